@@ -1,0 +1,1 @@
+"""Built-in robot descriptions (YAML package data), one file per arm."""

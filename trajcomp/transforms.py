@@ -1,0 +1,125 @@
+"""Pose and rotation conversions, vectorized over stacks of N poses.
+
+Inside trajcomp a pose is a homogeneous matrix (N, 4, 4) with millimetres, or
+a pose vector (N, 6) ``x, y, z, a, b, c`` in millimetres and radians, where
+A, B, C are KUKA-style intrinsic Z-Y'-X'' angles: R = Rz(A) Ry(B) Rx(C).
+Frames follow the ``T_a_b`` reading: pose of frame b expressed in frame a.
+"""
+
+import warnings
+
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+_ABC = "ZYX"  # upper case: intrinsic rotations
+
+
+def _stack(x, width):
+    """Return ``x`` as a float array (N, width) and whether it was a single row."""
+    arr = np.asarray(x, dtype=float)
+    single = arr.ndim == 1
+    arr = np.atleast_2d(arr)
+    if arr.shape[-1] != width:
+        raise ValueError(f"expected rows of {width} values, got shape {arr.shape}")
+    return arr, single
+
+
+def abc_to_matrix(abc):
+    """Rotation matrices from A, B, C angles.
+
+    Parameters
+    ----------
+    abc : array_like, shape (N, 3) or (3,)
+        Intrinsic Z-Y'-X'' angles, rad.
+
+    Returns
+    -------
+    ndarray, shape (N, 3, 3) or (3, 3)
+    """
+    arr, single = _stack(abc, 3)
+    mat = Rotation.from_euler(_ABC, arr).as_matrix()
+    return mat[0] if single else mat
+
+
+def matrix_to_abc(rot):
+    """A, B, C angles (rad), shape (N, 3) or (3,), of rotation matrices (N, 3, 3)."""
+    rot = np.asarray(rot, dtype=float)
+    with warnings.catch_warnings():
+        # B = +-90 deg is a legitimate pose; scipy then sets C = 0, which is exact.
+        warnings.simplefilter("ignore", UserWarning)
+        angles = Rotation.from_matrix(rot.reshape(-1, 3, 3)).as_euler(_ABC)
+    return angles[0] if rot.ndim == 2 else angles
+
+
+def pose_to_matrix(pose):
+    """Homogeneous matrices from pose vectors.
+
+    Parameters
+    ----------
+    pose : array_like, shape (N, 6) or (6,)
+        ``x, y, z`` in mm and ``a, b, c`` in rad.
+
+    Returns
+    -------
+    ndarray, shape (N, 4, 4) or (4, 4)
+    """
+    arr, single = _stack(pose, 6)
+    mat = np.zeros((len(arr), 4, 4))
+    mat[:, :3, :3] = abc_to_matrix(arr[:, 3:])
+    mat[:, :3, 3] = arr[:, :3]
+    mat[:, 3, 3] = 1.0
+    return mat[0] if single else mat
+
+
+def matrix_to_pose(mat):
+    """Pose vectors ``x, y, z, a, b, c`` (mm, rad) of matrices (N, 4, 4) or (4, 4)."""
+    mat = np.asarray(mat, dtype=float)
+    flat = mat.reshape(-1, 4, 4)
+    pose = np.concatenate([flat[:, :3, 3], matrix_to_abc(flat[:, :3, :3])], axis=1)
+    return pose[0] if mat.ndim == 2 else pose
+
+
+def quat_to_matrix(quat):
+    """Rotation matrices from unit quaternions, scalar first ``[w, x, y, z]`` (N, 4)."""
+    arr, single = _stack(quat, 4)
+    mat = Rotation.from_quat(arr, scalar_first=True).as_matrix()
+    return mat[0] if single else mat
+
+
+def matrix_to_quat(rot):
+    """Unit quaternions ``[w, x, y, z]`` with w >= 0 of rotation matrices (N, 3, 3)."""
+    rot = np.asarray(rot, dtype=float)
+    quat = Rotation.from_matrix(rot.reshape(-1, 3, 3)).as_quat(canonical=True, scalar_first=True)
+    return quat[0] if rot.ndim == 2 else quat
+
+
+def rotvec_to_matrix(rotvec):
+    """Rotation matrices from rotation vectors (axis times angle, rad), (N, 3)."""
+    arr, single = _stack(rotvec, 3)
+    mat = Rotation.from_rotvec(arr).as_matrix()
+    return mat[0] if single else mat
+
+
+def matrix_to_rotvec(rot):
+    """Rotation vectors (rad) of rotation matrices (N, 3, 3)."""
+    rot = np.asarray(rot, dtype=float)
+    vec = Rotation.from_matrix(rot.reshape(-1, 3, 3)).as_rotvec()
+    return vec[0] if rot.ndim == 2 else vec
+
+
+def invert(mat):
+    """Inverse of rigid transforms (N, 4, 4) or (4, 4), without a general inverse."""
+    mat = np.asarray(mat, dtype=float)
+    rot = mat[..., :3, :3]
+    out = np.zeros_like(mat)
+    out[..., :3, :3] = np.swapaxes(rot, -1, -2)
+    out[..., :3, 3] = -np.einsum("...ji,...j->...i", rot, mat[..., :3, 3])
+    out[..., 3, 3] = 1.0
+    return out
+
+
+def rotation_angle_between(rot_a, rot_b):
+    """Angle (rad) of the relative rotation between matrix stacks (N, 3, 3)."""
+    rel = np.einsum("...ji,...jk->...ik", rot_a, rot_b)
+    cos = (np.trace(rel, axis1=-2, axis2=-1) - 1.0) / 2.0
+    return np.arccos(np.clip(cos, -1.0, 1.0))
