@@ -1,0 +1,49 @@
+"""The ``trajcomp`` command line: one sub-command per module in trajcomp.commands.
+
+Library code raises TrajcompError; this is the only place that prints errors
+and chooses exit codes: 0 success, 1 the result fails a requested tolerance
+or limit, 2 bad usage or bad input.
+"""
+
+import argparse
+import importlib
+import sys
+
+from trajcomp import __version__
+from trajcomp.errors import ToleranceError, TrajcompError
+
+COMMANDS = (
+    "robots",
+)
+
+
+def build_parser():
+    """The argument parser with every sub-command registered."""
+    parser = argparse.ArgumentParser(
+        prog="trajcomp",
+        description="Offline absolute-accuracy compensation for 6-axis robot arms.",
+    )
+    parser.add_argument("--version", action="version", version=f"trajcomp {__version__}")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
+    for name in COMMANDS:
+        module = importlib.import_module(f"trajcomp.commands.{name}")
+        module.add_parser(sub)
+    return parser
+
+
+def main(argv=None):
+    """Run the CLI; returns the exit code (also used as the console script)."""
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    try:
+        return args.run(args) or 0
+    except ToleranceError as exc:
+        print(f"trajcomp: {exc}", file=sys.stderr)
+        return 1
+    except TrajcompError as exc:
+        print(f"trajcomp: error: {exc}", file=sys.stderr)
+        return 2
+
+
+if __name__ == "__main__":
+    sys.exit(main())
