@@ -8,8 +8,8 @@ base frame.
 import numpy as np
 
 
-def dh_link_transforms(a, alpha, d, theta):
-    """Standard DH link transforms ``Rz(theta) Tz(d) Tx(a) Rx(alpha)``.
+def dh_link_transforms(a, alpha, d, theta, beta=0.0):
+    """Standard DH link transforms ``Rz(theta) Tz(d) Tx(a) Rx(alpha) Ry(beta)``.
 
     Parameters
     ----------
@@ -17,6 +17,8 @@ def dh_link_transforms(a, alpha, d, theta):
         Link lengths (mm), twists (rad), offsets (mm).
     theta : ndarray, shape (N, 6)
         Joint DH angles, rad.
+    beta : array_like, shape (6,) or (N, 6)
+        Hayati twists about the link y axis, rad (0 for plain DH).
 
     Returns
     -------
@@ -39,6 +41,17 @@ def dh_link_transforms(a, alpha, d, theta):
     out[..., 2, 2] = ca
     out[..., 2, 3] = d
     out[..., 3, 3] = 1.0
+    if np.any(beta):
+        beta = np.broadcast_to(beta, theta.shape)
+        cb, sb = np.cos(beta), np.sin(beta)
+        rot_y = np.zeros(theta.shape + (4, 4))
+        rot_y[..., 0, 0] = cb
+        rot_y[..., 0, 2] = sb
+        rot_y[..., 1, 1] = 1.0
+        rot_y[..., 2, 0] = -sb
+        rot_y[..., 2, 2] = cb
+        rot_y[..., 3, 3] = 1.0
+        out = out @ rot_y
     return out
 
 
@@ -58,7 +71,7 @@ def link_frames(robot, q):
     """
     std = robot.as_standard()
     q = np.atleast_2d(np.asarray(q, dtype=float))
-    links = dh_link_transforms(std.a, std.alpha, std.d, std.dh_angles(q))
+    links = dh_link_transforms(std.a, std.alpha, std.d, std.dh_angles(q), std.beta)
     frames = np.empty((len(q), 7, 4, 4))
     frames[:, 0] = std.T_base_link0
     for i in range(6):

@@ -45,6 +45,11 @@ class Robot:
     convention : {"standard", "modified"}
     a, alpha, d, theta_offset : ndarray, shape (6,)
         DH parameters (mm, rad, mm, rad).
+    beta : ndarray, shape (6,)
+        Hayati twist about the link's y axis (rad), appended to standard DH
+        links as ``... Rx(alpha) Ry(beta)``. Zero in every data-sheet robot;
+        identification uses it where consecutive axes are nominally parallel
+        and the DH offset d is ill-conditioned.
     joint_map : ndarray, shape (6, 6)
         ``theta = joint_map @ q + theta_offset``.
     q_min, q_max : ndarray, shape (6,)
@@ -75,6 +80,7 @@ class Robot:
     T_flange_tool: np.ndarray
     T_world_base: np.ndarray
     source: str = ""
+    beta: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(6))
 
     def dh_angles(self, q):
         """DH joint angles theta (N, 6), rad, of joint angles q (N, 6), rad."""
@@ -103,6 +109,8 @@ class Robot:
         """
         if self.convention == "standard":
             return self
+        if np.any(self.beta):
+            raise RobotError(f"robot {self.name}: Hayati beta is defined for standard DH tables only")
         base = np.eye(4)
         base[:3, :3] = _rot_x(self.alpha[0])
         base[0, 3] = self.a[0]
