@@ -1,0 +1,191 @@
+"""The virtual robot: a nominal arm plus a seeded, documented error profile.
+
+It stands in for the real arm in every demo and test. Its controller knows
+only the nominal model: a joint command is taken as it is, a Cartesian command
+goes through nominal inverse kinematics. The arm then ends where its *true*
+kinematics put it:
+
+- DH parameter errors (a, d in mm; alpha, theta offset in rad) and a small
+  error of the declared tool position;
+- gravity compliance: each joint deflects by the gravity torque of the links
+  and payload beyond it divided by its stiffness;
+- gear eccentricity: once- and twice-per-turn joint angle errors;
+- repeatability noise on the reached position and laser-tracker noise on the
+  measurement (both isotropic Gaussian, per axis).
+
+Profiles (``PROFILES``): ``ideal`` (no error at all), ``paper`` (a UR10-class
+arm with 1-3 mm uncompensated error, as in the paper), ``harsh`` (twice the
+geometric and non-geometric errors, heavier payload, noisier).
+"""
+
+import dataclasses
+
+import numpy as np
+
+from trajcomp.kinematics import fk, link_frames
+
+GRAVITY = np.array([0.0, 0.0, -9.81])  # m/s^2, in the base frame
+
+
+@dataclasses.dataclass(frozen=True)
+class ErrorProfile:
+    """Magnitudes of the virtual robot's errors (standard deviations unless noted).
+
+    Attributes
+    ----------
+    name : str
+    length_sigma : float
+        DH a and d errors, mm.
+    angle_sigma : float
+        DH alpha and theta-offset errors, rad.
+    tool_sigma : float
+        Error of the declared tool (TCP) position, mm per axis.
+    link_mass : tuple of float
+        Mass of links 1..6, kg (centre of mass midway along each link).
+    payload : float
+        Mass at the TCP, kg.
+    stiffness : float
+        Joint stiffness, N m/rad (all joints).
+    gear_amplitude : float
+        Amplitude of the once- and twice-per-turn joint errors, rad.
+    repeatability_sigma, tracker_sigma : float
+        Noise of the reached and of the measured position, mm per axis.
+    """
+
+    name: str
+    length_sigma: float = 0.0
+    angle_sigma: float = 0.0
+    tool_sigma: float = 0.0
+    link_mass: tuple = (0.0,) * 6
+    payload: float = 0.0
+    stiffness: float = np.inf
+    gear_amplitude: float = 0.0
+    repeatability_sigma: float = 0.0
+    tracker_sigma: float = 0.0
+
+    @property
+    def noise_sigma(self):
+        """Combined per-axis noise of one measurement, mm."""
+        return float(np.hypot(self.repeatability_sigma, self.tracker_sigma))
+
+
+_UR10_MASSES = (7.1, 12.7, 4.27, 2.0, 2.0, 0.365)  # kg, UR10 data sheet
+
+PROFILES = {
+    "ideal": ErrorProfile("ideal"),
+    "paper": ErrorProfile(
+        "paper",
+        length_sigma=0.5,
+        angle_sigma=np.radians(0.05),
+        tool_sigma=0.2,
+        link_mass=_UR10_MASSES,
+        payload=2.0,
+        stiffness=4.0e5,
+        gear_amplitude=np.radians(0.004),
+        repeatability_sigma=0.008,
+        tracker_sigma=0.005,
+    ),
+    "harsh": ErrorProfile(
+        "harsh",
+        length_sigma=1.0,
+        angle_sigma=np.radians(0.1),
+        tool_sigma=0.5,
+        link_mass=_UR10_MASSES,
+        payload=8.0,
+        stiffness=2.0e5,
+        gear_amplitude=np.radians(0.01),
+        repeatability_sigma=0.02,
+        tracker_sigma=0.01,
+    ),
+}
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class VirtualRobot:
+    """A nominal robot with a seeded set of true errors.
+
+    Build one with `VirtualRobot.create`; `true_robot` holds the perturbed
+    kinematics, the other fields the non-geometric errors.
+    """
+
+    nominal: object
+    true_robot: object
+    profile: ErrorProfile
+    gear_phase: np.ndarray  # (6, 2) rad, phases of the once/twice-per-turn terms
+    seed: int
+
+    @classmethod
+    def create(cls, nominal, profile="paper", seed=0):
+        """Draw the true errors of a virtual copy of ``nominal``.
+
+        Parameters
+        ----------
+        nominal : Robot
+        profile : str or ErrorProfile
+            A name from `PROFILES` or a custom profile.
+        seed : int
+            Seeds the drawn errors (noise uses its own generator per call).
+        """
+        if isinstance(profile, str):
+            profile = PROFILES[profile]
+        rng = np.random.default_rng(seed)
+        std = nominal.as_standard()
+        tool = std.T_flange_tool.copy()
+        tool[:3, 3] += rng.normal(0.0, profile.tool_sigma, 3)
+        true_robot = std.replace(
+            a=std.a + rng.normal(0.0, profile.length_sigma, 6),
+            d=std.d + rng.normal(0.0, profile.length_sigma, 6),
+            alpha=std.alpha + rng.normal(0.0, profile.angle_sigma, 6),
+            theta_offset=std.theta_offset + rng.normal(0.0, profile.angle_sigma, 6),
+            T_flange_tool=tool,
+        )
+        return cls(nominal, true_robot, profile, rng.uniform(0, 2 * np.pi, (6, 2)), seed)
+
+    def reached_joints(self, q_cmd):
+        """Joint angles (N, 6) rad the arm really takes for commands q_cmd (N, 6)."""
+        q_cmd = np.atleast_2d(np.asarray(q_cmd, dtype=float))
+        gear = self.profile.gear_amplitude * (
+            np.sin(q_cmd + self.gear_phase[:, 0]) + np.sin(2 * q_cmd + self.gear_phase[:, 1])
+        )
+        q = q_cmd + gear
+        return q + self._gravity_deflection(q)
+
+    def _gravity_deflection(self, q):
+        """Joint deflection (N, 6) rad under gravity, from torques of the links beyond each joint."""
+        if not np.isfinite(self.profile.stiffness):
+            return np.zeros_like(q)
+        frames = link_frames(self.true_robot, q)
+        origins = frames[:, :, :3, 3] / 1000.0  # m
+        centres = 0.5 * (origins[:, :-1] + origins[:, 1:])  # (N, 6, 3) link k+1 centre
+        masses = np.asarray(self.profile.link_mass, dtype=float)
+        tcp = fk(self.true_robot, q)[:, :3, 3] / 1000.0
+        axes = frames[:, :6, :3, 2]
+        torque = np.zeros(q.shape)
+        for joint in range(6):
+            lever = centres[:, joint:] - origins[:, joint, None]
+            force = masses[joint:, None] * GRAVITY
+            moment = np.cross(lever, force).sum(axis=1)
+            moment += np.cross(tcp - origins[:, joint], self.profile.payload * GRAVITY)
+            torque[:, joint] = np.einsum("ij,ij->i", moment, axes[:, joint])
+        # The joint map turns DH-angle deflections into controller joint angles.
+        return (torque / self.profile.stiffness) @ np.linalg.inv(self.true_robot.joint_map).T
+
+    def reached_poses(self, q_cmd, rng=None):
+        """True TCP poses (N, 4, 4) for joint commands, with repeatability noise.
+
+        Parameters
+        ----------
+        q_cmd : array_like, shape (N, 6)
+            Commanded joint angles, rad.
+        rng : numpy.random.Generator, optional
+            Noise source; ``None`` gives noise-free poses.
+        """
+        poses = fk(self.true_robot, self.reached_joints(q_cmd))
+        if rng is not None:
+            poses[:, :3, 3] += rng.normal(0.0, self.profile.repeatability_sigma, (len(poses), 3))
+        return poses
+
+    def measure(self, q_cmd, rng):
+        """Tracker measurements of the TCP position (N, 3) mm, base frame, noisy."""
+        positions = self.reached_poses(q_cmd, rng)[:, :3, 3]
+        return positions + rng.normal(0.0, self.profile.tracker_sigma, positions.shape)
