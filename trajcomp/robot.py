@@ -16,6 +16,9 @@ A robot YAML file (see ``trajcomp/robots/*.yaml``) holds, in user units
 ``limits``
     ``position_min``, ``position_max`` (deg), ``velocity`` (deg/s),
     ``acceleration`` (deg/s^2), optional ``jerk`` (deg/s^3).
+``home`` (optional)
+    A typical working configuration (deg): the seed for inverse kinematics
+    when none is given, and the default planning orientation.
 ``base``, ``flange``, ``tool``, ``world`` (optional pose ``[x, y, z, a, b, c]``)
     DH frame 0 in the base frame, the manufacturer's flange frame in DH
     frame 6, the TCP in the flange frame and the base in the world frame.
@@ -58,6 +61,8 @@ class Robot:
         Joint velocity (rad/s) and acceleration (rad/s^2) limits.
     j_max : ndarray, shape (6,)
         Joint jerk limits, rad/s^3; ``inf`` where the data sheet gives none.
+    home : ndarray, shape (6,)
+        Typical working configuration, rad.
     T_base_link0, T_link6_flange, T_flange_tool, T_world_base : ndarray, shape (4, 4)
     source : str
         The data sheet or file the description comes from.
@@ -75,6 +80,7 @@ class Robot:
     v_max: np.ndarray
     a_max: np.ndarray
     j_max: np.ndarray
+    home: np.ndarray
     T_base_link0: np.ndarray
     T_link6_flange: np.ndarray
     T_flange_tool: np.ndarray
@@ -214,6 +220,7 @@ def robot_from_yaml(text, label="<robot>"):
             if jerk is None
             else fields.vector("limits.jerk", jerk, positive=True) * deg
         ),
+        home=fields.vector("home", doc.get("home", [0] * 6)) * deg,
         T_base_link0=fields.frame("base"),
         T_link6_flange=fields.frame("flange"),
         T_flange_tool=fields.frame("tool"),
