@@ -1,0 +1,143 @@
+"""Every residual field kind through the one entry point, plus the scattered kinds' own behaviour."""
+
+import json
+
+import numpy as np
+import pytest
+
+from trajcomp.errors import CalibrationError, ModelError
+from trajcomp.grid import KINDS, ResidualGrid, field_from_dict, fit_field
+from trajcomp.interpolate import KNN, RBF
+
+
+def smooth_field(p):
+    """A smooth error field on the box 0..100 mm, mm."""
+    x, y, z = p[:, 0], p[:, 1], p[:, 2]
+    return 0.5 * np.stack([np.sin(x / 30), np.cos(y / 40), np.sin((x + z) / 50)], axis=1)
+
+
+def cube(n, side=100.0):
+    axis = np.linspace(0.0, side, n)
+    return np.stack(np.meshgrid(axis, axis, axis, indexing="ij"), axis=-1).reshape(-1, 3)
+
+
+QUERY = np.random.default_rng(1).uniform(0.0, 100.0, (300, 3))
+
+
+@pytest.mark.parametrize("kind, ratio", [("idw8", 0.6), ("trilinear", 0.35), ("knn", 0.6), ("rbf", 0.35)])
+def test_converges_when_the_grid_is_refined(kind, ratio):
+    """Halving the step cuts the max error: by ~1/2 for the inverse-distance kinds, ~1/4 for the others."""
+    errors = []
+    for n in (5, 9):
+        p = cube(n)
+        field = fit_field(p, smooth_field(p), step=100.0 / (n - 1), interpolation=kind)
+        errors.append(np.abs(field.evaluate(QUERY) - smooth_field(QUERY)).max())
+    assert errors[1] < ratio * errors[0]
+
+
+@pytest.mark.parametrize("kind", KINDS)
+def test_every_kind_reproduces_data_and_constants_and_round_trips(kind):
+    p = cube(4)
+    values = np.random.default_rng(2).normal(size=p.shape)
+    field = fit_field(p, values, interpolation=kind, **({"smoothing": 0.0} if kind == "rbf" else {}))
+    assert field.evaluate(p) == pytest.approx(values, abs=1e-8)  # exact at the data points
+    constant = fit_field(p, np.tile([0.2, -0.1, 0.05], (len(p), 1)), interpolation=kind)
+    assert constant.evaluate(QUERY) == pytest.approx(np.tile([0.2, -0.1, 0.05], (len(QUERY), 1)), abs=1e-8)
+    back = field_from_dict(json.loads(json.dumps(field.to_dict())))
+    assert type(back) is type(field)
+    assert back.evaluate(QUERY) == pytest.approx(field.evaluate(QUERY), abs=1e-12)
+
+
+@pytest.mark.parametrize("kind", KINDS)
+def test_every_kind_applies_the_outside_policy(kind):
+    p = cube(3)
+    field = fit_field(p, smooth_field(p), interpolation=kind)
+    q = np.array([[50.0, 50.0, 50.0], [50.0, 120.0, 50.0]])
+    assert field.contains(q).tolist() == [True, False]
+    with pytest.raises(ModelError, match=r"point 1 at \(50.000, 120.000, 50.000\) mm lies outside"):
+        field.evaluate(q)
+    assert field.evaluate(q, outside="clamp")[1] == pytest.approx(field.evaluate([[50.0, 100.0, 50.0]])[0])
+    assert np.isnan(field.evaluate(q, outside="nan")[1]).all()
+
+
+def test_lattice_kinds_refuse_scattered_data():
+    p = np.random.default_rng(3).uniform(0, 100, (50, 3))
+    for kind in ("idw8", "trilinear"):
+        with pytest.raises(CalibrationError, match="do not lie on a regular grid"):
+            fit_field(p, p, interpolation=kind)
+    with pytest.raises(ValueError, match="unknown interpolation 'cubic'"):
+        fit_field(p, p, interpolation="cubic")
+
+
+def test_lattice_kinds_check_the_expected_step():
+    p = cube(5)
+    with pytest.raises(CalibrationError, match=r"detected grid step \(25.000, 25.000, 25.000\) mm differs from the expected \(20.000, 20.000, 20.000\) mm along x"):
+        fit_field(p, p, step=20.0)
+    assert isinstance(fit_field(p, p, step=(25.0, 25.0, 25.2)), ResidualGrid)
+
+
+# ---------------------------------------------------------------- scattered data
+
+SCATTERED = np.random.default_rng(4).uniform(0.0, 100.0, (300, 3))
+NOISE = 0.01
+
+
+def noisy_errors(seed=5):
+    return smooth_field(SCATTERED) + np.random.default_rng(seed).normal(0.0, NOISE, SCATTERED.shape)
+
+
+def test_knn_hand_computed_weights():
+    p = np.array([[0.0, 0, 0], [3.0, 0, 0], [0.0, 4.0, 0], [50.0, 50.0, 50.0]])
+    v = np.array([[1.0, 0, 0], [0.0, 1.0, 0], [0.0, 0, 1.0], [9.0, 9.0, 9.0]])
+    q = np.array([[0.0, 0.0, 1.0]])  # distances 1, sqrt(10), sqrt(17); the far point is not a neighbour
+    for power in (1, 2):
+        w = np.array([1.0, 10 ** (-power / 2), 17 ** (-power / 2)])
+        got = KNN(p, v, k=3, power=power).evaluate(q, outside="clamp")[0]
+        assert got == pytest.approx(w / w.sum(), abs=1e-12)
+    assert KNN(p, v, k=3).evaluate([[3.0, 0, 0]])[0] == pytest.approx([0, 1, 0], abs=0)  # data hit
+
+
+def test_knn_rejects_more_neighbours_than_points():
+    with pytest.raises(CalibrationError, match="k=8 neighbours requested but 4 data points"):
+        KNN(cube(2)[:4], np.zeros((4, 3)))
+
+
+def test_rbf_smooths_noise_with_a_cross_validated_smoothing():
+    rbf = RBF.fit(SCATTERED, noisy_errors())
+    inner = QUERY[np.all((QUERY > 15) & (QUERY < 85), axis=1)]
+    error = np.sqrt(np.mean(np.sum((rbf.evaluate(inner) - smooth_field(inner)) ** 2, axis=1)))
+    assert rbf.smoothing > 0
+    assert error < NOISE * np.sqrt(3)  # better than the noise of a single measurement
+    exact = RBF(SCATTERED, noisy_errors(), smoothing=0.0)
+    assert np.abs(exact.evaluate(SCATTERED) - noisy_errors()).max() < 1e-8  # smoothing 0 interpolates
+
+
+def test_rbf_kernel_options_and_errors():
+    gauss = RBF(SCATTERED, noisy_errors(), smoothing=1e-3, kernel="gaussian", epsilon=2.0)
+    assert np.abs(gauss.evaluate(QUERY[:20]) - smooth_field(QUERY[:20])).max() < 0.1
+    with pytest.raises(CalibrationError, match="rbf fit of 300 points"):
+        RBF(SCATTERED, noisy_errors(), kernel="gaussian")  # needs epsilon
+    with pytest.raises(ModelError, match="a rbf residual field cannot be evaluated by 'idw8'"):
+        gauss.evaluate(QUERY, method="idw8")
+
+
+def test_scattered_input_errors():
+    with pytest.raises(CalibrationError, match="300 points but 299 residuals"):
+        KNN(SCATTERED, noisy_errors()[1:])
+    bad = noisy_errors()
+    bad[7, 2] = np.inf
+    with pytest.raises(CalibrationError, match="scattered residuals: row 7 is not finite"):
+        RBF.fit(SCATTERED, bad)
+
+
+@pytest.mark.parametrize(
+    "data, message",
+    [
+        ({"kind": "spline"}, "unknown kind 'spline'"),
+        ({"kind": "knn", "points": [[0, 0, 0]]}, "residual field knn"),
+        ({"kind": "knn", "points": [[0, 0, 0]], "values": [[0, 0]], "k": 1}, r"shape \(N, 3\)"),
+    ],
+)
+def test_field_from_dict_rejects_bad_data(data, message):
+    with pytest.raises(ModelError, match=message):
+        field_from_dict(data)

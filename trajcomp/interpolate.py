@@ -1,0 +1,285 @@
+"""Interpolation of scattered residuals, and the domain policy of every residual field.
+
+A residual field maps positions (N, 3) mm to residual errors (N, 3) mm. The
+lattice fields (``idw8``, ``trilinear``) live in :mod:`trajcomp.grid`; this
+module holds the fields of scattered data, which need no lattice:
+
+- :class:`KNN` (``knn``): inverse-distance weighting over the k nearest
+  measured points;
+- :class:`RBF` (``rbf``): a smoothing radial basis function fit (thin-plate
+  spline by default), its smoothing chosen by k-fold cross-validation unless
+  given.
+
+Their domain is the bounding box of the data; :func:`bounded_evaluate`
+applies the same outside policy as the lattice fields.
+"""
+
+import dataclasses
+
+import numpy as np
+from scipy.interpolate import RBFInterpolator
+from scipy.spatial import cKDTree
+
+from trajcomp.errors import CalibrationError, ModelError
+from trajcomp.stats import as_vectors, kfold_indices
+
+OUTSIDE = ("error", "clamp", "nan")
+VERTEX_HIT = 1e-6
+"""Distance (mm) under which a query counts as coinciding with a data point or vertex."""
+SMOOTHING_CANDIDATES = (0.0, *(10.0**e for e in range(-6, 1)))
+"""Smoothing values tried by cross-validation (coordinates scaled to the unit box)."""
+
+
+def fmt_point(point):
+    """``(x.xxx, y.yyy, z.zzz)`` for messages."""
+    return "(" + ", ".join(f"{v:.3f}" for v in point) + ")"
+
+
+def in_box(points, lower, upper):
+    """Boolean mask (N,) of points (N, 3) inside the box ``lower..upper`` (boundary included, mm)."""
+    slack = 1e-9 * (1.0 + np.abs(upper - lower))
+    return np.all((points >= lower - slack) & (points <= upper + slack), axis=1)
+
+
+def bounded_evaluate(kernel, points, lower, upper, outside):
+    """Evaluate ``kernel`` on points with a policy for points outside a box.
+
+    Parameters
+    ----------
+    kernel : callable
+        ``kernel(points (N, 3)) -> (N, 3)``, valid inside the box.
+    points : ndarray, shape (N, 3)
+        Query points, mm.
+    lower, upper : ndarray, shape (3,)
+        Corners of the box, mm.
+    outside : {'error', 'clamp', 'nan'}
+        ``'error'`` raises on the first outside point; ``'clamp'`` evaluates
+        at the nearest point of the box; ``'nan'`` returns NaN rows there (so
+        the caller can fall back to the model-only value and flag them).
+
+    Returns
+    -------
+    ndarray, shape (N, 3)
+
+    Raises
+    ------
+    ModelError
+        With ``outside='error'``, naming the first outside point and the box.
+    ValueError
+        On an unknown policy.
+    """
+    if outside not in OUTSIDE:
+        raise ValueError(f"outside policy {outside!r}: expected one of {', '.join(OUTSIDE)}")
+    inside = in_box(points, lower, upper)
+    if outside == "error" and not inside.all():
+        first = int(np.flatnonzero(~inside)[0])
+        raise ModelError(
+            f"point {first} at {fmt_point(points[first])} mm lies outside the residual field's box "
+            f"{fmt_point(lower)}..{fmt_point(upper)} mm ({int((~inside).sum())} of {len(points)} points outside)"
+        )
+    values = kernel(np.clip(points, lower, upper))
+    if outside == "nan":
+        values[~inside] = np.nan
+    return values
+
+
+def _scattered_data(points, values):
+    p = as_vectors(points, "scattered points")
+    v = as_vectors(values, "scattered residuals")
+    if len(p) != len(v):
+        raise CalibrationError(f"scattered data: {len(p)} points but {len(v)} residuals")
+    return p, v
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class _Scattered:
+    """Shared behaviour of interpolators of scattered data (points, values in mm)."""
+
+    points: np.ndarray
+    values: np.ndarray
+
+    @property
+    def lower(self):
+        """Lower corner of the data's bounding box, mm, shape (3,)."""
+        return self.points.min(axis=0)
+
+    @property
+    def upper(self):
+        """Upper corner of the data's bounding box, mm, shape (3,)."""
+        return self.points.max(axis=0)
+
+    def contains(self, points):
+        """Boolean mask (N,) of points inside the data's bounding box."""
+        return in_box(as_vectors(points, "query points", error=ModelError), self.lower, self.upper)
+
+    def evaluate(self, points, method=None, outside="error"):
+        """Interpolated residual error at query points.
+
+        Parameters
+        ----------
+        points : array_like, shape (N, 3)
+            Query positions, mm.
+        method : str, optional
+            None or the field's own ``kind`` (for a call shared with the
+            lattice fields, whose method can be switched).
+        outside : {'error', 'clamp', 'nan'}, optional
+            Policy for points outside the data's bounding box, see
+            :func:`bounded_evaluate`.
+
+        Returns
+        -------
+        ndarray, shape (N, 3)
+            Residual error, mm.
+        """
+        if method not in (None, self.kind):
+            raise ModelError(f"a {self.kind} residual field cannot be evaluated by {method!r}")
+        p = as_vectors(points, "query points", error=ModelError)
+        return bounded_evaluate(self._kernel, p, self.lower, self.upper, outside)
+
+    def _fields(self):
+        return {"kind": self.kind, "points": self.points.tolist(), "values": self.values.tolist()}
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class KNN(_Scattered):
+    """Inverse-distance weighting over the ``k`` nearest data points.
+
+    Weights ``1 / d**power`` normalized to one; a query within
+    :data:`~trajcomp.grid.VERTEX_HIT` of a data point takes its value.
+
+    Attributes
+    ----------
+    points, values : ndarray, shape (N, 3)
+        Data positions and residual errors, mm.
+    k : int
+        Number of neighbours, ``1 <= k <= N``.
+    power : float
+        Distance exponent, e.g. 1 (the paper's weights) or 2 (Shepard).
+    """
+
+    k: int = 8
+    power: float = 1.0
+    kind = "knn"
+
+    def __post_init__(self):
+        p, v = _scattered_data(self.points, self.values)
+        if not 1 <= self.k <= len(p):
+            raise CalibrationError(f"knn: k={self.k} neighbours requested but {len(p)} data points")
+        if not self.power > 0:
+            raise CalibrationError(f"knn: power must be positive, got {self.power}")
+        object.__setattr__(self, "points", p)
+        object.__setattr__(self, "values", v)
+        object.__setattr__(self, "_tree", cKDTree(p))
+
+    def _kernel(self, points):
+        d, idx = self._tree.query(points, k=self.k)
+        d, idx = d.reshape(len(points), self.k), idx.reshape(len(points), self.k)
+        hit = d < VERTEX_HIT  # neighbours come sorted: a hit is in column 0
+        w = np.where(hit[:, :1], hit[:, :1] & (np.arange(self.k) == 0), 1.0 / np.where(hit, 1.0, d) ** self.power)
+        return np.einsum("nk,nkc->nc", w / w.sum(axis=1, keepdims=True), self.values[idx])
+
+    def to_dict(self):
+        """Plain-list dict: kind, points, values, k, power."""
+        return {**self._fields(), "k": self.k, "power": self.power}
+
+
+def _unit_box(points):
+    """Centre (3,) and half largest side of the bounding box of points (N, 3)."""
+    lower, upper = points.min(axis=0), points.max(axis=0)
+    return 0.5 * (lower + upper), 0.5 * max(float(np.max(upper - lower)), 1e-9)
+
+
+def _rbf_solve(x, values, smoothing, **options):
+    """scipy RBFInterpolator of scaled points x (N, 3), CalibrationError when it cannot be solved."""
+    try:
+        return RBFInterpolator(x, values, smoothing=smoothing, **options)
+    except (ValueError, np.linalg.LinAlgError) as exc:
+        raise CalibrationError(f"rbf fit of {len(x)} points (smoothing {smoothing}): {exc}") from None
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class RBF(_Scattered):
+    """Smoothing radial basis function fit of scattered residuals.
+
+    Coordinates are scaled to the unit box (centre of the data's bounding
+    box, half its largest side) before the fit, so ``smoothing`` and
+    ``epsilon`` do not depend on the size of the workspace. Build with
+    :meth:`fit` to choose the smoothing by cross-validation.
+
+    Attributes
+    ----------
+    points, values : ndarray, shape (N, 3)
+        Data positions and residual errors, mm.
+    smoothing : float
+        scipy's ``RBFInterpolator`` smoothing, >= 0 (0 interpolates exactly).
+    kernel : str
+        scipy kernel name, default ``'thin_plate_spline'``.
+    epsilon : float or None
+        Shape parameter in scaled units (required by scipy for kernels
+        other than the polyharmonic splines).
+    neighbors : int or None
+        Fit only the nearest ``neighbors`` points per query (large data).
+    """
+
+    smoothing: float = 0.0
+    kernel: str = "thin_plate_spline"
+    epsilon: float = None
+    neighbors: int = None
+    kind = "rbf"
+
+    def __post_init__(self):
+        p, v = _scattered_data(self.points, self.values)
+        centre, half = _unit_box(p)
+        rbf = _rbf_solve((p - centre) / half, v, self.smoothing, **self._options())
+        object.__setattr__(self, "points", p)
+        object.__setattr__(self, "values", v)
+        object.__setattr__(self, "_kernel", lambda q: rbf((q - centre) / half))
+
+    def _options(self):
+        return {"kernel": self.kernel, "epsilon": self.epsilon, "neighbors": self.neighbors}
+
+    @classmethod
+    def fit(cls, points, values, smoothing=None, folds=5, seed=0, **options):
+        """Fit, choosing the smoothing by k-fold cross-validation when not given.
+
+        Parameters
+        ----------
+        points, values : array_like, shape (N, 3)
+            Data positions and residual errors, mm.
+        smoothing : float, optional
+            Fixed smoothing; by default the candidate of
+            :data:`SMOOTHING_CANDIDATES` with the least cross-validated mean
+            squared error norm.
+        folds, seed : int, optional
+            Cross-validation folds and shuffle seed.
+        **options
+            ``kernel``, ``epsilon``, ``neighbors`` of :class:`RBF`.
+
+        Returns
+        -------
+        RBF
+        """
+        p, v = _scattered_data(points, values)
+        if smoothing is None:
+            centre, half = _unit_box(p)
+            x = (p - centre) / half
+            splits = kfold_indices(len(p), folds, seed)
+            scores = [_cv_score(x, v, splits, s, options) for s in SMOOTHING_CANDIDATES]
+            smoothing = SMOOTHING_CANDIDATES[int(np.argmin(scores))]
+        return cls(p, v, smoothing=smoothing, **options)
+
+    def to_dict(self):
+        """Plain-list dict: kind, points, values, smoothing, kernel, epsilon, neighbors."""
+        return {**self._fields(), "smoothing": self.smoothing, **self._options()}
+
+
+def _cv_score(x, values, splits, smoothing, options):
+    """Mean squared held-out error norm of an RBF fit (inf when a fold cannot be solved)."""
+    total = 0.0
+    for train, test in splits:
+        try:
+            rbf = _rbf_solve(x[train], values[train], smoothing, **options)
+        except CalibrationError:
+            return np.inf
+        total += np.sum((rbf(x[test]) - values[test]) ** 2)
+    return total / len(x)
