@@ -121,15 +121,17 @@ def detect_lattice(points, tol=TOLERANCE, step=None):
     ------
     CalibrationError
         Naming the axis and the number of points when fewer than 2 node
-        planes are found, the coordinates spread continuously (not a
-        lattice), or the planes are not evenly spaced.
+        planes are found, the coordinates spread continuously or the planes
+        lie closer than ``8 * tol`` (not a lattice), the planes are not
+        evenly spaced, a point is off its node, or the step is not the
+        expected one.
     """
     p = as_vectors(points, "grid points")
     if not tol > 0:
         raise ValueError(f"lattice tolerance must be positive, got {tol}")
     expected = None if step is None else np.broadcast_to(np.asarray(step, dtype=float), (3,))
     n = len(p)
-    origin, step, shape, index = np.empty(3), np.empty(3), [0, 0, 0], np.empty((n, 3), dtype=int)
+    origin, spacing, shape, index = np.empty(3), np.empty(3), [0, 0, 0], np.empty((n, 3), dtype=int)
     for a, axis in enumerate(AXES):
         c = p[:, a]
         s = np.sort(c)
@@ -161,23 +163,23 @@ def detect_lattice(points, tol=TOLERANCE, step=None):
                 + f" mm (tolerance {tol} mm)"
             )
         k = np.concatenate([[0], np.cumsum(multiple)])
-        step[a], origin[a] = np.polyfit(k, centers, 1)
-        index[:, a] = np.round((c - origin[a]) / step[a]).astype(int)
+        spacing[a], origin[a] = np.polyfit(k, centers, 1)
+        index[:, a] = np.round((c - origin[a]) / spacing[a]).astype(int)
         shape[a] = int(k[-1]) + 1
-        off = np.abs(c - (origin[a] + index[:, a] * step[a]))
+        off = np.abs(c - (origin[a] + index[:, a] * spacing[a]))
         if off.max() > tol:
             worst = int(np.argmax(off))
             raise CalibrationError(
                 f"point {worst} at {fmt_point(p[worst])} mm is {off[worst]:.3f} mm off the nearest grid node "
                 f"along {axis} (tolerance {tol} mm; {n} points)"
             )
-    if expected is not None and np.any(np.abs(step - expected) > tol):
-        axis = AXES[int(np.argmax(np.abs(step - expected)))]
+    if expected is not None and np.any(np.abs(spacing - expected) > tol):
+        axis = AXES[int(np.argmax(np.abs(spacing - expected)))]
         raise CalibrationError(
-            f"{n} points: detected grid step {fmt_point(step)} mm differs from the expected "
+            f"{n} points: detected grid step {fmt_point(spacing)} mm differs from the expected "
             f"{fmt_point(expected)} mm along {axis} (tolerance {tol} mm)"
         )
-    return Lattice(origin, step, tuple(shape)), index
+    return Lattice(origin, spacing, tuple(shape)), index
 
 
 def node_counts(lattice, index):
@@ -262,16 +264,18 @@ class ResidualGrid:
         v = as_vectors(values, "grid residuals")
         m = None if measured is None else as_vectors(measured, "measured grid points")
         if len(v) != len(p) or (m is not None and len(m) != len(p)):
-            raise CalibrationError(f"grid: {len(p)} points but {len(v)} residuals" + ("" if m is None else f" and {len(m)} measured points"))
+            extra = "" if m is None else f" and {len(m)} measured points"
+            raise CalibrationError(f"grid: {len(p)} points but {len(v)} residuals{extra}")
         lattice, index = detect_lattice(p, tol, step)
         counts = node_counts(lattice, index)
         if (counts == 0).any():
             missing = np.argwhere(counts == 0)
             first = missing[0]
+            size = "x".join(str(s) for s in lattice.shape)
             raise CalibrationError(
-                f"grid {lattice.shape[0]}x{lattice.shape[1]}x{lattice.shape[2]} (step {fmt_point(lattice.step)} mm): "
-                f"{len(missing)} of {counts.size} nodes have no measurement, first node {tuple(first.tolist())} "
-                f"at {fmt_point(lattice.origin + first * lattice.step)} mm; measure them or use a scattered interpolator"
+                f"grid {size} (step {fmt_point(lattice.step)} mm): {len(missing)} of {counts.size} nodes "
+                f"have no measurement, first node {tuple(first.tolist())} at "
+                f"{fmt_point(lattice.origin + first * lattice.step)} mm; measure them or use a scattered interpolator"
             )
         nodes = None if m is None else _node_means(lattice, index, m)
         return cls(lattice, _node_means(lattice, index, v), nodes, method)

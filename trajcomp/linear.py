@@ -50,7 +50,9 @@ class LinearCorrection:
     def __post_init__(self):
         coefficients = np.asarray(self.coefficients, dtype=float)
         if coefficients.shape != (3, 4) or not np.isfinite(coefficients).all():
-            raise ModelError(f"linear correction: coefficients must be finite with shape (3, 4), got {coefficients.shape}")
+            raise ModelError(
+                f"linear correction: coefficients must be finite with shape (3, 4), got shape {coefficients.shape}"
+            )
         regressors = tuple(tuple(r) for r in self.regressors)
         if len(regressors) != 3 or any(name not in AXES for r in regressors for name in r):
             raise ModelError(f"linear correction: regressors must be 3 lists of x, y, z, got {regressors}")
