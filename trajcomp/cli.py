@@ -14,6 +14,11 @@ from trajcomp.errors import ToleranceError, TrajcompError
 
 COMMANDS = (
     "robots",
+    "plan",
+    "simulate",
+    "calibrate",
+    "predict",
+    "validate",
 )
 
 

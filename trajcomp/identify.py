@@ -209,12 +209,18 @@ def best_fit_transform(src, dst):
     return out
 
 
-def outlier_rows(residuals, threshold=6.0):
-    """Indices of rows whose residual norm is a gross outlier (median + threshold x robust sigma)."""
+def outlier_rows(residuals, threshold=6.0, min_excess=0.5):
+    """Indices of rows whose residual is a gross outlier.
+
+    A row is one when its residual norm exceeds the median norm by more than
+    ``threshold`` robust standard deviations (1.4826 MAD) *and* by more than
+    ``min_excess`` mm: smooth non-geometric errors are not outliers, a
+    tracker beam break or a wrong row is.
+    """
     norm = np.linalg.norm(residuals, axis=1)
     median = np.median(norm)
     spread = 1.4826 * np.median(np.abs(norm - median))
-    return np.flatnonzero(norm > median + threshold * max(spread, 1e-3))
+    return np.flatnonzero(norm > median + max(threshold * spread, min_excess))
 
 
 def identify_dh(robot, q, measured, *, frame="base", tool=True, loss="linear", rtol=1e-3):

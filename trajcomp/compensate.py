@@ -1,0 +1,108 @@
+"""Compensation: the command that makes the real arm land on each target.
+
+For targets T (TCP poses in the base frame) and a mode of the model, find
+joints q such that the model's *predicted reached* pose is T, and emit the
+nominal-model pose of q (what the nominal controller must receive) with q.
+The reached position is ``FK_true(q) + f(c)`` where FK_true is the identified
+robot (``dh``, ``composite``) or the nominal one (``none``, ``linear``,
+``grid``), f the additive error field of the mode (zero, the linear error
+model, the raw-error grid or the residual grid) and c the commanded position,
+at which the field was measured. Because f depends on c, the solution is a
+short fixed-point iteration; the field is smooth, so three passes converge
+far below the measurement noise.
+"""
+
+import dataclasses
+
+import numpy as np
+
+from trajcomp.ik import ik, ik_numeric
+from trajcomp.kinematics import fk
+from trajcomp.model import evaluate_field
+from trajcomp.plan import batch_seed
+
+ITERATIONS = 3
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class CompensationResult:
+    """Commands for N targets.
+
+    Attributes
+    ----------
+    T_command : ndarray, shape (N, 4, 4)
+        TCP pose to send to the nominal controller, base frame, mm.
+    q : ndarray, shape (N, 6)
+        The joint angles of that command, rad.
+    correction : ndarray, shape (N, 3)
+        Commanded minus target position, mm.
+    outside : ndarray, shape (N,) bool
+        Targets outside the grid, handled by the ``outside`` policy.
+    """
+
+    T_command: np.ndarray
+    q: np.ndarray
+    correction: np.ndarray
+    outside: np.ndarray
+
+
+def compensate(model, targets, *, mode=None, tool=None, seed=None, outside="model", label="target"):
+    """Compensated commands for target TCP poses.
+
+    Parameters
+    ----------
+    model : CompensationModel
+    targets : ndarray, shape (N, 4, 4)
+        Where the real TCP must go, base frame, mm.
+    mode : str, optional
+        One of ``model.modes``; default ``model.method``.
+    tool : ndarray, shape (4, 4), optional
+        TCP in the flange frame of the program's tool, taken as exact. Default:
+        the measured TCP (declared tool for the command, identified tool for
+        the real arm).
+    seed : array_like, shape (N, 6) or (6,), optional
+        Joint seed choosing the IK branch; default: `batch_seed` of the targets.
+    outside : {"model", "clamp", "error"}
+        Policy for targets outside the grid (see `CompensationModel.predict`).
+    label : str
+        Names the targets in error messages (e.g. the program file).
+
+    Raises
+    ------
+    IKError
+        A target (named by index) cannot be reached.
+    ModelError
+        Unknown mode, or a target outside the grid with ``outside="error"``.
+    """
+    mode = mode or model.method
+    model.check_mode(mode)
+    targets = np.asarray(targets, dtype=float)
+    nominal = model.nominal
+    refine = mode in ("dh", "composite")
+    real = model.identified if refine else nominal
+    if tool is not None:
+        nominal = nominal.replace(T_flange_tool=tool)
+        real = real.replace(T_flange_tool=tool)
+    field = {"linear": None, "grid": model.grid, "composite": model.residual}.get(mode)
+    seed = batch_seed(nominal, targets) if seed is None else seed
+    goal = targets[:, :3, 3]
+    commanded = goal.copy()
+    flagged = np.zeros(len(targets), dtype=bool)
+    passes = ITERATIONS if mode in ("linear", "grid", "composite") else 1
+    for _ in range(passes):
+        aimed = targets.copy()
+        if mode == "linear":
+            aimed[:, :3, 3] = goal - model.linear.predict_error(commanded)
+        elif field is not None:
+            offset, flagged = evaluate_field(field, commanded, outside=outside)
+            aimed[:, :3, 3] = goal - offset
+        start = ik(nominal, aimed, seed=seed)
+        start.raise_on_failure(label)
+        q = start.q
+        if refine:
+            refined = ik_numeric(real, aimed, q)
+            refined.raise_on_failure(label)
+            q = refined.q
+        command = fk(nominal, q)
+        commanded = command[:, :3, 3]
+    return CompensationResult(command, q, commanded - goal, flagged)
