@@ -276,5 +276,5 @@ def test_detects_random_jittered_lattices(origin, step, shape, seed):
     order = rng.permutation(len(p))
     lattice, index = detect_lattice(p[order] + rng.uniform(-0.2, 0.2, p.shape))
     assert lattice.shape == shape
-    assert lattice.step == pytest.approx(step, abs=0.2)
+    assert lattice.step == pytest.approx(step, abs=0.4)  # plane centres within 0.2 mm: slopes within 0.4 mm
     assert np.array_equal(index, np.argwhere(np.ones(shape, dtype=bool))[order])
