@@ -19,6 +19,7 @@ COMMANDS = (
     "calibrate",
     "predict",
     "validate",
+    "demo",
 )
 
 
