@@ -1,0 +1,85 @@
+"""The format registry: lookup, lazy built-ins, entry-point plugins."""
+
+import sys
+from importlib.metadata import EntryPoint
+
+import pytest
+
+from trajcomp import formats
+from trajcomp.errors import ReadError, TrajcompError
+from trajcomp.program import Program
+
+
+def test_lookup_by_extension_and_name():
+    assert formats.find_format("a/b/PROG.SRC").name == "krl"
+    assert formats.find_format("x.mod").name == "rapid"
+    assert formats.find_format("x.ls").name == "fanuc_ls"
+    assert formats.find_format("x.script").name == "urscript"
+    assert formats.find_format("x.txt", format="csv").name == "csv"
+
+
+def test_unknown_extension_and_name():
+    with pytest.raises(TrajcompError, match=r"unknown program extension '\.xyz'.*\.src"):
+        formats.find_format("p.xyz")
+    with pytest.raises(TrajcompError, match="unknown program format 'nope'"):
+        formats.find_format(format="nope")
+
+
+def test_missing_file_is_a_read_error(tmp_path):
+    with pytest.raises(ReadError, match="no such file"):
+        formats.read(tmp_path / "none.src")
+
+
+def test_builtin_format_modules_are_imported_lazily():
+    code = (
+        "import sys, trajcomp.formats, trajcomp.cli; "
+        "print(any(m.startswith('trajcomp.formats.') for m in sys.modules))"
+    )
+    import subprocess
+
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == "False"
+
+
+@pytest.fixture
+def plugins(monkeypatch, tmp_path):
+    """Entry points of a working and a broken plugin, and a clean registry."""
+    module = tmp_path / "toyformat.py"
+    module.write_text(
+        "from trajcomp.formats import register_format\n"
+        "from trajcomp.program import Program\n"
+        "def read(path):\n"
+        "    return Program('toy', 'toy', (), ())\n"
+        "def write(program, path):\n"
+        "    return {path: b'toy\\n'}\n"
+        "register_format('toy', ['.toy'], read, write)\n"
+    )
+    monkeypatch.syspath_prepend(str(tmp_path))
+    points = [
+        EntryPoint("toy", "toyformat", formats.ENTRY_POINT_GROUP),
+        EntryPoint("broken", "no_such_module_for_trajcomp", formats.ENTRY_POINT_GROUP),
+    ]
+    monkeypatch.setattr(formats, "entry_points", lambda group: points if group == formats.ENTRY_POINT_GROUP else [])
+    monkeypatch.setattr(formats, "_FORMATS", dict(formats._FORMATS))
+    monkeypatch.setattr(formats, "_PLUGINS", {"loaded": False, "failed": {}})
+    yield
+    sys.modules.pop("toyformat", None)
+
+
+def test_plugin_formats_are_found_through_entry_points(plugins, tmp_path):
+    assert not formats._PLUGINS["loaded"]
+    formats.find_format("x.src")  # a built-in lookup does not load plugins
+    assert not formats._PLUGINS["loaded"]
+    fmt = formats.find_format("data.toy")
+    assert fmt.name == "toy" and fmt.source == "plugin toyformat"
+    (tmp_path / "a.toy").write_text("")
+    assert isinstance(formats.read(tmp_path / "a.toy"), Program)
+    formats.write(tmp_path / "b.toy", formats.read(tmp_path / "a.toy"))
+    assert (tmp_path / "b.toy").read_bytes() == b"toy\n"
+
+
+def test_broken_plugin_is_named_in_the_error(plugins):
+    with pytest.raises(TrajcompError, match=r"plugins that failed to import: broken \(no_such_module"):
+        formats.find_format("x.unknown")
+    assert "broken" in formats.plugin_failures()
+    assert "toy" in [f.name for f in formats.formats()]

@@ -1,0 +1,206 @@
+"""The program format registry: read and write robot programs by extension or name.
+
+Each format is one module exposing ``read(path) -> Program`` and
+``write(program, path) -> {path: bytes}`` (the writer returns the content of
+every file it produces, e.g. a KRL .src and its .dat; `write` puts them on
+disk atomically). Formats are registered with `register_format`; the
+built-in ones are registered by module name and imported on first use only.
+
+Third-party packages add formats through the entry-point group
+``trajcomp.formats``: an entry point names a module (or object) whose import
+calls `register_format`::
+
+    [project.entry-points."trajcomp.formats"]
+    myformat = "mypackage.trajcomp_format"
+
+Plugins are imported lazily, on the first lookup that needs them.
+"""
+
+import dataclasses
+import importlib
+from importlib.metadata import entry_points
+from pathlib import Path
+
+from trajcomp.atomic import write_atomic
+from trajcomp.errors import ReadError, TrajcompError
+
+ENTRY_POINT_GROUP = "trajcomp.formats"
+
+
+@dataclasses.dataclass(frozen=True)
+class Format:
+    """A registered format.
+
+    ``reader`` and ``writer`` are callables, or ``"module:function"`` strings
+    resolved on first use. ``source`` is ``"built-in"`` or the plugin's
+    entry point.
+    """
+
+    name: str
+    extensions: tuple
+    reader: object
+    writer: object
+    source: str = "built-in"
+
+    def _resolve(self, ref):
+        if callable(ref):
+            return ref
+        module, _, function = ref.partition(":")
+        return getattr(importlib.import_module(module), function)
+
+    def read(self, path):
+        return self._resolve(self.reader)(path)
+
+    def write(self, program, path):
+        return self._resolve(self.writer)(program, path)
+
+
+_FORMATS = {}
+_PLUGINS = {"loaded": False, "failed": {}}
+
+
+def register_format(name, extensions, reader, writer, *, source="built-in"):
+    """Register (or replace) a format.
+
+    Parameters
+    ----------
+    name : str
+        Registry name, e.g. ``"krl"``.
+    extensions : sequence of str
+        File extensions with the dot, e.g. ``[".src"]``; matched case-insensitively.
+    reader : callable or str
+        ``reader(path) -> Program``, or ``"module:function"``.
+    writer : callable or str
+        ``writer(program, path) -> {Path: bytes}``, or ``"module:function"``.
+    source : str
+        Shown by ``trajcomp formats``.
+    """
+    _FORMATS[name] = Format(name, tuple(e.lower() for e in extensions), reader, writer, source)
+
+
+for _name, _module, _extensions in (
+    ("csv", "csv_program", (".csv",)),
+    ("krl", "krl", (".src",)),
+    ("rapid", "rapid", (".mod", ".prg", ".modx")),
+    ("fanuc_ls", "fanuc_ls", (".ls",)),
+    ("urscript", "urscript", (".script", ".urscript")),
+):
+    register_format(_name, _extensions, f"trajcomp.formats.{_module}:read", f"trajcomp.formats.{_module}:write")
+
+
+def _load_plugins():
+    """Import every ``trajcomp.formats`` entry point once; remember the ones that fail."""
+    if _PLUGINS["loaded"]:
+        return
+    _PLUGINS["loaded"] = True
+    for entry in entry_points(group=ENTRY_POINT_GROUP):
+        before = set(_FORMATS)
+        try:
+            entry.load()
+        except Exception as exc:  # a broken plugin must not break the built-in formats
+            _PLUGINS["failed"][entry.name] = f"{entry.value}: {type(exc).__name__}: {exc}"
+            continue
+        for name in set(_FORMATS) - before:
+            _FORMATS[name] = dataclasses.replace(_FORMATS[name], source=f"plugin {entry.value}")
+
+
+def _plugin_failures():
+    failed = _PLUGINS["failed"]
+    if not failed:
+        return ""
+    return "; plugins that failed to import: " + "; ".join(f"{n} ({why})" for n, why in failed.items())
+
+
+def formats():
+    """All registered formats (plugins included), sorted by name."""
+    _load_plugins()
+    return [_FORMATS[name] for name in sorted(_FORMATS)]
+
+
+def plugin_failures():
+    """``{entry point name: reason}`` of plugins whose import failed."""
+    _load_plugins()
+    return dict(_PLUGINS["failed"])
+
+
+def find_format(path=None, format=None):
+    """The `Format` named ``format``, or else the one owning ``path``'s extension.
+
+    Raises
+    ------
+    TrajcompError
+        Unknown name or extension; the message lists the known ones and any
+        plugin that failed to import.
+    """
+    if format is None and path is None:
+        raise TrajcompError("give a path or a format name")
+    if format is not None and format not in _FORMATS:
+        _load_plugins()
+    if format is None:
+        suffix = Path(path).suffix.lower()
+        found = [f for f in _FORMATS.values() if suffix in f.extensions]
+        if not found:
+            _load_plugins()
+            found = [f for f in _FORMATS.values() if suffix in f.extensions]
+        if not found:
+            known = ", ".join(sorted(e for f in _FORMATS.values() for e in f.extensions))
+            raise TrajcompError(
+                f"{path}: unknown program extension {suffix or '(none)'!r}; known: {known}"
+                f"{_plugin_failures()}"
+            )
+        return found[0]
+    if format not in _FORMATS:
+        raise TrajcompError(
+            f"unknown program format {format!r}; known: {', '.join(sorted(_FORMATS))}{_plugin_failures()}"
+        )
+    return _FORMATS[format]
+
+
+def read(path, format=None):
+    """Read a robot program.
+
+    Parameters
+    ----------
+    path : str or Path
+    format : str, optional
+        Registry name; default from the extension.
+
+    Returns
+    -------
+    Program
+
+    Raises
+    ------
+    ReadError
+        Missing file, or malformed content (file:line and the text).
+    """
+    path = Path(path)
+    fmt = find_format(path, format)
+    if not path.is_file():
+        raise ReadError(f"{path}: no such file")
+    return fmt.read(path)
+
+
+def write(path, program, format=None):
+    """Write a robot program; every output file is complete or left untouched.
+
+    The whole content is produced before anything is written; each file is
+    then written to a temporary file and renamed into place.
+
+    Parameters
+    ----------
+    path : str or Path
+    program : Program
+    format : str, optional
+        Registry name; default from the extension.
+
+    Returns
+    -------
+    list of Path
+        The files written.
+    """
+    path = Path(path)
+    files = find_format(path, format).write(program, path)
+    for out, data in files.items():
+        write_atomic(out, data)
+    return list(files)

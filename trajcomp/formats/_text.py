@@ -1,0 +1,229 @@
+"""Source-preserving text helpers shared by the format modules.
+
+Readers decode a file once (keeping its line endings and encoding), find
+statements with regular expressions on a *masked* copy of the text (comments
+and string contents blanked, same length, so offsets stay valid) and record
+the span of every number a compensation may change. Writers replace only
+the numbers of edited targets, formatted like the file wrote them.
+"""
+
+import bisect
+import math
+import re
+from pathlib import Path
+
+from trajcomp.errors import ReadError
+from trajcomp.program import Source, Span
+
+NUMBER = r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?"
+
+
+def read_source(path, name=None):
+    """Decode a text file exactly: UTF-8 (with or without BOM), else Latin-1.
+
+    Raises
+    ------
+    ReadError
+        Unreadable, or binary (NUL bytes).
+    """
+    path = Path(path)
+    try:
+        data = path.read_bytes()
+    except OSError as exc:
+        raise ReadError(f"{path}: cannot read: {exc.strerror}") from exc
+    if b"\0" in data:
+        raise ReadError(f"{path}: not a text file")
+    encoding = "utf-8-sig" if data.startswith(b"\xef\xbb\xbf") else "utf-8"
+    try:
+        text = data.decode(encoding)
+    except UnicodeDecodeError:
+        encoding = "latin-1"
+        text = data.decode(encoding)
+    return Source(name or path.name, text, encoding)
+
+
+def mask(text, comment, quote='"'):
+    """``text`` with comments (from ``comment`` to the line end) and string contents blanked.
+
+    The result has the same length and line breaks, so offsets and line
+    numbers found in it hold for ``text``.
+    """
+    out = list(text)
+    i, n = 0, len(text)
+    while i < n:
+        ch = text[i]
+        if ch == quote:
+            end = text.find(quote, i + 1)
+            end = n if end < 0 else end
+            for k in range(i + 1, end):
+                if out[k] not in "\r\n":
+                    out[k] = " "
+            i = end + 1
+        elif text.startswith(comment, i):
+            while i < n and text[i] not in "\r\n":
+                out[i] = " "
+                i += 1
+        else:
+            i += 1
+    return "".join(out)
+
+
+class Lines:
+    """Line numbers (1-based) of offsets in a text, and its lines without line endings."""
+
+    def __init__(self, text):
+        self.text = text
+        self.starts = [0] + [m.end() for m in re.finditer(r"\r\n|\r|\n", text)]
+
+    def number(self, offset):
+        """Line number of a character offset."""
+        return bisect.bisect_right(self.starts, offset)
+
+    def __iter__(self):
+        """``(number, start, end)`` of every line; ``end`` excludes the line ending."""
+        for k, start in enumerate(self.starts):
+            stop = self.starts[k + 1] if k + 1 < len(self.starts) else len(self.text)
+            line = self.text[start:stop].rstrip("\r\n")
+            if k + 1 == len(self.starts) and not line:
+                return
+            yield k + 1, start, start + len(line)
+
+    def line(self, number):
+        """The text of line ``number`` without its line ending."""
+        start = self.starts[number - 1]
+        end = self.starts[number] if number < len(self.starts) else len(self.text)
+        return self.text[start:end].rstrip("\r\n")
+
+
+def fail(source_name, line, text, message):
+    """Raise a ReadError naming file, line, the problem and the offending text."""
+    raise ReadError(f"{source_name}:{line}: {message}: {text.strip()!r}")
+
+
+def spans(source, match, roles, offset=0):
+    """``{role: Span}`` of the groups of a regex match; ``roles`` names groups 1, 2, ...
+
+    ``offset`` is added to the match positions (when the regex ran on a slice).
+    """
+    out = {}
+    for k, role in enumerate(roles, start=1):
+        if role is None or match.group(k) is None:
+            continue
+        start, end = match.span(k)
+        out[role] = Span(source, start + offset, end + offset, match.group(k))
+    return out
+
+
+def values(spans_, roles):
+    """The numbers of some roles as floats."""
+    return [float(spans_[role].text) for role in roles]
+
+
+def decimals(text):
+    """Number of digits after the decimal point in a number's text."""
+    mantissa = re.split(r"[eE]", text)[0]
+    return len(mantissa.split(".")[1]) if "." in mantissa else 0
+
+
+def format_number(value, places):
+    """``value`` with ``places`` decimals, never ``-0``."""
+    text = f"{value:.{places}f}"
+    return text[1:] if float(text) == 0.0 and text.startswith("-") else text
+
+
+def near_angle(angle, reference, period=360.0):
+    """``angle`` shifted by whole periods to be closest to ``reference``."""
+    return angle - period * round((angle - reference) / period)
+
+
+def target_edits(program, encode, min_places):
+    """Text edits that write the edited targets' numbers back into the sources.
+
+    Parameters
+    ----------
+    program : Program
+        Read from the sources it carries.
+    encode : callable
+        ``encode(target, old) -> {role: float or str}``: the numbers of the
+        target in the language, ``old`` being ``{role: float}`` of the numbers
+        in the file (for choosing among equivalent angles and signs). A
+        ``str`` replaces the span's text as is.
+    min_places : Mapping[str, int]
+        Fewest decimals per role (at least 0.001 mm for positions).
+
+    Returns
+    -------
+    list of list of (start, end, text)
+        Edits per source; numbers equal at the written precision are left
+        with their original text.
+    """
+    edits = [[] for _ in program.sources]
+    for target in program.targets:
+        if not target.edited:
+            continue
+        old = {}
+        for role, span in target.spans.items():
+            try:
+                old[role] = float(span.text)
+            except ValueError:
+                old[role] = span.text
+        for role, value in encode(target, old).items():
+            span = target.spans.get(role)
+            if span is None:
+                continue
+            if isinstance(value, str):
+                text = value
+            else:
+                if not math.isfinite(value):
+                    raise ValueError(f"target {target.label}: {role} is not finite")
+                text = format_number(value, max(decimals(span.text), min_places.get(role, 0)))
+                if float(text) == old[role]:
+                    continue
+            if text != span.text:
+                edits[span.source].append((span.start, span.end, text))
+    return edits
+
+
+def patched(program, encode, min_places):
+    """The texts of the program's sources with the edited targets rewritten (see `target_edits`)."""
+    edits = target_edits(program, encode, min_places)
+    return [apply_edits(source.text, e) for source, e in zip(program.sources, edits)]
+
+
+def apply_edits(text, edits):
+    """``text`` with ``(start, end, replacement)`` edits applied (non-overlapping)."""
+    out, position = [], 0
+    for start, end, replacement in sorted(edits):
+        out.append(text[position:start])
+        out.append(replacement)
+        position = end
+    out.append(text[position:])
+    return "".join(out)
+
+
+def encode_text(source, text):
+    """Bytes of ``text`` in the source's encoding.
+
+    Raises
+    ------
+    ValueError
+        A character the encoding cannot hold (only possible in new text).
+    """
+    return text.encode(source.encoding)
+
+
+def numbered(names):
+    """Map tool or frame names to controller numbers: numeric names keep theirs, others get free ones."""
+    taken = {int(n) for n in names if n is not None and str(n).isdigit()}
+    out, free = {None: 0}, 1
+    for name in names:
+        if name in out:
+            continue
+        if str(name).isdigit():
+            out[name] = int(name)
+            continue
+        while free in taken:
+            free += 1
+        out[name] = free
+        taken.add(free)
+    return out
