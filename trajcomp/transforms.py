@@ -122,4 +122,6 @@ def rotation_angle_between(rot_a, rot_b):
     """Angle (rad) of the relative rotation between matrix stacks (N, 3, 3)."""
     rel = np.einsum("...ji,...jk->...ik", rot_a, rot_b)
     cos = (np.trace(rel, axis1=-2, axis2=-1) - 1.0) / 2.0
-    return np.arccos(np.clip(cos, -1.0, 1.0))
+    skew = np.stack([rel[..., 2, 1] - rel[..., 1, 2], rel[..., 0, 2] - rel[..., 2, 0], rel[..., 1, 0] - rel[..., 0, 1]], -1)
+    # atan2 keeps full precision for small angles, where arccos(cos) cannot resolve below ~1e-8 rad.
+    return np.arctan2(0.5 * np.linalg.norm(skew, axis=-1), cos)
