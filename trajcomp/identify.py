@@ -154,7 +154,8 @@ def analyse_identifiability(jac, names, rtol=1e-3):
         ones (or too weak to estimate) and it is fixed.
     """
     _, r, perm = qr(jac, mode="economic", pivoting=True)
-    diag = np.abs(np.diag(r))
+    diag = np.zeros(len(names))  # fewer rows than parameters: the rest have no pivot
+    diag[: min(r.shape)] = np.abs(np.diag(r))
     keep = diag >= rtol * diag[0]
     kept = sorted((names[p] for p in perm[keep]), key=names.index)
     fixed = {}

@@ -37,7 +37,7 @@ from trajcomp.transforms import matrix_to_pose, pose_to_matrix
 
 FORMAT = "trajcomp-model/1"
 MODES = ("none", "linear", "dh", "grid", "composite")
-_SIDECAR_NODES = 2000  # grids with more nodes go to a sidecar .npz
+_SIDECAR_NODES = 1000  # grids with more nodes go to a sidecar .npz
 
 
 @dataclasses.dataclass(frozen=True, eq=False)

@@ -1,0 +1,124 @@
+"""Calibration and compensation against the virtual robot's ground truth."""
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+from trajcomp.calibrate import calibrate
+from trajcomp.compensate import compensate
+from trajcomp.errors import ModelError
+from trajcomp.kinematics import fk
+from trajcomp.measurements import Measurements
+from trajcomp.model import load_model, save_model
+from trajcomp.plan import default_orientation, plan_grid
+from trajcomp.robot import load_robot
+from trajcomp.simulate import VirtualRobot
+from trajcomp.transforms import abc_to_matrix
+
+
+@pytest.fixture(scope="module")
+def setup():
+    robot = load_robot("ur10")
+    virtual = VirtualRobot.create(robot, "paper", seed=1)
+    rng = np.random.default_rng(5)
+    plan = plan_grid(robot, (300, -100, 300), 500, 100)
+    q = plan.joints[plan.reachable]
+    meas = Measurements(joints=q, position=plan.position[plan.reachable], measured=virtual.measure(q, rng),
+                        lines=np.arange(len(q)) + 2, path="virtual.csv")
+    model = calibrate(robot, meas, method="composite", grid_step=100, folds=0)
+    targets = np.tile(np.eye(4), (40, 1, 1))
+    targets[:, :3, :3] = abc_to_matrix(default_orientation(robot))
+    targets[:, :3, 3] = np.array([300, -100, 300]) + rng.uniform(0, 500, (40, 3))
+    return robot, virtual, model, targets
+
+
+def landing_error(virtual, model, targets, mode, **options):
+    result = compensate(model, targets, mode=mode, **options)
+    return np.linalg.norm(virtual.reached_poses(result.q)[:, :3, 3] - targets[:, :3, 3], axis=1)
+
+
+def test_the_virtual_robot_has_paper_sized_errors(setup):
+    _, virtual, model, targets = setup
+    error = landing_error(virtual, model, targets, "none")
+    assert 1.0 < error.mean() < 3.0
+
+
+def test_composite_beats_each_part_alone(setup):
+    _, virtual, model, targets = setup
+    mean = {mode: landing_error(virtual, model, targets, mode).mean() for mode in model.modes}
+    assert mean["composite"] < mean["dh"] < mean["linear"] < mean["none"]
+    assert mean["composite"] < mean["grid"]
+    assert mean["composite"] < 0.05  # 1-3 mm down to a few hundredths
+
+
+def test_compensated_command_is_the_nominal_pose_of_its_joints(setup):
+    robot, _, model, targets = setup
+    result = compensate(model, targets, mode="composite")
+    np.testing.assert_allclose(fk(robot, result.q), result.T_command, atol=1e-6)
+    assert np.all(np.linalg.norm(result.correction, axis=1) > 0.5)  # it really moved the targets
+
+
+def test_outside_policy(setup):
+    _, _, model, targets = setup
+    far = targets[:2].copy()
+    far[:, :3, 3] = [[550, 150, 250], [250, 100, 500]]  # below and beside the cube
+    assert compensate(model, far, mode="composite").outside.all()
+    with pytest.raises(ModelError, match="outside the compensation grid"):
+        compensate(model, far, mode="composite", outside="error")
+
+
+def test_not_worse_at_orientations_outside_the_measured_set(setup):
+    robot, virtual, model, targets = setup
+    tilted = targets.copy()
+    tilted[:, :3, :3] = abc_to_matrix(default_orientation(robot) + np.radians([30, 20, -15]))
+    none = landing_error(virtual, model, tilted, "none").mean()
+    assert landing_error(virtual, model, tilted, "dh").mean() < 0.5 * none
+
+
+def test_model_file_round_trip(setup, tmp_path):
+    _, _, model, targets = setup
+    save_model(tmp_path / "model.yaml", model)
+    back = load_model(tmp_path / "model.yaml")
+    assert back.modes == model.modes and back.dh_names == model.dh_names
+    np.testing.assert_allclose(compensate(back, targets).q, compensate(model, targets).q, atol=1e-9)
+
+
+def test_model_file_errors(setup, tmp_path):
+    _, _, model, _ = setup
+    path = tmp_path / "model.yaml"
+    save_model(path, model)
+    with pytest.raises(ModelError, match="is for robot 'ur10', not 'ur5'"):
+        load_model(path, robot="ur5")
+    path.write_text(path.read_text().replace("trajcomp-model/1", "trajcomp-model/9"))
+    with pytest.raises(ModelError, match="not supported"):
+        load_model(path)
+    (tmp_path / "other.yaml").write_text("a: 1\n")
+    with pytest.raises(ModelError, match="not a trajcomp model"):
+        load_model(tmp_path / "other.yaml")
+
+
+def test_large_grid_goes_to_a_sidecar(tmp_path):
+    robot = load_robot("ur10")
+    virtual = VirtualRobot.create(robot, "paper", seed=2)
+    plan = plan_grid(robot, (500, 100, 500), 100, 10)
+    q = plan.joints
+    meas = Measurements(joints=q, position=plan.position, measured=virtual.measure(q, np.random.default_rng(1)),
+                        lines=np.arange(len(q)))
+    model = calibrate(robot, meas, grid_step=10, folds=0)
+    save_model(tmp_path / "small.yaml", model)
+    assert (tmp_path / "small.npz").exists()
+    back = load_model(tmp_path / "small.yaml")
+    points = plan.position[:50] + 3.0
+    np.testing.assert_allclose(back.predict("composite", q[:50], points)[0], model.predict("composite", q[:50], points)[0])
+
+
+def test_gross_outlier_is_reported_and_left_out(setup):
+    robot, virtual, _, _ = setup
+    q = np.random.default_rng(3).uniform(-np.pi, np.pi, (150, 6))
+    measured = virtual.measure(q, np.random.default_rng(4))
+    measured[10] += [5.0, 0.0, 0.0]
+    meas = Measurements(joints=q, measured=measured, lines=np.arange(150) + 2, path="m.csv")
+    model = calibrate(robot, meas, method="dh", folds=0)
+    assert model.report["outlier_lines"] == [12]
+    assert any("outlier" in w for w in model.report["warnings"])
