@@ -12,8 +12,11 @@ import math
 import re
 from pathlib import Path
 
+import numpy as np
+
 from trajcomp.errors import ReadError
 from trajcomp.program import Source, Span
+from trajcomp.transforms import abc_to_matrix, matrix_to_abc
 
 NUMBER = r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?"
 
@@ -129,6 +132,26 @@ def format_number(value, places):
     """``value`` with ``places`` decimals, never ``-0``."""
     text = f"{value:.{places}f}"
     return text[1:] if float(text) == 0.0 and text.startswith("-") else text
+
+
+def same_rotation(rot, old_rot):
+    """True if a rotation (3, 3) equals the one the file states: its numbers then stay as written."""
+    return bool(np.allclose(rot, old_rot, rtol=0.0, atol=1e-12))
+
+
+def encode_xyzabc(pose, old, roles):
+    """Numbers of a pose (4, 4) as x, y, z (mm) and A, B, C (deg, R = Rz(A) Ry(B) Rx(C)).
+
+    ``roles`` names the six numbers in that order (FANUC: x, y, z, r, p, w).
+    The angles are chosen nearest the file's ``old`` ones, and left out
+    when the rotation is the one the file states.
+    """
+    out = dict(zip(roles[:3], pose[:3, 3]))
+    old_abc = [old[r] for r in roles[3:]]
+    if not same_rotation(pose[:3, :3], abc_to_matrix(np.radians(old_abc))):
+        for role, angle, reference in zip(roles[3:], np.degrees(matrix_to_abc(pose[:3, :3])), old_abc):
+            out[role] = near_angle(angle, reference)
+    return out
 
 
 def near_angle(angle, reference, period=360.0):

@@ -18,9 +18,9 @@ from trajcomp.formats._text import (
     Lines,
     apply_edits,
     encode_text,
+    encode_xyzabc,
     fail,
     format_number,
-    near_angle,
     read_source,
     target_edits,
 )
@@ -125,10 +125,7 @@ def _row(name, number, line, row, has_pose, has_joints, index):
 def _encode(target, old):
     out = {}
     if target.pose is not None:
-        pose = matrix_to_pose(target.pose)
-        out |= dict(zip(POSE[:3], pose[:3]))
-        for role, angle in zip(POSE[3:], np.degrees(pose[3:])):
-            out[role] = near_angle(angle, old[role]) if role in old else angle
+        out |= encode_xyzabc(target.pose, old, POSE)
     if target.joints is not None:
         out |= dict(zip(JOINTS, np.degrees(target.joints)))
     return out

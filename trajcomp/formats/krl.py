@@ -34,10 +34,10 @@ from trajcomp.formats._text import (
     NUMBER,
     Lines,
     encode_text,
+    encode_xyzabc,
     fail,
     format_number,
     mask,
-    near_angle,
     numbered,
     patched,
     read_source,
@@ -334,10 +334,7 @@ def _status_text(value, old):
 def _encode(target, old):
     if target.is_joint:
         return dict(zip(AXES, np.degrees(target.joints)))
-    pose = matrix_to_pose(target.pose)
-    out = dict(zip(POSE[:3], pose[:3]))
-    for role, angle in zip(POSE[3:], np.degrees(pose[3:])):
-        out[role] = near_angle(angle, old[role])
+    out = encode_xyzabc(target.pose, old, POSE)
     if target.config:
         out["s"] = _status_text(target.config[0], old.get("s"))
         out["t"] = _status_text(target.config[1], old.get("t"))
