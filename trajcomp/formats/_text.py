@@ -202,6 +202,8 @@ def target_edits(program, encode, min_places):
                 text = format_number(value, max(decimals(span.text), min_places.get(role, 0)))
                 if float(text) == old[role]:
                     continue
+                if re.match(r"[-+]?\.", span.text):  # the file writes .5, not 0.5
+                    text = re.sub(r"^(-?)0\.", r"\1.", text)
             if text != span.text:
                 edits[span.source].append((span.start, span.end, text))
     return edits

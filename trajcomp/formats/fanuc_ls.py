@@ -1,0 +1,311 @@
+"""FANUC teach pendant programs in ASCII form (.LS).
+
+Read:
+- the sections /PROG, /ATTR (LINE_COUNT), /MN, /POS, /END;
+- /MN motion lines ``J|L|C P[n] speed FINE|CNTn`` (a C line continues with
+  ``: P[m] speed ...``), speeds in ``%``, ``mm/sec``, ``cm/min``, ``deg/sec``,
+  ``sec``, ``msec``; ``UFRAME_NUM=n`` / ``UTOOL_NUM=n``. CNTn is read as an
+  n mm blend (FANUC's CNT is a rounding percentage);
+- /POS entries ``P[n:"comment"]{ GP1: UF : u, UT : t, CONFIG : 'N U T, 0,
+  0, 0', X = .. mm, Y, Z, W = .. deg, P, R (, E1 ..) }`` or with J1..J6
+  (joint representation). W, P, R: R = Rz(R) Ry(P) Rx(W), the matrix of
+  A, B, C = R, P, W. UF 0 and UT 0 are the world frame and the faceplate.
+Position registers (PR[n], P[R[n]]) and run-time modifiers (Offset,
+Tool_Offset, INC, VOFFSET) are left as written and reported as not
+compensated.
+
+Write: the edited positions' numbers and CONFIG; lines are never added or
+removed, so LINE_COUNT stays right. Generated programs count their lines.
+"""
+
+import re
+from pathlib import Path
+
+import numpy as np
+
+from trajcomp.errors import ReadError, WriteError
+from trajcomp.formats._text import (
+    NUMBER,
+    Lines,
+    encode_text,
+    encode_xyzabc,
+    fail,
+    format_number,
+    mask,
+    numbered,
+    patched,
+    read_source,
+)
+from trajcomp.program import CIRCULAR, JOINT, LINEAR, Motion, Program, Span, Statement, Target
+from trajcomp.transforms import matrix_to_pose, pose_to_matrix
+
+XYZWPR = ("x", "y", "z", "w", "p", "r")
+ABC_ORDER = ("x", "y", "z", "r", "p", "w")  # A = R, B = P, C = W
+JOINTS = ("j1", "j2", "j3", "j4", "j5", "j6")
+MIN_PLACES = dict.fromkeys(XYZWPR[:3], 3) | dict.fromkeys(XYZWPR[3:], 4) | dict.fromkeys(JOINTS, 4)
+KINDS = {"J": JOINT, "L": LINEAR, "C": CIRCULAR}
+SPEED_UNITS = {"%": (1.0, "%"), "mm/sec": (1.0, "mm/s"), "cm/min": (10.0 / 60.0, "mm/s"),
+               "inch/min": (25.4 / 60.0, "mm/s"), "deg/sec": (np.pi / 180.0, "rad/s"),
+               "sec": (1.0, "s"), "msec": (1e-3, "s")}
+
+_SECTION = re.compile(r"^/(PROG|ATTR|APPL|MN|POS|END)\b")
+_NUMBERED = re.compile(r"^\s*(\d+):(.*)$")
+_CONTINUED = re.compile(r"^\s*:(.*)$")
+_MOTION = re.compile(r"^\s*([JLC])\s+(P|PR)\[\s*([^\]:]+?)\s*(?::[^\]]*)?\](.*)$", re.I)
+_POINT = re.compile(r"^\s*P\[\s*([^\]:]+?)\s*(?::[^\]]*)?\](.*)$", re.I)
+_SPEED = re.compile(r"(" + NUMBER + r")\s*(%|mm/sec|cm/min|inch/min|deg/sec|msec|sec)", re.I)
+_ZONE = re.compile(r"\b(FINE|CNT\s*(\d+))\b", re.I)
+_RUNTIME = re.compile(r"\b(Offset|Tool_Offset|INC|VOFFSET)\b", re.I)
+_STATE = re.compile(r"^\s*(UFRAME_NUM|UTOOL_NUM)\s*=\s*(\d+)\s*;", re.I)
+_POS = re.compile(r"P\[\s*(\d+)\s*(?::\s*\"[^\"]*\")?\s*\]\s*\{(.*?)\};", re.S)
+_FIELD = re.compile(r"\b([XYZWPR]|J[1-6]|E\d)\s*=\s*(" + NUMBER + r")\s*(mm|deg)", re.I)
+_FRAME_NUMBER = re.compile(r"\b(UF|UT)\s*:\s*(\d+)", re.I)
+_CONFIG = re.compile(r"CONFIG\s*:\s*'([^']*)'", re.I)
+_CONFIG_VALUE = re.compile(r"^\s*([NF])\s*([UD])\s*([TB])\s*,\s*(-?\d+)\s*,\s*(-?\d+)\s*,\s*(-?\d+)\s*$", re.I)
+
+
+def read(path):
+    """Read a FANUC .LS program."""
+    source = read_source(path)
+    masked = mask(source.text, "!", quote='"')
+    lines = Lines(source.text)
+    head = next((source.text[s:e] for _, s, e in lines if source.text[s:e].strip()), "")
+    if not head.lstrip().upper().startswith("/PROG"):
+        raise ReadError(f"{path}: not a FANUC .LS program: it does not start with /PROG")
+    name = head.split()[1] if len(head.split()) > 1 else Path(path).stem
+    section, instructions, pos_start, pos_end = None, [], None, len(source.text)
+    for number, start, end in lines:
+        text = masked[start:end]
+        m = _SECTION.match(text.strip())
+        if m:
+            section = m.group(1)
+            if section == "POS":
+                pos_start = end
+            elif section == "END" and pos_start is not None:
+                pos_end = start
+            instructions.append((number, start, end, None))
+            continue
+        if section == "MN" and (c := _CONTINUED.match(text)) and instructions and instructions[-1][3] is not None:
+            prev = instructions[-1]
+            instructions[-1] = (prev[0], prev[1], end, prev[3] + " " + c.group(1))
+        elif section == "MN" and (n := _NUMBERED.match(text)):
+            instructions.append((number, start, end, n.group(2)))
+        else:
+            instructions.append((number, start, end, None))
+    targets, points = _positions(source, masked, lines, pos_start, pos_end)
+    items, frame, tool = [], None, None
+    for number, start, end, content in instructions:
+        original = source.text[start:end]
+        if content is None:
+            items.append(Statement(number, original))
+            continue
+        if m := _STATE.match(content):
+            if m.group(1).upper() == "UFRAME_NUM":
+                frame = m.group(2)
+            else:
+                tool = m.group(2)
+        m = _MOTION.match(content)
+        if not m:
+            items.append(Statement(number, original))
+            continue
+        items.append(_motion(m, content, points, frame, tool, source.name, number, original))
+    tools, frames = {"0": np.eye(4)}, {"0": np.eye(4)}
+    return Program("fanuc_ls", name, tuple(items), tuple(targets), tools, frames, (source,))
+
+
+def _motion(m, content, points, frame, tool, name, number, original):
+    kind = KINDS[m.group(1).upper()]
+    rest = m.group(4)
+    refs = [(m.group(2).upper(), m.group(3))]
+    if kind == CIRCULAR:
+        second = _POINT.search(rest) or re.search(r"\b(PR)\[\s*([^\]:]+?)\s*(?::[^\]]*)?\](.*)$", rest, re.I)
+        if not second:
+            fail(name, number, original, "C needs a via point and an end point")
+        if second.re is _POINT:
+            refs.append(("P", second.group(1)))
+            rest = second.group(2)
+        else:
+            refs.append(("PR", second.group(2)))
+            rest = second.group(3)
+    speed = _SPEED.search(rest)
+    zone = _ZONE.search(rest)
+    if not speed or not zone:
+        fail(name, number, original, "motion needs a speed and FINE or CNT")
+    scale, unit = SPEED_UNITS[speed.group(2).lower()]
+    runtime = bool(_RUNTIME.search(rest))
+    found = []
+    for kind_ref, ref in refs:
+        if runtime or kind_ref == "PR" or not ref.isdigit():
+            found.append(None)
+        elif int(ref) not in points:
+            fail(name, number, original, f"P[{ref}] has no entry in /POS")
+        else:
+            found.append(points[int(ref)])
+    return Motion(
+        kind=kind,
+        target=found[-1],
+        via=found[0] if kind == CIRCULAR else None,
+        speed=float(speed.group(1)) * scale,
+        speed_unit=unit,
+        zone=float(zone.group(2)) if zone.group(2) else None,
+        tool=tool,
+        frame=frame,
+        line=number,
+        text=" ".join(original.split()),
+    )
+
+
+def _positions(source, masked, lines, start, end):
+    """Targets of the /POS section and ``{P number: target index}``."""
+    targets, points = [], {}
+    if start is None:
+        return targets, points
+    for m in _POS.finditer(masked, start, end):
+        body_start = m.start(2)
+        body = masked[body_start:m.end(2)]
+        group = re.search(r"GP1\s*:(.*?)(?=GP\d+\s*:|$)", body, re.S)
+        if not group:
+            continue
+        gp_start = body_start + group.start(1)
+        gp = group.group(1)
+        line = lines.number(m.start())
+        original = source.text[m.start():m.end()]
+        fields = {}
+        for f in _FIELD.finditer(gp):
+            fields[f.group(1).lower()] = Span(0, gp_start + f.start(2), gp_start + f.end(2), f.group(2))
+        frames = {f.group(1).upper(): f.group(2) for f in _FRAME_NUMBER.finditer(gp)}
+        label = f"P[{m.group(1)}]"
+        where = {"name": label, "line": line, "tool": frames.get("UT"), "frame": frames.get("UF")}
+        if "j1" in fields:
+            missing = [j for j in JOINTS if j not in fields]
+            if missing:
+                fail(source.name, line, original, f"{label} lacks {', '.join(j.upper() for j in missing)}")
+            joints = np.radians([float(fields[j].text) for j in JOINTS])
+            target = Target(**where, joints=joints, spans={j: fields[j] for j in JOINTS})
+        else:
+            missing = [c for c in XYZWPR if c not in fields]
+            if missing:
+                fail(source.name, line, original, f"{label} lacks {', '.join(c.upper() for c in missing)}")
+            x, y, z, w, p, r = (float(fields[c].text) for c in XYZWPR)
+            spans = {c: fields[c] for c in XYZWPR}
+            config = ()
+            c = _CONFIG.search(gp)
+            if c:
+                v = _CONFIG_VALUE.match(c.group(1))
+                if not v:
+                    fail(source.name, line, original, f"{label}: malformed CONFIG")
+                config = (v.group(1).upper(), v.group(2).upper(), v.group(3).upper(), *map(int, v.groups()[3:]))
+                spans["config"] = Span(0, gp_start + c.start(1), gp_start + c.end(1), c.group(1))
+            pose = pose_to_matrix([x, y, z, *np.radians([r, p, w])])
+            target = Target(**where, pose=pose, config=config, spans=spans)
+        points[int(m.group(1))] = len(targets)
+        targets.append(target)
+    return targets, points
+
+
+def _config_text(config):
+    return f"{config[0]} {config[1]} {config[2]}, {config[3]}, {config[4]}, {config[5]}"
+
+
+def _encode(target, old):
+    if target.is_joint:
+        return dict(zip(JOINTS, np.degrees(target.joints)))
+    out = encode_xyzabc(target.pose, old, ABC_ORDER)
+    if target.config and "config" in old:
+        v = _CONFIG_VALUE.match(old["config"])
+        was = (v.group(1).upper(), v.group(2).upper(), v.group(3).upper(), *map(int, v.groups()[3:]))
+        if tuple(target.config) != was:
+            out["config"] = _config_text(target.config)
+    return out
+
+
+def write(program, path):
+    """``{path: bytes}``: patched in place if read from .LS, else a generated program."""
+    path = Path(path)
+    if program.format == "fanuc_ls" and program.sources:
+        source = program.sources[0]
+        return {path: encode_text(source, patched(program, _encode, MIN_PLACES)[0])}
+    return {path: _emit(program, path.stem).encode("utf-8")}
+
+
+ATTR = """/ATTR
+OWNER\t\t= MNEDITOR;
+COMMENT\t\t= "trajcomp";
+PROG_SIZE\t= 0;
+CREATE\t\t= DATE 00-01-01  TIME 00:00:00;
+MODIFIED\t= DATE 00-01-01  TIME 00:00:00;
+FILE_NAME\t= ;
+VERSION\t\t= 0;
+LINE_COUNT\t= {count};
+MEMORY_SIZE\t= 0;
+PROTECT\t\t= READ_WRITE;
+TCD:  STACK_SIZE\t= 0,
+      TASK_PRIORITY\t= 50,
+      TIME_SLICE\t= 0,
+      BUSY_LAMP_OFF\t= 0,
+      ABORT_REQUEST\t= 0,
+      PAUSE_REQUEST\t= 0;
+DEFAULT_GROUP\t= 1,*,*,*,*;
+CONTROL_CODE\t= 00000000 00000000;"""
+
+
+def _speed(motion):
+    if motion.speed is not None and motion.speed_unit == ("%" if motion.kind == JOINT else "mm/s"):
+        return f"{motion.speed:g}{'%' if motion.kind == JOINT else 'mm/sec'}"
+    return "100%" if motion.kind == JOINT else "100mm/sec"
+
+
+def _emit(program, name):
+    """A new .LS program; Cartesian targets need their CONFIG (see postprocess.convert)."""
+    used = program.usage()
+    tools = numbered([used[i][0] for i in sorted(used)])
+    frames = numbered([used[i][1] for i in sorted(used)])
+    mn, pos, numbers = [], [], {}
+    for table, numbering, label in ((program.tools, tools, "UTOOL"), (program.frames, frames, "UFRAME")):
+        for key, number in numbering.items():
+            if key is not None and number and key in table:
+                x, y, z, a, b, c = matrix_to_pose(table[key])
+                values = [x, y, z, *np.degrees([c, b, a])]
+                mn.append(f"  ! {label} {number} = " + ",".join(format_number(v, 3) for v in values) + " ;")
+    for motion in program.motions:
+        if motion.target is None:
+            mn.append(f"  ! not converted: {motion.text[:60]} ;")
+            continue
+        refs = []
+        for index in (motion.via, motion.target):
+            if index is None:
+                continue
+            if index not in numbers:
+                numbers[index] = len(numbers) + 1
+                tool, frame = used[index]
+                pos.append(_position(program.targets[index], numbers[index], tools[tool], frames[frame]))
+            refs.append(f"P[{numbers[index]}]")
+        zone = "FINE" if motion.zone is None else f"CNT{int(round(min(motion.zone, 100)))}"
+        keyword = {JOINT: "J", LINEAR: "L", CIRCULAR: "C"}[motion.kind]
+        if motion.kind == CIRCULAR:
+            mn.append(f"C {refs[0]}    \n    :  {refs[1]} {_speed(motion)} {zone}    ;")
+        else:
+            mn.append(f"{keyword} {refs[0]} {_speed(motion)} {zone}    ;")
+    numbered_mn = [f"{k:4d}:{line}" for k, line in enumerate(mn, start=1)]
+    text = [f"/PROG  {_program_name(name)}", ATTR.format(count=len(mn)), "/MN"] + numbered_mn
+    return "\n".join(text + ["/POS"] + pos + ["/END"]) + "\n"
+
+
+def _program_name(name):
+    return (re.sub(r"[^A-Z0-9_]", "_", name.upper()) or "PROG")[:36]
+
+
+def _position(target, number, tool, frame):
+    head = f"P[{number}]{{\n   GP1:\n\tUF : {frame}, UT : {tool},"
+    if target.is_joint:
+        j = [format_number(v, 6) for v in np.degrees(target.joints)]
+        body = (f"\n\tJ1= {j[0]} deg,\tJ2= {j[1]} deg,\tJ3= {j[2]} deg,"
+                f"\n\tJ4= {j[3]} deg,\tJ5= {j[4]} deg,\tJ6= {j[5]} deg")
+        return head + body + "\n};"
+    if len(target.config) != 6:
+        raise WriteError(f"target {target.label}: FANUC needs its CONFIG; convert with a robot")
+    x, y, z, a, b, c = matrix_to_pose(target.pose)
+    p = [format_number(v, 6) for v in (x, y, z)] + [format_number(v, 9) for v in np.degrees([c, b, a])]
+    return (head + f"\t\tCONFIG : '{_config_text(target.config)}',"
+            f"\n\tX = {p[0]}  mm,\tY = {p[1]}  mm,\tZ = {p[2]}  mm,"
+            f"\n\tW = {p[3]} deg,\tP = {p[4]} deg,\tR = {p[5]} deg\n}};")
