@@ -148,10 +148,12 @@ def ik_family(robot):
     std = robot.as_standard()
     a, alpha, d = std.a, std.alpha, std.d
     joint_map = robot.joint_map
+    wrist_diagonal = np.diag(np.diag(joint_map)[3:])
     integral = np.allclose(joint_map, np.round(joint_map)) and np.isclose(abs(np.linalg.det(joint_map)), 1.0)
-    wrist_map = joint_map[3:, :]
-    uncoupled_wrist = np.allclose(wrist_map, np.diag(np.diag(joint_map)[3:]) @ np.eye(6)[3:]) and np.allclose(
-        joint_map[:3, 3:], 0.0
+    uncoupled_wrist = (
+        np.allclose(joint_map[3:, :3], 0.0)
+        and np.allclose(joint_map[:3, 3:], 0.0)
+        and np.allclose(joint_map[3:, 3:], wrist_diagonal)
     )
 
     def perpendicular(angle):
@@ -528,7 +530,7 @@ def _pose_error(T_current, T_target):
     err = np.empty((len(T_current), 6))
     err[:, :3] = T_target[:, :3, 3] - T_current[:, :3, 3]
     rel = T_target[:, :3, :3] @ np.swapaxes(T_current[:, :3, :3], 1, 2)
-    axis = 0.5 * np.stack([rel[:, 2, 1] - rel[:, 1, 2], rel[:, 0, 2] - rel[:, 2, 0], rel[:, 1, 0] - rel[:, 0, 1]], axis=1)
+    axis = 0.5 * np.stack([rel[:, 2, 1] - rel[:, 1, 2], rel[:, 0, 2] - rel[:, 2, 0], rel[:, 1, 0] - rel[:, 0, 1]], 1)
     sin = np.linalg.norm(axis, axis=1)
     angle = np.arctan2(sin, 0.5 * (np.trace(rel, axis1=1, axis2=2) - 1.0))
     err[:, 3:] = axis * np.where(sin > 0.0, angle / np.where(sin > 0.0, sin, 1.0), 1.0)[:, None]
