@@ -67,3 +67,18 @@ def fanuc_config(robot, q):
         ("N" if wrist_negative else "F", "U" if elbow_up else "D", "B" if back else "T", *map(int, turn))
         for wrist_negative, elbow_up, back, turn in zip(negative, up, behind, turns)
     ]
+
+
+BY_FORMAT = {"krl": kuka_status_turn, "rapid": abb_confdata, "fanuc_ls": fanuc_config}
+
+
+def configuration_for(format_name, robot, q):
+    """Configuration data of joint vectors q (N, 6), rad, in a program format's language.
+
+    Returns
+    -------
+    list of tuple, or None for a format without configuration data (CSV,
+    URScript: their joints are written as joints).
+    """
+    function = BY_FORMAT.get(format_name)
+    return None if function is None else function(robot, q)

@@ -159,7 +159,8 @@ def _added_joints(program, source):
 def _emit(program):
     """A new program CSV; poses must already be in the base frame (see postprocess.convert)."""
     targets = program.targets
-    with_joints = all(targets[m.target].joints is not None for m in program.motions if m.target is not None)
+    used = [i for m in program.motions if m.target is not None for i in (m.via, m.target) if i is not None]
+    with_joints = all(targets[i].joints is not None for i in used)
     columns = list(POSE) + ["motion", "speed", "zone"] + (list(JOINTS) if with_joints else [])
     rows = [",".join(columns)]
     for motion in program.motions:
