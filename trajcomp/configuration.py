@@ -41,7 +41,7 @@ def kuka_status_turn(robot, q):
     q = np.atleast_2d(q)
     behind, up, negative = _flags(robot, q)
     status = behind * 1 + (up != behind) * 2 + negative * 4
-    turn = (q < 0.0) @ (1 << np.arange(6))
+    turn = (q < -1e-9) @ (1 << np.arange(6))  # a joint written as 0 is not negative
     return [(int(s), int(t)) for s, t in zip(status, turn)]
 
 

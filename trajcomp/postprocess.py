@@ -20,7 +20,7 @@ import dataclasses
 import numpy as np
 
 from trajcomp.configuration import configuration_for
-from trajcomp.errors import TrajcompError
+from trajcomp.errors import IKError, TrajcompError
 from trajcomp.ik import ik
 from trajcomp.kinematics import fk
 from trajcomp.program import Program
@@ -159,22 +159,33 @@ def compensate_program(program, correct, robot, *, tools=None, frames=None, join
     return edited, report
 
 
-def nominal_joints(robot, T_base_tcp, T_flange_tool, seed=None):
+def nominal_joints(robot, T_base_tcp, T_flange_tool, seed=None, labels=None):
     """Joints (N, 6), rad, that put each tool (N, 4, 4) on its pose (N, 4, 4) with the nominal robot.
+
+    Parameters
+    ----------
+    labels : sequence of str, optional
+        Target names for the error message.
 
     Raises
     ------
     IKError
-        A pose without solution.
+        Poses without solution, named with their reason.
     """
+    T_base_tcp = np.asarray(T_base_tcp, dtype=float)
+    labels = labels or [f"target {k}" for k in range(len(T_base_tcp))]
     q = np.empty((len(T_base_tcp), 6))
-    tools, group = np.unique(np.round(np.asarray(T_flange_tool).reshape(len(T_base_tcp), -1), 12), axis=0,
-                             return_inverse=True)
+    reason = np.empty(len(T_base_tcp), dtype=object)
+    flat = np.round(np.asarray(T_flange_tool, dtype=float).reshape(len(T_base_tcp), 16), 12)
+    tools, group = np.unique(flat, axis=0, return_inverse=True)
     for k, tool in enumerate(tools):
         rows = np.flatnonzero(group.ravel() == k)
         solved = ik(robot.replace(T_flange_tool=tool.reshape(4, 4)), T_base_tcp[rows],
                     seed=None if seed is None else seed[rows])
-        q[rows] = solved.raise_on_failure(f"{len(rows)} targets").q
+        q[rows], reason[rows] = solved.q, solved.reason
+    failed = [f"{labels[k]}: {reason[k]}" for k in np.flatnonzero(reason != "")]
+    if failed:
+        raise IKError(f"robot {robot.name}: no joint solution for {len(failed)} targets ({'; '.join(failed[:5])})")
     return q
 
 
@@ -216,7 +227,8 @@ def convert_program(program, to_format, *, robot=None, tools=None, frames=None):
     unknown = [i for i in cartesian if targets[i].joints is None]
     if robot is not None and unknown and (needs_config or to_format in FRAMELESS):
         T = np.array([frame_of(usage[i][1]) @ program.targets[i].pose for i in unknown])
-        q = nominal_joints(robot, T, np.array([tool_of(usage[i][0]) for i in unknown]))
+        tools_T = np.array([tool_of(usage[i][0]) for i in unknown])
+        q = nominal_joints(robot, T, tools_T, labels=[f"{program.name} {targets[i].label}" for i in unknown])
         for i, joints in zip(unknown, q):
             targets[i] = dataclasses.replace(targets[i], joints=joints)
     for i in range(len(targets)):

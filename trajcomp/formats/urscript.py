@@ -309,7 +309,10 @@ def _emit(program, name):
             tool = motion.tool
             if tool is not None:
                 if tool not in program.tools:
-                    raise WriteError(f"tool {tool} has no value; give it (e.g. --tool {tool}=x,y,z,a,b,c)")
+                    raise WriteError(
+                        f"tool {tool!r} is used but not defined in the program; "
+                        f"give its value (e.g. --tool {tool}=x,y,z,a,b,c in mm and deg)"
+                    )
                 lines.append(f"  set_tcp({_pose_text(program.tools[tool])})")
         positions = [_position(program.targets[i], motion.kind) for i in (motion.via, motion.target) if i is not None]
         function_name = {JOINT: "movej", LINEAR: "movel", CIRCULAR: "movec"}[motion.kind]

@@ -1,0 +1,70 @@
+"""The ``formats`` and ``convert`` sub-commands (run through their modules' parsers)."""
+
+import argparse
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from trajcomp import formats
+from trajcomp.cli import main
+from trajcomp.commands import convert as convert_command
+from trajcomp.commands import formats as formats_command
+from trajcomp.errors import TrajcompError
+
+DATA = Path(__file__).parent / "data" / "programs"
+EXAMPLES = Path(__file__).parent.parent / "examples" / "programs"
+
+
+def _run(argv):
+    parser = argparse.ArgumentParser()
+    sub = parser.add_subparsers(dest="command", required=True)
+    formats_command.add_parser(sub)
+    convert_command.add_parser(sub)
+    args = parser.parse_args(argv)
+    return args.run(args)
+
+
+def test_formats_lists_builtins(capsys):
+    assert _run(["formats"]) == 0
+    out = capsys.readouterr().out
+    for name in ("krl", "rapid", "fanuc_ls", "urscript", "csv"):
+        assert name in out
+    assert ".src" in out and "built-in" in out
+
+
+def test_convert_rapid_to_fanuc_computes_config(tmp_path, capsys):
+    out = tmp_path / "WELD.LS"
+    assert _run(["convert", str(EXAMPLES / "abb" / "Weld.mod"), str(out), "--robot", "abb_irb4600"]) == 0
+    program = formats.read(out)
+    assert len(program.motions) == 5
+    assert all(t.config == ("F", "U", "T", 0, 0, 0) for t in program.targets)  # IRB 4600 home wrist: J5 = +89 deg
+    assert "wrote" in capsys.readouterr().out
+
+
+def test_convert_needs_undefined_tools(tmp_path):
+    with pytest.raises(TrajcompError, match="tool '1' is used but not defined"):
+        _run(["convert", str(DATA / "krl" / "weld.src"), str(tmp_path / "w.script")])
+
+
+def test_convert_with_tools_and_frames(tmp_path, capsys):
+    out = tmp_path / "pick.src"
+    assert _run(["convert", str(DATA / "fanuc" / "PICK_PLACE.LS"), str(out), "--tool", "1=0,0,100,0,0,0",
+                 "--tool", "2=0,0,200,0,0,0", "--frame", "1=500,0,0,90,0,0"]) == 0
+    program = formats.read(out)
+    assert "2 computed at run time" in capsys.readouterr().out
+    np.testing.assert_allclose(program.tools["2"][:3, 3], [0, 0, 200])
+    np.testing.assert_allclose(program.frames["1"][:3, 3], [500, 0, 0])
+
+
+def test_bad_tool_option_is_a_clear_error():
+    with pytest.raises(TrajcompError, match=r"--tool '1=0,0': expected NAME=x,y,z,a,b,c"):
+        convert_command.parse_frame_values(["1=0,0"], "--tool")
+
+
+def test_bad_input_exits_with_2(tmp_path, capsys, monkeypatch):
+    bad = tmp_path / "bad.src"
+    bad.write_text("MODULE M\nENDMODULE\n")
+    monkeypatch.setattr("trajcomp.cli.COMMANDS", ("convert",))
+    assert main(["convert", str(bad), str(tmp_path / "out.mod")]) == 2
+    assert "not a KRL program" in capsys.readouterr().err

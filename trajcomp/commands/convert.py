@@ -1,0 +1,93 @@
+"""``trajcomp convert IN OUT``: rewrite a robot program in another language.
+
+Also home of the tool and frame options shared by the commands that read
+programs (``--tool NAME=x,y,z,a,b,c``, ``--frame``/``--base``/``--wobj``).
+"""
+
+import argparse
+import math
+
+import numpy as np
+
+from trajcomp import formats
+from trajcomp.errors import TrajcompError
+from trajcomp.postprocess import convert_program
+from trajcomp.robot import load_robot
+from trajcomp.transforms import pose_to_matrix
+
+
+def add_frame_options(parser):
+    """Add the repeated ``--tool`` and ``--frame`` (alias ``--base``, ``--wobj``, ``--uframe``) options."""
+    parser.add_argument(
+        "--tool", action="append", default=[], metavar="NAME=x,y,z,a,b,c",
+        help="value of a tool the program uses but does not define: TCP in the flange frame, mm and "
+        "deg (A, B, C = intrinsic Z-Y'-X''); repeat for several tools, e.g. --tool 1=0,0,150,0,0,0",
+    )
+    parser.add_argument(
+        "--frame", "--base", "--wobj", "--uframe", dest="frame", action="append", default=[],
+        metavar="NAME=x,y,z,a,b,c",
+        help="value of a user frame / base / work object the program uses but does not define, in the "
+        "world frame, mm and deg; repeatable",
+    )
+
+
+def parse_frame_values(values, option):
+    """``{name: T (4, 4)}`` of ``NAME=x,y,z,a,b,c`` texts (mm, deg).
+
+    Raises
+    ------
+    TrajcompError
+        A malformed value, naming the option and the text.
+    """
+    out = {}
+    for text in values:
+        name, _, numbers = text.partition("=")
+        try:
+            pose = [float(v) for v in numbers.split(",")]
+        except ValueError:
+            pose = []
+        if not name.strip() or len(pose) != 6 or not all(math.isfinite(v) for v in pose):
+            raise TrajcompError(f"{option} {text!r}: expected NAME=x,y,z,a,b,c (six numbers, mm and deg)")
+        out[name.strip()] = pose_to_matrix(np.array(pose[:3] + list(np.radians(pose[3:]))))
+    return out
+
+
+def frame_options(args):
+    """``(tools, frames)`` dictionaries from the parsed ``--tool`` / ``--frame`` options."""
+    return parse_frame_values(args.tool, "--tool"), parse_frame_values(args.frame, "--frame")
+
+
+def add_parser(sub):
+    parser = sub.add_parser(
+        "convert",
+        help="rewrite a robot program in another language",
+        description="Read a robot program (KRL, RAPID, FANUC LS, URScript or program CSV) and write it in "
+        "the language of OUT's extension. Poses are kept to 1e-6 mm; configuration data (KUKA S/T, ABB "
+        "confdata, FANUC CONFIG) are computed with the robot's kinematics, so give --robot when the "
+        "target language needs them. Motions whose position is computed at run time are written as "
+        "comments.",
+        epilog="examples:\n"
+        "  trajcomp convert weld.src weld.mod --robot abb_irb4600 --tool 1=0,0,150,0,0,0\n"
+        "  trajcomp convert path.csv path.script",
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    parser.add_argument("input", metavar="IN", help="program to read")
+    parser.add_argument("output", metavar="OUT", help="program to write (format from the extension)")
+    parser.add_argument("--robot", help="built-in robot name or robot YAML file (for configuration data)")
+    parser.add_argument("--from", dest="from_format", metavar="FORMAT", help="input format (default: extension)")
+    parser.add_argument("--to", dest="to_format", metavar="FORMAT", help="output format (default: extension)")
+    add_frame_options(parser)
+    parser.set_defaults(run=run)
+
+
+def run(args):
+    tools, frames = frame_options(args)
+    robot = load_robot(args.robot) if args.robot else None
+    program = formats.read(args.input, args.from_format)
+    to_format = formats.find_format(args.output, args.to_format).name
+    converted = convert_program(program, to_format, robot=robot, tools=tools, frames=frames)
+    written = formats.write(args.output, converted, to_format)
+    skipped = len(program.runtime_motions())
+    print(f"wrote {', '.join(str(p) for p in written)}: {len(converted.motions) - skipped} motions"
+          + (f", {skipped} computed at run time written as comments" if skipped else ""))
+    return 0

@@ -1,0 +1,25 @@
+"""``trajcomp formats``: list the robot program formats, built-in and plugins."""
+
+import argparse
+
+from trajcomp import formats
+
+
+def add_parser(sub):
+    parser = sub.add_parser(
+        "formats",
+        help="list the robot program formats",
+        description="List the program formats trajcomp reads and writes, their file extensions and where they "
+        "come from (built-in, or a plugin of the 'trajcomp.formats' entry-point group).",
+        epilog="example:\n  trajcomp formats",
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    parser.set_defaults(run=run)
+
+
+def run(args):
+    for fmt in formats.formats():
+        print(f"{fmt.name:10s} {' '.join(fmt.extensions):28s} {fmt.source}")
+    for name, reason in formats.plugin_failures().items():
+        print(f"{name:10s} {'':28s} plugin failed to import: {reason}")
+    return 0
