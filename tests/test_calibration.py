@@ -122,3 +122,20 @@ def test_gross_outlier_is_reported_and_left_out(setup):
     model = calibrate(robot, meas, method="dh", folds=0)
     assert model.report["outlier_lines"] == [12]
     assert any("outlier" in w for w in model.report["warnings"])
+
+
+def test_compensated_csv_program_lands_on_its_targets(setup, tmp_path):
+    from trajcomp.cli import main
+    from trajcomp.measurements import read_measurements
+
+    _, virtual, model, _ = setup
+    save_model(tmp_path / "model.yaml", model)
+    program = tmp_path / "path.csv"
+    program.write_text("x,y,z,a,b,c,motion\n450,50,650,90,0,180,PTP\n600.5,150.25,600.125,90,0,180,LIN\n")
+    out = tmp_path / "out.csv"
+    assert main(["compensate", str(program), "--model", str(tmp_path / "model.yaml"), "-o", str(out)]) == 0
+    corrected = read_measurements(out)  # the program CSV keeps x..c and adds j1..j6
+    targets = read_measurements(program).position
+    assert np.linalg.norm(corrected.position - targets, axis=1).min() > 0.5  # the commands moved
+    landed = virtual.reached_poses(corrected.joints)[:, :3, 3]
+    assert np.linalg.norm(landed - targets, axis=1).max() < 0.05

@@ -20,6 +20,7 @@ COMMANDS = (
     "predict",
     "validate",
     "demo",
+    "compensate",
 )
 
 

@@ -106,3 +106,31 @@ def compensate(model, targets, *, mode=None, tool=None, seed=None, outside="mode
         command = fk(nominal, q)
         commanded = command[:, :3, 3]
     return CompensationResult(command, q, commanded - goal, flagged)
+
+
+def program_corrector(model, *, mode=None, outside="model", label="program"):
+    """The ``correct`` callable of `trajcomp.postprocess.compensate_program` for a model.
+
+    Targets are grouped by tool (a program uses few) and each group is
+    compensated in one vectorized call; the result's outside-grid flags are
+    collected in the returned callable's ``outside`` attribute (N,) bool.
+    Targets on the robot's declared tool are the TCP that was measured: they
+    get the identified tool for the real arm (``tool=None`` of `compensate`).
+    """
+
+    def correct(targets, tools, seeds=None):
+        command = np.empty_like(targets)
+        q = np.empty((len(targets), 6))
+        correct.outside = np.zeros(len(targets), dtype=bool)
+        unique, group = np.unique(np.round(tools.reshape(len(tools), -1), 9), axis=0, return_inverse=True)
+        for g in range(len(unique)):
+            pick = np.flatnonzero(group.ravel() == g)
+            tool = tools[pick[0]]
+            measured_tcp = np.allclose(tool, model.nominal.T_flange_tool, atol=1e-9)
+            result = compensate(model, targets[pick], mode=mode, tool=None if measured_tcp else tool,
+                                seed=None if seeds is None else seeds[pick], outside=outside, label=label)
+            command[pick], q[pick] = result.T_command, result.q
+            correct.outside[pick] = result.outside
+        return command, q
+
+    return correct
