@@ -7,7 +7,7 @@ import pytest
 
 from trajcomp import formats
 from trajcomp.errors import TrajcompError, WriteError
-from trajcomp.postprocess import FRAMELESS, compensate_program, convert_program, nominal_joints
+from trajcomp.postprocess import FRAMELESS, compensate_program, convert_program
 from trajcomp.robot import load_robot
 from trajcomp.configuration import kuka_status_turn
 from trajcomp.kinematics import fk

@@ -39,7 +39,7 @@ def copy_program(path, folder, newline=None):
     return folder / path.name
 
 
-def write_then_read(path, program, out):
+def write_then_read(program, out):
     """Write ``program`` to ``out`` and read it back (the shared round-trip helper)."""
     formats.write(out, program)
     return formats.read(out)
@@ -57,7 +57,7 @@ def test_unchanged_program_writes_back_byte_for_byte(path, newline, tmp_path):
     (tmp_path / "out").mkdir()
     source = copy_program(path, tmp_path / "in", newline)
     program = formats.read(source)
-    again = write_then_read(source, program, tmp_path / "out" / source.name)
+    again = write_then_read(program, tmp_path / "out" / source.name)
     for file in companions(source):
         assert (tmp_path / "out" / file.name).read_bytes() == file.read_bytes(), file.name
     assert len(again.targets) == len(program.targets)
@@ -86,7 +86,7 @@ def test_rigid_shift_changes_only_the_compensated_numbers(path, tmp_path):
     stack = program.cartesian_targets()
     moved = stack.T.copy()
     moved[:, :3, 3] += shift
-    again = write_then_read(path, program.with_targets(stack.index, poses=moved), tmp_path / path.name)
+    again = write_then_read(program.with_targets(stack.index, poses=moved), tmp_path / path.name)
 
     allowed = {
         (program.sources[span.source].name, _line_of(program.sources[span.source].text, span.start + 1))

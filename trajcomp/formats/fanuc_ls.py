@@ -108,12 +108,12 @@ def read(path):
         if not m:
             items.append(Statement(number, original))
             continue
-        items.append(_motion(m, content, points, frame, tool, source.name, number, original))
+        items.append(_motion(m, points, frame, tool, source.name, number, original))
     tools, frames = {"0": np.eye(4)}, {"0": np.eye(4)}
     return Program("fanuc_ls", name, tuple(items), tuple(targets), tools, frames, (source,))
 
 
-def _motion(m, content, points, frame, tool, name, number, original):
+def _motion(m, points, frame, tool, name, number, original):
     kind = KINDS[m.group(1).upper()]
     rest = m.group(4)
     refs = [(m.group(2).upper(), m.group(3))]

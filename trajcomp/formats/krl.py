@@ -137,7 +137,7 @@ class _Reader:
         index = len(self.sources) - 1
         return index, Lines(source.text), mask(source.text, ";")
 
-    def declarations(self, index, lines, masked, line_no, start, end):
+    def declarations(self, index, masked, line_no, start, end):
         """Handle a point, FDAT/PDAT/LDAT or TOOL_DATA/BASE_DATA line; True if it was one."""
         name = self.sources[index].name
         text = masked[start:end]
@@ -161,12 +161,12 @@ class _Reader:
             return True
         return False
 
-    def statement(self, index, lines, masked, line_no, start, end):
+    def statement(self, index, masked, line_no, start, end):
         """Handle one .src line."""
         name = self.sources[index].name
         text = masked[start:end]
         original = self.sources[index].text[start:end]
-        if self.declarations(index, lines, masked, line_no, start, end):
+        if self.declarations(index, masked, line_no, start, end):
             self.items.append(Statement(line_no, original))
             return
         m = _MOTION.match(text)
@@ -303,9 +303,9 @@ def read(path):
     if dat_path is not None:
         dat_index, dat_lines, dat_masked = reader.add_source(read_source(dat_path))
         for line_no, start, end in dat_lines:
-            reader.declarations(dat_index, dat_lines, dat_masked, line_no, start, end)
+            reader.declarations(dat_index, dat_masked, line_no, start, end)
     for line_no, start, end in src_lines:
-        reader.statement(src_index, src_lines, src_masked, line_no, start, end)
+        reader.statement(src_index, src_masked, line_no, start, end)
     items = []
     for item in reader.items:
         if isinstance(item, Motion):

@@ -129,11 +129,11 @@ class _Reader:
                 near_text, near_at = near[0]
                 value = near_text.split("=", 1)[-1] if "=" in near_text else near_text
                 shift = near_at + (near_text.index("=") + 1 if "=" in near_text else 0)
-                self.link(index, value, shift, line, original)
+                self.link(index, value, shift)
             return index
         return None
 
-    def link(self, index, text, offset, line, original):
+    def link(self, index, text, offset):
         """Give Cartesian target ``index`` the joints of a qnear list (literal or variable)."""
         target = self.targets[index]
         if target.is_joint:
@@ -175,7 +175,7 @@ class _Reader:
         count = 2 if kind == CIRCULAR else 1
         if len(args) < count or not args[0][0].strip():
             fail(self.source.name, line, original, f"{function} needs {count} position(s)")
-        found = [self.joint_target(a, s, line, original) or self.position(a, s, line, original) for a, s in args[:count]]
+        found = [self.joint_target(a) or self.position(a, s, line, original) for a, s in args[:count]]
         options = dict(zip(POSITIONAL[function], (a.strip() for a, _ in args[count:] if "=" not in a)))
         options |= {k.strip(): v.strip() for k, v in (a.split("=", 1) for a, _ in args[count:] if "=" in a)}
         speed = _number(options.get("v"))
@@ -192,7 +192,7 @@ class _Reader:
             text=original.strip(),
         )
 
-    def joint_target(self, text, offset, line, original):
+    def joint_target(self, text):
         """Index of a joint-list variable used directly as a position."""
         m = _NAME.match(text)
         if m and m.group(1) in self.joint_variables and m.group(1) not in self.variables:

@@ -1,0 +1,52 @@
+"""Program CSV: columns, joint targets, added joints, errors."""
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from trajcomp import formats
+from trajcomp.errors import ReadError
+
+PATH = Path(__file__).parent / "data" / "programs" / "csv" / "path.csv"
+
+
+def test_columns_and_motions():
+    program = formats.read(PATH)
+    kinds = [(m.kind, m.speed, m.zone) for m in program.motions]
+    assert kinds == [("joint", None, None), ("linear", 100.0, 5.0), ("linear", 100.0, None)]
+    np.testing.assert_allclose(program.targets[1].pose[:3, 3], [650.25, -100.0, 480.125])
+
+
+def test_joints_are_added_as_columns_keeping_everything_else(tmp_path):
+    program = formats.read(PATH)
+    stack = program.cartesian_targets()
+    q = np.radians([[1, 2, 3, 4, 5, 6], [7, 8, 9, 10, 11, 12], [0, -90, 90, 0, 45, 0]])
+    formats.write(tmp_path / "out.csv", program.with_targets(stack.index, poses=stack.T, joints=q))
+    lines = (tmp_path / "out.csv").read_text().splitlines()
+    assert lines[0] == "# program CSV golden file: poses in the robot base frame (mm, deg)"
+    assert lines[1] == "id,x,y,z,a,b,c,motion,speed,zone,comment,j1,j2,j3,j4,j5,j6"
+    assert lines[2] == '1,600.0,-100.0,500.0,0.0,90.0,0.0,PTP,,,"approach, fast",1.0000,2.0000,3.0000,4.0000,5.0000,6.0000'
+    np.testing.assert_allclose(formats.read(tmp_path / "out.csv").targets[2].joints, q[2])
+
+
+@pytest.mark.parametrize(
+    "row, message",
+    [
+        ("1,2,x,4,5,6", "field z: not a number 'x'"),
+        ("1,2,3,4,5", "expected 6 fields, got 5"),
+        (",,,,,", "a row needs x,y,z,a,b,c or j1..j6"),
+    ],
+)
+def test_malformed_rows_name_file_line_field_and_text(tmp_path, row, message):
+    path = tmp_path / "bad.csv"
+    path.write_text(f"x,y,z,a,b,c\n0,0,0,0,0,0\n{row}\n")
+    with pytest.raises(ReadError, match=rf"bad\.csv:3: {message}: '{row}'"):
+        formats.read(path)
+
+
+def test_not_a_program_csv(tmp_path):
+    path = tmp_path / "m.csv"
+    path.write_text("mx,my,mz\n1,2,3\n")
+    with pytest.raises(ReadError, match=r"m\.csv:1: not a program CSV"):
+        formats.read(path)
