@@ -21,6 +21,8 @@ COMMANDS = (
     "validate",
     "demo",
     "compensate",
+    "formats",
+    "convert",
 )
 
 

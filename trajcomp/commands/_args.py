@@ -6,7 +6,6 @@ import sys
 import numpy as np
 
 from trajcomp.robot import load_robot
-from trajcomp.transforms import pose_to_matrix
 
 
 def numbers(count):
@@ -57,12 +56,3 @@ def progress(message):
     if sys.stderr.isatty():
         print(message, file=sys.stderr)
 
-
-def named_poses(text):
-    """An argparse type: ``NAME=x,y,z,a,b,c`` (mm, deg) -> (name, T (4, 4))."""
-    name, sep, values = text.partition("=")
-    if not sep or not name.strip():
-        raise argparse.ArgumentTypeError(f"expected NAME=x,y,z,a,b,c, got {text!r}")
-    pose = numbers(6)(values)
-    pose[3:] = np.radians(pose[3:])
-    return name.strip(), pose_to_matrix(pose)

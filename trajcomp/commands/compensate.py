@@ -1,7 +1,8 @@
 """``trajcomp compensate``: correct a robot program with a compensation model."""
 
 from trajcomp import formats
-from trajcomp.commands._args import command_parser, info, named_poses
+from trajcomp.commands._args import command_parser, info
+from trajcomp.commands.convert import add_frame_options, frame_options
 from trajcomp.compensate import program_corrector
 from trajcomp.model import MODES, load_model
 from trajcomp.postprocess import compensate_program
@@ -21,10 +22,7 @@ def add_parser(sub):
     parser.add_argument("--mode", choices=MODES, help="compensation mode (default: the model's method)")
     parser.add_argument("--outside", choices=("model", "clamp", "error"), default="model",
                         help="targets outside the grid: model only (flagged; default), nearest grid value, or an error")
-    parser.add_argument("--tool", type=named_poses, action="append", default=[], metavar="NAME=X,Y,Z,A,B,C",
-                        help="a tool the program uses but does not define (mm, deg); repeatable")
-    parser.add_argument("--frame", type=named_poses, action="append", default=[], metavar="NAME=X,Y,Z,A,B,C",
-                        help="a user frame / work object the program uses but does not define; repeatable")
+    add_frame_options(parser)
     parser.add_argument("--joint-targets", choices=("keep", "compensate"), default="keep",
                         help="joint-space targets: keep them (default) or compensate the pose they stand for")
     parser.add_argument("-o", "--output", required=True, help="corrected program to write")
@@ -35,10 +33,9 @@ def run(args):
     model = load_model(args.model)
     program = formats.read(args.program)
     correct = program_corrector(model, mode=args.mode, outside=args.outside, label=args.program)
+    tools, frames = frame_options(args)
     corrected, report = compensate_program(
-        program, correct, model.nominal,
-        tools=dict(pair for pair in args.tool), frames=dict(pair for pair in args.frame),
-        joint_targets=args.joint_targets,
+        program, correct, model.nominal, tools=tools, frames=frames, joint_targets=args.joint_targets,
     )
     formats.write(args.output, corrected)
     for line in report.lines():
