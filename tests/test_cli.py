@@ -60,3 +60,16 @@ def test_real_ur5_grid_calibrates_far_below_its_raw_error(tmp_path, capsys):
     rows = {line.split()[0]: float(line.split()[2]) for line in cv.splitlines()[2:] if line.strip()}
     assert rows["none"] > 2.0  # 2.63 mm mean as measured
     assert rows["composite"] < 0.12  # best published on these data: 0.155 mm
+
+
+def test_demo_runs_the_protocol_and_compensates_a_program(tmp_path, capsys):
+    assert main(["demo", "-o", str(tmp_path)]) == 0
+    out = capsys.readouterr().out
+    rows = {tuple(line.split()[:2]): float(line.split()[2]) for line in out.splitlines()
+            if line.startswith(("large", "small"))}
+    assert {mode for _, mode in rows} == {"none", "linear", "dh", "idw8", "trilinear", "composite"}
+    assert rows[("large", "composite")] < rows[("large", "none")] / 20
+    for name in ("model-large.yaml", "model-small.yaml", "program.csv", "program-compensated.csv"):
+        assert (tmp_path / name).exists()
+    planned, compensated = (float(line.split("mean")[1].split()[0]) for line in out.splitlines() if "lands" in line)
+    assert compensated < planned / 20

@@ -11,10 +11,14 @@ import dataclasses
 
 import numpy as np
 
+from trajcomp import formats
+from trajcomp.atomic import write_atomic
 from trajcomp.calibrate import calibrate
-from trajcomp.compensate import compensate
-from trajcomp.measurements import Measurements
-from trajcomp.plan import default_orientation, plan_grid
+from trajcomp.compensate import compensate, program_corrector
+from trajcomp.ik import ik
+from trajcomp.measurements import Measurements, read_measurements
+from trajcomp.postprocess import compensate_program
+from trajcomp.plan import batch_seed, default_orientation, plan_grid
 from trajcomp.simulate import VirtualRobot
 from trajcomp.stats import ErrorStats
 from trajcomp.transforms import abc_to_matrix
@@ -96,6 +100,43 @@ def format_comparison(results, noise_sigma):
     floor = noise_sigma * np.sqrt(8.0 / np.pi)
     lines.append(f"noise floor of one measured point (mean |noise|): {floor:.4f} mm")
     return "\n".join(lines)
+
+
+def write_example_program(path, robot, corner, side, waypoints=8, seed=0):
+    """A program CSV of LIN moves through random targets inside a cube (user units)."""
+    rng = np.random.default_rng(seed)
+    abc = np.degrees(default_orientation(robot))
+    rows = ["x,y,z,a,b,c,motion,speed,zone"]
+    for k, p in enumerate(np.asarray(corner) + rng.uniform(0.1 * side, 0.9 * side, (waypoints, 3))):
+        motion, speed, zone = ("PTP", "", "") if k == 0 else ("LIN", "250", "1")
+        rows.append(",".join(f"{v:.3f}" for v in (*p, *abc)) + f",{motion},{speed},{zone}")
+    write_atomic(path, "\n".join(rows) + "\n")
+
+
+def run_program(virtual, model, folder, corner, side):
+    """Compensate an example program with ``model`` and run both versions on the virtual arm.
+
+    Writes ``program.csv`` and ``program-compensated.csv`` into ``folder``.
+
+    Returns
+    -------
+    dict
+        ``{"as planned": ErrorStats, "compensated": ErrorStats}`` of the
+        landing error at the program's targets.
+    """
+    robot = virtual.nominal
+    original, corrected_path = folder / "program.csv", folder / "program-compensated.csv"
+    write_example_program(original, robot, corner, side)
+    program = formats.read(original)
+    corrected, _ = compensate_program(program, program_corrector(model, label=str(original)), robot)
+    formats.write(corrected_path, corrected)
+    targets = program.cartesian_targets().T  # CSV targets: base frame, robot tool
+    planned = ik(robot, targets, seed=batch_seed(robot, targets)).raise_on_failure(str(original)).q
+    landed = {
+        "as planned": virtual.reached_poses(planned)[:, :3, 3],
+        "compensated": virtual.reached_poses(read_measurements(corrected_path).joints)[:, :3, 3],
+    }
+    return {label: ErrorStats.from_errors(p - targets[:, :3, 3]) for label, p in landed.items()}
 
 
 def run_demo(robot, profile="paper", seed=1, progress=None):
