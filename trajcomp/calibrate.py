@@ -17,6 +17,7 @@ from trajcomp.ik import ik
 from trajcomp.kinematics import fk
 from trajcomp.linear import fit_linear
 from trajcomp.model import CompensationModel
+from trajcomp.plan import batch_seed
 from trajcomp.stats import ErrorStats, kfold_indices
 from trajcomp.transforms import invert, pose_to_matrix
 
@@ -29,16 +30,21 @@ LATTICE_INTERPOLATORS = ("idw8", "trilinear")
 def commanded(robot, meas):
     """Commanded joints (N, 6) rad and TCP positions (N, 3) mm of measurement rows.
 
-    Joints come from the file, or from nominal IK of the commanded pose;
-    positions from the file, or from nominal FK of the joints.
+    Joints come from the file, or from nominal IK of the commanded pose (None
+    when the file gives positions only); positions from the file, or from
+    nominal FK of the joints.
     """
     joints = meas.joints
     if joints is None and meas.orientation is not None:
-        result = ik(robot, pose_to_matrix(np.column_stack([meas.position, meas.orientation])), seed=robot.home)
-        result.raise_on_failure(meas.path)
-        joints = result.q
+        targets = pose_to_matrix(np.column_stack([meas.position, meas.orientation]))
+        joints = ik(robot, targets, seed=batch_seed(robot, targets)).raise_on_failure(meas.path).q
     position = meas.position if meas.position is not None else fk(robot, joints)[:, :3, 3]
     return joints, position
+
+
+def _rows(array, index):
+    """``array[index]``, passing None through (optional measurement columns)."""
+    return None if array is None else array[index]
 
 
 def to_base(T_tracker_base, measured):
@@ -155,8 +161,7 @@ def calibrate(robot, meas, *, robot_ref=None, method="composite", frame="base", 
         lines = meas.lines[parts.dh.outliers].tolist()
         warnings.append(f"{len(lines)} gross outliers (residual far beyond the others) left out, lines {lines[:20]}")
         parts = _Parts(robot, joints[keep], position[keep], measured[keep], **options)
-    subset = (lambda a: None if a is None else a[keep])
-    joints, position, measured = subset(joints), position[keep], measured[keep]
+    joints, position, measured = _rows(joints, keep), position[keep], measured[keep]
     report = {
         "measurements": {"file": meas.path, "rows": len(meas), "used": int(keep.sum()), "frame": frame},
         "warnings": warnings,
@@ -191,9 +196,8 @@ def cross_validate(robot, joints, position, measured, options, folds, seed, prog
     for k, (train, test) in enumerate(kfold_indices(len(position), folds, seed)):
         if progress:
             progress(f"cross-validation fold {k + 1}/{folds}")
-        pick = (lambda a, idx: None if a is None else a[idx])
-        parts = _Parts(robot, pick(joints, train), position[train], measured[train], **options)
+        parts = _Parts(robot, _rows(joints, train), position[train], measured[train], **options)
         model = parts.model(robot, robot.name, options["method"], np.eye(4), {})
-        for mode, err in mode_errors(model, pick(joints, test), position[test], measured[test]).items():
+        for mode, err in mode_errors(model, _rows(joints, test), position[test], measured[test]).items():
             collected.setdefault(mode, []).append(err)
     return {"folds": folds, "interpolation": options["interpolation"]} | {m: ErrorStats.from_errors(np.concatenate(e)).as_dict() for m, e in collected.items()}

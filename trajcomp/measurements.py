@@ -199,8 +199,17 @@ def read_measurements(path, mapping=None):
     )
 
 
-def format_measurements(meas, comments=()):
-    """CSV text of measurements in the standard layout (user units: mm, deg)."""
+def format_measurements(meas, comments=(), extra=None):
+    """CSV text of measurements in the standard layout (user units: mm, deg).
+
+    Parameters
+    ----------
+    meas : Measurements
+    comments : sequence of str
+        Lines written first, after ``# ``.
+    extra : dict, optional
+        Further columns ``{name: ndarray (N,)}``, written last as given.
+    """
     columns = []
     for names, array, scale in (
         (JOINTS, meas.joints, 180.0 / math.pi),
@@ -211,6 +220,8 @@ def format_measurements(meas, comments=()):
     ):
         if array is not None:
             columns.append((names, array * scale))
+    for name, values in (extra or {}).items():
+        columns.append(((name,), np.asarray(values, dtype=float)[:, None]))
     header = [name for names, _ in columns for name in names]
     table = np.column_stack([array for _, array in columns])
     out = io.StringIO()
@@ -222,6 +233,6 @@ def format_measurements(meas, comments=()):
     return out.getvalue()
 
 
-def write_measurements(path, meas, comments=()):
+def write_measurements(path, meas, comments=(), extra=None):
     """Write measurements atomically in the standard layout; see `format_measurements`."""
-    write_atomic(path, format_measurements(meas, comments))
+    write_atomic(path, format_measurements(meas, comments, extra))

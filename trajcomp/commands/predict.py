@@ -6,8 +6,7 @@ import numpy as np
 
 from trajcomp.calibrate import commanded
 from trajcomp.commands._args import command_parser, info
-from trajcomp.measurements import format_measurements, parse_mapping, read_measurements
-from trajcomp.atomic import write_atomic
+from trajcomp.measurements import parse_mapping, read_measurements, write_measurements
 from trajcomp.model import MODES, load_model
 
 
@@ -32,14 +31,9 @@ def run(args):
     joints, position = commanded(model.nominal, meas)
     mode = args.mode or model.method
     predicted, flagged = model.predict(mode, joints, position)
-    text = format_measurements(dataclasses.replace(meas, joints=joints, position=position),
-                               comments=[f"predicted by {args.model}, mode {mode}"])
-    lines = text.splitlines()
-    header = lines.index(next(line for line in lines if not line.startswith("#")))
-    lines[header] += ",px,py,pz,outside_grid"
-    for row, (p, out) in enumerate(zip(predicted, flagged)):
-        lines[header + 1 + row] += f",{p[0]:.6f},{p[1]:.6f},{p[2]:.6f},{int(out)}"
-    write_atomic(args.output, "\n".join(lines) + "\n")
+    extra = {"px": predicted[:, 0], "py": predicted[:, 1], "pz": predicted[:, 2], "outside_grid": flagged}
+    write_measurements(args.output, dataclasses.replace(meas, joints=joints, position=position),
+                       comments=[f"predicted by {args.model}, mode {mode}"], extra=extra)
     if flagged.any():
         info(f"{int(flagged.sum())} rows lie outside the grid: model-only prediction (outside_grid = 1)")
     info(f"wrote {args.output}: {len(meas)} predictions, mode {mode}")

@@ -5,11 +5,11 @@ import dataclasses
 import numpy as np
 
 from trajcomp.commands._args import add_robot, command_parser, info, robot_of
-from trajcomp.ik import ik
+from trajcomp.calibrate import commanded
+from trajcomp.errors import ReadError
 from trajcomp.kinematics import fk
 from trajcomp.measurements import read_measurements, write_measurements
 from trajcomp.simulate import PROFILES, VirtualRobot
-from trajcomp.transforms import pose_to_matrix
 
 
 def add_parser(sub):
@@ -29,21 +29,14 @@ def add_parser(sub):
     parser.set_defaults(run=run)
 
 
-def commanded_joints(robot, meas):
-    """Joint commands (N, 6) rad of a plan: its joints, or nominal IK of its poses."""
-    if meas.joints is not None:
-        return meas.joints
-    orientation = meas.orientation if meas.orientation is not None else np.zeros((len(meas), 3))
-    result = ik(robot, pose_to_matrix(np.column_stack([meas.position, orientation])), seed=robot.home)
-    result.raise_on_failure(meas.path)
-    return result.q
-
 
 def run(args):
     robot = robot_of(args)
     meas = read_measurements(args.plan)
     virtual = VirtualRobot.create(robot, args.profile, args.seed)
-    q = commanded_joints(robot, meas)
+    q, _ = commanded(robot, meas)
+    if q is None:
+        raise ReadError(f"{args.plan}: simulate needs commanded joints j1..j6 or full poses x,y,z,a,b,c")
     rng = np.random.default_rng([args.seed, args.run_index])
     measured = virtual.measure(q, rng)
     out = dataclasses.replace(meas, joints=q, measured=measured)
