@@ -1,0 +1,476 @@
+"""Every robot language, compensated through the CLI, lands on its targets as the CSV path does.
+
+For each language a small program is written (by this test, in the
+language's own units, conventions and typical precision) with targets inside
+a calibration cube of its robot, some in the base frame and some in a user
+frame / work object, all on a tool with a non-identity TCP. That tool is the
+one the calibration measured (the robot YAML's ``tool``), as on a real cell
+where the tracker target sits on the production tool: a program naming it
+by its own number or name, with its own numbers, gets the identified TCP. A
+composite model is calibrated on the robot's virtual copy; ``trajcomp
+compensate`` corrects the program; the corrected file is read back and
+turned into the joints the controller would run: from the joints the file
+carries (URScript ``Waypoint_q`` / ``qnear``, CSV ``j1..j6``, checked
+against the pose), or from nominal IK of the written pose on the branch and
+turns its written configuration data (KUKA S/T, ABB confdata, FANUC CONFIG)
+select. Those joints run on the virtual robot; the TCP must land within
+0.05 mm, with the error the same targets get through a program CSV, while
+the original program misses by more than 0.5 mm.
+
+The expected targets are computed here from the numbers written, with
+scipy's rotations (not trajcomp's conversions).
+"""
+
+import dataclasses
+import itertools
+import warnings
+from importlib import resources
+
+import numpy as np
+import pytest
+from scipy.spatial.transform import Rotation
+
+from trajcomp import formats
+from trajcomp.calibrate import calibrate
+from trajcomp.cli import main
+from trajcomp.compensate import compensate
+from trajcomp.configuration import configuration_for
+from trajcomp.ik import ik, ik_all
+from trajcomp.kinematics import fk
+from trajcomp.measurements import Measurements
+from trajcomp.model import save_model
+from trajcomp.plan import default_orientation, plan_grid
+from trajcomp.robot import load_robot
+from trajcomp.simulate import VirtualRobot
+
+LANDED = 0.05  # mm, largest landing error of a compensated target
+MISSED = 0.5  # mm, smallest landing error of an uncompensated target
+SAME_AS_CSV = 0.003  # mm, largest difference to the CSV path's landing error (written precision)
+
+# robot: calibration cube corner and side (mm), grid step; 216 points each
+CUBES = {
+    "kuka_kr6_r900": ((350.0, -150.0, 250.0), 300.0, 60.0),
+    "abb_irb4600": ((1000.0, -300.0, 700.0), 600.0, 120.0),
+    "fanuc_lrmate200id": ((320.0, -100.0, 300.0), 200.0, 40.0),
+    "ur10": ((300.0, -100.0, 300.0), 500.0, 100.0),
+    "ur5": ((200.0, -100.0, 200.0), 300.0, 60.0),
+}
+LANGUAGES = {"krl": "kuka_kr6_r900", "rapid": "abb_irb4600", "fanuc_ls": "fanuc_lrmate200id",
+             "urscript": "ur10", "csv": "ur5"}
+# Targets as fractions of the cube: (fraction, motion, in the user frame)
+PLAN = [
+    ((0.50, 0.50, 0.50), "ptp", False),
+    ((0.21, 0.33, 0.71), "lin", False),
+    ((0.62, 0.18, 0.41), "via", False),
+    ((0.83, 0.64, 0.27), "circ", False),
+    ((0.31, 0.72, 0.63), "lin", True),
+    ((0.72, 0.43, 0.22), "ptp", True),
+]
+# The measured TCP, T_flange_tool: x, y, z mm, A, B, C deg. Half a turn about z keeps
+# every language's numbers exact (ABB quaternion [0, 0, 0, 1]). On the flange axis: with
+# a lateral offset (8, -6, 60) the UR10's composite model is no better than its DH model
+# (0.055 mm mean on the virtual UR10, CSV path included), a calibration matter.
+TOOL = (0.0, 0.0, 60.0, 180.0, 0.0, 0.0)
+FRAME_ANGLE = 30.0  # deg about z: the user frame, placed at the cube corner
+
+
+def matrix(position, rotation):
+    T = np.eye(4)
+    T[:3, :3] = rotation.as_matrix()
+    T[:3, 3] = position
+    return T
+
+
+def xyzabc(values):
+    """T from x, y, z (mm) and KUKA A, B, C (deg): intrinsic Z-Y'-X''."""
+    return matrix(values[:3], Rotation.from_euler("ZYX", values[3:], degrees=True))
+
+
+def abc_of(T):
+    """KUKA A, B, C (deg) of T."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # B = 90 deg (KUKA tool down): scipy warns and sets C = 0
+        return Rotation.from_matrix(T[:3, :3]).as_euler("ZYX", degrees=True)
+
+
+def fixed(values, places):
+    return ",".join(f"{v:.{places}f}" for v in values)
+
+
+@dataclasses.dataclass
+class Point:
+    """One target of a test program, as the test means it."""
+
+    T_base: np.ndarray  # where the TCP must land, base frame, mm (from the numbers written)
+    T_frame: np.ndarray  # what the program states: the pose in its frame
+    framed: bool  # in the user frame
+    motion: str
+    config: tuple = ()  # configuration data of the original program (nominal IK)
+    q: np.ndarray = None  # nominal joints of the original program
+
+
+@dataclasses.dataclass
+class Case:
+    """A program in one language for one robot, with the value of its user frame."""
+
+    language: str
+    robot: object
+    points: list
+    frame: np.ndarray  # T_base_frame of the user frame, from the numbers written
+    files: dict = dataclasses.field(default_factory=dict)  # name -> text
+    options: list = dataclasses.field(default_factory=list)  # CLI --tool / --frame
+
+
+# ------------------------------------------------------------- the programs
+
+
+def build_points(language, robot, frame, written):
+    """Targets of PLAN; ``written(T) -> T`` is the pose the program's rounded numbers state."""
+    corner, side, _ = CUBES[robot.name]
+    rotation = Rotation.from_euler("ZYX", default_orientation(robot))  # the orientation measured
+    points = []
+    for fraction, motion, framed in PLAN:
+        position = np.asarray(corner) + side * np.asarray(fraction) + np.array([0.1234, -0.4321, 0.2468])
+        T_wanted = matrix(position, rotation)
+        T_frame = written(np.linalg.inv(frame) @ T_wanted if framed else T_wanted)
+        T_base = frame @ T_frame if framed else T_frame
+        solved = ik(robot, T_base[None], seed=robot.home)
+        assert solved.success[0], (language, fraction, solved.reason)
+        config = configuration_for(language, robot, solved.q)
+        points.append(Point(T_base, T_frame, framed, motion, tuple(config[0]) if config else (), solved.q[0]))
+    return points
+
+
+def krl_case(robot):
+    """KUKA KRL: .dat points (E6POS with S, T), inline E6POS, CIRC; tool and base 1 given on the command line."""
+    corner = CUBES[robot.name][0]
+    frame_values = (*corner, FRAME_ANGLE, 0.0, 0.0)
+    frame = xyzabc(frame_values)
+
+    def written(T):  # X, Y, Z with 3 decimals, A, B, C with 4 (as KUKA's editors write)
+        return xyzabc(np.concatenate([np.round(T[:3, 3], 3), np.round(abc_of(T), 4)]))
+
+    points = build_points("krl", robot, frame, written)
+
+    def e6pos(p):
+        xyz, abc = p.T_frame[:3, 3], abc_of(p.T_frame)
+        return (f"{{X {xyz[0]:.3f},Y {xyz[1]:.3f},Z {xyz[2]:.3f},A {abc[0]:.4f},B {abc[1]:.4f},C {abc[2]:.4f},"
+                f"S {p.config[0]},T {p.config[1]},E1 0.0,E2 0.0,E3 0.0,E4 0.0,E5 0.0,E6 0.0}}")
+
+    dat = ["&ACCESS RVP", "&REL 1", "DEFDAT  e2e"]
+    dat += [f"DECL E6POS XP{k + 1}={e6pos(p)}" for k, p in enumerate(points[:-1])]
+    dat += ["ENDDAT"]
+    src = [
+        "&ACCESS RVP", "&REL 1", "DEF e2e( )",
+        "  BAS(#TOOL,1)", "  BAS(#BASE,0)",
+        "  BAS(#VEL_PTP,50)", "  PTP XP1 C_DIS",
+        "  $VEL.CP=0.1", "  $APO.CDIS=5", "  LIN XP2 C_DIS",
+        "  CIRC XP3, XP4",
+        "  BAS(#BASE,1)",
+        "  LIN XP5",
+        f"  PTP {e6pos(points[-1])}",
+        "END",
+    ]
+    files = {"e2e.src": "\r\n".join(src) + "\r\n", "e2e.dat": "\r\n".join(dat) + "\r\n"}
+    options = ["--tool", "1=" + fixed(TOOL, 3), "--base", "1=" + fixed(frame_values, 3)]
+    return Case("krl", robot, points, frame, files, options)
+
+
+def _quat(T):
+    """ABB quaternion [q1 = w, q2, q3, q4] of T's rotation, q1 >= 0."""
+    x, y, z, w = Rotation.from_matrix(T[:3, :3]).as_quat()
+    return np.array([w, x, y, z]) * (1 if w >= 0 else -1)
+
+
+def _from_quat(position, q):
+    return matrix(position, Rotation.from_quat([q[1], q[2], q[3], q[0]]))
+
+
+def rapid_case(robot):
+    """ABB RAPID: robtarget declarations and an inline robtarget, MoveC, tooldata and wobjdata in the module."""
+    corner = CUBES[robot.name][0]
+    tool_q = np.round(_quat(xyzabc(TOOL)), 6)
+    assert np.allclose(_from_quat(TOOL[:3], tool_q), xyzabc(TOOL), atol=1e-12)
+    frame_q = np.round(_quat(xyzabc((0, 0, 0, FRAME_ANGLE, 0, 0))), 6)
+    frame = _from_quat(corner, frame_q)  # as written: quaternion with 6 decimals
+
+    def written(T):  # mm with 2 decimals, quaternion with 6 (as RobotStudio writes)
+        return _from_quat(np.round(T[:3, 3], 2), np.round(_quat(T), 6))
+
+    points = build_points("rapid", robot, frame, written)
+
+    def robtarget(p):
+        xyz, q = p.T_frame[:3, 3], _quat(p.T_frame)
+        return (f"[[{fixed(xyz, 2)}],[{fixed(q, 6)}],[{','.join(str(c) for c in p.config)}],"
+                "[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]]")
+
+    lines = [
+        "MODULE E2E",
+        f"  PERS tooldata tGun := [TRUE,[[{fixed(TOOL[:3], 1)}],[{fixed(tool_q, 6)}]],"
+        "[1.5,[0,0,50],[1,0,0,0],0,0,0]];",
+        f"  PERS wobjdata wTable := [FALSE,TRUE,\"\",[[{fixed(corner, 1)}],[{fixed(frame_q, 6)}]],"
+        "[[0,0,0],[1,0,0,0]]];",
+    ]
+    lines += [f"  CONST robtarget p{10 * (k + 1)} := {robtarget(p)};" for k, p in enumerate(points[:-1])]
+    lines += [
+        "",
+        "  PROC main()",
+        "    MoveJ p10, v1000, z10, tGun;",
+        "    MoveL p20, v200, z5, tGun;",
+        "    MoveC p30, p40, v100, fine, tGun;",
+        "    MoveL p50, v100, z5, tGun\\WObj:=wTable;",
+        f"    MoveJ {robtarget(points[-1])}, v500, fine, tGun\\WObj:=wTable;",
+        "  ENDPROC",
+        "ENDMODULE",
+    ]
+    return Case("rapid", robot, points, frame, {"E2E.mod": "\r\n".join(lines) + "\r\n"})
+
+
+def fanuc_case(robot):
+    """FANUC .LS: /POS entries with UF/UT/CONFIG, a C motion; user frame and tool 1 given on the command line."""
+    corner = CUBES[robot.name][0]
+    frame_values = (*corner, FRAME_ANGLE, 0.0, 0.0)  # W = P = 0, R = 30
+    frame = xyzabc(frame_values)
+
+    def wpr(T):
+        return Rotation.from_matrix(T[:3, :3]).as_euler("xyz", degrees=True)  # fixed X-Y-Z: W, P, R
+
+    def written(T):  # mm and deg with 3 decimals (as the controller writes)
+        return matrix(np.round(T[:3, 3], 3), Rotation.from_euler("xyz", np.round(wpr(T), 3), degrees=True))
+
+    points = build_points("fanuc_ls", robot, frame, written)
+
+    def position(k, p):
+        x, y, z = p.T_frame[:3, 3]
+        w, pp, r = wpr(p.T_frame)
+        f, u, t, t1, t4, t6 = p.config
+        return (f"P[{k}]{{\n   GP1:\n\tUF : {1 if p.framed else 0}, UT : 1,\t\t"
+                f"CONFIG : '{f} {u} {t}, {t1}, {t4}, {t6}',\n"
+                f"\tX = {x:.3f}  mm,\tY = {y:.3f}  mm,\tZ = {z:.3f}  mm,\n"
+                f"\tW = {w:.3f} deg,\tP = {pp:.3f} deg,\tR = {r:.3f} deg\n}};")
+
+    mn = [
+        "   1:  UFRAME_NUM=0 ;", "   2:  UTOOL_NUM=1 ;",
+        "   3:J P[1] 50% CNT50    ;",
+        "   4:L P[2] 200mm/sec CNT20    ;",
+        "   5:C P[3]    ", "    :  P[4] 100mm/sec FINE    ;",
+        "   6:  UFRAME_NUM=1 ;",
+        "   7:L P[5] 100mm/sec FINE    ;",
+        "   8:J P[6] 30% FINE    ;",
+    ]
+    text = (["/PROG  E2E", "/ATTR", "OWNER\t\t= MNEDITOR;", "LINE_COUNT\t= 8;", "/MN"] + mn + ["/POS"]
+            + [position(k + 1, p) for k, p in enumerate(points)] + ["/END"])
+    options = ["--tool", "1=" + fixed(TOOL, 3), "--uframe", "1=" + fixed(frame_values, 3)]
+    return Case("fanuc_ls", robot, points, frame, {"E2E.LS": "\n".join(text) + "\n"}, options)
+
+
+def urscript_case(robot):
+    """URScript: set_tcp, PolyScope Waypoint_p/_q pairs, get_inverse_kin with qnear, movec (no user frames)."""
+    tcp = np.concatenate([np.asarray(TOOL[:3]) / 1000.0, Rotation.from_matrix(xyzabc(TOOL)[:3, :3]).as_rotvec()])
+
+    def vector(T):
+        return np.concatenate([T[:3, 3] / 1000.0, Rotation.from_matrix(T[:3, :3]).as_rotvec()])
+
+    def written(T):  # metres and rad with 10 decimals
+        v = np.round(vector(T), 10)
+        return matrix(v[:3] * 1000.0, Rotation.from_rotvec(v[3:]))
+
+    points = build_points("urscript", robot, np.eye(4), written)
+    for p in points:
+        p.framed = False  # URScript poses are in the base frame
+
+    def pose(point):
+        return "p[" + ", ".join(f"{v:.10f}" for v in vector(point.T_frame)) + "]"
+
+    def joints(point):
+        return "[" + ", ".join(f"{v:.10f}" for v in point.q) + "]"
+
+    lines = ["def e2e():", "  set_tcp(p[" + ", ".join(f"{v:.9f}" for v in tcp) + "])"]
+    for k in (1, 2, 3, 4):
+        lines += [f"  global Waypoint_{k}_p={pose(points[k])}", f"  global Waypoint_{k}_q={joints(points[k])}"]
+    lines += [
+        f"  movej(get_inverse_kin({pose(points[0])}, qnear={joints(points[0])}), a=1.4, v=1.05)",
+        "  movel(Waypoint_1_p, a=1.2, v=0.25, r=0.005)",
+        "  movec(Waypoint_2_p, Waypoint_3_p, a=1.2, v=0.1, r=0, mode=0)",
+        "  movel(Waypoint_4_p, a=1.2, v=0.25)",
+        f"  movej(get_inverse_kin({pose(points[5])}, qnear={joints(points[5])}), a=1.4, v=1.05)",
+        "end",
+        "e2e()",
+    ]
+    return Case("urscript", robot, points, np.eye(4), {"e2e.script": "\n".join(lines) + "\n"})
+
+
+def csv_case(robot):
+    """Program CSV: base frame, the robot's TCP (a CSV states neither user frames nor tools)."""
+
+    def written(T):
+        return xyzabc(np.concatenate([np.round(T[:3, 3], 3), np.round(abc_of(T), 4)]))
+
+    points = [p for p in build_points("csv", robot, np.eye(4), written) if not p.framed]
+    return Case("csv", robot, points, np.eye(4), {"e2e.csv": csv_text(points, 3, 4)})
+
+
+def csv_text(points, places, angle_places):
+    """A program CSV of the points' base-frame poses."""
+    rows = ["x,y,z,a,b,c,motion,speed"]
+    for p in points:
+        motion = "PTP" if p.motion == "ptp" else "LIN"
+        rows.append(f"{fixed(p.T_base[:3, 3], places)},{fixed(abc_of(p.T_base), angle_places)},{motion},100")
+    return "\n".join(rows) + "\n"
+
+
+BUILDERS = {"krl": krl_case, "rapid": rapid_case, "fanuc_ls": fanuc_case, "urscript": urscript_case, "csv": csv_case}
+
+
+# --------------------------------------------- calibration, running, landing
+
+
+@pytest.fixture(scope="module")
+def cells(tmp_path_factory):
+    """``cell(name) -> (robot, virtual robot, model, model file)``: the robot with TOOL as its TCP, calibrated once."""
+    made = {}
+
+    def cell(name):
+        if name not in made:
+            folder = tmp_path_factory.mktemp(name)
+            yaml_text = resources.files("trajcomp.robots").joinpath(f"{name}.yaml").read_text(encoding="utf-8")
+            robot_file = folder / f"{name}_tool.yaml"
+            robot_file.write_text(yaml_text + f"tool: [{fixed(TOOL, 1)}]\n")
+            robot = load_robot(robot_file)
+            corner, side, step = CUBES[name]
+            virtual = VirtualRobot.create(robot, "paper", seed=1)
+            plan = plan_grid(robot, corner, side, step)
+            assert plan.reachable.all(), name
+            rng = np.random.default_rng(11)
+            meas = Measurements(joints=plan.joints, position=plan.position, measured=virtual.measure(plan.joints, rng),
+                                lines=np.arange(len(plan.joints)) + 2, path=f"{name}.csv")
+            model = calibrate(robot, meas, robot_ref=str(robot_file), method="composite", grid_step=step, folds=0)
+            save_model(folder / "model.yaml", model)
+            made[name] = (robot, virtual, model, folder / "model.yaml")
+        return made[name]
+
+    return cell
+
+
+def compensate_cli(program, model_path, output, options=()):
+    assert main(["compensate", str(program), "--model", str(model_path), *options, "-o", str(output)]) == 0
+    return formats.read(output)
+
+
+def controller_joints(case, program):
+    """Joints (N, 6) rad the controller runs for the motion targets of a program read back from file."""
+    robot = case.robot
+    used = [i for m in program.motions for i in (m.via, m.target) if i is not None]
+    out = []
+    for index, point in zip(used, case.points, strict=True):
+        target = program.targets[index]
+        T_base = case.frame @ target.pose if point.framed else target.pose
+        if target.joints is not None:  # URScript Waypoint_q / qnear, CSV j1..j6: they must be the pose's joints
+            assert np.linalg.norm(fk(robot, target.joints)[:3, 3] - T_base[:3, 3]) < 2e-3, target.label
+            out.append(target.joints)
+        elif target.config:
+            out.append(joints_of_configuration(case.language, robot, T_base, target.config))
+        else:  # a CSV row without joints: the controller's IK, nearest home
+            solved = ik(robot, T_base[None], seed=robot.home)
+            assert solved.success[0], (case.language, target.label, solved.reason)
+            out.append(solved.q[0])
+    return np.array(out)
+
+
+def joints_of_configuration(language, robot, T_base, config):
+    """The one nominal IK solution (branch and joint turns) whose configuration data are ``config``."""
+    q_branches, valid = ik_all(robot, T_base[None])
+    turns = 2 * np.pi * np.array(list(itertools.product((-1, 0, 1), repeat=6)))
+    candidates = (q_branches[0][valid[0]][:, None, :] + turns[None]).reshape(-1, 6)
+    candidates = candidates[robot.within_limits(candidates)]
+    match = [q for q, c in zip(candidates, configuration_for(language, robot, candidates)) if tuple(c) == tuple(config)]
+    assert len(match) == 1, f"{language}: {len(match)} solutions have configuration {config}"
+    return match[0]
+
+
+def landing_errors(points, virtual, q):
+    """|reached - target| (N,) mm of the measured TCP on the virtual robot."""
+    reached = virtual.reached_poses(np.asarray(q).reshape(-1, 6))[:, :3, 3]
+    return np.linalg.norm(reached - np.array([p.T_base[:3, 3] for p in points]).reshape(-1, 3), axis=1)
+
+
+# ------------------------------------------------------------------- tests
+
+
+@pytest.fixture(scope="module", params=sorted(LANGUAGES))
+def run(request, cells, tmp_path_factory):
+    """One language's program compensated through the CLI and run on the virtual robot."""
+    language = request.param
+    robot, virtual, _, model_path = cells(LANGUAGES[language])
+    case = BUILDERS[language](robot)
+    folder = tmp_path_factory.mktemp(language)
+    for name, text in case.files.items():
+        (folder / name).write_bytes(text.encode("utf-8"))
+    program = folder / next(iter(case.files))
+    (folder / "out").mkdir()
+    original = formats.read(program)
+    corrected = compensate_cli(program, model_path, folder / "out" / program.name, case.options)
+    # the same targets through a program CSV (base frame, written with 6 decimals)
+    (folder / "reference.csv").write_text(csv_text(case.points, 6, 9))
+    reference = compensate_cli(folder / "reference.csv", model_path, folder / "out" / "reference.csv")
+    plain = dataclasses.replace(case, language="csv", frame=np.eye(4),
+                                points=[dataclasses.replace(p, framed=False) for p in case.points])
+    return {
+        "case": case,
+        "original": original,
+        "corrected": corrected,
+        "before": landing_errors(case.points, virtual, controller_joints(case, original)),
+        "after": landing_errors(case.points, virtual, controller_joints(case, corrected)),
+        "csv": landing_errors(case.points, virtual, controller_joints(plain, reference)),
+    }
+
+
+def test_the_original_program_misses_its_targets(run):
+    assert run["before"].min() > MISSED, run["before"]
+
+
+def test_the_compensated_program_lands_on_its_targets(run):
+    assert run["after"].max() < LANDED, run["after"]
+
+
+def test_it_lands_as_well_as_the_csv_path(run):
+    np.testing.assert_allclose(run["after"], run["csv"], atol=SAME_AS_CSV)
+
+
+def test_only_numbers_change(run):
+    """Same lines and statements: the corrected files differ from the originals in target numbers only."""
+    original, corrected = run["original"], run["corrected"]
+    if run["case"].language == "csv":
+        pytest.skip("a program CSV gains j1..j6 columns (conventions.md)")
+    for before, after in zip(original.sources, corrected.sources, strict=True):
+        assert len(before.text.splitlines()) == len(after.text.splitlines())
+        for a, b in zip(before.text.splitlines(), after.text.splitlines()):
+            if "CONFIG" in a:  # FANUC flags are letters
+                continue
+            assert _skeleton(a) == _skeleton(b), (a, b)
+    assert [type(i) for i in original.items] == [type(i) for i in corrected.items]
+
+
+def _skeleton(line):
+    return "".join(ch for ch in line if not (ch.isdigit() or ch in ".-+"))
+
+
+@pytest.mark.xfail(strict=True, reason="a tool other than the measured TCP is taken as exact on the identified "
+                   "flange, but a single-orientation grid does not locate the flange: see test docstring")
+def test_a_tool_other_than_the_measured_tcp_lands(cells):
+    """Known limit: targets on another tool miss by tenths of a mm to mm.
+
+    Position measurements of one TCP in one orientation cannot tell the
+    flange's pose from the TCP's offset (d6 vs tool z, wrist angles vs tool
+    lever), so the identified flange is right only where the measured TCP
+    is. A program tool other than it is then placed on that flange.
+    """
+    robot, virtual, model, _ = cells("ur10")
+    other = xyzabc((0.0, 0.0, 150.0, 0.0, 0.0, 0.0))
+    corner, side, _ = CUBES["ur10"]
+    targets = np.tile(np.eye(4), (5, 1, 1))
+    targets[:, :3, :3] = Rotation.from_euler("ZYX", default_orientation(robot.replace(T_flange_tool=other))).as_matrix()
+    targets[:, :3, 3] = np.asarray(corner) + side * np.linspace(0.2, 0.8, 5)[:, None]
+    q = compensate(model, targets, tool=other).q
+    reached = fk(virtual.true_robot.replace(T_flange_tool=other), virtual.reached_joints(q))[:, :3, 3]
+    assert np.linalg.norm(reached - targets[:, :3, 3], axis=1).max() < LANDED
