@@ -21,6 +21,10 @@ operator ``P:{X 10}``, function calls) or to a point the program does not
 define is left as written and reported as not compensated.
 
 Write: the edited points' numbers, with S and T from their configuration.
+KUKA requires the DEF name of the .src and the DEFDAT name of the .dat to be
+the file name: a program written under another name gets both renamed (and
+its .dat written beside it under the same name); otherwise the files are
+written back byte for byte.
 """
 
 import dataclasses
@@ -29,7 +33,7 @@ from pathlib import Path
 
 import numpy as np
 
-from trajcomp.errors import ReadError
+from trajcomp.errors import ReadError, WriteError
 from trajcomp.formats._text import (
     NUMBER,
     Lines,
@@ -66,6 +70,8 @@ _MEMBER = re.compile(r"\s*([A-Za-z_]\w*)\s+(" + NUMBER + r"|'B[01]+')\s*$")
 _APPROX = re.compile(r"\s*((?:\bC_(?:PTP|DIS|VEL|ORI)\b\s*)+)$", re.I)
 _NAME = re.compile(r"^[A-Za-z_$][\w$]*$")
 _DEF = re.compile(r"^\s*(?:GLOBAL\s+)?DEF(?:FCT\s+\w+)?\s+(\w+)\s*\(", re.I | re.M)
+_DEFDAT = re.compile(r"^\s*DEFDAT\s+(\w+)", re.I | re.M)
+_PROGRAM_NAME = re.compile(r"^[A-Za-z_][A-Za-z0-9_]{0,23}$")  # KRL names: 24 characters at most
 
 
 def _members(body, start, source, name, line, text, numeric=True):
@@ -342,15 +348,38 @@ def _encode(target, old):
 
 
 def write(program, path):
-    """``{path.src: bytes, path.dat: bytes}``: patched in place if read from KRL, else generated."""
+    """``{path.src: bytes, path.dat: bytes}``: patched in place if read from KRL, else generated.
+
+    The DEF and DEFDAT names become the output file's name when it differs
+    (KUKA loads a program only under its own name).
+
+    Raises
+    ------
+    WriteError
+        The output file name is not a valid KRL name.
+    """
     path = Path(path)
+    if not _PROGRAM_NAME.match(path.stem):
+        raise WriteError(
+            f"{path}: {path.stem!r} cannot name a KRL program (letters, digits and _, "
+            "not starting with a digit, at most 24 characters): KUKA needs DEF name = file name"
+        )
     dat = path.with_suffix(".dat" if path.suffix.islower() else ".DAT")
     if program.format == "krl" and program.sources:
         texts = patched(program, _encode, MIN_PLACES)
+        texts = [_renamed(text, pattern, path.stem) for text, pattern in zip(texts, (_DEF, _DEFDAT))]
         outs = [path, dat][: len(texts)]
         return {out: encode_text(source, text) for out, source, text in zip(outs, program.sources, texts)}
     src_text, dat_text = _emit(program, path.stem)
     return {path: src_text.encode("latin-1"), dat: dat_text.encode("latin-1")}
+
+
+def _renamed(text, pattern, name):
+    """``text`` with the name of its first DEF (or DEFDAT) replaced by ``name`` if it differs (KRL ignores case)."""
+    m = pattern.search(mask(text, ";"))
+    if m is None or m.group(1).lower() == name.lower():
+        return text
+    return text[: m.start(1)] + name + text[m.end(1):]
 
 
 def _aggregate(target):
