@@ -7,6 +7,7 @@ or limit, 2 bad usage or bad input.
 
 import argparse
 import importlib
+import logging
 import sys
 
 from trajcomp import __version__
@@ -44,6 +45,7 @@ def main(argv=None):
     """Run the CLI; returns the exit code (also used as the console script)."""
     parser = build_parser()
     args = parser.parse_args(argv)
+    logging.basicConfig(level=logging.WARNING, format="trajcomp: warning: %(message)s")
     try:
         return args.run(args) or 0
     except ToleranceError as exc:

@@ -51,8 +51,6 @@ def run(args):
     )
     save_model(args.output, model)
     report = model.report
-    for warning in report["warnings"]:
-        info(f"warning: {warning}")
     if model.dh_names:
         info(f"identified {len(model.dh_names)} parameters; left at nominal: {', '.join(model.dh_fixed) or 'none'}")
     print_stats(f"fit on {report['measurements']['used']} measurements (|error|, mm):", report["fit"])
