@@ -215,6 +215,19 @@ def patched(program, encode, min_places):
     return [apply_edits(source.text, e) for source, e in zip(program.sources, edits)]
 
 
+def write_single_file(program, path, format_name, encode, min_places, emit):
+    """``{path: bytes}`` of a one-file language.
+
+    The program's source patched in place (see `patched`) when it was read
+    from ``format_name``; otherwise ``emit(program, path.stem)`` generated as
+    UTF-8 text.
+    """
+    path = Path(path)
+    if program.format == format_name and program.sources:
+        return {path: encode_text(program.sources[0], patched(program, encode, min_places)[0])}
+    return {path: emit(program, path.stem).encode("utf-8")}
+
+
 def apply_edits(text, edits):
     """``text`` with ``(start, end, replacement)`` edits applied (non-overlapping)."""
     out, position = [], 0

@@ -27,13 +27,12 @@ from trajcomp.errors import ReadError, WriteError
 from trajcomp.formats._text import (
     NUMBER,
     Lines,
-    encode_text,
     encode_xyzabc,
     fail,
     format_number,
     mask,
     numbered,
-    patched,
+    write_single_file,
     read_source,
 )
 from trajcomp.program import CIRCULAR, JOINT, LINEAR, Motion, Program, Span, Statement, Target
@@ -221,11 +220,7 @@ def _encode(target, old):
 
 def write(program, path):
     """``{path: bytes}``: patched in place if read from .LS, else a generated program."""
-    path = Path(path)
-    if program.format == "fanuc_ls" and program.sources:
-        source = program.sources[0]
-        return {path: encode_text(source, patched(program, _encode, MIN_PLACES)[0])}
-    return {path: _emit(program, path.stem).encode("utf-8")}
+    return write_single_file(program, path, "fanuc_ls", _encode, MIN_PLACES, _emit)
 
 
 ATTR = """/ATTR

@@ -17,7 +17,6 @@ Write: the edited targets' numbers, with confdata from their configuration.
 """
 
 import re
-from pathlib import Path
 
 import numpy as np
 
@@ -25,11 +24,10 @@ from trajcomp.errors import ReadError, WriteError
 from trajcomp.formats._text import (
     NUMBER,
     Lines,
-    encode_text,
     fail,
     format_number,
     mask,
-    patched,
+    write_single_file,
     read_source,
     same_rotation,
     spans,
@@ -243,11 +241,7 @@ def _encode(target, old):
 
 def write(program, path):
     """``{path: bytes}``: patched in place if read from RAPID, else a generated module."""
-    path = Path(path)
-    if program.format == "rapid" and program.sources:
-        source = program.sources[0]
-        return {path: encode_text(source, patched(program, _encode, MIN_PLACES)[0])}
-    return {path: _emit(program, path.stem).encode("utf-8")}
+    return write_single_file(program, path, "rapid", _encode, MIN_PLACES, _emit)
 
 
 def _numbers(values, places):

@@ -25,11 +25,10 @@ from trajcomp.errors import ReadError, WriteError
 from trajcomp.formats._text import (
     NUMBER,
     Lines,
-    encode_text,
     fail,
     format_number,
     mask,
-    patched,
+    write_single_file,
     read_source,
     same_rotation,
     spans,
@@ -270,11 +269,7 @@ def _encode(target, old):
 
 def write(program, path):
     """``{path: bytes}``: patched in place if read from URScript, else a generated script."""
-    path = Path(path)
-    if program.format == "urscript" and program.sources:
-        source = program.sources[0]
-        return {path: encode_text(source, patched(program, _encode, MIN_PLACES)[0])}
-    return {path: _emit(program, path.stem).encode("utf-8")}
+    return write_single_file(program, path, "urscript", _encode, MIN_PLACES, _emit)
 
 
 def _list(values, places):
