@@ -1,7 +1,5 @@
 """Calibration and compensation against the virtual robot's ground truth."""
 
-import dataclasses
-
 import numpy as np
 import pytest
 

@@ -12,7 +12,7 @@ import numpy as np
 
 from trajcomp.errors import CalibrationError
 from trajcomp.grid import fit_field
-from trajcomp.identify import best_fit_transform, identify_dh, outlier_rows
+from trajcomp.identify import best_fit_transform, identify_dh
 from trajcomp.ik import ik
 from trajcomp.kinematics import fk
 from trajcomp.linear import fit_linear

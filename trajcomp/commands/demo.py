@@ -2,9 +2,7 @@
 
 from pathlib import Path
 
-import numpy as np
-
-from trajcomp.commands._args import command_parser, info, progress
+from trajcomp.commands._args import command_parser, info
 from trajcomp.demo import CUBES, format_comparison, run_demo, run_program
 from trajcomp.model import save_model
 from trajcomp.robot import load_robot

@@ -2,8 +2,6 @@
 
 import dataclasses
 
-import numpy as np
-
 from trajcomp.calibrate import commanded
 from trajcomp.commands._args import command_parser, info
 from trajcomp.measurements import parse_mapping, read_measurements, write_measurements
