@@ -49,7 +49,8 @@ def _rows(array, index):
 
 def to_base(T_tracker_base, measured):
     """Tracker-frame positions (N, 3) expressed in the base frame."""
-    return measured @ invert(T_tracker_base)[:3, :3].T + invert(T_tracker_base)[:3, 3]
+    T_base_tracker = invert(T_tracker_base)
+    return measured @ T_base_tracker[:3, :3].T + T_base_tracker[:3, 3]
 
 
 class _Parts:

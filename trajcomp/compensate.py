@@ -17,7 +17,7 @@ import logging
 
 import numpy as np
 
-from trajcomp.ik import ik, ik_numeric
+from trajcomp.ik import ik_near
 from trajcomp.kinematics import fk
 from trajcomp.model import evaluate_field
 from trajcomp.plan import batch_seed
@@ -84,13 +84,11 @@ def compensate(model, targets, *, mode=None, tool=None, seed=None, outside="mode
     mode = mode or model.method
     model.check_mode(mode)
     targets = np.asarray(targets, dtype=float)
-    nominal = model.nominal
-    refine = mode in ("dh", "composite")
-    real = model.identified if refine else nominal
-    if tool is not None:
-        nominal = nominal.replace(T_flange_tool=tool)
-        real = real.replace(T_flange_tool=tool)
-    field = {"linear": None, "grid": model.grid, "composite": model.residual}.get(mode)
+    nominal = model.nominal if tool is None else model.nominal.replace(T_flange_tool=tool)
+    real = nominal
+    if mode in ("dh", "composite"):
+        real = model.identified if tool is None else model.identified.replace(T_flange_tool=tool)
+    field = model.error_field(mode)
     seed = batch_seed(nominal, targets) if seed is None else seed
     goal = targets[:, :3, 3]
     commanded = goal.copy()
@@ -103,13 +101,7 @@ def compensate(model, targets, *, mode=None, tool=None, seed=None, outside="mode
         elif field is not None:
             offset, flagged = evaluate_field(field, commanded, outside=outside)
             aimed[:, :3, 3] = goal - offset
-        start = ik(nominal, aimed, seed=seed)
-        start.raise_on_failure(label)
-        q = start.q
-        if refine:
-            refined = ik_numeric(real, aimed, q)
-            refined.raise_on_failure(label)
-            q = refined.q
+        q = ik_near(real, nominal, aimed, seed=seed).raise_on_failure(label).q
         command = fk(nominal, q)
         commanded = command[:, :3, 3]
     return CompensationResult(command, q, commanded - goal, flagged)

@@ -104,6 +104,10 @@ class CompensationModel:
         if mode not in self.modes:
             raise ModelError(f"mode {mode!r} is not available in this model (available: {', '.join(self.modes)})")
 
+    def error_field(self, mode):
+        """The interpolated field ``mode`` adds: raw-error grid (grid), residual grid (composite), else None."""
+        return {"grid": self.grid, "composite": self.residual}.get(mode)
+
     def predict(self, mode, joints, position, *, interpolation=None, outside="model"):
         """Predicted reached TCP positions.
 
@@ -141,8 +145,7 @@ class CompensationModel:
             base = np.array(position, dtype=float)
         if mode == "dh":
             return base, flagged
-        field = self.grid if mode == "grid" else self.residual
-        term, flagged = evaluate_field(field, position, interpolation, outside)
+        term, flagged = evaluate_field(self.error_field(mode), position, interpolation, outside)
         return base + term, flagged
 
 
