@@ -1,6 +1,13 @@
-"""Atomic file output: write to a temporary file beside the target, then rename."""
+"""Atomic file output: every file complete or untouched, a set of files all or none.
+
+Content is written to temporary files beside the targets and renamed into
+place. Replaced files keep their permission bits; new files get the usual
+mode for the user's umask (not the 0600 of a bare temporary file).
+"""
 
 import os
+import shutil
+import stat
 import tempfile
 from pathlib import Path
 
@@ -16,15 +23,61 @@ def write_atomic(path, data, *, newline=None, encoding="utf-8"):
         Destination. An existing file is replaced only once the new content is
         fully on disk.
     data : str or bytes
-        Content. ``str`` is encoded with ``encoding``; ``newline`` is passed to
-        the text layer (``""`` keeps the line endings that ``data`` holds).
+        Content. ``str`` is encoded with ``encoding``; ``newline`` (``None``:
+        ``"\\n"`` becomes the platform line ending, ``""`` keeps the line
+        endings ``data`` holds) applies to ``str`` only.
 
     Raises
     ------
     WriteError
         If the folder does not exist or the file cannot be written.
     """
-    path = Path(path)
+    if isinstance(data, str):
+        if newline is None:
+            data = data.replace("\n", os.linesep)
+        elif newline:
+            data = data.replace("\n", newline)
+        try:
+            data = data.encode(encoding)
+        except UnicodeError as exc:
+            raise WriteError(f"{path}: cannot write: {exc}") from exc
+    write_files_atomic({path: data})
+
+
+def write_files_atomic(files):
+    """Write several files all or none.
+
+    Every content is first written to a temporary file beside its target;
+    only when all are on disk are they renamed into place. If a rename
+    fails, the files already replaced are restored from backups and the
+    new ones removed, so a KRL ``.src`` never lands without its ``.dat``
+    nor a model YAML without its grid sidecar.
+
+    Parameters
+    ----------
+    files : Mapping[str or Path, bytes]
+        Destination paths and their content.
+
+    Raises
+    ------
+    WriteError
+        A folder does not exist or a file cannot be written; nothing on disk
+        has changed.
+    """
+    files = {Path(path): data for path, data in files.items()}
+    staged = {}
+    try:
+        for path, data in files.items():
+            staged[path] = _stage(path, data)
+        _commit(staged)
+    except BaseException:
+        for tmp in staged.values():
+            Path(tmp).unlink(missing_ok=True)
+        raise
+
+
+def _stage(path, data):
+    """A temporary file beside ``path`` holding ``data``, with ``path``'s mode; its name."""
     folder = path.parent if str(path.parent) else Path(".")
     if not folder.is_dir():
         raise WriteError(f"{path}: folder {folder} does not exist")
@@ -33,13 +86,51 @@ def write_atomic(path, data, *, newline=None, encoding="utf-8"):
     except OSError as exc:
         raise WriteError(f"{path}: cannot write: {exc.strerror}") from exc
     try:
-        if isinstance(data, bytes):
-            with os.fdopen(fd, "wb") as handle:
-                handle.write(data)
-        else:
-            with os.fdopen(fd, "w", encoding=encoding, newline=newline) as handle:
-                handle.write(data)
-        os.replace(tmp, path)
-    except (OSError, UnicodeError) as exc:
+        with os.fdopen(fd, "wb") as handle:
+            handle.write(data)
+        os.chmod(tmp, _mode_for(path))
+    except OSError as exc:
         Path(tmp).unlink(missing_ok=True)
         raise WriteError(f"{path}: cannot write: {exc}") from exc
+    return tmp
+
+
+def _mode_for(path):
+    """Permission bits for ``path``: those of the file it replaces, else 0666 less the umask."""
+    try:
+        return stat.S_IMODE(os.stat(path).st_mode)
+    except FileNotFoundError:
+        umask = os.umask(0)
+        os.umask(umask)
+        return 0o666 & ~umask
+
+
+def _backup(path, backup):
+    """A copy of ``path`` at ``backup`` (a hard link where the file system allows); ``backup``."""
+    try:
+        os.link(path, backup)
+    except OSError:
+        shutil.copy2(path, backup)
+    return backup
+
+
+def _commit(staged):
+    """Rename staged temporaries into place; on failure put every replaced file back."""
+    backups, done = {}, []
+    try:
+        for path in staged:
+            if path.exists():
+                backups[path] = _backup(path, f"{staged[path]}.bak")
+        for path, tmp in staged.items():
+            os.replace(tmp, path)
+            done.append(path)
+    except OSError as exc:
+        for path in done:
+            if path in backups:
+                os.replace(backups.pop(path), path)
+            else:
+                path.unlink(missing_ok=True)
+        raise WriteError(f"{path}: cannot write: {exc}") from exc
+    finally:
+        for backup in backups.values():
+            Path(backup).unlink(missing_ok=True)

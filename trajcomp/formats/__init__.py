@@ -21,7 +21,7 @@ import importlib
 from importlib.metadata import entry_points
 from pathlib import Path
 
-from trajcomp.atomic import write_atomic
+from trajcomp.atomic import write_files_atomic
 from trajcomp.errors import ReadError, TrajcompError
 
 ENTRY_POINT_GROUP = "trajcomp.formats"
@@ -182,10 +182,10 @@ def read(path, format=None):
 
 
 def write(path, program, format=None):
-    """Write a robot program; every output file is complete or left untouched.
+    """Write a robot program; its output files (a KRL .src and .dat) land all or none.
 
-    The whole content is produced before anything is written; each file is
-    then written to a temporary file and renamed into place.
+    The whole content is produced before anything is written, then
+    committed with `trajcomp.atomic.write_files_atomic`.
 
     Parameters
     ----------
@@ -201,6 +201,5 @@ def write(path, program, format=None):
     """
     path = Path(path)
     files = find_format(path, format).write(program, path)
-    for out, data in files.items():
-        write_atomic(out, data)
+    write_files_atomic(files)
     return list(files)
