@@ -9,9 +9,11 @@ from trajcomp import formats
 from trajcomp.errors import TrajcompError, WriteError
 from trajcomp.postprocess import FRAMELESS, compensate_program, convert_program
 from trajcomp.robot import load_robot
-from trajcomp.configuration import kuka_status_turn
+from trajcomp.compensate import CompensationResult
+from trajcomp.configuration import abb_confdata, kuka_status_turn
+from trajcomp.frames import FrameTable
 from trajcomp.kinematics import fk
-from trajcomp.transforms import matrix_to_pose, pose_to_matrix
+from trajcomp.transforms import invert, matrix_to_pose, pose_to_matrix
 
 DATA = Path(__file__).parent / "data" / "programs"
 GOLDEN = {
@@ -90,52 +92,67 @@ def test_conversion_computes_configuration_with_the_robot(robot, tmp_path):
     assert [t.config for t in formats.read(tmp_path / "fk.src").targets] == kuka_status_turn(robot, solved)
 
 
-def _rigid_correct(offset, joints):
-    """Stand-in compensation: command = target + offset (base frame); the joints are given (seed if any)."""
+def _rigid_correct(offset, joint_step=np.zeros(6)):
+    """Stand-in compensation: command = target + offset (base frame); joints = seed + joint_step (rad)."""
     calls = []
 
-    def correct(T_base_tcp, T_flange_tool, q_seed):
+    def correct(T_base_tcp, T_flange_tool, q_seed, names):
         calls.append(len(T_base_tcp))
         command = T_base_tcp.copy()
         command[:, :3, 3] += offset
-        return command, (np.tile(joints, (len(command), 1)) if q_seed is None else q_seed)
+        n = len(command)
+        return CompensationResult(command, q_seed + joint_step, np.tile(offset, (n, 1)), np.zeros(n, bool), np.zeros(n))
 
     correct.calls = calls
     return correct
 
 
+def _reachable(program, robot, q0=np.radians([100, 10, -20, 30, -40, 200])):
+    """The program with every used Cartesian target moved to a pose the robot reaches, its confdata consistent.
+
+    Welding.mod's own numbers are a parser test (one point sits inside the robot base); the
+    targets become FK of joints near ``q0`` expressed in their own frames.
+    """
+    plan_index = [i for i in program.usage() if not program.targets[i].is_joint]
+    table = FrameTable(program, robot)
+    T_base_frame, T_tool, _ = table.targets_in_base(plan_index)
+    q = q0 + np.radians(np.arange(len(plan_index)))[:, None] * np.array([1, 1, 1, 0, 0, 0])
+    poses = invert(T_base_frame) @ fk(robot.replace(T_flange_tool=np.eye(4)), q) @ T_tool
+    return program.with_targets(plan_index, poses=poses, configs=abb_confdata(robot, q))
+
+
 def test_compensation_moves_each_target_by_the_offset_in_its_own_frame(tmp_path):
     robot = load_robot("abb_irb4600")
-    program = formats.read(GOLDEN["rapid"])
+    program = _reachable(formats.read(GOLDEN["rapid"]), robot)
     offset = np.array([0.3, -0.2, 0.1])
-    q = np.radians([100, 10, -20, 30, -40, 200])
-    correct = _rigid_correct(offset, q)
+    correct = _rigid_correct(offset)
     new, report = compensate_program(program, correct, robot)
     assert correct.calls == [len(program.cartesian_targets())]  # one vectorized call
     stack, new_stack = program.cartesian_targets(), new.cartesian_targets()
     for frame, before, after in zip(stack.frame, stack.T, new_stack.T):
         R = program.frames[frame][:3, :3]
         np.testing.assert_allclose(after[:3, 3] - before[:3, 3], R.T @ offset, atol=1e-9)
-    assert report.compensated == stack.names
-    assert [line for line, _ in report.not_compensated] == [25, 26, 31]
+    assert sorted(report.labels) == sorted(program.where(i) for i in stack.index)
+    assert [line for line, _, _ in report.not_compensated] == [25, 26, 31]
     assert report.unused == ("pUnused",)
     assert report.joint_targets == ("jHome", "line 30")
+    assert report.declared == report.written  # the corrected joints are the planned ones: same confdata
     formats.write(tmp_path / "Welding.mod", new)
     again = formats.read(tmp_path / "Welding.mod")
     for i in stack.index:
-        assert again.targets[i].config == (1, 0, 2, 1)  # confdata of q (100, 30, 200 deg; J5 < 0)
+        assert again.targets[i].config == program.targets[i].config
     for i in program.joint_targets()[0]:
         np.testing.assert_array_equal(again.targets[i].joints, program.targets[i].joints)
 
 
 def test_joint_targets_compensated_on_request():
     robot = load_robot("abb_irb4600")
-    program = formats.read(GOLDEN["rapid"])
+    program = _reachable(formats.read(GOLDEN["rapid"]), robot)
     index, q = program.joint_targets()
-    joints = np.radians([1, 2, 3, 4, 5, 6])
-    new, report = compensate_program(program, _rigid_correct(np.zeros(3), joints), robot, joint_targets="compensate")
+    step = np.radians([0.01, 0.02, 0.03, 0.04, 0.05, 0.06])
+    new, report = compensate_program(program, _rigid_correct(np.zeros(3), step), robot, joint_targets="compensate")
     for i in index:
-        np.testing.assert_allclose(new.targets[i].joints, joints)  # the corrected joints replace them
+        np.testing.assert_allclose(new.targets[i].joints, program.targets[i].joints + step)  # corrected joints
         assert new.targets[i].edited
     assert report.joint_mode == "compensate"
 
@@ -143,4 +160,4 @@ def test_joint_targets_compensated_on_request():
 def test_undefined_tool_is_an_error_not_a_guess(robot):
     program = formats.read(GOLDEN["krl"])
     with pytest.raises(TrajcompError, match=r"tool '1' is used but not defined.*--tool 1=x,y,z,a,b,c"):
-        compensate_program(program, _rigid_correct(np.zeros(3), np.zeros(6)), robot)
+        compensate_program(program, _rigid_correct(np.zeros(3)), robot)

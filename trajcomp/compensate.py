@@ -45,15 +45,32 @@ class CompensationResult:
         Commanded minus target position, mm.
     outside : ndarray, shape (N,) bool
         Targets outside the grid, handled by the ``outside`` policy.
+    residual : ndarray, shape (N,)
+        Distance from the target to where the model predicts the arm lands
+        with the command, mm: what the fixed-point iteration left.
     """
 
     T_command: np.ndarray
     q: np.ndarray
     correction: np.ndarray
     outside: np.ndarray
+    residual: np.ndarray
+
+    @classmethod
+    def concatenate(cls, parts, order):
+        """One result of several: rows ``order[k]`` (N,) come from the k-th part."""
+        n = sum(len(o) for o in order)
+        fields = {}
+        for field in dataclasses.fields(cls):
+            first = getattr(parts[0], field.name)
+            out = np.empty((n,) + first.shape[1:], dtype=first.dtype)
+            for part, rows in zip(parts, order):
+                out[rows] = getattr(part, field.name)
+            fields[field.name] = out
+        return cls(**fields)
 
 
-def compensate(model, targets, *, mode=None, tool=None, seed=None, outside="model", label="target"):
+def compensate(model, targets, *, mode=None, tool=None, seed=None, outside="model", label="targets", names=None):
     """Compensated commands for target TCP poses.
 
     Parameters
@@ -72,12 +89,15 @@ def compensate(model, targets, *, mode=None, tool=None, seed=None, outside="mode
     outside : {"model", "clamp", "error"}
         Policy for targets outside the grid (see `CompensationModel.predict`).
     label : str
-        Names the targets in error messages (e.g. the program file).
+        Names the set of targets in error messages (e.g. the program file).
+    names : sequence of str, length N, optional
+        Names of the targets in error messages (label and line); default
+        ``target k`` (0-based).
 
     Raises
     ------
     IKError
-        A target (named by index) cannot be reached.
+        A target (named) cannot be reached.
     ModelError
         Unknown mode, or a target outside the grid with ``outside="error"``.
     """
@@ -101,26 +121,30 @@ def compensate(model, targets, *, mode=None, tool=None, seed=None, outside="mode
         elif field is not None:
             offset, flagged = evaluate_field(field, commanded, outside=outside)
             aimed[:, :3, 3] = goal - offset
-        q = ik_near(real, nominal, aimed, seed=seed).raise_on_failure(label).q
+        q = ik_near(real, nominal, aimed, seed=seed).raise_on_failure(label, names).q
         command = fk(nominal, q)
         commanded = command[:, :3, 3]
-    return CompensationResult(command, q, commanded - goal, flagged)
+    reached = fk(real, q)[:, :3, 3]
+    if mode == "linear":
+        reached = reached + model.linear.predict_error(commanded)
+    elif field is not None:
+        reached = reached + evaluate_field(field, commanded, outside=outside)[0]
+    residual = np.linalg.norm(reached - goal, axis=1)
+    return CompensationResult(command, q, commanded - goal, flagged, residual)
 
 
 def program_corrector(model, *, mode=None, outside="model", label="program"):
     """The ``correct`` callable of `trajcomp.postprocess.compensate_program` for a model.
 
-    Targets are grouped by tool (a program uses few) and each group is
-    compensated in one vectorized call; the result's outside-grid flags are
-    collected in the returned callable's ``outside`` attribute (N,) bool.
-    Targets on the robot's declared tool are the TCP that was measured: they
-    get the identified tool for the real arm (``tool=None`` of `compensate`).
+    ``correct(targets (N, 4, 4), tools (N, 4, 4), seeds (N, 6), names) ->
+    CompensationResult``. Targets are grouped by tool (a program uses few)
+    and each group is compensated in one vectorized call. Targets on the
+    robot's declared tool are the TCP that was measured: they get the
+    identified tool for the real arm (``tool=None`` of `compensate`).
     """
 
-    def correct(targets, tools, seeds=None):
-        command = np.empty_like(targets)
-        q = np.empty((len(targets), 6))
-        correct.outside = np.zeros(len(targets), dtype=bool)
+    def correct(targets, tools, seeds, names):
+        parts, order = [], []
         unique, group = np.unique(np.round(tools.reshape(len(tools), -1), 9), axis=0, return_inverse=True)
         for g in range(len(unique)):
             pick = np.flatnonzero(group.ravel() == g)
@@ -131,10 +155,10 @@ def program_corrector(model, *, mode=None, outside="model", label="program"):
                     "%s: %d targets use a tool other than the calibrated TCP; a model measured in one "
                     "orientation does not locate the flange, so they may miss by tenths of a mm", label, len(pick),
                 )
-            result = compensate(model, targets[pick], mode=mode, tool=None if measured_tcp else tool,
-                                seed=None if seeds is None else seeds[pick], outside=outside, label=label)
-            command[pick], q[pick] = result.T_command, result.q
-            correct.outside[pick] = result.outside
-        return command, q
+            parts.append(compensate(model, targets[pick], mode=mode, tool=None if measured_tcp else tool,
+                                    seed=seeds[pick], outside=outside, label=label,
+                                    names=[names[k] for k in pick]))
+            order.append(pick)
+        return CompensationResult.concatenate(parts, order)
 
     return correct

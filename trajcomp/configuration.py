@@ -82,3 +82,87 @@ def configuration_for(format_name, robot, q):
     """
     function = BY_FORMAT.get(format_name)
     return None if function is None else function(robot, q)
+
+
+# Windows are closed intervals that reproduce the encoders' half-open ones to _EDGE: a joint
+# on a boundary (J4 = 0, J6 = 180 deg) belongs to exactly one window, as it has one code.
+_EDGE = 1e-9  # rad
+
+
+def _kuka_windows(config):
+    """Branch and joint windows of a KUKA ``(S, T)``: T bit i set means axis i+1 < 0."""
+    status, turn = (int(v) for v in config)
+    back = bool(status & 1)
+    up = bool(status & 2) != back
+    bits = (turn >> np.arange(6)) & 1
+    lower = np.where(bits, -np.inf, -_EDGE)
+    upper = np.where(bits, -2 * _EDGE, np.inf)
+    return _branch(back, up, bool(status & 4)), lower, upper
+
+
+def _abb_windows(config):
+    """Branch and joint windows of ABB confdata: joints 1, 4, 6 in quadrants [cf, cf + 1) * 90 deg."""
+    cf1, cf4, cf6, cfx = (int(v) for v in config)
+    back = bool(cfx & 4)
+    up = bool(cfx & 2) == back
+    lower, upper = np.full(6, -np.inf), np.full(6, np.inf)
+    for joint, quadrant in zip((0, 3, 5), (cf1, cf4, cf6)):
+        lower[joint], upper[joint] = quadrant * np.pi / 2 - _EDGE, (quadrant + 1) * np.pi / 2 - 2 * _EDGE
+    return _branch(back, up, bool(cfx & 1)), lower, upper
+
+
+def _fanuc_windows(config):
+    """Branch and joint windows of FANUC CONFIG: joints 1, 4, 6 in turn t, ((2t - 1) pi, (2t + 1) pi]."""
+    flip, elbow, front, *turns = config
+    lower, upper = np.full(6, -np.inf), np.full(6, np.inf)
+    for joint, turn in zip((0, 3, 5), turns):
+        lower[joint], upper[joint] = (2 * int(turn) - 1) * np.pi + _EDGE, (2 * int(turn) + 1) * np.pi
+    return _branch(front == "B", elbow == "U", flip == "N"), lower, upper
+
+
+def _branch(back, up, negative):
+    """`trajcomp.ik.Configuration` index of the flags."""
+    return 4 * back + 2 * (not up) + negative
+
+
+WINDOWS_BY_FORMAT = {"krl": _kuka_windows, "rapid": _abb_windows, "fanuc_ls": _fanuc_windows}
+
+
+def declared_windows(format_name, configs):
+    """The branch and joint windows that configuration data declare: the inverse of `configuration_for`.
+
+    Parameters
+    ----------
+    format_name : str
+    configs : sequence of tuple, length N
+        Configuration data as read (``()`` where a target has none).
+
+    Returns
+    -------
+    branch : ndarray of int, shape (N,)
+        `Configuration` index 0..7; -1 where nothing is declared.
+    lower, upper : ndarray, shape (N, 6)
+        Window of each joint, rad (``-inf`` / ``inf`` where free).
+    """
+    n = len(configs)
+    branch = np.full(n, -1)
+    lower, upper = np.full((n, 6), -np.inf), np.full((n, 6), np.inf)
+    decode = WINDOWS_BY_FORMAT.get(format_name)
+    for k, config in enumerate(configs):
+        if decode is not None and config:
+            branch[k], lower[k], upper[k] = decode(config)
+    return branch, lower, upper
+
+
+def describe(format_name, config):
+    """Configuration data as a program of the language writes them (``""`` for none).
+
+    ``("krl", (6, 50))`` -> ``"S 6, T 50"``; RAPID ``"[0,-1,0,1]"``; FANUC ``"N U T, 0, 0, 0"``.
+    """
+    if not config:
+        return ""
+    if format_name == "krl":
+        return f"S {config[0]}, T {config[1]}"
+    if format_name == "fanuc_ls":
+        return f"{' '.join(config[:3])}, {', '.join(str(t) for t in config[3:])}"
+    return "[" + ",".join(str(v) for v in config) + "]"

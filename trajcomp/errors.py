@@ -40,3 +40,7 @@ class TimingError(TrajcompError):
 
 class ToleranceError(TrajcompError):
     """The work ran but its result fails a requested tolerance or limit."""
+
+
+class CompensationError(TrajcompError):
+    """A correction is implausible: larger than the stated bound for a calibrated arm."""

@@ -127,17 +127,20 @@ class IKResult:
     residual_rot: np.ndarray
     reason: np.ndarray
 
-    def raise_on_failure(self, label="targets"):
-        """Raise IKError naming the failed targets (0-based indices) and why; else return self.
+    def raise_on_failure(self, label="targets", names=None):
+        """Raise IKError naming the failed targets and why; else return self.
 
         Parameters
         ----------
         label : str
             Names the set of targets in the message (e.g. a program file).
+        names : sequence of str, length N, optional
+            Names of the targets (label and line); default ``target k`` (0-based).
         """
         failed = np.flatnonzero(~self.success)
         if failed.size:
-            shown = ", ".join(f"target {i}: {self.reason[i]}" for i in failed[:5])
+            name = (lambda i: f"target {i}") if names is None else names.__getitem__
+            shown = ", ".join(f"{name(i)}: {self.reason[i]}" for i in failed[:5])
             more = f" and {failed.size - 5} more" if failed.size > 5 else ""
             raise IKError(f"{label}: no IK solution for {failed.size} of {len(self.success)} targets ({shown}{more})")
         return self

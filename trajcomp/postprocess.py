@@ -1,116 +1,145 @@
 """Apply corrected poses to robot programs, and convert programs between languages.
 
-`compensate_program` takes every target a program's motions use to the base
-frame with its tool, asks a ``correct`` callable (the compensation core)
-once for all of them, brings the commands back to each target's own frame
-and writes them into the program with configuration data recomputed from the
+`compensate_program` solves every target a program's motions use in the
+posture the program declares (`trajcomp.posture`), asks a ``correct``
+callable (the compensation core) once for all of them, seeded there,
+refuses corrections that are implausible or leave the posture, brings the
+commands back to each target's own frame (`trajcomp.frames`) and writes
+them into the program with configuration data recomputed from the
 corrected joints. `convert_program` re-expresses a program in another
 language.
-
-Frames: a target's pose is T_frame_tcp in its user frame (KUKA base, ABB
-work object, FANUC user frame). Frame values are T_world_frame and tool
-values T_flange_tool (mm); the base is placed in the world by the robot's
-``T_world_base``. A frame or tool the program uses must be defined in the
-program or supplied by the caller; a missing one is an error, never a guess.
-Frame ``None`` is the base, tool ``None`` the robot description's tool.
 """
 
 import dataclasses
 
 import numpy as np
 
-from trajcomp.configuration import configuration_for
-from trajcomp.errors import IKError, TrajcompError
-from trajcomp.ik import ik
+from trajcomp.configuration import configuration_for, describe
+from trajcomp.errors import CompensationError
 from trajcomp.kinematics import fk
+from trajcomp.frames import FrameTable
+from trajcomp.posture import MAX_JOINT_CHANGE, check_posture, planned_joints
 from trajcomp.program import Program
-from trajcomp.transforms import invert
+from trajcomp.transforms import invert, matrix_to_rotvec
 
 FRAMELESS = frozenset({"csv", "urscript"})  # languages whose poses are always in the base frame
 
 
-@dataclasses.dataclass(frozen=True)
+MAX_CORRECTION = 10.0  # mm, default bound of a plausible correction of a calibrated arm
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
 class ProgramReport:
-    """What a compensation or conversion did to a program.
+    """What a compensation did to a program: one row per compensated target, in motion order.
 
     Attributes
     ----------
-    compensated : tuple of str
-        Labels of the Cartesian targets given new numbers.
-    joint_targets : tuple of str
-        Labels of joint targets, and whether they were kept or compensated.
-    not_compensated : tuple of (int, str)
-        Line and text of motions whose position is computed at run time or
-        refers to a point the program does not define: passed through.
+    labels : tuple of str, length N
+        Target names with file and line (``P1 (weld.dat:12)``).
+    lines : ndarray of int, shape (N,)
+        Source line of each target's numbers.
+    tools, frames : tuple of (str or None), length N
+        Tool and user frame names (None: the robot's tool / the base).
+    T_target, T_command : ndarray, shape (N, 4, 4)
+        Where the TCP must land and the pose sent to the controller, base frame, mm.
+    correction : ndarray, shape (N, 6)
+        Command minus target: position (mm) and rotation vector (deg).
+    q, q_planned : ndarray, shape (N, 6)
+        Written (corrected) joints, and the nominal joints of the original
+        target in its declared posture, rad.
+    declared, written : tuple of str, length N
+        Configuration data as the language writes them (``""`` where none).
+    posture_source : tuple of str, length N
+        ``"joints"``, ``"config"``, ``"previous"`` or ``"home"`` (`trajcomp.posture`).
+    outside_grid : ndarray of bool, shape (N,)
+    predicted_residual : ndarray, shape (N,)
+        Distance from the target to the model-predicted landing, mm.
+    not_compensated : tuple of (int, str, str)
+        Line, text and reason of motions passed through unchanged.
     unused : tuple of str
         Targets no motion uses: left as written.
+    joint_targets : tuple of str
+        Joint targets, kept as written or compensated (``joint_mode``).
     joint_mode : str
         ``"keep"`` or ``"compensate"``.
+    warnings : tuple of str
+        What the run could do but the user must know.
     """
 
-    compensated: tuple
-    joint_targets: tuple
-    not_compensated: tuple
-    unused: tuple
+    labels: tuple
+    lines: np.ndarray
+    tools: tuple
+    frames: tuple
+    T_target: np.ndarray
+    T_command: np.ndarray
+    correction: np.ndarray
+    q: np.ndarray
+    q_planned: np.ndarray
+    declared: tuple
+    written: tuple
+    posture_source: tuple
+    outside_grid: np.ndarray
+    predicted_residual: np.ndarray
+    not_compensated: tuple = ()
+    unused: tuple = ()
+    joint_targets: tuple = ()
     joint_mode: str = "keep"
+    warnings: tuple = ()
 
-    def lines(self):
+    @property
+    def compensated(self):
+        """Labels of the compensated targets."""
+        return self.labels
+
+    def lines_of_text(self):
         """Human-readable summary lines."""
-        out = [f"compensated targets: {len(self.compensated)}"]
+        out = [f"compensated targets: {len(self.labels)}"]
+        changed = [f"{label} {d} -> {w}" for label, d, w in zip(self.labels, self.declared, self.written) if d != w]
+        if changed:
+            out.append("configuration data rewritten for the corrected joints (same posture, a joint crosses a "
+                       f"sign or quadrant boundary): {'; '.join(changed)}")
         verb = "compensated" if self.joint_mode == "compensate" else "kept as written"
         if self.joint_targets:
             out.append(f"joint targets {verb}: {', '.join(self.joint_targets)}")
-        for line, text in self.not_compensated:
-            out.append(f"not compensated (computed at run time or undefined), line {line}: {text}")
+        if self.not_compensated:
+            out.append(f"{len(self.not_compensated)} motions NOT compensated:")
+            out += [f"  line {line}: {text} ({reason})" for line, text, reason in self.not_compensated]
         if self.unused:
             out.append(f"unused points left as written: {', '.join(self.unused)}")
+        out += [f"warning: {w}" for w in self.warnings]
         return out
 
 
-def _frame_table(program, robot, tools, frames):
-    """Lookup functions name -> T_flange_tool and name -> T_base_frame, with located errors."""
-    tool_values = {**(tools or {}), **program.tools}
-    frame_values = {**(frames or {}), **program.frames}
-    T_base_world = invert(robot.T_world_base) if robot is not None else np.eye(4)
-    default_tool = robot.T_flange_tool if robot is not None else np.eye(4)
+def compensate_program(program, correct, robot, *, tools=None, frames=None, joint_targets="keep",
+                       max_joint_change=MAX_JOINT_CHANGE, max_correction=MAX_CORRECTION):
+    """A program whose targets are replaced by their compensated commands, in their declared postures.
 
-    def lookup(values, name, what, option):
-        if name not in values:
-            raise TrajcompError(
-                f"{program.name}: {what} {name!r} is used but not defined in the program; "
-                f"give its value (e.g. {option} {name}=x,y,z,a,b,c in mm and deg)"
-            )
-        return values[name]
-
-    def tool(name):
-        return default_tool if name is None else lookup(tool_values, name, "tool", "--tool")
-
-    def frame(name):
-        return np.eye(4) if name is None else T_base_world @ lookup(frame_values, name, "frame", "--frame")
-
-    return tool, frame
-
-
-def compensate_program(program, correct, robot, *, tools=None, frames=None, joint_targets="keep"):
-    """A program whose targets are replaced by their compensated commands.
+    Every target is first solved with the nominal robot in the posture the
+    program declares (`trajcomp.posture.planned_joints`); the compensation
+    is seeded there and must stay there.
 
     Parameters
     ----------
     program : Program
     correct : callable
-        ``correct(T_base_tcp (N, 4, 4), T_flange_tool (N, 4, 4), q_seed (N, 6)
-        or None) -> (T_base_tcp_command (N, 4, 4), q (N, 6))``: the
-        nominal-model TCP pose that makes the real arm land on each target,
-        and its joints (rad). Called once, for all targets.
+        ``correct(T_base_tcp (N, 4, 4), T_flange_tool (N, 4, 4), q_seed (N, 6),
+        names (N,)) -> CompensationResult``: the nominal-model TCP pose that
+        makes the real arm land on each target and its joints (rad), solved
+        next to the seed joints. Called once, for all targets (see
+        `trajcomp.compensate.program_corrector`).
     robot : Robot
-        The nominal robot (configuration data, joint-target poses, base
-        placement and default tool).
+        The nominal robot (posture, configuration data, joint-target poses,
+        base placement and default tool).
     tools, frames : Mapping[str, ndarray (4, 4)], optional
         Values of tools (T_flange_tool) and user frames (T_world_frame), mm,
         that the program uses but does not define.
     joint_targets : {"keep", "compensate"}
         ``"compensate"`` treats each joint target as the nominal pose FK(q)
         stands for and replaces it with the corrected joints.
+    max_joint_change : float
+        Largest change of any joint a correction may cause, rad.
+    max_correction : float
+        Largest plausible position correction, mm.
 
     Returns
     -------
@@ -121,72 +150,81 @@ def compensate_program(program, correct, robot, *, tools=None, frames=None, join
     TrajcompError
         A tool or frame used but not defined, or a target used with two
         different tools or frames.
+    IKError
+        A target its declared posture cannot reach, before or after
+        correction, or a correction that leaves the posture.
+    CompensationError
+        A correction larger than ``max_correction``.
     """
     if joint_targets not in ("keep", "compensate"):
         raise ValueError(f"joint_targets must be 'keep' or 'compensate', got {joint_targets!r}")
-    tool_of, frame_of = _frame_table(program, robot, tools, frames)
+    table = FrameTable(program, robot, tools, frames)
     usage = program.usage()
-    stack = program.cartesian_targets()
-    T_base_frame = np.array([frame_of(f) for f in stack.frame]).reshape(-1, 4, 4)
-    T_tool = [tool_of(t) for t in stack.tool]
-    T_target = [T_base_frame @ stack.T]
-    seeds = [program.targets[i].joints for i in stack.index]
+    plan = planned_joints(program, robot, tools=tools, frames=frames)
+    cartesian, T_base_frame, T_tool, T_target = plan.index, plan.T_base_frame, plan.T_flange_tool, plan.T_base_tcp
+    rows, q_planned, source = cartesian, plan.q, plan.source
     joint_index, q_joint = program.joint_targets()
     if joint_targets == "compensate" and len(joint_index):
-        joint_tools = [tool_of(usage[i][0]) for i in joint_index]
-        T_target.append(fk(robot, q_joint, tcp=False) @ np.array(joint_tools))
-        T_tool += joint_tools
-        seeds += list(q_joint)
-    T_target = np.concatenate(T_target)
-    edited = program
-    if len(T_target):
-        seed = None if any(s is None for s in seeds) else np.array(seeds)
-        T_command, q = correct(T_target, np.array(T_tool), seed)
-        n = len(stack)
-        poses = invert(T_base_frame) @ T_command[:n]
-        edited = edited.with_targets(
-            stack.index, poses=poses, joints=q[:n], configs=configuration_for(program.format, robot, q[:n])
-        )
-        if n < len(T_target):
+        joint_tools = np.array([table.tool(usage[i][0]) for i in joint_index])
+        T_target = np.concatenate([T_target, fk(robot, q_joint, tcp=False) @ joint_tools])
+        T_tool = np.concatenate([T_tool, joint_tools])
+        rows = np.concatenate([cartesian, joint_index])
+        q_planned = np.concatenate([q_planned, q_joint])
+        source = source + ("joints",) * len(joint_index)
+    labels = [program.where(i) for i in rows]
+    result = correct(T_target, T_tool, q_planned, labels) if len(rows) else None
+    edited, q, T_command = program, np.empty((0, 6)), np.empty((0, 4, 4))
+    if result is not None:
+        _check_correction(result.correction, labels, max_correction)
+        check_posture(q_planned, result.q, labels, max_joint_change)
+        q, T_command, n = result.q, result.T_command, len(cartesian)
+        edited = edited.with_targets(cartesian, poses=invert(T_base_frame) @ T_command[:n], joints=q[:n],
+                                     configs=configuration_for(program.format, robot, q[:n]))
+        if n < len(rows):
             edited = edited.with_targets(joint_index, joints=q[n:])
     report = ProgramReport(
-        compensated=stack.names,
-        joint_targets=tuple(program.targets[i].label for i in joint_index),
-        not_compensated=tuple((m.line, m.text) for m in program.runtime_motions()),
+        labels=tuple(labels),
+        lines=np.array([program.targets[i].line for i in rows], dtype=int),
+        tools=tuple(usage[i][0] for i in rows),
+        frames=tuple(usage[i][1] for i in rows),
+        T_target=T_target,
+        T_command=T_command,
+        correction=_correction(T_target, T_command),
+        q=q,
+        q_planned=q_planned,
+        declared=tuple(describe(program.format, program.targets[i].config) for i in rows),
+        written=tuple(describe(program.format, edited.targets[i].config) for i in rows),
+        posture_source=tuple(source),
+        outside_grid=np.zeros(len(rows), dtype=bool) if result is None else result.outside,
+        predicted_residual=np.zeros(len(rows)) if result is None else result.residual,
+        not_compensated=tuple((m.line, m.text, "position computed at run time") for m in program.runtime_motions()),
         unused=tuple(t.label for t in program.unused_targets()),
+        joint_targets=tuple(program.targets[i].label for i in joint_index),
         joint_mode=joint_targets,
     )
     return edited, report
 
 
-def nominal_joints(robot, T_base_tcp, T_flange_tool, seed=None, labels=None):
-    """Joints (N, 6), rad, that put each tool (N, 4, 4) on its pose (N, 4, 4) with the nominal robot.
+def _correction(T_target, T_command):
+    """Command minus target (N, 6): position (mm) and rotation vector (deg) of R_command R_target^T."""
+    out = np.zeros((len(T_target), 6))
+    if len(T_target):
+        out[:, :3] = T_command[:, :3, 3] - T_target[:, :3, 3]
+        out[:, 3:] = np.degrees(matrix_to_rotvec(T_command[:, :3, :3] @ np.swapaxes(T_target[:, :3, :3], 1, 2)))
+    return out
 
-    Parameters
-    ----------
-    labels : sequence of str, optional
-        Target names for the error message.
 
-    Raises
-    ------
-    IKError
-        Poses without solution, named with their reason.
-    """
-    T_base_tcp = np.asarray(T_base_tcp, dtype=float)
-    labels = labels or [f"target {k}" for k in range(len(T_base_tcp))]
-    q = np.empty((len(T_base_tcp), 6))
-    reason = np.empty(len(T_base_tcp), dtype=object)
-    flat = np.round(np.asarray(T_flange_tool, dtype=float).reshape(len(T_base_tcp), 16), 12)
-    tools, group = np.unique(flat, axis=0, return_inverse=True)
-    for k, tool in enumerate(tools):
-        rows = np.flatnonzero(group.ravel() == k)
-        solved = ik(robot.replace(T_flange_tool=tool.reshape(4, 4)), T_base_tcp[rows],
-                    seed=None if seed is None else seed[rows])
-        q[rows], reason[rows] = solved.q, solved.reason
-    failed = [f"{labels[k]}: {reason[k]}" for k in np.flatnonzero(reason != "")]
-    if failed:
-        raise IKError(f"robot {robot.name}: no joint solution for {len(failed)} targets ({'; '.join(failed[:5])})")
-    return q
+def _check_correction(correction, labels, bound):
+    """CompensationError naming the targets whose position correction exceeds ``bound`` mm."""
+    size = np.linalg.norm(correction, axis=1)
+    bad = np.flatnonzero(size > bound)
+    if bad.size:
+        shown = "; ".join(f"{labels[k]}: {size[k]:.2f} mm" for k in bad[:5])
+        more = f" and {bad.size - 5} more" if bad.size > 5 else ""
+        raise CompensationError(
+            f"{bad.size} corrections exceed {bound:g} mm, implausible for a calibrated arm (wrong model, robot, "
+            f"tool or units?): {shown}{more}. Raise --max-correction only if this is intended"
+        )
 
 
 def convert_program(program, to_format, *, robot=None, tools=None, frames=None):
@@ -213,24 +251,23 @@ def convert_program(program, to_format, *, robot=None, tools=None, frames=None):
     Program
         With no sources: writers generate the text.
     """
-    tool_of, frame_of = _frame_table(program, robot, tools, frames)
+    table = FrameTable(program, robot, tools, frames)
     usage = program.usage()
     targets = list(program.targets)
     motions = program.motions
     if to_format in FRAMELESS:
         for i, (_, frame) in usage.items():
             if targets[i].pose is not None and frame is not None:
-                targets[i] = dataclasses.replace(targets[i], pose=frame_of(frame) @ targets[i].pose, frame=None)
+                targets[i] = dataclasses.replace(targets[i], pose=table.frame(frame) @ targets[i].pose, frame=None)
         motions = tuple(dataclasses.replace(m, frame=None) for m in motions)
     cartesian = [i for i in sorted(usage) if not targets[i].is_joint]
     needs_config = to_format in ("krl", "rapid", "fanuc_ls")
-    unknown = [i for i in cartesian if targets[i].joints is None]
+    unknown = any(targets[i].joints is None for i in cartesian)
     if robot is not None and unknown and (needs_config or to_format in FRAMELESS):
-        T = np.array([frame_of(usage[i][1]) @ program.targets[i].pose for i in unknown])
-        tools_T = np.array([tool_of(usage[i][0]) for i in unknown])
-        q = nominal_joints(robot, T, tools_T, labels=[f"{program.name} {targets[i].label}" for i in unknown])
-        for i, joints in zip(unknown, q):
-            targets[i] = dataclasses.replace(targets[i], joints=joints)
+        plan = planned_joints(program, robot, tools=tools, frames=frames)
+        for i, joints in zip(plan.index, plan.q):
+            if targets[i].joints is None:
+                targets[i] = dataclasses.replace(targets[i], joints=joints)
     for i in range(len(targets)):
         known = targets[i].joints is not None and not targets[i].is_joint and robot is not None and needs_config
         config = configuration_for(to_format, robot, targets[i].joints[None])[0] if known else ()

@@ -260,6 +260,16 @@ class Program:
         used = self.usage()
         return tuple(t for i, t in enumerate(self.targets) if i not in used)
 
+    def where(self, index):
+        """Target ``index`` named for messages: label, file and line (``P1 (weld.dat:12)``)."""
+        target = self.targets[index]
+        span = next(iter(target.spans.values()), None)
+        if span is not None and span.source < len(self.sources):
+            place = f"{self.sources[span.source].name}:{target.line}"
+        else:
+            place = f"line {target.line}"
+        return f"{target.name} ({place})" if target.name else place
+
     def with_targets(self, index, *, poses=None, joints=None, configs=None):
         """A new program with some targets replaced and marked edited.
 

@@ -31,6 +31,17 @@ def add_frame_options(parser):
     )
 
 
+def add_in_place_option(parser):
+    """Add ``--in-place``: without it, an output that is an input file is refused."""
+    parser.add_argument("--in-place", action="store_true",
+                        help="allow the output to replace the input program (otherwise refused)")
+
+
+def protected_inputs(args, path, program):
+    """The input files of ``program`` (read from ``path``) an output must not overwrite; none with ``--in-place``."""
+    return [] if args.in_place else formats.input_paths(path, program)
+
+
 def parse_frame_values(values, option):
     """``{name: T (4, 4)}`` of ``NAME=x,y,z,a,b,c`` texts (mm, deg).
 
@@ -77,6 +88,7 @@ def add_parser(sub):
     parser.add_argument("--from", dest="from_format", metavar="FORMAT", help="input format (default: extension)")
     parser.add_argument("--to", dest="to_format", metavar="FORMAT", help="output format (default: extension)")
     add_frame_options(parser)
+    add_in_place_option(parser)
     parser.set_defaults(run=run)
 
 
@@ -86,7 +98,7 @@ def run(args):
     program = formats.read(args.input, args.from_format)
     to_format = formats.find_format(args.output, args.to_format).name
     converted = convert_program(program, to_format, robot=robot, tools=tools, frames=frames)
-    written = formats.write(args.output, converted, to_format)
+    written = formats.write(args.output, converted, to_format, protect=protected_inputs(args, args.input, program))
     skipped = len(program.runtime_motions())
     print(f"wrote {', '.join(str(p) for p in written)}: {len(converted.motions) - skipped} motions"
           + (f", {skipped} computed at run time written as comments" if skipped else ""))

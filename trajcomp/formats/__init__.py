@@ -22,7 +22,7 @@ from importlib.metadata import entry_points
 from pathlib import Path
 
 from trajcomp.atomic import write_files_atomic
-from trajcomp.errors import ReadError, TrajcompError
+from trajcomp.errors import ReadError, TrajcompError, WriteError
 
 ENTRY_POINT_GROUP = "trajcomp.formats"
 
@@ -181,7 +181,13 @@ def read(path, format=None):
     return fmt.read(path)
 
 
-def write(path, program, format=None):
+def input_paths(path, program):
+    """The files a program read from ``path`` came from (a KRL .src and its .dat)."""
+    path = Path(path)
+    return [path] + [path.parent / source.name for source in program.sources]
+
+
+def write(path, program, format=None, *, protect=()):
     """Write a robot program; its output files (a KRL .src and .dat) land all or none.
 
     The whole content is produced before anything is written, then
@@ -193,13 +199,27 @@ def write(path, program, format=None):
     program : Program
     format : str, optional
         Registry name; default from the extension.
+    protect : sequence of Path, optional
+        Files that must not be overwritten (the program's inputs, see `input_paths`).
 
     Returns
     -------
     list of Path
         The files written.
+
+    Raises
+    ------
+    WriteError
+        An output is one of the ``protect`` files, or cannot be written.
     """
     path = Path(path)
     files = find_format(path, format).write(program, path)
+    kept = {p.resolve() for p in map(Path, protect) if p.exists()}
+    clash = [str(out) for out in files if Path(out).resolve() in kept]
+    if clash:
+        raise WriteError(
+            f"{', '.join(clash)}: would overwrite the input program; write to another file (-o) "
+            "or give --in-place to replace it"
+        )
     write_files_atomic(files)
     return list(files)

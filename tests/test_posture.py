@@ -1,0 +1,203 @@
+"""The posture a program declares is the one it is solved, compensated and written in.
+
+References are independent of `trajcomp.posture`: configuration data are
+checked by re-encoding joints with the language's encoder, joints against
+forward kinematics, and the singular case against a real IK solve.
+"""
+
+import shutil
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from trajcomp import formats
+from trajcomp.cli import main
+from trajcomp.compensate import CompensationResult
+from trajcomp.configuration import configuration_for, declared_windows
+from trajcomp.errors import CompensationError, IKError
+from trajcomp.ik import configuration_of, ik
+from trajcomp.kinematics import fk
+from trajcomp.postprocess import compensate_program
+from trajcomp.posture import planned_joints
+from trajcomp.robot import load_robot
+from trajcomp.transforms import matrix_to_abc
+
+EXAMPLES = Path(__file__).resolve().parents[1] / "examples" / "programs"
+ROBOTS = {"krl": "kuka_kr6_r900", "rapid": "abb_irb4600", "fanuc_ls": "fanuc_lrmate200id"}
+
+
+@pytest.mark.parametrize("language", sorted(ROBOTS))
+def test_declared_windows_invert_every_encoder(language):
+    """Decoding the data of random joints gives back their branch, and windows that hold them only."""
+    robot = load_robot(ROBOTS[language])
+    rng = np.random.default_rng(3)
+    q = rng.uniform(robot.q_min, robot.q_max, (2000, 6))
+    q[:500, [0, 3, 5]] = np.round(q[:500, [0, 3, 5]] / (np.pi / 2)) * np.pi / 2  # on code boundaries
+    configs = configuration_for(language, robot, q)
+    branch, lower, upper = declared_windows(language, configs)
+    assert np.array_equal(branch, [c.index for c in configuration_of(robot, q)])
+    assert np.all((lower <= q) & (q <= upper))
+    # a joint one hair across a finite bound has another code
+    for side, bound in ((-1, lower), (1, upper)):
+        finite = np.isfinite(bound)
+        rows, joints = np.nonzero(finite)
+        moved = q[rows].copy()
+        moved[np.arange(len(rows)), joints] = bound[rows, joints] + side * 1e-6
+        again = configuration_for(language, robot, moved)
+        assert all(a != configs[r] for a, r in zip(again, rows))
+
+
+def _stand_in(robot, offset):
+    """A ``correct`` that moves every target by ``offset`` (mm) and solves the nominal IK next to the seed."""
+
+    def correct(T, tools, seeds, names):
+        command = T.copy()
+        command[:, :3, 3] += offset
+        q = np.array([ik(robot.replace(T_flange_tool=tool), t[None], seed=s).q[0]
+                      for t, tool, s in zip(command, tools, seeds)])
+        n = len(T)
+        return CompensationResult(command, q, np.tile(offset, (n, 1)), np.zeros(n, bool), np.zeros(n))
+
+    return correct
+
+
+def _krl(tmp_path, points, body):
+    """A KRL program (.src + .dat) of E6POS points ``{name: (x, y, z, a, b, c, s, t)}`` and motion lines."""
+    dat = ["DEFDAT post"] + [
+        f"DECL E6POS {name}={{X {x},Y {y},Z {z},A {a},B {b},C {c},S {s},T {t}}}"
+        for name, (x, y, z, a, b, c, s, t) in points.items()
+    ] + ["ENDDAT"]
+    (tmp_path / "post.dat").write_text("\n".join(dat) + "\n")
+    (tmp_path / "post.src").write_text("\n".join(["DEF post( )", *body, "END"]) + "\n")
+    return formats.read(tmp_path / "post.src")
+
+
+def test_kuka_status_and_turn_choose_the_branch_and_turns(tmp_path):
+    """S 6 (wrist negative, elbow down) and T bits: the planned joints encode back to exactly those data."""
+    robot = load_robot("kuka_kr6_r900")
+    q = np.radians([[20.0, -70.0, 100.0, 30.0, 40.0, -20.0]])
+    T = fk(robot, q)[0]
+    flipped = q[0] + np.radians([0, 0, 0, -180, 0, 180])  # A4 - 180, A5 negated, A6 + 180: same pose
+    flipped[4] = -q[0, 4]
+    solutions = [q[0], flipped]
+    points = {}
+    for k, joints in enumerate(solutions):
+        s, t = configuration_for("krl", robot, joints[None])[0]
+        points[f"P{k + 1}"] = (*T[:3, 3], *np.degrees(matrix_to_abc(T[:3, :3])), s, t)
+    program = _krl(tmp_path, points, ["PTP P1", "PTP P2"])
+    plan = planned_joints(program, robot)
+    for k, joints in enumerate(plan.q):
+        np.testing.assert_allclose(fk(robot, joints[None])[0], T, atol=1e-6)
+        assert configuration_for("krl", robot, joints[None])[0] == program.targets[plan.index[k]].config
+    assert plan.source == ("config", "config")
+    assert abs(plan.q[1, 4] + plan.q[0, 4]) < 1e-6  # the second is the flipped wrist
+
+
+def test_undeclared_targets_follow_the_previous_one_not_home(tmp_path):
+    """CSV rows without joints after a row with flipped-wrist joints stay in that posture."""
+    robot = load_robot("ur10")
+    q0 = np.radians([10.0, -100.0, 100.0, -90.0, 90.0, 200.0])  # wrist flipped w.r.t. home, J6 past 180
+    T = fk(robot, np.tile(q0, (4, 1)))
+    T[:, 0, 3] += np.array([0.0, 5.0, 10.0, 15.0])
+    rows = ["x,y,z,a,b,c,j1,j2,j3,j4,j5,j6"]
+    for k, pose in enumerate(T):
+        xyzabc = ",".join(f"{v:.6f}" for v in [*pose[:3, 3], *np.degrees(matrix_to_abc(pose[:3, :3]))])
+        rows.append(xyzabc + ("," + ",".join(f"{v:.6f}" for v in np.degrees(q0)) if k == 0 else ",,,,,,"))
+    path = tmp_path / "p.csv"
+    path.write_text("\n".join(rows) + "\n")
+    program = formats.read(path)
+    plan = planned_joints(program, robot)
+    assert plan.source == ("joints", "previous", "previous", "previous")
+    home_branch = configuration_of(robot, ik(robot, T[:1], seed=robot.home).q[0]).index
+    assert home_branch != configuration_of(robot, q0).index
+    assert all(c.index == configuration_of(robot, q0).index for c in configuration_of(robot, plan.q))
+    assert np.all(np.abs(plan.q - q0) < np.radians(5.0))  # J6 stays past 180 deg, no unwinding
+
+
+def test_a_posture_that_cannot_reach_the_target_is_named_with_its_line(tmp_path):
+    robot = load_robot("kuka_kr6_r900")
+    program = _krl(tmp_path, {"PGOOD": (445, 0, 790, 0, 90, 0, 2, 2), "PFAR": (2445, 0, 790, 0, 90, 0, 2, 2)},
+                   ["PTP PGOOD", "LIN PFAR"])
+    with pytest.raises(IKError, match=r"PFAR \(post\.dat:3\).*configuration \(2, 2\)"):
+        planned_joints(program, robot)
+
+
+def test_a_correction_that_swings_the_wrist_near_a_singularity_is_refused(tmp_path):
+    """Wrist almost straight (A5 = 0.05 deg): a 0.5 mm correction turns A4/A6 by tens of degrees."""
+    robot = load_robot("kuka_kr6_r900")
+    q = np.radians([[0.0, -80.0, 100.0, 0.0, 0.05, 0.0]])
+    T = fk(robot, q)[0]
+    s, t = configuration_for("krl", robot, q)[0]
+    program = _krl(tmp_path, {"P1": (*T[:3, 3], *np.degrees(matrix_to_abc(T[:3, :3])), s, t)}, ["PTP P1"])
+    offset = np.array([0.0, 0.5, 0.0])
+    swing = ik(robot, (T + np.pad(offset[:, None], ((0, 1), (3, 0))))[None], seed=q[0]).q[0] - q[0]
+    assert np.degrees(np.abs(swing)).max() > 5.0  # the reference: a real IK solve
+    with pytest.raises(IKError, match=r"P1 \(post\.dat:2\): J[46] .* deg"):
+        compensate_program(program, _stand_in(robot, offset), robot)
+    _, report = compensate_program(program, _stand_in(robot, offset), robot, max_joint_change=np.pi)
+    assert report.posture_source == ("config",)
+
+
+def test_an_implausibly_large_correction_is_refused(tmp_path):
+    robot = load_robot("kuka_kr6_r900")
+    program = _krl(tmp_path, {"P1": (445, 0, 790, 0, 90, 0, 2, 2), "P2": (445, 0, 770, 0, 90, 0, 2, 2)},
+                   ["PTP P1", "LIN P2"])
+    with pytest.raises(CompensationError, match=r"2 corrections exceed 10 mm.*P1 \(post\.dat:2\): 15\.00 mm"):
+        compensate_program(program, _stand_in(robot, np.array([15.0, 0.0, 0.0])), robot)
+
+
+# ------------------------------------------------------------------ CLI
+
+
+@pytest.fixture(scope="module")
+def kuka_model(tmp_path_factory):
+    """A composite model of the virtual KR6 around the example weld path (README commands)."""
+    folder = tmp_path_factory.mktemp("kuka")
+    plan, meas, model = folder / "plan.csv", folder / "meas.csv", folder / "kuka.yaml"
+    assert main(["plan", "--robot", "kuka_kr6_r900", "--cube", "400,-50,650", "--side", "200", "--step", "50",
+                 "-o", str(plan)]) == 0
+    assert main(["simulate", str(plan), "--robot", "kuka_kr6_r900", "--seed", "1", "-o", str(meas)]) == 0
+    assert main(["calibrate", str(meas), "--robot", "kuka_kr6_r900", "--grid-step", "50", "--folds", "0",
+                 "-o", str(model)]) == 0
+    return model
+
+
+def _copy_example(tmp_path):
+    for name in ("weld.src", "weld.dat"):
+        shutil.copy(EXAMPLES / "kuka" / name, tmp_path / name)
+    return tmp_path / "weld.src"
+
+
+def test_output_over_the_input_is_refused_without_in_place(tmp_path, kuka_model, capsys):
+    src = _copy_example(tmp_path)
+    before = {p.name: p.read_bytes() for p in tmp_path.iterdir()}
+    assert main(["compensate", str(src), "--model", str(kuka_model), "-o", str(src)]) == 2
+    assert "would overwrite the input program" in capsys.readouterr().err
+    assert {p.name: p.read_bytes() for p in tmp_path.iterdir()} == before
+    (tmp_path / "out").mkdir()
+    assert main(["compensate", str(src), "--model", str(kuka_model), "-o", str(tmp_path / "out" / "weld.src")]) == 0
+    src.chmod(0o640)
+    assert main(["compensate", str(src), "--model", str(kuka_model), "--in-place", "-o", str(src)]) == 0
+    assert (tmp_path / "weld.src").read_bytes() == (tmp_path / "out" / "weld.src").read_bytes()
+    assert (tmp_path / "weld.dat").read_bytes() == (tmp_path / "out" / "weld.dat").read_bytes()
+    assert (src.stat().st_mode & 0o777) == 0o640
+
+
+def test_motions_computed_at_run_time_are_counted_and_fail_the_exit_code(tmp_path, kuka_model, capsys):
+    src = _copy_example(tmp_path)
+    text = src.read_text()
+    src.write_text(text.replace("END", "LIN P1:{X 10}\nEND", 1) if "LIN P1:" not in text else text)
+    code = main(["compensate", str(src), "--model", str(kuka_model), "-o", str(tmp_path / "out.src")])
+    err = capsys.readouterr().err
+    assert code == 1
+    assert "1 of" in err and "motions were not compensated" in err
+    assert (tmp_path / "out.src").exists()  # written, and said so
+
+
+def test_bounds_must_be_positive(tmp_path, kuka_model, capsys):
+    src = _copy_example(tmp_path)
+    for option in ("--max-joint-change", "--max-correction"):
+        assert main(["compensate", str(src), "--model", str(kuka_model), option, "nan", "-o",
+                     str(tmp_path / "o.src")]) == 2
+        assert option in capsys.readouterr().err

@@ -1,0 +1,63 @@
+"""Tools and user frames of a program: names to values, and targets in the robot base frame.
+
+Frame values are T_world_frame and tool values T_flange_tool (mm); the base
+is placed in the world by the robot's ``T_world_base``. A frame or tool the
+program uses must be defined in the program or supplied by the caller; a
+missing one is an error, never a guess. Frame ``None`` is the base, tool
+``None`` the robot description's tool.
+"""
+
+import numpy as np
+
+from trajcomp.errors import TrajcompError
+from trajcomp.transforms import invert
+
+
+class FrameTable:
+    """Values of the tools and frames a program uses: its own, then the caller's.
+
+    Parameters
+    ----------
+    program : Program
+    robot : Robot or None
+        Places the base in the world and gives the default tool (identity without).
+    tools, frames : Mapping[str, ndarray (4, 4)], optional
+        T_flange_tool and T_world_frame (mm) the program uses but does not define.
+    """
+
+    def __init__(self, program, robot=None, tools=None, frames=None):
+        self.program = program
+        self.tools = {**(tools or {}), **program.tools}
+        self.frames = {**(frames or {}), **program.frames}
+        self.T_base_world = invert(robot.T_world_base) if robot is not None else np.eye(4)
+        self.default_tool = robot.T_flange_tool if robot is not None else np.eye(4)
+
+    def tool(self, name):
+        """T_flange_tool (4, 4) of a tool name (None: the robot's tool)."""
+        return self.default_tool if name is None else self._lookup(self.tools, name, "tool", "--tool")
+
+    def frame(self, name):
+        """T_base_frame (4, 4) of a frame name (None: the base)."""
+        return np.eye(4) if name is None else self.T_base_world @ self._lookup(self.frames, name, "frame", "--frame")
+
+    def _lookup(self, values, name, what, option):
+        if name not in values:
+            raise TrajcompError(
+                f"{self.program.name}: {what} {name!r} is used but not defined in the program; "
+                f"give its value (e.g. {option} {name}=x,y,z,a,b,c in mm and deg)"
+            )
+        return values[name]
+
+    def targets_in_base(self, index):
+        """Targets ``index`` (N,) as used by the motions, in the base frame.
+
+        Returns
+        -------
+        T_base_frame, T_flange_tool, T_base_tcp : ndarray, shape (N, 4, 4)
+            Each target's user frame, tool and pose, mm.
+        """
+        usage = self.program.usage()
+        T_base_frame = np.array([self.frame(usage[i][1]) for i in index]).reshape(-1, 4, 4)
+        T_flange_tool = np.array([self.tool(usage[i][0]) for i in index]).reshape(-1, 4, 4)
+        poses = np.array([self.program.targets[i].pose for i in index]).reshape(-1, 4, 4)
+        return T_base_frame, T_flange_tool, T_base_frame @ poses

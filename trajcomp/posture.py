@@ -1,0 +1,285 @@
+"""The arm posture a program declares for each target, as nominal joint angles.
+
+A Cartesian target is reached by up to eight arm branches and, on joints
+that turn more than a revolution, by several turns. The program says which
+one it means, and that is the one it must run in after compensation:
+
+1. ``"joints"``: joints the program carries for the target (CSV ``j1..j6``,
+   URScript ``qnear`` / ``Waypoint_q``): the solution nearest them, branch
+   and turns.
+2. ``"config"``: configuration data (KUKA S/T, ABB confdata, FANUC CONFIG):
+   the branch its flags name, each joint in the window its turn data name
+   (`trajcomp.configuration.declared_windows`).
+3. ``"previous"``: the program says nothing: the solution nearest the
+   joints of the previous position in motion order (target or joint
+   target), as the controller moves on from where the arm is.
+4. ``"home"``: nothing declared and nothing before it: nearest the robot's
+   home configuration.
+
+`planned_joints` solves every target with the nominal robot in its posture:
+the joints the uncompensated program runs. Compensation then solves the
+corrected target next to these joints and `check_posture` refuses any joint
+that moved more than a bound: a branch or turn switch always turns some
+joint by tens of degrees, a sub-millimetre correction by far less.
+"""
+
+import dataclasses
+
+import numpy as np
+
+from trajcomp.configuration import declared_windows
+from trajcomp.errors import IKError
+from trajcomp.frames import FrameTable
+from trajcomp.ik import ik_all
+
+TURN = 2.0 * np.pi
+MAX_JOINT_CHANGE = np.radians(5.0)  # rad: default bound of the joint change a correction may cause
+_WINDOW_TOL = 1e-9  # rad, slack of the joint limits
+_TURNS = np.arange(-3, 4)  # whole turns tried when placing a joint in its window
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class Plan:
+    """Nominal joints of a program's targets in their declared postures.
+
+    Attributes
+    ----------
+    index : ndarray of int, shape (N,)
+        Target indices into `Program.targets`, in motion order (first use).
+    q : ndarray, shape (N, 6)
+        Joint angles, rad.
+    source : tuple of str, length N
+        How each posture was chosen: ``"joints"``, ``"config"``,
+        ``"previous"`` or ``"home"``.
+    T_base_frame, T_flange_tool, T_base_tcp : ndarray, shape (N, 4, 4)
+        Each target's user frame, tool and pose in the base frame, mm.
+    """
+
+    index: np.ndarray
+    q: np.ndarray
+    source: tuple
+    T_base_frame: np.ndarray
+    T_flange_tool: np.ndarray
+    T_base_tcp: np.ndarray
+
+
+def motion_order(program):
+    """Target indices (used as target or via point) in the order motions first use them."""
+    order = {}
+    for motion in program.motions:
+        for i in (motion.via, motion.target):
+            if i is not None:
+                order.setdefault(i, len(order))
+    return np.array(list(order), dtype=int)
+
+
+def planned_joints(program, robot, *, tools=None, frames=None):
+    """Solve the Cartesian targets with the nominal robot in the posture their program declares.
+
+    Parameters
+    ----------
+    program : Program
+    robot : Robot
+        The nominal robot (closed-form IK family).
+    tools, frames : Mapping[str, ndarray (4, 4)], optional
+        Tools (T_flange_tool) and user frames (T_world_frame), mm, the
+        program uses but does not define (`trajcomp.frames.FrameTable`).
+
+    Returns
+    -------
+    Plan
+        The Cartesian targets motions use, in motion order.
+
+    Raises
+    ------
+    IKError
+        A target its declared posture cannot reach, named by label and line
+        with the configuration it declares and why.
+    TrajcompError
+        A tool or frame used but not defined.
+    """
+    index = np.array([i for i in motion_order(program) if not program.targets[i].is_joint], dtype=int)
+    T_base_frame, T_flange_tool, T_base_tcp = FrameTable(program, robot, tools, frames).targets_in_base(index)
+    n = len(index)
+    targets = [program.targets[i] for i in index]
+    q_all, valid = _all_branches(robot, T_base_tcp, T_flange_tool)
+    branch, lower, upper = declared_windows(program.format, [t.config for t in targets])
+    hint = np.array([np.full(6, np.nan) if t.joints is None else t.joints for t in targets]).reshape(n, 6)
+    has_hint = np.all(np.isfinite(hint), axis=1)
+    by_config = ~has_hint & (branch >= 0)
+    q = np.full((n, 6), np.nan)
+    q[has_hint] = _nearest(robot, q_all[has_hint], valid[has_hint], hint[has_hint])
+    q[by_config] = _in_windows(robot, q_all[by_config], valid[by_config], branch[by_config],
+                               lower[by_config], upper[by_config])
+    source = np.where(has_hint, "joints", np.where(by_config, "config", "")).astype(object)
+    _fail_unreachable(program, robot, index, q, source)
+    _chain(program, robot, index, q, q_all, valid, source, {int(i): k for k, i in enumerate(index)})
+    return Plan(index, q, tuple(source), T_base_frame, T_flange_tool, T_base_tcp)
+
+
+def check_posture(q_planned, q, labels, bound=MAX_JOINT_CHANGE):
+    """Refuse corrected joints that left the planned posture.
+
+    Parameters
+    ----------
+    q_planned, q : ndarray, shape (N, 6)
+        Planned (uncompensated) and corrected joints, rad.
+    labels : sequence of str, length N
+        Target names with their source line.
+    bound : float
+        Largest change of any joint, rad.
+
+    Raises
+    ------
+    IKError
+        Naming each target, the joint, both values (deg) and the bound.
+    """
+    change = np.abs(q - q_planned)
+    bad = np.flatnonzero(np.any(change > bound, axis=1))
+    if bad.size:
+        joint = np.argmax(change[bad], axis=1)
+        shown = "; ".join(
+            f"{labels[k]}: J{j + 1} {np.degrees(q_planned[k, j]):.2f} -> {np.degrees(q[k, j]):.2f} deg"
+            for k, j in zip(bad[:5], joint[:5])
+        )
+        more = f" and {bad.size - 5} more" if bad.size > 5 else ""
+        raise IKError(
+            f"{bad.size} corrected targets leave the programmed posture (a joint turns more than "
+            f"{np.degrees(bound):.1f} deg; near a singularity or a joint limit): {shown}{more}. "
+            "Move the targets away from the singularity, or raise --max-joint-change if the motion is intended"
+        )
+
+
+def _all_branches(robot, T_base_tcp, T_flange_tool):
+    """Closed-form solutions (N, 8, 6) and validity (N, 8), grouped by tool."""
+    n = len(T_base_tcp)
+    q_all = np.full((n, 8, 6), np.nan)
+    valid = np.zeros((n, 8), dtype=bool)
+    flat = np.round(np.asarray(T_flange_tool, dtype=float).reshape(n, 16), 12)
+    tools, group = np.unique(flat, axis=0, return_inverse=True)
+    for k, tool in enumerate(tools):
+        rows = np.flatnonzero(group.ravel() == k)
+        q_all[rows], valid[rows] = ik_all(robot.replace(T_flange_tool=tool.reshape(4, 4)), T_base_tcp[rows])
+    return q_all, valid
+
+
+def _turned(robot, q, reference):
+    """Each joint of q (..., 6) moved by whole turns inside the limits, nearest ``reference`` (..., 6)."""
+    lowest = np.ceil((robot.q_min - _WINDOW_TOL - q) / TURN)
+    highest = np.floor((robot.q_max + _WINDOW_TOL - q) / TURN)
+    with np.errstate(invalid="ignore"):
+        k = np.clip(np.round((reference - q) / TURN), lowest, highest)
+    return q + TURN * k
+
+
+def _nearest(robot, q_all, valid, reference):
+    """Per row the branch and turns (M, 6) nearest ``reference`` (M, 6); NaN where none is valid."""
+    candidates = _turned(robot, q_all, reference[:, None, :])
+    distance = np.where(valid, np.sum((candidates - reference[:, None, :]) ** 2, axis=2), np.inf)
+    best = np.argmin(distance, axis=1)
+    q = candidates[np.arange(len(q_all)), best]
+    q[~np.isfinite(distance[np.arange(len(q_all)), best])] = np.nan
+    return q
+
+
+def _in_windows(robot, q_all, valid, branch, lower, upper):
+    """The declared branch (M,) with each joint turned into its window [lower, upper] (M, 6) and the limits."""
+    rows = np.arange(len(branch))
+    q = q_all[rows, branch]
+    candidates = q[:, :, None] + TURN * _TURNS
+    low = np.maximum(lower, robot.q_min - _WINDOW_TOL)[:, :, None]
+    high = np.minimum(upper, robot.q_max + _WINDOW_TOL)[:, :, None]
+    inside = (candidates >= low) & (candidates <= high)
+    anchor = np.clip(0.0, lower, upper)[:, :, None]  # half-open windows (KUKA T): the turn nearest zero
+    cost = np.where(inside, np.abs(candidates - anchor), np.inf)
+    pick = np.argmin(cost, axis=2)
+    chosen = np.take_along_axis(candidates, pick[:, :, None], axis=2)[:, :, 0]
+    placed = np.isfinite(np.take_along_axis(cost, pick[:, :, None], axis=2)[:, :, 0]).all(axis=1)
+    return np.where((valid[rows, branch] & placed)[:, None], chosen, np.nan)
+
+
+def _fail_unreachable(program, robot, index, q, source):
+    """IKError for declared targets without a solution in their declared posture."""
+    failed = np.flatnonzero((source != "") & ~np.all(np.isfinite(q), axis=1))
+    if not failed.size:
+        return
+    shown = "; ".join(
+        f"{program.where(index[k])}: {_declaration(program.targets[index[k]], source[k])}" for k in failed[:5]
+    )
+    more = f" and {failed.size - 5} more" if failed.size > 5 else ""
+    raise IKError(
+        f"{program.name}: {failed.size} targets cannot be reached by robot {robot.name} in the posture "
+        f"the program declares ({shown}{more}); the program was not changed"
+    )
+
+
+def _declaration(target, source):
+    if source == "joints":
+        return f"no solution near joints {np.round(np.degrees(target.joints), 2).tolist()} deg inside the limits"
+    return f"configuration {target.config} unreachable or outside the joint limits"
+
+
+def _runs(program, robot, row_of, q, source):
+    """Runs of undeclared rows in motion order, each with the joints (6,) of the position before it.
+
+    Yields ``(rows, anchor, from_home)``: consecutive undeclared Cartesian
+    targets and the joints the arm has before the first of them (a planned
+    declared target, a joint target, or home when nothing comes before).
+    """
+    anchor, from_home, run = robot.home, True, []
+    for motion in program.motions:
+        for i in (motion.via, motion.target):
+            if i is None:
+                continue
+            k = row_of.get(i)
+            if k is not None and source[k] == "" and k not in run:
+                run.append(k)
+                continue
+            if run:
+                yield run, anchor, from_home
+                run = []
+            if k is not None:
+                anchor, from_home = q[k], False
+            elif program.targets[i].is_joint:
+                anchor, from_home = np.asarray(program.targets[i].joints, dtype=float), False
+    if run:
+        yield run, anchor, from_home
+
+
+def _chain(program, robot, index, q, q_all, valid, source, row_of):
+    """Fill the undeclared rows, each nearest the joints of the position before it.
+
+    A run of undeclared targets is solved at once assuming the arm keeps the
+    branch of its first target and turns continuously (unwrapped joints);
+    the proposal is then checked row by row against the nearest solution to
+    its predecessor, and the run is restarted where another branch or turn
+    is nearer. Smooth paths take one pass.
+    """
+    for run, anchor, from_home in _runs(program, robot, row_of, q, source):
+        rows = np.array(run)
+        start = 0
+        while start < len(rows):
+            first = _nearest(robot, q_all[rows[start : start + 1]], valid[rows[start : start + 1]], anchor[None])[0]
+            if not np.all(np.isfinite(first)):
+                raise IKError(
+                    f"{program.name}: {program.where(index[rows[start]])}: robot {robot.name} cannot reach "
+                    "the target inside its joint limits; the program was not changed"
+                )
+            rest = rows[start + 1 :]
+            branch = _branch_of(q_all[rows[start]], first)
+            proposal = np.unwrap(np.vstack([first, q_all[rest, branch]]), axis=0)
+            before = proposal[:-1]
+            best = _nearest(robot, q_all[rest], valid[rest], before)
+            agree = np.all(np.abs(best - proposal[1:]) < 1e-9, axis=1)
+            stop = len(rest) if agree.all() else int(np.argmin(agree))
+            q[rows[start : start + 1 + stop]] = proposal[: 1 + stop]
+            source[rows[start]] = "home" if from_home and start == 0 else "previous"
+            source[rows[start + 1 : start + 1 + stop]] = "previous"
+            anchor, from_home = proposal[stop], False
+            start += 1 + stop
+
+
+def _branch_of(q_branches, q):
+    """Index of the branch (of q_branches (8, 6)) that ``q`` (6,) is a turn of."""
+    wrapped = np.angle(np.exp(1j * (q_branches - q)))
+    return int(np.nanargmin(np.where(np.isnan(wrapped), np.inf, np.abs(wrapped)).sum(axis=1)))
