@@ -226,18 +226,20 @@ def _runs(program, robot, row_of, q, source):
     targets and the joints the arm has before the first of them (a planned
     declared target, a joint target, or home when nothing comes before).
     """
-    anchor, from_home, run = robot.home, True, []
+    anchor, from_home, run, in_run = robot.home, True, [], set()
     for motion in program.motions:
         for i in (motion.via, motion.target):
             if i is None:
                 continue
             k = row_of.get(i)
-            if k is not None and source[k] == "" and k not in run:
-                run.append(k)
+            if k is not None and source[k] == "":
+                if k not in in_run:
+                    run.append(k)
+                    in_run.add(k)
                 continue
             if run:
                 yield run, anchor, from_home
-                run = []
+                run, in_run = [], set()
             if k is not None:
                 anchor, from_home = q[k], False
             elif program.targets[i].is_joint:
