@@ -1,0 +1,44 @@
+"""Progress bars: drawn on a terminal, silent in pipelines."""
+
+import io
+
+from trajcomp.progress import is_terminal, progress
+
+
+class Terminal(io.StringIO):
+    """A text stream that says it is a terminal."""
+
+    def isatty(self):
+        return True
+
+
+def test_a_terminal_shows_the_count_and_the_rate():
+    stream = Terminal()
+    with progress(1000, desc="compensate", unit="target", stream=stream, delay=0) as bar:
+        bar.update(400)
+        bar.update(600)
+    final = stream.getvalue().split("\r")[-1]
+    assert final.startswith("compensate: 100%")
+    assert "1000/1000" in final and "target/s" in final
+
+
+def test_a_pipeline_gets_nothing():
+    stream = io.StringIO()
+    with progress(10, desc="compensate", stream=stream, delay=0) as bar:
+        bar.update(10)
+    assert stream.getvalue() == ""
+
+
+def test_a_short_run_on_a_terminal_draws_nothing():
+    stream = Terminal()
+    with progress(10, desc="compensate", stream=stream, delay=60) as bar:
+        bar.update(10)
+    assert stream.getvalue() == ""
+
+
+def test_closed_or_plain_objects_are_no_terminal():
+    closed = io.StringIO()
+    closed.close()
+    assert not is_terminal(closed)
+    assert not is_terminal(object())
+    assert is_terminal(Terminal())
