@@ -1,11 +1,17 @@
-"""``trajcomp compensate``: correct a robot program with a compensation model."""
+"""``trajcomp compensate``: correct robot programs with a compensation model, one file or a batch."""
+
+import dataclasses
+import functools
+import glob
+from pathlib import Path
 
 import numpy as np
 
-from trajcomp import formats
+from trajcomp import batch, formats
 from trajcomp.commands._args import command_parser, info
-from trajcomp.commands.convert import add_frame_options, add_in_place_option, frame_options, protected_inputs
+from trajcomp.commands.convert import add_frame_options, add_in_place_option, frame_options
 from trajcomp.compensate import program_corrector
+from trajcomp.errors import TrajcompError
 from trajcomp.model import MODES, load_model
 from trajcomp.postprocess import MAX_CORRECTION, compensate_program
 from trajcomp.posture import MAX_JOINT_CHANGE
@@ -21,9 +27,11 @@ def add_parser(sub):
         "the same format. A target that cannot keep its posture, or whose correction is implausibly "
         "large, stops the run (exit 2) and nothing is written. Motions whose position is computed at "
         "run time are listed and left as written; the run then exits 1.",
-        "trajcomp compensate program.csv --model model.yaml --mode composite -o corrected.csv",
+        "trajcomp compensate program.csv --model model.yaml --mode composite -o corrected.csv\n"
+        "  trajcomp compensate cam/ 'cells/*.src' --model model.yaml -o corrected/ --jobs 2",
     )
-    parser.add_argument("program", help="program file")
+    parser.add_argument("program", nargs="+",
+                        help="program file; several files, folders or glob patterns run as a batch")
     parser.add_argument("--model", required=True, help="model file from `trajcomp calibrate`")
     parser.add_argument("--mode", choices=MODES, help="compensation mode (default: the model's method)")
     parser.add_argument("--outside", choices=("model", "clamp", "error"), default="model",
@@ -37,31 +45,103 @@ def add_parser(sub):
     parser.add_argument("--max-correction", type=float, default=MAX_CORRECTION, metavar="MM",
                         help="largest plausible position correction (default %(default)g mm)")
     add_in_place_option(parser)
-    parser.add_argument("-o", "--output", required=True, help="corrected program to write")
+    parser.add_argument("-o", "--output", required=True,
+                        help="corrected program to write; for a batch, the folder to write into")
+    parser.add_argument("--jobs", type=int, default=1, metavar="N",
+                        help="batch: files compensated in parallel by N processes (default 1)")
+    parser.add_argument("--scheduler", metavar="ADDRESS",
+                        help="batch: run on a Dask distributed cluster (scheduler address, or 'local' "
+                        "for a local cluster of --jobs workers)")
+    parser.add_argument("--summary", metavar="PATH",
+                        help="batch: summary JSON to write (default OUTDIR/summary.json)")
     parser.set_defaults(run=run)
+
+
+@dataclasses.dataclass(frozen=True)
+class CompensateJob:
+    """Compensate one program file into one output: the unit of work of a batch (picklable).
+
+    Attributes mirror the command's options; ``tools`` and ``frames`` are
+    parsed values (T (4, 4), mm), ``max_joint_change`` is in rad.
+    """
+
+    model: str
+    mode: str = None
+    outside: str = "model"
+    tools: dict = dataclasses.field(default_factory=dict)
+    frames: dict = dataclasses.field(default_factory=dict)
+    joint_targets: str = "keep"
+    max_joint_change: float = MAX_JOINT_CHANGE
+    max_correction: float = MAX_CORRECTION
+    in_place: bool = False
+
+    def __call__(self, path, output):
+        """Compensate ``path`` into ``output``; a `batch.FileResult` (raises TrajcompError on bad input)."""
+        model = _model(self.model)
+        program = formats.read(path)
+        correct = program_corrector(model, mode=self.mode, outside=self.outside, label=str(path))
+        corrected, report = compensate_program(
+            program, correct, model.nominal, tools=self.tools, frames=self.frames,
+            joint_targets=self.joint_targets, max_joint_change=self.max_joint_change,
+            max_correction=self.max_correction,
+        )
+        protect = () if self.in_place else formats.input_paths(path, program)
+        written = formats.write(output, corrected, protect=protect)
+        lines = report.lines_of_text()
+        outside = report.outside_grid
+        if outside.any():
+            lines.append(f"{int(outside.sum())} targets lie outside the compensation grid: {self.outside} policy applied")
+        lines.append(f"wrote {', '.join(map(str, written))}")
+        status, message = batch.PASS, ""
+        if report.not_compensated:
+            status = batch.FAIL
+            message = (f"{len(report.not_compensated)} of {len(program.motions)} motions were not compensated "
+                       "(positions computed at run time): the program is written, but not fully corrected")
+        return batch.FileResult(str(path), tuple(map(str, written)), status, message, tuple(lines))
+
+
+@functools.lru_cache(maxsize=4)
+def _model(path):
+    """The model file, loaded once per process (a batch worker serves many files)."""
+    return load_model(path)
 
 
 def run(args):
     for option, value in (("--max-joint-change", args.max_joint_change), ("--max-correction", args.max_correction)):
         if not (np.isfinite(value) and value > 0):
-            raise formats.TrajcompError(f"{option}: expected a positive number, got {value}")
-    model = load_model(args.model)
-    program = formats.read(args.program)
-    correct = program_corrector(model, mode=args.mode, outside=args.outside, label=args.program)
+            raise TrajcompError(f"{option}: expected a positive number, got {value}")
+    if args.jobs < 1:
+        raise TrajcompError(f"--jobs: expected a whole number of at least 1, got {args.jobs}")
     tools, frames = frame_options(args)
-    corrected, report = compensate_program(
-        program, correct, model.nominal, tools=tools, frames=frames, joint_targets=args.joint_targets,
-        max_joint_change=np.radians(args.max_joint_change), max_correction=args.max_correction,
+    job = CompensateJob(
+        model=str(Path(args.model).resolve()), mode=args.mode, outside=args.outside, tools=tools, frames=frames,
+        joint_targets=args.joint_targets, max_joint_change=np.radians(args.max_joint_change),
+        max_correction=args.max_correction, in_place=args.in_place,
     )
-    formats.write(args.output, corrected, protect=protected_inputs(args, args.program, program))
-    for line in report.lines_of_text():
-        info(line)
-    outside = report.outside_grid
-    if outside.any():
-        info(f"{int(outside.sum())} targets lie outside the compensation grid: {args.outside} policy applied")
-    info(f"wrote {args.output}")
-    if report.not_compensated:
-        info(f"trajcomp: {len(report.not_compensated)} of {len(program.motions)} motions were not compensated "
-             "(positions computed at run time, listed above): the program is written, but not fully corrected")
-        return 1
-    return 0
+    _model(job.model)  # a broken model fails the run once, before any file
+    first = args.program[0]
+    single = len(args.program) == 1 and not Path(first).is_dir() and not glob.has_magic(first) \
+        and not Path(args.output).is_dir()
+    if single:
+        result = job(Path(args.program[0]), Path(args.output))
+        for line in result.lines:
+            info(line)
+        if result.message:
+            info(f"trajcomp: {result.message}")
+        return batch.EXIT_CODES[result.status]
+    return _run_batch(args, job)
+
+
+def _run_batch(args, job):
+    inputs = batch.expand_inputs(args.program)
+    outputs = batch.output_paths(inputs, args.output)
+    Path(args.output).mkdir(parents=True, exist_ok=True)
+    results = batch.run_batch(job, inputs, outputs, jobs=args.jobs, scheduler=args.scheduler)
+    for result in results:
+        info(f"{result.status.upper():5} {result.input}" + (f": {result.message}" if result.message else ""))
+    summary = Path(args.summary) if args.summary else Path(args.output) / "summary.json"
+    batch.write_summary(summary, results, model=args.model, mode=args.mode or "model default",
+                        jobs=args.jobs, scheduler=args.scheduler)
+    counts = {s: sum(r.status == s for r in results) for s in batch.EXIT_CODES}
+    info(f"{len(results)} programs: " + ", ".join(f"{n} {s}" for s, n in counts.items() if n) + f"; summary {summary}")
+    return batch.exit_code(results)

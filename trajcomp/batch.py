@@ -1,0 +1,175 @@
+"""Batch runs: many program files through one job, in parallel, a failing file never stopping the others.
+
+A job is a picklable callable ``job(input: Path, output: Path) -> FileResult``
+(e.g. `trajcomp.commands.compensate.CompensateJob`). `run_batch` runs it over
+the files inline, in a local process pool (``jobs`` > 1) or on a Dask
+distributed cluster (``scheduler``: an address, or ``"local"`` for a local
+cluster), and turns every error of one file into that file's result.
+"""
+
+import dataclasses
+import glob
+import json
+import traceback
+from concurrent.futures import ProcessPoolExecutor
+from pathlib import Path
+
+from trajcomp import __version__, formats
+from trajcomp.atomic import write_atomic
+from trajcomp.errors import TrajcompError
+
+PASS, FAIL, ERROR, CRASH = "pass", "fail", "error", "crash"
+EXIT_CODES = {PASS: 0, FAIL: 1, ERROR: 2, CRASH: 3}  # a crash is a bug: neither success nor bad input
+SUMMARY_SCHEMA = "trajcomp-batch/1"
+
+
+@dataclasses.dataclass(frozen=True)
+class FileResult:
+    """What a job did with one file.
+
+    Attributes
+    ----------
+    input : str
+    outputs : tuple of str
+        Files written (empty when nothing was).
+    status : {"pass", "fail", "error", "crash"}
+        Done; done but failing its verdict or tolerance; refused (bad input,
+        nothing written); an internal error (a bug).
+    message : str
+        Why it failed, was refused or crashed.
+    lines : tuple of str
+        The run's report lines.
+    """
+
+    input: str
+    outputs: tuple = ()
+    status: str = PASS
+    message: str = ""
+    lines: tuple = ()
+
+
+def expand_inputs(patterns):
+    """Program files named by paths, folders (their program files) and glob patterns, in order, once each.
+
+    Raises
+    ------
+    TrajcompError
+        A pattern that matches no program file, naming it.
+    """
+    extensions = {e for f in formats.formats() for e in f.extensions}
+    found = []
+    for pattern in patterns:
+        path = Path(pattern)
+        if path.is_dir():
+            matches = sorted(p for p in path.iterdir() if p.is_file() and p.suffix.lower() in extensions)
+        elif glob.has_magic(pattern):
+            matches = sorted(p for p in map(Path, glob.glob(pattern)) if p.is_file() and p.suffix.lower() in extensions)
+        else:
+            matches = [path]
+        if not matches:
+            raise TrajcompError(f"{pattern}: no program file ({', '.join(sorted(extensions))})")
+        found += [p for p in matches if p not in found]
+    return found
+
+
+def output_paths(inputs, out_dir):
+    """``out_dir / name`` of every input (Path list).
+
+    Raises
+    ------
+    TrajcompError
+        Two inputs of the same file name (their outputs would collide), or
+        ``out_dir`` is a file.
+    """
+    out_dir = Path(out_dir)
+    if out_dir.exists() and not out_dir.is_dir():
+        raise TrajcompError(f"{out_dir}: with several programs, -o names a folder, and this is a file")
+    seen = {}
+    for path in inputs:
+        key = path.name.lower()  # KRL and Windows controllers do not tell case apart
+        if key in seen:
+            raise TrajcompError(f"{seen[key]} and {path} would both be written to {out_dir / path.name}")
+        seen[key] = path
+    return [out_dir / path.name for path in inputs]
+
+
+def run_one(job, path, output):
+    """``job(path, output)`` with every exception turned into the file's result."""
+    try:
+        return job(Path(path), Path(output))
+    except TrajcompError as exc:
+        return FileResult(str(path), status=ERROR, message=str(exc))
+    except Exception as exc:  # one file's bug must not stop the batch; it is reported as a crash
+        return FileResult(str(path), status=CRASH, message=f"{type(exc).__name__}: {exc}",
+                          lines=tuple(traceback.format_exc().splitlines()))
+
+
+def run_batch(job, inputs, outputs, *, jobs=1, scheduler=None):
+    """Run ``job`` over the files, each result in input order.
+
+    Parameters
+    ----------
+    job : callable
+        Picklable ``job(input, output) -> FileResult``.
+    inputs, outputs : sequence of Path
+    jobs : int
+        Worker processes (local pool, or local Dask cluster).
+    scheduler : str, optional
+        Dask scheduler address, or ``"local"`` for a local cluster of
+        ``jobs`` workers; default: no Dask.
+
+    Returns
+    -------
+    list of FileResult
+    """
+    if scheduler is not None:
+        return _on_dask(job, inputs, outputs, jobs, scheduler)
+    if jobs <= 1 or len(inputs) <= 1:
+        return [run_one(job, i, o) for i, o in zip(inputs, outputs)]
+    with ProcessPoolExecutor(max_workers=jobs) as pool:
+        return list(pool.map(run_one, [job] * len(inputs), inputs, outputs))
+
+
+def _on_dask(job, inputs, outputs, jobs, scheduler):
+    try:
+        from dask.distributed import Client, LocalCluster
+    except ImportError as exc:
+        raise TrajcompError(
+            f"--scheduler needs Dask distributed ({exc}); install it with: pip install 'trajcomp[cluster]'"
+        ) from exc
+    cluster = LocalCluster(n_workers=max(jobs, 1), threads_per_worker=1, dashboard_address=None) \
+        if scheduler == "local" else None
+    try:
+        with Client(cluster if cluster is not None else scheduler, timeout="20s") as client:
+            futures = client.map(run_one, [job] * len(inputs), inputs, outputs, pure=False)
+            return client.gather(futures)
+    except OSError as exc:
+        raise TrajcompError(f"--scheduler {scheduler}: cannot reach the Dask scheduler: {exc}") from exc
+    finally:
+        if cluster is not None:
+            cluster.close()
+
+
+def exit_code(results):
+    """The batch's exit code: the worst of its files' (crash 3, error 2, fail 1, pass 0)."""
+    return max((EXIT_CODES[r.status] for r in results), default=0)
+
+
+def write_summary(path, results, **context):
+    """Write the batch summary JSON (schema ``trajcomp-batch/1``) atomically.
+
+    ``context`` (model, mode, options) is recorded as given.
+    """
+    counts = {status: sum(r.status == status for r in results) for status in EXIT_CODES}
+    document = {
+        "schema": SUMMARY_SCHEMA,
+        "trajcomp": __version__,
+        **context,
+        "exit_code": exit_code(results),
+        "counts": counts,
+        "files": [
+            {"input": r.input, "outputs": list(r.outputs), "status": r.status, "message": r.message}
+            for r in results
+        ],
+    }
+    write_atomic(path, json.dumps(document, indent=2) + "\n")
