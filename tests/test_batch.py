@@ -1,7 +1,6 @@
 """Batch compensation: many files, one report line and summary entry each, a bad file never stops the rest."""
 
 import json
-import shutil
 from pathlib import Path
 
 import pytest

@@ -104,7 +104,7 @@ def run_one(job, path, output):
                           lines=tuple(traceback.format_exc().splitlines()))
 
 
-def run_batch(job, inputs, outputs, *, jobs=1, scheduler=None):
+def run_batch(job, inputs, outputs, *, jobs=1, scheduler=None, done=None):
     """Run ``job`` over the files, each result in input order.
 
     Parameters
@@ -117,22 +117,31 @@ def run_batch(job, inputs, outputs, *, jobs=1, scheduler=None):
     scheduler : str, optional
         Dask scheduler address, or ``"local"`` for a local cluster of
         ``jobs`` workers; default: no Dask.
+    done : callable, optional
+        ``done(result)`` as each file finishes (e.g. a progress bar's update).
 
     Returns
     -------
     list of FileResult
     """
+    done = done or (lambda result: None)
     if scheduler is not None:
-        return _on_dask(job, inputs, outputs, jobs, scheduler)
+        return _on_dask(job, inputs, outputs, jobs, scheduler, done)
     if jobs <= 1 or len(inputs) <= 1:
-        return [run_one(job, i, o) for i, o in zip(inputs, outputs)]
+        results = (run_one(job, i, o) for i, o in zip(inputs, outputs))
+        return [_reported(result, done) for result in results]
     with ProcessPoolExecutor(max_workers=jobs) as pool:
-        return list(pool.map(run_one, [job] * len(inputs), inputs, outputs))
+        return [_reported(result, done) for result in pool.map(run_one, [job] * len(inputs), inputs, outputs)]
 
 
-def _on_dask(job, inputs, outputs, jobs, scheduler):
+def _reported(result, done):
+    done(result)
+    return result
+
+
+def _on_dask(job, inputs, outputs, jobs, scheduler, done):
     try:
-        from dask.distributed import Client, LocalCluster
+        from dask.distributed import Client, LocalCluster, as_completed
     except ImportError as exc:
         raise TrajcompError(
             f"--scheduler needs Dask distributed ({exc}); install it with: pip install 'trajcomp[cluster]'"
@@ -142,6 +151,8 @@ def _on_dask(job, inputs, outputs, jobs, scheduler):
     try:
         with Client(cluster if cluster is not None else scheduler, timeout="20s") as client:
             futures = client.map(run_one, [job] * len(inputs), inputs, outputs, pure=False)
+            for future in as_completed(futures):
+                done(future.result())
             return client.gather(futures)
     except OSError as exc:
         raise TrajcompError(f"--scheduler {scheduler}: cannot reach the Dask scheduler: {exc}") from exc

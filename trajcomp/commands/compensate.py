@@ -15,6 +15,7 @@ from trajcomp.errors import TrajcompError
 from trajcomp.model import MODES, load_model
 from trajcomp.postprocess import MAX_CORRECTION, compensate_program
 from trajcomp.posture import MAX_JOINT_CHANGE
+from trajcomp.progress import progress
 
 
 def add_parser(sub):
@@ -136,7 +137,9 @@ def _run_batch(args, job):
     inputs = batch.expand_inputs(args.program)
     outputs = batch.output_paths(inputs, args.output)
     Path(args.output).mkdir(parents=True, exist_ok=True)
-    results = batch.run_batch(job, inputs, outputs, jobs=args.jobs, scheduler=args.scheduler)
+    with progress(len(inputs), desc="compensate", unit="file") as bar:
+        results = batch.run_batch(job, inputs, outputs, jobs=args.jobs, scheduler=args.scheduler,
+                                  done=lambda result: bar.update(1))
     for result in results:
         info(f"{result.status.upper():5} {result.input}" + (f": {result.message}" if result.message else ""))
     summary = Path(args.summary) if args.summary else Path(args.output) / "summary.json"
