@@ -17,7 +17,7 @@ import logging
 
 import numpy as np
 
-from trajcomp.ik import ik_near
+from trajcomp.ik import ik_near, ik_numeric
 from trajcomp.kinematics import fk
 from trajcomp.model import evaluate_field
 from trajcomp.plan import batch_seed
@@ -114,6 +114,7 @@ def compensate(model, targets, *, mode=None, tool=None, seed=None, outside="mode
     commanded = goal.copy()
     flagged = np.zeros(len(targets), dtype=bool)
     passes = ITERATIONS if mode in ("linear", "grid", "composite") else 1
+    q = None
     for _ in range(passes):
         aimed = targets.copy()
         if mode == "linear":
@@ -121,7 +122,11 @@ def compensate(model, targets, *, mode=None, tool=None, seed=None, outside="mode
         elif field is not None:
             offset, flagged = evaluate_field(field, commanded, outside=outside)
             aimed[:, :3, 3] = goal - offset
-        q = ik_near(real, nominal, aimed, seed=seed).raise_on_failure(label, names).q
+        if q is None:  # the branch from the nominal closed form, then the identified arm
+            solved = ik_near(real, nominal, aimed, seed=seed)
+        else:  # the aim moved by the field's change, microns: refine from the last joints
+            solved = ik_numeric(real, aimed, q)
+        q = solved.raise_on_failure(label, names).q
         command = fk(nominal, q)
         commanded = command[:, :3, 3]
     reached = fk(real, q)[:, :3, 3]

@@ -29,7 +29,7 @@ import dataclasses
 import numpy as np
 
 from trajcomp.errors import IKError
-from trajcomp.kinematics import dh_link_transforms, fk, jacobian, link_frames
+from trajcomp.kinematics import dh_link_transforms, fk, fk_and_jacobian, jacobian, link_frames
 from trajcomp.transforms import invert
 
 BRANCHES = 8
@@ -316,14 +316,15 @@ def ik_numeric(robot, T_base_tcp, q0, *, tol_pos=POS_TOL, tol_rot=ROT_TOL, max_i
         res_rot = np.full(len(T), np.nan)
         active = np.flatnonzero(started)
         for iteration in range(max_iter + 1):
-            error = _pose_error(fk(robot, q[active]), T[active])
+            pose, jac = fk_and_jacobian(robot, q[active])
+            error = _pose_error(pose, T[active])
             res_pos[active] = np.linalg.norm(error[:, :3], axis=1)
             res_rot[active] = np.linalg.norm(error[:, 3:], axis=1)
             done = (res_pos[active] < tol_pos) & (res_rot[active] < tol_rot)
-            active, error = active[~done], error[~done]
+            active, error, jac = active[~done], error[~done], jac[~done]
             if not active.size or iteration == max_iter:
                 break
-            q[active] += _gauss_newton_step(jacobian(robot, q[active]), error)
+            q[active] += _gauss_newton_step(jac, error)
         converged = started & (res_pos < tol_pos) & (res_rot < tol_rot)
         inside = robot.within_limits(q)
         reason = np.full(len(T), "", dtype=object)

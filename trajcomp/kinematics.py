@@ -95,9 +95,7 @@ def fk(robot, q, *, tcp=True):
     ndarray, shape (N, 4, 4) or (4, 4) for a single configuration
     """
     single = np.ndim(q) == 1
-    end = link_frames(robot, q)[:, 6] @ robot.T_link6_flange
-    if tcp:
-        end = end @ robot.T_flange_tool
+    end = _end(robot, link_frames(robot, q), tcp)
     return end[0] if single else end
 
 
@@ -118,13 +116,22 @@ def jacobian(robot, q, *, tcp=True):
         Rows 0-2: linear velocity (mm/rad), rows 3-5: angular velocity
         (rad/rad), per unit joint angle.
     """
+    return fk_and_jacobian(robot, q, tcp=tcp)[1]
+
+
+def fk_and_jacobian(robot, q, *, tcp=True):
+    """`fk` (N, 4, 4) and `jacobian` (N, 6, 6) of q (N, 6) from one pass over the links."""
     frames = link_frames(robot, q)
-    end = frames[:, 6] @ robot.T_link6_flange
-    if tcp:
-        end = end @ robot.T_flange_tool
+    end = _end(robot, frames, tcp)
     axes = frames[:, :6, :3, 2]
     origins = frames[:, :6, :3, 3]
     jac = np.empty((len(frames), 6, 6))
     jac[:, :3, :] = np.swapaxes(np.cross(axes, end[:, None, :3, 3] - origins), 1, 2)
     jac[:, 3:, :] = np.swapaxes(axes, 1, 2)
-    return jac @ robot.joint_map
+    return end, jac @ robot.joint_map
+
+
+def _end(robot, frames, tcp):
+    """Flange (or TCP) poses (N, 4, 4) from link frames (N, 7, 4, 4)."""
+    end = frames[:, 6] @ robot.T_link6_flange
+    return end @ robot.T_flange_tool if tcp else end
