@@ -1,0 +1,388 @@
+"""The Python API for offline programming tools: compensate a pose, a path or a program file.
+
+RoboDK-like: an offline programming (OLP) tool hands over the pose it wants
+the real TCP at, with the active tool and reference frame and the joints it
+planned, and gets back the pose to send to the controller instead, the
+joints of that command and the correction. A `Compensator` holds a loaded
+model; the module functions take a model file (loaded once per file
+version) and delegate to one::
+
+    import trajcomp
+
+    comp = trajcomp.Compensator("model.yaml")
+    command, joints, correction = comp.filter_target(
+        [550, 100, 550, 90, 0, 180], joints_hint=[10, -80, 100, -110, -90, 0])
+    out, report = comp.filter_program("weld.src", "weld_compensated.src")
+
+Units at this boundary: mm and degrees. A pose is a homogeneous matrix
+(4, 4) in mm or ``x, y, z, a, b, c`` (mm, deg; A, B, C = intrinsic
+Z-Y'-X'', R = Rz(A) Ry(B) Rx(C)); a stack of N poses is (N, 4, 4) or
+(N, 6). Commands come back in the form and frame the poses were given in.
+
+Posture: ``joints_hint`` chooses the arm posture, the IK branch and joint
+turns nearest the hint, and the command's joints are in that posture; a
+correction that would leave it is refused (`trajcomp.IKError`). Without a
+hint, each pose takes the posture nearest the joints of the pose before it
+(the first: nearest the robot's home), as a controller moves on from where
+the arm is. Everything else is `trajcomp.postprocess.compensate_program`'s:
+this module feeds it a small in-memory program.
+"""
+
+import dataclasses
+import functools
+import logging
+import os
+from pathlib import Path
+
+import numpy as np
+
+from trajcomp import formats
+from trajcomp.compensate import program_corrector
+from trajcomp.errors import TrajcompError
+from trajcomp.model import CompensationModel, load_model
+from trajcomp.postprocess import MAX_CORRECTION, compensate_program
+from trajcomp.posture import MAX_JOINT_CHANGE
+from trajcomp.program import LINEAR, Motion, Program, Target
+from trajcomp.transforms import matrix_to_pose, pose_to_matrix
+
+log = logging.getLogger(__name__)
+
+API_FORMAT = "api"  # format name of the in-memory programs: no language, no configuration data
+_TOOL, _FRAME = "tool", "frame"  # names of the caller's tool and frame in those programs
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class Filtered:
+    """Commands for N poses (`Compensator.filter_targets`).
+
+    Attributes
+    ----------
+    poses : ndarray, shape (N, 4, 4) or (N, 6)
+        Pose to send to the nominal controller for each target, in the
+        caller's frame and form (matrix in mm, or x, y, z, a, b, c in mm, deg).
+    joints : ndarray, shape (N, 6)
+        Joints of each command, deg, in the requested posture.
+    correction : ndarray, shape (N, 6)
+        Command minus target in the robot base frame: dx, dy, dz (mm) and
+        rotation vector (deg).
+    outside_grid : ndarray of bool, shape (N,)
+        Targets outside the calibrated grid (handled by the ``outside`` policy).
+    report : ProgramReport
+        Everything compensation knows about each target (planned joints,
+        posture source, predicted residual, warnings).
+    """
+
+    poses: np.ndarray
+    joints: np.ndarray
+    correction: np.ndarray
+    outside_grid: np.ndarray
+    report: object
+
+
+class Compensator:
+    """A compensation model ready to filter poses and programs.
+
+    Parameters
+    ----------
+    model : str, Path or CompensationModel
+        A model file from ``trajcomp calibrate``, or a loaded model.
+    mode : str, optional
+        Compensation mode (one of the model's modes); default the model's method.
+    outside : {"model", "clamp", "error"}
+        Targets outside the calibrated grid: model only (flagged, logged),
+        nearest grid value, or an error.
+    max_joint_change : float
+        Largest joint change a correction may cause before the target
+        counts as leaving its posture, deg.
+    max_correction : float
+        Largest plausible position correction, mm.
+
+    Raises
+    ------
+    ModelError
+        Unreadable or incompatible model file, or a mode the model lacks.
+    """
+
+    def __init__(self, model, *, mode=None, outside="model", max_joint_change=np.degrees(MAX_JOINT_CHANGE),
+                 max_correction=MAX_CORRECTION):
+        self.model = model if isinstance(model, CompensationModel) else load_model(model)
+        self.mode = mode or self.model.method
+        self.model.check_mode(self.mode)
+        if outside not in ("model", "clamp", "error"):
+            raise TrajcompError(f"outside: expected 'model', 'clamp' or 'error', got {outside!r}")
+        for name, value in (("max_joint_change", max_joint_change), ("max_correction", max_correction)):
+            if not (np.isfinite(value) and value > 0):
+                raise TrajcompError(f"{name}: expected a positive number, got {value}")
+        self.outside = outside
+        self.max_joint_change = float(max_joint_change)
+        self.max_correction = float(max_correction)
+
+    @property
+    def robot(self):
+        """The nominal robot the model compensates (`trajcomp.robot.Robot`)."""
+        return self.model.nominal
+
+    def __repr__(self):
+        return f"Compensator(robot={self.robot.name!r}, mode={self.mode!r}, outside={self.outside!r})"
+
+    def filter_target(self, pose, tool=None, frame=None, joints_hint=None):
+        """The command for one target pose.
+
+        Parameters
+        ----------
+        pose : array_like, shape (4, 4) or (6,)
+            Where the real TCP must go, in ``frame``: matrix in mm, or
+            x, y, z, a, b, c in mm and deg.
+        tool : array_like, shape (4, 4) or (6,), optional
+            The TCP in the flange frame (T_flange_tool, mm / deg); default
+            the TCP the model was calibrated with.
+        frame : array_like, shape (4, 4) or (6,), optional
+            The reference frame of ``pose`` in the robot base frame
+            (T_base_frame, mm / deg); default the robot base.
+        joints_hint : array_like, shape (6,), optional
+            Joints (deg) choosing the posture: the IK branch and turns
+            nearest them. Default: nearest the robot's home.
+
+        Returns
+        -------
+        command_pose : ndarray, shape (4, 4) or (6,)
+            The pose to send, in ``frame`` and in the form of ``pose``.
+        joints : ndarray, shape (6,)
+            Its joints, deg, in the hinted posture.
+        correction : ndarray, shape (6,)
+            Command minus target, robot base frame: dx, dy, dz (mm),
+            rotation vector (deg).
+
+        Raises
+        ------
+        IKError
+            The pose is unreachable in the posture, or its correction
+            leaves the posture.
+        CompensationError
+            An implausibly large correction (wrong model, tool or units).
+        ModelError
+            Outside the grid with ``outside="error"``.
+        TrajcompError
+            A malformed pose, tool, frame or hint.
+        """
+        single = np.asarray(pose, dtype=float)
+        if single.shape not in ((4, 4), (6,)):
+            raise TrajcompError(f"pose: expected a 4x4 matrix or x,y,z,a,b,c (mm, deg), got shape {single.shape}")
+        hint = None if joints_hint is None else np.asarray(joints_hint, dtype=float)[None]
+        result = self.filter_targets(single[None], tool, frame, hint)
+        return result.poses[0], result.joints[0], result.correction[0]
+
+    def filter_targets(self, poses, tool=None, frame=None, joints_hint=None):
+        """Commands for a stack of target poses (a path), in one vectorized run.
+
+        Parameters
+        ----------
+        poses : array_like, shape (N, 4, 4) or (N, 6)
+            Targets in ``frame`` (mm; mm and deg), in path order.
+        tool, frame : array_like, shape (4, 4) or (6,), optional
+            As for `filter_target`, the same for every pose.
+        joints_hint : array_like, shape (N, 6) or (6,), optional
+            Joints (deg) choosing each pose's posture; default: each pose
+            nearest the joints of the one before (the first nearest home).
+
+        Returns
+        -------
+        Filtered
+
+        Raises
+        ------
+        As `filter_target`; messages name the poses ``pose k`` (1-based).
+        """
+        T, form = _pose_stack(poses, "poses")
+        n = len(T)
+        hint = None if joints_hint is None else self._hint(joints_hint, n)
+        tools = {} if tool is None else {_TOOL: _one_pose(tool, "tool")}
+        frames = {} if frame is None else {_FRAME: self.robot.T_world_base @ _one_pose(frame, "frame")}
+        program = Program(
+            format=API_FORMAT,
+            name="filter_targets",
+            items=tuple(Motion(LINEAR, target=k, tool=_TOOL if tools else None, frame=_FRAME if frames else None,
+                               line=k + 1) for k in range(n)),
+            targets=tuple(Target(name=f"pose {k + 1}", line=k + 1, pose=T[k], joints=None if hint is None else hint[k])
+                          for k in range(n)),
+            tools=tools,
+            frames=frames,
+        )
+        edited, report = self._compensate(program, label="filter_targets")
+        command = np.array([t.pose for t in edited.targets]).reshape(n, 4, 4)
+        joints = np.degrees(np.array([t.joints for t in edited.targets]).reshape(n, 6))
+        return Filtered(_in_form(command, form), joints, report.correction, report.outside_grid, report)
+
+    def filter_program(self, path, out_path=None, *, tools=None, frames=None, joint_targets="keep", in_place=False):
+        """Compensate a robot program file and write the corrected program.
+
+        The file is read in its language (`trajcomp.formats`, plugins
+        included), every Cartesian target is replaced by its command in the
+        posture the program declares, configuration data are rewritten from
+        the corrected joints, and the program is written in the same
+        language; only the numbers of the targets change.
+
+        Parameters
+        ----------
+        path : str or Path
+            The program (its extension names the language).
+        out_path : str or Path, optional
+            Where to write; default ``<stem>_compensated<suffix>`` beside it.
+        tools : Mapping[str, array_like (4, 4) or (6,)], optional
+            Tools (T_flange_tool, mm / deg) the program uses but does not define.
+        frames : Mapping[str, array_like (4, 4) or (6,)], optional
+            User frames / bases / work objects (T_world_frame, mm / deg) the
+            program uses but does not define.
+        joint_targets : {"keep", "compensate"}
+            Joint-space targets: kept as written, or compensated as the pose they stand for.
+        in_place : bool
+            Allow ``out_path`` to replace the input program (refused otherwise).
+
+        Returns
+        -------
+        out_path : Path
+        report : ProgramReport
+            One row per compensated target; ``report.not_compensated`` lists
+            motions whose position is computed at run time (written as they
+            were: the program is then not fully corrected).
+
+        Raises
+        ------
+        ReadError, WriteError, IKError, CompensationError, TrajcompError
+            As ``trajcomp compensate``; nothing is written on error.
+        """
+        path = Path(path)
+        out_path = path.with_name(f"{path.stem}_compensated{path.suffix}") if out_path is None else Path(out_path)
+        program = formats.read(path)
+        corrected, report = self._compensate(
+            program, label=str(path), tools=_named_poses(tools, "tools"), frames=_named_poses(frames, "frames"),
+            joint_targets=joint_targets,
+        )
+        formats.write(out_path, corrected, protect=() if in_place else formats.input_paths(path, program))
+        return out_path, report
+
+    def _hint(self, joints_hint, n):
+        """Hint joints (n, 6), rad, of a (6,) or (n, 6) array in deg, finite and inside the joint limits."""
+        hint = np.broadcast_to(np.radians(_finite(joints_hint, "joints_hint", (6,), (n, 6))), (n, 6))
+        outside = np.flatnonzero(~self.robot.within_limits(hint))
+        if outside.size:
+            k = outside[0]
+            joint = int(np.argmax((hint[k] < self.robot.q_min) | (hint[k] > self.robot.q_max)))
+            raise TrajcompError(
+                f"joints_hint of pose {k + 1}: J{joint + 1} = {np.degrees(hint[k, joint]):.3f} deg is outside the "
+                f"limits of robot {self.robot.name} ({np.degrees(self.robot.q_min[joint]):g} to "
+                f"{np.degrees(self.robot.q_max[joint]):g} deg); the arm cannot be in that posture"
+            )
+        return hint
+
+    def _compensate(self, program, label, **options):
+        correct = program_corrector(self.model, mode=self.mode, outside=self.outside, label=label)
+        edited, report = compensate_program(
+            program, correct, self.robot, max_joint_change=np.radians(self.max_joint_change),
+            max_correction=self.max_correction, **options,
+        )
+        if report.outside_grid.any():
+            log.warning("%s: %d of %d targets lie outside the compensation grid: %s policy applied",
+                        label, int(report.outside_grid.sum()), len(report.outside_grid), self.outside)
+        return edited, report
+
+
+def compensator(model, **options):
+    """A `Compensator` for ``model``: a file path (loaded once per file version), a model or a Compensator.
+
+    Parameters
+    ----------
+    model : str, Path, CompensationModel or Compensator
+    **options
+        `Compensator` options (``mode``, ``outside``, ...); not with a Compensator.
+    """
+    if isinstance(model, Compensator):
+        if options:
+            raise TypeError(f"options {sorted(options)} belong to the Compensator's constructor")
+        return model
+    if isinstance(model, (str, os.PathLike)):
+        path = Path(model).resolve()
+        try:
+            version = path.stat().st_mtime_ns
+        except OSError as exc:
+            raise TrajcompError(f"{model}: cannot read the model file: {exc.strerror}") from exc
+        model = _load(path, version)
+    return Compensator(model, **options)
+
+
+def filter_target(pose, tool=None, frame=None, joints_hint=None, *, model, **options):
+    """`Compensator.filter_target` with a model file, model or Compensator (see `compensator`)."""
+    return compensator(model, **options).filter_target(pose, tool, frame, joints_hint)
+
+
+def filter_targets(poses, tool=None, frame=None, joints_hint=None, *, model, **options):
+    """`Compensator.filter_targets` with a model file, model or Compensator (see `compensator`)."""
+    return compensator(model, **options).filter_targets(poses, tool, frame, joints_hint)
+
+
+def filter_program(path, out_path=None, *, model, tools=None, frames=None, joint_targets="keep", in_place=False,
+                   **options):
+    """`Compensator.filter_program` with a model file, model or Compensator (see `compensator`)."""
+    return compensator(model, **options).filter_program(
+        path, out_path, tools=tools, frames=frames, joint_targets=joint_targets, in_place=in_place)
+
+
+@functools.lru_cache(maxsize=8)
+def _load(path, version):
+    """The model in ``path``; ``version`` (its modification time) makes an edited file load again."""
+    return load_model(path)
+
+
+def _finite(values, what, *shapes):
+    """``values`` as a float array of one of ``shapes``, all finite; else TrajcompError naming ``what``."""
+    arr = np.asarray(values, dtype=float)
+    if arr.shape not in shapes:
+        expected = " or ".join(str(s) for s in shapes)
+        raise TrajcompError(f"{what}: expected shape {expected}, got {arr.shape}")
+    if not np.all(np.isfinite(arr)):
+        raise TrajcompError(f"{what}: not finite: {arr.tolist()}")
+    return arr
+
+
+def _pose_stack(poses, what):
+    """Matrices (N, 4, 4) of poses given as (N, 4, 4) or (N, 6) mm / deg, and that form."""
+    arr = np.asarray(poses, dtype=float)
+    if arr.ndim == 3 and arr.shape[1:] == (4, 4):
+        T, form = _finite(arr, what, arr.shape), "matrix"
+    elif arr.ndim == 2 and arr.shape[1] == 6:
+        xyzabc = _finite(arr, what, arr.shape)
+        T, form = pose_to_matrix(np.column_stack([xyzabc[:, :3], np.radians(xyzabc[:, 3:])])), "xyzabc"
+    else:
+        raise TrajcompError(f"{what}: expected poses of shape (N, 4, 4) or (N, 6) (mm, deg), got {arr.shape}")
+    if not len(T):
+        raise TrajcompError(f"{what}: no poses")
+    rotation = T[:, :3, :3]
+    orthonormal = np.abs(rotation @ np.swapaxes(rotation, 1, 2) - np.eye(3)).max(axis=(1, 2)) < 1e-6
+    proper = orthonormal & (np.linalg.det(rotation) > 0) & np.all(np.abs(T[:, 3] - [0, 0, 0, 1]) < 1e-12, axis=1)
+    if not proper.all():
+        bad = np.flatnonzero(~proper)
+        raise TrajcompError(f"{what}: not a rigid transform (rotation not orthonormal, or last row not "
+                            f"0 0 0 1) at pose {', '.join(str(k + 1) for k in bad[:5])}")
+    return T, form
+
+
+def _one_pose(pose, what):
+    """T (4, 4) of one pose given as (4, 4) or (6,) mm / deg."""
+    arr = np.asarray(pose, dtype=float)
+    if arr.shape not in ((4, 4), (6,)):
+        raise TrajcompError(f"{what}: expected a 4x4 matrix or x,y,z,a,b,c (mm, deg), got shape {arr.shape}")
+    return _pose_stack(arr[None], what)[0][0]
+
+
+def _named_poses(values, what):
+    """``{name: T (4, 4)}`` of a mapping of poses, or None."""
+    return None if values is None else {str(name): _one_pose(pose, f"{what}[{name!r}]") for name, pose in values.items()}
+
+
+def _in_form(T, form):
+    """Matrices (N, 4, 4) returned as given: matrices, or x, y, z, a, b, c (mm, deg)."""
+    if form == "matrix":
+        return T
+    pose = matrix_to_pose(T)
+    pose[:, 3:] = np.degrees(pose[:, 3:])
+    return pose
