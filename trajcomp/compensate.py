@@ -17,7 +17,7 @@ import logging
 
 import numpy as np
 
-from trajcomp.ik import ik_near, ik_numeric
+from trajcomp.ik import ik_near, ik_numeric, pose_error
 from trajcomp.kinematics import fk
 from trajcomp.model import evaluate_field
 from trajcomp.plan import batch_seed
@@ -122,10 +122,7 @@ def compensate(model, targets, *, mode=None, tool=None, seed=None, outside="mode
         elif field is not None:
             offset, flagged = evaluate_field(field, commanded, outside=outside)
             aimed[:, :3, 3] = goal - offset
-        if q is None:  # the branch from the nominal closed form, then the identified arm
-            solved = ik_near(real, nominal, aimed, seed=seed)
-        else:  # the aim moved by the field's change, microns: refine from the last joints
-            solved = ik_numeric(real, aimed, q)
+        solved = _solve(real, nominal, aimed, seed if q is None else q)
         q = solved.raise_on_failure(label, names).q
         command = fk(nominal, q)
         commanded = command[:, :3, 3]
@@ -136,6 +133,27 @@ def compensate(model, targets, *, mode=None, tool=None, seed=None, outside="mode
         reached = reached + evaluate_field(field, commanded, outside=outside)[0]
     residual = np.linalg.norm(reached - goal, axis=1)
     return CompensationResult(command, q, commanded - goal, flagged, residual)
+
+
+SEED_NEAR = (10.0, 0.05)  # mm, rad: a seed this close to its target starts Gauss-Newton directly
+
+
+def _solve(real, nominal, targets, seed):
+    """IK of the real arm for targets (N, 4, 4), seeded by joints (N, 6) or (6,).
+
+    Rows whose seed puts the nominal TCP within `SEED_NEAR` of the target
+    (planned joints, the previous pass) are refined by Gauss-Newton from
+    it, which stays on the seed's branch and turns; the others get the
+    nominal closed form's branch nearest the seed first (`ik_near`).
+    """
+    seed = np.broadcast_to(np.asarray(seed, dtype=float), (len(targets), 6))
+    error = pose_error(fk(nominal, seed), targets)
+    near = (np.linalg.norm(error[:, :3], axis=1) < SEED_NEAR[0]) & (np.linalg.norm(error[:, 3:], axis=1) < SEED_NEAR[1])
+    solved = ik_numeric(real, targets, np.where(near[:, None], seed, np.nan))
+    far = np.flatnonzero(~solved.success)
+    if far.size:
+        solved = solved.with_rows(far, ik_near(real, nominal, targets[far], seed=seed[far]))
+    return solved
 
 
 def program_corrector(model, *, mode=None, outside="model", label="program"):

@@ -127,6 +127,15 @@ class IKResult:
     residual_rot: np.ndarray
     reason: np.ndarray
 
+    def with_rows(self, rows, other):
+        """A copy with rows ``rows`` (M,) taken from ``other``, an IKResult of M targets."""
+        fields = {}
+        for field in dataclasses.fields(self):
+            values = getattr(self, field.name).copy()
+            values[rows] = getattr(other, field.name)
+            fields[field.name] = values
+        return IKResult(**fields)
+
     def raise_on_failure(self, label="targets", names=None):
         """Raise IKError naming the failed targets and why; else return self.
 
@@ -317,7 +326,7 @@ def ik_numeric(robot, T_base_tcp, q0, *, tol_pos=POS_TOL, tol_rot=ROT_TOL, max_i
         active = np.flatnonzero(started)
         for iteration in range(max_iter + 1):
             pose, jac = fk_and_jacobian(robot, q[active])
-            error = _pose_error(pose, T[active])
+            error = pose_error(pose, T[active])
             res_pos[active] = np.linalg.norm(error[:, :3], axis=1)
             res_rot[active] = np.linalg.norm(error[:, 3:], axis=1)
             done = (res_pos[active] < tol_pos) & (res_rot[active] < tol_rot)
@@ -524,7 +533,7 @@ def _gauss_newton_step(jac, error):
     return step * np.minimum(1.0, _MAX_STEP / np.maximum(largest, 1e-300))
 
 
-def _pose_error(T_current, T_target):
+def pose_error(T_current, T_target):
     """Pose error (N, 6): target minus current position (mm), rotation vector of R_t R_c^T (rad).
 
     The rotation vector is computed here rather than with scipy: four times
@@ -549,7 +558,7 @@ def _verified(robot, T, q, reason):
     res_pos = np.full(len(T), np.nan)
     res_rot = np.full(len(T), np.nan)
     have = np.flatnonzero(np.all(np.isfinite(q), axis=1))
-    error = _pose_error(fk(robot, q[have]), T[have])
+    error = pose_error(fk(robot, q[have]), T[have])
     res_pos[have] = np.linalg.norm(error[:, :3], axis=1)
     res_rot[have] = np.linalg.norm(error[:, 3:], axis=1)
     accurate = (res_pos < POS_TOL) & (res_rot < ROT_TOL)
