@@ -1,0 +1,99 @@
+"""Scale benchmark: end-to-end CLI throughput and peak memory on long CAM programs (not a timed test).
+
+Run:  python tests/benchmarks/bench_scale.py [N ...]     (default: 100000 300000 1000000)
+
+For each N, a helix of N LIN waypoints (program CSV, mm and deg, 3 and 4
+decimals) on the virtual UR10 is compensated in composite mode by the CLI
+in a fresh process (`python -m trajcomp.cli compensate`), start-up
+included; the table gives wall time, waypoints/s and the peak resident
+memory of that process. Also: CLI start-up (`trajcomp --version`) and the
+compensation core alone (targets/s on one core).
+Targets (issue 11): >= 50,000 waypoints/s at 300,000 points, < 1 GB peak at
+1,000,000 points, start-up < 0.3 s.
+"""
+
+import os
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+from trajcomp.cli import main
+from trajcomp.compensate import compensate
+from trajcomp.ik import ik
+from trajcomp.model import load_model
+from trajcomp.plan import default_orientation
+from trajcomp.transforms import abc_to_matrix
+
+
+def helix(robot, n):
+    """Poses (n, 4, 4) of a helix of 20 turns inside the UR10 calibration cube, tool orientation of home."""
+    t = np.linspace(0.0, 40.0 * np.pi, n)
+    T = np.tile(np.eye(4), (n, 1, 1))
+    T[:, :3, :3] = abc_to_matrix(default_orientation(robot))
+    T[:, :3, 3] = np.c_[550 + 80 * np.cos(t), 150 + 80 * np.sin(t), 550 + np.linspace(0.0, 100.0, n)]
+    return T
+
+
+def write_program(path, robot, n):
+    abc = np.degrees(default_orientation(robot))
+    position = helix(robot, n)[:, :3, 3]
+    tail = f",{abc[0]:.4f},{abc[1]:.4f},{abc[2]:.4f},LIN,50\n"
+    with open(path, "w") as out:
+        out.write("x,y,z,a,b,c,motion,speed\n")
+        out.writelines(f"{x:.3f},{y:.3f},{z:.3f}{tail}" for x, y, z in position)
+
+
+def run_cli(args):
+    """Wall time (s) and peak RSS (MB) of ``python -m trajcomp.cli ARGS`` in a fresh process."""
+    start = time.perf_counter()
+    with tempfile.TemporaryFile() as err:
+        child = subprocess.Popen([sys.executable, "-m", "trajcomp.cli", *args], stdout=subprocess.DEVNULL, stderr=err)
+        _, status, usage = os.wait4(child.pid, 0)
+        wall = time.perf_counter() - start
+        child.returncode = os.waitstatus_to_exitcode(status)
+        if child.returncode != 0:
+            err.seek(0)
+            raise SystemExit(f"trajcomp {' '.join(args)} exited {child.returncode}:\n{err.read()[-2000:].decode()}")
+    return wall, usage.ru_maxrss / 1024.0
+
+
+def make_model(folder):
+    plan, meas, model = folder / "plan.csv", folder / "meas.csv", folder / "model.yaml"
+    quiet = open(os.devnull, "w")
+    sys.stderr, stderr = quiet, sys.stderr
+    try:
+        main(["plan", "--robot", "ur10", "--cube", "300,-100,300", "--side", "500", "--step", "100", "-o", str(plan)])
+        main(["simulate", str(plan), "--robot", "ur10", "--seed", "1", "-o", str(meas)])
+        main(["calibrate", str(meas), "--robot", "ur10", "--grid-step", "100", "--folds", "0", "-o", str(model)])
+    finally:
+        sys.stderr = stderr
+    return model
+
+
+def main_bench(sizes):
+    folder = Path(tempfile.mkdtemp(prefix="trajcomp-scale-"))
+    model_path = make_model(folder)
+    startup = min(run_cli(["--version"])[0] for _ in range(3))
+    print(f"CLI start-up (trajcomp --version, best of 3): {startup:.3f} s   (target < 0.3 s)")
+    model = load_model(model_path)
+    T = helix(model.nominal, 100_000)
+    seed = ik(model.nominal, T, seed=model.nominal.home).q
+    start = time.perf_counter()
+    compensate(model, T, seed=seed)
+    core = len(T) / (time.perf_counter() - start)
+    print(f"compensation core, composite, 100,000 seeded targets, this process: {core:,.0f} targets/s")
+    print(f"\n{'waypoints':>10} {'wall s':>8} {'waypoints/s':>12} {'peak MB':>8}")
+    for n in sizes:
+        program = folder / f"helix{n}.csv"
+        write_program(program, model.nominal, n)
+        wall, peak = run_cli(["compensate", str(program), "--model", str(model_path), "-o", str(folder / "out.csv")])
+        print(f"{n:>10,} {wall:>8.2f} {n / wall:>12,.0f} {peak:>8,.0f}")
+    print("targets: >= 50,000 waypoints/s at 300,000; < 1,000 MB at 1,000,000")
+
+
+if __name__ == "__main__":
+    main_bench([int(a) for a in sys.argv[1:]] or [100_000, 300_000, 1_000_000])
