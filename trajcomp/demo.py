@@ -1,13 +1,15 @@
 """The paper's protocol end to end on the virtual robot.
 
 Large cube (corner 300,-100,300, side 500, step 100: 216 points) and small
-cube (corner 500,100,500, side 100, step 10: 1331 points) on a UR10-class
-virtual arm; calibrate on the grid, then send 40 random validation targets
+cube (corner 500,100,500, side 100, step 10: 1331 points) on the paper's
+UR10-class arm, the same cubes scaled to the reach of any other arm
+(`demo_cubes`); calibrate on the grid, then send 40 random validation targets
 inside each cube, compensated in each mode, and measure where the arm really
 lands. The table puts the paper's numbers beside ours.
 """
 
 import dataclasses
+import itertools
 
 import numpy as np
 
@@ -15,10 +17,13 @@ from trajcomp import formats
 from trajcomp.atomic import write_atomic
 from trajcomp.calibrate import calibrate
 from trajcomp.compensate import compensate, program_corrector
+from trajcomp.errors import TrajcompError
 from trajcomp.ik import ik
+from trajcomp.kinematics import fk, link_frames
 from trajcomp.measurements import Measurements, read_measurements
 from trajcomp.postprocess import compensate_program
 from trajcomp.plan import batch_seed, default_orientation, plan_grid
+from trajcomp.robot import load_robot
 from trajcomp.simulate import VirtualRobot
 from trajcomp.stats import ErrorStats
 from trajcomp.transforms import abc_to_matrix
@@ -32,7 +37,39 @@ PAPER = {
     ("small", "composite"): (-0.002851, -0.008719, -0.007675),
 }
 
-CUBES = {"large": ((300.0, -100.0, 300.0), 500.0, 100.0), "small": ((500.0, 100.0, 500.0), 100.0, 10.0)}
+
+@dataclasses.dataclass(frozen=True)
+class Cube:
+    """An axis-aligned calibration cube and its grid.
+
+    Attributes
+    ----------
+    name : str
+    corner : tuple of float, (3,)
+        Lowest corner, mm, base frame.
+    side, step : float
+        Edge length and grid step, mm (side = a whole number of steps).
+    """
+
+    name: str
+    corner: tuple
+    side: float
+    step: float
+
+    def __post_init__(self):
+        object.__setattr__(self, "corner", tuple(float(v) for v in self.corner))
+
+    def __str__(self):
+        points = (round(self.side / self.step) + 1) ** 3
+        corner = ",".join(f"{v:g}" for v in self.corner)
+        return f"{self.name} cube: corner {corner}, side {self.side:g}, step {self.step:g} mm ({points} points)"
+
+
+PAPER_ROBOT = "ur10"  # the arm class of the paper's cubes
+PAPER_CUBES = (Cube("large", (300.0, -100.0, 300.0), 500.0, 100.0), Cube("small", (500.0, 100.0, 500.0), 100.0, 10.0))
+# Placements tried around the scaled paper cubes: shifts of up to two large
+# steps per axis, nearest first.
+_SHIFTS = sorted(itertools.product(range(-2, 3), repeat=3), key=lambda s: (np.dot(s, s), s))
 
 # Row label -> (model mode, grid interpolation)
 ROWS = {
@@ -49,7 +86,7 @@ ROWS = {
 class CubeResult:
     """Validation statistics of one cube: ``{row label: ErrorStats}`` and the calibration model."""
 
-    name: str
+    cube: Cube
     points: int
     stats: dict
     model: object
@@ -61,18 +98,69 @@ def with_interpolation(model, interpolation):
     return dataclasses.replace(model, grid=swap(model.grid), residual=swap(model.residual))
 
 
-def run_cube(virtual, name, corner, side, step, *, validation=40, seed=0):
+def shoulder_and_reach(robot, samples=4096):
+    """Origin of the joint-2 axis (3,) mm and the farthest TCP distance from it, mm.
+
+    The reach is the maximum over ``samples`` seeded random configurations
+    within the joint limits (each joint's range clipped to one turn).
+    """
+    rng = np.random.default_rng(0)
+    q = rng.uniform(np.maximum(robot.q_min, -np.pi), np.minimum(robot.q_max, np.pi), (samples, 6))
+    shoulder = link_frames(robot, np.zeros(6))[0, 1, :3, 3]
+    return shoulder, float(np.linalg.norm(fk(robot, q)[:, :3, 3] - shoulder, axis=1).max())
+
+
+def demo_cubes(robot):
+    """The paper's two cubes, scaled to the arm's reach and placed where it reaches every vertex.
+
+    The paper's cubes are given for its UR10; for another arm they are
+    scaled about the shoulder (origin of the joint-2 axis) by the ratio of
+    the arms' reaches (`shoulder_and_reach`), the large step rounded to
+    10 mm and the small one to 1 mm. When a grid vertex is out of reach in
+    that place, both cubes move together by whole large steps (up to two
+    per axis, nearest placement first). The UR10 gets the paper's cubes.
+
+    Returns
+    -------
+    tuple of Cube
+        The large and the small cube.
+
+    Raises
+    ------
+    TrajcompError
+        No tried placement has every vertex of both grids reachable.
+    """
+    paper_shoulder, paper_reach = shoulder_and_reach(load_robot(PAPER_ROBOT))
+    shoulder, reach = shoulder_and_reach(robot)
+    scale = reach / paper_reach
+    scaled = []
+    for cube, unit in zip(PAPER_CUBES, (10.0, 1.0)):
+        step = max(unit, unit * round(cube.step * scale / unit))
+        corner = 10.0 * np.round((shoulder + scale * (np.asarray(cube.corner) - paper_shoulder)) / 10.0)
+        scaled.append(Cube(cube.name, corner, step * round(cube.side / cube.step), step))
+    for shift in _SHIFTS:
+        offset = scaled[0].step * np.asarray(shift)
+        cubes = tuple(dataclasses.replace(c, corner=np.add(c.corner, offset)) for c in scaled)
+        if all(plan_grid(robot, c.corner, c.side, c.step).reachable.all() for c in cubes):
+            return cubes
+    raise TrajcompError(
+        f"demo: robot {robot.name}: no placement of the paper's cubes scaled to its reach ({reach:.0f} mm, "
+        f"{scaled[0]}) has every grid vertex reachable"
+    )
+
+
+def run_cube(virtual, cube, *, validation=40, seed=0):
     """Calibrate on one cube's grid and validate compensation at random targets."""
     robot = virtual.nominal
-    rng = np.random.default_rng([seed, len(name)])
-    plan = plan_grid(robot, corner, side, step)
+    rng = np.random.default_rng([seed, len(cube.name)])
+    plan = plan_grid(robot, cube.corner, cube.side, cube.step)
     q = plan.joints[plan.reachable]
     meas = Measurements(joints=q, position=plan.position[plan.reachable], measured=virtual.measure(q, rng),
-                        lines=np.arange(len(q)) + 1, path=f"<virtual {name} cube>")
-    model = calibrate(robot, meas, robot_ref=robot.name, method="composite", grid_step=step, folds=0)
+                        lines=np.arange(len(q)) + 1, path=f"<virtual {cube.name} cube>")
+    model = calibrate(robot, meas, robot_ref=robot.name, method="composite", grid_step=cube.step, folds=0)
     targets = np.tile(np.eye(4), (validation, 1, 1))
     targets[:, :3, :3] = abc_to_matrix(default_orientation(robot))
-    targets[:, :3, 3] = np.asarray(corner) + rng.uniform(0.0, side, (validation, 3))
+    targets[:, :3, 3] = np.asarray(cube.corner) + rng.uniform(0.0, cube.side, (validation, 3))
     stats = {}
     for label, (mode, interpolation) in ROWS.items():
         used = model if interpolation is None else with_interpolation(model, interpolation)
@@ -80,7 +168,7 @@ def run_cube(virtual, name, corner, side, step, *, validation=40, seed=0):
         reached = virtual.reached_poses(result.q, rng)[:, :3, 3]
         measured = reached + rng.normal(0.0, virtual.profile.tracker_sigma, reached.shape)
         stats[label] = ErrorStats.from_errors(measured - targets[:, :3, 3])
-    return CubeResult(name, len(q), stats, model)
+    return CubeResult(cube, len(q), stats, model)
 
 
 def format_comparison(results, noise_sigma):
@@ -91,10 +179,10 @@ def format_comparison(results, noise_sigma):
     ]
     for result in results:
         for label, s in result.stats.items():
-            paper = PAPER.get((result.name, label))
+            paper = PAPER.get((result.cube.name, label))
             theirs = "".join(f"{v:>9.4f}" for v in paper) if paper else f"{'-':>9s}{'-':>9s}{'-':>9s}"
             lines.append(
-                f"{result.name:6s} {label:10s} {s.mean:8.4f} {s.rms:8.4f} {s.max:8.4f}   "
+                f"{result.cube.name:6s} {label:10s} {s.mean:8.4f} {s.rms:8.4f} {s.max:8.4f}   "
                 + "".join(f"{v:8.4f} " for v in s.signed_mean) + "  " + theirs
             )
     floor = noise_sigma * np.sqrt(8.0 / np.pi)
@@ -102,21 +190,28 @@ def format_comparison(results, noise_sigma):
     return "\n".join(lines)
 
 
-def write_example_program(path, robot, corner, side, waypoints=8, seed=0):
-    """A program CSV of LIN moves through random targets inside a cube (user units)."""
+def write_example_program(path, robot, cube, waypoints=8, seed=0):
+    """A program CSV of LIN moves through random targets inside a Cube (user units)."""
     rng = np.random.default_rng(seed)
     abc = np.degrees(default_orientation(robot))
     rows = ["x,y,z,a,b,c,motion,speed,zone"]
-    for k, p in enumerate(np.asarray(corner) + rng.uniform(0.1 * side, 0.9 * side, (waypoints, 3))):
+    for k, p in enumerate(np.asarray(cube.corner) + rng.uniform(0.1 * cube.side, 0.9 * cube.side, (waypoints, 3))):
         motion, speed, zone = ("PTP", "", "") if k == 0 else ("LIN", "250", "1")
         rows.append(",".join(f"{v:.3f}" for v in (*p, *abc)) + f",{motion},{speed},{zone}")
     write_atomic(path, "\n".join(rows) + "\n")
 
 
-def run_program(virtual, model, folder, corner, side):
-    """Compensate an example program with ``model`` and run both versions on the virtual arm.
+def run_program(virtual, result, folder):
+    """Compensate an example program inside a cube with its model; run both versions on the virtual arm.
 
     Writes ``program.csv`` and ``program-compensated.csv`` into ``folder``.
+
+    Parameters
+    ----------
+    virtual : VirtualRobot
+    result : CubeResult
+        The cube the program's targets are drawn in and the model that corrects them.
+    folder : pathlib.Path
 
     Returns
     -------
@@ -126,9 +221,9 @@ def run_program(virtual, model, folder, corner, side):
     """
     robot = virtual.nominal
     original, corrected_path = folder / "program.csv", folder / "program-compensated.csv"
-    write_example_program(original, robot, corner, side)
+    write_example_program(original, robot, result.cube)
     program = formats.read(original)
-    corrected, _ = compensate_program(program, program_corrector(model, label=str(original)), robot)
+    corrected, _ = compensate_program(program, program_corrector(result.model, label=str(original)), robot)
     formats.write(corrected_path, corrected)
     targets = program.cartesian_targets().T  # CSV targets: base frame, robot tool
     planned = ik(robot, targets, seed=batch_seed(robot, targets)).raise_on_failure(str(original)).q
@@ -140,11 +235,18 @@ def run_program(virtual, model, folder, corner, side):
 
 
 def run_demo(robot, profile="paper", seed=1, progress=None):
-    """Both cubes of the paper's protocol; returns the list of CubeResult."""
+    """Both cubes of the paper's protocol (`demo_cubes`) on a virtual copy of ``robot``.
+
+    Returns
+    -------
+    virtual : VirtualRobot
+    results : list of CubeResult
+        The large cube's, then the small cube's.
+    """
     virtual = VirtualRobot.create(robot, profile, seed)
     results = []
-    for name, (corner, side, step) in CUBES.items():
+    for cube in demo_cubes(robot):
         if progress:
-            progress(f"{name} cube: plan, measure, calibrate, validate")
-        results.append(run_cube(virtual, name, corner, side, step, seed=seed))
+            progress(f"{cube}: plan, measure, calibrate, validate")
+        results.append(run_cube(virtual, cube, seed=seed))
     return virtual, results

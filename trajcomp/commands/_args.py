@@ -35,13 +35,18 @@ def robot_of(args):
     return load_robot(args.robot)
 
 
-def command_parser(sub, name, help, description, example):
-    """A sub-command parser with its one-line help, description and example."""
+def command_parser(sub, name, help, description, *examples):
+    """A sub-command parser with its one-line help, description and example command lines.
+
+    The examples are shown under ``example:`` in ``--help``; tests/test_docs.py
+    runs them in order from the root of a clone, so each must work as written.
+    """
+    label = "example" if len(examples) == 1 else "examples"
     return sub.add_parser(
         name,
         help=help,
         description=description,
-        epilog=f"example:\n  {example}",
+        epilog=f"{label}:\n" + "\n".join(f"  {example}" for example in examples),
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
 

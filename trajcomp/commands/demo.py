@@ -3,7 +3,7 @@
 from pathlib import Path
 
 from trajcomp.commands._args import command_parser, info
-from trajcomp.demo import CUBES, format_comparison, run_demo, run_program
+from trajcomp.demo import PAPER_ROBOT, format_comparison, run_demo, run_program
 from trajcomp.model import save_model
 from trajcomp.robot import load_robot
 from trajcomp.simulate import PROFILES
@@ -12,16 +12,18 @@ from trajcomp.simulate import PROFILES
 def add_parser(sub):
     parser = command_parser(
         sub, "demo", "run the paper's protocol on the virtual robot",
-        "Calibrate a virtual UR10-class arm on the paper's two grids (100 mm and 10 mm "
-        "steps), validate compensation at 40 random targets per cube in every mode, print "
-        "the paper's table beside ours, write the models, then compensate an example "
-        "program with the large-cube model and run it on the virtual arm.",
+        "Calibrate a virtual arm on the paper's two grids (100 mm and 10 mm steps on its "
+        "UR10; scaled to the reach of any other arm, which the output names), validate "
+        "compensation at 40 random targets per cube in every mode, print the paper's table "
+        "beside ours, write the models, then compensate an example program with the "
+        "large-cube model and run it on the virtual arm.",
         "trajcomp demo -o trajcomp-demo",
+        "trajcomp demo --robot kuka_kr6_r900 --profile harsh -o trajcomp-demo/kuka-harsh",
     )
-    parser.add_argument("--robot", default="ur10", help="robot (default ur10, the paper's arm class)")
+    parser.add_argument("--robot", default=PAPER_ROBOT, help=f"robot (default {PAPER_ROBOT}, the paper's arm class)")
     parser.add_argument("--profile", choices=sorted(PROFILES), default="paper", help="error profile (default paper)")
     parser.add_argument("--seed", type=int, default=1, help="seed of the virtual robot (default 1)")
-    parser.add_argument("-o", "--output-dir", default="trajcomp-demo", help="folder for the model (default trajcomp-demo)")
+    parser.add_argument("-o", "--output-dir", default="trajcomp-demo", help="folder for the models and the program (default trajcomp-demo)")
     parser.set_defaults(run=run)
 
 
@@ -31,13 +33,14 @@ def run(args):
     out.mkdir(parents=True, exist_ok=True)
     virtual, results = run_demo(robot, args.profile, args.seed, progress=info)
     print(f"virtual {robot.name}, profile {args.profile}, seed {args.seed}: compensation validated at 40 random targets per cube")
+    for result in results:
+        print(f"  {result.cube}")
     print(format_comparison(results, virtual.profile.noise_sigma))
     for result in results:
-        path = out / f"model-{result.name}.yaml"
+        path = out / f"model-{result.cube.name}.yaml"
         save_model(path, result.model)
         info(f"wrote {path} ({result.points} grid points)")
-    corner, side, _ = CUBES["large"]
-    landing = run_program(virtual, results[0].model, out, corner, side)
+    landing = run_program(virtual, results[0], out)
     print(f"example program {out / 'program.csv'} -> {out / 'program-compensated.csv'} "
           "(composite, large-cube model; landing error without repeatability noise):")
     for label, stats in landing.items():
