@@ -28,8 +28,8 @@ def add_parser(sub):
         "the same format. A target that cannot keep its posture, or whose correction is implausibly "
         "large, stops the run (exit 2) and nothing is written. Motions whose position is computed at "
         "run time are listed and left as written; the run then exits 1.",
-        "trajcomp compensate program.csv --model model.yaml --mode composite -o corrected.csv\n"
-        "  trajcomp compensate cam/ 'cells/*.src' --model model.yaml -o corrected/ --jobs 2",
+        "trajcomp compensate examples/ur10_path.csv --model model.yaml --mode composite -o ur10_path.compensated.csv",
+        "trajcomp compensate examples/programs/csv 'examples/programs/ur/*.script' --model model.yaml -o corrected/ --jobs 2",
     )
     parser.add_argument("program", nargs="+",
                         help="program file; several files, folders or glob patterns run as a batch")

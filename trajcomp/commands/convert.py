@@ -78,8 +78,8 @@ def add_parser(sub):
         "target language needs them. Motions whose position is computed at run time are written as "
         "comments.",
         epilog="examples:\n"
-        "  trajcomp convert weld.src weld.mod --robot abb_irb4600 --tool 1=0,0,150,0,0,0\n"
-        "  trajcomp convert path.csv path.script",
+        "  trajcomp convert examples/programs/kuka/weld.src weld.csv --robot kuka_kr6_r900\n"
+        "  trajcomp convert examples/programs/csv/weld.csv weld.script",
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     parser.add_argument("input", metavar="IN", help="program to read")

@@ -19,6 +19,7 @@ def add_parser(sub):
         "the measurement CSV with the measured TCP positions mx, my, mz added. The "
         "virtual robot's errors are drawn from --seed; each --run draws new noise.",
         "trajcomp simulate plan.csv --robot ur10 --profile paper --seed 1 -o measurements.csv",
+        "trajcomp simulate plan.csv --robot ur10 --profile paper --seed 1 --run 1 -o validation.csv",
     )
     parser.add_argument("plan", help="plan CSV (from `trajcomp plan`)")
     add_robot(parser)

@@ -1,0 +1,301 @@
+"""The README's commands and every ``--help`` example run as written.
+
+Rules (the README's "Set up" section points here):
+
+- README: every fenced block tagged ``sh`` holds console commands. They run
+  in order, top to bottom, as one terminal session that starts at the root of
+  a clone: a temporary folder holding a copy of ``examples/``, beside a link
+  ``shared`` to the real data folder next to this repository when there is
+  one. ``cd`` carries over to later commands and files stay. A line ending in
+  ``\\`` continues on the next, ``#`` starts a comment, ``A && B`` runs A then
+  B. Any other fenced block is shown output; a ``trajcomp`` command in one
+  fails `test_readme_commands_are_in_sh_blocks` (tag that block ``sh``).
+- How: ``cd DIR`` moves the session; a plain ``trajcomp ...`` runs
+  ``trajcomp.cli.main`` in this process (the code of this checkout); any
+  other command runs in bash, with ``trajcomp`` and ``python`` on the PATH
+  running this checkout's code.
+- ``--help``: the lines under ``example:`` of every sub-command run in the
+  order of ``trajcomp.cli.COMMANDS``, as another session from the root of
+  another such clone.
+- Not run: a command starting with one of `NOT_RUN` (installing, the test
+  suite itself, CI, the benchmarks); in ``A && B`` only that part is left
+  out. A command naming a path under ``shared/data/`` skips when that path
+  is absent.
+- Every other command must exit 0; a failure names the README line (or the
+  sub-command) and the command, with the end of its output.
+
+Each command is one test item. An item run alone first runs the commands
+before it, so any selection works; after a failure the rest of that session
+is skipped.
+"""
+
+import argparse
+import contextlib
+import dataclasses
+import importlib
+import io
+import os
+import re
+import shlex
+import shutil
+import subprocess
+import sys
+import traceback
+from pathlib import Path
+
+import pytest
+
+from trajcomp.cli import COMMANDS, main
+
+REPO = Path(__file__).resolve().parents[1]
+README = REPO / "README.md"
+
+NOT_RUN = (
+    "pip install",  # changes the environment; the test runs the code of this checkout
+    "python -m pytest",  # the test suite itself
+    ".ci/run",  # the test suite from a clean checkout
+    "python tests/benchmarks/",  # minutes of work, not part of the test run
+)
+COMMAND_LANGUAGES = {"sh"}
+REAL_DATA = re.compile(r"[^\s=,]*shared/data/[^\s,]*")
+FENCE = re.compile(r"^\s*```\s*(\S*)")
+CONTINUED = "\\"
+COMMENT = re.compile(r"(^|\s)#.*")
+TRAJCOMP_LINE = re.compile(r"^\s*(\$\s*)?trajcomp\s")
+SHELL_SYNTAX = re.compile(r"[|<>;&`$()*?]")
+TIMEOUT = 300  # s, per shell command
+
+
+@dataclasses.dataclass(frozen=True)
+class Command:
+    """One command line as the docs show it: where it is written and its text."""
+
+    where: str
+    text: str
+
+    def __str__(self):
+        return f"{self.where}: `{self.text}`"
+
+
+def fenced_blocks(path):
+    """``(language, [(line number, text), ...])`` of every fenced block of a Markdown file."""
+    blocks, current = [], None
+    for number, line in enumerate(path.read_text(encoding="utf-8").splitlines(), start=1):
+        fence = FENCE.match(line)
+        if fence and current is None:
+            current = (fence.group(1), [])
+        elif fence:
+            blocks.append(current)
+            current = None
+        elif current is not None:
+            current[1].append((number, line))
+    return blocks
+
+
+def readme_commands(path=README):
+    """The commands of the ``sh`` blocks, continued lines joined, comments dropped."""
+    commands = []
+    for language, lines in fenced_blocks(path):
+        if language not in COMMAND_LANGUAGES:
+            continue
+        pending = None
+        for number, line in lines:
+            text = COMMENT.sub("", line).strip()
+            if pending is None and not text:
+                continue
+            start, before = pending or (number, "")
+            joined = f"{before} {text.removesuffix(CONTINUED).strip()}".strip()
+            pending = (start, joined) if text.endswith(CONTINUED) else None
+            if pending is None:
+                commands.append(Command(f"{path.name}:{start}", joined))
+    return commands
+
+
+def help_examples():
+    """``{sub-command: [example command lines]}`` from each parser's epilog, in the order of COMMANDS."""
+    sub = argparse.ArgumentParser(prog="trajcomp").add_subparsers()
+    examples = {}
+    for name in COMMANDS:
+        importlib.import_module(f"trajcomp.commands.{name}").add_parser(sub)
+        shown = re.search(r"^examples?:\n((?:[ \t]+\S.*\n?)*)", sub.choices[name].epilog or "", re.MULTILINE)
+        examples[name] = [line.strip() for line in (shown.group(1) if shown else "").splitlines() if line.strip()]
+    return examples
+
+
+class Session:
+    """One terminal session over a list of commands in a temporary clone."""
+
+    def __init__(self, root, commands):
+        self.root = root
+        self.cwd = root / "clone"
+        self.commands = commands
+        self.next = 0
+        self.failed = None
+        shutil.copytree(REPO / "examples", self.cwd / "examples")
+        if (REPO.parent / "shared").is_dir():
+            (root / "shared").symlink_to(REPO.parent / "shared")
+        bin_dir = root / "bin"
+        bin_dir.mkdir()
+        shim = bin_dir / "trajcomp"
+        shim.write_text(f'#!/bin/sh\nexec {shlex.quote(sys.executable)} -m trajcomp.cli "$@"\n')
+        shim.chmod(0o755)
+        self.env = dict(
+            os.environ,
+            PATH=os.pathsep.join([str(bin_dir), str(Path(sys.executable).parent), os.environ.get("PATH", "")]),
+            PYTHONPATH=os.pathsep.join([str(REPO), os.environ.get("PYTHONPATH", "")]),
+        )
+
+    def run_through(self, index):
+        """Run the commands up to ``index``; the skip reason of the last one, or None."""
+        if self.failed is not None:
+            pytest.skip(f"not run: {self.failed} failed before")
+        reason = None
+        while self.next <= index:
+            command = self.commands[self.next]
+            self.next += 1
+            try:
+                reason = self.run(command)
+            except BaseException:
+                self.failed = command.where
+                raise
+        return reason
+
+    def run(self, command):
+        """Run one command in the session's folder; the reason it is not run, or None."""
+        parts = [p for p in re.split(r"\s+&&\s+", command.text) if not p.startswith(NOT_RUN)]
+        if not parts:
+            return f"{command}: not run in tests (it starts with one of {', '.join(NOT_RUN)})"
+        for path in REAL_DATA.findall(command.text):
+            if not (self.cwd / path).exists():
+                return f"{command}: needs the real data, {path} is absent"
+        for part in parts:
+            words = shlex.split(part)
+            if words[0] == "cd" and len(words) == 2:
+                if not (self.cwd / words[1]).is_dir():
+                    pytest.fail(f"{command}: no folder {words[1]} in {self.cwd}", pytrace=False)
+                self.cwd = (self.cwd / words[1]).resolve()
+                continue
+            plain_trajcomp = words[0] == "trajcomp" and not SHELL_SYNTAX.search(part)
+            code, output = self.trajcomp(words[1:]) if plain_trajcomp else self.shell(part)
+            if code != 0:
+                tail = "\n".join(output.strip().splitlines()[-15:])
+                pytest.fail(f"{command} exited {code} in {self.cwd}:\n{tail}", pytrace=False)
+        return None
+
+    def trajcomp(self, argv):
+        """``(exit code, output)`` of the CLI run in this process, in the session's folder.
+
+        The same ``main`` as the console script, without its start-up cost
+        (about a second of imports per command).
+        """
+        output = io.StringIO()
+        previous = Path.cwd()
+        os.chdir(self.cwd)
+        try:
+            with contextlib.redirect_stdout(output), contextlib.redirect_stderr(output):
+                code = main(argv)
+        except SystemExit as exc:  # argparse: bad usage
+            code = exc.code
+        except Exception:  # a traceback: the console script would exit 1 with it
+            code = 1
+            output.write(traceback.format_exc())
+        finally:
+            os.chdir(previous)
+        return code, output.getvalue()
+
+    def shell(self, text):
+        """``(exit code, output)`` of a shell command in the session's folder."""
+        done = subprocess.run(["bash", "-c", text], cwd=self.cwd, env=self.env, capture_output=True, text=True,
+                              timeout=TIMEOUT)
+        return done.returncode, done.stdout + done.stderr
+
+
+README_COMMANDS = readme_commands()
+HELP_EXAMPLES = [
+    Command(f"trajcomp {name} --help, example {k}", text)
+    for name, lines in help_examples().items()
+    for k, text in enumerate(lines, start=1)
+]
+
+
+@pytest.fixture(scope="module")
+def readme_session(tmp_path_factory):
+    return Session(tmp_path_factory.mktemp("readme"), README_COMMANDS)
+
+
+@pytest.fixture(scope="module")
+def help_session(tmp_path_factory):
+    return Session(tmp_path_factory.mktemp("help"), HELP_EXAMPLES)
+
+
+@pytest.mark.parametrize("index", range(len(README_COMMANDS)), ids=[c.where for c in README_COMMANDS])
+def test_readme_command_runs_as_written(readme_session, index):
+    reason = readme_session.run_through(index)
+    if reason:
+        pytest.skip(reason)
+
+
+@pytest.mark.parametrize("index", range(len(HELP_EXAMPLES)), ids=[c.where for c in HELP_EXAMPLES])
+def test_help_example_runs_as_written(help_session, index):
+    reason = help_session.run_through(index)
+    if reason:
+        pytest.skip(reason)
+
+
+def test_every_command_shows_an_example():
+    assert [name for name, lines in help_examples().items() if not lines] == []
+
+
+def test_readme_commands_are_in_sh_blocks():
+    hidden = [
+        f"README.md:{number}: {text.strip()}"
+        for language, lines in fenced_blocks(README)
+        if language not in COMMAND_LANGUAGES
+        for number, text in lines
+        if TRAJCOMP_LINE.match(text)
+    ]
+    assert not hidden, "trajcomp commands in a block not tagged sh (the docs test would not run them):\n" + "\n".join(hidden)
+
+
+def test_readme_keeps_the_set_up_commands():
+    texts = {c.text for c in README_COMMANDS}
+    assert {"pip install -e . && trajcomp demo", 'pip install -e ".[test]" && python -m pytest'} <= texts
+
+
+def test_extraction_joins_continued_lines_and_drops_comments(tmp_path):
+    readme = tmp_path / "README.md"
+    readme.write_text(
+        "text\n```sh\n# a comment\ntrajcomp plan --robot ur10 \\\n  --step 100 -o plan.csv   # plan it\n"
+        "cd tour\n```\n```text\ntrajcomp: error: shown output\n```\n"
+    )
+    assert readme_commands(readme) == [
+        Command("README.md:4", "trajcomp plan --robot ur10 --step 100 -o plan.csv"),
+        Command("README.md:6", "cd tour"),
+    ]
+
+
+def test_a_failing_command_is_named_by_its_line(tmp_path):
+    session = Session(tmp_path, [
+        Command("README.md:3", "mkdir -p tour && cd tour"),
+        Command("README.md:4", "trajcomp validate model.yaml validation.csv --tolerance 0.05"),
+        Command("README.md:5", "trajcomp robots"),
+    ])
+    assert session.run_through(0) is None and session.cwd.name == "tour"
+    with pytest.raises(pytest.fail.Exception, match=r"README.md:4: `trajcomp validate model.yaml .*` exited 2 in .*tour"):
+        session.run_through(1)
+    with pytest.raises(pytest.skip.Exception, match="not run: README.md:4 failed before"):
+        session.run_through(2)
+
+
+def test_install_test_and_benchmark_commands_and_absent_data_are_skipped_by_rule(tmp_path):
+    session = Session(tmp_path, [
+        Command("README.md:1", 'pip install -e ".[test]" && python -m pytest'),
+        Command("README.md:2", "python tests/benchmarks/bench_demo.py"),
+        Command("README.md:3", "trajcomp calibrate ../shared/data/no-such-set/grid.csv --robot ur5 -o m.yaml"),
+        Command("README.md:4", "pip install -e . && trajcomp robots > robots.txt"),
+    ])
+    assert "not run in tests" in session.run_through(0)
+    assert "not run in tests" in session.run_through(1)
+    assert "needs the real data, ../shared/data/no-such-set/grid.csv is absent" in session.run_through(2)
+    assert session.run_through(3) is None  # the trajcomp part ran, through the shell
+    assert "ur10" in (session.cwd / "robots.txt").read_text()
