@@ -16,7 +16,7 @@ import sys
 import numpy as np
 
 import trajcomp
-from trajcomp.demo import CUBES, run_cube
+from trajcomp.demo import PAPER_CUBES, run_cube
 from trajcomp.robot import load_robot
 from trajcomp.simulate import VirtualRobot
 
@@ -25,7 +25,7 @@ def main(model_path=None):
     virtual = None
     if model_path is None:
         virtual = VirtualRobot.create(load_robot("ur10"), "paper", seed=1)
-        model_path = run_cube(virtual, "large", *CUBES["large"]).model
+        model_path = run_cube(virtual, PAPER_CUBES[0]).model
     compensator = trajcomp.Compensator(model_path)  # a model file, or a loaded model
 
     pose = [550.0, 100.0, 550.0, 90.0, 0.0, 180.0]  # x, y, z mm, A, B, C deg: TCP in the robot base frame

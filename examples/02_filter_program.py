@@ -17,7 +17,7 @@ from pathlib import Path
 import numpy as np
 
 import trajcomp
-from trajcomp.demo import CUBES, run_cube
+from trajcomp.demo import PAPER_CUBES, run_cube
 from trajcomp.robot import load_robot
 from trajcomp.simulate import VirtualRobot
 
@@ -26,7 +26,7 @@ PROGRAM = Path(__file__).with_name("ur10_path.csv")
 
 def main(model_path=None, program=PROGRAM, output=None):
     if model_path is None:
-        model_path = run_cube(VirtualRobot.create(load_robot("ur10"), "paper", seed=1), "large", *CUBES["large"]).model
+        model_path = run_cube(VirtualRobot.create(load_robot("ur10"), "paper", seed=1), PAPER_CUBES[0]).model
     program = Path(program)
     output = Path(output or f"{program.stem}_compensated{program.suffix}")
     written, report = trajcomp.filter_program(program, output, model=model_path)
