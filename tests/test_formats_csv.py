@@ -50,3 +50,40 @@ def test_not_a_program_csv(tmp_path):
     path.write_text("mx,my,mz\n1,2,3\n")
     with pytest.raises(ReadError, match=r"m\.csv:1: not a program CSV"):
         formats.read(path)
+
+
+@pytest.mark.parametrize(
+    "text, message",
+    [
+        # a typo of x: the rows would otherwise be read as joint targets
+        ("xx,y,z,a,b,c,j1,j2,j3,j4,j5,j6\n1,2,3,4,5,6,0,0,0,0,0,0\n", "column x missing"),
+        ("x,y,z,a,b,c,speeed\n1,2,3,4,5,6,100\n", "unknown column 'speeed': did you mean 'speed'"),
+        ("x,y,z,a,b,c,xx\n1,2,3,4,5,6,7\n", "unknown column 'xx': did you mean 'x'"),
+        ("x,y,z,a,b,c,z\n1,2,3,4,5,6,7\n", "column z given twice"),
+        ("x,y,z,a,b,c,j1,j2\n1,2,3,4,5,6,0,0\n", "column j3, j4, j5, j6 missing"),
+        ("x,y,z,a,b,c\n", "no target rows after the header"),
+        ("x,y,z,a,b,c\n# only a comment\n\n", "no target rows after the header"),
+    ],
+)
+def test_header_mistakes_are_refused_not_read_as_another_program(tmp_path, text, message):
+    path = tmp_path / "bad.csv"
+    path.write_text(text)
+    with pytest.raises(ReadError, match=rf"bad\.csv:\d+: {message}"):
+        formats.read(path)
+
+
+@pytest.mark.parametrize("value", ["nan", "inf", "-inf", "1e999", "9" * 5000], ids=["nan", "inf", "-inf", "1e999", "long"])
+def test_non_finite_and_over_long_numbers_are_refused(tmp_path, value):
+    path = tmp_path / "bad.csv"
+    path.write_text(f"x,y,z,a,b,c\n1,2,{value},4,5,6\n")
+    with pytest.raises(ReadError, match=r"bad\.csv:2: field z: .*(not a number|out of range)"):
+        formats.read(path)
+
+
+def test_other_columns_are_kept_and_t_is_known(tmp_path):
+    path = tmp_path / "ok.csv"
+    path.write_text("id,x,y,z,a,b,c,comment,t\n7,1,2,3,4,5,6,keep me,0.5\n")
+    program = formats.read(path)
+    assert len(program.motions) == 1
+    formats.write(tmp_path / "out.csv", program)
+    assert (tmp_path / "out.csv").read_text() == path.read_text()

@@ -4,9 +4,13 @@ A `Program` is the ordered list of what the program does -- `Motion` items
 and opaque `Statement` items kept in place -- plus its targets: every
 Cartesian or joint position the program states, named (KRL .dat points,
 RAPID robtarget declarations, FANUC /POS entries, URScript variables) or
-inline. Motions refer to targets by index; a motion whose target is computed
-at run time (Offs, RelTool, PR[] arithmetic, pose_trans, ...) has no target
-and is passed through untouched.
+inline. Motions refer to targets by index; a motion whose position is
+computed at run time (Offs, RelTool, PR[] arithmetic, a procedure parameter,
+a tool set at run time, ...) has no target, says why (`Motion.reason`) and
+is passed through untouched. Readers refuse a motion to a point they cannot
+resolve (undefined, untaught, cut off): nothing passes through silently.
+Points named elsewhere than in a compensated motion (procedure arguments,
+``Offs(p10, ...)``) are listed by `Program.referenced_targets`, not as unused.
 
 Fidelity: a program read from files keeps their text (`Source`) and, for
 each number that a compensation may change, its `Span` in that text. Writers
@@ -72,6 +76,13 @@ class Target:
     tool, frame : str or None
         Tool and frame names the point data itself states (FANUC UT, UF);
         otherwise the motions using the target state them.
+    external : ndarray, shape (K,), or None
+        External axes as the program states them (KUKA E1..E6, ABB extax
+        eax_a..eax_f, FANUC E1.. of group 1 then the axes of groups 2..),
+        in the controller's units (mm for linear, deg for rotary axes);
+        NaN for an axis the program marks unused (ABB 9E9). Carried
+        unchanged by compensation and conversion: the arm's base is assumed
+        fixed (see `Program.moving_external_axes`). None: none stated.
     spans : Mapping[str, Span]
         The target's numbers in the source text by role (``x``, ``q1``,
         ``j3``, ``s`` ...), as the format module names them.
@@ -86,6 +97,7 @@ class Target:
     config: tuple = ()
     tool: str = None
     frame: str = None
+    external: np.ndarray = None
     spans: Mapping = dataclasses.field(default_factory=dict)
     edited: bool = False
 
@@ -108,8 +120,8 @@ class Motion:
     ----------
     kind : {"joint", "linear", "circular"}
     target : int or None
-        Index into `Program.targets`; None when the position is an
-        expression computed at run time (the motion is not compensated).
+        Index into `Program.targets`; None when the position is computed at
+        run time (the motion is not compensated; ``reason`` says why).
     via : int or None
         Via (auxiliary) point of a circular motion.
     speed : float or None
@@ -124,6 +136,13 @@ class Motion:
     line : int
     text : str
         The instruction as written (one line, stripped).
+    reason : str
+        Why ``target`` is None (``"Offs(...) computed at run time"``); ``""``
+        for a compensated motion.
+    refs : tuple of int
+        Targets the motion names without moving to them as stated (the base
+        point of ``Offs(p10, ...)``, the points of a motion whose tool is set
+        at run time).
     """
 
     kind: str
@@ -136,14 +155,21 @@ class Motion:
     frame: str = None
     line: int = 0
     text: str = ""
+    reason: str = ""
+    refs: tuple = ()
 
 
 @dataclasses.dataclass(frozen=True)
 class Statement:
-    """Anything that is not a motion, kept as written."""
+    """Anything that is not a motion, kept as written.
+
+    ``refs`` are the targets it names (procedure arguments ``MyProc p10;``,
+    ``PR[1]=P[3]``): used by the program, but not by a motion trajcomp sees.
+    """
 
     line: int
     text: str
+    refs: tuple = ()
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -208,6 +234,52 @@ class Program:
         """Motions whose position is computed at run time (not compensable)."""
         return tuple(m for m in self.motions if m.target is None)
 
+    def not_compensated(self):
+        """``((line, text, reason), ...)`` of the motions passed through unchanged, in program order."""
+        return tuple((m.line, m.text, m.reason or "position computed at run time") for m in self.runtime_motions())
+
+    def referenced_targets(self):
+        """Targets named outside the compensated motions, which no compensated motion uses.
+
+        Procedure arguments (RAPID ``MyProc p10;``, KRL ``MYPROC(XP1)``),
+        ``PR[1]=P[3]``, the base point of ``Offs(p10, ...)``: the program
+        uses these points, but trajcomp cannot see where to, so they are
+        left as written and must be reported as not compensated.
+
+        Returns
+        -------
+        tuple of (int, int, str)
+            ``(target index, line, text)`` of each naming item, in program order.
+        """
+        used = self.usage()
+        return tuple(
+            (i, item.line, item.text.strip())
+            for item in self.items
+            for i in dict.fromkeys(item.refs)
+            if i not in used
+        )
+
+    def moving_external_axes(self):
+        """External axes whose value differs between the targets the motions use.
+
+        Compensation corrects the arm for a fixed base; a program that moves
+        a track or positioner between targets needs that stated.
+
+        Returns
+        -------
+        tuple of str
+            Axis labels (``"E1"``, ...) in axis order; empty if none moves.
+        """
+        values = [self.targets[i].external for i in sorted(self.usage()) if self.targets[i].external is not None]
+        if len(values) < 2:
+            return ()
+        width = max(len(v) for v in values)
+        table = np.full((len(values), width), np.nan)
+        for row, v in zip(table, values):
+            row[: len(v)] = v
+        moving = [k for k in range(width) if len(np.unique(table[~np.isnan(table[:, k]), k])) > 1]
+        return tuple(f"E{k + 1}" for k in moving)
+
     def usage(self):
         """Tool and frame of every target, from its own data or the motions using it.
 
@@ -256,8 +328,8 @@ class Program:
         return index, np.array([self.targets[i].joints for i in index]).reshape(-1, 6)
 
     def unused_targets(self):
-        """Targets no motion uses (left unchanged by compensation)."""
-        used = self.usage()
+        """Targets nothing uses: no motion, statement or run-time expression (left unchanged)."""
+        used = set(self.usage()) | {i for item in self.items for i in item.refs}
         return tuple(t for i, t in enumerate(self.targets) if i not in used)
 
     def where(self, index):

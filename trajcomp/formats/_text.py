@@ -8,14 +8,15 @@ the numbers of edited targets, formatted like the file wrote them.
 """
 
 import bisect
+import dataclasses
 import math
 import re
 from pathlib import Path
 
 import numpy as np
 
-from trajcomp.errors import ReadError
-from trajcomp.program import Source, Span
+from trajcomp.errors import ReadError, WriteError
+from trajcomp.program import CIRCULAR, Source, Span
 from trajcomp.transforms import abc_to_matrix, matrix_to_abc
 
 NUMBER = r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?"
@@ -100,7 +101,46 @@ class Lines:
 
 def fail(source_name, line, text, message):
     """Raise a ReadError naming file, line, the problem and the offending text."""
-    raise ReadError(f"{source_name}:{line}: {message}: {text.strip()!r}")
+    raise ReadError(f"{source_name}:{line}: {message}: {text.strip()[:200]!r}")
+
+
+def finite(text, source_name, line, original, field):
+    """The float a number's text states; ReadError naming the field if it is not a finite number."""
+    try:
+        value = float(text)
+    except ValueError:
+        fail(source_name, line, original, f"{field}: not a number {text[:40]!r}")
+    if not math.isfinite(value):
+        fail(source_name, line, original, f"{field}: {text[:40]!r} is out of range")
+    return value
+
+
+def integer(text, source_name, line, original, field):
+    """The integer a number's text states (``2``, ``2.0``); ReadError if it is not a whole number."""
+    value = finite(text, source_name, line, original, field)
+    if value != int(value):
+        fail(source_name, line, original, f"{field}: {text[:40]!r} is not a whole number")
+    return int(value)
+
+
+def unresolved(source_name, missing, hint):
+    """ReadError listing motions whose point cannot be resolved: ``missing`` is ``[(name, line)]``."""
+    shown = ", ".join(f"{name} (line {line})" for name, line in missing[:10])
+    more = f" and {len(missing) - 10} more" if len(missing) > 10 else ""
+    raise ReadError(f"{source_name}: motions to points the program does not define: {shown}{more}; {hint}")
+
+
+def whole_circle(motion):
+    """A circular motion with both its via and end point, or none of them (run time).
+
+    A circle whose via or end point is computed at run time cannot be
+    compensated half: both then pass through, named in ``refs``.
+    """
+    if motion.kind != CIRCULAR or (motion.via is None) == (motion.target is None):
+        return motion
+    known = tuple(i for i in (motion.via, motion.target) if i is not None)
+    return dataclasses.replace(motion, target=None, via=None, refs=motion.refs + known,
+                               reason=motion.reason or "circle point computed at run time")
 
 
 def spans(source, match, roles, offset=0):
@@ -198,7 +238,7 @@ def target_edits(program, encode, min_places):
                 text = value
             else:
                 if not math.isfinite(value):
-                    raise ValueError(f"target {target.label}: {role} is not finite")
+                    raise WriteError(f"target {where(target)}: {role} is not a finite number, nothing written")
                 text = format_number(value, max(decimals(span.text), min_places.get(role, 0)))
                 if float(text) == old[role]:
                     continue
@@ -213,6 +253,35 @@ def patched(program, encode, min_places):
     """The texts of the program's sources with the edited targets rewritten (see `target_edits`)."""
     edits = target_edits(program, encode, min_places)
     return [apply_edits(source.text, e) for source, e in zip(program.sources, edits)]
+
+
+def where(target):
+    """A target named for messages: ``p10 (line 12)``, or ``line 12`` for an inline one."""
+    return f"{target.name} (line {target.line})" if target.name else f"line {target.line}"
+
+
+def check_finite(program):
+    """WriteError naming the first target, tool, frame or motion whose numbers are not finite.
+
+    Robot code must never receive ``nan`` or ``inf``; every writer is fed
+    through this check (`trajcomp.formats.write`).
+    """
+    used = {i for m in program.motions for i in (m.target, m.via) if i is not None}
+    for i in sorted(used):
+        target = program.targets[i]
+        for what, values in (("pose", target.pose), ("joints", target.joints), ("external axes", target.external)):
+            if values is None:
+                continue
+            if np.isinf(values).any() or (what != "external axes" and np.isnan(values).any()):  # NaN: unused axis
+                raise WriteError(f"target {where(target)}: {what} not finite, nothing written")
+    for kind, table in (("tool", program.tools), ("frame", program.frames)):
+        for name, T in table.items():
+            if not np.isfinite(T).all():
+                raise WriteError(f"{kind} {name}: value not finite, nothing written")
+    for m in program.motions:
+        for what, value in (("speed", m.speed), ("zone", m.zone)):
+            if value is not None and not math.isfinite(value):
+                raise WriteError(f"motion at line {m.line} ({m.text[:60]}): {what} not finite, nothing written")
 
 
 def write_single_file(program, path, format_name, encode, min_places, emit):
@@ -244,10 +313,13 @@ def encode_text(source, text):
 
     Raises
     ------
-    ValueError
+    WriteError
         A character the encoding cannot hold (only possible in new text).
     """
-    return text.encode(source.encoding)
+    try:
+        return text.encode(source.encoding)
+    except UnicodeEncodeError as exc:
+        raise WriteError(f"{source.name}: {text[exc.start:exc.end]!r} cannot be written in {source.encoding}") from exc
 
 
 def numbered(names):

@@ -1,15 +1,20 @@
 """Program CSV (conventions.md): one target per row, TCP poses in the robot base frame.
 
 Columns ``x,y,z,a,b,c`` (mm, deg; A, B, C intrinsic Z-Y'-X''), optional
-``motion`` (PTP | LIN), ``speed`` (mm/s), ``zone`` (mm) and ``j1..j6``
-(deg). A row with empty pose fields and joints is a joint target. ``#``
-lines are comments. Any other column is kept as it is.
+``motion`` (PTP | LIN), ``speed`` (mm/s), ``zone`` (mm), ``j1..j6`` (deg)
+and ``t`` (s, written by re-timing). A row with empty pose fields and
+joints is a joint target. ``#`` lines are comments. Any other column (an
+id, a comment) is kept as it is, except a name close to a known one (``xx``,
+``speeed``: a typo would silently drop data) and a column given twice.
+A pose or joint group given in part, and a file without target rows, are
+refused too.
 
 Writing a program read from CSV keeps every column, row and byte; the
 edited rows get their new pose and, where the program knows their joints,
 ``j1..j6`` (added as columns when the file has none).
 """
 
+import difflib
 import re
 
 import numpy as np
@@ -20,6 +25,7 @@ from trajcomp.formats._text import (
     encode_text,
     encode_xyzabc,
     fail,
+    finite,
     format_number,
     read_source,
     target_edits,
@@ -31,6 +37,7 @@ POSE = ("x", "y", "z", "a", "b", "c")
 JOINTS = ("j1", "j2", "j3", "j4", "j5", "j6")
 MIN_PLACES = dict.fromkeys(POSE[:3], 3) | dict.fromkeys(POSE[3:], 4) | dict.fromkeys(JOINTS, 4)
 KINDS = {"PTP": JOINT, "LIN": LINEAR}
+KNOWN = POSE + JOINTS + ("motion", "speed", "zone", "t")
 _FIELD = re.compile(r'(?:^|,)[ \t]*("(?:[^"]|"")*"|[^,]*)')
 
 
@@ -59,11 +66,8 @@ def read(path):
             continue
         fields = _fields(line, start)
         if header is None:
-            header = [f[0].lower() for f in fields]
-            has_pose = all(c in header for c in POSE)
-            has_joints = all(c in header for c in JOINTS)
-            if not (has_pose or has_joints):
-                fail(source.name, number, line, "not a program CSV: the header needs x,y,z,a,b,c or j1..j6")
+            header = _header([f[0].lower() for f in fields], source.name, number, line)
+            has_pose, has_joints = POSE[0] in header, JOINTS[0] in header
             items.append(Statement(number, line))
             continue
         if len(fields) != len(header):
@@ -74,14 +78,32 @@ def read(path):
         items.append(motion)
     if header is None:
         fail(source.name, 1, source.text[:80], "not a program CSV: no header row")
+    if not targets:
+        fail(source.name, lines.number(len(source.text)), source.text[-80:], "no target rows after the header")
     return Program("csv", source.name.rsplit(".", 1)[0], tuple(items), tuple(targets), sources=(source,))
 
 
+def _header(names, source_name, number, line):
+    """The column names, checked: a whole pose or joint group, no column twice, no near-miss of a known name."""
+    groups = [group for group in (POSE, JOINTS) if any(c in names for c in group)]
+    if not groups:
+        fail(source_name, number, line, "not a program CSV: the header needs x,y,z,a,b,c or j1..j6")
+    twice = sorted({c for c in names if names.count(c) > 1})
+    if twice:
+        fail(source_name, number, line, f"column {', '.join(twice)} given twice")
+    for group in groups:
+        missing = [c for c in group if c not in names]
+        if missing:
+            fail(source_name, number, line, f"column {', '.join(missing)} missing: {','.join(group)} go together")
+    for name in names:
+        close = difflib.get_close_matches(name, KNOWN, n=1, cutoff=0.6) if name not in KNOWN else []
+        if close:
+            fail(source_name, number, line, f"unknown column {name!r}: did you mean {close[0]!r}?")
+    return names
+
+
 def _number(name, number, line, field, column):
-    try:
-        return float(field[0])
-    except ValueError:
-        fail(name, number, line, f"field {column}: not a number {field[0]!r}")
+    return finite(field[0], name, number, line, f"field {column}")
 
 
 def _row(name, number, line, row, has_pose, has_joints, index):
