@@ -1,5 +1,6 @@
 """KUKA KRL reader and writer: constructs, S/T, errors."""
 
+import re
 from pathlib import Path
 
 import numpy as np
@@ -7,7 +8,7 @@ import pytest
 
 from trajcomp import formats
 from trajcomp.configuration import kuka_status_turn
-from trajcomp.errors import ReadError
+from trajcomp.errors import ReadError, WriteError
 from trajcomp.robot import load_robot
 from trajcomp.transforms import abc_to_matrix
 
@@ -93,3 +94,112 @@ def test_wrong_language_is_a_clear_error(tmp_path):
     path = _write(tmp_path, "MODULE M\nPROC main()\nENDPROC\nENDMODULE\n")
     with pytest.raises(ReadError, match="not a KRL program"):
         formats.read(path)
+
+
+SRC = "DEF p( )\nPTP XP1\nLIN XP2\nLIN XP3 C_DIS\nEND\n"
+DAT = ("DEFDAT p\nDECL E6POS XP1={X 1,Y 2,Z 3,A 0,B 0,C 0,S 2,T 2}\nDECL E6POS XP2={X 4,Y 5,Z 6,A 0,B 0,C 0,S 2,T 2}\n"
+       "DECL E6POS XP3={X 7,Y 8,Z 9,A 0,B 0,C 0,S 2,T 2}\nENDDAT\n")
+
+
+def test_src_without_its_dat_names_every_unresolved_point(tmp_path):
+    path = _write(tmp_path, SRC)
+    with pytest.raises(ReadError, match=r"p\.src: .*XP1 \(line 2\), XP2 \(line 3\), XP3 \(line 4\); no p\.dat"):
+        formats.read(path)
+
+
+@pytest.mark.parametrize(
+    "dat, message",
+    [
+        (DAT.replace("ENDDAT\n", ""), r"p\.dat: no ENDDAT: the data list is cut off"),
+        (DAT.replace(",Y 8,Z 9,A 0,B 0,C 0,S 2,T 2}\nENDDAT", "\nENDDAT"), r"p\.dat:4: malformed or cut point"),
+        (DAT.replace("DECL E6POS XP3={X 7,Y 8,Z 9,A 0,B 0,C 0,S 2,T 2}\n", ""), r"XP3 \(line 4\); are they declared in p\.dat"),
+        ("garbage\x01\x02 not a data list\n", r"p\.dat: not a KRL data list"),
+    ],
+    ids=["no ENDDAT", "cut line", "point missing", "garbage"],
+)
+def test_cut_or_garbage_dat_is_refused(tmp_path, dat, message):
+    path = _write(tmp_path, SRC, dat)
+    with pytest.raises(ReadError, match=message):
+        formats.read(path)
+
+
+def test_positions_known_only_at_run_time_are_listed_with_their_reason(tmp_path):
+    src = (
+        "DEF p( )\nDECL E6POS XTMP\nPTP XP1\nXTMP = $POS_ACT\nLIN XTMP\nLIN $POS_ACT\nMOVE(XP1)\n"
+        "XP3.Z = XP3.Z + 10\nLIN XP3\n$TOOL = TOOL_DATA[1]:{X 1}\nLIN XP2\nEND\n"
+        "DEF MOVE(P:IN)\nLIN P\nEND\n"
+    )
+    program = formats.read(_write(tmp_path, src, DAT))
+    reasons = {line: reason for line, _, reason in program.not_compensated()}
+    assert reasons == {
+        5: "XTMP is declared without a value (set at run time, line 2)",
+        6: "$POS_ACT: system variable, known at run time",
+        9: "XP3 is changed at run time (line 8)",
+        11: "$TOOL = TOOL_DATA[1]:{X 1} set at run time (line 10)",
+        14: "P: routine parameter, known at run time",
+    }
+    assert [program.targets[i].name for i in program.usage()] == ["XP1"]
+    # XP2 and XP3 are used, but not compensated: named, not "unused"
+    assert [t.name for t in program.unused_targets()] == []
+    assert sorted((program.targets[i].name, line) for i, line, _ in program.referenced_targets()) == [
+        ("XP2", 11), ("XP3", 8), ("XP3", 9)]
+
+
+def test_points_passed_to_routines_are_referenced_not_unused(tmp_path):
+    src = "DEF p( )\nPTP XP1\nGRIP(XP2, 3)\nEND\n"
+    program = formats.read(_write(tmp_path, src, DAT))
+    assert [(program.targets[i].name, line, text) for i, line, text in program.referenced_targets()] == [
+        ("XP2", 3, "GRIP(XP2, 3)")]
+    assert [t.name for t in program.unused_targets()] == ["XP3"]
+
+
+def test_spline_inline_form_takes_tool_and_base_from_its_fdat(tmp_path):
+    dat = DAT.replace("ENDDAT", "DECL FDAT FP2={TOOL_NO 4,BASE_NO 7,IPO_FRAME #BASE}\nENDDAT")
+    src = ("DEF p( )\nBAS(#TOOL, 1)\nSLIN XP2 WITH $VEL=SVEL_CP(0.2,,LCPDAT1), $TOOL=STOOL2(FP2), "
+           "$BASE=SBASE(FP2.BASE_NO) C_SPL\nEND\n")
+    (motion,) = formats.read(_write(tmp_path, src, dat)).motions
+    assert (motion.tool, motion.frame, motion.target) == ("4", "7", 1)
+
+
+@pytest.mark.parametrize("member, value", [("S", "1e999"), ("T", "2.5"), ("X", "1e999"), ("A", "-1e400")])
+def test_out_of_range_numbers_are_refused_naming_the_member(tmp_path, member, value):
+    dat = re.sub(rf"\b{member} [^,}}]+", f"{member} {value}", DAT, count=1)
+    with pytest.raises(ReadError, match=rf"p\.dat:2: {member}: '{value}' is (out of range|not a whole number)"):
+        formats.read(_write(tmp_path, SRC, dat))
+
+
+def test_external_axes_are_read_and_their_motion_detected(tmp_path):
+    dat = DAT.replace("T 2}", "T 2,E1 0.0,E2 90.0}").replace("X 4,Y 5,Z 6,A 0,B 0,C 0,S 2,T 2,E1 0.0", "X 4,Y 5,Z 6,A 0,B 0,C 0,S 2,T 2,E1 500.0")
+    program = formats.read(_write(tmp_path, SRC, dat))
+    np.testing.assert_array_equal(program.targets[1].external, [500.0, 90.0])
+    assert program.moving_external_axes() == ("E1",)
+    assert formats.read(_write(tmp_path, SRC, DAT)).moving_external_axes() == ()
+
+
+def test_external_axes_are_carried_by_conversion(tmp_path):
+    from trajcomp.postprocess import convert_program
+
+    real = formats.read(Path(__file__).parent / "data" / "programs" / "real" / "krl" / "Prog1.src")
+    out = tmp_path / "copy.src"
+    formats.write(out, convert_program(real, "krl"))
+    again = formats.read(out)
+    assert [t.external.tolist() for t in again.targets] == [[0.0]] * 5
+
+
+def test_a_program_keeps_its_def_under_its_own_name_even_if_krl_could_not_use_it(tmp_path):
+    (tmp_path / "in").mkdir()
+    source = tmp_path / "in" / "weld-2.src"
+    source.write_bytes(b"DEF weld_2( )\r\nPTP {X 1,Y 2,Z 3,A 0,B 0,C 0}\r\nEND\r\n")
+    formats.write(tmp_path / "weld-2.src", formats.read(source))
+    assert (tmp_path / "weld-2.src").read_bytes() == source.read_bytes()
+    with pytest.raises(WriteError, match="cannot name a KRL program"):
+        formats.write(tmp_path / "weld-3.src", formats.read(source))
+
+
+def test_real_robodk_program_reads_with_its_frames_and_external_axis():
+    program = formats.read(Path(__file__).parent / "data" / "programs" / "real" / "krl" / "Prog1.src")
+    assert program.not_compensated() == ()
+    assert {m.tool for m in program.motions} == {"TOOL line 48"} and {m.frame for m in program.motions} == {"BASE line 43"}
+    np.testing.assert_allclose(program.tools["TOOL line 48"][:3, 3], [-4.0, 0.0, 371.3])
+    index, joints = program.joint_targets()
+    assert len(index) == 1 and len(program.cartesian_targets()) == 4

@@ -197,7 +197,7 @@ def compensate_program(program, correct, robot, *, tools=None, frames=None, join
         posture_source=tuple(source),
         outside_grid=np.zeros(len(rows), dtype=bool) if result is None else result.outside,
         predicted_residual=np.zeros(len(rows)) if result is None else result.residual,
-        not_compensated=tuple((m.line, m.text, "position computed at run time") for m in program.runtime_motions()),
+        not_compensated=program.not_compensated(),
         unused=tuple(t.label for t in program.unused_targets()),
         joint_targets=tuple(program.targets[i].label for i in joint_index),
         joint_mode=joint_targets,

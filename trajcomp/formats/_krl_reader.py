@@ -1,0 +1,448 @@
+"""The KRL reader: .src statements and .dat declarations into a `Program` (see `trajcomp.formats.krl`)."""
+
+import dataclasses
+import re
+from pathlib import Path
+
+import numpy as np
+
+from trajcomp.errors import ReadError
+from trajcomp.formats._text import (
+    NUMBER,
+    Lines,
+    fail,
+    finite,
+    integer,
+    mask,
+    read_source,
+    unresolved,
+    whole_circle,
+)
+from trajcomp.program import CIRCULAR, JOINT, LINEAR, Motion, Program, Span, Statement, Target
+from trajcomp.transforms import pose_to_matrix
+
+POSE = ("x", "y", "z", "a", "b", "c")
+AXES = ("a1", "a2", "a3", "a4", "a5", "a6")
+EXTERNAL = ("e1", "e2", "e3", "e4", "e5", "e6")
+MIN_PLACES = dict.fromkeys(POSE[:3], 3) | dict.fromkeys(POSE[3:], 4) | dict.fromkeys(AXES, 4)
+POINT_TYPES = "E6POS|POS|FRAME|E6AXIS|AXIS"
+JOINT_TYPES = {"E6AXIS", "AXIS"}
+KINDS = {"PTP": JOINT, "SPTP": JOINT, "LIN": LINEAR, "SLIN": LINEAR, "CIRC": CIRCULAR, "SCIRC": CIRCULAR}
+
+_DECL = re.compile(
+    r"^\s*(?:DECL\s+)?(?:GLOBAL\s+)?(" + POINT_TYPES + r"|FDAT|PDAT|LDAT)\s+(\w+)\s*=\s*\{(.*)\}\s*$", re.I
+)
+_DECL_START = re.compile(r"^\s*(?:DECL\s+)?(?:GLOBAL\s+)?(?:" + POINT_TYPES + r")\s+\w+\s*=", re.I)
+_DECL_BARE = re.compile(r"^\s*(?:DECL\s+)?(?:GLOBAL\s+)?(?:" + POINT_TYPES + r")\s+(\w+(?:\s*,\s*\w+)*)\s*$", re.I)
+_DATA = re.compile(r"^\s*(TOOL_DATA|BASE_DATA)\s*\[\s*(\d+)\s*\]\s*=\s*(.*?)\s*$", re.I)
+_SYSVAR = re.compile(r"^\s*\$(TOOL|BASE)\s*=\s*(.*?)\s*$", re.I)
+_DATA_REF = re.compile(r"^(TOOL_DATA|BASE_DATA)\s*\[\s*(\d+)\s*\]$", re.I)
+_BAS = re.compile(r"^\s*BAS\s*\(\s*#(TOOL|BASE|VEL_PTP|VEL_CP)\s*,\s*(.*?)\s*\)\s*$", re.I)
+_ACT = re.compile(r"^\s*(FDAT|PDAT|LDAT)_ACT\s*=\s*(\w+)\s*$", re.I)
+_VEL_CP = re.compile(r"^\s*\$VEL\.CP\s*=\s*(" + NUMBER + r")\s*$", re.I)
+_APO = re.compile(r"^\s*\$APO\.CDIS\s*=\s*(" + NUMBER + r")\s*$", re.I)
+_MOTION = re.compile(r"^\s*(PTP|LIN|CIRC|SPTP|SLIN|SCIRC)(_REL)?\b\s*(.*?)\s*$", re.I)
+_MEMBER = re.compile(r"\s*([A-Za-z_]\w*)\s+(" + NUMBER + r"|'B[01]+')\s*$")
+_APPROX = re.compile(r"\s*((?:\bC_(?:PTP|DIS|VEL|ORI|SPL)\b\s*)+)$", re.I)
+_NAME = re.compile(r"^[A-Za-z_$][\w$]*$")
+_WORD = re.compile(r"[A-Za-z_$][\w$]*")
+_ASSIGN = re.compile(r"^\s*([A-Za-z_]\w*)\s*(?:\.\w+|\[[^\]]*\])*\s*=(?!=)")
+_WITH_TOOL = re.compile(r"\$TOOL\s*=\s*STOOL2\s*\(\s*(\w+)\s*\)", re.I)
+_WITH_BASE = re.compile(r"\$BASE\s*=\s*SBASE\s*\(\s*(\w+)\s*\.\s*BASE_NO\s*\)", re.I)
+_HOME = re.compile(r"^XHOME\d*$", re.I)
+_DEF = re.compile(r"^\s*(?:GLOBAL\s+)?DEF(?:FCT\s+\w+)?\s+(\w+)\s*\(", re.I | re.M)
+_DEF_LINE = re.compile(r"^\s*(?:GLOBAL\s+)?DEF(?:FCT\s+\w+)?\s+\w+\s*\((.*?)\)", re.I)
+_DEFDAT = re.compile(r"^\s*DEFDAT\s+(\w+)", re.I | re.M)
+_ENDDAT = re.compile(r"^\s*ENDDAT\b", re.I | re.M)
+_PROGRAM_NAME = re.compile(r"^[A-Za-z_][A-Za-z0-9_]{0,23}$")  # KRL names: 24 characters at most
+
+
+@dataclasses.dataclass(frozen=True)
+class _Named:
+    """A motion argument naming a point, resolved once the whole program is read."""
+
+    name: str
+    line: int
+
+
+def _members(body, start, source, name, line, text, numeric=True):
+    """``{member: Span}`` of a KRL aggregate body at offset ``start``; type prefixes skipped."""
+    colon = re.match(r"\s*\w+\s*:", body)
+    skip = colon.end() if colon else 0
+    out, position = {}, skip
+    for piece in body[skip:].split(","):
+        m = _MEMBER.match(piece)
+        if m:
+            key = m.group(1).lower()
+            out[key] = Span(source, start + position + m.start(2), start + position + m.end(2), m.group(2))
+        elif numeric and piece.strip():
+            fail(name, line, text, f"malformed member {piece.strip()!r}")
+        position += len(piece) + 1
+    return out
+
+
+def _int(text, source_name, line, original, field):
+    """An INT member: a whole number or a bit string ``'B0101'``."""
+    return int(text[2:-1], 2) if text.startswith("'") else integer(text, source_name, line, original, field)
+
+
+def _values(members, roles, source_name, line, original):
+    return np.array([finite(members[r].text, source_name, line, original, r.upper()) for r in roles])
+
+
+def _external(members, source_name, line, original):
+    """E1..E6 as stated (NaN for the ones not given); None if none is."""
+    given = [e for e in EXTERNAL if e in members]
+    if not given:
+        return None
+    values = np.full(int(given[-1][1:]), np.nan)
+    for e in given:
+        values[int(e[1:]) - 1] = finite(members[e].text, source_name, line, original, e.upper())
+    return values
+
+
+def _point(members, name, source_name, line, text, typ):
+    """A Target from the members of a point aggregate."""
+    external = _external(members, source_name, line, text)
+    if typ in JOINT_TYPES or (typ is None and "a1" in members):
+        missing = [a for a in AXES if a not in members]
+        if missing:
+            fail(source_name, line, text, f"joint point lacks {', '.join(m.upper() for m in missing)}")
+        joints = np.radians(_values(members, AXES, source_name, line, text))
+        return Target(name=name, line=line, joints=joints, external=external, spans={a: members[a] for a in AXES})
+    return Target(name=name, line=line, pose=_frame(members, source_name, line, text), external=external,
+                  config=_status_turn(members, source_name, line, text),
+                  spans={k: v for k, v in members.items() if k in POSE or k in ("s", "t")})
+
+
+def _status_turn(members, source_name, line, text):
+    if "s" not in members or "t" not in members:
+        return ()
+    return _int(members["s"].text, source_name, line, text, "S"), _int(members["t"].text, source_name, line, text, "T")
+
+
+def _frame(members, source_name, line, text):
+    missing = [p for p in POSE if p not in members]
+    if missing:
+        fail(source_name, line, text, f"point lacks {', '.join(m.upper() for m in missing)}")
+    vector = _values(members, POSE, source_name, line, text)
+    vector[3:] = np.radians(vector[3:])
+    return pose_to_matrix(vector)
+
+
+def _sibling_dat(path):
+    for candidate in path.parent.iterdir():
+        if candidate.stem.lower() == path.stem.lower() and candidate.suffix.lower() == ".dat":
+            return candidate
+    return None
+
+
+class _Reader:
+    """Parser state while reading one KRL program."""
+
+    def __init__(self):
+        self.sources, self.targets, self.items = [], [], []
+        self.points, self.data = {}, {}
+        self.unset = {}  # NAME -> why its value is only known at run time
+        self.tools, self.frames = {"0": np.eye(4)}, {"0": np.eye(4)}
+        self.runtime = {"TOOL": {}, "BASE": {}}  # number -> why TOOL_DATA[n] / BASE_DATA[n] is set at run time
+        self.tool = self.base = None
+        self.tool_why = self.base_why = ""  # why the active tool / base is only known at run time
+        self.params = set()
+        self.speed_ptp = self.speed_cp = self.zone = None
+
+    def add_source(self, source):
+        self.sources.append(source)
+        index = len(self.sources) - 1
+        return index, Lines(source.text), mask(source.text, ";")
+
+    def declarations(self, index, masked, line_no, start, end):
+        """Handle a point, FDAT/PDAT/LDAT or TOOL_DATA/BASE_DATA line; True if it was one."""
+        name = self.sources[index].name
+        text = masked[start:end]
+        original = self.sources[index].text[start:end]
+        m = _DECL.match(text)
+        if m:
+            typ, point = m.group(1).upper(), m.group(2)
+            body_start = start + m.start(3)
+            if typ in ("FDAT", "PDAT", "LDAT"):
+                self.data[point.upper()] = _members(m.group(3), body_start, index, name, line_no, original, False)
+            else:
+                members = _members(m.group(3), body_start, index, name, line_no, original)
+                self.points[point.upper()] = len(self.targets)
+                self.targets.append(_point(members, point, name, line_no, original, typ))
+            return True
+        if _DECL_START.match(text):
+            fail(name, line_no, original, "malformed or cut point declaration")
+        if m := _DECL_BARE.match(text):
+            for point in re.split(r"\s*,\s*", m.group(1)):
+                self.unset[point.upper()] = f"{point} is declared without a value (set at run time, line {line_no})"
+            return True
+        m = _DATA.match(text)
+        if m:
+            which = "TOOL" if m.group(1).upper() == "TOOL_DATA" else "BASE"
+            value = m.group(3)
+            if value.startswith("{") and value.endswith("}") and value.count("{") == 1:
+                members = _members(value[1:-1], start + m.start(3) + 1, index, name, line_no, original)
+                (self.tools if which == "TOOL" else self.frames)[m.group(2)] = _frame(members, name, line_no, original)
+                self.runtime[which].pop(m.group(2), None)
+            else:
+                self.runtime[which][m.group(2)] = f"{m.group(1).upper()}[{m.group(2)}] set at run time (line {line_no})"
+            return True
+        return False
+
+    def statement(self, index, masked, line_no, start, end):
+        """Handle one .src line."""
+        name = self.sources[index].name
+        text = masked[start:end]
+        original = self.sources[index].text[start:end]
+        if m := _DEF_LINE.match(text):
+            self.params = {p.split(":")[0].strip().upper() for p in m.group(1).split(",") if p.strip()}
+        if self.declarations(index, masked, line_no, start, end):
+            self.items.append(Statement(line_no, original))
+            return
+        m = _MOTION.match(text)
+        if m:
+            self.items.append(self.motion(m, index, start, line_no, original))
+            return
+        self.state(text, index, start, name, line_no, original)
+        self.items.append(Statement(line_no, original))
+
+    def select(self, which, value, why=""):
+        """Make tool or base ``value`` active (``why``: it is only known at run time)."""
+        why = why or self.runtime[which].get(value, "")
+        if which == "TOOL":
+            self.tool, self.tool_why = value, why
+        else:
+            self.base, self.base_why = value, why
+
+    def state(self, text, index, start, name, line_no, original):
+        """Track tool, base, speed and zone statements."""
+        if m := _SYSVAR.match(text):
+            which, value = m.group(1).upper(), m.group(2)
+            ref = _DATA_REF.match(value)
+            if ref and (ref.group(1).upper() == "TOOL_DATA") == (which == "TOOL"):
+                self.select(which, ref.group(2))
+            elif value.upper() == "$NULLFRAME":
+                self.select(which, "0")
+            elif value.startswith("{") and value.endswith("}") and value.count("{") == 1:
+                members = _members(value[1:-1], start + m.start(2) + 1, index, name, line_no, original)
+                key = f"{which} line {line_no}"
+                (self.tools if which == "TOOL" else self.frames)[key] = _frame(members, name, line_no, original)
+                self.select(which, key)
+            else:
+                self.select(which, None, f"${which} = {value} set at run time (line {line_no})")
+        elif m := _BAS.match(text):
+            what, value = m.group(1).upper(), m.group(2)
+            if not re.fullmatch(NUMBER, value):
+                if what in ("TOOL", "BASE"):
+                    self.select(what, None, f"BAS(#{what}, {value}) set at run time (line {line_no})")
+                return
+            number = finite(value, name, line_no, original, what)
+            if what in ("TOOL", "BASE"):
+                self.select(what, str(integer(value, name, line_no, original, what)))
+            elif what == "VEL_PTP":
+                self.speed_ptp = number
+            else:
+                self.speed_cp = number * 1000.0
+        elif m := _ACT.match(text):
+            self.activate(m.group(1).upper(), m.group(2).upper(), name, line_no, original)
+        elif m := _VEL_CP.match(text):
+            self.speed_cp = finite(m.group(1), name, line_no, original, "$VEL.CP") * 1000.0
+        elif m := _APO.match(text):
+            self.zone = finite(m.group(1), name, line_no, original, "$APO.CDIS")
+
+    def activate(self, kind, data_name, name, line_no, original):
+        """FDAT_ACT / PDAT_ACT / LDAT_ACT: tool, base, speed and zone of the next motion."""
+        data = self.data.get(data_name)
+        if kind == "FDAT":
+            if data is None:
+                why = f"FDAT {data_name} is not in this program: its tool and base are unknown (line {line_no})"
+                self.select("TOOL", None, why)
+                self.select("BASE", None, why)
+                return
+            for which, member in (("TOOL", "tool_no"), ("BASE", "base_no")):
+                if member in data:
+                    self.select(which, str(integer(data[member].text, name, line_no, original, member.upper())))
+        elif data is not None:
+            if "vel" in data:
+                vel = finite(data["vel"].text, name, line_no, original, "VEL")
+                if kind == "PDAT":
+                    self.speed_ptp = vel
+                else:
+                    self.speed_cp = vel * 1000.0
+            if "apo_dist" in data:
+                self.zone = finite(data["apo_dist"].text, name, line_no, original, "APO_DIST")
+
+    def motion(self, m, index, start, line_no, original):
+        """A Motion from a PTP/LIN/CIRC line; named points are resolved at the end (`_resolve`)."""
+        name = self.sources[index].name
+        kind = KINDS[m.group(1).upper()]
+        args, *with_clause = re.split(r"\bWITH\b", m.group(3), maxsplit=1, flags=re.I)
+        if with_clause:
+            self.spline_frames(with_clause[0], name, line_no, original)
+        offset = start + m.start(3)
+        approx = _APPROX.search(args)
+        zone = self.zone if approx else None
+        if approx:
+            args = args[: approx.start()]
+        parts, position = [], 0
+        for piece in _split_top(args):
+            parts.append((piece, offset + position))
+            position += len(piece) + 1
+        wanted = 2 if kind == CIRCULAR else 1
+        if len(parts) < wanted or not parts[0][0].strip():
+            fail(name, line_no, original, f"{m.group(1).upper()} needs {wanted} target(s)")
+        reason = ""
+        if m.group(2):
+            found, reason = [None] * wanted, "relative motion: its position depends on where the arm is"
+        else:
+            found = [self.target(piece, at, index, name, line_no, original) for piece, at in parts[:wanted]]
+            if None in found:
+                reason = "position computed at run time: " + " ".join(parts[found.index(None)][0].split())
+        reason = reason or self.tool_why or self.base_why
+        speed, unit = (self.speed_ptp, "%") if kind == JOINT else (self.speed_cp, "mm/s")
+        return Motion(
+            kind=kind,
+            target=found[-1],
+            via=found[0] if kind == CIRCULAR else None,
+            speed=speed,
+            speed_unit=unit,
+            zone=zone,
+            tool=self.tool,
+            frame=self.base,
+            line=line_no,
+            text=original.strip(),
+            reason=reason,
+        )
+
+    def spline_frames(self, clause, name, line_no, original):
+        """Tool and base of a spline inline form: ``$TOOL=STOOL2(FP1), $BASE=SBASE(FP1.BASE_NO)``."""
+        for which, pattern in (("TOOL", _WITH_TOOL), ("BASE", _WITH_BASE)):
+            if m := pattern.search(clause):
+                data = self.data.get(m.group(1).upper(), {})
+                member = data.get(f"{which.lower()}_no")
+                if member is None:
+                    self.select(which, None, f"FDAT {m.group(1)} is not in this program: {which.lower()} unknown "
+                                             f"(line {line_no})")
+                else:
+                    self.select(which, str(integer(member.text, name, line_no, original, f"{which}_NO")))
+            elif re.search(rf"\${which}\s*=", clause, re.I):
+                self.select(which, None, f"${which} set at run time in WITH (line {line_no})")
+
+    def target(self, piece, at, index, name, line_no, original):
+        """Target index of an inline aggregate, `_Named` for a point name, None for an expression."""
+        stripped = piece.strip()
+        if stripped.startswith("{") and stripped.endswith("}") and stripped.count("{") == 1:
+            body_at = at + piece.index("{") + 1
+            members = _members(stripped[1:-1], body_at, index, name, line_no, original)
+            self.targets.append(_point(members, "", name, line_no, original, None))
+            return len(self.targets) - 1
+        if _NAME.match(stripped):
+            return _Named(stripped, line_no)
+        return None
+
+
+def _split_top(text):
+    """Split at commas outside braces, brackets and parentheses."""
+    parts, depth, current = [], 0, []
+    for ch in text:
+        if ch in "{[(":
+            depth += 1
+        elif ch in "}])":
+            depth -= 1
+        if ch == "," and depth == 0:
+            parts.append("".join(current))
+            current = []
+        else:
+            current.append(ch)
+    parts.append("".join(current))
+    return parts
+
+
+def read(path):
+    """Read a KRL .src and its .dat (same name, beside it, if there is one).
+
+    Raises
+    ------
+    ReadError
+        Malformed or cut text, a .dat without DEFDAT or ENDDAT, or motions
+        to points the program does not define (all named with their lines).
+    """
+    path = Path(path)
+    reader = _Reader()
+    src = read_source(path)
+    if not _DEF.search(mask(src.text, ";")):
+        raise ReadError(f"{path}: not a KRL program: no DEF line")
+    src_index, src_lines, src_masked = reader.add_source(src)
+    dat_path = _sibling_dat(path)
+    if dat_path is not None:
+        dat_index, dat_lines, dat_masked = reader.add_source(read_source(dat_path))
+        if not _DEFDAT.search(dat_masked):
+            raise ReadError(f"{dat_path}: not a KRL data list: no DEFDAT line")
+        if not _ENDDAT.search(dat_masked):
+            raise ReadError(f"{dat_path}: no ENDDAT: the data list is cut off")
+        for line_no, start, end in dat_lines:
+            reader.declarations(dat_index, dat_masked, line_no, start, end)
+    for line_no, start, end in src_lines:
+        reader.statement(src_index, src_masked, line_no, start, end)
+    items = _resolve(reader, path, dat_path)
+    return Program(
+        "krl", path.stem, items, tuple(reader.targets), reader.tools, reader.frames, tuple(reader.sources)
+    )
+
+
+def _resolve(reader, path, dat_path):
+    """The items with named points resolved, points changed at run time found, and routine arguments noted.
+
+    A point assigned anywhere in the code (``XP1 = ...``, ``XP1.Z = ...``)
+    holds a run-time value, so none of its motions is compensated.
+    """
+    assigned, items = {}, []
+    for item in reader.items:
+        if isinstance(item, Statement) and (m := _ASSIGN.match(mask(item.text, ";"))):
+            assigned.setdefault(m.group(1).upper(), item.line)
+    missing = []
+
+    def lookup(ref):
+        """(index or None, why) of a motion argument."""
+        if not isinstance(ref, _Named):
+            return ref, ""
+        key = ref.name.upper()
+        if key in assigned and key in reader.points:
+            return None, f"{ref.name} is changed at run time (line {assigned[key]})"
+        if key in reader.points:
+            return reader.points[key], ""
+        if ref.name.startswith("$"):
+            return None, f"{ref.name}: system variable, known at run time"
+        if key in reader.params:
+            return None, f"{ref.name}: routine parameter, known at run time"
+        if key in reader.unset:
+            return None, reader.unset[key]
+        if _HOME.match(ref.name):
+            return None, f"{ref.name}: home position of $config.dat, not in this program (left as written)"
+        missing.append((ref.name, ref.line))
+        return None, ""
+
+    for item in reader.items:
+        if isinstance(item, Motion):
+            (via, via_why), (target, why) = lookup(item.via), lookup(item.target)
+            reason = via_why or why or item.reason
+            if reason:
+                named = {w.upper() for w in _WORD.findall(mask(item.text, ";"))}
+                known = tuple(reader.points[w] for w in sorted(named) if w in reader.points)
+                item = dataclasses.replace(item, target=None, via=None, reason=reason,
+                                           refs=known + tuple(i for i in (via, target) if isinstance(i, int)))
+            else:
+                item = whole_circle(dataclasses.replace(item, target=target, via=via))
+        else:
+            named = {w.upper() for w in _WORD.findall(mask(item.text, ";"))}
+            refs = tuple(reader.points[w] for w in sorted(named) if w in reader.points)
+            if refs and not _DECL.match(item.text):
+                item = dataclasses.replace(item, refs=refs)
+        items.append(item)
+    if missing:
+        hint = (f"are they declared in {dat_path.name}? (cut or damaged data list; points of $config.dat are not read)"
+                if dat_path is not None else f"no {path.stem}.dat beside {path.name}")
+        unresolved(path.name, missing, hint)
+    return tuple(items)
