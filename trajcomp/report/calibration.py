@@ -1,0 +1,285 @@
+"""Calibration and validation reports: accuracy per mode, ISO 9283, error trends and maps, parameters, validity.
+
+The per-point errors are recomputed here from the measurements and the
+model (`trajcomp.calibrate.mode_errors`); the fit and cross-validation
+statistics are those `calibrate` stored in the model.
+"""
+
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+from trajcomp.calibrate import commanded, mode_errors, to_base
+from trajcomp.grid import ResidualGrid
+from trajcomp.identify import is_angle
+from trajcomp.kinematics import fk
+from trajcomp.report import plots
+from trajcomp.report.document import Figure, Report
+from trajcomp.report.provenance import grid_box, header
+from trajcomp.report.verdict import accuracy_check, verdict
+from trajcomp.stats import AXES, ErrorStats
+from trajcomp.transforms import abc_to_matrix, matrix_to_abc, matrix_to_pose
+
+ISO_CYCLES = 30  # cycles per pose of the ISO 9283 test
+
+
+def trends(position, errors):
+    """Least-squares line of each error axis against each commanded coordinate.
+
+    Parameters
+    ----------
+    position, errors : ndarray, shape (N, 3)
+        Commanded positions and errors, mm.
+
+    Returns
+    -------
+    dict
+        ``out["dx"]["y"] = {"slope_mm_per_m", "intercept_mm", "r2"}``; R² is 0
+        where the coordinate or the error does not vary.
+    """
+    out = {}
+    for e, name in enumerate(("dx", "dy", "dz")):
+        out[name] = {}
+        for c, axis in enumerate(AXES):
+            x, y = position[:, c], errors[:, e]
+            dx, dy = x - x.mean(), y - y.mean()
+            sxx, syy = float(dx @ dx), float(dy @ dy)
+            slope = float(dx @ dy) / sxx if sxx > 0 else 0.0
+            r2 = slope**2 * sxx / syy if syy > 0 else 0.0
+            out[name][axis] = {"slope_mm_per_m": slope * 1000.0, "intercept_mm": float(y.mean() - slope * x.mean()),
+                               "r2": float(min(r2, 1.0))}
+    return out
+
+
+def iso9283(position, measured, predicted, mode):
+    """ISO 9283-style pose accuracy (AP) and repeatability (RP) over commands measured more than once.
+
+    Per repeated command (positions equal to 0.001 mm): the barycentre of
+    the attained positions; AP = its distance to the command (and to the
+    model's prediction); RP = mean + 3 standard deviations (n - 1) of the
+    distances of the attained positions to the barycentre.
+
+    Parameters
+    ----------
+    position, measured, predicted : ndarray, shape (N, 3)
+        Commanded, measured and model-predicted positions, mm.
+    mode : str
+        The mode of ``predicted``.
+    """
+    _, group, counts = np.unique(np.round(position, 3), axis=0, return_inverse=True, return_counts=True)
+    group = group.ravel()
+    repeated = np.flatnonzero(counts >= 2)
+    if not repeated.size:
+        return {"available": False, "mode": mode,
+                "note": "no command was measured more than once, so repeatability (RP) and the ISO 9283 pose "
+                        "accuracy (AP of a barycentre) cannot be computed; measure a few poses 30 times to get them"}
+
+    def mean_of(values):
+        sums = np.stack([np.bincount(group, weights=values[:, c], minlength=len(counts)) for c in range(3)], axis=1)
+        return sums / counts[:, None]
+
+    barycentre = mean_of(measured)
+    distance = np.linalg.norm(measured - barycentre[group], axis=1)
+    l_mean = np.bincount(group, weights=distance) / counts
+    spread = np.bincount(group, weights=(distance - l_mean[group]) ** 2) / np.maximum(counts - 1, 1)
+    rp = l_mean + 3.0 * np.sqrt(spread)
+    ap = np.linalg.norm(barycentre - mean_of(position), axis=1)
+    ap_model = None if predicted is None else np.linalg.norm(barycentre - mean_of(predicted), axis=1)
+    poses = [{"position": mean_of(position)[g].round(3).tolist(), "cycles": int(counts[g]), "ap_mm": float(ap[g]),
+              "ap_model_mm": None if ap_model is None else float(ap_model[g]), "rp_mm": float(rp[g])}
+             for g in repeated]
+    few = counts[repeated].min() < ISO_CYCLES
+    return {
+        "available": True,
+        "mode": mode,
+        "note": f"{repeated.size} commands were measured {_range(counts[repeated])} times"
+                + (f"; ISO 9283 asks for {ISO_CYCLES} cycles per pose, so these figures are indicative" if few else ""),
+        "cycles_min": int(counts[repeated].min()),
+        "cycles_max": int(counts[repeated].max()),
+        "ap_max_mm": float(ap[repeated].max()),
+        "ap_model_max_mm": None if ap_model is None else float(ap_model[repeated].max()),
+        "rp_max_mm": float(rp[repeated].max()),
+        "poses": poses,
+    }
+
+
+def _range(values):
+    """``"3"`` or ``"3 to 5"``."""
+    low, high = int(values.min()), int(values.max())
+    return f"{low}" if low == high else f"{low} to {high}"
+
+
+def orientations(rotations):
+    """Distinct commanded orientations (to about 0.1 deg) and their spread, of rotation matrices (N, 3, 3)."""
+    if rotations is None:
+        return None
+    _, first = np.unique(np.round(rotations.reshape(-1, 9), 3), axis=0, return_index=True)
+    rot = Rotation.from_matrix(rotations)
+    deviation = np.degrees((rot.mean().inv() * rot).magnitude())
+    return {"distinct": int(len(first)), "max_deviation_deg": float(deviation.max()),
+            "examples": np.degrees(matrix_to_abc(rotations[np.sort(first)[:5]])).round(3).tolist()}
+
+
+def _data(model, meas):
+    """Commanded joints (or None), positions, measured positions in the base frame, and errors per mode."""
+    joints, position = commanded(model.nominal, meas)
+    measured = to_base(model.T_tracker_base, meas.measured)
+    return joints, position, measured, mode_errors(model, joints, position, measured)
+
+
+def _after_mode(model):
+    """The mode whose errors at the fit's own points are an honest 'after' map.
+
+    A lattice grid reproduces its nodes, so its fit errors there are zero by
+    construction: the map then shows the model before the grid.
+    """
+    lattice = [m for m in ("grid", "composite") if isinstance(model.error_field(m), ResidualGrid)]
+    honest = [m for m in model.modes if m not in lattice]
+    return model.method if model.method in honest else honest[-1]
+
+
+def _files_and_robot(model, files, options):
+    return {"files": list(files), "robot": {"name": model.nominal.name, "source": model.nominal.source},
+            "options": options or {}}
+
+
+def calibration_report(model, meas, *, files=(), options=None):
+    """The calibration report of a model and the measurements it was identified from.
+
+    Parameters
+    ----------
+    model : CompensationModel
+        As returned by `trajcomp.calibrate.calibrate` (its ``report`` holds
+        the fit and cross-validation statistics).
+    meas : Measurements
+        The measurements (all rows; outliers are marked by line).
+    files : sequence of dict
+        `trajcomp.report.provenance.file_entry` of inputs and outputs.
+    options : dict, optional
+        The run's options as given.
+
+    Returns
+    -------
+    Report
+    """
+    joints, position, measured, errors = _data(model, meas)
+    stored = model.report
+    outlier_lines = list(stored.get("outlier_lines") or [])
+    excluded = np.isin(meas.lines, outlier_lines)
+    cv = stored.get("cross_validation")
+    after = _after_mode(model)
+    missing = []
+    if model.grid is None and model.residual is None:
+        missing.append("no grid: this model has no residual grid (method " + model.method + "), so there is no "
+                       "grid box; targets are compensated by the parameter or linear model everywhere")
+    if cv is None:
+        missing.append("no cross-validation: calibrate ran with --folds 0; the fit statistics flatter the model")
+    iso = iso9283(position[~excluded], measured[~excluded], (measured - errors[after])[~excluded], after)
+    if not iso["available"]:
+        missing.append("no repeatability: " + iso["note"])
+    rotations = fk(model.nominal, joints)[:, :3, :3] if joints is not None else (
+        None if meas.orientation is None else abc_to_matrix(meas.orientation))
+    tool = matrix_to_pose(model.nominal.T_flange_tool)
+    tool[3:] = np.degrees(tool[3:])
+    identified_tool = [model.dh_delta[model.dh_names.index(n)] if n in model.dh_names else 0.0
+                       for n in ("tool_x", "tool_y", "tool_z")]
+    doc = header("calibration", "calibrate")
+    doc.update({
+        "provenance": _files_and_robot(model, files, options),
+        "verdict": None,
+        "method": model.method,
+        "modes": list(model.modes),
+        "points": len(meas),
+        "used": int((~excluded).sum()),
+        "fit": {m: s for m, s in (stored.get("fit") or {}).items() if isinstance(s, dict)},
+        "cross_validation": None if cv is None else {
+            "folds": cv["folds"], "interpolation": cv.get("interpolation"),
+            "modes": {m: s for m, s in cv.items() if isinstance(s, dict)}},
+        "iso9283": iso,
+        "trends": trends(position[~excluded], errors["none"][~excluded]),
+        "linear": None if model.linear is None else model.linear.to_dict(),
+        "maps_note": _maps_note(model, after, "fit"),
+        "parameters": None if not model.dh_names else {
+            "identified": [{"name": n, "delta": float(np.degrees(d) if is_angle(n) else d),
+                            "sigma": float(np.degrees(s) if is_angle(n) else s), "unit": "deg" if is_angle(n) else "mm"}
+                           for n, d, s in zip(model.dh_names, model.dh_delta, model.dh_sigma)],
+            "fixed": [{"name": n, "reason": r} for n, r in model.dh_fixed.items()],
+            "condition_number": (stored.get("identifiability") or {}).get("condition")},
+        "outliers": {"file": meas.path, "lines": outlier_lines},
+        "validity": {
+            "measured_box": {"lower": position.min(axis=0).tolist(), "upper": position.max(axis=0).tolist()},
+            "grids": {name: None if getattr(model, name) is None else grid_box(getattr(model, name))
+                      for name in ("grid", "residual")},
+            "orientations": orientations(rotations),
+            "tool": {"pose": tool.tolist(),
+                     "identified_offset_mm": [float(v) for v in identified_tool]
+                     if any(n.startswith("tool_") for n in model.dh_names) else None},
+            "note": "Targets outside the grid box get the parameter model only. A model measured with one tool in "
+                    "few orientations does not locate the flange: targets on another tool or far from the measured "
+                    "orientations may miss by tenths of a millimetre.",
+        },
+        "warnings": list(stored.get("warnings") or []),
+        "missing": missing,
+    })
+    return Report(doc, _figures(doc, position, errors, excluded, after, model, "fit"))
+
+
+def validation_report(model, meas, *, criteria, files=(), options=None):
+    """The validation report: a model's accuracy per mode on measurements it was not fitted to, with a verdict.
+
+    The verdict is the model-accuracy criterion of the compliance report: the
+    95th percentile |error| of the model's method within ``criteria.tolerance``.
+
+    Returns
+    -------
+    Report
+        Its document has ``modes: {mode: {n, mean, rms, p95, max, signed_mean, std}}``.
+    """
+    joints, position, measured, errors = _data(model, meas)
+    stats = {m: ErrorStats.from_errors(e).as_dict() for m, e in errors.items()}
+    check = accuracy_check(stats[model.method], model.method, criteria.tolerance, "validation measurement")
+    doc = header("validation", "validate")
+    doc.update({
+        "provenance": _files_and_robot(model, files, options),
+        "criteria": criteria.as_dict(),
+        "verdict": verdict([check]),
+        "method": model.method,
+        "points": len(meas),
+        "modes": stats,
+        "trends": trends(position, errors["none"]),
+        "maps_note": _maps_note(model, model.method, "validation"),
+        "warnings": [],
+        "missing": [],
+    })
+    return Report(doc, _figures(doc, position, errors, np.zeros(len(position), dtype=bool), model.method, model,
+                                "validation"))
+
+
+def _maps_note(model, after, data):
+    if data == "validation":
+        return (f"|measured − predicted| at the validation points with no compensation (before) and with mode "
+                f"{after} (after). Note the different colour scales.")
+    why = "" if after == model.method else (
+        f" The {model.method} mode is not shown: its grid reproduces the measured nodes, so its errors there are "
+        "zero by construction; the cross-validation above is its honest accuracy.")
+    return (f"|measured − predicted| at the measured points with no compensation (before) and with mode {after} "
+            f"(after, fit).{why} Note the different colour scales.")
+
+
+def _figures(doc, position, errors, excluded, after, model, data):
+    field = model.error_field(model.method)
+    box = None if field is None else grid_box(field)
+    box = None if box is None else (box["lower"], box["upper"])
+    keep = ~excluded
+    maps = [("before (none)", np.linalg.norm(errors["none"][keep], axis=1)),
+            (f"after ({after})", np.linalg.norm(errors[after][keep], axis=1))]
+    tables = ({"fit": doc["fit"]} | ({f"{doc['cross_validation']['folds']}-fold CV": doc["cross_validation"]["modes"]}
+                                      if doc["cross_validation"] else {})) if data == "fit" else {"validation": doc["modes"]}
+    return (
+        Figure("statistics", "Mean and 95th percentile |error| per mode", "Log scale; lower is better.",
+               lambda: plots.mode_statistics(tables)),
+        Figure("trends", "Error per axis against each commanded coordinate",
+               "Each error component (measured − commanded) against each commanded coordinate, with its "
+               "least-squares line; red lines mark strong linear relations (R² ≥ 0.5).",
+               lambda: plots.error_trends(position, errors["none"], doc["trends"], excluded)),
+        Figure("maps", "Error maps", doc["maps_note"], lambda: plots.error_maps(position[keep], maps, box)),
+    )

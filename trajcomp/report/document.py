@@ -1,0 +1,97 @@
+"""A report: its JSON document, its figures (drawn only for HTML), its text summary, its files.
+
+The JSON document follows the schema ``trajcomp-report/1`` shipped as
+``trajcomp/report/schema.json``. Figures are callables that return a
+matplotlib figure; they run only when the HTML page is rendered, so a
+JSON-only run never imports matplotlib.
+"""
+
+import dataclasses
+import json
+import math
+from importlib import resources
+from pathlib import Path
+
+import numpy as np
+
+from trajcomp.atomic import write_files_atomic
+
+SCHEMA = "trajcomp-report/1"
+
+
+@dataclasses.dataclass(frozen=True)
+class Figure:
+    """One figure of the HTML page.
+
+    Attributes
+    ----------
+    section : str
+        Key of the page section it belongs to.
+    title, caption : str
+    draw : callable
+        ``draw() -> matplotlib.figure.Figure``.
+    """
+
+    section: str
+    title: str
+    caption: str
+    draw: object
+
+
+@dataclasses.dataclass(frozen=True)
+class Report:
+    """A report document (JSON-ready dict, see the schema) and its figures."""
+
+    doc: dict
+    figures: tuple = ()
+
+    @property
+    def passed(self):
+        """False when the report has a verdict and it fails."""
+        verdict = self.doc.get("verdict")
+        return verdict is None or verdict["result"] == "pass"
+
+    def json_text(self):
+        """The JSON document, indented, ending in a newline."""
+        return json.dumps(plain(self.doc), indent=1, allow_nan=False) + "\n"
+
+    def html_text(self):
+        """The self-contained HTML page (figures embedded)."""
+        from trajcomp.report.html import render
+
+        return render(self)
+
+    def write(self, path, *, json_only=False):
+        """Write ``<path stem>.json`` and, unless ``json_only``, ``<path stem>.html``, all or none.
+
+        Returns
+        -------
+        list of Path
+            The files written.
+        """
+        path = Path(path)
+        files = {path.with_suffix(".json"): self.json_text().encode("utf-8")}
+        if not json_only:
+            files[path.with_suffix(".html")] = self.html_text().encode("utf-8")
+        write_files_atomic(files)
+        return list(files)
+
+
+def plain(value):
+    """``value`` with numpy scalars and arrays as Python numbers and lists, non-finite floats as None."""
+    if isinstance(value, dict):
+        return {str(k): plain(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [plain(v) for v in value]
+    if isinstance(value, np.ndarray):
+        return plain(value.tolist())
+    if isinstance(value, np.generic):
+        value = value.item()
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
+    return value
+
+
+def schema():
+    """The JSON Schema (dict) of the report documents."""
+    return json.loads(resources.files("trajcomp.report").joinpath("schema.json").read_text(encoding="utf-8"))

@@ -1,0 +1,214 @@
+"""The report figures, drawn with matplotlib (Agg backend, imported on first use).
+
+Each function takes arrays in user units (mm, deg) and returns a
+matplotlib Figure; `trajcomp.report.html` embeds it as a PNG data URI.
+"""
+
+import numpy as np
+
+AXES = ("x", "y", "z")
+WIDTH = 10.0  # in, figure width at the page's text width
+_INSIDE, _OUTSIDE, _LIMIT = "#1f5fa8", "#c0392b", "#7f8c8d"
+
+
+def pyplot():
+    """matplotlib.pyplot on the Agg backend (no display needed)."""
+    import matplotlib
+
+    matplotlib.use("Agg", force=True)
+    import matplotlib.pyplot as plt
+
+    plt.rcParams.update({"font.size": 9, "axes.grid": True, "grid.alpha": 0.3, "axes.spines.top": False,
+                         "axes.spines.right": False, "figure.dpi": 100})
+    return plt
+
+
+def error_trends(position, errors, trends, excluded=None):
+    """The paper's plots: each error axis against each commanded coordinate, with the fitted lines.
+
+    Parameters
+    ----------
+    position : ndarray, shape (N, 3)
+        Commanded positions, mm.
+    errors : ndarray, shape (N, 3)
+        Measured minus commanded, mm.
+    trends : dict
+        ``trends["dx"]["y"] = {"slope_mm_per_m", "intercept_mm", "r2"}`` (`trajcomp.report.calibration.trends`).
+    excluded : ndarray of bool, shape (N,), optional
+        Rows left out of the fit (outliers), drawn as crosses.
+    """
+    plt = pyplot()
+    fig, axes = plt.subplots(3, 3, figsize=(WIDTH, 8.0), sharex="col", sharey="row", constrained_layout=True)
+    keep = np.ones(len(position), dtype=bool) if excluded is None else ~excluded
+    for row, name in enumerate(("dx", "dy", "dz")):
+        for col, axis in enumerate(AXES):
+            ax = axes[row, col]
+            ax.scatter(position[keep, col], errors[keep, row], s=6, alpha=0.5, color=_INSIDE, linewidths=0)
+            if not keep.all():
+                ax.scatter(position[~keep, col], errors[~keep, row], s=20, marker="x", color=_OUTSIDE, label="outlier")
+            fit = trends[name][axis]
+            span = np.array([position[:, col].min(), position[:, col].max()])
+            strong = fit["r2"] >= 0.5
+            ax.plot(span, fit["intercept_mm"] + fit["slope_mm_per_m"] * span / 1000.0,
+                    color=_OUTSIDE if strong else "black", lw=2.2 if strong else 1.0)
+            ax.set_title(f"{name} vs {axis}: {fit['slope_mm_per_m']:+.3f} mm/m, R² {fit['r2']:.2f}",
+                         fontsize=8.5, fontweight="bold" if strong else "normal")
+            if row == 2:
+                ax.set_xlabel(f"commanded {axis} (mm)")
+            if col == 0:
+                ax.set_ylabel(f"{name} (mm)")
+    return fig
+
+
+def error_maps(position, maps, limit_box=None):
+    """|error| coloured over the top view (x, y) and the side view (x, z), one row per map.
+
+    Parameters
+    ----------
+    position : ndarray, shape (N, 3)
+        Positions, mm.
+    maps : sequence of (str, ndarray (N,))
+        Row title and |error| (mm) of each row, e.g. before and after.
+    limit_box : (ndarray (3,), ndarray (3,)), optional
+        Lower and upper corner of the grid box, drawn as a rectangle.
+    """
+    plt = pyplot()
+    fig, axes = plt.subplots(len(maps), 2, figsize=(WIDTH, 3.6 * len(maps)), squeeze=False, constrained_layout=True)
+    for row, (title, values) in enumerate(maps):
+        order = np.argsort(values)  # largest errors drawn last, on top
+        for col, (i, j) in enumerate(((0, 1), (0, 2))):
+            ax = axes[row, col]
+            art = ax.scatter(position[order, i], position[order, j], c=values[order], s=14, cmap="viridis",
+                             vmin=0.0, vmax=max(float(np.percentile(values, 99)), 1e-9), linewidths=0)
+            if limit_box is not None:
+                _box(ax, limit_box, i, j)
+            ax.set_aspect("equal", adjustable="datalim")
+            ax.set_xlabel(f"{AXES[i]} (mm)")
+            ax.set_ylabel(f"{AXES[j]} (mm)")
+            ax.set_title(f"{title}: {'top' if col == 0 else 'side'} view")
+        fig.colorbar(art, ax=axes[row, :], label="|error| (mm)", shrink=0.9)
+    return fig
+
+
+def mode_statistics(tables):
+    """Mean and p95 |error| per mode, one group of bars per statistics table, log scale.
+
+    Parameters
+    ----------
+    tables : dict of str to dict
+        ``{"fit": {mode: stats dict}, "5-fold cross-validation": {...}}``.
+    """
+    plt = pyplot()
+    fig, ax = plt.subplots(figsize=(WIDTH, 3.4), constrained_layout=True)
+    modes = list(dict.fromkeys(m for table in tables.values() for m in table))
+    width = 0.8 / (2 * len(tables))
+    colors = ("#1f5fa8", "#8fb3dd", "#c0392b", "#e6a39c")
+    k = 0
+    for name, table in tables.items():
+        for stat in ("mean", "p95"):
+            values = [table.get(m, {}).get(stat, np.nan) for m in modes]
+            ax.bar(np.arange(len(modes)) + (k - len(tables) + 0.5) * width, values, width,
+                   label=f"{name}: {stat}", color=colors[k % len(colors)])
+            k += 1
+    ax.set_xticks(np.arange(len(modes)), modes)
+    ax.set_yscale("log")
+    ax.set_ylabel("|error| (mm)")
+    ax.legend(ncols=2, fontsize=8)
+    return fig
+
+
+def targets_and_grid(target, outside, grid_box=None):
+    """The targets in motion order over the top and side views, outside-grid ones marked, with the grid box."""
+    plt = pyplot()
+    fig, axes = plt.subplots(1, 2, figsize=(WIDTH, 4.0), constrained_layout=True)
+    for ax, (i, j) in zip(axes, ((0, 1), (0, 2))):
+        ax.plot(target[:, i], target[:, j], color=_LIMIT, lw=0.8, zorder=1)
+        ax.scatter(target[~outside, i], target[~outside, j], s=18, color=_INSIDE, label="inside the grid", zorder=2)
+        if outside.any():
+            ax.scatter(target[outside, i], target[outside, j], s=40, marker="x", color=_OUTSIDE,
+                       label="outside the grid", zorder=3)
+        if grid_box is not None:
+            _box(ax, grid_box, i, j)
+        ax.set_aspect("equal", adjustable="datalim")
+        ax.set_xlabel(f"{AXES[i]} (mm, base)")
+        ax.set_ylabel(f"{AXES[j]} (mm, base)")
+    axes[0].legend(fontsize=8)
+    return fig
+
+
+def corrections(correction_mm, correction_deg, residual, tolerance):
+    """Per target: position and orientation correction, and the predicted residual against the tolerance."""
+    plt = pyplot()
+    fig, (top, bottom) = plt.subplots(2, 1, figsize=(WIDTH, 4.8), sharex=True, constrained_layout=True)
+    index = np.arange(1, len(correction_mm) + 1)
+    top.plot(index, correction_mm, "o-", ms=3, color=_INSIDE)
+    top.set_ylabel("position (mm)", color=_INSIDE)
+    twin = top.twinx()
+    twin.plot(index, correction_deg, "s--", ms=3, color="#d35400")
+    twin.set_ylabel("orientation (deg)", color="#d35400")
+    twin.grid(False)
+    top.set_title("correction applied (command − target)")
+    bottom.semilogy(index, np.maximum(residual, 1e-9), "o", ms=3, color=_INSIDE)
+    bottom.axhline(tolerance, color=_OUTSIDE, lw=1.5, label=f"tolerance {tolerance:g} mm")
+    bottom.set_ylabel("predicted residual (mm)")
+    bottom.set_xlabel("target (motion order)")
+    bottom.legend(fontsize=8, loc="lower right")
+    return fig
+
+
+def joint_ranges(joints_deg, q_min_deg, q_max_deg, margin):
+    """Each joint across the targets, as a fraction of its range; the margin band shaded."""
+    plt = pyplot()
+    fig, ax = plt.subplots(figsize=(WIDTH, 3.4), constrained_layout=True)
+    index = np.arange(1, len(joints_deg) + 1)
+    span = q_max_deg - q_min_deg
+    for j in range(joints_deg.shape[1]):
+        ax.plot(index, (joints_deg[:, j] - q_min_deg[j]) / span[j], "o-", ms=2.5, lw=1, label=f"J{j + 1}")
+    band = float(np.max(margin / span))
+    ax.axhspan(0, band, color=_OUTSIDE, alpha=0.15)
+    ax.axhspan(1 - band, 1, color=_OUTSIDE, alpha=0.15)
+    ax.set_ylim(-0.02, 1.02)
+    ax.set_ylabel("position in range (0 = min, 1 = max)")
+    ax.set_xlabel("target (motion order)")
+    ax.legend(ncols=6, fontsize=8, loc="upper center")
+    return fig
+
+
+def singularities(distances, margins):
+    """Shoulder (mm), elbow and wrist (deg) singularity distances per target, with their margins."""
+    plt = pyplot()
+    fig, axes = plt.subplots(1, 3, figsize=(WIDTH, 2.8), constrained_layout=True)
+    index = np.arange(1, len(next(iter(distances.values()))) + 1)
+    for ax, (name, values) in zip(axes, distances.items()):
+        unit = "mm" if name == "shoulder" else "deg"
+        ax.plot(index, values, "o-", ms=2.5, lw=1, color=_INSIDE)
+        ax.axhline(margins[name], color=_OUTSIDE, lw=1.2)
+        ax.set_ylim(bottom=0)
+        ax.set_title(f"{name} ({unit})")
+        ax.set_xlabel("target")
+    return fig
+
+
+def timing_peaks(section):
+    """Peak joint velocity, acceleration and jerk as a fraction of their limits, per joint."""
+    plt = pyplot()
+    fig, ax = plt.subplots(figsize=(WIDTH, 3.0), constrained_layout=True)
+    names = ("velocity", "acceleration", "jerk")
+    width = 0.26
+    for k, name in enumerate(names):
+        ratios = [row[name]["ratio"] if row[name]["ratio"] is not None else np.nan for row in section["joints"]]
+        ax.bar(np.arange(6) + (k - 1) * width, np.array(ratios, dtype=float) * 100, width, label=name)
+    ax.axhline(100, color=_OUTSIDE, lw=1.5)
+    ax.set_xticks(np.arange(6), [f"J{j}" for j in range(1, 7)])
+    ax.set_ylabel("peak / limit (%)")
+    ax.legend(ncols=3, fontsize=8)
+    return fig
+
+
+def _box(ax, box, i, j):
+    """The (i, j) projection of an axis-aligned box (lower (3,), upper (3,)) as a dashed rectangle."""
+    from matplotlib.patches import Rectangle
+
+    lower, upper = np.asarray(box[0]), np.asarray(box[1])
+    ax.add_patch(Rectangle((lower[i], lower[j]), upper[i] - lower[i], upper[j] - lower[j], fill=False,
+                           ls="--", lw=1.2, color=_LIMIT, label="grid box"))

@@ -1,0 +1,314 @@
+"""The sections of each kind of report page, as HTML fragments (figures are appended by `html.render`)."""
+
+from pathlib import Path
+
+from trajcomp.report.markup import Raw, esc, key_values, table
+
+SHOWN = 30  # targets named per criterion before "and N more"
+
+
+def concerns(criterion):
+    """What a failed criterion concerns, as text."""
+    named = [*criterion["targets"], *(f"line {line}" for line in criterion["lines"])]
+    more = f" … and {len(named) - SHOWN} more" if len(named) > SHOWN else ""
+    return ", ".join(named[:SHOWN]) + more
+
+
+def headline(doc):
+    """One line saying what the report is about."""
+    files = doc["provenance"]["files"]
+    inputs = [Path(f["path"]).name for f in files if f["role"] in ("program", "measurements")]
+    what = {"compliance": "Program", "calibration": "Calibration from", "validation": "Validation on"}[doc["kind"]]
+    return f"{what} {', '.join(inputs) or '(in memory)'} · robot {doc['provenance']['robot']['name']}"
+
+
+def verdict_section(verdict):
+    badge = {"pass": "pass", "fail": "fail", "not evaluated": "na"}
+    rows = [(Raw(f'<span class="badge {badge[c["status"]]}">{esc(c["status"])}</span>'), c["statement"],
+             c["detail"], concerns(c) if c["status"] == "fail" else "") for c in verdict["criteria"]]
+    return table(("status", "criterion", "found", "concerns"), rows)
+
+
+def missing_section(missing):
+    return '<div class="callout">' + "".join(f"<p>{esc(m)}</p>" for m in missing) + "</div>"
+
+
+def stats_table(named):
+    """Rows of per-mode statistics dicts: n, mean, RMS, p95, max, signed means."""
+    rows = [(mode, s["n"], *(f"{s[k]:.4f}" for k in ("mean", "rms", "p95", "max")),
+             *(f"{v:+.4f}" for v in s["signed_mean"])) for mode, s in named.items() if isinstance(s, dict)]
+    return table(("mode", "n", "mean", "RMS", "p95", "max", "dx", "dy", "dz"), rows, numeric=range(1, 9))
+
+
+def files_table(files):
+    return table(("role", "file", "bytes", "SHA-256"),
+                 [(f["role"], f["path"], f["bytes"], Raw(f'<span class="hash">{esc(f["sha256"])}</span>'))
+                  for f in files], numeric=(2,))
+
+
+def options_table(options):
+    return key_values([(k, v) for k, v in options.items()]) if options else "<p>default options</p>"
+
+
+def _vector(values, digits):
+    return " ".join(f"{v:.{digits}f}" for v in values)
+
+
+# ------------------------------------------------------------------ compliance
+
+
+def compliance_sections(doc):
+    parts = [("verdict", "Verdict", verdict_section(doc["verdict"]) + _criteria_text(doc["criteria"]))]
+    if doc["missing"]:
+        parts.append(("missing", "Not available in this run", missing_section(doc["missing"])))
+    parts.append(("targets", "Targets", _targets(doc)))
+    parts.append(("not_compensated", "Motions not compensated", _not_compensated(doc)))
+    if doc["targets"]:
+        parts.append(("posture", "Posture: joint limits and singularities", _posture_text(doc)))
+    parts.append(("timing", "Timing", _timing(doc["timing"])))
+    if doc["warnings"]:
+        parts.append(("warnings", "Warnings", "<ul>" + "".join(f"<li>{esc(w)}</li>" for w in doc["warnings"]) + "</ul>"))
+    parts.append(("provenance", "Provenance", _compliance_provenance(doc)))
+    return parts
+
+
+def _criteria_text(criteria):
+    return (f"<p>Tolerance {criteria['tolerance_mm']:g} mm; joint limit margin {criteria['limit_margin_deg']:g} deg; "
+            f"singularity margins {criteria['singularity_margin_deg']:g} deg (elbow, wrist) and "
+            f"{criteria['shoulder_margin_mm']:g} mm (shoulder). A criterion that cannot be evaluated "
+            "does not fail the run; it says why.</p>")
+
+
+def _targets(doc):
+    s = doc["summary"]
+    if not doc["targets"]:
+        return "<p>No target was compensated.</p>"
+    lead = key_values([
+        ("compensated targets", s["targets"]),
+        ("outside the grid", s["outside_grid"]),
+        ("posture changed", s["configuration_changed"]),
+        ("largest correction", f"{s['correction_max_mm']:.4f} mm, {s['correction_max_deg']:.4f} deg"),
+        ("largest predicted residual", f"{s['residual_max_mm']:.2e} mm"),
+        ("smallest joint limit distance", f"{s['limit_distance_min_deg']:.2f} deg"),
+        ("unused points (left as written)", ", ".join(doc["unused"]) or "none"),
+        ("joint targets", f"{doc['joint_targets']['mode']}: {', '.join(doc['joint_targets']['labels']) or 'none'}"),
+    ])
+    fails = {c["id"]: set(c["targets"]) for c in doc["verdict"]["criteria"] if c["status"] == "fail"}
+    labels = [t["label"] for t in doc["targets"]]
+
+    def marker(columns):
+        """Cells of failing targets to highlight: {criterion: columns}."""
+        return lambda r, col: any(col in cols and labels[r] in fails.get(key, ()) for key, cols in columns.items())
+
+    rows = [(k + 1, t["label"], t["line"], *(f"{v:.3f}" for v in t["target"]), f"{t['correction_norm_mm']:.4f}",
+             f"{t['correction_norm_deg']:.4f}", f"{t['predicted_residual_mm']:.1e}",
+             "outside" if t["outside_grid"] else "inside") for k, t in enumerate(doc["targets"])]
+    poses = table(("#", "target", "line", "x", "y", "z", "a", "b", "c", "correction mm", "correction deg",
+                   "residual mm", "grid"), rows, numeric={0, 2, *range(3, 12)},
+                  bad=marker({"residual": (11,), "outside_grid": (12,)}), css="wide")
+    rows = []
+    for k, t in enumerate(doc["targets"]):
+        limit = t["limit_distance_deg"]
+        nearest = min(range(6), key=limit.__getitem__)
+        branch = t["branch"] if t["branch"] == t["branch_planned"] else f"{t['branch_planned']} → {t['branch']}"
+        config = t["declared"] if t["declared"] == t["written"] else f"{t['declared'] or '—'} → {t['written']}"
+        rows.append((k + 1, t["label"], config or "—", t["posture_source"], branch,
+                     *(f"{v:.2f}" for v in t["joints_deg"]), f"{limit[nearest]:.2f} (J{nearest + 1})",
+                     f"{t['singularity']['shoulder_mm']:.0f}", f"{t['singularity']['elbow_deg']:.1f}",
+                     f"{t['singularity']['wrist_deg']:.1f}", f"{max(t['jump_deg'], key=abs):+.2f}"))
+    posture = table(("#", "target", "configuration declared → written", "posture from", "branch", "J1", "J2", "J3",
+                     "J4", "J5", "J6", "limit dist. deg", "shoulder mm", "elbow deg", "wrist deg", "max jump deg"),
+                    rows, numeric={0, *range(5, 16)},
+                    bad=marker({"configuration": (2, 4), "joint_limits": (11,), "singularity": (12, 13, 14)}),
+                    css="wide")
+    return (lead + "<h3>Poses and corrections</h3><p>Targets in the robot base frame (mm; A, B, C in deg); "
+            "correction = command − target; residual = distance from the target to where the model predicts "
+            "the arm lands with the command.</p>" + '<div class="scroll">' + poses + "</div>"
+            + "<h3>Posture</h3><p>Written joints (deg), the branch (shoulder/elbow/wrist) they put the arm in, "
+            "the nearest joint limit, the distance to each singularity, and the largest joint change from the "
+            "previous target.</p>" + '<div class="scroll">' + posture + "</div>")
+
+
+def _not_compensated(doc):
+    if not doc["not_compensated"]:
+        return "<p>Every motion was compensated.</p>"
+    return ('<div class="callout"><p>These motions were left exactly as written; they do not land where the '
+            "model would put them.</p></div>"
+            + table(("line", "statement", "why"), [(m["line"], Raw(f"<code>{esc(m['text'])}</code>"), m["reason"])
+                                                   for m in doc["not_compensated"]], numeric=(0,)))
+
+
+def _posture_text(doc):
+    return ("<p>Each written joint against its position limits, and how far each target is from the three "
+            "singularities of the arm (where a small correction can swing joints fast or switch branch).</p>")
+
+
+def _timing(section):
+    if section is None:
+        return '<div class="callout"><p>The program was not re-timed: no cycle time and no peak values.</p></div>'
+    before = section["cycle_time_before_s"]
+    lead = key_values([
+        ("cycle time", f"{section['cycle_time_s']:.3f} s"
+                       + ("" if before is None else f" (before: {before:.3f} s, {section['cycle_time_s'] - before:+.3f} s)")),
+        ("within limits (dense check)", "yes" if section["within_limits"] else "no"),
+        ("segments", ", ".join(f"{s['kind']} {s['first']}–{s['last']} {s['duration_s']:.3f} s" for s in section["segments"])),
+    ])
+    rows = []
+    for row in section["joints"]:
+        cells = [f"J{row['joint']}"]
+        for name in ("velocity", "acceleration", "jerk"):
+            q = row[name]
+            cells += [f"{q['peak']:.1f}", "—" if q["limit"] is None else f"{q['limit']:.1f}",
+                      "—" if q["ratio"] is None else f"{q['ratio']:.0%}"]
+        rows.append(cells)
+    over = {(r, c) for r, row in enumerate(section["joints"]) for c, name in ((3, "velocity"), (6, "acceleration"),
+            (9, "jerk")) if row[name]["ratio"] is not None and row[name]["ratio"] > 1.01}
+    return lead + table(("joint", "peak vel. deg/s", "limit", "%", "peak acc. deg/s²", "limit", "%",
+                         "peak jerk deg/s³", "limit", "%"), rows, numeric=range(1, 10),
+                        bad=lambda r, c: (r, c) in over)
+
+
+def _model_table(model):
+    if model is None:
+        return "<p>No model.</p>"
+    grid = model["grid"]
+    box = "none" if grid is None else (f"{grid['kind']} ({grid['interpolation']}) from {_vector(grid['lower'], 1)} "
+                                       f"to {_vector(grid['upper'], 1)} mm")
+    cv = model.get("cross_validation") or {}
+    out = key_values([
+        ("file", model["path"]), ("SHA-256", Raw(f'<span class="hash">{esc(model["sha256"])}</span>')),
+        ("created", model["created"]), ("written by trajcomp", model["trajcomp_version"]),
+        ("robot", model["robot"]), ("method / mode used", f"{model['method']} / {model['mode']}"),
+        ("modes available", ", ".join(model["modes"])), ("grid", box),
+        ("measurements", (model.get("measurements") or {}).get("file")),
+    ])
+    out += "<h3>Fit (|error|, mm)</h3>" + stats_table(model["fit"])
+    if cv:
+        out += (f"<h3>{cv['folds']}-fold cross-validation (|error|, mm; interpolator {esc(cv.get('interpolation'))})</h3>"
+                + stats_table({k: v for k, v in cv.items() if isinstance(v, dict)}))
+    return out
+
+
+def _compliance_provenance(doc):
+    p = doc["provenance"]
+    return ("<h3>Files</h3>" + files_table(p["files"])
+            + "<h3>Robot</h3>" + key_values([("name", p["robot"]["name"]), ("source", p["robot"]["source"])])
+            + "<h3>Model</h3>" + _model_table(p["model"])
+            + "<h3>Options</h3>" + options_table(p["options"]))
+
+
+# ------------------------------------------------------------------ calibration and validation
+
+
+def calibration_sections(doc):
+    parts = []
+    if doc.get("verdict"):
+        parts.append(("verdict", "Verdict", verdict_section(doc["verdict"])))
+    if doc["missing"]:
+        parts.append(("missing", "Not available from these data", missing_section(doc["missing"])))
+    parts.append(("statistics", "Accuracy per mode", _statistics(doc)))
+    if doc["kind"] == "calibration":
+        parts.append(("iso9283", "ISO 9283 pose accuracy and repeatability", _iso(doc["iso9283"])))
+    parts.append(("trends", "Error against the commanded coordinates", _trends(doc["trends"])))
+    parts.append(("maps", "Error maps before and after", f"<p>{esc(doc['maps_note'])}</p>"))
+    if doc["kind"] == "calibration":
+        parts.append(("parameters", "Identified parameters", _parameters(doc["parameters"])))
+        parts.append(("validity", "What the model is valid for", _validity(doc["validity"])))
+        parts.append(("outliers", "Outliers", _outliers(doc["outliers"])))
+    if doc["warnings"]:
+        parts.append(("warnings", "Warnings", "<ul>" + "".join(f"<li>{esc(w)}</li>" for w in doc["warnings"]) + "</ul>"))
+    p = doc["provenance"]
+    parts.append(("provenance", "Provenance", "<h3>Files</h3>" + files_table(p["files"])
+                  + "<h3>Robot</h3>" + key_values([("name", p["robot"]["name"]), ("source", p["robot"]["source"])])
+                  + "<h3>Options</h3>" + options_table(p["options"])))
+    return parts
+
+
+def _statistics(doc):
+    if doc["kind"] == "validation":
+        return (f"<p>|measured − predicted| on {doc['points']} points, per mode (mm). "
+                "Norms are the headline; signed per-axis means can cancel.</p>" + stats_table(doc["modes"]))
+    out = ("<p>|measured − predicted| per mode (mm). Norms are the headline; signed per-axis means can cancel. "
+           "The fit is on the measurements the model was identified from; cross-validation holds each fold out.</p>"
+           "<h3>Fit</h3>" + stats_table(doc["fit"]))
+    cv = doc["cross_validation"]
+    if cv is not None:
+        out += (f"<h3>{cv['folds']}-fold cross-validation (interpolator {esc(cv['interpolation'])})</h3>"
+                + stats_table(cv["modes"]))
+    return out
+
+
+def _iso(iso):
+    if not iso["available"]:
+        return f'<div class="callout"><p>{esc(iso["note"])}</p></div>'
+    rows = [(k + 1, _vector(p["position"], 1), p["cycles"], f"{p['ap_mm']:.4f}",
+             "—" if p["ap_model_mm"] is None else f"{p['ap_model_mm']:.4f}", f"{p['rp_mm']:.4f}")
+            for k, p in enumerate(iso["poses"])]
+    return (f"<p>{esc(iso['note'])}</p>"
+            + key_values([("poses measured repeatedly", len(iso["poses"])),
+                          ("cycles per pose", f"{iso['cycles_min']}–{iso['cycles_max']}"),
+                          ("AP (largest, nominal command)", f"{iso['ap_max_mm']:.4f} mm"),
+                          (f"AP (largest, {iso['mode']} model)", "—" if iso["ap_model_max_mm"] is None
+                           else f"{iso['ap_model_max_mm']:.4f} mm"),
+                          ("RP (largest)", f"{iso['rp_max_mm']:.4f} mm")])
+            + table(("pose", "commanded x y z (mm)", "cycles", "AP mm", f"AP {iso['mode']} mm", "RP mm"), rows,
+                    numeric=(0, 2, 3, 4, 5)))
+
+
+def _trends(trends):
+    rows = [(name, *(f"{trends[name][axis]['slope_mm_per_m']:+.3f} (R² {trends[name][axis]['r2']:.2f})"
+                     for axis in ("x", "y", "z"))) for name in ("dx", "dy", "dz")]
+    return ("<p>Slope of each error axis against each commanded coordinate (mm per m, least squares), as in "
+            "the paper's plots: strong linear relations are what the indirect (linear) correction removes.</p>"
+            + table(("error", "vs x", "vs y", "vs z"), rows, numeric=(1, 2, 3)))
+
+
+def _parameters(params):
+    if params is None:
+        return '<div class="callout"><p>No kinematic model was identified (method without DH).</p></div>'
+    rows = [(p["name"], f"{p['delta']:+.5f}", f"{p['sigma']:.5f}", p["unit"],
+             "" if p["sigma"] == 0 else f"{abs(p['delta']) / p['sigma']:.1f}") for p in params["identified"]]
+    out = (f"<p>{len(params['identified'])} parameters identified (deltas to the nominal table with one standard "
+           f"deviation); condition number of the scaled Jacobian {params['condition_number']:.1f}.</p>"
+           + table(("parameter", "delta", "σ", "unit", "|delta|/σ"), rows, numeric=(1, 2, 4)))
+    if params["fixed"]:
+        out += "<h3>Left at nominal</h3>" + table(("parameter", "why"), [(f["name"], f["reason"]) for f in params["fixed"]])
+    return out
+
+
+def _validity(v):
+    grids = [(name, "none" if g is None else f"{g['kind']} ({g['interpolation']}), {_vector(g['lower'], 1)} to "
+              f"{_vector(g['upper'], 1)} mm" + ("" if g["step"] is None else f", step {_vector(g['step'], 1)} mm"))
+             for name, g in v["grids"].items()]
+    o = v["orientations"]
+    return key_values([
+        ("measured positions", f"{_vector(v['measured_box']['lower'], 1)} to {_vector(v['measured_box']['upper'], 1)} mm"),
+        *grids,
+        ("orientations", "unknown (positions only)" if o is None else
+         f"{o['distinct']} distinct; largest deviation from their mean {o['max_deviation_deg']:.1f} deg; "
+         f"e.g. A B C {'; '.join(_vector(e, 1) for e in o['examples'])}"),
+        ("tool (TCP in the flange frame)", f"{_vector(v['tool']['pose'], 3)} (mm, deg)"),
+        ("identified TCP offset", "not identified" if v["tool"]["identified_offset_mm"] is None
+         else f"{_vector(v['tool']['identified_offset_mm'], 4)} mm"),
+        ("note", v["note"]),
+    ])
+
+
+def _outliers(outliers):
+    if not outliers["lines"]:
+        return "<p>No measurement was left out.</p>"
+    return (f"<p>{len(outliers['lines'])} rows were left out as gross outliers (residual far beyond the others), "
+            f"by line of {esc(outliers['file'])}:</p><p class=\"mono\">{esc(', '.join(map(str, outliers['lines'])))}</p>")
+
+
+def build(report):
+    """Title, subtitle and the sections ``[(key, heading, html)]`` of a report page."""
+    doc = report.doc
+    if doc["kind"] == "compliance":
+        title = f"Compliance report · {doc['command']}"
+        subtitle = "Is the corrected program safe to run and within tolerance? Criteria, evidence, provenance."
+        return title, subtitle, compliance_sections(doc)
+    title = "Calibration report" if doc["kind"] == "calibration" else "Validation report"
+    subtitle = ("How accurate is the model, on which data, and where is it valid?" if doc["kind"] == "calibration"
+                else "How accurate is the model on measurements it was not fitted to?")
+    return title, subtitle, calibration_sections(doc)

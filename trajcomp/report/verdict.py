@@ -1,0 +1,119 @@
+"""The verdict of a report: stated criteria, each passed, failed or not evaluated, with what it concerns.
+
+A report passes when every criterion that could be evaluated passes; a
+criterion that could not (no timing, no grid) says why and does not fail
+the run. Each failed criterion names the targets (labels) or program lines
+it concerns, so that the fix can start at the right place.
+"""
+
+import dataclasses
+
+import numpy as np
+
+from trajcomp.errors import TrajcompError
+
+PASS, FAIL, NOT_EVALUATED = "pass", "fail", "not evaluated"
+
+
+@dataclasses.dataclass(frozen=True)
+class Criteria:
+    """Thresholds of the verdict, in user units.
+
+    Attributes
+    ----------
+    tolerance : float
+        Largest acceptable landing error, mm: per target (predicted residual)
+        and for 95 % of the model's held-out points (model accuracy).
+    limit_margin : float
+        Smallest acceptable distance of a joint to its position limit, deg.
+    singularity_margin : float
+        Smallest acceptable elbow and wrist singularity distance, deg.
+    shoulder_margin : float
+        Smallest acceptable shoulder singularity distance, mm.
+    """
+
+    tolerance: float = 0.1
+    limit_margin: float = 1.0
+    singularity_margin: float = 5.0
+    shoulder_margin: float = 50.0
+
+    def __post_init__(self):
+        for field in dataclasses.fields(self):
+            value = getattr(self, field.name)
+            if not (np.isfinite(value) and value >= 0):
+                raise TrajcompError(f"{field.name.replace('_', ' ')}: expected a finite number >= 0, got {value}")
+
+    def as_dict(self):
+        """``{"tolerance_mm": ..., "limit_margin_deg": ..., ...}``."""
+        units = {"tolerance": "mm", "limit_margin": "deg", "singularity_margin": "deg", "shoulder_margin": "mm"}
+        return {f"{name}_{unit}": getattr(self, name) for name, unit in units.items()}
+
+
+@dataclasses.dataclass(frozen=True)
+class Check:
+    """One criterion and its outcome.
+
+    Attributes
+    ----------
+    id : str
+        Stable key (``residual``, ``outside_grid``, ...).
+    statement : str
+        The criterion in words, with its threshold.
+    status : {"pass", "fail", "not evaluated"}
+    detail : str
+        What was found (worst value) or why it was not evaluated.
+    targets : tuple of str
+        Labels of the targets it fails for.
+    lines : tuple of int
+        Program lines it fails for (motions without a target).
+    """
+
+    id: str
+    statement: str
+    status: str
+    detail: str = ""
+    targets: tuple = ()
+    lines: tuple = ()
+
+    def as_dict(self):
+        return {**dataclasses.asdict(self), "targets": list(self.targets), "lines": list(self.lines)}
+
+
+def check(id, statement, failing, labels, detail):
+    """A Check from a boolean mask (N,) of failing targets and their labels (N,)."""
+    failing = np.asarray(failing, dtype=bool)
+    return Check(id, statement, FAIL if failing.any() else PASS, detail,
+                 targets=tuple(str(labels[k]) for k in np.flatnonzero(failing)))
+
+
+def not_evaluated(id, statement, reason):
+    """A Check that could not be evaluated, and why."""
+    return Check(id, statement, NOT_EVALUATED, reason)
+
+
+def verdict(checks):
+    """The verdict dict of a report: ``{"result": "pass" | "fail", "criteria": [...]}``."""
+    failed = any(c.status == FAIL for c in checks)
+    return {"result": FAIL if failed else PASS, "criteria": [c.as_dict() for c in checks]}
+
+
+def accuracy_check(stats, mode, tolerance, source):
+    """The model-accuracy criterion: 95th percentile |error| of ``mode`` within the tolerance.
+
+    Parameters
+    ----------
+    stats : dict or None
+        Statistics dict of the mode (`trajcomp.stats.ErrorStats.as_dict`).
+    mode : str
+    tolerance : float
+        mm.
+    source : str
+        Where the statistics come from (``"5-fold cross-validation"``,
+        ``"validation measurements"``), for the statement.
+    """
+    statement = f"95 % of {source} errors in mode {mode} within {tolerance:g} mm"
+    if not stats:
+        return not_evaluated("model_accuracy", statement, f"no statistics of mode {mode} in the model")
+    p95 = stats["p95"]
+    return Check("model_accuracy", statement, PASS if p95 <= tolerance else FAIL,
+                 f"p95 |error| {p95:.4f} mm (mean {stats['mean']:.4f}, max {stats['max']:.4f} mm, {stats['n']} points)")
