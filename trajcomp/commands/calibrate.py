@@ -2,6 +2,7 @@
 
 from trajcomp.calibrate import METHODS, calibrate
 from trajcomp.commands._args import add_robot, command_parser, info, progress, robot_of
+from trajcomp.commands._report import add_report_options, emit
 from trajcomp.measurements import parse_mapping, read_measurements
 from trajcomp.model import save_model
 from trajcomp.stats import ErrorStats, format_table
@@ -30,6 +31,7 @@ def add_parser(sub):
     parser.add_argument("--columns", type=parse_mapping, metavar="FIELD=EXPR,...",
                         help="column mapping for other layouts, e.g. j1=joint_1,mx=x_t+x_dif")
     parser.add_argument("-o", "--output", required=True, help="model file to write (.yaml)")
+    add_report_options(parser, verdict=None)
     parser.set_defaults(run=run)
 
 
@@ -53,8 +55,17 @@ def run(args):
     report = model.report
     if model.dh_names:
         info(f"identified {len(model.dh_names)} parameters; left at nominal: {', '.join(model.dh_fixed) or 'none'}")
-    print_stats(f"fit on {report['measurements']['used']} measurements (|error|, mm):", report["fit"])
-    if "cross_validation" in report:
-        print_stats(f"{report['cross_validation']['folds']}-fold cross-validation (|error|, mm):", report["cross_validation"])
+    if not (args.json_only and not args.report):
+        print_stats(f"fit on {report['measurements']['used']} measurements (|error|, mm):", report["fit"])
+        if "cross_validation" in report:
+            print_stats(f"{report['cross_validation']['folds']}-fold cross-validation (|error|, mm):",
+                        report["cross_validation"])
     info(f"wrote {args.output}")
+    if args.report or args.json_only:
+        from trajcomp.report import calibration_report, file_entry
+
+        files = [file_entry("measurements", args.measurements), file_entry("model", args.output)]
+        options = {k: v for k, v in vars(args).items() if k in ("robot", "method", "grid_step", "interpolation",
+                                                                 "frame", "loss", "folds", "columns")}
+        return emit(calibration_report(model, meas, files=files, options=options), args.report, args.json_only)
     return 0

@@ -3,12 +3,14 @@
 import dataclasses
 import functools
 import glob
+import sys
 from pathlib import Path
 
 import numpy as np
 
 from trajcomp import batch, formats
 from trajcomp.commands._args import command_parser, info
+from trajcomp.commands._report import add_report_options, criteria_of
 from trajcomp.commands.convert import add_frame_options, add_in_place_option, frame_options
 from trajcomp.compensate import program_corrector
 from trajcomp.errors import TrajcompError
@@ -16,6 +18,8 @@ from trajcomp.model import MODES, load_model
 from trajcomp.postprocess import MAX_CORRECTION, compensate_program
 from trajcomp.posture import MAX_JOINT_CHANGE
 from trajcomp.progress import progress
+from trajcomp.report import Criteria, compliance_report, file_entry, model_entry, summary_lines
+from trajcomp.transforms import matrix_to_pose
 
 
 def add_parser(sub):
@@ -26,8 +30,10 @@ def add_parser(sub):
         "posture the program declares (configuration data, turns, qnear, joints; else the previous "
         "target's), recompute configuration data from the corrected joints and write the program in "
         "the same format. A target that cannot keep its posture, or whose correction is implausibly "
-        "large, stops the run (exit 2) and nothing is written. Motions whose position is computed at "
-        "run time are listed and left as written; the run then exits 1.",
+        "large, stops the run (exit 2) and nothing is written. Every run ends with a verdict against "
+        "stated criteria (residual within --tolerance, targets inside the grid, posture kept, joint "
+        "limit and singularity margins, every motion compensated); a failing verdict exits 1 with the "
+        "program written and the report saying why.",
         "trajcomp compensate examples/ur10_path.csv --model model.yaml --mode composite -o ur10_path.compensated.csv",
         "trajcomp compensate examples/programs/csv 'examples/programs/ur/*.script' --model model.yaml -o corrected/ --jobs 2",
     )
@@ -55,6 +61,7 @@ def add_parser(sub):
                         "for a local cluster of --jobs workers)")
     parser.add_argument("--summary", metavar="PATH",
                         help="batch: summary JSON to write (default OUTDIR/summary.json)")
+    add_report_options(parser)
     parser.set_defaults(run=run)
 
 
@@ -75,36 +82,75 @@ class CompensateJob:
     max_joint_change: float = MAX_JOINT_CHANGE
     max_correction: float = MAX_CORRECTION
     in_place: bool = False
+    criteria: Criteria = Criteria()
+    report: str = None
+    report_folder: bool = False
+    json_only: bool = False
 
     def __call__(self, path, output):
         """Compensate ``path`` into ``output``; a `batch.FileResult` (raises TrajcompError on bad input)."""
+        return self.run(path, output)[0]
+
+    def run(self, path, output):
+        """Compensate ``path`` into ``output``, judge it and write its report: ``(FileResult, Report)``.
+
+        The report goes to ``report`` or, with ``report_folder``, to
+        ``report / <output name>`` (``.html`` and ``.json``).
+        """
         model = _model(self.model)
         program = formats.read(path)
+        sources = list(dict.fromkeys(formats.input_paths(path, program)))
+        files = [file_entry("program", p) for p in sources]
         correct = program_corrector(model, mode=self.mode, outside=self.outside, label=str(path))
         corrected, report = compensate_program(
             program, correct, model.nominal, tools=self.tools, frames=self.frames,
             joint_targets=self.joint_targets, max_joint_change=self.max_joint_change,
             max_correction=self.max_correction,
         )
-        protect = () if self.in_place else formats.input_paths(path, program)
+        protect = () if self.in_place else sources
         written = formats.write(output, corrected, protect=protect)
-        lines = report.lines_of_text()
-        outside = report.outside_grid
-        if outside.any():
-            lines.append(f"{int(outside.sum())} targets lie outside the compensation grid: {self.outside} policy applied")
-        lines.append(f"wrote {', '.join(map(str, written))}")
+        mode = self.mode or model.method
+        compliance = compliance_report(
+            report, model.nominal, criteria=self.criteria, model=model, model_info=_model_info(self.model, mode),
+            mode=mode, files=files + [file_entry("output", p) for p in written], options=self.options(),
+        )
+        reports = []
+        if self.report:
+            target = Path(self.report) / Path(output).name if self.report_folder else Path(self.report)
+            reports = compliance.write(target, json_only=self.json_only)
+        lines = [*summary_lines(compliance.doc), *(f"warning: {w}" for w in report.warnings),
+                 f"wrote {', '.join(map(str, written + reports))}"]
         status, message = batch.PASS, ""
-        if report.not_compensated:
+        if not compliance.passed:
+            failed = [c["id"] for c in compliance.doc["verdict"]["criteria"] if c["status"] == "fail"]
             status = batch.FAIL
-            message = (f"{len(report.not_compensated)} of {len(program.motions)} motions were not compensated "
-                       "(positions computed at run time): the program is written, but not fully corrected")
-        return batch.FileResult(str(path), tuple(map(str, written)), status, message, tuple(lines))
+            message = f"the program is written but fails its verdict ({', '.join(failed)}); see the report"
+            if report.not_compensated:
+                message += (f"; {len(report.not_compensated)} of {len(program.motions)} motions were not "
+                            "compensated (positions computed at run time)")
+        return batch.FileResult(str(path), tuple(map(str, written + reports)), status, message, tuple(lines)), compliance
+
+    def options(self):
+        """The run's options as user values, for the report's provenance."""
+        poses = {}
+        for kind in ("tools", "frames"):
+            values = {name: matrix_to_pose(T) for name, T in getattr(self, kind).items()}
+            poses[kind] = {name: [*p[:3], *np.degrees(p[3:])] for name, p in values.items()}
+        return {"mode": self.mode, "outside": self.outside, "joint_targets": self.joint_targets,
+                "max_joint_change_deg": float(np.degrees(self.max_joint_change)),
+                "max_correction_mm": self.max_correction, **poses}
 
 
 @functools.lru_cache(maxsize=4)
 def _model(path):
     """The model file, loaded once per process (a batch worker serves many files)."""
     return load_model(path)
+
+
+@functools.lru_cache(maxsize=4)
+def _model_info(path, mode):
+    """The report's model entry (file checksum, date, statistics), once per process."""
+    return model_entry(path, _model(path), mode)
 
 
 def run(args):
@@ -117,20 +163,27 @@ def run(args):
     job = CompensateJob(
         model=str(Path(args.model).resolve()), mode=args.mode, outside=args.outside, tools=tools, frames=frames,
         joint_targets=args.joint_targets, max_joint_change=np.radians(args.max_joint_change),
-        max_correction=args.max_correction, in_place=args.in_place,
+        max_correction=args.max_correction, in_place=args.in_place, criteria=criteria_of(args),
+        report=args.report, json_only=args.json_only,
     )
     _model(job.model)  # a broken model fails the run once, before any file
     first = args.program[0]
     single = len(args.program) == 1 and not Path(first).is_dir() and not glob.has_magic(first) \
         and not Path(args.output).is_dir()
     if single:
-        result = job(Path(args.program[0]), Path(args.output))
+        result, compliance = job.run(Path(args.program[0]), Path(args.output))
+        if args.json_only and not args.report:
+            sys.stdout.write(compliance.json_text())
         for line in result.lines:
             info(line)
         if result.message:
             info(f"trajcomp: {result.message}")
         return batch.EXIT_CODES[result.status]
-    return _run_batch(args, job)
+    if args.json_only and not args.report:
+        raise TrajcompError("--json-only: a batch writes one report per program; give --report FOLDER")
+    if args.report:
+        Path(args.report).mkdir(parents=True, exist_ok=True)
+    return _run_batch(args, dataclasses.replace(job, report_folder=True))
 
 
 def _run_batch(args, job):

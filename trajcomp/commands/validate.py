@@ -1,25 +1,27 @@
-"""``trajcomp validate``: a model's accuracy on measurements, per mode."""
+"""``trajcomp validate``: a model's accuracy on measurements, per mode, with a verdict."""
 
-from trajcomp.calibrate import commanded, mode_errors, to_base
+from trajcomp.atomic import write_atomic
 from trajcomp.commands._args import command_parser
-from trajcomp.errors import ToleranceError
+from trajcomp.commands._report import add_report_options, criteria_of, emit
+from trajcomp.commands.calibrate import print_stats
 from trajcomp.measurements import parse_mapping, read_measurements
 from trajcomp.model import load_model
-from trajcomp.stats import ErrorStats, format_table
+from trajcomp.report import file_entry, validation_report
 
 
 def add_parser(sub):
     parser = command_parser(
         sub, "validate", "check a model against measurements",
         "Print the statistics of |measured - predicted| per mode (none, linear, dh, grid, "
-        "composite) on a measurement CSV, e.g. a second run of validation points. With "
-        "--tolerance, exit 1 when the model's mode exceeds it (mean |error|).",
-        "trajcomp validate model.yaml validation.csv --tolerance 0.05",
+        "composite) on a measurement CSV, e.g. a second run of validation points. Exit 1 when the "
+        "95th percentile |error| of the model's mode exceeds --tolerance (the verdict of the report).",
+        "trajcomp validate model.yaml validation.csv --tolerance 0.05 --json validation.json",
     )
     parser.add_argument("model", help="model file from `trajcomp calibrate`")
     parser.add_argument("measurements", help="measurement CSV with mx, my, mz")
     parser.add_argument("--columns", type=parse_mapping, metavar="FIELD=EXPR,...", help="column mapping for other layouts")
-    parser.add_argument("--tolerance", type=float, help="maximum mean |error| of the model's mode, mm")
+    parser.add_argument("--json", metavar="PATH", help="write the statistics and verdict as JSON (trajcomp-report/1)")
+    add_report_options(parser, verdict="accuracy")
     parser.set_defaults(run=run)
 
 
@@ -27,12 +29,11 @@ def run(args):
     model = load_model(args.model)
     meas = read_measurements(args.measurements, args.columns)
     meas.require_measured()
-    joints, position = commanded(model.nominal, meas)
-    measured = to_base(model.T_tracker_base, meas.measured)
-    stats = {m: ErrorStats.from_errors(e) for m, e in mode_errors(model, joints, position, measured).items()}
-    print(f"{args.measurements}: {len(meas)} points (|measured - predicted|, mm)")
-    print(format_table(stats))
-    achieved = stats[model.method].mean
-    if args.tolerance is not None and achieved > args.tolerance:
-        raise ToleranceError(f"mode {model.method}: mean |error| {achieved:.4f} mm exceeds the tolerance {args.tolerance} mm")
-    return 0
+    files = [file_entry("model", args.model), file_entry("measurements", args.measurements)]
+    report = validation_report(model, meas, criteria=criteria_of(args), files=files,
+                               options={"columns": args.columns, "tolerance_mm": args.tolerance})
+    if not (args.json_only and not args.report):
+        print_stats(f"{args.measurements}: {len(meas)} points (|measured - predicted|, mm)", report.doc["modes"])
+    if args.json:
+        write_atomic(args.json, report.json_text())
+    return emit(report, args.report, args.json_only)

@@ -220,7 +220,7 @@ def compliance_report(report, robot, *, criteria=None, model=None, model_info=No
         checks.insert(1, accuracy_check(stats, mode, criteria.tolerance, source))
     lines = tuple(int(line) for line, *_ in report.not_compensated)
     checks.append(Check("uncompensated", "every motion compensated", FAIL if lines else PASS,
-                        f"{len(lines)} motion(s) left as written" if lines else "", lines=lines))
+                        f"{len(lines)} motion(s) left as written" if lines else "no motion left as written", lines=lines))
     checks.append(timing_check(section))
     doc = header("compliance", command)
     doc.update({

@@ -152,7 +152,8 @@ def corrections(correction_mm, correction_deg, residual, tolerance):
     bottom.axhline(tolerance, color=_OUTSIDE, lw=1.5, label=f"tolerance {tolerance:g} mm")
     bottom.set_ylabel("predicted residual (mm)")
     bottom.set_xlabel("target (motion order)")
-    bottom.legend(fontsize=8, loc="lower right")
+    bottom.legend(fontsize=8, loc="center right")
+    _integer_ticks(bottom)
     return fig
 
 
@@ -171,6 +172,7 @@ def joint_ranges(joints_deg, q_min_deg, q_max_deg, margin):
     ax.set_ylabel("position in range (0 = min, 1 = max)")
     ax.set_xlabel("target (motion order)")
     ax.legend(ncols=6, fontsize=8, loc="upper center")
+    _integer_ticks(ax)
     return fig
 
 
@@ -186,6 +188,7 @@ def singularities(distances, margins):
         ax.set_ylim(bottom=0)
         ax.set_title(f"{name} ({unit})")
         ax.set_xlabel("target")
+        _integer_ticks(ax)
     return fig
 
 
@@ -203,6 +206,13 @@ def timing_peaks(section):
     ax.set_ylabel("peak / limit (%)")
     ax.legend(ncols=3, fontsize=8)
     return fig
+
+
+def _integer_ticks(ax):
+    """Whole target numbers on the x axis."""
+    from matplotlib.ticker import MaxNLocator
+
+    ax.xaxis.set_major_locator(MaxNLocator(integer=True))
 
 
 def _box(ax, box, i, j):

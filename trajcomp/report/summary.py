@@ -1,0 +1,43 @@
+"""The one-screen text summary of a report (for stderr)."""
+
+from pathlib import Path
+
+from trajcomp.report.verdict import FAIL, NOT_EVALUATED
+
+NAMED = 6  # targets named per failed criterion
+
+
+def _concerns(criterion):
+    named = [*criterion["targets"], *(f"line {line}" for line in criterion["lines"])]
+    more = f" (+{len(named) - NAMED} more)" if len(named) > NAMED else ""
+    return ", ".join(named[:NAMED]) + more
+
+
+def verdict_lines(verdict):
+    """One line per criterion: status, id, what was found and, when failed, what it concerns."""
+    out = []
+    for c in verdict["criteria"]:
+        status = {FAIL: "FAIL", NOT_EVALUATED: "  --"}.get(c["status"], "pass")
+        found = c["detail"] if c["status"] != NOT_EVALUATED else f"not evaluated: {c['detail']}"
+        concerns = f": {_concerns(c)}" if c["status"] == FAIL and (c["targets"] or c["lines"]) else ""
+        out.append(f"  {status}  {c['id']:<15} {found}{concerns}")
+    return out
+
+
+def summary_lines(doc):
+    """The summary of a report document (list of str, at most about 20 lines)."""
+    verdict = doc.get("verdict")
+    files = [Path(f["path"]).name for f in doc["provenance"]["files"] if f["role"] in ("program", "measurements")]
+    what = f"{doc['kind']} report of {', '.join(files) or 'the run'} (robot {doc['provenance']['robot']['name']})"
+    if verdict is None:
+        out = [what]
+    else:
+        criteria = doc.get("criteria") or {}
+        tolerance = f", tolerance {criteria['tolerance_mm']:g} mm" if criteria else ""
+        out = [f"verdict: {verdict['result'].upper()}{tolerance}: {what}", *verdict_lines(verdict)]
+    summary = doc.get("summary")
+    if summary and summary["targets"]:
+        out.append(f"  {summary['targets']} targets; largest correction {summary['correction_max_mm']:.3f} mm, "
+                   f"{summary['correction_max_deg']:.3f} deg; {summary['outside_grid']} outside the grid")
+    out += [f"  missing: {m}" for m in doc["missing"]]
+    return out
