@@ -1,0 +1,149 @@
+"""Report files: JSON valid against the shipped schema, self-contained HTML, CLI exit codes, calibration figures."""
+
+import base64
+import json
+import re
+import subprocess
+import sys
+from pathlib import Path
+
+import jsonschema
+import numpy as np
+import pytest
+
+from trajcomp.cli import main
+from trajcomp.measurements import Measurements
+from trajcomp.model import load_model
+from trajcomp.report import calibration_report, schema
+from trajcomp.report.calibration import iso9283, trends
+
+EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "programs" / "kuka" / "weld.src"
+VALIDATOR = jsonschema.Draft202012Validator(schema())
+
+
+def _valid(doc):
+    errors = [f"{list(e.absolute_path)}: {e.message}" for e in VALIDATOR.iter_errors(doc)]
+    assert not errors, errors[:5]
+    return doc
+
+
+def test_the_shipped_schema_is_a_valid_json_schema():
+    jsonschema.Draft202012Validator.check_schema(schema())
+    assert schema()["properties"]["schema"]["const"] == "trajcomp-report/1"
+
+
+def _self_contained(page):
+    """The figures of a page (PNG bytes), after checking that it loads nothing from anywhere."""
+    assert not re.search(r"<script|<link|<iframe|@import|url\(", page, re.IGNORECASE)
+    assert not re.search(r"(src|href)\s*=\s*[\"'](?!data:|#)", page, re.IGNORECASE)
+    assert "http://" not in page and "https://" not in page
+    images = re.findall(r'<img [^>]*src="data:image/png;base64,([A-Za-z0-9+/=]+)"', page)
+    return [base64.b64decode(data) for data in images]
+
+
+def test_compensate_writes_a_valid_report_and_a_self_contained_page(tmp_path, kuka_model, capsys):
+    out = tmp_path / "weld.src"
+    assert main(["compensate", str(EXAMPLE), "--model", str(kuka_model), "-o", str(out),
+                 "--report", str(tmp_path / "weld-report")]) == 0
+    err = capsys.readouterr().err
+    assert "verdict: PASS" in err and len(err.splitlines()) < 25
+    doc = _valid(json.loads((tmp_path / "weld-report.json").read_text()))
+    assert doc["kind"] == "compliance" and doc["verdict"]["result"] == "pass"
+    roles = {f["role"]: f for f in doc["provenance"]["files"]}
+    assert set(roles) == {"program", "output"} and doc["provenance"]["model"]["mode"] == "composite"
+    assert [t["label"].split()[0] for t in doc["targets"]] == ["P1", "P2", "P3", "P4", "P5"]
+    figures = _self_contained((tmp_path / "weld-report.html").read_text())
+    assert len(figures) == 4 and all(png.startswith(b"\x89PNG\r\n\x1a\n") for png in figures)
+
+
+def test_a_failing_verdict_exits_1_with_the_program_written(tmp_path, kuka_model, capsys):
+    out = tmp_path / "weld.src"
+    code = main(["compensate", str(EXAMPLE), "--model", str(kuka_model), "-o", str(out), "--json-only",
+                 "--singularity-margin", "85"])  # the weld path's wrist is 76-87 deg from its singularity
+    captured = capsys.readouterr()
+    assert code == 1 and out.exists() and (tmp_path / "weld.dat").exists()
+    doc = _valid(json.loads(captured.out))
+    failed = [c for c in doc["verdict"]["criteria"] if c["status"] == "fail"]
+    assert [c["id"] for c in failed] == ["singularity"] and failed[0]["targets"]
+    assert "FAIL  singularity" in captured.err
+
+
+def test_json_only_does_not_import_matplotlib(tmp_path, kuka_model):
+    script = (f"import sys; from trajcomp.cli import main; "
+              f"code = main(['compensate', {str(EXAMPLE)!r}, '--model', {str(kuka_model)!r}, '-o', "
+              f"{str(tmp_path / 'w.src')!r}, '--report', {str(tmp_path / 'r')!r}, '--json-only']); "
+              f"print(code, 'matplotlib' in sys.modules)")
+    run = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, check=True,
+                         cwd=Path(__file__).resolve().parents[1])
+    assert run.stdout.split() == ["0", "False"]
+    assert (tmp_path / "r.json").exists() and not (tmp_path / "r.html").exists()
+
+
+def test_validate_json_and_its_verdict(tmp_path, kuka_model):
+    folder = Path(kuka_model).parent
+    second = tmp_path / "run2.csv"
+    assert main(["simulate", str(folder / "plan.csv"), "--robot", "kuka_kr6_r900", "--seed", "1", "--run", "2",
+                 "-o", str(second)]) == 0
+    path = tmp_path / "validation.json"
+    assert main(["validate", str(kuka_model), str(second), "--json", str(path), "--tolerance", "0.5"]) == 0
+    doc = _valid(json.loads(path.read_text()))
+    assert set(doc["modes"]) == {"none", "linear", "dh", "grid", "composite"}
+    assert doc["modes"]["none"]["mean"] > 10 * doc["modes"]["composite"]["mean"]
+    tight = doc["modes"]["composite"]["p95"] * 0.9
+    assert main(["validate", str(kuka_model), str(second), "--json", str(path), "--tolerance", str(tight)]) == 1
+    assert json.loads(path.read_text())["verdict"]["result"] == "fail"
+
+
+def test_trends_recover_a_linear_error_and_ignore_the_others():
+    axis = np.arange(0.0, 500.0, 100.0)
+    position = np.stack(np.meshgrid(axis, axis, axis, indexing="ij"), -1).reshape(-1, 3)
+    errors = np.zeros_like(position)
+    errors[:, 0] = 0.002 * position[:, 1] - 0.3  # dx = 2 mm per m of y
+    got = trends(position, errors)
+    assert got["dx"]["y"]["slope_mm_per_m"] == pytest.approx(2.0)
+    assert got["dx"]["y"]["intercept_mm"] == pytest.approx(-0.3)
+    assert got["dx"]["y"]["r2"] == pytest.approx(1.0)
+    assert got["dx"]["x"]["slope_mm_per_m"] == pytest.approx(0.0, abs=1e-12) and got["dx"]["x"]["r2"] == 0.0
+    assert got["dz"]["z"] == {"slope_mm_per_m": 0.0, "intercept_mm": 0.0, "r2": 0.0}
+
+
+def test_iso9283_accuracy_and_repeatability_by_hand():
+    command = np.repeat([[500.0, 0.0, 400.0], [600.0, 0.0, 400.0]], 4, axis=0)
+    scatter = np.array([[0, 0.1, 0], [0, -0.1, 0], [0, 0, 0.1], [0, 0, -0.1]] * 2)
+    measured = command + [1.0, 0.0, 0.0] + scatter  # barycentre 1 mm off in x; every point 0.1 mm from it
+    got = iso9283(np.vstack([command, [[0.0, 0.0, 0.0]]]), np.vstack([measured, [[0.0, 0.0, 0.0]]]),
+                  np.vstack([command + [1.0, 0.0, 0.0], [[0.0, 0.0, 0.0]]]), "dh")
+    assert got["available"] and len(got["poses"]) == 2 and got["cycles_min"] == 4
+    assert got["ap_max_mm"] == pytest.approx(1.0)
+    assert got["ap_model_max_mm"] == pytest.approx(0.0, abs=1e-12)
+    assert got["rp_max_mm"] == pytest.approx(0.1)  # l-bar 0.1, S_l 0
+    assert not iso9283(command[::4], measured[::4], None, "dh")["available"]
+
+
+def test_calibration_report_with_repeats_is_valid_and_embeds_its_figures(kuka_model, tmp_path):
+    folder = Path(kuka_model).parent
+    model = load_model(kuka_model)
+    from trajcomp.measurements import read_measurements
+
+    meas = read_measurements(folder / "meas.csv")
+    twice = Measurements(joints=np.vstack([meas.joints, meas.joints[:5]]),
+                         position=np.vstack([meas.position, meas.position[:5]]),
+                         measured=np.vstack([meas.measured, meas.measured[:5] + [0.0, 0.02, 0.0]]),
+                         lines=np.arange(len(meas) + 5) + 2, path="meas.csv")
+    report = calibration_report(model, twice)
+    doc = _valid(json.loads(report.json_text()))
+    assert doc["iso9283"]["available"] and doc["iso9283"]["cycles_max"] == 2
+    assert doc["iso9283"]["rp_max_mm"] == pytest.approx(0.01, abs=1e-9)  # 2 points 0.02 mm apart: l 0.01, S_l 0
+    assert doc["parameters"]["identified"] and doc["validity"]["orientations"]["distinct"] == 1
+    assert any(m.startswith("no cross-validation") for m in doc["missing"])  # the fixture ran --folds 0
+    figures = _self_contained(report.html_text())
+    assert len(figures) == len(report.figures) == 3
+
+
+def test_calibrate_report_without_a_grid_says_so(tmp_path, kuka_model):
+    meas = Path(kuka_model).parent / "meas.csv"
+    assert main(["calibrate", str(meas), "--robot", "kuka_kr6_r900", "--method", "dh", "--folds", "0",
+                 "-o", str(tmp_path / "dh.yaml"), "--report", str(tmp_path / "cal"), "--json-only"]) == 0
+    doc = _valid(json.loads((tmp_path / "cal.json").read_text()))
+    assert doc["validity"]["grids"] == {"grid": None, "residual": None}
+    assert any(m.startswith("no grid") for m in doc["missing"])
