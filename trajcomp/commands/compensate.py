@@ -35,7 +35,7 @@ def add_parser(sub):
         "limit and singularity margins, every motion compensated); a failing verdict exits 1 with the "
         "program written and the report saying why.",
         "trajcomp compensate examples/ur10_path.csv --model model.yaml --mode composite -o ur10_path.compensated.csv",
-        "trajcomp compensate examples/programs/csv 'examples/programs/ur/*.script' --model model.yaml -o corrected/ --jobs 2",
+        "trajcomp compensate 'examples/*.csv' --model model.yaml -o corrected/ --jobs 2 --report corrected/reports",
     )
     parser.add_argument("program", nargs="+",
                         help="program file; several files, folders or glob patterns run as a batch")
