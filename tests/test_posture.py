@@ -188,3 +188,20 @@ def test_bounds_must_be_positive(tmp_path, kuka_model, capsys):
         assert main(["compensate", str(src), "--model", str(kuka_model), option, "nan", "-o",
                      str(tmp_path / "o.src")]) == 2
         assert option in capsys.readouterr().err
+
+
+def test_points_passed_to_routines_are_not_compensated_and_moving_external_axes_are_warned(tmp_path):
+    """Nothing silent: a point handed to a routine is listed with its line; a track that moves is said."""
+    robot = load_robot("kuka_kr6_r900")
+    (tmp_path / "post.dat").write_text(
+        "DEFDAT post\n"
+        "DECL E6POS P1={X 445,Y 0,Z 790,A 0,B 90,C 0,S 2,T 2,E1 0.0}\n"
+        "DECL E6POS P2={X 445,Y 0,Z 770,A 0,B 90,C 0,S 2,T 2,E1 800.0}\n"
+        "DECL E6POS P3={X 445,Y 0,Z 750,A 0,B 90,C 0,S 2,T 2,E1 0.0}\n"
+        "ENDDAT\n")
+    (tmp_path / "post.src").write_text("DEF post( )\nPTP P1\nLIN P2\nGRIP(P3, 1)\nEND\n")
+    program = formats.read(tmp_path / "post.src")
+    _, report = compensate_program(program, _stand_in(robot, np.array([0.1, 0.0, 0.0])), robot)
+    assert [(line, text) for line, text, _ in report.not_compensated] == [(4, "GRIP(P3, 1)")]
+    assert "P3" in report.not_compensated[0][2]
+    assert len(report.warnings) == 1 and "E1" in report.warnings[0] and "fixed" in report.warnings[0]

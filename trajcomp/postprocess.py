@@ -197,12 +197,27 @@ def compensate_program(program, correct, robot, *, tools=None, frames=None, join
         posture_source=tuple(source),
         outside_grid=np.zeros(len(rows), dtype=bool) if result is None else result.outside,
         predicted_residual=np.zeros(len(rows)) if result is None else result.residual,
-        not_compensated=program.not_compensated(),
+        not_compensated=program.not_compensated() + tuple(
+            (line, text, f"point {program.targets[i].label} is used here, where trajcomp cannot see the motion "
+                         "(a procedure argument, a run-time expression): left as written")
+            for i, line, text in program.referenced_targets()
+        ),
         unused=tuple(t.label for t in program.unused_targets()),
         joint_targets=tuple(program.targets[i].label for i in joint_index),
         joint_mode=joint_targets,
+        warnings=_warnings(program),
     )
     return edited, report
+
+
+def _warnings(program):
+    """What the user must know about a compensated program: external axes that move."""
+    moving = program.moving_external_axes()
+    if not moving:
+        return ()
+    return (f"the program moves external axes {', '.join(moving)} (a track or positioner): the compensation "
+            "assumes the arm's base is fixed, so targets reached after a base move are corrected for the "
+            "calibrated base only",)
 
 
 def _correction(T_target, T_command):
