@@ -73,3 +73,16 @@ def test_demo_runs_the_protocol_and_compensates_a_program(tmp_path, capsys):
         assert (tmp_path / name).exists()
     planned, compensated = (float(line.split("mean")[1].split()[0]) for line in out.splitlines() if "lands" in line)
     assert compensated < planned / 20
+
+
+def test_running_a_command_imports_no_other_command(tmp_path):
+    """Start-up: `trajcomp formats` and `--version` do not import the calibration or report stack."""
+    import subprocess
+    import sys
+
+    code = ("import sys\nfrom trajcomp.cli import main\ntry:\n    main({argv})\nfinally:\n"
+            "    print(sorted(m for m in sys.modules if m.startswith(('trajcomp.commands.', 'trajcomp.calibrate', "
+            "'trajcomp.report', 'matplotlib', 'scipy.interpolate'))))")
+    for argv, allowed in ((["formats"], ["trajcomp.commands.formats"]), (["--version"], [])):
+        done = subprocess.run([sys.executable, "-c", code.format(argv=argv)], capture_output=True, text=True)
+        assert done.stdout.strip().splitlines()[-1] == str(allowed), (argv, done.stdout, done.stderr)

@@ -27,23 +27,36 @@ COMMANDS = (
 )
 
 
-def build_parser():
-    """The argument parser with every sub-command registered."""
+def build_parser(only=None):
+    """The argument parser with every sub-command registered, or only those named in ``only``.
+
+    Each command's module imports what its work needs (numpy, scipy,
+    matplotlib...): registering only the command being run keeps the
+    others' imports out of its start-up.
+    """
     parser = argparse.ArgumentParser(
         prog="trajcomp",
         description="Offline absolute-accuracy compensation for 6-axis robot arms.",
     )
     parser.add_argument("--version", action="version", version=f"trajcomp {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
-    for name in COMMANDS:
+    for name in COMMANDS if only is None else only:
         module = importlib.import_module(f"trajcomp.commands.{name}")
         module.add_parser(sub)
     return parser
 
 
+def _needed(argv):
+    """The commands a command line needs registered: the one it runs, none for --version, else all (None)."""
+    if argv and argv[0] in COMMANDS:
+        return (argv[0],)
+    return () if argv == ["--version"] else None
+
+
 def main(argv=None):
     """Run the CLI; returns the exit code (also used as the console script)."""
-    parser = build_parser()
+    argv = sys.argv[1:] if argv is None else list(argv)
+    parser = build_parser(_needed(argv))
     args = parser.parse_args(argv)
     logging.basicConfig(level=logging.WARNING, format="trajcomp: warning: %(message)s")
     try:
