@@ -141,6 +141,10 @@ def test_what_cannot_be_right_is_refused(cell, comp, branches):
         trajcomp.Compensator(cell.model, max_correction=0.1).filter_target(POSE, joints_hint=branches[3])
     with pytest.raises(IKError, match="pose 1"):
         comp.filter_target(POSE + [3000, 0, 0, 0, 0, 0])  # out of reach
+    with pytest.raises(IKError, match=r"weld P7 \(line 2\)"):  # the caller's names for its poses
+        comp.filter_targets([POSE, POSE + [3000, 0, 0, 0, 0, 0]], names=["weld P6", "weld P7"])
+    with pytest.raises(TrajcompError, match="names: 1 names for 2 poses"):
+        comp.filter_targets([POSE, POSE], names=["P1"])
     skewed = matrix(POSE)
     skewed[0, 0] += 0.01
     with pytest.raises(TrajcompError, match="not a rigid transform"):

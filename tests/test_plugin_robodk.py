@@ -47,6 +47,16 @@ except ImportError:
     pass
 
 
+class CountingCompensator(trajcomp.Compensator):
+    """A Compensator that counts its vectorized calls."""
+
+    calls = 0
+
+    def filter_targets(self, *args, **kwargs):
+        self.calls += 1
+        return super().filter_targets(*args, **kwargs)
+
+
 class VendorPost:
     """A stand-in vendor RobotPost: every method records its name and arguments."""
 
@@ -91,7 +101,8 @@ def planned_joints(cell):
 def generated(request, robodk_plugin, cell):
     """A program generated through the wrapper as RoboDK would, and the vendor's record of it."""
     Mat = request.param
-    RobotPost = robodk_plugin.compensated_post(VendorPost, model=cell.model_path)
+    counting = CountingCompensator(cell.model_path)
+    RobotPost = robodk_plugin.compensated_post(VendorPost, model=counting)
     post = RobotPost("KUKA_KRC4_trajcomp", "UR10", 6, lines_x_prog=5000)
     pose = [Mat(matrix(t).tolist()) for t in TARGETS]
     joints = planned_joints(cell)
@@ -106,7 +117,8 @@ def generated(request, robodk_plugin, cell):
     post.MoveC(pose[2], joints[2], pose[3], joints[3], CONF, tuple(CONF))
     post.ProgFinish("weld")
     post.ProgSave("/tmp/robodk", "weld")
-    return {"post": post, "calls": post.vendor.calls, "Mat": Mat, "joints": joints, "home": home}
+    return {"post": post, "calls": post.vendor.calls, "Mat": Mat, "joints": joints, "home": home,
+            "batches": counting.calls}
 
 
 def moves(calls):
@@ -153,6 +165,7 @@ def test_types_and_everything_else_pass_through(generated):
     for pose, joints, conf in moves(calls):
         assert type(pose) is Mat and isinstance(joints, list) and len(joints) == 6
     assert [conf for _, _, conf in moves(calls)] == [CONF, CONF, CONF, tuple(CONF)]  # same posture, same flags
+    assert generated["batches"] == 1  # the path's three moves (four poses) in one vectorized call
     post = generated["post"]
     post.PROG = "written"
     assert post.vendor.PROG == "written" and post.PROG == "written"
@@ -164,13 +177,25 @@ def test_a_station_that_is_not_the_calibrated_cell_is_refused(robodk_plugin, cel
     joints = planned_joints(cell)
     post.setFrame(StandInMat(matrix(FRAME).tolist()))
     post.setTool(StandInMat(matrix((0, 0, 5.0, 0, 0, 0)).tolist()))  # RoboDK's tool is 5 mm longer
-    with pytest.raises(TrajcompError, match=r"MoveL: .* 5.000 mm .* not the calibrated one"):
+    with pytest.raises(TrajcompError, match=r"MoveL #1: .* 5.000 mm .* not the calibrated one"):
         post.MoveL(StandInMat(matrix(TARGETS[0]).tolist()), joints[0], CONF)
-    with pytest.raises(TrajcompError, match="without joints"):
+    with pytest.raises(TrajcompError, match="MoveL #1: RoboDK gave a pose without joints"):
         post.MoveL(StandInMat(matrix(TARGETS[0]).tolist()), None, CONF)
     with pytest.raises(TrajcompError, match="7 axes"):
         RobotPost("post", "UR10 on a track", 7)
     assert [name for name, _ in post.vendor.calls] == ["setFrame", "setTool"]  # no move was written
+
+
+def test_an_error_in_a_batch_names_the_move(robodk_plugin, cell):
+    strict = trajcomp.Compensator(cell.model_path, max_correction=0.1)
+    post = robodk_plugin.compensated_post(VendorPost, model=strict)("post", "UR10", 6)
+    post.setFrame(StandInMat(matrix(FRAME).tolist()))
+    joints = planned_joints(cell)
+    post.MoveJ(StandInMat(matrix(TARGETS[0]).tolist()), joints[0], CONF)
+    post.MoveC(StandInMat(matrix(TARGETS[2]).tolist()), joints[2], StandInMat(matrix(TARGETS[3]).tolist()),
+               joints[3], CONF, CONF)
+    with pytest.raises(TrajcompError, match=r"exceed 0.1 mm.*MoveJ #1 .*MoveC #2 via .*MoveC #2 end"):
+        post.ProgFinish("weld")
 
 
 def test_flags_follow_a_joint_across_its_boundary(robodk_plugin, cell):

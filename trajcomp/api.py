@@ -172,7 +172,7 @@ class Compensator:
         result = self.filter_targets(single[None], tool, frame, hint)
         return result.poses[0], result.joints[0], result.correction[0]
 
-    def filter_targets(self, poses, tool=None, frame=None, joints_hint=None):
+    def filter_targets(self, poses, tool=None, frame=None, joints_hint=None, names=None):
         """Commands for a stack of target poses (a path), in one vectorized run.
 
         Parameters
@@ -184,6 +184,10 @@ class Compensator:
         joints_hint : array_like, shape (N, 6) or (6,), optional
             Joints (deg) choosing each pose's posture; default: each pose
             nearest the joints of the one before (the first nearest home).
+        names : sequence of str, length N, optional
+            How error messages name the poses (e.g. the caller's move
+            numbers), each followed by its 1-based place in the stack as
+            ``(line k)``; default ``pose k``.
 
         Returns
         -------
@@ -191,10 +195,13 @@ class Compensator:
 
         Raises
         ------
-        As `filter_target`; messages name the poses ``pose k`` (1-based).
+        As `filter_target`; messages name the poses.
         """
         T, form = _pose_stack(poses, "poses")
         n = len(T)
+        names = [f"pose {k + 1}" for k in range(n)] if names is None else [str(name) for name in names]
+        if len(names) != n:
+            raise TrajcompError(f"names: {len(names)} names for {n} poses")
         hint = None if joints_hint is None else self._hint(joints_hint, n)
         tools = {} if tool is None else {_TOOL: _one_pose(tool, "tool")}
         frames = {} if frame is None else {_FRAME: self.robot.T_world_base @ _one_pose(frame, "frame")}
@@ -203,7 +210,7 @@ class Compensator:
             name="filter_targets",
             items=tuple(Motion(LINEAR, target=k, tool=_TOOL if tools else None, frame=_FRAME if frames else None,
                                line=k + 1) for k in range(n)),
-            targets=tuple(Target(name=f"pose {k + 1}", line=k + 1, pose=T[k], joints=None if hint is None else hint[k])
+            targets=tuple(Target(name=names[k], line=k + 1, pose=T[k], joints=None if hint is None else hint[k])
                           for k in range(n)),
             tools=tools,
             frames=frames,
@@ -315,9 +322,9 @@ def filter_target(pose, tool=None, frame=None, joints_hint=None, *, model, **opt
     return compensator(model, **options).filter_target(pose, tool, frame, joints_hint)
 
 
-def filter_targets(poses, tool=None, frame=None, joints_hint=None, *, model, **options):
+def filter_targets(poses, tool=None, frame=None, joints_hint=None, names=None, *, model, **options):
     """`Compensator.filter_targets` with a model file, model or Compensator (see `compensator`)."""
-    return compensator(model, **options).filter_targets(poses, tool, frame, joints_hint)
+    return compensator(model, **options).filter_targets(poses, tool, frame, joints_hint, names)
 
 
 def filter_program(path, out_path=None, *, model, tools=None, frames=None, joint_targets="keep", in_place=False,

@@ -24,7 +24,8 @@ The joints RoboDK plans choose the posture (`trajcomp.Compensator`); they
 must be the joints of the pose on the model's nominal robot with the active
 tool and frame (1 mm, 1 deg), so a station whose robot, tool or frame
 differs from the calibrated one is refused instead of compensated wrongly.
-Joint moves without a pose (``MoveJ(None, joints)``) pass unchanged.
+Joint moves without a pose (``MoveJ(None, joints)``) pass unchanged. Moves
+are compensated in batches, a whole path in one vectorized call.
 """
 
 import numpy as np
@@ -69,19 +70,26 @@ class CompensatedPost:
     post's arguments. Attributes other than its own (``PROG``, ``LOG``, ...)
     are the vendor post's.
 
+    Moves with a pose are queued and compensated together, in one
+    vectorized call, as soon as anything else reaches the post (a frame,
+    tool, speed, message, the end of the program, an attribute): a long
+    machining path costs milliseconds, not milliseconds per point. The
+    vendor post receives every call in RoboDK's order.
+
     Raises
     ------
     TrajcompError
         A robot with external axes (its poses depend on them), a pose
-        without joints, joints that are not the pose's, or any error of
-        `trajcomp.Compensator.filter_targets` (posture, implausible
-        correction, unreachable); RoboDK then shows the message and writes
-        no program.
+        without joints or with joints that are not the pose's (at once), or
+        any error of `trajcomp.Compensator.filter_targets` for a queued move
+        (posture, implausible correction, unreachable; named ``MoveL #n``,
+        the n-th move of the program); RoboDK then shows the message and
+        writes no program.
     """
 
     VENDOR_POST = None
     COMPENSATOR = None
-    _OWN = frozenset({"vendor", "tool", "frame", "moves", "outside", "largest"})
+    _OWN = frozenset({"vendor", "tool", "frame", "queue", "count", "moves", "outside", "largest"})
 
     def __init__(self, *args, **kwargs):
         axes = kwargs.get("robot_axes", args[2] if len(args) > 2 else 6)
@@ -91,28 +99,33 @@ class CompensatedPost:
         self.vendor = self.VENDOR_POST(*args, **kwargs)
         self.tool = None  # T_flange_tool of setTool, mm (None: the calibrated TCP)
         self.frame = None  # T_base_frame of setFrame, mm (None: the robot base)
-        self.moves, self.outside, self.largest = 0, 0, 0.0
+        self.queue = []  # moves waiting for compensation: (method, label, targets, T (k, 4, 4), hint (k, 6))
+        self.count = 0  # moves with a pose so far
+        self.moves, self.outside, self.largest = 0, 0, 0.0  # poses compensated, of them outside the grid, mm
 
     def __getattr__(self, name):
-        vendor = self.__dict__.get("vendor")
-        if vendor is None:
+        if "vendor" not in self.__dict__:
             raise AttributeError(name)
-        return getattr(vendor, name)
+        self._flush()
+        return getattr(self.vendor, name)
 
     def __setattr__(self, name, value):
         if name in self._OWN:
             object.__setattr__(self, name, value)
         else:
+            self._flush()
             setattr(self.vendor, name, value)
 
     # ------------------------------------------------------- program frame
 
     def ProgStart(self, *args, **kwargs):
+        self._flush()
         self.vendor.ProgStart(*args, **kwargs)
         self._comment(f"compensated by trajcomp {__version__}: robot {self.COMPENSATOR.robot.name}, "
                       f"mode {self.COMPENSATOR.mode}")
 
     def ProgFinish(self, *args, **kwargs):
+        self._flush()
         summary = f"trajcomp: {self.moves} poses compensated, largest correction {self.largest:.3f} mm"
         if self.outside:
             summary += f"; {self.outside} outside the calibrated grid ({self.COMPENSATOR.outside} policy)"
@@ -121,11 +134,13 @@ class CompensatedPost:
 
     def setFrame(self, pose, *args, **kwargs):
         """The reference frame of the following poses, in the robot base frame."""
+        self._flush()
         self.frame = _matrix(pose)
         self.vendor.setFrame(pose, *args, **kwargs)
 
     def setTool(self, pose, *args, **kwargs):
         """The TCP of the following poses, in the flange frame."""
+        self._flush()
         self.tool = _matrix(pose)
         self.vendor.setTool(pose, *args, **kwargs)
 
@@ -133,39 +148,56 @@ class CompensatedPost:
 
     def MoveJ(self, pose, joints, conf_RLF=None):
         if pose is None:  # a joint target: the joints are the program's
+            self._flush()
             self.vendor.MoveJ(pose, joints, conf_RLF)
             return
-        (pose, joints, conf_RLF), = self._compensate("MoveJ", [(pose, joints, conf_RLF)])
-        self.vendor.MoveJ(pose, joints, conf_RLF)
+        self._enqueue("MoveJ", [(pose, joints, conf_RLF)])
 
     def MoveL(self, pose, joints, conf_RLF=None):
-        (pose, joints, conf_RLF), = self._compensate("MoveL", [(pose, joints, conf_RLF)])
-        self.vendor.MoveL(pose, joints, conf_RLF)
+        self._enqueue("MoveL", [(pose, joints, conf_RLF)])
 
     def MoveC(self, pose1, joints1, pose2, joints2, conf_RLF_1=None, conf_RLF_2=None):
-        (pose1, joints1, conf_RLF_1), (pose2, joints2, conf_RLF_2) = self._compensate(
-            "MoveC", [(pose1, joints1, conf_RLF_1), (pose2, joints2, conf_RLF_2)])
-        self.vendor.MoveC(pose1, joints1, pose2, joints2, conf_RLF_1, conf_RLF_2)
+        self._enqueue("MoveC", [(pose1, joints1, conf_RLF_1), (pose2, joints2, conf_RLF_2)])
 
-    def _compensate(self, move, targets):
-        """``[(pose, joints, conf_RLF)]`` of a move's targets replaced by their commands, in their types."""
-        comp = self.COMPENSATOR
-        T = np.array([_matrix(pose) for pose, _, _ in targets])
+    def _enqueue(self, method, targets):
+        """Check a move's targets ``[(pose, joints, conf_RLF)]`` now; queue them for compensation."""
+        label = f"{method} #{self.count + 1}"
         if any(joints is None for _, joints, _ in targets):
-            raise TrajcompError(f"{move}: RoboDK gave a pose without joints; the posture to keep is unknown")
+            raise TrajcompError(f"{label}: RoboDK gave a pose without joints; the posture to keep is unknown")
+        T = np.array([_matrix(pose) for pose, _, _ in targets])
         hint = np.array([np.asarray(joints, dtype=float)[:6] for _, joints, _ in targets])
-        self._check_hint(move, T, hint)
-        result = comp.filter_targets(T, tool=self.tool, frame=self.frame, joints_hint=hint)
-        self.moves += len(targets)
+        self._check_hint(label, T, hint)
+        self.queue.append((method, label, targets, T, hint))
+        self.count += 1
+
+    def _flush(self):
+        """Compensate the queued moves in one call and hand them to the vendor post, in order."""
+        queue, self.queue = self.queue, []
+        if not queue:
+            return
+        comp = self.COMPENSATOR
+        hint = np.concatenate([q[4] for q in queue])
+        names = [label + ("" if len(targets) == 1 else (" via", " end")[k])
+                 for _, label, targets, _, _ in queue for k in range(len(targets))]
+        result = comp.filter_targets(np.concatenate([q[3] for q in queue]), tool=self.tool, frame=self.frame,
+                                     joints_hint=hint, names=names)
+        self.moves += len(hint)
         self.outside += int(result.outside_grid.sum())
         self.largest = max(self.largest, float(np.linalg.norm(result.correction[:, :3], axis=1).max()))
-        return [
-            (_like(pose, result.poses[k]), _like(joints, result.joints[k]),
-             conf_after(comp.robot, conf, hint[k], result.joints[k]))
-            for k, (pose, joints, conf) in enumerate(targets)
-        ]
+        row = 0
+        for method, _, targets, _, _ in queue:
+            commands = []
+            for pose, joints, conf in targets:
+                commands.append((_like(pose, result.poses[row]), _like(joints, result.joints[row]),
+                                 conf_after(comp.robot, conf, hint[row], result.joints[row])))
+                row += 1
+            poses, joints, confs = zip(*commands)
+            if method == "MoveC":
+                self.vendor.MoveC(poses[0], joints[0], poses[1], joints[1], confs[0], confs[1])
+            else:
+                getattr(self.vendor, method)(poses[0], joints[0], confs[0])
 
-    def _check_hint(self, move, T, hint):
+    def _check_hint(self, label, T, hint):
         """Refuse joints that are not the pose's on the model's robot with the active tool and frame."""
         robot = self.COMPENSATOR.robot
         tool = robot.T_flange_tool if self.tool is None else self.tool
@@ -178,7 +210,7 @@ class CompensatedPost:
         if bad.size:
             k = bad[0]
             raise TrajcompError(
-                f"{move}: the joints RoboDK gives ({np.round(hint[k], 3).tolist()} deg) put the tool "
+                f"{label}: the joints RoboDK gives ({np.round(hint[k], 3).tolist()} deg) put the tool "
                 f"{distance[k]:.3f} mm and {angle[k]:.3f} deg from the pose on robot {robot.name} of the model: "
                 "the station's robot, tool or reference frame is not the calibrated one"
             )
