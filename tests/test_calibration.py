@@ -8,7 +8,7 @@ from trajcomp.compensate import compensate
 from trajcomp.errors import ModelError
 from trajcomp.kinematics import fk
 from trajcomp.measurements import Measurements
-from trajcomp.model import load_model, save_model
+from trajcomp.model import FORMAT, load_model, save_model
 from trajcomp.plan import default_orientation, plan_grid
 from trajcomp.robot import load_robot
 from trajcomp.simulate import VirtualRobot
@@ -88,7 +88,7 @@ def test_model_file_errors(setup, tmp_path):
     save_model(path, model)
     with pytest.raises(ModelError, match="is for robot 'ur10', not 'ur5'"):
         load_model(path, robot="ur5")
-    path.write_text(path.read_text().replace("trajcomp-model/1", "trajcomp-model/9"))
+    path.write_text(path.read_text().replace(FORMAT, "trajcomp-model/9"))
     with pytest.raises(ModelError, match="not supported"):
         load_model(path)
     (tmp_path / "other.yaml").write_text("a: 1\n")
@@ -105,7 +105,7 @@ def test_large_grid_goes_to_a_sidecar(tmp_path):
                         lines=np.arange(len(q)))
     model = calibrate(robot, meas, grid_step=10, folds=0)
     save_model(tmp_path / "small.yaml", model)
-    assert (tmp_path / "small.npz").exists()
+    assert (tmp_path / "small.yaml.npz").exists()
     back = load_model(tmp_path / "small.yaml")
     points = plan.position[:50] + 3.0
     np.testing.assert_allclose(back.predict("composite", q[:50], points)[0], model.predict("composite", q[:50], points)[0])

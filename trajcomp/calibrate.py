@@ -1,9 +1,20 @@
 """Calibration: from measurements to a compensation model, with cross-validation.
 
 One call fits every part the data allows (the paper's linear correction, the
-DH identification, the grid of raw errors, the grid of residuals after the DH
-model), so that `validate` can compare the modes on the same model. Fit and
-k-fold cross-validation statistics are recorded in the model's report.
+kinematic identification with TCP and tracker registration, the grid of raw
+errors, and the composite's residual after the kinematic model), so that
+`validate` can compare the modes on the same model. Data that cannot be what
+it claims is refused (`trajcomp.plausibility`). Gross outliers are named by
+line, weigh nothing in the robust fit and are left out of the grids, their
+nodes filled from the model. Fit and k-fold cross-validation statistics are
+recorded in the model's report.
+
+The composite's residual depends on the data: measured at one tool
+orientation (the paper's protocol), it is a field over the commanded
+position (``idw8`` by default); measured at several orientations or with
+orientations (6-DoF), it is the joint-angle error model of
+`trajcomp.joint_errors`, identified with a refinement of the DH parameters,
+which holds at any orientation and for any tool.
 """
 
 import logging
@@ -11,20 +22,25 @@ import logging
 import numpy as np
 
 from trajcomp.errors import CalibrationError
-from trajcomp.grid import fit_field
-from trajcomp.identify import best_fit_transform, identify_dh
+from trajcomp.grid import KINDS, METHODS as LATTICE_INTERPOLATORS, fit_field
+from trajcomp.identify import LOSSES, ORIENTATION_WEIGHT, best_fit_transform, identify, outlier_rows
 from trajcomp.ik import ik
+from trajcomp.joint_errors import KIND as JOINT_KIND
+from trajcomp.joint_errors import JointResidual, is_term
 from trajcomp.kinematics import fk
 from trajcomp.linear import fit_linear
 from trajcomp.model import CompensationModel
+from trajcomp.orientations import MIN_AXIS_OFFSET, MIN_SPREAD, axis_offset, locates_flange, orientation_spread
+from trajcomp.parameters import is_robot_parameter
 from trajcomp.plan import batch_seed
+from trajcomp.plausibility import check_columns, check_identification, check_units
 from trajcomp.stats import ErrorStats, kfold_indices
-from trajcomp.transforms import invert, pose_to_matrix
+from trajcomp.transforms import abc_to_matrix, invert, pose_to_matrix
 
 log = logging.getLogger(__name__)
 
 METHODS = ("linear", "dh", "grid", "composite")
-LATTICE_INTERPOLATORS = ("idw8", "trilinear")
+INTERPOLATIONS = ("auto", JOINT_KIND, *KINDS)
 
 
 def commanded(robot, meas):
@@ -53,38 +69,110 @@ def to_base(T_tracker_base, measured):
     return measured @ T_base_tracker[:3, :3].T + T_base_tracker[:3, 3]
 
 
-class _Parts:
-    """The fitted parts of a model, from one training set."""
+def register(model, joints, position, measured):
+    """Base pose (4, 4) in a new tracker placement, from reference rows measured there.
 
-    def __init__(self, robot, joints, position, measured, *, method, grid_step, interpolation, loss):
-        errors = measured - position
-        self.linear = fit_linear(position, errors)
-        self.dh = None
+    The model's predicted positions (its default mode) of the reference rows
+    are fitted rigidly to their measured positions (tracker frame), as
+    `trajcomp.identify.best_fit_transform`.
+
+    Raises
+    ------
+    CalibrationError
+        Fewer than 3 reference rows.
+    """
+    if len(measured) < 3:
+        raise CalibrationError(f"{len(measured)} reference rows cannot register a tracker: at least 3 are needed")
+    predicted = model.predict(model.method, joints, position, outside="clamp")[0]
+    return best_fit_transform(predicted, measured)
+
+
+def residual_kind(interpolation, joints, spread, oriented):
+    """The composite residual's kind for ``interpolation`` ('auto' chooses from the data)."""
+    if interpolation not in INTERPOLATIONS:
+        raise CalibrationError(f"unknown interpolation {interpolation!r} (one of {', '.join(INTERPOLATIONS)})")
+    if interpolation == "auto":
+        several = joints is not None and (oriented or spread[0] >= MIN_SPREAD)
+        return JOINT_KIND if several else "idw8"
+    if interpolation == JOINT_KIND and joints is None:
+        raise CalibrationError("the joint residual needs the commanded joints j1..j6 or full poses x..c")
+    return interpolation
+
+
+class _Parts:
+    """The fitted parts of a model, from one training set in the base frame.
+
+    ``dh`` may be given (the full-data fit, which also registered the
+    tracker). Gross outliers (`trajcomp.identify.outlier_rows` of the best
+    kinematic model's residuals: the joint residual's when there is one)
+    weigh nothing in the robust fits; the linear fit and the scattered
+    fields leave them out, the lattice grids fill their nodes from the model.
+    """
+
+    def __init__(self, robot, joints, position, measured, rotation, *, method, grid_step, kind, loss,
+                 orientation_weight, R_tcp_target=None, dh=None):
+        self.dh = dh
         self.grid = None
         self.residual = None
-        if joints is not None and method in ("dh", "composite"):
-            self.dh = identify_dh(robot, joints, measured, loss=loss)
+        self.left_out = np.zeros(len(position), dtype=bool)
+        if dh is None and joints is not None and method in ("dh", "composite"):
+            self.dh = identify(robot, joints, measured, rotation=rotation, loss=loss,
+                               orientation_weight=orientation_weight, R_tcp_target=R_tcp_target)
+        modelled = None
+        if self.dh is not None:
+            modelled = fk(self.dh.robot, joints)[:, :3, 3]
+            self.left_out[self.dh.outliers] = True
+            if method == "composite" and kind == JOINT_KIND:
+                self.residual = _joint_residual(robot, self.dh, joints, measured, rotation, loss, orientation_weight)
+                modelled = fk(self.residual.robot(self.dh.robot), self.residual.reached(robot, joints))[:, :3, 3]
+                self.left_out = np.zeros(len(position), dtype=bool)
+                self.left_out[outlier_rows(measured - modelled)] = True
+        keep = ~self.left_out
+        errors = measured - position
+        self.linear = fit_linear(position[keep], errors[keep])
         if method in ("grid", "composite"):
-            self.grid = fit_field(position, errors, step=grid_step, interpolation=interpolation)
-            if self.dh is not None:
-                self.residual = fit_field(position, self.dh.residuals, step=grid_step, interpolation=interpolation)
+            fill = errors if modelled is None else np.where(self.left_out[:, None], modelled - position, errors)
+            self.grid = _field(position, fill, self.left_out, "knn" if kind == JOINT_KIND else kind, grid_step)
+        if self.dh is not None and method == "composite" and kind != JOINT_KIND:
+            residuals = np.where(self.left_out[:, None], 0.0, measured - modelled)
+            self.residual = _field(position, residuals, self.left_out, kind, grid_step)
 
-    def model(self, robot, robot_ref, method, T_tracker_base, report):
+    def model(self, robot, robot_ref, method, T_tracker_base, report, places):
         dh = self.dh
+        robot_names = [n for n in dh.names if is_robot_parameter(n)] if dh else []
+        pick = [dh.names.index(n) for n in robot_names]
         return CompensationModel(
             nominal=robot,
             robot_ref=robot_ref,
             method=method,
             T_tracker_base=T_tracker_base,
-            dh_names=list(dh.names) if dh else [],
-            dh_delta=dh.delta if dh else np.zeros(0),
-            dh_sigma=dh.sigma if dh else np.zeros(0),
+            dh_names=robot_names,
+            dh_delta=dh.delta[pick] if dh else np.zeros(0),
+            dh_sigma=dh.sigma[pick] if dh else np.zeros(0),
             dh_fixed=dict(dh.identifiability.fixed) if dh else {},
             linear=self.linear,
             grid=self.grid,
             residual=self.residual,
             report=report,
+            R_tcp_target=dh.R_tcp_target if dh else np.eye(3),
+            places_other_tools=places[0],
+            other_tools_reason=places[1],
         )
+
+
+def _field(position, values, left_out, kind, grid_step):
+    """A field over commanded positions; lattice kinds take the left-out rows' model values, the others drop them."""
+    if kind in LATTICE_INTERPOLATORS:
+        return fit_field(position, values, step=grid_step, interpolation=kind, left_out=left_out)
+    return fit_field(position[~left_out], values[~left_out], interpolation=kind)
+
+
+def _joint_residual(nominal, dh, joints, measured, rotation, loss, orientation_weight):
+    """Joint-error terms and a DH refinement on top of the kinematic fit (frames as that fit found them)."""
+    refined = identify(dh.robot, joints, measured, rotation=rotation, joint_terms=True, loss=loss, nominal=nominal,
+                       orientation_weight=orientation_weight, R_tcp_target=dh.R_tcp_target)
+    pick = [k for k, n in enumerate(refined.names) if is_robot_parameter(n) or is_term(n)]
+    return JointResidual([refined.names[k] for k in pick], refined.delta[pick], joints.min(axis=0), joints.max(axis=0))
 
 
 def mode_errors(model, joints, position, measured, interpolation=None):
@@ -95,110 +183,167 @@ def mode_errors(model, joints, position, measured, interpolation=None):
     }
 
 
-def calibrate(robot, meas, *, robot_ref=None, method="composite", frame="base", grid_step=None,
-              interpolation="idw8", loss="linear", folds=5, seed=0, progress=None):
+def other_tools(robot, method, kind, joints, spread, oriented):
+    """``(places, reason)``: can a model fitted so place a tool other than the measured TCP?"""
+    if joints is None or method in ("linear", "grid"):
+        return False, f"mode {method} predicts from the commanded TCP position only: it knows nothing of the flange"
+    turned = f"the measurements turn the tool by {spread[0]:.1f} and {spread[1]:.1f} deg RMS about its two main axes"
+    if not locates_flange(spread):
+        return False, (f"{turned}; at least {MIN_SPREAD:g} deg about two axes are needed to locate the flange, so a "
+                       "tool other than the measured TCP may miss by tenths of a mm: measure at several orientations "
+                       "(trajcomp plan --orientations)")
+    offset = axis_offset(robot)
+    if not oriented and offset < MIN_AXIS_OFFSET:
+        return False, (f"{turned}, but the measured point lies {offset:.1f} mm from the last joint's axis, so the "
+                       "direction of that axis is not seen and a tool at another distance may miss by tenths of a mm: "
+                       f"measure a point at least {MIN_AXIS_OFFSET:g} mm off the axis, or orientations too (6-DoF)")
+    if method == "composite" and kind != JOINT_KIND:
+        return False, (f"{turned}, but the composite residual is a {kind} field over the measured TCP's positions; "
+                       "calibrate with --interpolation joint (or use mode dh) for other tools")
+    return True, (f"{turned}{' with orientations measured' if oriented else f' at {offset:.0f} mm from the last axis'}"
+                  ": the flange is located; another tool lands as the measured one does, as far as its offset from "
+                  "the flange is exact and the zero of the last joint is right (one measured frame cannot see it)")
+
+
+def calibrate(robot, meas, *, robot_ref=None, method="composite", frame=None, grid_step=None,
+              interpolation="auto", loss="huber", folds=5, seed=0, progress=None,
+              orientation_weight=ORIENTATION_WEIGHT):
     """Identify a compensation model from measurements.
 
     Parameters
     ----------
     robot : Robot
-        Nominal robot.
+        Nominal robot, with the nominal TCP of the measured point.
     meas : Measurements
-        Commanded joints and/or poses with measured TCP positions.
+        Commanded joints and/or poses with measured TCP positions (and
+        optionally orientations).
     robot_ref : str, optional
         How the robot is named in the model file (default: its name).
     method : {"linear", "dh", "grid", "composite"}
         The model's default mode; every part it needs is fitted.
-    frame : {"base", "tracker"}
-        Frame of the measured positions; ``tracker`` estimates the base
-        registration (best-fit rigid transform, refined by the DH fit).
-    grid_step : float, optional
+    frame : {"base", "tracker"}, optional
+        Frame of the measured columns (default: as the file's layout states,
+        else base); ``tracker`` identifies the base registration with the arm.
+    grid_step : float or array_like of 3 floats, optional
         Expected lattice step, mm (checked against the data).
     interpolation : str
-        Interpolator of the grids (idw8, trilinear, knn, rbf).
+        The composite's residual: ``auto`` (joint for data at several
+        orientations or with orientations, else idw8), ``joint``, or a field
+        over positions (idw8, trilinear, knn, rbf); the raw-error grid uses
+        the field (idw8 when ``joint``).
     loss : str
-        Robust loss of the DH fit (linear, soft_l1, huber, cauchy).
+        Robust loss of the identification (linear, soft_l1, huber, cauchy).
     folds : int
         k of the k-fold cross-validation (0 or 1: none).
     seed : int
-        Seeds the fold split.
+        Seeds the fold split (>= 0).
     progress : callable, optional
         Called with a text line as the folds run.
+    orientation_weight : float
+        mm per rad of orientation residual (6-DoF data).
 
     Returns
     -------
     CompensationModel
         Its ``report`` holds ``fit`` and ``cross_validation`` statistics per
-        mode, ``warnings`` and the outlier rows.
+        mode, ``warnings`` and the outlier lines.
 
     Raises
     ------
     CalibrationError
-        Unknown method, no measured columns, joints missing for a DH method,
-        too few points for the parameters, or a degenerate grid.
+        Unknown method or interpolation, no measured columns, joints missing
+        for a DH method, implausible data or identification, too few points
+        for the parameters, or a degenerate grid.
     """
     if method not in METHODS:
         raise CalibrationError(f"unknown method {method!r} (one of {', '.join(METHODS)})")
+    if loss not in LOSSES:
+        raise CalibrationError(f"unknown loss {loss!r} (one of {', '.join(LOSSES)})")
+    if not (isinstance(seed, (int, np.integer)) and seed >= 0):
+        raise CalibrationError(f"seed must be a non-negative integer, got {seed!r}")
     if meas.measured is None:
         raise CalibrationError(f"{meas.path}: measured columns mx, my, mz are required")
+    frame = frame or meas.frame or "base"
     joints, position = commanded(robot, meas)
     if joints is None and method in ("dh", "composite"):
         raise CalibrationError(f"{meas.path}: method {method} needs commanded joints j1..j6 or a full pose x..c")
+    check_columns(meas)
+    rotation = None if meas.measured_orientation is None else abc_to_matrix(meas.measured_orientation)
+    spread = orientation_spread(fk(robot, joints)[:, :3, :3] if joints is not None else abc_to_matrix(
+        meas.orientation if meas.orientation is not None else np.zeros((1, 3))))
+    kind = residual_kind(interpolation, joints, spread, rotation is not None)
+    T_tracker_base = best_fit_transform(position, meas.measured) if frame == "tracker" else np.eye(4)
+    nominal_error = np.linalg.norm(to_base(T_tracker_base, meas.measured) - position, axis=1)
+    check_units(meas, position, meas.measured, nominal_error)
+    dh = None
+    if joints is not None:
+        dh = identify(robot, joints, meas.measured, rotation=rotation, frame=frame, loss=loss,
+                      orientation_weight=orientation_weight)
+        check_identification(meas.path, dh, robot.T_flange_tool)
+        T_tracker_base = dh.T_tracker_base
+    measured = to_base(T_tracker_base, meas.measured)
+    rotation_base = None if rotation is None else invert(T_tracker_base)[:3, :3] @ rotation
     warnings = []
-    measured = meas.measured
-    T_tracker_base = np.eye(4)
-    if frame == "tracker":
-        T_tracker_base = best_fit_transform(position, measured)
-        measured = to_base(T_tracker_base, measured)
-    _, first, counts = np.unique(np.round(position, 3), axis=0, return_index=True, return_counts=True)
+    command = position if joints is None else np.column_stack([position, np.degrees(joints)])
+    _, first, counts = np.unique(np.round(command, 3), axis=0, return_index=True, return_counts=True)
     if np.any(counts > 1):
         lines = meas.lines[np.sort(first[counts > 1])][:10].tolist()
-        warnings.append(f"{int((counts - 1).sum())} rows repeat an earlier command (first at lines {lines}); their measurements are averaged by the grid")
-    options = dict(method=method, grid_step=grid_step, interpolation=interpolation, loss=loss)
-    parts = _Parts(robot, joints, position, measured, **options)
-    keep = np.ones(len(meas), dtype=bool)
-    if parts.dh is not None and len(parts.dh.outliers):
-        keep[parts.dh.outliers] = False
-        lines = meas.lines[parts.dh.outliers].tolist()
-        warnings.append(f"{len(lines)} gross outliers (residual far beyond the others) left out, lines {lines[:20]}")
-        parts = _Parts(robot, joints[keep], position[keep], measured[keep], **options)
-    joints, position, measured = _rows(joints, keep), position[keep], measured[keep]
+        warnings.append(f"{int((counts - 1).sum())} rows repeat an earlier command (first at lines {lines}); "
+                        "their measurements are averaged by the grid")
+    options = dict(method=method, grid_step=grid_step, kind=kind, loss=loss, orientation_weight=orientation_weight)
+    parts = _Parts(robot, joints, position, measured, rotation_base, dh=dh, **options)
+    left_out = parts.left_out
+    keep = ~left_out
+    if left_out.any():
+        lines = meas.lines[left_out].tolist()
+        warnings.append(f"{len(lines)} gross outliers (residual far beyond the others) weigh nothing in the fit and "
+                        f"are left out of the grids, their nodes filled from the model: lines {lines[:20]}"
+                        + (" ..." if len(lines) > 20 else ""))
     report = {
-        "measurements": {"file": meas.path, "rows": len(meas), "used": int(keep.sum()), "frame": frame},
+        "measurements": {"file": meas.path, "rows": len(meas), "used": int(keep.sum()), "frame": frame,
+                         "orientation_spread_deg": [round(float(v), 3) for v in spread]},
+        "residual": kind,
         "warnings": warnings,
-        "outlier_lines": meas.lines[~keep].tolist(),
+        "outlier_lines": meas.lines[left_out].tolist(),
     }
-    if parts.dh is not None:
-        report["identifiability"] = {"condition": parts.dh.identifiability.condition}
-    model = parts.model(robot, robot_ref or robot.name, method, T_tracker_base, report)
-    report["fit"] = {m: ErrorStats.from_errors(e).as_dict() for m, e in mode_errors(model, joints, position, measured).items()}
+    if dh is not None:
+        report["identifiability"] = {"condition": dh.identifiability.condition,
+                                     "fixed": dict(dh.identifiability.fixed)}
+    places = other_tools(robot, method, kind, joints, spread, rotation is not None)
+    model = parts.model(robot, robot_ref or robot.name, method, T_tracker_base, report, places)
+    report["fit"] = {m: ErrorStats.from_errors(e).as_dict() for m, e in
+                     mode_errors(model, _rows(joints, keep), position[keep], measured[keep]).items()}
     if folds > 1:
         report["cross_validation"] = cross_validate(
-            robot, joints, position, measured, options, folds, seed, progress
+            robot, _rows(joints, keep), position[keep], measured[keep], _rows(rotation_base, keep),
+            options | {"R_tcp_target": None if dh is None else dh.R_tcp_target}, folds, seed, progress,
         )
     for message in warnings:
         log.warning(message)
     return model
 
 
-def cross_validate(robot, joints, position, measured, options, folds, seed, progress=None):
+def cross_validate(robot, joints, position, measured, rotation, options, folds, seed, progress=None):
     """k-fold cross-validation statistics per mode, as a dict of ErrorStats dicts.
 
-    Held-out nodes leave holes in a lattice, so the folds evaluate the
+    The folds fit in the base frame (the tracker registration of the full
+    fit). Held-out nodes leave holes in a lattice, so the folds evaluate the
     lattice interpolators (idw8, trilinear) by their scattered counterpart,
     inverse-distance weighting over the 8 nearest training nodes; the report
     names the interpolator the folds used.
     """
     if len(position) < 2 * folds:
         raise CalibrationError(f"{len(position)} measurements are too few for {folds}-fold cross-validation")
-    if options["interpolation"] in LATTICE_INTERPOLATORS:
-        options = options | {"interpolation": "knn", "grid_step": None}
+    if options["kind"] in LATTICE_INTERPOLATORS:
+        options = options | {"kind": "knn", "grid_step": None}
     collected = {}
     for k, (train, test) in enumerate(kfold_indices(len(position), folds, seed)):
         if progress:
             progress(f"cross-validation fold {k + 1}/{folds}")
-        parts = _Parts(robot, _rows(joints, train), position[train], measured[train], **options)
-        model = parts.model(robot, robot.name, options["method"], np.eye(4), {})
+        parts = _Parts(robot, _rows(joints, train), position[train], measured[train], _rows(rotation, train), **options)
+        model = parts.model(robot, robot.name, options["method"], np.eye(4), {}, (False, ""))
         for mode, err in mode_errors(model, _rows(joints, test), position[test], measured[test]).items():
             collected.setdefault(mode, []).append(err)
-    return {"folds": folds, "interpolation": options["interpolation"]} | {m: ErrorStats.from_errors(np.concatenate(e)).as_dict() for m, e in collected.items()}
+    return {"folds": folds, "interpolation": options["kind"]} | {
+        m: ErrorStats.from_errors(np.concatenate(e)).as_dict() for m, e in collected.items()
+    }

@@ -3,9 +3,10 @@
 For targets T (TCP poses in the base frame) and a mode of the model, find
 joints q such that the model's *predicted reached* pose is T, and emit the
 nominal-model pose of q (what the nominal controller must receive) with q.
-The reached position is ``FK_true(q) + f(c)`` where FK_true is the identified
-robot (``dh``, ``composite``) or the nominal one (``none``, ``linear``,
-``grid``), f the additive error field of the mode (zero, the linear error
+The reached position is ``FK_true(q) + f(c)`` where FK_true is the model's
+arm (`CompensationModel.arm`: the identified robot, with joint-angle errors
+for a composite fitted at several orientations, or the nominal one), f the
+additive error field of the mode (zero, the linear error
 model, the raw-error grid or the residual grid) and c the commanded position,
 at which the field was measured. Because f depends on c, the solution is a
 short fixed-point iteration; the field is smooth, so three passes converge
@@ -105,15 +106,13 @@ def compensate(model, targets, *, mode=None, tool=None, seed=None, outside="mode
     model.check_mode(mode)
     targets = np.asarray(targets, dtype=float)
     nominal = model.nominal if tool is None else model.nominal.replace(T_flange_tool=tool)
-    real = nominal
-    if mode in ("dh", "composite"):
-        real = model.identified if tool is None else model.identified.replace(T_flange_tool=tool)
+    arm = model.arm(mode, tool, outside)
     field = model.error_field(mode)
     seed = batch_seed(nominal, targets) if seed is None else seed
     goal = targets[:, :3, 3]
     commanded = goal.copy()
     flagged = np.zeros(len(targets), dtype=bool)
-    passes = ITERATIONS if mode in ("linear", "grid", "composite") else 1
+    passes = ITERATIONS if mode == "linear" or field is not None else 1
     q = None
     for _ in range(passes):
         aimed = targets.copy()
@@ -122,17 +121,17 @@ def compensate(model, targets, *, mode=None, tool=None, seed=None, outside="mode
         elif field is not None:
             offset, flagged = evaluate_field(field, commanded, outside=outside)
             aimed[:, :3, 3] = goal - offset
-        solved = _solve(real, nominal, aimed, seed if q is None else q)
-        q = solved.raise_on_failure(label, names).q
+        solved = _solve(arm.robot, nominal, aimed, seed if q is None else q)
+        q = arm.commanded_joints(solved.raise_on_failure(label, names).q)
         command = fk(nominal, q)
         commanded = command[:, :3, 3]
-    reached = fk(real, q)[:, :3, 3]
+    reached = arm.fk(q)[:, :3, 3]
     if mode == "linear":
         reached = reached + model.linear.predict_error(commanded)
     elif field is not None:
         reached = reached + evaluate_field(field, commanded, outside=outside)[0]
     residual = np.linalg.norm(reached - goal, axis=1)
-    return CompensationResult(command, q, commanded - goal, flagged, residual)
+    return CompensationResult(command, q, commanded - goal, flagged | arm.outside_rows(q), residual)
 
 
 SEED_NEAR = (10.0, 0.05)  # mm, rad: a seed this close to its target starts Gauss-Newton directly
@@ -173,11 +172,9 @@ def program_corrector(model, *, mode=None, outside="model", label="program"):
             pick = np.flatnonzero(group.ravel() == g)
             tool = tools[pick[0]]
             measured_tcp = same_tool(tool, model.nominal.T_flange_tool)
-            if not measured_tcp:
-                log.warning(
-                    "%s: %d targets use a tool other than the calibrated TCP; a model measured in one "
-                    "orientation does not locate the flange, so they may miss by tenths of a mm", label, len(pick),
-                )
+            if not measured_tcp and not model.places_other_tools:
+                log.warning("%s: %d targets use a tool other than the calibrated TCP: %s",
+                            label, len(pick), model.other_tools_reason)
             parts.append(compensate(model, targets[pick], mode=mode, tool=None if measured_tcp else tool,
                                     seed=seeds[pick], outside=outside, label=label,
                                     names=[names[k] for k in pick]))

@@ -188,12 +188,12 @@ def node_counts(lattice, index):
     return np.bincount(flat, minlength=np.prod(lattice.shape)).reshape(lattice.shape)
 
 
-def _node_means(lattice, index, data):
-    """Per-node average of per-point data (N, 3) -> (nx, ny, nz, 3); nodes must all have points."""
+def _node_means(lattice, index, data, weights):
+    """Per-node weighted average of per-point data (N, 3) -> (nx, ny, nz, 3); every node must have weight."""
     flat = np.ravel_multi_index(index.T, lattice.shape)
     size = int(np.prod(lattice.shape))
-    sums = np.stack([np.bincount(flat, weights=data[:, c], minlength=size) for c in range(3)], axis=-1)
-    return (sums / np.bincount(flat, minlength=size)[:, None]).reshape(*lattice.shape, 3)
+    sums = np.stack([np.bincount(flat, weights=weights * data[:, c], minlength=size) for c in range(3)], axis=-1)
+    return (sums / np.bincount(flat, weights=weights, minlength=size)[:, None]).reshape(*lattice.shape, 3)
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -231,7 +231,7 @@ class ResidualGrid:
             raise ModelError(f"residual grid: unknown method {self.method!r} (one of {', '.join(METHODS)})")
 
     @classmethod
-    def from_points(cls, points, values, tol=TOLERANCE, method="idw8", measured=None, step=None):
+    def from_points(cls, points, values, tol=TOLERANCE, method="idw8", measured=None, step=None, left_out=None):
         """Build a grid from errors measured at (approximately) lattice points.
 
         Parameters
@@ -249,6 +249,10 @@ class ResidualGrid:
             coordinates used by ``idw8``.
         step : float or array_like of 3 floats, optional
             Expected lattice step, mm, see :func:`detect_lattice`.
+        left_out : array_like of bool, shape (N,), optional
+            Rows (outliers) whose values and measured positions come from a
+            model, not a measurement: a node takes them only when it has no
+            other row.
 
         Returns
         -------
@@ -277,8 +281,12 @@ class ResidualGrid:
                 f"have no measurement, first node {tuple(first.tolist())} at "
                 f"{fmt_point(lattice.origin + first * lattice.step)} mm; measure them or use a scattered interpolator"
             )
-        nodes = None if m is None else _node_means(lattice, index, m)
-        return cls(lattice, _node_means(lattice, index, v), nodes, method)
+        weights = np.ones(len(p)) if left_out is None else (~np.asarray(left_out, dtype=bool)).astype(float)
+        flat = np.ravel_multi_index(index.T, lattice.shape)
+        empty = np.bincount(flat, weights=weights, minlength=counts.size) == 0
+        weights[empty[flat]] = 1.0  # a node with only left-out rows takes their model values
+        nodes = None if m is None else _node_means(lattice, index, m, weights)
+        return cls(lattice, _node_means(lattice, index, v, weights), nodes, method)
 
     @property
     def node_positions(self):

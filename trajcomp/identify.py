@@ -1,14 +1,20 @@
-"""Kinematic identification: least-squares fit of DH deltas, tool and base.
+"""Kinematic identification: one robust least-squares fit of the whole arm.
 
-The parameters are deltas to the nominal standard DH table (``a``, ``alpha``,
-``d``, ``theta`` per joint; Hayati ``beta`` for links joining nominally
-parallel axes, where ``d`` is ill-conditioned), the TCP position in the
-flange frame and, for tracker-frame data, the base pose. Which of them the
-data can identify is decided by QR with column pivoting of the scaled
-Jacobian: redundant or weak parameters stay at their nominal value and are
-reported, with the reason. The fit is a (robust) nonlinear least-squares
-problem solved by ``scipy.optimize.least_squares``; parameter uncertainties
-come from the covariance of the solution.
+Unknowns (see `trajcomp.parameters`): DH deltas, the TCP position in the
+flange frame, for 6-DoF data the orientation of the measured frame, for
+tracker-frame data the base registration, and optionally the joint-error
+terms of `trajcomp.joint_errors`. All are refined together by Gauss-Newton
+on the analytic Jacobian, vectorized over the N measurements, starting from
+the nominal robot (and a best-fit registration of its TCP positions).
+
+Residuals per measurement: the position error (mm) and, when orientations
+are measured, the orientation error (rotation vector, rad) times
+``orientation_weight`` (mm per rad): the stated weighting of one against the
+other. A robust loss (iteratively re-weighted) bounds the pull of any one
+measurement; gross outliers are reported by row, not silently dropped.
+Which parameters the data identify is decided by QR with column pivoting
+of the scaled Jacobian over the whole parameter set; the others stay at
+their starting value and are reported with the reason.
 """
 
 import dataclasses
@@ -16,110 +22,28 @@ import logging
 
 import numpy as np
 from scipy.linalg import qr
-from scipy.optimize import least_squares
 
+from trajcomp import joint_errors
 from trajcomp.errors import CalibrationError
 from trajcomp.kinematics import fk
-from trajcomp.transforms import invert, rotvec_to_matrix
+from trajcomp.parameters import (
+    BASE_NAMES,
+    TARGET_NAMES,
+    apply_deltas,
+    candidate_parameters,
+    is_robot_parameter,
+    pose_jacobian,
+    scales,
+)
+from trajcomp.transforms import invert, matrix_to_rotvec, rotvec_to_matrix
 
 log = logging.getLogger(__name__)
 
-ANGLE_LEVER = 1000.0  # mm: an angle parameter is scaled as its effect at this lever arm
-BASE_NAMES = ("base_x", "base_y", "base_z", "base_rx", "base_ry", "base_rz")
-TOOL_NAMES = ("tool_x", "tool_y", "tool_z")
-_FD_STEP = 1e-6  # scaled units (mm, or rad * ANGLE_LEVER)
-
-
-def candidate_parameters(robot, *, base=False, tool=True):
-    """Names of the parameters a fit may adjust, for a standard-DH robot.
-
-    Parameters
-    ----------
-    robot : Robot
-    base : bool
-        Include the six base-pose parameters (tracker-frame data).
-    tool : bool
-        Include the TCP position in the flange frame.
-
-    Returns
-    -------
-    list of str
-        e.g. ``["a1", "alpha1", "d1", "theta1", ..., "beta2", ..., "tool_x"]``.
-    """
-    std = robot.as_standard()
-    names = []
-    for i in range(6):
-        names += [f"a{i + 1}", f"alpha{i + 1}", f"d{i + 1}", f"theta{i + 1}"]
-        if i < 5 and abs(np.sin(std.alpha[i])) < 1e-6:
-            names.append(f"beta{i + 1}")
-    if base:
-        names += BASE_NAMES
-    if tool:
-        names += TOOL_NAMES
-    return names
-
-
-def is_angle(name):
-    """True for parameters in rad, False for those in mm."""
-    return name.startswith(("alpha", "theta", "beta", "base_r"))
-
-
-def apply_deltas(robot, names, delta):
-    """The robot with parameter deltas applied.
-
-    Parameters
-    ----------
-    robot : Robot
-        Nominal robot (any convention; the result is standard DH).
-    names : sequence of str
-        Parameter names, see `candidate_parameters`.
-    delta : array_like, shape (P,)
-        Deltas in mm or rad.
-    """
-    std = robot.as_standard()
-    table = {key: getattr(std, key).copy() for key in ("a", "alpha", "d", "theta_offset", "beta")}
-    base = np.zeros(6)
-    tool = np.zeros(3)
-    for name, value in zip(names, delta):
-        if name.startswith("base_"):
-            base[BASE_NAMES.index(name)] = value
-        elif name.startswith("tool_"):
-            tool[TOOL_NAMES.index(name)] = value
-        else:
-            kind, joint = name[:-1], int(name[-1]) - 1
-            table["theta_offset" if kind == "theta" else kind][joint] += value
-    T_base_link0 = std.T_base_link0
-    if np.any(base):
-        shift = np.eye(4)
-        shift[:3, :3] = rotvec_to_matrix(base[3:])
-        shift[:3, 3] = base[:3]
-        T_base_link0 = shift @ T_base_link0
-    T_flange_tool = std.T_flange_tool.copy()
-    T_flange_tool[:3, 3] += tool
-    return std.replace(T_base_link0=T_base_link0, T_flange_tool=T_flange_tool, **table)
-
-
-def _scales(names):
-    return np.array([1.0 / ANGLE_LEVER if is_angle(n) else 1.0 for n in names])
-
-
-def position_jacobian(robot, q, names, delta):
-    """d(TCP position)/d(scaled parameter), by forward differences.
-
-    Returns
-    -------
-    ndarray, shape (3 N, P)
-        Rows ordered x1, y1, z1, x2, ...; columns per scaled parameter
-        (mm per mm, or mm per ``ANGLE_LEVER`` rad).
-    """
-    scales = _scales(names)
-    base = fk(apply_deltas(robot, names, delta), q)[:, :3, 3].ravel()
-    jac = np.empty((base.size, len(names)))
-    for k in range(len(names)):
-        step = np.array(delta, dtype=float)
-        step[k] += _FD_STEP * scales[k]
-        jac[:, k] = (fk(apply_deltas(robot, names, step), q)[:, :3, 3].ravel() - base) / _FD_STEP
-    return jac
+LOSSES = ("linear", "soft_l1", "huber", "cauchy")
+ORIENTATION_WEIGHT = 100.0  # mm/rad: 1 mrad of orientation error weighs as 0.1 mm of position error
+ROBUST_SCALE = 3.0  # the loss turns robust beyond this many median residual norms
+MAX_ITERATIONS = 50
+STEP_TOLERANCE = 1e-7  # mm (or rad * ANGLE_LEVER): converged when no scaled parameter moves more
 
 
 @dataclasses.dataclass(frozen=True)
@@ -130,7 +54,7 @@ class Identifiability:
     ----------
     kept : list of str
     fixed : dict
-        ``{name: reason}`` for parameters left at their nominal value.
+        ``{name: reason}`` for parameters left at their starting value.
     condition : float
         Condition number of the scaled Jacobian of the kept parameters.
     """
@@ -146,13 +70,15 @@ def analyse_identifiability(jac, names, rtol=1e-3):
     Parameters
     ----------
     jac : ndarray, shape (M, P)
-        Scaled Jacobian (see `position_jacobian`).
+        Scaled Jacobian (columns per mm, or per ``ANGLE_LEVER`` rad).
     names : sequence of str
     rtol : float
         A parameter is kept while its pivot ``|R_kk|`` is at least ``rtol``
         times the largest; below that its effect is redundant with the kept
         ones (or too weak to estimate) and it is fixed.
     """
+    if jac.shape[0] > jac.shape[1]:
+        jac = np.linalg.qr(jac, mode="r")  # same pivots and singular values, P x P: cheap to pivot
     _, r, perm = qr(jac, mode="economic", pivoting=True)
     diag = np.zeros(len(names))  # fewer rows than parameters: the rest have no pivot
     diag[: min(r.shape)] = np.abs(np.diag(r))
@@ -162,40 +88,8 @@ def analyse_identifiability(jac, names, rtol=1e-3):
     for p, d in zip(perm[~keep], diag[~keep]):
         reason = "redundant with kept parameters" if d < 1e-6 * diag[0] else "too weakly observed by these measurements"
         fixed[names[p]] = f"{reason} (pivot {d / diag[0]:.1e})"
-    sub = jac[:, [names.index(n) for n in kept]]
-    sv = np.linalg.svd(sub, compute_uv=False)
+    sv = np.linalg.svd(jac[:, [names.index(n) for n in kept]], compute_uv=False)
     return Identifiability(kept, fixed, float(sv[0] / sv[-1]))
-
-
-@dataclasses.dataclass(frozen=True, eq=False)
-class DHFit:
-    """Result of `identify_dh`.
-
-    Attributes
-    ----------
-    robot : Robot
-        Identified robot (standard DH), base frame = the robot's base.
-    names : list of str
-        Identified parameters.
-    delta, sigma : ndarray, shape (P,)
-        Deltas to nominal and their standard deviations (mm or rad).
-    identifiability : Identifiability
-    residuals : ndarray, shape (N, 3)
-        Measured minus identified TCP position, mm, base frame.
-    outliers : ndarray
-        Indices of rows whose residual is a gross outlier.
-    T_tracker_base : ndarray, shape (4, 4)
-        Base pose in the tracker frame (identity for base-frame data).
-    """
-
-    robot: object
-    names: list
-    delta: np.ndarray
-    sigma: np.ndarray
-    identifiability: Identifiability
-    residuals: np.ndarray
-    outliers: np.ndarray
-    T_tracker_base: np.ndarray
 
 
 def best_fit_transform(src, dst):
@@ -208,6 +102,12 @@ def best_fit_transform(src, dst):
     out[:3, :3] = rot
     out[:3, 3] = cd - rot @ cs
     return out
+
+
+def mean_rotation(rotations):
+    """The rotation (3, 3) nearest, in the chordal sense, to a stack of rotations (N, 3, 3)."""
+    u, _, vt = np.linalg.svd(np.sum(rotations, axis=0))
+    return u @ np.diag([1.0, 1.0, np.sign(np.linalg.det(u @ vt))]) @ vt
 
 
 def outlier_rows(residuals, threshold=6.0, min_excess=0.5):
@@ -224,25 +124,202 @@ def outlier_rows(residuals, threshold=6.0, min_excess=0.5):
     return np.flatnonzero(norm > median + max(threshold * spread, min_excess))
 
 
-def identify_dh(robot, q, measured, *, frame="base", tool=True, loss="linear", rtol=1e-3):
-    """Least-squares identification of the robot's kinematic parameters.
+def robust_weights(norms, loss):
+    """IRLS weights (N,) of residual norms (N,) for a loss, scale `ROBUST_SCALE` median norms."""
+    if loss not in LOSSES:
+        raise CalibrationError(f"unknown loss {loss!r} (one of {', '.join(LOSSES)})")
+    if loss == "linear":
+        return np.ones_like(norms)
+    z = norms / max(ROBUST_SCALE * np.median(norms), 1e-9)
+    if loss == "huber":
+        return np.where(z <= 1.0, 1.0, 1.0 / np.maximum(z, 1.0))
+    if loss == "soft_l1":
+        return 1.0 / np.sqrt(1.0 + z**2)
+    return 1.0 / (1.0 + z**2)
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class KinematicFit:
+    """Result of `identify`.
+
+    Attributes
+    ----------
+    robot : Robot
+        Identified robot (standard DH, identified TCP position), base frame
+        = the robot's base.
+    names : list of str
+        Identified parameters (DH, tool, registration, target, joint terms).
+    delta, sigma : ndarray, shape (P,)
+        Change from the start and standard deviation, mm or rad (joint
+        terms: their coefficients). For ``base_*`` and ``target_*`` the
+        change is the pose (rotation vector) of the final frame in the
+        starting one.
+    identifiability : Identifiability
+    joint_errors : JointResidual
+        The identified joint-error terms (empty without them).
+    residuals : ndarray, shape (N, 3)
+        Measured minus identified TCP position, mm, base frame.
+    rotation_residuals : ndarray, shape (N, 3), or None
+        Measured relative to identified orientation (rotation vector, rad, base axes).
+    weights : ndarray, shape (N,)
+        Final robust weight of each measurement (1 = full weight).
+    outliers : ndarray of int
+        Rows whose residual is a gross outlier (`outlier_rows`).
+    T_tracker_base : ndarray, shape (4, 4)
+        Base pose in the tracker frame (identity for base-frame data).
+    R_tcp_target : ndarray, shape (3, 3)
+        Orientation of the measured frame in the TCP frame (identity without orientations).
+    orientation_weight : float
+        mm per rad of the orientation residuals.
+    """
+
+    robot: object
+    names: list
+    delta: np.ndarray
+    sigma: np.ndarray
+    identifiability: Identifiability
+    joint_errors: object
+    residuals: np.ndarray
+    rotation_residuals: np.ndarray
+    weights: np.ndarray
+    outliers: np.ndarray
+    T_tracker_base: np.ndarray
+    R_tcp_target: np.ndarray
+    orientation_weight: float
+
+
+class _Problem:
+    """State and residuals of one fit: the robot, frames and joint terms being refined."""
+
+    def __init__(self, start, nominal, q, measured, rotation, T_tracker_base, R_tcp_target, weight):
+        self.start, self.nominal, self.q = start, nominal, q
+        self.measured, self.rotation = measured, rotation
+        self.T_tracker_base, self.R_tcp_target, self.weight = T_tracker_base, R_tcp_target, weight
+
+    def setup(self, names):
+        self.names = list(names)
+        self.terms = [n for n in names if joint_errors.is_term(n)]
+        self.features = joint_errors.features(self.nominal, self.q, self.terms)
+        self.x = np.zeros(len(names))
+
+    def state(self, x):
+        """Robot, joint errors, registration and target rotation at parameter vector x."""
+        robot_names = [n for n in self.names if is_robot_parameter(n) and not joint_errors.is_term(n)]
+        robot = apply_deltas(self.start, robot_names, [v for n, v in zip(self.names, x) if n in robot_names])
+        terms = joint_errors.JointResidual(self.terms, [v for n, v in zip(self.names, x) if n in self.terms])
+        T_tb, R_target = self.T_tracker_base.copy(), self.R_tcp_target.copy()
+        pick = {n: v for n, v in zip(self.names, x)}
+        if any(n in pick for n in BASE_NAMES):
+            step = np.eye(4)
+            step[:3, :3] = rotvec_to_matrix([pick.get(n, 0.0) for n in BASE_NAMES[3:]])
+            step[:3, 3] = [pick.get(n, 0.0) for n in BASE_NAMES[:3]]
+            T_tb = T_tb @ step
+        if any(n in pick for n in TARGET_NAMES):
+            R_target = R_target @ rotvec_to_matrix([pick.get(n, 0.0) for n in TARGET_NAMES])
+        return robot, terms, T_tb, R_target
+
+    def evaluate(self, x, jacobian=True):
+        """Residual rows (N, 3 or 6) and, optionally, their Jacobian (N, 3 or 6, P) at x."""
+        robot, terms, T_tb, R_target = self.state(x)
+        offsets = np.zeros(self.q.shape)
+        for k, name in enumerate(self.terms):
+            offsets[:, joint_errors.term_joint(name)] += self.features[:, k] * terms.values[k]
+        q = self.q + offsets @ np.linalg.inv(self.nominal.joint_map).T
+        geometric = [n for n in self.names if not joint_errors.is_term(n)]
+        thetas = [f"theta{j}" for j in range(1, 7)]
+        T_tcp, jac = pose_jacobian(robot, q, geometric + thetas, R_target) if jacobian else (fk(robot, q), None)
+        T_base_tracker = invert(T_tb)
+        measured = self.measured @ T_base_tracker[:3, :3].T + T_base_tracker[:3, 3]
+        rows = [T_tcp[:, :3, 3] - measured]
+        if self.rotation is not None:
+            R_measured = T_base_tracker[:3, :3] @ self.rotation
+            R_predicted = T_tcp[:, :3, :3] @ R_target
+            rows.append(self.weight * matrix_to_rotvec(R_predicted @ np.swapaxes(R_measured, 1, 2)))
+        residual = np.concatenate(rows, axis=1)
+        if not jacobian:
+            return residual, None
+        width = residual.shape[1]
+        jac[:, 3:] *= self.weight
+        full = np.empty((len(q), width, len(self.names)))
+        for k, name in enumerate(self.names):
+            if joint_errors.is_term(name):
+                column = jac[:, :width, len(geometric) + joint_errors.term_joint(name)]
+                full[:, :, k] = column * self.features[:, self.terms.index(name), None]
+            else:
+                full[:, :, k] = jac[:, :width, geometric.index(name)]
+        return residual, full
+
+
+def _row_norms(residual):
+    return np.linalg.norm(residual, axis=1)
+
+
+def identifiability(robot, q, *, rotation=False, frame="base", tool=True, joint_terms=False, rtol=1e-3):
+    """Which parameters measurements of the nominal robot at joints q would identify.
 
     Parameters
     ----------
     robot : Robot
-        Nominal robot.
+    q : ndarray, shape (N, 6)
+        Planned joint angles, rad.
+    rotation : bool
+        Orientations measured too (6-DoF).
+    frame, tool, joint_terms, rtol
+        As `identify`.
+
+    Returns
+    -------
+    Identifiability
+    """
+    q = np.asarray(q, dtype=float)
+    seen = fk(robot, q)
+    problem = _Problem(robot, robot, q, seen[:, :3, 3], seen[:, :3, :3] if rotation else None, np.eye(4), np.eye(3),
+                       ORIENTATION_WEIGHT)
+    names = candidate_parameters(robot, tool=tool, orientation=rotation, tracker=frame == "tracker")
+    problem.setup(names + (joint_errors.term_names() if joint_terms else []))
+    _, jac = problem.evaluate(problem.x)
+    return analyse_identifiability(jac.reshape(-1, len(problem.names)) * scales(problem.names), problem.names, rtol)
+
+
+def identify(robot, q, measured, *, rotation=None, frame="base", tool=True, joint_terms=False, loss="huber",
+             rtol=1e-3, orientation_weight=ORIENTATION_WEIGHT, nominal=None, T_tracker_base=None,
+             R_tcp_target=None, candidates=None):
+    """Robust least-squares identification of the arm, its TCP and the tracker registration.
+
+    Parameters
+    ----------
+    robot : Robot
+        Starting robot (the nominal one, or an identified one to refine).
     q : ndarray, shape (N, 6)
         Commanded joint angles, rad.
     measured : ndarray, shape (N, 3)
-        Measured TCP positions, mm, in the base frame or (``frame="tracker"``)
-        in the tracker frame.
+        Measured positions of the measured point, mm, in the base frame or
+        (``frame="tracker"``) in the tracker frame.
+    rotation : ndarray, shape (N, 3, 3), optional
+        Measured orientations of the measured frame, same frame as ``measured``.
     frame : {"base", "tracker"}
     tool : bool
         Identify the TCP position in the flange frame.
+    joint_terms : bool
+        Also identify the joint-error terms (`trajcomp.joint_errors`).
     loss : {"linear", "soft_l1", "huber", "cauchy"}
-        Robust loss of scipy.optimize.least_squares; residual scale 0.1 mm.
+        Robust loss on each measurement's residual norm, scale `ROBUST_SCALE`
+        median norms.
     rtol : float
         Identifiability threshold, see `analyse_identifiability`.
+    orientation_weight : float
+        mm per rad of orientation residual.
+    nominal : Robot, optional
+        Robot of the joint-error features (default: ``robot``).
+    T_tracker_base, R_tcp_target : ndarray, optional
+        Given registration (4, 4) and measured-frame orientation (3, 3): kept
+        fixed. Default: estimated, starting from a best fit of ``robot``.
+    candidates : sequence of str, optional
+        Restrict the parameters to these (default: all that apply).
+
+    Returns
+    -------
+    KinematicFit
 
     Raises
     ------
@@ -251,37 +328,84 @@ def identify_dh(robot, q, measured, *, frame="base", tool=True, loss="linear", r
     """
     q = np.asarray(q, dtype=float)
     measured = np.asarray(measured, dtype=float)
-    if not (np.all(np.isfinite(q)) and np.all(np.isfinite(measured))):
+    if not (np.all(np.isfinite(q)) and np.all(np.isfinite(measured))) or (
+        rotation is not None and not np.all(np.isfinite(rotation))
+    ):
         raise CalibrationError("joint or measured values contain NaN or infinity")
-    T_tracker_base = np.eye(4)
-    if frame == "tracker":
-        T_tracker_base = best_fit_transform(fk(robot, q)[:, :3, 3], measured)
-        measured = (invert(T_tracker_base) @ np.column_stack([measured, np.ones(len(measured))]).T).T[:, :3]
-    names = candidate_parameters(robot, base=frame == "tracker", tool=tool)
-    zero = np.zeros(len(names))
-    ident = analyse_identifiability(position_jacobian(robot, q, names, zero), names, rtol)
+    nominal = robot if nominal is None else nominal
+    start_tcp = fk(robot, q)
+    register = frame == "tracker" and T_tracker_base is None
+    if T_tracker_base is None:
+        T_tracker_base = best_fit_transform(start_tcp[:, :3, 3], measured) if frame == "tracker" else np.eye(4)
+    orient = rotation is not None and R_tcp_target is None
+    if R_tcp_target is None:
+        R_tcp_target = np.eye(3)
+        if rotation is not None:
+            in_base = invert(T_tracker_base)[:3, :3] @ rotation
+            R_tcp_target = mean_rotation(np.swapaxes(start_tcp[:, :3, :3], 1, 2) @ in_base)
+    names = candidate_parameters(robot, tool=tool, orientation=orient, tracker=register)
+    if joint_terms:
+        names += joint_errors.term_names()
+    if candidates is not None:
+        names = [n for n in names if n in candidates]
+    problem = _Problem(robot, nominal, q, measured, rotation, T_tracker_base, R_tcp_target, orientation_weight)
+    problem.setup(names)
+    _, jac = problem.evaluate(problem.x)
+    scale = scales(names)
+    ident = analyse_identifiability(jac.reshape(-1, len(names)) * scale, names, rtol)
     kept = ident.kept
-    if 3 * len(q) < 2 * len(kept):
+    if jac.shape[1] * len(q) < 2 * len(kept):
         raise CalibrationError(
-            f"{len(q)} measured positions are too few to identify {len(kept)} parameters "
-            f"(need at least {int(np.ceil(2 * len(kept) / 3))})"
+            f"{len(q)} measurements are too few to identify {len(kept)} parameters "
+            f"(need at least {int(np.ceil(2 * len(kept) / jac.shape[1]))})"
         )
-    scales = _scales(kept)
+    problem.setup(kept)
+    x, weights, jac = _solve(problem, scales(kept), loss)
+    residual, _ = problem.evaluate(x, jacobian=False)
+    robot_fit, terms, T_tb, R_target = problem.state(x)
+    variance = float(np.sum(weights[:, None] * residual**2) / max(residual.size - len(kept), 1))
+    normal, _ = _normal_equations(jac, residual, weights, np.ones(len(kept)))
+    sigma = np.sqrt(np.clip(np.diag(np.linalg.pinv(normal)), 0.0, None) * variance)
+    position = -residual[:, :3]
+    rotation_residuals = None if rotation is None else -residual[:, 3:] / orientation_weight
+    log.info("identified %d parameters, fixed %d, rms %.4f mm", len(kept), len(ident.fixed),
+             np.sqrt(np.mean(np.sum(position**2, axis=1))))
+    return KinematicFit(
+        robot=robot_fit, names=kept, delta=x, sigma=sigma, identifiability=ident, joint_errors=terms,
+        residuals=position, rotation_residuals=rotation_residuals, weights=weights,
+        outliers=outlier_rows(position), T_tracker_base=T_tb, R_tcp_target=R_target,
+        orientation_weight=orientation_weight,
+    )
 
-    def residual(x):
-        return (fk(apply_deltas(robot, kept, x * scales), q)[:, :3, 3] - measured).ravel()
 
-    def jacobian(x):
-        return position_jacobian(robot, q, kept, x * scales)
+def _solve(problem, scale, loss):
+    """Iteratively re-weighted Gauss-Newton with step halving.
 
-    sol = least_squares(residual, np.zeros(len(kept)), jac=jacobian, loss=loss, f_scale=0.1, method="trf")
-    delta = sol.x * scales
-    identified = apply_deltas(robot, kept, delta)
-    residuals = measured - fk(identified, q)[:, :3, 3]
-    dof = max(residuals.size - len(kept), 1)
-    variance = float(np.sum(residuals**2) / dof)
-    jac = jacobian(sol.x)
-    cov = np.linalg.pinv(jac.T @ jac) * variance
-    sigma = np.sqrt(np.clip(np.diag(cov), 0.0, None)) * scales
-    log.info("identified %d parameters, fixed %d, rms %.4f mm", len(kept), len(ident.fixed), np.sqrt(variance))
-    return DHFit(identified, kept, delta, sigma, ident, residuals, outlier_rows(residuals), T_tracker_base)
+    Each step solves the normal equations of the scaled, weighted problem
+    (P x P, cheap for any N). Returns the parameters x (P,), the final
+    weights (N,) and the Jacobian (N, rows, P) at x.
+    """
+    x = problem.x
+    residual, jac = problem.evaluate(x)
+    for _ in range(MAX_ITERATIONS):
+        weights = robust_weights(_row_norms(residual), loss)
+        normal, gradient = _normal_equations(jac, residual, weights, scale)
+        step = -np.linalg.lstsq(normal, gradient, rcond=None)[0]
+        cost = float(np.sum(weights[:, None] * residual**2))
+        for _ in range(30):  # halve until the weighted cost does not grow
+            trial = x + step * scale
+            trial_residual, trial_jac = problem.evaluate(trial)
+            if float(np.sum(weights[:, None] * trial_residual**2)) <= cost * (1 + 1e-12):
+                break
+            step = step / 2
+        x, residual, jac = trial, trial_residual, trial_jac
+        if np.max(np.abs(step), initial=0.0) < STEP_TOLERANCE:
+            break
+    return x, robust_weights(_row_norms(residual), loss), jac
+
+
+def _normal_equations(jac, residual, weights, scale):
+    """``(A^T A, A^T b)`` of the scaled Jacobian A and residual b, rows weighted."""
+    a = jac.reshape(len(jac) * jac.shape[1], -1) * scale
+    w = np.repeat(weights, jac.shape[1])
+    return a.T @ (w[:, None] * a), a.T @ (w * residual.ravel())

@@ -2,9 +2,9 @@
 
 Columns: ``j1..j6`` commanded joints (deg), ``x,y,z[,a,b,c]`` commanded TCP
 pose (mm, deg), ``mx,my,mz`` measured TCP position (mm), optional
-``mrx,mry,mrz`` measured orientation (deg). Other layouts are read through an
-explicit column mapping ``{field: expression}`` where an expression is a
-column name or a sum/difference of columns, e.g. ``{"mx": "x_t+x_dif"}``.
+``mrx,mry,mrz`` measured orientation (deg). Files in another layout (other
+column names, delimiter, decimal comma, units, rotation conventions) are read
+through an explicit `trajcomp.columns.Layout`, never by guessing.
 """
 
 import csv
@@ -12,19 +12,28 @@ import dataclasses
 import io
 import math
 import re
-from pathlib import Path
 
 import numpy as np
 
 from trajcomp.atomic import write_atomic
+from trajcomp.columns import (
+    FIELDS,
+    JOINTS,
+    MEASURED,
+    MEASURED_ORIENTATION,
+    MEASURED_QUATERNION,
+    ORIENTATION,
+    POSITION,
+    QUATERNION,
+    Layout,
+    parse_mapping,
+    rotation_to_abc,
+)
 from trajcomp.errors import ReadError
 
-JOINTS = ("j1", "j2", "j3", "j4", "j5", "j6")
-POSITION = ("x", "y", "z")
-ORIENTATION = ("a", "b", "c")
-MEASURED = ("mx", "my", "mz")
-MEASURED_ORIENTATION = ("mrx", "mry", "mrz")
-FIELDS = JOINTS + POSITION + ORIENTATION + MEASURED + MEASURED_ORIENTATION
+__all__ = ["Measurements", "parse_mapping", "read_measurements", "format_measurements", "write_measurements"]
+
+MAX_FIELD = 1000  # characters: no number in a measurement file is longer
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -42,11 +51,14 @@ class Measurements:
     measured : ndarray, shape (N, 3), or None
         Measured TCP position, mm.
     measured_orientation : ndarray, shape (N, 3), or None
-        Measured TCP orientation A, B, C, rad.
+        Measured orientation A, B, C, rad (of the measured frame).
     lines : ndarray, shape (N,)
         Line number of each row in its file (for messages).
     path : str
         Where the rows came from.
+    frame : str or None
+        Frame of the measured columns when the file's layout states it
+        (``base`` or ``tracker``).
     """
 
     joints: np.ndarray = None
@@ -56,6 +68,7 @@ class Measurements:
     measured_orientation: np.ndarray = None
     lines: np.ndarray = None
     path: str = "<memory>"
+    frame: str = None
 
     def __len__(self):
         return len(self.lines)
@@ -73,6 +86,10 @@ class Measurements:
         """Raise ReadError unless the measured columns mx, my, mz are present."""
         if self.measured is None:
             raise ReadError(f"{self.path}: measured columns mx, my, mz are required")
+
+    def describe(self, index):
+        """``file:line`` of row ``index`` (for messages)."""
+        return f"{self.path}:{int(self.lines[index])}"
 
 
 _TERM = re.compile(r"\s*([+-]?)\s*([^+\-\s][^+\-]*?)\s*(?=[+-]|$)")
@@ -93,35 +110,42 @@ def _parse_expression(expression, header, path, field):
     return terms
 
 
-def parse_mapping(text):
-    """Parse a CLI mapping ``"j1=joint_1,mx=x_t+x_dif"`` into a dict.
+def _rows(path, layout):
+    """Non-empty, non-comment rows ``[(line, cells)]`` of a file, cells with the decimal mark made '.'."""
+    try:
+        with open(path, encoding="utf-8-sig", newline="") as handle:
+            text = handle.read()
+    except (OSError, UnicodeError) as exc:
+        raise ReadError(f"{path}: cannot read: {exc}") from exc
+    rows = []
+    reader = csv.reader(io.StringIO(text), delimiter=layout.delimiter)
+    try:
+        for row in reader:
+            number = reader.line_num
+            if not row or not any(cell.strip() for cell in row) or row[0].lstrip().startswith("#"):
+                continue
+            long = [cell for cell in row if len(cell) > MAX_FIELD]
+            if long:
+                raise ReadError(
+                    f"{path}:{number}: a field of {len(long[0])} characters is too long (at most {MAX_FIELD})"
+                )
+            if layout.decimal == ",":
+                row = [cell.replace(",", ".") for cell in row]
+            rows.append((number, row))
+    except csv.Error as exc:
+        raise ReadError(f"{path}:{reader.line_num}: {exc}") from None
+    return rows
 
-    Raises
-    ------
-    ReadError
-        On an entry without ``=`` or an unknown target field.
-    """
-    mapping = {}
-    for entry in filter(None, (e.strip() for e in text.split(","))):
-        field, sep, expression = entry.partition("=")
-        field = field.strip()
-        if not sep or not expression.strip():
-            raise ReadError(f"column mapping entry {entry!r}: expected FIELD=COLUMN")
-        if field not in FIELDS:
-            raise ReadError(f"column mapping entry {entry!r}: unknown field {field!r} (one of {', '.join(FIELDS)})")
-        mapping[field] = expression.strip()
-    return mapping
 
-
-def read_measurements(path, mapping=None):
-    """Read a measurement CSV.
+def read_measurements(path, layout=None):
+    """Read a measurement file.
 
     Parameters
     ----------
     path : str or Path
-    mapping : dict, optional
-        ``{field: expression}`` for files in another layout; fields not in
-        the mapping are read from columns of their own name when present.
+    layout : Layout or dict, optional
+        The file's layout (a plain dict is taken as its ``columns``); fields
+        not mapped are read from columns of their own name when present.
 
     Returns
     -------
@@ -131,23 +155,18 @@ def read_measurements(path, mapping=None):
     ------
     ReadError
         Naming the file, line and field of a missing, non-numeric or
-        non-finite value, an incomplete column group, or an empty file.
+        non-finite value, an over-long field, an incomplete column group, a
+        bad orientation, or an empty file.
     """
     path = str(path)
-    try:
-        text = Path(path).read_text(encoding="utf-8-sig")
-    except (OSError, UnicodeError) as exc:
-        raise ReadError(f"{path}: cannot read: {exc}") from exc
-    rows = [
-        (number, row)
-        for number, row in enumerate(csv.reader(io.StringIO(text)), start=1)
-        if row and any(cell.strip() for cell in row) and not row[0].lstrip().startswith("#")
-    ]
+    if layout is None or isinstance(layout, dict):
+        layout = Layout(columns=dict(layout or {}))
+    rows = _rows(path, layout)
     if not rows:
         raise ReadError(f"{path}: no header row")
     header_line, header = rows[0]
     header = [cell.strip() for cell in header]
-    mapping = dict(mapping or {})
+    mapping = dict(layout.columns)
     for field in FIELDS:
         if field not in mapping and field in header:
             mapping[field] = field
@@ -171,31 +190,47 @@ def read_measurements(path, mapping=None):
                     raise ReadError(f"{path}:{number}: field {header[column]}: not a finite number: {cell!r}")
                 total += sign * number_value
             values[field][r] = total
+    lines = np.array([number for number, _ in data])
 
-    def group(names, scale=1.0, required=False):
+    def group(names, scale=1.0):
         present = [n for n in names if n in values]
         if not present:
-            if required:
-                raise ReadError(f"{path}: columns {', '.join(names)} are required")
             return None
         if len(present) != len(names):
             missing = [n for n in names if n not in values]
             raise ReadError(f"{path}: line {header_line}: column group {','.join(names)} lacks {', '.join(missing)}")
         return np.column_stack([values[n] for n in names]) * scale
 
-    deg = math.pi / 180.0
-    joints = group(JOINTS, deg)
-    position = group(POSITION)
+    def rotation(name, euler_fields, quaternion_fields):
+        convention = layout.convention(name)
+        fields = quaternion_fields if convention == "quaternion" else euler_fields
+        other = euler_fields if convention == "quaternion" else quaternion_fields
+        if any(n in values for n in other):
+            raise ReadError(f"{path}: {','.join(other)} need the rotation convention of {name} to be "
+                            f"{'an Euler sequence or rotvec' if convention == 'quaternion' else 'quaternion'}")
+        raw = group(fields)
+        if raw is None:
+            return None
+        try:
+            return rotation_to_abc(raw, convention, layout.scale(name))
+        except ValueError as exc:
+            bad = re.search(r"row (\d+)", str(exc))
+            where = f"{path}:{lines[int(bad.group(1))]}" if bad else path
+            raise ReadError(f"{where}: {name}: {exc}") from None
+
+    joints = group(JOINTS, layout.scale("joints"))
+    position = group(POSITION, layout.scale("position"))
     if joints is None and position is None:
         raise ReadError(f"{path}: line {header_line}: need commanded joints j1..j6 or a commanded pose x,y,z")
     return Measurements(
         joints=joints,
         position=position,
-        orientation=group(ORIENTATION, deg),
-        measured=group(MEASURED),
-        measured_orientation=group(MEASURED_ORIENTATION, deg),
-        lines=np.array([number for number, _ in data]),
+        orientation=rotation("orientation", ORIENTATION, QUATERNION),
+        measured=group(MEASURED, layout.scale("measured")),
+        measured_orientation=rotation("measured_orientation", MEASURED_ORIENTATION, MEASURED_QUATERNION),
+        lines=lines,
         path=path,
+        frame=layout.frame,
     )
 
 

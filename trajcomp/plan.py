@@ -1,10 +1,19 @@
-"""Measurement planning: a cubic grid of TCP targets, solved with nominal IK."""
+"""Measurement planning: a cubic grid of TCP targets at one or several tool orientations, solved with nominal IK.
+
+Measured at one orientation (the paper's protocol), a grid calibrates the arm
+for that orientation and TCP. At several orientations, turning the tool
+about two axes, the identification locates the flange and separates
+joint-angle errors, so the model serves other orientations and tools;
+`orientations_needed` says from how many orientations of a plan on the
+identification has all the parameters it can have.
+"""
 
 import dataclasses
 
 import numpy as np
 
 from trajcomp.errors import TrajcompError
+from trajcomp.identify import identifiability
 from trajcomp.ik import ik
 from trajcomp.kinematics import fk
 from trajcomp.transforms import abc_to_matrix, matrix_to_abc
@@ -17,9 +26,10 @@ class Plan:
     Attributes
     ----------
     position : ndarray, shape (N, 3)
-        TCP target positions, mm, base frame, x fastest then y then z.
-    orientation : ndarray, shape (3,)
-        TCP orientation A, B, C, rad, the same for every target.
+        TCP target positions, mm, base frame: grid nodes x fastest then y
+        then z, each node at every orientation in turn.
+    orientation : ndarray, shape (N, 3)
+        TCP orientation A, B, C, rad, of each target.
     joints : ndarray, shape (N, 6)
         Nominal IK solution, rad (NaN rows where unreachable).
     reachable : ndarray, shape (N,) bool
@@ -52,8 +62,10 @@ def grid_points(corner, side, step):
     """
     corner = np.asarray(corner, dtype=float)
     side = np.broadcast_to(np.asarray(side, dtype=float), (3,))
-    if step <= 0 or np.any(side < 0):
-        raise TrajcompError(f"grid: step must be positive and sides non-negative, got step {step}, side {side}")
+    if not (np.isfinite(step) and step > 0 and np.all(np.isfinite(side)) and np.all(side >= 0)
+            and np.all(np.isfinite(corner))):
+        raise TrajcompError(f"grid: step must be finite and positive, corner and sides finite, sides non-negative; "
+                            f"got corner {corner.tolist()}, side {side.tolist()}, step {step}")
     counts = side / step
     if np.any(np.abs(counts - np.round(counts)) > 1e-6):
         raise TrajcompError(f"grid: side {side.tolist()} mm is not a whole number of {step} mm steps")
@@ -85,22 +97,68 @@ def batch_seed(robot, targets):
 def plan_grid(robot, corner, side, step, orientation=None):
     """Plan a cubic measurement grid and solve every target with nominal IK.
 
-    Targets are solved on the branch nearest `batch_seed`, so that the whole
-    grid is measured in one arm configuration.
+    The targets of each orientation are solved on the branch nearest its
+    `batch_seed`, so that each orientation's grid is measured in one arm
+    configuration.
 
     Parameters
     ----------
     robot : Robot
     corner, side, step
         See `grid_points` (mm).
-    orientation : array_like, shape (3,), optional
-        A, B, C in rad; default: the home configuration's TCP orientation.
+    orientation : array_like, shape (3,) or (K, 3), optional
+        A, B, C in rad, one orientation or several; default: the home
+        configuration's TCP orientation.
     """
-    position = grid_points(corner, side, step)
-    orientation = default_orientation(robot) if orientation is None else np.asarray(orientation, dtype=float)
-    targets = np.tile(np.eye(4), (len(position), 1, 1))
-    targets[:, :3, :3] = abc_to_matrix(orientation)
-    targets[:, :3, 3] = position
-    result = ik(robot, targets, seed=batch_seed(robot, targets))
-    joints = np.where(result.success[:, None], result.q, np.nan)
-    return Plan(position, orientation, joints, result.success.copy(), np.asarray(result.reason))
+    nodes = grid_points(corner, side, step)
+    orientations = np.atleast_2d(default_orientation(robot) if orientation is None else orientation).astype(float)
+    solved = []
+    for abc in orientations:
+        targets = np.tile(np.eye(4), (len(nodes), 1, 1))
+        targets[:, :3, :3] = abc_to_matrix(abc)
+        targets[:, :3, 3] = nodes
+        solved.append(ik(robot, targets, seed=batch_seed(robot, targets)))
+
+    def order(stack):
+        """Per-orientation arrays (K, nodes, ...) -> node-major (nodes * K, ...)."""
+        stack = np.asarray(stack)
+        return np.swapaxes(stack, 0, 1).reshape(len(nodes) * len(orientations), *stack.shape[2:])
+
+    success = order([r.success for r in solved])
+    joints = np.where(success[:, None], order([r.q for r in solved]), np.nan)
+    return Plan(
+        position=np.repeat(nodes, len(orientations), axis=0),
+        orientation=np.tile(orientations, (len(nodes), 1)),
+        joints=joints,
+        reachable=success,
+        reason=order([np.asarray(r.reason) for r in solved]),
+    )
+
+
+def orientations_needed(robot, plan, *, frame="tracker", joint_terms=True):
+    """How many of a plan's orientations the identification needs, from position measurements.
+
+    Parameters
+    ----------
+    robot : Robot
+    plan : Plan
+        Its orientations are taken in their order; unreachable targets are left out.
+    frame, joint_terms
+        As `trajcomp.identify.identify`.
+
+    Returns
+    -------
+    counts : list of (int, int)
+        ``(k, identifiable parameters)`` using the first k orientations.
+    candidates : int
+        Number of candidate parameters.
+    """
+    _, first, group = np.unique(np.round(plan.orientation, 9), axis=0, return_index=True, return_inverse=True)
+    rank = np.argsort(np.argsort(first))[group.ravel()]  # orientation number in the plan's order
+    counts, candidates = [], 0
+    for k in range(1, len(first) + 1):
+        rows = (rank < k) & plan.reachable
+        ident = identifiability(robot, plan.joints[rows], frame=frame, joint_terms=joint_terms)
+        candidates = len(ident.kept) + len(ident.fixed)
+        counts.append((k, len(ident.kept)))
+    return counts, candidates

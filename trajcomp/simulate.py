@@ -6,12 +6,16 @@ goes through nominal inverse kinematics. The arm then ends where its *true*
 kinematics put it:
 
 - DH parameter errors (a, d in mm; alpha, theta offset in rad) and a small
-  error of the declared tool position;
+  error of the declared tool position. The flange is machined to the last
+  axis: link 6's a, d and alpha errors are of machining size
+  (``flange_length_sigma``, ``flange_angle_sigma``), its theta offset (the
+  joint's zero) is as large as the others'. A tool other than the measured
+  one is exact on the real flange;
 - gravity compliance: each joint deflects by the gravity torque of the links
   and payload beyond it divided by its stiffness;
 - gear eccentricity: once- and twice-per-turn joint angle errors;
 - repeatability noise on the reached position and laser-tracker noise on the
-  measurement (both isotropic Gaussian, per axis).
+  measurement (isotropic Gaussian, per axis; orientation noise for 6-DoF).
 
 Profiles (``PROFILES``): ``ideal`` (no error at all), ``paper`` (a UR10-class
 arm with 1-3 mm uncompensated error, as in the paper), ``harsh`` (twice the
@@ -23,6 +27,7 @@ import dataclasses
 import numpy as np
 
 from trajcomp.kinematics import fk, link_frames
+from trajcomp.transforms import rotvec_to_matrix
 
 GRAVITY = np.array([0.0, 0.0, -9.81])  # m/s^2, in the base frame
 
@@ -40,6 +45,8 @@ class ErrorProfile:
         DH alpha and theta-offset errors, rad.
     tool_sigma : float
         Error of the declared tool (TCP) position, mm per axis.
+    flange_length_sigma, flange_angle_sigma : float
+        Errors of link 6's a, d (mm) and alpha (rad): the flange's machining.
     link_mass : tuple of float
         Mass of links 1..6, kg (centre of mass midway along each link).
     payload : float
@@ -50,18 +57,23 @@ class ErrorProfile:
         Amplitude of the once- and twice-per-turn joint errors, rad.
     repeatability_sigma, tracker_sigma : float
         Noise of the reached and of the measured position, mm per axis.
+    tracker_angle_sigma : float
+        Noise of a measured orientation (6-DoF tracker), rad per axis.
     """
 
     name: str
     length_sigma: float = 0.0
     angle_sigma: float = 0.0
     tool_sigma: float = 0.0
+    flange_length_sigma: float = 0.0
+    flange_angle_sigma: float = 0.0
     link_mass: tuple = (0.0,) * 6
     payload: float = 0.0
     stiffness: float = np.inf
     gear_amplitude: float = 0.0
     repeatability_sigma: float = 0.0
     tracker_sigma: float = 0.0
+    tracker_angle_sigma: float = 0.0
 
     @property
     def noise_sigma(self):
@@ -78,24 +90,30 @@ PROFILES = {
         length_sigma=0.5,
         angle_sigma=np.radians(0.05),
         tool_sigma=0.2,
+        flange_length_sigma=0.01,
+        flange_angle_sigma=np.radians(0.002),
         link_mass=_UR10_MASSES,
         payload=2.0,
         stiffness=4.0e5,
         gear_amplitude=np.radians(0.004),
         repeatability_sigma=0.008,
         tracker_sigma=0.005,
+        tracker_angle_sigma=np.radians(0.003),
     ),
     "harsh": ErrorProfile(
         "harsh",
         length_sigma=1.0,
         angle_sigma=np.radians(0.1),
         tool_sigma=0.5,
+        flange_length_sigma=0.02,
+        flange_angle_sigma=np.radians(0.004),
         link_mass=_UR10_MASSES,
         payload=8.0,
         stiffness=2.0e5,
         gear_amplitude=np.radians(0.01),
         repeatability_sigma=0.02,
         tracker_sigma=0.01,
+        tracker_angle_sigma=np.radians(0.006),
     ),
 }
 
@@ -132,11 +150,14 @@ class VirtualRobot:
         std = nominal.as_standard()
         tool = std.T_flange_tool.copy()
         tool[:3, 3] += rng.normal(0.0, profile.tool_sigma, 3)
+        unit = rng.normal(0.0, 1.0, (4, 6))  # a, d, alpha, theta errors per joint, in sigmas
+        length = np.append(np.full(5, profile.length_sigma), profile.flange_length_sigma)
+        angle = np.append(np.full(5, profile.angle_sigma), profile.flange_angle_sigma)
         true_robot = std.replace(
-            a=std.a + rng.normal(0.0, profile.length_sigma, 6),
-            d=std.d + rng.normal(0.0, profile.length_sigma, 6),
-            alpha=std.alpha + rng.normal(0.0, profile.angle_sigma, 6),
-            theta_offset=std.theta_offset + rng.normal(0.0, profile.angle_sigma, 6),
+            a=std.a + unit[0] * length,
+            d=std.d + unit[1] * length,
+            alpha=std.alpha + unit[2] * angle,
+            theta_offset=std.theta_offset + unit[3] * profile.angle_sigma,
             T_flange_tool=tool,
         )
         return cls(nominal, true_robot, profile, rng.uniform(0, 2 * np.pi, (6, 2)), seed)
@@ -189,3 +210,11 @@ class VirtualRobot:
         """Tracker measurements of the TCP position (N, 3) mm, base frame, noisy."""
         positions = self.reached_poses(q_cmd, rng)[:, :3, 3]
         return positions + rng.normal(0.0, self.profile.tracker_sigma, positions.shape)
+
+    def measure_poses(self, q_cmd, rng):
+        """6-DoF tracker measurements of the TCP frame (N, 4, 4), base frame, noisy in position and orientation."""
+        poses = self.reached_poses(q_cmd, rng)
+        poses[:, :3, 3] += rng.normal(0.0, self.profile.tracker_sigma, (len(poses), 3))
+        turn = rotvec_to_matrix(rng.normal(0.0, self.profile.tracker_angle_sigma, (len(poses), 3)))
+        poses[:, :3, :3] = turn @ poses[:, :3, :3]
+        return poses

@@ -1,11 +1,15 @@
 """Argument types and helpers shared by the sub-commands."""
 
 import argparse
+import math
 import sys
 
 import numpy as np
 
+from trajcomp.columns import load_layout, parse_mapping
+from trajcomp.errors import TrajcompError
 from trajcomp.robot import load_robot
+from trajcomp.transforms import pose_to_matrix
 
 
 def numbers(count):
@@ -21,6 +25,65 @@ def numbers(count):
         return values
 
     return parse
+
+
+def non_negative_int(text):
+    """An argparse type: an integer >= 0 (seeds, counts)."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
+    if value < 0:
+        raise argparse.ArgumentTypeError(f"expected a number >= 0, got {text!r}")
+    return value
+
+
+def positive_number(text):
+    """An argparse type: a finite number > 0 (steps, lengths, weights)."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
+    if not (math.isfinite(value) and value > 0):
+        raise argparse.ArgumentTypeError(f"expected a finite number > 0, got {text!r}")
+    return value
+
+
+def steps(text):
+    """An argparse type: one positive step, or three (x, y, z), mm."""
+    values = [positive_number(v) for v in text.split(",")]
+    if len(values) not in (1, 3):
+        raise argparse.ArgumentTypeError(f"expected one step or three (x,y,z), got {text!r}")
+    return values[0] if len(values) == 1 else np.array(values)
+
+
+def pose(text):
+    """An argparse type: ``x,y,z,a,b,c`` (mm, deg) as a matrix (4, 4), mm and rad."""
+    values = numbers(6)(text)
+    return pose_to_matrix(np.concatenate([values[:3], np.radians(values[3:])]))
+
+
+def mapping(text):
+    """An argparse type: a column mapping ``FIELD=EXPR,...`` (`trajcomp.columns.parse_mapping`)."""
+    try:
+        return parse_mapping(text)
+    except TrajcompError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
+
+
+def add_layout(parser):
+    """The ``--columns`` / ``--columns-file`` options of the commands that read measurements."""
+    group = parser.add_mutually_exclusive_group()
+    group.add_argument("--columns", type=mapping, metavar="FIELD=EXPR,...",
+                       help="column mapping for other layouts, e.g. j1=joint_1,mx=x_t+x_dif")
+    group.add_argument("--columns-file", metavar="YAML",
+                       help="layout file: columns, delimiter, decimal comma, units, rotation conventions, frame "
+                       "(examples/columns/*.yaml)")
+
+
+def layout_of(args):
+    """The measurement layout the options name, or None for the standard layout."""
+    return load_layout(args.columns_file) if args.columns_file else args.columns
 
 
 def add_robot(parser, required=True):

@@ -1,35 +1,61 @@
 """``trajcomp calibrate``: identify a compensation model from measurements."""
 
-from trajcomp.calibrate import METHODS, calibrate
-from trajcomp.commands._args import add_robot, command_parser, info, progress, robot_of
+import numpy as np
+
+from trajcomp.calibrate import INTERPOLATIONS, METHODS, calibrate
+from trajcomp.commands._args import (
+    add_layout,
+    add_robot,
+    command_parser,
+    info,
+    layout_of,
+    non_negative_int,
+    pose,
+    positive_number,
+    progress,
+    robot_of,
+    steps,
+)
 from trajcomp.commands._report import add_report_options, emit
-from trajcomp.measurements import parse_mapping, read_measurements
+from trajcomp.identify import LOSSES, ORIENTATION_WEIGHT
+from trajcomp.measurements import read_measurements
 from trajcomp.model import save_model
+from trajcomp.parameters import is_angle
 from trajcomp.stats import ErrorStats, format_table
+from trajcomp.transforms import matrix_to_pose
 
 
 def add_parser(sub):
     parser = command_parser(
         sub, "calibrate", "identify a compensation model",
-        "Identify a compensation model from a measurement CSV: the paper's linear "
-        "correction, the DH parameters (least squares, with identifiability analysis) "
-        "and the residual grid. Prints fit and k-fold cross-validation statistics "
-        "(mean, RMS, p95, max of |error|) per mode.",
+        "Identify a compensation model from measurements: the paper's linear correction, the "
+        "arm's kinematics with the TCP and (tracker frame) the base registration in one robust "
+        "least-squares fit with identifiability analysis, and the residual: a grid over positions "
+        "for data at one tool orientation, joint-angle errors for data at several orientations. "
+        "Implausible data (wrong units, another robot) is refused. Prints fit and k-fold "
+        "cross-validation statistics (mean, RMS, p95, max of |error|) per mode.",
         "trajcomp calibrate measurements.csv --robot ur10 --method composite --grid-step 100 -o model.yaml",
     )
     parser.add_argument("measurements", help="measurement CSV")
     add_robot(parser)
+    parser.add_argument("--tool", type=pose, metavar="x,y,z,a,b,c",
+                        help="nominal TCP of the measured point in the flange frame, mm and deg (default: the robot's)")
     parser.add_argument("--method", choices=METHODS, default="composite", help="default mode of the model (default composite)")
-    parser.add_argument("--grid-step", type=float, help="expected grid step, mm (checked against the data)")
-    parser.add_argument("--interpolation", default="idw8",
-                        help="grid interpolator: idw8 (the paper's), trilinear, knn, rbf (default idw8)")
-    parser.add_argument("--frame", choices=("base", "tracker"), default="base",
-                        help="frame of the measured columns (tracker: estimate the base registration)")
-    parser.add_argument("--loss", choices=("linear", "soft_l1", "huber", "cauchy"), default="linear",
-                        help="robust loss of the DH fit (default linear)")
-    parser.add_argument("--folds", type=int, default=5, help="k of the k-fold cross-validation (default 5; 0: none)")
-    parser.add_argument("--columns", type=parse_mapping, metavar="FIELD=EXPR,...",
-                        help="column mapping for other layouts, e.g. j1=joint_1,mx=x_t+x_dif")
+    parser.add_argument("--grid-step", type=steps, metavar="STEP[,STEP,STEP]",
+                        help="expected grid step, mm, or one per axis x,y,z (checked against the data)")
+    parser.add_argument("--interpolation", choices=INTERPOLATIONS, default="auto",
+                        help="composite residual: auto (joint for data at several orientations, else idw8), joint "
+                        "(joint-angle errors), or a field over positions: idw8 (the paper's), trilinear, knn, rbf")
+    parser.add_argument("--frame", choices=("base", "tracker"),
+                        help="frame of the measured columns (tracker: identify the base registration too; "
+                        "default: as the layout file says, else base)")
+    parser.add_argument("--loss", choices=LOSSES, default="huber", help="robust loss of the fit (default huber)")
+    parser.add_argument("--orientation-weight", type=positive_number, default=ORIENTATION_WEIGHT, metavar="MM_PER_RAD",
+                        help=f"weight of measured orientation against position, mm per rad (default {ORIENTATION_WEIGHT:g}: "
+                        "1 mrad counts as 0.1 mm)")
+    parser.add_argument("--folds", type=non_negative_int, default=5, help="k of the k-fold cross-validation (default 5; 0: none)")
+    parser.add_argument("--seed", type=non_negative_int, default=0, help="seed of the fold split (default 0)")
+    add_layout(parser)
     parser.add_argument("-o", "--output", required=True, help="model file to write (.yaml)")
     add_report_options(parser, verdict=None)
     parser.set_defaults(run=run)
@@ -43,20 +69,43 @@ def print_stats(title, stats):
     print(format_table(rows))
 
 
+def describe(model):
+    """Lines on what was identified: parameters, TCP, registration, other tools."""
+    lines = []
+    if model.dh_names:
+        shown = ", ".join(
+            f"{n} {np.degrees(d) if is_angle(n) else d:+.4f}{' deg' if is_angle(n) else ''}"
+            for n, d in zip(model.dh_names, model.dh_delta)
+        )
+        lines.append(f"identified {len(model.dh_names)} parameters: {shown}")
+        lines.append(f"left at nominal: {', '.join(f'{n} ({r})' for n, r in model.dh_fixed.items()) or 'none'}")
+        tcp = model.identified.T_flange_tool[:3, 3]
+        lines.append(f"TCP in the flange frame: {tcp[0]:.3f}, {tcp[1]:.3f}, {tcp[2]:.3f} mm")
+    if not np.allclose(model.T_tracker_base, np.eye(4)):
+        base = matrix_to_pose(model.T_tracker_base)
+        lines.append("base in the tracker frame: " + ", ".join(f"{v:.3f}" for v in base[:3])
+                     + " mm, " + ", ".join(f"{v:.4f}" for v in np.degrees(base[3:])) + " deg")
+    lines.append(f"other tools: {'yes' if model.places_other_tools else 'no'}: {model.other_tools_reason}")
+    return lines
+
+
 def run(args):
     robot = robot_of(args)
-    meas = read_measurements(args.measurements, args.columns)
+    if args.tool is not None:
+        robot = robot.replace(T_flange_tool=args.tool)
+    meas = read_measurements(args.measurements, layout_of(args))
     model = calibrate(
-        robot, meas, robot_ref=args.robot, method=args.method, frame=args.frame,
-        grid_step=args.grid_step, interpolation=args.interpolation, loss=args.loss,
-        folds=args.folds, progress=progress,
+        robot, meas, robot_ref=args.robot, method=args.method, frame=args.frame, grid_step=args.grid_step,
+        interpolation=args.interpolation, loss=args.loss, folds=args.folds, seed=args.seed, progress=progress,
+        orientation_weight=args.orientation_weight,
     )
     save_model(args.output, model)
     report = model.report
-    if model.dh_names:
-        info(f"identified {len(model.dh_names)} parameters; left at nominal: {', '.join(model.dh_fixed) or 'none'}")
+    for line in describe(model):
+        info(line)
     if not (args.json_only and not args.report):
-        print_stats(f"fit on {report['measurements']['used']} measurements (|error|, mm):", report["fit"])
+        print_stats(f"fit on {report['measurements']['used']} measurements, residual {report['residual']} "
+                    "(|error|, mm):", report["fit"])
         if "cross_validation" in report:
             print_stats(f"{report['cross_validation']['folds']}-fold cross-validation (|error|, mm):",
                         report["cross_validation"])
@@ -65,7 +114,10 @@ def run(args):
         from trajcomp.report import calibration_report, file_entry
 
         files = [file_entry("measurements", args.measurements), file_entry("model", args.output)]
-        options = {k: v for k, v in vars(args).items() if k in ("robot", "method", "grid_step", "interpolation",
-                                                                 "frame", "loss", "folds", "columns")}
+        options = {k: v for k, v in vars(args).items() if k in ("robot", "method", "interpolation", "frame", "loss",
+                                                                 "folds", "seed", "orientation_weight", "columns_file")}
+        options["grid_step"] = None if args.grid_step is None else np.atleast_1d(args.grid_step).tolist()
+        options["columns"] = None if args.columns is None else dict(args.columns.columns)
+        options["tool"] = None if args.tool is None else [float(v) for v in matrix_to_pose(args.tool)]
         return emit(calibration_report(model, meas, files=files, options=options), args.report, args.json_only)
     return 0

@@ -3,8 +3,9 @@
 import dataclasses
 
 from trajcomp.calibrate import commanded
-from trajcomp.commands._args import command_parser, info
-from trajcomp.measurements import parse_mapping, read_measurements, write_measurements
+from trajcomp.commands._args import command_parser, info, layout_of
+from trajcomp.commands.validate import add_tracker_options, tracker_pose
+from trajcomp.measurements import read_measurements, write_measurements
 from trajcomp.model import MODES, load_model
 
 
@@ -12,27 +13,33 @@ def add_parser(sub):
     parser = command_parser(
         sub, "predict", "predict reached TCP positions",
         "For each commanded row of a measurement CSV, predict the reached TCP position "
-        "(columns px, py, pz added) with a mode of the model.",
+        "(columns px, py, pz added) with a mode of the model: in the base frame, or with "
+        "--frame tracker in the tracker frame (the model's registration, or --register rows "
+        "measured in a new tracker placement).",
         "trajcomp predict model.yaml plan.csv --mode composite -o predicted.csv",
     )
     parser.add_argument("model", help="model file from `trajcomp calibrate`")
     parser.add_argument("measurements", help="measurement or plan CSV")
     parser.add_argument("--mode", choices=MODES, help="prediction mode (default: the model's method)")
-    parser.add_argument("--columns", type=parse_mapping, metavar="FIELD=EXPR,...", help="column mapping for other layouts")
+    add_tracker_options(parser)
     parser.add_argument("-o", "--output", required=True, help="CSV to write")
     parser.set_defaults(run=run)
 
 
 def run(args):
     model = load_model(args.model)
-    meas = read_measurements(args.measurements, args.columns)
+    meas = read_measurements(args.measurements, layout_of(args))
+    frame = args.frame or meas.frame or "base"
     joints, position = commanded(model.nominal, meas)
     mode = args.mode or model.method
+    model.check_mode(mode)
     predicted, flagged = model.predict(mode, joints, position)
+    T_tracker_base = tracker_pose(args, model, frame)
+    predicted = predicted @ T_tracker_base[:3, :3].T + T_tracker_base[:3, 3]
     extra = {"px": predicted[:, 0], "py": predicted[:, 1], "pz": predicted[:, 2], "outside_grid": flagged}
     write_measurements(args.output, dataclasses.replace(meas, joints=joints, position=position),
-                       comments=[f"predicted by {args.model}, mode {mode}"], extra=extra)
+                       comments=[f"predicted by {args.model}, mode {mode}, {frame} frame"], extra=extra)
     if flagged.any():
         info(f"{int(flagged.sum())} rows lie outside the grid: model-only prediction (outside_grid = 1)")
-    info(f"wrote {args.output}: {len(meas)} predictions, mode {mode}")
+    info(f"wrote {args.output}: {len(meas)} predictions, mode {mode}, {frame} frame")
     return 0

@@ -1,39 +1,101 @@
 """``trajcomp validate``: a model's accuracy on measurements, per mode, with a verdict."""
 
+import dataclasses
+
+import numpy as np
+
 from trajcomp.atomic import write_atomic
-from trajcomp.commands._args import command_parser
+from trajcomp.calibrate import commanded, register, to_base
+from trajcomp.commands._args import add_layout, command_parser, info, layout_of
 from trajcomp.commands._report import add_report_options, criteria_of, emit
 from trajcomp.commands.calibrate import print_stats
-from trajcomp.measurements import parse_mapping, read_measurements
+from trajcomp.errors import ReadError
+from trajcomp.measurements import read_measurements
 from trajcomp.model import load_model
 from trajcomp.report import file_entry, validation_report
+from trajcomp.transforms import abc_to_matrix, invert, rotation_angle_between
 
 
 def add_parser(sub):
     parser = command_parser(
         sub, "validate", "check a model against measurements",
         "Print the statistics of |measured - predicted| per mode (none, linear, dh, grid, "
-        "composite) on a measurement CSV, e.g. a second run of validation points. Exit 1 when the "
-        "95th percentile |error| of the model's mode exceeds --tolerance (the verdict of the report).",
+        "composite) on a measurement CSV, e.g. a second run of validation points, and of the "
+        "orientation error for 6-DoF data. Tracker-frame data go through the model's "
+        "registration (same tracker placement) or through --register reference rows measured "
+        "in a new placement. Exit 1 when the 95th percentile |error| of the model's mode exceeds "
+        "--tolerance (the verdict of the report).",
         "trajcomp validate model.yaml validation.csv --tolerance 0.05 --json validation.json",
     )
     parser.add_argument("model", help="model file from `trajcomp calibrate`")
     parser.add_argument("measurements", help="measurement CSV with mx, my, mz")
-    parser.add_argument("--columns", type=parse_mapping, metavar="FIELD=EXPR,...", help="column mapping for other layouts")
+    add_tracker_options(parser)
     parser.add_argument("--json", metavar="PATH", help="write the statistics and verdict as JSON (trajcomp-report/1)")
     add_report_options(parser, verdict="accuracy")
     parser.set_defaults(run=run)
 
 
+def add_tracker_options(parser):
+    """Layout, ``--frame`` and ``--register`` options shared with predict."""
+    add_layout(parser)
+    parser.add_argument("--frame", choices=("base", "tracker"),
+                        help="frame of the measured columns (default: as the layout file says, else base)")
+    parser.add_argument("--register", metavar="CSV",
+                        help="reference rows (same layout) measured in a new tracker placement: register the "
+                        "tracker from them instead of using the model's registration")
+
+
+def tracker_pose(args, model, frame):
+    """T_tracker_base (4, 4) for the data: identity (base frame), the model's, or registered from --register."""
+    if frame != "tracker":
+        if args.register:
+            raise ReadError("--register needs tracker-frame data (--frame tracker or a layout with frame: tracker)")
+        return np.eye(4)
+    if not args.register:
+        return model.T_tracker_base
+    reference = read_measurements(args.register, layout_of(args))
+    reference.require_measured()
+    joints, position = commanded(model.nominal, reference)
+    T_tracker_base = register(model, joints, position, reference.measured)
+    residual = np.linalg.norm(to_base(T_tracker_base, reference.measured)
+                              - model.predict(model.method, joints, position, outside="clamp")[0], axis=1)
+    info(f"registered the tracker on {len(reference)} reference rows of {args.register}: "
+         f"mean |residual| {residual.mean():.4f} mm")
+    return T_tracker_base
+
+
+def orientation_lines(model, meas, T_tracker_base):
+    """Orientation |error| lines of 6-DoF data for the kinematic modes (empty without measured orientations)."""
+    joints, _ = commanded(model.nominal, meas)
+    if meas.measured_orientation is None or joints is None:
+        return []
+    seen = invert(T_tracker_base)[:3, :3] @ abc_to_matrix(meas.measured_orientation)
+    lines = []
+    for mode in ("dh", "composite"):
+        if mode in model.modes:
+            predicted = model.arm(mode, outside="clamp").fk(joints)[:, :3, :3] @ model.R_tcp_target
+            angle = np.degrees(rotation_angle_between(predicted, seen))
+            lines.append(f"{mode} orientation |error|: mean {angle.mean():.4f}  max {angle.max():.4f} deg")
+    return lines
+
+
 def run(args):
     model = load_model(args.model)
-    meas = read_measurements(args.measurements, args.columns)
+    meas = read_measurements(args.measurements, layout_of(args))
     meas.require_measured()
+    frame = args.frame or meas.frame or "base"
+    T_tracker_base = tracker_pose(args, model, frame)
+    placed = dataclasses.replace(model, T_tracker_base=T_tracker_base)  # the data's registration
     files = [file_entry("model", args.model), file_entry("measurements", args.measurements)]
-    report = validation_report(model, meas, criteria=criteria_of(args), files=files,
-                               options={"columns": args.columns, "tolerance_mm": args.tolerance})
+    options = {"columns": None if args.columns is None else dict(args.columns.columns),
+               "columns_file": args.columns_file, "frame": frame, "register": args.register,
+               "tolerance_mm": args.tolerance}
+    report = validation_report(placed, meas, criteria=criteria_of(args), files=files, options=options)
     if not (args.json_only and not args.report):
-        print_stats(f"{args.measurements}: {len(meas)} points (|measured - predicted|, mm)", report.doc["modes"])
+        print_stats(f"{args.measurements}: {len(meas)} points, {frame} frame (|measured - predicted|, mm)",
+                    report.doc["modes"])
+        for line in orientation_lines(placed, meas, T_tracker_base):
+            print(line)
     if args.json:
         write_atomic(args.json, report.json_text())
     return emit(report, args.report, args.json_only)

@@ -1,0 +1,178 @@
+"""Kinematic parameters of an arm and their analytic Jacobian.
+
+A calibration adjusts, from the nominal robot:
+
+- per joint ``j`` of the standard DH table: ``a{j}``, ``alpha{j}``,
+  ``d{j}``, ``theta{j}`` (offset) and, for a link joining nominally parallel
+  axes, the Hayati twist ``beta{j}`` (where ``d`` is ill-conditioned);
+- ``tool_x``, ``tool_y``, ``tool_z``: the TCP position in the flange frame.
+  With it, link 6 (a6, alpha6, d6, theta6) is left out: after joint 6 the
+  chain to the TCP is one rigid transform, which the tool already spans;
+- ``target_rx``, ``target_ry``, ``target_rz``: orientation of the frame a
+  6-DoF tracker measures in the TCP frame (rotation vector, target axes),
+  only when orientations are measured;
+- ``base_x`` ... ``base_rz``: the base pose in the tracker frame (translation,
+  rotation vector in base axes), only for tracker-frame data.
+
+Every parameter moves the TCP as a unit twist: a translation along an axis
+or a rotation about an axis through a point, both known from the DH frames
+at each configuration. `pose_jacobian` builds the derivative of the TCP
+position and orientation for all N configurations at once; no finite
+differences. Lengths mm, angles rad.
+"""
+
+import numpy as np
+
+from trajcomp.kinematics import link_frames
+
+ANGLE_LEVER = 1000.0  # mm: an angle parameter is scaled as its effect at this lever arm
+TOOL_NAMES = ("tool_x", "tool_y", "tool_z")
+TARGET_NAMES = ("target_rx", "target_ry", "target_rz")
+BASE_NAMES = ("base_x", "base_y", "base_z", "base_rx", "base_ry", "base_rz")
+_PARALLEL = 1e-6  # |sin(alpha)| below which consecutive axes are parallel
+
+
+def candidate_parameters(robot, *, tool=True, orientation=False, tracker=False):
+    """Names of the parameters a fit may adjust.
+
+    Parameters
+    ----------
+    robot : Robot
+    tool : bool
+        Include the TCP position in the flange frame (and leave link 6 out).
+    orientation : bool
+        Orientations are measured: include the measured frame's orientation.
+    tracker : bool
+        Measurements in the tracker frame: include the base registration.
+
+    Returns
+    -------
+    list of str
+        e.g. ``["a1", "alpha1", "d1", "theta1", ..., "beta2", ..., "tool_x", ...]``.
+    """
+    std = robot.as_standard()
+    names = []
+    for i in range(5 if tool else 6):
+        names += [f"a{i + 1}", f"alpha{i + 1}", f"d{i + 1}", f"theta{i + 1}"]
+        if i < 5 and abs(np.sin(std.alpha[i])) < _PARALLEL:
+            names.append(f"beta{i + 1}")
+    if tool:
+        names += TOOL_NAMES
+    if orientation:
+        names += TARGET_NAMES
+    if tracker:
+        names += BASE_NAMES
+    return names
+
+
+def is_angle(name):
+    """True for parameters in rad, False for those in mm."""
+    return name.startswith(("alpha", "theta", "beta", "base_r", "target_r"))
+
+
+def scales(names):
+    """Per-parameter scale (P,): 1 for mm, 1 / `ANGLE_LEVER` for angles and joint-error terms (solver units).
+
+    A joint-error term's basis function is of order one (sin, cos, or a
+    lever in m), so its coefficient acts as an angle.
+    """
+    return np.array([1.0 / ANGLE_LEVER if is_angle(n) or n.startswith(("gear", "grav")) else 1.0 for n in names])
+
+
+def is_robot_parameter(name):
+    """True for the DH and tool parameters (those that change the arm, see `apply_deltas`)."""
+    return not name.startswith(("base_", "target_"))
+
+
+def apply_deltas(robot, names, delta):
+    """The robot with DH and tool parameter deltas applied.
+
+    Parameters
+    ----------
+    robot : Robot
+        Nominal robot (any convention; the result is standard DH).
+    names : sequence of str
+        Parameter names, see `candidate_parameters`; registration and
+        target parameters are ignored (they are not part of the arm).
+    delta : array_like, shape (P,)
+        Deltas in mm or rad.
+    """
+    std = robot.as_standard()
+    table = {key: getattr(std, key).copy() for key in ("a", "alpha", "d", "theta_offset", "beta")}
+    T_flange_tool = std.T_flange_tool.copy()
+    for name, value in zip(names, delta):
+        if name in TOOL_NAMES:
+            T_flange_tool[TOOL_NAMES.index(name), 3] += value
+        elif is_robot_parameter(name):
+            kind, joint = name[:-1], int(name[-1]) - 1
+            table["theta_offset" if kind == "theta" else kind][joint] += value
+    return std.replace(T_flange_tool=T_flange_tool, **table)
+
+
+def pose_jacobian(robot, q, names, R_tcp_target=None):
+    """TCP pose and its derivative with respect to each parameter.
+
+    Parameters
+    ----------
+    robot : Robot
+        The current estimate (standard DH after `apply_deltas`).
+    q : ndarray, shape (N, 6)
+        Joint angles, rad.
+    names : sequence of str
+        Parameters, see `candidate_parameters`.
+    R_tcp_target : ndarray, shape (3, 3), optional
+        Current orientation of the measured frame in the TCP frame.
+
+    Returns
+    -------
+    T_tcp : ndarray, shape (N, 4, 4)
+        TCP poses in the base frame.
+    jac : ndarray, shape (N, 6, P)
+        Rows 0-2: TCP position (mm per mm or per rad); rows 3-5: rotation of
+        the measured frame about the base axes (rad per mm or rad). A
+        registration parameter ``base_*`` moves the base in the tracker
+        frame; its column is the apparent motion of the TCP in the base
+        frame (the measurements move the opposite way).
+    """
+    std = robot.as_standard()
+    frames = link_frames(std, q)
+    flange = frames[:, 6] @ std.T_link6_flange
+    tcp = flange @ std.T_flange_tool
+    p = tcp[:, :3, 3]
+    jac = np.zeros((len(p), 6, len(names)))
+
+    def rotation(column, axis, point):
+        jac[:, :3, column] = np.cross(axis, p - point)
+        jac[:, 3:, column] = axis
+
+    for k, name in enumerate(names):
+        if name in TOOL_NAMES:
+            jac[:, :3, k] = flange[:, :3, TOOL_NAMES.index(name)]
+        elif name in TARGET_NAMES:
+            R_target = tcp[:, :3, :3] @ (np.eye(3) if R_tcp_target is None else R_tcp_target)
+            jac[:, 3:, k] = R_target[:, :, TARGET_NAMES.index(name)]
+        elif name in BASE_NAMES:
+            axis = np.eye(3)[BASE_NAMES.index(name) % 3]
+            if name in BASE_NAMES[:3]:
+                jac[:, :3, k] = axis
+            else:
+                rotation(k, np.broadcast_to(axis, p.shape), np.zeros(3))
+        else:
+            kind, j = name[:-1], int(name[-1])
+            before, after = frames[:, j - 1], frames[:, j]
+            # x axis of link j before its Hayati twist Ry(beta): Rx(alpha) keeps it
+            cb, sb = np.cos(std.beta[j - 1]), np.sin(std.beta[j - 1])
+            x_link = cb * after[:, :3, 0] + sb * after[:, :3, 2]
+            if kind == "theta":
+                rotation(k, before[:, :3, 2], before[:, :3, 3])
+            elif kind == "d":
+                jac[:, :3, k] = before[:, :3, 2]
+            elif kind == "a":
+                jac[:, :3, k] = x_link
+            elif kind == "alpha":
+                rotation(k, x_link, after[:, :3, 3])
+            elif kind == "beta":
+                rotation(k, after[:, :3, 1], after[:, :3, 3])
+            else:
+                raise ValueError(f"unknown parameter {name!r}")
+    return tcp, jac
