@@ -1,5 +1,7 @@
 """Calibration and compensation against the virtual robot's ground truth."""
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -137,3 +139,67 @@ def test_compensated_csv_program_lands_on_its_targets(setup, tmp_path):
     assert np.linalg.norm(corrected.position - targets, axis=1).min() > 0.5  # the commands moved
     landed = virtual.reached_poses(corrected.joints)[:, :3, 3]
     assert np.linalg.norm(landed - targets, axis=1).max() < 0.05
+
+
+@pytest.fixture(scope="module")
+def tilted():
+    """The virtual UR10 with a target 40 mm off the flange axis, measured at five orientations."""
+    from trajcomp.orientations import spread_orientations
+    from trajcomp.transforms import pose_to_matrix
+
+    robot = load_robot("ur10").replace(T_flange_tool=pose_to_matrix([40.0, -30.0, 100.0, 0.0, 0.0, 0.0]))
+    virtual = VirtualRobot.create(robot, "paper", seed=3)
+    plan = plan_grid(robot, (300, -100, 300), 400, 100, spread_orientations(default_orientation(robot), 5, np.radians(30)))
+    q = plan.joints[plan.reachable]
+    meas = Measurements(joints=q, position=plan.position[plan.reachable], lines=np.arange(len(q)) + 2,
+                        measured=virtual.measure(q, np.random.default_rng(7)), path="tilted.csv")
+    return robot, virtual, calibrate(robot, meas, folds=0), q
+
+
+def test_several_orientations_give_a_joint_residual_that_holds_between_them(tilted):
+    robot, virtual, model, q = tilted
+    assert model.report["residual"] == "joint" and model.places_other_tools
+    rng = np.random.default_rng(8)
+    postures = q[rng.choice(len(q), 30)] + np.radians(rng.uniform(-4.0, 4.0, (30, 6)))  # between the measured ones
+    targets = fk(robot, postures)
+    landed = {}
+    for mode in ("dh", "composite"):
+        result = compensate(model, targets, mode=mode, seed=postures)
+        assert not result.outside.any()
+        landed[mode] = np.linalg.norm(virtual.reached_poses(result.q)[:, :3, 3] - targets[:, :3, 3], axis=1).mean()
+    assert landed["composite"] < 0.5 * landed["dh"]  # the joint errors are what the DH table cannot hold
+    assert landed["composite"] < 0.01  # mm, noise-free landing: measurement noise is 0.01 mm per axis
+
+
+def test_joints_outside_the_calibrated_range_follow_the_outside_policy(tilted):
+    robot, _, model, q = tilted
+    other_branch = q[:3].copy()
+    other_branch[:, 0] += np.radians(90.0)  # the arm turned a quarter turn away from where it was measured
+    targets = fk(robot, other_branch)
+    assert compensate(model, targets, seed=other_branch).outside.all()
+    with pytest.raises(ModelError, match="outside the joint range the model was calibrated on"):
+        compensate(model, targets, seed=other_branch, outside="error")
+    assert model.predict("composite", other_branch, targets[:, :3, 3])[1].all()
+
+
+UR10_IPA = Path(__file__).resolve().parents[2] / "shared" / "data" / "ur10-ipa" / "grid_A.csv"
+
+
+@pytest.mark.skipif(not UR10_IPA.exists(), reason="shared UR10 data not present")
+def test_real_ur10_at_23_orientations_in_the_tracker_frame(tmp_path, capsys):
+    """A subset of the real data set as its authors wrote it: its nominal TCP is found 16 mm off."""
+    from trajcomp.cli import main
+
+    lines = UR10_IPA.read_text(encoding="utf-8").splitlines()
+    subset = tmp_path / "grid_A.csv"
+    subset.write_text("\n".join(lines[:1] + lines[1::6]) + "\n", encoding="utf-8")
+    layout = Path(__file__).resolve().parents[1] / "examples" / "columns" / "ur10-ipa.yaml"
+    model = tmp_path / "ur10.yaml"
+    assert main(["calibrate", str(subset), "--robot", "ur10", "--columns-file", str(layout),
+                 "--tool", "0,0,109,90,0,0", "--folds", "0", "-o", str(model)]) == 0
+    out, err = capsys.readouterr()
+    tcp = [float(v) for v in err.split("TCP in the flange frame: ")[1].split(" mm")[0].split(",")]
+    assert 90.0 < tcp[2] < 96.0  # the README's independent fit: some 15 mm closer to the flange than 109
+    fit = {line.split()[0]: float(line.split()[2]) for line in out.splitlines()[2:7]}
+    assert fit["composite"] < 0.4 and fit["dh"] < 0.45 and fit["none"] > 10.0
+    assert "outliers" not in err and "other tools: yes" in err

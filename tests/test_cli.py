@@ -2,6 +2,7 @@
 
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from trajcomp.cli import main
@@ -86,3 +87,65 @@ def test_running_a_command_imports_no_other_command(tmp_path):
     for argv, allowed in ((["formats"], ["trajcomp.commands.formats"]), (["--version"], [])):
         done = subprocess.run([sys.executable, "-c", code.format(argv=argv)], capture_output=True, text=True)
         assert done.stdout.strip().splitlines()[-1] == str(allowed), (argv, done.stdout, done.stderr)
+
+
+@pytest.mark.parametrize("argv", [
+    ["calibrate", "meas.csv", "--robot", "ur10", "--columns", "foo", "-o", "m.yaml"],
+    ["calibrate", "meas.csv", "--robot", "ur10", "--interpolation", "bogus", "-o", "m.yaml"],
+    ["calibrate", "meas.csv", "--robot", "ur10", "--seed", "-1", "-o", "m.yaml"],
+    ["calibrate", "meas.csv", "--robot", "ur10", "--grid-step", "100,100", "-o", "m.yaml"],
+    ["plan", "--robot", "ur10", "--cube", "0,0,0", "--side", "100", "--step", "nan", "-o", "p.csv"],
+    ["plan", "--robot", "ur10", "--cube", "0,0,0", "--side", "inf", "--step", "10", "-o", "p.csv"],
+    ["plan", "--robot", "ur10", "--cube", "0,0,0", "--side", "100", "--step", "10", "--orientations", "0", "-o", "p.csv"],
+    ["simulate", "plan.csv", "--robot", "ur10", "--seed", "-1", "-o", "m.csv"],
+    ["simulate", "plan.csv", "--robot", "ur10", "--run", "-3", "-o", "m.csv"],
+    ["demo", "--seed", "-1", "-o", "demo"],
+])
+def test_inputs_that_crashed_are_usage_errors(argv, capsys):
+    with pytest.raises(SystemExit) as exit_info:
+        main(argv)
+    assert exit_info.value.code == 2
+    assert "error: argument" in capsys.readouterr().err
+
+
+def test_an_over_long_csv_field_exits_2_naming_the_line(tmp_path, capsys):
+    path = tmp_path / "long.csv"
+    path.write_text("j1,j2,j3,j4,j5,j6,mx,my,mz\n1,2,3,4,5,6,7,8," + "9" * 200000 + "\n")
+    assert main(["calibrate", str(path), "--robot", "ur10", "-o", str(tmp_path / "m.yaml")]) == 2
+    assert "long.csv:2:" in capsys.readouterr().err
+
+
+def test_tracker_frame_six_dof_data_through_plan_simulate_calibrate_validate_predict(tmp_path, capsys):
+    """Several orientations, a tracker frame, orientations measured; then the tracker is moved."""
+    plan, meas, model = tmp_path / "plan.csv", tmp_path / "meas.csv", tmp_path / "model.yaml"
+    tracker = "2400,-1300,150,175,0.5,-1"
+    assert main(["plan", "--robot", "ur10", "--cube", "300,-100,300", "--side", "400", "--step", "100",
+                 "--orientations", "5", "-o", str(plan)]) == 0
+    assert "the identification needs" in capsys.readouterr().err
+    assert main(["simulate", str(plan), "--robot", "ur10", "--seed", "1", "--tracker", tracker, "--six-dof",
+                 "-o", str(meas)]) == 0
+    assert main(["calibrate", str(meas), "--robot", "ur10", "--frame", "tracker", "--folds", "0", "-o", str(model)]) == 0
+    err = capsys.readouterr().err
+    base = [float(v) for v in err.split("base in the tracker frame: ")[1].split("\n")[0].replace(" mm", "")
+            .replace(" deg", "").split(",")]
+    np.testing.assert_allclose(base, [2400, -1300, 150, 175, 0.5, -1], atol=0.2)  # d1, theta1 trade with z, rz
+    assert "other tools: yes" in err
+    second = tmp_path / "run2.csv"
+    assert main(["simulate", str(plan), "--robot", "ur10", "--seed", "1", "--run", "2", "--tracker", tracker,
+                 "--six-dof", "-o", str(second)]) == 0
+    assert main(["validate", str(model), str(second), "--frame", "tracker", "--tolerance", "0.03"]) == 0
+    assert "composite orientation |error|" in capsys.readouterr().out
+    predicted = tmp_path / "pred.csv"
+    assert main(["predict", str(model), str(second), "--frame", "tracker", "-o", str(predicted)]) == 0
+    rows = np.genfromtxt([line for line in predicted.read_text().splitlines() if not line.startswith("#")],
+                         delimiter=",", names=True)
+    landed = np.column_stack([rows["px"] - rows["mx"], rows["py"] - rows["my"], rows["pz"] - rows["mz"]])
+    assert np.linalg.norm(landed, axis=1).mean() < 0.03  # predicted in the tracker frame, where it measured
+    moved, reference = tmp_path / "moved.csv", tmp_path / "reference.csv"
+    assert main(["simulate", str(plan), "--robot", "ur10", "--seed", "1", "--run", "3",
+                 "--tracker=-2000,800,-100,10,0,30", "--six-dof", "-o", str(moved)]) == 0
+    lines = moved.read_text().splitlines()
+    reference.write_text("\n".join(lines[:2] + lines[2::40]) + "\n")  # a few rows measured in the new placement
+    assert main(["validate", str(model), str(moved), "--frame", "tracker", "--tolerance", "0.03"]) == 1
+    assert main(["validate", str(model), str(moved), "--frame", "tracker", "--register", str(reference),
+                 "--tolerance", "0.03"]) == 0

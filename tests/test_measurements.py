@@ -1,8 +1,12 @@
 """Measurement CSV: standard layout, column mapping, located errors."""
 
+from pathlib import Path
+
 import numpy as np
 import pytest
+from scipy.spatial.transform import Rotation
 
+from trajcomp.columns import Layout, load_layout
 from trajcomp.errors import ReadError
 from trajcomp.measurements import Measurements, parse_mapping, read_measurements, write_measurements
 
@@ -60,3 +64,94 @@ def test_mapping_errors(tmp_path):
         read_measurements(path, {"x": "q", "y": "b", "z": "c"})
     with pytest.raises(ReadError, match="unknown field 'w'"):
         parse_mapping("w=a")
+
+
+# ------------------------------------------------------------- layouts
+
+
+def test_layout_file_reads_a_european_export(tmp_path):
+    """';' separated, decimal comma, joints in rad, positions in m, measured orientation intrinsic X-Y-Z."""
+    layout = write(tmp_path, """
+delimiter: ";"
+decimal: ","
+frame: tracker
+columns: {j1: q1, j2: q2, j3: q3, j4: q4, j5: q5, j6: q6, x: gx, y: gy, z: gz,
+          mx: px, my: py, mz: pz, mrx: rx, mry: ry, mrz: rz}
+units: {joints: rad, position: m}
+rotations: {measured_orientation: XYZ}
+""", "layout.yaml")
+    path = write(tmp_path, "q1;q2;q3;q4;q5;q6;gx;gy;gz;px;py;pz;rx;ry;rz\r\n"
+                           "0,5;-1,25;1;0;1,5;0;0,75;-0,5;1,25;750,5;-499,25;1250;10;-20,5;30\r\n")
+    meas = read_measurements(path, load_layout(layout))
+    np.testing.assert_allclose(meas.joints, [[0.5, -1.25, 1.0, 0.0, 1.5, 0.0]])
+    np.testing.assert_allclose(meas.position, [[750.0, -500.0, 1250.0]])
+    np.testing.assert_allclose(meas.measured, [[750.5, -499.25, 1250.0]])
+    expected = Rotation.from_euler("XYZ", [10, -20.5, 30], degrees=True)
+    got = Rotation.from_euler("ZYX", meas.measured_orientation[0])  # A, B, C = intrinsic Z-Y'-X''
+    assert (expected.inv() * got).magnitude() < 1e-12
+    assert meas.frame == "tracker" and meas.lines.tolist() == [2]
+
+
+@pytest.mark.parametrize("convention, values", [
+    ("xyz", "10,20,30"), ("rotvec", "0.1,-0.2,0.3"), ("quaternion", "0.9,0.1,-0.2,0.3"), ("ZYX", "40,-10,5")])
+def test_rotation_conventions_match_scipy(tmp_path, convention, values):
+    numbers = [float(v) for v in values.split(",")]
+    names = ["a", "b", "c"] if convention != "quaternion" else ["qw", "qx", "qy", "qz"]
+    path = write(tmp_path, f"x,y,z,{','.join(names)}\n1,2,3,{values}\n")
+    unit = "rad" if convention == "rotvec" else "deg"
+    meas = read_measurements(path, Layout(units={"orientation": unit}, rotations={"orientation": convention}))
+    if convention == "quaternion":
+        expected = Rotation.from_quat(numbers, scalar_first=True)
+    elif convention == "rotvec":
+        expected = Rotation.from_rotvec(numbers)
+    else:
+        expected = Rotation.from_euler(convention, numbers, degrees=True)
+    assert (expected.inv() * Rotation.from_euler("ZYX", meas.orientation[0])).magnitude() < 1e-12
+
+
+@pytest.mark.parametrize("text, message", [
+    ("columns: {w: a}\n", "unknown field 'w'"),
+    ("columns: {x: a, y: a}\n", "fields x and y both read 'a'"),
+    ("decimal: ','\ndelimiter: ','\n", "cannot also be the delimiter"),
+    ("units: {joints: furlong}\n", "'furlong' is not a unit"),
+    ("rotations: {orientation: XYX1}\n", "Euler sequence"),
+    ("colums: {x: a}\n", "unknown keys colums"),
+    ("frame: world\n", "frame: expected one of base, tracker"),
+    ("[1, 2]\n", "expected a mapping"),
+])
+def test_layout_file_errors_name_the_file_and_key(tmp_path, text, message):
+    with pytest.raises(ReadError, match=message):
+        load_layout(write(tmp_path, text, "layout.yaml"))
+
+
+def test_an_over_long_field_is_an_error_not_a_crash(tmp_path):
+    for size in (5000, 200000):  # beyond our bound, and beyond the csv module's own limit
+        path = write(tmp_path, "j1,j2,j3,j4,j5,j6,mx,my,mz\n1,2,3,4,5,6,7,8," + "9" * size + "\n")
+        with pytest.raises(ReadError, match=r"m.csv:2: .*(too long|field larger)"):
+            read_measurements(path)
+
+
+def test_a_zero_quaternion_names_its_line(tmp_path):
+    path = write(tmp_path, "x,y,z,qw,qx,qy,qz\n1,2,3,1,0,0,0\n4,5,6,0,0,0,0\n")
+    with pytest.raises(ReadError, match=r"m.csv:3: orientation: zero quaternion"):
+        read_measurements(path, Layout(rotations={"orientation": "quaternion"}))
+
+
+DATA = Path(__file__).resolve().parents[2] / "shared" / "data"
+EXAMPLES = Path(__file__).resolve().parents[1] / "examples" / "columns"
+
+
+@pytest.mark.parametrize("name, file, rows", [("ur10-ipa", "grid_A.csv", 5892), ("ur5-grid", "grid.csv", 1000)])
+def test_the_shipped_layouts_read_the_real_files_as_their_authors_wrote_them(name, file, rows):
+    path = DATA / name / file
+    if not path.exists():
+        pytest.skip(f"shared data {name} not present")
+    meas = read_measurements(path, load_layout(EXAMPLES / f"{name}.yaml"))
+    assert len(meas) == rows and meas.measured.shape == (rows, 3)
+    if name == "ur10-ipa":  # line 3 of the file: elbow_joint -1,15395 rad, measurement_z -414,74345 mm
+        assert meas.lines[1] == 3 and meas.joints[1, 2] == pytest.approx(-1.15395)
+        assert meas.measured[1, 2] == pytest.approx(-414.74345) and meas.frame == "tracker"
+    else:  # reached = commanded + difference, as the layout states
+        np.testing.assert_allclose(meas.measured[0], [-430.32784075885013 - 2.144122241149887,
+                                                      -6.2740647628546 - 3.5212622371454003,
+                                                      -98.6368469428076 + 0.8144149428075877])

@@ -75,21 +75,27 @@ def check_units(meas, commanded, measured, nominal_error):
     """
     spread_commanded = float(np.sqrt(np.sum(np.var(commanded, axis=0))))
     spread_measured = float(np.sqrt(np.sum(np.var(measured, axis=0))))
-    if spread_commanded > 1.0 and not 1 / SCALE_BOUND < spread_measured / spread_commanded < SCALE_BOUND:
-        ratio = spread_measured / spread_commanded
+    ratio = spread_measured / max(spread_commanded, 1e-9)
+    scaled = spread_commanded > 1.0 and not 1 / SCALE_BOUND < ratio < SCALE_BOUND
+    median = float(np.median(nominal_error))
+    if meas.joints is not None and np.max(np.abs(meas.joints)) < np.radians(2 * np.pi + 0.01) and (
+        scaled or median > NOMINAL_ERROR_BOUND
+    ):
+        raise CalibrationError(
+            f"{meas.path}: every joint value lies within +-{np.degrees(np.max(np.abs(meas.joints))):.2f} deg and the "
+            f"measurements do not fit them (median |measured - nominal| {median:.1f} mm): joints in radians read as "
+            "degrees? (a layout file with units: joints: rad)"
+        )
+    if scaled:
         hint = "measured in metres? (units: measured: m)" if 0.0005 < ratio < 0.002 else "measured in another unit?"
         raise CalibrationError(
             f"{meas.path}: the measured positions spread {spread_measured:.4g} where the commanded ones spread "
             f"{spread_commanded:.4g} mm (ratio {ratio:.3g}): {hint}"
         )
-    median = float(np.median(nominal_error))
     if median > NOMINAL_ERROR_BOUND:
-        hints = ["data of another robot or another TCP", "wrong column mapping"]
-        if meas.joints is not None and np.max(np.abs(meas.joints)) < np.radians(2 * np.pi + 0.01):
-            hints.insert(0, "joints in radians read as degrees (units: joints: rad)")
         raise CalibrationError(
             f"{meas.path}: median |measured - nominal| is {median:.1f} mm, beyond the {NOMINAL_ERROR_BOUND:g} mm "
-            f"of any plausible arm error: {'; '.join(hints)}?"
+            "of any plausible arm error: data of another robot or another TCP, or a wrong column mapping?"
         )
 
 

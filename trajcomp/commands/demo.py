@@ -2,7 +2,7 @@
 
 from pathlib import Path
 
-from trajcomp.commands._args import command_parser, info
+from trajcomp.commands._args import command_parser, info, non_negative_int
 from trajcomp.demo import PAPER_ROBOT, format_comparison, run_demo, run_program
 from trajcomp.model import save_model
 from trajcomp.robot import load_robot
@@ -22,7 +22,7 @@ def add_parser(sub):
     )
     parser.add_argument("--robot", default=PAPER_ROBOT, help=f"robot (default {PAPER_ROBOT}, the paper's arm class)")
     parser.add_argument("--profile", choices=sorted(PROFILES), default="paper", help="error profile (default paper)")
-    parser.add_argument("--seed", type=int, default=1, help="seed of the virtual robot (default 1)")
+    parser.add_argument("--seed", type=non_negative_int, default=1, help="seed of the virtual robot (default 1)")
     parser.add_argument("-o", "--output-dir", default="trajcomp-demo", help="folder for the models and the program (default trajcomp-demo)")
     parser.set_defaults(run=run)
 
