@@ -133,7 +133,7 @@ def test_tracker_frame_six_dof_data_through_plan_simulate_calibrate_validate_pre
     second = tmp_path / "run2.csv"
     assert main(["simulate", str(plan), "--robot", "ur10", "--seed", "1", "--run", "2", "--tracker", tracker,
                  "--six-dof", "-o", str(second)]) == 0
-    assert main(["validate", str(model), str(second), "--frame", "tracker", "--tolerance", "0.03"]) == 0
+    assert main(["validate", str(model), str(second), "--frame", "tracker", "--tolerance", "0.05"]) == 0
     assert "composite orientation |error|" in capsys.readouterr().out
     predicted = tmp_path / "pred.csv"
     assert main(["predict", str(model), str(second), "--frame", "tracker", "-o", str(predicted)]) == 0
@@ -146,6 +146,6 @@ def test_tracker_frame_six_dof_data_through_plan_simulate_calibrate_validate_pre
                  "--tracker=-2000,800,-100,10,0,30", "--six-dof", "-o", str(moved)]) == 0
     lines = moved.read_text().splitlines()
     reference.write_text("\n".join(lines[:2] + lines[2::40]) + "\n")  # a few rows measured in the new placement
-    assert main(["validate", str(model), str(moved), "--frame", "tracker", "--tolerance", "0.03"]) == 1
+    assert main(["validate", str(model), str(moved), "--frame", "tracker", "--tolerance", "0.05"]) == 1
     assert main(["validate", str(model), str(moved), "--frame", "tracker", "--register", str(reference),
-                 "--tolerance", "0.03"]) == 0
+                 "--tolerance", "0.05"]) == 0

@@ -7,10 +7,10 @@ kinematics put it:
 
 - DH parameter errors (a, d in mm; alpha, theta offset in rad) and a small
   error of the declared tool position. The flange is machined to the last
-  axis: link 6's a, d and alpha errors are of machining size
-  (``flange_length_sigma``, ``flange_angle_sigma``), its theta offset (the
-  joint's zero) is as large as the others'. A tool other than the measured
-  one is exact on the real flange;
+  axis: the a, d and alpha errors drawn for link 6 are errors of the
+  measured tool's mounting (its TCP lands exactly where that link's errors
+  would put it), while joint 6 keeps its zero error. A tool other than the
+  measured one, taken as exact, is exact on the real flange;
 - gravity compliance: each joint deflects by the gravity torque of the links
   and payload beyond it divided by its stiffness;
 - gear eccentricity: once- and twice-per-turn joint angle errors;
@@ -26,7 +26,7 @@ import dataclasses
 
 import numpy as np
 
-from trajcomp.kinematics import fk, link_frames
+from trajcomp.kinematics import dh_link_transforms, fk, link_frames
 from trajcomp.transforms import rotvec_to_matrix
 
 GRAVITY = np.array([0.0, 0.0, -9.81])  # m/s^2, in the base frame
@@ -45,8 +45,6 @@ class ErrorProfile:
         DH alpha and theta-offset errors, rad.
     tool_sigma : float
         Error of the declared tool (TCP) position, mm per axis.
-    flange_length_sigma, flange_angle_sigma : float
-        Errors of link 6's a, d (mm) and alpha (rad): the flange's machining.
     link_mass : tuple of float
         Mass of links 1..6, kg (centre of mass midway along each link).
     payload : float
@@ -65,8 +63,6 @@ class ErrorProfile:
     length_sigma: float = 0.0
     angle_sigma: float = 0.0
     tool_sigma: float = 0.0
-    flange_length_sigma: float = 0.0
-    flange_angle_sigma: float = 0.0
     link_mass: tuple = (0.0,) * 6
     payload: float = 0.0
     stiffness: float = np.inf
@@ -90,8 +86,6 @@ PROFILES = {
         length_sigma=0.5,
         angle_sigma=np.radians(0.05),
         tool_sigma=0.2,
-        flange_length_sigma=0.01,
-        flange_angle_sigma=np.radians(0.002),
         link_mass=_UR10_MASSES,
         payload=2.0,
         stiffness=4.0e5,
@@ -105,8 +99,6 @@ PROFILES = {
         length_sigma=1.0,
         angle_sigma=np.radians(0.1),
         tool_sigma=0.5,
-        flange_length_sigma=0.02,
-        flange_angle_sigma=np.radians(0.004),
         link_mass=_UR10_MASSES,
         payload=8.0,
         stiffness=2.0e5,
@@ -150,14 +142,20 @@ class VirtualRobot:
         std = nominal.as_standard()
         tool = std.T_flange_tool.copy()
         tool[:3, 3] += rng.normal(0.0, profile.tool_sigma, 3)
-        unit = rng.normal(0.0, 1.0, (4, 6))  # a, d, alpha, theta errors per joint, in sigmas
-        length = np.append(np.full(5, profile.length_sigma), profile.flange_length_sigma)
-        angle = np.append(np.full(5, profile.angle_sigma), profile.flange_angle_sigma)
+        a = std.a + rng.normal(0.0, profile.length_sigma, 6)
+        d = std.d + rng.normal(0.0, profile.length_sigma, 6)
+        alpha = std.alpha + rng.normal(0.0, profile.angle_sigma, 6)
+        theta_offset = std.theta_offset + rng.normal(0.0, profile.angle_sigma, 6)
+        # Link 6's a, d, alpha errors go to the mounting of the measured tool: same TCP, exact flange.
+        drawn, exact = (dh_link_transforms(link[0], link[1], link[2], np.zeros((1, 1)))[0, 0]
+                        for link in ((a[5], alpha[5], d[5]), (std.a[5], std.alpha[5], std.d[5])))
+        flange = std.T_link6_flange
+        tool = np.linalg.inv(flange) @ np.linalg.inv(exact) @ drawn @ flange @ tool
         true_robot = std.replace(
-            a=std.a + unit[0] * length,
-            d=std.d + unit[1] * length,
-            alpha=std.alpha + unit[2] * angle,
-            theta_offset=std.theta_offset + unit[3] * profile.angle_sigma,
+            a=np.append(a[:5], std.a[5]),
+            d=np.append(d[:5], std.d[5]),
+            alpha=np.append(alpha[:5], std.alpha[5]),
+            theta_offset=theta_offset,
             T_flange_tool=tool,
         )
         return cls(nominal, true_robot, profile, rng.uniform(0, 2 * np.pi, (6, 2)), seed)

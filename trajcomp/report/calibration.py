@@ -10,7 +10,7 @@ from scipy.spatial.transform import Rotation
 
 from trajcomp.calibrate import commanded, mode_errors, to_base
 from trajcomp.grid import ResidualGrid
-from trajcomp.identify import is_angle
+from trajcomp.parameters import is_angle
 from trajcomp.kinematics import fk
 from trajcomp.report import plots
 from trajcomp.report.document import Figure, Report
@@ -207,8 +207,8 @@ def calibration_report(model, meas, *, files=(), options=None):
         "outliers": {"file": meas.path, "lines": outlier_lines},
         "validity": {
             "measured_box": {"lower": position.min(axis=0).tolist(), "upper": position.max(axis=0).tolist()},
-            "grids": {name: None if getattr(model, name) is None else grid_box(getattr(model, name))
-                      for name in ("grid", "residual")},
+            "grids": {name: None if getattr(model, name, None) is None or getattr(getattr(model, name), "kind", "") == "joint"
+                      else grid_box(getattr(model, name)) for name in ("grid", "residual")},
             "orientations": orientations(rotations),
             "tool": {"pose": tool.tolist(),
                      "identified_offset_mm": [float(v) for v in identified_tool]
