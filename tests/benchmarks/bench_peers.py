@@ -39,7 +39,7 @@ from scipy.optimize import least_squares  # noqa: E402
 
 from trajcomp.calibrate import calibrate  # noqa: E402
 from trajcomp.identify import apply_deltas, identify_dh  # noqa: E402
-from trajcomp.ik import configuration_of, ik, ik_all  # noqa: E402
+from trajcomp.ik import configuration_of, ik  # noqa: E402
 from trajcomp.interpolate import RBF  # noqa: E402
 from trajcomp.kinematics import fk, link_frames  # noqa: E402
 from trajcomp.measurements import Measurements  # noqa: E402
