@@ -17,8 +17,8 @@ every figure is per core; each time is the best of three runs.
    and at 2,000 validation points against the virtual arm's noise-free
    residual (accuracy), beside scipy's RegularGridInterpolator and
    RBFInterpolator on the same data.
-3. Identification: trajcomp's DH fit (analytic Jacobian, identifiability by
-   QR) beside a plain scipy least_squares over all 24 DH deltas and the TCP
+3. Identification: trajcomp's fit (`trajcomp.identify.identify`: analytic
+   Jacobian, identifiability by QR, robust loss) beside a plain scipy least_squares over all 24 DH deltas and the TCP
    with finite differences, on the same 216 measurements; accuracy is the
    DH model's mean landing error at the validation points.
 """
@@ -38,11 +38,12 @@ from scipy.interpolate import RBFInterpolator, RegularGridInterpolator  # noqa: 
 from scipy.optimize import least_squares  # noqa: E402
 
 from trajcomp.calibrate import calibrate  # noqa: E402
-from trajcomp.identify import apply_deltas, identify_dh  # noqa: E402
+from trajcomp.identify import identify  # noqa: E402
 from trajcomp.ik import configuration_of, ik  # noqa: E402
 from trajcomp.interpolate import RBF  # noqa: E402
 from trajcomp.kinematics import fk, link_frames  # noqa: E402
 from trajcomp.measurements import Measurements  # noqa: E402
+from trajcomp.parameters import apply_deltas  # noqa: E402
 from trajcomp.plan import plan_grid  # noqa: E402
 from trajcomp.robot import load_robot  # noqa: E402
 from trajcomp.simulate import VirtualRobot  # noqa: E402
@@ -213,7 +214,7 @@ def interpolation_rows(model, meas, q, commanded, truth):
 
 
 def identification_rows(robot, meas, q, commanded, truth):
-    """trajcomp's DH fit and a plain finite-difference least_squares: name, s, ratio, evaluations, accuracy."""
+    """trajcomp's fit and a plain finite-difference least_squares: name, s, ratio, evaluations, accuracy."""
     names = [f"{p}{i + 1}" for i in range(6) for p in ("a", "alpha", "d", "theta")] + ["tool_x", "tool_y", "tool_z"]
     evaluations = {"n": 0}
 
@@ -222,7 +223,7 @@ def identification_rows(robot, meas, q, commanded, truth):
         return (fk(apply_deltas(robot, names, x), meas.joints)[:, :3, 3] - meas.measured).ravel()
 
     fits = {
-        "trajcomp identify_dh (analytic Jacobian, QR)": lambda: identify_dh(robot, meas.joints, meas.measured).robot,
+        "trajcomp identify (analytic Jacobian, QR, huber)": lambda: identify(robot, meas.joints, meas.measured).robot,
         "scipy least_squares, 27 parameters, 2-point FD": lambda: apply_deltas(
             robot, names, least_squares(residual, np.zeros(len(names)), method="trf").x),
     }
