@@ -81,3 +81,121 @@ def test_wrong_language_is_a_clear_error(tmp_path):
     path.write_text("DEF p( )\nPTP HOME\nEND\n")
     with pytest.raises(ReadError, match="not a RAPID module"):
         formats.read(path)
+
+
+def _module(tmp_path, body, decls=""):
+    path = tmp_path / "M.mod"
+    path.write_text(
+        "MODULE M\n"
+        "  CONST robtarget p10:=[[1,2,3],[1,0,0,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]];\n"
+        "  CONST robtarget p20:=[[4,5,6],[1,0,0,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]];\n"
+        "  PERS tooldata MyTool:=[TRUE,[[0,0,100],[1,0,0,0]],[1,[0,0,1],[1,0,0,0],0,0,0]];\n"
+        "  PERS wobjdata Frame2:=[FALSE,TRUE,\"\",[[100,200,0],[1,0,0,0]],[[0,0,0],[1,0,0,0]]];\n"
+        f"{decls}  PROC main()\n{body}  ENDPROC\nENDMODULE\n"
+    )
+    return path
+
+
+def test_work_object_after_a_comma_as_robodk_writes_it(tmp_path):
+    program = formats.read(_module(tmp_path, "    MoveL p10, v100, z10, tool0,\\WObj:=Frame2;\n"
+                                             "    MoveL p20, v100, z10, MyTool ,\\WObj:=Frame2 \\TLoad:=load0;\n"))
+    assert [(m.tool, m.frame) for m in program.motions] == [("tool0", "Frame2"), ("MyTool", "Frame2")]
+
+
+def test_identifiers_are_case_insensitive_and_tool0_wobj0_predefined(tmp_path):
+    program = formats.read(_module(tmp_path, "    MoveL P10, v100, fine, Tool0\\WObj:=WOBJ0;\n"
+                                             "    MoveJ p20, v100, fine, mytool\\WObj:=frame2;\n"))
+    assert [(m.tool, m.frame) for m in program.motions] == [("tool0", "wobj0"), ("MyTool", "Frame2")]
+    assert [program.targets[m.target].name for m in program.motions] == ["p10", "p20"]
+
+
+def test_undeclared_point_is_refused_naming_it(tmp_path):
+    path = _module(tmp_path, "    MoveL p10, v100, z10, tool0;\n    MoveL p30, v100, z10, tool0;\n"
+                             "    MoveC p40, p20, v100, z10, tool0;\n")
+    with pytest.raises(ReadError, match=r"M\.mod: .*p30 \(line 8\), p40 \(line 9\); declare them in this module"):
+        formats.read(path)
+
+
+def test_positions_known_only_at_run_time_are_listed_with_their_reason(tmp_path):
+    body = ("    MoveL p10, v100, z10, tool0;\n    MoveL pTemp, v100, z10, tool0;\n    p20.trans.z := 50;\n"
+            "    MoveL p20, v100, z10, tool0;\n    MoveL pts{2}, v100, z10, tool0;\n    MyProc p10;\n"
+            "    SearchL \\Stop, di1, pHit, p10, v100, tool0;\n  ENDPROC\n"
+            "  PROC MyProc(robtarget pGoal)\n    MoveL pGoal, v100, fine, tool0;\n")
+    decls = "  VAR robtarget pTemp;\n  VAR robtarget pHit;\n"
+    program = formats.read(_module(tmp_path, body, decls))
+    reasons = {line: reason for line, _, reason in program.not_compensated()}
+    assert reasons == {
+        10: "pTemp is declared without a value (set at run time, line 6)",
+        12: "p20 is changed at run time (line 11)",
+        13: "position computed at run time: pts{2}",
+        15: "SearchL: instruction not read by trajcomp, left as written",
+        18: "pGoal: routine parameter, known at run time",
+    }
+    assert sorted((program.targets[i].name, line) for i, line, _ in program.referenced_targets()) == [
+        ("p20", 11), ("p20", 12)]
+    assert program.unused_targets() == ()
+
+
+def test_points_passed_to_routines_are_referenced_not_unused(tmp_path):
+    program = formats.read(_module(tmp_path, "    MoveL p10, v100, z10, tool0;\n    Glue p20, 3;\n"))
+    assert [(program.targets[i].name, line, text) for i, line, text in program.referenced_targets()] == [
+        ("p20", 8, "Glue p20, 3;")]
+    assert program.unused_targets() == ()
+
+
+def test_robodk_tool_and_work_object_assignments_set_their_values(tmp_path):
+    # As RoboDK's ABB post (ABB_RAPID_IRC5.py, setFrame/setTool) writes them, before inline targets.
+    body = ("    rdkWObj.uframe := [[500.000, 0.000, 100.000],[1.00000000, 0.00000000, 0.00000000, 0.00000000]];\n"
+            "    rdkTool.tframe := [[0.000, 0.000, 200.000],[0.70710678, 0.00000000, 0.70710678, 0.00000000]];\n"
+            "    MoveL [[10,0,0],[0,0,1,0],[0,0,0,0],[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]],rdkSpeed,z1,rdkTool,"
+            "\\WObj:=rdkWObj;\n"
+            "    rdkTool.tframe := CalcTool();\n"
+            "    MoveL [[20,0,0],[0,0,1,0],[0,0,0,0],[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]],rdkSpeed,z1,rdkTool,"
+            "\\WObj:=rdkWObj;\n")
+    decls = ("  LOCAL PERS tooldata rdkTool := [TRUE,[[0,0,0],[1,0,0,0]],[2,[0,0,15],[1,0,0,0],0,0,0.005]];\n"
+             "  LOCAL PERS wobjdata rdkWObj := [FALSE, TRUE, \"\", [[0,0,0],[1,0,0,0]],[[0,0,0],[1,0,0,0]]];\n")
+    program = formats.read(_module(tmp_path, body, decls))
+    first, second = program.motions
+    assert (first.tool, first.frame) == ("rdkTool line 10", "rdkWObj line 9")
+    np.testing.assert_allclose(program.frames[first.frame][:3, 3], [500, 0, 100])
+    np.testing.assert_allclose(program.tools[first.tool][:3, 3], [0, 0, 200])
+    assert second.target is None and second.reason == "rdkTool is changed at run time (line 12)"
+
+
+@pytest.mark.parametrize(
+    "target, message",
+    [
+        ("[[1,2,3],[1,0,0,0],[0,1e999,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]]", "confdata cf4: '1e999' is out of range"),
+        ("[[1,2,3],[1,0,0,0],[0,2.5,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]]", "confdata cf4: '2.5' is not a whole number"),
+        ("[[1,2,3],[0,0,0,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]]", "quaternion of length 0, not a rotation"),
+        ("[[1,2,1e999],[1,0,0,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]]", "z: '1e999' is out of range"),
+    ],
+)
+def test_numbers_that_cannot_be_a_target_are_refused(tmp_path, target, message):
+    path = _module(tmp_path, f"    MoveL {target}, v100, z10, tool0;\n")
+    with pytest.raises(ReadError, match=rf"M\.mod:7: robtarget:? {message}"):
+        formats.read(path)
+
+
+def test_arc_and_trigg_instructions_are_compensated_with_their_tool(tmp_path):
+    program = formats.read(_module(tmp_path, "    ArcL p10, v100, seam1, weld1\\Weave:=weave1, z10, MyTool\\WObj:=Frame2;\n"
+                                             "    TriggL p20, v200, trigg1, fine, tool0;\n"))
+    assert [(program.targets[m.target].name, m.speed, m.zone, m.tool, m.frame) for m in program.motions] == [
+        ("p10", 100.0, 10.0, "MyTool", "Frame2"), ("p20", 200.0, None, "tool0", "wobj0")]
+
+
+REAL = Path(__file__).parent / "data" / "programs" / "real" / "rapid" / "1_T_ROB2.mod"
+
+
+def test_real_compas_rrc_module_with_a_moving_track(tmp_path):
+    program = formats.read(REAL)
+    assert program.not_compensated() == () and len(program.usage()) == 11
+    assert {m.frame for m in program.motions} == {"DefaultFrame", "wobj0"}
+    assert program.targets[1].external[0] == 681.92 and np.isnan(program.targets[1].external[1:]).all()
+    assert program.moving_external_axes() == ("E1",)
+    from trajcomp.postprocess import convert_program
+
+    formats.write(tmp_path / "track.src", convert_program(program, "krl"))  # no robot: no S/T, the track is kept
+    again = formats.read(tmp_path / "track.src")
+    np.testing.assert_array_equal([t.external[0] for t in again.targets], [t.external[0] for t in program.targets])
+    assert again.moving_external_axes() == ("E1",)

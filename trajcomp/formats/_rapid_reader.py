@@ -1,0 +1,387 @@
+"""The RAPID reader: a module's declarations and motion instructions into a `Program` (see `trajcomp.formats.rapid`)."""
+
+import dataclasses
+import re
+
+import numpy as np
+
+from trajcomp.errors import ReadError
+from trajcomp.formats._text import (
+    NUMBER,
+    Lines,
+    fail,
+    finite,
+    integer,
+    mask,
+    read_source,
+    spans,
+    unresolved,
+    whole_circle,
+)
+from trajcomp.program import CIRCULAR, JOINT, LINEAR, Motion, Program, Statement, Target
+from trajcomp.transforms import quat_to_matrix
+
+POSITION = ("x", "y", "z")
+QUAT = ("q1", "q2", "q3", "q4")
+CONF = ("cf1", "cf4", "cf6", "cfx")
+EXTAX = ("ea", "eb", "ec", "ed", "ee", "ef")
+JOINTS = ("j1", "j2", "j3", "j4", "j5", "j6")
+UNUSED_AXIS = 8.9e9  # ABB writes 9E9 for an external axis that is not used
+QUAT_TOLERANCE = 0.01  # |norm - 1| a stated quaternion may have (written with few decimals)
+PREDEFINED = {"tool0": np.eye(4)}, {"wobj0": np.eye(4)}  # need no declaration
+
+# Motion instructions read: points (1, or 2 for circles), then speed; Move* have zone and tool
+# next, the others (TriggL, ArcL, CladL ...) more data in between and the tool last. Other
+# motion instructions (SearchL, MoveExtJ, SpotL ...) are listed as not compensated.
+_FAMILIES = {f"MOVE{k}{s}": k for k in ("J", "L", "C") for s in ("", "DO", "AO", "GO", "SYNC")}
+_FAMILIES |= {"MOVEABSJ": "J"} | {f"{p}{k}": k for p in ("TRIGG", "ARC", "CLAD") for k in ("J", "L", "C")}
+KINDS = {"J": JOINT, "L": LINEAR, "C": CIRCULAR}
+
+_N = r"\s*(" + NUMBER + r")\s*"
+_POSE = r"\[\s*\[" + ",".join([_N] * 3) + r"\]\s*,\s*\[" + ",".join([_N] * 4) + r"\]\s*\]"
+_ROBTARGET = re.compile(
+    r"^\s*\[\s*\[" + ",".join([_N] * 3) + r"\]\s*,\s*\[" + ",".join([_N] * 4) + r"\]\s*,\s*\["
+    + ",".join([_N] * 4) + r"\]\s*,\s*\[" + ",".join([_N] * 6) + r"\]\s*\]\s*$"
+)
+_JOINTTARGET = re.compile(r"^\s*\[\s*\[" + ",".join([_N] * 6) + r"\]\s*,\s*\[" + ",".join([_N] * 6) + r"\]\s*\]\s*$")
+_TOOLDATA = re.compile(r"^\s*\[\s*(TRUE|FALSE)\s*,\s*" + _POSE + r"\s*,", re.I)
+_WOBJDATA = re.compile(
+    r"^\s*\[\s*(TRUE|FALSE)\s*,\s*(?:TRUE|FALSE)\s*,\s*\"(\s*)\"\s*,\s*" + _POSE + r"\s*,\s*" + _POSE + r"\s*\]\s*$", re.I
+)
+_POSE_LITERAL = re.compile(r"^\s*" + _POSE + r"\s*$")
+_DECL = re.compile(
+    r"^\s*(?:(?:LOCAL|TASK)\s+)*(?:CONST|PERS|VAR)\s+(robtarget|jointtarget|tooldata|wobjdata)\s+(\w+)\s*:=(.*);\s*$",
+    re.I | re.S,
+)
+_DECL_BARE = re.compile(
+    r"^\s*(?:(?:LOCAL|TASK)\s+)*(?:PERS|VAR)\s+(?:robtarget|jointtarget|tooldata|wobjdata)\s+(\w+(?:\s*,\s*\w+)*)\s*;",
+    re.I,
+)
+_STARTS_DECL = re.compile(r"^\s*(?:(?:LOCAL|TASK)\s+)*(?:CONST|PERS|VAR)\b", re.I)
+_INSTRUCTION = re.compile(r"^\s*([A-Za-z]\w*)\b(.*);\s*$", re.S)
+_STARTS_MOTION = re.compile(r"^\s*(?:Move|Trigg|Search|Arc|Clad|Spot|Paint|Disp|Contact)\w*\b", re.I)
+_ROUTINE = re.compile(r"^\s*(?:LOCAL\s+)?(?:PROC|FUNC\s+\w+|TRAP)\s+\w+\s*\((.*)\)", re.I | re.S)
+_ASSIGN = re.compile(r"^\s*([A-Za-z]\w*)((?:\.\w+)*)\s*:=(.*);\s*$", re.S)
+_MODULE = re.compile(r"^\s*MODULE\s+(\w+)", re.I | re.M)
+_NAME = re.compile(r"^[A-Za-z]\w*$")
+_WORD = re.compile(r"[A-Za-z]\w*")
+_OPTION = re.compile(r"\\(\w+)(?:\s*:=\s*([^\\]+))?")
+_SPEED = re.compile(r"^v(\d+(?:\.\d*)?)$", re.I)
+_ZONE = re.compile(r"^(fine|z(\d+(?:\.\d*)?))$", re.I)
+
+
+def pose(values):
+    """T (4, 4) from x, y, z (mm) and a quaternion [w, x, y, z]."""
+    T = np.eye(4)
+    T[:3, :3] = quat_to_matrix(values[3:7])
+    T[:3, 3] = values[:3]
+    return T
+
+
+def _statements(source, masked):
+    """``(line, start, end)`` of each statement: declarations and motions up to their ``;``, else one line."""
+    lines = Lines(source.text)
+    out, pending = [], None
+    for number, start, end in lines:
+        if pending is not None:
+            if ";" in masked[start:end]:
+                out.append((pending[0], pending[1], start + masked[start:end].index(";") + 1))
+                pending = None
+            continue
+        text = masked[start:end]
+        if (_STARTS_DECL.match(text) or _STARTS_MOTION.match(text)) and ";" not in text:
+            pending = (number, start)
+        elif _STARTS_DECL.match(text) or _STARTS_MOTION.match(text):
+            out.append((number, start, start + text.index(";") + 1))
+        else:
+            out.append((number, start, end))
+    if pending is not None:
+        fail(source.name, pending[0], source.text[pending[1]:pending[1] + 80], "statement without ';'")
+    return out
+
+
+def _split_top(text, offset):
+    """``[(piece, start)]`` of ``text`` split at top-level commas."""
+    parts, depth, start = [], 0, 0
+    for k, ch in enumerate(text):
+        if ch in "[({":
+            depth += 1
+        elif ch in "])}":
+            depth -= 1
+        elif ch == "," and depth == 0:
+            parts.append((text[start:k], offset + start))
+            start = k + 1
+    parts.append((text[start:], offset + start))
+    return parts
+
+
+def _bare(argument):
+    """An argument without its optional parts (``\\V:=...``, ``\\WObj:=...``, ``\\NoEOffs``)."""
+    return re.sub(r"\\.*", "", argument, flags=re.S).strip()
+
+
+@dataclasses.dataclass(frozen=True)
+class _Named:
+    """A motion argument naming a point, resolved once the whole module is read."""
+
+    name: str
+    line: int
+
+
+class _Reader:
+    def __init__(self, source):
+        self.source = source
+        self.targets, self.items, self.points = [], [], {}
+        self.tools, self.frames = dict(PREDEFINED[0]), dict(PREDEFINED[1])
+        self.active = {"tool": {"tool0": "tool0"}, "wobj": {"wobj0": "wobj0"}}  # lower name -> key of its value
+        self.why = {}  # lower name of a tool or work object -> why its value is known only at run time
+        self.wobj_parts = {}  # lower name -> (uframe, oframe)
+        self.unset = {}  # lower point name -> why its value is known only at run time
+        self.params = set()
+
+    def number(self, text, line, original, field):
+        return finite(text, self.source.name, line, original, field)
+
+    def literal(self, kind, text, offset, name, line, original):
+        """A Target from a robtarget or jointtarget literal starting at ``offset``."""
+        label = name or kind
+        if kind == "jointtarget":
+            m = _JOINTTARGET.match(text)
+            if not m:
+                fail(self.source.name, line, original, "malformed jointtarget")
+            joints = np.radians([self.number(m.group(k), line, original, f"{label} joint {k}") for k in range(1, 7)])
+            return Target(name=name, line=line, joints=joints, spans=spans(0, m, JOINTS, offset),
+                          external=self.external(m, 7, line, original, label))
+        m = _ROBTARGET.match(text)
+        if not m:
+            fail(self.source.name, line, original, "malformed robtarget")
+        values = np.array([self.number(m.group(k), line, original, f"{label} {r}")
+                           for k, r in enumerate(POSITION + QUAT, start=1)])
+        self.check_quaternion(values[3:], line, original, label)
+        config = tuple(integer(m.group(k), self.source.name, line, original, f"{label} confdata {c}")
+                       for k, c in zip(range(8, 12), CONF))
+        return Target(name=name, line=line, pose=pose(values), config=config,
+                      spans=spans(0, m, POSITION + QUAT + CONF, offset),
+                      external=self.external(m, 12, line, original, label))
+
+    def check_quaternion(self, quat, line, original, label):
+        norm = np.linalg.norm(quat)
+        if abs(norm - 1.0) > QUAT_TOLERANCE:
+            fail(self.source.name, line, original, f"{label}: quaternion of length {norm:.4g}, not a rotation")
+
+    def external(self, m, first, line, original, label):
+        """External axes eax_a..eax_f, NaN where unused (9E9); None if all are unused."""
+        values = np.array([self.number(m.group(k), line, original, f"{label} extax {e}")
+                           for k, e in zip(range(first, first + 6), EXTAX)])
+        values[np.abs(values) >= UNUSED_AXIS] = np.nan
+        return None if np.isnan(values).all() else values
+
+    def frame_values(self, kind, d, line, original, name):
+        """The pose numbers of a tooldata (tframe) or wobjdata (uframe, oframe) match, checked."""
+        groups = d.groups()[1 if kind == "tooldata" else 2:]
+        numbers = [self.number(g, line, original, f"{name} {kind}") for g in groups]
+        for start in range(0, len(numbers), 7):
+            self.check_quaternion(numbers[start + 3:start + 7], line, original, name)
+        return numbers
+
+    def declaration(self, m, start, line, original):
+        kind, name, value = m.group(1).lower(), m.group(2), m.group(3)
+        offset = start + m.start(3)
+        if kind in ("robtarget", "jointtarget"):
+            self.points[name.lower()] = len(self.targets)
+            self.targets.append(self.literal(kind, value, offset, name, line, original))
+            return
+        pattern = _TOOLDATA if kind == "tooldata" else _WOBJDATA
+        d = pattern.match(value)
+        if not d:
+            fail(self.source.name, line, original, f"malformed {kind}")
+        numbers = self.frame_values(kind, d, line, original, name)
+        group = "tool" if kind == "tooldata" else "wobj"
+        if (d.group(1).upper() == "TRUE") != (kind == "tooldata"):
+            what = "stationary tool (robhold FALSE)" if kind == "tooldata" else "robot-held work object"
+            self.why[name.lower()] = f"{name}: {what}, not supported"
+            return
+        self.active[group][name.lower()] = name
+        if kind == "tooldata":
+            self.tools[name] = pose(numbers)
+        else:
+            self.wobj_parts[name.lower()] = (pose(numbers[:7]), pose(numbers[7:]))
+            self.frames[name] = self.wobj_parts[name.lower()][0] @ self.wobj_parts[name.lower()][1]
+
+    def assignment(self, m, line, original):
+        """``tool.tframe := [..]``, ``wobj.uframe := [..]``: a new value from here on; other assignments at run time."""
+        name, key = m.group(1), m.group(1).lower()
+        field, value = m.group(2).lower(), m.group(3)
+        literal = _POSE_LITERAL.match(value)
+        if key in self.active["tool"] and key != "tool0":
+            if field == ".tframe" and literal:
+                numbers = [self.number(g, line, original, name) for g in literal.groups()]
+                self.check_quaternion(numbers[3:], line, original, name)
+                self.tools[f"{name} line {line}"] = pose(numbers)
+                self.active["tool"][key] = f"{name} line {line}"
+                self.why.pop(key, None)
+            else:
+                self.why[key] = f"{name} is changed at run time (line {line})"
+        elif key in self.active["wobj"] and key != "wobj0":
+            parts = self.wobj_parts.get(key)
+            if field in (".uframe", ".oframe") and literal and parts is not None:
+                numbers = [self.number(g, line, original, name) for g in literal.groups()]
+                self.check_quaternion(numbers[3:], line, original, name)
+                parts = (pose(numbers), parts[1]) if field == ".uframe" else (parts[0], pose(numbers))
+                self.wobj_parts[key] = parts
+                self.frames[f"{name} line {line}"] = parts[0] @ parts[1]
+                self.active["wobj"][key] = f"{name} line {line}"
+                self.why.pop(key, None)
+            else:
+                self.why[key] = f"{name} is changed at run time (line {line})"
+
+    def position(self, piece, start, kind, line, original):
+        """Target index of an inline literal, `_Named` for a name, None for an expression."""
+        text = _bare(piece)
+        if text.startswith("["):
+            shift = start + len(piece) - len(piece.lstrip())
+            self.targets.append(self.literal("jointtarget" if kind == "MOVEABSJ" else "robtarget",
+                                             text, shift, "", line, original))
+            return len(self.targets) - 1
+        return _Named(text, line) if _NAME.match(text) else None
+
+    def frame_name(self, group, text, line):
+        """(key of the tool or work object named ``text``, why it is known only at run time)."""
+        if not _NAME.match(text):
+            return text, f"{group} {text} computed at run time"
+        key = text.lower()
+        return self.active[group].get(key, text), self.why.get(key, "")
+
+    def motion(self, instruction, rest, start, line, original):
+        keyword = instruction.upper()
+        family = _FAMILIES.get(keyword)
+        text = " ".join(original.split())
+        if family is None:
+            return Motion(kind=LINEAR, line=line, text=text,
+                          reason=f"{instruction}: instruction not read by trajcomp, left as written")
+        kind = KINDS[family]
+        pieces = _split_top(rest, start)
+        options = {k.lower(): (v or "").strip() for p, _ in pieces for k, v in _OPTION.findall(p)}
+        positional = [(p, s) for p, s in pieces if not p.strip().startswith("\\")]
+        count = 2 if kind == CIRCULAR else 1
+        tool_at = count + 2 if keyword.startswith("MOVE") else len(positional) - 1
+        if len(positional) < count + 3 or tool_at >= len(positional):
+            fail(self.source.name, line, original, f"{instruction} needs {count + 3} arguments")
+        found = [self.position(p, s, keyword, line, original) for p, s in positional[:count]]
+        speed_text = _bare(positional[count][0])
+        zones = [_bare(p) for p, _ in positional[count + 1:tool_at + 1] if _ZONE.match(_bare(p))]
+        tool, tool_why = self.frame_name("tool", _bare(positional[tool_at][0]), line)
+        frame, frame_why = self.frame_name("wobj", options.get("wobj", "wobj0"), line)
+        reason = "" if None not in found else (
+            "position computed at run time: " + " ".join(positional[found.index(None)][0].split()))
+        return Motion(
+            kind=kind,
+            target=found[-1],
+            via=found[0] if kind == CIRCULAR else None,
+            speed=self.speed(options.get("v"), speed_text, line, original),
+            zone=self.zone(options.get("z"), zones, line, original),
+            tool=tool,
+            frame=frame,
+            line=line,
+            text=text,
+            reason=reason or tool_why or frame_why,
+        )
+
+    def speed(self, option, text, line, original):
+        """mm/s of ``\\V:=`` or ``vN``; None for speeddata the module names (vmax, v_weld ...)."""
+        if option and re.fullmatch(NUMBER, option):
+            return self.number(option, line, original, "\\V")
+        m = _SPEED.match(text)
+        return self.number(m.group(1), line, original, "speed") if m else None
+
+    def zone(self, option, zones, line, original):
+        """mm of ``\\Z:=`` or ``zN``; None for fine or zonedata the module names."""
+        if option and re.fullmatch(NUMBER, option):
+            return self.number(option, line, original, "\\Z") or None
+        m = _ZONE.match(zones[0]) if zones else None
+        if m is None or m.group(2) is None:
+            return None
+        return self.number(m.group(2), line, original, "zone") or None
+
+
+def read(path):
+    """Read a RAPID module.
+
+    Raises
+    ------
+    ReadError
+        Malformed text, numbers out of range, a quaternion that is not a
+        rotation, or motions to points the module does not declare.
+    """
+    source = read_source(path)
+    masked = mask(source.text, "!")
+    module = _MODULE.search(masked)
+    if not module:
+        raise ReadError(f"{path}: not a RAPID module: no MODULE line")
+    reader = _Reader(source)
+    for line, start, end in _statements(source, masked):
+        text, original = masked[start:end], source.text[start:end]
+        if m := _ROUTINE.match(text):
+            reader.params = {_WORD.findall(p.split("{")[0])[-1].lower() for p in m.group(1).split(",")
+                             if _WORD.findall(p.split("{")[0])}
+        if m := _DECL.match(text):
+            reader.declaration(m, start, line, original)
+        elif m := _DECL_BARE.match(text):
+            for name in re.split(r"\s*,\s*", m.group(1)):
+                reader.unset[name.lower()] = f"{name} is declared without a value (set at run time, line {line})"
+        elif _STARTS_MOTION.match(text) and (m := _INSTRUCTION.match(text)):
+            reader.items.append(reader.motion(m.group(1), m.group(2), start + m.start(2), line, original))
+            continue
+        elif m := _ASSIGN.match(text):
+            reader.assignment(m, line, original)
+        reader.items.append(Statement(line, original))
+    items = _resolve(reader, masked)
+    return Program(
+        "rapid", module.group(1), items, tuple(reader.targets), reader.tools, reader.frames, (source,)
+    )
+
+
+def _resolve(reader, masked):
+    """The items with named points resolved; points assigned at run time and routine arguments found."""
+    assigned = {}
+    for item in reader.items:
+        if isinstance(item, Statement) and (m := _ASSIGN.match(mask(item.text, "!"))):
+            assigned.setdefault(m.group(1).lower(), item.line)
+    missing = []
+
+    def lookup(ref):
+        if not isinstance(ref, _Named):
+            return ref, ""
+        key = ref.name.lower()
+        if key in assigned and key in reader.points:
+            return None, f"{ref.name} is changed at run time (line {assigned[key]})"
+        if key in reader.points:
+            return reader.points[key], ""
+        if key in reader.params:
+            return None, f"{ref.name}: routine parameter, known at run time"
+        if key in reader.unset:
+            return None, reader.unset[key]
+        missing.append((ref.name, ref.line))
+        return None, ""
+
+    def named(text):
+        words = {w.lower() for w in _WORD.findall(mask(text, "!"))}
+        return tuple(reader.points[w] for w in sorted(words) if w in reader.points)
+
+    items = []
+    for item in reader.items:
+        if isinstance(item, Motion):
+            (via, via_why), (target, why) = lookup(item.via), lookup(item.target)
+            reason = via_why or why or item.reason
+            if reason:
+                item = dataclasses.replace(item, target=None, via=None, reason=reason, refs=named(item.text)
+                                           + tuple(i for i in (via, target) if isinstance(i, int)))
+            else:
+                item = whole_circle(dataclasses.replace(item, target=target, via=via))
+        elif not _DECL.match(mask(item.text, "!")) and (refs := named(item.text)):
+            item = dataclasses.replace(item, refs=refs)
+        items.append(item)
+    if missing:
+        unresolved(reader.source.name, missing, "declare them in this module (trajcomp reads one module; points "
+                                                "of other modules are not known)")
+    return tuple(items)
