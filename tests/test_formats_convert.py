@@ -59,8 +59,15 @@ def test_conversion_preserves_poses(from_format, to_format, robot, tmp_path):
     seeded = program.with_targets(stack.index, joints=np.zeros((len(stack), 6)))  # configuration from joints
     converted = convert_program(seeded, to_format, robot=robot, tools=TOOLS, frames=FRAMES)
     out = tmp_path / f"converted{EXTENSION[to_format]}"
+    axis = {"rapid": [250.5], "fanuc_ls": [150.0]}.get(from_format, [])  # pFixture's extax, P[6]'s E1
+    if axis and to_format in FRAMELESS:
+        with pytest.raises(WriteError, match="hold 0 external axes; the program gives E1 a value"):
+            formats.write(out, converted)
+        return
     formats.write(out, converted)
     again = formats.read(out)
+    external = [t.external[0] for t in again.targets if t.external is not None]
+    assert external == axis  # carried; KUKA's E1..E6 = 0 left out
     base = to_format in FRAMELESS
     before, after = _positions(program, base), _positions(again, base)
     assert [kind for kind, _ in before] == [kind for kind, _ in after]

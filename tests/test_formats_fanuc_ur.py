@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from trajcomp import formats
-from trajcomp.errors import ReadError
+from trajcomp.errors import ReadError, WriteError
 from trajcomp.transforms import abc_to_matrix, rotvec_to_matrix
 
 DATA = Path(__file__).parent / "data" / "programs"
@@ -118,3 +118,84 @@ def test_wrong_language_is_a_clear_error(tmp_path, suffix, other):
     path.write_text(other)
     with pytest.raises(ReadError, match="not a (FANUC|URScript)"):
         formats.read(path)
+
+
+def _ls(tmp_path, mn, pos):
+    path = tmp_path / "T.LS"
+    lines = "".join(f"{k:4d}:{line} ;\n" for k, line in enumerate(mn, start=1))
+    path.write_text(f"/PROG  T\n/ATTR\n/MN\n{lines}/POS\n{pos}/END\n")
+    return path
+
+
+def _p(n, x, ut=1, config="N U T, 0, 0, 0", extra=""):
+    return (f"P[{n}]{{\n   GP1:\n\tUF : 0, UT : {ut},\t\tCONFIG : '{config}',\n"
+            f"\tX = {x}  mm,\tY = 0.000  mm,\tZ = 500.000  mm,\n\tW = 180.000 deg,\tP = 0.000 deg,\tR = 0.000 deg{extra}\n}};\n")
+
+
+def test_fanuc_german_export_reads_konfig_tool_and_the_servo_gun_axis():
+    program = formats.read(DATA / "real" / "fanuc" / "up106.ls")
+    assert [program.targets[m.target].config for m in program.motions] == [("N", "U", "T", 0, 0, 0)] * 3
+    assert {m.tool for m in program.motions} == {"1"} and {m.frame for m in program.motions} == {"0"}
+    assert [(m.speed, m.speed_unit, m.zone) for m in program.motions] == [(100.0, "%", None)] * 3
+    assert [t.external.tolist() for t in program.targets] == [[100.0, 0.0, 0.0], [20.0, 0.0, 0.0], [100.0, 0.0, 0.0]]
+    assert program.moving_external_axes() == ("E1",)  # GP2 J1, the servo gun
+
+
+def test_fanuc_untaught_position_is_refused_when_a_motion_uses_it():
+    with pytest.raises(ReadError, match=r"motn015\.ls:27: P\[1\] is not taught \(its position is \*+, line 31\)"):
+        formats.read(DATA.parent / "refused" / "fanuc" / "motn015.ls")
+
+
+def test_fanuc_untaught_position_nothing_moves_to_is_fine(tmp_path):
+    untaught = "P[2]{\n   GP1:\n\tUF : F, UT : F,\t\tKONFIG : 'N D B, 0, 0, 0',\n\tX = ********  mm\n};\n"
+    program = formats.read(_ls(tmp_path, ["L P[1] 100mm/sec FINE"], _p(1, "400.000") + untaught))
+    assert len(program.targets) == 1 and program.not_compensated() == ()
+
+
+def test_fanuc_tool_set_at_run_time_stops_compensation_from_that_line(tmp_path):
+    mn = ["UTOOL_NUM=1", "L P[1] 100mm/sec FINE", "UTOOL[1]=PR[5]", "L P[2] 100mm/sec FINE",
+          "L P[3] 100mm/sec FINE"]
+    program = formats.read(_ls(tmp_path, mn, _p(1, "400.000") + _p(2, "410.000") + _p(3, "420.000", ut=2)))
+    assert [program.targets[i].name for i in program.usage()] == ["P[1]", "P[3]"]  # P[3] uses tool 2
+    assert program.not_compensated() == (
+        (7, "4:L P[2] 100mm/sec FINE ;", "tool 1 set at run time by UTOOL[1]=PR[5] (line 6)"),)
+    assert [program.targets[i].name for i, _, _ in program.referenced_targets()] == ["P[2]"]
+
+
+def test_fanuc_register_and_max_speeds_corner_region_and_references(tmp_path):
+    mn = ["L P[1] R[4]mm/sec CNT R[2]", "L P[2] max_speed CR50", "PR[1]=P[3]", "L P[3] 100mm/sec FINE Offset,PR[1]"]
+    program = formats.read(_ls(tmp_path, mn, _p(1, "400.000") + _p(2, "410.000") + _p(3, "420.000")))
+    assert [(m.speed, m.zone, m.target) for m in program.motions] == [(None, None, 0), (None, 50.0, 1), (100.0, None, None)]
+    assert program.not_compensated()[0][2] == "Offset applied at run time"
+    assert [(program.targets[i].name, line) for i, line, _ in program.referenced_targets()] == [("P[3]", 6), ("P[3]", 7)]
+
+
+def test_fanuc_circle_with_a_register_point_passes_through_whole(tmp_path):
+    mn = ["C P[1]", "L P[2] 100mm/sec FINE"]
+    path = tmp_path / "C.LS"
+    path.write_text("/PROG  C\n/MN\n   1:C P[1]    \n    :  PR[2] 100mm/sec FINE    ;\n   2:L P[2] 100mm/sec FINE ;\n"
+                    f"/POS\n{_p(1, '400.000')}{_p(2, '410.000')}/END\n")
+    program = formats.read(path)
+    circle = program.motions[0]
+    assert (circle.target, circle.via, circle.refs) == (None, None, (0,))
+    assert circle.reason == "position register PR[2]"
+
+
+def test_a_circle_without_its_via_point_is_never_written(tmp_path):
+    import dataclasses
+
+    program = formats.read(DATA / "fanuc" / "PICK_PLACE.LS")
+    items = [dataclasses.replace(m, via=None) if getattr(m, "kind", "") == "circular" else m for m in program.items]
+    for suffix in (".LS", ".src", ".mod", ".script"):
+        from trajcomp.postprocess import convert_program
+
+        converted = convert_program(program.replace(items=tuple(items)), formats.find_format(tmp_path / f"x{suffix}").name,
+                                    tools={"1": np.eye(4), "2": np.eye(4)}, frames={"1": np.eye(4)})
+        with pytest.raises(WriteError, match=r"line 28 .*a circle needs its via point"):
+            formats.write(tmp_path / f"x{suffix}", converted)
+
+
+@pytest.mark.parametrize("x", ["1e999", "-1e400"])
+def test_fanuc_out_of_range_number_is_refused(tmp_path, x):
+    with pytest.raises(ReadError, match=rf"T\.LS:\d+: P\[1\] X: '{x}' is out of range"):
+        formats.read(_ls(tmp_path, ["L P[1] 100mm/sec FINE"], _p(1, x)))

@@ -176,14 +176,19 @@ def test_external_axes_are_read_and_their_motion_detected(tmp_path):
     assert formats.read(_write(tmp_path, SRC, DAT)).moving_external_axes() == ()
 
 
-def test_external_axes_are_carried_by_conversion(tmp_path):
+def test_external_axes_are_carried_by_conversion_and_zero_ones_left_out(tmp_path):
     from trajcomp.postprocess import convert_program
 
+    dat = DAT.replace("S 2,T 2}", "S 2,T 2,E1 0.0,E2 0.0}").replace("Z 6,A 0,B 0,C 0,S 2,T 2,E1 0.0", "Z 6,A 0,B 0,C 0,S 2,T 2,E1 -250.5")
+    program = formats.read(_write(tmp_path, SRC, dat))
+    formats.write(tmp_path / "copy.src", convert_program(program, "krl"))
+    again = formats.read(tmp_path / "copy.src")
+    assert [t.external.tolist() for t in again.targets] == [[0.0], [-250.5], [0.0]]  # E2 = 0 everywhere: left out
+    with pytest.raises(WriteError, match="URScript points hold 0 external axes; the program gives E1 a value"):
+        formats.write(tmp_path / "copy.script", convert_program(program, "urscript"))
     real = formats.read(Path(__file__).parent / "data" / "programs" / "real" / "krl" / "Prog1.src")
-    out = tmp_path / "copy.src"
-    formats.write(out, convert_program(real, "krl"))
-    again = formats.read(out)
-    assert [t.external.tolist() for t in again.targets] == [[0.0]] * 5
+    formats.write(tmp_path / "real.src", convert_program(real, "krl"))
+    assert all(t.external is None for t in formats.read(tmp_path / "real.src").targets)  # E1 0.0 only
 
 
 def test_a_program_keeps_its_def_under_its_own_name_even_if_krl_could_not_use_it(tmp_path):

@@ -213,10 +213,10 @@ def write(path, program, format=None, *, protect=()):
         An output is one of the ``protect`` files, or cannot be written, or
         a number to write is not finite (``nan``, ``inf``: never into robot code).
     """
-    from trajcomp.formats._text import check_finite  # lazily, like the format modules
+    from trajcomp.formats._text import check_writable  # lazily, like the format modules
 
     path = Path(path)
-    check_finite(program)
+    check_writable(program)
     files = find_format(path, format).write(program, path)
     kept = {p.resolve() for p in map(Path, protect) if p.exists()}
     clash = [str(out) for out in files if Path(out).resolve() in kept]

@@ -260,11 +260,12 @@ def where(target):
     return f"{target.name} (line {target.line})" if target.name else f"line {target.line}"
 
 
-def check_finite(program):
-    """WriteError naming the first target, tool, frame or motion whose numbers are not finite.
+def check_writable(program):
+    """WriteError naming the first target, tool, frame or motion that cannot become robot code.
 
-    Robot code must never receive ``nan`` or ``inf``; every writer is fed
-    through this check (`trajcomp.formats.write`).
+    Robot code must never receive ``nan`` or ``inf``, nor a circle without
+    its via point; every writer is fed through this check
+    (`trajcomp.formats.write`).
     """
     used = {i for m in program.motions for i in (m.target, m.via) if i is not None}
     for i in sorted(used):
@@ -279,9 +280,48 @@ def check_finite(program):
             if not np.isfinite(T).all():
                 raise WriteError(f"{kind} {name}: value not finite, nothing written")
     for m in program.motions:
+        if m.kind == CIRCULAR and m.target is not None and m.via is None:
+            raise WriteError(f"motion at line {m.line} ({m.text[:60]}): a circle needs its via point, nothing written")
         for what, value in (("speed", m.speed), ("zone", m.zone)):
             if value is not None and not math.isfinite(value):
                 raise WriteError(f"motion at line {m.line} ({m.text[:60]}): {what} not finite, nothing written")
+
+
+def active_axes(program, capacity, language):
+    """External axes a generated program writes: those a used target gives a value other than 0.
+
+    A program without external axes may still state them as 0 (KUKA E1..E6):
+    those are left out of languages that do not need them.
+
+    Parameters
+    ----------
+    capacity : int
+        How many external axes a point of the language holds.
+    language : str
+        For the message.
+
+    Returns
+    -------
+    list of int
+        Axis indices (0 = E1), ascending.
+
+    Raises
+    ------
+    WriteError
+        An axis with a value beyond what the language holds: dropping it
+        would move the program elsewhere.
+    """
+    used = {i for m in program.motions for i in (m.target, m.via) if i is not None}
+    active = set()
+    for i in used:
+        external = program.targets[i].external
+        if external is not None:
+            active |= {k for k, v in enumerate(external) if not np.isnan(v) and v != 0.0}
+    beyond = sorted(k for k in active if k >= capacity)
+    if beyond:
+        raise WriteError(f"{language} points hold {capacity} external axes; the program gives E{beyond[0] + 1} "
+                         "a value: it cannot be written without changing what the program does")
+    return sorted(active)
 
 
 def write_single_file(program, path, format_name, encode, min_places, emit):

@@ -21,6 +21,7 @@ import numpy as np
 
 from trajcomp.formats._text import (
     Lines,
+    active_axes,
     apply_edits,
     encode_text,
     encode_xyzabc,
@@ -180,6 +181,7 @@ def _added_joints(program, source):
 
 def _emit(program):
     """A new program CSV; poses must already be in the base frame (see postprocess.convert)."""
+    active_axes(program, 0, "program CSV")
     targets = program.targets
     used = [i for m in program.motions if m.target is not None for i in (m.via, m.target) if i is not None]
     with_joints = all(targets[i].joints is not None for i in used)

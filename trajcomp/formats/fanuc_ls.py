@@ -1,23 +1,33 @@
 """FANUC teach pendant programs in ASCII form (.LS).
 
 Read:
-- the sections /PROG, /ATTR (LINE_COUNT), /MN, /POS, /END;
-- /MN motion lines ``J|L|C P[n] speed FINE|CNTn`` (a C line continues with
-  ``: P[m] speed ...``), speeds in ``%``, ``mm/sec``, ``cm/min``, ``deg/sec``,
-  ``sec``, ``msec``; ``UFRAME_NUM=n`` / ``UTOOL_NUM=n``. CNTn is read as an
-  n mm blend (FANUC's CNT is a rounding percentage);
+- the sections /PROG, /ATTR, /MN, /POS, /END, in English or German
+  exports (``CONFIG`` / ``KONFIG``, ``UTOOL_NUM`` / ``WKZ_NUM``,
+  ``UFRAME_NUM`` / ``BENUTZER_NUM``, ``sec`` / ``sek``);
+- /MN motion lines ``J|L|C P[n] speed FINE|CNTn|CRn`` (a C line continues
+  with ``: P[m] speed ...``), speeds in ``%``, ``mm/sec``, ``cm/min``,
+  ``deg/sec``, ``sec``, ``msec`` (a speed register or ``max_speed``: no
+  number); ``UFRAME_NUM=n`` / ``UTOOL_NUM=n``. CNTn is read as an n mm blend
+  (FANUC's CNT is a rounding percentage);
 - /POS entries ``P[n:"comment"]{ GP1: UF : u, UT : t, CONFIG : 'N U T, 0,
   0, 0', X = .. mm, Y, Z, W = .. deg, P, R (, E1 ..) }`` or with J1..J6
   (joint representation). W, P, R: R = Rz(R) Ry(P) Rx(W), the matrix of
   A, B, C = R, P, W. UF 0 and UT 0 are the world frame and the faceplate.
-Position registers (PR[n], P[R[n]]) and run-time modifiers (Offset,
-Tool_Offset, INC, VOFFSET) are left as written and reported as not
-compensated.
+  E1.. of group 1, then the axes of groups 2.. (servo gun, positioner) are
+  the target's external axes, carried unchanged.
+Not compensated, with the reason (`Motion.reason`): position registers
+(PR[n], P[R[n]]), run-time modifiers (Offset, Tool_Offset, INC, VOFFSET),
+and motions with a tool or user frame set at run time (``UTOOL[1]=PR[1]``,
+``UTOOL_NUM=R[1]``) from that line on. A motion to a position without a
+/POS entry, or to an untaught one (``X = ********``), is a ReadError; an
+untaught position nothing moves to is fine. Positions named by other
+instructions (``PR[1]=P[3]``) are `Statement.refs`.
 
 Write: the edited positions' numbers and CONFIG; lines are never added or
 removed, so LINE_COUNT stays right. Generated programs count their lines.
 """
 
+import dataclasses
 import re
 from pathlib import Path
 
@@ -27,13 +37,16 @@ from trajcomp.errors import ReadError, WriteError
 from trajcomp.formats._text import (
     NUMBER,
     Lines,
+    active_axes,
     encode_xyzabc,
     fail,
+    finite,
     format_number,
     mask,
     numbered,
-    write_single_file,
     read_source,
+    whole_circle,
+    write_single_file,
 )
 from trajcomp.program import CIRCULAR, JOINT, LINEAR, Motion, Program, Span, Statement, Target
 from trajcomp.transforms import matrix_to_pose, pose_to_matrix
@@ -46,25 +59,71 @@ KINDS = {"J": JOINT, "L": LINEAR, "C": CIRCULAR}
 SPEED_UNITS = {"%": (1.0, "%"), "mm/sec": (1.0, "mm/s"), "cm/min": (10.0 / 60.0, "mm/s"),
                "inch/min": (25.4 / 60.0, "mm/s"), "deg/sec": (np.pi / 180.0, "rad/s"),
                "sec": (1.0, "s"), "msec": (1e-3, "s")}
+_UNIT = r"%|mm/se[ck]|cm/min|inch/min|deg/se[ck]|mse[ck]|se[ck]"
 
 _SECTION = re.compile(r"^/(PROG|ATTR|APPL|MN|POS|END)\b")
 _NUMBERED = re.compile(r"^\s*(\d+):(.*)$")
 _CONTINUED = re.compile(r"^\s*:(.*)$")
 _MOTION = re.compile(r"^\s*([JLC])\s+(P|PR)\[\s*([^\]:]+?)\s*(?::[^\]]*)?\](.*)$", re.I)
 _POINT = re.compile(r"^\s*P\[\s*([^\]:]+?)\s*(?::[^\]]*)?\](.*)$", re.I)
-_SPEED = re.compile(r"(" + NUMBER + r")\s*(%|mm/sec|cm/min|inch/min|deg/sec|msec|sec)", re.I)
-_ZONE = re.compile(r"\b(FINE|CNT\s*(\d+))\b", re.I)
+_SPEED_TERM = re.compile(
+    r"^\s*(?:(" + NUMBER + r")\s*(" + _UNIT + r")|\S+)\s+(FINE|FEIN|CNT\s*(" + NUMBER + r")?\S*|CR\s*(" + NUMBER
+    + r")?\S*)(?:\s|$)", re.I
+)
 _RUNTIME = re.compile(r"\b(Offset|Tool_Offset|INC|VOFFSET)\b", re.I)
-_STATE = re.compile(r"^\s*(UFRAME_NUM|UTOOL_NUM)\s*=\s*(\d+)\s*;", re.I)
+_STATE = re.compile(r"^\s*(UFRAME_NUM|UTOOL_NUM|BENUTZER_NUM|WKZ_NUM)\s*=\s*(.*?)\s*;", re.I)
+_SET_FRAME = re.compile(r"^\s*(UFRAME|UTOOL|BENUTZER|WKZ)\s*\[\s*(\d+)\s*\]\s*=\s*(.*?)\s*;", re.I)
+_POINT_REF = re.compile(r"\bP\[\s*(\d+)\s*(?::[^\]]*)?\]", re.I)
 _POS = re.compile(r"P\[\s*(\d+)\s*(?::\s*\"[^\"]*\")?\s*\]\s*\{(.*?)\};", re.S)
-_FIELD = re.compile(r"\b([XYZWPR]|J[1-6]|E\d)\s*=\s*(" + NUMBER + r")\s*(mm|deg)", re.I)
+_GROUP = re.compile(r"GP(\d+)\s*:(.*?)(?=GP\d+\s*:|$)", re.S)
+_FIELD = re.compile(r"\b([XYZWPR]|J\d|E\d)\s*=\s*(" + NUMBER + r"|\*+)\s*(mm|deg)", re.I)
 _FRAME_NUMBER = re.compile(r"\b(UF|UT)\s*:\s*(\d+)", re.I)
-_CONFIG = re.compile(r"CONFIG\s*:\s*'([^']*)'", re.I)
-_CONFIG_VALUE = re.compile(r"^\s*([NF])\s*([UD])\s*([TB])\s*,\s*(-?\d+)\s*,\s*(-?\d+)\s*,\s*(-?\d+)\s*$", re.I)
+_CONFIG = re.compile(r"(?:CONFIG|KONFIG)\s*:\s*'([^']*)'", re.I)
+_CONFIG_VALUE = re.compile(r"^\s*([NF])\s*([UD])\s*([TB])\s*,\s*(-?\d{1,3})\s*,\s*(-?\d{1,3})\s*,\s*(-?\d{1,3})\s*$", re.I)
+_TOOL_WORDS = {"UTOOL_NUM": "tool", "WKZ_NUM": "tool", "UFRAME_NUM": "frame", "BENUTZER_NUM": "frame",
+               "UTOOL": "tool", "WKZ": "tool", "UFRAME": "frame", "BENUTZER": "frame"}
+
+
+@dataclasses.dataclass
+class _State:
+    """Active tool and user frame numbers while reading /MN, and which are set at run time."""
+
+    tool: str = None
+    frame: str = None
+    why: dict = dataclasses.field(default_factory=lambda: {"tool": "", "frame": ""})  # active one set at run time
+    set_at_run_time: dict = dataclasses.field(default_factory=lambda: {"tool": {}, "frame": {}})  # number -> why
+
+    def update(self, content, line):
+        """Follow ``UTOOL_NUM=n``, ``UTOOL_NUM=R[1]`` and ``UTOOL[n]=PR[m]`` (and the user frame ones)."""
+        if m := _STATE.match(content):
+            what, value = _TOOL_WORDS[m.group(1).upper()], m.group(2)
+            if value.isdigit():
+                setattr(self, what, value)
+                self.why[what] = ""
+            else:
+                setattr(self, what, None)
+                self.why[what] = f"{m.group(1).upper()}={value} chosen at run time (line {line})"
+        elif m := _SET_FRAME.match(content):
+            what = _TOOL_WORDS[m.group(1).upper()]
+            self.set_at_run_time[what][m.group(2)] = (
+                f"{what} {m.group(2)} set at run time by {m.group(1).upper()}[{m.group(2)}]={m.group(3)} (line {line})")
+
+    def reason(self, what, number):
+        """Why the tool or frame a motion uses is only known at run time ("" if it is not)."""
+        if number is None:
+            return self.why[what]
+        return self.set_at_run_time[what].get(number, "")
 
 
 def read(path):
-    """Read a FANUC .LS program."""
+    """Read a FANUC .LS program.
+
+    Raises
+    ------
+    ReadError
+        Malformed text, numbers out of range, or motions to positions
+        without a /POS entry or not taught.
+    """
     source = read_source(path)
     masked = mask(source.text, "!", quote='"')
     lines = Lines(source.text)
@@ -91,28 +150,42 @@ def read(path):
             instructions.append((number, start, end, n.group(2)))
         else:
             instructions.append((number, start, end, None))
-    targets, points = _positions(source, masked, lines, pos_start, pos_end)
-    items, frame, tool = [], None, None
+    targets, points, untaught = _positions(source, masked, lines, pos_start, pos_end)
+    items, state = [], _State()
     for number, start, end, content in instructions:
         original = source.text[start:end]
         if content is None:
             items.append(Statement(number, original))
             continue
-        if m := _STATE.match(content):
-            if m.group(1).upper() == "UFRAME_NUM":
-                frame = m.group(2)
-            else:
-                tool = m.group(2)
+        state.update(content, number)
         m = _MOTION.match(content)
         if not m:
-            items.append(Statement(number, original))
+            refs = tuple(points[int(n)] for n in _POINT_REF.findall(content) if int(n) in points)
+            items.append(Statement(number, original, refs=refs))
             continue
-        items.append(_motion(m, points, frame, tool, source.name, number, original))
+        motion = _motion(m, points, untaught, source.name, number, original)
+        items.append(_with_frames(motion, targets, state))
     tools, frames = {"0": np.eye(4)}, {"0": np.eye(4)}
     return Program("fanuc_ls", name, tuple(items), tuple(targets), tools, frames, (source,))
 
 
-def _motion(m, points, frame, tool, name, number, original):
+def _with_frames(motion, targets, state):
+    """The motion with the tool and frame it runs with; not compensated if one is set at run time."""
+    motion = dataclasses.replace(motion, tool=state.tool, frame=state.frame)
+    for index in (motion.via, motion.target):
+        if index is None:
+            continue
+        target = targets[index]
+        tool = target.tool if target.tool is not None else state.tool
+        frame = target.frame if target.frame is not None else state.frame
+        why = ("" if target.is_joint else state.reason("tool", tool)) or state.reason("frame", frame)
+        if why:
+            points = tuple(i for i in (motion.via, motion.target) if i is not None)
+            return dataclasses.replace(motion, target=None, via=None, reason=why, refs=motion.refs + points)
+    return motion
+
+
+def _motion(m, points, untaught, name, number, original):
     kind = KINDS[m.group(1).upper()]
     rest = m.group(4)
     refs = [(m.group(2).upper(), m.group(3))]
@@ -126,66 +199,91 @@ def _motion(m, points, frame, tool, name, number, original):
         else:
             refs.append(("PR", second.group(2)))
             rest = second.group(3)
-    speed = _SPEED.search(rest)
-    zone = _ZONE.search(rest)
-    if not speed or not zone:
-        fail(name, number, original, "motion needs a speed and FINE or CNT")
-    scale, unit = SPEED_UNITS[speed.group(2).lower()]
-    runtime = bool(_RUNTIME.search(rest))
-    found = []
+    spec = _SPEED_TERM.match(rest)
+    if not spec:
+        fail(name, number, original, "motion needs a speed and FINE, CNT or CR")
+    speed, unit = None, "%"
+    if spec.group(1) is not None:
+        scale, unit = SPEED_UNITS[re.sub("sek$", "sec", spec.group(2).lower())]
+        speed = finite(spec.group(1), name, number, original, "speed") * scale
+    blend = spec.group(4) or spec.group(5)
+    zone = finite(blend, name, number, original, "CNT") if blend is not None else None
+    runtime = _RUNTIME.search(rest)
+    found, reason = [], ""
     for kind_ref, ref in refs:
+        if kind_ref == "P" and ref.isdigit() and int(ref) in untaught:
+            fail(name, number, original, f"P[{ref}] is not taught (its position is ********, line "
+                                         f"{untaught[int(ref)]}): teach it or remove the motion")
         if runtime or kind_ref == "PR" or not ref.isdigit():
             found.append(None)
+            reason = reason or (f"{runtime.group(1)} applied at run time" if runtime
+                                else f"position register {kind_ref}[{ref}]" if kind_ref == "PR"
+                                else f"P[{ref}]: position index computed at run time")
         elif int(ref) not in points:
             fail(name, number, original, f"P[{ref}] has no entry in /POS")
         else:
             found.append(points[int(ref)])
-    return Motion(
+    named = tuple(points[int(r)] for k, r in refs if k == "P" and r.isdigit() and int(r) in points)
+    motion = Motion(
         kind=kind,
         target=found[-1],
         via=found[0] if kind == CIRCULAR else None,
-        speed=float(speed.group(1)) * scale,
+        speed=speed,
         speed_unit=unit,
-        zone=float(zone.group(2)) if zone.group(2) else None,
-        tool=tool,
-        frame=frame,
+        zone=zone or None,
         line=number,
         text=" ".join(original.split()),
+        reason=reason,
+        refs=named if reason else (),
     )
+    if reason:
+        return dataclasses.replace(motion, target=None, via=None)
+    return whole_circle(motion)
 
 
 def _positions(source, masked, lines, start, end):
-    """Targets of the /POS section and ``{P number: target index}``."""
-    targets, points = [], {}
+    """Targets of the /POS section, ``{P number: target index}`` and ``{P number: line}`` of untaught ones."""
+    targets, points, untaught = [], {}, {}
     if start is None:
-        return targets, points
+        return targets, points, untaught
     for m in _POS.finditer(masked, start, end):
         body_start = m.start(2)
         body = masked[body_start:m.end(2)]
-        group = re.search(r"GP1\s*:(.*?)(?=GP\d+\s*:|$)", body, re.S)
-        if not group:
+        groups = {int(g.group(1)): (body_start + g.start(2), g.group(2)) for g in _GROUP.finditer(body)}
+        if 1 not in groups:
             continue
-        gp_start = body_start + group.start(1)
-        gp = group.group(1)
+        gp_start, gp = groups[1]
         line = lines.number(m.start())
         original = source.text[m.start():m.end()]
+        label = f"P[{m.group(1)}]"
+        if "*" in "".join(f.group(2) for f in _FIELD.finditer(gp)):
+            untaught[int(m.group(1))] = line
+            continue
         fields = {}
         for f in _FIELD.finditer(gp):
             fields[f.group(1).lower()] = Span(0, gp_start + f.start(2), gp_start + f.end(2), f.group(2))
+
+        def value(role):
+            return finite(fields[role].text, source.name, line, original, f"{label} {role.upper()}")
+
         frames = {f.group(1).upper(): f.group(2) for f in _FRAME_NUMBER.finditer(gp)}
-        label = f"P[{m.group(1)}]"
-        where = {"name": label, "line": line, "tool": frames.get("UT"), "frame": frames.get("UF")}
+        external = [value(e) for e in sorted(f for f in fields if f.startswith("e"))]
+        for k in sorted(g for g in groups if g > 1):
+            external += [finite(f.group(2), source.name, line, original, f"{label} GP{k} {f.group(1)}")
+                         for f in _FIELD.finditer(groups[k][1]) if "*" not in f.group(2)]
+        where = {"name": label, "line": line, "tool": frames.get("UT"), "frame": frames.get("UF"),
+                 "external": np.array(external) if external else None}
         if "j1" in fields:
             missing = [j for j in JOINTS if j not in fields]
             if missing:
                 fail(source.name, line, original, f"{label} lacks {', '.join(j.upper() for j in missing)}")
-            joints = np.radians([float(fields[j].text) for j in JOINTS])
+            joints = np.radians([value(j) for j in JOINTS])
             target = Target(**where, joints=joints, spans={j: fields[j] for j in JOINTS})
         else:
             missing = [c for c in XYZWPR if c not in fields]
             if missing:
                 fail(source.name, line, original, f"{label} lacks {', '.join(c.upper() for c in missing)}")
-            x, y, z, w, p, r = (float(fields[c].text) for c in XYZWPR)
+            x, y, z, w, p, r = (value(c) for c in XYZWPR)
             spans = {c: fields[c] for c in XYZWPR}
             config = ()
             c = _CONFIG.search(gp)
@@ -199,7 +297,7 @@ def _positions(source, masked, lines, start, end):
             target = Target(**where, pose=pose, config=config, spans=spans)
         points[int(m.group(1))] = len(targets)
         targets.append(target)
-    return targets, points
+    return targets, points, untaught
 
 
 def _config_text(config):
@@ -255,6 +353,7 @@ def _emit(program, name):
     used = program.usage()
     tools = numbered([used[i][0] for i in sorted(used)])
     frames = numbered([used[i][1] for i in sorted(used)])
+    axes = active_axes(program, 3, "FANUC .LS (group 1)")
     mn, pos, numbers = [], [], {}
     for table, numbering, label in ((program.tools, tools, "UTOOL"), (program.frames, frames, "UFRAME")):
         for key, number in numbering.items():
@@ -273,7 +372,7 @@ def _emit(program, name):
             if index not in numbers:
                 numbers[index] = len(numbers) + 1
                 tool, frame = used[index]
-                pos.append(_position(program.targets[index], numbers[index], tools[tool], frames[frame]))
+                pos.append(_position(program.targets[index], numbers[index], tools[tool], frames[frame], axes))
             refs.append(f"P[{numbers[index]}]")
         zone = "FINE" if motion.zone is None else f"CNT{int(round(min(motion.zone, 100)))}"
         keyword = {JOINT: "J", LINEAR: "L", CIRCULAR: "C"}[motion.kind]
@@ -290,17 +389,27 @@ def _program_name(name):
     return (re.sub(r"[^A-Z0-9_]", "_", name.upper()) or "PROG")[:36]
 
 
-def _position(target, number, tool, frame):
+def _position(target, number, tool, frame, axes):
     head = f"P[{number}]{{\n   GP1:\n\tUF : {frame}, UT : {tool},"
     if target.is_joint:
         j = [format_number(v, 6) for v in np.degrees(target.joints)]
         body = (f"\n\tJ1= {j[0]} deg,\tJ2= {j[1]} deg,\tJ3= {j[2]} deg,"
                 f"\n\tJ4= {j[3]} deg,\tJ5= {j[4]} deg,\tJ6= {j[5]} deg")
-        return head + body + "\n};"
+        return head + body + _extended(target, axes) + "\n};"
     if len(target.config) != 6:
         raise WriteError(f"target {target.label}: FANUC needs its CONFIG; convert with a robot")
     x, y, z, a, b, c = matrix_to_pose(target.pose)
     p = [format_number(v, 6) for v in (x, y, z)] + [format_number(v, 9) for v in np.degrees([c, b, a])]
     return (head + f"\t\tCONFIG : '{_config_text(target.config)}',"
             f"\n\tX = {p[0]}  mm,\tY = {p[1]}  mm,\tZ = {p[2]}  mm,"
-            f"\n\tW = {p[3]} deg,\tP = {p[4]} deg,\tR = {p[5]} deg\n}};")
+            f"\n\tW = {p[3]} deg,\tP = {p[4]} deg,\tR = {p[5]} deg" + _extended(target, axes) + "\n};")
+
+
+def _extended(target, axes):
+    """``,\\n\\tE1= ..`` of a target's external ``axes`` (indices) as extended axes of group 1.
+
+    Written in mm: a rotary extended axis needs its unit changed to deg.
+    """
+    values = [] if target.external is None else target.external
+    fields = [f"E{k + 1}= {format_number(values[k], 6)}  mm" for k in axes if k < len(values) and not np.isnan(values[k])]
+    return ",\n\t" + ",\t".join(fields) if fields else ""

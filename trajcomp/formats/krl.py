@@ -41,7 +41,7 @@ import numpy as np
 
 from trajcomp.errors import WriteError
 from trajcomp.formats._krl_reader import _DEF, _DEFDAT, _NAME, _PROGRAM_NAME, AXES, MIN_PLACES, POSE, read
-from trajcomp.formats._text import encode_text, encode_xyzabc, format_number, mask, numbered, patched
+from trajcomp.formats._text import active_axes, encode_text, encode_xyzabc, format_number, mask, numbered, patched
 from trajcomp.program import CIRCULAR, JOINT, LINEAR
 from trajcomp.transforms import matrix_to_pose
 
@@ -103,14 +103,10 @@ def _renamed(text, pattern, name):
     return text[: m.start(1)] + name + text[m.end(1):]
 
 
-def _aggregate(target):
-    """Type and members of a point declaration; external axes carried as E1..E6."""
-    if target.external is not None and not np.isnan(target.external[6:]).all():
-        raise WriteError(f"target {target.label} (line {target.line}): KRL points carry 6 external axes, "
-                         f"it has {len(target.external)}")
-    external = [] if target.external is None else [
-        f"E{k + 1} {format_number(v, 6)}" for k, v in enumerate(target.external[:6]) if not np.isnan(v)
-    ]
+def _aggregate(target, axes):
+    """Type and members of a point declaration; its external ``axes`` (indices) as E1..E6."""
+    values = target.external if target.external is not None else []
+    external = [f"E{k + 1} {format_number(values[k], 6)}" for k in axes if k < len(values) and not np.isnan(values[k])]
     if target.is_joint:
         axes = [f"A{k + 1} {format_number(v, 9)}" for k, v in enumerate(np.degrees(target.joints))]
         return "E6AXIS", ",".join(axes + external)
@@ -126,6 +122,7 @@ def _emit(program, name):
     """New .src and .dat texts (CRLF, as KUKA's editors write them)."""
     tools = numbered([m.tool for m in program.motions])
     bases = numbered([m.frame for m in program.motions])
+    axes = active_axes(program, 6, "KRL")
     names, decls = {}, []
     src = [f"DEF {name}( )"]
     for table, numbers, data in ((program.tools, tools, "TOOL_DATA"), (program.frames, bases, "BASE_DATA")):
@@ -160,7 +157,7 @@ def _emit(program, name):
                 continue
             if index not in names:
                 names[index] = _point_name(program.targets[index], names.values(), len(names) + 1)
-                typ, body = _aggregate(program.targets[index])
+                typ, body = _aggregate(program.targets[index], axes)
                 decls.append(f"DECL {typ} {names[index]}={{{body}}}")
             refs.append(names[index])
         keyword = {JOINT: "PTP", LINEAR: "LIN", CIRCULAR: "CIRC"}[motion.kind]

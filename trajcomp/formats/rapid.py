@@ -33,7 +33,7 @@ import numpy as np
 
 from trajcomp.errors import WriteError
 from trajcomp.formats._rapid_reader import CONF, JOINTS, POSITION, QUAT, read
-from trajcomp.formats._text import format_number, same_rotation, write_single_file
+from trajcomp.formats._text import active_axes, format_number, same_rotation, write_single_file
 from trajcomp.program import CIRCULAR, JOINT, LINEAR
 from trajcomp.transforms import matrix_to_quat, quat_to_matrix
 
@@ -98,6 +98,7 @@ def _zone(motion):
 def _emit(program, name):
     """A new RAPID module; Cartesian targets need their confdata (see postprocess.convert)."""
     module = _identifier(name, "M", "Module")
+    axes = active_axes(program, 6, "RAPID")
     decls, body, names = [], [], {}
     for tool in dict.fromkeys(m.tool for m in program.motions):
         if tool is not None and tool in program.tools and _identifier(tool, "t", "tool0") != "tool0":
@@ -123,14 +124,14 @@ def _emit(program, name):
             if index not in names:
                 names[index] = _point_name(target, set(names.values()), len(names) + 1)
                 if target.is_joint:
-                    decls.append(f"  CONST jointtarget {names[index]} := [[{_numbers(np.degrees(target.joints), 9)}],[{_extax(target)}]];")
+                    decls.append(f"  CONST jointtarget {names[index]} := [[{_numbers(np.degrees(target.joints), 9)}],[{_extax(target, axes)}]];")
                 else:
                     if len(target.config) != 4:
                         raise WriteError(f"target {target.label}: RAPID needs its confdata; convert with a robot")
                     decls.append(
                         f"  CONST robtarget {names[index]} := [[{_numbers(target.pose[:3, 3], 6)}],"
                         f"[{_numbers(matrix_to_quat(target.pose[:3, :3]), 10)}],"
-                        f"[{','.join(str(c) for c in target.config)}],[{_extax(target)}]];"
+                        f"[{','.join(str(c) for c in target.config)}],[{_extax(target, axes)}]];"
                     )
             refs.append(names[index])
         joint_target = program.targets[motion.target].is_joint
@@ -142,14 +143,11 @@ def _emit(program, name):
     return "\n".join(lines) + "\n"
 
 
-def _extax(target):
-    """eax_a..eax_f of a target: its external axes, 9E+09 where unused."""
+def _extax(target, axes):
+    """eax_a..eax_f of a target: its external ``axes`` (indices), 9E+09 for the others."""
     values = [] if target.external is None else list(target.external)
-    if len(values) > 6 and not np.isnan(values[6:]).all():
-        raise WriteError(f"target {target.label} (line {target.line}): RAPID carries 6 external axes, "
-                         f"it has {len(values)}")
-    values = (values + [np.nan] * 6)[:6]
-    return ",".join(UNUSED if np.isnan(v) else format_number(v, 6) for v in values)
+    out = [values[k] if k in axes and k < len(values) else np.nan for k in range(6)]
+    return ",".join(UNUSED if np.isnan(v) else format_number(v, 6) for v in out)
 
 
 def _point_name(target, taken, number):

@@ -24,6 +24,7 @@ import numpy as np
 from trajcomp.errors import ReadError, WriteError
 from trajcomp.formats._text import (
     NUMBER,
+    active_axes,
     Lines,
     fail,
     format_number,
@@ -290,6 +291,7 @@ def _position(target, kind):
 
 def _emit(program, name):
     """A new URScript program; poses must already be in the base frame (see postprocess.convert)."""
+    active_axes(program, 0, "URScript")
     function = re.sub(r"\W", "_", name) or "program"
     if function[0].isdigit():
         function = "p" + function
