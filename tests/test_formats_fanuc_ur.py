@@ -171,7 +171,6 @@ def test_fanuc_register_and_max_speeds_corner_region_and_references(tmp_path):
 
 
 def test_fanuc_circle_with_a_register_point_passes_through_whole(tmp_path):
-    mn = ["C P[1]", "L P[2] 100mm/sec FINE"]
     path = tmp_path / "C.LS"
     path.write_text("/PROG  C\n/MN\n   1:C P[1]    \n    :  PR[2] 100mm/sec FINE    ;\n   2:L P[2] 100mm/sec FINE ;\n"
                     f"/POS\n{_p(1, '400.000')}{_p(2, '410.000')}/END\n")
