@@ -25,7 +25,8 @@ GOLDEN = {
 }
 EXTENSION = {"csv": ".csv", "krl": ".src", "rapid": ".mod", "fanuc_ls": ".ls", "urscript": ".script"}
 TOOLS = {name: pose_to_matrix([1.0 * k, -2.0, 100.0 + k, 0.1, 0.2 * k, -0.3]) for k, name in enumerate("123", 1)}
-FRAMES = {"1": pose_to_matrix([400.0, -150.0, 20.0, 0.5, 0.0, 0.0])}
+FRAMES = {"1": pose_to_matrix([400.0, -150.0, 20.0, 0.5, 0.0, 0.0]),
+          "Plane_1": pose_to_matrix([300.0, 100.0, 5.0, 0.0, 0.0, 0.25])}
 
 
 @pytest.fixture(scope="module")

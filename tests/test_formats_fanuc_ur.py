@@ -91,7 +91,8 @@ def test_ur_waypoints_units_and_qnear(ur):
     assert by_line[10].zone == 5.0 and by_line[10].speed == 250.0
     inline = ur.targets[by_line[15].target]
     np.testing.assert_allclose(inline.joints, [0.5, -1.2, 1.4, -1.8, -1.57, 0.3])
-    assert {m.line for m in ur.runtime_motions()} == {17, 18}
+    assert by_line[17].frame == "Plane_1" and "Plane_1" not in ur.frames  # an installation feature: give its value
+    assert {m.line for m in ur.runtime_motions()} == {18}
 
 
 def test_ur_pose_and_joints_pairs_both_updated(ur, tmp_path):
@@ -198,3 +199,76 @@ def test_a_circle_without_its_via_point_is_never_written(tmp_path):
 def test_fanuc_out_of_range_number_is_refused(tmp_path, x):
     with pytest.raises(ReadError, match=rf"T\.LS:\d+: P\[1\] X: '{x}' is out of range"):
         formats.read(_ls(tmp_path, ["L P[1] 100mm/sec FINE"], _p(1, x)))
+
+
+ROBODK_UR = DATA / "real" / "ur" / "Prog1.script"
+
+
+def test_robodk_urscript_poses_in_ref_frame_are_compensable_targets(tmp_path):
+    from scipy.spatial.transform import Rotation
+
+    from trajcomp.postprocess import convert_program
+
+    program = formats.read(ROBODK_UR)
+    assert program.not_compensated() == ()
+    moves = [m for m in program.motions if m.kind == "linear"]
+    assert len(moves) == 8 and {m.frame for m in moves} == {"ref_frame"} and {m.speed for m in moves} == {250.0}
+    np.testing.assert_allclose(program.frames["ref_frame"][:3, 3], [1323.43, 124.721, 611.576])
+    # The base-frame pose the arm goes to, by scipy from the numbers written: ref_frame * p
+    frame = np.array([1.323430, 0.124721, 0.611576])
+    p = np.array([-0.221556, -0.116633, 0.191249]), Rotation.from_rotvec([-0.295626, 3.094521, 0.301191])
+    formats.write(tmp_path / "base.csv", convert_program(program, "csv"))
+    row = (tmp_path / "base.csv").read_text().splitlines()[3].split(",")
+    np.testing.assert_allclose([float(v) for v in row[:3]], (frame + p[0]) * 1000.0, atol=1e-6)
+    np.testing.assert_allclose(Rotation.from_euler("ZYX", [float(v) for v in row[3:6]], degrees=True).as_matrix(),
+                               p[1].as_matrix(), atol=1e-9)
+
+
+def _script(tmp_path, body):
+    path = tmp_path / "s.script"
+    path.write_text("def s():\n" + "".join(f"  {line}\n" for line in body) + "end\n")
+    return path
+
+
+def test_lists_that_are_not_poses_are_not_points(tmp_path):
+    program = formats.read(_script(tmp_path, [
+        "gains = [0, 0, 0, 0]", "selection = [0, 0, 1, 0, 0, 0]", "limits = [0.1, 0.1, 0.15, 0.35, 0.35, 0.35]",
+        "force_mode(tool_pose(), selection, [0, 0, 20, 0, 0, 0], 2, limits)",
+        "movel(p[0.4, 0.1, 0.3, 0, 3.14, 0], a=1.2, v=0.1)"]))
+    assert len(program.targets) == 1 and program.unused_targets() == ()
+
+
+def test_urscript_positions_known_only_at_run_time_are_listed(tmp_path):
+    program = formats.read(_script(tmp_path, [
+        "p1 = p[0.4, 0.1, 0.3, 0, 3.14, 0]", "p2 = pose_add(p1, p[0, 0, 0.05, 0, 0, 0])", "movel(p2)",
+        "def go(target):", "  movel(target)", "end", "movel(later)", "later = p[0.5, 0.1, 0.3, 0, 3.14, 0]",
+        "set_tcp(get_tcp_offset())", "movel(p1)", "servoj([0, -1.5, 1.5, -1.5, -1.5, 0], t=0.008)"]))
+    reasons = {line: reason for line, _, reason in program.not_compensated()}
+    assert reasons == {
+        4: "p2 is set at run time (line 3)",
+        6: "target: function parameter, known at run time",
+        8: "later is assigned further down: its value depends on the order of calls",
+        11: "TCP set at run time: set_tcp(get_tcp_offset()) (line 10)",
+        12: "servoj: streamed set point, not compensated by trajcomp",
+    }
+    # p1 feeds the run-time pose on line 3 and is moved to after the run-time TCP: used, not "unused"
+    assert [(program.targets[i].name, line) for i, line, _ in program.referenced_targets()] == [("p1", 3), ("p1", 11)]
+
+
+def test_a_variable_the_script_never_assigns_is_refused(tmp_path):
+    with pytest.raises(ReadError, match=r"s\.script: .*Waypoint_9_p \(line 2\); they are never assigned"):
+        formats.read(_script(tmp_path, ["movel(Waypoint_9_p, a=1.2, v=0.25)"]))
+
+
+def test_a_variable_used_as_frame_and_as_target_is_refused(tmp_path):
+    with pytest.raises(ReadError, match=r"f is used as a frame \(line 3\) and as a target \(line 4\)"):
+        formats.read(_script(tmp_path, ["f = p[0.5, 0, 0.1, 0, 0, 0]", "movel(pose_trans(f, p[0, 0, 0.1, 0, 3.14, 0]))",
+                                        "movel(f)"]))
+
+
+def test_set_tcp_from_a_variable(tmp_path):
+    program = formats.read(_script(tmp_path, ["tcp = p[0, 0, 0.2, 0, 0, 0]", "set_tcp(tcp)",
+                                              "movel(p[0.4, 0.1, 0.3, 0, 3.14, 0])"]))
+    (motion,) = program.motions
+    np.testing.assert_allclose(program.tools[motion.tool][:3, 3], [0, 0, 200])
+    assert program.unused_targets() == () and len(program.targets) == 1
