@@ -5,8 +5,8 @@ kinematic identification with TCP and tracker registration, the grid of raw
 errors, and the composite's residual after the kinematic model), so that
 `validate` can compare the modes on the same model. Data that cannot be what
 it claims is refused (`trajcomp.plausibility`). Gross outliers are named by
-line, weigh nothing in the robust fit and are left out of the grids, their
-nodes filled from the model. Fit and k-fold cross-validation statistics are
+line; the robust loss bounds their pull on the fit, and they are left out of
+the grids and statistics, their nodes filled from the model. Fit and k-fold cross-validation statistics are
 recorded in the model's report.
 
 The composite's residual depends on the data: measured at one tool
@@ -105,8 +105,8 @@ class _Parts:
     ``dh`` may be given (the full-data fit, which also registered the
     tracker). Gross outliers (`trajcomp.identify.outlier_rows` of the best
     kinematic model's residuals: the joint residual's when there is one)
-    weigh nothing in the robust fits; the linear fit and the scattered
-    fields leave them out, the lattice grids fill their nodes from the model.
+    pull little on the robust fits; the linear fit and the scattered fields
+    leave them out, the lattice grids fill their nodes from the model.
     """
 
     def __init__(self, robot, joints, position, measured, rotation, *, method, grid_step, kind, loss,
@@ -296,9 +296,9 @@ def calibrate(robot, meas, *, robot_ref=None, method="composite", frame=None, gr
     keep = ~left_out
     if left_out.any():
         lines = meas.lines[left_out].tolist()
-        warnings.append(f"{len(lines)} gross outliers (residual far beyond the others) weigh nothing in the fit and "
-                        f"are left out of the grids, their nodes filled from the model: lines {lines[:20]}"
-                        + (" ..." if len(lines) > 20 else ""))
+        warnings.append(f"{len(lines)} gross outliers (residual far beyond the others; the robust loss bounds their "
+                        f"pull on the fit) are left out of the grids and statistics, their nodes filled from the "
+                        f"model: lines {lines[:20]}" + (" ..." if len(lines) > 20 else ""))
     report = {
         "measurements": {"file": meas.path, "rows": len(meas), "used": int(keep.sum()), "frame": frame,
                          "orientation_spread_deg": [round(float(v), 3) for v in spread]},
