@@ -5,6 +5,7 @@ checked by re-encoding joints with the language's encoder, joints against
 forward kinematics, and the singular case against a real IK solve.
 """
 
+import re
 import shutil
 from pathlib import Path
 
@@ -205,3 +206,44 @@ def test_points_passed_to_routines_are_not_compensated_and_moving_external_axes_
     assert [(line, text) for line, text, _ in report.not_compensated] == [(4, "GRIP(P3, 1)")]
     assert "P3" in report.not_compensated[0][2]
     assert len(report.warnings) == 1 and "E1" in report.warnings[0] and "fixed" in report.warnings[0]
+
+
+def _flipped_weld(tmp_path):
+    """The example weld program with every point in the flipped-wrist posture (same poses)."""
+    robot = load_robot("kuka_kr6_r900")
+    program = formats.read(_copy_example(tmp_path))
+    plan = planned_joints(program, robot)
+    flipped = plan.q + np.radians([0, 0, 0, -180, 0, 180])
+    flipped[:, 4] = -plan.q[:, 4]
+    np.testing.assert_allclose(fk(robot, flipped), fk(robot, plan.q), atol=1e-9)
+    dat = (tmp_path / "weld.dat").read_text()
+    for i, (s, t) in zip(plan.index, configuration_for("krl", robot, flipped)):
+        name = program.targets[i].name
+        dat = re.sub(rf"(DECL E6POS {name}=.*?)S \d+,T \d+", rf"\g<1>S {s},T {t}", dat)
+    (tmp_path / "weld.dat").write_text(dat)
+    return tmp_path / "weld.src"
+
+
+def test_a_posture_the_calibration_never_measured_fails_the_verdict(tmp_path, kuka_model, capsys):
+    """The KR6 was measured wrist-positive only: a wrist-flipped program is outside the calibrated region."""
+    from trajcomp.model import load_model
+
+    model = load_model(kuka_model)
+    assert len(model.postures) == 1
+    src = _flipped_weld(tmp_path)
+    (tmp_path / "out").mkdir()
+    assert main(["compensate", str(src), "--model", str(kuka_model), "-o", str(tmp_path / "out" / "weld.src")]) == 1
+    assert "5 of 5 targets outside" in capsys.readouterr().err
+    assert main(["compensate", str(src), "--model", str(kuka_model), "--outside", "error",
+                 "-o", str(tmp_path / "out" / "weld.src")]) == 2
+    assert "never measured" in capsys.readouterr().err
+
+
+def test_the_measured_postures_are_kept_in_the_model_file(tmp_path, kuka_model):
+    from trajcomp.model import load_model, save_model
+
+    model = load_model(kuka_model)
+    save_model(tmp_path / "again.yaml", model)
+    assert load_model(tmp_path / "again.yaml").postures == model.postures
+    text = (tmp_path / "again.yaml").read_text()
+    assert "postures:\n- front/up/positive" in text or "postures:\n- front/down/positive" in text

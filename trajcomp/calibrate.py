@@ -17,6 +17,7 @@ orientations (6-DoF), it is the joint-angle error model of
 which holds at any orientation and for any tool.
 """
 
+import dataclasses
 import logging
 
 import numpy as np
@@ -24,7 +25,7 @@ import numpy as np
 from trajcomp.errors import CalibrationError
 from trajcomp.grid import KINDS, METHODS as LATTICE_INTERPOLATORS, fit_field
 from trajcomp.identify import LOSSES, ORIENTATION_WEIGHT, best_fit_transform, identify, outlier_rows
-from trajcomp.ik import ik
+from trajcomp.ik import branch_index, ik
 from trajcomp.joint_errors import KIND as JOINT_KIND
 from trajcomp.joint_errors import JointResidual, is_term
 from trajcomp.kinematics import fk
@@ -311,6 +312,8 @@ def calibrate(robot, meas, *, robot_ref=None, method="composite", frame=None, gr
                                      "fixed": dict(dh.identifiability.fixed)}
     places = other_tools(robot, method, kind, joints, spread, rotation is not None)
     model = parts.model(robot, robot_ref or robot.name, method, T_tracker_base, report, places)
+    if joints is not None:
+        model = dataclasses.replace(model, postures=tuple(np.unique(branch_index(robot, joints)).tolist()))
     report["fit"] = {m: ErrorStats.from_errors(e).as_dict() for m, e in
                      mode_errors(model, _rows(joints, keep), position[keep], measured[keep]).items()}
     if folds > 1:

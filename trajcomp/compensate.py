@@ -131,7 +131,8 @@ def compensate(model, targets, *, mode=None, tool=None, seed=None, outside="mode
     elif field is not None:
         reached = reached + evaluate_field(field, commanded, outside=outside)[0]
     residual = np.linalg.norm(reached - goal, axis=1)
-    return CompensationResult(command, q, commanded - goal, flagged | arm.outside_rows(q), residual)
+    outside_region = flagged | arm.outside_rows(q) | model.unmeasured_posture(q, outside)
+    return CompensationResult(command, q, commanded - goal, outside_region, residual)
 
 
 SEED_NEAR = (10.0, 0.05)  # mm, rad: a seed this close to its target starts Gauss-Newton directly

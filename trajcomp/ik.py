@@ -387,7 +387,12 @@ def configuration_of(robot, q):
     -------
     list of Configuration, or one Configuration for a single q
     """
-    single = np.ndim(q) == 1
+    configs = [Configuration.from_index(i) for i in branch_index(robot, np.atleast_2d(q))]
+    return configs[0] if np.ndim(q) == 1 else configs
+
+
+def branch_index(robot, q):
+    """`Configuration.index` (N,) of joint angles q (N, 6), rad, computed from the link frames."""
     frames = link_frames(robot, q)
     origin0, z0 = frames[:, 0, :3, 3], frames[:, 0, :3, 2]
     x1 = frames[:, 1, :3, 0]
@@ -399,9 +404,7 @@ def configuration_of(robot, q):
     cross = _dot(w, ahead) * _dot(e, up) - _dot(w, up) * _dot(e, ahead)
     axes = np.einsum("njk,ji->nik", frames[:, :6, :3, 2], robot.joint_map)
     triple = _dot(np.cross(axes[:, 3], axes[:, 5]), axes[:, 4])
-    index = 4 * (forward < 0) + 2 * (cross <= 0) + (triple < 0)
-    configs = [Configuration.from_index(i) for i in index]
-    return configs[0] if single else configs
+    return 4 * (forward < 0) + 2 * (cross <= 0) + (triple < 0)
 
 
 # ---------------------------------------------------------------- closed form

@@ -36,6 +36,7 @@ from trajcomp import __version__
 from trajcomp.atomic import write_files_atomic
 from trajcomp.errors import ModelError
 from trajcomp.grid import field_from_dict
+from trajcomp.ik import Configuration, branch_index
 from trajcomp.joint_errors import KIND as JOINT_KIND
 from trajcomp.joint_errors import JointResidual
 from trajcomp.kinematics import fk
@@ -87,6 +88,14 @@ class CompensationModel:
         on the measured TCP's position.
     other_tools_reason : str
         Why (or why not), in words.
+    postures : tuple of int
+        Arm branches (`trajcomp.ik.Configuration` indices) the measurements
+        were taken in; empty when unknown (positions without joints, or a
+        model file written before they were recorded). Errors of another
+        branch were never measured: gear and compliance errors follow the
+        joints, and a single-branch fit does not separate every wrist
+        parameter, so such targets count as outside the calibrated region
+        (`unmeasured_posture`).
     """
 
     nominal: object
@@ -104,6 +113,31 @@ class CompensationModel:
     R_tcp_target: np.ndarray = dataclasses.field(default_factory=lambda: np.eye(3))
     places_other_tools: bool = False
     other_tools_reason: str = "not stated"
+    postures: tuple = ()
+
+    def unmeasured_posture(self, q, outside="model"):
+        """Mask (N,) of commanded joints q (N, 6) rad in an arm branch the calibration did not measure.
+
+        All False when the model does not record its postures.
+
+        Raises
+        ------
+        ModelError
+            With the ``error`` policy, naming the first such row and its branch.
+        """
+        q = np.atleast_2d(q)
+        if not self.postures:
+            return np.zeros(len(q), dtype=bool)
+        branch = branch_index(self.nominal, q)
+        out = ~np.isin(branch, self.postures)
+        if outside == "error" and out.any():
+            first = int(np.flatnonzero(out)[0])
+            raise ModelError(
+                f"target {first}: arm posture {Configuration.from_index(branch[first])} was never measured (the "
+                f"calibration measured {', '.join(str(Configuration.from_index(b)) for b in self.postures)}; "
+                f"{int(out.sum())} targets in other postures)"
+            )
+        return out
 
     @property
     def identified(self):
@@ -342,6 +376,7 @@ def save_model(path, model):
         "tracker_to_base": _pose_user(model.T_tracker_base),
         "measured_frame_in_tcp": [round(float(v), 9) for v in np.degrees(matrix_to_abc(model.R_tcp_target))],
         "places_other_tools": {"value": bool(model.places_other_tools), "reason": model.other_tools_reason},
+        "postures": [str(Configuration.from_index(b)) for b in model.postures],
         "parameters": [
             {
                 "name": name,
@@ -374,6 +409,14 @@ def save_model(path, model):
         files[sidecar_path(path)] = buffer.getvalue()
     files[path] = yaml.safe_dump(_plain(doc), sort_keys=False, width=100).encode("utf-8")
     write_files_atomic(files)
+
+
+def _posture_index(text, path):
+    """Configuration index of a posture written ``shoulder/elbow/wrist`` (``front/up/positive``)."""
+    parts = str(text).split("/")
+    if len(parts) != 3:
+        raise ModelError(f"{path}: field postures: expected shoulder/elbow/wrist, got {text!r}")
+    return Configuration(*parts).index
 
 
 def _plain(value):
@@ -461,6 +504,7 @@ def load_model(path, robot=None):
             R_tcp_target=abc_to_matrix(np.radians(target.reshape(3))),
             places_other_tools=bool(tools["value"]),
             other_tools_reason=str(tools["reason"]),
+            postures=tuple(_posture_index(text, path) for text in doc.get("postures") or ()),
         )
     except ModelError as exc:
         raise ModelError(str(exc) if str(exc).startswith(str(path)) else f"{path}: {exc}") from None
