@@ -18,6 +18,12 @@ def test_plan_simulate_calibrate_validate_predict(tmp_path, capsys):
     assert main(["simulate", str(plan), "--robot", "ur10", "--seed", "1", "-o", str(meas)]) == 0
     assert main(["calibrate", str(meas), "--robot", "ur10", "--grid-step", "100", "-o", str(model)]) == 0
     assert "cross-validation" in capsys.readouterr().out
+    per_axis = tmp_path / "per-axis.yaml"
+    assert main(["calibrate", str(meas), "--robot", "ur10", "--grid-step", "100,100,100", "--folds", "0",
+                 "-o", str(per_axis)]) == 0
+    assert main(["calibrate", str(meas), "--robot", "ur10", "--grid-step", "100,100,50", "--folds", "0",
+                 "-o", str(per_axis)]) == 2
+    assert "differs from the expected (100.000, 100.000, 50.000) mm along z" in capsys.readouterr().err
     second = tmp_path / "run2.csv"
     assert main(["simulate", str(plan), "--robot", "ur10", "--seed", "1", "--run", "2", "-o", str(second)]) == 0
     assert main(["validate", str(model), str(second), "--tolerance", "0.5"]) == 0

@@ -88,7 +88,8 @@ def compensate(model, targets, *, mode=None, tool=None, seed=None, outside="mode
     seed : array_like, shape (N, 6) or (6,), optional
         Joint seed choosing the IK branch; default: `batch_seed` of the targets.
     outside : {"model", "clamp", "error"}
-        Policy for targets outside the grid (see `CompensationModel.predict`).
+        Policy for targets outside the grid, or outside the joint range of a
+        joint residual (see `CompensationModel.predict`).
     label : str
         Names the set of targets in error messages (e.g. the program file).
     names : sequence of str, length N, optional

@@ -276,14 +276,19 @@ def identifiability(robot, q, *, rotation=False, frame="base", tool=True, joint_
     problem = _Problem(robot, robot, q, seen[:, :3, 3], seen[:, :3, :3] if rotation else None, np.eye(4), np.eye(3),
                        ORIENTATION_WEIGHT)
     names = candidate_parameters(robot, tool=tool, orientation=rotation, tracker=frame == "tracker")
-    problem.setup(names + (joint_errors.term_names() if joint_terms else []))
+    return _identifiable(problem, names + (joint_errors.term_names() if joint_terms else []), rtol)
+
+
+def _identifiable(problem, names, rtol):
+    """`Identifiability` of candidate ``names`` in ``problem`` at its start."""
+    problem.setup(names)
     _, jac = problem.evaluate(problem.x)
-    return analyse_identifiability(jac.reshape(-1, len(problem.names)) * scales(problem.names), problem.names, rtol)
+    return analyse_identifiability(jac.reshape(-1, len(names)) * scales(names), names, rtol)
 
 
 def identify(robot, q, measured, *, rotation=None, frame="base", tool=True, joint_terms=False, loss="huber",
              rtol=1e-3, orientation_weight=ORIENTATION_WEIGHT, nominal=None, T_tracker_base=None,
-             R_tcp_target=None, candidates=None):
+             R_tcp_target=None):
     """Robust least-squares identification of the arm, its TCP and the tracker registration.
 
     Parameters
@@ -314,8 +319,6 @@ def identify(robot, q, measured, *, rotation=None, frame="base", tool=True, join
     T_tracker_base, R_tcp_target : ndarray, optional
         Given registration (4, 4) and measured-frame orientation (3, 3): kept
         fixed. Default: estimated, starting from a best fit of ``robot``.
-    candidates : sequence of str, optional
-        Restrict the parameters to these (default: all that apply).
 
     Returns
     -------
@@ -346,18 +349,14 @@ def identify(robot, q, measured, *, rotation=None, frame="base", tool=True, join
     names = candidate_parameters(robot, tool=tool, orientation=orient, tracker=register)
     if joint_terms:
         names += joint_errors.term_names()
-    if candidates is not None:
-        names = [n for n in names if n in candidates]
     problem = _Problem(robot, nominal, q, measured, rotation, T_tracker_base, R_tcp_target, orientation_weight)
-    problem.setup(names)
-    _, jac = problem.evaluate(problem.x)
-    scale = scales(names)
-    ident = analyse_identifiability(jac.reshape(-1, len(names)) * scale, names, rtol)
+    ident = _identifiable(problem, names, rtol)
     kept = ident.kept
-    if jac.shape[1] * len(q) < 2 * len(kept):
+    rows = 3 if rotation is None else 6  # residuals per measurement
+    if rows * len(q) < 2 * len(kept):
         raise CalibrationError(
             f"{len(q)} measurements are too few to identify {len(kept)} parameters "
-            f"(need at least {int(np.ceil(2 * len(kept) / jac.shape[1]))})"
+            f"(need at least {int(np.ceil(2 * len(kept) / rows))})"
         )
     problem.setup(kept)
     x, weights, jac = _solve(problem, scales(kept), loss)

@@ -33,7 +33,7 @@ KIND = "joint"
 HARMONICS = (1, 2)
 GRAVITY = np.array([0.0, 0.0, -1.0])  # unit weight direction, base frame
 _PARAMETER = re.compile(r"^(?:(?:a|alpha|d|theta|beta)[1-6]|tool_[xyz])$")
-RANGE_MARGIN = np.radians(5.0)  # rad a commanded joint may lie beyond the fitted range: smooth terms extrapolate that far
+RANGE_MARGIN = np.radians(5.0)  # rad beyond the fitted joint range still inside: smooth terms extrapolate that far
 COMMAND_ITERATIONS = 4  # fixed-point passes of `JointResidual.commanded`: errors are mrad, contraction ~1e-3
 
 

@@ -87,10 +87,6 @@ class Measurements:
         if self.measured is None:
             raise ReadError(f"{self.path}: measured columns mx, my, mz are required")
 
-    def describe(self, index):
-        """``file:line`` of row ``index`` (for messages)."""
-        return f"{self.path}:{int(self.lines[index])}"
-
 
 _TERM = re.compile(r"\s*([+-]?)\s*([^+\-\s][^+\-]*?)\s*(?=[+-]|$)")
 
