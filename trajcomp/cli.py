@@ -24,6 +24,7 @@ COMMANDS = (
     "compensate",
     "formats",
     "convert",
+    "retime",
 )
 
 

@@ -143,6 +143,10 @@ class Motion:
         Targets the motion names without moving to them as stated (the base
         point of ``Offs(p10, ...)``, the points of a motion whose tool is set
         at run time).
+    spans : Mapping[str, Span]
+        Where the motion's speed and time fields stand in the source, by
+        role as the format module names them (``speed``, ``t``, ``end``
+        ...): re-timing writes there (`trajcomp.timing.writeback`).
     """
 
     kind: str
@@ -157,6 +161,7 @@ class Motion:
     text: str = ""
     reason: str = ""
     refs: tuple = ()
+    spans: Mapping = dataclasses.field(default_factory=dict)
 
 
 @dataclasses.dataclass(frozen=True)

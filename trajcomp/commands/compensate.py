@@ -12,6 +12,8 @@ from trajcomp import batch, formats
 from trajcomp.commands._args import command_parser, info
 from trajcomp.commands._report import add_report_options, criteria_of
 from trajcomp.commands.convert import add_frame_options, add_in_place_option, frame_options
+from trajcomp.commands.retime import CHOICES as RETIME_CHOICES
+from trajcomp.commands.retime import LIMIT_MESSAGE, METHOD_HELP, add_tolerance_option, retime_compensated, timing_lines
 from trajcomp.compensate import program_corrector
 from trajcomp.errors import TrajcompError
 from trajcomp.model import MODES, load_model
@@ -19,6 +21,7 @@ from trajcomp.postprocess import MAX_CORRECTION, compensate_program
 from trajcomp.posture import MAX_JOINT_CHANGE
 from trajcomp.progress import progress
 from trajcomp.report import Criteria, compliance_report, file_entry, model_entry, summary_lines
+from trajcomp.timing.path import TOLERANCE
 from trajcomp.transforms import matrix_to_pose
 
 
@@ -51,6 +54,10 @@ def add_parser(sub):
                         "its posture (default %(default)g deg)")
     parser.add_argument("--max-correction", type=float, default=MAX_CORRECTION, metavar="MM",
                         help="largest plausible position correction (default %(default)g mm)")
+    parser.add_argument("--retime", choices=RETIME_CHOICES, default="auto",
+                        help=f"re-time the corrected program under the robot's limits ({METHOD_HELP}); none: keep "
+                        "the program's speeds (default %(default)s)")
+    add_tolerance_option(parser)
     add_in_place_option(parser)
     parser.add_argument("-o", "--output", required=True,
                         help="corrected program to write; for a batch, the folder to write into")
@@ -86,6 +93,8 @@ class CompensateJob:
     report: str = None
     report_folder: bool = False
     json_only: bool = False
+    retime: str = "auto"
+    path_tolerance: float = TOLERANCE
 
     def __call__(self, path, output):
         """Compensate ``path`` into ``output``; a `batch.FileResult` (raises TrajcompError on bad input)."""
@@ -107,6 +116,11 @@ class CompensateJob:
             joint_targets=self.joint_targets, max_joint_change=self.max_joint_change,
             max_correction=self.max_correction,
         )
+        timing, timed = [], None
+        if self.retime != "none":
+            corrected, timed, before = retime_compensated(program, corrected, model.nominal, self.retime,
+                                                          self.path_tolerance, self.tools, self.frames)
+            timing = timing_lines(timed, before)
         protect = () if self.in_place else sources
         written = formats.write(output, corrected, protect=protect)
         mode = self.mode or model.method
@@ -118,7 +132,7 @@ class CompensateJob:
         if self.report:
             target = Path(self.report) / Path(output).name if self.report_folder else Path(self.report)
             reports = compliance.write(target, json_only=self.json_only)
-        lines = [*summary_lines(compliance.doc), *(f"warning: {w}" for w in report.warnings),
+        lines = [*summary_lines(compliance.doc), *(f"warning: {w}" for w in report.warnings), *timing,
                  f"wrote {', '.join(map(str, written + reports))}"]
         status, message = batch.PASS, ""
         if not compliance.passed:
@@ -128,6 +142,8 @@ class CompensateJob:
             if report.not_compensated:
                 message += (f"; {len(report.not_compensated)} of {len(program.motions)} motions were not "
                             "compensated (positions computed at run time)")
+        if timed is not None and not timed.within_limits:
+            status, message = batch.FAIL, "; ".join(filter(None, [message, LIMIT_MESSAGE]))
         return batch.FileResult(str(path), tuple(map(str, written + reports)), status, message, tuple(lines)), compliance
 
     def options(self):
@@ -138,7 +154,8 @@ class CompensateJob:
             poses[kind] = {name: [*p[:3], *np.degrees(p[3:])] for name, p in values.items()}
         return {"mode": self.mode, "outside": self.outside, "joint_targets": self.joint_targets,
                 "max_joint_change_deg": float(np.degrees(self.max_joint_change)),
-                "max_correction_mm": self.max_correction, **poses}
+                "max_correction_mm": self.max_correction, "retime": self.retime,
+                "path_tolerance_mm": self.path_tolerance, **poses}
 
 
 @functools.lru_cache(maxsize=4)
@@ -164,7 +181,7 @@ def run(args):
         model=str(Path(args.model).resolve()), mode=args.mode, outside=args.outside, tools=tools, frames=frames,
         joint_targets=args.joint_targets, max_joint_change=np.radians(args.max_joint_change),
         max_correction=args.max_correction, in_place=args.in_place, criteria=criteria_of(args),
-        report=args.report, json_only=args.json_only,
+        report=args.report, json_only=args.json_only, retime=args.retime, path_tolerance=args.path_tolerance,
     )
     _model(job.model)  # a broken model fails the run once, before any file
     first = args.program[0]

@@ -150,6 +150,7 @@ class _Reader:
         self.tool_why = self.base_why = ""  # why the active tool / base is only known at run time
         self.params = set()
         self.speed_ptp = self.speed_cp = self.zone = None
+        self.speed_spans = {JOINT: None, LINEAR: None}  # the number of the statement that set each speed
 
     def add_source(self, source):
         self.sources.append(source)
@@ -243,12 +244,15 @@ class _Reader:
                 self.select(what, str(integer(value, name, line_no, original, what)))
             elif what == "VEL_PTP":
                 self.speed_ptp = number
+                self.speed_spans[JOINT] = Span(index, start + m.start(2), start + m.end(2), value)
             else:
                 self.speed_cp = number * 1000.0
+                self.speed_spans[LINEAR] = Span(index, start + m.start(2), start + m.end(2), value)
         elif m := _ACT.match(text):
             self.activate(m.group(1).upper(), m.group(2).upper(), name, line_no, original)
         elif m := _VEL_CP.match(text):
             self.speed_cp = finite(m.group(1), name, line_no, original, "$VEL.CP") * 1000.0
+            self.speed_spans[LINEAR] = Span(index, start + m.start(1), start + m.end(1), m.group(1))
         elif m := _APO.match(text):
             self.zone = finite(m.group(1), name, line_no, original, "$APO.CDIS")
 
@@ -271,6 +275,7 @@ class _Reader:
                     self.speed_ptp = vel
                 else:
                     self.speed_cp = vel * 1000.0
+                self.speed_spans[JOINT if kind == "PDAT" else LINEAR] = None
             if "apo_dist" in data:
                 self.zone = finite(data["apo_dist"].text, name, line_no, original, "APO_DIST")
 
@@ -302,6 +307,9 @@ class _Reader:
                 reason = "position computed at run time: " + " ".join(parts[found.index(None)][0].split())
         reason = reason or self.tool_why or self.base_why
         speed, unit = (self.speed_ptp, "%") if kind == JOINT else (self.speed_cp, "mm/s")
+        spans = {"motion": Span(index, start + m.start(1), start + m.end(1), m.group(1))}
+        if self.speed_spans[JOINT if kind == JOINT else LINEAR] is not None:  # where re-timing writes
+            spans["speed"] = self.speed_spans[JOINT if kind == JOINT else LINEAR]
         return Motion(
             kind=kind,
             target=found[-1],
@@ -314,6 +322,7 @@ class _Reader:
             line=line_no,
             text=original.strip(),
             reason=reason,
+            spans=spans,
         )
 
     def spline_frames(self, clause, name, line_no, original):

@@ -18,7 +18,7 @@ from trajcomp.formats._text import (
     unresolved,
     whole_circle,
 )
-from trajcomp.program import CIRCULAR, JOINT, LINEAR, Motion, Program, Statement, Target
+from trajcomp.program import CIRCULAR, JOINT, LINEAR, Motion, Program, Span, Statement, Target
 from trajcomp.transforms import quat_to_matrix
 
 POSITION = ("x", "y", "z")
@@ -274,17 +274,22 @@ class _Reader:
         frame, frame_why = self.frame_name("wobj", options.get("wobj", "wobj0"), line)
         reason = "" if None not in found else (
             "position computed at run time: " + " ".join(positional[found.index(None)][0].split()))
+        speed, speed_unit = self.speed(options.get("v"), speed_text, line, original), "mm/s"
+        if options.get("t") and re.fullmatch(NUMBER, options["t"]):  # \T:= the motion's time
+            speed, speed_unit = self.number(options["t"], line, original, "\\T"), "s"
         return Motion(
             kind=kind,
             target=found[-1],
             via=found[0] if kind == CIRCULAR else None,
-            speed=self.speed(options.get("v"), speed_text, line, original),
+            speed=speed,
+            speed_unit=speed_unit,
             zone=self.zone(options.get("z"), zones, line, original),
             tool=tool,
             frame=frame,
             line=line,
             text=text,
             reason=reason or tool_why or frame_why,
+            spans={"speed": _stripped_span(*positional[count])},  # where re-timing writes
         )
 
     def speed(self, option, text, line, original):
@@ -302,6 +307,12 @@ class _Reader:
         if m is None or m.group(2) is None:
             return None
         return self.number(m.group(2), line, original, "zone") or None
+
+
+def _stripped_span(piece, at):
+    """Span of an argument without its surrounding white space (the speed data and its \\V / \\T)."""
+    start = at + len(piece) - len(piece.lstrip())
+    return Span(0, start, start + len(piece.strip()), piece.strip())
 
 
 def read(path):

@@ -17,7 +17,7 @@ from trajcomp.formats._text import (
     spans,
     unresolved,
 )
-from trajcomp.program import CIRCULAR, JOINT, LINEAR, Motion, Program, Statement, Target
+from trajcomp.program import CIRCULAR, JOINT, LINEAR, Motion, Program, Span, Statement, Target
 from trajcomp.transforms import rotvec_to_matrix
 
 POSE = ("x", "y", "z", "rx", "ry", "rz")
@@ -253,6 +253,10 @@ class _Reader:
         options = dict(zip(POSITIONAL[function], (a.strip() for a, _ in args[count:] if "=" not in a)))
         options |= {k.strip(): v.strip() for k, v in (a.split("=", 1) for a, _ in args[count:] if "=" in a)}
         speed, blend = self.option(options.get("v"), line, original), self.option(options.get("r"), line, original)
+        speed = None if speed is None else speed * (1.0 if function == "movej" else 1000.0)
+        unit = "rad/s" if function == "movej" else "mm/s"
+        if self.option(options.get("t"), line, original):  # t= the motion's time: v and a are ignored
+            speed, unit = self.option(options.get("t"), line, original), "s"
         frames = {frame for _, frame, _ in found}
         why = next((w for _, _, w in found if w), "") or self.tool_why
         if not why and len(frames) > 1:
@@ -261,8 +265,8 @@ class _Reader:
             kind=kind,
             target=None if why else found[-1][0],
             via=None if why or kind != CIRCULAR else found[0][0],
-            speed=None if speed is None else speed * (1.0 if function == "movej" else 1000.0),
-            speed_unit="rad/s" if function == "movej" else "mm/s",
+            speed=speed,
+            speed_unit=unit,
             zone=blend * 1000.0 if blend else None,
             tool=self.tool,
             frame=found[-1][1] if not why else None,
@@ -270,6 +274,7 @@ class _Reader:
             text=text,
             reason=why,
             refs=tuple(i for i, _, _ in found if isinstance(i, int)) if why else (),
+            spans=_timing_spans(function, args, count),
         )
 
     def option(self, text, line, original):
@@ -300,6 +305,22 @@ class _Reader:
         names = [w for w in dict.fromkeys(_WORD.findall(text)) if w != assigned and w in self.values
                  and not self.values[w].target.is_joint and w not in self.frame_uses]
         return tuple(self.use(self.values[w]) for w in names)
+
+
+
+def _timing_spans(function, args, count):
+    """Where re-timing writes: the values of ``t`` and ``v`` (named or positional) and the call's end."""
+    spans = {}
+    positional = iter(POSITIONAL[function])
+    for text, at in args[count:]:
+        key, _, value = text.partition("=") if "=" in text else (next(positional, ""), "", text)
+        shift = at + (len(text) - len(value) if "=" in text else 0)
+        start = shift + len(value) - len(value.lstrip())
+        if key.strip() in ("t", "v"):
+            spans[key.strip()] = Span(0, start, start + len(value.strip()), value.strip())
+    last, at = args[-1]
+    spans["end"] = Span(0, at + len(last.rstrip()), at + len(last.rstrip()), "")
+    return spans
 
 
 def read(path):

@@ -14,6 +14,7 @@ edited rows get their new pose and, where the program knows their joints,
 ``j1..j6`` (added as columns when the file has none).
 """
 
+import dataclasses
 import difflib
 import re
 
@@ -76,7 +77,7 @@ def read(path):
         row = dict(zip(header, fields))
         motion, target = _row(source.name, number, line, row, has_pose, has_joints, len(targets))
         targets.append(target)
-        items.append(motion)
+        items.append(dataclasses.replace(motion, spans=_timing_spans(row, end)))
     if header is None:
         fail(source.name, 1, source.text[:80], "not a program CSV: no header row")
     if not targets:
@@ -143,6 +144,14 @@ def _row(name, number, line, row, has_pose, has_joints, index):
         text=line.strip(),
     )
     return motion, target
+
+
+def _timing_spans(row, end):
+    """Where re-timing writes: the ``t`` cell (if the file has the column) and the row's end."""
+    spans = {"end": Span(0, end, end, "")}
+    if "t" in row:
+        spans["t"] = Span(0, row["t"][1], row["t"][2], row["t"][0])
+    return spans
 
 
 def _encode(target, old):

@@ -70,6 +70,7 @@ _SPEED_TERM = re.compile(
     r"^\s*(?:(" + NUMBER + r")\s*(" + _UNIT + r")|\S+)\s+(FINE|FEIN|CNT\s*(" + NUMBER + r")?\S*|CR\s*(" + NUMBER
     + r")?\S*)(?:\s|$)", re.I
 )
+_SPEED_FIELD = re.compile(r"(?:" + NUMBER + r")\s*(?:" + _UNIT + r")(?=\s+(?:FINE|FEIN|CNT|CR))", re.I)
 _RUNTIME = re.compile(r"\b(Offset|Tool_Offset|INC|VOFFSET)\b", re.I)
 _STATE = re.compile(r"^\s*(UFRAME_NUM|UTOOL_NUM|BENUTZER_NUM|WKZ_NUM)\s*=\s*(.*?)\s*;", re.I)
 _SET_FRAME = re.compile(r"^\s*(UFRAME|UTOOL|BENUTZER|WKZ)\s*\[\s*(\d+)\s*\]\s*=\s*(.*?)\s*;", re.I)
@@ -164,6 +165,9 @@ def read(path):
             items.append(Statement(number, original, refs=refs))
             continue
         motion = _motion(m, points, untaught, source.name, number, original)
+        speed = _SPEED_FIELD.search(masked, start, end)  # where re-timing writes the motion's speed
+        if speed is not None:
+            motion = dataclasses.replace(motion, spans={"speed": Span(0, speed.start(), speed.end(), speed.group())})
         items.append(_with_frames(motion, targets, state))
     tools, frames = {"0": np.eye(4)}, {"0": np.eye(4)}
     return Program("fanuc_ls", name, tuple(items), tuple(targets), tools, frames, (source,))

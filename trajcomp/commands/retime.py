@@ -1,0 +1,123 @@
+"""``trajcomp retime IN -o OUT --robot R``: time a program under the arm's limits and write the timing into it.
+
+Also the re-timing step of ``trajcomp compensate --retime`` (`retime_compensated`).
+"""
+
+from trajcomp import formats
+from trajcomp.commands._args import add_robot, command_parser, info, robot_of
+from trajcomp.commands.convert import add_frame_options, add_in_place_option, frame_options, protected_inputs
+from trajcomp.errors import TimingError, TrajcompError
+from trajcomp.posture import planned_joints
+from trajcomp.timing import METHODS
+from trajcomp.timing.path import TOLERANCE
+
+CHOICES = METHODS + ("none",)
+METHOD_HELP = ("auto: TOPP-RA (toppra) for continuous LIN/CIRC runs, ruckig (jerk-limited) for point-to-point "
+               "and stop-to-stop motions; toppra or ruckig: that one for every segment")
+
+
+def add_parser(sub):
+    parser = command_parser(
+        sub, "retime", "time a program under the arm's joint limits",
+        "Read a program (any format; Cartesian targets are solved with the robot's nominal model in the "
+        "posture the program declares), compute the time-optimal timing under the robot's joint velocity, "
+        "acceleration and jerk limits without running faster than the program asks, check it by sampling "
+        "at 1 kHz and write it into the program's speed and time fields (CSV t column, RAPID \\T, URScript "
+        "t= / v=, FANUC sec / msec, KRL $VEL.CP / BAS(#VEL_PTP)); every other byte is kept. Exits 1 "
+        "(the program written) if a sample exceeds a limit by more than 1 %.",
+        "trajcomp retime weld.mod -o weld-timed.mod --robot abb_irb4600",
+    )
+    parser.add_argument("program", metavar="IN", help="program file")
+    parser.add_argument("-o", "--output", required=True, help="program to write (same language as IN)")
+    add_robot(parser)
+    parser.add_argument("--method", choices=METHODS, default="auto", help=METHOD_HELP)
+    add_tolerance_option(parser)
+    add_frame_options(parser)
+    add_in_place_option(parser)
+    parser.set_defaults(run=run)
+
+
+def add_tolerance_option(parser):
+    """Add ``--path-tolerance MM``: how far the timed path may pass from a waypoint."""
+    parser.add_argument("--path-tolerance", type=float, default=TOLERANCE, metavar="MM",
+                        help="largest distance of the timed joint path from a waypoint, mm: the path is smoothed "
+                        "within it against IK noise (default %(default)g mm)")
+
+
+def run(args):
+    robot = robot_of(args)
+    program = formats.read(args.program)
+    out_format = formats.find_format(args.output).name
+    if out_format != program.format:
+        raise TrajcompError(f"{args.output}: retime writes the language it reads ({program.format}); "
+                            f"convert the program first (trajcomp convert)")
+    tools, frames = frame_options(args)
+    plan = planned_joints(program, robot, tools=tools, frames=frames)
+    joints = dict(zip(plan.index.tolist(), plan.q))
+    timed, result = timed_program(program, robot, joints, args.method, args.path_tolerance, tools, frames)
+    written = formats.write(args.output, timed, protect=protected_inputs(args, args.program, program))
+    for line in timing_lines(result):
+        info(line)
+    info(f"wrote {', '.join(map(str, written))}")
+    if not result.within_limits:
+        info(f"trajcomp: {LIMIT_MESSAGE}")
+        return 1
+    return 0
+
+
+LIMIT_MESSAGE = "the timing exceeds a limit by more than 1 % in the 1 kHz check (table above): check it before running"
+
+
+def timed_program(program, robot, joints, method, tolerance, tools, frames):
+    """``(program with the timing written into its speed fields, TimingResult)``."""
+    from trajcomp.timing.writeback import apply_timing, retime_program
+
+    if not tolerance > 0:
+        raise TrajcompError(f"--path-tolerance: expected a positive number of mm, got {tolerance}")
+    result = retime_program(program, robot, joints, method=method, tools=tools, frames=frames, tolerance=tolerance)
+    return apply_timing(program, result, robot)
+
+
+def timing_lines(result, before=None):
+    """The dense check table, the cycle time(s) and what was written, as text lines."""
+    written = sum(1 for s in result.segments for text in s.settings if text)
+    kinds = ", ".join(sorted({s.kind for s in result.segments if s.kind != "untimed"}))
+    return [*result.lines_of_text(before), f"speed settings written for {written} motions ({kinds})"]
+
+
+def retime_compensated(original, corrected, robot, method, tolerance, tools=None, frames=None):
+    """Time a compensated program, and its original for the cycle time before compensation.
+
+    Parameters
+    ----------
+    original, corrected : Program
+        Before and after compensation (the corrected targets carry their joints).
+    robot : Robot
+        The nominal robot.
+    method : str
+        One of `trajcomp.timing.METHODS`.
+    tolerance : float
+        Path tolerance, mm.
+
+    Returns
+    -------
+    (Program, TimingResult, float)
+        The corrected program with its timing written, the timing, and the
+        original program's cycle time (s).
+
+    Raises
+    ------
+    TimingError
+        With a hint to compensate without re-timing.
+    """
+    from trajcomp.timing.writeback import retime_program
+
+    plan = planned_joints(original, robot, tools=tools, frames=frames)
+    after = {int(i): corrected.targets[i].joints for i in plan.index}
+    try:
+        before = retime_program(original, robot, dict(zip(plan.index.tolist(), plan.q)), method=method,
+                                tools=tools, frames=frames, tolerance=tolerance)
+        timed, result = timed_program(corrected, robot, after, method, tolerance, tools, frames)
+    except TimingError as exc:
+        raise TimingError(f"{exc} (compensate with --retime none to keep the program's speeds)") from None
+    return timed, result, before.cycle_time

@@ -1,0 +1,103 @@
+"""The dense check: a timed segment sampled at 1 kHz against its limits.
+
+TOPP-RA enforces limits at grid points only, and a ruckig law on a curved
+path bounds the path, not each joint: the only statement that holds
+between grid points is a measured one. Each segment is sampled every
+1 ms (and at its end); joint velocity and acceleration come from the path
+derivatives and the time law (q' sd, q'' sd^2 + q' sdd), jerk from the
+finite difference of the sampled acceleration (ruckig segments only: a
+TOPP-RA law has piecewise-constant path acceleration, its jerk is not
+bounded), and the TCP speed of linear and circular motions from the
+Jacobian, against the speed the program asked.
+"""
+
+import dataclasses
+
+import numpy as np
+
+from trajcomp.program import JOINT
+
+RATE = 1000.0  # Hz
+LIMIT_TOLERANCE = 0.01  # a sampled value may exceed its limit by this share
+
+
+@dataclasses.dataclass(frozen=True)
+class Peaks:
+    """What the dense check measured on one segment.
+
+    Attributes
+    ----------
+    velocity, acceleration, jerk : ndarray, shape (6,)
+        Peak |q'|, |q''| (rad/s, rad/s^2) and |q'''| (rad/s^3; NaN when not measured).
+    velocity_ratio, acceleration_ratio : ndarray, shape (6,)
+        Peak of the sampled value over the limit of the motion at that sample.
+    speed_ratio : float
+        Peak TCP speed over the programmed TCP speed, linear and circular
+        motions with one (0 when none).
+    """
+
+    velocity: np.ndarray
+    acceleration: np.ndarray
+    jerk: np.ndarray
+    velocity_ratio: np.ndarray
+    acceleration_ratio: np.ndarray
+    speed_ratio: float
+
+    @property
+    def worst(self):
+        """The largest ratio of a sampled value over its limit."""
+        return float(max(self.velocity_ratio.max(), self.acceleration_ratio.max(), self.speed_ratio))
+
+
+def sample_times(duration, rate=RATE):
+    """Sample times (N,) from 0 every 1/rate s, and ``duration`` itself."""
+    return np.r_[np.arange(0.0, duration, 1.0 / rate), duration]
+
+
+def evaluate(run, law, t):
+    """Joints, velocities and accelerations (each (N, 6)) of a timed run at times t (N,), and s, sd (N,)."""
+    s, sd, sdd = law(t)
+    s = np.clip(s, 0.0, run.length)
+    dq = run.path(s, 1)
+    return run.path(s), dq * sd[:, None], run.path(s, 2) * (sd**2)[:, None] + dq * sdd[:, None], s, sd
+
+
+def segment_peaks(run, law, moves, *, jerk, rate=RATE):
+    """Sample a timed run at ``rate`` and measure its peaks against the limits of each motion.
+
+    Parameters
+    ----------
+    run : RunPath
+    law : ConstantAcceleration or RuckigLaw
+    moves : Moves
+    jerk : bool
+        Measure the jerk (ruckig segments).
+
+    Returns
+    -------
+    Peaks
+    """
+    t = sample_times(law.duration, rate)
+    q, qd, qdd, s, sd = evaluate(run, law, t)
+    k = run.motion_at(s)
+    velocity, acceleration = np.abs(qd), np.abs(qdd)
+    jerk_peak = np.full(6, np.nan)
+    if jerk and len(t) > 1:
+        jerk_peak = np.max(np.abs(np.diff(qdd, axis=0)) / np.diff(t)[:, None], axis=0)
+    return Peaks(
+        velocity=velocity.max(axis=0),
+        acceleration=acceleration.max(axis=0),
+        jerk=jerk_peak,
+        velocity_ratio=np.max(velocity / moves.velocity[k], axis=0),
+        acceleration_ratio=np.max(acceleration / moves.acceleration[k], axis=0),
+        speed_ratio=_speed_ratio(run, moves, k, s, sd),
+    )
+
+
+def _speed_ratio(run, moves, k, s, sd):
+    """Peak TCP speed over the programmed one, on samples of linear / circular motions with a speed."""
+    kinds = np.array(moves.kind)[k]
+    rows = np.flatnonzero((kinds != JOINT) & np.isfinite(moves.tcp_speed[k]))
+    if not rows.size:
+        return 0.0
+    return float(np.max(run.tcp_rate(s[rows]) * np.abs(sd[rows]) / moves.tcp_speed[k[rows]]))

@@ -1,0 +1,272 @@
+"""The joint path of a continuous run, fitted for TOPP-RA within a stated tolerance.
+
+A run is a chain of linear / circular motions the arm passes without
+stopping (or, in toppra mode, one joint motion). Its samples come from
+`trajcomp.timing.samples` (the controller's interpolation); then:
+
+1. Parameter: s = joint-space arc length (rad) of the samples; duplicated
+   and zero-length waypoints collapse onto one sample.
+2. Fit: the cubic spline through the samples, unless their noise (IK
+   solutions of rounded numbers) or a blended corner makes it need more
+   than `SMOOTHING_GAIN` times the acceleration of a thinned one, which
+   makes TOPP-RA crawl. The thinned spline is a least-squares cubic
+   B-spline with knots on every `KNOT_STRIDE` samples, refined where it
+   leaves the tolerance: within `TOLERANCE` mm of every sample's TCP and
+   ``TOLERANCE * ROTATION_PER_MM`` rad of its orientation (linearized with
+   the Jacobian) and of each joint, or within the programmed zone radius
+   near a blended corner. The tolerance keeps the compensated positions.
+3. `JointPath` wraps the spline for toppra; grid points are every sample,
+   subdivided to at least `MIN_GRID` intervals.
+"""
+
+import dataclasses
+
+import numpy as np
+from scipy.interpolate import make_interp_spline, make_lsq_spline
+
+from trajcomp.kinematics import jacobian
+from trajcomp.program import JOINT
+from trajcomp.timing.samples import run_samples, tool_groups
+
+TOLERANCE = 0.005  # mm, largest deviation of the timed path from a waypoint or sample
+ROTATION_PER_MM = 1e-3  # rad of orientation tolerance per mm of position tolerance
+MIN_GRID = 200  # fewest TOPP-RA grid intervals of a run
+KNOT_STRIDE = 16  # samples per knot interval of the first thinned fit
+SMOOTHING_GAIN = 1.1  # a thinned path is taken when the exact one needs this much more acceleration
+_DUPLICATE = 1e-9  # rad, joint distance under which two samples are one
+
+
+class JointPath:
+    """A joint path q(s), s in rad of joint-space arc length (toppra's AbstractGeometricPath interface).
+
+    Parameters
+    ----------
+    spline : scipy.interpolate.BSpline
+        Cubic, values (6,).
+    """
+
+    def __init__(self, spline):
+        self.spline = spline
+        self._derivatives = (spline, spline.derivative(1), spline.derivative(2))
+
+    def __call__(self, s, order=0):
+        """q (order 0), dq/ds (1) or d2q/ds2 (2) at path positions s (N,): shape (N, 6)."""
+        return self._derivatives[order](s)
+
+    @property
+    def dof(self):
+        return 6
+
+    @property
+    def path_interval(self):
+        k = self.spline.k
+        return np.array([self.spline.t[k], self.spline.t[-k - 1]])
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class RunPath:
+    """The fitted path of waypoints ``first..last`` of a `Moves`.
+
+    Attributes
+    ----------
+    path : JointPath or None
+        None when the run has no length (all waypoints equal).
+    s_waypoints : ndarray, shape (last - first + 1,)
+        Path position of each waypoint, rad.
+    grid : ndarray, shape (G,)
+        TOPP-RA grid points: every sample, subdivided.
+    first, last : int
+    tcp_lengths : ndarray, shape (last - first + 1,)
+        TCP path length of the motion into each waypoint, mm (0 for the first).
+    grid_rate : ndarray, shape (G,)
+        |dp/ds| on the grid: mm of TCP travel per rad of path, each motion with its tool.
+    deviation : float
+        Largest TCP deviation (mm, linearized) of the path from a sample
+        outside blended corners.
+    """
+
+    path: JointPath
+    s_waypoints: np.ndarray
+    grid: np.ndarray
+    first: int
+    last: int
+    tcp_lengths: np.ndarray
+    grid_rate: np.ndarray
+    deviation: float
+
+    @property
+    def length(self):
+        return float(self.s_waypoints[-1])
+
+    def motion_at(self, s, side="left"):
+        """Waypoint index k of the motion (into waypoint k) each path position s (N,) lies on.
+
+        At a waypoint, ``side="left"`` gives the motion ending there, ``"right"`` the one starting there.
+        """
+        inner = np.searchsorted(self.s_waypoints, s, side=side)
+        return self.first + np.clip(inner, 1, len(self.s_waypoints) - 1)
+
+    def speed_bound(self, moves, velocity_scale=1.0, speed_scale=1.0):
+        """Largest squared path speed x = sd^2 (G,) on the grid, and the joint velocity limits (G, 6) used.
+
+        A grid point obeys the joint velocity limits and the programmed TCP
+        speed (or, for a linear / circular motion with a programmed time,
+        its TCP length over that time) of the motions it belongs to (both,
+        at a waypoint).
+        """
+        grid, dq = self.grid, self.path(self.grid, 1)
+        near = np.stack([self.motion_at(grid), self.motion_at(grid, "right")])
+        velocity = np.min(moves.velocity[near], axis=0) * velocity_scale
+        with np.errstate(divide="ignore", invalid="ignore"):
+            cartesian = np.array([kind != JOINT for kind in moves.kind])
+            timed = np.where(cartesian & (moves.min_duration > 0), self._all_lengths(moves) / moves.min_duration,
+                             np.inf)
+            tcp = np.min(np.minimum(moves.tcp_speed, timed)[near], axis=0) * speed_scale
+            x_joint = np.min((velocity / np.abs(dq)) ** 2, axis=1)
+            x_tcp = (tcp / self.grid_rate) ** 2
+        return np.minimum(x_joint, np.nan_to_num(x_tcp, nan=np.inf)), velocity
+
+    def tcp_rate(self, s):
+        """|dp/ds| (N,) at path positions s (N,), interpolated on the grid, mm/rad."""
+        return np.interp(s, self.grid, self.grid_rate)
+
+    def _all_lengths(self, moves):
+        lengths = np.zeros(len(moves))
+        lengths[self.first : self.last + 1] = self.tcp_lengths
+        return lengths
+
+
+def run_path(moves, robot, first, last, tolerance=TOLERANCE):
+    """Build and fit the joint path of waypoints ``first..last``.
+
+    Parameters
+    ----------
+    moves : Moves
+    robot : Robot
+        The nominal robot (the controller's interpolation).
+    first, last : int
+        Waypoint indices; the motions are first + 1 .. last.
+    tolerance : float
+        Largest deviation of the fitted path from every sample, mm.
+
+    Returns
+    -------
+    RunPath
+
+    Raises
+    ------
+    TimingError
+        From `trajcomp.timing.samples.run_samples`.
+    """
+    q, owner = run_samples(moves, robot, first, last)
+    keep = np.ones(len(q), dtype=bool)
+    keep[1:] = np.linalg.norm(np.diff(q, axis=0), axis=1) > _DUPLICATE
+    kept = np.cumsum(keep) - 1
+    waypoint_rows = kept[np.r_[np.flatnonzero(np.diff(owner)), len(owner) - 1]]
+    q, owner = q[keep], owner[keep]
+    s = np.r_[0.0, np.cumsum(np.linalg.norm(np.diff(q, axis=0), axis=1))]
+    s_waypoints = s[waypoint_rows]
+    if len(q) < 2:
+        return RunPath(None, s_waypoints, s, first, last, np.zeros(last - first + 1), np.zeros(len(s)), 0.0)
+    jac = tcp_jacobians(robot, moves.tool, owner, q)
+    steps = np.r_[0.0, np.linalg.norm(np.einsum("nij,nj->ni", jac[1:, :3], np.diff(q, axis=0)), axis=1)]
+    travel = np.cumsum(steps)  # TCP arc length from the run's start, mm
+    tcp_lengths = np.diff(travel[waypoint_rows], prepend=0.0)
+    tol = _tolerances(moves, first, last, travel, owner, waypoint_rows, tcp_lengths, tolerance)
+    spline, deviation = _fit(s, q, jac, tol, np.min(moves.acceleration[first + 1 : last + 1], axis=0))
+    path = JointPath(spline)
+    grid = _grid(s)
+    k = first + np.clip(np.searchsorted(s_waypoints, grid), 1, len(s_waypoints) - 1)
+    rate = np.linalg.norm(np.einsum("nij,nj->ni", tcp_jacobians(robot, moves.tool, k, path(grid))[:, :3],
+                                    path(grid, 1)), axis=1)
+    return RunPath(path, s_waypoints, grid, first, last, tcp_lengths, rate, deviation)
+
+
+def _grid(s):
+    """Grid points: every sample s (n,), with intervals longer than 1/MIN_GRID of the path subdivided evenly."""
+    longest = s[-1] / MIN_GRID
+    pieces = np.maximum(np.ceil(np.diff(s) / longest).astype(int), 1)
+    offsets = np.concatenate([np.arange(p) / p for p in pieces]) if np.any(pieces > 1) else np.zeros(len(pieces))
+    start = np.repeat(s[:-1], pieces)
+    return np.r_[start + offsets * np.repeat(np.diff(s), pieces), s[-1]]
+
+
+def tcp_jacobians(robot, tools, owner, q):
+    """TCP Jacobians (n, 6, 6) of configurations q (n, 6), each with the tool ``tools[owner]`` of its motion."""
+    jac = np.empty((len(q), 6, 6))
+    for tool, rows in tool_groups(tools[owner]):
+        jac[rows] = jacobian(robot.replace(T_flange_tool=tool), q[rows])
+    return jac
+
+
+def _tolerances(moves, first, last, travel, owner, waypoint_rows, tcp_lengths, tolerance):
+    """Allowed TCP deviation (n,) of the path from each sample, mm: ``tolerance``, or more in blended corners.
+
+    A corner at waypoint k with zone r (not a stop) may be cut: samples
+    within r_eff = min(r, half of each neighbouring motion) of it, along the
+    path, get ``r_eff - distance``.
+    """
+    tol = np.full(len(travel), tolerance)
+    corners = np.arange(first + 1, last)
+    if not corners.size or not np.any(moves.zone[corners] > 0):
+        return tol
+    radius = np.zeros(last - first + 1)
+    inner = corners - first
+    radius[inner] = np.minimum(moves.zone[corners], 0.5 * np.minimum(tcp_lengths[inner], tcp_lengths[inner + 1]))
+    corner_travel = travel[waypoint_rows]
+    local = owner - first
+    for corner in (np.clip(local - 1, 0, None), local):
+        tol = np.maximum(tol, radius[corner] - np.abs(travel - corner_travel[corner]))
+    return tol
+
+
+def _fit(s, q, jac, tol, acceleration):
+    """Cubic B-spline q(s) of samples (s (n,), q (n, 6)) within tolerances tol (n,) mm: (BSpline, deviation mm).
+
+    The samples are interpolated unless a thinned spline within the
+    tolerances needs less than 1 / SMOOTHING_GAIN of the acceleration at
+    the same path speed (noise, or a blended corner): a clean path is
+    taken exactly.
+    """
+    n = len(s)
+    if n < 4:  # a line or a single corner: interpolate, with points added on the straight pieces
+        dense = np.union1d(s, np.linspace(s[0], s[-1], 4))
+        return make_interp_spline(dense, make_interp_spline(s, q, k=1)(dense), k=3), 0.0
+    exact = make_interp_spline(s, q, k=3)
+    thinned, deviation = _thinned(s, q, jac, tol)
+    if thinned is None or _demand(exact, s, acceleration) <= SMOOTHING_GAIN * _demand(thinned, s, acceleration):
+        return exact, 0.0
+    return thinned, deviation
+
+
+def _thinned(s, q, jac, tol):
+    """Least-squares cubic spline with the fewest knots (refined where needed) within tol: (BSpline or None, mm)."""
+    n = len(s)
+    knots = np.unique(np.r_[np.arange(0, n, KNOT_STRIDE), n - 1])
+    while True:
+        try:
+            spline = make_lsq_spline(s, q, np.r_[[s[0]] * 4, s[knots[1:-1]], [s[-1]] * 4], k=3)
+        except (ValueError, np.linalg.LinAlgError):
+            return None, 0.0
+        position, rotation, joint = _deviation(spline, s, q, jac)
+        bad = (position > tol) | (np.maximum(rotation, joint) > tol * ROTATION_PER_MM)
+        if not bad.any():
+            return spline, float(np.max(np.where(tol <= tol.min(), position, 0.0)))
+        cell = np.searchsorted(knots, np.flatnonzero(bad), side="right") - 1
+        cell = np.unique(np.clip(cell, 0, len(knots) - 2))
+        wide = cell[knots[cell + 1] - knots[cell] >= 4]
+        if not wide.size:
+            return None, 0.0
+        knots = np.unique(np.r_[knots, (knots[wide] + knots[wide + 1]) // 2])
+
+
+def _demand(spline, s, acceleration):
+    """Largest joint acceleration (share of the limit) the path needs at unit path speed: max |q''_j| / a_j."""
+    return float(np.max(np.abs(spline(s, 2)) / acceleration))
+
+
+def _deviation(spline, s, q, jac):
+    """TCP position (mm), orientation (rad, linearized) and largest joint (rad) deviation (n,) from the samples."""
+    joints = spline(s) - q
+    delta = np.einsum("nij,nj->ni", jac, joints)
+    return np.linalg.norm(delta[:, :3], axis=1), np.linalg.norm(delta[:, 3:], axis=1), np.abs(joints).max(axis=1)

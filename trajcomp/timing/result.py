@@ -1,0 +1,185 @@
+"""What re-timing produced: time stamps, segments with their speed settings, and the dense check."""
+
+import dataclasses
+
+import numpy as np
+
+from trajcomp.timing.check import LIMIT_TOLERANCE, RATE, evaluate, sample_times
+
+
+@dataclasses.dataclass(frozen=True)
+class Segment:
+    """A stretch of waypoints timed together, at rest at both ends.
+
+    Attributes
+    ----------
+    kind : {"toppra", "ruckig", "untimed"}
+        How it was timed; ``"untimed"``: the motion into ``last`` starts
+        from a position the program does not state.
+    first, last : int
+        Waypoint indices; the segment's motions are first + 1 .. last.
+    duration : float
+        s.
+    settings : tuple of str
+        The speed setting written for each of its motions, as the program
+        text (``"v20\\T:=4.213"``, ``"t=4.2130"``, ``"4213msec"``,
+        ``"$VEL.CP=0.018991"``, ``"t=4.213000"``); empty until the timing is
+        written into a program (`trajcomp.timing.apply_timing`), ``""`` for
+        a motion left as written.
+    """
+
+    kind: str
+    first: int
+    last: int
+    duration: float
+    settings: tuple = ()
+
+    @property
+    def setting(self):
+        """The settings as one line (``"-"`` when none were written)."""
+        written = [s for s in self.settings if s]
+        if not written:
+            return "-"
+        return written[0] if len(written) == 1 else f"{written[0]} .. {written[-1]} ({len(written)} motions)"
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class TimingResult:
+    """A re-timed motion sequence of M waypoints.
+
+    Attributes
+    ----------
+    t : ndarray, shape (M,)
+        Time stamp of each waypoint, s (0 at the first).
+    cycle_time : float
+        s, the time from the first to the last waypoint (untimed motions count 0).
+    segments : tuple of Segment
+    peak_velocity, peak_acceleration : ndarray, shape (6,)
+        Largest sampled |joint velocity| (rad/s) and |acceleration| (rad/s^2).
+    peak_jerk : ndarray, shape (6,)
+        Largest sampled |joint jerk| in ruckig segments, rad/s^3 (NaN when
+        there is none: a TOPP-RA law does not bound jerk).
+    limit_velocity, limit_acceleration, limit_jerk : ndarray, shape (6,)
+        The robot's limits, same units (jerk ``inf`` where unknown).
+    within_limits : bool
+        No 1 kHz sample exceeds its motion's velocity or acceleration limit
+        (or programmed TCP speed), nor a ruckig segment the jerk limit, by
+        more than 1 %.
+    peak_speed_ratio : float
+        Largest sampled TCP speed over the programmed TCP speed (linear and
+        circular motions; 0 when none has one).
+    q : ndarray, shape (M, 6)
+        Joints of each waypoint, rad.
+    tcp_length : ndarray, shape (M,)
+        TCP path length of the motion into each waypoint, mm (0 for untimed).
+    labels : tuple of str, length M
+        Waypoint names with file and line.
+    motion : ndarray of int, shape (M,)
+        Index into `Program.motions` of the motion into each waypoint.
+    untimed : tuple of int
+        Waypoints whose motion was not timed.
+    deviation : float
+        Largest deviation of the timed joint path from a waypoint or path
+        sample outside blended corners, mm (linearized).
+    warnings : tuple of str
+        What the timing assumed that differs from the program's declaration
+        (a joint turn a linear motion cannot honour).
+    """
+
+    t: np.ndarray
+    cycle_time: float
+    segments: tuple
+    peak_velocity: np.ndarray
+    peak_acceleration: np.ndarray
+    peak_jerk: np.ndarray
+    limit_velocity: np.ndarray
+    limit_acceleration: np.ndarray
+    limit_jerk: np.ndarray
+    within_limits: bool
+    peak_speed_ratio: float
+    q: np.ndarray
+    tcp_length: np.ndarray
+    labels: tuple
+    motion: np.ndarray
+    untimed: tuple
+    deviation: float
+    warnings: tuple = ()
+    pieces: tuple = dataclasses.field(default=(), repr=False)
+
+    @property
+    def durations(self):
+        """Duration of the motion into each waypoint (M,), s (0 for the first and untimed ones)."""
+        return np.diff(self.t, prepend=self.t[:1])
+
+    def sample(self, rate=RATE):
+        """The timed trajectory sampled every 1/rate s within each segment.
+
+        Returns
+        -------
+        t : ndarray, shape (N,)
+            s, non-decreasing (segment ends appear twice: end of one, start of the next).
+        q, qd, qdd : ndarray, shape (N, 6)
+            rad, rad/s, rad/s^2.
+        """
+        parts = []
+        for start, run, law in self.pieces:
+            local = sample_times(law.duration, rate)
+            q, qd, qdd, _, _ = evaluate(run, law, local)
+            parts.append((start + local, q, qd, qdd))
+        if not parts:
+            return np.zeros(0), np.zeros((0, 6)), np.zeros((0, 6)), np.zeros((0, 6))
+        return tuple(np.concatenate(column) for column in zip(*parts))
+
+    def at(self, t):
+        """Joints, velocities and accelerations (each (N, 6)) at times t (N,), s.
+
+        Between segments (zero-length or untimed motions) the arm rests at
+        the last waypoint reached.
+        """
+        t = np.asarray(t, dtype=float)
+        q = np.tile(self.q[0], (len(t), 1))
+        qd, qdd = np.zeros((len(t), 6)), np.zeros((len(t), 6))
+        for start, run, law in self.pieces:
+            after = t >= start
+            q[after] = run.path(np.array([run.length]))[0]
+            qd[after] = qdd[after] = 0.0
+            inside = after & (t <= start + law.duration)
+            if inside.any():
+                q[inside], qd[inside], qdd[inside], _, _ = evaluate(run, law, t[inside] - start)
+        return q, qd, qdd
+
+    def with_settings(self, settings):
+        """A copy whose segments carry the written settings (``{waypoint index: text}``)."""
+        segments = tuple(
+            dataclasses.replace(s, settings=tuple(settings.get(k, "") for k in range(s.first + 1, s.last + 1)))
+            for s in self.segments
+        )
+        return dataclasses.replace(self, segments=segments)
+
+    def lines_of_text(self, before=None):
+        """Summary lines: per joint peaks against limits, cycle time (and before, s)."""
+        out = [f"{'joint':<6}{'|v| deg/s':>11}{'limit':>8}{'|a| deg/s^2':>13}{'limit':>8}"
+               f"{'|j| deg/s^3':>13}{'limit':>9}"]
+        deg = np.degrees
+        for j in range(6):
+            jerk = "-" if np.isnan(self.peak_jerk[j]) else f"{deg(self.peak_jerk[j]):.0f}"
+            jerk_limit = "-" if np.isinf(self.limit_jerk[j]) else f"{deg(self.limit_jerk[j]):.0f}"
+            out.append(
+                f"J{j + 1:<5}{deg(self.peak_velocity[j]):>11.1f}{deg(self.limit_velocity[j]):>8.0f}"
+                f"{deg(self.peak_acceleration[j]):>13.1f}{deg(self.limit_acceleration[j]):>8.0f}"
+                f"{jerk:>13}{jerk_limit:>9}"
+            )
+        verdict = "within" if self.within_limits else f"ABOVE (by more than {100 * LIMIT_TOLERANCE:.0f} %)"
+        out.append(f"dense check at {RATE:.0f} Hz: {verdict} the limits; peak TCP speed "
+                   f"{100 * self.peak_speed_ratio:.1f} % of the programmed speed")
+        cycle = f"cycle time {self.cycle_time:.3f} s"
+        if before is not None:
+            change = 100.0 * (self.cycle_time - before) / before if before > 0 else 0.0
+            cycle = f"cycle time before compensation {before:.3f} s, after {self.cycle_time:.3f} s ({change:+.2f} %)"
+        out.append(cycle)
+        if self.untimed:
+            names = ", ".join(self.labels[k] for k in self.untimed[:5])
+            more = f" and {len(self.untimed) - 5} more" if len(self.untimed) > 5 else ""
+            out.append(f"not timed (the arm's position before the motion is unknown): motions to {names}{more}")
+        out += [f"warning: {w}" for w in self.warnings]
+        return out

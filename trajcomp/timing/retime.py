@@ -1,0 +1,184 @@
+"""Re-time a motion sequence: split it into segments at rest, time each, check densely.
+
+Segments (``method="auto"``):
+
+- a joint motion (PTP, MoveJ, movej, J) from rest to rest is a
+  stop-to-stop segment timed by ruckig (jerk-limited, the straight joint
+  line);
+- a chain of motions joined by zones (no exact stop), and a single
+  linear or circular motion, is a continuous run timed by TOPP-RA
+  (`trajcomp.timing.toppra_run`), starting and ending at rest. A joint
+  motion's zone is where the arm leaves its joint line for the next one.
+
+``"toppra"`` times joint motions with TOPP-RA too (on their joint line),
+``"ruckig"`` times runs with ruckig along their path (1 degree of freedom,
+worst-case bounds). Every segment is then sampled at 1 kHz
+(`trajcomp.timing.check`); where a sample exceeds a limit by more than
+half the tolerance, that limit is lowered by the overshoot and the
+segment timed again.
+"""
+
+import dataclasses
+
+import numpy as np
+
+from trajcomp.program import JOINT
+from trajcomp.timing.check import LIMIT_TOLERANCE, segment_peaks
+from trajcomp.timing.path import TOLERANCE, run_path
+from trajcomp.timing.result import Segment, TimingResult
+
+METHODS = ("auto", "toppra", "ruckig")
+_RETRIES = 4  # timings of one segment with lowered limits before giving up
+_TARGET = 1.0 + 0.5 * LIMIT_TOLERANCE  # re-time a segment whose samples exceed a limit by more than this
+
+
+def retime(moves, robot, *, method="auto", tolerance=TOLERANCE):
+    """Time-optimal timing of a motion sequence under the robot's limits and the programmed speeds.
+
+    Parameters
+    ----------
+    moves : Moves
+    robot : Robot
+        The nominal robot: the controller's interpolation, joint velocity,
+        acceleration and jerk limits.
+    method : {"auto", "toppra", "ruckig"}
+        See the module description.
+    tolerance : float
+        Largest deviation of the timed path from each waypoint, mm.
+
+    Returns
+    -------
+    TimingResult
+
+    Raises
+    ------
+    TimingError
+        A motion the limits cannot be met on, named by waypoint, line and joint.
+    """
+    if method not in METHODS:
+        raise ValueError(f"method must be one of {METHODS}, got {method!r}")
+    m = len(moves)
+    t = np.zeros(m)
+    tcp_length = np.zeros(m)
+    arrived = moves.q.copy()
+    segments, pieces, peaks, deviation = [], [], [], 0.0
+    for kind, first, last in plan_segments(moves, method):
+        if kind == "untimed":
+            t[last] = t[first]
+            segments.append(Segment(kind, first, last, 0.0))
+            continue
+        arrived[first + 1 : last + 1] = _continued(arrived[first], moves.q[first : last + 1],
+                                                   moves.kind[first + 1 : last + 1])
+        run = run_path(dataclasses.replace(moves, q=arrived), robot, first, last, tolerance)
+        tcp_length[first + 1 : last + 1] = run.tcp_lengths[1:]
+        deviation = max(deviation, run.deviation)
+        if run.path is None:
+            t[first + 1 : last + 1] = t[first]
+            segments.append(Segment(kind, first, last, 0.0))
+            continue
+        law, checked = _timed(kind, run, moves, robot)
+        t[first + 1 : last + 1] = t[first] + law.time_at(run.s_waypoints[1:])
+        t[last] = t[first] + law.duration
+        segments.append(Segment(kind, first, last, law.duration))
+        pieces.append((t[first], run, law))
+        peaks.append(checked)
+    return _result(moves, robot, arrived, t, segments, pieces, peaks, tcp_length, deviation)
+
+
+def _continued(start, declared, kinds):
+    """Joints (n - 1, 6) a chain of motions reaches its waypoints with, starting from ``start`` (6,).
+
+    A joint motion goes to the declared joints. Along linear and circular
+    motions the controller keeps turning each joint continuously: a
+    waypoint's declared turn (KUKA T, ABB cf4 / cf6, joints a revolution
+    off) does not apply there; each joint moves by its declared change
+    wrapped to less than half a turn per motion.
+    """
+    turn = 2.0 * np.pi
+    change = np.diff(declared, axis=0)
+    slip = np.vstack([start - declared[0], np.angle(np.exp(1j * change)) - change])  # whole turns gained
+    joint = np.r_[True, [kind == JOINT for kind in kinds]]
+    total = np.cumsum(slip, axis=0)
+    reset = np.maximum.accumulate(np.where(joint, np.arange(len(joint)), 0))  # the last joint motion
+    offset = total - np.where(reset[:, None] > 0, total[reset], 0.0)
+    return declared[1:] + np.round(offset[1:] / turn) * turn
+
+
+def plan_segments(moves, method="auto"):
+    """``[(kind, first, last)]``: the segments of a sequence (see the module description)."""
+    run_kind = "ruckig" if method == "ruckig" else "toppra"
+    joint_kind = "toppra" if method == "toppra" else "ruckig"
+    out, k, m = [], 1, len(moves)
+    while k < m:
+        if moves.start[k]:
+            out.append(("untimed", k - 1, k))
+        else:
+            first = k - 1
+            while k + 1 < m and not moves.stop[k]:
+                k += 1
+            single_joint = k == first + 1 and moves.kind[k] == JOINT
+            out.append((joint_kind if single_joint else run_kind, first, k))
+        k += 1
+    return out
+
+
+def _timed(kind, run, moves, robot):
+    """Time a run, lowering the limits a sample exceeds until the dense check passes: (law, Peaks)."""
+    if kind == "toppra":  # toppra is slow to import: only when a segment needs it
+        from trajcomp.timing.toppra_run import toppra_law as law_of
+    else:
+        from trajcomp.timing.ruckig_move import ruckig_law as law_of
+    velocity, acceleration, speed = np.ones(6), np.ones(6), 1.0
+    for _ in range(_RETRIES):
+        law = law_of(run, moves, robot, velocity, acceleration, speed)
+        peaks = segment_peaks(run, law, moves, jerk=kind == "ruckig")
+        if peaks.worst <= _TARGET:
+            break
+        velocity = velocity / np.maximum(peaks.velocity_ratio, 1.0)
+        acceleration = acceleration / np.maximum(peaks.acceleration_ratio, 1.0)
+        speed = speed / max(peaks.speed_ratio, 1.0)
+    return law, peaks
+
+
+def _turn_warnings(moves, arrived):
+    """Messages for waypoints a LIN / CIRC reaches in another turn of a joint than declared."""
+    off = np.abs(arrived - moves.q) > 1e-6
+    out = []
+    for k in np.flatnonzero(off.any(axis=1)):
+        joints = ", ".join(f"J{j + 1} at {np.degrees(arrived[k, j]):.1f} deg, not {np.degrees(moves.q[k, j]):.1f}"
+                           for j in np.flatnonzero(off[k]))
+        out.append(f"the {moves.kind[k]} motion reaches {moves.labels[k]} with {joints} (a linear or circular "
+                   "motion turns continuously; the declared turn applies to joint motions)")
+    return tuple(out)
+
+
+def _result(moves, robot, arrived, t, segments, pieces, peaks, tcp_length, deviation):
+    def peak(name):
+        values = [getattr(p, name) for p in peaks]
+        return np.nanmax(values, axis=0) if values and not np.all(np.isnan(values)) else np.full(6, np.nan)
+
+    velocity, acceleration, jerk = peak("velocity"), peak("acceleration"), peak("jerk")
+    jerk = np.where(np.isfinite(robot.j_max), jerk, np.nan)  # without a jerk limit ruckig steps the acceleration
+    worst = max([p.worst for p in peaks], default=0.0)
+    jerk_ok = np.all(np.nan_to_num(jerk, nan=0.0) <= robot.j_max * (1.0 + LIMIT_TOLERANCE))
+    return TimingResult(
+        t=t,
+        cycle_time=float(t[-1]) if len(t) else 0.0,
+        segments=tuple(segments),
+        peak_velocity=np.nan_to_num(velocity),
+        peak_acceleration=np.nan_to_num(acceleration),
+        peak_jerk=jerk,
+        limit_velocity=robot.v_max,
+        limit_acceleration=robot.a_max,
+        limit_jerk=robot.j_max,
+        within_limits=bool(worst <= 1.0 + LIMIT_TOLERANCE and jerk_ok),
+        peak_speed_ratio=max([p.speed_ratio for p in peaks], default=0.0),
+        q=arrived,
+        tcp_length=tcp_length,
+        labels=moves.labels,
+        motion=moves.motion,
+        untimed=tuple(s.last for s in segments if s.kind == "untimed"),
+        deviation=deviation,
+        warnings=_turn_warnings(moves, arrived),
+        pieces=tuple(pieces),
+    )

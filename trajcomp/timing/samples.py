@@ -1,0 +1,214 @@
+"""Joint samples of a run as the controller interpolates it, for all its motions at once.
+
+A LIN moves the TCP on the straight line between its end poses, the
+orientation turning uniformly about one axis; a CIRC on the circle through
+start, via and end point (orientation as for a LIN); both are solved with
+the nominal model (the written poses are nominal-model commands), every
+`STEP_MM` mm and `STEP_DEG` deg. A PTP is the straight line in joint space.
+Where neighbouring samples differ by more than `JUMP_DEG` in a joint the
+interval is bisected (a fast wrist swing near a singularity is sampled
+finely); a jump that survives down to 1e-6 of a motion is a pass through
+a singularity and is refused.
+"""
+
+import numpy as np
+
+from trajcomp.errors import TimingError
+from trajcomp.ik import configuration_of, ik, ik_all, ik_family
+from trajcomp.kinematics import fk
+from trajcomp.program import CIRCULAR, JOINT
+from trajcomp.transforms import matrix_to_rotvec, rotvec_to_matrix
+
+STEP_MM = 5.0  # mm, largest TCP step between path samples of a LIN / CIRC
+STEP_DEG = 2.0  # deg, largest orientation or joint step between path samples
+JUMP_DEG = 5.0  # deg, a larger joint step between neighbouring samples is bisected
+_SMALLEST_FRACTION = 1e-6  # of a motion: bisection stops here (singular)
+
+
+def run_samples(moves, robot, first, last):
+    """Joint samples of waypoints ``first..last`` and the motions they belong to.
+
+    Returns
+    -------
+    q : ndarray, shape (n, 6)
+        Samples in path order, rad; the waypoints are among them.
+    owner : ndarray of int, shape (n,)
+        Waypoint k whose motion each sample ends (motion k covers (wp k-1, wp k]);
+        ``first`` for the first sample.
+
+    Raises
+    ------
+    TimingError
+        A motion leaves the workspace or the joint limits between its
+        waypoints, a circle is degenerate, or a LIN passes a singularity.
+    """
+    geometry = _Geometry(moves, robot, first, last)
+    counts = geometry.sample_counts()
+    local = np.repeat(np.arange(len(counts)), counts)
+    fraction = np.concatenate([np.arange(1, n + 1) / n for n in counts]) if len(counts) else np.zeros(0)
+    local, fraction = np.r_[0, local], np.r_[0.0, fraction]  # the first waypoint: motion 0 at fraction 0
+    q = geometry.solve(local, fraction, seed=None)
+    local, fraction, q = geometry.bisect_jumps(local, fraction, q)
+    return q, first + np.where(fraction > 0, local + 1, local)
+
+
+class _Geometry:
+    """The motions first + 1 .. last of a run, vectorized; motion ``first + 1 + i`` has local index i."""
+
+    def __init__(self, moves, robot, first, last):
+        self.moves, self.robot = moves, robot
+        self.k = np.arange(first + 1, last + 1)
+        self.q_a, self.q_b = moves.q[self.k - 1], moves.q[self.k]
+        self.joint = np.array([moves.kind[k] == JOINT for k in self.k], dtype=bool)
+        tools = moves.tool[self.k]
+        T_a, T_b = _fk_with_tools(robot, tools, self.q_a), _fk_with_tools(robot, tools, self.q_b)
+        self.R_a, self.p_a, self.p_b = T_a[:, :3, :3], T_a[:, :3, 3], T_b[:, :3, 3]
+        self.turn = matrix_to_rotvec(np.swapaxes(self.R_a, 1, 2) @ T_b[:, :3, :3]).reshape(-1, 3)
+        self.length = np.linalg.norm(self.p_b - self.p_a, axis=1)
+        self.circle = np.zeros(len(self.k), dtype=bool)
+        self.centre, self.e1, self.e2 = np.zeros((3, len(self.k), 3))
+        self.radius, self.sweep = np.zeros((2, len(self.k)))
+        for i in np.flatnonzero([moves.kind[k] == CIRCULAR for k in self.k]):
+            via = fk(robot.replace(T_flange_tool=moves.tool[self.k[i]]), moves.via[self.k[i]])[:3, 3]
+            self._set_circle(i, via)
+        self.arm_branch = None  # shoulder and elbow flags (branch index // 2) of each motion's start
+        if ik_family(robot) is not None and len(self.k):
+            self.arm_branch = np.array([c.index // 2 for c in configuration_of(robot, self.q_a)])
+
+    def _set_circle(self, i, via):
+        """Centre, radius, plane axes and sweep of circular motion i through ``via`` (3,)."""
+        u, w = via - self.p_a[i], self.p_b[i] - self.p_a[i]
+        normal = np.cross(u, w)
+        if np.linalg.norm(normal) < 1e-6 * max(np.linalg.norm(u) * np.linalg.norm(w), 1e-12):
+            raise TimingError(f"circular motion to {self.moves.labels[self.k[i]]}: start, via and end point "
+                              "lie on one line")
+        centre = self.p_a[i] + (np.dot(u, u) * np.cross(w, normal) + np.dot(w, w) * np.cross(normal, u)) / (
+            2.0 * np.dot(normal, normal))
+        radius = np.linalg.norm(self.p_a[i] - centre)
+        e1 = (self.p_a[i] - centre) / radius
+        e2 = np.cross(normal / np.linalg.norm(normal), e1)
+        end = self.p_b[i] - centre
+        self.sweep[i] = np.arctan2(np.dot(end, e2), np.dot(end, e1)) % (2.0 * np.pi)
+        self.circle[i], self.centre[i], self.radius[i], self.e1[i], self.e2[i] = True, centre, radius, e1, e2
+        self.length[i] = radius * self.sweep[i]
+
+    def sample_counts(self):
+        """Number of sample intervals (M,) of each motion."""
+        step = np.radians(STEP_DEG)
+        joint_steps = np.max(np.abs(self.q_b - self.q_a), axis=1) / step
+        cartesian = np.maximum(self.length / STEP_MM, np.linalg.norm(self.turn, axis=1) / step)
+        return np.ceil(np.maximum(np.where(self.joint, 0.0, cartesian), np.maximum(joint_steps, 1.0))).astype(int)
+
+    def poses(self, local, fraction):
+        """TCP poses (n, 4, 4) of motions ``local`` (n,) at ``fraction`` (n,) of their way."""
+        T = np.tile(np.eye(4), (len(local), 1, 1))
+        T[:, :3, :3] = self.R_a[local] @ rotvec_to_matrix(fraction[:, None] * self.turn[local]).reshape(-1, 3, 3)
+        line = self.p_a[local] + fraction[:, None] * (self.p_b[local] - self.p_a[local])
+        theta = (fraction * self.sweep[local])[:, None]
+        arc = self.centre[local] + self.radius[local, None] * (np.cos(theta) * self.e1[local]
+                                                                + np.sin(theta) * self.e2[local])
+        T[:, :3, 3] = np.where(self.circle[local, None], arc, line)
+        return T
+
+    def solve(self, local, fraction, seed):
+        """Joints (n, 6) at fractions of motions: ends as given, joint motions on their line, others by IK.
+
+        ``seed`` (n, 6): the IK seeds; None to use the joint line.
+        """
+        line = self.q_a[local] + fraction[:, None] * (self.q_b[local] - self.q_a[local])
+        q = line.copy()
+        solve = ~self.joint[local] & (fraction > 0) & (fraction < 1)
+        if not solve.any():
+            return q
+        seed = line if seed is None else seed
+        rows = np.flatnonzero(solve)
+        T = self.poses(local[rows], fraction[rows])
+        for tool, group in tool_groups(self.moves.tool[self.k[local[rows]]]):
+            part = rows[group]
+            q[part] = self._continuous(self.robot.replace(T_flange_tool=tool), T[group], seed[part], local[part],
+                                       fraction[part])
+        return q
+
+    def _continuous(self, arm, T, seed, local, fraction):
+        """IK nearest ``seed`` (n, 6) in each motion's shoulder and elbow side, then checked against the limits.
+
+        The controller follows the path continuously and stops at a joint
+        limit, so the solution is chosen first (a Cartesian motion keeps
+        the arm's shoulder and elbow side; its wrist may turn over) and the
+        limits are checked after. Arms without a closed form are solved
+        numerically from the seed.
+
+        Raises
+        ------
+        TimingError
+            Naming the motion, where on it, and the joint beyond its limit
+            (or that the path leaves the workspace).
+        """
+        free = arm.replace(q_min=np.full(6, -np.inf), q_max=np.full(6, np.inf))
+        if self.arm_branch is None:
+            solved = ik(free, T, seed=seed)
+            q, found = solved.q, solved.success
+        else:
+            q_all, valid = ik_all(free, T, seed=seed)
+            allowed = valid & (np.arange(8)[None, :] // 2 == self.arm_branch[local][:, None])
+            distance = np.where(allowed, np.sum((q_all - seed[:, None]) ** 2, axis=2), np.inf)
+            best = np.argmin(distance, axis=1)
+            q, found = q_all[np.arange(len(T)), best], np.isfinite(distance[np.arange(len(T)), best])
+        inside = np.all((q >= arm.q_min - 1e-9) & (q <= arm.q_max + 1e-9), axis=1)
+        if (found & inside).all():
+            return q
+        bad = int(np.flatnonzero(~(found & inside))[0])
+        i = local[bad]
+        what = (f"{self.moves.kind[self.k[i]]} motion to {self.moves.labels[self.k[i]]} "
+                f"at {100 * fraction[bad]:.0f} % of its way")
+        if not found[bad]:
+            raise TimingError(f"{what}: the path leaves the workspace, or would have to change the arm's "
+                              "shoulder or elbow side")
+        j = int(np.flatnonzero((q[bad] < arm.q_min) | (q[bad] > arm.q_max))[0])
+        limit = arm.q_max[j] if q[bad, j] > arm.q_max[j] else arm.q_min[j]
+        raise TimingError(f"{what}: J{j + 1} would reach {np.degrees(q[bad, j]):.1f} deg, beyond its limit "
+                          f"{np.degrees(limit):.1f} deg; the controller cannot run it")
+
+    def bisect_jumps(self, local, fraction, q):
+        """Samples with every interval whose joint step exceeds JUMP_DEG bisected; TimingError at a singular pass."""
+        jump = np.radians(JUMP_DEG)
+        while True:
+            big = np.flatnonzero(np.max(np.abs(np.diff(q, axis=0)), axis=1) > jump)
+            if not big.size:
+                return local, fraction, q
+            motion = local[big + 1]
+            left = np.where(local[big] == motion, fraction[big], 0.0)
+            width = fraction[big + 1] - left
+            if np.any(width < _SMALLEST_FRACTION):
+                self._singular(big[np.argmin(width)], motion[np.argmin(width)], left[np.argmin(width)], q)
+            middle = 0.5 * (left + fraction[big + 1])
+            q_middle = self.solve(motion, middle, seed=q[big])
+            order = np.argsort(np.r_[np.arange(len(q)), big + 0.5], kind="stable")
+            local = np.r_[local, motion][order]
+            fraction = np.r_[fraction, middle][order]
+            q = np.concatenate([q, q_middle])[order]
+
+    def _singular(self, row, i, fraction, q):
+        jump = np.radians(JUMP_DEG)
+        turned = np.abs(q[row + 1] - q[row])
+        joints = " and ".join(f"J{j + 1}" for j in np.flatnonzero(turned > jump))
+        raise TimingError(
+            f"{self.moves.kind[self.k[i]]} motion to {self.moves.labels[self.k[i]]} passes through a singularity "
+            f"at {100 * fraction:.0f} % of its way: {joints} would turn by {np.degrees(turned.max()):.0f} deg at "
+            "one point; the controller cannot follow it. Move the path away from the singularity or use a "
+            "joint motion"
+        )
+
+
+def tool_groups(tools):
+    """``[(tool (4, 4), rows)]``: the distinct tools of a stack (n, 4, 4) and the rows using each."""
+    if not len(tools) or np.all(tools == tools[0]):
+        return [(tools[0], np.arange(len(tools)))] if len(tools) else []
+    unique, group = np.unique(tools.reshape(len(tools), 16), axis=0, return_inverse=True)
+    return [(tool.reshape(4, 4), np.flatnonzero(group.ravel() == g)) for g, tool in enumerate(unique)]
+
+
+def _fk_with_tools(robot, tools, q):
+    """TCP poses (n, 4, 4) of joints q (n, 6), each with its tool (n, 4, 4)."""
+    flange = fk(robot, q, tcp=False)
+    return flange @ tools

@@ -1,0 +1,171 @@
+"""TOPP-RA time-optimal parametrization of a run's path under joint and TCP speed limits.
+
+toppra (Pham & Pham 2018) bounds the squared path speed x = sd^2 and the
+path acceleration u = sdd on a grid; here with the seidel solver, a grid
+point on every path sample (every waypoint) and the constant-acceleration
+parametrizer: u is constant between grid points, exactly as TOPP-RA's
+discretization assumes, so the time law between grid points is the one
+the solver checked (a spline through the grid velocities overshoots
+between grid points). Limits hold only at grid points: `trajcomp.timing.check`
+verifies them densely afterwards.
+
+Constraints per grid point s_i:
+
+- joint velocity: ``|q'_j(s_i)| sd <= v_j`` and programmed TCP speed
+  ``|J_pos q'(s_i)| sd <= v_tcp``: one bound on x;
+- joint acceleration: ``|q'_j u + q''_j x| <= a_j`` (interpolation scheme).
+"""
+
+import dataclasses
+import logging
+
+import numpy as np
+import toppra.algorithm
+import toppra.constraint
+
+from trajcomp.errors import TimingError
+
+logging.getLogger("toppra").setLevel(logging.ERROR)  # its failures are reported here, with the waypoint
+
+_X_CAP = 1e12  # (rad/s)^2 ceiling of the squared path speed where no limit binds
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class ConstantAcceleration:
+    """A time law s(t) with constant path acceleration between grid points.
+
+    Attributes
+    ----------
+    s, sd : ndarray, shape (G,)
+        Grid points (rad of path) and path speed there (1/s).
+    t : ndarray, shape (G,)
+        Time at each grid point, s.
+    u : ndarray, shape (G - 1,)
+        Path acceleration on each interval.
+    """
+
+    s: np.ndarray
+    sd: np.ndarray
+    t: np.ndarray
+    u: np.ndarray
+
+    @classmethod
+    def from_speeds(cls, s, sd):
+        """The law of grid points s (G,) and speeds sd (G,) (toppra's ParametrizeConstAccel)."""
+        ds = np.diff(s)
+        with np.errstate(divide="ignore"):
+            dt = 2.0 * ds / (sd[:-1] + sd[1:])
+        if not np.all(np.isfinite(dt)):
+            raise ValueError("the path speed is zero on a whole interval")
+        return cls(s, sd, np.r_[0.0, np.cumsum(dt)], 0.5 * np.diff(sd**2) / ds)
+
+    @property
+    def duration(self):
+        return float(self.t[-1])
+
+    def __call__(self, t):
+        """s, sd, sdd (each (N,)) at times t (N,)."""
+        i = np.clip(np.searchsorted(self.t, t, side="right") - 1, 0, len(self.u) - 1)
+        dt = t - self.t[i]
+        u = self.u[i]
+        return self.s[i] + self.sd[i] * dt + 0.5 * u * dt**2, self.sd[i] + u * dt, u
+
+    def time_at(self, s):
+        """Times (N,) at which the law passes path positions s (N,)."""
+        i = np.clip(np.searchsorted(self.s, s, side="right") - 1, 0, len(self.u) - 1)
+        ahead = np.maximum(np.asarray(s) - self.s[i], 0.0)
+        root = np.sqrt(np.maximum(self.sd[i] ** 2 + 2.0 * self.u[i] * ahead, 0.0))
+        with np.errstate(invalid="ignore", divide="ignore"):
+            dt = np.where(ahead > 0, 2.0 * ahead / (self.sd[i] + root), 0.0)
+        return self.t[i] + dt
+
+
+def toppra_law(run, moves, robot, velocity_scale=1.0, acceleration_scale=1.0, speed_scale=1.0):
+    """The time-optimal constant-acceleration law of a run's path, at rest at both ends.
+
+    Parameters
+    ----------
+    run : RunPath
+        With a path (non-zero length).
+    moves : Moves
+        Limits of each motion.
+    robot : Robot
+        For the TCP Jacobian.
+    velocity_scale, acceleration_scale : float or ndarray (6,)
+        Factors on the joint limits (the dense check lowers them where the
+        path overshoots between grid points).
+    speed_scale : float
+        Factor on the programmed TCP speeds.
+
+    Returns
+    -------
+    ConstantAcceleration
+
+    Raises
+    ------
+    TimingError
+        TOPP-RA finds no feasible speed: names the waypoint, its line and
+        the joint whose limit binds there.
+    """
+    grid, path = run.grid, run.path
+    x_max, velocity = run.speed_bound(moves, velocity_scale, speed_scale)
+    x_max = np.minimum(x_max, _X_CAP)
+    dq = path(grid, 1)
+    acceleration = np.min(moves.acceleration[run.first + 1 : run.last + 1], axis=0) * acceleration_scale
+    limits = toppra.constraint.JointAccelerationConstraint(
+        acceleration, discretization_scheme=toppra.constraint.DiscretizationType.Interpolation
+    )
+    instance = toppra.algorithm.TOPPRA([_SquaredSpeedBound(x_max), limits], path, gridpoints=grid,
+                                       solver_wrapper="seidel", parametrizer="ParametrizeConstAccel")
+    _, sd, _, K = instance.compute_parameterization(0.0, 0.0, return_data=True)
+    if sd is None or not np.all(np.isfinite(sd)):
+        raise _infeasible(run, moves, K, x_max, dq, path(grid, 2), acceleration, grid)
+    try:
+        return ConstantAcceleration.from_speeds(grid, np.maximum(sd, 0.0))
+    except ValueError:
+        i = int(np.argmin(sd[:-1] + sd[1:]))
+        raise _stuck(run, moves, grid, i, x_max, dq, velocity) from None
+
+
+class _SquaredSpeedBound(toppra.constraint.LinearConstraint):
+    """toppra velocity constraint 0 <= x_i <= x_max_i at every grid point (joint and TCP speed in one)."""
+
+    def __init__(self, x_max):
+        super().__init__()
+        self.dof = 6
+        self.x_max = x_max
+        self._format_string = "    squared path speed bound\n"
+
+    def compute_constraint_params(self, path, gridpoints, *args, **kwargs):
+        return None, None, None, None, None, None, np.column_stack([np.zeros_like(self.x_max), self.x_max])
+
+
+def _where(run, moves, grid_s):
+    """'the motion to P3 (weld.dat:4), 40 % of its way' for a path position."""
+    k = int(run.motion_at(np.array([grid_s]))[0])
+    lo, hi = run.s_waypoints[k - run.first - 1], run.s_waypoints[k - run.first]
+    share = 0.0 if hi <= lo else 100.0 * (grid_s - lo) / (hi - lo)
+    return f"the {moves.kind[k]} motion to {moves.labels[k]}, {share:.0f} % of its way"
+
+
+def _infeasible(run, moves, K, x_max, dq, ddq, acceleration, grid):
+    """TimingError for a run TOPP-RA cannot parametrize, naming where and the binding joint."""
+    bad = np.flatnonzero(np.isnan(K).any(axis=1)) if K is not None else np.array([0])
+    i = int(bad.max()) if bad.size else 0
+    ratio = np.abs(ddq[i]) * x_max[i] / acceleration
+    j = int(np.argmax(ratio))
+    return TimingError(
+        f"no feasible speed at {_where(run, moves, grid[i])}: J{j + 1} cannot follow the path's curvature "
+        f"within its acceleration limit {np.degrees(acceleration[j]):.0f} deg/s^2 (TOPP-RA found no "
+        "controllable speed); check the path there for a kink or a singularity"
+    )
+
+
+def _stuck(run, moves, grid, i, x_max, dq, velocity):
+    """TimingError for a path whose speed must be zero over a whole grid interval."""
+    ratio = np.abs(dq[i]) / velocity
+    j = int(np.argmax(ratio))
+    return TimingError(
+        f"the arm would have to stand still at {_where(run, moves, grid[i])}: J{j + 1} needs an unbounded "
+        f"speed there (limit {np.degrees(velocity[i, j]):.0f} deg/s); the path is singular or kinked"
+    )

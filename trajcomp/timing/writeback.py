@@ -1,0 +1,285 @@
+"""The timing written into a program's own speed and time fields, every other byte kept.
+
+Per language, for each timed motion of duration T (TCP path length L):
+
+- CSV: a ``t`` column, the time stamp of each row (s, to the ns), added or replaced;
+- ABB RAPID: ``\\T:=T`` after the speed data (replacing a ``\\V`` or ``\\T``);
+- URScript: ``t=T`` on movej / movel; movep / movec take no time, so ``v=L/T``;
+- FANUC: the speed becomes time-based: ``Tmsec`` (1 ms resolution), ``T sec``
+  beyond 32 s;
+- KUKA KRL, which has no motion time: ``$VEL.CP = L/T`` before each LIN /
+  CIRC and ``BAS(#VEL_PTP, %)`` before each PTP, the percentage with which
+  the leading axis, accelerating at its limit, needs T (a trapezoid). The
+  statement that sets a motion's speed is edited when it serves that motion
+  first, else a line is inserted before the motion; a motion after it that
+  is not re-timed gets its original value back.
+
+Times are rounded up and speeds down at the written resolution: never
+faster than the timing. Motions that are not timed (their start is unknown)
+or have no length keep their fields.
+"""
+
+import bisect
+import dataclasses
+import math
+import re
+
+import numpy as np
+
+from trajcomp.errors import TimingError
+from trajcomp.formats._text import Lines, apply_edits, format_number
+from trajcomp.program import JOINT, Span
+from trajcomp.timing.moves import moves_from_program
+from trajcomp.timing.path import TOLERANCE
+from trajcomp.timing.retime import retime
+
+MSEC_LIMIT = 32000  # FANUC msec speeds: 1 .. 32000
+
+
+def retime_program(program, robot, joints, *, method="auto", tools=None, frames=None, tolerance=TOLERANCE):
+    """Re-time a program whose targets' joints are known (`moves_from_program`, then `retime`).
+
+    Returns
+    -------
+    TimingResult
+    """
+    moves = moves_from_program(program, robot, joints, tools=tools, frames=frames)
+    return retime(moves, robot, method=method, tolerance=tolerance)
+
+
+def apply_timing(program, result, robot):
+    """The program with its speed / time fields set from a timing, and the timing with its settings.
+
+    Parameters
+    ----------
+    program : Program
+        Read from a file (its sources are patched).
+    result : TimingResult
+        Of this program (`retime_program`).
+    robot : Robot
+        Axis limits for the KRL PTP percentage.
+
+    Returns
+    -------
+    (Program, TimingResult)
+
+    Raises
+    ------
+    TimingError
+        A program without sources, or a language timing cannot be written in.
+    """
+    writer = _WRITERS.get(program.format)
+    if writer is None or not program.sources:
+        raise TimingError(
+            f"{program.name}: timing can be written into CSV, KRL, RAPID, FANUC LS and URScript programs read "
+            f"from a file, not into a {program.format} program{'' if program.sources else ' built in memory'}"
+        )
+    edits, settings = writer(program, result, robot)
+    return edit_sources(program, edits), result.with_settings(settings)
+
+
+def _timed(result):
+    """Waypoints whose motion has a duration to write: (k, duration s)."""
+    untimed = set(result.untimed)
+    durations = result.durations
+    return [(k, durations[k]) for k in range(1, len(result.t)) if k not in untimed and durations[k] > 0]
+
+
+def _ceil(value, places):
+    return math.ceil(value * 10**places - 1e-9) / 10**places
+
+
+def _floor(value, places):
+    return max(math.floor(value * 10**places + 1e-9), 1) / 10**places
+
+
+def _csv(program, result, robot):
+    text = program.sources[0].text
+    by_motion = {int(m): k for k, m in enumerate(result.motion)}
+    edits, settings = [], {}
+    for m, motion in enumerate(program.motions):
+        value = format_number(result.t[by_motion[m]], 9)
+        span = motion.spans.get("t") or motion.spans["end"]
+        edits.append((span.start, span.end, value if "t" in motion.spans else "," + value))
+        settings[by_motion[m]] = f"t={value}"
+    if not any("t" in m.spans for m in program.motions):
+        header = next(item for item in program.items if item.text.strip() and not item.text.lstrip().startswith("#"))
+        lines = Lines(text)
+        end = lines.starts[header.line - 1] + len(lines.line(header.line))
+        edits.append((end, end, ",t"))
+    return [edits], settings
+
+
+def _rapid(program, result, robot):
+    edits, settings = [], {}
+    for k, duration in _timed(result):
+        span = program.motions[result.motion[k]].spans["speed"]
+        speed_data = span.text.split("\\")[0].rstrip()  # v20 of v20\V:=15 or v20\T:=4
+        written = f"{speed_data}\\T:={format_number(_ceil(duration, 3), 3)}"
+        edits.append((span.start, span.end, written))
+        settings[k] = written
+    return [edits], settings
+
+
+def _urscript(program, result, robot):
+    edits, settings = [], {}
+    for k, duration in _timed(result):
+        motion = program.motions[result.motion[k]]
+        function = re.match(r"\s*(\w+)", motion.text).group(1)
+        if function in ("movej", "movel"):
+            key, value = "t", format_number(_ceil(duration, 4), 4)
+        elif result.tcp_length[k] > 0:
+            key, value = "v", format_number(_floor(result.tcp_length[k] / duration / 1000.0, 6), 6)
+        else:
+            continue
+        if key in motion.spans:
+            edits.append((motion.spans[key].start, motion.spans[key].end, value))
+        else:
+            edits.append((motion.spans["end"].start, motion.spans["end"].start, f", {key}={value}"))
+        settings[k] = f"{key}={value}"
+    return [edits], settings
+
+
+def _fanuc(program, result, robot):
+    edits, settings = [], {}
+    for k, duration in _timed(result):
+        span = program.motions[result.motion[k]].spans["speed"]
+        ms = math.ceil(duration * 1000.0 - 1e-6)
+        written = f"{ms}msec" if ms <= MSEC_LIMIT else f"{format_number(_ceil(duration, 1), 1)}sec"
+        edits.append((span.start, span.end, written))
+        settings[k] = written
+    return [edits], settings
+
+
+def _krl(program, result, robot):
+    wanted = {}
+    for k, duration in _timed(result):
+        m = int(result.motion[k])
+        if program.motions[m].kind == JOINT:
+            percent = _ptp_percent(result.q[k] - result.q[k - 1], duration, robot)
+            if percent is not None:
+                wanted[m] = (k, str(percent))
+        elif result.tcp_length[k] > 0:
+            wanted[m] = (k, format_number(_floor(result.tcp_length[k] / duration / 1000.0, 6), 6))
+    text = program.sources[0].text
+    newline = "\r\n" if "\r\n" in text else "\n"
+    edits = [[] for _ in program.sources]
+    settings, running, governing = {}, {}, {}
+    for m, motion in enumerate(program.motions):
+        group = "ptp" if motion.kind == JOINT else "cp"
+        span = motion.spans.get("speed")
+        key = None if span is None else (span.source, span.start)
+        k, want = wanted.get(m, (None, None))
+        if key != governing.get(group):  # a new statement sets this motion's speed
+            governing[group] = key
+            running[group] = None if span is None else span.text
+            if span is not None and want is not None:
+                edits[span.source].append((span.start, span.end, want))
+                running[group] = want
+        need = want if want is not None else (None if span is None else span.text)
+        if need is None or (running[group] is not None and float(need) == float(running[group])):
+            if want is not None:
+                settings[k] = _krl_statement(group, want)
+            continue
+        at = motion.spans["motion"]
+        line_start = text.rfind("\n", 0, at.start) + 1
+        indent = re.match(r"[ \t]*", text[line_start:]).group()
+        edits[at.source].append((line_start, line_start, f"{indent}{_krl_statement(group, need)}{newline}"))
+        running[group] = need
+        if want is not None:
+            settings[k] = _krl_statement(group, want)
+    return edits, settings
+
+
+def _krl_statement(group, value):
+    return f"$VEL.CP={value}" if group == "cp" else f"BAS(#VEL_PTP,{value})"
+
+
+def _ptp_percent(delta, duration, robot):
+    """Integer % of axis speed with which a synchronized PTP takes ``duration``; None if any would.
+
+    The axes move in phase along the joint line, the line parameter l from
+    0 to 1 with acceleration a_l = min_j a_j / |delta_j| (the leading axis
+    at its limit). A trapezoid of l that takes T cruises at
+    v_l = (a_l T - sqrt(a_l^2 T^2 - 4 a_l)) / 2, and the percentage is the
+    largest v_l |delta_j| / v_max_j, rounded down (never faster), at least 1.
+    None when T is the acceleration-limited time (no cruise, whatever the
+    percentage): the program's own value then stands.
+    """
+    distance = np.abs(delta)
+    moving = distance > 0
+    if not moving.any():
+        return None
+    a = np.min(robot.a_max[moving] / distance[moving])
+    root = (a * duration) ** 2 - 4.0 * a
+    if root <= 1e-6 * (a * duration) ** 2:
+        return None
+    speed = 0.5 * (a * duration - np.sqrt(root))
+    return max(math.floor(100.0 * speed * np.max(distance / robot.v_max) + 1e-9), 1)
+
+
+_WRITERS = {"csv": _csv, "rapid": _rapid, "urscript": _urscript, "fanuc_ls": _fanuc, "krl": _krl}
+
+
+def edit_sources(program, edits):
+    """The program with text edits applied to its sources and every span and line number moved along.
+
+    Parameters
+    ----------
+    program : Program
+    edits : sequence of list of (start, end, text)
+        Per source; non-overlapping; an insertion (start == end) goes before
+        a span starting there and after a span ending there.
+
+    Returns
+    -------
+    Program
+    """
+    shifts = [_Shift(source.text, sorted(e)) for source, e in zip(program.sources, edits)]
+    sources = tuple(s.source_like(source) for s, source in zip(shifts, program.sources))
+
+    def span(old):
+        shift = shifts[old.source]
+        start = shift.start(old.start)
+        end = max(shift.end(old.end), start)
+        return Span(old.source, start, end, shift.new[start:end])
+
+    def moved(thing, source):
+        spans = {role: span(s) for role, s in getattr(thing, "spans", {}).items()}
+        changes = {"spans": spans} if spans else {}
+        return dataclasses.replace(thing, line=shifts[source].line(thing.line), **changes)
+
+    targets = tuple(moved(t, next(iter(t.spans.values())).source) if t.spans else t for t in program.targets)
+    items = tuple(moved(item, 0) for item in program.items)  # statements and motions are lines of the first file
+    return program.replace(sources=sources, targets=targets, items=items)
+
+
+class _Shift:
+    """Offsets and line numbers of a text before edits mapped to the edited text."""
+
+    def __init__(self, text, edits):
+        self.old, self.new = text, apply_edits(text, edits)
+        self.ends = [e[1] for e in edits]
+        self.starts = [e[0] for e in edits]
+        self.delta = np.cumsum([0] + [len(e[2]) - (e[1] - e[0]) for e in edits])
+        self.old_lines, self.new_lines = Lines(self.old), Lines(self.new)
+
+    def start(self, position):
+        """New offset of a span start: after every edit ending at or before it."""
+        return position + int(self.delta[bisect.bisect_right(self.ends, position)])
+
+    def end(self, position):
+        """New offset of a span end: after every edit ending at or before it, except insertions at it."""
+        count = bisect.bisect_right(self.ends, position)
+        while count and self.starts[count - 1] == self.ends[count - 1] == position:
+            count -= 1
+        return position + int(self.delta[count])
+
+    def line(self, number):
+        """New number of a line (by its start)."""
+        if number < 1 or number > len(self.old_lines.starts):
+            return number
+        return self.new_lines.number(self.start(self.old_lines.starts[number - 1]))
+
+    def source_like(self, source):
+        return source.__class__(source.name, self.new, source.encoding)
