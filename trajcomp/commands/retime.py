@@ -3,6 +3,8 @@
 Also the re-timing step of ``trajcomp compensate --retime`` (`retime_compensated`).
 """
 
+import dataclasses
+
 from trajcomp import formats
 from trajcomp.commands._args import add_robot, command_parser, info, robot_of
 from trajcomp.commands.convert import add_frame_options, add_in_place_option, frame_options, protected_inputs
@@ -25,7 +27,7 @@ def add_parser(sub):
         "at 1 kHz and write it into the program's speed and time fields (CSV t column, RAPID \\T, URScript "
         "t= / v=, FANUC sec / msec, KRL $VEL.CP / BAS(#VEL_PTP)); every other byte is kept. Exits 1 "
         "(the program written) if a sample exceeds a limit by more than 1 %.",
-        "trajcomp retime weld.mod -o weld-timed.mod --robot abb_irb4600",
+        "trajcomp retime examples/programs/abb/Weld.mod -o Weld-timed.mod --robot abb_irb4600",
     )
     parser.add_argument("program", metavar="IN", help="program file")
     parser.add_argument("-o", "--output", required=True, help="program to write (same language as IN)")
@@ -102,21 +104,27 @@ def retime_compensated(original, corrected, robot, method, tolerance, tools=None
     Returns
     -------
     (Program, TimingResult, float)
-        The corrected program with its timing written, the timing, and the
-        original program's cycle time (s).
+        The corrected program with its timing written (as it was, with a
+        warning in the timing, for a language without writable speed
+        fields), the timing, and the original program's cycle time (s).
 
     Raises
     ------
     TimingError
         With a hint to compensate without re-timing.
     """
-    from trajcomp.timing.writeback import retime_program
+    from trajcomp.timing.writeback import retime_program, writable
 
     plan = planned_joints(original, robot, tools=tools, frames=frames)
     after = {int(i): corrected.targets[i].joints for i in plan.index}
     try:
         before = retime_program(original, robot, dict(zip(plan.index.tolist(), plan.q)), method=method,
                                 tools=tools, frames=frames, tolerance=tolerance)
+        if not writable(corrected):
+            result = retime_program(corrected, robot, after, method=method, tools=tools, frames=frames,
+                                    tolerance=tolerance)
+            note = f"the timing is not written: {corrected.format} programs have no speed fields trajcomp writes"
+            return corrected, dataclasses.replace(result, warnings=result.warnings + (note,)), before.cycle_time
         timed, result = timed_program(corrected, robot, after, method, tolerance, tools, frames)
     except TimingError as exc:
         raise TimingError(f"{exc} (compensate with --retime none to keep the program's speeds)") from None

@@ -18,14 +18,40 @@ Constraints per grid point s_i:
 
 import dataclasses
 import logging
+import sys
+import types
 
 import numpy as np
-import toppra.algorithm
-import toppra.constraint
 
 from trajcomp.errors import TimingError
 
-logging.getLogger("toppra").setLevel(logging.ERROR)  # its failures are reported here, with the waypoint
+
+def _import_toppra():
+    """Import toppra without matplotlib.
+
+    toppra's algorithm module imports matplotlib.pyplot at load time for
+    plots trajcomp never draws (0.2 s, and the reports' JSON-only path
+    stays free of matplotlib): stand-in modules take its place during the
+    import, then are removed again. toppra's own warnings are silenced:
+    its failures are reported here, with the waypoint.
+    """
+    stand_ins = {}
+    if "matplotlib" not in sys.modules:
+        stand_ins = {"matplotlib": types.ModuleType("matplotlib"), "matplotlib.pyplot": types.ModuleType("pyplot")}
+        stand_ins["matplotlib"].pyplot = stand_ins["matplotlib.pyplot"]
+        sys.modules.update(stand_ins)
+    try:
+        import toppra.algorithm
+        import toppra.constraint
+    finally:
+        for name, module in stand_ins.items():
+            if sys.modules.get(name) is module:
+                del sys.modules[name]
+    logging.getLogger("toppra").setLevel(logging.ERROR)
+    return toppra
+
+
+toppra = _import_toppra()
 
 _X_CAP = 1e12  # (rad/s)^2 ceiling of the squared path speed where no limit binds
 

@@ -69,13 +69,18 @@ def apply_timing(program, result, robot):
         A program without sources, or a language timing cannot be written in.
     """
     writer = _WRITERS.get(program.format)
-    if writer is None or not program.sources:
+    if not writable(program):
         raise TimingError(
             f"{program.name}: timing can be written into CSV, KRL, RAPID, FANUC LS and URScript programs read "
             f"from a file, not into a {program.format} program{'' if program.sources else ' built in memory'}"
         )
     edits, settings = writer(program, result, robot)
     return edit_sources(program, edits), result.with_settings(settings)
+
+
+def writable(program):
+    """True if `apply_timing` can write into this program (a supported language, read from a file)."""
+    return program.format in _WRITERS and bool(program.sources)
 
 
 def _timed(result):
