@@ -148,7 +148,9 @@ def _urscript(program, result, robot):
 def _fanuc(program, result, robot):
     edits, settings = [], {}
     for k, duration in _timed(result):
-        span = program.motions[result.motion[k]].spans["speed"]
+        span = program.motions[result.motion[k]].spans.get("speed")
+        if span is None:  # a speed register or max_speed: set at run time, left as it is
+            continue
         ms = math.ceil(duration * 1000.0 - 1e-6)
         written = f"{ms}msec" if ms <= MSEC_LIMIT else f"{format_number(_ceil(duration, 1), 1)}sec"
         edits.append((span.start, span.end, written))
