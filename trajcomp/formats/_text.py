@@ -311,16 +311,19 @@ def active_axes(program, capacity, language):
         An axis with a value beyond what the language holds: dropping it
         would move the program elsewhere.
     """
-    used = {i for m in program.motions for i in (m.target, m.via) if i is not None}
-    active = set()
+    used = sorted({i for m in program.motions for i in (m.target, m.via) if i is not None})
+    first = {}  # axis -> the first target giving it a value
     for i in used:
         external = program.targets[i].external
         if external is not None:
-            active |= {k for k, v in enumerate(external) if not np.isnan(v) and v != 0.0}
-    beyond = sorted(k for k in active if k >= capacity)
+            for k, v in enumerate(external):
+                if not np.isnan(v) and v != 0.0:
+                    first.setdefault(k, program.targets[i])
+    beyond = sorted(k for k in first if k >= capacity)
     if beyond:
-        raise WriteError(f"{language} points hold {capacity} external axes; the program gives E{beyond[0] + 1} "
-                         "a value: it cannot be written without changing what the program does")
+        raise WriteError(f"{language} points hold {capacity} external axes; target {where(first[beyond[0]])} gives "
+                         f"E{beyond[0] + 1} a value: it cannot be written without changing what the program does")
+    active = set(first)
     return sorted(active)
 
 

@@ -45,6 +45,7 @@ from trajcomp.formats._text import (
     mask,
     numbered,
     read_source,
+    where,
     whole_circle,
     write_single_file,
 )
@@ -401,7 +402,7 @@ def _position(target, number, tool, frame, axes):
                 f"\n\tJ4= {j[3]} deg,\tJ5= {j[4]} deg,\tJ6= {j[5]} deg")
         return head + body + _extended(target, axes) + "\n};"
     if len(target.config) != 6:
-        raise WriteError(f"target {target.label}: FANUC needs its CONFIG; convert with a robot")
+        raise WriteError(f"target {where(target)}: FANUC needs its CONFIG; convert with a robot")
     x, y, z, a, b, c = matrix_to_pose(target.pose)
     p = [format_number(v, 6) for v in (x, y, z)] + [format_number(v, 9) for v in np.degrees([c, b, a])]
     return (head + f"\t\tCONFIG : '{_config_text(target.config)}',"

@@ -33,7 +33,7 @@ import numpy as np
 
 from trajcomp.errors import WriteError
 from trajcomp.formats._rapid_reader import CONF, JOINTS, POSITION, QUAT, read
-from trajcomp.formats._text import active_axes, format_number, same_rotation, write_single_file
+from trajcomp.formats._text import active_axes, format_number, same_rotation, where, write_single_file
 from trajcomp.program import CIRCULAR, JOINT, LINEAR
 from trajcomp.transforms import matrix_to_quat, quat_to_matrix
 
@@ -127,7 +127,7 @@ def _emit(program, name):
                     decls.append(f"  CONST jointtarget {names[index]} := [[{_numbers(np.degrees(target.joints), 9)}],[{_extax(target, axes)}]];")
                 else:
                     if len(target.config) != 4:
-                        raise WriteError(f"target {target.label}: RAPID needs its confdata; convert with a robot")
+                        raise WriteError(f"target {where(target)}: RAPID needs its confdata; convert with a robot")
                     decls.append(
                         f"  CONST robtarget {names[index]} := [[{_numbers(target.pose[:3, 3], 6)}],"
                         f"[{_numbers(matrix_to_quat(target.pose[:3, :3]), 10)}],"
