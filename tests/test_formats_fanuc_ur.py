@@ -272,3 +272,9 @@ def test_set_tcp_from_a_variable(tmp_path):
     (motion,) = program.motions
     np.testing.assert_allclose(program.tools[motion.tool][:3, 3], [0, 0, 200])
     assert program.unused_targets() == () and len(program.targets) == 1
+
+
+def test_urscript_qnear_out_of_range_is_refused(tmp_path):
+    path = _script(tmp_path, ["movej(get_inverse_kin(p[0.4, 0.1, 0.3, 0, 3.14, 0], qnear=[0, -1.5, 1e999, 0, 0, 0]))"])
+    with pytest.raises(ReadError, match=r"s\.script:2: qnear 3: '1e999' is out of range"):
+        formats.read(path)

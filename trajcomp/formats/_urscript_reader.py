@@ -171,7 +171,7 @@ class _Reader:
                 near_text, near_at = near[0]
                 value = near_text.split("=", 1)[-1] if "=" in near_text else near_text
                 shift = near_at + (near_text.index("=") + 1 if "=" in near_text else 0)
-                self.link(index, value, shift)
+                self.link(index, value, shift, line, original)
             return index, frame, why
         if m := _POSE_TRANS.match(text):
             args = arguments(m.group(1), offset + m.start(1))
@@ -209,13 +209,13 @@ class _Reader:
             return self.frame_names[id(value)], ""
         return None, "frame computed at run time: " + " ".join(text.split())
 
-    def link(self, index, text, offset):
+    def link(self, index, text, offset, line, original):
         """Give Cartesian target ``index`` the joints of a qnear list (literal or variable)."""
         target = self.targets[index]
         if target.is_joint:
             return
         if m := _LIST.match(text):
-            joints = np.array([float(m.group(k)) for k in range(1, 7)])
+            joints = np.array([finite(m.group(k), self.source.name, line, original, f"qnear {k}") for k in range(1, 7)])
             found = spans(0, m, NEAR, offset)
         elif (m := _NAME.match(text)) and m.group(1) in self.values and self.values[m.group(1)].target.is_joint:
             listed = self.values[m.group(1)].target
