@@ -31,6 +31,7 @@ from trajcomp.timing.samples import run_samples, tool_groups
 TOLERANCE = 0.005  # mm, largest deviation of the timed path from a waypoint or sample
 ROTATION_PER_MM = 1e-3  # rad of orientation tolerance per mm of position tolerance
 MIN_GRID = 200  # fewest TOPP-RA grid intervals of a run
+END_REFINEMENT = 10  # halvings of the first and last grid interval (rest at both ends)
 KNOT_STRIDE = 16  # samples per knot interval of the first thinned fit
 SMOOTHING_GAIN = 1.1  # a thinned path is taken when the exact one needs this much more acceleration
 _DUPLICATE = 1e-9  # rad, joint distance under which two samples are one
@@ -168,27 +169,34 @@ def run_path(moves, robot, first, last, tolerance=TOLERANCE):
     s_waypoints = s[waypoint_rows]
     if len(q) < 2:
         return RunPath(None, s_waypoints, s, first, last, np.zeros(last - first + 1), np.zeros(len(s)), 0.0)
-    jac = tcp_jacobians(robot, moves.tool, owner, q)
+    grid = _grid(s)  # every sample is a grid point: one Jacobian batch serves the fit and the TCP speed
+    k = first + np.clip(np.searchsorted(s_waypoints, grid), 1, len(s_waypoints) - 1)
+    jac_grid = tcp_jacobians(robot, moves.tool, k, np.column_stack([np.interp(grid, s, q[:, j]) for j in range(6)]))
+    jac = jac_grid[np.searchsorted(grid, s)]
     steps = np.r_[0.0, np.linalg.norm(np.einsum("nij,nj->ni", jac[1:, :3], np.diff(q, axis=0)), axis=1)]
     travel = np.cumsum(steps)  # TCP arc length from the run's start, mm
     tcp_lengths = np.diff(travel[waypoint_rows], prepend=0.0)
     tol = _tolerances(moves, first, last, travel, owner, waypoint_rows, tcp_lengths, tolerance)
     spline, deviation = _fit(s, q, jac, tol, np.min(moves.acceleration[first + 1 : last + 1], axis=0))
     path = JointPath(spline)
-    grid = _grid(s)
-    k = first + np.clip(np.searchsorted(s_waypoints, grid), 1, len(s_waypoints) - 1)
-    rate = np.linalg.norm(np.einsum("nij,nj->ni", tcp_jacobians(robot, moves.tool, k, path(grid))[:, :3],
-                                    path(grid, 1)), axis=1)
+    rate = np.linalg.norm(np.einsum("nij,nj->ni", jac_grid[:, :3], path(grid, 1)), axis=1)
     return RunPath(path, s_waypoints, grid, first, last, tcp_lengths, rate, deviation)
 
 
 def _grid(s):
-    """Grid points: every sample s (n,), with intervals longer than 1/MIN_GRID of the path subdivided evenly."""
+    """Grid points: every sample s (n,), intervals longer than 1/MIN_GRID of the path subdivided evenly.
+
+    The first and last intervals are also halved `END_REFINEMENT` times
+    towards the ends: the path speed is constant-acceleration from rest to
+    the first grid point, so a coarse first interval would slow the start.
+    """
     longest = s[-1] / MIN_GRID
     pieces = np.maximum(np.ceil(np.diff(s) / longest).astype(int), 1)
-    offsets = np.concatenate([np.arange(p) / p for p in pieces]) if np.any(pieces > 1) else np.zeros(len(pieces))
-    start = np.repeat(s[:-1], pieces)
-    return np.r_[start + offsets * np.repeat(np.diff(s), pieces), s[-1]]
+    part = np.arange(pieces.sum()) - np.repeat(np.cumsum(pieces) - pieces, pieces)  # 0 .. p-1 in each interval
+    grid = np.r_[np.repeat(s[:-1], pieces) + part / np.repeat(pieces, pieces) * np.repeat(np.diff(s), pieces), s[-1]]
+    halves = 0.5 ** np.arange(1, END_REFINEMENT + 1)
+    ends = np.r_[grid[1] * halves, grid[-1] - (grid[-1] - grid[-2]) * halves]
+    return np.unique(np.r_[grid, ends])
 
 
 def tcp_jacobians(robot, tools, owner, q):
@@ -233,8 +241,13 @@ def _fit(s, q, jac, tol, acceleration):
         dense = np.union1d(s, np.linspace(s[0], s[-1], 4))
         return make_interp_spline(dense, make_interp_spline(s, q, k=1)(dense), k=3), 0.0
     exact = make_interp_spline(s, q, k=3)
+    demand = _demand(exact, s, acceleration)
+    if n >= 4 * KNOT_STRIDE and np.all(tol <= tol.min()):  # no corner to cut: is the exact path noisy?
+        coarse = np.r_[np.arange(0, n - 1, KNOT_STRIDE // 2), n - 1]
+        if demand <= SMOOTHING_GAIN * _demand(make_interp_spline(s[coarse], q[coarse], k=3), s, acceleration):
+            return exact, 0.0  # as smooth as a spline through every eighth sample: clean
     thinned, deviation = _thinned(s, q, jac, tol)
-    if thinned is None or _demand(exact, s, acceleration) <= SMOOTHING_GAIN * _demand(thinned, s, acceleration):
+    if thinned is None or demand <= SMOOTHING_GAIN * _demand(thinned, s, acceleration):
         return exact, 0.0
     return thinned, deviation
 

@@ -14,7 +14,7 @@ a singularity and is refused.
 import numpy as np
 
 from trajcomp.errors import TimingError
-from trajcomp.ik import configuration_of, ik, ik_all, ik_family
+from trajcomp.ik import branch_index, ik, ik_all, ik_family
 from trajcomp.kinematics import fk
 from trajcomp.program import CIRCULAR, JOINT
 from trajcomp.transforms import matrix_to_rotvec, rotvec_to_matrix
@@ -45,8 +45,8 @@ def run_samples(moves, robot, first, last):
     geometry = _Geometry(moves, robot, first, last)
     counts = geometry.sample_counts()
     local = np.repeat(np.arange(len(counts)), counts)
-    fraction = np.concatenate([np.arange(1, n + 1) / n for n in counts]) if len(counts) else np.zeros(0)
-    local, fraction = np.r_[0, local], np.r_[0.0, fraction]  # the first waypoint: motion 0 at fraction 0
+    step = np.arange(len(local)) - np.repeat(np.cumsum(counts) - counts, counts) + 1  # 1 .. n within a motion
+    local, fraction = np.r_[0, local], np.r_[0.0, step / np.repeat(counts, counts)]  # first: motion 0 at 0
     q = geometry.solve(local, fraction, seed=None)
     local, fraction, q = geometry.bisect_jumps(local, fraction, q)
     return q, first + np.where(fraction > 0, local + 1, local)
@@ -61,7 +61,8 @@ class _Geometry:
         self.q_a, self.q_b = moves.q[self.k - 1], moves.q[self.k]
         self.joint = np.array([moves.kind[k] == JOINT for k in self.k], dtype=bool)
         tools = moves.tool[self.k]
-        T_a, T_b = _fk_with_tools(robot, tools, self.q_a), _fk_with_tools(robot, tools, self.q_b)
+        flange = fk(robot, moves.q[first : last + 1], tcp=False)  # each waypoint once
+        T_a, T_b = flange[:-1] @ tools, flange[1:] @ tools
         self.R_a, self.p_a, self.p_b = T_a[:, :3, :3], T_a[:, :3, 3], T_b[:, :3, 3]
         self.turn = matrix_to_rotvec(np.swapaxes(self.R_a, 1, 2) @ T_b[:, :3, :3]).reshape(-1, 3)
         self.length = np.linalg.norm(self.p_b - self.p_a, axis=1)
@@ -71,9 +72,8 @@ class _Geometry:
         for i in np.flatnonzero([moves.kind[k] == CIRCULAR for k in self.k]):
             via = fk(robot.replace(T_flange_tool=moves.tool[self.k[i]]), moves.via[self.k[i]])[:3, 3]
             self._set_circle(i, via)
-        self.arm_branch = None  # shoulder and elbow flags (branch index // 2) of each motion's start
-        if ik_family(robot) is not None and len(self.k):
-            self.arm_branch = np.array([c.index // 2 for c in configuration_of(robot, self.q_a)])
+        self.closed_form = ik_family(robot) is not None
+        self.arm_branch = np.full(len(self.k), -1)  # shoulder and elbow flags (branch index // 2), when known
 
     def _set_circle(self, i, via):
         """Centre, radius, plane axes and sweep of circular motion i through ``via`` (3,)."""
@@ -145,12 +145,12 @@ class _Geometry:
             (or that the path leaves the workspace).
         """
         free = arm.replace(q_min=np.full(6, -np.inf), q_max=np.full(6, np.inf))
-        if self.arm_branch is None:
+        if not self.closed_form:
             solved = ik(free, T, seed=seed)
             q, found = solved.q, solved.success
         else:
             q_all, valid = ik_all(free, T, seed=seed)
-            allowed = valid & (np.arange(8)[None, :] // 2 == self.arm_branch[local][:, None])
+            allowed = valid & (np.arange(8)[None, :] // 2 == self._arm_branch(local)[:, None])
             distance = np.where(allowed, np.sum((q_all - seed[:, None]) ** 2, axis=2), np.inf)
             best = np.argmin(distance, axis=1)
             q, found = q_all[np.arange(len(T)), best], np.isfinite(distance[np.arange(len(T)), best])
@@ -168,6 +168,13 @@ class _Geometry:
         limit = arm.q_max[j] if q[bad, j] > arm.q_max[j] else arm.q_min[j]
         raise TimingError(f"{what}: J{j + 1} would reach {np.degrees(q[bad, j]):.1f} deg, beyond its limit "
                           f"{np.degrees(limit):.1f} deg; the controller cannot run it")
+
+    def _arm_branch(self, local):
+        """Shoulder and elbow flags (branch index // 2) of the start of motions ``local`` (n,)."""
+        unknown = np.unique(local[self.arm_branch[local] < 0])
+        if unknown.size:
+            self.arm_branch[unknown] = branch_index(self.robot, self.q_a[unknown]) // 2
+        return self.arm_branch[local]
 
     def bisect_jumps(self, local, fraction, q):
         """Samples with every interval whose joint step exceeds JUMP_DEG bisected; TimingError at a singular pass."""
@@ -206,9 +213,3 @@ def tool_groups(tools):
         return [(tools[0], np.arange(len(tools)))] if len(tools) else []
     unique, group = np.unique(tools.reshape(len(tools), 16), axis=0, return_inverse=True)
     return [(tool.reshape(4, 4), np.flatnonzero(group.ravel() == g)) for g, tool in enumerate(unique)]
-
-
-def _fk_with_tools(robot, tools, q):
-    """TCP poses (n, 4, 4) of joints q (n, 6), each with its tool (n, 4, 4)."""
-    flange = fk(robot, q, tcp=False)
-    return flange @ tools

@@ -1,0 +1,118 @@
+"""Every example program re-timed through the CLI, in its own language: only speed fields change, and they hold the timing.
+
+The example weld path is the same in every language: a joint motion to P1
+(from an unknown position: not timed), 80 mm down to P2 and an exact stop,
+60 mm to P3 blended into 40 mm to P4, all at 20 mm/s, and a joint motion
+back. So, independently of the timing code: the first line takes 80 / 20 =
+4 s plus its acceleration ramps, the blended pair 100 / 20 = 5 s plus
+ramps, and no line may be faster than 20 mm/s on average. The written
+fields are parsed here from the text, per language.
+"""
+
+import difflib
+import re
+import shutil
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from trajcomp import formats
+from trajcomp.cli import main
+
+EXAMPLES = Path(__file__).resolve().parents[1] / "examples" / "programs"
+PROGRAMS = {  # language: (file, robot)
+    "csv": ("csv/weld.csv", "ur10"),
+    "krl": ("kuka/weld.src", "kuka_kr6_r900"),
+    "rapid": ("abb/Weld.mod", "abb_irb4600"),
+    "fanuc_ls": ("fanuc/WELD.LS", "fanuc_lrmate200id"),
+    "urscript": ("ur/weld.script", "ur10"),
+}
+RAMPS = 0.1  # s, at most spent accelerating and braking on a 20 mm/s line (any of these arms)
+SPEED_FIELDS = {  # the speed / time fields re-timing may write, per language
+    "csv": r",(?:t|[\d.]+)$",  # a t column added
+    "krl": r"\$VEL\.CP=[\d.]+|BAS\(#VEL_PTP,[\d.]+\)",
+    "rapid": r"\\T:=[\d.]+",
+    "fanuc_ls": r"\b[\d.]+(?:%|mm/sec|msec|sec)",
+    "urscript": r",\s*t=[\d.]+|v=[\d.]+",
+}
+
+
+def retimed(tmp_path, language):
+    source, robot = PROGRAMS[language]
+    folder = tmp_path / "in"
+    folder.mkdir()
+    for file in (EXAMPLES / source).parent.iterdir():
+        shutil.copy(file, folder / file.name)
+    output = tmp_path / "out" / Path(source).name
+    output.parent.mkdir()
+    assert main(["retime", str(folder / Path(source).name), "-o", str(output), "--robot", robot]) == 0
+    return (folder / Path(source).name).read_text(), output.read_text(), output
+
+
+def durations(language, text):
+    """The motion times (s) of the three lines, read from the written program."""
+    if language == "csv":
+        t = np.array([float(row.rsplit(",", 1)[1]) for row in text.splitlines()[1:]])
+        return np.diff(t)[:3]
+    pattern = {"rapid": r"MoveL P\d, v20\\T:=([\d.]+)", "urscript": r"movel\(.*t=([\d.]+)\)",
+               "fanuc_ls": r":L P\[\d\] (\d+)msec"}[language]
+    values = np.array([float(v) for v in re.findall(pattern, text)])
+    return values / 1000.0 if language == "fanuc_ls" else values
+
+
+@pytest.mark.parametrize("language", sorted(PROGRAMS))
+def test_an_example_program_retimes_and_only_its_speed_fields_change(tmp_path, language):
+    before, after, output = retimed(tmp_path, language)
+    pattern = SPEED_FIELDS[language]
+    for tag, i1, i2, j1, j2 in difflib.SequenceMatcher(a=before.splitlines(), b=after.splitlines()).get_opcodes():
+        old, new = before.splitlines()[i1:i2], after.splitlines()[j1:j2]
+        if tag == "insert":  # KRL sets a speed on a line of its own
+            assert language == "krl" and all(re.fullmatch(r"\s*(?:" + pattern + ")", line) for line in new), new
+        elif tag == "replace" and language == "csv":
+            assert [re.sub(pattern, "", line, count=1) for line in new] == old
+        elif tag == "replace":
+            assert [re.sub(pattern, "", line) for line in old] == [re.sub(pattern, "", line) for line in new]
+        else:
+            assert tag == "equal", (tag, old, new)
+    assert formats.read(output).format == language  # the written program reads back
+
+
+@pytest.mark.parametrize("language", ["csv", "rapid", "fanuc_ls", "urscript"])
+def test_the_written_motion_times_match_the_path_and_its_speed(tmp_path, language):
+    _, after, _ = retimed(tmp_path, language)
+    first, second, third = durations(language, after)
+    assert 80.0 / 20.0 <= first <= 80.0 / 20.0 + RAMPS
+    assert second >= 60.0 / 20.0 and third >= 40.0 / 20.0  # never faster than programmed
+    assert second + third <= 100.0 / 20.0 + RAMPS
+
+
+def test_krl_gets_a_path_speed_per_line_never_above_the_programmed_one(tmp_path):
+    _, after, _ = retimed(tmp_path, "krl")
+    speeds = [float(v) for v in re.findall(r"\$VEL\.CP=([\d.]+)", after)]
+    assert len(speeds) == 3  # one per re-timed LIN: edited before P2, inserted before P3 and P4
+    assert all(0.0195 <= v <= 0.020 for v in speeds)  # m/s: the average over each line, ramps included
+    lines = after.splitlines()
+    for name in ("P2", "P3", "P4"):
+        motion = next(k for k, line in enumerate(lines) if re.match(rf"\s*LIN {name}\b", line))
+        assert lines[motion - 1].strip().startswith("$VEL.CP=")
+
+
+def test_the_cycle_time_before_and_after_compensation_is_printed_and_targets_stay_compensated(
+        tmp_path, kuka_model, capsys):
+    for name in ("weld.src", "weld.dat"):
+        shutil.copy(EXAMPLES / "kuka" / name, tmp_path / name)
+    timed, plain = tmp_path / "timed" / "weld.src", tmp_path / "plain" / "weld.src"
+    timed.parent.mkdir()
+    plain.parent.mkdir()
+    assert main(["compensate", str(tmp_path / "weld.src"), "--model", str(kuka_model), "-o", str(timed)]) == 0
+    err = capsys.readouterr().err
+    assert re.search(r"cycle time before compensation [\d.]+ s, after [\d.]+ s", err)
+    assert re.search(r"J5\s+[\d.]+\s+388", err)  # the dense check's table: peak and limit per joint
+    assert main(["compensate", str(tmp_path / "weld.src"), "--model", str(kuka_model), "-o", str(plain),
+                 "--retime", "none"]) == 0
+    with_timing, without = formats.read(timed), formats.read(plain)
+    for a, b in zip(with_timing.targets, without.targets):  # the inserted lines moved nothing else
+        np.testing.assert_allclose(a.pose, b.pose, atol=1e-9)
+    assert (timed.parent / "weld.dat").read_text() == (plain.parent / "weld.dat").read_text()
+    assert "$VEL.CP=0.02" not in timed.read_text() and "$VEL.CP=0.020000" in plain.read_text()
