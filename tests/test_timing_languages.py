@@ -1,4 +1,4 @@
-"""Every example program re-timed through the CLI, in its own language: only speed fields change, and they hold the timing.
+"""Every example program re-timed through the CLI in its own language: only speed fields change, holding the timing.
 
 The example weld path is the same in every language: a joint motion to P1
 (from an unknown position: not timed), 80 mm down to P2 and an exact stop,

@@ -116,7 +116,7 @@ class CompensateJob:
             joint_targets=self.joint_targets, max_joint_change=self.max_joint_change,
             max_correction=self.max_correction,
         )
-        timing, timed = [], None
+        timing, timed, before = [], None, None
         if self.retime != "none":
             corrected, timed, before = retime_compensated(program, corrected, model.nominal, self.retime,
                                                           self.path_tolerance, self.tools, self.frames)
@@ -127,6 +127,7 @@ class CompensateJob:
         compliance = compliance_report(
             report, model.nominal, criteria=self.criteria, model=model, model_info=_model_info(self.model, mode),
             mode=mode, files=files + [file_entry("output", p) for p in written], options=self.options(),
+            timing=timed, cycle_time_before=before if timed is not None else None,
         )
         reports = []
         if self.report:

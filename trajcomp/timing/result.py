@@ -35,8 +35,8 @@ class Segment:
     settings: tuple = ()
 
     @property
-    def setting(self):
-        """The settings as one line (``"-"`` when none were written)."""
+    def speed(self):
+        """The speed or time settings written, as one line (``"-"`` when none were)."""
         written = [s for s in self.settings if s]
         if not written:
             return "-"
