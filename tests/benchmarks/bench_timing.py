@@ -99,8 +99,8 @@ def limits_row(name, moves, robot):
     ref, ref_worst = reference(moves, result, robot)
     v = np.max(result.peak_velocity / robot.v_max)
     a = np.max(result.peak_acceleration / robot.a_max)
-    j = np.nanmax(result.peak_jerk / robot.j_max) if np.any(np.isfinite(result.peak_jerk)) else np.nan
-    jerk = "-" if np.isnan(j) else f"{j:.3f}"
+    measured = np.isfinite(robot.j_max) & any(s.kind == "ruckig" for s in result.segments)
+    jerk = f"{np.max(result.peak_jerk[measured] / robot.j_max[measured]):.3f}" if measured.any() else "-"
     print(f"{name:26s} {len(moves):>7d} {result.cycle_time:>9.3f} {ref:>9.3f} {result.cycle_time / ref:>7.3f} "
           f"{v:>7.3f} {a:>7.3f} {jerk:>7s} {ref_worst:>8.3f}  {'yes' if result.within_limits else 'NO'}")
 

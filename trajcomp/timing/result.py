@@ -13,9 +13,8 @@ class Segment:
 
     Attributes
     ----------
-    kind : {"toppra", "ruckig", "untimed"}
-        How it was timed; ``"untimed"``: the motion into ``last`` starts
-        from a position the program does not state.
+    kind : {"toppra", "ruckig"}
+        How it was timed.
     first, last : int
         Waypoint indices; the segment's motions are first + 1 .. last.
     duration : float
@@ -57,8 +56,10 @@ class TimingResult:
     peak_velocity, peak_acceleration : ndarray, shape (6,)
         Largest sampled |joint velocity| (rad/s) and |acceleration| (rad/s^2).
     peak_jerk : ndarray, shape (6,)
-        Largest sampled |joint jerk| in ruckig segments, rad/s^3 (NaN when
-        there is none: a TOPP-RA law does not bound jerk).
+        Largest sampled |joint jerk| in ruckig segments of an arm with a
+        jerk limit, rad/s^3; 0 where none was measured (a TOPP-RA law does
+        not bound jerk, and without a jerk limit ruckig steps the
+        acceleration).
     limit_velocity, limit_acceleration, limit_jerk : ndarray, shape (6,)
         The robot's limits, same units (jerk ``inf`` where unknown).
     within_limits : bool
@@ -77,7 +78,9 @@ class TimingResult:
     motion : ndarray of int, shape (M,)
         Index into `Program.motions` of the motion into each waypoint.
     untimed : tuple of int
-        Waypoints whose motion was not timed.
+        Waypoints whose motion was not timed: it starts from a position the
+        program does not state (the first motion, one after a position
+        computed at run time). They belong to no segment.
     deviation : float
         Largest deviation of the timed joint path from a waypoint or path
         sample outside blended corners, mm (linearized).
@@ -161,8 +164,10 @@ class TimingResult:
         out = [f"{'joint':<6}{'|v| deg/s':>11}{'limit':>8}{'|a| deg/s^2':>13}{'limit':>8}"
                f"{'|j| deg/s^3':>13}{'limit':>9}"]
         deg = np.degrees
+        ruckig = any(s.kind == "ruckig" for s in self.segments)
         for j in range(6):
-            jerk = "-" if np.isnan(self.peak_jerk[j]) else f"{deg(self.peak_jerk[j]):.0f}"
+            measured = ruckig and np.isfinite(self.limit_jerk[j])
+            jerk = f"{deg(self.peak_jerk[j]):.0f}" if measured else "-"
             jerk_limit = "-" if np.isinf(self.limit_jerk[j]) else f"{deg(self.limit_jerk[j]):.0f}"
             out.append(
                 f"J{j + 1:<5}{deg(self.peak_velocity[j]):>11.1f}{deg(self.limit_velocity[j]):>8.0f}"

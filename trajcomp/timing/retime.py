@@ -61,11 +61,11 @@ def retime(moves, robot, *, method="auto", tolerance=TOLERANCE):
     t = np.zeros(m)
     tcp_length = np.zeros(m)
     arrived = moves.q.copy()
-    segments, pieces, peaks, deviation = [], [], [], 0.0
+    segments, pieces, peaks, untimed, deviation = [], [], [], [], 0.0
     for kind, first, last in plan_segments(moves, method):
         if kind == "untimed":
             t[last] = t[first]
-            segments.append(Segment(kind, first, last, 0.0))
+            untimed.append(last)
             continue
         arrived[first + 1 : last + 1] = _continued(arrived[first], moves.q[first : last + 1],
                                                    moves.kind[first + 1 : last + 1])
@@ -82,7 +82,7 @@ def retime(moves, robot, *, method="auto", tolerance=TOLERANCE):
         segments.append(Segment(kind, first, last, law.duration))
         pieces.append((t[first], run, law))
         peaks.append(checked)
-    return _result(moves, robot, arrived, t, segments, pieces, peaks, tcp_length, deviation)
+    return _result(moves, robot, arrived, t, segments, pieces, peaks, untimed, tcp_length, deviation)
 
 
 def _continued(start, declared, kinds):
@@ -152,21 +152,21 @@ def _turn_warnings(moves, arrived):
     return tuple(out)
 
 
-def _result(moves, robot, arrived, t, segments, pieces, peaks, tcp_length, deviation):
+def _result(moves, robot, arrived, t, segments, pieces, peaks, untimed, tcp_length, deviation):
     def peak(name):
-        values = [getattr(p, name) for p in peaks]
-        return np.nanmax(values, axis=0) if values and not np.all(np.isnan(values)) else np.full(6, np.nan)
+        values = np.array([getattr(p, name) for p in peaks]).reshape(-1, 6)
+        return np.max(np.nan_to_num(values, nan=0.0), axis=0, initial=0.0)
 
-    velocity, acceleration, jerk = peak("velocity"), peak("acceleration"), peak("jerk")
-    jerk = np.where(np.isfinite(robot.j_max), jerk, np.nan)  # without a jerk limit ruckig steps the acceleration
+    velocity, acceleration = peak("velocity"), peak("acceleration")
+    jerk = np.where(np.isfinite(robot.j_max), peak("jerk"), 0.0)  # measured in ruckig segments, jerk-limited
     worst = max([p.worst for p in peaks], default=0.0)
-    jerk_ok = np.all(np.nan_to_num(jerk, nan=0.0) <= robot.j_max * (1.0 + LIMIT_TOLERANCE))
+    jerk_ok = np.all(jerk <= robot.j_max * (1.0 + LIMIT_TOLERANCE))
     return TimingResult(
         t=t,
         cycle_time=float(t[-1]) if len(t) else 0.0,
         segments=tuple(segments),
-        peak_velocity=np.nan_to_num(velocity),
-        peak_acceleration=np.nan_to_num(acceleration),
+        peak_velocity=velocity,
+        peak_acceleration=acceleration,
         peak_jerk=jerk,
         limit_velocity=robot.v_max,
         limit_acceleration=robot.a_max,
@@ -177,7 +177,7 @@ def _result(moves, robot, arrived, t, segments, pieces, peaks, tcp_length, devia
         tcp_length=tcp_length,
         labels=moves.labels,
         motion=moves.motion,
-        untimed=tuple(s.last for s in segments if s.kind == "untimed"),
+        untimed=tuple(untimed),
         deviation=deviation,
         warnings=_turn_warnings(moves, arrived),
         pieces=tuple(pieces),
