@@ -55,7 +55,7 @@ def durations(language, text):
     if language == "csv":
         t = np.array([float(row.rsplit(",", 1)[1]) for row in text.splitlines()[1:]])
         return np.diff(t)[:3]
-    pattern = {"rapid": r"MoveL P\d, v20\\T:=([\d.]+)", "urscript": r"movel\(.*t=([\d.]+)\)",
+    pattern = {"rapid": r"MoveL \w+, v20\\T:=([\d.]+)", "urscript": r"movel\(.*t=([\d.]+)\)",
                "fanuc_ls": r":L P\[\d\] (\d+)msec"}[language]
     values = np.array([float(v) for v in re.findall(pattern, text)])
     return values / 1000.0 if language == "fanuc_ls" else values
@@ -116,3 +116,25 @@ def test_the_cycle_time_before_and_after_compensation_is_printed_and_targets_sta
         np.testing.assert_allclose(a.pose, b.pose, atol=1e-9)
     assert (timed.parent / "weld.dat").read_text() == (plain.parent / "weld.dat").read_text()
     assert "$VEL.CP=0.02" not in timed.read_text() and "$VEL.CP=0.020000" in plain.read_text()
+
+
+EXTENSIONS = {"csv": ".csv", "krl": ".src", "rapid": ".mod", "fanuc_ls": ".ls", "urscript": ".script"}
+CROSS = [(a, b) for a in sorted(PROGRAMS) for b in sorted(PROGRAMS) if a != b]
+
+
+@pytest.mark.parametrize("source,language", CROSS)
+def test_every_example_converted_to_another_language_retimes_there(tmp_path, source, language):
+    path, robot = PROGRAMS[source]
+    converted, output = tmp_path / f"weld{EXTENSIONS[language]}", tmp_path / f"timed{EXTENSIONS[language]}"
+    assert main(["convert", str(EXAMPLES / path), str(converted), "--robot", robot]) == 0
+    # a FANUC program names the ABB work object and tool by number; their values stand in its comments
+    frames = ["--tool", "1=0,0,0,0,0,0", "--frame", "1=0,0,0,0,0,0"] * ((source, language) == ("rapid", "fanuc_ls"))
+    assert main(["retime", str(converted), "-o", str(output), "--robot", robot, *frames]) == 0
+    text = output.read_text()
+    if language == "krl":  # the $VEL.CP set right before each LIN
+        speeds = [float(v) for v in re.findall(r"\$VEL\.CP=([\d.]+)\s*\n\s*LIN\b", text)]
+        assert len(speeds) == 3 and all(0.0195 <= v <= 0.020 for v in speeds)
+        return
+    first, second, third = durations(language, text)
+    assert 80.0 / 20.0 <= first <= 80.0 / 20.0 + RAMPS
+    assert second >= 60.0 / 20.0 and third >= 40.0 / 20.0 and second + third <= 100.0 / 20.0 + RAMPS

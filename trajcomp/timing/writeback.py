@@ -171,13 +171,15 @@ def _krl(program, result, robot):
     text = program.sources[0].text
     newline = "\r\n" if "\r\n" in text else "\n"
     edits = [[] for _ in program.sources]
-    settings, running, governing = {}, {}, {}
+    settings = {}
+    running = {"ptp": None, "cp": None}  # the speed value in force as the program runs down
+    governing = {"ptp": None, "cp": None}  # (source, offset) of the statement that set it
     for m, motion in enumerate(program.motions):
         group = "ptp" if motion.kind == JOINT else "cp"
         span = motion.spans.get("speed")
         key = None if span is None else (span.source, span.start)
         k, want = wanted.get(m, (None, None))
-        if key != governing.get(group):  # a new statement sets this motion's speed
+        if key != governing[group]:  # a new statement sets this motion's speed
             governing[group] = key
             running[group] = None if span is None else span.text
             if span is not None and want is not None:
