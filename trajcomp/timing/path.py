@@ -1,8 +1,8 @@
 """The joint path of a continuous run, fitted for TOPP-RA within a stated tolerance.
 
-A run is a chain of linear / circular motions the arm passes without
-stopping (or, in toppra mode, one joint motion). Its samples come from
-`trajcomp.timing.samples` (the controller's interpolation); then:
+A run is a chain of motions the arm passes without stopping, or one
+motion from rest to rest. Its samples come from `trajcomp.timing.samples`
+(the controller's interpolation); then:
 
 1. Parameter: s = joint-space arc length (rad) of the samples; duplicated
    and zero-length waypoints collapse onto one sample.
@@ -16,7 +16,8 @@ stopping (or, in toppra mode, one joint motion). Its samples come from
    the Jacobian) and of each joint, or within the programmed zone radius
    near a blended corner. The tolerance keeps the compensated positions.
 3. `JointPath` wraps the spline for toppra; grid points are every sample,
-   subdivided to at least `MIN_GRID` intervals.
+   subdivided to at least `MIN_GRID` intervals, and refined towards both
+   ends, where the arm starts and stops.
 """
 
 import dataclasses
@@ -118,23 +119,18 @@ class RunPath:
         grid, dq = self.grid, self.path(self.grid, 1)
         near = np.stack([self.motion_at(grid), self.motion_at(grid, "right")])
         velocity = np.min(moves.velocity[near], axis=0) * velocity_scale
+        tcp = moves.tcp_speed.copy()
+        k = np.arange(self.first + 1, self.last + 1)
+        timed = k[(moves.min_duration[k] > 0) & np.array([moves.kind[i] != JOINT for i in k], dtype=bool)]
+        tcp[timed] = np.minimum(tcp[timed], self.tcp_lengths[timed - self.first] / moves.min_duration[timed])
         with np.errstate(divide="ignore", invalid="ignore"):
-            cartesian = np.array([kind != JOINT for kind in moves.kind])
-            timed = np.where(cartesian & (moves.min_duration > 0), self._all_lengths(moves) / moves.min_duration,
-                             np.inf)
-            tcp = np.min(np.minimum(moves.tcp_speed, timed)[near], axis=0) * speed_scale
             x_joint = np.min((velocity / np.abs(dq)) ** 2, axis=1)
-            x_tcp = (tcp / self.grid_rate) ** 2
+            x_tcp = (np.min(tcp[near], axis=0) * speed_scale / self.grid_rate) ** 2
         return np.minimum(x_joint, np.nan_to_num(x_tcp, nan=np.inf)), velocity
 
     def tcp_rate(self, s):
         """|dp/ds| (N,) at path positions s (N,), interpolated on the grid, mm/rad."""
         return np.interp(s, self.grid, self.grid_rate)
-
-    def _all_lengths(self, moves):
-        lengths = np.zeros(len(moves))
-        lengths[self.first : self.last + 1] = self.tcp_lengths
-        return lengths
 
 
 def run_path(moves, robot, first, last, tolerance=TOLERANCE):
