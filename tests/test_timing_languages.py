@@ -138,3 +138,23 @@ def test_every_example_converted_to_another_language_retimes_there(tmp_path, sou
     first, second, third = durations(language, text)
     assert 80.0 / 20.0 <= first <= 80.0 / 20.0 + RAMPS
     assert second >= 60.0 / 20.0 and third >= 40.0 / 20.0 and second + third <= 100.0 / 20.0 + RAMPS
+
+
+def test_krl_restores_the_speed_of_a_motion_that_is_not_retimed(tmp_path):
+    """After a motion computed at run time the next one starts from an unknown position: it keeps its speed."""
+    src = (EXAMPLES / "kuka" / "weld.src").read_text().replace("$VEL.CP=0.020000", "$VEL.CP=0.050000")
+    src = src.replace("  LIN P4\n", "  LIN_REL {Z 10}\n  LIN P4\n")
+    (tmp_path / "weld.src").write_text(src)
+    shutil.copy(EXAMPLES / "kuka" / "weld.dat", tmp_path / "weld.dat")
+    output = tmp_path / "out" / "weld.src"
+    output.parent.mkdir()
+    assert main(["retime", str(tmp_path / "weld.src"), "-o", str(output), "--robot", "kuka_kr6_r900"]) == 0
+    lines = output.read_text().splitlines()
+    before = {name: lines[next(k for k, line in enumerate(lines) if re.match(rf"\s*{name}\b", line)) - 1].strip()
+              for name in ("LIN P2", "LIN P3", "LIN_REL", "LIN P4")}
+    assert re.fullmatch(r"\$VEL\.CP=0\.04\d+", before["LIN P2"])  # edited: P2 from rest to rest, ramps included
+    assert re.fullmatch(r"\$VEL\.CP=0\.04\d+", before["LIN P3"])  # inserted
+    assert before["LIN_REL"] == "$VEL.CP=0.050000"  # inserted back: the run-time motion and P4 are not re-timed
+    assert before["LIN P4"] == "LIN_REL {Z 10}"
+    assert [line for line in lines if not line.strip().startswith("$VEL.CP")] == \
+        [line for line in src.splitlines() if not line.strip().startswith("$VEL.CP")]
