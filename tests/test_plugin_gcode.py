@@ -110,7 +110,7 @@ def test_blocks_modal_words_tools_and_feeds(gcode, tmp_path):
 def test_inches_tool_axes_and_work_offsets(gcode, tmp_path):
     inch = formats.read(write(tmp_path, "inch.ngc", "G20 G90 G55\nG1 X10 Y-2 Z20.5 A90 B0 C180 F60\n"))
     (motion,) = inch.motions
-    np.testing.assert_allclose(inch.targets[0].pose, matrix(np.array([10, -2, 20.5]) * 25.4, abc(90, 0, 180)))
+    np.testing.assert_allclose(inch.targets[0].pose, matrix(np.array([10, -2, 20.5]) * 25.4, abc(90, 0, 180)), atol=1e-12)
     assert motion.speed == pytest.approx(25.4) and motion.frame == "G55"
     axes = formats.read(write(tmp_path, "axis.nc", TOOL_AXIS))
     rotations = [axes.targets[m.target].pose[:3, :3] for m in axes.motions]

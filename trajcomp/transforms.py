@@ -6,12 +6,10 @@ A, B, C are KUKA-style intrinsic Z-Y'-X'' angles: R = Rz(A) Ry(B) Rx(C).
 Frames follow the ``T_a_b`` reading: pose of frame b expressed in frame a.
 """
 
-import warnings
-
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-_ABC = "ZYX"  # upper case: intrinsic rotations
+_GIMBAL = 1e-12  # cos B below which A and C are coupled (B = +-90 deg)
 
 
 def _stack(x, width):
@@ -35,19 +33,33 @@ def abc_to_matrix(abc):
     Returns
     -------
     ndarray, shape (N, 3, 3) or (3, 3)
+        ``Rz(A) Ry(B) Rx(C)``, written out (no per-call scipy object: the
+        program readers and writers convert one pose at a time).
     """
     arr, single = _stack(abc, 3)
-    mat = Rotation.from_euler(_ABC, arr).as_matrix()
+    (ca, cb, cc), (sa, sb, sc) = np.cos(arr).T, np.sin(arr).T
+    mat = np.empty((len(arr), 3, 3))
+    mat[:, 0, 0], mat[:, 0, 1], mat[:, 0, 2] = ca * cb, ca * sb * sc - sa * cc, ca * sb * cc + sa * sc
+    mat[:, 1, 0], mat[:, 1, 1], mat[:, 1, 2] = sa * cb, sa * sb * sc + ca * cc, sa * sb * cc - ca * sc
+    mat[:, 2, 0], mat[:, 2, 1], mat[:, 2, 2] = -sb, cb * sc, cb * cc
     return mat[0] if single else mat
 
 
 def matrix_to_abc(rot):
-    """A, B, C angles (rad), shape (N, 3) or (3,), of rotation matrices (N, 3, 3)."""
+    """A, B, C angles (rad), shape (N, 3) or (3,), of rotation matrices (N, 3, 3).
+
+    B is in [-90, 90] deg. At B = +-90 deg (KUKA's tool pointing down) only
+    A - C or A + C is defined: C is then 0, as scipy's convention.
+    """
     rot = np.asarray(rot, dtype=float)
-    with warnings.catch_warnings():
-        # B = +-90 deg is a legitimate pose; scipy then sets C = 0, which is exact.
-        warnings.simplefilter("ignore", UserWarning)
-        angles = Rotation.from_matrix(rot.reshape(-1, 3, 3)).as_euler(_ABC)
+    r = rot.reshape(-1, 3, 3)
+    cos_b = np.hypot(r[:, 0, 0], r[:, 1, 0])
+    locked = cos_b < _GIMBAL
+    angles = np.empty((len(r), 3))
+    angles[:, 1] = np.arctan2(-r[:, 2, 0], cos_b)
+    angles[:, 0] = np.where(locked, np.arctan2(-r[:, 0, 1], r[:, 1, 1]), np.arctan2(r[:, 1, 0], r[:, 0, 0]))
+    angles[:, 2] = np.where(locked, 0.0, np.arctan2(r[:, 2, 1], r[:, 2, 2]))
+    angles += 0.0  # -0.0 (atan2 of a signed zero) is written "-0.000" by every format
     return angles[0] if rot.ndim == 2 else angles
 
 

@@ -176,7 +176,7 @@ def format_number(value, places):
 
 def same_rotation(rot, old_rot):
     """True if a rotation (3, 3) equals the one the file states: its numbers then stay as written."""
-    return bool(np.allclose(rot, old_rot, rtol=0.0, atol=1e-12))
+    return bool(np.abs(np.subtract(rot, old_rot)).max() <= 1e-12)
 
 
 def encode_xyzabc(pose, old, roles):

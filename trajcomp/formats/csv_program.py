@@ -78,11 +78,12 @@ def read(path):
         motion, target = _row(source.name, number, line, row, has_pose, has_joints, len(targets))
         targets.append(target)
         items.append(dataclasses.replace(motion, spans=_timing_spans(row, end)))
+    targets = _with_poses(targets)
     if header is None:
         fail(source.name, 1, source.text[:80], "not a program CSV: no header row")
     if not targets:
         fail(source.name, lines.number(len(source.text)), source.text[-80:], "no target rows after the header")
-    return Program("csv", source.name.rsplit(".", 1)[0], tuple(items), tuple(targets), sources=(source,))
+    return Program("csv", source.name.rsplit(".", 1)[0], tuple(items), targets, sources=(source,))
 
 
 def _header(names, source_name, number, line):
@@ -122,9 +123,7 @@ def _row(name, number, line, row, has_pose, has_joints, index):
     pose = joints = None
     found = {}
     if pose_given:
-        vector = numbers(POSE)
-        vector[3:] = np.radians(vector[3:])
-        pose = pose_to_matrix(vector)
+        pose = numbers(POSE)  # x, y, z, a, b, c (mm, deg): matrices for all rows at once in _with_poses
         found |= spans(POSE)
     if joints_given:
         joints = np.radians(numbers(JOINTS))
@@ -152,6 +151,19 @@ def _timing_spans(row, end):
     if "t" in row:
         spans["t"] = Span(0, row["t"][1], row["t"][2], row["t"][0])
     return spans
+
+
+def _with_poses(targets):
+    """The targets (tuple) with their pose rows x, y, z, a, b, c (mm, deg) turned into matrices in one call."""
+    rows = [k for k, t in enumerate(targets) if t.pose is not None]
+    out = list(targets)
+    if rows:
+        vectors = np.array([targets[k].pose for k in rows])
+        vectors[:, 3:] = np.radians(vectors[:, 3:])
+        for k, matrix in zip(rows, pose_to_matrix(vectors)):
+            out[k] = Target(name="", line=targets[k].line, pose=matrix, joints=targets[k].joints,
+                            spans=targets[k].spans)
+    return tuple(out)
 
 
 def _encode(target, old):

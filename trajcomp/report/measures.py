@@ -18,7 +18,7 @@ arm's branch or swing a joint fast.
 
 import numpy as np
 
-from trajcomp.ik import configuration_of
+from trajcomp.ik import BRANCHES, Configuration, branch_index
 from trajcomp.kinematics import link_frames
 
 SINGULARITIES = ("shoulder", "elbow", "wrist")
@@ -71,7 +71,8 @@ def branch_changes(robot, q_before, q_after):
     before, after : list of str
         The branches (``front/up/positive``) of each row.
     """
-    before = [str(c) for c in configuration_of(robot, np.atleast_2d(q_before))]
-    after = [str(c) for c in configuration_of(robot, np.atleast_2d(q_after))]
+    names = np.array([str(Configuration.from_index(b)) for b in range(BRANCHES)])
+    before = names[branch_index(robot, np.atleast_2d(q_before))].tolist()
+    after = names[branch_index(robot, np.atleast_2d(q_after))].tolist()
     turned = np.any(np.abs(np.atleast_2d(q_after) - q_before) >= np.pi, axis=1)
     return (np.array(before) != np.array(after)) | turned, before, after
