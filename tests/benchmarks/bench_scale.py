@@ -2,8 +2,9 @@
 
 Run:  python tests/benchmarks/bench_scale.py [N ...]     (default: 100000 300000 1000000)
 
-For each N, a helix of N LIN waypoints (program CSV, mm and deg, 3 and 4
-decimals) on the virtual UR10 is compensated in composite mode by the CLI
+For each N, a helix of N LIN waypoints blended with 1 mm zones (a CAM path;
+program CSV, mm and deg, 3 and 4 decimals) on the virtual UR10 is
+compensated in composite mode and re-timed (the default) by the CLI
 in a fresh process (`python -m trajcomp.cli compensate`), start-up
 included; the table gives wall time, waypoints/s and the peak resident
 memory of that process. Also: CLI start-up (`trajcomp --version`) and the
@@ -41,9 +42,9 @@ def helix(robot, n):
 def write_program(path, robot, n):
     abc = np.degrees(default_orientation(robot))
     position = helix(robot, n)[:, :3, 3]
-    tail = f",{abc[0]:.4f},{abc[1]:.4f},{abc[2]:.4f},LIN,50\n"
+    tail = f",{abc[0]:.4f},{abc[1]:.4f},{abc[2]:.4f},LIN,50,1\n"
     with open(path, "w") as out:
-        out.write("x,y,z,a,b,c,motion,speed\n")
+        out.write("x,y,z,a,b,c,motion,speed,zone\n")
         out.writelines(f"{x:.3f},{y:.3f},{z:.3f}{tail}" for x, y, z in position)
 
 
