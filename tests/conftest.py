@@ -1,8 +1,25 @@
 """Fixtures shared by several test modules."""
 
+import importlib.metadata
+import sys
+
 import pytest
 
+from trajcomp import formats
 from trajcomp.cli import main
+
+
+def install_plugin(monkeypatch, folder, name, module):
+    """Make a plugin in ``folder`` importable and declare its entry point, as installing it would.
+
+    The format registry is restored when the test ends.
+    """
+    monkeypatch.syspath_prepend(str(folder))
+    monkeypatch.delitem(sys.modules, module, raising=False)
+    entry = importlib.metadata.EntryPoint(name, module, formats.ENTRY_POINT_GROUP)
+    monkeypatch.setattr(formats, "entry_points", lambda group: [entry] if group == formats.ENTRY_POINT_GROUP else [])
+    monkeypatch.setattr(formats, "_FORMATS", dict(formats._FORMATS))
+    monkeypatch.setattr(formats, "_PLUGINS", {"loaded": False, "failed": {}})
 
 
 @pytest.fixture(scope="session")

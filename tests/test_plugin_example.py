@@ -1,11 +1,10 @@
 """The example plugin in plugins/trajcomp-points works through the entry-point hook."""
 
-import importlib.metadata
-import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import install_plugin
 
 from trajcomp import formats
 from trajcomp.errors import ReadError
@@ -16,12 +15,7 @@ PLUGIN = Path(__file__).resolve().parents[1] / "plugins" / "trajcomp-points"
 @pytest.fixture
 def points_plugin(monkeypatch):
     """The plugin's entry point, as installing the package would declare it."""
-    monkeypatch.syspath_prepend(str(PLUGIN))
-    monkeypatch.delitem(sys.modules, "trajcomp_points", raising=False)
-    entry = importlib.metadata.EntryPoint("points", "trajcomp_points", formats.ENTRY_POINT_GROUP)
-    monkeypatch.setattr(formats, "entry_points", lambda group: [entry] if group == formats.ENTRY_POINT_GROUP else [])
-    monkeypatch.setattr(formats, "_FORMATS", dict(formats._FORMATS))
-    monkeypatch.setattr(formats, "_PLUGINS", {"loaded": False, "failed": {}})
+    install_plugin(monkeypatch, PLUGIN, "points", "trajcomp_points")
 
 
 def test_plugin_reads_writes_and_converts(points_plugin, tmp_path):

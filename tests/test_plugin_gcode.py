@@ -6,14 +6,13 @@ UR10 the model was calibrated on: a compensated program, run as a controller
 runs it (each pose solved nearest the joints before), lands on its targets.
 """
 
-import importlib.metadata
 import re
-import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
+from conftest import install_plugin
 from virtual_cell import landing_error, virtual_cell
 
 from trajcomp import formats
@@ -55,12 +54,7 @@ Y140.0000
 @pytest.fixture
 def gcode(monkeypatch):
     """The plugin's entry point, as installing the package declares it."""
-    monkeypatch.syspath_prepend(str(PLUGIN))
-    monkeypatch.delitem(sys.modules, "trajcomp_gcode", raising=False)
-    entry = importlib.metadata.EntryPoint("gcode", "trajcomp_gcode", formats.ENTRY_POINT_GROUP)
-    monkeypatch.setattr(formats, "entry_points", lambda group: [entry] if group == formats.ENTRY_POINT_GROUP else [])
-    monkeypatch.setattr(formats, "_FORMATS", dict(formats._FORMATS))
-    monkeypatch.setattr(formats, "_PLUGINS", {"loaded": False, "failed": {}})
+    install_plugin(monkeypatch, PLUGIN, "gcode", "trajcomp_gcode")
 
 
 @pytest.fixture(scope="module")
