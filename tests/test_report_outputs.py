@@ -57,6 +57,19 @@ def test_compensate_writes_a_valid_report_and_a_self_contained_page(tmp_path, ku
     assert len(figures) == 5 and all(png.startswith(b"\x89PNG\r\n\x1a\n") for png in figures)
 
 
+def test_retime_writes_a_compliance_report_of_the_program_as_written(tmp_path, capsys):
+    """Every retime run has a report: the targets in their declared postures, the timing, the verdict."""
+    out = tmp_path / "weld.src"
+    assert main(["retime", str(EXAMPLE), "--robot", "kuka_kr6_r900", "-o", str(out),
+                 "--report", str(tmp_path / "timed")]) == 0
+    assert "verdict: PASS" in capsys.readouterr().err
+    doc = _valid(json.loads((tmp_path / "timed.json").read_text()))
+    assert doc["command"] == "retime" and doc["verdict"]["result"] == "pass"
+    assert doc["timing"]["within_limits"] and doc["timing"]["cycle_time_s"] > 0
+    assert all(t["correction_norm_mm"] == 0.0 for t in doc["targets"]) and len(doc["targets"]) == 5
+    assert [t["posture_source"] for t in doc["targets"]] == ["config"] * 5
+
+
 def test_a_failing_verdict_exits_1_with_the_program_written(tmp_path, kuka_model, capsys):
     out = tmp_path / "weld.src"
     code = main(["compensate", str(EXAMPLE), "--model", str(kuka_model), "-o", str(out), "--json-only",

@@ -202,12 +202,50 @@ def compensate_program(program, correct, robot, *, tools=None, frames=None, join
                          "(a procedure argument, a run-time expression): left as written")
             for i, line, text in program.referenced_targets()
         ),
-        unused=tuple(t.label for t in program.unused_targets()),
-        joint_targets=tuple(program.targets[i].label for i in joint_index),
-        joint_mode=joint_targets,
-        warnings=_warnings(program),
+        **_program_facts(program, joint_index, joint_targets),
     )
     return edited, report
+
+
+def as_written_report(program, plan):
+    """The `ProgramReport` of a program run as written (no correction), e.g. for re-timing alone.
+
+    Parameters
+    ----------
+    program : Program
+    plan : trajcomp.posture.Plan
+        Its Cartesian targets in their declared postures (`planned_joints`).
+    """
+    usage = program.usage()
+    n = len(plan.index)
+    joint_index, _ = program.joint_targets()
+    return ProgramReport(
+        labels=tuple(program.where(i) for i in plan.index),
+        lines=np.array([program.targets[i].line for i in plan.index], dtype=int),
+        tools=tuple(usage[i][0] for i in plan.index),
+        frames=tuple(usage[i][1] for i in plan.index),
+        T_target=plan.T_base_tcp,
+        T_command=plan.T_base_tcp,
+        correction=np.zeros((n, 6)),
+        q=plan.q,
+        q_planned=plan.q,
+        declared=tuple(describe(program.format, program.targets[i].config) for i in plan.index),
+        written=tuple(describe(program.format, program.targets[i].config) for i in plan.index),
+        posture_source=plan.source,
+        outside_grid=np.zeros(n, dtype=bool),
+        predicted_residual=np.zeros(n),
+        **_program_facts(program, joint_index, "keep"),
+    )
+
+
+def _program_facts(program, joint_index, joint_mode):
+    """The report fields that describe the program itself: unused points, joint targets, warnings."""
+    return {
+        "unused": tuple(t.label for t in program.unused_targets()),
+        "joint_targets": tuple(program.targets[i].label for i in joint_index),
+        "joint_mode": joint_mode,
+        "warnings": _warnings(program),
+    }
 
 
 def _warnings(program):

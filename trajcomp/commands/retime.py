@@ -7,9 +7,12 @@ import dataclasses
 
 from trajcomp import formats
 from trajcomp.commands._args import add_robot, command_parser, info, robot_of
+from trajcomp.commands._report import add_report_options, criteria_of, emit
 from trajcomp.commands.convert import add_frame_options, add_in_place_option, frame_options, protected_inputs
 from trajcomp.errors import TimingError, TrajcompError
+from trajcomp.postprocess import as_written_report
 from trajcomp.posture import planned_joints
+from trajcomp.report import compliance_report, file_entry
 from trajcomp.timing import METHODS
 from trajcomp.timing.path import TOLERANCE
 
@@ -36,6 +39,7 @@ def add_parser(sub):
     add_tolerance_option(parser)
     add_frame_options(parser)
     add_in_place_option(parser)
+    add_report_options(parser)
     parser.set_defaults(run=run)
 
 
@@ -61,10 +65,17 @@ def run(args):
     for line in timing_lines(result):
         info(line)
     info(f"wrote {', '.join(map(str, written))}")
+    report = compliance_report(
+        as_written_report(program, plan), robot, criteria=criteria_of(args), command="retime", timing=result,
+        files=[file_entry("program", p) for p in dict.fromkeys(formats.input_paths(args.program, program))]
+        + [file_entry("output", p) for p in written],
+        options={"method": args.method, "path_tolerance_mm": args.path_tolerance},
+    )
+    code = emit(report, args.report, args.json_only)
     if not result.within_limits:
         info(f"trajcomp: {LIMIT_MESSAGE}")
         return 1
-    return 0
+    return code
 
 
 LIMIT_MESSAGE = "the timing exceeds a limit by more than 1 % in the 1 kHz check (table above): check it before running"
