@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from trajcomp import formats
-from trajcomp.errors import WriteError
+from trajcomp.errors import ReadError, WriteError
 from trajcomp.postprocess import convert_program
 
 PATH = Path(__file__).parent / "data" / "programs" / "csv" / "path.csv"
@@ -40,3 +40,25 @@ def test_non_finite_speed_is_refused(tmp_path):
     items = [dataclasses.replace(m, speed=np.inf) if getattr(m, "speed", None) else m for m in program.items]
     with pytest.raises(WriteError, match="line 4 .*speed not finite"):
         formats.write(tmp_path / "out.csv", program.replace(items=tuple(items)))
+
+
+@pytest.mark.parametrize(
+    "name, text, message",
+    [
+        ("p.csv", "x,y,z,a,b,c,j1,j2,j3,j4,j5,j6\n1,2,3,4,5,6,0,0,0,-100.05e301,0,0\n",
+         r"p\.csv:2: field j4: '-100\.05e301' is out of range \(beyond \+-3600\)"),
+        ("p.src", "DEF p( )\nLIN {X 2e6,Y 0,Z 0,A 0,B 0,C 0}\nEND\n", r"p\.src:2: X: '2e6' is out of range \(beyond \+-1e\+06\)"),
+        ("s.script", "def s():\n  movej([0, 0, 70, 0, 0, 0])\nend\n", r"s\.script:2: list j3: '70' is out of range"),
+        ("M.mod", "MODULE M\n  PROC main()\n    MoveAbsJ [[0,0,1e5,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]], v100, fine, tool0;\n"
+         "  ENDPROC\nENDMODULE\n", r"M\.mod:3: jointtarget joint 3: '1e5' is out of range"),
+        ("P.LS", "/PROG P\n/MN\n   1:L P[1] 100mm/sec FINE ;\n/POS\nP[1]{\n   GP1:\n\tUF : 0, UT : 1,\n"
+         "\tX = 1.0 mm, Y = 2.0 mm, Z = 3.0 mm,\n\tW = 0 deg, P = 2e5 deg, R = 0 deg\n};\n/END\n",
+         r"P\.LS:5: P\[1\] P: '2e5' is out of range \(beyond \+-10000\)"),
+    ],
+    ids=["csv joint", "krl position", "urscript joint", "rapid joint", "fanuc angle"],
+)
+def test_magnitudes_no_program_states_are_refused(tmp_path, name, text, message):
+    """A joint beyond ten turns, a position beyond a kilometre: a typo or damage, refused by the reader."""
+    (tmp_path / name).write_text(text)
+    with pytest.raises(ReadError, match=message):
+        formats.read(tmp_path / name)

@@ -159,3 +159,18 @@ def test_mutated_programs_never_crash(seed_file, cell, tmp_path):
             last = traceback.format_exception(exc)[-2].strip().splitlines()[0]
             crashes.append(f"case {case}: {how}, then {to_format}: {type(exc).__name__}: {exc} [{last}]")
     assert not crashes, f"{seed_file.name}: {len(crashes)} crashes\n" + "\n".join(crashes[:20])
+
+
+def test_found_a_wrist_point_a_denormal_off_the_base_axis_solves_without_overflow():
+    """Fuzz find: ``p[0, 0, 0.05, -1e-320, 0, 0]`` put the UR10 wrist point 1e-318 mm off axis 1 (ik overflow)."""
+    from trajcomp.ik import ik
+    from trajcomp.transforms import rotvec_to_matrix
+
+    robot = load_robot("ur10")
+    T = np.eye(4)
+    T[:3, :3] = rotvec_to_matrix([-1e-320, 0.0, 0.0])
+    T[:3, 3] = [0.0, 0.0, 50.0]
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", RuntimeWarning)
+        result = ik(robot, T[None], seed=robot.home)
+    assert result.reason[0] in ("", "unreachable", "joint limits", "singular", "not converged")

@@ -446,7 +446,7 @@ def _dh_branches(robot, family, T, theta_seed):
     # Joint 1: the wrist point's offset along z1 is s = d2 + d3 + d4 cos(alpha3).
     s = d[1] + d[2] + d[3] * np.cos(alpha[2])
     r = np.hypot(p[:, 0], p[:, 1])[:, None]
-    with np.errstate(divide="ignore", invalid="ignore"):
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):  # r ~ 0: on the axis, handled below
         ratio = s * sa1 / r
     on_axis = r < _SINGULAR_SIN
     reachable = on_axis | (np.abs(ratio) <= 1.0 + _REACH_SLACK)

@@ -8,6 +8,9 @@ import numpy as np
 
 from trajcomp.errors import ReadError
 from trajcomp.formats._text import (
+    ANGLE_LIMIT,
+    JOINT_LIMIT,
+    LENGTH_LIMIT,
     NUMBER,
     Lines,
     fail,
@@ -25,6 +28,7 @@ POSE = ("x", "y", "z", "a", "b", "c")
 AXES = ("a1", "a2", "a3", "a4", "a5", "a6")
 EXTERNAL = ("e1", "e2", "e3", "e4", "e5", "e6")
 MIN_PLACES = dict.fromkeys(POSE[:3], 3) | dict.fromkeys(POSE[3:], 4) | dict.fromkeys(AXES, 4)
+LIMITS = dict.fromkeys(POSE[:3], LENGTH_LIMIT) | dict.fromkeys(POSE[3:], ANGLE_LIMIT) | dict.fromkeys(AXES, JOINT_LIMIT)
 POINT_TYPES = "E6POS|POS|FRAME|E6AXIS|AXIS"
 JOINT_TYPES = {"E6AXIS", "AXIS"}
 KINDS = {"PTP": JOINT, "SPTP": JOINT, "LIN": LINEAR, "SLIN": LINEAR, "CIRC": CIRCULAR, "SCIRC": CIRCULAR}
@@ -87,7 +91,7 @@ def _int(text, source_name, line, original, field):
 
 
 def _values(members, roles, source_name, line, original):
-    return np.array([finite(members[r].text, source_name, line, original, r.upper()) for r in roles])
+    return np.array([finite(members[r].text, source_name, line, original, r.upper(), LIMITS[r]) for r in roles])
 
 
 def _external(members, source_name, line, original):
@@ -97,7 +101,7 @@ def _external(members, source_name, line, original):
         return None
     values = np.full(int(given[-1][1:]), np.nan)
     for e in given:
-        values[int(e[1:]) - 1] = finite(members[e].text, source_name, line, original, e.upper())
+        values[int(e[1:]) - 1] = finite(members[e].text, source_name, line, original, e.upper(), LENGTH_LIMIT)
     return values
 
 

@@ -7,6 +7,8 @@ import numpy as np
 
 from trajcomp.errors import ReadError
 from trajcomp.formats._text import (
+    JOINT_LIMIT,
+    LENGTH_LIMIT,
     NUMBER,
     Lines,
     fail,
@@ -139,8 +141,8 @@ class _Reader:
         self.unset = {}  # lower point name -> why its value is known only at run time
         self.params = set()
 
-    def number(self, text, line, original, field):
-        return finite(text, self.source.name, line, original, field)
+    def number(self, text, line, original, field, limit=LENGTH_LIMIT):
+        return finite(text, self.source.name, line, original, field, limit)
 
     def literal(self, kind, text, offset, name, line, original):
         """A Target from a robtarget or jointtarget literal starting at ``offset``."""
@@ -149,7 +151,8 @@ class _Reader:
             m = _JOINTTARGET.match(text)
             if not m:
                 fail(self.source.name, line, original, "malformed jointtarget")
-            joints = np.radians([self.number(m.group(k), line, original, f"{label} joint {k}") for k in range(1, 7)])
+            joints = np.radians([self.number(m.group(k), line, original, f"{label} joint {k}", JOINT_LIMIT)
+                                 for k in range(1, 7)])
             return Target(name=name, line=line, joints=joints, spans=spans(0, m, JOINTS, offset),
                           external=self.external(m, 7, line, original, label))
         m = _ROBTARGET.match(text)
@@ -171,7 +174,7 @@ class _Reader:
 
     def external(self, m, first, line, original, label):
         """External axes eax_a..eax_f, NaN where unused (9E9); None if all are unused."""
-        values = np.array([self.number(m.group(k), line, original, f"{label} extax {e}")
+        values = np.array([self.number(m.group(k), line, original, f"{label} extax {e}", 1e10)
                            for k, e in zip(range(first, first + 6), EXTAX)])
         values[np.abs(values) >= UNUSED_AXIS] = np.nan
         return None if np.isnan(values).all() else values

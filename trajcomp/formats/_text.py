@@ -20,6 +20,10 @@ from trajcomp.program import CIRCULAR, Source, Span
 from trajcomp.transforms import abc_to_matrix, matrix_to_abc
 
 NUMBER = r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?"
+# Magnitudes no robot program states: beyond them a number is a typo or damage, not a position.
+LENGTH_LIMIT = 1e6  # mm (a kilometre)
+ANGLE_LIMIT = 1e4  # deg
+JOINT_LIMIT = 3600.0  # deg (ten turns)
 
 
 def read_source(path, name=None):
@@ -104,14 +108,15 @@ def fail(source_name, line, text, message):
     raise ReadError(f"{source_name}:{line}: {message}: {text.strip()[:200]!r}")
 
 
-def finite(text, source_name, line, original, field):
-    """The float a number's text states; ReadError naming the field if it is not a finite number."""
+def finite(text, source_name, line, original, field, limit=math.inf):
+    """The float a number's text states; ReadError naming the field if it is not a number within ``limit``."""
     try:
         value = float(text)
     except ValueError:
         fail(source_name, line, original, f"{field}: not a number {text[:40]!r}")
-    if not math.isfinite(value):
-        fail(source_name, line, original, f"{field}: {text[:40]!r} is out of range")
+    if not math.isfinite(value) or abs(value) > limit:
+        fail(source_name, line, original, f"{field}: {text[:40]!r} is out of range" +
+             (f" (beyond +-{limit:g})" if math.isfinite(limit) else ""))
     return value
 
 

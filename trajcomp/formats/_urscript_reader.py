@@ -8,6 +8,8 @@ import numpy as np
 
 from trajcomp.errors import ReadError
 from trajcomp.formats._text import (
+    JOINT_LIMIT,
+    LENGTH_LIMIT,
     NUMBER,
     Lines,
     fail,
@@ -116,12 +118,12 @@ class _Reader:
     def literal(self, text, offset, line, original, name=""):
         """A Target from a pose or six-number list literal; None if ``text`` is not one."""
         if m := _POSE.match(text):
-            values = [finite(m.group(k), self.source.name, line, original, f"{name or 'pose'} {r}")
+            values = [finite(m.group(k), self.source.name, line, original, f"{name or 'pose'} {r}", LENGTH_LIMIT / 1000.0)
                       for k, r in enumerate(POSE, start=1)]
             return Target(name=name, line=line, pose=pose(values), spans=spans(0, m, POSE, offset))
         if m := _LIST.match(text):
-            joints = np.array([finite(m.group(k), self.source.name, line, original, f"{name or 'list'} {r}")
-                               for k, r in enumerate(JOINTS, start=1)])
+            joints = np.array([finite(m.group(k), self.source.name, line, original, f"{name or 'list'} {r}",
+                                      np.radians(JOINT_LIMIT)) for k, r in enumerate(JOINTS, start=1)])
             return Target(name=name, line=line, joints=joints, spans=spans(0, m, JOINTS, offset))
         if _NUMBERS_ONLY.match(text):
             self.fail(line, original, "malformed pose (p[...] needs six numbers)")
@@ -215,7 +217,8 @@ class _Reader:
         if target.is_joint:
             return
         if m := _LIST.match(text):
-            joints = np.array([finite(m.group(k), self.source.name, line, original, f"qnear {k}") for k in range(1, 7)])
+            joints = np.array([finite(m.group(k), self.source.name, line, original, f"qnear {k}", np.radians(JOINT_LIMIT))
+                               for k in range(1, 7)])
             found = spans(0, m, NEAR, offset)
         elif (m := _NAME.match(text)) and m.group(1) in self.values and self.values[m.group(1)].target.is_joint:
             listed = self.values[m.group(1)].target

@@ -16,11 +16,15 @@ edited rows get their new pose and, where the program knows their joints,
 
 import dataclasses
 import difflib
+import math
 import re
 
 import numpy as np
 
 from trajcomp.formats._text import (
+    ANGLE_LIMIT,
+    JOINT_LIMIT,
+    LENGTH_LIMIT,
     Lines,
     active_axes,
     apply_edits,
@@ -106,7 +110,9 @@ def _header(names, source_name, number, line):
 
 
 def _number(name, number, line, field, column):
-    return finite(field[0], name, number, line, f"field {column}")
+    limit = LENGTH_LIMIT if column in POSE[:3] else ANGLE_LIMIT if column in POSE else (
+        JOINT_LIMIT if column in JOINTS else math.inf)
+    return finite(field[0], name, number, line, f"field {column}", limit)
 
 
 def _row(name, number, line, row, has_pose, has_joints, index):

@@ -35,6 +35,9 @@ import numpy as np
 
 from trajcomp.errors import ReadError, WriteError
 from trajcomp.formats._text import (
+    ANGLE_LIMIT,
+    JOINT_LIMIT,
+    LENGTH_LIMIT,
     NUMBER,
     Lines,
     active_axes,
@@ -269,12 +272,13 @@ def _positions(source, masked, lines, start, end):
             fields[f.group(1).lower()] = Span(0, gp_start + f.start(2), gp_start + f.end(2), f.group(2))
 
         def value(role):
-            return finite(fields[role].text, source.name, line, original, f"{label} {role.upper()}")
+            limit = LENGTH_LIMIT if role in "xyz" else ANGLE_LIMIT if role in "wpr" else JOINT_LIMIT
+            return finite(fields[role].text, source.name, line, original, f"{label} {role.upper()}", limit)
 
         frames = {f.group(1).upper(): f.group(2) for f in _FRAME_NUMBER.finditer(gp)}
         external = [value(e) for e in sorted(f for f in fields if f.startswith("e"))]
         for k in sorted(g for g in groups if g > 1):
-            external += [finite(f.group(2), source.name, line, original, f"{label} GP{k} {f.group(1)}")
+            external += [finite(f.group(2), source.name, line, original, f"{label} GP{k} {f.group(1)}", LENGTH_LIMIT)
                          for f in _FIELD.finditer(groups[k][1]) if "*" not in f.group(2)]
         where = {"name": label, "line": line, "tool": frames.get("UT"), "frame": frames.get("UF"),
                  "external": np.array(external) if external else None}
