@@ -420,7 +420,7 @@ def _closed_form_family(robot):
 def _branches(robot, family, T, seed):
     """Joint angles (N, 8, 6) of all branches, reachable and inside-limits masks (N, 8)."""
     theta, reachable = _dh_branches(robot, family, T, robot.dh_angles(seed))
-    q, inside = _turn_towards(robot, robot.joint_angles(theta), seed[:, None, :])
+    q, inside = turn_towards(robot, robot.joint_angles(theta), seed[:, None, :])
     return q, reachable, inside & reachable
 
 
@@ -500,8 +500,9 @@ def _planar(x, y, a2, L3, beta, elbow_sign):
     return theta2, np.arctan2(sin3, cos3) - beta, ok
 
 
-def _turn_towards(robot, q, ref):
-    """Each joint value moved by whole turns inside the limits, nearest ``ref``; and the inside mask."""
+def turn_towards(robot, q, ref):
+    """Joints q (..., 6), rad, each moved by whole turns inside the limits nearest ``ref`` (..., 6); and the mask
+    (...) of rows whose every joint has a turn inside the limits."""
     turn = 2.0 * np.pi
     with np.errstate(invalid="ignore"):
         lowest = np.ceil((robot.q_min - _LIMIT_TOL - q) / turn)

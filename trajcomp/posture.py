@@ -30,7 +30,7 @@ import numpy as np
 from trajcomp.configuration import declared_windows
 from trajcomp.errors import IKError
 from trajcomp.frames import FrameTable
-from trajcomp.ik import ik_all
+from trajcomp.ik import ik_all, turn_towards
 
 TURN = 2.0 * np.pi
 MAX_JOINT_CHANGE = np.radians(5.0)  # rad: default bound of the joint change a correction may cause
@@ -163,18 +163,9 @@ def _all_branches(robot, T_base_tcp, T_flange_tool):
     return q_all, valid
 
 
-def _turned(robot, q, reference):
-    """Each joint of q (..., 6) moved by whole turns inside the limits, nearest ``reference`` (..., 6)."""
-    lowest = np.ceil((robot.q_min - _WINDOW_TOL - q) / TURN)
-    highest = np.floor((robot.q_max + _WINDOW_TOL - q) / TURN)
-    with np.errstate(invalid="ignore"):
-        k = np.clip(np.round((reference - q) / TURN), lowest, highest)
-    return q + TURN * k
-
-
 def _nearest(robot, q_all, valid, reference):
     """Per row the branch and turns (M, 6) nearest ``reference`` (M, 6); NaN where none is valid."""
-    candidates = _turned(robot, q_all, reference[:, None, :])
+    candidates = turn_towards(robot, q_all, reference[:, None, :])[0]
     distance = np.where(valid, np.sum((candidates - reference[:, None, :]) ** 2, axis=2), np.inf)
     best = np.argmin(distance, axis=1)
     q = candidates[np.arange(len(q_all)), best]
