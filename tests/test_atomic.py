@@ -32,10 +32,9 @@ def test_new_file_gets_the_umask_mode_not_0600(tmp_path):
     assert mode(tmp_path / "new.csv") == 0o644
 
 
-def test_files_land_all_or_none_when_a_rename_fails(tmp_path, monkeypatch):
-    src, dat = tmp_path / "weld.src", tmp_path / "weld.dat"
-    src.write_bytes(b"old src")
-    dat.write_bytes(b"old dat")
+@pytest.fixture
+def second_rename_fails(monkeypatch):
+    """os.replace as atomic uses it, failing on its second call (the disk fills between two files)."""
     real_replace = os.replace
     calls = []
 
@@ -46,25 +45,22 @@ def test_files_land_all_or_none_when_a_rename_fails(tmp_path, monkeypatch):
         real_replace(a, b)
 
     monkeypatch.setattr(atomic.os, "replace", second_fails)
+    yield
+    monkeypatch.setattr(atomic.os, "replace", real_replace)
+
+
+def test_files_land_all_or_none_when_a_rename_fails(tmp_path, second_rename_fails):
+    src, dat = tmp_path / "weld.src", tmp_path / "weld.dat"
+    src.write_bytes(b"old src")
+    dat.write_bytes(b"old dat")
     with pytest.raises(WriteError, match="disk full"):
         write_files_atomic({src: b"new src", dat: b"new dat"})
-    monkeypatch.setattr(atomic.os, "replace", real_replace)
     assert src.read_bytes() == b"old src"
     assert dat.read_bytes() == b"old dat"
     assert sorted(p.name for p in tmp_path.iterdir()) == ["weld.dat", "weld.src"]
 
 
-def test_a_new_file_is_removed_again_when_its_partner_fails(tmp_path, monkeypatch):
-    real_replace = os.replace
-    calls = []
-
-    def second_fails(a, b):
-        calls.append(b)
-        if len(calls) == 2:
-            raise OSError("disk full")
-        real_replace(a, b)
-
-    monkeypatch.setattr(atomic.os, "replace", second_fails)
+def test_a_new_file_is_removed_again_when_its_partner_fails(tmp_path, second_rename_fails):
     with pytest.raises(WriteError):
         write_files_atomic({tmp_path / "m.yaml": b"a", tmp_path / "m.npz": b"b"})
     assert list(tmp_path.iterdir()) == []
