@@ -199,3 +199,14 @@ def test_real_compas_rrc_module_with_a_moving_track(tmp_path):
     again = formats.read(tmp_path / "track.src")
     np.testing.assert_array_equal([t.external[0] for t in again.targets], [t.external[0] for t in program.targets])
     assert again.moving_external_axes() == ("E1",)
+
+
+def test_real_module_with_work_object_after_a_comma_and_run_time_targets():
+    program = formats.read(REAL.parent / "Cymbergaj.mod")
+    assert {m.frame for m in program.motions} == {"test_reakcji"}  # "tool0,\WObj:=test_reakcji": not wobj0
+    assert [(line, reason) for line, _, reason in program.not_compensated()] == [
+        (103, "target_position is declared without a value (set at run time, line 19)"),
+        (113, "position computed at run time: Offs(target_position, 0, 0, 0)"),
+        (120, "position computed at run time: Offs(home,0,0,0)"),
+    ]
+    assert [program.targets[i].name for i in program.usage()] == ["home"]
