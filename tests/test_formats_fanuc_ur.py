@@ -7,6 +7,7 @@ import pytest
 
 from trajcomp import formats
 from trajcomp.errors import ReadError, WriteError
+from trajcomp.robot import load_robot
 from trajcomp.transforms import abc_to_matrix, rotvec_to_matrix
 
 DATA = Path(__file__).parent / "data" / "programs"
@@ -278,3 +279,15 @@ def test_urscript_qnear_out_of_range_is_refused(tmp_path):
     path = _script(tmp_path, ["movej(get_inverse_kin(p[0.4, 0.1, 0.3, 0, 3.14, 0], qnear=[0, -1.5, 1e999, 0, 0, 0]))"])
     with pytest.raises(ReadError, match=r"s\.script:2: qnear 3: '1e999' is out of range"):
         formats.read(path)
+
+
+def test_urscript_movec_with_a_run_time_via_point_converts_to_ls_as_a_comment(tmp_path):
+    from trajcomp.postprocess import convert_program
+
+    path = _script(tmp_path, ["movel(p[0.4, 0.1, 0.3, 0, 3.14, 0])",
+                              "movec(pose_add(get_actual_tcp_pose(), p[0, 0.01, 0, 0, 0, 0]), p[0.42, 0.12, 0.3, 0, 3.14, 0])"])
+    program = formats.read(path)
+    circle = program.motions[1]
+    assert (circle.target, circle.via, circle.line) == (None, None, 3)
+    formats.write(tmp_path / "C.LS", convert_program(program, "fanuc_ls", robot=load_robot("ur10")))
+    assert "! not converted: movec(pose_add(" in (tmp_path / "C.LS").read_text()
