@@ -68,6 +68,9 @@ def test_retime_writes_a_compliance_report_of_the_program_as_written(tmp_path, c
     assert doc["timing"]["within_limits"] and doc["timing"]["cycle_time_s"] > 0
     assert all(t["correction_norm_mm"] == 0.0 for t in doc["targets"]) and len(doc["targets"]) == 5
     assert [t["posture_source"] for t in doc["targets"]] == ["config"] * 5
+    status = {c["id"]: c["status"] for c in doc["verdict"]["criteria"]}
+    assert status["residual"] == status["uncompensated"] == "not evaluated"  # nothing was compensated
+    assert status["joint_limits"] == status["timing"] == "pass"
 
 
 def test_a_failing_verdict_exits_1_with_the_program_written(tmp_path, kuka_model, capsys):

@@ -105,8 +105,11 @@ def target_rows(report, robot):
     return measures, rows
 
 
-def target_checks(report, measures, criteria, has_grid, mode):
-    """The per-target criteria of the verdict (list of Check)."""
+AS_WRITTEN = "no compensation model: the program runs as written (retime)"
+
+
+def target_checks(report, measures, criteria, has_grid, mode, compensated=True):
+    """The per-target criteria of the verdict (list of Check); without compensation, its criteria are not evaluated."""
     labels = report.labels
     c = criteria
     statements = {
@@ -122,7 +125,10 @@ def target_checks(report, measures, criteria, has_grid, mode):
     residual = report.predicted_residual
     checks = [check("residual", statements["residual"], residual > c.tolerance, labels,
                     f"largest {residual.max():.2e} mm")]
-    if has_grid:
+    if not compensated:
+        checks = [not_evaluated("residual", statements["residual"], AS_WRITTEN),
+                  not_evaluated("outside_grid", statements["outside_grid"], AS_WRITTEN)]
+    elif has_grid:
         outside = report.outside_grid
         checks.append(check("outside_grid", statements["outside_grid"], outside, labels,
                             f"{int(outside.sum())} of {len(labels)} targets outside"))
@@ -230,15 +236,19 @@ def compliance_report(report, robot, *, criteria=None, model=None, model_info=No
     if section is None:
         missing.append("no timing: the program was not re-timed, so there are no cycle time and no peak "
                        "joint velocity, acceleration or jerk")
-    checks = target_checks(report, measures, criteria, has_grid, mode)
+    checks = target_checks(report, measures, criteria, has_grid, mode, compensated=model is not None)
     if model is not None:
         cv = model.report.get("cross_validation") or {}
         source = f"{cv['folds']}-fold cross-validation" if mode in cv else "calibration fit"
         stats = cv.get(mode) or (model.report.get("fit") or {}).get(mode)
         checks.insert(1, accuracy_check(stats, mode, criteria.tolerance, source))
     lines = tuple(int(line) for line, *_ in report.not_compensated)
-    checks.append(Check("uncompensated", "every motion compensated", FAIL if lines else PASS,
-                        f"{len(lines)} motion(s) left as written" if lines else "no motion left as written", lines=lines))
+    if model is None:
+        checks.append(not_evaluated("uncompensated", "every motion compensated", AS_WRITTEN))
+    else:
+        checks.append(Check("uncompensated", "every motion compensated", FAIL if lines else PASS,
+                            f"{len(lines)} motion(s) left as written" if lines else "no motion left as written",
+                            lines=lines))
     checks.append(timing_check(section))
     doc = header("compliance", command)
     doc.update({
