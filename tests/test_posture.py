@@ -247,3 +247,19 @@ def test_the_measured_postures_are_kept_in_the_model_file(tmp_path, kuka_model):
     assert load_model(tmp_path / "again.yaml").postures == model.postures
     text = (tmp_path / "again.yaml").read_text()
     assert "postures:\n- front/up/positive" in text or "postures:\n- front/down/positive" in text
+
+
+def test_declared_joints_outside_the_limits_are_refused_not_turned(tmp_path):
+    """j1 = 3000 deg (wrong unit or robot) is not quietly taken as 3000 - 8 * 360 = 120 deg."""
+    path = tmp_path / "p.csv"
+    path.write_text("x,y,z,a,b,c,j1,j2,j3,j4,j5,j6\n-688,-163.9,627.1,90,0,180,3000,-90,92,-92,-90,0\n")
+    with pytest.raises(IKError, match=r"outside the limits of robot ur10 \(p\.csv:2: joints \[3000\.0, -90\.0"):
+        planned_joints(formats.read(path), load_robot("ur10"))
+
+
+def test_a_ptp_to_xhome_is_a_joint_position_kept_not_a_motion_left_uncompensated(tmp_path):
+    robot = load_robot("kuka_kr6_r900")
+    program = _krl(tmp_path, {"P1": (445, 0, 790, 0, 90, 0, 2, 2)}, ["PTP XHOME", "PTP P1", "PTP XHOME"])
+    _, report = compensate_program(program, _stand_in(robot, np.array([0.1, 0.0, 0.0])), robot)
+    assert report.not_compensated == ()
+    assert report.joint_targets == ("PTP XHOME (line 2)", "PTP XHOME (line 4)")

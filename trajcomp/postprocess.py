@@ -242,7 +242,8 @@ def _program_facts(program, joint_index, joint_mode):
     """The report fields that describe the program itself: unused points, joint targets, warnings."""
     return {
         "unused": tuple(t.label for t in program.unused_targets()),
-        "joint_targets": tuple(program.targets[i].label for i in joint_index),
+        "joint_targets": tuple(program.targets[i].label for i in joint_index)
+        + tuple(f"{m.text} (line {m.line})" for m in program.motions if m.axis_position),
         "joint_mode": joint_mode,
         "warnings": _warnings(program),
     }

@@ -106,6 +106,7 @@ def planned_joints(program, robot, *, tools=None, frames=None):
     branch, lower, upper = declared_windows(program.format, [t.config for t in targets])
     hint = np.array([np.full(6, np.nan) if t.joints is None else t.joints for t in targets]).reshape(n, 6)
     has_hint = np.all(np.isfinite(hint), axis=1)
+    _fail_outside_limits(program, robot, index[has_hint], hint[has_hint])
     by_config = ~has_hint & (branch >= 0)
     q = np.full((n, 6), np.nan)
     q[has_hint] = _nearest(robot, q_all[has_hint], valid[has_hint], hint[has_hint])
@@ -187,6 +188,18 @@ def _in_windows(robot, q_all, valid, branch, lower, upper):
     chosen = np.take_along_axis(candidates, pick[:, :, None], axis=2)[:, :, 0]
     placed = np.isfinite(np.take_along_axis(cost, pick[:, :, None], axis=2)[:, :, 0]).all(axis=1)
     return np.where((valid[rows, branch] & placed)[:, None], chosen, np.nan)
+
+
+def _fail_outside_limits(program, robot, index, joints):
+    """IKError for targets whose declared joints (M, 6), rad, lie outside the robot's limits: no turn is guessed."""
+    outside = np.flatnonzero(~robot.within_limits(joints))
+    if outside.size:
+        shown = "; ".join(f"{program.where(index[k])}: joints {np.round(np.degrees(joints[k]), 3).tolist()} deg"
+                          for k in outside[:5])
+        raise IKError(
+            f"{program.name}: {outside.size} targets declare joints outside the limits of robot {robot.name} "
+            f"({shown}); wrong robot, or joints in the wrong unit? The program was not changed"
+        )
 
 
 def _fail_unreachable(program, robot, index, q, source):

@@ -147,6 +147,10 @@ class Motion:
         Where the motion's speed and time fields stand in the source, by
         role as the format module names them (``speed``, ``t``, ``end``
         ...): re-timing writes there (`trajcomp.timing.writeback`).
+    axis_position : bool
+        The motion goes to an axis (joint) position stated outside the
+        program (KUKA ``XHOME`` of $config.dat): joint space, kept as written
+        like a joint target, not a motion left uncompensated.
     """
 
     kind: str
@@ -162,6 +166,7 @@ class Motion:
     reason: str = ""
     refs: tuple = ()
     spans: Mapping = dataclasses.field(default_factory=dict)
+    axis_position: bool = False
 
 
 @dataclasses.dataclass(frozen=True)
@@ -241,7 +246,8 @@ class Program:
 
     def not_compensated(self):
         """``((line, text, reason), ...)`` of the motions passed through unchanged, in program order."""
-        return tuple((m.line, m.text, m.reason or "position computed at run time") for m in self.runtime_motions())
+        return tuple((m.line, m.text, m.reason or "position computed at run time")
+                     for m in self.runtime_motions() if not m.axis_position)
 
     def referenced_targets(self):
         """Targets named outside the compensated motions, which no compensated motion uses.

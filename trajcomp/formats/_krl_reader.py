@@ -444,7 +444,8 @@ def _resolve(reader, path, dat_path):
             if reason:
                 named = {w.upper() for w in _WORD.findall(mask(item.text, ";"))}
                 known = tuple(reader.points[w] for w in sorted(named) if w in reader.points)
-                item = dataclasses.replace(item, target=None, via=None, reason=reason,
+                home = isinstance(item.target, _Named) and bool(_HOME.match(item.target.name))
+                item = dataclasses.replace(item, target=None, via=None, reason=reason, axis_position=home,
                                            refs=known + tuple(i for i in (via, target) if isinstance(i, int)))
             else:
                 item = whole_circle(dataclasses.replace(item, target=target, via=via))
