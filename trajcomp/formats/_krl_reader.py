@@ -18,6 +18,7 @@ from trajcomp.formats._text import (
     integer,
     mask,
     read_source,
+    split_top,
     unresolved,
     whole_circle,
 )
@@ -296,7 +297,7 @@ class _Reader:
         if approx:
             args = args[: approx.start()]
         parts, position = [], 0
-        for piece in _split_top(args):
+        for piece, _ in split_top(args):
             parts.append((piece, offset + position))
             position += len(piece) + 1
         wanted = 2 if kind == CIRCULAR else 1
@@ -354,23 +355,6 @@ class _Reader:
         if _NAME.match(stripped):
             return _Named(stripped, line_no)
         return None
-
-
-def _split_top(text):
-    """Split at commas outside braces, brackets and parentheses."""
-    parts, depth, current = [], 0, []
-    for ch in text:
-        if ch in "{[(":
-            depth += 1
-        elif ch in "}])":
-            depth -= 1
-        if ch == "," and depth == 0:
-            parts.append("".join(current))
-            current = []
-        else:
-            current.append(ch)
-    parts.append("".join(current))
-    return parts
 
 
 def read(path):

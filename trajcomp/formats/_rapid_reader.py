@@ -17,6 +17,7 @@ from trajcomp.formats._text import (
     mask,
     read_source,
     spans,
+    split_top,
     unresolved,
     whole_circle,
 )
@@ -100,21 +101,6 @@ def _statements(source, masked):
     if pending is not None:
         fail(source.name, pending[0], source.text[pending[1]:pending[1] + 80], "statement without ';'")
     return out
-
-
-def _split_top(text, offset):
-    """``[(piece, start)]`` of ``text`` split at top-level commas."""
-    parts, depth, start = [], 0, 0
-    for k, ch in enumerate(text):
-        if ch in "[({":
-            depth += 1
-        elif ch in "])}":
-            depth -= 1
-        elif ch == "," and depth == 0:
-            parts.append((text[start:k], offset + start))
-            start = k + 1
-    parts.append((text[start:], offset + start))
-    return parts
 
 
 def _bare(argument):
@@ -263,7 +249,7 @@ class _Reader:
             return Motion(kind=LINEAR, line=line, text=text,
                           reason=f"{instruction}: instruction not read by trajcomp, left as written")
         kind = KINDS[family]
-        pieces = _split_top(rest, start)
+        pieces = split_top(rest, start)
         options = {k.lower(): (v or "").strip() for p, _ in pieces for k, v in _OPTION.findall(p)}
         positional = [(p, s) for p, s in pieces if not p.strip().startswith("\\")]
         count = 2 if kind == CIRCULAR else 1

@@ -103,6 +103,24 @@ class Lines:
         return self.text[start:end].rstrip("\r\n")
 
 
+def split_top(text, offset=0):
+    """``[(piece, start)]`` of ``text`` split at commas outside braces, brackets and parentheses.
+
+    ``start`` is the piece's offset in the source (``offset`` is where ``text`` begins).
+    """
+    parts, depth, start = [], 0, 0
+    for k, ch in enumerate(text):
+        if ch in "{[(":
+            depth += 1
+        elif ch in "}])":
+            depth -= 1
+        elif ch == "," and depth == 0:
+            parts.append((text[start:k], offset + start))
+            start = k + 1
+    parts.append((text[start:], offset + start))
+    return parts
+
+
 def fail(source_name, line, text, message):
     """Raise a ReadError naming file, line, the problem and the offending text."""
     raise ReadError(f"{source_name}:{line}: {message}: {text.strip()[:200]!r}")

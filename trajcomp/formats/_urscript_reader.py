@@ -17,6 +17,7 @@ from trajcomp.formats._text import (
     mask,
     read_source,
     spans,
+    split_top,
     unresolved,
 )
 from trajcomp.program import CIRCULAR, JOINT, LINEAR, Motion, Program, Span, Statement, Target
@@ -43,21 +44,6 @@ _NAME = re.compile(r"^\s*([A-Za-z_]\w*)\s*$")
 _WORD = re.compile(r"[A-Za-z_]\w*")
 _NUMBERS_ONLY = re.compile(r"^\s*p\[[\s\d.eE+,-]*\]\s*$")
 _SIGNS = re.compile(r"(?m)^\s*def\s+\w+\s*\(|\b(?:movej|movel|movep|movec)\s*\(|\bp\[")
-
-
-def arguments(text, offset):
-    """``[(argument, start)]`` of a call's argument text, split at top-level commas."""
-    parts, depth, start = [], 0, 0
-    for k, ch in enumerate(text):
-        if ch in "[(":
-            depth += 1
-        elif ch in "])":
-            depth -= 1
-        elif ch == "," and depth == 0:
-            parts.append((text[start:k], offset + start))
-            start = k + 1
-    parts.append((text[start:], offset + start))
-    return parts
 
 
 def _closing(text, open_at):
@@ -166,7 +152,7 @@ class _Reader:
                 return None, None, f"{name} is a number, not a position"
             return _Named(name, line), None, ""
         if m := _IK.match(text):
-            args = arguments(m.group(1), offset + m.start(1))
+            args = split_top(m.group(1), offset + m.start(1))
             index, frame, why = self.position(args[0][0], args[0][1], line, original)
             near = [a for a in args[1:] if a[0].strip().startswith("qnear")] or args[1:2]
             if isinstance(index, int) and near:
@@ -176,7 +162,7 @@ class _Reader:
                 self.link(index, value, shift, line, original)
             return index, frame, why
         if m := _POSE_TRANS.match(text):
-            args = arguments(m.group(1), offset + m.start(1))
+            args = split_top(m.group(1), offset + m.start(1))
             if len(args) == 2:
                 frame, why = self.frame(args[0][0], args[0][1], line, original)
                 if why:
@@ -348,7 +334,7 @@ def read(path):
             close = _closing(text, call.end() - 1)
             if close < 0:
                 fail(source.name, line, original, "unbalanced parentheses")
-            args = arguments(text[call.end():close], start + call.end())
+            args = split_top(text[call.end():close], start + call.end())
             motion = reader.call(call.group(1), args, line, original)
             reader.items.append(motion or Statement(line, original))
             continue
