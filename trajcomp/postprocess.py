@@ -86,11 +86,6 @@ class ProgramReport:
     joint_mode: str = "keep"
     warnings: tuple = ()
 
-    @property
-    def compensated(self):
-        """Labels of the compensated targets."""
-        return self.labels
-
     def lines_of_text(self):
         """Human-readable summary lines."""
         out = [f"compensated targets: {len(self.labels)}"]
