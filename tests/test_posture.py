@@ -186,9 +186,11 @@ def test_motions_computed_at_run_time_are_counted_and_fail_the_exit_code(tmp_pat
 def test_bounds_must_be_positive(tmp_path, kuka_model, capsys):
     src = _copy_example(tmp_path)
     for option in ("--max-joint-change", "--max-correction"):
-        assert main(["compensate", str(src), "--model", str(kuka_model), option, "nan", "-o",
-                     str(tmp_path / "o.src")]) == 2
+        with pytest.raises(SystemExit) as exit_info:  # argparse: bad usage
+            main(["compensate", str(src), "--model", str(kuka_model), option, "nan", "-o", str(tmp_path / "o.src")])
+        assert exit_info.value.code == 2
         assert option in capsys.readouterr().err
+    assert not (tmp_path / "o.src").exists()
 
 
 def test_points_passed_to_routines_are_not_compensated_and_moving_external_axes_are_warned(tmp_path):

@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 
 from trajcomp import batch, formats
-from trajcomp.commands._args import command_parser, info
+from trajcomp.commands._args import command_parser, info, positive_number
 from trajcomp.commands._report import add_report_options, criteria_of
 from trajcomp.commands.convert import add_frame_options, add_in_place_option, frame_options
 from trajcomp.commands.retime import CHOICES as RETIME_CHOICES
@@ -49,10 +49,10 @@ def add_parser(sub):
     add_frame_options(parser)
     parser.add_argument("--joint-targets", choices=("keep", "compensate"), default="keep",
                         help="joint-space targets: keep them (default) or compensate the pose they stand for")
-    parser.add_argument("--max-joint-change", type=float, default=float(np.degrees(MAX_JOINT_CHANGE)), metavar="DEG",
+    parser.add_argument("--max-joint-change", type=positive_number, default=float(np.degrees(MAX_JOINT_CHANGE)), metavar="DEG",
                         help="largest joint change a correction may cause before the target counts as leaving "
                         "its posture (default %(default)g deg)")
-    parser.add_argument("--max-correction", type=float, default=MAX_CORRECTION, metavar="MM",
+    parser.add_argument("--max-correction", type=positive_number, default=MAX_CORRECTION, metavar="MM",
                         help="largest plausible position correction (default %(default)g mm)")
     parser.add_argument("--retime", choices=RETIME_CHOICES, default="auto",
                         help=f"re-time the corrected program under the robot's limits ({METHOD_HELP}); none: keep "
@@ -172,9 +172,6 @@ def _model_info(path, mode):
 
 
 def run(args):
-    for option, value in (("--max-joint-change", args.max_joint_change), ("--max-correction", args.max_correction)):
-        if not (np.isfinite(value) and value > 0):
-            raise TrajcompError(f"{option}: expected a positive number, got {value}")
     if args.jobs < 1:
         raise TrajcompError(f"--jobs: expected a whole number of at least 1, got {args.jobs}")
     tools, frames = frame_options(args)
