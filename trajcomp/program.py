@@ -17,6 +17,12 @@ each number that a compensation may change, its `Span` in that text. Writers
 replace only the numbers of targets marked ``edited`` (`Program.with_targets`
 marks them), so an unchanged program writes back byte for byte.
 
+Columns: the pipeline stages (posture, compensation, re-timing) read a
+program through `Program.motion_table` and `Program.target_table`, arrays
+over all motions and targets, never object by object. A program read from
+a long CSV holds only these columns (`Program.from_tables`): its ``items``
+and ``targets`` stay complete sequences, but each access builds an object.
+
 Units inside the model: mm and rad. Poses are ``T_frame_tcp`` (4, 4): the
 TCP of the target's tool in the target's user frame (KUKA base, ABB work
 object, FANUC user frame); ``frame=None`` is the robot base and
@@ -24,7 +30,8 @@ object, FANUC user frame); ``frame=None`` is the robot base and
 """
 
 import dataclasses
-from collections.abc import Mapping
+import functools
+from collections.abc import Mapping, Sequence
 
 import numpy as np
 
@@ -183,6 +190,266 @@ class Statement:
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
+class MotionTable:
+    """The motions of a program as arrays over its M motions, in program order.
+
+    Attributes
+    ----------
+    kind : ndarray of object, shape (M,)
+        ``"joint"``, ``"linear"`` or ``"circular"``.
+    target, via : ndarray of int, shape (M,)
+        Target indices; -1 where the motion has none (run time / no via point).
+    speed : ndarray, shape (M,)
+        In ``speed_unit``; NaN where the language default applies.
+    speed_unit : ndarray of object, shape (M,)
+    zone : ndarray, shape (M,)
+        Blend radius, mm; NaN for an exact stop.
+    tool, frame : ndarray of object, shape (M,)
+        Names (None: the robot's tool / the base).
+    line : ndarray of int, shape (M,)
+    axis_position : ndarray of bool, shape (M,)
+    """
+
+    kind: np.ndarray
+    target: np.ndarray
+    via: np.ndarray
+    speed: np.ndarray
+    speed_unit: np.ndarray
+    zone: np.ndarray
+    tool: np.ndarray
+    frame: np.ndarray
+    line: np.ndarray
+    axis_position: np.ndarray
+
+    def __len__(self):
+        return len(self.line)
+
+    @classmethod
+    def of(cls, motions):
+        """The table of `Motion` objects."""
+        def column(values, dtype):
+            return np.array(values, dtype=dtype).reshape(len(motions))
+
+        def number(value):
+            return np.nan if value is None else value
+
+        return cls(
+            kind=column([m.kind for m in motions], object),
+            target=column([-1 if m.target is None else m.target for m in motions], int),
+            via=column([-1 if m.via is None else m.via for m in motions], int),
+            speed=column([number(m.speed) for m in motions], float),
+            speed_unit=column([m.speed_unit for m in motions], object),
+            zone=column([number(m.zone) for m in motions], float),
+            tool=column([m.tool for m in motions], object),
+            frame=column([m.frame for m in motions], object),
+            line=column([m.line for m in motions], int),
+            axis_position=column([m.axis_position for m in motions], bool),
+        )
+
+    def motion(self, k, text=""):
+        """Motion ``k`` as an object (its spans and refs are not kept in the table)."""
+        def optional(value, kind):
+            return None if (value < 0 if kind is int else np.isnan(value)) else kind(value)
+
+        return Motion(
+            kind=self.kind[k], target=optional(self.target[k], int), via=optional(self.via[k], int),
+            speed=optional(self.speed[k], float), speed_unit=self.speed_unit[k], zone=optional(self.zone[k], float),
+            tool=self.tool[k], frame=self.frame[k], line=int(self.line[k]), text=text,
+            axis_position=bool(self.axis_position[k]),
+        )
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class TargetTable:
+    """The targets of a program as arrays over its N targets.
+
+    Attributes
+    ----------
+    pose : ndarray, shape (N, 4, 4)
+        T_frame_tcp, mm; NaN for a joint target.
+    joints : ndarray, shape (N, 6)
+        Joints, rad; NaN where the target states none.
+    line : ndarray of int, shape (N,)
+    config : tuple, length N
+        Configuration data (``()`` where none).
+    tool, frame : ndarray of object, shape (N,)
+        Names the point data state (None: the motion's).
+    external : tuple, length N
+        External axes (ndarray) or None.
+    edited : ndarray of bool, shape (N,)
+    """
+
+    pose: np.ndarray
+    joints: np.ndarray
+    line: np.ndarray
+    config: tuple
+    tool: np.ndarray
+    frame: np.ndarray
+    external: tuple
+    edited: np.ndarray
+
+    def __len__(self):
+        return len(self.line)
+
+    @property
+    def is_joint(self):
+        """ndarray of bool (N,): joint-space targets (no pose)."""
+        return np.isnan(self.pose[:, 0, 0])
+
+    @classmethod
+    def of(cls, targets):
+        """The table of `Target` objects."""
+        n = len(targets)
+        nan_pose, nan_joints = np.full((4, 4), np.nan), np.full(6, np.nan)
+        return cls(
+            pose=np.array([nan_pose if t.pose is None else t.pose for t in targets], dtype=float).reshape(n, 4, 4),
+            joints=np.array([nan_joints if t.joints is None else t.joints for t in targets], dtype=float).reshape(n, 6),
+            line=np.array([t.line for t in targets], dtype=int).reshape(n),
+            config=tuple(t.config for t in targets),
+            tool=np.array([t.tool for t in targets], dtype=object).reshape(n),
+            frame=np.array([t.frame for t in targets], dtype=object).reshape(n),
+            external=tuple(t.external for t in targets),
+            edited=np.array([t.edited for t in targets], dtype=bool).reshape(n),
+        )
+
+    @classmethod
+    def of_rows(cls, pose, joints, line):
+        """A table of inline targets in the robot base frame, with the robot's tool (CSV rows).
+
+        Parameters
+        ----------
+        pose : ndarray, shape (N, 4, 4)
+            NaN for joint targets.
+        joints : ndarray, shape (N, 6)
+            Rad; NaN where none.
+        line : ndarray of int, shape (N,)
+        """
+        n = len(line)
+        return cls(pose, joints, np.asarray(line, dtype=int), ((),) * n, np.full(n, None, dtype=object),
+                   np.full(n, None, dtype=object), (None,) * n, np.zeros(n, dtype=bool))
+
+    def target(self, i):
+        """Target ``i`` as an object."""
+        return Target(
+            name="", line=int(self.line[i]),
+            pose=None if np.isnan(self.pose[i, 0, 0]) else self.pose[i],
+            joints=None if np.isnan(self.joints[i]).any() else self.joints[i],
+            config=self.config[i], tool=self.tool[i], frame=self.frame[i], external=self.external[i],
+            edited=bool(self.edited[i]),
+        )
+
+    def with_rows(self, index, *, poses=None, joints=None, configs=None):
+        """A copy with rows ``index`` replaced and marked edited (see `Program.with_targets`)."""
+        changes = {"edited": self.edited.copy()}
+        changes["edited"][index] = True
+        if poses is not None:
+            changes["pose"] = self.pose.copy()
+            changes["pose"][index] = poses
+        if joints is not None:
+            changes["joints"] = self.joints.copy()
+            changes["joints"][index] = joints
+        if configs is not None:
+            config = list(self.config)
+            for k, i in enumerate(index):
+                config[i] = tuple(configs[k])
+            changes["config"] = tuple(config)
+        return dataclasses.replace(self, **changes)
+
+
+class _Rows(Sequence):
+    """A sequence whose items are built on access from a table (``build(k)``)."""
+
+    def __init__(self, size, build):
+        self._size, self._build = size, build
+
+    def __len__(self):
+        return self._size
+
+    def __getitem__(self, k):
+        if isinstance(k, slice):
+            return tuple(self._build(j) for j in range(*k.indices(self._size)))
+        if not -self._size <= k < self._size:
+            raise IndexError(k)
+        return self._build(k % self._size)
+
+
+class TargetRows(_Rows):
+    """The targets of a table-backed program: a `TargetTable` seen as a sequence of `Target`."""
+
+    def __init__(self, table):
+        super().__init__(len(table), table.target)
+        self.table = table
+
+
+class ItemRows(_Rows):
+    """The items of a table-backed program: its statements, and the motions of a `MotionTable`, by line.
+
+    Parameters
+    ----------
+    statements : sequence of Statement
+    motions : MotionTable
+    text : callable
+        ``text(line) -> str``: the instruction written at a line.
+    """
+
+    def __init__(self, statements, motions, text):
+        lines = np.concatenate([[s.line for s in statements], motions.line]).astype(int)
+        self._order = np.argsort(lines, kind="stable")
+        self.statements, self.table, self._text = tuple(statements), motions, text
+        super().__init__(len(lines), self._item)
+        self.motions = _Rows(len(motions), self._motion)
+
+    def _item(self, k):
+        j = self._order[k]
+        return self.statements[j] if j < len(self.statements) else self._motion(j - len(self.statements))
+
+    def _motion(self, k):
+        return self.table.motion(k, self._text(int(self.table.line[k])))
+
+
+class LineLabels(Sequence):
+    """Labels ``file:line`` of targets given by their lines (N,), built on access."""
+
+    def __init__(self, source_name, lines):
+        self.source_name, self.lines = source_name, np.asarray(lines, dtype=int)
+
+    def __len__(self):
+        return len(self.lines)
+
+    def __getitem__(self, k):
+        if isinstance(k, slice):
+            return [f"{self.source_name}:{n}" for n in self.lines[k].tolist()]
+        return f"{self.source_name}:{self.lines[k]}"
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class Usage:
+    """Tool and frame of every target some motion uses (`Program.usage_table`).
+
+    Attributes
+    ----------
+    index : ndarray of int, shape (K,)
+        Target indices, ascending.
+    tool, frame : ndarray of object, shape (K,)
+        Names (None: the robot's tool / the base).
+    """
+
+    index: np.ndarray
+    tool: np.ndarray
+    frame: np.ndarray
+
+
+def _codes(values):
+    """Integer codes (N,) of hashable values (N,) and the distinct values in first-seen order."""
+    values = list(values)
+    names = list(dict.fromkeys(values))
+    if len(names) <= 1:
+        return np.zeros(len(values), dtype=int), names
+    lookup = {name: k for k, name in enumerate(names)}
+    return np.fromiter(map(lookup.__getitem__, values), dtype=int, count=len(values)), names
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
 class PoseStack:
     """The Cartesian targets of a program as one stack.
 
@@ -217,8 +484,8 @@ class Program:
         Registry name of the language the program was read from (or is
         meant for).
     name : str
-    items : tuple of (Motion or Statement)
-    targets : tuple of Target
+    items : Sequence of (Motion or Statement)
+    targets : Sequence of Target
     tools : Mapping[str, ndarray (4, 4)]
         T_flange_tool of the tools the program defines, mm.
     frames : Mapping[str, ndarray (4, 4)]
@@ -229,25 +496,69 @@ class Program:
 
     format: str
     name: str
-    items: tuple
-    targets: tuple
+    items: Sequence
+    targets: Sequence
     tools: Mapping = dataclasses.field(default_factory=dict)
     frames: Mapping = dataclasses.field(default_factory=dict)
     sources: tuple = ()
 
+    @classmethod
+    def from_tables(cls, format, name, statements, motions, targets, text, sources=()):
+        """A program held as columns: for long programs (a CSV of a million rows).
+
+        Parameters
+        ----------
+        format, name : str
+        statements : sequence of Statement
+            Everything that is not a motion, with its line.
+        motions : MotionTable
+        targets : TargetTable
+        text : callable
+            ``text(line) -> str``: the instruction at a line (built on access).
+        sources : tuple of Source
+        """
+        return cls(format, name, ItemRows(statements, motions, text), TargetRows(targets), sources=sources)
+
     @property
     def motions(self):
         """The motion items, in program order."""
+        if isinstance(self.items, ItemRows):
+            return self.items.motions
         return tuple(item for item in self.items if isinstance(item, Motion))
+
+    def motion_table(self):
+        """The motions as a `MotionTable` (built once)."""
+        if isinstance(self.items, ItemRows):
+            return self.items.table
+        return self._motion_table
+
+    @functools.cached_property
+    def _motion_table(self):
+        return MotionTable.of(self.motions)
+
+    def target_table(self):
+        """The targets as a `TargetTable` (built once)."""
+        if isinstance(self.targets, TargetRows):
+            return self.targets.table
+        return self._target_table
+
+    @functools.cached_property
+    def _target_table(self):
+        return TargetTable.of(self.targets)
 
     def runtime_motions(self):
         """Motions whose position is computed at run time (not compensable)."""
-        return tuple(m for m in self.motions if m.target is None)
+        return tuple(self.motions[k] for k in np.flatnonzero(self.motion_table().target < 0))
 
     def not_compensated(self):
         """``((line, text, reason), ...)`` of the motions passed through unchanged, in program order."""
         return tuple((m.line, m.text, m.reason or "position computed at run time")
                      for m in self.runtime_motions() if not m.axis_position)
+
+    def _referencing_items(self):
+        """The items that name targets outside compensated motions (``refs``)."""
+        items = self.items.statements if isinstance(self.items, ItemRows) else self.items
+        return [item for item in items if item.refs]
 
     def referenced_targets(self):
         """Targets named outside the compensated motions, which no compensated motion uses.
@@ -262,10 +573,10 @@ class Program:
         tuple of (int, int, str)
             ``(target index, line, text)`` of each naming item, in program order.
         """
-        used = self.usage()
+        used = set(self.usage_table().index.tolist())
         return tuple(
             (i, item.line, item.text.strip())
-            for item in self.items
+            for item in self._referencing_items()
             for i in dict.fromkeys(item.refs)
             if i not in used
         )
@@ -281,7 +592,8 @@ class Program:
         tuple of str
             Axis labels (``"E1"``, ...) in axis order; empty if none moves.
         """
-        values = [self.targets[i].external for i in sorted(self.usage()) if self.targets[i].external is not None]
+        external = self.target_table().external
+        values = [external[i] for i in self.usage_table().index.tolist() if external[i] is not None]
         if len(values) < 2:
             return ()
         width = max(len(v) for v in values)
@@ -291,14 +603,10 @@ class Program:
         moving = [k for k in range(width) if len(np.unique(table[~np.isnan(table[:, k]), k])) > 1]
         return tuple(f"E{k + 1}" for k in moving)
 
-    def usage(self):
-        """Tool and frame of every target, from its own data or the motions using it.
+    def usage_table(self):
+        """Tool and frame of every target some motion uses, as arrays (`Usage`, built once).
 
-        Returns
-        -------
-        dict
-            ``{target index: (tool, frame)}`` for every target some motion
-            uses (as target or via point).
+        A target's own tool or frame (FANUC UT, UF) wins over the motion's.
 
         Raises
         ------
@@ -306,45 +614,79 @@ class Program:
             A target used with two different tools or frames: one set of
             numbers cannot be right for both.
         """
-        used = {}
-        for motion in self.motions:
-            for index in (motion.target, motion.via):
-                if index is None:
-                    continue
-                target = self.targets[index]
-                tool = target.tool if target.tool is not None else motion.tool
-                frame = target.frame if target.frame is not None else motion.frame
-                if used.setdefault(index, (tool, frame)) != (tool, frame):
-                    raise TrajcompError(
-                        f"target {target.label} is used with tool/frame {used[index]} and, "
-                        f"at line {motion.line}, with {(tool, frame)}: it cannot be compensated for both"
-                    )
-        return used
+        return self._usage
+
+    @functools.cached_property
+    def _usage(self):
+        motions, targets = self.motion_table(), self.target_table()
+        index = np.stack([motions.via, motions.target], axis=1).ravel()  # via before target, program order
+        rows = np.repeat(np.arange(len(motions)), 2)
+        keep = index >= 0
+        index, rows = index[keep], rows[keep]
+        own_tool, own_frame = targets.tool[index], targets.frame[index]
+        tool = np.where(np.equal(own_tool, None), motions.tool[rows], own_tool)
+        frame = np.where(np.equal(own_frame, None), motions.frame[rows], own_frame)
+        tool_code, _ = _codes(tool)
+        frame_code, _ = _codes(frame)
+        key = tool_code * (frame_code.max(initial=0) + 1) + frame_code
+        order = np.argsort(index, kind="stable")
+        first = np.ones(len(order), dtype=bool)
+        first[1:] = index[order][1:] != index[order][:-1]
+        start = order[first]
+        first_key = np.repeat(key[start], np.diff(np.append(np.flatnonzero(first), len(order))))
+        clash = np.flatnonzero(key[order] != first_key)
+        if clash.size:
+            j = order[clash[np.argmin(order[clash])]]
+            k = start[np.searchsorted(index[start], index[j])]
+            raise TrajcompError(
+                f"target {self.targets[index[j]].label} is used with tool/frame {(tool[k], frame[k])} and, "
+                f"at line {motions.line[rows[j]]}, with {(tool[j], frame[j])}: it cannot be compensated for both"
+            )
+        return Usage(index[start], tool[start], frame[start])
+
+    def usage(self):
+        """Tool and frame of every target, from its own data or the motions using it.
+
+        Returns
+        -------
+        dict
+            ``{target index: (tool, frame)}`` for every target some motion
+            uses (as target or via point), by ascending index (see
+            `usage_table` for long programs).
+
+        Raises
+        ------
+        TrajcompError
+            As `usage_table`.
+        """
+        used = self.usage_table()
+        return dict(zip(used.index.tolist(), zip(used.tool.tolist(), used.frame.tolist())))
 
     def cartesian_targets(self):
         """The Cartesian targets used by motions, as one `PoseStack`."""
-        used = self.usage()
-        index = [i for i in sorted(used) if not self.targets[i].is_joint]
-        return PoseStack(
-            index=np.array(index, dtype=int),
-            T=np.array([self.targets[i].pose for i in index]).reshape(-1, 4, 4),
-            tool=tuple(used[i][0] for i in index),
-            frame=tuple(used[i][1] for i in index),
-            names=tuple(self.targets[i].label for i in index),
-        )
+        used, targets = self.usage_table(), self.target_table()
+        cartesian = ~targets.is_joint[used.index]
+        index = used.index[cartesian]
+        return PoseStack(index=index, T=targets.pose[index], tool=tuple(used.tool[cartesian]),
+                         frame=tuple(used.frame[cartesian]), names=self.labels(index))
 
     def joint_targets(self):
         """Indices (N,) of the joint targets used by motions, and their joints (N, 6), rad."""
-        index = np.array([i for i in sorted(self.usage()) if self.targets[i].is_joint], dtype=int)
-        return index, np.array([self.targets[i].joints for i in index]).reshape(-1, 6)
+        used, targets = self.usage_table(), self.target_table()
+        index = used.index[targets.is_joint[used.index]]
+        return index, targets.joints[index]
 
     def unused_targets(self):
         """Targets nothing uses: no motion, statement or run-time expression (left unchanged)."""
-        used = set(self.usage()) | {i for item in self.items for i in item.refs}
-        return tuple(t for i, t in enumerate(self.targets) if i not in used)
+        used = np.zeros(len(self.targets), dtype=bool)
+        used[self.usage_table().index] = True
+        used[[i for item in self._referencing_items() for i in item.refs]] = True
+        return tuple(self.targets[i] for i in np.flatnonzero(~used))
 
     def where(self, index):
         """Target ``index`` named for messages: label, file and line (``P1 (weld.dat:12)``)."""
+        if isinstance(self.targets, TargetRows):
+            return self.labels([index])[0]
         target = self.targets[index]
         span = next(iter(target.spans.values()), None)
         if span is not None and span.source < len(self.sources):
@@ -352,6 +694,13 @@ class Program:
         else:
             place = f"line {target.line}"
         return f"{target.name} ({place})" if target.name else place
+
+    def labels(self, index):
+        """`where` of many targets (N,): a sequence of str (built on access for a table-backed program)."""
+        if isinstance(self.targets, TargetRows):
+            lines = self.target_table().line[np.asarray(index, dtype=int)]
+            return LineLabels(self.sources[0].name, lines) if self.sources else [f"line {n}" for n in lines]
+        return [self.where(i) for i in index]
 
     def with_targets(self, index, *, poses=None, joints=None, configs=None):
         """A new program with some targets replaced and marked edited.
@@ -367,8 +716,12 @@ class Program:
         configs : sequence of tuple, length N, optional
             New configuration data in the program's language.
         """
+        index = np.asarray(index, dtype=int)
+        if isinstance(self.targets, TargetRows):
+            table = self.targets.table.with_rows(index, poses=poses, joints=joints, configs=configs)
+            return dataclasses.replace(self, targets=TargetRows(table))
         targets = list(self.targets)
-        for k, i in enumerate(np.asarray(index, dtype=int)):
+        for k, i in enumerate(index):
             change = {"edited": True}
             if poses is not None:
                 change["pose"] = np.asarray(poses[k], dtype=float)
