@@ -36,6 +36,9 @@ import time  # noqa: E402
 from pathlib import Path  # noqa: E402
 
 import numpy as np  # noqa: E402
+import toppra  # noqa: E402
+import toppra.algorithm  # noqa: E402
+import toppra.constraint  # noqa: E402
 
 from trajcomp import formats  # noqa: E402
 from trajcomp.cli import main as cli  # noqa: E402
@@ -50,7 +53,7 @@ from trajcomp.robot import load_robot  # noqa: E402
 from trajcomp.timing import Moves, moves_from_program, plan_segments, retime  # noqa: E402
 from trajcomp.timing.check import segment_peaks  # noqa: E402
 from trajcomp.timing.path import run_path  # noqa: E402
-from trajcomp.timing.toppra_run import toppra, toppra_law  # noqa: E402
+from trajcomp.timing.toppra_run import toppra_law  # noqa: E402
 from trajcomp.transforms import abc_to_matrix, matrix_to_abc  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[2]

@@ -254,7 +254,7 @@ def _thinned(s, q, jac, tol):
     knots = np.unique(np.r_[np.arange(0, n, KNOT_STRIDE), n - 1])
     while True:
         try:
-            spline = make_lsq_spline(s, q, np.r_[[s[0]] * 4, s[knots[1:-1]], [s[-1]] * 4], k=3)
+            spline = make_lsq_spline(s, q, np.r_[[s[0]] * 4, s[knots[1:-1]], [s[-1]] * 4], k=3, method="norm-eq")
         except (ValueError, np.linalg.LinAlgError):
             return None, 0.0
         position, rotation, joint = _deviation(spline, s, q, jac)

@@ -1,13 +1,14 @@
 """TOPP-RA time-optimal parametrization of a run's path under joint and TCP speed limits.
 
-toppra (Pham & Pham 2018) bounds the squared path speed x = sd^2 and the
-path acceleration u = sdd on a grid; here with the seidel solver, a grid
-point on every path sample (every waypoint) and the constant-acceleration
-parametrizer: u is constant between grid points, exactly as TOPP-RA's
-discretization assumes, so the time law between grid points is the one
-the solver checked (a spline through the grid velocities overshoots
-between grid points). Limits hold only at grid points: `trajcomp.timing.check`
-verifies them densely afterwards.
+TOPP-RA (Pham & Pham 2018) bounds the squared path speed x = sd^2 and the
+path acceleration u = sdd on a grid; here with a grid point on every path
+sample (every waypoint), solved by `trajcomp.timing.reachability` (the
+same discretization as toppra's seidel solver, vectorized), and the
+constant-acceleration time law: u is constant between grid points, exactly
+as TOPP-RA's discretization assumes, so the time law between grid points
+is the one the solver checked (a spline through the grid velocities
+overshoots between grid points). Limits hold only at grid points:
+`trajcomp.timing.check` verifies them densely afterwards.
 
 Constraints per grid point s_i:
 
@@ -17,41 +18,11 @@ Constraints per grid point s_i:
 """
 
 import dataclasses
-import logging
-import sys
-import types
 
 import numpy as np
 
 from trajcomp.errors import TimingError
-
-
-def _import_toppra():
-    """Import toppra without matplotlib.
-
-    toppra's algorithm module imports matplotlib.pyplot at load time for
-    plots trajcomp never draws (0.2 s, and the reports' JSON-only path
-    stays free of matplotlib): stand-in modules take its place during the
-    import, then are removed again. toppra's own warnings are silenced:
-    its failures are reported here, with the waypoint.
-    """
-    stand_ins = {}
-    if "matplotlib" not in sys.modules:
-        stand_ins = {"matplotlib": types.ModuleType("matplotlib"), "matplotlib.pyplot": types.ModuleType("pyplot")}
-        stand_ins["matplotlib"].pyplot = stand_ins["matplotlib.pyplot"]
-        sys.modules.update(stand_ins)
-    try:
-        import toppra.algorithm
-        import toppra.constraint
-    finally:
-        for name, module in stand_ins.items():
-            if sys.modules.get(name) is module:
-                del sys.modules[name]
-    logging.getLogger("toppra").setLevel(logging.ERROR)
-    return toppra
-
-
-toppra = _import_toppra()
+from trajcomp.timing.reachability import squared_speeds
 
 _X_CAP = 1e12  # (rad/s)^2 ceiling of the squared path speed where no limit binds
 
@@ -130,40 +101,20 @@ def toppra_law(run, moves, robot, velocity_scale=1.0, acceleration_scale=1.0, sp
     Raises
     ------
     TimingError
-        TOPP-RA finds no feasible speed: names the waypoint, its line and
-        the joint whose limit binds there.
+        The path speed must be zero over a whole grid interval (a singular
+        or kinked path): names the waypoint, its line and the joint.
     """
     grid, path = run.grid, run.path
     x_max, velocity = run.speed_bound(moves, velocity_scale, speed_scale)
     x_max = np.minimum(x_max, _X_CAP)
     dq = path(grid, 1)
     acceleration = np.min(moves.acceleration[run.first + 1 : run.last + 1], axis=0) * acceleration_scale
-    limits = toppra.constraint.JointAccelerationConstraint(
-        acceleration, discretization_scheme=toppra.constraint.DiscretizationType.Interpolation
-    )
-    instance = toppra.algorithm.TOPPRA([_SquaredSpeedBound(x_max), limits], path, gridpoints=grid,
-                                       solver_wrapper="seidel", parametrizer="ParametrizeConstAccel")
-    _, sd, _, K = instance.compute_parameterization(0.0, 0.0, return_data=True)
-    if sd is None or not np.all(np.isfinite(sd)):
-        raise _infeasible(run, moves, K, x_max, dq, path(grid, 2), acceleration, grid)
+    x = squared_speeds(grid, dq, path(grid, 2), acceleration, x_max, rest=[0, len(grid) - 1])
     try:
-        return ConstantAcceleration.from_speeds(grid, np.maximum(sd, 0.0))
+        return ConstantAcceleration.from_speeds(grid, np.sqrt(x))
     except ValueError:
-        i = int(np.argmin(sd[:-1] + sd[1:]))
+        i = int(np.argmin(x[:-1] + x[1:]))
         raise _stuck(run, moves, grid, i, x_max, dq, velocity) from None
-
-
-class _SquaredSpeedBound(toppra.constraint.LinearConstraint):
-    """toppra velocity constraint 0 <= x_i <= x_max_i at every grid point (joint and TCP speed in one)."""
-
-    def __init__(self, x_max):
-        super().__init__()
-        self.dof = 6
-        self.x_max = x_max
-        self._format_string = "    squared path speed bound\n"
-
-    def compute_constraint_params(self, path, gridpoints, *args, **kwargs):
-        return None, None, None, None, None, None, np.column_stack([np.zeros_like(self.x_max), self.x_max])
 
 
 def _where(run, moves, grid_s):
@@ -172,19 +123,6 @@ def _where(run, moves, grid_s):
     lo, hi = run.s_waypoints[k - run.first - 1], run.s_waypoints[k - run.first]
     share = 0.0 if hi <= lo else 100.0 * (grid_s - lo) / (hi - lo)
     return f"the {moves.kind[k]} motion to {moves.labels[k]}, {share:.0f} % of its way"
-
-
-def _infeasible(run, moves, K, x_max, dq, ddq, acceleration, grid):
-    """TimingError for a run TOPP-RA cannot parametrize, naming where and the binding joint."""
-    bad = np.flatnonzero(np.isnan(K).any(axis=1)) if K is not None else np.array([0])
-    i = int(bad.max()) if bad.size else 0
-    ratio = np.abs(ddq[i]) * x_max[i] / acceleration
-    j = int(np.argmax(ratio))
-    return TimingError(
-        f"no feasible speed at {_where(run, moves, grid[i])}: J{j + 1} cannot follow the path's curvature "
-        f"within its acceleration limit {np.degrees(acceleration[j]):.0f} deg/s^2 (TOPP-RA found no "
-        "controllable speed); check the path there for a kink or a singularity"
-    )
 
 
 def _stuck(run, moves, grid, i, x_max, dq, velocity):

@@ -1,0 +1,144 @@
+"""TOPP-RA's two reachability passes, vectorized over the grid: the time-optimal path speed.
+
+TOPP-RA (Pham & Pham 2018) bounds the squared path speed x = sd^2 on a grid
+s_0 < ... < s_{G-1} with a constant path acceleration u on each interval,
+so x_{i+1} = x_i + 2 (s_{i+1} - s_i) u. With the joint acceleration
+constraint in its "interpolation" discretization (checked at both ends of
+the interval with the same u),
+
+    |q'_j(s_i) u + q''_j(s_i) x_i| <= a_j   and   |q'_j(s_{i+1}) u + q''_j(s_{i+1}) x_{i+1}| <= a_j,
+
+every constraint of interval i is a band ``sigma x_i - w <= x_{i+1} <= sigma x_i + w``
+(w >= 0: rest, x = 0, is always allowed), or a bound on x_i alone where a
+joint does not move. The controllable set of grid point i is then [0, h_i]
+(rest is always reachable), with
+
+    h_i = min(X_i, min over bands with sigma > 0 of (h_{i+1} + w) / sigma),
+
+X_i the largest x_i the interval allows at all (the velocity bound and
+the bands crossing), and the greedy forward pass is
+``x_{i+1} = min(h_{i+1}, min over bands of sigma x_i + w)``.
+
+Both recurrences are solved as a wave: every grid point is first
+evaluated against its neighbour's bound (one vectorized sweep), then only
+the points whose neighbour changed are evaluated again, until none
+changes. Most points are settled by the first sweep (the speed follows
+its upper bound); the rest are the acceleration and braking ramps, all
+advanced together, one grid point per sweep. The result is exactly the
+sequential recurrence's.
+"""
+
+import numpy as np
+
+CHUNK = 65536  # grid intervals per block of the full sweeps (bounds the temporary arrays)
+
+
+def squared_speeds(s, dq, ddq, acceleration, x_max, rest):
+    """Time-optimal squared path speeds x (G,) under joint acceleration limits and speed bounds.
+
+    Parameters
+    ----------
+    s : ndarray, shape (G,)
+        Grid, strictly increasing (rad of path).
+    dq, ddq : ndarray, shape (G, 6)
+        Path derivatives q'(s), q''(s) at the grid points.
+    acceleration : ndarray, shape (6,)
+        Joint acceleration limits, rad/s^2.
+    x_max : ndarray, shape (G,)
+        Upper bound of x at each grid point (joint velocity, TCP speed), finite.
+    rest : ndarray of int
+        Grid points where the path speed is 0 (at least the first and the last).
+
+    Returns
+    -------
+    ndarray, shape (G,)
+        x = sd^2, 0 at the rest points.
+    """
+    bands = _Bands(np.diff(s), dq, ddq, np.asarray(acceleration, dtype=float))
+    h = np.append(np.minimum(x_max[:-1], bands.largest_x(x_max[:-1])), 0.0)
+    h[rest] = 0.0
+    _settle(h, bands.backward, backward=True)
+    x = h.copy()
+    _settle(x, lambda i, x_i: np.minimum(h[i + 1], bands.forward(i, x_i)), backward=False)
+    return np.maximum(x, 0.0)
+
+
+def _settle(values, step, *, backward):
+    """Solve values[i] = min(values[i], step(i, values[i + 1])) (backward) or
+    values[i + 1] = step(i, values[i]) (forward) for every interval i, in place, as a wave."""
+    stages = len(values) - 1
+    changed = []
+    for start in range(0, stages, CHUNK):
+        i = np.arange(start, min(start + CHUNK, stages))
+        changed.append(_update(values, step, i, backward))
+    active = np.concatenate(changed) if changed else np.zeros(0, dtype=int)
+    while active.size:
+        i = active - 1 if backward else active
+        i = i[(i >= 0) & (i < stages)]
+        active = _update(values, step, i, backward)
+
+
+def _update(values, step, i, backward):
+    """Evaluate intervals i once; the grid points that changed."""
+    if backward:
+        new = step(i, values[i + 1])
+        lower = new < values[i]
+        values[i[lower]] = new[lower]
+        return i[lower]
+    new = step(i, values[i])
+    moved = new != values[i + 1]
+    values[i[moved] + 1] = new[moved]
+    return i[moved] + 1
+
+
+class _Bands:
+    """The bands ``sigma x_i - w <= x_{i+1} <= sigma x_i + w`` (G-1, 12) of every interval, and x_i-only bounds."""
+
+    def __init__(self, ds, dq, ddq, acceleration):
+        # alpha x_i + beta x_{i+1} in [-a, a]: joint j at the interval's start (first 6), at its end (last 6)
+        two_ds = 2.0 * ds[:, None]
+        beta = np.hstack([dq[:-1] / two_ds, dq[1:] / two_ds + ddq[1:]])
+        alpha = np.hstack([ddq[:-1] - dq[:-1] / two_ds, -dq[1:] / two_ds])
+        a = np.tile(acceleration, 2)
+        moving = beta != 0.0
+        with np.errstate(divide="ignore", invalid="ignore"):
+            self.sigma = np.where(moving, -alpha / beta, 0.0)
+            self.w = np.where(moving, a / np.abs(beta), np.inf)
+            self.x_bound = np.min(np.where(moving, np.inf, a / np.abs(alpha)), axis=1)
+        positive = self.sigma > 0.0
+        with np.errstate(divide="ignore"):
+            self.inverse = np.where(positive, 1.0 / self.sigma, 0.0)
+            self.offset = np.where(positive, self.w / self.sigma, np.inf)
+
+    def backward(self, i, h_next):
+        """Largest x_i (n,) of intervals i (n,) from which x_{i+1} <= h_next (n,) can be kept (and X_i)."""
+        return np.minimum(self.largest[i], np.min(h_next[:, None] * self.inverse[i] + self.offset[i], axis=1))
+
+    def forward(self, i, x):
+        """Largest x_{i+1} (n,) the bands of intervals i (n,) allow from x_i = x (n,)."""
+        return np.min(self.sigma[i] * x[:, None] + self.w[i], axis=1)
+
+    def largest_x(self, x_max):
+        """X_i (G-1,): the largest x_i <= x_max (G-1,) with some x_{i+1} >= 0 inside every band.
+
+        The feasible x_i form an interval [0, X_i] (rest is inside every
+        band); the gap ``min(upper) - max(0, lower)`` is concave in x_i, so
+        Newton's method from the right converges to X_i in a few steps.
+        """
+        x = np.minimum(x_max, self.x_bound)
+        todo = np.arange(len(x))
+        for _ in range(100):
+            sigma, w = self.sigma[todo], self.w[todo]
+            upper, lower = sigma * x[todo, None] + w, sigma * x[todo, None] - w
+            iu, il = np.argmin(upper, axis=1), np.argmax(lower, axis=1)
+            rows = np.arange(len(todo))
+            top, bottom = upper[rows, iu], lower[rows, il]
+            gap = top - np.maximum(bottom, 0.0)
+            bad = gap < -1e-12 * np.abs(top)
+            if not bad.any():
+                break
+            slope = sigma[rows, iu] - np.where(bottom > 0.0, sigma[rows, il], 0.0)
+            todo, gap, slope = todo[bad], gap[bad], slope[bad]
+            x[todo] = np.maximum(x[todo] - gap / np.minimum(slope, -1e-300), 0.0)
+        self.largest = np.append(x, 0.0)
+        return x
