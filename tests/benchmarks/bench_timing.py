@@ -42,7 +42,7 @@ import toppra.constraint  # noqa: E402
 
 from trajcomp import formats  # noqa: E402
 from trajcomp.cli import main as cli  # noqa: E402
-from trajcomp.commands.retime import retime_compensated  # noqa: E402
+from trajcomp.commands.retime import planned, retime_compensated  # noqa: E402
 from trajcomp.compensate import program_corrector  # noqa: E402
 from trajcomp.ik import ik  # noqa: E402
 from trajcomp.kinematics import fk  # noqa: E402
@@ -111,7 +111,7 @@ def limits_row(name, moves, robot):
 def program_moves(path, robot):
     program = formats.read(ROOT / path)
     plan = planned_joints(program, robot)
-    return program, moves_from_program(program, robot, dict(zip(plan.index.tolist(), plan.q)))
+    return program, moves_from_program(program, robot, planned(program, plan))
 
 
 def model_of(folder, robot_name, corner, side):
@@ -132,8 +132,7 @@ def compensated_moves(folder, path, robot_name, corner, side):
     program = formats.read(ROOT / path)
     corrected, _ = compensate_program(program, program_corrector(model), model.nominal)
     _, result, before = retime_compensated(program, corrected, model.nominal, "auto", 0.005)
-    plan = planned_joints(program, model.nominal)
-    moves = moves_from_program(corrected, model.nominal, {int(i): corrected.targets[i].joints for i in plan.index})
+    moves = moves_from_program(corrected, model.nominal, corrected.target_table().joints)
     return moves, model.nominal, before, result
 
 

@@ -5,6 +5,8 @@ Also the re-timing step of ``trajcomp compensate --retime`` (`retime_compensated
 
 import dataclasses
 
+import numpy as np
+
 from trajcomp import formats
 from trajcomp.commands._args import add_robot, command_parser, info, robot_of
 from trajcomp.commands._report import add_report_options, criteria_of, emit
@@ -59,8 +61,7 @@ def run(args):
                             f"convert the program first (trajcomp convert)")
     tools, frames = frame_options(args)
     plan = planned_joints(program, robot, tools=tools, frames=frames)
-    joints = dict(zip(plan.index.tolist(), plan.q))
-    timed, result = timed_program(program, robot, joints, args.method, args.path_tolerance, tools, frames)
+    timed, result = timed_program(program, robot, planned(program, plan), args.method, args.path_tolerance, tools, frames)
     written = formats.write(args.output, timed, protect=protected_inputs(args, args.program, program))
     for line in timing_lines(result):
         info(line)
@@ -98,6 +99,13 @@ def timing_lines(result, before=None):
     return [*result.lines_of_text(before), f"speed settings written for {written} motions ({kinds})"]
 
 
+def planned(program, plan):
+    """Joints (N, 6) of a program's N targets from a `trajcomp.posture.Plan`, NaN where it has none."""
+    joints = np.full((len(program.target_table()), 6), np.nan)
+    joints[plan.index] = plan.q
+    return joints
+
+
 def retime_compensated(original, corrected, robot, method, tolerance, tools=None, frames=None):
     """Time a compensated program, and its original for the cycle time before compensation.
 
@@ -127,9 +135,9 @@ def retime_compensated(original, corrected, robot, method, tolerance, tools=None
     from trajcomp.timing.writeback import retime_program, writable
 
     plan = planned_joints(original, robot, tools=tools, frames=frames)
-    after = {int(i): corrected.targets[i].joints for i in plan.index}
+    after = corrected.target_table().joints
     try:
-        before = retime_program(original, robot, dict(zip(plan.index.tolist(), plan.q)), method=method,
+        before = retime_program(original, robot, planned(original, plan), method=method,
                                 tools=tools, frames=frames, tolerance=tolerance)
         if not writable(corrected):
             result = retime_program(corrected, robot, after, method=method, tools=tools, frames=frames,

@@ -96,7 +96,7 @@ def segment_peaks(run, law, moves, *, jerk, rate=RATE):
 
 def _speed_ratio(run, moves, k, s, sd):
     """Peak TCP speed over the programmed one, on samples of linear / circular motions with a speed."""
-    kinds = np.array(moves.kind)[k]
+    kinds = moves.kind[k]
     rows = np.flatnonzero((kinds != JOINT) & np.isfinite(moves.tcp_speed[k]))
     if not rows.size:
         return 0.0

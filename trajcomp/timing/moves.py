@@ -11,12 +11,13 @@ this; `Moves.from_joints` builds one for a joint path (a CAM path, tests).
 """
 
 import dataclasses
+from collections.abc import Sequence
 
 import numpy as np
 
 from trajcomp.errors import TimingError
 from trajcomp.frames import FrameTable
-from trajcomp.program import CIRCULAR, JOINT, LINEAR
+from trajcomp.program import CIRCULAR, JOINT, LINEAR, _codes
 
 KINDS = (JOINT, LINEAR, CIRCULAR)
 
@@ -25,11 +26,14 @@ KINDS = (JOINT, LINEAR, CIRCULAR)
 class Moves:
     """M waypoints and the motions between them.
 
+    Per-motion limits that are the same for every motion may be read-only
+    broadcast views (no memory per motion).
+
     Attributes
     ----------
     q : ndarray, shape (M, 6)
         Joints of each waypoint, rad.
-    kind : tuple of str, length M
+    kind : ndarray of object, shape (M,)
         ``"joint"``, ``"linear"`` or ``"circular"``: the motion into waypoint k.
     via : ndarray, shape (M, 6)
         Joints of the via point of a circular motion k, rad; NaN elsewhere.
@@ -46,19 +50,21 @@ class Moves:
     velocity, acceleration : ndarray, shape (M, 6)
         Joint velocity (rad/s) and acceleration (rad/s^2) limits of motion k:
         the robot's, lowered by a programmed joint speed (% or rad/s).
-    tool : ndarray, shape (M, 4, 4)
-        T_flange_tool of motion k, mm.
+    tools : ndarray, shape (T, 4, 4)
+        The distinct T_flange_tool the motions use, mm.
+    tool : ndarray of int, shape (M,)
+        Index into `tools` of motion k's tool.
     start : ndarray of bool, shape (M,)
         Waypoint k begins a timed stretch: the arm's position before it is
         not known, motion k is not timed.
-    labels : tuple of str, length M
+    labels : Sequence[str], length M
         Waypoint names with file and line, for messages.
     motion : ndarray of int, shape (M,)
         Index into `Program.motions` of motion k (``arange(M)`` for a joint path).
     """
 
     q: np.ndarray
-    kind: tuple
+    kind: np.ndarray
     via: np.ndarray
     stop: np.ndarray
     zone: np.ndarray
@@ -66,21 +72,27 @@ class Moves:
     min_duration: np.ndarray
     velocity: np.ndarray
     acceleration: np.ndarray
+    tools: np.ndarray
     tool: np.ndarray
     start: np.ndarray
-    labels: tuple
+    labels: Sequence
     motion: np.ndarray
 
     def __post_init__(self):
-        stop = np.asarray(self.stop, dtype=bool).copy()
+        stop = np.array(self.stop, dtype=bool)
         if len(stop):
             stop[[0, -1]] = True
         stop[np.asarray(self.start, dtype=bool)] = True
         stop[np.flatnonzero(np.asarray(self.start, dtype=bool)) - 1] = True
         object.__setattr__(self, "stop", stop)
+        object.__setattr__(self, "kind", np.asarray(self.kind, dtype=object).reshape(len(self.q)))
 
     def __len__(self):
         return len(self.q)
+
+    def tool_of(self, k):
+        """T_flange_tool (n, 4, 4) of motions k (n,)."""
+        return self.tools[self.tool[k]]
 
     @classmethod
     def from_joints(cls, q, robot, *, kind=LINEAR, tcp_speed=np.inf, stop=False, zone=0.0, labels=None, tool=None):
@@ -105,27 +117,42 @@ class Moves:
         """
         q = np.atleast_2d(np.asarray(q, dtype=float))
         m = len(q)
-        kinds = (kind,) * m if isinstance(kind, str) else tuple(kind)
         tool = robot.T_flange_tool if tool is None else np.asarray(tool, dtype=float)
         return cls(
             q=q,
-            kind=kinds,
-            via=np.full((m, 6), np.nan),
+            kind=np.full(m, kind, dtype=object) if isinstance(kind, str) else kind,
+            via=np.broadcast_to(np.nan, (m, 6)),
             stop=np.broadcast_to(stop, (m,)),
             zone=np.broadcast_to(np.asarray(zone, dtype=float), (m,)).copy(),
             tcp_speed=np.broadcast_to(np.asarray(tcp_speed, dtype=float), (m,)).copy(),
             min_duration=np.zeros(m),
-            velocity=np.tile(robot.v_max, (m, 1)),
-            acceleration=np.tile(robot.a_max, (m, 1)),
-            tool=np.broadcast_to(tool, (m, 4, 4)).copy(),
-            start=np.eye(1, m, dtype=bool)[0] if m else np.zeros(0, dtype=bool),
-            labels=tuple(labels) if labels is not None else tuple(f"waypoint {k}" for k in range(m)),
+            velocity=np.broadcast_to(robot.v_max, (m, 6)),
+            acceleration=np.broadcast_to(robot.a_max, (m, 6)),
+            tools=tool[None],
+            tool=np.zeros(m, dtype=int),
+            start=np.arange(m) == 0,
+            labels=labels if labels is not None else WaypointLabels(m),
             motion=np.arange(m),
         )
 
 
+class WaypointLabels(Sequence):
+    """``waypoint k`` for k < n, built on access."""
+
+    def __init__(self, n):
+        self.n = n
+
+    def __len__(self):
+        return self.n
+
+    def __getitem__(self, k):
+        if isinstance(k, slice):
+            return [f"waypoint {i}" for i in range(self.n)[k]]
+        return f"waypoint {range(self.n)[k]}"
+
+
 def moves_from_program(program, robot, joints, *, tools=None, frames=None):
-    """The `Moves` of a program whose targets' joints are known.
+    """The `Moves` of a program whose targets' joints are known (columnar: no loop over its motions).
 
     Motions to positions computed at run time are not waypoints: the
     waypoint after one begins a new timed stretch.
@@ -135,9 +162,9 @@ def moves_from_program(program, robot, joints, *, tools=None, frames=None):
     program : Program
     robot : Robot
         Joint limits, default tool.
-    joints : Mapping[int, ndarray (6,)]
-        Joints (rad) of the Cartesian targets by target index (compensated,
-        or planned in the declared posture); joint targets use their own.
+    joints : ndarray, shape (N, 6)
+        Joints (rad) of the program's N targets (compensated, or planned in
+        the declared posture), NaN where not known; joint targets use their own.
     tools, frames : Mapping[str, ndarray (4, 4)], optional
         Tools and frames the program uses but does not define (`trajcomp.frames.FrameTable`).
 
@@ -151,60 +178,57 @@ def moves_from_program(program, robot, joints, *, tools=None, frames=None):
         A programmed speed that is not positive, or a target without joints,
         named by line.
     """
-    table = FrameTable(program, robot, tools, frames)
-    usage = program.usage()
-    rows, start = [], True
-    for m, motion in enumerate(program.motions):
-        if motion.target is None:
-            start = True
-            continue
-        rows.append((m, motion, start))
-        start = False
-    size = len(rows)
-    out = {
-        "q": np.zeros((size, 6)), "via": np.full((size, 6), np.nan), "stop": np.zeros(size, bool),
-        "zone": np.zeros(size), "tcp_speed": np.full(size, np.inf), "min_duration": np.zeros(size),
-        "velocity": np.tile(robot.v_max, (size, 1)), "acceleration": np.tile(robot.a_max, (size, 1)),
-        "tool": np.zeros((size, 4, 4)), "start": np.zeros(size, bool), "motion": np.zeros(size, int),
-    }
-    kinds, labels = [], []
-
-    def joints_of(index, motion):
-        target = program.targets[index]
-        value = target.joints if target.is_joint else joints.get(index)
-        if value is None:
-            raise TimingError(f"{program.where(index)}: no joints known for this target (line {motion.line})")
-        return np.asarray(value, dtype=float)
-
-    for k, (m, motion, start) in enumerate(rows):
-        out["q"][k] = joints_of(motion.target, motion)
-        if motion.via is not None:
-            out["via"][k] = joints_of(motion.via, motion)
-        out["stop"][k] = motion.zone is None
-        out["zone"][k] = motion.zone or 0.0
-        out["tool"][k] = table.tool(usage[motion.target][0])
-        out["start"][k] = start
-        out["motion"][k] = m
-        _apply_speed(out, k, motion, robot, program.where(motion.target))
-        kinds.append(motion.kind)
-        labels.append(program.where(motion.target))
-    return Moves(kind=tuple(kinds), labels=tuple(labels), **out)
+    table, targets = program.motion_table(), program.target_table()
+    rows = np.flatnonzero(table.target >= 0)
+    runtime_before = np.cumsum(table.target < 0)[rows]
+    start = np.r_[True, runtime_before[1:] != runtime_before[:-1]][: len(rows)]
+    known = np.where(targets.is_joint[:, None], targets.joints, np.asarray(joints, dtype=float))
+    target, via = table.target[rows], table.via[rows]
+    circular = np.flatnonzero(via >= 0)
+    for index, motion in ((target, rows), (via[circular], rows[circular])):
+        missing = np.flatnonzero(np.isnan(known[index]).any(axis=1))
+        if missing.size:
+            k = missing[0]
+            raise TimingError(f"{program.where(int(index[k]))}: no joints known for this target "
+                              f"(line {table.line[motion[k]]})")
+    via_q = np.full((len(rows), 6), np.nan) if circular.size else np.broadcast_to(np.nan, (len(rows), 6))
+    if circular.size:
+        via_q[circular] = known[via[circular]]
+    zone = table.zone[rows]
+    used = program.usage_table()
+    tool, names = _codes(used.tool[np.searchsorted(used.index, target)])
+    frame_table = FrameTable(program, robot, tools, frames)
+    labels = program.labels(target)
+    speeds = _speed_limits(table, rows, robot, program, labels)
+    return Moves(
+        q=known[target], kind=table.kind[rows], via=via_q, stop=np.isnan(zone), zone=np.nan_to_num(zone, nan=0.0),
+        tools=np.array([frame_table.tool(name) for name in names]).reshape(-1, 4, 4), tool=tool, start=start,
+        labels=labels, motion=rows, **speeds,
+    )
 
 
-def _apply_speed(out, k, motion, robot, where):
-    """Set the limits row k from the motion's programmed speed."""
-    if motion.speed is None:
-        return
-    if not (np.isfinite(motion.speed) and motion.speed > 0):
+def _speed_limits(table, rows, robot, program, labels):
+    """tcp_speed, min_duration, velocity and acceleration of motions ``rows`` from their programmed speeds."""
+    speed, unit, kind = table.speed[rows], table.speed_unit[rows], table.kind[rows]
+    given = ~np.isnan(speed)
+    bad = np.flatnonzero(given & ~(np.isfinite(speed) & (speed > 0)))
+    if bad.size:
+        k = bad[0]
         raise TimingError(
-            f"line {motion.line}: motion to {where} asks speed {motion.speed:g} {motion.speed_unit}: "
+            f"line {table.line[rows[k]]}: motion to {labels[k]} asks speed {speed[k]:g} {unit[k]}: "
             "a positive speed is needed to time it"
         )
-    if motion.speed_unit == "mm/s":
-        out["tcp_speed"][k] = motion.speed
-    elif motion.speed_unit == "%" and motion.kind == JOINT:
-        out["velocity"][k] = robot.v_max * min(motion.speed, 100.0) / 100.0
-    elif motion.speed_unit == "rad/s" and motion.kind == JOINT:
-        out["velocity"][k] = np.minimum(robot.v_max, motion.speed)
-    elif motion.speed_unit == "s":
-        out["min_duration"][k] = motion.speed
+    m = len(rows)
+    percent = given & (unit == "%") & (kind == JOINT)
+    absolute = given & (unit == "rad/s") & (kind == JOINT)
+    velocity = np.broadcast_to(robot.v_max, (m, 6))
+    if percent.any() or absolute.any():
+        velocity = velocity.copy()
+        velocity[percent] = robot.v_max * np.minimum(speed[percent, None], 100.0) / 100.0
+        velocity[absolute] = np.minimum(robot.v_max, speed[absolute, None])
+    return {
+        "tcp_speed": np.where(given & (unit == "mm/s"), speed, np.inf),
+        "min_duration": np.where(given & (unit == "s"), speed, 0.0),
+        "velocity": velocity,
+        "acceleration": np.broadcast_to(robot.a_max, (m, 6)),
+    }

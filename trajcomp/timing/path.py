@@ -121,7 +121,7 @@ class RunPath:
         velocity = np.min(moves.velocity[near], axis=0) * velocity_scale
         tcp = moves.tcp_speed.copy()
         k = np.arange(self.first + 1, self.last + 1)
-        timed = k[(moves.min_duration[k] > 0) & np.array([moves.kind[i] != JOINT for i in k], dtype=bool)]
+        timed = k[(moves.min_duration[k] > 0) & (moves.kind[k] != JOINT)]
         tcp[timed] = np.minimum(tcp[timed], self.tcp_lengths[timed - self.first] / moves.min_duration[timed])
         with np.errstate(divide="ignore", invalid="ignore"):
             x_joint = np.min((velocity / np.abs(dq)) ** 2, axis=1)
@@ -167,7 +167,7 @@ def run_path(moves, robot, first, last, tolerance=TOLERANCE):
         return RunPath(None, s_waypoints, s, first, last, np.zeros(last - first + 1), np.zeros(len(s)), 0.0)
     grid = _grid(s)  # every sample is a grid point: one Jacobian batch serves the fit and the TCP speed
     k = first + np.clip(np.searchsorted(s_waypoints, grid), 1, len(s_waypoints) - 1)
-    jac_grid = tcp_jacobians(robot, moves.tool, k, np.column_stack([np.interp(grid, s, q[:, j]) for j in range(6)]))
+    jac_grid = tcp_jacobians(robot, moves, k, np.column_stack([np.interp(grid, s, q[:, j]) for j in range(6)]))
     jac = jac_grid[np.searchsorted(grid, s)]
     steps = np.r_[0.0, np.linalg.norm(np.einsum("nij,nj->ni", jac[1:, :3], np.diff(q, axis=0)), axis=1)]
     travel = np.cumsum(steps)  # TCP arc length from the run's start, mm
@@ -195,10 +195,10 @@ def _grid(s):
     return np.unique(np.r_[grid, ends])
 
 
-def tcp_jacobians(robot, tools, owner, q):
-    """TCP Jacobians (n, 6, 6) of configurations q (n, 6), each with the tool ``tools[owner]`` of its motion."""
+def tcp_jacobians(robot, moves, owner, q):
+    """TCP Jacobians (n, 6, 6) of configurations q (n, 6), each with the tool of its motion ``owner`` (n,)."""
     jac = np.empty((len(q), 6, 6))
-    for tool, rows in tool_groups(tools[owner]):
+    for tool, rows in tool_groups(moves, owner):
         jac[rows] = jacobian(robot.replace(T_flange_tool=tool), q[rows])
     return jac
 

@@ -97,7 +97,7 @@ def _continued(start, declared, kinds):
     turn = 2.0 * np.pi
     change = np.diff(declared, axis=0)
     slip = np.vstack([start - declared[0], np.angle(np.exp(1j * change)) - change])  # whole turns gained
-    joint = np.r_[True, [kind == JOINT for kind in kinds]]
+    joint = np.r_[True, kinds == JOINT]
     total = np.cumsum(slip, axis=0)
     reset = np.maximum.accumulate(np.where(joint, np.arange(len(joint)), 0))  # the last joint motion
     offset = total - np.where(reset[:, None] > 0, total[reset], 0.0)
@@ -105,21 +105,18 @@ def _continued(start, declared, kinds):
 
 
 def plan_segments(moves, method="auto"):
-    """``[(kind, first, last)]``: the segments of a sequence (see the module description)."""
+    """``[(kind, first, last)]``: the segments of a sequence (see the module description).
+
+    Segments run from one exact stop to the next; a waypoint that starts
+    a timed stretch is reached by an untimed motion from the one before.
+    """
     run_kind = "ruckig" if method == "ruckig" else "toppra"
     joint_kind = "toppra" if method == "toppra" else "ruckig"
-    out, k, m = [], 1, len(moves)
-    while k < m:
-        if moves.start[k]:
-            out.append(("untimed", k - 1, k))
-        else:
-            first = k - 1
-            while k + 1 < m and not moves.stop[k]:
-                k += 1
-            single_joint = k == first + 1 and moves.kind[k] == JOINT
-            out.append((joint_kind if single_joint else run_kind, first, k))
-        k += 1
-    return out
+    stops = np.flatnonzero(moves.stop)
+    first, last = stops[:-1], stops[1:]
+    single_joint = (last == first + 1) & (moves.kind[last] == JOINT)
+    kinds = np.where(moves.start[last], "untimed", np.where(single_joint, joint_kind, run_kind))
+    return list(zip(kinds.tolist(), first.tolist(), last.tolist()))
 
 
 def _timed(kind, run, moves, robot):

@@ -59,8 +59,8 @@ class _Geometry:
         self.moves, self.robot = moves, robot
         self.k = np.arange(first + 1, last + 1)
         self.q_a, self.q_b = moves.q[self.k - 1], moves.q[self.k]
-        self.joint = np.array([moves.kind[k] == JOINT for k in self.k], dtype=bool)
-        tools = moves.tool[self.k]
+        self.joint = moves.kind[self.k] == JOINT
+        tools = moves.tool_of(self.k)
         flange = fk(robot, moves.q[first : last + 1], tcp=False)  # each waypoint once
         T_a, T_b = flange[:-1] @ tools, flange[1:] @ tools
         self.R_a, self.p_a, self.p_b = T_a[:, :3, :3], T_a[:, :3, 3], T_b[:, :3, 3]
@@ -69,8 +69,8 @@ class _Geometry:
         self.circle = np.zeros(len(self.k), dtype=bool)
         self.centre, self.e1, self.e2 = np.zeros((3, len(self.k), 3))
         self.radius, self.sweep = np.zeros((2, len(self.k)))
-        for i in np.flatnonzero([moves.kind[k] == CIRCULAR for k in self.k]):
-            via = fk(robot.replace(T_flange_tool=moves.tool[self.k[i]]), moves.via[self.k[i]])[:3, 3]
+        for i in np.flatnonzero(moves.kind[self.k] == CIRCULAR):
+            via = fk(robot.replace(T_flange_tool=moves.tool_of(self.k[i])), moves.via[self.k[i]])[:3, 3]
             self._set_circle(i, via)
         self.closed_form = ik_family(robot) is not None
         self.arm_branch = np.full(len(self.k), -1)  # shoulder and elbow flags (branch index // 2), when known
@@ -123,7 +123,7 @@ class _Geometry:
         seed = line if seed is None else seed
         rows = np.flatnonzero(solve)
         T = self.poses(local[rows], fraction[rows])
-        for tool, group in tool_groups(self.moves.tool[self.k[local[rows]]]):
+        for tool, group in tool_groups(self.moves, self.k[local[rows]]):
             part = rows[group]
             q[part] = self._continuous(self.robot.replace(T_flange_tool=tool), T[group], seed[part], local[part],
                                        fraction[part])
@@ -207,9 +207,9 @@ class _Geometry:
         )
 
 
-def tool_groups(tools):
-    """``[(tool (4, 4), rows)]``: the distinct tools of a stack (n, 4, 4) and the rows using each."""
-    if not len(tools) or np.all(tools == tools[0]):
-        return [(tools[0], np.arange(len(tools)))] if len(tools) else []
-    unique, group = np.unique(tools.reshape(len(tools), 16), axis=0, return_inverse=True)
-    return [(tool.reshape(4, 4), np.flatnonzero(group.ravel() == g)) for g, tool in enumerate(unique)]
+def tool_groups(moves, k):
+    """``[(tool (4, 4), rows)]``: the distinct tools of motions k (n,) and the rows of k using each."""
+    index = moves.tool[k]
+    if not len(index) or np.all(index == index[0]):
+        return [(moves.tools[index[0]], np.arange(len(index)))] if len(index) else []
+    return [(moves.tools[t], np.flatnonzero(index == t)) for t in np.unique(index)]

@@ -37,7 +37,7 @@ MSEC_LIMIT = 32000  # FANUC msec speeds: 1 .. 32000
 
 
 def retime_program(program, robot, joints, *, method="auto", tools=None, frames=None, tolerance=TOLERANCE):
-    """Re-time a program whose targets' joints are known (`moves_from_program`, then `retime`).
+    """Re-time a program whose targets' joints (N, 6) are known (`moves_from_program`, then `retime`).
 
     Returns
     -------
