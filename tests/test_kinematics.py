@@ -9,8 +9,9 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from trajcomp.kinematics import fk, jacobian
+from trajcomp.kinematics import BLOCK, fk, fk_and_jacobian, jacobian, link_frames
 from trajcomp.robot import builtin_robot_names, load_robot, robot_from_yaml
+from trajcomp.transforms import invert
 
 X, Y, Z = np.eye(3)
 
@@ -197,3 +198,99 @@ def test_modified_table_of_a_standard_arm_gives_identical_fk(name):
     q = random_q(std, 200, 5)
     np.testing.assert_allclose(fk(modified, q), fk(std, q), atol=1e-9)
     np.testing.assert_allclose(jacobian(modified, q), jacobian(std, q), atol=1e-9)
+
+
+def dh_matrix_product(robot, q):
+    """Link frames (N, 7, 4, 4) and TCP poses (N, 4, 4) as the plain product of elementary 4 x 4 matrices.
+
+    Standard links ``Rz(theta) Tz(d) Tx(a) Rx(alpha) Ry(beta)``, modified
+    links ``Rx(alpha) Tx(a) Rz(theta) Tz(d)``; theta = joint map times q plus
+    the offsets. Written independently of trajcomp.kinematics.
+    """
+
+    def rotation(axis, angles):
+        out = np.tile(np.eye(4), (len(angles), 1, 1))
+        out[:, :3, :3] = Rotation.from_rotvec(np.outer(angles, axis)).as_matrix()
+        return out
+
+    def translation(axis, length):
+        out = np.eye(4)
+        out[:3, 3] = np.multiply(axis, length)
+        return out
+
+    theta = q @ robot.joint_map.T + robot.theta_offset
+    ones = np.ones(len(q))
+    frames = [np.tile(robot.T_base_link0, (len(q), 1, 1))]
+    for i in range(6):
+        if robot.convention == "standard":
+            link = (rotation(Z, theta[:, i]) @ translation(Z, robot.d[i]) @ translation(X, robot.a[i])
+                    @ rotation(X, robot.alpha[i] * ones) @ rotation(Y, robot.beta[i] * ones))
+        else:
+            link = (rotation(X, robot.alpha[i] * ones) @ translation(X, robot.a[i])
+                    @ rotation(Z, theta[:, i]) @ translation(Z, robot.d[i]))
+        frames.append(frames[-1] @ link)
+    return np.stack(frames, axis=1), frames[-1] @ robot.T_link6_flange @ robot.T_flange_tool
+
+
+def varied_robots():
+    """Every built-in arm as is, identified-like (DH deltas, Hayati beta != 0, a tool) and the modified table."""
+    rng = np.random.default_rng(7)
+    tool = np.eye(4)
+    tool[:3, :3], tool[:3, 3] = rot([1, 2, 3] / np.sqrt(14), 40), (12.0, -30.0, 140.0)
+    robots = {}
+    for name in builtin_robot_names():
+        robot = load_robot(name)
+        robots[name] = robot
+        robots[f"{name} identified"] = robot.replace(
+            a=robot.a + rng.normal(0, 0.5, 6),
+            d=robot.d + rng.normal(0, 0.5, 6),
+            alpha=robot.alpha + rng.normal(0, 1e-3, 6),
+            theta_offset=robot.theta_offset + rng.normal(0, 1e-3, 6),
+            beta=rng.normal(0, 1e-2, 6),
+            T_flange_tool=tool,
+        )
+    robots["modified"] = robot_from_yaml(MODIFIED_YAML).replace(T_flange_tool=tool)
+    return robots
+
+
+VARIED = varied_robots()
+
+
+@pytest.mark.parametrize("name", sorted(VARIED))
+def test_fk_and_link_frames_match_the_product_of_dh_matrices(name):
+    """Several blocks of rows (the chain is computed in blocks), joints beyond the limits included."""
+    robot = VARIED[name]
+    q = np.random.default_rng(8).uniform(-2 * np.pi, 2 * np.pi, (2 * BLOCK + 37, 6))
+    frames, tcp = dh_matrix_product(robot, q)
+    np.testing.assert_allclose(fk(robot, q), tcp, rtol=0, atol=1e-9)
+    np.testing.assert_allclose(fk(robot, q, tcp=False), tcp @ invert(robot.T_flange_tool), rtol=0, atol=1e-9)
+    if robot.convention == "standard":  # a modified table's DH frames are those of its standard regrouping
+        np.testing.assert_allclose(link_frames(robot, q), frames, rtol=0, atol=1e-9)
+
+
+@pytest.mark.parametrize("name", sorted(VARIED))
+def test_jacobian_matches_central_differences_of_the_dh_product(name):
+    robot = VARIED[name]
+    q = np.random.default_rng(9).uniform(robot.q_min, robot.q_max, (200, 6))
+    h = 1e-5
+    numeric = np.empty((len(q), 6, 6))
+    for j in range(6):
+        step = np.zeros(6)
+        step[j] = h
+        plus, minus = dh_matrix_product(robot, q + step)[1], dh_matrix_product(robot, q - step)[1]
+        numeric[:, :3, j] = (plus[:, :3, 3] - minus[:, :3, 3]) / (2 * h)
+        relative = plus[:, :3, :3] @ np.swapaxes(minus[:, :3, :3], 1, 2)
+        numeric[:, 3:, j] = Rotation.from_matrix(relative).as_rotvec() / (2 * h)
+    pose, jac = fk_and_jacobian(robot, q)
+    np.testing.assert_allclose(pose, dh_matrix_product(robot, q)[1], rtol=0, atol=1e-9)
+    np.testing.assert_allclose(jac[:, :3], numeric[:, :3], rtol=0, atol=1e-6)
+    np.testing.assert_allclose(jac[:, 3:], numeric[:, 3:], rtol=0, atol=1e-9)
+    np.testing.assert_array_equal(jacobian(robot, q), jac)
+
+
+def test_empty_and_single_configurations():
+    robot = VARIED["ur10 identified"]
+    assert fk(robot, np.empty((0, 6))).shape == (0, 4, 4)
+    assert jacobian(robot, np.empty((0, 6))).shape == (0, 6, 6)
+    q = np.radians([10.0, -80.0, 70.0, -30.0, 60.0, 5.0])
+    np.testing.assert_allclose(fk(robot, q), dh_matrix_product(robot, q[None])[1][0], rtol=0, atol=1e-9)

@@ -29,7 +29,7 @@ import dataclasses
 import numpy as np
 
 from trajcomp.errors import IKError
-from trajcomp.kinematics import dh_link_transforms, fk, fk_and_jacobian, jacobian, link_frames
+from trajcomp.kinematics import dh_link_transforms, fk, fk_and_jacobian, in_blocks, jacobian, link_frames
 from trajcomp.transforms import invert
 
 BRANCHES = 8
@@ -47,7 +47,6 @@ _REACH_SLACK = 1e-9  # relative slack on cos/sin arguments before a target count
 _LIMIT_TOL = 1e-9  # rad, as Robot.within_limits
 _ROT_SCALE = 1000.0  # mm/rad, weight of orientation against position error in Gauss-Newton
 _MAX_STEP = 0.3  # rad, largest joint step of one Gauss-Newton iteration
-_BLOCK = 2048  # targets solved together: large enough to vectorize, small enough for the cache
 
 
 @dataclasses.dataclass(frozen=True)
@@ -228,7 +227,7 @@ def ik_all(robot, T_base_tcp, *, seed=None):
     family = _closed_form_family(robot)
     T = _pose_stack(T_base_tcp)
     seed = _seed_stack(robot, seed, len(T))
-    q, reachable, inside = _in_blocks(lambda t, s: _branches(robot, family, t, s), T, seed)
+    q, reachable, inside = in_blocks(lambda t, s: _branches(robot, family, t, s), T, seed)
     return q, reachable & inside
 
 
@@ -285,7 +284,7 @@ def ik(robot, T_base_tcp, *, seed=None, config=None, weights=None):
         reason = np.where(solved, "", np.where(in_reach, JOINT_LIMITS, UNREACHABLE))
         return _verified(robot, T, np.where(solved[:, None], q_all[rows, branch], np.nan), reason)
 
-    return IKResult(*_in_blocks(solve, T, seed, branch))
+    return IKResult(*in_blocks(solve, T, seed, branch))
 
 
 def ik_numeric(robot, T_base_tcp, q0, *, tol_pos=POS_TOL, tol_rot=ROT_TOL, max_iter=30):
@@ -345,7 +344,7 @@ def ik_numeric(robot, T_base_tcp, q0, *, tol_pos=POS_TOL, tol_rot=ROT_TOL, max_i
         success = converged & inside
         return np.where(success[:, None], q, np.nan), success, res_pos, res_rot, reason.astype(str)
 
-    return IKResult(*_in_blocks(solve, T, q0))
+    return IKResult(*in_blocks(solve, T, q0))
 
 
 def ik_near(robot, nominal, T_base_tcp, *, seed=None, config=None, weights=None):
@@ -568,13 +567,6 @@ def _verified(robot, T, q, reason):
     accurate = (res_pos < POS_TOL) & (res_rot < ROT_TOL)
     reason = np.where(np.isfinite(res_pos) & ~accurate, NOT_CONVERGED, reason).astype(str)
     return np.where(accurate[:, None], q, np.nan), accurate, res_pos, res_rot, reason
-
-
-def _in_blocks(solve, *arrays):
-    """Apply ``solve`` to blocks of `_BLOCK` rows of ``arrays`` (kept in cache) and join its outputs."""
-    n = len(arrays[0])
-    parts = [solve(*(arr[i : i + _BLOCK] for arr in arrays)) for i in range(0, max(n, 1), _BLOCK)]
-    return tuple(np.concatenate(columns) for columns in zip(*parts))
 
 
 def _pose_stack(T):
