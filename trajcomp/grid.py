@@ -329,24 +329,31 @@ class ResidualGrid:
         return bounded_evaluate(kernel, p, self.lattice.origin, self.lattice.upper, outside)
 
     def _corners(self, points):
-        """Corner indices (N, 8, 3) of each point's cell and its local coordinates (N, 3)."""
+        """Flat node indices (N, 8) of the corners of each point's cell and its local coordinates (N, 3)."""
         cell, local = self.lattice.locate(points)
-        return cell[:, None, :] + _CORNERS, local
+        _, ny, nz = self.lattice.shape
+        strides = np.array([ny * nz, nz, 1])
+        return (cell @ strides)[:, None] + _CORNERS @ strides, local
 
     def _idw8(self, points):
         corners, _ = self._corners(points)
-        i, j, k = corners[..., 0], corners[..., 1], corners[..., 2]
-        d = np.linalg.norm(points[:, None, :] - self.node_positions[i, j, k], axis=2)  # (N, 8), eq. 2
+        offsets = np.take(self.node_positions.reshape(-1, 3), corners, axis=0) - points[:, None, :]
+        d = np.sqrt(np.einsum("nkc,nkc->nk", offsets, offsets))  # (N, 8), eq. 2
         hit = d < VERTEX_HIT
-        first_hit = hit & (np.cumsum(hit, axis=1) == 1)
-        w = np.where(hit.any(axis=1, keepdims=True), first_hit, 1.0 / np.where(hit, 1.0, d))
+        w = 1.0 / np.where(hit, 1.0, d)
+        on_vertex = np.flatnonzero(hit.any(axis=1))
+        w[on_vertex] = hit[on_vertex] & (np.cumsum(hit[on_vertex], axis=1) == 1)  # the first vertex hit
         q = w / w.sum(axis=1, keepdims=True)  # eq. 3
-        return np.einsum("nk,nkc->nc", q, self.values[i, j, k])  # eq. 4
+        return np.einsum("nk,nkc->nc", q, self._corner_values(corners))  # eq. 4
 
     def _trilinear(self, points):
         corners, t = self._corners(points)
         w = np.prod(np.where(_CORNERS == 1, t[:, None, :], 1.0 - t[:, None, :]), axis=2)  # (N, 8)
-        return np.einsum("nk,nkc->nc", w, self.values[corners[..., 0], corners[..., 1], corners[..., 2]])
+        return np.einsum("nk,nkc->nc", w, self._corner_values(corners))
+
+    def _corner_values(self, corners):
+        """Node values (N, 8, 3) at flat node indices (N, 8)."""
+        return np.take(self.values.reshape(-1, 3), corners, axis=0)
 
     def to_dict(self):
         """Plain-list dict for the model file: kind, method, origin, step, shape, values[, nodes]."""
