@@ -148,8 +148,10 @@ def declared_windows(format_name, configs):
     branch = np.full(n, -1)
     lower, upper = np.full((n, 6), -np.inf), np.full((n, 6), np.inf)
     decode = WINDOWS_BY_FORMAT.get(format_name)
+    if decode is None:
+        return branch, lower, upper
     for k, config in enumerate(configs):
-        if decode is not None and config:
+        if config:
             branch[k], lower[k], upper[k] = decode(config)
     return branch, lower, upper
 

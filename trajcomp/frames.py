@@ -10,6 +10,7 @@ missing one is an error, never a guess. Frame ``None`` is the base, tool
 import numpy as np
 
 from trajcomp.errors import TrajcompError
+from trajcomp.program import _codes
 from trajcomp.transforms import invert
 
 
@@ -56,8 +57,15 @@ class FrameTable:
         T_base_frame, T_flange_tool, T_base_tcp : ndarray, shape (N, 4, 4)
             Each target's user frame, tool and pose, mm.
         """
-        usage = self.program.usage()
-        T_base_frame = np.array([self.frame(usage[i][1]) for i in index]).reshape(-1, 4, 4)
-        T_flange_tool = np.array([self.tool(usage[i][0]) for i in index]).reshape(-1, 4, 4)
-        poses = np.array([self.program.targets[i].pose for i in index]).reshape(-1, 4, 4)
+        used = self.program.usage_table()
+        row = np.searchsorted(used.index, index)
+        T_base_frame = _values(used.frame[row], self.frame)
+        T_flange_tool = _values(used.tool[row], self.tool)
+        poses = self.program.target_table().pose[index]
         return T_base_frame, T_flange_tool, T_base_frame @ poses
+
+
+def _values(names, value):
+    """``value(name)`` (4, 4) of each of N names, stacked (N, 4, 4): looked up once per distinct name."""
+    codes, distinct = _codes(names)
+    return np.array([value(name) for name in distinct]).reshape(-1, 4, 4)[codes]

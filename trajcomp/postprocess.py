@@ -154,19 +154,18 @@ def compensate_program(program, correct, robot, *, tools=None, frames=None, join
     if joint_targets not in ("keep", "compensate"):
         raise ValueError(f"joint_targets must be 'keep' or 'compensate', got {joint_targets!r}")
     table = FrameTable(program, robot, tools, frames)
-    usage = program.usage()
     plan = planned_joints(program, robot, tools=tools, frames=frames)
     cartesian, T_base_frame, T_tool, T_target = plan.index, plan.T_base_frame, plan.T_flange_tool, plan.T_base_tcp
     rows, q_planned, source = cartesian, plan.q, plan.source
     joint_index, q_joint = program.joint_targets()
     if joint_targets == "compensate" and len(joint_index):
-        joint_tools = np.array([table.tool(usage[i][0]) for i in joint_index])
+        joint_tools = table.targets_in_base(joint_index)[1]
         T_target = np.concatenate([T_target, fk(robot, q_joint, tcp=False) @ joint_tools])
         T_tool = np.concatenate([T_tool, joint_tools])
         rows = np.concatenate([cartesian, joint_index])
         q_planned = np.concatenate([q_planned, q_joint])
         source = source + ("joints",) * len(joint_index)
-    labels = [program.where(i) for i in rows]
+    labels = program.labels(rows)
     result = correct(T_target, T_tool, q_planned, labels) if len(rows) else None
     edited, q, T_command = program, np.empty((0, 6)), np.empty((0, 4, 4))
     if result is not None:
@@ -178,17 +177,15 @@ def compensate_program(program, correct, robot, *, tools=None, frames=None, join
         if n < len(rows):
             edited = edited.with_targets(joint_index, joints=q[n:])
     report = ProgramReport(
-        labels=tuple(labels),
-        lines=np.array([program.targets[i].line for i in rows], dtype=int),
-        tools=tuple(usage[i][0] for i in rows),
-        frames=tuple(usage[i][1] for i in rows),
+        labels=labels,
+        **_target_facts(program, rows),
         T_target=T_target,
         T_command=T_command,
         correction=_correction(T_target, T_command),
         q=q,
         q_planned=q_planned,
-        declared=tuple(describe(program.format, program.targets[i].config) for i in rows),
-        written=tuple(describe(program.format, edited.targets[i].config) for i in rows),
+        declared=_described(program, rows),
+        written=_described(edited, rows),
         posture_source=tuple(source),
         outside_grid=np.zeros(len(rows), dtype=bool) if result is None else result.outside,
         predicted_residual=np.zeros(len(rows)) if result is None else result.residual,
@@ -211,21 +208,18 @@ def as_written_report(program, plan):
     plan : trajcomp.posture.Plan
         Its Cartesian targets in their declared postures (`planned_joints`).
     """
-    usage = program.usage()
     n = len(plan.index)
     joint_index, _ = program.joint_targets()
     return ProgramReport(
-        labels=tuple(program.where(i) for i in plan.index),
-        lines=np.array([program.targets[i].line for i in plan.index], dtype=int),
-        tools=tuple(usage[i][0] for i in plan.index),
-        frames=tuple(usage[i][1] for i in plan.index),
+        labels=program.labels(plan.index),
+        **_target_facts(program, plan.index),
         T_target=plan.T_base_tcp,
         T_command=plan.T_base_tcp,
         correction=np.zeros((n, 6)),
         q=plan.q,
         q_planned=plan.q,
-        declared=tuple(describe(program.format, program.targets[i].config) for i in plan.index),
-        written=tuple(describe(program.format, program.targets[i].config) for i in plan.index),
+        declared=_described(program, plan.index),
+        written=_described(program, plan.index),
         posture_source=plan.source,
         outside_grid=np.zeros(n, dtype=bool),
         predicted_residual=np.zeros(n),
@@ -233,12 +227,27 @@ def as_written_report(program, plan):
     )
 
 
+def _target_facts(program, index):
+    """The report fields of targets ``index`` (N,) that the program states: source lines, tools, frames."""
+    used = program.usage_table()
+    row = np.searchsorted(used.index, index)
+    return {"lines": program.target_table().line[index], "tools": tuple(used.tool[row]),
+            "frames": tuple(used.frame[row])}
+
+
+def _described(program, index):
+    """Configuration data of targets ``index`` (N,) as the language writes them (`describe`), tuple of str."""
+    config = program.target_table().config
+    return tuple(describe(program.format, config[i]) for i in index.tolist())
+
+
 def _program_facts(program, joint_index, joint_mode):
     """The report fields that describe the program itself: unused points, joint targets, warnings."""
     return {
         "unused": tuple(t.label for t in program.unused_targets()),
         "joint_targets": tuple(program.targets[i].label for i in joint_index)
-        + tuple(f"{m.text} (line {m.line})" for m in program.motions if m.axis_position),
+        + tuple(f"{program.motions[k].text} (line {program.motions[k].line})"
+                for k in np.flatnonzero(program.motion_table().axis_position)),
         "joint_mode": joint_mode,
         "warnings": _warnings(program),
     }

@@ -65,12 +65,16 @@ class Plan:
 
 def motion_order(program):
     """Target indices (used as target or via point) in the order motions first use them."""
-    order = {}
-    for motion in program.motions:
-        for i in (motion.via, motion.target):
-            if i is not None:
-                order.setdefault(i, len(order))
-    return np.array(list(order), dtype=int)
+    visits = _visits(program)
+    _, first = np.unique(visits, return_index=True)
+    return visits[np.sort(first)]
+
+
+def _visits(program):
+    """Target indices (K,) in the order motions reach them: via point, then target, of each motion."""
+    motions = program.motion_table()
+    visits = np.stack([motions.via, motions.target], axis=1).ravel()
+    return visits[visits >= 0]
 
 
 def planned_joints(program, robot, *, tools=None, frames=None):
@@ -98,13 +102,14 @@ def planned_joints(program, robot, *, tools=None, frames=None):
     TrajcompError
         A tool or frame used but not defined.
     """
-    index = np.array([i for i in motion_order(program) if not program.targets[i].is_joint], dtype=int)
+    table = program.target_table()
+    order = motion_order(program)
+    index = order[~table.is_joint[order]]
     T_base_frame, T_flange_tool, T_base_tcp = FrameTable(program, robot, tools, frames).targets_in_base(index)
     n = len(index)
-    targets = [program.targets[i] for i in index]
     q_all, valid = _all_branches(robot, T_base_tcp, T_flange_tool)
-    branch, lower, upper = declared_windows(program.format, [t.config for t in targets])
-    hint = np.array([np.full(6, np.nan) if t.joints is None else t.joints for t in targets]).reshape(n, 6)
+    branch, lower, upper = declared_windows(program.format, [table.config[i] for i in index.tolist()])
+    hint = table.joints[index]
     has_hint = np.all(np.isfinite(hint), axis=1)
     _fail_outside_limits(program, robot, index[has_hint], hint[has_hint])
     by_config = ~has_hint & (branch >= 0)
@@ -114,7 +119,7 @@ def planned_joints(program, robot, *, tools=None, frames=None):
                                lower[by_config], upper[by_config])
     source = np.where(has_hint, "joints", np.where(by_config, "config", "")).astype(object)
     _fail_unreachable(program, robot, index, q, source)
-    _chain(program, robot, index, q, q_all, valid, source, {int(i): k for k, i in enumerate(index)})
+    _chain(program, robot, index, q, q_all, valid, source)
     return Plan(index, q, tuple(source), T_base_frame, T_flange_tool, T_base_tcp)
 
 
@@ -223,36 +228,34 @@ def _declaration(target, source):
     return f"configuration {target.config} unreachable or outside the joint limits"
 
 
-def _runs(program, robot, row_of, q, source):
+def _runs(program, robot, index, q, source):
     """Runs of undeclared rows in motion order, each with the joints (6,) of the position before it.
 
     Yields ``(rows, anchor, from_home)``: consecutive undeclared Cartesian
-    targets and the joints the arm has before the first of them (a planned
-    declared target, a joint target, or home when nothing comes before).
+    targets (rows of ``index``, each once) and the joints the arm has
+    before the first of them (a planned declared target, a joint target, or
+    home when nothing comes before).
     """
-    anchor, from_home, run, in_run = robot.home, True, [], set()
-    for motion in program.motions:
-        for i in (motion.via, motion.target):
-            if i is None:
-                continue
-            k = row_of.get(i)
-            if k is not None and source[k] == "":
-                if k not in in_run:
-                    run.append(k)
-                    in_run.add(k)
-                continue
-            if run:
-                yield run, anchor, from_home
-                run, in_run = [], set()
-            if k is not None:
-                anchor, from_home = q[k], False
-            elif program.targets[i].is_joint:
-                anchor, from_home = np.asarray(program.targets[i].joints, dtype=float), False
-    if run:
-        yield run, anchor, from_home
+    visits = _visits(program)
+    row_of = np.full(len(program.targets), -1)
+    row_of[index] = np.arange(len(index))
+    rows = row_of[visits]
+    undeclared = rows >= 0
+    undeclared[undeclared] = np.asarray(source, dtype=object)[rows[undeclared]] == ""
+    edges = np.flatnonzero(np.diff(np.concatenate([[0], undeclared.astype(int), [0]])))
+    joints = program.target_table().joints
+    for begin, end in zip(edges[0::2], edges[1::2]):
+        run = rows[begin:end]
+        _, first = np.unique(run, return_index=True)
+        if begin == 0:
+            anchor, from_home = robot.home, True
+        else:
+            before = rows[begin - 1]
+            anchor, from_home = (q[before] if before >= 0 else joints[visits[begin - 1]]), False
+        yield run[np.sort(first)], anchor, from_home
 
 
-def _chain(program, robot, index, q, q_all, valid, source, row_of):
+def _chain(program, robot, index, q, q_all, valid, source):
     """Fill the undeclared rows, each nearest the joints of the position before it.
 
     A run of undeclared targets is solved at once assuming the arm keeps the
@@ -261,8 +264,7 @@ def _chain(program, robot, index, q, q_all, valid, source, row_of):
     its predecessor, and the run is restarted where another branch or turn
     is nearer. Smooth paths take one pass.
     """
-    for run, anchor, from_home in _runs(program, robot, row_of, q, source):
-        rows = np.array(run)
+    for rows, anchor, from_home in _runs(program, robot, index, q, source):
         start = 0
         while start < len(rows):
             first = _nearest(robot, q_all[rows[start : start + 1]], valid[rows[start : start + 1]], anchor[None])[0]

@@ -267,6 +267,8 @@ class TargetTable:
     ----------
     pose : ndarray, shape (N, 4, 4)
         T_frame_tcp, mm; NaN for a joint target.
+    is_joint : ndarray of bool, shape (N,)
+        Joint-space targets (no pose).
     joints : ndarray, shape (N, 6)
         Joints, rad; NaN where the target states none.
     line : ndarray of int, shape (N,)
@@ -280,6 +282,7 @@ class TargetTable:
     """
 
     pose: np.ndarray
+    is_joint: np.ndarray
     joints: np.ndarray
     line: np.ndarray
     config: tuple
@@ -291,11 +294,6 @@ class TargetTable:
     def __len__(self):
         return len(self.line)
 
-    @property
-    def is_joint(self):
-        """ndarray of bool (N,): joint-space targets (no pose)."""
-        return np.isnan(self.pose[:, 0, 0])
-
     @classmethod
     def of(cls, targets):
         """The table of `Target` objects."""
@@ -303,6 +301,7 @@ class TargetTable:
         nan_pose, nan_joints = np.full((4, 4), np.nan), np.full(6, np.nan)
         return cls(
             pose=np.array([nan_pose if t.pose is None else t.pose for t in targets], dtype=float).reshape(n, 4, 4),
+            is_joint=np.array([t.pose is None for t in targets], dtype=bool).reshape(n),
             joints=np.array([nan_joints if t.joints is None else t.joints for t in targets], dtype=float).reshape(n, 6),
             line=np.array([t.line for t in targets], dtype=int).reshape(n),
             config=tuple(t.config for t in targets),
@@ -325,14 +324,14 @@ class TargetTable:
         line : ndarray of int, shape (N,)
         """
         n = len(line)
-        return cls(pose, joints, np.asarray(line, dtype=int), ((),) * n, np.full(n, None, dtype=object),
+        return cls(pose, np.isnan(pose[:, 0, 0]), joints, np.asarray(line, dtype=int), ((),) * n, np.full(n, None, dtype=object),
                    np.full(n, None, dtype=object), (None,) * n, np.zeros(n, dtype=bool))
 
     def target(self, i):
         """Target ``i`` as an object."""
         return Target(
             name="", line=int(self.line[i]),
-            pose=None if np.isnan(self.pose[i, 0, 0]) else self.pose[i],
+            pose=None if self.is_joint[i] else self.pose[i],
             joints=None if np.isnan(self.joints[i]).any() else self.joints[i],
             config=self.config[i], tool=self.tool[i], frame=self.frame[i], external=self.external[i],
             edited=bool(self.edited[i]),

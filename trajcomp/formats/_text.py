@@ -218,8 +218,8 @@ def encode_xyzabc(pose, old, roles):
 
 
 def near_angle(angle, reference, period=360.0):
-    """``angle`` shifted by whole periods to be closest to ``reference``."""
-    return angle - period * round((angle - reference) / period)
+    """``angle`` (scalar or array) shifted by whole periods to be closest to ``reference``."""
+    return angle - period * np.round((np.asarray(angle) - reference) / period)
 
 
 def target_edits(program, encode, min_places):
@@ -290,24 +290,32 @@ def check_writable(program):
     its via point; every writer is fed through this check
     (`trajcomp.formats.write`).
     """
-    used = {i for m in program.motions for i in (m.target, m.via) if i is not None}
-    for i in sorted(used):
-        target = program.targets[i]
-        for what, values in (("pose", target.pose), ("joints", target.joints), ("external axes", target.external)):
-            if values is None:
-                continue
-            if np.isinf(values).any() or (what != "external axes" and np.isnan(values).any()):  # NaN: unused axis
-                raise WriteError(f"target {where(target)}: {what} not finite, nothing written")
+    motions, targets = program.motion_table(), program.target_table()
+    used = np.unique(np.concatenate([motions.target, motions.via]))
+    used = used[used >= 0]
+    pose, joints = targets.pose[used], targets.joints[used]
+    bad_pose = np.isinf(pose).any(axis=(1, 2)) | (~targets.is_joint[used] & np.isnan(pose).any(axis=(1, 2)))
+    stated = ~np.isnan(joints).all(axis=1)  # NaN: no joints
+    bad_joints = stated & ~np.isfinite(joints).all(axis=1)
+    for what, bad in (("pose", bad_pose), ("joints", bad_joints)):
+        if bad.any():
+            raise WriteError(f"target {where(program.targets[used[np.argmax(bad)]])}: {what} not finite, nothing written")
+    for i in used.tolist():
+        external = targets.external[i]
+        if external is not None and np.isinf(external).any():  # NaN: an unused axis
+            raise WriteError(f"target {where(program.targets[i])}: external axes not finite, nothing written")
     for kind, table in (("tool", program.tools), ("frame", program.frames)):
         for name, T in table.items():
             if not np.isfinite(T).all():
                 raise WriteError(f"{kind} {name}: value not finite, nothing written")
-    for m in program.motions:
-        if m.kind == CIRCULAR and m.target is not None and m.via is None:
-            raise WriteError(f"motion at line {m.line} ({m.text[:60]}): a circle needs its via point, nothing written")
-        for what, value in (("speed", m.speed), ("zone", m.zone)):
-            if value is not None and not math.isfinite(value):
-                raise WriteError(f"motion at line {m.line} ({m.text[:60]}): {what} not finite, nothing written")
+    circle_without_via = (motions.kind == CIRCULAR) & (motions.target >= 0) & (motions.via < 0)
+    bad_speed = ~np.isnan(motions.speed) & ~np.isfinite(motions.speed)
+    bad_zone = ~np.isnan(motions.zone) & ~np.isfinite(motions.zone)
+    for bad, problem in ((circle_without_via, "a circle needs its via point"), (bad_speed, "speed not finite"),
+                         (bad_zone, "zone not finite")):
+        if bad.any():
+            m = program.motions[int(np.argmax(bad))]
+            raise WriteError(f"motion at line {m.line} ({m.text[:60]}): {problem}, nothing written")
 
 
 def active_axes(program, capacity, language):

@@ -9,12 +9,14 @@ id, a comment) is kept as it is, except a name close to a known one (``xx``,
 A pose or joint group given in part, and a file without target rows, are
 refused too.
 
-Writing a program read from CSV keeps every column, row and byte; the
-edited rows get their new pose and, where the program knows their joints,
-``j1..j6`` (added as columns when the file has none).
+CSV programs are CAM paths of up to millions of rows, so they are read and
+written as columns, a block of rows at a time (`Program.from_tables`): no
+object per row. Writing a program read from CSV keeps every column, row and
+byte; the edited rows get their new pose and, where the program knows their
+joints, ``j1..j6`` (added as columns when the file has none); `with_times`
+sets the ``t`` column.
 """
 
-import dataclasses
 import difflib
 import math
 import re
@@ -25,69 +27,108 @@ from trajcomp.formats._text import (
     ANGLE_LIMIT,
     JOINT_LIMIT,
     LENGTH_LIMIT,
-    Lines,
     active_axes,
-    apply_edits,
+    decimals,
     encode_text,
-    encode_xyzabc,
     fail,
     finite,
     format_number,
+    near_angle,
     read_source,
-    target_edits,
 )
-from trajcomp.program import JOINT, LINEAR, Motion, Program, Span, Statement, Target
-from trajcomp.transforms import matrix_to_pose, pose_to_matrix
+from trajcomp.program import JOINT, LINEAR, MotionTable, Program, Source, Statement, TargetTable
+from trajcomp.transforms import abc_to_matrix, matrix_to_abc, matrix_to_pose, pose_to_matrix
 
 POSE = ("x", "y", "z", "a", "b", "c")
 JOINTS = ("j1", "j2", "j3", "j4", "j5", "j6")
 MIN_PLACES = dict.fromkeys(POSE[:3], 3) | dict.fromkeys(POSE[3:], 4) | dict.fromkeys(JOINTS, 4)
+LIMITS = dict.fromkeys(POSE[:3], LENGTH_LIMIT) | dict.fromkeys(POSE[3:], ANGLE_LIMIT) | dict.fromkeys(JOINTS, JOINT_LIMIT)
 KINDS = {"PTP": JOINT, "LIN": LINEAR}
 KNOWN = POSE + JOINTS + ("motion", "speed", "zone", "t")
-_FIELD = re.compile(r'(?:^|,)[ \t]*("(?:[^"]|"")*"|[^,]*)')
+BLOCK = 50_000  # rows parsed or formatted together: vectorized, with bounded temporary memory
+_QUOTED_COMMA = re.compile(r',(?=(?:[^"]*"[^"]*")*[^"]*$)')  # a comma outside double quotes
 
 
-def _fields(text, start):
-    """``[(value, start, end)]`` of a CSV line at offset ``start``."""
-    out = []
-    for m in _FIELD.finditer(text):
-        value = m.group(1).rstrip()
-        s = m.start(1)
-        e = s + len(value)
-        if value.startswith('"'):
-            value = value[1:-1].replace('""', '"')
-        out.append((value.strip(), start + s, start + e))
-    return out
+def _split(text):
+    """The lines of a text and the line endings after them: ``text == "".join(interleaved)``.
+
+    Returns
+    -------
+    lines : list of str
+        Without line endings; the empty piece after a final line ending included.
+    endings : list of str
+        ``\n``, ``\r\n`` or ``\r`` after each line but the last.
+    """
+    if "\r" not in text:
+        lines = text.split("\n")
+        return lines, ["\n"] * (len(lines) - 1)
+    parts = re.split(r"(\r\n|\r|\n)", text)
+    return parts[0::2], parts[1::2]
+
+
+def _join(lines, endings):
+    return "".join(line + ending for line, ending in zip(lines, endings + [""]))
+
+
+def _cells(line):
+    """The raw cells of a CSV line: ``",".join(cells) == line``; commas inside quotes kept."""
+    return _QUOTED_COMMA.split(line) if '"' in line else line.split(",")
+
+
+def _value(cell):
+    """A cell's value: stripped, quotes removed."""
+    value = cell.strip()
+    if len(value) > 1 and value[0] == value[-1] == '"':
+        return value[1:-1].replace('""', '"')
+    return value
+
+
+def _is_statement(line):
+    stripped = line.lstrip()
+    return not stripped or stripped[0] == "#"
+
+
+def _header_line(lines):
+    """Number (1-based) of the header: the first line that is not blank or a comment (None: none)."""
+    return next((n for n, line in enumerate(lines, 1) if not _is_statement(line)), None)
 
 
 def read(path):
     """Read a program CSV. Raises ReadError with file:line, field and text."""
     source = read_source(path)
-    lines = Lines(source.text)
-    header, items, targets = None, [], []
-    for number, start, end in lines:
-        line = source.text[start:end]
-        if not line.strip() or line.lstrip().startswith("#"):
-            items.append(Statement(number, line))
-            continue
-        fields = _fields(line, start)
-        if header is None:
-            header = _header([f[0].lower() for f in fields], source.name, number, line)
-            has_pose, has_joints = POSE[0] in header, JOINTS[0] in header
-            items.append(Statement(number, line))
-            continue
-        if len(fields) != len(header):
-            fail(source.name, number, line, f"expected {len(header)} fields, got {len(fields)}")
-        row = dict(zip(header, fields))
-        motion, target = _row(source.name, number, line, row, has_pose, has_joints, len(targets))
-        targets.append(target)
-        items.append(dataclasses.replace(motion, spans=_timing_spans(row, end)))
-    targets = _with_poses(targets)
-    if header is None:
+    lines, endings = _split(source.text)
+    if lines and not lines[-1]:
+        lines.pop()
+    number = _header_line(lines)
+    if number is None:
         fail(source.name, 1, source.text[:80], "not a program CSV: no header row")
-    if not targets:
-        fail(source.name, lines.number(len(source.text)), source.text[-80:], "no target rows after the header")
-    return Program("csv", source.name.rsplit(".", 1)[0], tuple(items), targets, sources=(source,))
+    header = _header([_value(c).lower() for c in _cells(lines[number - 1])], source.name, number, lines[number - 1])
+    statement = [_is_statement(line) for line in lines]
+    statement[number - 1] = True
+    rows = np.flatnonzero(~np.array(statement, dtype=bool)) + 1
+    if not len(rows):
+        fail(source.name, len(lines), source.text[-80:], "no target rows after the header")
+    statements = [Statement(n, lines[n - 1]) for n in np.flatnonzero(statement) + 1]
+    blocks = [_parse_block(source.name, header, [lines[n - 1] for n in rows[k : k + BLOCK]], rows[k : k + BLOCK])
+              for k in range(0, len(rows), BLOCK)]
+    pose, joints, kind, speed, zone = (np.concatenate(parts) for parts in zip(*blocks))
+    n = len(rows)
+    motions = MotionTable(
+        kind=kind, target=np.arange(n), via=np.full(n, -1), speed=speed,
+        speed_unit=np.full(n, "mm/s", dtype=object), zone=np.where(zone == 0.0, np.nan, zone),
+        tool=np.full(n, None, dtype=object), frame=np.full(n, None, dtype=object), line=rows,
+        axis_position=np.zeros(n, dtype=bool),
+    )
+    starts = np.concatenate([[0], np.cumsum([len(line) + len(end) for line, end in zip(lines, endings)])])
+    lengths = np.array([len(line) for line in lines])
+    del lines
+
+    def text(number):
+        start = starts[number - 1]
+        return source.text[start : start + lengths[number - 1]].strip()
+
+    return Program.from_tables("csv", source.name.rsplit(".", 1)[0], statements, motions,
+                               TargetTable.of_rows(pose, joints, rows), text, sources=(source,))
 
 
 def _header(names, source_name, number, line):
@@ -109,101 +150,207 @@ def _header(names, source_name, number, line):
     return names
 
 
-def _number(name, number, line, field, column):
-    limit = LENGTH_LIMIT if column in POSE[:3] else ANGLE_LIMIT if column in POSE else (
-        JOINT_LIMIT if column in JOINTS else math.inf)
-    return finite(field[0], name, number, line, f"field {column}", limit)
+def _parse_block(name, header, lines, numbers):
+    """Columns of a block of B target rows: poses (B, 4, 4), joints (B, 6) rad, kinds, speeds, zones (B,).
 
-
-def _row(name, number, line, row, has_pose, has_joints, index):
-    def numbers(columns):
-        return np.array([_number(name, number, line, row[c], c) for c in columns])
-
-    def spans(columns):
-        return {c: Span(0, row[c][1], row[c][2], row[c][0]) for c in columns}
-
-    pose_given = has_pose and any(row[c][0] for c in POSE)
-    joints_given = has_joints and any(row[c][0] for c in JOINTS)
-    if not (pose_given or joints_given):
-        fail(name, number, line, "a row needs x,y,z,a,b,c or j1..j6")
-    pose = joints = None
-    found = {}
-    if pose_given:
-        pose = numbers(POSE)  # x, y, z, a, b, c (mm, deg): matrices for all rows at once in _with_poses
-        found |= spans(POSE)
-    if joints_given:
-        joints = np.radians(numbers(JOINTS))
-        found |= spans(JOINTS)
-    kind_text = row.get("motion", ("", 0, 0))[0].upper()
-    if kind_text and kind_text not in KINDS:
-        fail(name, number, line, f"field motion: expected PTP or LIN, got {kind_text!r}")
-    speed = _number(name, number, line, row["speed"], "speed") if row.get("speed", ("",))[0] else None
-    zone = _number(name, number, line, row["zone"], "zone") if row.get("zone", ("",))[0] else None
-    target = Target(name="", line=number, pose=pose, joints=joints, spans=found)
-    motion = Motion(
-        kind=KINDS.get(kind_text, LINEAR),
-        target=index,
-        speed=speed,
-        zone=zone or None,
-        line=number,
-        text=line.strip(),
-    )
-    return motion, target
-
-
-def _timing_spans(row, end):
-    """Where re-timing writes: the ``t`` cell (if the file has the column) and the row's end."""
-    spans = {"end": Span(0, end, end, "")}
-    if "t" in row:
-        spans["t"] = Span(0, row["t"][1], row["t"][2], row["t"][0])
-    return spans
-
-
-def _with_poses(targets):
-    """The targets (tuple) with their pose rows x, y, z, a, b, c (mm, deg) turned into matrices in one call."""
-    rows = [k for k, t in enumerate(targets) if t.pose is not None]
-    out = list(targets)
-    if rows:
-        vectors = np.array([targets[k].pose for k in rows])
+    Parsed as arrays; a block with any mistake is checked row by row, which
+    names the first one (`_check_row`).
+    """
+    b = len(lines)
+    cells = [_cells(line) for line in lines]
+    if any(len(row) != len(header) for row in cells):
+        _check_rows(name, header, lines, numbers)
+    columns = dict(zip(header, zip(*cells)))
+    values, empty = {}, {}
+    for column in [c for c in header if c in LIMITS or c in ("speed", "zone")]:
+        text = np.strings.strip(np.array(columns[column], dtype=str))
+        text = np.where(np.strings.startswith(text, '"'), np.strings.strip(np.strings.strip(text, '"')), text)
+        empty[column] = text == ""
+        number = np.full(b, np.nan)
+        try:
+            number[~empty[column]] = text[~empty[column]].astype(float)
+        except ValueError:
+            _check_rows(name, header, lines, numbers)
+        if np.any(~empty[column] & ~(np.abs(number) <= LIMITS.get(column, np.inf))):
+            _check_rows(name, header, lines, numbers)
+        values[column] = number
+    none = np.zeros(b, dtype=bool)
+    pose_given = ~np.all([empty[c] for c in POSE], axis=0) if "x" in header else none
+    joints_given = ~np.all([empty[c] for c in JOINTS], axis=0) if "j1" in header else none
+    partial = pose_given & (np.any([empty[c] for c in POSE], axis=0) if "x" in header else none)
+    partial |= joints_given & (np.any([empty[c] for c in JOINTS], axis=0) if "j1" in header else none)
+    kind_text = np.full(b, "")
+    if "motion" in header:
+        kind_text = np.strings.upper(np.array([_value(c) for c in columns["motion"]], dtype=str))
+    if partial.any() or not np.all(pose_given | joints_given) or not set(np.unique(kind_text)) <= {"", *KINDS}:
+        _check_rows(name, header, lines, numbers)
+    pose = np.full((b, 4, 4), np.nan)
+    if pose_given.any():
+        vectors = np.stack([values[c][pose_given] for c in POSE], axis=1)
         vectors[:, 3:] = np.radians(vectors[:, 3:])
-        for k, matrix in zip(rows, pose_to_matrix(vectors)):
-            out[k] = Target(name="", line=targets[k].line, pose=matrix, joints=targets[k].joints,
-                            spans=targets[k].spans)
-    return tuple(out)
+        pose[pose_given] = pose_to_matrix(vectors)
+    joints = np.full((b, 6), np.nan)
+    if joints_given.any():
+        joints[joints_given] = np.radians(np.stack([values[c][joints_given] for c in JOINTS], axis=1))
+    kind = np.where(kind_text == "PTP", JOINT, LINEAR).astype(object)
+    return pose, joints, kind, values.get("speed", np.full(b, np.nan)), values.get("zone", np.full(b, np.nan))
 
 
-def _encode(target, old):
-    out = {}
-    if target.pose is not None:
-        out |= encode_xyzabc(target.pose, old, POSE)
-    if target.joints is not None:
-        out |= dict(zip(JOINTS, np.degrees(target.joints)))
-    return out
+def _check_rows(name, header, lines, numbers):
+    """ReadError naming the first mistake of a block (file:line, field, text), checking row by row."""
+    for line, number in zip(lines, numbers):
+        _check_row(name, header, line, int(number))
+    raise AssertionError(f"{name}: a block of rows flagged as faulty has no faulty row")
+
+
+def _check_row(name, header, line, number):
+    cells = [_value(c) for c in _cells(line)]
+    if len(cells) != len(header):
+        fail(name, number, line, f"expected {len(header)} fields, got {len(cells)}")
+    row = dict(zip(header, cells))
+    groups = [group for group in (POSE, JOINTS) if group[0] in row and any(row[c] for c in group)]
+    if not groups:
+        fail(name, number, line, "a row needs x,y,z,a,b,c or j1..j6")
+    for column in [c for group in groups for c in group] + [c for c in ("speed", "zone") if row.get(c)]:
+        finite(row[column], name, number, line, f"field {column}", LIMITS.get(column, math.inf))
+    kind = row.get("motion", "").upper()
+    if kind and kind not in KINDS:
+        fail(name, number, line, f"field motion: expected PTP or LIN, got {kind!r}")
 
 
 def write(program, path):
     """The CSV text of a program: patched in place if read from CSV, else generated."""
     if program.format == "csv" and program.sources:
         source = program.sources[0]
-        edits = target_edits(program, _encode, MIN_PLACES)[0] + _added_joints(program, source)
-        return {path: encode_text(source, apply_edits(source.text, edits))}
+        return {path: encode_text(source, _patched(program, source.text))}
     return {path: _emit(program).encode("utf-8")}
 
 
-def _added_joints(program, source):
-    """Edits appending j1..j6 to the header and rows when the file has no joint columns."""
-    lines = Lines(source.text)
-    header = next(((n, s, e) for n, s, e in lines if source.text[s:e].strip()
-                   and not source.text[s:e].lstrip().startswith("#")), None)
-    names = [f[0].lower() for f in _fields(source.text[header[1]:header[2]], header[1])]
-    if any(c in names for c in JOINTS) or not any(t.edited and t.joints is not None for t in program.targets):
-        return []
-    edits = [(header[2], header[2], "," + ",".join(JOINTS))]
-    for target in program.targets:
-        end = lines.starts[target.line - 1] + len(lines.line(target.line))
-        cells = [""] * 6 if target.joints is None else [format_number(v, 4) for v in np.degrees(target.joints)]
-        edits.append((end, end, "," + ",".join(cells)))
-    return edits
+def _patched(program, text):
+    """``text`` with the edited targets' numbers rewritten, and j1..j6 appended when the file has no such columns."""
+    lines, endings = _split(text)
+    number = _header_line(lines)
+    header = [_value(c).lower() for c in _cells(lines[number - 1])]
+    targets = program.target_table()
+    edited = np.flatnonzero(targets.edited)
+    for k in range(0, len(edited), BLOCK):
+        rows = edited[k : k + BLOCK]
+        numbers = targets.line[rows]
+        cells = [_cells(lines[n - 1]) for n in numbers]
+        updates = _pose_cells(targets.pose[rows], ~targets.is_joint[rows], cells, header) if "x" in header else {}
+        if "j1" in header:
+            updates |= _joint_cells(targets.joints[rows], cells, header)
+        for column, texts in updates.items():
+            j = header.index(column)
+            for row, new in zip(cells, texts):
+                if new is not None:
+                    row[j] = _replaced(row[j], new)
+        for n, row in zip(numbers, cells):
+            lines[n - 1] = ",".join(row)
+    if "j1" not in header and np.isfinite(targets.joints[edited]).all(axis=1).any():
+        lines[number - 1] += "," + ",".join(JOINTS)
+        for n, cells in zip(targets.line, _degrees_cells(targets.joints)):
+            lines[n - 1] += "," + cells
+    return _join(lines, endings)
+
+
+def _replaced(cell, new):
+    """``cell`` with its value replaced by ``new``, keeping the spaces around it."""
+    value = cell.strip()
+    return new if value == cell else cell.replace(value, new, 1)
+
+
+def _pose_cells(pose, cartesian, cells, header):
+    """New texts of x..c for edited rows (B,): None where a row has no pose (``cartesian`` False) or a number is unchanged."""
+    old = {c: [_value(row[header.index(c)]) for row in cells] for c in POSE}
+    out = {c: [None] * len(cells) for c in POSE}
+    rows = np.flatnonzero(cartesian)
+    if not rows.size:
+        return out
+    for c, values in zip(POSE[:3], pose[rows, :3, 3].T):
+        _fill(out[c], rows, values, [old[c][r] for r in rows], MIN_PLACES[c])
+    old_abc = np.array([[float(old[c][r]) for c in POSE[3:]] for r in rows])
+    rotation = pose[rows, :3, :3]
+    turned = np.abs(rotation - abc_to_matrix(np.radians(old_abc))).max(axis=(1, 2)) > 1e-12
+    if turned.any():
+        angles = near_angle(np.degrees(matrix_to_abc(rotation[turned])), old_abc[turned])
+        for c, values in zip(POSE[3:], angles.T):
+            _fill(out[c], rows[turned], values, [old[c][r] for r in rows[turned]], MIN_PLACES[c])
+    return out
+
+
+def _joint_cells(joints, cells, header):
+    """New texts of j1..j6 for edited rows (B,): None where a row has no joints or the number is unchanged."""
+    out = {c: [None] * len(cells) for c in JOINTS}
+    rows = np.flatnonzero(np.isfinite(joints).all(axis=1))
+    for c, values in zip(JOINTS, np.degrees(joints[rows]).T):
+        _fill(out[c], rows, values, [_value(cells[r][header.index(c)]) for r in rows], MIN_PLACES[c])
+    return out
+
+
+def _fill(out, rows, values, old, min_places):
+    """Set ``out[rows]`` to the texts of ``values`` written like ``old`` (decimals, ``.5``), None where equal."""
+    texts = _numbers_text(values, old, min_places)
+    old_values = np.array([float(t) if t else np.nan for t in old])
+    same = np.array(texts, dtype=float) == old_values
+    for r, text, keep, before in zip(rows, texts, same, old):
+        if not keep:
+            out[r] = re.sub(r"^(-?)0\.", r"\1.", text) if re.match(r"[-+]?\.", before) else text
+    return out
+
+
+def _numbers_text(values, old, min_places):
+    """Texts (list of str) of values (B,) with the decimals of the file's texts ``old``, at least ``min_places``."""
+    places = np.maximum([decimals(t) for t in old], min_places) if old else np.zeros(0, dtype=int)
+    texts = np.empty(len(values), dtype=object)
+    for p in np.unique(places):
+        pick = places == p
+        chosen = values[pick]
+        chosen = np.where(np.round(chosen, p) == 0.0, 0.0, chosen)  # never -0
+        texts[pick] = [f"{v:.{p}f}" for v in chosen.tolist()]
+    return texts.tolist()
+
+
+def _degrees_cells(joints):
+    """The appended j1..j6 cells of each target (N,): joints (N, 6) rad as deg, 4 decimals; empty where none."""
+    known = np.isfinite(joints).all(axis=1)
+    degrees = np.where(np.round(np.degrees(joints), 4) == 0.0, 0.0, np.degrees(joints))
+    return [",".join(f"{v:.4f}" for v in row) if ok else ",,,,," for row, ok in zip(degrees.tolist(), known)]
+
+
+def with_times(program, times):
+    """The program with its ``t`` column (s, to the ns) set, added after the last column when the file has none.
+
+    Parameters
+    ----------
+    program : Program
+        Read from a CSV file.
+    times : ndarray, shape (M,)
+        Time stamp of each motion (row), s, in motion order.
+
+    Returns
+    -------
+    (Program, list of str)
+        The program with its source text changed, and the written values.
+    """
+    source = program.sources[0]
+    lines, endings = _split(source.text)
+    number = _header_line(lines)
+    header = [_value(c).lower() for c in _cells(lines[number - 1])]
+    written = _numbers_text(np.asarray(times, dtype=float), [""] * len(times), 9)
+    rows = program.motion_table().line
+    if "t" in header:
+        j = header.index("t")
+        for n, value in zip(rows, written):
+            cells = _cells(lines[n - 1])
+            cells[j] = _replaced(cells[j], value)
+            lines[n - 1] = ",".join(cells)
+    else:
+        lines[number - 1] += ",t"
+        for n, value in zip(rows, written):
+            lines[n - 1] += "," + value
+    text = _join(lines, endings)
+    return program.replace(sources=(Source(source.name, text, source.encoding),)), written
 
 
 def _emit(program):

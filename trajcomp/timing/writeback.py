@@ -28,6 +28,7 @@ import numpy as np
 
 from trajcomp.errors import TimingError
 from trajcomp.formats._text import Lines, apply_edits, format_number
+from trajcomp.formats.csv_program import with_times
 from trajcomp.program import JOINT, Span
 from trajcomp.timing.moves import moves_from_program
 from trajcomp.timing.path import TOLERANCE
@@ -74,8 +75,8 @@ def apply_timing(program, result, robot):
             f"{program.name}: timing can be written into CSV, KRL, RAPID, FANUC LS and URScript programs read "
             f"from a file, not into a {program.format} program{'' if program.sources else ' built in memory'}"
         )
-    edits, settings = writer(program, result, robot)
-    return edit_sources(program, edits), result.with_settings(settings)
+    timed, settings = writer(program, result, robot)
+    return timed, result.with_settings(settings)
 
 
 def writable(program):
@@ -99,20 +100,11 @@ def _floor(value, places):
 
 
 def _csv(program, result, robot):
-    text = program.sources[0].text
-    by_motion = {int(m): k for k, m in enumerate(result.motion)}
-    edits, settings = [], {}
-    for m, motion in enumerate(program.motions):
-        value = format_number(result.t[by_motion[m]], 9)
-        span = motion.spans.get("t") or motion.spans["end"]
-        edits.append((span.start, span.end, value if "t" in motion.spans else "," + value))
-        settings[by_motion[m]] = f"t={value}"
-    if not any("t" in m.spans for m in program.motions):
-        header = next(item for item in program.items if item.text.strip() and not item.text.lstrip().startswith("#"))
-        lines = Lines(text)
-        end = lines.starts[header.line - 1] + len(lines.line(header.line))
-        edits.append((end, end, ",t"))
-    return [edits], settings
+    """The ``t`` column: each row's time stamp (`trajcomp.formats.csv_program.with_times`)."""
+    times = np.full(len(program.motions), np.nan)
+    times[result.motion] = result.t
+    timed, written = with_times(program, times)
+    return timed, {k: f"t={written[m]}" for k, m in enumerate(result.motion.tolist())}
 
 
 def _rapid(program, result, robot):
@@ -123,7 +115,7 @@ def _rapid(program, result, robot):
         written = f"{speed_data}\\T:={format_number(_ceil(duration, 3), 3)}"
         edits.append((span.start, span.end, written))
         settings[k] = written
-    return [edits], settings
+    return edit_sources(program, [edits]), settings
 
 
 def _urscript(program, result, robot):
@@ -142,7 +134,7 @@ def _urscript(program, result, robot):
         else:
             edits.append((motion.spans["end"].start, motion.spans["end"].start, f", {key}={value}"))
         settings[k] = f"{key}={value}"
-    return [edits], settings
+    return edit_sources(program, [edits]), settings
 
 
 def _fanuc(program, result, robot):
@@ -155,7 +147,7 @@ def _fanuc(program, result, robot):
         written = f"{ms}msec" if ms <= MSEC_LIMIT else f"{format_number(_ceil(duration, 1), 1)}sec"
         edits.append((span.start, span.end, written))
         settings[k] = written
-    return [edits], settings
+    return edit_sources(program, [edits]), settings
 
 
 def _krl(program, result, robot):
@@ -197,7 +189,7 @@ def _krl(program, result, robot):
         running[group] = need
         if want is not None:
             settings[k] = _krl_statement(group, want)
-    return edits, settings
+    return edit_sources(program, edits), settings
 
 
 def _krl_statement(group, value):
