@@ -236,77 +236,101 @@ def _patched(program, text):
     for k in range(0, len(edited), BLOCK):
         rows = edited[k : k + BLOCK]
         numbers = targets.line[rows]
-        cells = [_cells(lines[n - 1]) for n in numbers]
-        updates = _pose_cells(targets.pose[rows], ~targets.is_joint[rows], cells, header) if "x" in header else {}
+        columns = [np.array(cells, dtype=str) for cells in zip(*(_cells(lines[n - 1]) for n in numbers))]
+        old = {c: np.strings.strip(columns[j]) for j, c in enumerate(header) if c in LIMITS}
+        updates = _pose_texts(targets.pose[rows], ~targets.is_joint[rows], old) if "x" in header else {}
         if "j1" in header:
-            updates |= _joint_cells(targets.joints[rows], cells, header)
-        for column, texts in updates.items():
+            updates |= _joint_texts(targets.joints[rows], old)
+        for column, (changed, texts) in updates.items():
             j = header.index(column)
-            for row, new in zip(cells, texts):
-                if new is not None:
-                    row[j] = _replaced(row[j], new)
-        for n, row in zip(numbers, cells):
-            lines[n - 1] = ",".join(row)
+            columns[j] = np.where(changed, _in_cells(columns[j], old[column], texts), columns[j])
+        joined = columns[0]
+        for column in columns[1:]:
+            joined = np.strings.add(np.strings.add(joined, ","), column)
+        for n, line in zip(numbers.tolist(), joined.tolist()):
+            lines[n - 1] = line
     if "j1" not in header and np.isfinite(targets.joints[edited]).all(axis=1).any():
         lines[number - 1] += "," + ",".join(JOINTS)
-        for n, cells in zip(targets.line, _degrees_cells(targets.joints)):
+        for n, cells in zip(targets.line.tolist(), _degrees_cells(targets.joints)):
             lines[n - 1] += "," + cells
     return _join(lines, endings)
 
 
-def _replaced(cell, new):
-    """``cell`` with its value replaced by ``new``, keeping the spaces around it."""
-    value = cell.strip()
-    return new if value == cell else cell.replace(value, new, 1)
+def _in_cells(cells, values, texts):
+    """Cells (B,) with their values replaced by ``texts``, keeping the spaces or quotes around them."""
+    plain = cells == values
+    if plain.all():
+        return texts
+    out = texts.astype(object)
+    for k in np.flatnonzero(~plain):
+        out[k] = cells[k].replace(values[k], texts[k], 1)
+    return out.astype(str)
 
 
-def _pose_cells(pose, cartesian, cells, header):
-    """New texts of x..c for edited rows (B,): None where a row has no pose (``cartesian`` False) or a number is unchanged."""
-    old = {c: [_value(row[header.index(c)]) for row in cells] for c in POSE}
-    out = {c: [None] * len(cells) for c in POSE}
+def _pose_texts(pose, cartesian, old):
+    """``{column: (changed (B,), texts (B,))}`` of x..c for edited rows: poses (B, 4, 4), old cell values (B,)."""
+    changed = {c: np.zeros(len(pose), dtype=bool) for c in POSE}
+    texts = {c: old[c].astype(object) for c in POSE}  # new texts may be longer than the old
     rows = np.flatnonzero(cartesian)
-    if not rows.size:
-        return out
     for c, values in zip(POSE[:3], pose[rows, :3, 3].T):
-        _fill(out[c], rows, values, [old[c][r] for r in rows], MIN_PLACES[c])
-    old_abc = np.array([[float(old[c][r]) for c in POSE[3:]] for r in rows])
+        changed[c][rows], texts[c][rows] = _written(values, old[c][rows], MIN_PLACES[c])
+    old_abc = np.stack([old[c][rows] for c in POSE[3:]], axis=1).astype(float)
     rotation = pose[rows, :3, :3]
-    turned = np.abs(rotation - abc_to_matrix(np.radians(old_abc))).max(axis=(1, 2)) > 1e-12
+    turned = np.abs(rotation - abc_to_matrix(np.radians(old_abc))).max(axis=(1, 2), initial=0.0) > 1e-12
     if turned.any():
         angles = near_angle(np.degrees(matrix_to_abc(rotation[turned])), old_abc[turned])
         for c, values in zip(POSE[3:], angles.T):
-            _fill(out[c], rows[turned], values, [old[c][r] for r in rows[turned]], MIN_PLACES[c])
-    return out
+            changed[c][rows[turned]], texts[c][rows[turned]] = _written(values, old[c][rows[turned]], MIN_PLACES[c])
+    return {c: (changed[c], texts[c].astype(str)) for c in POSE}
 
 
-def _joint_cells(joints, cells, header):
-    """New texts of j1..j6 for edited rows (B,): None where a row has no joints or the number is unchanged."""
-    out = {c: [None] * len(cells) for c in JOINTS}
+def _joint_texts(joints, old):
+    """``{column: (changed (B,), texts (B,))}`` of j1..j6 for edited rows: joints (B, 6) rad, old cell values (B,)."""
     rows = np.flatnonzero(np.isfinite(joints).all(axis=1))
+    out = {}
     for c, values in zip(JOINTS, np.degrees(joints[rows]).T):
-        _fill(out[c], rows, values, [_value(cells[r][header.index(c)]) for r in rows], MIN_PLACES[c])
+        changed, texts = np.zeros(len(joints), dtype=bool), old[c].astype(object)
+        changed[rows], texts[rows] = _written(values, old[c][rows], MIN_PLACES[c])
+        out[c] = changed, texts.astype(str)
     return out
 
 
-def _fill(out, rows, values, old, min_places):
-    """Set ``out[rows]`` to the texts of ``values`` written like ``old`` (decimals, ``.5``), None where equal."""
-    texts = _numbers_text(values, old, min_places)
-    old_values = np.array([float(t) if t else np.nan for t in old])
-    same = np.array(texts, dtype=float) == old_values
-    for r, text, keep, before in zip(rows, texts, same, old):
-        if not keep:
-            out[r] = re.sub(r"^(-?)0\.", r"\1.", text) if re.match(r"[-+]?\.", before) else text
-    return out
+def _written(values, old, min_places):
+    """How a file that wrote ``old`` (B,) writes ``values`` (B,): ``(changed (B,), texts (B,))``.
+
+    The decimals of the old text (at least ``min_places``), ``.5`` kept
+    bare where the file writes it so; ``changed`` is False where the number
+    reads back equal to the old one (its text is then kept).
+    """
+    texts = np.asarray(_numbers_text(values, _decimals(old), min_places), dtype=str)
+    before = np.full(len(old), np.nan)
+    given = old != ""
+    before[given] = old[given].astype(float)
+    changed = texts.astype(float) != before
+    bare = np.strings.startswith(old, ".") | np.strings.startswith(old, "-.") | np.strings.startswith(old, "+.")
+    if (bare & changed).any():
+        texts = np.where(bare, np.strings.replace(np.strings.replace(texts, "-0.", "-."), "0.", ".", count=1), texts)
+    return changed, texts
 
 
-def _numbers_text(values, old, min_places):
-    """Texts (list of str) of values (B,) with the decimals of the file's texts ``old``, at least ``min_places``."""
-    places = np.maximum([decimals(t) for t in old], min_places) if old else np.zeros(0, dtype=int)
+def _decimals(texts):
+    """Digits after the decimal point of number texts (B,) (`decimals`), ndarray of int."""
+    texts = np.asarray(texts, dtype=str)
+    dot = np.strings.find(texts, ".")
+    places = np.where(dot >= 0, np.strings.str_len(texts) - dot - 1, 0)
+    exponent = (np.strings.find(texts, "e") >= 0) | (np.strings.find(texts, "E") >= 0)
+    places[exponent] = [decimals(t) for t in texts[exponent]]
+    return places
+
+
+def _numbers_text(values, places, min_places):
+    """Texts (list of str) of values (B,) with ``max(places, min_places)`` decimals each, never ``-0``."""
+    places = np.maximum(places, min_places)
     texts = np.empty(len(values), dtype=object)
     for p in np.unique(places):
         pick = places == p
         chosen = values[pick]
-        chosen = np.where(np.round(chosen, p) == 0.0, 0.0, chosen)  # never -0
+        chosen = np.where(np.round(chosen, p) == 0.0, 0.0, chosen)
         texts[pick] = [f"{v:.{p}f}" for v in chosen.tolist()]
     return texts.tolist()
 
@@ -337,7 +361,7 @@ def with_times(program, times):
     lines, endings = _split(source.text)
     number = _header_line(lines)
     header = [_value(c).lower() for c in _cells(lines[number - 1])]
-    written = _numbers_text(np.asarray(times, dtype=float), [""] * len(times), 9)
+    written = _numbers_text(np.asarray(times, dtype=float), np.zeros(len(times), dtype=int), 9)
     rows = program.motion_table().line
     if "t" in header:
         j = header.index("t")
