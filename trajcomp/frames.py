@@ -69,3 +69,11 @@ def _values(names, value):
     """``value(name)`` (4, 4) of each of N names, stacked (N, 4, 4): looked up once per distinct name."""
     codes, distinct = _codes(names)
     return np.array([value(name) for name in distinct]).reshape(-1, 4, 4)[codes]
+
+
+def tool_groups(tools):
+    """``[(tool (4, 4), rows)]``: the distinct tools of a stack (n, 4, 4) and the rows using each."""
+    if not len(tools) or np.all(tools == tools[0]):
+        return [(tools[0], np.arange(len(tools)))] if len(tools) else []
+    unique, group = np.unique(tools.reshape(len(tools), 16), axis=0, return_inverse=True)
+    return [(tool.reshape(4, 4), np.flatnonzero(group.ravel() == g)) for g, tool in enumerate(unique)]

@@ -29,7 +29,7 @@ import numpy as np
 
 from trajcomp.configuration import declared_windows
 from trajcomp.errors import IKError
-from trajcomp.frames import FrameTable
+from trajcomp.frames import FrameTable, tool_groups
 from trajcomp.ik import ik_all, turn_towards
 
 TURN = 2.0 * np.pi
@@ -161,11 +161,8 @@ def _all_branches(robot, T_base_tcp, T_flange_tool):
     n = len(T_base_tcp)
     q_all = np.full((n, 8, 6), np.nan)
     valid = np.zeros((n, 8), dtype=bool)
-    flat = np.round(np.asarray(T_flange_tool, dtype=float).reshape(n, 16), 12)
-    tools, group = np.unique(flat, axis=0, return_inverse=True)
-    for k, tool in enumerate(tools):
-        rows = np.flatnonzero(group.ravel() == k)
-        q_all[rows], valid[rows] = ik_all(robot.replace(T_flange_tool=tool.reshape(4, 4)), T_base_tcp[rows])
+    for tool, rows in tool_groups(np.asarray(T_flange_tool, dtype=float)):
+        q_all[rows], valid[rows] = ik_all(robot.replace(T_flange_tool=tool), T_base_tcp[rows])
     return q_all, valid
 
 
