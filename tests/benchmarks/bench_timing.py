@@ -53,7 +53,7 @@ from trajcomp.robot import load_robot  # noqa: E402
 from trajcomp.timing import Moves, moves_from_program, plan_segments, retime  # noqa: E402
 from trajcomp.timing.check import segment_peaks  # noqa: E402
 from trajcomp.timing.path import run_path  # noqa: E402
-from trajcomp.timing.toppra_run import toppra_law  # noqa: E402
+from trajcomp.timing.toppra_run import toppra_laws  # noqa: E402
 from trajcomp.transforms import abc_to_matrix, matrix_to_abc  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -91,7 +91,7 @@ def reference(moves, result, robot):
         fine = np.unique((run.grid[:-1, None] + np.outer(np.diff(run.grid), np.arange(REFINE) / REFINE)).ravel())
         fine = np.r_[fine, run.grid[-1]]
         run = dataclasses.replace(run, grid=fine, grid_rate=np.interp(fine, run.grid, run.grid_rate))
-        law = toppra_law(run, moves, robot)
+        law = toppra_laws([run], moves, robot)[0]
         total += law.duration
         worst = max(worst, segment_peaks(run, law, moves, jerk=False).worst)
     return total, worst

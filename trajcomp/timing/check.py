@@ -43,6 +43,11 @@ class Peaks:
     acceleration_ratio: np.ndarray
     speed_ratio: float
 
+    @classmethod
+    def worst_of(cls, peaks):
+        """The peaks of several parts of one segment (a non-empty list of Peaks)."""
+        return cls(**{f.name: np.fmax.reduce([getattr(p, f.name) for p in peaks]) for f in dataclasses.fields(cls)})
+
     @property
     def worst(self):
         """The largest ratio of a sampled value over its limit."""

@@ -23,11 +23,11 @@ motion from rest to rest. Its samples come from `trajcomp.timing.samples`
 import dataclasses
 
 import numpy as np
-from scipy.interpolate import make_interp_spline, make_lsq_spline
+from scipy.interpolate import BSpline, make_interp_spline, make_lsq_spline
 
-from trajcomp.kinematics import jacobian
+from trajcomp.kinematics import fk_and_jacobian
 from trajcomp.program import JOINT
-from trajcomp.timing.samples import run_samples, tool_groups
+from trajcomp.timing.samples import run_samples
 
 TOLERANCE = 0.005  # mm, largest deviation of the timed path from a waypoint or sample
 ROTATION_PER_MM = 1e-3  # rad of orientation tolerance per mm of position tolerance
@@ -133,7 +133,7 @@ class RunPath:
         return np.interp(s, self.grid, self.grid_rate)
 
 
-def run_path(moves, robot, first, last, tolerance=TOLERANCE):
+def run_path(moves, robot, first, last, tolerance=TOLERANCE, *, part=None):
     """Build and fit the joint path of waypoints ``first..last``.
 
     Parameters
@@ -145,6 +145,11 @@ def run_path(moves, robot, first, last, tolerance=TOLERANCE):
         Waypoint indices; the motions are first + 1 .. last.
     tolerance : float
         Largest deviation of the fitted path from every sample, mm.
+    part : (int, int), optional
+        Waypoints ``a..b`` (first <= a < b <= last) whose part of the path
+        is returned, its path position 0 at waypoint a; the motions around
+        it are fitted too, so that the part is the path a fit of the whole
+        would give there (see `trajcomp.timing.windows`). Default: all.
 
     Returns
     -------
@@ -155,28 +160,38 @@ def run_path(moves, robot, first, last, tolerance=TOLERANCE):
     TimingError
         From `trajcomp.timing.samples.run_samples`.
     """
-    q, owner = run_samples(moves, robot, first, last)
+    a, b = part or (first, last)
+    q, owner, (waypoint, flange, flange_jac) = run_samples(moves, robot, first, last)
     keep = np.ones(len(q), dtype=bool)
     keep[1:] = np.linalg.norm(np.diff(q, axis=0), axis=1) > _DUPLICATE
     kept = np.cumsum(keep) - 1
     waypoint_rows = kept[np.r_[np.flatnonzero(np.diff(owner)), len(owner) - 1]]
-    q, owner = q[keep], owner[keep]
+    q, owner, waypoint = q[keep], owner[keep], waypoint[keep]
     s = np.r_[0.0, np.cumsum(np.linalg.norm(np.diff(q, axis=0), axis=1))]
     s_waypoints = s[waypoint_rows]
-    if len(q) < 2:
-        return RunPath(None, s_waypoints, s, first, last, np.zeros(last - first + 1), np.zeros(len(s)), 0.0)
+    s_a, s_b = s_waypoints[a - first], s_waypoints[b - first]
+    if s_b <= s_a:
+        return RunPath(None, s_waypoints[a - first : b - first + 1] - s_a, np.zeros(1), a, b, np.zeros(b - a + 1),
+                       np.zeros(1), 0.0)
     grid = _grid(s)  # every sample is a grid point: one Jacobian batch serves the fit and the TCP speed
     k = first + np.clip(np.searchsorted(s_waypoints, grid), 1, len(s_waypoints) - 1)
-    jac_grid = tcp_jacobians(robot, moves, k, np.column_stack([np.interp(grid, s, q[:, j]) for j in range(6)]))
-    jac = jac_grid[np.searchsorted(grid, s)]
+    row = np.searchsorted(grid, s)  # grid point of each sample
+    at = waypoint >= 0
+    known = (row[at], flange[waypoint[at]], flange_jac[waypoint[at]])
+    jac_grid = tcp_jacobians(robot, moves, k, np.column_stack([np.interp(grid, s, q[:, j]) for j in range(6)]), known)
+    jac = jac_grid[row]
     steps = np.r_[0.0, np.linalg.norm(np.einsum("nij,nj->ni", jac[1:, :3], np.diff(q, axis=0)), axis=1)]
     travel = np.cumsum(steps)  # TCP arc length from the run's start, mm
     tcp_lengths = np.diff(travel[waypoint_rows], prepend=0.0)
     tol = _tolerances(moves, first, last, travel, owner, waypoint_rows, tcp_lengths, tolerance)
     spline, deviation = _fit(s, q, jac, tol, np.min(moves.acceleration[first + 1 : last + 1], axis=0))
-    path = JointPath(spline)
-    rate = np.linalg.norm(np.einsum("nij,nj->ni", jac_grid[:, :3], path(grid, 1)), axis=1)
-    return RunPath(path, s_waypoints, grid, first, last, tcp_lengths, rate, deviation)
+    inside = (grid >= s_a) & (grid <= s_b)
+    grid, jac_grid = grid[inside], jac_grid[inside]
+    rate = np.linalg.norm(np.einsum("nij,nj->ni", jac_grid[:, :3], spline(grid, 1)), axis=1)
+    path = JointPath(BSpline(spline.t - s_a, spline.c, spline.k))
+    lengths = tcp_lengths[a - first : b - first + 1].copy()
+    lengths[0] = 0.0
+    return RunPath(path, s_waypoints[a - first : b - first + 1] - s_a, grid - s_a, a, b, lengths, rate, deviation)
 
 
 def _grid(s):
@@ -195,11 +210,23 @@ def _grid(s):
     return np.unique(np.r_[grid, ends])
 
 
-def tcp_jacobians(robot, moves, owner, q):
-    """TCP Jacobians (n, 6, 6) of configurations q (n, 6), each with the tool of its motion ``owner`` (n,)."""
-    jac = np.empty((len(q), 6, 6))
-    for tool, rows in tool_groups(moves, owner):
-        jac[rows] = jacobian(robot.replace(T_flange_tool=tool), q[rows])
+def tcp_jacobians(robot, moves, owner, q, known=None):
+    """TCP Jacobians (n, 6, 6) of configurations q (n, 6), each with the tool of its motion ``owner`` (n,).
+
+    ``known``: ``(rows, flange (r, 4, 4), flange Jacobians (r, 6, 6))`` of
+    rows whose flange kinematics were computed before (the waypoints).
+    """
+    jac, rotation = np.empty((len(q), 6, 6)), np.empty((len(q), 3, 3))
+    todo = np.ones(len(q), dtype=bool)
+    if known is not None:
+        rows, flange, flange_jac = known
+        jac[rows], rotation[rows], todo[rows] = flange_jac, flange[:, :3, :3], False
+    rows = np.flatnonzero(todo)
+    if rows.size:
+        flange, jac[rows] = fk_and_jacobian(robot, q[rows], tcp=False)
+        rotation[rows] = flange[:, :3, :3]
+    offset = np.einsum("nij,nj->ni", rotation, moves.tools[moves.tool[owner], :3, 3])  # flange to TCP, base frame
+    jac[:, :3] += np.swapaxes(np.cross(np.swapaxes(jac[:, 3:], 1, 2), offset[:, None, :]), 1, 2)
     return jac
 
 

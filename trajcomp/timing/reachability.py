@@ -46,7 +46,7 @@ def squared_speeds(s, dq, ddq, acceleration, x_max, rest):
         Joint acceleration limits, rad/s^2.
     x_max : ndarray, shape (G,)
         Upper bound of x at each grid point (joint velocity, TCP speed), finite.
-    rest : ndarray of int
+    rest : array_like of int
         Grid points where the path speed is 0 (at least the first and the last).
 
     Returns
@@ -54,11 +54,28 @@ def squared_speeds(s, dq, ddq, acceleration, x_max, rest):
     ndarray, shape (G,)
         x = sd^2, 0 at the rest points.
     """
+    x_max = np.array(x_max, dtype=float)
+    x_max[rest] = 0.0
+    return forward(s, dq, ddq, acceleration, backward(s, dq, ddq, acceleration, x_max, end=0.0), start=0.0)
+
+
+def backward(s, dq, ddq, acceleration, x_max, end):
+    """The controllable bounds h (G,): from x_i <= h_i the path can go on to x_{G-1} <= ``end``.
+
+    Parameters as `squared_speeds`; ``end`` is the bound at the last grid
+    point (0: rest there; for a window, the next window's bound).
+    """
     bands = _Bands(np.diff(s), dq, ddq, np.asarray(acceleration, dtype=float))
-    h = np.append(np.minimum(x_max[:-1], bands.largest_x(x_max[:-1])), 0.0)
-    h[rest] = 0.0
+    h = np.append(bands.largest_x(x_max[:-1]), min(end, x_max[-1]))
     _settle(h, bands.backward, backward=True)
+    return h
+
+
+def forward(s, dq, ddq, acceleration, h, start):
+    """The greedy forward pass: x (G,) from x_0 = ``start`` (<= h_0), as fast as h and the bands allow."""
+    bands = _Bands(np.diff(s), dq, ddq, np.asarray(acceleration, dtype=float))
     x = h.copy()
+    x[0] = start
     _settle(x, lambda i, x_i: np.minimum(h[i + 1], bands.forward(i, x_i)), backward=False)
     return np.maximum(x, 0.0)
 
@@ -105,14 +122,13 @@ class _Bands:
             self.sigma = np.where(moving, -alpha / beta, 0.0)
             self.w = np.where(moving, a / np.abs(beta), np.inf)
             self.x_bound = np.min(np.where(moving, np.inf, a / np.abs(alpha)), axis=1)
-        positive = self.sigma > 0.0
-        with np.errstate(divide="ignore"):
-            self.inverse = np.where(positive, 1.0 / self.sigma, 0.0)
-            self.offset = np.where(positive, self.w / self.sigma, np.inf)
 
     def backward(self, i, h_next):
         """Largest x_i (n,) of intervals i (n,) from which x_{i+1} <= h_next (n,) can be kept (and X_i)."""
-        return np.minimum(self.largest[i], np.min(h_next[:, None] * self.inverse[i] + self.offset[i], axis=1))
+        sigma = self.sigma[i]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            reach = np.where(sigma > 0.0, (h_next[:, None] + self.w[i]) / sigma, np.inf)
+        return np.minimum(self.largest[i], np.min(reach, axis=1))
 
     def forward(self, i, x):
         """Largest x_{i+1} (n,) the bands of intervals i (n,) allow from x_i = x (n,)."""

@@ -23,9 +23,10 @@ import dataclasses
 import numpy as np
 
 from trajcomp.program import JOINT
-from trajcomp.timing.check import LIMIT_TOLERANCE, segment_peaks
-from trajcomp.timing.path import TOLERANCE, run_path
+from trajcomp.timing.check import LIMIT_TOLERANCE, Peaks, segment_peaks
+from trajcomp.timing.path import TOLERANCE
 from trajcomp.timing.result import Segment, TimingResult
+from trajcomp.timing.windows import WINDOW, run_windows
 
 METHODS = ("auto", "toppra", "ruckig")
 _RETRIES = 4  # timings of one segment with lowered limits before giving up
@@ -61,6 +62,7 @@ def retime(moves, robot, *, method="auto", tolerance=TOLERANCE):
     t = np.zeros(m)
     tcp_length = np.zeros(m)
     arrived = moves.q.copy()
+    reached = dataclasses.replace(moves, q=arrived)  # filled in segment by segment
     segments, pieces, peaks, untimed, deviation = [], [], [], [], 0.0
     for kind, first, last in plan_segments(moves, method):
         if kind == "untimed":
@@ -69,18 +71,24 @@ def retime(moves, robot, *, method="auto", tolerance=TOLERANCE):
             continue
         arrived[first + 1 : last + 1] = _continued(arrived[first], moves.q[first : last + 1],
                                                    moves.kind[first + 1 : last + 1])
-        run = run_path(dataclasses.replace(moves, q=arrived), robot, first, last, tolerance)
-        tcp_length[first + 1 : last + 1] = run.tcp_lengths[1:]
-        deviation = max(deviation, run.deviation)
-        if run.path is None:
+        runs = run_windows(reached, robot, first, last, tolerance, WINDOW if kind == "toppra" else None)
+        tcp_length[first + 1 : last + 1] = np.concatenate([run.tcp_lengths[1:] for run in runs])
+        deviation = max(deviation, *(run.deviation for run in runs))
+        if all(run.path is None for run in runs):
             t[first + 1 : last + 1] = t[first]
             segments.append(Segment(kind, first, last, 0.0))
             continue
-        law, checked = _timed(kind, run, moves, robot)
-        t[first + 1 : last + 1] = t[first] + law.time_at(run.s_waypoints[1:])
-        t[last] = t[first] + law.duration
-        segments.append(Segment(kind, first, last, law.duration))
-        pieces.append((t[first], run, law))
+        laws, checked = _timed(kind, runs, moves, robot)
+        start = t[first]
+        for run, law in zip(runs, laws):
+            if law is None:
+                t[run.first + 1 : run.last + 1] = start
+                continue
+            t[run.first + 1 : run.last + 1] = start + law.time_at(run.s_waypoints[1:])
+            t[run.last] = start + law.duration
+            pieces.append((start, run, law))
+            start += law.duration
+        segments.append(Segment(kind, first, last, start - t[first]))
         peaks.append(checked)
     return _result(moves, robot, arrived, t, segments, pieces, peaks, untimed, tcp_length, deviation)
 
@@ -96,7 +104,7 @@ def _continued(start, declared, kinds):
     """
     turn = 2.0 * np.pi
     change = np.diff(declared, axis=0)
-    slip = np.vstack([start - declared[0], np.angle(np.exp(1j * change)) - change])  # whole turns gained
+    slip = np.vstack([start - declared[0], (change + np.pi) % turn - np.pi - change])  # whole turns gained
     joint = np.r_[True, kinds == JOINT]
     total = np.cumsum(slip, axis=0)
     reset = np.maximum.accumulate(np.where(joint, np.arange(len(joint)), 0))  # the last joint motion
@@ -119,22 +127,26 @@ def plan_segments(moves, method="auto"):
     return list(zip(kinds.tolist(), first.tolist(), last.tolist()))
 
 
-def _timed(kind, run, moves, robot):
-    """Time a run, lowering the limits a sample exceeds until the dense check passes: (law, Peaks)."""
-    if kind == "toppra":  # toppra is slow to import: only when a segment needs it
-        from trajcomp.timing.toppra_run import toppra_law as law_of
-    else:
-        from trajcomp.timing.ruckig_move import ruckig_law as law_of
+def _timed(kind, runs, moves, robot):
+    """Time a run's windows, lowering the limits a sample exceeds until the dense check passes: (laws, Peaks)."""
+    if kind == "toppra":
+        from trajcomp.timing.toppra_run import toppra_laws as laws_of
+    else:  # a ruckig run is one window
+        from trajcomp.timing.ruckig_move import ruckig_law
+
+        def laws_of(runs, *args):
+            return [ruckig_law(runs[0], *args)]
     velocity, acceleration, speed = np.ones(6), np.ones(6), 1.0
     for _ in range(_RETRIES):
-        law = law_of(run, moves, robot, velocity, acceleration, speed)
-        peaks = segment_peaks(run, law, moves, jerk=kind == "ruckig")
+        laws = laws_of(runs, moves, robot, velocity, acceleration, speed)
+        peaks = Peaks.worst_of([segment_peaks(run, law, moves, jerk=kind == "ruckig")
+                                for run, law in zip(runs, laws) if law is not None])
         if peaks.worst <= _TARGET:
             break
         velocity = velocity / np.maximum(peaks.velocity_ratio, 1.0)
         acceleration = acceleration / np.maximum(peaks.acceleration_ratio, 1.0)
         speed = speed / max(peaks.speed_ratio, 1.0)
-    return law, peaks
+    return laws, peaks
 
 
 def _turn_warnings(moves, arrived):

@@ -15,7 +15,7 @@ import numpy as np
 
 from trajcomp.errors import TimingError
 from trajcomp.ik import branch_index, ik, ik_all, ik_family
-from trajcomp.kinematics import fk
+from trajcomp.kinematics import fk, fk_and_jacobian
 from trajcomp.program import CIRCULAR, JOINT
 from trajcomp.transforms import matrix_to_rotvec, rotvec_to_matrix
 
@@ -35,6 +35,11 @@ def run_samples(moves, robot, first, last):
     owner : ndarray of int, shape (n,)
         Waypoint k whose motion each sample ends (motion k covers (wp k-1, wp k]);
         ``first`` for the first sample.
+    waypoint_kinematics : (ndarray (n,) of int, ndarray (W, 4, 4), ndarray (W, 6, 6))
+        For each sample, the waypoint ``first + i`` it is (i; -1 for a
+        sample between waypoints), and the flange poses and flange
+        Jacobians of the W = last - first + 1 waypoints (computed once here,
+        reused by `trajcomp.timing.path`).
 
     Raises
     ------
@@ -49,7 +54,8 @@ def run_samples(moves, robot, first, last):
     local, fraction = np.r_[0, local], np.r_[0.0, step / np.repeat(counts, counts)]  # first: motion 0 at 0
     q = geometry.solve(local, fraction, seed=None)
     local, fraction, q = geometry.bisect_jumps(local, fraction, q)
-    return q, first + np.where(fraction > 0, local + 1, local)
+    waypoint = np.where(fraction == 1.0, local + 1, np.where(np.arange(len(q)) == 0, 0, -1))
+    return q, first + np.where(fraction > 0, local + 1, local), (waypoint, geometry.flange, geometry.flange_jac)
 
 
 class _Geometry:
@@ -61,10 +67,12 @@ class _Geometry:
         self.q_a, self.q_b = moves.q[self.k - 1], moves.q[self.k]
         self.joint = moves.kind[self.k] == JOINT
         tools = moves.tool_of(self.k)
-        flange = fk(robot, moves.q[first : last + 1], tcp=False)  # each waypoint once
-        T_a, T_b = flange[:-1] @ tools, flange[1:] @ tools
-        self.R_a, self.p_a, self.p_b = T_a[:, :3, :3], T_a[:, :3, 3], T_b[:, :3, 3]
-        self.turn = matrix_to_rotvec(np.swapaxes(self.R_a, 1, 2) @ T_b[:, :3, :3]).reshape(-1, 3)
+        self.flange, self.flange_jac = fk_and_jacobian(robot, moves.q[first : last + 1], tcp=False)  # once each
+        T_a, T_b = self.flange[:-1] @ tools, self.flange[1:] @ tools
+        self.R_a, self.R_b, self.p_a, self.p_b = T_a[:, :3, :3], T_b[:, :3, :3], T_a[:, :3, 3], T_b[:, :3, 3]
+        cosine = 0.5 * (np.einsum("nji,nji->n", self.R_a, self.R_b) - 1.0)  # of the turn: (trace(R_a^T R_b) - 1) / 2
+        self.angle = np.arccos(np.clip(cosine, -1.0, 1.0))
+        self.turn = np.full((len(self.k), 3), np.nan)  # rotation vectors, solved where samples need them
         self.length = np.linalg.norm(self.p_b - self.p_a, axis=1)
         self.circle = np.zeros(len(self.k), dtype=bool)
         self.centre, self.e1, self.e2 = np.zeros((3, len(self.k), 3))
@@ -96,12 +104,16 @@ class _Geometry:
         """Number of sample intervals (M,) of each motion."""
         step = np.radians(STEP_DEG)
         joint_steps = np.max(np.abs(self.q_b - self.q_a), axis=1) / step
-        cartesian = np.maximum(self.length / STEP_MM, np.linalg.norm(self.turn, axis=1) / step)
+        cartesian = np.maximum(self.length / STEP_MM, self.angle / step)
         return np.ceil(np.maximum(np.where(self.joint, 0.0, cartesian), np.maximum(joint_steps, 1.0))).astype(int)
 
     def poses(self, local, fraction):
         """TCP poses (n, 4, 4) of motions ``local`` (n,) at ``fraction`` (n,) of their way."""
         T = np.tile(np.eye(4), (len(local), 1, 1))
+        unknown = np.unique(local[np.isnan(self.turn[local, 0])])
+        if unknown.size:
+            relative = np.swapaxes(self.R_a[unknown], 1, 2) @ self.R_b[unknown]
+            self.turn[unknown] = matrix_to_rotvec(relative).reshape(-1, 3)
         T[:, :3, :3] = self.R_a[local] @ rotvec_to_matrix(fraction[:, None] * self.turn[local]).reshape(-1, 3, 3)
         line = self.p_a[local] + fraction[:, None] * (self.p_b[local] - self.p_a[local])
         theta = (fraction * self.sweep[local])[:, None]

@@ -22,7 +22,7 @@ import dataclasses
 import numpy as np
 
 from trajcomp.errors import TimingError
-from trajcomp.timing.reachability import squared_speeds
+from trajcomp.timing.reachability import backward, forward
 
 _X_CAP = 1e12  # (rad/s)^2 ceiling of the squared path speed where no limit binds
 
@@ -77,13 +77,22 @@ class ConstantAcceleration:
         return self.t[i] + dt
 
 
-def toppra_law(run, moves, robot, velocity_scale=1.0, acceleration_scale=1.0, speed_scale=1.0):
-    """The time-optimal constant-acceleration law of a run's path, at rest at both ends.
+def toppra_laws(runs, moves, robot, velocity_scale=1.0, acceleration_scale=1.0, speed_scale=1.0):
+    """The time-optimal constant-acceleration laws of a run's windows, at rest at both ends of the run.
+
+    Consecutive windows share a grid point (a waypoint): the backward pass
+    goes through the windows from the last to the first, each ending at
+    the bound its successor found for the shared point, and the forward
+    pass from the first to the last, each starting at the speed its
+    predecessor reached there. So the path speed is continuous at every
+    join and the laws are those of one TOPP-RA problem over the whole run
+    (each interval with its own window's path). A window without length
+    is a rest point.
 
     Parameters
     ----------
-    run : RunPath
-        With a path (non-zero length).
+    runs : list of RunPath
+        Consecutive windows of one run (`trajcomp.timing.windows.run_windows`), or one run.
     moves : Moves
         Limits of each motion.
     robot : Robot
@@ -96,7 +105,8 @@ def toppra_law(run, moves, robot, velocity_scale=1.0, acceleration_scale=1.0, sp
 
     Returns
     -------
-    ConstantAcceleration
+    list of ConstantAcceleration or None
+        One per window (None for one without length).
 
     Raises
     ------
@@ -104,17 +114,35 @@ def toppra_law(run, moves, robot, velocity_scale=1.0, acceleration_scale=1.0, sp
         The path speed must be zero over a whole grid interval (a singular
         or kinked path): names the waypoint, its line and the joint.
     """
-    grid, path = run.grid, run.path
-    x_max, velocity = run.speed_bound(moves, velocity_scale, speed_scale)
-    x_max = np.minimum(x_max, _X_CAP)
-    dq = path(grid, 1)
-    acceleration = np.min(moves.acceleration[run.first + 1 : run.last + 1], axis=0) * acceleration_scale
-    x = squared_speeds(grid, dq, path(grid, 2), acceleration, x_max, rest=[0, len(grid) - 1])
-    try:
-        return ConstantAcceleration.from_speeds(grid, np.sqrt(x))
-    except ValueError:
-        i = int(np.argmin(x[:-1] + x[1:]))
-        raise _stuck(run, moves, grid, i, x_max, dq, velocity) from None
+    def problem(run):
+        x_max, velocity = run.speed_bound(moves, velocity_scale, speed_scale)
+        acceleration = np.min(moves.acceleration[run.first + 1 : run.last + 1], axis=0) * acceleration_scale
+        return run.grid, run.path(run.grid, 1), run.path(run.grid, 2), acceleration, np.minimum(x_max, _X_CAP), velocity
+
+    bounds, end = [], 0.0
+    for run in reversed(runs):
+        if run.path is None:
+            bounds.append(None)
+            end = 0.0
+            continue
+        grid, dq, ddq, acceleration, x_max, _ = problem(run)
+        bounds.append(backward(grid, dq, ddq, acceleration, x_max, end))
+        end = bounds[-1][0]
+    laws, start = [], 0.0
+    for run, h in zip(runs, reversed(bounds)):
+        if run.path is None:
+            laws.append(None)
+            start = 0.0
+            continue
+        grid, dq, ddq, acceleration, x_max, velocity = problem(run)
+        x = forward(grid, dq, ddq, acceleration, h, start)
+        start = x[-1]
+        try:
+            laws.append(ConstantAcceleration.from_speeds(grid, np.sqrt(x)))
+        except ValueError:
+            i = int(np.argmin(x[:-1] + x[1:]))
+            raise _stuck(run, moves, grid, i, x_max, dq, velocity) from None
+    return laws
 
 
 def _where(run, moves, grid_s):

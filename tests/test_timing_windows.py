@@ -1,0 +1,63 @@
+"""A long run timed in windows: the same timing as in one piece, continuous at the joins, within the limits."""
+
+import importlib
+
+import numpy as np
+import pytest
+
+from trajcomp.ik import ik
+from trajcomp.kinematics import fk
+from trajcomp.robot import load_robot
+from trajcomp.timing import Moves, retime
+
+UR10 = load_robot("ur10")
+retime_module = importlib.import_module("trajcomp.timing.retime")  # the module, not the function of that name
+
+
+@pytest.fixture(scope="module")
+def helix():
+    n = 3001
+    angle = np.linspace(0.0, 2.0 * np.pi * 6, n)
+    T = np.tile(fk(UR10, UR10.home), (n, 1, 1))
+    T[:, 0, 3] += 60.0 * (np.cos(angle) - 1.0)
+    T[:, 1, 3] += 60.0 * np.sin(angle)
+    T[:, 2, 3] += np.linspace(0.0, -80.0, n)
+    return ik(UR10, T, seed=UR10.home).raise_on_failure().q
+
+
+@pytest.fixture(scope="module")
+def whole_and_windowed(helix):
+    moves = Moves.from_joints(helix, UR10, tcp_speed=250.0, zone=0.5)
+    whole = retime(moves, UR10)
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setattr(retime_module, "WINDOW", 1000)
+        windowed = retime(moves, UR10)
+    return whole, windowed
+
+
+def test_a_windowed_run_is_timed_as_the_whole_run(whole_and_windowed):
+    whole, windowed = whole_and_windowed
+    assert len(whole.pieces) == 1 and len(windowed.pieces) == 3
+    assert len(windowed.segments) == 1 and windowed.within_limits
+    np.testing.assert_allclose(windowed.t, whole.t, rtol=0, atol=1e-6 * whole.cycle_time)
+    assert np.all(np.diff(windowed.t) > 0)  # every waypoint stamped, in order
+
+
+def test_at_a_join_position_and_velocity_are_continuous_and_the_limits_hold(whole_and_windowed):
+    _, windowed = whole_and_windowed
+    for start, run, _ in windowed.pieces[1:]:  # each join: the waypoint two windows share
+        assert windowed.t[run.first] == start
+        before, after = windowed.at(np.array([start - 1e-9])), windowed.at(np.array([start + 1e-9]))
+        np.testing.assert_allclose(before[0], after[0], atol=1e-8)  # q (rad): both paths meet at the waypoint
+        assert np.max(np.abs(before[1] - after[1]) / UR10.v_max) < 1e-6  # joint velocity: no step
+        # finite differences of the stamped waypoints across the join (independent of the laws)
+        k = np.arange(run.first - 20, run.first + 21)
+        dt = np.diff(windowed.t[k])
+        v = np.diff(windowed.q[k], axis=0) / dt[:, None]
+        a = np.diff(v, axis=0) / (0.5 * (dt[:-1] + dt[1:]))[:, None]
+        assert np.all(np.abs(v) <= UR10.v_max * 1.01)
+        assert np.all(np.abs(a) <= UR10.a_max * 1.02)
+    t = np.arange(0.0, windowed.cycle_time, 1e-3)
+    _, qd, qdd = windowed.at(t)
+    assert np.all(np.abs(qd).max(axis=0) <= UR10.v_max * 1.01)
+    assert np.all(np.abs(qdd).max(axis=0) <= UR10.a_max * 1.01)
