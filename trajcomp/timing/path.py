@@ -119,13 +119,14 @@ class RunPath:
         grid, dq = self.grid, self.path(self.grid, 1)
         near = np.stack([self.motion_at(grid), self.motion_at(grid, "right")])
         velocity = np.min(moves.velocity[near], axis=0) * velocity_scale
-        tcp = moves.tcp_speed.copy()
-        k = np.arange(self.first + 1, self.last + 1)
-        timed = k[(moves.min_duration[k] > 0) & (moves.kind[k] != JOINT)]
-        tcp[timed] = np.minimum(tcp[timed], self.tcp_lengths[timed - self.first] / moves.min_duration[timed])
+        k = np.arange(self.first, self.last + 1)  # tcp[i]: motion first + i (waypoint first's own is not used)
+        tcp = moves.tcp_speed[k]
+        timed = (moves.min_duration[k] > 0) & (moves.kind[k] != JOINT)
+        timed[0] = False
+        tcp[timed] = np.minimum(tcp[timed], self.tcp_lengths[timed] / moves.min_duration[k[timed]])
         with np.errstate(divide="ignore", invalid="ignore"):
             x_joint = np.min((velocity / np.abs(dq)) ** 2, axis=1)
-            x_tcp = (np.min(tcp[near], axis=0) * speed_scale / self.grid_rate) ** 2
+            x_tcp = (np.min(tcp[near - self.first], axis=0) * speed_scale / self.grid_rate) ** 2
         return np.minimum(x_joint, np.nan_to_num(x_tcp, nan=np.inf)), velocity
 
     def tcp_rate(self, s):

@@ -29,6 +29,7 @@ from trajcomp.timing.result import Segment, TimingResult
 from trajcomp.timing.windows import WINDOW, run_windows
 
 METHODS = ("auto", "toppra", "ruckig")
+_BLOCK = 65536  # waypoints per block of the per-waypoint passes over a long run
 _RETRIES = 4  # timings of one segment with lowered limits before giving up
 _TARGET = 1.0 + 0.5 * LIMIT_TOLERANCE  # re-time a segment whose samples exceed a limit by more than this
 
@@ -69,8 +70,8 @@ def retime(moves, robot, *, method="auto", tolerance=TOLERANCE):
             t[last] = t[first]
             untimed.append(last)
             continue
-        arrived[first + 1 : last + 1] = _continued(arrived[first], moves.q[first : last + 1],
-                                                   moves.kind[first + 1 : last + 1])
+        _continued(arrived[first], moves.q[first : last + 1], moves.kind[first + 1 : last + 1],
+                   arrived[first + 1 : last + 1])
         runs = run_windows(reached, robot, first, last, tolerance, WINDOW if kind == "toppra" else None)
         tcp_length[first + 1 : last + 1] = np.concatenate([run.tcp_lengths[1:] for run in runs])
         deviation = max(deviation, *(run.deviation for run in runs))
@@ -93,23 +94,27 @@ def retime(moves, robot, *, method="auto", tolerance=TOLERANCE):
     return _result(moves, robot, arrived, t, segments, pieces, peaks, untimed, tcp_length, deviation)
 
 
-def _continued(start, declared, kinds):
-    """Joints (n - 1, 6) a chain of motions reaches its waypoints with, starting from ``start`` (6,).
+def _continued(start, declared, kinds, out):
+    """Write into ``out`` (n - 1, 6) the joints a chain of motions reaches its waypoints with from ``start`` (6,).
 
-    A joint motion goes to the declared joints. Along linear and circular
-    motions the controller keeps turning each joint continuously: a
-    waypoint's declared turn (KUKA T, ABB cf4 / cf6, joints a revolution
-    off) does not apply there; each joint moves by its declared change
-    wrapped to less than half a turn per motion.
+    ``declared`` (n, 6) are the waypoints' joints, ``kinds`` (n - 1,) the
+    motions into waypoints 1 .. n - 1. A joint motion goes to the declared
+    joints. Along linear and circular motions the controller keeps turning
+    each joint continuously: a waypoint's declared turn (KUKA T, ABB cf4 /
+    cf6, joints a revolution off) does not apply there; each joint moves by
+    its declared change wrapped to less than half a turn per motion. Done
+    in blocks of `_BLOCK` waypoints (bounded memory on long runs).
     """
     turn = 2.0 * np.pi
-    change = np.diff(declared, axis=0)
-    slip = np.vstack([start - declared[0], (change + np.pi) % turn - np.pi - change])  # whole turns gained
-    joint = np.r_[True, kinds == JOINT]
-    total = np.cumsum(slip, axis=0)
-    reset = np.maximum.accumulate(np.where(joint, np.arange(len(joint)), 0))  # the last joint motion
-    offset = total - np.where(reset[:, None] > 0, total[reset], 0.0)
-    return declared[1:] + np.round(offset[1:] / turn) * turn
+    gained = start - declared[0]  # whole turns gained since the last joint motion, (6,)
+    for lo in range(1, len(declared), _BLOCK):
+        hi = min(lo + _BLOCK, len(declared))
+        change = declared[lo:hi] - declared[lo - 1 : hi - 1]
+        total = gained + np.cumsum((change + np.pi) % turn - np.pi - change, axis=0)
+        last_joint = np.maximum.accumulate(np.where(kinds[lo - 1 : hi - 1] == JOINT, np.arange(hi - lo), -1))
+        offset = np.where(last_joint[:, None] >= 0, total - total[last_joint], total)
+        out[lo - 1 : hi - 1] = declared[lo:hi] + np.round(offset / turn) * turn
+        gained = offset[-1]
 
 
 def plan_segments(moves, method="auto"):
@@ -151,13 +156,15 @@ def _timed(kind, runs, moves, robot):
 
 def _turn_warnings(moves, arrived):
     """Messages for waypoints a LIN / CIRC reaches in another turn of a joint than declared."""
-    off = np.abs(arrived - moves.q) > 1e-6
     out = []
-    for k in np.flatnonzero(off.any(axis=1)):
-        joints = ", ".join(f"J{j + 1} at {np.degrees(arrived[k, j]):.1f} deg, not {np.degrees(moves.q[k, j]):.1f}"
-                           for j in np.flatnonzero(off[k]))
-        out.append(f"the {moves.kind[k]} motion reaches {moves.labels[k]} with {joints} (a linear or circular "
-                   "motion turns continuously; the declared turn applies to joint motions)")
+    for lo in range(0, len(arrived), _BLOCK):
+        off = np.abs(arrived[lo : lo + _BLOCK] - moves.q[lo : lo + _BLOCK]) > 1e-6
+        for i in np.flatnonzero(off.any(axis=1)):
+            k = lo + i
+            joints = ", ".join(f"J{j + 1} at {np.degrees(arrived[k, j]):.1f} deg, not {np.degrees(moves.q[k, j]):.1f}"
+                               for j in np.flatnonzero(off[i]))
+            out.append(f"the {moves.kind[k]} motion reaches {moves.labels[k]} with {joints} (a linear or circular "
+                       "motion turns continuously; the declared turn applies to joint motions)")
     return tuple(out)
 
 
