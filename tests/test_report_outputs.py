@@ -52,6 +52,8 @@ def test_compensate_writes_a_valid_report_and_a_self_contained_page(tmp_path, ku
     roles = {f["role"]: f for f in doc["provenance"]["files"]}
     assert set(roles) == {"program", "output"} and doc["provenance"]["model"]["mode"] == "composite"
     assert [t["label"].split()[0] for t in doc["targets"]] == ["P1", "P2", "P3", "P4", "P5"]
+    assert doc["target_table"]["complete"] and doc["full_data"] is None  # a short program: every target, no sidecar
+    assert [t["index"] for t in doc["targets"]] == [1, 2, 3, 4, 5] and not any(t["flags"] for t in doc["targets"])
     assert doc["timing"]["within_limits"] and doc["timing"]["cycle_time_before_s"] > 0  # compensate re-times
     figures = _self_contained((tmp_path / "weld-report.html").read_text())
     assert len(figures) == 5 and all(png.startswith(b"\x89PNG\r\n\x1a\n") for png in figures)

@@ -392,7 +392,11 @@ def configuration_of(robot, q):
 
 def branch_index(robot, q):
     """`Configuration.index` (N,) of joint angles q (N, 6), rad, computed from the link frames."""
-    frames = link_frames(robot, q)
+    return frames_branch_index(robot, link_frames(robot, q))
+
+
+def frames_branch_index(robot, frames):
+    """`branch_index` (N,) of link frames (N, 7, 4, 4) (`trajcomp.kinematics.link_frames`)."""
     origin0, z0 = frames[:, 0, :3, 3], frames[:, 0, :3, 2]
     x1 = frames[:, 1, :3, 0]
     shoulder, elbow, wrist_point = (frames[:, i, :3, 3] for i in (1, 2, 5))

@@ -3,8 +3,10 @@
 Built from the run's `trajcomp.postprocess.ProgramReport` (one row per
 compensated target, motion order), the nominal robot, the model and, when
 the program was re-timed, the `trajcomp.timing` result. Every criterion of
-the verdict is stated with its threshold; each failing one lists the
-targets or lines it concerns. What the run could not provide (no
+the verdict is stated with its threshold; each failing one counts and
+lists the targets or lines it concerns. Measures, statistics and verdict
+cover every target; a long program's table is summarised
+(`trajcomp.report.targets`). What the run could not provide (no
 compensable motion, no grid in the mode, no re-timing) is listed under
 ``missing`` instead of being shown empty.
 """
@@ -13,103 +15,29 @@ import numpy as np
 
 from trajcomp.report import plots
 from trajcomp.report.document import Figure, Report
-from trajcomp.report.measures import branch_changes, joint_jumps, limit_distances, singularity_distances
 from trajcomp.report.provenance import grid_box, header
+from trajcomp.report.targets import ARRAYS, TIMES, flag_bits, full_data, statistics, table_rows, target_json, \
+    target_measures
 from trajcomp.report.verdict import FAIL, PASS, Check, Criteria, accuracy_check, check, not_evaluated, verdict
-from trajcomp.transforms import matrix_to_pose
 
 TIMING_SLACK = 0.01  # relative: a peak up to 1 % over its limit passes (the timing's own dense check)
-
-
-def _poses(T):
-    """Pose rows x, y, z (mm), a, b, c (deg) of matrices (N, 4, 4)."""
-    if not len(T):
-        return np.zeros((0, 6))
-    pose = matrix_to_pose(T)
-    pose[:, 3:] = np.degrees(pose[:, 3:])
-    return pose
-
-
-def _round(array, digits):
-    return np.round(np.asarray(array, dtype=float), digits).tolist()
-
-
-def target_rows(report, robot):
-    """Per-target measures (dict of arrays, N rows) and the JSON rows of the targets table.
-
-    Parameters
-    ----------
-    report : ProgramReport
-    robot : Robot
-        The nominal robot (limits, branches, singularities).
-    """
-    n = len(report.labels)
-    q, q_planned = report.q.reshape(n, 6), report.q_planned.reshape(n, 6)
-    changed, branch_planned, branch = branch_changes(robot, q_planned, q)
-    measures = {
-        "limit": np.degrees(limit_distances(robot, q)).reshape(n, 6),
-        "singular": singularity_distances(robot, q),
-        "jump": np.degrees(joint_jumps(q)).reshape(n, 6),
-        "changed": changed,
-        "correction_mm": np.linalg.norm(report.correction[:, :3], axis=1),
-        "correction_deg": np.linalg.norm(report.correction[:, 3:], axis=1),
-    }
-    singular = measures["singular"]
-    columns = {  # every column rounded and made plain once: N rows of Python values
-        "target": _round(_poses(report.T_target), 4),
-        "command": _round(_poses(report.T_command), 4),
-        "correction_mm": _round(report.correction[:, :3], 4),
-        "correction_deg": _round(report.correction[:, 3:], 5),
-        "correction_norm_mm": _round(measures["correction_mm"], 4),
-        "correction_norm_deg": _round(measures["correction_deg"], 5),
-        "predicted_residual_mm": np.asarray(report.predicted_residual, dtype=float).tolist(),
-        "outside_grid": np.asarray(report.outside_grid, dtype=bool).tolist(),
-        "joints_deg": _round(np.degrees(q), 4),
-        "planned_joints_deg": _round(np.degrees(q_planned), 4),
-        "configuration_changed": np.asarray(changed, dtype=bool).tolist(),
-        "limit_distance_deg": _round(measures["limit"], 3),
-        "shoulder_mm": _round(singular["shoulder"], 2),
-        "elbow_deg": _round(singular["elbow"], 3),
-        "wrist_deg": _round(singular["wrist"], 3),
-        "jump_deg": _round(measures["jump"], 3),
-    }
-    rows = []
-    for k in range(n):
-        row = {name: values[k] for name, values in columns.items()}
-        rows.append({
-            "label": report.labels[k],
-            "line": int(report.lines[k]),
-            "tool": report.tools[k],
-            "frame": report.frames[k],
-            "target": row["target"],
-            "command": row["command"],
-            "correction_mm": row["correction_mm"],
-            "correction_deg": row["correction_deg"],
-            "correction_norm_mm": row["correction_norm_mm"],
-            "correction_norm_deg": row["correction_norm_deg"],
-            "predicted_residual_mm": row["predicted_residual_mm"],
-            "outside_grid": row["outside_grid"],
-            "joints_deg": row["joints_deg"],
-            "planned_joints_deg": row["planned_joints_deg"],
-            "posture_source": report.posture_source[k],
-            "declared": report.declared[k],
-            "written": report.written[k],
-            "branch_planned": branch_planned[k],
-            "branch": branch[k],
-            "configuration_changed": row["configuration_changed"],
-            "limit_distance_deg": row["limit_distance_deg"],
-            "singularity": {"shoulder_mm": row["shoulder_mm"], "elbow_deg": row["elbow_deg"],
-                            "wrist_deg": row["wrist_deg"]},
-            "jump_deg": row["jump_deg"],
-        })
-    return measures, rows
 
 
 AS_WRITTEN = "no compensation model: the program runs as written (retime)"
 
 
 def target_checks(report, measures, criteria, has_grid, mode, compensated=True):
-    """The per-target criteria of the verdict (list of Check); without compensation, its criteria are not evaluated."""
+    """The per-target criteria of the verdict and their failing masks.
+
+    Without compensation the residual and grid criteria are not evaluated;
+    without targets, none is.
+
+    Returns
+    -------
+    checks : list of Check
+    masks : dict of str to ndarray of bool, shape (N,)
+        Failing targets of each evaluated criterion.
+    """
     labels = report.labels
     c = criteria
     statements = {
@@ -121,37 +49,39 @@ def target_checks(report, measures, criteria, has_grid, mode, compensated=True):
                         f"and {c.shoulder_margin:g} mm from the shoulder singularity"),
     }
     if not len(labels):
-        return [not_evaluated(key, text, "no compensated target") for key, text in statements.items()]
-    residual = report.predicted_residual
-    checks = [check("residual", statements["residual"], residual > c.tolerance, labels,
-                    f"largest {residual.max():.2e} mm")]
+        return [not_evaluated(key, text, "no compensated target") for key, text in statements.items()], {}
+    v = measures.values
+    masks = {"residual": v["predicted_residual_mm"] > c.tolerance,
+             "outside_grid": np.asarray(report.outside_grid, dtype=bool),
+             "configuration": measures.changed,
+             "joint_limits": v["limit_distance_deg"] < c.limit_margin,
+             "singularity": ((v["shoulder_mm"] < c.shoulder_margin) | (v["elbow_deg"] < c.singularity_margin)
+                             | (v["wrist_deg"] < c.singularity_margin))}
+    details = {
+        "residual": f"largest {v['predicted_residual_mm'].max():.2e} mm",
+        "outside_grid": f"{int(masks['outside_grid'].sum())} of {len(labels)} targets outside",
+        "configuration": f"{int(masks['configuration'].sum())} targets changed branch or turned a joint by half a turn",
+        "joint_limits": f"smallest distance {v['limit_distance_deg'].min():.2f} deg",
+        "singularity": (f"smallest: shoulder {v['shoulder_mm'].min():.1f} mm, elbow {v['elbow_deg'].min():.2f} deg, "
+                        f"wrist {v['wrist_deg'].min():.2f} deg"),
+    }
+    skipped = {}
     if not compensated:
-        checks = [not_evaluated("residual", statements["residual"], AS_WRITTEN),
-                  not_evaluated("outside_grid", statements["outside_grid"], AS_WRITTEN)]
-    elif has_grid:
-        outside = report.outside_grid
-        checks.append(check("outside_grid", statements["outside_grid"], outside, labels,
-                            f"{int(outside.sum())} of {len(labels)} targets outside"))
-    else:
-        checks.append(not_evaluated("outside_grid", statements["outside_grid"],
-                                    f"mode {mode} uses no grid: every target gets the same kind of correction"))
-    changed = measures["changed"]
-    checks.append(check("configuration", statements["configuration"], changed, labels,
-                        f"{int(changed.sum())} targets changed branch or turned a joint by half a turn"))
-    limit = measures["limit"].min(axis=1)
-    checks.append(check("joint_limits", statements["joint_limits"], limit < c.limit_margin, labels,
-                        f"smallest distance {limit.min():.2f} deg"))
-    singular = measures["singular"]
-    near = ((singular["shoulder"] < c.shoulder_margin) | (singular["elbow"] < c.singularity_margin)
-            | (singular["wrist"] < c.singularity_margin))
-    checks.append(check("singularity", statements["singularity"], near, labels,
-                        f"smallest: shoulder {singular['shoulder'].min():.1f} mm, elbow {singular['elbow'].min():.2f} deg, "
-                        f"wrist {singular['wrist'].min():.2f} deg"))
-    return checks
+        skipped = {"residual": AS_WRITTEN, "outside_grid": AS_WRITTEN}
+    elif not has_grid:
+        skipped = {"outside_grid": f"mode {mode} uses no grid: every target gets the same kind of correction"}
+    masks = {key: mask for key, mask in masks.items() if key not in skipped}
+    checks = [not_evaluated(key, text, skipped[key]) if key in skipped
+              else check(key, text, masks[key], labels, details[key]) for key, text in statements.items()]
+    return checks, masks
 
 
-def timing_section(timing, before=None):
-    """The timing dict of a `trajcomp.timing` result (contract 3), with the cycle time ``before`` (s) if known."""
+def timing_section(timing, before=None, times=True):
+    """The timing dict of a `trajcomp.timing` result (contract 3), with the cycle time ``before`` (s) if known.
+
+    ``times``: with the time stamp of every waypoint (``t_s``); a summarised
+    report keeps them in its sidecar instead.
+    """
     limits = {"velocity": ("peak_velocity", "limit_velocity", "deg/s"),
               "acceleration": ("peak_acceleration", "limit_acceleration", "deg/s^2"),
               "jerk": ("peak_jerk", "limit_jerk", "deg/s^3")}
@@ -165,14 +95,16 @@ def timing_section(timing, before=None):
         joints.append(row)
     segments = [{"kind": s.kind, "first": int(s.first), "last": int(s.last), "duration_s": float(s.duration),
                  "speed": getattr(s, "speed", None)} for s in timing.segments]
-    return {
+    section = {
         "cycle_time_s": float(timing.cycle_time),
         "cycle_time_before_s": None if before is None else float(before),
         "within_limits": bool(timing.within_limits),
         "joints": joints,
         "segments": segments,
-        "t_s": _round(timing.t, 4),
     }
+    if times:
+        section["t_s"] = np.round(np.asarray(timing.t, dtype=float), 4).tolist()
+    return section
 
 
 def timing_check(section):
@@ -224,19 +156,21 @@ def compliance_report(report, robot, *, criteria=None, model=None, model_info=No
     criteria = criteria or Criteria()
     mode = mode or (model.method if model is not None else None)
     has_grid = model is not None and model.error_field(mode) is not None
-    measures, rows = target_rows(report, robot)
+    measures = target_measures(report, robot)
+    checks, masks = target_checks(report, measures, criteria, has_grid, mode, compensated=model is not None)
+    flags = flag_bits(masks) if masks else np.zeros(len(measures), np.uint8)
+    index, table = table_rows(flags, measures)
     missing = []
-    if not rows:
+    if not len(measures):
         missing.append("no compensable motion: the program has no Cartesian target a motion uses, "
                        "so there is nothing to tabulate or plot")
     if model is not None and not has_grid:
         missing.append(f"no grid: mode {mode} of this model uses no residual grid, so there is no grid box "
                        "and no outside-grid check")
-    section = None if timing is None else timing_section(timing, cycle_time_before)
+    section = None if timing is None else timing_section(timing, cycle_time_before, times=table["complete"])
     if section is None:
         missing.append("no timing: the program was not re-timed, so there are no cycle time and no peak "
                        "joint velocity, acceleration or jerk")
-    checks = target_checks(report, measures, criteria, has_grid, mode, compensated=model is not None)
     if model is not None:
         cv = model.report.get("cross_validation") or {}
         source = f"{cv['folds']}-fold cross-validation" if mode in cv else "calibration fit"
@@ -248,16 +182,20 @@ def compliance_report(report, robot, *, criteria=None, model=None, model_info=No
     else:
         checks.append(Check("uncompensated", "every motion compensated", FAIL if lines else PASS,
                             f"{len(lines)} motion(s) left as written" if lines else "no motion left as written",
-                            lines=lines))
+                            lines=lines, failing=len(lines)))
     checks.append(timing_check(section))
+    data = None
+    if not table["complete"]:
+        data = full_data(report, measures, flags, None if timing is None else timing.t)
     doc = header("compliance", command)
     doc.update({
         "provenance": {"files": list(files), "robot": {"name": robot.name, "source": robot.source},
                        "model": model_info, "mode": mode, "options": options or {}},
         "criteria": criteria.as_dict(),
         "verdict": verdict(checks),
-        "summary": _summary(report, measures),
-        "targets": rows,
+        "summary": {**_summary(report, measures), "statistics": statistics(measures, report.labels)},
+        "target_table": table,
+        "targets": target_json(report, robot, measures, flags, index),
         "not_compensated": [{"line": int(line), "text": text, "reason": reason}
                             for line, text, reason in report.not_compensated],
         "unused": list(report.unused),
@@ -265,37 +203,45 @@ def compliance_report(report, robot, *, criteria=None, model=None, model_info=No
         "warnings": list(report.warnings),
         "timing": section,
         "missing": missing,
+        "full_data": None if data is None else {
+            "path": None, "format": "npz", "rows": len(measures),
+            "arrays": {name: ARRAYS.get(name, TIMES) for name in data}},
     })
-    return Report(doc, _figures(report, robot, measures, doc, model.error_field(mode) if has_grid else None))
+    figures = _figures(report, robot, measures, doc, model.error_field(mode) if has_grid else None)
+    return Report(doc, figures, data)
 
 
 def _figures(report, robot, measures, doc, field):
     """The compliance figures, drawn lazily; none without targets."""
     figures = []
-    if doc["targets"]:
-        target = np.array([row["target"] for row in doc["targets"]])
+    n = len(measures)
+    if n:
         box = None if field is None else grid_box(field)
         box = None if box is None else (box["lower"], box["upper"])
-        c = doc["criteria"]
+        c, v = doc["criteria"], measures.values
+        envelope = plots.envelope_note(n)
         figures += [
             Figure("targets", "Targets and the measured grid",
-                   "Targets in motion order (base frame); crosses lie outside the grid, where only the model applies.",
-                   lambda: plots.targets_and_grid(target[:, :3], report.outside_grid, box)),
+                   "Targets in motion order (base frame); crosses lie outside the grid, where only the model applies."
+                   + plots.path_note(n, int(np.count_nonzero(report.outside_grid))),
+                   lambda: plots.targets_and_grid(report.T_target[:, :3, 3], np.asarray(report.outside_grid, bool),
+                                                  box)),
             Figure("targets", "Corrections and predicted residuals",
                    "Top: size of the correction per target. Bottom: distance from the target to where the model "
-                   "predicts the arm lands with the command (log scale), against the tolerance.",
-                   lambda: plots.corrections(measures["correction_mm"], measures["correction_deg"],
-                                             report.predicted_residual, c["tolerance_mm"])),
+                   "predicts the arm lands with the command (log scale), against the tolerance." + envelope,
+                   lambda: plots.corrections(v["correction_mm"], v["correction_deg"], v["predicted_residual_mm"],
+                                             c["tolerance_mm"])),
             Figure("posture", "Joints within their ranges",
-                   "Each written joint as a fraction of its range; shaded: the limit margin.",
-                   lambda: plots.joint_ranges(np.degrees(report.q), np.degrees(robot.q_min), np.degrees(robot.q_max),
-                                              c["limit_margin_deg"])),
+                   "Each written joint as a fraction of its range; shaded: the limit margin." + envelope,
+                   lambda: plots.joint_ranges(np.degrees(np.reshape(report.q, (n, 6))), np.degrees(robot.q_min),
+                                              np.degrees(robot.q_max), c["limit_margin_deg"])),
             Figure("posture", "Distance to singularities",
                    "Shoulder: wrist point from the axis-1 plane (mm); elbow: arm bend from stretched or folded; "
-                   "wrist: angle between axes 4 and 6 (deg). Red: the margins.",
-                   lambda: plots.singularities(measures["singular"], {"shoulder": c["shoulder_margin_mm"],
-                                                                      "elbow": c["singularity_margin_deg"],
-                                                                      "wrist": c["singularity_margin_deg"]})),
+                   "wrist: angle between axes 4 and 6 (deg). Red: the margins." + envelope,
+                   lambda: plots.singularities({"shoulder": v["shoulder_mm"], "elbow": v["elbow_deg"],
+                                                "wrist": v["wrist_deg"]},
+                                               {"shoulder": c["shoulder_margin_mm"], "elbow": c["singularity_margin_deg"],
+                                                "wrist": c["singularity_margin_deg"]})),
         ]
     if doc["timing"] is not None:
         figures.append(Figure("timing", "Peaks against limits", "Peak joint velocity, acceleration and jerk of "
@@ -313,9 +259,9 @@ def _summary(report, measures):
     return {
         "targets": n,
         "outside_grid": int(np.sum(report.outside_grid)),
-        "configuration_changed": int(measures["changed"].sum()),
-        "correction_max_mm": float(measures["correction_mm"].max()),
-        "correction_max_deg": float(measures["correction_deg"].max()),
-        "residual_max_mm": float(report.predicted_residual.max()),
-        "limit_distance_min_deg": float(measures["limit"].min()),
+        "configuration_changed": int(measures.changed.sum()),
+        "correction_max_mm": float(measures.values["correction_mm"].max()),
+        "correction_max_deg": float(measures.values["correction_deg"].max()),
+        "residual_max_mm": float(measures.values["predicted_residual_mm"].max()),
+        "limit_distance_min_deg": float(measures.values["limit_distance_deg"].min()),
     }

@@ -3,10 +3,13 @@
 The JSON document follows the schema ``trajcomp-report/1`` shipped as
 ``trajcomp/report/schema.json``. Figures are callables that return a
 matplotlib figure; they run only when the HTML page is rendered, so a
-JSON-only run never imports matplotlib.
+JSON-only run never imports matplotlib. A report that summarises its
+per-target data carries them as arrays, written beside the JSON as a NumPy
+``.npz`` sidecar (named in the document's ``full_data.path``).
 """
 
 import dataclasses
+import io
 import json
 import math
 from importlib import resources
@@ -40,10 +43,20 @@ class Figure:
 
 @dataclasses.dataclass(frozen=True)
 class Report:
-    """A report document (JSON-ready dict, see the schema) and its figures."""
+    """A report document (JSON-ready dict, see the schema), its figures and its full per-target data.
+
+    Attributes
+    ----------
+    doc : dict
+    figures : tuple of Figure
+    data : dict of str to ndarray, optional
+        The sidecar arrays the document's ``full_data`` describes (None: the
+        document holds everything).
+    """
 
     doc: dict
     figures: tuple = ()
+    data: dict = None
 
     @property
     def passed(self):
@@ -62,7 +75,12 @@ class Report:
         return render(self)
 
     def write(self, path, *, json_only=False):
-        """Write ``<path stem>.json`` and, unless ``json_only``, ``<path stem>.html``, all or none.
+        """Write ``PATH.json``, unless ``json_only`` ``PATH.html``, and the sidecar, all or none.
+
+        ``PATH`` is ``path`` without a ``.json`` or ``.html`` suffix
+        (``cell.report`` gives ``cell.report.json``). The sidecar
+        ``PATH.targets.npz`` (only with `data`) is named in the written
+        document's ``full_data.path``.
 
         Returns
         -------
@@ -70,9 +88,22 @@ class Report:
             The files written.
         """
         path = Path(path)
-        files = {path.with_suffix(".json"): self.json_text().encode("utf-8")}
+        base = path.with_suffix("") if path.suffix.lower() in (".json", ".html") else path
+
+        def named(suffix):
+            return base.with_name(base.name + suffix)
+
+        report, sidecar = self, {}
+        if self.data is not None:
+            buffer = io.BytesIO()
+            np.savez(buffer, **self.data)
+            sidecar[named(".targets.npz")] = buffer.getbuffer()
+            report = dataclasses.replace(self, doc={**self.doc, "full_data": {**self.doc["full_data"],
+                                                                              "path": named(".targets.npz").name}})
+        files = {named(".json"): report.json_text().encode("utf-8")}
         if not json_only:
-            files[path.with_suffix(".html")] = self.html_text().encode("utf-8")
+            files[named(".html")] = report.html_text().encode("utf-8")
+        files.update(sidecar)
         write_files_atomic(files)
         return list(files)
 

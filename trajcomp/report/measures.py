@@ -1,4 +1,4 @@
-"""Posture measures of joint vectors: limit distances, singularity distances, jumps, branch changes.
+"""Posture measures of joint vectors: limit distances, singularity distances, jumps, branches.
 
 The singularity distances are those of the branch flags of
 `trajcomp.ik.configuration_of`: each flag flips exactly where its measure
@@ -18,7 +18,7 @@ arm's branch or swing a joint fast.
 
 import numpy as np
 
-from trajcomp.ik import BRANCHES, Configuration, branch_index
+from trajcomp.ik import BRANCHES, Configuration, branch_index, frames_branch_index
 from trajcomp.kinematics import link_frames
 
 SINGULARITIES = ("shoulder", "elbow", "wrist")
@@ -38,7 +38,11 @@ def singularity_distances(robot, q):
     dict of str to ndarray, shape (N,)
         Keys `SINGULARITIES`, see the module docstring.
     """
-    frames = link_frames(robot, np.atleast_2d(q))
+    return _singularity_distances(robot, link_frames(robot, np.atleast_2d(q)))
+
+
+def _singularity_distances(robot, frames):
+    """`singularity_distances` of link frames (N, 7, 4, 4)."""
     origin = frames[..., :3, 3]
     x1 = frames[:, 1, :3, 0]
     shoulder = np.abs(np.einsum("ni,ni->n", origin[:, 5] - origin[:, 0], x1))
@@ -51,28 +55,46 @@ def singularity_distances(robot, q):
     to_wrist = in_plane(origin[:, 4] - origin[:, 2])
     bend = np.degrees(np.arctan2(np.linalg.norm(np.cross(to_shoulder, to_wrist), axis=1),
                                  np.einsum("ni,ni->n", to_shoulder, to_wrist)))
-    axes = np.einsum("njk,ji->nik", frames[:, :6, :3, 2], robot.joint_map)
-    wrist = np.degrees(np.arcsin(np.clip(np.linalg.norm(np.cross(axes[:, 3], axes[:, 5]), axis=1), 0.0, 1.0)))
+    z = frames[:, :6, :3, 2]  # DH axes; the axis of joint i is column i of the joint map over them
+    axis4, axis6 = (np.einsum("njk,j->nk", z, robot.joint_map[:, i]) for i in (3, 5))
+    wrist = np.degrees(np.arcsin(np.clip(np.linalg.norm(np.cross(axis4, axis6), axis=1), 0.0, 1.0)))
     return {"shoulder": shoulder, "elbow": np.minimum(bend, 180.0 - bend), "wrist": wrist}
 
 
-def joint_jumps(q):
-    """Joint change (N, 6), rad, from the previous row of q (N, 6); zero for the first row."""
+def joint_jumps(q, before=None):
+    """Joint change (N, 6), rad, from the previous row of q (N, 6).
+
+    The first row's is from ``before`` (6,), the joints preceding q (a
+    chunk's predecessor); zero without it.
+    """
     q = np.atleast_2d(q)
-    return np.diff(q, axis=0, prepend=q[:1])
+    return np.diff(q, axis=0, prepend=q[:1] if before is None else np.reshape(before, (1, 6)))
 
 
-def branch_changes(robot, q_before, q_after):
-    """Where two joint stacks (N, 6), rad, differ in arm branch or turn a joint by half a turn or more.
+BRANCH_NAMES = tuple(str(Configuration.from_index(b)) for b in range(BRANCHES))  # by branch index
+
+
+def posture_measures(robot, q, q_planned):
+    """Singularity distances and branches of written joints q (N, 6), and whether they left the planned posture.
+
+    Parameters
+    ----------
+    robot : Robot
+    q, q_planned : ndarray, shape (N, 6)
+        Written and planned (declared posture) joints, rad.
 
     Returns
     -------
+    singular : dict of str to ndarray, shape (N,)
+        `singularity_distances` of q.
+    branch, branch_planned : ndarray of uint8, shape (N,)
+        Branch index of q and of q_planned (`BRANCH_NAMES` names it: ``front/up/positive``).
     changed : ndarray of bool, shape (N,)
-    before, after : list of str
-        The branches (``front/up/positive``) of each row.
+        The branch differs or a joint turned by half a turn or more.
     """
-    names = np.array([str(Configuration.from_index(b)) for b in range(BRANCHES)])
-    before = names[branch_index(robot, np.atleast_2d(q_before))].tolist()
-    after = names[branch_index(robot, np.atleast_2d(q_after))].tolist()
-    turned = np.any(np.abs(np.atleast_2d(q_after) - q_before) >= np.pi, axis=1)
-    return (np.array(before) != np.array(after)) | turned, before, after
+    q, q_planned = np.atleast_2d(q), np.atleast_2d(q_planned)
+    frames = link_frames(robot, q)  # once for both measures
+    branch = frames_branch_index(robot, frames).astype(np.uint8)
+    branch_planned = branch_index(robot, q_planned).astype(np.uint8)
+    turned = np.any(np.abs(q - q_planned) >= np.pi, axis=1)
+    return _singularity_distances(robot, frames), branch, branch_planned, (branch != branch_planned) | turned

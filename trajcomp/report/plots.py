@@ -8,6 +8,7 @@ import numpy as np
 
 AXES = ("x", "y", "z")
 WIDTH = 10.0  # in, figure width at the page's text width
+POINTS = 2000  # points per drawn series: longer ones are decimated (min-max envelope, every k-th target)
 _INSIDE, _OUTSIDE, _LIMIT = "#1f5fa8", "#c0392b", "#7f8c8d"
 
 
@@ -117,15 +118,83 @@ def mode_statistics(tables):
     return fig
 
 
+def envelope(values, points=POINTS):
+    """A per-target series decimated to at most ``points`` bins, keeping every extreme.
+
+    Parameters
+    ----------
+    values : ndarray, shape (N,)
+    points : int
+
+    Returns
+    -------
+    x, lower, upper : ndarray, shape (B,)
+        1-based target number at each bin's centre, the smallest and the
+        largest value in the bin (B = N and lower = upper when N <= points).
+    """
+    values = np.asarray(values, dtype=float)
+    n = len(values)
+    if n <= points:
+        return np.arange(1, n + 1), values, values
+    width = -(-n // points)
+    padded = np.full(width * -(-n // width), np.nan)
+    padded[:n] = values
+    bins = padded.reshape(-1, width)
+    x = np.minimum(np.arange(len(bins)) * width + (width + 1) / 2, n)
+    return x, np.nanmin(bins, axis=1), np.nanmax(bins, axis=1)
+
+
+def envelope_note(n, points=POINTS):
+    """The caption sentence of a per-target figure of ``n`` targets drawn as envelopes ("" when drawn whole)."""
+    if n <= points:
+        return ""
+    return (f" {n} targets: each curve is drawn as its band from smallest to largest value over bins of "
+            f"{-(-n // points)} targets, so that no extreme is lost.")
+
+
+def _series(ax, values, style, color, **kwargs):
+    """A per-target series: points and lines up to `POINTS` targets, else its min-max envelope as a band."""
+    x, lower, upper = envelope(values)
+    if len(x) == len(values):
+        ax.plot(x, values, style, color=color, **kwargs)
+    else:
+        ax.fill_between(x, lower, upper, color=color, alpha=0.45, lw=0.6, edgecolor=color, step="mid",
+                        label=kwargs.get("label"))
+
+
+def _stride(n, points=POINTS):
+    """Every how many targets a path of ``n`` targets is drawn (1 up to ``points``)."""
+    return max(1, -(-n // points))
+
+
+def path_note(n, outside, points=POINTS):
+    """The caption sentence of the targets figure of ``n`` targets, ``outside`` of them outside the grid."""
+    step, cross = _stride(n, points), _stride(outside, points)
+    if step == 1 and cross == 1:
+        return ""
+    return (f" {n} targets: the path is drawn through one target in {step}"
+            + (f", and one in {cross} of the {outside} outside the grid is crossed." if cross > 1 else
+               "; every target outside the grid is crossed."))
+
+
 def targets_and_grid(target, outside, grid_box=None):
-    """The targets in motion order over the top and side views, outside-grid ones marked, with the grid box."""
+    """The targets in motion order over the top and side views, outside-grid ones marked, with the grid box.
+
+    Long paths are drawn through every k-th target (`path_note`), at most
+    `POINTS` of them and of the outside-grid crosses.
+    """
     plt = pyplot()
     fig, axes = plt.subplots(1, 2, figsize=(WIDTH, 4.0), constrained_layout=True)
+    step = _stride(len(target))
+    path = np.r_[np.arange(0, len(target), step), len(target) - 1] if len(target) else np.zeros(0, int)
+    shown, crossed = target[path], target[outside][::_stride(int(outside.sum()))]
+    inside = ~outside[path]
     for ax, (i, j) in zip(axes, ((0, 1), (0, 2))):
-        ax.plot(target[:, i], target[:, j], color=_LIMIT, lw=0.8, zorder=1)
-        ax.scatter(target[~outside, i], target[~outside, j], s=18, color=_INSIDE, label="inside the grid", zorder=2)
-        if outside.any():
-            ax.scatter(target[outside, i], target[outside, j], s=40, marker="x", color=_OUTSIDE,
+        ax.plot(shown[:, i], shown[:, j], color=_LIMIT, lw=0.8, zorder=1)
+        ax.scatter(shown[inside, i], shown[inside, j], s=18 if step == 1 else 4, color=_INSIDE,
+                   label="inside the grid", zorder=2)
+        if len(crossed):
+            ax.scatter(crossed[:, i], crossed[:, j], s=40, marker="x", color=_OUTSIDE,
                        label="outside the grid", zorder=3)
         if grid_box is not None:
             _box(ax, grid_box, i, j)
@@ -140,15 +209,15 @@ def corrections(correction_mm, correction_deg, residual, tolerance):
     """Per target: position and orientation correction, and the predicted residual against the tolerance."""
     plt = pyplot()
     fig, (top, bottom) = plt.subplots(2, 1, figsize=(WIDTH, 4.8), sharex=True, constrained_layout=True)
-    index = np.arange(1, len(correction_mm) + 1)
-    top.plot(index, correction_mm, "o-", ms=3, color=_INSIDE)
+    _series(top, correction_mm, "o-", _INSIDE, ms=3)
     top.set_ylabel("position (mm)", color=_INSIDE)
     twin = top.twinx()
-    twin.plot(index, correction_deg, "s--", ms=3, color="#d35400")
+    _series(twin, correction_deg, "s--", "#d35400", ms=3)
     twin.set_ylabel("orientation (deg)", color="#d35400")
     twin.grid(False)
     top.set_title("correction applied (command − target)")
-    bottom.semilogy(index, np.maximum(residual, 1e-9), "o", ms=3, color=_INSIDE)
+    _series(bottom, np.maximum(residual, 1e-9), "o", _INSIDE, ms=3)
+    bottom.set_yscale("log")
     bottom.axhline(tolerance, color=_OUTSIDE, lw=1.5, label=f"tolerance {tolerance:g} mm")
     bottom.set_ylabel("predicted residual (mm)")
     bottom.set_xlabel("target (motion order)")
@@ -161,10 +230,9 @@ def joint_ranges(joints_deg, q_min_deg, q_max_deg, margin):
     """Each joint across the targets, as a fraction of its range; the margin band shaded."""
     plt = pyplot()
     fig, ax = plt.subplots(figsize=(WIDTH, 3.4), constrained_layout=True)
-    index = np.arange(1, len(joints_deg) + 1)
     span = q_max_deg - q_min_deg
     for j in range(joints_deg.shape[1]):
-        ax.plot(index, (joints_deg[:, j] - q_min_deg[j]) / span[j], "o-", ms=2.5, lw=1, label=f"J{j + 1}")
+        _series(ax, (joints_deg[:, j] - q_min_deg[j]) / span[j], "o-", f"C{j}", ms=2.5, lw=1, label=f"J{j + 1}")
     band = float(np.max(margin / span))
     ax.axhspan(0, band, color=_OUTSIDE, alpha=0.15)
     ax.axhspan(1 - band, 1, color=_OUTSIDE, alpha=0.15)
@@ -180,10 +248,9 @@ def singularities(distances, margins):
     """Shoulder (mm), elbow and wrist (deg) singularity distances per target, with their margins."""
     plt = pyplot()
     fig, axes = plt.subplots(1, 3, figsize=(WIDTH, 2.8), constrained_layout=True)
-    index = np.arange(1, len(next(iter(distances.values()))) + 1)
     for ax, (name, values) in zip(axes, distances.items()):
         unit = "mm" if name == "shoulder" else "deg"
-        ax.plot(index, values, "o-", ms=2.5, lw=1, color=_INSIDE)
+        _series(ax, values, "o-", _INSIDE, ms=2.5, lw=1)
         ax.axhline(margins[name], color=_OUTSIDE, lw=1.2)
         ax.set_ylim(bottom=0)
         ax.set_title(f"{name} ({unit})")
@@ -212,7 +279,7 @@ def _integer_ticks(ax):
     """Whole target numbers on the x axis."""
     from matplotlib.ticker import MaxNLocator
 
-    ax.xaxis.set_major_locator(MaxNLocator(integer=True))
+    ax.xaxis.set_major_locator(MaxNLocator(nbins="auto", integer=True))
 
 
 def _box(ax, box, i, j):

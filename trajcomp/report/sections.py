@@ -10,7 +10,8 @@ SHOWN = 30  # targets named per criterion before "and N more"
 def concerns(criterion):
     """What a failed criterion concerns, as text."""
     named = [*criterion["targets"], *(f"line {line}" for line in criterion["lines"])]
-    more = f" … and {len(named) - SHOWN} more" if len(named) > SHOWN else ""
+    total = max(criterion["failing"], len(named))
+    more = f" … and {total - SHOWN} more" if total > SHOWN else ""
     return ", ".join(named[:SHOWN]) + more
 
 
@@ -66,6 +67,8 @@ def compliance_sections(doc):
     if doc["targets"]:
         parts.append(("posture", "Posture: joint limits and singularities", _posture_text(doc)))
     parts.append(("timing", "Timing", _timing(doc["timing"])))
+    if doc["targets"]:
+        parts.append(("table", "Targets one by one", _target_tables(doc)))
     if doc["warnings"]:
         parts.append(("warnings", "Warnings", "<ul>" + "".join(f"<li>{esc(w)}</li>" for w in doc["warnings"]) + "</ul>"))
     parts.append(("provenance", "Provenance", _compliance_provenance(doc)))
@@ -79,46 +82,92 @@ def _criteria_text(criteria):
             "does not fail the run; it says why.</p>")
 
 
+def _names(names):
+    """A list of names as text, the first `SHOWN` of them."""
+    more = f" … and {len(names) - SHOWN} more" if len(names) > SHOWN else ""
+    return ", ".join(names[:SHOWN]) + more or "none"
+
+
+STATISTICS = {"correction_mm": "correction, position", "correction_deg": "correction, orientation",
+              "predicted_residual_mm": "predicted residual", "limit_distance_deg": "nearest joint limit",
+              "shoulder_mm": "shoulder singularity", "elbow_deg": "elbow singularity",
+              "wrist_deg": "wrist singularity", "jump_deg": "largest joint change"}
+
+
+def _statistics_table(statistics):
+    """Distribution of each per-target measure over all targets."""
+    rows = [(STATISTICS[name], s["unit"], *(f"{s[k]:.4g}" for k in ("min", "p5", "median", "mean", "p95", "max")),
+             f"#{s['worst']} {s['worst_label']}") for name, s in statistics.items()]
+    return table(("measure", "unit", "min", "p5", "median", "mean", "p95", "max", "worst target"), rows,
+                 numeric=range(2, 8))
+
+
+def _full_data(doc):
+    """Where the data of every target are, for a summarised table."""
+    data = doc["full_data"]
+    if data["path"] is None:
+        return ("the per-target data of every target were not written (the JSON went to standard output); "
+                "--report PATH writes them beside the report")
+    return (f"the data of every target are in {data['path']} beside this page "
+            f"(NumPy: numpy.load(\"{data['path']}\"); arrays {', '.join(data['arrays'])})")
+
+
 def _targets(doc):
-    s = doc["summary"]
+    s, shown = doc["summary"], doc["target_table"]
     if not doc["targets"]:
         return "<p>No target was compensated.</p>"
     lead = key_values([
         ("compensated targets", s["targets"]),
+        ("tabulated below", "every target" if shown["complete"] else f"{shown['rows']} of {shown['targets']}"),
+        ("flagged (failing a per-target criterion)", shown["flagged"]),
         ("outside the grid", s["outside_grid"]),
         ("posture changed", s["configuration_changed"]),
         ("largest correction", f"{s['correction_max_mm']:.4f} mm, {s['correction_max_deg']:.4f} deg"),
         ("largest predicted residual", f"{s['residual_max_mm']:.2e} mm"),
         ("smallest joint limit distance", f"{s['limit_distance_min_deg']:.2f} deg"),
-        ("unused points (left as written)", ", ".join(doc["unused"]) or "none"),
-        ("joint targets", f"{doc['joint_targets']['mode']}: {', '.join(doc['joint_targets']['labels']) or 'none'}"),
+        ("unused points (left as written)", _names(doc["unused"])),
+        ("joint targets", f"{doc['joint_targets']['mode']}: {_names(doc['joint_targets']['labels'])}"),
     ])
-    fails = {c["id"]: set(c["targets"]) for c in doc["verdict"]["criteria"] if c["status"] == "fail"}
-    labels = [t["label"] for t in doc["targets"]]
+    return lead + f"<h3>Statistics over all {s['targets']} targets</h3>" + _statistics_table(s["statistics"])
+
+
+def _target_tables(doc):
+    shown, why, lead = doc["target_table"], {}, ""
+    if not shown["complete"]:
+        lead = (f'<div class="callout"><p>Summarised: {esc(shown["selection"])}.</p>'
+                f"<p>{esc(_full_data(doc))}.</p></div>")
+        for name, indices in shown["worst"].items():
+            for k in indices:
+                why.setdefault(k, []).append(f"worst {STATISTICS[name]}")
+    targets = doc["targets"]
 
     def marker(columns):
         """Cells of failing targets to highlight: {criterion: columns}."""
-        return lambda r, col: any(col in cols and labels[r] in fails.get(key, ()) for key, cols in columns.items())
+        return lambda r, col: any(col in cols and key in targets[r]["flags"] for key, cols in columns.items())
 
-    rows = [(k + 1, t["label"], t["line"], *(f"{v:.3f}" for v in t["target"]), f"{t['correction_norm_mm']:.4f}",
+    def reason(t):
+        return ("; ".join([*t["flags"], *why.get(t["index"], [])]),) if why else ()
+
+    extra = ("shown for",) if why else ()
+    rows = [(t["index"], t["label"], t["line"], *(f"{v:.3f}" for v in t["target"]), f"{t['correction_norm_mm']:.4f}",
              f"{t['correction_norm_deg']:.4f}", f"{t['predicted_residual_mm']:.1e}",
-             "outside" if t["outside_grid"] else "inside") for k, t in enumerate(doc["targets"])]
+             "outside" if t["outside_grid"] else "inside", *reason(t)) for t in targets]
     poses = table(("#", "target", "line", "x", "y", "z", "a", "b", "c", "correction mm", "correction deg",
-                   "residual mm", "grid"), rows, numeric={0, 2, *range(3, 12)},
+                   "residual mm", "grid", *extra), rows, numeric={0, 2, *range(3, 12)},
                   bad=marker({"residual": (11,), "outside_grid": (12,)}), css="wide")
     rows = []
-    for k, t in enumerate(doc["targets"]):
+    for t in targets:
         limit = t["limit_distance_deg"]
         nearest = min(range(6), key=limit.__getitem__)
         branch = t["branch"] if t["branch"] == t["branch_planned"] else f"{t['branch_planned']} → {t['branch']}"
         config = t["declared"] if t["declared"] == t["written"] else f"{t['declared'] or '—'} → {t['written']}"
-        rows.append((k + 1, t["label"], config or "—", t["posture_source"], branch,
+        rows.append((t["index"], t["label"], config or "—", t["posture_source"], branch,
                      *(f"{v:.2f}" for v in t["joints_deg"]), f"{limit[nearest]:.2f} (J{nearest + 1})",
                      f"{t['singularity']['shoulder_mm']:.0f}", f"{t['singularity']['elbow_deg']:.1f}",
-                     f"{t['singularity']['wrist_deg']:.1f}", f"{max(t['jump_deg'], key=abs):+.2f}"))
+                     f"{t['singularity']['wrist_deg']:.1f}", f"{max(t['jump_deg'], key=abs):+.2f}", *reason(t)))
     posture = table(("#", "target", "configuration declared → written", "posture from", "branch", "J1", "J2", "J3",
-                     "J4", "J5", "J6", "limit dist. deg", "shoulder mm", "elbow deg", "wrist deg", "max jump deg"),
-                    rows, numeric={0, *range(5, 16)},
+                     "J4", "J5", "J6", "limit dist. deg", "shoulder mm", "elbow deg", "wrist deg", "max jump deg",
+                     *extra), rows, numeric={0, *range(5, 16)},
                     bad=marker({"configuration": (2, 4), "joint_limits": (11,), "singularity": (12, 13, 14)}),
                     css="wide")
     return (lead + "<h3>Poses and corrections</h3><p>Targets in the robot base frame (mm; A, B, C in deg); "

@@ -9,7 +9,8 @@ NAMED = 6  # targets named per failed criterion
 
 def _concerns(criterion):
     named = [*criterion["targets"], *(f"line {line}" for line in criterion["lines"])]
-    more = f" (+{len(named) - NAMED} more)" if len(named) > NAMED else ""
+    total = max(criterion["failing"], len(named))
+    more = f" (+{total - NAMED} more)" if total > NAMED else ""
     return ", ".join(named[:NAMED]) + more
 
 

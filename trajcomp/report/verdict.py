@@ -13,6 +13,7 @@ import numpy as np
 from trajcomp.errors import TrajcompError
 
 PASS, FAIL, NOT_EVALUATED = "pass", "fail", "not evaluated"
+LISTED = 2000  # targets named per failed criterion; `Check.failing` counts them all
 
 
 @dataclasses.dataclass(frozen=True)
@@ -63,9 +64,11 @@ class Check:
     detail : str
         What was found (worst value) or why it was not evaluated.
     targets : tuple of str
-        Labels of the targets it fails for.
+        Labels of the targets it fails for (the first `LISTED`, motion order).
     lines : tuple of int
         Program lines it fails for (motions without a target).
+    failing : int
+        How many targets or lines it fails for.
     """
 
     id: str
@@ -74,16 +77,17 @@ class Check:
     detail: str = ""
     targets: tuple = ()
     lines: tuple = ()
+    failing: int = 0
 
     def as_dict(self):
         return {**dataclasses.asdict(self), "targets": list(self.targets), "lines": list(self.lines)}
 
 
 def check(id, statement, failing, labels, detail):
-    """A Check from a boolean mask (N,) of failing targets and their labels (N,)."""
-    failing = np.asarray(failing, dtype=bool)
-    return Check(id, statement, FAIL if failing.any() else PASS, detail,
-                 targets=tuple(str(labels[k]) for k in np.flatnonzero(failing)))
+    """A Check from a boolean mask (N,) of failing targets and their labels (Sequence[str], N)."""
+    failing = np.flatnonzero(np.asarray(failing, dtype=bool))
+    return Check(id, statement, FAIL if len(failing) else PASS, detail,
+                 targets=tuple(str(labels[k]) for k in failing[:LISTED].tolist()), failing=len(failing))
 
 
 def not_evaluated(id, statement, reason):
