@@ -162,27 +162,17 @@ def run_path(moves, robot, first, last, tolerance=TOLERANCE, *, part=None):
         From `trajcomp.timing.samples.run_samples`.
     """
     a, b = part or (first, last)
-    q, owner, (waypoint, flange, flange_jac) = run_samples(moves, robot, first, last)
-    keep = np.ones(len(q), dtype=bool)
-    keep[1:] = np.linalg.norm(np.diff(q, axis=0), axis=1) > _DUPLICATE
-    kept = np.cumsum(keep) - 1
-    waypoint_rows = kept[np.r_[np.flatnonzero(np.diff(owner)), len(owner) - 1]]
-    q, owner, waypoint = q[keep], owner[keep], waypoint[keep]
-    s = np.r_[0.0, np.cumsum(np.linalg.norm(np.diff(q, axis=0), axis=1))]
+    q, owner, s, waypoint_rows, known = _collapsed(moves, robot, first, last)
     s_waypoints = s[waypoint_rows]
     s_a, s_b = s_waypoints[a - first], s_waypoints[b - first]
     if s_b <= s_a:
-        return RunPath(None, s_waypoints[a - first : b - first + 1] - s_a, np.zeros(1), a, b, np.zeros(b - a + 1),
-                       np.zeros(1), 0.0)
+        return _no_path(a, b)
     grid = _grid(s)  # every sample is a grid point: one Jacobian batch serves the fit and the TCP speed
     k = first + np.clip(np.searchsorted(s_waypoints, grid), 1, len(s_waypoints) - 1)
     row = np.searchsorted(grid, s)  # grid point of each sample
-    at = waypoint >= 0
-    known = (row[at], flange[waypoint[at]], flange_jac[waypoint[at]])
-    jac_grid = tcp_jacobians(robot, moves, k, np.column_stack([np.interp(grid, s, q[:, j]) for j in range(6)]), known)
+    jac_grid = tcp_jacobians(robot, moves, k, _interpolated(grid, s, q), (row[known[0]], *known[1:]))
     jac = jac_grid[row]
-    steps = np.r_[0.0, np.linalg.norm(np.einsum("nij,nj->ni", jac[1:, :3], np.diff(q, axis=0)), axis=1)]
-    travel = np.cumsum(steps)  # TCP arc length from the run's start, mm
+    travel = _travel(q, jac)
     tcp_lengths = np.diff(travel[waypoint_rows], prepend=0.0)
     tol = _tolerances(moves, first, last, travel, owner, waypoint_rows, tcp_lengths, tolerance)
     spline, deviation = _fit(s, q, jac, tol, np.min(moves.acceleration[first + 1 : last + 1], axis=0))
@@ -193,6 +183,82 @@ def run_path(moves, robot, first, last, tolerance=TOLERANCE, *, part=None):
     lengths = tcp_lengths[a - first : b - first + 1].copy()
     lengths[0] = 0.0
     return RunPath(path, s_waypoints[a - first : b - first + 1] - s_a, grid - s_a, a, b, lengths, rate, deviation)
+
+
+def stop_paths(moves, robot, first, last, tolerance=TOLERANCE):
+    """The paths of motions first + 1 .. last, each from rest to rest (every waypoint an exact stop), built together.
+
+    One sampling, one Jacobian batch for all the motions; each is then
+    fitted on its own samples, exactly as `run_path` of that motion alone.
+
+    Returns
+    -------
+    list of RunPath
+        One per motion, in order.
+    """
+    q, owner, s, waypoint_rows, known = _collapsed(moves, robot, first, last)
+    runs = []  # per motion: (k, sample rows, local path positions, grid)
+    for k, r0, r1 in zip(range(first + 1, last + 1), waypoint_rows[:-1].tolist(), waypoint_rows[1:].tolist()):
+        local = s[r0 : r1 + 1] - s[r0]
+        runs.append((k, slice(r0, r1 + 1), local, _grid(local) if r1 > r0 else local[:0]))
+    sizes = [len(grid) for *_, grid in runs]
+    offsets = np.r_[0, np.cumsum(sizes)]
+    first_point = np.full(len(s), -1)  # grid point (in all grids) of the sample each motion starts at
+    for (_, rows, _, _), offset, size in zip(runs, offsets, sizes):
+        if size:
+            first_point[rows.start] = offset
+    at = first_point[known[0]] >= 0
+    jac_all = tcp_jacobians(robot, moves, np.repeat(np.arange(first + 1, last + 1), sizes),
+                            np.concatenate([_interpolated(grid, local, q[rows]) for _, rows, local, grid in runs]),
+                            (first_point[known[0][at]], known[1][at], known[2][at]))
+    paths = []
+    for (k, rows, local, grid), offset in zip(runs, offsets):
+        if not len(grid):
+            paths.append(_no_path(k - 1, k))
+            continue
+        jac_grid = jac_all[offset : offset + len(grid)]
+        jac = jac_grid[np.searchsorted(grid, local)]
+        travel = _travel(q[rows], jac)
+        spline, deviation = _fit(local, q[rows], jac, np.full(len(local), tolerance), moves.acceleration[k])
+        rate = np.linalg.norm(np.einsum("nij,nj->ni", jac_grid[:, :3], spline(grid, 1)), axis=1)
+        paths.append(RunPath(JointPath(spline), local[[0, -1]], grid, k - 1, k, np.array([0.0, travel[-1]]), rate,
+                             deviation))
+    return paths
+
+
+def _collapsed(moves, robot, first, last):
+    """Samples of waypoints first..last with duplicates collapsed.
+
+    Returns
+    -------
+    q (n, 6), owner (n,), s (n,) joint arc length (rad), waypoint_rows (W,) the sample of each waypoint,
+    known : (rows (r,), flange (r, 4, 4), flange Jacobians (r, 6, 6)) of samples that are waypoints.
+    """
+    q, owner, (waypoint, flange, flange_jac) = run_samples(moves, robot, first, last)
+    keep = np.ones(len(q), dtype=bool)
+    keep[1:] = np.linalg.norm(np.diff(q, axis=0), axis=1) > _DUPLICATE
+    kept = np.cumsum(keep) - 1
+    waypoint_rows = kept[np.r_[np.flatnonzero(np.diff(owner)), len(owner) - 1]]
+    q, owner, waypoint = q[keep], owner[keep], waypoint[keep]
+    s = np.r_[0.0, np.cumsum(np.linalg.norm(np.diff(q, axis=0), axis=1))]
+    at = np.flatnonzero(waypoint >= 0)
+    return q, owner, s, waypoint_rows, (at, flange[waypoint[at]], flange_jac[waypoint[at]])
+
+
+def _no_path(a, b):
+    """The RunPath of waypoints a..b that do not move."""
+    return RunPath(None, np.zeros(b - a + 1), np.zeros(1), a, b, np.zeros(b - a + 1), np.zeros(1), 0.0)
+
+
+def _interpolated(grid, s, q):
+    """Joints (G, 6) at path positions grid (G,), linear between the samples (s (n,), q (n, 6))."""
+    return np.column_stack([np.interp(grid, s, q[:, j]) for j in range(6)])
+
+
+def _travel(q, jac):
+    """TCP arc length (n,) from the first sample, mm, of samples q (n, 6) with TCP Jacobians jac (n, 6, 6)."""
+    steps = np.linalg.norm(np.einsum("nij,nj->ni", jac[1:, :3], np.diff(q, axis=0)), axis=1)
+    return np.r_[0.0, np.cumsum(steps)]
 
 
 def _grid(s):

@@ -42,8 +42,8 @@ def squared_speeds(s, dq, ddq, acceleration, x_max, rest):
         Grid, strictly increasing (rad of path).
     dq, ddq : ndarray, shape (G, 6)
         Path derivatives q'(s), q''(s) at the grid points.
-    acceleration : ndarray, shape (6,)
-        Joint acceleration limits, rad/s^2.
+    acceleration : ndarray, shape (6,) or (G - 1, 6)
+        Joint acceleration limits, rad/s^2 (per interval: independent runs in one problem).
     x_max : ndarray, shape (G,)
         Upper bound of x at each grid point (joint velocity, TCP speed), finite.
     rest : array_like of int
@@ -116,7 +116,7 @@ class _Bands:
         two_ds = 2.0 * ds[:, None]
         beta = np.hstack([dq[:-1] / two_ds, dq[1:] / two_ds + ddq[1:]])
         alpha = np.hstack([ddq[:-1] - dq[:-1] / two_ds, -dq[1:] / two_ds])
-        a = np.tile(acceleration, 2)
+        a = np.concatenate([acceleration, acceleration], axis=-1)
         moving = beta != 0.0
         with np.errstate(divide="ignore", invalid="ignore"):
             self.sigma = np.where(moving, -alpha / beta, 0.0)

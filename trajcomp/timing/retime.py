@@ -16,20 +16,28 @@ worst-case bounds). Every segment is then sampled at 1 kHz
 (`trajcomp.timing.check`); where a sample exceeds a limit by more than
 half the tolerance, that limit is lowered by the overshoot and the
 segment timed again.
+
+Consecutive single motions from rest to rest (a program of exact stops)
+are built and timed together, up to `STOP_BATCH` at a time: one sampling
+and one Jacobian batch for their paths, one TOPP-RA problem for their
+TOPP-RA laws (`trajcomp.timing.toppra_run.rest_to_rest_laws`); each is
+the timing it gets alone.
 """
 
 import dataclasses
+import itertools
 
 import numpy as np
 
 from trajcomp.program import JOINT
 from trajcomp.timing.check import LIMIT_TOLERANCE, Peaks, segment_peaks
-from trajcomp.timing.path import TOLERANCE
+from trajcomp.timing.path import TOLERANCE, stop_paths
 from trajcomp.timing.result import Segment, TimingResult
 from trajcomp.timing.windows import WINDOW, run_windows
 
 METHODS = ("auto", "toppra", "ruckig")
 _BLOCK = 65536  # waypoints per block of the per-waypoint passes over a long run
+STOP_BATCH = 500  # single motions from rest to rest timed together at most
 _RETRIES = 4  # timings of one segment with lowered limits before giving up
 _TARGET = 1.0 + 0.5 * LIMIT_TOLERANCE  # re-time a segment whose samples exceed a limit by more than this
 
@@ -59,39 +67,58 @@ def retime(moves, robot, *, method="auto", tolerance=TOLERANCE):
     """
     if method not in METHODS:
         raise ValueError(f"method must be one of {METHODS}, got {method!r}")
-    m = len(moves)
-    t = np.zeros(m)
-    tcp_length = np.zeros(m)
-    arrived = moves.q.copy()
+    timeline = _Timeline(moves)
+    arrived = timeline.arrived
     reached = dataclasses.replace(moves, q=arrived)  # filled in segment by segment
-    segments, pieces, peaks, untimed, deviation = [], [], [], [], 0.0
-    for kind, first, last in plan_segments(moves, method):
+    for batch in _batches(plan_segments(moves, method)):
+        kind, first, last = batch[0]
         if kind == "untimed":
-            t[last] = t[first]
-            untimed.append(last)
+            timeline.untimed(last)
             continue
+        last = batch[-1][2]
         _continued(arrived[first], moves.q[first : last + 1], moves.kind[first + 1 : last + 1],
                    arrived[first + 1 : last + 1])
-        runs = run_windows(reached, robot, first, last, tolerance, WINDOW if kind == "toppra" else None)
-        tcp_length[first + 1 : last + 1] = np.concatenate([run.tcp_lengths[1:] for run in runs])
-        deviation = max(deviation, *(run.deviation for run in runs))
-        if all(run.path is None for run in runs):
-            t[first + 1 : last + 1] = t[first]
-            segments.append(Segment(kind, first, last, 0.0))
+        if last - first == len(batch):  # exact stops after every motion: timed together
+            _time_stops(timeline, batch, stop_paths(reached, robot, first, last, tolerance), moves, robot)
             continue
-        laws, checked = _timed(kind, runs, moves, robot)
-        start = t[first]
-        for run, law in zip(runs, laws):
-            if law is None:
-                t[run.first + 1 : run.last + 1] = start
-                continue
-            t[run.first + 1 : run.last + 1] = start + law.time_at(run.s_waypoints[1:])
-            t[run.last] = start + law.duration
-            pieces.append((start, run, law))
-            start += law.duration
-        segments.append(Segment(kind, first, last, start - t[first]))
-        peaks.append(checked)
-    return _result(moves, robot, arrived, t, segments, pieces, peaks, untimed, tcp_length, deviation)
+        runs = run_windows(reached, robot, first, last, tolerance, WINDOW if kind == "toppra" else None)
+        timeline.add(kind, first, last, runs, *_timed(kind, runs, moves, robot))
+    return timeline.result(robot)
+
+
+def _batches(plan):
+    """The plan's segments in lists: runs of single motions from rest to rest together (up to `STOP_BATCH`),
+    every other segment alone."""
+    def single(segment):
+        kind, first, last = segment
+        return kind != "untimed" and last == first + 1
+
+    for together, group in itertools.groupby(plan, key=single):
+        group = list(group)
+        if together:
+            yield from (group[i : i + STOP_BATCH] for i in range(0, len(group), STOP_BATCH))
+        else:
+            yield from ([segment] for segment in group)
+
+
+def _time_stops(timeline, batch, runs, moves, robot):
+    """Time single motions from rest to rest: TOPP-RA ones as one problem, ruckig ones each; check each."""
+    from trajcomp.timing.ruckig_move import ruckig_law
+    from trajcomp.timing.toppra_run import rest_to_rest_laws
+
+    laws = [None] * len(runs)
+    by_toppra = [i for i, (kind, *_) in enumerate(batch) if kind == "toppra" and runs[i].path is not None]
+    for i, law in zip(by_toppra, rest_to_rest_laws([runs[i] for i in by_toppra], moves, robot)):
+        laws[i] = law
+    for (kind, first, last), run, law in zip(batch, runs, laws):
+        if run.path is None:
+            timeline.add(kind, first, last, [run], [None], None)
+            continue
+        law = law or ruckig_law(run, moves, robot)
+        peaks = segment_peaks(run, law, moves, jerk=kind == "ruckig")
+        if peaks.worst > _TARGET:  # the dense check found an overshoot: the motion alone, with lowered limits
+            (law,), peaks = _timed(kind, [run], moves, robot)
+        timeline.add(kind, first, last, [run], [law], peaks)
 
 
 def _continued(start, declared, kinds, out):
@@ -168,33 +195,67 @@ def _turn_warnings(moves, arrived):
     return tuple(out)
 
 
-def _result(moves, robot, arrived, t, segments, pieces, peaks, untimed, tcp_length, deviation):
-    def peak(name):
-        values = np.array([getattr(p, name) for p in peaks]).reshape(-1, 6)
-        return np.max(np.nan_to_num(values, nan=0.0), axis=0, initial=0.0)
+class _Timeline:
+    """What re-timing has found so far, segment by segment, and the `TimingResult` it makes."""
 
-    velocity, acceleration = peak("velocity"), peak("acceleration")
-    jerk = np.where(np.isfinite(robot.j_max), peak("jerk"), 0.0)  # measured in ruckig segments, jerk-limited
-    worst = max([p.worst for p in peaks], default=0.0)
-    jerk_ok = np.all(jerk <= robot.j_max * (1.0 + LIMIT_TOLERANCE))
-    return TimingResult(
-        t=t,
-        cycle_time=float(t[-1]) if len(t) else 0.0,
-        segments=tuple(segments),
-        peak_velocity=velocity,
-        peak_acceleration=acceleration,
-        peak_jerk=jerk,
-        limit_velocity=robot.v_max,
-        limit_acceleration=robot.a_max,
-        limit_jerk=robot.j_max,
-        within_limits=bool(worst <= 1.0 + LIMIT_TOLERANCE and jerk_ok),
-        peak_speed_ratio=max([p.speed_ratio for p in peaks], default=0.0),
-        q=arrived,
-        tcp_length=tcp_length,
-        labels=moves.labels,
-        motion=moves.motion,
-        untimed=tuple(untimed),
-        deviation=deviation,
-        warnings=_turn_warnings(moves, arrived),
-        pieces=tuple(pieces),
-    )
+    def __init__(self, moves):
+        self.moves = moves
+        self.t, self.tcp_length = np.zeros(len(moves)), np.zeros(len(moves))
+        self.arrived = moves.q.copy()
+        self.segments, self.pieces, self.peaks, self.untimed_at, self.deviation = [], [], [], [], 0.0
+
+    def untimed(self, k):
+        """Waypoint k is reached by a motion that is not timed (its start is unknown)."""
+        self.t[k] = self.t[k - 1]
+        self.untimed_at.append(k)
+
+    def add(self, kind, first, last, runs, laws, peaks):
+        """A segment timed in windows ``runs`` with ``laws`` (None for a window without length), checked to ``peaks``."""
+        self.tcp_length[first + 1 : last + 1] = np.concatenate([run.tcp_lengths[1:] for run in runs])
+        self.deviation = max(self.deviation, *(run.deviation for run in runs))
+        start = self.t[first]
+        for run, law in zip(runs, laws):
+            if law is None:
+                self.t[run.first + 1 : run.last + 1] = start
+                continue
+            self.t[run.first + 1 : run.last + 1] = start + law.time_at(run.s_waypoints[1:])
+            self.t[run.last] = start + law.duration
+            self.pieces.append((start, run, law))
+            start += law.duration
+        self.segments.append(Segment(kind, first, last, start - self.t[first]))
+        if peaks is not None:
+            self.peaks.append(peaks)
+
+    def result(self, robot):
+        """The `TimingResult`."""
+        moves, peaks = self.moves, self.peaks
+
+        def peak(name):
+            values = np.array([getattr(p, name) for p in peaks]).reshape(-1, 6)
+            return np.max(np.nan_to_num(values, nan=0.0), axis=0, initial=0.0)
+
+        velocity, acceleration = peak("velocity"), peak("acceleration")
+        jerk = np.where(np.isfinite(robot.j_max), peak("jerk"), 0.0)  # measured in ruckig segments, jerk-limited
+        worst = max([p.worst for p in peaks], default=0.0)
+        jerk_ok = np.all(jerk <= robot.j_max * (1.0 + LIMIT_TOLERANCE))
+        return TimingResult(
+            t=self.t,
+            cycle_time=float(self.t[-1]) if len(self.t) else 0.0,
+            segments=tuple(self.segments),
+            peak_velocity=velocity,
+            peak_acceleration=acceleration,
+            peak_jerk=jerk,
+            limit_velocity=robot.v_max,
+            limit_acceleration=robot.a_max,
+            limit_jerk=robot.j_max,
+            within_limits=bool(worst <= 1.0 + LIMIT_TOLERANCE and jerk_ok),
+            peak_speed_ratio=max([p.speed_ratio for p in peaks], default=0.0),
+            q=self.arrived,
+            tcp_length=self.tcp_length,
+            labels=moves.labels,
+            motion=moves.motion,
+            untimed=tuple(self.untimed_at),
+            deviation=self.deviation,
+            warnings=_turn_warnings(moves, self.arrived),
+            pieces=tuple(self.pieces),
+        )

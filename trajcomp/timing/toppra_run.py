@@ -22,7 +22,7 @@ import dataclasses
 import numpy as np
 
 from trajcomp.errors import TimingError
-from trajcomp.timing.reachability import backward, forward
+from trajcomp.timing.reachability import backward, forward, squared_speeds
 
 _X_CAP = 1e12  # (rad/s)^2 ceiling of the squared path speed where no limit binds
 
@@ -114,18 +114,14 @@ def toppra_laws(runs, moves, robot, velocity_scale=1.0, acceleration_scale=1.0, 
         The path speed must be zero over a whole grid interval (a singular
         or kinked path): names the waypoint, its line and the joint.
     """
-    def problem(run):
-        x_max, velocity = run.speed_bound(moves, velocity_scale, speed_scale)
-        acceleration = np.min(moves.acceleration[run.first + 1 : run.last + 1], axis=0) * acceleration_scale
-        return run.grid, run.path(run.grid, 1), run.path(run.grid, 2), acceleration, np.minimum(x_max, _X_CAP), velocity
-
+    scales = (velocity_scale, acceleration_scale, speed_scale)
     bounds, end = [], 0.0
     for run in reversed(runs):
         if run.path is None:
             bounds.append(None)
             end = 0.0
             continue
-        grid, dq, ddq, acceleration, x_max, _ = problem(run)
+        grid, dq, ddq, acceleration, x_max, _ = _problem(run, moves, *scales)
         bounds.append(backward(grid, dq, ddq, acceleration, x_max, end))
         end = bounds[-1][0]
     laws, start = [], 0.0
@@ -134,7 +130,7 @@ def toppra_laws(runs, moves, robot, velocity_scale=1.0, acceleration_scale=1.0, 
             laws.append(None)
             start = 0.0
             continue
-        grid, dq, ddq, acceleration, x_max, velocity = problem(run)
+        grid, dq, ddq, acceleration, x_max, velocity = _problem(run, moves, *scales)
         x = forward(grid, dq, ddq, acceleration, h, start)
         start = x[-1]
         try:
@@ -143,6 +139,55 @@ def toppra_laws(runs, moves, robot, velocity_scale=1.0, acceleration_scale=1.0, 
             i = int(np.argmin(x[:-1] + x[1:]))
             raise _stuck(run, moves, grid, i, x_max, dq, velocity) from None
     return laws
+
+
+def rest_to_rest_laws(runs, moves, robot):
+    """The time-optimal laws of independent runs, each at rest at both ends, solved as one problem.
+
+    The runs' grids are laid end to end (a unit gap between them) with
+    the path speed 0 at each run's ends, so one pair of reachability
+    passes times them all (a program of exact stops: thousands of short
+    runs).
+
+    Parameters
+    ----------
+    runs : list of RunPath
+        With paths (non-zero length).
+    moves : Moves
+    robot : Robot
+
+    Returns
+    -------
+    list of ConstantAcceleration
+    """
+    if not runs:
+        return []
+    problems = [_problem(run, moves) for run in runs]
+    sizes = np.array([len(p[0]) for p in problems])
+    ends = np.cumsum(sizes)
+    starts = ends - sizes
+    lengths = np.array([p[0][-1] for p in problems])
+    shift = np.r_[0.0, np.cumsum(lengths + 1.0)[:-1]]
+    s = np.concatenate([p[0] for p in problems]) + np.repeat(shift, sizes)
+    dq, ddq = (np.concatenate([p[i] for p in problems]) for i in (1, 2))
+    acceleration = np.repeat([p[3] for p in problems], sizes, axis=0)[:-1]
+    x = squared_speeds(s, dq, ddq, acceleration, np.concatenate([p[4] for p in problems]), np.r_[starts, ends - 1])
+    laws = []
+    for run, problem, lo, hi in zip(runs, problems, starts, ends):
+        try:
+            laws.append(ConstantAcceleration.from_speeds(run.grid, np.sqrt(x[lo:hi])))
+        except ValueError:
+            i = int(np.argmin(x[lo : hi - 1] + x[lo + 1 : hi]))
+            raise _stuck(run, moves, run.grid, i, problem[4], problem[1], problem[5]) from None
+    return laws
+
+
+def _problem(run, moves, velocity_scale=1.0, acceleration_scale=1.0, speed_scale=1.0):
+    """A run's TOPP-RA data: grid (G,), q' and q'' there (G, 6), acceleration limits (6,), x bound (G,),
+    joint velocity limits (G, 6)."""
+    x_max, velocity = run.speed_bound(moves, velocity_scale, speed_scale)
+    acceleration = np.min(moves.acceleration[run.first + 1 : run.last + 1], axis=0) * acceleration_scale
+    return run.grid, run.path(run.grid, 1), run.path(run.grid, 2), acceleration, np.minimum(x_max, _X_CAP), velocity
 
 
 def _where(run, moves, grid_s):

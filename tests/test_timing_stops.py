@@ -1,0 +1,61 @@
+"""A program of exact stops, timed in batches: each motion gets the timing it gets alone."""
+
+import importlib
+
+import numpy as np
+import pytest
+
+from trajcomp.ik import ik
+from trajcomp.kinematics import fk
+from trajcomp.program import JOINT, LINEAR
+from trajcomp.robot import load_robot
+from trajcomp.timing import Moves, retime
+from trajcomp.timing.path import run_path
+from trajcomp.timing.ruckig_move import ruckig_law
+from trajcomp.timing.toppra_run import toppra_laws
+
+UR10 = load_robot("ur10")
+retime_module = importlib.import_module("trajcomp.timing.retime")  # the module, not the function of that name
+
+
+@pytest.fixture(scope="module")
+def stops():
+    """Moves of 13 waypoints stopping at each: lines on a circle, one repeated waypoint, three joint motions."""
+    angle = np.linspace(0.0, 1.5 * np.pi, 10)
+    T = np.tile(fk(UR10, UR10.home), (10, 1, 1))
+    T[:, 0, 3] += 80.0 * (np.cos(angle) - 1.0)
+    T[:, 1, 3] += 80.0 * np.sin(angle)
+    q = ik(UR10, T, seed=UR10.home).raise_on_failure().q
+    q = np.concatenate([q[:5], q[4:5], q[5:], q[:1] + np.radians([30.0, -10.0, 15.0, 0.0, 20.0, 40.0]), q[:1]])
+    kind = np.array([LINEAR] * 11 + [JOINT] * 2, dtype=object)
+    kind[7] = JOINT  # a joint motion between lines
+    return Moves.from_joints(q, UR10, kind=kind, tcp_speed=np.r_[np.full(8, 250.0), np.full(5, np.inf)], stop=True)
+
+
+def alone(moves, k):
+    """Duration of motion k timed on its own: its path fitted alone, TOPP-RA (lines) or ruckig (joint motions)."""
+    run = run_path(moves, UR10, k - 1, k)
+    if run.path is None:
+        return 0.0
+    law = ruckig_law(run, moves, UR10) if moves.kind[k] == JOINT else toppra_laws([run], moves, UR10)[0]
+    return law.duration
+
+
+def test_each_stop_to_stop_motion_takes_the_time_it_takes_alone(stops, monkeypatch):
+    monkeypatch.setattr(retime_module, "STOP_BATCH", 4)  # batches of 4, 4, 4 and 0 + a last one of 0
+    result = retime(stops, UR10)
+    expected = [alone(stops, k) for k in range(1, len(stops))]
+    np.testing.assert_allclose(np.diff(result.t), expected, rtol=1e-6, atol=1e-9)
+    assert expected[4] == 0.0 and min(np.delete(expected, 4)) > 0.05  # the repeated waypoint takes no time
+    assert [s.kind for s in result.segments] == ["toppra"] * 6 + ["ruckig"] + ["toppra"] * 3 + ["ruckig"] * 2
+    assert result.within_limits
+
+
+def test_every_stop_is_at_rest_and_the_limits_hold_between(stops):
+    result = retime(stops, UR10)
+    _, qd_stop, _ = result.at(result.t[1:-1])
+    assert np.max(np.abs(qd_stop)) < 1e-6  # at rest at each waypoint
+    t = np.arange(0.0, result.cycle_time, 1e-3)
+    _, qd, qdd = result.at(t)
+    assert np.all(np.abs(qd).max(axis=0) <= UR10.v_max * 1.01)
+    assert np.all(np.abs(qdd).max(axis=0) <= UR10.a_max * 1.01)
