@@ -158,3 +158,27 @@ def test_krl_restores_the_speed_of_a_motion_that_is_not_retimed(tmp_path):
     assert before["LIN P4"] == "LIN_REL {Z 10}"
     assert [line for line in lines if not line.strip().startswith("$VEL.CP")] == \
         [line for line in src.splitlines() if not line.strip().startswith("$VEL.CP")]
+
+
+
+@pytest.mark.parametrize("joint_targets", ["keep", "compensate"])
+def test_the_compensations_planned_joints_time_the_original_as_its_posture_plan_does(
+        tmp_path, kuka_model, joint_targets):
+    from trajcomp.commands.retime import retime_compensated
+    from trajcomp.compensate import program_corrector
+    from trajcomp.model import load_model
+    from trajcomp.postprocess import compensate_program
+
+    model = load_model(kuka_model)
+    shutil.copy(EXAMPLES / "kuka" / "weld.dat", tmp_path / "weld.dat")
+    home = ",".join(f"A{j + 1} {v:.3f}" for j, v in enumerate(np.degrees(model.nominal.home)))
+    source = (EXAMPLES / "kuka" / "weld.src").read_text().replace("  LIN P4\n", f"  LIN P4\n  PTP {{{home}}}\n")
+    (tmp_path / "weld.src").write_text(source)  # a joint target between the Cartesian ones
+    program = formats.read(tmp_path / "weld.src")
+    corrected, report = compensate_program(program, program_corrector(model), model.nominal,
+                                           joint_targets=joint_targets)
+    assert len(report.joint_targets) == 1
+    solved = retime_compensated(program, corrected, model.nominal, "auto", 0.005)
+    reused = retime_compensated(program, corrected, model.nominal, "auto", 0.005, q_planned=report.q_planned)
+    assert reused[2] == solved[2] > 9.0  # the cycle time before compensation, s: 80 + 100 mm at 20 mm/s and more
+    np.testing.assert_array_equal(reused[1].t, solved[1].t)

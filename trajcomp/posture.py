@@ -70,6 +70,12 @@ def motion_order(program):
     return visits[np.sort(first)]
 
 
+def planned_targets(program):
+    """Indices of the Cartesian targets motions use, in motion order: the rows of `planned_joints`' `Plan`."""
+    order = motion_order(program)
+    return order[~program.target_table().is_joint[order]]
+
+
 def _visits(program):
     """Target indices (K,) in the order motions reach them: via point, then target, of each motion."""
     motions = program.motion_table()
@@ -103,8 +109,7 @@ def planned_joints(program, robot, *, tools=None, frames=None):
         A tool or frame used but not defined.
     """
     table = program.target_table()
-    order = motion_order(program)
-    index = order[~table.is_joint[order]]
+    index = planned_targets(program)
     T_base_frame, T_flange_tool, T_base_tcp = FrameTable(program, robot, tools, frames).targets_in_base(index)
     n = len(index)
     q_all, valid = _all_branches(robot, T_base_tcp, T_flange_tool)

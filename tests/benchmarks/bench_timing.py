@@ -111,7 +111,7 @@ def limits_row(name, moves, robot):
 def program_moves(path, robot):
     program = formats.read(ROOT / path)
     plan = planned_joints(program, robot)
-    return program, moves_from_program(program, robot, planned(program, plan))
+    return program, moves_from_program(program, robot, planned(program, plan.index, plan.q))
 
 
 def model_of(folder, robot_name, corner, side):

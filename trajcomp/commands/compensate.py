@@ -119,7 +119,8 @@ class CompensateJob:
         timing, timed, before = [], None, None
         if self.retime != "none":
             corrected, timed, before = retime_compensated(program, corrected, model.nominal, self.retime,
-                                                          self.path_tolerance, self.tools, self.frames)
+                                                          self.path_tolerance, self.tools, self.frames,
+                                                          q_planned=report.q_planned)
             timing = timing_lines(timed, before)
         protect = () if self.in_place else sources
         written = formats.write(output, corrected, protect=protect)

@@ -13,7 +13,7 @@ from trajcomp.commands._report import add_report_options, criteria_of, emit
 from trajcomp.commands.convert import add_frame_options, add_in_place_option, frame_options, protected_inputs
 from trajcomp.errors import TimingError, TrajcompError
 from trajcomp.postprocess import as_written_report
-from trajcomp.posture import planned_joints
+from trajcomp.posture import planned_joints, planned_targets
 from trajcomp.report import compliance_report, file_entry
 from trajcomp.timing import METHODS
 from trajcomp.timing.path import TOLERANCE
@@ -61,7 +61,8 @@ def run(args):
                             f"convert the program first (trajcomp convert)")
     tools, frames = frame_options(args)
     plan = planned_joints(program, robot, tools=tools, frames=frames)
-    timed, result = timed_program(program, robot, planned(program, plan), args.method, args.path_tolerance, tools, frames)
+    joints = planned(program, plan.index, plan.q)
+    timed, result = timed_program(program, robot, joints, args.method, args.path_tolerance, tools, frames)
     written = formats.write(args.output, timed, protect=protected_inputs(args, args.program, program))
     for line in timing_lines(result):
         info(line)
@@ -99,14 +100,15 @@ def timing_lines(result, before=None):
     return [*result.lines_of_text(before), f"speed settings written for {written} motions ({kinds})"]
 
 
-def planned(program, plan):
-    """Joints (N, 6) of a program's N targets from a `trajcomp.posture.Plan`, NaN where it has none."""
+def planned(program, index, q):
+    """Joints (N, 6) of a program's N targets: q (n, 6) of targets index (n,) (a `trajcomp.posture.Plan`), NaN
+    elsewhere."""
     joints = np.full((len(program.target_table()), 6), np.nan)
-    joints[plan.index] = plan.q
+    joints[index] = q
     return joints
 
 
-def retime_compensated(original, corrected, robot, method, tolerance, tools=None, frames=None):
+def retime_compensated(original, corrected, robot, method, tolerance, tools=None, frames=None, *, q_planned=None):
     """Time a compensated program, and its original for the cycle time before compensation.
 
     Parameters
@@ -119,6 +121,13 @@ def retime_compensated(original, corrected, robot, method, tolerance, tools=None
         One of `trajcomp.timing.METHODS`.
     tolerance : float
         Path tolerance, mm.
+    tools, frames : Mapping[str, ndarray (4, 4)], optional
+        Tools and frames the program uses but does not define.
+    q_planned : ndarray, shape (n, 6), optional
+        The original's Cartesian targets in their declared postures, in
+        motion order (`trajcomp.posture.planned_targets`), rad: the
+        compensation's `ProgramReport.q_planned` (rows beyond n, joint
+        targets, are not used). Solved again when not given.
 
     Returns
     -------
@@ -134,10 +143,15 @@ def retime_compensated(original, corrected, robot, method, tolerance, tools=None
     """
     from trajcomp.timing.writeback import retime_program, writable
 
-    plan = planned_joints(original, robot, tools=tools, frames=frames)
+    if q_planned is None:
+        plan = planned_joints(original, robot, tools=tools, frames=frames)
+        index, q_planned = plan.index, plan.q
+    else:
+        index = planned_targets(original)
+        q_planned = q_planned[: len(index)]
     after = corrected.target_table().joints
     try:
-        before = retime_program(original, robot, planned(original, plan), method=method,
+        before = retime_program(original, robot, planned(original, index, q_planned), method=method,
                                 tools=tools, frames=frames, tolerance=tolerance)
         if not writable(corrected):
             result = retime_program(corrected, robot, after, method=method, tools=tools, frames=frames,
