@@ -62,13 +62,27 @@ class FrameTable:
         T_base_frame = _values(used.frame[row], self.frame)
         T_flange_tool = _values(used.tool[row], self.tool)
         poses = self.program.target_table().pose[index]
-        return T_base_frame, T_flange_tool, T_base_frame @ poses
+        return T_base_frame, T_flange_tool, poses if _is_base(T_base_frame) else T_base_frame @ poses
+
+
+def in_frames(T_base_frame, T_base_pose):
+    """Poses (N, 4, 4) given in the base frame, expressed in their user frames ``T_base_frame`` (N, 4, 4), mm."""
+    return T_base_pose if _is_base(T_base_frame) else invert(T_base_frame) @ T_base_pose
+
+
+def _is_base(T_base_frame):
+    """Whether every frame of a stack (N, 4, 4) is the base itself (no transform to apply)."""
+    return bool(len(T_base_frame)) and np.array_equal(T_base_frame, np.broadcast_to(np.eye(4), T_base_frame.shape))
 
 
 def _values(names, value):
-    """``value(name)`` (4, 4) of each of N names, stacked (N, 4, 4): looked up once per distinct name."""
+    """``value(name)`` (4, 4) of each of N names, stacked (N, 4, 4): looked up once per distinct name.
+
+    A read-only view of one matrix when every name is the same (no copy per row).
+    """
     codes, distinct = _codes(names)
-    return np.array([value(name) for name in distinct]).reshape(-1, 4, 4)[codes]
+    values = np.array([value(name) for name in distinct]).reshape(-1, 4, 4)
+    return np.broadcast_to(values[0], (len(names), 4, 4)) if len(distinct) == 1 else values[codes]
 
 
 def tool_groups(tools):

@@ -17,10 +17,10 @@ import numpy as np
 from trajcomp.configuration import configuration_for, describe
 from trajcomp.errors import CompensationError
 from trajcomp.kinematics import fk
-from trajcomp.frames import FrameTable
+from trajcomp.frames import FrameTable, in_frames
 from trajcomp.posture import MAX_JOINT_CHANGE, check_posture, planned_joints
 from trajcomp.program import Program
-from trajcomp.transforms import invert, matrix_to_rotvec
+from trajcomp.transforms import matrix_to_rotvec
 
 FRAMELESS = frozenset({"csv", "urscript"})  # languages whose poses are always in the base frame
 
@@ -172,7 +172,7 @@ def compensate_program(program, correct, robot, *, tools=None, frames=None, join
         _check_correction(result.correction, labels, max_correction)
         check_posture(q_planned, result.q, labels, max_joint_change)
         q, T_command, n = result.q, result.T_command, len(cartesian)
-        edited = edited.with_targets(cartesian, poses=invert(T_base_frame) @ T_command[:n], joints=q[:n],
+        edited = edited.with_targets(cartesian, poses=in_frames(T_base_frame, T_command[:n]), joints=q[:n],
                                      configs=configuration_for(program.format, robot, q[:n]))
         if n < len(rows):
             edited = edited.with_targets(joint_index, joints=q[n:])

@@ -24,6 +24,7 @@ joint by tens of degrees, a sub-millimetre correction by far less.
 """
 
 import dataclasses
+import functools
 
 import numpy as np
 
@@ -31,11 +32,13 @@ from trajcomp.configuration import declared_windows
 from trajcomp.errors import IKError
 from trajcomp.frames import FrameTable, tool_groups
 from trajcomp.ik import ik_all, turn_towards
+from trajcomp.kinematics import in_blocks
 
 TURN = 2.0 * np.pi
 MAX_JOINT_CHANGE = np.radians(5.0)  # rad: default bound of the joint change a correction may cause
 _WINDOW_TOL = 1e-9  # rad, slack of the joint limits
 _TURNS = np.arange(-3, 4)  # whole turns tried when placing a joint in its window
+BLOCK = 16_384  # undeclared targets whose eight branches are held at once: bounded memory at millions of targets
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -112,19 +115,24 @@ def planned_joints(program, robot, *, tools=None, frames=None):
     index = planned_targets(program)
     T_base_frame, T_flange_tool, T_base_tcp = FrameTable(program, robot, tools, frames).targets_in_base(index)
     n = len(index)
-    q_all, valid = _all_branches(robot, T_base_tcp, T_flange_tool)
-    branch, lower, upper = declared_windows(program.format, [table.config[i] for i in index.tolist()])
+    branches = functools.partial(_all_branches, robot, T_base_tcp, T_flange_tool)
     hint = table.joints[index]
     has_hint = np.all(np.isfinite(hint), axis=1)
     _fail_outside_limits(program, robot, index[has_hint], hint[has_hint])
-    by_config = ~has_hint & (branch >= 0)
+    configured = np.flatnonzero(~has_hint & np.array([bool(table.config[i]) for i in index.tolist()], dtype=bool))
+    branch, lower, upper = declared_windows(program.format, [table.config[i] for i in index[configured].tolist()])
+    by_config, declared = configured[branch >= 0], branch >= 0
     q = np.full((n, 6), np.nan)
-    q[has_hint] = _nearest(robot, q_all[has_hint], valid[has_hint], hint[has_hint])
-    q[by_config] = _in_windows(robot, q_all[by_config], valid[by_config], branch[by_config],
-                               lower[by_config], upper[by_config])
-    source = np.where(has_hint, "joints", np.where(by_config, "config", "")).astype(object)
+    source = np.empty(n, dtype=object)
+    source[:], source[has_hint], source[by_config] = "", "joints", "config"
+    rows = np.flatnonzero(has_hint)
+    if rows.size:
+        q[rows] = in_blocks(lambda rows, hint: (_nearest(robot, *branches(rows), hint),), rows, hint[rows])[0]
+    if by_config.size:
+        q[by_config] = in_blocks(lambda rows, *window: (_in_windows(robot, *branches(rows), *window),),
+                                 by_config, branch[declared], lower[declared], upper[declared])[0]
     _fail_unreachable(program, robot, index, q, source)
-    _chain(program, robot, index, q, q_all, valid, source)
+    _chain(program, robot, index, q, branches, source)
     return Plan(index, q, tuple(source), T_base_frame, T_flange_tool, T_base_tcp)
 
 
@@ -161,13 +169,12 @@ def check_posture(q_planned, q, labels, bound=MAX_JOINT_CHANGE):
         )
 
 
-def _all_branches(robot, T_base_tcp, T_flange_tool):
-    """Closed-form solutions (N, 8, 6) and validity (N, 8), grouped by tool."""
-    n = len(T_base_tcp)
-    q_all = np.full((n, 8, 6), np.nan)
-    valid = np.zeros((n, 8), dtype=bool)
-    for tool, rows in tool_groups(np.asarray(T_flange_tool, dtype=float)):
-        q_all[rows], valid[rows] = ik_all(robot.replace(T_flange_tool=tool), T_base_tcp[rows])
+def _all_branches(robot, T_base_tcp, T_flange_tool, rows):
+    """Closed-form solutions (R, 8, 6) and validity (R, 8) of targets ``rows`` (R,), grouped by tool."""
+    q_all = np.full((len(rows), 8, 6), np.nan)
+    valid = np.zeros((len(rows), 8), dtype=bool)
+    for tool, group in tool_groups(np.asarray(T_flange_tool[rows], dtype=float)):
+        q_all[group], valid[group] = ik_all(robot.replace(T_flange_tool=tool), T_base_tcp[rows[group]])
     return q_all, valid
 
 
@@ -257,36 +264,39 @@ def _runs(program, robot, index, q, source):
         yield run[np.sort(first)], anchor, from_home
 
 
-def _chain(program, robot, index, q, q_all, valid, source):
+def _chain(program, robot, index, q, branches, source):
     """Fill the undeclared rows, each nearest the joints of the position before it.
 
-    A run of undeclared targets is solved at once assuming the arm keeps the
-    branch of its first target and turns continuously (unwrapped joints);
-    the proposal is then checked row by row against the nearest solution to
-    its predecessor, and the run is restarted where another branch or turn
-    is nearer. Smooth paths take one pass.
+    A run of undeclared targets is solved a block of `BLOCK` rows at a time
+    (``branches(rows)``: their closed-form solutions), assuming the arm
+    keeps the branch of its first target and turns continuously (unwrapped
+    joints); the proposal is then checked row by row against the nearest
+    solution to its predecessor, and the run is restarted where another
+    branch or turn is nearer. Smooth paths take one pass per block.
     """
     for rows, anchor, from_home in _runs(program, robot, index, q, source):
-        start = 0
-        while start < len(rows):
-            first = _nearest(robot, q_all[rows[start : start + 1]], valid[rows[start : start + 1]], anchor[None])[0]
-            if not np.all(np.isfinite(first)):
-                raise IKError(
-                    f"{program.name}: {program.where(index[rows[start]])}: robot {robot.name} cannot reach "
-                    "the target inside its joint limits; the program was not changed"
-                )
-            rest = rows[start + 1 :]
-            branch = _branch_of(q_all[rows[start]], first)
-            proposal = np.unwrap(np.vstack([first, q_all[rest, branch]]), axis=0)
-            before = proposal[:-1]
-            best = _nearest(robot, q_all[rest], valid[rest], before)
-            agree = np.all(np.abs(best - proposal[1:]) < 1e-9, axis=1)
-            stop = len(rest) if agree.all() else int(np.argmin(agree))
-            q[rows[start : start + 1 + stop]] = proposal[: 1 + stop]
-            source[rows[start]] = "home" if from_home and start == 0 else "previous"
-            source[rows[start + 1 : start + 1 + stop]] = "previous"
-            anchor, from_home = proposal[stop], False
-            start += 1 + stop
+        for begin in range(0, len(rows), BLOCK):
+            block = rows[begin : begin + BLOCK]
+            q_all, valid = branches(block)
+            start = 0
+            while start < len(block):
+                first = _nearest(robot, q_all[start : start + 1], valid[start : start + 1], anchor[None])[0]
+                if not np.all(np.isfinite(first)):
+                    raise IKError(
+                        f"{program.name}: {program.where(index[block[start]])}: robot {robot.name} cannot reach "
+                        "the target inside its joint limits; the program was not changed"
+                    )
+                branch = _branch_of(q_all[start], first)
+                proposal = np.unwrap(np.vstack([first, q_all[start + 1 :, branch]]), axis=0)
+                best = _nearest(robot, q_all[start + 1 :], valid[start + 1 :], proposal[:-1])
+                agree = np.all(np.abs(best - proposal[1:]) < 1e-9, axis=1)
+                stop = len(agree) if agree.all() else int(np.argmin(agree))
+                q[block[start : start + 1 + stop]] = proposal[: 1 + stop]
+                source[block[start : start + 1 + stop]] = "previous"
+                if from_home:
+                    source[block[start]] = "home"
+                anchor, from_home = proposal[stop], False
+                start += 1 + stop
 
 
 def _branch_of(q_branches, q):

@@ -115,7 +115,7 @@ def read(path):
     n = len(rows)
     motions = MotionTable(
         kind=kind, target=np.arange(n), via=np.full(n, -1), speed=speed,
-        speed_unit=np.full(n, "mm/s", dtype=object), zone=np.where(zone == 0.0, np.nan, zone),
+        speed_unit=_repeated("mm/s", n), zone=np.where(zone == 0.0, np.nan, zone),
         tool=np.full(n, None, dtype=object), frame=np.full(n, None, dtype=object), line=rows,
         axis_position=np.zeros(n, dtype=bool),
     )
@@ -192,8 +192,15 @@ def _parse_block(name, header, lines, numbers):
     joints = np.full((b, 6), np.nan)
     if joints_given.any():
         joints[joints_given] = np.radians(np.stack([values[c][joints_given] for c in JOINTS], axis=1))
-    kind = np.where(kind_text == "PTP", JOINT, LINEAR).astype(object)
+    kind = np.array([LINEAR, JOINT], dtype=object)[(kind_text == "PTP").astype(np.intp)]  # shared str objects
     return pose, joints, kind, values.get("speed", np.full(b, np.nan)), values.get("zone", np.full(b, np.nan))
+
+
+def _repeated(value, n):
+    """An object array (n,) holding ``value`` n times: one object, not n copies (as ``np.full`` makes of a str)."""
+    out = np.empty(n, dtype=object)
+    out[:] = value
+    return out
 
 
 def _check_rows(name, header, lines, numbers):
