@@ -243,18 +243,15 @@ def _patched(program, text):
     for k in range(0, len(edited), BLOCK):
         rows = edited[k : k + BLOCK]
         numbers = targets.line[rows]
-        columns = [np.array(cells, dtype=str) for cells in zip(*(_cells(lines[n - 1]) for n in numbers))]
-        old = {c: np.strings.strip(columns[j]) for j, c in enumerate(header) if c in LIMITS}
+        columns = list(zip(*(_cells(lines[n - 1]) for n in numbers.tolist())))
+        old = {c: np.strings.strip(np.array(columns[j], dtype=str)) for j, c in enumerate(header) if c in LIMITS}
         updates = _pose_texts(targets.pose[rows], ~targets.is_joint[rows], old) if "x" in header else {}
         if "j1" in header:
             updates |= _joint_texts(targets.joints[rows], old)
         for column, (changed, texts) in updates.items():
             j = header.index(column)
-            columns[j] = np.where(changed, _in_cells(columns[j], old[column], texts), columns[j])
-        joined = columns[0]
-        for column in columns[1:]:
-            joined = np.strings.add(np.strings.add(joined, ","), column)
-        for n, line in zip(numbers.tolist(), joined.tolist()):
+            columns[j] = _in_cells(columns[j], old[column], changed, texts)
+        for n, line in zip(numbers.tolist(), map(",".join, zip(*columns))):
             lines[n - 1] = line
     if "j1" not in header and np.isfinite(targets.joints[edited]).all(axis=1).any():
         lines[number - 1] += "," + ",".join(JOINTS)
@@ -263,15 +260,10 @@ def _patched(program, text):
     return _join(lines, endings)
 
 
-def _in_cells(cells, values, texts):
-    """Cells (B,) with their values replaced by ``texts``, keeping the spaces or quotes around them."""
-    plain = cells == values
-    if plain.all():
-        return texts
-    out = texts.astype(object)
-    for k in np.flatnonzero(~plain):
-        out[k] = cells[k].replace(values[k], texts[k], 1)
-    return out.astype(str)
+def _in_cells(cells, values, changed, texts):
+    """Cells (B,) (list of str) with the changed values replaced by ``texts``, keeping the spaces or quotes around them."""
+    return [cell.replace(value, text, 1) if change and cell != value else (text if change else cell)
+            for cell, value, change, text in zip(cells, values.tolist(), changed.tolist(), texts.tolist())]
 
 
 def _pose_texts(pose, cartesian, old):
@@ -337,16 +329,27 @@ def _numbers_text(values, places, min_places):
     for p in np.unique(places):
         pick = places == p
         chosen = values[pick]
-        chosen = np.where(np.round(chosen, p) == 0.0, 0.0, chosen)
-        texts[pick] = [f"{v:.{p}f}" for v in chosen.tolist()]
+        texts[pick] = _formatted(np.where(np.round(chosen, p) == 0.0, 0.0, chosen), f"%.{p}f")
     return texts.tolist()
+
+
+def _formatted(values, spec):
+    """Texts (list of str) of values (N, ...) formatted row by row with ``spec`` (a %-format of one row).
+
+    One %-operation over all rows: about twice as fast as formatting each number.
+    """
+    values = np.asarray(values, dtype=float).reshape(len(values), -1)
+    if not len(values):
+        return []
+    return ("\n".join([spec] * len(values)) % tuple(values.ravel().tolist())).split("\n")
 
 
 def _degrees_cells(joints):
     """The appended j1..j6 cells of each target (N,): joints (N, 6) rad as deg, 4 decimals; empty where none."""
     known = np.isfinite(joints).all(axis=1)
-    degrees = np.where(np.round(np.degrees(joints), 4) == 0.0, 0.0, np.degrees(joints))
-    return [",".join(f"{v:.4f}" for v in row) if ok else ",,,,," for row, ok in zip(degrees.tolist(), known)]
+    degrees = np.degrees(joints)
+    degrees = np.where((np.round(degrees, 4) == 0.0) | ~known[:, None], 0.0, degrees)
+    return np.where(known, _formatted(degrees, ",".join(["%.4f"] * 6)), ",,,,,").tolist()
 
 
 def with_times(program, times):
