@@ -326,8 +326,8 @@ def ik_numeric(robot, T_base_tcp, q0, *, tol_pos=POS_TOL, tol_rot=ROT_TOL, max_i
         for iteration in range(max_iter + 1):
             pose, jac = fk_and_jacobian(robot, q[active])
             error = pose_error(pose, T[active])
-            res_pos[active] = np.linalg.norm(error[:, :3], axis=1)
-            res_rot[active] = np.linalg.norm(error[:, 3:], axis=1)
+            res_pos[active] = _norm(error[:, :3])
+            res_rot[active] = _norm(error[:, 3:])
             done = (res_pos[active] < tol_pos) & (res_rot[active] < tol_rot)
             active, error, jac = active[~done], error[~done], jac[~done]
             if not active.size or iteration == max_iter:
@@ -392,7 +392,7 @@ def configuration_of(robot, q):
 
 def branch_index(robot, q):
     """`Configuration.index` (N,) of joint angles q (N, 6), rad, computed from the link frames."""
-    return frames_branch_index(robot, link_frames(robot, q))
+    return in_blocks(lambda q: (frames_branch_index(robot, link_frames(robot, q)),), np.atleast_2d(q))[0]
 
 
 def frames_branch_index(robot, frames):
@@ -549,11 +549,14 @@ def pose_error(T_current, T_target):
     """
     err = np.empty((len(T_current), 6))
     err[:, :3] = T_target[:, :3, 3] - T_current[:, :3, 3]
-    rel = T_target[:, :3, :3] @ np.swapaxes(T_current[:, :3, :3], 1, 2)
-    axis = 0.5 * np.stack([rel[:, 2, 1] - rel[:, 1, 2], rel[:, 0, 2] - rel[:, 2, 0], rel[:, 1, 0] - rel[:, 0, 1]], 1)
-    sin = np.linalg.norm(axis, axis=1)
-    angle = np.arctan2(sin, 0.5 * (np.trace(rel, axis1=1, axis2=2) - 1.0))
-    err[:, 3:] = axis * np.where(sin > 0.0, angle / np.where(sin > 0.0, sin, 1.0), 1.0)[:, None]
+    current, target = T_current[:, :3, :3], T_target[:, :3, :3]
+    axis = err[:, 3:]  # half the skew part of R_t R_c^T: the sum over columns k of current_k x target_k, halved
+    for i, (u, v) in enumerate(((1, 2), (2, 0), (0, 1))):
+        axis[:, i] = _dot(current[:, u], target[:, v]) - _dot(current[:, v], target[:, u])
+    axis *= 0.5
+    sin = _norm(axis)
+    angle = np.arctan2(sin, 0.5 * (np.einsum("nij,nij->n", current, target) - 1.0))
+    axis *= np.where(sin > 0.0, angle / np.where(sin > 0.0, sin, 1.0), 1.0)[:, None]
     return err
 
 
@@ -566,8 +569,8 @@ def _verified(robot, T, q, reason):
     res_rot = np.full(len(T), np.nan)
     have = np.flatnonzero(np.all(np.isfinite(q), axis=1))
     error = pose_error(fk(robot, q[have]), T[have])
-    res_pos[have] = np.linalg.norm(error[:, :3], axis=1)
-    res_rot[have] = np.linalg.norm(error[:, 3:], axis=1)
+    res_pos[have] = _norm(error[:, :3])
+    res_rot[have] = _norm(error[:, 3:])
     accurate = (res_pos < POS_TOL) & (res_rot < ROT_TOL)
     reason = np.where(np.isfinite(res_pos) & ~accurate, NOT_CONVERGED, reason).astype(str)
     return np.where(accurate[:, None], q, np.nan), accurate, res_pos, res_rot, reason
@@ -610,4 +613,10 @@ def _rot_x(angle):
 
 
 def _dot(u, v):
+    """Row-wise dot products (N,) of (N, 3) arrays (einsum: faster than sums of products on 3 columns)."""
     return np.einsum("ni,ni->n", u, v)
+
+
+def _norm(u):
+    """Row-wise Euclidean norms (N,) of an (N, 3) array."""
+    return np.sqrt(_dot(u, u))
