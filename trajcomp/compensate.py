@@ -14,16 +14,19 @@ far below the measurement noise.
 """
 
 import dataclasses
+import functools
 import logging
 
 import numpy as np
 
+from trajcomp.errors import TrajcompError
 from trajcomp.ik import ik_near, ik_numeric, pose_error
 from trajcomp.kinematics import fk
 from trajcomp.model import evaluate_field
 from trajcomp.plan import batch_seed
 
 ITERATIONS = 3
+CHUNK = 16384  # targets compensated together: the working arrays stay small and memory stays flat
 log = logging.getLogger(__name__)
 
 
@@ -59,15 +62,19 @@ class CompensationResult:
 
     @classmethod
     def concatenate(cls, parts, order):
-        """One result of several: rows ``order[k]`` (N,) come from the k-th part."""
-        n = sum(len(o) for o in order)
-        fields = {}
-        for field in dataclasses.fields(cls):
-            first = getattr(parts[0], field.name)
-            out = np.empty((n,) + first.shape[1:], dtype=first.dtype)
-            for part, rows in zip(parts, order):
-                out[rows] = getattr(part, field.name)
-            fields[field.name] = out
+        """One result of several: rows ``order[k]`` (index array) come from the k-th of ``parts``.
+
+        ``parts`` may be any iterable (a generator): it is consumed once, so
+        parts computed one after the other are never all held at once.
+        """
+        n = sum(len(rows) for rows in order)
+        fields = None
+        for part, rows in zip(parts, order):
+            if fields is None:
+                fields = {f.name: np.empty((n, *getattr(part, f.name).shape[1:]), getattr(part, f.name).dtype)
+                          for f in dataclasses.fields(cls)}
+            for name, values in fields.items():
+                values[rows] = getattr(part, name)
         return cls(**fields)
 
 
@@ -107,14 +114,30 @@ def compensate(model, targets, *, mode=None, tool=None, seed=None, outside="mode
     model.check_mode(mode)
     targets = np.asarray(targets, dtype=float)
     nominal = model.nominal if tool is None else model.nominal.replace(T_flange_tool=tool)
-    arm = model.arm(mode, tool, outside)
-    field = model.error_field(mode)
     seed = batch_seed(nominal, targets) if seed is None else seed
+    seed = np.broadcast_to(np.asarray(seed, dtype=float), (len(targets), 6))
+    rows = functools.partial(_compensate_rows, model, mode, nominal, model.arm(mode, tool, outside),
+                             model.error_field(mode), outside, label)
+    if len(targets) <= CHUNK:
+        return rows(targets, seed, names)
+    starts = range(0, len(targets), CHUNK)
+    try:
+        return CompensationResult.concatenate((rows(targets[i:i + CHUNK], seed[i:i + CHUNK]) for i in starts),
+                                              [np.arange(i, min(i + CHUNK, len(targets))) for i in starts])
+    except TrajcompError:
+        # A chunk names its targets from 0 and counts only its own: redo the whole
+        # set in one piece (each target is compensated on its own, so it fails the
+        # same way) for the message naming every failing target of the set.
+        return rows(targets, seed, names)
+
+
+def _compensate_rows(model, mode, nominal, arm, field, outside, label, targets, seed, names=None):
+    """`compensate` of targets (N, 4, 4) from joint seeds (N, 6) with the mode's arm and error field."""
     goal = targets[:, :3, 3]
     commanded = goal.copy()
     flagged = np.zeros(len(targets), dtype=bool)
     passes = ITERATIONS if mode == "linear" or field is not None else 1
-    q = None
+    q, command = seed, None
     for _ in range(passes):
         aimed = targets.copy()
         if mode == "linear":
@@ -122,7 +145,7 @@ def compensate(model, targets, *, mode=None, tool=None, seed=None, outside="mode
         elif field is not None:
             offset, flagged = evaluate_field(field, commanded, outside=outside)
             aimed[:, :3, 3] = goal - offset
-        solved = _solve(arm.robot, nominal, aimed, seed if q is None else q)
+        solved = _solve(arm.robot, nominal, aimed, q, command)
         q = arm.commanded_joints(solved.raise_on_failure(label, names).q)
         command = fk(nominal, q)
         commanded = command[:, :3, 3]
@@ -139,16 +162,17 @@ def compensate(model, targets, *, mode=None, tool=None, seed=None, outside="mode
 SEED_NEAR = (10.0, 0.05)  # mm, rad: a seed this close to its target starts Gauss-Newton directly
 
 
-def _solve(real, nominal, targets, seed):
+def _solve(real, nominal, targets, seed, seed_pose=None):
     """IK of the real arm for targets (N, 4, 4), seeded by joints (N, 6) or (6,).
 
     Rows whose seed puts the nominal TCP within `SEED_NEAR` of the target
     (planned joints, the previous pass) are refined by Gauss-Newton from
     it, which stays on the seed's branch and turns; the others get the
     nominal closed form's branch nearest the seed first (`ik_near`).
+    ``seed_pose`` (N, 4, 4) is the seed's nominal TCP when already known.
     """
     seed = np.broadcast_to(np.asarray(seed, dtype=float), (len(targets), 6))
-    error = pose_error(fk(nominal, seed), targets)
+    error = pose_error(fk(nominal, seed) if seed_pose is None else seed_pose, targets)
     near = (np.linalg.norm(error[:, :3], axis=1) < SEED_NEAR[0]) & (np.linalg.norm(error[:, 3:], axis=1) < SEED_NEAR[1])
     solved = ik_numeric(real, targets, np.where(near[:, None], seed, np.nan))
     far = np.flatnonzero(~solved.success)

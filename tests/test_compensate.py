@@ -1,0 +1,57 @@
+"""The compensation core in pieces: chunks give the result of one piece and name failures alike."""
+
+import numpy as np
+import pytest
+
+import trajcomp.compensate as compensation
+from trajcomp.compensate import compensate
+from trajcomp.errors import IKError, ModelError
+from trajcomp.plan import default_orientation
+from trajcomp.transforms import abc_to_matrix
+from virtual_cell import landing_error, virtual_cell
+
+
+@pytest.fixture(scope="module")
+def cell(tmp_path_factory):
+    return virtual_cell(tmp_path_factory)
+
+
+def targets_in_cube(robot, n, seed):
+    """n TCP poses (n, 4, 4) inside the calibrated cube, tool orientation of home."""
+    targets = np.tile(np.eye(4), (n, 1, 1))
+    targets[:, :3, :3] = abc_to_matrix(default_orientation(robot))
+    targets[:, :3, 3] = np.array([320.0, -80.0, 320.0]) + np.random.default_rng(seed).uniform(0, 460, (n, 3))
+    return targets
+
+
+def test_chunks_give_the_result_of_one_piece(cell, monkeypatch):
+    targets = targets_in_cube(cell.robot, 40, 1)
+    targets[9, :3, 3] = [550.0, 150.0, 250.0]  # below the cube: flagged outside, in the second chunk
+    whole = compensate(cell.model, targets)
+    monkeypatch.setattr(compensation, "CHUNK", 7)
+    pieces = compensate(cell.model, targets)
+    for name in ("T_command", "q", "correction", "residual", "outside"):
+        np.testing.assert_array_equal(getattr(pieces, name), getattr(whole, name))
+    assert pieces.outside.tolist() == [i == 9 for i in range(40)]
+    assert landing_error(cell, np.degrees(pieces.q), targets)[~pieces.outside].max() < 0.05
+
+
+def test_failures_in_chunks_are_named_as_in_one_piece(cell, monkeypatch):
+    """The message names every failing target of the whole set with its count, not a chunk's."""
+    targets = targets_in_cube(cell.robot, 30, 2)
+    targets[[12, 23], :3, 3] = [[3000.0, 0.0, 500.0], [0.0, -2500.0, 900.0]]  # beyond the reach, chunks 2 and 4
+    names = [f"prog.csv line {k + 2}" for k in range(30)]
+    with pytest.raises(IKError) as whole:
+        compensate(cell.model, targets, label="prog.csv", names=names)
+    monkeypatch.setattr(compensation, "CHUNK", 6)
+    with pytest.raises(IKError) as pieces:
+        compensate(cell.model, targets, label="prog.csv", names=names)
+    assert str(pieces.value) == str(whole.value)
+    assert "2 of 30 targets" in str(whole.value)
+    assert "prog.csv line 14: unreachable" in str(whole.value) and "prog.csv line 25" in str(whole.value)
+
+    outside = targets_in_cube(cell.robot, 30, 3)
+    outside[[8, 20], :3, 3] = [[550.0, 150.0, 250.0], [250.0, 100.0, 500.0]]
+    with pytest.raises(ModelError, match=r"target 8 at .* \(2 targets outside\)"):
+        compensate(cell.model, outside, outside="error")
+
