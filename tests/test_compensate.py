@@ -1,10 +1,10 @@
-"""The compensation core in pieces: chunks give the result of one piece and name failures alike."""
+"""The compensation core in pieces: chunks give the result of one piece and name failures alike; tool groups."""
 
 import numpy as np
 import pytest
 
 import trajcomp.compensate as compensation
-from trajcomp.compensate import compensate
+from trajcomp.compensate import compensate, program_corrector
 from trajcomp.errors import IKError, ModelError
 from trajcomp.plan import default_orientation
 from trajcomp.transforms import abc_to_matrix
@@ -55,3 +55,27 @@ def test_failures_in_chunks_are_named_as_in_one_piece(cell, monkeypatch):
     with pytest.raises(ModelError, match=r"target 8 at .* \(2 targets outside\)"):
         compensate(cell.model, outside, outside="error")
 
+
+def test_program_corrector_compensates_each_tool_group_with_its_tool(cell):
+    targets = targets_in_cube(cell.robot, 12, 4)
+    gripper = np.eye(4)
+    gripper[:3, 3] = [0.0, 30.0, 150.0]
+    measured = cell.model.nominal.T_flange_tool
+    on_gripper = np.arange(12) % 3 == 1
+    tools = np.where(on_gripper[:, None, None], gripper, measured)
+    seeds = compensate(cell.model, targets).q
+    names = [f"line {k}" for k in range(12)]
+    result = program_corrector(cell.model)(targets, tools, seeds, names)
+    alone = {False: compensate(cell.model, targets[~on_gripper], seed=seeds[~on_gripper]),
+             True: compensate(cell.model, targets[on_gripper], tool=gripper, seed=seeds[on_gripper])}
+    for name in ("T_command", "q", "correction", "residual", "outside"):
+        for group, reference in alone.items():
+            np.testing.assert_array_equal(getattr(result, name)[on_gripper == group], getattr(reference, name))
+    assert not np.allclose(result.q[on_gripper], seeds[on_gripper], atol=1e-3)  # the gripper's TCP moved the joints
+
+    one_tool = program_corrector(cell.model, label="prog.csv")
+    np.testing.assert_array_equal(one_tool(targets, np.broadcast_to(measured, (12, 4, 4)), seeds, names).q,
+                                  compensate(cell.model, targets, seed=seeds).q)
+    targets[5, :3, 3] = [3000.0, 0.0, 500.0]
+    with pytest.raises(IKError, match=r"prog.csv: no IK solution for 1 of 12 targets \(line 5: unreachable\)"):
+        one_tool(targets, np.broadcast_to(measured, (12, 4, 4)), seeds, names)

@@ -20,6 +20,7 @@ import logging
 import numpy as np
 
 from trajcomp.errors import TrajcompError
+from trajcomp.frames import tool_groups
 from trajcomp.ik import ik_near, ik_numeric, pose_error
 from trajcomp.kinematics import fk
 from trajcomp.model import evaluate_field
@@ -192,19 +193,20 @@ def program_corrector(model, *, mode=None, outside="model", label="program"):
     """
 
     def correct(targets, tools, seeds, names):
-        parts, order = [], []
-        unique, group = np.unique(np.round(tools.reshape(len(tools), -1), 9), axis=0, return_inverse=True)
-        for g in range(len(unique)):
-            pick = np.flatnonzero(group.ravel() == g)
-            tool = tools[pick[0]]
-            measured_tcp = same_tool(tool, model.nominal.T_flange_tool)
-            if not measured_tcp and not model.places_other_tools:
-                log.warning("%s: %d targets use a tool other than the calibrated TCP: %s",
-                            label, len(pick), model.other_tools_reason)
-            parts.append(compensate(model, targets[pick], mode=mode, tool=None if measured_tcp else tool,
-                                    seed=seeds[pick], outside=outside, label=label,
-                                    names=[names[k] for k in pick]))
-            order.append(pick)
-        return CompensationResult.concatenate(parts, order)
+        groups = tool_groups(tools)
+        if len(groups) == 1:  # the usual program: one tool, no per-row copies or names
+            return on_tool(groups[0][0], targets, seeds, names)
+        return CompensationResult.concatenate(
+            (on_tool(tool, targets[rows], seeds[rows], [names[k] for k in rows]) for tool, rows in groups),
+            [rows for _, rows in groups],
+        )
+
+    def on_tool(tool, targets, seeds, names):
+        measured_tcp = same_tool(tool, model.nominal.T_flange_tool)
+        if not measured_tcp and not model.places_other_tools:
+            log.warning("%s: %d targets use a tool other than the calibrated TCP: %s",
+                        label, len(targets), model.other_tools_reason)
+        return compensate(model, targets, mode=mode, tool=None if measured_tcp else tool, seed=seeds,
+                          outside=outside, label=label, names=names)
 
     return correct
