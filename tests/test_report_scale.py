@@ -215,3 +215,18 @@ def test_the_worst_places_are_separate_local_extremes_worst_first():
     expected = [525, 1_725, *sorted(set(crests) - {525, 1_725}, key=lambda c: (-wave[c], c))[:3]]
     assert worst["correction_mm"].tolist() == expected  # one target per crest, not its neighbours
     assert worst["limit_distance_deg"].tolist()[:1] == [7]  # the first of the plateau, as numpy's argmin
+
+
+def test_a_long_path_keeps_a_marker_near_every_target_and_every_isolated_one():
+    from scipy.spatial import cKDTree
+
+    k = np.arange(200_000)
+    points = np.c_[500.0 + 80.0 * np.cos(k / 900.0), 150.0 + 80.0 * np.sin(k / 900.0)]  # a circle run ~35 times
+    points[123_456] = [900.0, -300.0]  # one target far off the path
+    kept = plots.one_per_cell(points, cells=400)
+    assert 123_456 in kept and np.all(np.diff(kept) > 0) and len(kept) < 5_000
+    cell = (points.max(axis=0) - points.min(axis=0)) / 400
+    distance, _ = cKDTree(points[kept]).query(points)
+    assert distance.max() <= np.hypot(*cell)  # every target within one raster cell of a drawn marker
+    short = points[:plots.POINTS]
+    assert plots.one_per_cell(short).tolist() == list(range(plots.POINTS))

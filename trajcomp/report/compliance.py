@@ -223,7 +223,7 @@ def _figures(report, robot, measures, doc, field):
         figures += [
             Figure("targets", "Targets and the measured grid",
                    "Targets in motion order (base frame); crosses lie outside the grid, where only the model applies."
-                   + plots.path_note(n, int(np.count_nonzero(report.outside_grid))),
+                   + plots.path_note(n),
                    lambda: plots.targets_and_grid(report.T_target[:, :3, 3], np.asarray(report.outside_grid, bool),
                                                   box)),
             Figure("targets", "Corrections and predicted residuals",

@@ -9,6 +9,7 @@ import numpy as np
 AXES = ("x", "y", "z")
 WIDTH = 10.0  # in, figure width at the page's text width
 POINTS = 2000  # points per drawn series: longer ones are decimated (min-max envelope, every k-th target)
+CELLS = 400  # raster cells per axis of a view of a long path: one marker per occupied cell
 _INSIDE, _OUTSIDE, _LIMIT = "#1f5fa8", "#c0392b", "#7f8c8d"
 
 
@@ -158,7 +159,7 @@ def _series(ax, values, style, color, **kwargs):
     if len(x) == len(values):
         ax.plot(x, values, style, color=color, **kwargs)
     else:
-        ax.fill_between(x, lower, upper, color=color, alpha=0.45, lw=0.6, edgecolor=color, step="mid",
+        ax.fill_between(x, lower, upper, color=color, alpha=0.7, lw=0.6, edgecolor=color, step="mid",
                         label=kwargs.get("label"))
 
 
@@ -167,34 +168,56 @@ def _stride(n, points=POINTS):
     return max(1, -(-n // points))
 
 
-def path_note(n, outside, points=POINTS):
-    """The caption sentence of the targets figure of ``n`` targets, ``outside`` of them outside the grid."""
-    step, cross = _stride(n, points), _stride(outside, points)
-    if step == 1 and cross == 1:
+def one_per_cell(points, cells=CELLS):
+    """Which of the points (K, 2) to mark so that every one shows: the first in each occupied raster cell.
+
+    Up to `POINTS` points, all of them; beyond, the bounding box is cut into
+    ``cells`` x ``cells`` cells (finer than the drawn pixels) and the first
+    point of each occupied cell is kept, so every point lies within one cell
+    of a kept one and an isolated target is never dropped.
+
+    Returns
+    -------
+    ndarray of int
+        Ascending indices into ``points``.
+    """
+    points = np.asarray(points, dtype=float)
+    if len(points) <= POINTS:
+        return np.arange(len(points))
+    lower = points.min(axis=0)
+    span = np.maximum(points.max(axis=0) - lower, 1e-9)
+    cell = np.minimum((points - lower) / span * cells, cells - 1).astype(np.int64)
+    _, first = np.unique(cell[:, 0] * cells + cell[:, 1], return_index=True)
+    return np.sort(first)
+
+
+def path_note(n, points=POINTS):
+    """The caption sentence of the targets figure of ``n`` targets ("" when every target is drawn)."""
+    if n <= points:
         return ""
-    return (f" {n} targets: the path is drawn through one target in {step}"
-            + (f", and one in {cross} of the {outside} outside the grid is crossed." if cross > 1 else
-               "; every target outside the grid is crossed."))
+    return (f" {n} targets: the path line is drawn through one target in {_stride(n, points)}; the markers, one "
+            f"per occupied cell of a {CELLS} x {CELLS} raster of each view, show every target inside and every "
+            "one outside the grid.")
 
 
 def targets_and_grid(target, outside, grid_box=None):
     """The targets in motion order over the top and side views, outside-grid ones marked, with the grid box.
 
-    Long paths are drawn through every k-th target (`path_note`), at most
-    `POINTS` of them and of the outside-grid crosses.
+    Long paths (`path_note`): the line through every k-th target, at most
+    `POINTS`; the markers thinned by `one_per_cell`, so none is lost.
     """
     plt = pyplot()
     fig, axes = plt.subplots(1, 2, figsize=(WIDTH, 4.0), constrained_layout=True)
     step = _stride(len(target))
     path = np.r_[np.arange(0, len(target), step), len(target) - 1] if len(target) else np.zeros(0, int)
-    shown, crossed = target[path], target[outside][::_stride(int(outside.sum()))]
-    inside = ~outside[path]
     for ax, (i, j) in zip(axes, ((0, 1), (0, 2))):
-        ax.plot(shown[:, i], shown[:, j], color=_LIMIT, lw=0.8, zorder=1)
-        ax.scatter(shown[inside, i], shown[inside, j], s=18 if step == 1 else 4, color=_INSIDE,
-                   label="inside the grid", zorder=2)
+        ax.plot(target[path, i], target[path, j], color=_LIMIT, lw=0.8, zorder=1)
+        inside, crossed = target[~outside][:, [i, j]], target[outside][:, [i, j]]
+        inside, crossed = inside[one_per_cell(inside)], crossed[one_per_cell(crossed)]
+        ax.scatter(inside[:, 0], inside[:, 1], s=18 if step == 1 else 4, color=_INSIDE, label="inside the grid",
+                   zorder=2)
         if len(crossed):
-            ax.scatter(crossed[:, i], crossed[:, j], s=40, marker="x", color=_OUTSIDE,
+            ax.scatter(crossed[:, 0], crossed[:, 1], s=40 if step == 1 else 16, marker="x", color=_OUTSIDE,
                        label="outside the grid", zorder=3)
         if grid_box is not None:
             _box(ax, grid_box, i, j)
