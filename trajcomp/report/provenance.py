@@ -10,6 +10,8 @@ import yaml
 from trajcomp import __version__
 from trajcomp.errors import ReadError
 
+_LOADER = getattr(yaml, "CSafeLoader", yaml.SafeLoader)  # libyaml's safe loader where PyYAML has it: 8x faster
+
 
 def sha256(path):
     """Hex SHA-256 of a file's bytes."""
@@ -42,7 +44,7 @@ def model_entry(path, model, mode):
         The mode the run used.
     """
     try:
-        header = yaml.safe_load(Path(path).read_text(encoding="utf-8"))
+        header = yaml.load(Path(path).read_text(encoding="utf-8"), Loader=_LOADER)
     except (OSError, UnicodeError, yaml.YAMLError) as exc:
         raise ReadError(f"{path}: cannot read the model file again for the report: {exc}") from exc
     report = model.report
