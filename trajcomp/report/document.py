@@ -12,6 +12,7 @@ import dataclasses
 import io
 import json
 import math
+import zipfile
 from importlib import resources
 from pathlib import Path
 
@@ -49,9 +50,9 @@ class Report:
     ----------
     doc : dict
     figures : tuple of Figure
-    data : dict of str to ndarray, optional
-        The sidecar arrays the document's ``full_data`` describes (None: the
-        document holds everything).
+    data : dict of str to callable, optional
+        The sidecar arrays the document's ``full_data`` describes, each built
+        when called (None: the document holds everything).
     """
 
     doc: dict
@@ -95,9 +96,7 @@ class Report:
 
         report, sidecar = self, {}
         if self.data is not None:
-            buffer = io.BytesIO()
-            np.savez(buffer, **self.data)
-            sidecar[named(".targets.npz")] = buffer.getbuffer()
+            sidecar[named(".targets.npz")] = npz_bytes(self.data)
             report = dataclasses.replace(self, doc={**self.doc, "full_data": {**self.doc["full_data"],
                                                                               "path": named(".targets.npz").name}})
         files = {named(".json"): report.json_text().encode("utf-8")}
@@ -126,3 +125,17 @@ def plain(value):
 def schema():
     """The JSON Schema (dict) of the report documents."""
     return json.loads(resources.files("trajcomp.report").joinpath("schema.json").read_text(encoding="utf-8"))
+
+
+def npz_bytes(arrays):
+    """An uncompressed ``.npz`` (as `numpy.savez` writes it) of ``{name: callable returning an array}``.
+
+    The arrays are built and written one at a time, so only the archive and
+    one array are in memory at once.
+    """
+    buffer = io.BytesIO()
+    with zipfile.ZipFile(buffer, "w", zipfile.ZIP_STORED, allowZip64=True) as archive:
+        for name, build in arrays.items():
+            with archive.open(f"{name}.npy", "w", force_zip64=True) as member:
+                np.lib.format.write_array(member, np.asanyarray(build()), allow_pickle=False)
+    return buffer.getbuffer()

@@ -251,21 +251,28 @@ TIMES = "(M,) float64: time stamp of each waypoint of the re-timed program, s"
 
 
 def full_data(report, measures, flags, t=None):
-    """The sidecar arrays (`ARRAYS`, and ``t_s`` (M,) of a re-timing) of all N targets."""
+    """The sidecar arrays (`ARRAYS`, and ``t_s`` (M,) of a re-timing) of all N targets.
+
+    Returns
+    -------
+    dict of str to callable
+        Each builds its array when called, so that writing the sidecar holds
+        one float32 copy at a time (`trajcomp.report.document.npz_bytes`).
+    """
     n = len(measures)
     arrays = {
-        "line": np.asarray(report.lines, dtype=np.int32).reshape(n),
-        "position_mm": np.asarray(report.T_target[:, :3, 3], dtype=np.float32),
-        "joints_deg": np.degrees(np.reshape(report.q, (n, 6))).astype(np.float32),
-        **{name: measures.values[name].astype(np.float32) for name in MEASURES},
-        "outside_grid": np.asarray(report.outside_grid, dtype=bool).reshape(n),
-        "configuration_changed": measures.changed,
-        "branch": measures.branch,
-        "branch_planned": measures.branch_planned,
-        "branch_names": np.array(BRANCH_NAMES),
-        "flags": flags,
-        "flag_names": np.array(FLAGS),
+        "line": lambda: np.asarray(report.lines, dtype=np.int32).reshape(n),
+        "position_mm": lambda: np.asarray(report.T_target[:, :3, 3], dtype=np.float32),
+        "joints_deg": lambda: np.degrees(np.reshape(report.q, (n, 6))).astype(np.float32),
+        **{name: (lambda name=name: measures.values[name].astype(np.float32)) for name in MEASURES},
+        "outside_grid": lambda: np.asarray(report.outside_grid, dtype=bool).reshape(n),
+        "configuration_changed": lambda: measures.changed,
+        "branch": lambda: measures.branch,
+        "branch_planned": lambda: measures.branch_planned,
+        "branch_names": lambda: np.array(BRANCH_NAMES),
+        "flags": lambda: flags,
+        "flag_names": lambda: np.array(FLAGS),
     }
     if t is not None:
-        arrays["t_s"] = np.asarray(t, dtype=float)
+        arrays["t_s"] = lambda: np.asarray(t, dtype=float)
     return arrays
