@@ -14,7 +14,7 @@ import pytest
 from trajcomp.cli import main
 from trajcomp.measurements import Measurements
 from trajcomp.model import load_model
-from trajcomp.report import calibration_report, schema
+from trajcomp.report import Report, calibration_report, schema
 from trajcomp.report.calibration import iso9283, trends
 
 EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "programs" / "kuka" / "weld.src"
@@ -166,3 +166,11 @@ def test_calibrate_report_without_a_grid_says_so(tmp_path, kuka_model):
     doc = _valid(json.loads((tmp_path / "cal.json").read_text()))
     assert doc["validity"]["grids"] == {"grid": None, "residual": None}
     assert any(m.startswith("no grid") for m in doc["missing"])
+
+
+def test_the_report_path_gets_json_and_html_appended(tmp_path):
+    report = Report({"schema": "trajcomp-report/1", "verdict": {"result": "pass", "criteria": []}})
+    dotted = report.write(tmp_path / "ur10_path.report", json_only=True)  # README: PATH.json, dots kept
+    named = report.write(tmp_path / "cell.json", json_only=True)  # a given .json is not doubled
+    assert [f.name for f in dotted + named] == ["ur10_path.report.json", "cell.json"]
+    assert json.loads(dotted[0].read_text())["schema"] == "trajcomp-report/1"
