@@ -163,15 +163,8 @@ def _parse_block(name, header, lines, numbers):
     columns = dict(zip(header, zip(*cells)))
     values, empty = {}, {}
     for column in [c for c in header if c in LIMITS or c in ("speed", "zone")]:
-        text = np.strings.strip(np.array(columns[column], dtype=str))
-        text = np.where(np.strings.startswith(text, '"'), np.strings.strip(np.strings.strip(text, '"')), text)
-        empty[column] = text == ""
-        number = np.full(b, np.nan)
-        try:
-            number[~empty[column]] = text[~empty[column]].astype(float)
-        except ValueError:
-            _check_rows(name, header, lines, numbers)
-        if np.any(~empty[column] & ~(np.abs(number) <= LIMITS.get(column, np.inf))):
+        number, empty[column] = _numbers(columns[column])
+        if number is None or np.any(~empty[column] & ~(np.abs(number) <= LIMITS.get(column, np.inf))):
             _check_rows(name, header, lines, numbers)
         values[column] = number
     none = np.zeros(b, dtype=bool)
@@ -179,10 +172,8 @@ def _parse_block(name, header, lines, numbers):
     joints_given = ~np.all([empty[c] for c in JOINTS], axis=0) if "j1" in header else none
     partial = pose_given & (np.any([empty[c] for c in POSE], axis=0) if "x" in header else none)
     partial |= joints_given & (np.any([empty[c] for c in JOINTS], axis=0) if "j1" in header else none)
-    kind_text = np.full(b, "")
-    if "motion" in header:
-        kind_text = np.strings.upper(np.array([_value(c) for c in columns["motion"]], dtype=str))
-    if partial.any() or not np.all(pose_given | joints_given) or not set(np.unique(kind_text)) <= {"", *KINDS}:
+    kinds = {cell: _value(cell).upper() for cell in set(columns.get("motion", ()))}  # the few distinct cells
+    if partial.any() or not np.all(pose_given | joints_given) or not set(kinds.values()) <= {"", *KINDS}:
         _check_rows(name, header, lines, numbers)
     pose = np.full((b, 4, 4), np.nan)
     if pose_given.any():
@@ -192,8 +183,31 @@ def _parse_block(name, header, lines, numbers):
     joints = np.full((b, 6), np.nan)
     if joints_given.any():
         joints[joints_given] = np.radians(np.stack([values[c][joints_given] for c in JOINTS], axis=1))
-    kind = np.array([LINEAR, JOINT], dtype=object)[(kind_text == "PTP").astype(np.intp)]  # shared str objects
+    ptp = {cell for cell, kind in kinds.items() if kind == "PTP"}
+    is_ptp = np.fromiter((cell in ptp for cell in columns["motion"]), bool, b) if ptp else np.zeros(b, dtype=bool)
+    kind = np.array([LINEAR, JOINT], dtype=object)[is_ptp.astype(np.intp)]  # shared str objects
     return pose, joints, kind, values.get("speed", np.full(b, np.nan)), values.get("zone", np.full(b, np.nan))
+
+
+def _numbers(cells):
+    """Values (B,) of a column's cells (B,) (NaN where empty) and which are empty; values None if a cell is no number.
+
+    Plain numbers (the common case) are converted from the Python str at
+    once; cells with quotes or empty ones go through a str array.
+    """
+    try:
+        return np.array(cells, dtype=float), np.zeros(len(cells), dtype=bool)
+    except ValueError:
+        pass
+    text = np.strings.strip(np.array(cells, dtype=str))
+    text = np.where(np.strings.startswith(text, '"'), np.strings.strip(np.strings.strip(text, '"')), text)
+    empty = text == ""
+    number = np.full(len(cells), np.nan)
+    try:
+        number[~empty] = text[~empty].astype(float)
+    except ValueError:
+        return None, empty
+    return number, empty
 
 
 def _repeated(value, n):
