@@ -109,18 +109,22 @@ def read(path):
     if not len(rows):
         fail(source.name, len(lines), source.text[-80:], "no target rows after the header")
     statements = [Statement(n, lines[n - 1]) for n in np.flatnonzero(statement) + 1]
-    blocks = [_parse_block(source.name, header, [lines[n - 1] for n in rows[k : k + BLOCK]], rows[k : k + BLOCK])
-              for k in range(0, len(rows), BLOCK)]
-    pose, joints, kind, speed, zone = (np.concatenate(parts) for parts in zip(*blocks))
     n = len(rows)
+    pose, joints, kind, speed, zone = (np.empty((n, 4, 4)), np.empty((n, 6)), np.empty(n, dtype=object),
+                                       np.empty(n), np.empty(n))  # filled a block at a time: no second copy
+    for k in range(0, n, BLOCK):
+        block, part = rows[k : k + BLOCK], slice(k, k + BLOCK)
+        pose[part], joints[part], kind[part], speed[part], zone[part] = _parse_block(
+            source.name, header, [lines[number - 1] for number in block.tolist()], block)
     motions = MotionTable(
         kind=kind, target=np.arange(n), via=np.full(n, -1), speed=speed,
         speed_unit=_repeated("mm/s", n), zone=np.where(zone == 0.0, np.nan, zone),
         tool=np.full(n, None, dtype=object), frame=np.full(n, None, dtype=object), line=rows,
         axis_position=np.zeros(n, dtype=bool),
     )
-    starts = np.concatenate([[0], np.cumsum([len(line) + len(end) for line, end in zip(lines, endings)])])
-    lengths = np.array([len(line) for line in lines])
+    lengths = np.fromiter(map(len, lines), dtype=int, count=len(lines))
+    ending_lengths = np.fromiter(map(len, endings[: len(lines) - 1]), dtype=int, count=len(lines) - 1)
+    starts = np.concatenate([[0], np.cumsum(lengths[:-1] + ending_lengths)])
     del lines
 
     def text(number):
