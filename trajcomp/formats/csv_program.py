@@ -67,6 +67,9 @@ def _split(text):
 
 
 def _join(lines, endings):
+    """The text of `_split`'s lines and endings."""
+    if endings.count("\n") == len(endings):
+        return "\n".join(lines)
     return "".join(line + ending for line, ending in zip(lines, endings + [""]))
 
 
@@ -368,7 +371,8 @@ def _degrees_cells(joints):
     known = np.isfinite(joints).all(axis=1)
     degrees = np.degrees(joints)
     degrees = np.where((np.round(degrees, 4) == 0.0) | ~known[:, None], 0.0, degrees)
-    return np.where(known, _formatted(degrees, ",".join(["%.4f"] * 6)), ",,,,,").tolist()
+    cells = _formatted(degrees, ",".join(["%.4f"] * 6))
+    return cells if known.all() else np.where(known, cells, ",,,,,").tolist()
 
 
 def with_times(program, times):
