@@ -456,32 +456,34 @@ def _dh_branches(robot, family, T, theta_seed):
     lean = np.arcsin(np.clip(np.nan_to_num(ratio), -1.0, 1.0))
     theta1 = np.arctan2(p[:, 1], p[:, 0])[:, None] + np.where(side > 0, lean, np.pi - lean)
     theta1 = np.where(on_axis, theta_seed[:, None, 0], theta1)
-    rot01 = _rot_z(theta1) @ _rot_x(alpha[0])
-    forward = p[:, None, 0] * np.cos(theta1) + p[:, None, 1] * np.sin(theta1) - a[0]
+    turn1 = _cos_sin(theta1)
+    forward = p[:, None, 0] * turn1[0] + p[:, None, 1] * turn1[1] - a[0]
     height = np.broadcast_to(sa1 * (p[:, None, 2] - d[0]), forward.shape)
 
     theta = np.empty(theta1.shape + (6,))
     theta[..., 0] = theta1
     if family == "spherical":
         theta2, theta3, planar_ok = _planar(forward, height, a[1], L3, beta, elbow_sign)
-        rot36 = np.swapaxes(rot01 @ _rot_z(theta2 + theta3) @ _rot_x(alpha[2]), -1, -2) @ R
-        r13, r23, r33 = rot36[..., 0, 2], rot36[..., 1, 2], rot36[..., 2, 2]
+        turn23 = _cos_sin(theta2 + theta3)
+        x36, z36 = (_into_link(turn23, alpha[2], _into_link(turn1, alpha[0], _column(R, j))) for j in (0, 2))
+        r13, r23, r33 = z36  # column 2 of R_36 = R_03^T R
         sin5 = np.hypot(r13, r23)
         theta5 = np.arctan2(wrist_sign * sin5, -s4 * s5 * r33)
         toward = wrist_sign * s5
         theta4 = np.where(sin5 < _SINGULAR_SIN, theta_seed[:, None, 3], np.arctan2(toward * r23, toward * r13))
-        rest = np.swapaxes(_rot_z(theta4) @ _rot_x(alpha[3]) @ _rot_z(theta5) @ _rot_x(alpha[4]), -1, -2) @ rot36
-        theta6 = np.arctan2(rest[..., 1, 0], rest[..., 0, 0])
+        x6 = _into_link(_cos_sin(theta5), alpha[4], _into_link(_cos_sin(theta4), alpha[3], x36))
+        theta6 = np.arctan2(x6[1], x6[0])
     else:
-        rot16 = np.swapaxes(rot01, -1, -2) @ R
-        r31, r32, r33 = rot16[..., 2, 0], rot16[..., 2, 1], rot16[..., 2, 2]
+        r31, r32, r33 = (_into_link(turn1, alpha[0], _column(R, j))[2] for j in range(3))  # row 2 of R_16 = R_01^T R
         sin5 = np.hypot(r31, r32)
         theta5 = np.arctan2(wrist_sign * sin5, -s4 * s5 * r33)
         toward = wrist_sign * s4
         theta6 = np.where(sin5 < _SINGULAR_SIN, theta_seed[:, None, 5], np.arctan2(-toward * r32, toward * r31))
-        wrist = _rot_x(alpha[3]) @ _rot_z(theta5) @ _rot_x(alpha[4]) @ _rot_z(theta6)
-        rot_sum = rot16 @ np.swapaxes(wrist, -1, -2)
-        theta234 = np.arctan2(rot_sum[..., 1, 0], rot_sum[..., 0, 0])
+        # theta2 + theta3 + theta4 is the angle in the arm plane of column 0 of R_14 = R_01^T R W^T,
+        # W = Rx(alpha4) Rz(theta5) Rx(alpha5) Rz(theta6) the wrist's rotation.
+        wrist_x = _into_link(_cos_sin(theta6), 0.0, _into_link(_cos_sin(theta5), alpha[4], (1.0, 0.0, 0.0)))
+        x14 = _into_link(turn1, alpha[0], tuple(sum(R[..., i, k] * wrist_x[k] for k in range(3)) for i in range(3)))
+        theta234 = np.arctan2(x14[1], x14[0])
         # Axis 4 lies d5 before the wrist point along z4 = (s4 sin, -s4 cos) in the arm plane.
         theta2, theta3, planar_ok = _planar(
             forward - d[4] * s4 * np.sin(theta234), height + d[4] * s4 * np.cos(theta234), a[1], L3, beta, elbow_sign
@@ -598,18 +600,26 @@ def _config_indices(config, n):
     return np.broadcast_to(index, (n,))
 
 
-def _rot_z(angle):
-    """Rotations about z, (..., 3, 3), of angles (...)."""
-    c, s = np.cos(angle), np.sin(angle)
-    out = np.zeros(np.shape(angle) + (3, 3))
-    out[..., 0, 0], out[..., 0, 1], out[..., 1, 0], out[..., 1, 1], out[..., 2, 2] = c, -s, s, c, 1.0
-    return out
+def _cos_sin(angle):
+    """(cos, sin) of angles (...), rad."""
+    return np.cos(angle), np.sin(angle)
 
 
-def _rot_x(angle):
-    """Rotation about x (3, 3) of one angle."""
-    c, s = np.cos(angle), np.sin(angle)
-    return np.array([[1.0, 0.0, 0.0], [0.0, c, -s], [0.0, s, c]])
+def _into_link(turn, alpha, v):
+    """``(Rz(theta) Rx(alpha))^T v``: vectors v (three components (...)) in the frame of the next DH link.
+
+    ``turn`` is (cos theta, sin theta) (...); alpha a scalar twist, rad. Column
+    arithmetic instead of stacked 3x3 products (the closed forms run over N x 8 branches).
+    """
+    cos, sin = turn
+    x, y = cos * v[0] + sin * v[1], cos * v[1] - sin * v[0]
+    cos_alpha, sin_alpha = np.cos(alpha), np.sin(alpha)
+    return x, cos_alpha * y + sin_alpha * v[2], cos_alpha * v[2] - sin_alpha * y
+
+
+def _column(R, j):
+    """Column j of rotations R (..., 3, 3) as three components (...)."""
+    return R[..., 0, j], R[..., 1, j], R[..., 2, j]
 
 
 def _dot(u, v):
