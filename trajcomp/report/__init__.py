@@ -4,24 +4,28 @@ Each report is a `Report`: a JSON document of the versioned schema
 ``trajcomp-report/1`` (``trajcomp/report/schema.json``) with a pass/fail
 verdict against stated `Criteria`, figures drawn with matplotlib only when
 the self-contained HTML page is rendered, and a one-screen text summary.
+The names below are imported from their module on first use, so that a
+compliance report does not load the calibration machinery and the reverse.
 """
 
-from trajcomp.report.calibration import calibration_report, validation_report
-from trajcomp.report.compliance import compliance_report
-from trajcomp.report.document import SCHEMA, Report, schema
-from trajcomp.report.provenance import file_entry, model_entry
-from trajcomp.report.summary import summary_lines
-from trajcomp.report.verdict import Criteria
+import importlib
 
-__all__ = [
-    "SCHEMA",
-    "Criteria",
-    "Report",
-    "calibration_report",
-    "compliance_report",
-    "file_entry",
-    "model_entry",
-    "schema",
-    "summary_lines",
-    "validation_report",
-]
+_MODULES = {
+    "SCHEMA": "document",
+    "Criteria": "verdict",
+    "Report": "document",
+    "calibration_report": "calibration",
+    "compliance_report": "compliance",
+    "file_entry": "provenance",
+    "model_entry": "provenance",
+    "schema": "document",
+    "summary_lines": "summary",
+    "validation_report": "calibration",
+}
+__all__ = sorted(_MODULES)
+
+
+def __getattr__(name):
+    if name not in _MODULES:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    return getattr(importlib.import_module(f"{__name__}.{_MODULES[name]}"), name)
