@@ -230,3 +230,29 @@ def test_a_long_path_keeps_a_marker_near_every_target_and_every_isolated_one():
     assert distance.max() <= np.hypot(*cell)  # every target within one raster cell of a drawn marker
     short = points[:plots.POINTS]
     assert plots.one_per_cell(short).tolist() == list(range(plots.POINTS))
+
+
+def test_the_segments_of_a_program_of_exact_stops_are_counted_and_listed_up_to_the_bound():
+    from types import SimpleNamespace
+
+    from trajcomp.report.compliance import timing_section
+    from trajcomp.report.sections import _timing
+
+    stops = 3 * ROWS  # every motion an exact stop: one segment each
+    kinds = np.where(np.arange(stops) % 3 == 0, "ruckig", "toppra")
+    segments = tuple(SimpleNamespace(kind=str(kind), first=k, last=k + 1, duration=0.5 + k % 7)
+                     for k, kind in enumerate(kinds))
+    six = np.ones(6)
+    timing = SimpleNamespace(peak_velocity=six, limit_velocity=2 * six, peak_acceleration=six,
+                             limit_acceleration=2 * six, peak_jerk=six, limit_jerk=np.full(6, np.inf),
+                             segments=segments, cycle_time=100.0, within_limits=True, t=np.linspace(0, 100, stops + 1))
+    section = timing_section(timing, times=False)
+    durations = np.array([s.duration for s in segments])
+    assert section["segment_count"] == stops and len(section["segments"]) == ROWS and "t_s" not in section
+    assert [s["first"] for s in section["segments"]] == list(range(ROWS))
+    for kind in ("ruckig", "toppra"):
+        assert section["segments_by_kind"][kind]["count"] == np.count_nonzero(kinds == kind)
+        assert section["segments_by_kind"][kind]["duration_s"] == pytest.approx(durations[kinds == kind].sum())
+    text = _timing(section)  # the page's timing section
+    assert f"… and {stops - 30} more" in text and "toppra 1–2 1.500 s" in text
+

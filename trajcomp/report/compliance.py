@@ -16,7 +16,7 @@ import numpy as np
 from trajcomp.report import plots
 from trajcomp.report.document import Figure, Report
 from trajcomp.report.provenance import grid_box, header
-from trajcomp.report.targets import ARRAYS, TIMES, flag_bits, full_data, statistics, table_rows, target_json, \
+from trajcomp.report.targets import ARRAYS, ROWS, TIMES, flag_bits, full_data, statistics, table_rows, target_json, \
     target_measures
 from trajcomp.report.verdict import FAIL, PASS, Check, Criteria, accuracy_check, check, not_evaluated, verdict
 
@@ -80,7 +80,8 @@ def timing_section(timing, before=None, times=True):
     """The timing dict of a `trajcomp.timing` result (contract 3), with the cycle time ``before`` (s) if known.
 
     ``times``: with the time stamp of every waypoint (``t_s``); a summarised
-    report keeps them in its sidecar instead.
+    report keeps them in its sidecar instead. The segments (one per stretch
+    between exact stops) are counted by kind and listed up to `ROWS`.
     """
     limits = {"velocity": ("peak_velocity", "limit_velocity", "deg/s"),
               "acceleration": ("peak_acceleration", "limit_acceleration", "deg/s^2"),
@@ -93,13 +94,20 @@ def timing_section(timing, before=None, times=True):
             row[name] = {"peak": p, "limit": lim if np.isfinite(lim) else None, "unit": unit,
                          "ratio": p / lim if np.isfinite(lim) and lim > 0 else None}
         joints.append(row)
+    by_kind = {}
+    for segment in timing.segments:
+        entry = by_kind.setdefault(segment.kind, {"count": 0, "duration_s": 0.0})
+        entry["count"] += 1
+        entry["duration_s"] += float(segment.duration)
     segments = [{"kind": s.kind, "first": int(s.first), "last": int(s.last), "duration_s": float(s.duration),
-                 "speed": getattr(s, "speed", None)} for s in timing.segments]
+                 "speed": getattr(s, "speed", None)} for s in timing.segments[:ROWS]]
     section = {
         "cycle_time_s": float(timing.cycle_time),
         "cycle_time_before_s": None if before is None else float(before),
         "within_limits": bool(timing.within_limits),
         "joints": joints,
+        "segment_count": len(timing.segments),
+        "segments_by_kind": by_kind,
         "segments": segments,
     }
     if times:

@@ -82,9 +82,10 @@ def _criteria_text(criteria):
             "does not fail the run; it says why.</p>")
 
 
-def _names(names):
-    """A list of names as text, the first `SHOWN` of them."""
-    more = f" … and {len(names) - SHOWN} more" if len(names) > SHOWN else ""
+def _names(names, total=None):
+    """A list of names (of ``total``, all by default) as text, the first `SHOWN` of them."""
+    total = len(names) if total is None else total
+    more = f" … and {total - SHOWN} more" if total > SHOWN else ""
     return ", ".join(names[:SHOWN]) + more or "none"
 
 
@@ -200,7 +201,10 @@ def _timing(section):
         ("cycle time", f"{section['cycle_time_s']:.3f} s"
                        + ("" if before is None else f" (before: {before:.3f} s, {section['cycle_time_s'] - before:+.3f} s)")),
         ("within limits (dense check)", "yes" if section["within_limits"] else "no"),
-        ("segments", ", ".join(f"{s['kind']} {s['first']}–{s['last']} {s['duration_s']:.3f} s" for s in section["segments"])),
+        ("segments by kind", "; ".join(f"{k['count']} {kind}, {k['duration_s']:.3f} s"
+                                       for kind, k in section["segments_by_kind"].items()) or "none"),
+        ("segments", _names([f"{s['kind']} {s['first']}–{s['last']} {s['duration_s']:.3f} s" for s in section["segments"]],
+                    section["segment_count"])),
     ])
     rows = []
     for row in section["joints"]:
