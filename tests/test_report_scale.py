@@ -256,3 +256,19 @@ def test_the_segments_of_a_program_of_exact_stops_are_counted_and_listed_up_to_t
     text = _timing(section)  # the page's timing section
     assert f"… and {stops - 30} more" in text and "toppra 1–2 1.500 s" in text
 
+
+
+def test_motions_not_compensated_unused_points_and_joint_targets_are_counted_and_listed_up_to_the_bound(model):
+    import dataclasses
+
+    many = ROWS + 500
+    report = dataclasses.replace(
+        _sweep([]), not_compensated=tuple((k + 9, f"LIN P[{k}]", "run-time position") for k in range(many)),
+        unused=tuple(f"U{k}" for k in range(many)), joint_targets=tuple(f"J{k}" for k in range(many)))
+    doc = compliance_report(report, KUKA, model=model, mode="composite").doc
+    assert doc["summary"]["not_compensated"] == doc["summary"]["unused"] == doc["joint_targets"]["count"] == many
+    assert [m["line"] for m in doc["not_compensated"]] == list(range(9, ROWS + 9))
+    assert doc["unused"] == [f"U{k}" for k in range(ROWS)] and len(doc["joint_targets"]["labels"]) == ROWS
+    uncompensated = next(c for c in doc["verdict"]["criteria"] if c["id"] == "uncompensated")
+    assert uncompensated["failing"] == many and uncompensated["lines"] == list(range(9, ROWS + 9))
+    assert jsonschema.Draft202012Validator(schema()).is_valid(doc)

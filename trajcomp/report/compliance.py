@@ -190,7 +190,7 @@ def compliance_report(report, robot, *, criteria=None, model=None, model_info=No
     else:
         checks.append(Check("uncompensated", "every motion compensated", FAIL if lines else PASS,
                             f"{len(lines)} motion(s) left as written" if lines else "no motion left as written",
-                            lines=lines, failing=len(lines)))
+                            lines=lines[:ROWS], failing=len(lines)))
     checks.append(timing_check(section))
     data = None
     if not table["complete"]:
@@ -205,9 +205,10 @@ def compliance_report(report, robot, *, criteria=None, model=None, model_info=No
         "target_table": table,
         "targets": target_json(report, robot, measures, flags, index),
         "not_compensated": [{"line": int(line), "text": text, "reason": reason}
-                            for line, text, reason in report.not_compensated],
-        "unused": list(report.unused),
-        "joint_targets": {"mode": report.joint_mode, "labels": list(report.joint_targets)},
+                            for line, text, reason in report.not_compensated[:ROWS]],
+        "unused": list(report.unused[:ROWS]),
+        "joint_targets": {"mode": report.joint_mode, "labels": list(report.joint_targets[:ROWS]),
+                          "count": len(report.joint_targets)},
         "warnings": list(report.warnings),
         "timing": section,
         "missing": missing,
@@ -259,12 +260,18 @@ def _figures(report, robot, measures, doc, field):
 
 
 def _summary(report, measures):
-    """Counts and worst values over the targets (None where there is no target)."""
+    """Counts and worst values over the targets (None where there is no target).
+
+    The motions not compensated and the unused points are counted here and
+    listed in the document up to `ROWS`.
+    """
     n = len(report.labels)
+    counts = {"not_compensated": len(report.not_compensated), "unused": len(report.unused)}
     if not n:
         return {"targets": 0, "outside_grid": 0, "configuration_changed": 0, "correction_max_mm": None,
-                "correction_max_deg": None, "residual_max_mm": None, "limit_distance_min_deg": None}
+                "correction_max_deg": None, "residual_max_mm": None, "limit_distance_min_deg": None, **counts}
     return {
+        **counts,
         "targets": n,
         "outside_grid": int(np.sum(report.outside_grid)),
         "configuration_changed": int(measures.changed.sum()),

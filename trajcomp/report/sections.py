@@ -126,8 +126,9 @@ def _targets(doc):
         ("largest correction", f"{s['correction_max_mm']:.4f} mm, {s['correction_max_deg']:.4f} deg"),
         ("largest predicted residual", f"{s['residual_max_mm']:.2e} mm"),
         ("smallest joint limit distance", f"{s['limit_distance_min_deg']:.2f} deg"),
-        ("unused points (left as written)", _names(doc["unused"])),
-        ("joint targets", f"{doc['joint_targets']['mode']}: {_names(doc['joint_targets']['labels'])}"),
+        ("unused points (left as written)", _names(doc["unused"], s["unused"])),
+        ("joint targets", f"{doc['joint_targets']['mode']}: "
+                          f"{_names(doc['joint_targets']['labels'], doc['joint_targets']['count'])}"),
     ])
     return lead + f"<h3>Statistics over all {s['targets']} targets</h3>" + _statistics_table(s["statistics"])
 
@@ -182,7 +183,9 @@ def _target_tables(doc):
 def _not_compensated(doc):
     if not doc["not_compensated"]:
         return "<p>Every motion was compensated.</p>"
-    return ('<div class="callout"><p>These motions were left exactly as written; they do not land where the '
+    listed, total = len(doc["not_compensated"]), doc["summary"]["not_compensated"]
+    which = "These motions were" if listed == total else f"{total} motions were (the first {listed} listed)"
+    return (f'<div class="callout"><p>{which} left exactly as written; they do not land where the '
             "model would put them.</p></div>"
             + table(("line", "statement", "why"), [(m["line"], Raw(f"<code>{esc(m['text'])}</code>"), m["reason"])
                                                    for m in doc["not_compensated"]], numeric=(0,)))
