@@ -12,7 +12,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from trajcomp import formats
+from trajcomp import formats, posture
 from trajcomp.cli import main
 from trajcomp.compensate import CompensationResult
 from trajcomp.configuration import configuration_for, declared_windows
@@ -47,6 +47,30 @@ def test_declared_windows_invert_every_encoder(language):
         moved[np.arange(len(rows)), joints] = bound[rows, joints] + side * 1e-6
         again = configuration_for(language, robot, moved)
         assert all(a != configs[r] for a, r in zip(again, rows))
+
+
+@pytest.mark.parametrize("block", [7, 16_384])
+def test_a_long_undeclared_run_keeps_turning_across_planning_blocks(tmp_path, monkeypatch, block):
+    """A tool spun 300 deg about its axis in 31 rows: J6 turns on by each step, through the planning blocks."""
+    monkeypatch.setattr(posture, "BLOCK", block)
+    robot = load_robot("ur10")
+    q0 = np.radians([10.0, -100.0, 100.0, -90.0, 90.0, -150.0])
+    step = np.radians(10.0)
+    T = fk(robot, q0) @ np.array([_rot_z(k * step) for k in range(31)])
+    rows = ["x,y,z,a,b,c"] + [",".join(f"{v:.9f}" for v in [*pose[:3, 3], *np.degrees(matrix_to_abc(pose[:3, :3]))])
+                              for pose in T]
+    (tmp_path / "spin.csv").write_text("\n".join(rows) + "\n")
+    plan = planned_joints(formats.read(tmp_path / "spin.csv"), robot)
+    plan_q0 = ik(robot, T[:1], seed=robot.home).q[0]
+    assert plan.source == ("home",) + ("previous",) * 30
+    assert np.allclose(plan.q[:, :5], plan_q0[:5], atol=1e-6)
+    assert np.allclose(np.abs(plan.q[:, 5] - plan_q0[5]), step * np.arange(31), atol=1e-6)  # 300 deg, no unwinding
+
+
+def _rot_z(angle):
+    T = np.eye(4)
+    T[:2, :2] = [[np.cos(angle), -np.sin(angle)], [np.sin(angle), np.cos(angle)]]
+    return T
 
 
 def _stand_in(robot, offset):
