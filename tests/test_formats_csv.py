@@ -87,3 +87,59 @@ def test_other_columns_are_kept_and_t_is_known(tmp_path):
     assert len(program.motions) == 1
     formats.write(tmp_path / "out.csv", program)
     assert (tmp_path / "out.csv").read_text() == path.read_text()
+
+
+def _mixed_rows():
+    """Rows of every kind a CAM export mixes: plain, quoted, spaced, bare .5, a joint target, PTP and LIN."""
+    return [
+        "# mixed", "id,x,y,z,a,b,c,motion,speed,zone,j1,j2,j3,j4,j5,j6",
+        "1,600.0,-100.0,500.0,0.0,90.0,0.0,PTP,,,,,,,,",
+        '2,"610.5", -100.0 ,500.0,0.0,90.0,0.0,lin,100,5,,,,,,',
+        "3,,,,,,,PTP,,,0,-90,90,0,45,0",
+        "# a comment between rows",
+        "4,620.125,-99.5,.5,0.0,90.0,0.0,LIN,100,,,,,,,",
+        "5,630.0,-99.0,501.0,0.0,90.0,0.0,LIN,50,1,10,-80,80,0,90,0",
+        "6,640.0,-98.5,502.0,0.0,89.5,0.0,LIN,50,1,,,,,,",
+    ]
+
+
+@pytest.mark.parametrize("block", [1, 2, 3])
+def test_rows_read_and_written_in_blocks_equal_one_block(tmp_path, monkeypatch, block):
+    """Blocks of 1 to 3 rows (the reader and writer work a block at a time) give the tables and bytes of one block."""
+    from trajcomp.formats import csv_program
+
+    path = tmp_path / "mixed.csv"
+    path.write_text("\n".join(_mixed_rows()) + "\n")
+
+    def run():
+        program = formats.read(path)
+        stack = program.cartesian_targets()
+        poses = stack.T.copy()
+        poses[:, :3, 3] += [0.25, -0.125, 1.0]
+        edited = program.with_targets(stack.index, poses=poses, joints=np.radians(np.tile([5.0, -85, 85, 1, 44, 2],
+                                                                                          (len(poses), 1))))
+        return program, formats.write(tmp_path / f"out{block}.csv", edited)[0].read_bytes()
+
+    reference, expected = run()
+    monkeypatch.setattr(csv_program, "BLOCK", block)
+    program, written = run()
+    for name in ("pose", "joints", "line", "is_joint"):
+        np.testing.assert_array_equal(getattr(program.target_table(), name), getattr(reference.target_table(), name))
+    assert list(program.motion_table().kind) == ["joint", "linear", "joint", "linear", "linear", "linear"]
+    np.testing.assert_array_equal(program.motion_table().speed, [np.nan, 100, np.nan, 100, 50, 50])
+    assert written == expected
+    assert written.decode().splitlines()[6] == "4,620.375,-99.625,1.500,0.0,90.0,0.0,LIN,100,,5.0000,-85.0000,85.0000," \
+                                               "1.0000,44.0000,2.0000"
+
+
+@pytest.mark.parametrize("block", [2, 50_000])
+def test_a_mistake_in_a_later_block_is_named_by_its_line(tmp_path, monkeypatch, block):
+    from trajcomp.formats import csv_program
+
+    monkeypatch.setattr(csv_program, "BLOCK", block)
+    rows = _mixed_rows()
+    rows.insert(7, "7,650.0,-98.0,503.0,0.0,90.0,0.0,LNI,50,1,,,,,,")
+    path = tmp_path / "typo.csv"
+    path.write_text("\n".join(rows) + "\n")
+    with pytest.raises(ReadError, match=r"typo\.csv:8: field motion: expected PTP or LIN, got 'LNI'"):
+        formats.read(path)

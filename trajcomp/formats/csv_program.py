@@ -206,8 +206,7 @@ def _numbers(cells):
         return np.array(cells, dtype=float), np.zeros(len(cells), dtype=bool)
     except ValueError:
         pass
-    text = np.strings.strip(np.array(cells, dtype=str))
-    text = np.where(np.strings.startswith(text, '"'), np.strings.strip(np.strings.strip(text, '"')), text)
+    text = _stripped(cells)
     empty = text == ""
     number = np.full(len(cells), np.nan)
     try:
@@ -215,6 +214,12 @@ def _numbers(cells):
     except ValueError:
         return None, empty
     return number, empty
+
+
+def _stripped(cells):
+    """The values (B,) of cells (B,) as a str array: spaces and surrounding quotes removed."""
+    text = np.strings.strip(np.array(cells, dtype=str))
+    return np.where(np.strings.startswith(text, '"'), np.strings.strip(np.strings.strip(text, '"')), text)
 
 
 def _repeated(value, n):
@@ -265,7 +270,7 @@ def _patched(program, text):
         rows = edited[k : k + BLOCK]
         numbers = targets.line[rows]
         columns = list(zip(*(_cells(lines[n - 1]) for n in numbers.tolist())))
-        old = {c: np.strings.strip(np.array(columns[j], dtype=str)) for j, c in enumerate(header) if c in LIMITS}
+        old = {c: _stripped(columns[j]) for j, c in enumerate(header) if c in LIMITS}
         updates = _pose_texts(targets.pose[rows], ~targets.is_joint[rows], old) if "x" in header else {}
         if "j1" in header:
             updates |= _joint_texts(targets.joints[rows], old)
