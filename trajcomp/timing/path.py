@@ -11,7 +11,8 @@ motion from rest to rest. Its samples come from `trajcomp.timing.samples`
    than `SMOOTHING_GAIN` times the acceleration of a thinned one, which
    makes TOPP-RA crawl. The thinned spline is a least-squares cubic
    B-spline with knots on every `KNOT_STRIDE` samples, refined where it
-   leaves the tolerance: within `TOLERANCE` mm of every sample's TCP and
+   leaves the tolerance (and samples the finest knots still miss weighted
+   more): within `TOLERANCE` mm of every sample's TCP and
    ``TOLERANCE * ROTATION_PER_MM`` rad of its orientation (linearized with
    the Jacobian) and of each joint, or within the programmed zone radius
    near a blended corner. The tolerance keeps the compensated positions.
@@ -36,6 +37,8 @@ END_REFINEMENT = 10  # halvings of the first and last grid interval (rest at bot
 KNOT_STRIDE = 16  # samples per knot interval of the first thinned fit
 SMOOTHING_GAIN = 1.1  # a thinned path is taken when the exact one needs this much more acceleration
 _DUPLICATE = 1e-9  # rad, joint distance under which two samples are one
+_NARROWEST = 2  # samples per knot interval at the finest
+_PULL, _PULLS = 4.0, 8  # weight factor on samples the finest knots leave outside the tolerance, and how often
 
 
 class JointPath:
@@ -343,12 +346,21 @@ def _fit(s, q, jac, tol, acceleration):
 
 
 def _thinned(s, q, jac, tol):
-    """Least-squares cubic spline with the fewest knots (refined where needed) within tol: (BSpline or None, mm)."""
+    """Least-squares cubic spline with the fewest knots (refined where needed) within tol: (BSpline or None, mm).
+
+    Knot intervals with a sample outside the tolerance are halved down to
+    `_NARROWEST` samples; where that is not enough (a step in the samples,
+    e.g. where the compensation's solution changes by a few micrometres)
+    those samples are weighted `_PULL` times more, up to `_PULLS` times,
+    so the fit stays smooth elsewhere.
+    """
     n = len(s)
     knots = np.unique(np.r_[np.arange(0, n, KNOT_STRIDE), n - 1])
+    weight, pulls = np.ones(n), 0
     while True:
         try:
-            spline = make_lsq_spline(s, q, np.r_[[s[0]] * 4, s[knots[1:-1]], [s[-1]] * 4], k=3, method="norm-eq")
+            spline = make_lsq_spline(s, q, np.r_[[s[0]] * 4, s[knots[1:-1]], [s[-1]] * 4], k=3, w=weight,
+                                     method="norm-eq")
         except (ValueError, np.linalg.LinAlgError):
             return None, 0.0
         position, rotation, joint = _deviation(spline, s, q, jac)
@@ -357,10 +369,13 @@ def _thinned(s, q, jac, tol):
             return spline, float(np.max(np.where(tol <= tol.min(), position, 0.0)))
         cell = np.searchsorted(knots, np.flatnonzero(bad), side="right") - 1
         cell = np.unique(np.clip(cell, 0, len(knots) - 2))
-        wide = cell[knots[cell + 1] - knots[cell] >= 4]
-        if not wide.size:
+        wide = cell[knots[cell + 1] - knots[cell] >= 2 * _NARROWEST]
+        if wide.size:
+            knots = np.unique(np.r_[knots, (knots[wide] + knots[wide + 1]) // 2])
+        elif pulls < _PULLS:
+            weight[bad], pulls = weight[bad] * _PULL, pulls + 1
+        else:
             return None, 0.0
-        knots = np.unique(np.r_[knots, (knots[wide] + knots[wide + 1]) // 2])
 
 
 def _demand(spline, s, acceleration):
