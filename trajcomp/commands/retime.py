@@ -152,13 +152,13 @@ def retime_compensated(original, corrected, robot, method, tolerance, tools=None
     after = corrected.target_table().joints
     try:
         before = retime_program(original, robot, planned(original, index, q_planned), method=method,
-                                tools=tools, frames=frames, tolerance=tolerance)
+                                tools=tools, frames=frames, tolerance=tolerance).cycle_time  # only this kept
         if not writable(corrected):
             result = retime_program(corrected, robot, after, method=method, tools=tools, frames=frames,
                                     tolerance=tolerance)
             note = f"the timing is not written: {corrected.format} programs have no speed fields trajcomp writes"
-            return corrected, dataclasses.replace(result, warnings=result.warnings + (note,)), before.cycle_time
+            return corrected, dataclasses.replace(result, warnings=result.warnings + (note,)), before
         timed, result = timed_program(corrected, robot, after, method, tolerance, tools, frames)
     except TimingError as exc:
         raise TimingError(f"{exc} (compensate with --retime none to keep the program's speeds)") from None
-    return timed, result, before.cycle_time
+    return timed, result, before
