@@ -6,6 +6,7 @@ import pytest
 import trajcomp.compensate as compensation
 from trajcomp.compensate import compensate, program_corrector
 from trajcomp.errors import IKError, ModelError
+from trajcomp.ik import IKResult
 from trajcomp.plan import default_orientation
 from trajcomp.transforms import abc_to_matrix
 from virtual_cell import landing_error, virtual_cell
@@ -79,3 +80,24 @@ def test_program_corrector_compensates_each_tool_group_with_its_tool(cell):
     targets[5, :3, 3] = [3000.0, 0.0, 500.0]
     with pytest.raises(IKError, match=r"prog.csv: no IK solution for 1 of 12 targets \(line 5: unreachable\)"):
         one_tool(targets, np.broadcast_to(measured, (12, 4, 4)), seeds, names)
+
+
+def test_targets_stop_iterating_once_they_land(cell, monkeypatch):
+    targets = targets_in_cube(cell.robot, 40, 5)
+    solved_rows = []
+    solve = compensation._solve
+    monkeypatch.setattr(compensation, "_solve", lambda *args: solved_rows.append(len(args[2])) or solve(*args))
+    landed = compensate(cell.model, targets)
+    assert solved_rows[0] == 40 and sum(solved_rows) < 3 * 40  # fewer rows than three full passes
+    monkeypatch.setattr(compensation, "LANDED", 0.0)
+    every_pass = compensate(cell.model, targets)
+    assert landed.residual.max() < 1e-5
+    np.testing.assert_allclose(landed.T_command[:, :3, 3], every_pass.T_command[:, :3, 3], rtol=0, atol=1e-5)
+
+
+def test_a_failure_among_the_rows_of_a_later_pass_is_counted_among_all_targets():
+    solved = IKResult(np.full((2, 6), np.nan), np.array([True, False]), np.zeros(2), np.zeros(2),
+                      np.array(["", "unreachable"]))
+    names = [f"line {k}" for k in range(5)]
+    with pytest.raises(IKError, match=r"^p: no IK solution for 1 of 5 targets \(line 3: unreachable\)$"):
+        compensation._of_all(solved, np.array([1, 3]), 5).raise_on_failure("p", names)

@@ -9,8 +9,9 @@ for a composite fitted at several orientations, or the nominal one), f the
 additive error field of the mode (zero, the linear error
 model, the raw-error grid or the residual grid) and c the commanded position,
 at which the field was measured. Because f depends on c, the solution is a
-short fixed-point iteration; the field is smooth, so three passes converge
-far below the measurement noise.
+short fixed-point iteration; the field is smooth, so two or three passes
+converge far below the measurement noise (a target stops once the model
+predicts it lands within `LANDED`).
 """
 
 import dataclasses
@@ -21,12 +22,13 @@ import numpy as np
 
 from trajcomp.errors import TrajcompError
 from trajcomp.frames import tool_groups
-from trajcomp.ik import ik_near, ik_numeric, pose_error
+from trajcomp.ik import IKResult, ik_near, ik_numeric, pose_error
 from trajcomp.kinematics import fk
 from trajcomp.model import evaluate_field
 from trajcomp.plan import batch_seed
 
-ITERATIONS = 3
+ITERATIONS = 3  # fixed-point passes at most
+LANDED = 1e-5  # mm: a target whose predicted landing error is below this needs no further pass
 CHUNK = 16384  # targets compensated together: the working arrays stay small and memory stays flat
 log = logging.getLogger(__name__)
 
@@ -133,31 +135,50 @@ def compensate(model, targets, *, mode=None, tool=None, seed=None, outside="mode
 
 
 def _compensate_rows(model, mode, nominal, arm, field, outside, label, targets, seed, names=None):
-    """`compensate` of targets (N, 4, 4) from joint seeds (N, 6) with the mode's arm and error field."""
+    """`compensate` of targets (N, 4, 4) from joint seeds (N, 6) with the mode's arm and error field.
+
+    Each fixed-point pass solves the rows not yet landed for their goal minus
+    the error term at their last commanded position; a row stops once the
+    model predicts it lands within `LANDED` of its goal (or after
+    `ITERATIONS` passes).
+    """
     goal = targets[:, :3, 3]
-    commanded = goal.copy()
-    flagged = np.zeros(len(targets), dtype=bool)
-    passes = ITERATIONS if mode == "linear" or field is not None else 1
-    q, command = seed, None
-    for _ in range(passes):
-        aimed = targets.copy()
-        if mode == "linear":
-            aimed[:, :3, 3] = goal - model.linear.predict_error(commanded)
-        elif field is not None:
-            offset, flagged = evaluate_field(field, commanded, outside=outside)
-            aimed[:, :3, 3] = goal - offset
-        solved = _solve(arm.robot, nominal, aimed, q, command)
-        q = arm.commanded_joints(solved.raise_on_failure(label, names).q)
-        command = fk(nominal, q)
-        commanded = command[:, :3, 3]
-    reached = arm.fk(q)[:, :3, 3]
-    if mode == "linear":
-        reached = reached + model.linear.predict_error(commanded)
-    elif field is not None:
-        reached = reached + evaluate_field(field, commanded, outside=outside)[0]
-    residual = np.linalg.norm(reached - goal, axis=1)
+    error_term = functools.partial(_error_term, model, mode, field, outside)
+    offset, flagged = error_term(goal)
+    q, command, residual = np.array(seed), np.empty_like(targets), np.empty(len(targets))
+    todo = np.arange(len(targets))
+    for k in range(ITERATIONS if mode == "linear" or field is not None else 1):
+        aimed = targets[todo]
+        aimed[:, :3, 3] = goal[todo] - offset[todo]
+        solved = _solve(arm.robot, nominal, aimed, q[todo], command[todo] if k else None)
+        if not solved.success.all():
+            _of_all(solved, todo, len(targets)).raise_on_failure(label, names)
+        q[todo] = arm.commanded_joints(solved.q)
+        command[todo] = fk(nominal, q[todo])
+        offset, flagged = error_term(command[:, :3, 3])
+        residual[todo] = np.linalg.norm(arm.fk(q[todo])[:, :3, 3] + offset[todo] - goal[todo], axis=1)
+        todo = todo[residual[todo] >= LANDED]
+        if not todo.size:
+            break
     outside_region = flagged | arm.outside_rows(q) | model.unmeasured_posture(q, outside)
-    return CompensationResult(command, q, commanded - goal, outside_region, residual)
+    return CompensationResult(command, q, command[:, :3, 3] - goal, outside_region, residual)
+
+
+def _error_term(model, mode, field, outside, commanded):
+    """The mode's additive error (N, 3), mm, at commanded positions (N, 3) and the rows outside its grid (N,)."""
+    if field is not None:
+        return evaluate_field(field, commanded, outside=outside)
+    flagged = np.zeros(len(commanded), dtype=bool)
+    return (model.linear.predict_error(commanded) if mode == "linear" else np.zeros_like(commanded)), flagged
+
+
+def _of_all(solved, rows, n):
+    """An IKResult of rows (M,) of n targets as one of all n (the others solved), for its failure message."""
+    if len(rows) == n:
+        return solved
+    every = IKResult(np.zeros((n, 6)), np.ones(n, dtype=bool), np.zeros(n), np.zeros(n),
+                     np.full(n, "", dtype=solved.reason.dtype))
+    return every.with_rows(rows, solved)
 
 
 SEED_NEAR = (10.0, 0.05)  # mm, rad: a seed this close to its target starts Gauss-Newton directly
