@@ -242,11 +242,7 @@ def test_the_segments_of_a_program_of_exact_stops_are_counted_and_listed_up_to_t
     kinds = np.where(np.arange(stops) % 3 == 0, "ruckig", "toppra")
     segments = tuple(SimpleNamespace(kind=str(kind), first=k, last=k + 1, duration=0.5 + k % 7)
                      for k, kind in enumerate(kinds))
-    six = np.ones(6)
-    timing = SimpleNamespace(peak_velocity=six, limit_velocity=2 * six, peak_acceleration=six,
-                             limit_acceleration=2 * six, peak_jerk=six, limit_jerk=np.full(6, np.inf),
-                             segments=segments, cycle_time=100.0, within_limits=True, t=np.linspace(0, 100, stops + 1))
-    section = timing_section(timing, times=False)
+    section = timing_section(_timing_result(segments, stops + 1), times=False)
     durations = np.array([s.duration for s in segments])
     assert section["segment_count"] == stops and len(section["segments"]) == ROWS and "t_s" not in section
     assert [s["first"] for s in section["segments"]] == list(range(ROWS))
@@ -272,3 +268,35 @@ def test_motions_not_compensated_unused_points_and_joint_targets_are_counted_and
     uncompensated = next(c for c in doc["verdict"]["criteria"] if c["id"] == "uncompensated")
     assert uncompensated["failing"] == many and uncompensated["lines"] == list(range(9, ROWS + 9))
     assert jsonschema.Draft202012Validator(schema()).is_valid(doc)
+
+
+def _timing_result(segments, waypoints):
+    """A stand-in `trajcomp.timing` result (contract 3) of ``waypoints`` within the limits."""
+    from types import SimpleNamespace
+
+    six = np.ones(6)
+    return SimpleNamespace(peak_velocity=six, limit_velocity=2 * six, peak_acceleration=six,
+                           limit_acceleration=2 * six, peak_jerk=six, limit_jerk=np.full(6, np.inf),
+                           segments=segments, cycle_time=100.0, within_limits=True,
+                           t=np.linspace(0.0, 100.0, waypoints))
+
+
+def test_the_times_of_a_long_joint_program_go_to_the_sidecar(tmp_path):
+    from types import SimpleNamespace
+
+    empty = np.zeros((0, 6))
+    report = ProgramReport(labels=(), lines=np.zeros(0, int), tools=(), frames=(), T_target=np.zeros((0, 4, 4)),
+                           T_command=np.zeros((0, 4, 4)), correction=empty, q=empty, q_planned=empty, declared=(),
+                           written=(), posture_source=(), outside_grid=np.zeros(0, bool),
+                           predicted_residual=np.zeros(0))  # joint targets only: no Cartesian target
+    waypoints = ROWS + 1
+    segment = SimpleNamespace(kind="toppra", first=0, last=waypoints - 1, duration=100.0)
+    result = compliance_report(report, KUKA, timing=_timing_result((segment,), waypoints), command="retime")
+    files = result.write(tmp_path / "joints", json_only=True)
+    doc = json.loads(files[0].read_text())
+    assert "t_s" not in doc["timing"] and doc["target_table"]["complete"] and doc["full_data"]["rows"] == 0
+    assert jsonschema.Draft202012Validator(schema()).is_valid(doc)
+    with np.load(files[1]) as data:
+        np.testing.assert_array_equal(data["t_s"], np.linspace(0.0, 100.0, waypoints))
+    short = compliance_report(report, KUKA, timing=_timing_result((segment,), ROWS), command="retime")
+    assert len(short.doc["timing"]["t_s"]) == ROWS and short.data is None

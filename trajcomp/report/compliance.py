@@ -79,8 +79,8 @@ def target_checks(report, measures, criteria, has_grid, mode, compensated=True):
 def timing_section(timing, before=None, times=True):
     """The timing dict of a `trajcomp.timing` result (contract 3), with the cycle time ``before`` (s) if known.
 
-    ``times``: with the time stamp of every waypoint (``t_s``); a summarised
-    report keeps them in its sidecar instead. The segments (one per stretch
+    ``times``: with the time stamp of every waypoint (``t_s``); a report of
+    more than `ROWS` waypoints keeps them in its sidecar instead. The segments (one per stretch
     between exact stops) are counted by kind and listed up to `ROWS`.
     """
     limits = {"velocity": ("peak_velocity", "limit_velocity", "deg/s"),
@@ -175,7 +175,8 @@ def compliance_report(report, robot, *, criteria=None, model=None, model_info=No
     if model is not None and not has_grid:
         missing.append(f"no grid: mode {mode} of this model uses no residual grid, so there is no grid box "
                        "and no outside-grid check")
-    section = None if timing is None else timing_section(timing, cycle_time_before, times=table["complete"])
+    long_times = timing is not None and len(timing.t) > ROWS  # its time stamps go to the sidecar
+    section = None if timing is None else timing_section(timing, cycle_time_before, times=not long_times)
     if section is None:
         missing.append("no timing: the program was not re-timed, so there are no cycle time and no peak "
                        "joint velocity, acceleration or jerk")
@@ -193,7 +194,7 @@ def compliance_report(report, robot, *, criteria=None, model=None, model_info=No
                             lines=lines[:ROWS], failing=len(lines)))
     checks.append(timing_check(section))
     data = None
-    if not table["complete"]:
+    if not table["complete"] or long_times:
         data = full_data(report, measures, flags, None if timing is None else timing.t)
     doc = header("compliance", command)
     doc.update({
