@@ -342,17 +342,28 @@ class TargetTable:
         changes = {"edited": self.edited.copy()}
         changes["edited"][index] = True
         if poses is not None:
-            changes["pose"] = self.pose.copy()
-            changes["pose"][index] = poses
+            changes["pose"] = _replaced(self.pose, index, poses)
         if joints is not None:
-            changes["joints"] = self.joints.copy()
-            changes["joints"][index] = joints
+            changes["joints"] = _replaced(self.joints, index, joints)
         if configs is not None:
             config = list(self.config)
             for k, i in enumerate(index):
                 config[i] = tuple(configs[k])
             changes["config"] = tuple(config)
         return dataclasses.replace(self, **changes)
+
+
+def _replaced(values, index, rows):
+    """``values`` (N, ...) with rows ``index`` set to ``rows``: a copy, or ``rows`` itself as a read-only view when
+    they replace every row in order (a long program fully compensated: no second copy)."""
+    rows = np.asarray(rows, dtype=values.dtype)
+    if rows.shape == values.shape and np.array_equal(index, np.arange(len(values))):
+        view = rows[:]
+        view.flags.writeable = False
+        return view
+    out = values.copy()
+    out[index] = rows
+    return out
 
 
 class _Rows(Sequence):
