@@ -2,7 +2,7 @@
 
 import io
 
-from trajcomp.progress import is_terminal, progress
+from trajcomp.progress import Stages, is_terminal, progress
 
 
 class Terminal(io.StringIO):
@@ -42,3 +42,23 @@ def test_closed_or_plain_objects_are_no_terminal():
     assert not is_terminal(closed)
     assert not is_terminal(object())
     assert is_terminal(Terminal())
+
+
+def test_stages_name_the_running_stage_and_count_every_one():
+    stream = Terminal()
+    seen = []
+    with Stages(("read", "compensate", "write"), desc="weld.csv", stream=stream, delay=0) as stages:
+        for _ in range(3):
+            seen.append(stages.bar.desc)
+            stages.advance()
+    assert seen == ["weld.csv: read", "weld.csv: compensate", "weld.csv: write"]
+    final = stream.getvalue().split("\r")[-1]
+    assert final.startswith("weld.csv: write: 100%") and "3/3" in final
+
+
+def test_disabled_stages_draw_nothing_even_on_a_terminal():
+    stream = Terminal()
+    with Stages(("read", "write"), desc="weld.csv", stream=stream, delay=0, enabled=False) as stages:
+        stages.advance()
+        stages.advance()
+    assert stream.getvalue() == ""

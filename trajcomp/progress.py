@@ -15,7 +15,7 @@ import sys
 DELAY = 0.5  # s: runs shorter than this never show a bar
 
 
-def progress(total, *, desc, unit="it", stream=None, delay=DELAY):
+def progress(total, *, desc, unit="it", stream=None, delay=DELAY, enabled=True):
     """A progress bar counting ``total`` units of work.
 
     Parameters
@@ -30,6 +30,8 @@ def progress(total, *, desc, unit="it", stream=None, delay=DELAY):
         Where the bar is drawn; default ``sys.stderr``.
     delay : float
         Seconds before the bar first appears, s.
+    enabled : bool
+        False: never drawn (e.g. inside a batch that shows its own bar).
 
     Returns
     -------
@@ -41,7 +43,42 @@ def progress(total, *, desc, unit="it", stream=None, delay=DELAY):
 
     stream = sys.stderr if stream is None else stream
     return tqdm(total=total, desc=desc, unit=unit, file=stream, delay=delay,
-                dynamic_ncols=True, disable=not is_terminal(stream))
+                dynamic_ncols=True, disable=not (enabled and is_terminal(stream)))
+
+
+class Stages:
+    """A progress bar over the named stages of one run (`progress`): call ``advance()`` as each stage ends.
+
+    The bar names the stage running (``weld.csv: re-time``); a program of
+    a million points spends tens of seconds in each.
+
+    Parameters
+    ----------
+    names : sequence of str
+        The stages in the order they run.
+    desc : str
+        What runs (e.g. the file name).
+    **options
+        ``stream``, ``delay``, ``enabled`` of `progress`.
+    """
+
+    def __init__(self, names, *, desc, **options):
+        self.names, self.desc = tuple(names), desc
+        self.bar = progress(len(self.names), desc=f"{desc}: {self.names[0]}", unit="stage", **options)
+
+    def __enter__(self):
+        self.bar.__enter__()
+        return self
+
+    def __exit__(self, *exc):
+        return self.bar.__exit__(*exc)
+
+    def advance(self):
+        """End the running stage; the bar names the next one."""
+        done = self.bar.n + 1
+        if done < len(self.names):
+            self.bar.set_description_str(f"{self.desc}: {self.names[done]}", refresh=False)
+        self.bar.update(1)
 
 
 def is_terminal(stream):

@@ -19,7 +19,7 @@ from trajcomp.errors import TrajcompError
 from trajcomp.model import MODES, load_model
 from trajcomp.postprocess import MAX_CORRECTION, compensate_program
 from trajcomp.posture import MAX_JOINT_CHANGE
-from trajcomp.progress import progress
+from trajcomp.progress import Stages, progress
 from trajcomp.report import Criteria, compliance_report, file_entry, model_entry, summary_lines
 from trajcomp.timing.path import TOLERANCE
 from trajcomp.transforms import matrix_to_pose
@@ -95,6 +95,9 @@ class CompensateJob:
     json_only: bool = False
     retime: str = "auto"
     path_tolerance: float = TOLERANCE
+    show_stages: bool = False  # a bar over STAGES on a terminal (one file; a batch shows files instead)
+
+    STAGES = ("read", "compensate", "re-time", "write", "report")
 
     def __call__(self, path, output):
         """Compensate ``path`` into ``output``; a `batch.FileResult` (raises TrajcompError on bad input)."""
@@ -106,34 +109,41 @@ class CompensateJob:
         The report goes to ``report`` or, with ``report_folder``, to
         ``report / <output name>`` (``.html`` and ``.json``).
         """
-        model = _model(self.model)
-        program = formats.read(path)
-        sources = list(dict.fromkeys(formats.input_paths(path, program)))
-        files = [file_entry("program", p) for p in sources]
-        correct = program_corrector(model, mode=self.mode, outside=self.outside, label=str(path))
-        corrected, report = compensate_program(
-            program, correct, model.nominal, tools=self.tools, frames=self.frames,
-            joint_targets=self.joint_targets, max_joint_change=self.max_joint_change,
-            max_correction=self.max_correction,
-        )
-        timing, timed, before = [], None, None
-        if self.retime != "none":
-            corrected, timed, before = retime_compensated(program, corrected, model.nominal, self.retime,
-                                                          self.path_tolerance, self.tools, self.frames,
-                                                          q_planned=report.q_planned)
-            timing = timing_lines(timed, before)
-        protect = () if self.in_place else sources
-        written = formats.write(output, corrected, protect=protect)
-        mode = self.mode or model.method
-        compliance = compliance_report(
-            report, model.nominal, criteria=self.criteria, model=model, model_info=_model_info(self.model, mode),
-            mode=mode, files=files + [file_entry("output", p) for p in written], options=self.options(),
-            timing=timed, cycle_time_before=before if timed is not None else None,
-        )
-        reports = []
-        if self.report:
-            target = Path(self.report) / Path(output).name if self.report_folder else Path(self.report)
-            reports = compliance.write(target, json_only=self.json_only)
+        with Stages(self.STAGES, desc=Path(path).name, enabled=self.show_stages) as stages:
+            model = _model(self.model)
+            program = formats.read(path)
+            sources = list(dict.fromkeys(formats.input_paths(path, program)))
+            files = [file_entry("program", p) for p in sources]
+            correct = program_corrector(model, mode=self.mode, outside=self.outside, label=str(path))
+            stages.advance()
+            corrected, report = compensate_program(
+                program, correct, model.nominal, tools=self.tools, frames=self.frames,
+                joint_targets=self.joint_targets, max_joint_change=self.max_joint_change,
+                max_correction=self.max_correction,
+            )
+            stages.advance()
+            timing, timed, before = [], None, None
+            if self.retime != "none":
+                corrected, timed, before = retime_compensated(program, corrected, model.nominal, self.retime,
+                                                              self.path_tolerance, self.tools, self.frames,
+                                                              q_planned=report.q_planned)
+                timing = timing_lines(timed, before)
+            stages.advance()
+            protect = () if self.in_place else sources
+            written = formats.write(output, corrected, protect=protect)
+            stages.advance()
+            mode = self.mode or model.method
+            compliance = compliance_report(
+                report, model.nominal, criteria=self.criteria, model=model,
+                model_info=_model_info(self.model, mode), mode=mode,
+                files=files + [file_entry("output", p) for p in written], options=self.options(),
+                timing=timed, cycle_time_before=before if timed is not None else None,
+            )
+            reports = []
+            if self.report:
+                target = Path(self.report) / Path(output).name if self.report_folder else Path(self.report)
+                reports = compliance.write(target, json_only=self.json_only)
+            stages.advance()
         lines = [*summary_lines(compliance.doc), *(f"warning: {w}" for w in report.warnings), *timing,
                  f"wrote {', '.join(map(str, written + reports))}"]
         status, message = batch.PASS, ""
@@ -187,7 +197,7 @@ def run(args):
     single = len(args.program) == 1 and not Path(first).is_dir() and not glob.has_magic(first) \
         and not Path(args.output).is_dir()
     if single:
-        result, compliance = job.run(Path(args.program[0]), Path(args.output))
+        result, compliance = dataclasses.replace(job, show_stages=True).run(Path(first), Path(args.output))
         if args.json_only and not args.report:
             sys.stdout.write(compliance.json_text())
         for line in result.lines:
