@@ -289,3 +289,14 @@ def test_a_ptp_to_xhome_is_a_joint_position_kept_not_a_motion_left_uncompensated
     _, report = compensate_program(program, _stand_in(robot, np.array([0.1, 0.0, 0.0])), robot)
     assert report.not_compensated == ()
     assert report.joint_targets == ("PTP XHOME (line 2)", "PTP XHOME (line 4)")
+
+
+def test_a_program_in_metres_is_refused_with_the_unit_named(tmp_path):
+    """Positions a thousand times too small all lie inside the robot's base: refused, the unit named."""
+    robot = load_robot("ur10")
+    T = fk(robot, np.radians([[10.0, -100.0, 100.0, -90.0, 90.0, 0.0], [20.0, -90.0, 90.0, -90.0, 90.0, 0.0]]))
+    rows = ["x,y,z,a,b,c"] + [",".join(f"{v:.6f}" for v in [*pose[:3, 3] / 1000.0,
+                                                          *np.degrees(matrix_to_abc(pose[:3, :3]))]) for pose in T]
+    (tmp_path / "metres.csv").write_text("\n".join(rows) + "\n")
+    with pytest.raises(IKError, match=r"metres: every target lies within 10 mm of the robot base origin.*metres\?"):
+        planned_joints(formats.read(tmp_path / "metres.csv"), robot)

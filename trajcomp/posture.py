@@ -38,6 +38,7 @@ TURN = 2.0 * np.pi
 MAX_JOINT_CHANGE = np.radians(5.0)  # rad: default bound of the joint change a correction may cause
 _WINDOW_TOL = 1e-9  # rad, slack of the joint limits
 _TURNS = np.arange(-3, 4)  # whole turns tried when placing a joint in its window
+METRES_BOX = 10.0  # mm: targets all this close to the base origin are positions in metres
 BLOCK = 16_384  # undeclared targets whose eight branches are held at once: bounded memory at millions of targets
 
 
@@ -115,6 +116,7 @@ def planned_joints(program, robot, *, tools=None, frames=None):
     index = planned_targets(program)
     T_base_frame, T_flange_tool, T_base_tcp = FrameTable(program, robot, tools, frames).targets_in_base(index)
     n = len(index)
+    _fail_in_metres(program, T_base_tcp)
     branches = functools.partial(_all_branches, robot, T_base_tcp, T_flange_tool)
     hint = table.joints[index]
     has_hint = np.all(np.isfinite(hint), axis=1)
@@ -213,6 +215,15 @@ def _fail_outside_limits(program, robot, index, joints):
         raise IKError(
             f"{program.name}: {outside.size} targets declare joints outside the limits of robot {robot.name} "
             f"({shown}); wrong robot, or joints in the wrong unit? The program was not changed"
+        )
+
+
+def _fail_in_metres(program, T_base_tcp):
+    """IKError for a program whose every target lies within `METRES_BOX` of the base origin: metres, not mm."""
+    if len(T_base_tcp) and np.abs(T_base_tcp[:, :3, 3]).max() < METRES_BOX:
+        raise IKError(
+            f"{program.name}: every target lies within {METRES_BOX:g} mm of the robot base origin, inside the "
+            "robot itself: are the positions in metres? trajcomp reads millimetres; the program was not changed"
         )
 
 
