@@ -30,6 +30,6 @@ def kuka_model(tmp_path_factory):
     assert main(["plan", "--robot", "kuka_kr6_r900", "--cube", "400,-50,650", "--side", "200", "--step", "50",
                  "-o", str(plan)]) == 0
     assert main(["simulate", str(plan), "--robot", "kuka_kr6_r900", "--seed", "1", "-o", str(meas)]) == 0
-    assert main(["calibrate", str(meas), "--robot", "kuka_kr6_r900", "--grid-step", "50", "--folds", "0",
+    assert main(["calibrate", str(meas), "--robot", "kuka_kr6_r900", "--grid-step", "50", "--folds", "3",
                  "-o", str(model)]) == 0
     return model

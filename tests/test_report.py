@@ -188,3 +188,16 @@ def test_no_compensable_motion_says_so_instead_of_empty_tables(model):
     assert {c["status"] for c in report.doc["verdict"]["criteria"] if c["id"] != "model_accuracy"} >= {"not evaluated"}
     assert report.figures == ()
     assert report.passed
+
+
+def test_without_cross_validation_a_grid_mode_is_not_judged_by_its_own_nodes(model):
+    """--folds 0: a grid reproduces its nodes (fit p95 ~ 0), so composite is not evaluated; dh uses its fit, said so."""
+    assert "composite" in model.report["cross_validation"]  # the fixture's model is cross-validated
+    no_cv = dataclasses.replace(model, report={k: v for k, v in model.report.items() if k != "cross_validation"})
+    assert model.report["fit"]["composite"]["p95"] < 1e-6  # the meaningless pass this guards against
+    composite = _criteria(compliance_report(_report(_targets()), KUKA, model=no_cv, mode="composite").doc)
+    assert composite["model_accuracy"][0] == "not evaluated"
+    dh = compliance_report(_report(_targets()), KUKA, model=no_cv, mode="dh").doc
+    check = next(c for c in dh["verdict"]["criteria"] if c["id"] == "model_accuracy")
+    expected = "pass" if model.report["fit"]["dh"]["p95"] <= Criteria().tolerance else "fail"
+    assert check["status"] == expected and "calibration fit (in-sample)" in check["statement"]

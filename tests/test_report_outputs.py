@@ -1,6 +1,7 @@
 """Report files: JSON valid against the shipped schema, self-contained HTML, CLI exit codes, calibration figures."""
 
 import base64
+import dataclasses
 import json
 import re
 import subprocess
@@ -154,7 +155,9 @@ def test_calibration_report_with_repeats_is_valid_and_embeds_its_figures(kuka_mo
     assert doc["iso9283"]["available"] and doc["iso9283"]["cycles_max"] == 2
     assert doc["iso9283"]["rp_max_mm"] == pytest.approx(0.01, abs=1e-9)  # 2 points 0.02 mm apart: l 0.01, S_l 0
     assert doc["parameters"]["identified"] and doc["validity"]["orientations"]["distinct"] == 1
-    assert any(m.startswith("no cross-validation") for m in doc["missing"])  # the fixture ran --folds 0
+    assert not any(m.startswith("no cross-validation") for m in doc["missing"])  # the fixture ran --folds 3
+    no_cv = dataclasses.replace(model, report={k: v for k, v in model.report.items() if k != "cross_validation"})
+    assert any(m.startswith("no cross-validation") for m in calibration_report(no_cv, twice).doc["missing"])
     figures = _self_contained(report.html_text())
     assert len(figures) == len(report.figures) == 3
 

@@ -101,7 +101,7 @@ def verdict(checks):
     return {"result": FAIL if failed else PASS, "criteria": [c.as_dict() for c in checks]}
 
 
-def accuracy_check(stats, mode, tolerance, source):
+def accuracy_check(stats, mode, tolerance, source, missing=None):
     """The model-accuracy criterion: 95th percentile |error| of ``mode`` within the tolerance.
 
     Parameters
@@ -114,10 +114,12 @@ def accuracy_check(stats, mode, tolerance, source):
     source : str
         Where the statistics come from (``"5-fold cross-validation"``,
         ``"validation measurements"``), for the statement.
+    missing : str, optional
+        Why there are no statistics (default: the model has none of the mode).
     """
     statement = f"95 % of {source} errors in mode {mode} within {tolerance:g} mm"
     if not stats:
-        return not_evaluated("model_accuracy", statement, f"no statistics of mode {mode} in the model")
+        return not_evaluated("model_accuracy", statement, missing or f"no statistics of mode {mode} in the model")
     p95 = stats["p95"]
     return Check("model_accuracy", statement, PASS if p95 <= tolerance else FAIL,
                  f"p95 |error| {p95:.4f} mm (mean {stats['mean']:.4f}, max {stats['max']:.4f} mm, {stats['n']} points)")
