@@ -16,11 +16,11 @@ import numpy as np
 
 from trajcomp.configuration import configuration_for, describe
 from trajcomp.errors import CompensationError
+from trajcomp.ik import pose_error
 from trajcomp.kinematics import fk
 from trajcomp.frames import FrameTable, in_frames
 from trajcomp.posture import MAX_JOINT_CHANGE, check_posture, planned_joints
 from trajcomp.program import Program
-from trajcomp.transforms import matrix_to_rotvec
 
 FRAMELESS = frozenset({"csv", "urscript"})  # languages whose poses are always in the base frame
 
@@ -264,11 +264,9 @@ def _warnings(program):
 
 
 def _correction(T_target, T_command):
-    """Command minus target (N, 6): position (mm) and rotation vector (deg) of R_command R_target^T."""
-    out = np.zeros((len(T_target), 6))
-    if len(T_target):
-        out[:, :3] = T_command[:, :3, 3] - T_target[:, :3, 3]
-        out[:, 3:] = np.degrees(matrix_to_rotvec(T_command[:, :3, :3] @ np.swapaxes(T_target[:, :3, :3], 1, 2)))
+    """Command minus target (N, 6): position (mm) and rotation vector (deg) of R_command R_target^T (`pose_error`)."""
+    out = pose_error(T_target, T_command) if len(T_target) else np.zeros((0, 6))
+    out[:, 3:] = np.degrees(out[:, 3:])
     return out
 
 
