@@ -13,6 +13,7 @@ Targets (issue 11): >= 50,000 waypoints/s at 300,000 points, < 1 GB peak at
 1,000,000 points, start-up < 0.3 s.
 """
 
+import contextlib
 import os
 import subprocess
 import sys
@@ -64,14 +65,10 @@ def run_cli(args):
 
 def make_model(folder):
     plan, meas, model = folder / "plan.csv", folder / "meas.csv", folder / "model.yaml"
-    quiet = open(os.devnull, "w")
-    sys.stderr, stderr = quiet, sys.stderr
-    try:
+    with open(os.devnull, "w") as quiet, contextlib.redirect_stdout(quiet), contextlib.redirect_stderr(quiet):
         main(["plan", "--robot", "ur10", "--cube", "300,-100,300", "--side", "500", "--step", "100", "-o", str(plan)])
         main(["simulate", str(plan), "--robot", "ur10", "--seed", "1", "-o", str(meas)])
         main(["calibrate", str(meas), "--robot", "ur10", "--grid-step", "100", "--folds", "0", "-o", str(model)])
-    finally:
-        sys.stderr = stderr
     return model
 
 
