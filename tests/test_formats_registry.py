@@ -83,3 +83,11 @@ def test_broken_plugin_is_named_in_the_error(plugins):
         formats.find_format("x.unknown")
     assert "broken" in formats.plugin_failures()
     assert "toy" in [f.name for f in formats.formats()]
+
+
+def test_mask_blanks_comments_and_string_contents_keeping_offsets():
+    from trajcomp.formats._text import mask
+
+    text = 'LIN P1 ; go "fast"\r\nMSG="a;b" ; c\nX="ab\ncd'
+    assert mask(text, ";") == 'LIN P1 ' + " " * 11 + '\r\nMSG="   " ' + " " * 3 + '\nX="  \n  '
+    assert mask("a // b\n// c", "//") == "a     \n    "

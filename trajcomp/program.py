@@ -529,9 +529,9 @@ class Program:
         """
         return cls(format, name, ItemRows(statements, motions, text), TargetRows(targets), sources=sources)
 
-    @property
+    @functools.cached_property
     def motions(self):
-        """The motion items, in program order."""
+        """The motion items, in program order (built once: code indexes it in loops over motions)."""
         if isinstance(self.items, ItemRows):
             return self.items.motions
         return tuple(item for item in self.items if isinstance(item, Motion))

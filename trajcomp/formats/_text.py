@@ -9,6 +9,7 @@ the numbers of edited targets, formatted like the file wrote them.
 
 import bisect
 import dataclasses
+import functools
 import math
 import re
 from pathlib import Path
@@ -54,26 +55,29 @@ def mask(text, comment, quote='"'):
     """``text`` with comments (from ``comment`` to the line end) and string contents blanked.
 
     The result has the same length and line breaks, so offsets and line
-    numbers found in it hold for ``text``.
+    numbers found in it hold for ``text``. Scanned left to right: a comment
+    mark inside a string and a quote inside a comment are plain text.
     """
-    out = list(text)
-    i, n = 0, len(text)
-    while i < n:
-        ch = text[i]
-        if ch == quote:
-            end = text.find(quote, i + 1)
-            end = n if end < 0 else end
-            for k in range(i + 1, end):
-                if out[k] not in "\r\n":
-                    out[k] = " "
-            i = end + 1
-        elif text.startswith(comment, i):
-            while i < n and text[i] not in "\r\n":
-                out[i] = " "
-                i += 1
-        else:
-            i += 1
-    return "".join(out)
+    return _masked_parts(comment, quote).sub(_blanked, text)
+
+
+@functools.lru_cache(maxsize=None)
+def _masked_parts(comment, quote):
+    """The pattern of a string (group 1: its contents, to the closing quote or the end) or a comment."""
+    q, c = re.escape(quote), re.escape(comment)
+    return re.compile(f"{q}([^{q}]*)(?:{q}|\\Z)|{c}[^\r\n]*")
+
+
+def _blanked(match):
+    """A string with its contents blanked (quotes and line breaks kept), or a comment blanked."""
+    if match.group(1) is None:
+        return " " * len(match.group(0))
+    start, end = match.span(1)
+    return match.group(0)[: start - match.start()] + _NOT_LINE_BREAK.sub(" ", match.group(1)) + \
+        match.group(0)[end - match.start():]
+
+
+_NOT_LINE_BREAK = re.compile(r"[^\r\n]")
 
 
 class Lines:
