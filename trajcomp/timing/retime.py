@@ -38,7 +38,7 @@ from trajcomp.timing.windows import WINDOW, run_windows
 METHODS = ("auto", "toppra", "ruckig")
 _BLOCK = 65536  # waypoints per block of the per-waypoint passes over a long run
 STOP_BATCH = 500  # single motions from rest to rest timed together at most
-_RETRIES = 4  # timings of one segment with lowered limits before giving up
+_RETRIES = 6  # timings of one segment with lowered limits before giving up
 _TARGET = 1.0 + 0.5 * LIMIT_TOLERANCE  # re-time a segment whose samples exceed a limit by more than this
 
 
@@ -176,7 +176,8 @@ def _timed(kind, runs, moves, robot):
         if peaks.worst <= _TARGET:
             break
         velocity = velocity / np.maximum(peaks.velocity_ratio, 1.0)
-        acceleration = acceleration / np.maximum(peaks.acceleration_ratio, 1.0)
+        # an overshoot between grid points shrinks slower than the limit lowered by its ratio: lower it more
+        acceleration = acceleration / np.maximum(peaks.acceleration_ratio, 1.0) ** 1.5
         speed = speed / max(peaks.speed_ratio, 1.0)
     return laws, peaks
 
