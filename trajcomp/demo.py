@@ -157,7 +157,7 @@ def run_cube(virtual, cube, *, validation=40, seed=0):
     q = plan.joints[plan.reachable]
     meas = Measurements(joints=q, position=plan.position[plan.reachable], measured=virtual.measure(q, rng),
                         lines=np.arange(len(q)) + 1, path=f"<virtual {cube.name} cube>")
-    model = calibrate(robot, meas, robot_ref=robot.name, method="composite", grid_step=cube.step, folds=0)
+    model = calibrate(robot, meas, robot_ref=robot.name, method="composite", grid_step=cube.step, folds=5)
     targets = np.tile(np.eye(4), (validation, 1, 1))
     targets[:, :3, :3] = abc_to_matrix(default_orientation(robot))
     targets[:, :3, 3] = np.asarray(cube.corner) + rng.uniform(0.0, cube.side, (validation, 3))
