@@ -21,6 +21,7 @@ from trajcomp.kinematics import fk
 from trajcomp.program import JOINT, LINEAR
 from trajcomp.robot import load_robot
 from trajcomp.timing import Moves, retime
+from trajcomp.timing.toppra_run import ConstantAcceleration
 from trajcomp.transforms import abc_to_matrix, matrix_to_abc
 
 UR10 = load_robot("ur10")
@@ -119,6 +120,36 @@ def test_sharp_blended_corners_meet_the_limits_in_the_dense_check(tmp_path):
             (399.713, 218.250, 608.876)]]
     (tmp_path / "corners.csv").write_text("\n".join(rows) + "\n")
     assert main(["retime", str(tmp_path / "corners.csv"), "-o", str(tmp_path / "out.csv"), "--robot", "ur10"]) == 0
+
+
+def test_an_overshoot_lower_limits_do_not_reach_is_met_by_running_slower(tmp_path, monkeypatch):
+    """11 lines with 1 mm zones where J2 stays 4-6 % over in the blends however low its acceleration limit:
+    the best timing runs uniformly slower, by no more than the overshoot needs."""
+    rows = ["x,y,z,a,b,c,motion,speed,zone", "672.486,76.581,409.615,90,0,180,PTP,,1"] + [
+        f"{x},{y},{z},90,0,180,LIN,250,1" for x, y, z in [
+            (629.405, 129.418, 669.576), (444.207, 77.914, 669.952), (552.827, 152.554, 444.478),
+            (355.815, 323.290, 384.330), (687.971, 97.152, 730.409), (509.770, 324.577, 572.464),
+            (446.054, 246.569, 619.756), (623.682, 135.530, 438.755), (606.376, -7.164, 626.889),
+            (604.155, 100.605, 669.409), (427.610, 106.184, 669.174)]]
+    (tmp_path / "blends.csv").write_text("\n".join(rows) + "\n")
+    stretched = []
+    original = ConstantAcceleration.stretched
+    monkeypatch.setattr(ConstantAcceleration, "stretched",
+                        lambda law, factor: stretched.append(factor) or original(law, factor))
+    assert main(["retime", str(tmp_path / "blends.csv"), "-o", str(tmp_path / "out.csv"), "--robot", "ur10"]) == 0
+    assert stretched and all(1.0 < f < 1.05 for f in stretched)  # sqrt of a 4-6 % acceleration overshoot, and margin
+
+
+def test_a_stretched_law_runs_the_same_path_slower():
+    law = ConstantAcceleration.from_speeds(np.array([0.0, 0.5, 1.5, 2.0]), np.array([0.0, 1.0, 2.0, 0.0]))
+    slow = law.stretched(2.0)
+    assert slow.duration == pytest.approx(2.0 * law.duration)
+    t = np.linspace(0.0, law.duration, 37)
+    s, sd, sdd = law(t)
+    s2, sd2, sdd2 = slow(2.0 * t)
+    np.testing.assert_allclose(s2, s, atol=1e-12)
+    np.testing.assert_allclose(sd2, sd / 2.0, atol=1e-12)
+    np.testing.assert_allclose(sdd2, sdd / 4.0, atol=1e-12)
 
 
 def test_duplicated_and_zero_length_waypoints_take_no_time(tmp_path):

@@ -160,7 +160,13 @@ def plan_segments(moves, method="auto"):
 
 
 def _timed(kind, runs, moves, robot):
-    """Time a run's windows, lowering the limits a sample exceeds until the dense check passes: (laws, Peaks)."""
+    """Time a run's windows, lowering the limits a sample exceeds until the dense check passes: (laws, Peaks).
+
+    A TOPP-RA run still over a limit after `_RETRIES` timings (an overshoot
+    between grid points that lower limits do not reach, e.g. inside a tight
+    blend where the programmed speed binds) runs its best timing uniformly
+    slower, by the factor that brings every sample within the limits.
+    """
     if kind == "toppra":
         from trajcomp.timing.toppra_run import toppra_laws as laws_of
     else:  # a ruckig run is one window
@@ -169,17 +175,30 @@ def _timed(kind, runs, moves, robot):
         def laws_of(runs, *args):
             return [ruckig_law(runs[0], *args)]
     velocity, acceleration, speed = np.ones(6), np.ones(6), 1.0
+    best = None
     for _ in range(_RETRIES):
         laws = laws_of(runs, moves, robot, velocity, acceleration, speed)
-        peaks = Peaks.worst_of([segment_peaks(run, law, moves, jerk=kind == "ruckig")
-                                for run, law in zip(runs, laws) if law is not None])
+        peaks = _peaks(kind, runs, laws, moves)
+        if best is None or peaks.worst < best[1].worst:
+            best = laws, peaks
         if peaks.worst <= _TARGET:
             break
         velocity = velocity / np.maximum(peaks.velocity_ratio, 1.0)
         # an overshoot between grid points shrinks slower than the limit lowered by its ratio: lower it more
         acceleration = acceleration / np.maximum(peaks.acceleration_ratio, 1.0) ** 1.5
         speed = speed / max(peaks.speed_ratio, 1.0)
+    laws, peaks = best
+    if peaks.worst > _TARGET and kind == "toppra":
+        factor = _TARGET * max(np.sqrt(peaks.acceleration_ratio.max()), peaks.velocity_ratio.max(), peaks.speed_ratio)
+        laws = [None if law is None else law.stretched(factor) for law in laws]
+        peaks = _peaks(kind, runs, laws, moves)
     return laws, peaks
+
+
+def _peaks(kind, runs, laws, moves):
+    """The dense check's worst of a run's timed windows."""
+    return Peaks.worst_of([segment_peaks(run, law, moves, jerk=kind == "ruckig")
+                           for run, law in zip(runs, laws) if law is not None])
 
 
 def _turn_warnings(moves, arrived):

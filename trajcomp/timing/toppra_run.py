@@ -60,6 +60,10 @@ class ConstantAcceleration:
     def duration(self):
         return float(self.t[-1])
 
+    def stretched(self, factor):
+        """The same path run ``factor`` (>= 1) times slower: speeds / factor, accelerations / factor^2."""
+        return dataclasses.replace(self, sd=self.sd / factor, t=self.t * factor, u=self.u / factor**2)
+
     def __call__(self, t):
         """s, sd, sdd (each (N,)) at times t (N,)."""
         i = np.clip(np.searchsorted(self.t, t, side="right") - 1, 0, len(self.u) - 1)
