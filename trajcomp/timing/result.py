@@ -1,6 +1,7 @@
 """What re-timing produced: time stamps, segments with their speed settings, and the dense check."""
 
 import dataclasses
+from collections.abc import Mapping
 
 import numpy as np
 
@@ -152,12 +153,23 @@ class TimingResult:
         return q, qd, qdd
 
     def with_settings(self, settings):
-        """A copy whose segments carry the written settings (``{waypoint index: text}``)."""
-        segments = tuple(
-            dataclasses.replace(s, settings=tuple(settings.get(k, "") for k in range(s.first + 1, s.last + 1)))
-            for s in self.segments
-        )
-        return dataclasses.replace(self, segments=segments)
+        """A copy whose segments carry the written settings.
+
+        Parameters
+        ----------
+        settings : Mapping[int, str] or Sequence[str]
+            ``{waypoint index: text}`` for the waypoints that got one, or a
+            text for every waypoint (M,) (a long CSV program: its segments
+            share the texts instead of a dict of them).
+        """
+        if isinstance(settings, Mapping):
+            def texts(s):
+                return tuple(settings.get(k, "") for k in range(s.first + 1, s.last + 1))
+        else:
+            def texts(s):
+                return tuple(settings[s.first + 1 : s.last + 1])
+        return dataclasses.replace(self, segments=tuple(dataclasses.replace(s, settings=texts(s))
+                                                        for s in self.segments))
 
     def lines_of_text(self, before=None):
         """Summary lines: per joint peaks against limits, cycle time (and before, s)."""

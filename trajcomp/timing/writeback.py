@@ -101,10 +101,10 @@ def _floor(value, places):
 
 def _csv(program, result, robot):
     """The ``t`` column: each row's time stamp (`trajcomp.formats.csv_program.with_times`)."""
-    times = np.full(len(program.motions), np.nan)
+    times = np.full(len(program.motion_table()), np.nan)
     times[result.motion] = result.t
     timed, written = with_times(program, times)
-    return timed, {k: f"t={written[m]}" for k, m in enumerate(result.motion.tolist())}
+    return timed, ["t=" + written[m] for m in result.motion.tolist()]
 
 
 def _rapid(program, result, robot):
