@@ -70,3 +70,9 @@ def test_missing_folder_writes_nothing(tmp_path):
     with pytest.raises(WriteError, match="does not exist"):
         write_files_atomic({tmp_path / "a.txt": b"a", tmp_path / "no" / "b.txt": b"b"})
     assert list(tmp_path.iterdir()) == []
+
+
+def test_content_given_in_pieces_is_written_in_order(tmp_path):
+    target = tmp_path / "long.csv"
+    write_files_atomic({target: [b"x,y\n", b"1,2\n", b"3,4"]})
+    assert target.read_bytes() == b"x,y\n1,2\n3,4"

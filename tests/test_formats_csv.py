@@ -104,12 +104,13 @@ def _mixed_rows():
 
 
 @pytest.mark.parametrize("block", [1, 2, 3])
-def test_rows_read_and_written_in_blocks_equal_one_block(tmp_path, monkeypatch, block):
+@pytest.mark.parametrize("ending", ["\n", "\r\n"])
+def test_rows_read_and_written_in_blocks_equal_one_block(tmp_path, monkeypatch, block, ending):
     """Blocks of 1 to 3 rows (the reader and writer work a block at a time) give the tables and bytes of one block."""
     from trajcomp.formats import csv_program
 
     path = tmp_path / "mixed.csv"
-    path.write_text("\n".join(_mixed_rows()) + "\n")
+    path.write_bytes(ending.join(_mixed_rows()).encode())  # no line ending after the last row
 
     def run():
         program = formats.read(path)
@@ -127,7 +128,7 @@ def test_rows_read_and_written_in_blocks_equal_one_block(tmp_path, monkeypatch, 
         np.testing.assert_array_equal(getattr(program.target_table(), name), getattr(reference.target_table(), name))
     assert list(program.motion_table().kind) == ["joint", "linear", "joint", "linear", "linear", "linear"]
     np.testing.assert_array_equal(program.motion_table().speed, [np.nan, 100, np.nan, 100, 50, 50])
-    assert written == expected
+    assert written == expected and written.count(ending.encode()) == len(_mixed_rows()) - 1
     assert written.decode().splitlines()[6] == "4,620.375,-99.625,1.500,0.0,90.0,0.0,LIN,100,,5.0000,-85.0000,85.0000," \
                                                "1.0000,44.0000,2.0000"
 

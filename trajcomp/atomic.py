@@ -55,8 +55,9 @@ def write_files_atomic(files):
 
     Parameters
     ----------
-    files : Mapping[str or Path, bytes]
-        Destination paths and their content.
+    files : Mapping[str or Path, bytes or list of bytes]
+        Destination paths and their content (a list: pieces written in order,
+        for a long file that is never joined in memory).
 
     Raises
     ------
@@ -87,7 +88,7 @@ def _stage(path, data):
         raise WriteError(f"{path}: cannot write: {exc.strerror}") from exc
     try:
         with os.fdopen(fd, "wb") as handle:
-            handle.write(data)
+            handle.writelines(data if isinstance(data, list) else [data])
         os.chmod(tmp, _mode_for(path))
     except OSError as exc:
         Path(tmp).unlink(missing_ok=True)

@@ -71,7 +71,7 @@ def register_format(name, extensions, reader, writer, *, source="built-in"):
     reader : callable or str
         ``reader(path) -> Program``, or ``"module:function"``.
     writer : callable or str
-        ``writer(program, path) -> {Path: bytes}``, or ``"module:function"``.
+        ``writer(program, path) -> {Path: bytes}`` (or a list of bytes pieces, for a long file), or ``"module:function"``.
     source : str
         Shown by ``trajcomp formats``.
     """

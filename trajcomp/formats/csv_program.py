@@ -67,10 +67,21 @@ def _split(text):
 
 
 def _join(lines, endings):
-    """The text of `_split`'s lines and endings."""
-    if endings.count("\n") == len(endings):
-        return "\n".join(lines)
-    return "".join(line + ending for line, ending in zip(lines, endings + [""]))
+    """The text of `_split`'s lines and endings (consumes ``lines``)."""
+    return "".join(_pieces(lines, endings))
+
+
+def _pieces(lines, endings):
+    """The text of `_split`'s lines and endings, `BLOCK` lines a piece; each line is released once joined."""
+    uniform = endings.count("\n") == len(endings)
+    for a in range(0, len(lines), BLOCK):
+        b = min(a + BLOCK, len(lines))
+        if uniform:
+            piece = "\n".join(lines[a:b]) + ("\n" if b < len(lines) else "")
+        else:
+            piece = "".join(map(str.__add__, lines[a:b], endings[a:b])) + (lines[-1] if b == len(lines) else "")
+        lines[a:b] = [None] * (b - a)
+        yield piece
 
 
 def _cells(line):
@@ -255,12 +266,13 @@ def write(program, path):
     """The CSV text of a program: patched in place if read from CSV, else generated."""
     if program.format == "csv" and program.sources:
         source = program.sources[0]
-        return {path: encode_text(source, _patched(program, source.text))}
+        return {path: [encode_text(source, piece) for piece in _pieces(*_patched(program, source.text))]}
     return {path: _emit(program).encode("utf-8")}
 
 
 def _patched(program, text):
-    """``text`` with the edited targets' numbers rewritten, and j1..j6 appended when the file has no such columns."""
+    """The lines and line endings (`_split`) of ``text`` with the edited targets' numbers rewritten, and j1..j6
+    appended when the file has no such columns."""
     lines, endings = _split(text)
     number = _header_line(lines)
     header = [_value(c).lower() for c in _cells(lines[number - 1])]
@@ -281,9 +293,10 @@ def _patched(program, text):
             lines[n - 1] = line
     if "j1" not in header and np.isfinite(targets.joints[edited]).all(axis=1).any():
         lines[number - 1] += "," + ",".join(JOINTS)
-        for n, cells in zip(targets.line.tolist(), _degrees_cells(targets.joints)):
-            lines[n - 1] += "," + cells
-    return _join(lines, endings)
+        for k in range(0, len(targets), BLOCK):
+            for n, cells in zip(targets.line[k : k + BLOCK].tolist(), _degrees_cells(targets.joints[k : k + BLOCK])):
+                lines[n - 1] += "," + cells
+    return lines, endings
 
 
 def _in_cells(cells, values, changed, texts):
