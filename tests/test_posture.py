@@ -17,7 +17,7 @@ from trajcomp.cli import main
 from trajcomp.compensate import CompensationResult
 from trajcomp.configuration import configuration_for, declared_windows
 from trajcomp.errors import CompensationError, IKError
-from trajcomp.ik import configuration_of, ik
+from trajcomp.ik import configuration_of, ik, ik_all
 from trajcomp.kinematics import fk
 from trajcomp.postprocess import compensate_program
 from trajcomp.posture import planned_joints
@@ -65,6 +65,23 @@ def test_a_long_undeclared_run_keeps_turning_across_planning_blocks(tmp_path, mo
     assert plan.source == ("home",) + ("previous",) * 30
     assert np.allclose(plan.q[:, :5], plan_q0[:5], atol=1e-6)
     assert np.allclose(np.abs(plan.q[:, 5] - plan_q0[5]), step * np.arange(31), atol=1e-6)  # 300 deg, no unwinding
+
+
+def test_a_target_visited_again_keeps_the_posture_of_its_first_visit(tmp_path):
+    """LIN P1, PTP to a joint target on the other wrist branch, LIN P1 again: P1 is solved once, from home."""
+    robot = load_robot("kuka_kr6_r900")
+    point = "DECL POS P1={X 500,Y 100,Z 600,A 0,B 90,C 0}"  # no S, T: undeclared
+    (tmp_path / "one.dat").write_text(f"DEFDAT one\n{point}\nENDDAT\n")
+    (tmp_path / "one.src").write_text("DEF one( )\nLIN P1\nEND\n")
+    alone = planned_joints(formats.read(tmp_path / "one.src"), robot)
+    q_all, valid = ik_all(robot, alone.T_base_tcp)
+    flipped = next(k for k in np.flatnonzero(valid[0]) if k != configuration_of(robot, alone.q[0]).index)
+    axes = ",".join(f"A{j + 1} {v:.6f}" for j, v in enumerate(np.degrees(q_all[0, flipped])))
+    (tmp_path / "again.dat").write_text(f"DEFDAT again\n{point}\nDECL E6AXIS JB={{{axes}}}\nENDDAT\n")
+    (tmp_path / "again.src").write_text("DEF again( )\nLIN P1\nPTP JB\nLIN P1\nEND\n")
+    plan = planned_joints(formats.read(tmp_path / "again.src"), robot)
+    assert plan.source == ("home",)
+    np.testing.assert_allclose(plan.q, alone.q, atol=1e-9)
 
 
 def _rot_z(angle):

@@ -251,28 +251,29 @@ def _declaration(target, source):
 def _runs(program, robot, index, q, source):
     """Runs of undeclared rows in motion order, each with the joints (6,) of the position before it.
 
-    Yields ``(rows, anchor, from_home)``: consecutive undeclared Cartesian
-    targets (rows of ``index``, each once) and the joints the arm has
-    before the first of them (a planned declared target, a joint target, or
-    home when nothing comes before).
+    Yields ``(rows, anchor, from_home)``: consecutive first visits of
+    undeclared Cartesian targets (rows of ``index``) and the joints the arm
+    has before the first of them: a planned declared target, a joint target,
+    home when nothing comes before, or a target visited again (solved at its
+    first visit, which its posture keeps: the arm is there).
     """
     visits = _visits(program)
     row_of = np.full(len(program.targets), -1)
     row_of[index] = np.arange(len(index))
     rows = row_of[visits]
-    undeclared = rows >= 0
+    undeclared = np.zeros(len(rows), dtype=bool)
+    undeclared[np.unique(rows, return_index=True)[1]] = True
+    undeclared &= rows >= 0
     undeclared[undeclared] = np.asarray(source, dtype=object)[rows[undeclared]] == ""
     edges = np.flatnonzero(np.diff(np.concatenate([[0], undeclared.astype(int), [0]])))
     joints = program.target_table().joints
     for begin, end in zip(edges[0::2], edges[1::2]):
-        run = rows[begin:end]
-        _, first = np.unique(run, return_index=True)
         if begin == 0:
             anchor, from_home = robot.home, True
         else:
             before = rows[begin - 1]
             anchor, from_home = (q[before] if before >= 0 else joints[visits[begin - 1]]), False
-        yield run[np.sort(first)], anchor, from_home
+        yield rows[begin:end], anchor, from_home
 
 
 def _chain(program, robot, index, q, branches, source):
