@@ -17,7 +17,9 @@ joints, ``j1..j6`` (added as columns when the file has none); `with_times`
 sets the ``t`` column.
 """
 
+import contextlib
 import difflib
+import gc
 import math
 import re
 
@@ -126,10 +128,11 @@ def read(path):
     n = len(rows)
     pose, joints, kind, speed, zone = (np.empty((n, 4, 4)), np.empty((n, 6)), np.empty(n, dtype=object),
                                        np.empty(n), np.empty(n))  # filled a block at a time: no second copy
-    for k in range(0, n, BLOCK):
-        block, part = rows[k : k + BLOCK], slice(k, k + BLOCK)
-        pose[part], joints[part], kind[part], speed[part], zone[part] = _parse_block(
-            source.name, header, [lines[number - 1] for number in block.tolist()], block)
+    with _collection_paused():
+        for k in range(0, n, BLOCK):
+            block, part = rows[k : k + BLOCK], slice(k, k + BLOCK)
+            pose[part], joints[part], kind[part], speed[part], zone[part] = _parse_block(
+                source.name, header, [lines[number - 1] for number in block.tolist()], block)
     motions = MotionTable(
         kind=kind, target=np.arange(n), via=np.full(n, -1), speed=speed,
         speed_unit=_repeated("mm/s", n), zone=np.where(zone == 0.0, np.nan, zone),
@@ -147,6 +150,19 @@ def read(path):
 
     return Program.from_tables("csv", source.name.rsplit(".", 1)[0], statements, motions,
                                TargetTable.of_rows(pose, joints, rows), text, sources=(source,))
+
+
+@contextlib.contextmanager
+def _collection_paused():
+    """Cyclic garbage collection paused while rows are split into millions of short-lived lists and tuples
+    (they hold no cycles, yet their count triggers full collections: a third of the time of reading)."""
+    enabled = gc.isenabled()
+    gc.disable()
+    try:
+        yield
+    finally:
+        if enabled:
+            gc.enable()
 
 
 def _header(names, source_name, number, line):
@@ -229,7 +245,10 @@ def _numbers(cells):
 
 def _stripped(cells):
     """The values (B,) of cells (B,) as a str array: spaces and surrounding quotes removed."""
-    text = np.strings.strip(np.array(cells, dtype=str))
+    text = np.array(cells, dtype=str)
+    if _plain(cells):
+        return text
+    text = np.strings.strip(text)
     return np.where(np.strings.startswith(text, '"'), np.strings.strip(np.strings.strip(text, '"')), text)
 
 
@@ -266,7 +285,8 @@ def write(program, path):
     """The CSV text of a program: patched in place if read from CSV, else generated."""
     if program.format == "csv" and program.sources:
         source = program.sources[0]
-        return {path: [encode_text(source, piece) for piece in _pieces(*_patched(program, source.text))]}
+        with _collection_paused():
+            return {path: [encode_text(source, piece) for piece in _pieces(*_patched(program, source.text))]}
     return {path: _emit(program).encode("utf-8")}
 
 
@@ -280,8 +300,9 @@ def _patched(program, text):
     edited = np.flatnonzero(targets.edited)
     for k in range(0, len(edited), BLOCK):
         rows = edited[k : k + BLOCK]
-        numbers = targets.line[rows]
-        columns = list(zip(*(_cells(lines[n - 1]) for n in numbers.tolist())))
+        numbers = targets.line[rows].tolist()
+        block = [lines[n - 1] for n in numbers]
+        columns = list(zip(*([line.split(",") for line in block] if _plain(block) else map(_cells, block))))
         old = {c: _stripped(columns[j]) for j, c in enumerate(header) if c in LIMITS}
         updates = _pose_texts(targets.pose[rows], ~targets.is_joint[rows], old) if "x" in header else {}
         if "j1" in header:
@@ -289,7 +310,7 @@ def _patched(program, text):
         for column, (changed, texts) in updates.items():
             j = header.index(column)
             columns[j] = _in_cells(columns[j], old[column], changed, texts)
-        for n, line in zip(numbers.tolist(), map(",".join, zip(*columns))):
+        for n, line in zip(numbers, map(",".join, zip(*columns))):
             lines[n - 1] = line
     if "j1" not in header and np.isfinite(targets.joints[edited]).all(axis=1).any():
         lines[number - 1] += "," + ",".join(JOINTS)
@@ -301,36 +322,48 @@ def _patched(program, text):
 
 def _in_cells(cells, values, changed, texts):
     """Cells (B,) (list of str) with the changed values replaced by ``texts``, keeping the spaces or quotes around them."""
+    texts = texts.tolist() if isinstance(texts, np.ndarray) else texts
+    if changed.all() and _plain(cells):
+        return texts
     return [cell.replace(value, text, 1) if change and cell != value else (text if change else cell)
-            for cell, value, change, text in zip(cells, values.tolist(), changed.tolist(), texts.tolist())]
+            for cell, value, change, text in zip(cells, values.tolist(), changed.tolist(), texts)]
+
+
+def _plain(texts):
+    """Whether no text (sequence of str) holds a quote, space or tab: cells then are their values."""
+    joined = "".join(texts)
+    return not ('"' in joined or " " in joined or "\t" in joined)
 
 
 def _pose_texts(pose, cartesian, old):
     """``{column: (changed (B,), texts (B,))}`` of x..c for edited rows: poses (B, 4, 4), old cell values (B,)."""
-    changed = {c: np.zeros(len(pose), dtype=bool) for c in POSE}
-    texts = {c: old[c].astype(object) for c in POSE}  # new texts may be longer than the old
     rows = np.flatnonzero(cartesian)
-    for c, values in zip(POSE[:3], pose[rows, :3, 3].T):
-        changed[c][rows], texts[c][rows] = _written(values, old[c][rows], MIN_PLACES[c])
+    out = {c: _in_rows(rows, *_written(values, old[c][rows], MIN_PLACES[c]), old[c])
+           for c, values in zip(POSE[:3], pose[rows, :3, 3].T)}
     old_abc = np.stack([old[c][rows] for c in POSE[3:]], axis=1).astype(float)
     rotation = pose[rows, :3, :3]
     turned = np.abs(rotation - abc_to_matrix(np.radians(old_abc))).max(axis=(1, 2), initial=0.0) > 1e-12
-    if turned.any():
-        angles = near_angle(np.degrees(matrix_to_abc(rotation[turned])), old_abc[turned])
-        for c, values in zip(POSE[3:], angles.T):
-            changed[c][rows[turned]], texts[c][rows[turned]] = _written(values, old[c][rows[turned]], MIN_PLACES[c])
-    return {c: (changed[c], texts[c]) for c in POSE}
+    angles = near_angle(np.degrees(matrix_to_abc(rotation[turned])), old_abc[turned])
+    for c, values in zip(POSE[3:], angles.T):
+        out[c] = _in_rows(rows[turned], *_written(values, old[c][rows[turned]], MIN_PLACES[c]), old[c])
+    return out
 
 
 def _joint_texts(joints, old):
     """``{column: (changed (B,), texts (B,))}`` of j1..j6 for edited rows: joints (B, 6) rad, old cell values (B,)."""
     rows = np.flatnonzero(np.isfinite(joints).all(axis=1))
-    out = {}
-    for c, values in zip(JOINTS, np.degrees(joints[rows]).T):
-        changed, texts = np.zeros(len(joints), dtype=bool), old[c].astype(object)
-        changed[rows], texts[rows] = _written(values, old[c][rows], MIN_PLACES[c])
-        out[c] = changed, texts
-    return out
+    return {c: _in_rows(rows, *_written(values, old[c][rows], MIN_PLACES[c]), old[c])
+            for c, values in zip(JOINTS, np.degrees(joints[rows]).T)}
+
+
+def _in_rows(rows, changed, texts, old):
+    """``(changed (B,), texts (B,))`` of a column whose rows ``rows`` (R,) got ``changed``, ``texts`` (R,) and
+    whose other rows keep their ``old`` text (B,)."""
+    if len(rows) == len(old):
+        return changed, texts
+    all_changed, all_texts = np.zeros(len(old), dtype=bool), old.astype(object)  # new texts may be longer
+    all_changed[rows], all_texts[rows] = changed, texts
+    return all_changed, all_texts
 
 
 def _written(values, old, min_places):
