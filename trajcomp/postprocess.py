@@ -238,6 +238,8 @@ def _target_facts(program, index):
 def _described(program, index):
     """Configuration data of targets ``index`` (N,) as the language writes them (`describe`), tuple of str."""
     config = program.target_table().config
+    if not any(config):  # no target states any (a CSV program)
+        return ("",) * len(index)
     return tuple(describe(program.format, config[i]) for i in index.tolist())
 
 
