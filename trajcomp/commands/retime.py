@@ -19,7 +19,7 @@ from trajcomp.timing import METHODS
 from trajcomp.timing.path import TOLERANCE
 
 CHOICES = METHODS + ("none",)
-METHOD_HELP = ("auto: TOPP-RA (toppra) for continuous LIN/CIRC runs, ruckig (jerk-limited) for point-to-point "
+METHOD_HELP = ("auto: TOPP-RA for continuous LIN/CIRC runs, ruckig (jerk-limited) for point-to-point "
                "and stop-to-stop motions; toppra or ruckig: that one for every segment")
 
 

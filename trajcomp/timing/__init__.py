@@ -9,7 +9,7 @@ into the program's speed fields.
 - `trajcomp.timing.moves`: the motion sequence (`Moves`, from a program or joints);
 - `trajcomp.timing.samples`: the controller's interpolation of a run, solved in joints;
 - `trajcomp.timing.path`: the joint path of a run, fitted within tolerance;
-- `trajcomp.timing.toppra_run`: TOPP-RA along a run (seidel solver, constant acceleration);
+- `trajcomp.timing.toppra_run`: TOPP-RA along a run (`trajcomp.timing.reachability`, constant acceleration);
 - `trajcomp.timing.ruckig_move`: jerk-limited rest-to-rest motion with ruckig;
 - `trajcomp.timing.check`: the dense 1 kHz check;
 - `trajcomp.timing.retime`: segments and the `TimingResult`;

@@ -16,7 +16,7 @@ motion from rest to rest. Its samples come from `trajcomp.timing.samples`
    ``TOLERANCE * ROTATION_PER_MM`` rad of its orientation (linearized with
    the Jacobian) and of each joint, or within the programmed zone radius
    near a blended corner. The tolerance keeps the compensated positions.
-3. `JointPath` wraps the spline for toppra; grid points are every sample,
+3. `JointPath` wraps the spline for TOPP-RA; grid points are every sample,
    subdivided to at least `MIN_GRID` intervals, and refined towards both
    ends, where the arm starts and stops.
 """
@@ -42,7 +42,7 @@ _PULL, _PULLS = 4.0, 8  # weight factor on samples the finest knots leave outsid
 
 
 class JointPath:
-    """A joint path q(s), s in rad of joint-space arc length (toppra's AbstractGeometricPath interface).
+    """A joint path q(s), s in rad of joint-space arc length (toppra's path interface: the tests time it with toppra).
 
     Parameters
     ----------
