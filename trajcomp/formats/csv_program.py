@@ -321,7 +321,7 @@ def _patched(program, text):
 
 
 def _in_cells(cells, values, changed, texts):
-    """Cells (B,) (list of str) with the changed values replaced by ``texts``, keeping the spaces or quotes around them."""
+    """Cells (B,) (str) with the changed values replaced by ``texts``, keeping the spaces or quotes around them."""
     texts = texts.tolist() if isinstance(texts, np.ndarray) else texts
     if changed.all() and _plain(cells):
         return texts
