@@ -152,6 +152,15 @@ def test_a_stretched_law_runs_the_same_path_slower():
     np.testing.assert_allclose(sdd2, sdd / 4.0, atol=1e-12)
 
 
+def test_a_re_timed_program_can_be_re_timed_again(tmp_path):
+    """The output has a t column: timing it again rewrites that column (it raised a NameError once)."""
+    (tmp_path / "p.csv").write_text("x,y,z,a,b,c,motion,speed,zone\n600,100,500,90,0,180,PTP,,\n"
+                                    "650,100,500,90,0,180,LIN,100,\n650,150,500,90,0,180,LIN,100,\n")
+    assert main(["retime", str(tmp_path / "p.csv"), "-o", str(tmp_path / "once.csv"), "--robot", "ur10"]) == 0
+    assert main(["retime", str(tmp_path / "once.csv"), "-o", str(tmp_path / "twice.csv"), "--robot", "ur10"]) == 0
+    assert (tmp_path / "twice.csv").read_text() == (tmp_path / "once.csv").read_text()
+
+
 def test_duplicated_and_zero_length_waypoints_take_no_time(tmp_path):
     _, q = helix(UR10, 300, turns=1)
     doubled = np.insert(np.repeat(q, 2, axis=0), 100, q[50], axis=0)  # every row twice, row 50 three times

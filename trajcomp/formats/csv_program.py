@@ -449,10 +449,12 @@ def with_times(program, times):
     rows = program.motion_table().line
     if "t" in header:
         j = header.index("t")
-        for n, value in zip(rows, written):
-            cells = _cells(lines[n - 1])
-            cells[j] = _replaced(cells[j], value)
-            lines[n - 1] = ",".join(cells)
+        cells = [_cells(lines[n - 1]) for n in rows.tolist()]
+        column = [row[j] for row in cells]
+        column = _in_cells(column, _stripped(column), np.ones(len(column), dtype=bool), written)
+        for n, row, cell in zip(rows.tolist(), cells, column):
+            row[j] = cell
+            lines[n - 1] = ",".join(row)
     else:
         lines[number - 1] += ",t"
         for n, value in zip(rows, written):
