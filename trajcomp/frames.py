@@ -10,7 +10,7 @@ missing one is an error, never a guess. Frame ``None`` is the base, tool
 import numpy as np
 
 from trajcomp.errors import TrajcompError
-from trajcomp.program import _codes
+from trajcomp.program import _codes, rows_of
 from trajcomp.transforms import invert
 
 
@@ -61,22 +61,13 @@ class FrameTable:
         row = np.searchsorted(used.index, index)
         T_base_frame = _values(used.frame[row], self.frame)
         T_flange_tool = _values(used.tool[row], self.tool)
-        poses = _rows(self.program.target_table().pose, index)
+        poses = rows_of(self.program.target_table().pose, index)
         return T_base_frame, T_flange_tool, poses if _is_base(T_base_frame) else T_base_frame @ poses
 
 
 def in_frames(T_base_frame, T_base_pose):
     """Poses (N, 4, 4) given in the base frame, expressed in their user frames ``T_base_frame`` (N, 4, 4), mm."""
     return T_base_pose if _is_base(T_base_frame) else invert(T_base_frame) @ T_base_pose
-
-
-def _rows(values, index):
-    """``values[index]``; a read-only view instead of a copy when ``index`` takes every row in order."""
-    if len(index) != len(values) or not np.array_equal(index, np.arange(len(values))):
-        return values[index]
-    view = values[:]
-    view.flags.writeable = False
-    return view
 
 
 def _is_base(T_base_frame):

@@ -357,13 +357,28 @@ def _replaced(values, index, rows):
     """``values`` (N, ...) with rows ``index`` set to ``rows``: a copy, or ``rows`` itself as a read-only view when
     they replace every row in order (a long program fully compensated: no second copy)."""
     rows = np.asarray(rows, dtype=values.dtype)
-    if rows.shape == values.shape and np.array_equal(index, np.arange(len(values))):
-        view = rows[:]
-        view.flags.writeable = False
-        return view
+    if rows.shape == values.shape and every_row(index, len(values)):
+        return read_only(rows)
     out = values.copy()
     out[index] = rows
     return out
+
+
+def rows_of(values, index):
+    """``values[index]``; a read-only view instead of a copy when ``index`` takes every row in order."""
+    return read_only(values) if every_row(index, len(values)) else values[index]
+
+
+def every_row(index, n):
+    """Whether ``index`` (K,) takes each of n rows once, in order."""
+    return len(index) == n and np.array_equal(index, np.arange(n))
+
+
+def read_only(values):
+    """A view of an array that cannot be written through (shared data stays as it is)."""
+    view = values[:]
+    view.flags.writeable = False
+    return view
 
 
 class _Rows(Sequence):
