@@ -25,6 +25,7 @@ from trajcomp.frames import tool_groups
 from trajcomp.ik import IKResult, ik_near, ik_numeric, pose_error
 from trajcomp.kinematics import fk
 from trajcomp.model import evaluate_field
+from trajcomp.parallel import map_blocks
 from trajcomp.plan import batch_seed
 
 ITERATIONS = 3  # fixed-point passes at most
@@ -81,7 +82,8 @@ class CompensationResult:
         return cls(**fields)
 
 
-def compensate(model, targets, *, mode=None, tool=None, seed=None, outside="model", label="targets", names=None):
+def compensate(model, targets, *, mode=None, tool=None, seed=None, outside="model", label="targets", names=None,
+               workers=1):
     """Compensated commands for target TCP poses.
 
     Parameters
@@ -105,6 +107,9 @@ def compensate(model, targets, *, mode=None, tool=None, seed=None, outside="mode
     names : sequence of str, length N, optional
         Names of the targets in error messages (label and line); default
         ``target k`` (0-based).
+    workers : int
+        Processes that compensate chunks of `CHUNK` targets at once
+        (`trajcomp.parallel.map_blocks`); the result does not depend on it.
 
     Raises
     ------
@@ -124,9 +129,10 @@ def compensate(model, targets, *, mode=None, tool=None, seed=None, outside="mode
     if len(targets) <= CHUNK:
         return rows(targets, seed, names)
     starts = range(0, len(targets), CHUNK)
+    chunks = map_blocks(lambda k: rows(targets[starts[k] : starts[k] + CHUNK], seed[starts[k] : starts[k] + CHUNK]),
+                        len(starts), workers)
     try:
-        return CompensationResult.concatenate((rows(targets[i:i + CHUNK], seed[i:i + CHUNK]) for i in starts),
-                                              [np.arange(i, min(i + CHUNK, len(targets))) for i in starts])
+        return CompensationResult.concatenate(chunks, [np.arange(i, min(i + CHUNK, len(targets))) for i in starts])
     except TrajcompError:
         # A chunk names its targets from 0 and counts only its own: redo the whole
         # set in one piece (each target is compensated on its own, so it fails the
@@ -203,7 +209,7 @@ def _solve(real, nominal, targets, seed, seed_pose=None):
     return solved
 
 
-def program_corrector(model, *, mode=None, outside="model", label="program"):
+def program_corrector(model, *, mode=None, outside="model", label="program", workers=1):
     """The ``correct`` callable of `trajcomp.postprocess.compensate_program` for a model.
 
     ``correct(targets (N, 4, 4), tools (N, 4, 4), seeds (N, 6), names) ->
@@ -211,6 +217,7 @@ def program_corrector(model, *, mode=None, outside="model", label="program"):
     and each group is compensated in one vectorized call. Targets on the
     robot's declared tool are the TCP that was measured: they get the
     identified tool for the real arm (``tool=None`` of `compensate`).
+    ``workers`` processes share the chunks of each group (`compensate`).
     """
 
     def correct(targets, tools, seeds, names):
@@ -228,6 +235,6 @@ def program_corrector(model, *, mode=None, outside="model", label="program"):
             log.warning("%s: %d targets use a tool other than the calibrated TCP: %s",
                         label, len(targets), model.other_tools_reason)
         return compensate(model, targets, mode=mode, tool=None if measured_tcp else tool, seed=seeds,
-                          outside=outside, label=label, names=names)
+                          outside=outside, label=label, names=names, workers=workers)
 
     return correct

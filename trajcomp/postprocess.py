@@ -106,7 +106,7 @@ class ProgramReport:
 
 
 def compensate_program(program, correct, robot, *, tools=None, frames=None, joint_targets="keep",
-                       max_joint_change=MAX_JOINT_CHANGE, max_correction=MAX_CORRECTION):
+                       max_joint_change=MAX_JOINT_CHANGE, max_correction=MAX_CORRECTION, workers=1):
     """A program whose targets are replaced by their compensated commands, in their declared postures.
 
     Every target is first solved with the nominal robot in the posture the
@@ -135,6 +135,9 @@ def compensate_program(program, correct, robot, *, tools=None, frames=None, join
         Largest change of any joint a correction may cause, rad.
     max_correction : float
         Largest plausible position correction, mm.
+    workers : int
+        Processes that share the posture planning (`planned_joints`); give
+        ``correct`` as many (`trajcomp.compensate.program_corrector`).
 
     Returns
     -------
@@ -154,7 +157,7 @@ def compensate_program(program, correct, robot, *, tools=None, frames=None, join
     if joint_targets not in ("keep", "compensate"):
         raise ValueError(f"joint_targets must be 'keep' or 'compensate', got {joint_targets!r}")
     table = FrameTable(program, robot, tools, frames)
-    plan = planned_joints(program, robot, tools=tools, frames=frames)
+    plan = planned_joints(program, robot, tools=tools, frames=frames, workers=workers)
     cartesian, T_base_frame, T_tool, T_target = plan.index, plan.T_base_frame, plan.T_flange_tool, plan.T_base_tcp
     rows, q_planned, source = cartesian, plan.q, plan.source
     joint_index, q_joint = program.joint_targets()

@@ -32,7 +32,7 @@ from trajcomp.configuration import declared_windows
 from trajcomp.errors import IKError
 from trajcomp.frames import FrameTable, tool_groups
 from trajcomp.ik import ik_all, turn_towards
-from trajcomp.kinematics import in_blocks
+from trajcomp.parallel import map_blocks
 
 TURN = 2.0 * np.pi
 MAX_JOINT_CHANGE = np.radians(5.0)  # rad: default bound of the joint change a correction may cause
@@ -87,7 +87,7 @@ def _visits(program):
     return visits[visits >= 0]
 
 
-def planned_joints(program, robot, *, tools=None, frames=None):
+def planned_joints(program, robot, *, tools=None, frames=None, workers=1):
     """Solve the Cartesian targets with the nominal robot in the posture their program declares.
 
     Parameters
@@ -98,6 +98,9 @@ def planned_joints(program, robot, *, tools=None, frames=None):
     tools, frames : Mapping[str, ndarray (4, 4)], optional
         Tools (T_flange_tool) and user frames (T_world_frame), mm, the
         program uses but does not define (`trajcomp.frames.FrameTable`).
+    workers : int
+        Processes that solve blocks of `BLOCK` targets' closed-form branches
+        (`trajcomp.parallel.map_blocks`); the plan does not depend on it.
 
     Returns
     -------
@@ -128,13 +131,11 @@ def planned_joints(program, robot, *, tools=None, frames=None):
     source = np.empty(n, dtype=object)
     source[:], source[has_hint], source[by_config] = "", "joints", "config"
     rows = np.flatnonzero(has_hint)
-    if rows.size:
-        q[rows] = in_blocks(lambda rows, hint: (_nearest(robot, *branches(rows), hint),), rows, hint[rows])[0]
-    if by_config.size:
-        q[by_config] = in_blocks(lambda rows, *window: (_in_windows(robot, *branches(rows), *window),),
-                                 by_config, branch[declared], lower[declared], upper[declared])[0]
+    q[rows] = _in_blocks(lambda rows, hint: _nearest(robot, *branches(rows), hint), workers, rows, hint[rows])
+    q[by_config] = _in_blocks(lambda rows, *window: _in_windows(robot, *branches(rows), *window), workers,
+                              by_config, branch[declared], lower[declared], upper[declared])
     _fail_unreachable(program, robot, index, q, source)
-    _chain(program, robot, index, q, branches, source)
+    _chain(program, robot, index, q, branches, source, workers)
     return Plan(index, q, tuple(source), T_base_frame, T_flange_tool, T_base_tcp)
 
 
@@ -169,6 +170,14 @@ def check_posture(q_planned, q, labels, bound=MAX_JOINT_CHANGE):
             f"{np.degrees(bound):.1f} deg; near a singularity or a joint limit): {shown}{more}. "
             "Move the targets away from the singularity, or raise --max-joint-change if the motion is intended"
         )
+
+
+def _in_blocks(solve, workers, rows, *arrays):
+    """Joints (M, 6) of rows (M,) solved `BLOCK` rows at a time: ``solve(rows, *arrays' rows) -> (B, 6)``."""
+    starts = range(0, len(rows), BLOCK)
+    blocks = map_blocks(lambda k: solve(*(a[starts[k] : starts[k] + BLOCK] for a in (rows, *arrays))),
+                        len(starts), workers)
+    return np.concatenate([np.empty((0, 6)), *blocks])
 
 
 def _all_branches(robot, T_base_tcp, T_flange_tool, rows):
@@ -249,13 +258,15 @@ def _declaration(target, source):
 
 
 def _runs(program, robot, index, q, source):
-    """Runs of undeclared rows in motion order, each with the joints (6,) of the position before it.
+    """Runs of undeclared rows in motion order, each with the joints of the position before it.
 
-    Yields ``(rows, anchor, from_home)``: consecutive first visits of
-    undeclared Cartesian targets (rows of ``index``) and the joints the arm
-    has before the first of them: a planned declared target, a joint target,
-    home when nothing comes before, or a target visited again (solved at its
-    first visit, which its posture keeps: the arm is there).
+    Returns a list of ``(rows, anchor)``: consecutive first visits of
+    undeclared Cartesian targets (rows of ``index``), and ``anchor() ->
+    (joints (6,), from_home)``: the joints the arm has before the first of
+    them: a planned declared target, a joint target, home when nothing
+    comes before, or a target visited again (solved at its first visit,
+    which its posture keeps: the arm is there). Call it when the run is
+    reached: an earlier run may solve that target.
     """
     visits = _visits(program)
     row_of = np.full(len(program.targets), -1)
@@ -267,29 +278,34 @@ def _runs(program, robot, index, q, source):
     undeclared[undeclared] = np.asarray(source, dtype=object)[rows[undeclared]] == ""
     edges = np.flatnonzero(np.diff(np.concatenate([[0], undeclared.astype(int), [0]])))
     joints = program.target_table().joints
-    for begin, end in zip(edges[0::2], edges[1::2]):
-        if begin == 0:
-            anchor, from_home = robot.home, True
-        else:
-            before = rows[begin - 1]
-            anchor, from_home = (q[before] if before >= 0 else joints[visits[begin - 1]]), False
-        yield rows[begin:end], anchor, from_home
+
+    def anchor(before):
+        if before < 0:
+            return robot.home, True
+        return (q[rows[before]] if rows[before] >= 0 else joints[visits[before]]), False
+
+    return [(rows[begin:end], functools.partial(anchor, begin - 1)) for begin, end in zip(edges[0::2], edges[1::2])]
 
 
-def _chain(program, robot, index, q, branches, source):
+def _chain(program, robot, index, q, branches, source, workers=1):
     """Fill the undeclared rows, each nearest the joints of the position before it.
 
     A run of undeclared targets is solved a block of `BLOCK` rows at a time
-    (``branches(rows)``: their closed-form solutions), assuming the arm
-    keeps the branch of its first target and turns continuously (unwrapped
-    joints); the proposal is then checked row by row against the nearest
-    solution to its predecessor, and the run is restarted where another
-    branch or turn is nearer. Smooth paths take one pass per block.
+    (``branches(rows)``: their closed-form solutions, computed ahead by
+    ``workers`` processes), assuming the arm keeps the branch of its first
+    target and turns continuously (unwrapped joints); the proposal is then
+    checked row by row against the nearest solution to its predecessor, and
+    the run is restarted where another branch or turn is nearer. Smooth
+    paths take one pass per block.
     """
-    for rows, anchor, from_home in _runs(program, robot, index, q, source):
+    runs = _runs(program, robot, index, q, source)
+    blocks = [rows[begin : begin + BLOCK] for rows, _ in runs for begin in range(0, len(rows), BLOCK)]
+    solutions = map_blocks(lambda k: branches(blocks[k]), len(blocks), workers)
+    for rows, anchor_of in runs:
+        anchor, from_home = anchor_of()
         for begin in range(0, len(rows), BLOCK):
             block = rows[begin : begin + BLOCK]
-            q_all, valid = branches(block)
+            q_all, valid = next(solutions)
             start = 0
             while start < len(block):
                 first = _nearest(robot, q_all[start : start + 1], valid[start : start + 1], anchor[None])[0]

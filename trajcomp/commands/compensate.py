@@ -17,6 +17,7 @@ from trajcomp.commands.retime import LIMIT_MESSAGE, METHOD_HELP, add_tolerance_o
 from trajcomp.compensate import program_corrector
 from trajcomp.errors import TrajcompError
 from trajcomp.model import MODES, load_model
+from trajcomp.parallel import usable_cores
 from trajcomp.postprocess import MAX_CORRECTION, compensate_program
 from trajcomp.posture import MAX_JOINT_CHANGE
 from trajcomp.progress import Stages, progress
@@ -61,8 +62,9 @@ def add_parser(sub):
     add_in_place_option(parser)
     parser.add_argument("-o", "--output", required=True,
                         help="corrected program to write; for a batch, the folder to write into")
-    parser.add_argument("--jobs", type=int, default=1, metavar="N",
-                        help="batch: files compensated in parallel by N processes (default 1)")
+    parser.add_argument("--jobs", type=int, default=usable_cores(), metavar="N",
+                        help="processes to use: a batch compensates N files at once, one program shares its "
+                        "targets among N (default: the %(default)s cores this machine gives)")
     parser.add_argument("--scheduler", metavar="ADDRESS",
                         help="batch: run on a Dask distributed cluster (scheduler address, or 'local' "
                         "for a local cluster of --jobs workers)")
@@ -96,6 +98,7 @@ class CompensateJob:
     retime: str = "auto"
     path_tolerance: float = TOLERANCE
     show_stages: bool = False  # a bar over STAGES on a terminal (one file; a batch shows files instead)
+    workers: int = 1  # processes sharing the compensation of one file (a batch spreads files instead)
 
     STAGES = ("read", "compensate", "re-time", "write", "report")
 
@@ -114,12 +117,13 @@ class CompensateJob:
             program = formats.read(path)
             sources = list(dict.fromkeys(formats.input_paths(path, program)))
             files = [file_entry("program", p) for p in sources]
-            correct = program_corrector(model, mode=self.mode, outside=self.outside, label=str(path))
+            correct = program_corrector(model, mode=self.mode, outside=self.outside, label=str(path),
+                                        workers=self.workers)
             stages.advance()
             corrected, report = compensate_program(
                 program, correct, model.nominal, tools=self.tools, frames=self.frames,
                 joint_targets=self.joint_targets, max_joint_change=self.max_joint_change,
-                max_correction=self.max_correction,
+                max_correction=self.max_correction, workers=self.workers,
             )
             stages.advance()
             timing, timed, before = [], None, None
@@ -197,7 +201,8 @@ def run(args):
     single = len(args.program) == 1 and not Path(first).is_dir() and not glob.has_magic(first) \
         and not Path(args.output).is_dir()
     if single:
-        result, compliance = dataclasses.replace(job, show_stages=True).run(Path(first), Path(args.output))
+        result, compliance = dataclasses.replace(job, show_stages=True, workers=args.jobs).run(
+            Path(first), Path(args.output))
         if args.json_only and not args.report:
             sys.stdout.write(compliance.json_text())
         for line in result.lines:

@@ -1,0 +1,97 @@
+"""Blocks on several cores: the same results in the same order as one process, errors named as there."""
+
+import multiprocessing
+import os
+
+import numpy as np
+import pytest
+
+import trajcomp.compensate as compensation
+import trajcomp.posture as posture
+from trajcomp import formats
+from trajcomp.compensate import compensate
+from trajcomp.errors import IKError
+from trajcomp.parallel import map_blocks, usable_cores
+from trajcomp.posture import planned_joints
+from trajcomp.robot import load_robot
+from test_compensate import cell, targets_in_cube  # noqa: F401 (fixture)
+
+pytestmark = pytest.mark.skipif("fork" not in multiprocessing.get_all_start_methods(), reason="needs fork")
+
+
+def test_blocks_come_back_in_order_with_the_serial_values():
+    data = np.random.default_rng(0).normal(size=(50, 3))  # read by the workers from the caller's memory
+    serial = list(map_blocks(lambda k: (k, data[k].sum()), 50, 1))
+    for workers in (2, 3):
+        assert list(map_blocks(lambda k: (k, data[k].sum()), 50, workers)) == serial
+    assert [k for k, _ in serial] == list(range(50))
+
+
+def test_blocks_run_in_other_processes_only_when_asked():
+    assert set(map_blocks(lambda k: os.getpid(), 6, 1)) == {os.getpid()}
+    assert os.getpid() not in set(map_blocks(lambda k: os.getpid(), 6, 2))
+    assert list(map_blocks(lambda k: os.getpid(), 1, 4)) == [os.getpid()]  # one block: no process started
+    assert list(map_blocks(lambda k: k, 0, 2)) == []
+
+
+def test_an_error_in_a_block_is_raised_with_its_message():
+    def block(k):
+        if k == 5:
+            raise IKError(f"block {k}: target unreachable")
+        return k
+
+    results = map_blocks(block, 9, 2)
+    assert [next(results) for _ in range(5)] == [0, 1, 2, 3, 4]
+    with pytest.raises(IKError, match="block 5: target unreachable"):
+        next(results)
+
+
+def _pids_of_blocks(_):
+    return sorted(set(map_blocks(lambda k: os.getpid(), 4, 2))), os.getpid()
+
+
+def test_a_pool_worker_computes_its_blocks_itself():
+    """A daemonic worker cannot start processes: its blocks run inline instead of failing."""
+    with multiprocessing.get_context("fork").Pool(1) as pool:
+        pids, worker = pool.map(_pids_of_blocks, [0])[0]
+    assert pids == [worker]
+
+
+def test_usable_cores_is_this_process_affinity():
+    assert usable_cores() == len(os.sched_getaffinity(0)) >= 1
+
+
+def test_compensation_on_two_processes_equals_one(cell, monkeypatch):  # noqa: F811
+    monkeypatch.setattr(compensation, "CHUNK", 16)
+    targets = targets_in_cube(cell.robot, 100, 4)
+    one, two = compensate(cell.model, targets, workers=1), compensate(cell.model, targets, workers=2)
+    for name in ("T_command", "q", "correction", "residual", "outside"):
+        np.testing.assert_array_equal(getattr(two, name), getattr(one, name))
+
+
+def test_compensation_failure_on_two_processes_names_targets_as_one(cell, monkeypatch):  # noqa: F811
+    targets = targets_in_cube(cell.robot, 30, 2)
+    targets[[12, 23], :3, 3] = [[3000.0, 0.0, 500.0], [0.0, -2500.0, 900.0]]
+    names = [f"prog.csv line {k + 2}" for k in range(30)]
+    with pytest.raises(IKError) as one:
+        compensate(cell.model, targets, label="prog.csv", names=names)
+    monkeypatch.setattr(compensation, "CHUNK", 6)
+    with pytest.raises(IKError) as two:
+        compensate(cell.model, targets, label="prog.csv", names=names, workers=2)
+    assert str(two.value) == str(one.value)
+
+
+def test_posture_plan_on_two_processes_equals_one(tmp_path, monkeypatch):
+    """Undeclared runs chained across blocks, and declared joints, give the same plan on two processes."""
+    monkeypatch.setattr(posture, "BLOCK", 7)
+    t = np.linspace(0.0, 4.0 * np.pi, 60)
+    rows = [f"{550 + 80 * np.cos(a):.3f},{150 + 80 * np.sin(a):.3f},{550 + 5 * a:.3f},0,90,0,LIN,50,1,,,,,,"
+            for a in t]
+    rows[30] = "600,100,600,0,90,0,PTP,50,,0,-90,90,-90,-90,0"  # a declared posture in the middle
+    program = tmp_path / "helix.csv"
+    program.write_text("x,y,z,a,b,c,motion,speed,zone,j1,j2,j3,j4,j5,j6\n" + "\n".join(rows) + "\n")
+    read = formats.read(program)
+    robot = load_robot("ur10")
+    one, two = planned_joints(read, robot, workers=1), planned_joints(read, robot, workers=2)
+    np.testing.assert_array_equal(two.q, one.q)
+    assert two.source == one.source and one.source[30] == "joints" and one.source[0] == "home"

@@ -1,0 +1,73 @@
+"""Blocks of one long program computed on several cores.
+
+A stage that works a block of rows at a time (compensation chunks, the
+posture plan's closed-form branches) hands `map_blocks` a function of the
+block's index. With more than one worker the blocks are computed by
+processes started with ``fork``: they inherit the caller's arrays as they
+are (nothing is copied or pickled on the way in) and send each block's
+result back, in block order, as it is needed, so only a few results are
+held at a time. Where ``fork`` is not available, or the caller is itself a
+worker of a pool (a batch's file worker, a Dask worker), the blocks run one
+after the other in this process: the results are the same either way.
+"""
+
+import multiprocessing
+import os
+
+_TASK = None  # the function of the running `map_blocks`, inherited by its forked workers
+_LOOKAHEAD = 2  # blocks a worker may compute ahead of the consumer, each
+
+
+def usable_cores():
+    """Cores this process may run on (its CPU affinity), at least 1."""
+    try:
+        return max(1, len(os.sched_getaffinity(0)))
+    except AttributeError:  # not on Linux
+        return max(1, os.cpu_count() or 1)
+
+
+def map_blocks(function, count, workers=1):
+    """``function(k)`` for k = 0 .. count - 1, in order, computed by up to ``workers`` processes.
+
+    Parameters
+    ----------
+    function : callable
+        ``function(k) -> result`` of block k; it may read any data the caller
+        holds (a closure). Results must be picklable when ``workers > 1``.
+    count : int
+        Number of blocks.
+    workers : int
+        Processes to use; 1 (or a single block) computes in this process.
+
+    Yields
+    ------
+    The results, in block order. An exception raised by a block is raised
+    here, when its result is reached; the remaining blocks are abandoned.
+    """
+    workers = min(workers, count)
+    if workers <= 1 or not _can_fork():
+        yield from map(function, range(count))
+        return
+    global _TASK
+    _TASK = function
+    try:
+        pool = multiprocessing.get_context("fork").Pool(workers)  # the workers start here, with the function
+    finally:
+        _TASK = None
+    with pool:
+        pending = []
+        for k in range(count):
+            pending.append(pool.apply_async(_run, (k,)))
+            if len(pending) > workers * _LOOKAHEAD:
+                yield pending.pop(0).get()
+        for result in pending:
+            yield result.get()
+
+
+def _run(k):
+    return _TASK(k)
+
+
+def _can_fork():
+    """Whether this process may start forked workers: fork exists and this is not a daemonic pool worker."""
+    return "fork" in multiprocessing.get_all_start_methods() and not multiprocessing.current_process().daemon
