@@ -17,7 +17,7 @@ from trajcomp.kinematics import fk
 from trajcomp.model import load_model
 from trajcomp.postprocess import ProgramReport
 from trajcomp.report import compliance_report, schema, summary_lines
-from trajcomp.report import plots
+from trajcomp.report import plots, targets
 from trajcomp.report.measures import singularity_distances
 from trajcomp.report.targets import FLAGS, ROWS, WORST, TargetMeasures, worst_targets
 from trajcomp.robot import load_robot
@@ -300,3 +300,15 @@ def test_the_times_of_a_long_joint_program_go_to_the_sidecar(tmp_path):
         np.testing.assert_array_equal(data["t_s"], np.linspace(0.0, 100.0, waypoints))
     short = compliance_report(report, KUKA, timing=_timing_result((segment,), ROWS), command="retime")
     assert len(short.doc["timing"]["t_s"]) == ROWS and short.data is None
+
+
+def test_the_measures_on_two_processes_equal_those_of_one(sweep, monkeypatch):
+    """Blocks split between processes (jumps measured across their boundaries) give the same measures."""
+    monkeypatch.setattr(targets, "BLOCK", 3 * targets.CHUNK + 5)
+    report, _ = sweep
+    one, two = targets.target_measures(report, KUKA, workers=1), targets.target_measures(report, KUKA, workers=2)
+    for name, values in one.values.items():
+        np.testing.assert_array_equal(two.values[name], values, err_msg=name)
+    for name in ("branch", "branch_planned", "changed"):
+        np.testing.assert_array_equal(getattr(two, name), getattr(one, name))
+    assert one.changed.tolist().count(True) == 1 and one.changed[FLIP]

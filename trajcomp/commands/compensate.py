@@ -141,7 +141,7 @@ class CompensateJob:
                 report, model.nominal, criteria=self.criteria, model=model,
                 model_info=_model_info(self.model, mode), mode=mode,
                 files=files + [file_entry("output", p) for p in written], options=self.options(),
-                timing=timed, cycle_time_before=before if timed is not None else None,
+                timing=timed, cycle_time_before=before if timed is not None else None, workers=self.workers,
             )
             reports = []
             if self.report:

@@ -130,7 +130,7 @@ def timing_check(section):
 
 
 def compliance_report(report, robot, *, criteria=None, model=None, model_info=None, mode=None, files=(),
-                      options=None, timing=None, cycle_time_before=None, command="compensate"):
+                      options=None, timing=None, cycle_time_before=None, command="compensate", workers=1):
     """The compliance report of one run (schema ``trajcomp-report/1``, kind ``compliance``).
 
     Parameters
@@ -156,6 +156,8 @@ def compliance_report(report, robot, *, criteria=None, model=None, model_info=No
         Cycle time of the program before, s.
     command : str
         The command that ran (``compensate``, ``retime``).
+    workers : int
+        Processes that share the per-target measures (`target_measures`).
 
     Returns
     -------
@@ -164,7 +166,7 @@ def compliance_report(report, robot, *, criteria=None, model=None, model_info=No
     criteria = criteria or Criteria()
     mode = mode or (model.method if model is not None else None)
     has_grid = model is not None and model.error_field(mode) is not None
-    measures = target_measures(report, robot)
+    measures = target_measures(report, robot, workers)
     checks, masks = target_checks(report, measures, criteria, has_grid, mode, compensated=model is not None)
     flags = flag_bits(masks) if masks else np.zeros(len(measures), np.uint8)
     index, table = table_rows(flags, measures)

@@ -14,10 +14,12 @@ import dataclasses
 
 import numpy as np
 
+from trajcomp.parallel import map_blocks
 from trajcomp.report.measures import BRANCH_NAMES, joint_jumps, limit_distances, posture_measures
 from trajcomp.transforms import matrix_to_pose
 
 CHUNK = 2048  # targets per pass of the kinematic measures
+BLOCK = 16 * CHUNK  # targets per task of a process computing the kinematic measures
 ROWS = 2000  # every target tabulated up to this many; the rows of a summarised table
 WORST = 10  # worst places (local extremes) of each measure in a summarised table
 
@@ -32,6 +34,7 @@ MEASURES = {
     "wrist_deg": ("deg", "min", "wrist singularity distance"),
     "jump_deg": ("deg", "max", "largest joint change from the previous target"),
 }
+KINEMATIC = ("limit_distance_deg", "shoulder_mm", "elbow_deg", "wrist_deg", "jump_deg")  # from the joints
 FLAGS = ("residual", "outside_grid", "configuration", "joint_limits", "singularity")  # bit k of `flags`
 
 
@@ -58,27 +61,45 @@ class TargetMeasures:
         return len(self.changed)
 
 
-def target_measures(report, robot):
-    """`TargetMeasures` of a `ProgramReport` (N targets) on the nominal ``robot``, in chunks of `CHUNK`."""
+def target_measures(report, robot, workers=1):
+    """`TargetMeasures` of a `ProgramReport` (N targets) on the nominal ``robot``.
+
+    The kinematic measures are computed in chunks of `CHUNK` targets, a
+    `BLOCK` of them by each of ``workers`` processes
+    (`trajcomp.parallel.map_blocks`); the result does not depend on it.
+    """
     n = len(report.labels)
     q, q_planned = np.reshape(report.q, (n, 6)), np.reshape(report.q_planned, (n, 6))
     correction = np.reshape(report.correction, (n, 6))
     values = {"correction_mm": np.linalg.norm(correction[:, :3], axis=1),
               "correction_deg": np.linalg.norm(correction[:, 3:], axis=1),
               "predicted_residual_mm": np.asarray(report.predicted_residual, dtype=float).reshape(n)}
-    for name in ("limit_distance_deg", "shoulder_mm", "elbow_deg", "wrist_deg", "jump_deg"):
-        values[name] = np.empty(n)
+    values |= {name: np.empty(n) for name in KINEMATIC}
     branch, branch_planned, changed = np.empty(n, np.uint8), np.empty(n, np.uint8), np.empty(n, bool)
-    for start in range(0, n, CHUNK):
-        part = slice(start, min(start + CHUNK, n))
-        values["limit_distance_deg"][part] = np.degrees(limit_distances(robot, q[part]).min(axis=1))
-        jumps = joint_jumps(q[part], q[start - 1] if start else None)
-        values["jump_deg"][part] = np.degrees(np.abs(jumps).max(axis=1))
-        singular, branch[part], branch_planned[part], changed[part] = posture_measures(robot, q[part],
-                                                                                       q_planned[part])
-        for name in ("shoulder", "elbow", "wrist"):
-            values[f"{name}_{'mm' if name == 'shoulder' else 'deg'}"][part] = singular[name]
+    starts = range(0, n, BLOCK)
+    blocks = map_blocks(lambda k: _kinematic_measures(robot, q, q_planned, starts[k], min(starts[k] + BLOCK, n)),
+                        len(starts), workers)
+    for start, (kinematic, *flags) in zip(starts, blocks):
+        part = slice(start, start + len(flags[0]))
+        for name, column in zip(KINEMATIC, kinematic):
+            values[name][part] = column
+        branch[part], branch_planned[part], changed[part] = flags
     return TargetMeasures(values, branch, branch_planned, changed)
+
+
+def _kinematic_measures(robot, q, q_planned, begin, end):
+    """The `KINEMATIC` measures of targets ``begin`` .. ``end`` - 1 of joints q, q_planned (N, 6) rad:
+    ``(values (5, B), branch, branch_planned, changed (B,))``, computed `CHUNK` targets at a time."""
+    values = np.empty((len(KINEMATIC), end - begin))
+    branch, branch_planned, changed = np.empty(end - begin, np.uint8), np.empty(end - begin, np.uint8), \
+        np.empty(end - begin, bool)
+    for start in range(begin, end, CHUNK):
+        part, out = slice(start, min(start + CHUNK, end)), slice(start - begin, min(start + CHUNK, end) - begin)
+        jumps = joint_jumps(q[part], q[start - 1] if start else None)
+        singular, branch[out], branch_planned[out], changed[out] = posture_measures(robot, q[part], q_planned[part])
+        values[:, out] = [np.degrees(limit_distances(robot, q[part]).min(axis=1)), singular["shoulder"],
+                          singular["elbow"], singular["wrist"], np.degrees(np.abs(jumps).max(axis=1))]
+    return values, branch, branch_planned, changed
 
 
 def statistics(measures, labels):
