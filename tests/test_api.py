@@ -20,6 +20,7 @@ from scipy.spatial.transform import Rotation
 from virtual_cell import landing_error, virtual_cell
 
 import trajcomp
+import trajcomp.compensate as compensation
 from trajcomp import api, formats
 from trajcomp.errors import CompensationError, IKError, ModelError, TrajcompError, WriteError
 from trajcomp.ik import configuration_of, ik_all
@@ -99,6 +100,19 @@ def test_a_path_in_one_call_equals_pose_by_pose(comp, branches):
         np.testing.assert_allclose(together.poses[k], command, atol=1e-9)
         np.testing.assert_allclose(together.joints[k], joints, atol=1e-9)
         np.testing.assert_allclose(together.correction[k], correction, atol=1e-9)
+
+
+def test_a_long_path_on_two_processes_equals_one(cell, comp, monkeypatch):
+    monkeypatch.setattr(compensation, "CHUNK", 8)  # several chunks for the workers to share
+    path = np.array([POSE + [dx, -dx / 2, dx / 3, 0, 0, 0] for dx in np.linspace(0.0, 90.0, 40)])
+    one = comp.filter_targets(path)
+    two = trajcomp.Compensator(cell.model, workers=2).filter_targets(path)
+    np.testing.assert_array_equal(two.poses, one.poses)
+    np.testing.assert_array_equal(two.joints, one.joints)
+    assert landing_error(cell, one.joints, [matrix(p) for p in path]).max() < LANDED
+    for bad in (0, 1.5, True):
+        with pytest.raises(TrajcompError, match="workers: expected a whole number"):
+            trajcomp.Compensator(cell.model, workers=bad)
 
 
 def test_a_pose_in_a_user_frame_and_its_form(comp, branches):

@@ -96,6 +96,11 @@ class Compensator:
         counts as leaving its posture, deg.
     max_correction : float
         Largest plausible position correction, mm.
+    workers : int
+        Processes that share the targets of a long path or program
+        (`trajcomp.parallel.map_blocks`; forked, on POSIX); the results do
+        not depend on it. Default 1: this process only, safe inside a host
+        application's threads.
 
     Raises
     ------
@@ -104,7 +109,7 @@ class Compensator:
     """
 
     def __init__(self, model, *, mode=None, outside="model", max_joint_change=np.degrees(MAX_JOINT_CHANGE),
-                 max_correction=MAX_CORRECTION):
+                 max_correction=MAX_CORRECTION, workers=1):
         self.model = model if isinstance(model, CompensationModel) else load_model(model)
         self.mode = mode or self.model.method
         self.model.check_mode(self.mode)
@@ -113,9 +118,12 @@ class Compensator:
         for name, value in (("max_joint_change", max_joint_change), ("max_correction", max_correction)):
             if not (np.isfinite(value) and value > 0):
                 raise TrajcompError(f"{name}: expected a positive number, got {value}")
+        if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
+            raise TrajcompError(f"workers: expected a whole number of at least 1, got {workers!r}")
         self.outside = outside
         self.max_joint_change = float(max_joint_change)
         self.max_correction = float(max_correction)
+        self.workers = workers
 
     @property
     def robot(self):
@@ -283,10 +291,11 @@ class Compensator:
         return hint
 
     def _compensate(self, program, label, **options):
-        correct = program_corrector(self.model, mode=self.mode, outside=self.outside, label=label)
+        correct = program_corrector(self.model, mode=self.mode, outside=self.outside, label=label,
+                                    workers=self.workers)
         edited, report = compensate_program(
             program, correct, self.robot, max_joint_change=np.radians(self.max_joint_change),
-            max_correction=self.max_correction, **options,
+            max_correction=self.max_correction, workers=self.workers, **options,
         )
         if report.outside_grid.any():
             log.warning("%s: %d of %d targets lie outside the compensation grid: %s policy applied",
