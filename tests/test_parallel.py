@@ -95,3 +95,19 @@ def test_posture_plan_on_two_processes_equals_one(tmp_path, monkeypatch):
     one, two = planned_joints(read, robot, workers=1), planned_joints(read, robot, workers=2)
     np.testing.assert_array_equal(two.q, one.q)
     assert two.source == one.source and one.source[30] == "joints" and one.source[0] == "home"
+
+
+def test_an_unreachable_target_stops_the_plan_alike_and_leaves_no_worker(tmp_path, monkeypatch):
+    monkeypatch.setattr(posture, "BLOCK", 7)
+    rows = [f"{550 + k:.3f},150,550,0,90,0,LIN,50,1" for k in range(40)]
+    rows[25] = "5000,150,550,0,90,0,LIN,50,1"  # out of reach, in the fourth block
+    program = tmp_path / "far.csv"
+    program.write_text("x,y,z,a,b,c,motion,speed,zone\n" + "\n".join(rows) + "\n")
+    read, robot = formats.read(program), load_robot("ur10")
+    messages = []
+    for workers in (1, 2):
+        with pytest.raises(IKError, match="cannot reach") as error:
+            planned_joints(read, robot, workers=workers)
+        messages.append(str(error.value))
+        assert multiprocessing.active_children() == []
+    assert messages[0] == messages[1] and "far.csv:27" in messages[0]

@@ -23,6 +23,7 @@ that moved more than a bound: a branch or turn switch always turns some
 joint by tens of degrees, a sub-millimetre correction by far less.
 """
 
+import contextlib
 import dataclasses
 import functools
 
@@ -300,7 +301,12 @@ def _chain(program, robot, index, q, branches, source, workers=1):
     """
     runs = _runs(program, robot, index, q, source)
     blocks = [rows[begin : begin + BLOCK] for rows, _ in runs for begin in range(0, len(rows), BLOCK)]
-    solutions = map_blocks(lambda k: branches(blocks[k]), len(blocks), workers)
+    with contextlib.closing(map_blocks(lambda k: branches(blocks[k]), len(blocks), workers)) as solutions:
+        _chain_runs(program, robot, index, q, source, runs, solutions)
+
+
+def _chain_runs(program, robot, index, q, source, runs, solutions):
+    """`_chain` of ``runs`` (`_runs`), taking each block's branches from the iterator ``solutions``."""
     for rows, anchor_of in runs:
         anchor, from_home = anchor_of()
         for begin in range(0, len(rows), BLOCK):
