@@ -155,3 +155,15 @@ def test_tracker_frame_six_dof_data_through_plan_simulate_calibrate_validate_pre
     assert main(["validate", str(model), str(moved), "--frame", "tracker", "--tolerance", "0.05"]) == 1
     assert main(["validate", str(model), str(moved), "--frame", "tracker", "--register", str(reference),
                  "--tolerance", "0.05"]) == 0
+
+
+def test_ctrl_c_exits_130_with_a_line_and_no_traceback(tmp_path, monkeypatch, capsys):
+    import trajcomp.commands.robots as robots
+
+    def interrupted(args):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(robots, "run", interrupted)
+    assert main(["robots"]) == 130
+    err = capsys.readouterr().err
+    assert err == "trajcomp: interrupted: what was not finished was not written\n"

@@ -17,6 +17,7 @@ from pathlib import Path
 from trajcomp import __version__, formats
 from trajcomp.atomic import write_atomic
 from trajcomp.errors import TrajcompError
+from trajcomp.parallel import ignore_interrupts
 
 PASS, FAIL, ERROR, CRASH = "pass", "fail", "error", "crash"
 EXIT_CODES = {PASS: 0, FAIL: 1, ERROR: 2, CRASH: 3}  # a crash is a bug: neither success nor bad input
@@ -130,8 +131,11 @@ def run_batch(job, inputs, outputs, *, jobs=1, scheduler=None, done=None):
     if jobs <= 1 or len(inputs) <= 1:
         results = (run_one(job, i, o) for i, o in zip(inputs, outputs))
         return [_reported(result, done) for result in results]
-    with ProcessPoolExecutor(max_workers=jobs) as pool:
+    pool = ProcessPoolExecutor(max_workers=jobs, initializer=ignore_interrupts)
+    try:
         return [_reported(result, done) for result in pool.map(run_one, [job] * len(inputs), inputs, outputs)]
+    finally:  # interrupted: the files not started are dropped, the running ones finish (each written whole)
+        pool.shutdown(cancel_futures=True)
 
 
 def _reported(result, done):

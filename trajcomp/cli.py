@@ -2,7 +2,8 @@
 
 Library code raises TrajcompError; this is the only place that prints errors
 and chooses exit codes: 0 success, 1 the result fails a requested tolerance
-or limit, 2 bad usage or bad input.
+or limit, 2 bad usage or bad input; 130 (the shells' code of Ctrl-C) when
+the user interrupts the run, which writes nothing it had not finished.
 """
 
 import argparse
@@ -13,6 +14,7 @@ import sys
 from trajcomp import __version__
 from trajcomp.errors import ToleranceError, TrajcompError
 
+INTERRUPTED = 130  # exit code of a run stopped by Ctrl-C (SIGINT), as shells report it
 COMMANDS = (
     "robots",
     "plan",
@@ -68,6 +70,9 @@ def main(argv=None):
     except TrajcompError as exc:
         print(f"trajcomp: error: {exc}", file=sys.stderr)
         return 2
+    except KeyboardInterrupt:
+        print("trajcomp: interrupted: what was not finished was not written", file=sys.stderr)
+        return INTERRUPTED
 
 
 if __name__ == "__main__":

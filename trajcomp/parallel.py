@@ -13,6 +13,7 @@ after the other in this process: the results are the same either way.
 
 import multiprocessing
 import os
+import signal
 
 _TASK = None  # the function of the running `map_blocks`, inherited by its forked workers
 _LOOKAHEAD = 2  # blocks a worker may compute ahead of the consumer, each
@@ -42,7 +43,8 @@ def map_blocks(function, count, workers=1):
     Yields
     ------
     The results, in block order. An exception raised by a block is raised
-    here, when its result is reached; the remaining blocks are abandoned.
+    here, when its result is reached; the blocks not yet started are
+    dropped, and the workers end once the few under way have.
     """
     workers = min(workers, count)
     if workers <= 1 or not _can_fork():
@@ -51,10 +53,10 @@ def map_blocks(function, count, workers=1):
     global _TASK
     _TASK = function
     try:
-        pool = multiprocessing.get_context("fork").Pool(workers)  # the workers start here, with the function
+        pool = multiprocessing.get_context("fork").Pool(workers, ignore_interrupts)  # they start here, with it
     finally:
         _TASK = None
-    with pool:
+    try:
         pending = []
         for k in range(count):
             pending.append(pool.apply_async(_run, (k,)))
@@ -62,6 +64,14 @@ def map_blocks(function, count, workers=1):
                 yield pending.pop(0).get()
         for result in pending:
             yield result.get()
+    finally:  # also when a block failed or the caller stopped: the few blocks under way end, then the workers
+        pool.close()  # (Pool.terminate can hang on its task thread; at most workers * _LOOKAHEAD blocks wait)
+        pool.join()
+
+
+def ignore_interrupts():
+    """Initializer of worker processes: Ctrl-C is the parent's to handle (it stops them), not theirs to report."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
 
 
 def _run(k):
