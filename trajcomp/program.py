@@ -324,8 +324,9 @@ class TargetTable:
         line : ndarray of int, shape (N,)
         """
         n = len(line)
-        return cls(pose, np.isnan(pose[:, 0, 0]), joints, np.asarray(line, dtype=int), ((),) * n, np.full(n, None, dtype=object),
-                   np.full(n, None, dtype=object), (None,) * n, np.zeros(n, dtype=bool))
+        none = repeated(None, n)
+        return cls(pose, np.isnan(pose[:, 0, 0]), joints, np.asarray(line, dtype=int), ((),) * n, none, none,
+                   (None,) * n, np.zeros(n, dtype=bool))
 
     def target(self, i):
         """Target ``i`` as an object."""
@@ -372,6 +373,13 @@ def rows_of(values, index):
 def every_row(index, n):
     """Whether ``index`` (K,) takes each of n rows once, in order."""
     return len(index) == n and np.array_equal(index, np.arange(n))
+
+
+def repeated(value, n):
+    """A read-only object array (n,) holding ``value`` n times, in one element's memory (a zero stride)."""
+    one = np.empty(1, dtype=object)
+    one[0] = value
+    return np.broadcast_to(one, (n,))
 
 
 def read_only(values):
