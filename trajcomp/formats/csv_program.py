@@ -48,6 +48,7 @@ LIMITS = dict.fromkeys(POSE[:3], LENGTH_LIMIT) | dict.fromkeys(POSE[3:], ANGLE_L
 KINDS = {"PTP": JOINT, "LIN": LINEAR}
 KNOWN = POSE + JOINTS + ("motion", "speed", "zone", "t")
 BLOCK = 50_000  # rows parsed or formatted together: vectorized, with bounded temporary memory
+_BARE_ZERO = re.compile(r"^(-?)0\.")  # the 0 of 0.5 and -0.5, for a file that writes .5
 _QUOTED_COMMA = re.compile(r',(?=(?:[^"]*"[^"]*")*[^"]*$)')  # a comma outside double quotes
 
 
@@ -379,9 +380,10 @@ def _written(values, old, min_places):
     before[given] = np.array(old[given].tolist(), dtype=float)  # from Python str: 4x faster than a str array's astype
     changed = np.array(texts, dtype=float) != before
     bare = np.strings.startswith(old, ".") | np.strings.startswith(old, "-.") | np.strings.startswith(old, "+.")
-    if (bare & changed).any():
-        texts = np.asarray(texts, dtype=str)
-        texts = np.where(bare, np.strings.replace(np.strings.replace(texts, "-0.", "-."), "0.", ".", count=1), texts)
+    if (bare & changed).any():  # only a leading 0 goes: 10.5 stays 10.5 (an unanchored replace wrote 1.5)
+        texts = list(texts)
+        for k in np.flatnonzero(bare & changed).tolist():
+            texts[k] = _BARE_ZERO.sub(r"\1.", texts[k], count=1)
     return changed, texts
 
 
