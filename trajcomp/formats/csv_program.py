@@ -305,16 +305,13 @@ def _patched_pieces(program, source):
 
 
 def _line_blocks(text, size):
-    """``(first, chunk)`` of ``text`` cut after every ``size``-th ``\n``: the number (1-based) of the chunk's first
-    line and its text, line endings included (a ``\r\n`` is never cut; a file of bare ``\r`` endings is one chunk).
-    """
+    """``(first, chunk)`` of ``text`` in chunks of about ``size`` lines (by the mean line length), each cut after a
+    ``\n``: the number (1-based) of the chunk's first line and its text, line endings included (a ``\r\n`` is never
+    cut; a file of bare ``\r`` endings is one chunk)."""
+    width = max(1, size * len(text) // (text.count("\n") + 1))  # characters of about ``size`` lines
     first, start = 1, 0
     while True:
-        end = start
-        for _ in range(size):
-            end = text.find("\n", end) + 1
-            if not end:
-                break
+        end = text.find("\n", start + width - 1) + 1
         if not end or end == len(text):
             yield first, text[start:]
             return
@@ -427,30 +424,37 @@ def _pose_columns(columns, header, pose, rows):
            for c, values in zip(POSE[:3], pose[rows, :3, 3].T)}
     if not len(rows):
         return out
-    picked = rows.tolist() if len(rows) < len(columns[0]) else None
-    old_abc = np.stack([_numbers(column if picked is None else [column[k] for k in picked])[0]
-                        for column in (columns[header.index(c)] for c in POSE[3:])], axis=1)
+    abc = [columns[header.index(c)] for c in POSE[3:]]
+    canonical = [_canonical(column) for column in abc]
+    picked = rows.tolist() if len(rows) < len(abc[0]) else None
+    old_abc = np.stack([
+        found[1][rows] if found is not None and found[1] is not None else
+        _numbers(column if picked is None else [column[k] for k in picked])[0]
+        for column, found in zip(abc, canonical)], axis=1)
     rotation = pose[rows, :3, :3]
     turned = np.abs(rotation - abc_to_matrix(np.radians(old_abc))).max(axis=(1, 2), initial=0.0) > 1e-12
     angles = near_angle(np.degrees(matrix_to_abc(rotation[turned])), old_abc[turned])
-    for c, values in zip(POSE[3:], angles.T):
-        out[c] = _column(columns[header.index(c)], rows[turned], values, MIN_PLACES[c])
+    for c, values, column, found in zip(POSE[3:], angles.T, abc, canonical):
+        out[c] = _column(column, rows[turned], values, MIN_PLACES[c], found)
     return out
 
 
-def _column(cells, rows, values, min_places):
+_UNKNOWN = object()
+
+
+def _column(cells, rows, values, min_places, canonical=_UNKNOWN):
     """How a column writes new ``values`` (R,) in its ``rows`` (R,): ``(spec, items)`` for the row %-operation.
 
-    ``cells`` (B,) are the column's raw cells. A column of canonical
-    numbers (`_canonical_decimals`), all rows given, is written as floats
-    with its spec ``%.<d>f``: a number that reads back equal to its old cell
-    is then that very text. Any other column goes the exact way (`_written`,
-    `_in_cells`) and gives its cells with ``%s``.
+    ``cells`` (B,) are the column's raw cells (``canonical``: their
+    `_canonical`, if known). A column of canonical numbers, all rows given,
+    is written as floats with its spec ``%.<d>f``: a number that reads back
+    equal to its old cell is then that very text. Any other column goes the
+    exact way (`_written`, `_in_cells`) and gives its cells with ``%s``.
     """
     if len(rows) == len(cells) and len(cells):
-        places = _canonical_decimals(cells)
-        if places is not None and places >= min_places and np.abs(values).max() < 1e14 / 10.0**places:
-            return f"%.{places}f", _no_negative_zero(values, places).tolist()
+        found = _canonical(cells) if canonical is _UNKNOWN else canonical
+        if found is not None and found[0] >= min_places and np.abs(values).max() < 1e14 / 10.0 ** found[0]:
+            return f"%.{found[0]}f", _no_negative_zero(values, found[0]).tolist()
     if not len(rows):
         return "%s", cells
     rows = rows.tolist()
@@ -467,13 +471,16 @@ _ASCII_NUMBER = np.zeros(256, dtype=bool)
 _ASCII_NUMBER[np.frombuffer(b"0123456789-.,", dtype=np.uint8)] = True
 
 
-def _canonical_decimals(cells):
-    """``d`` if every cell (str) is a number as ``%.<d>f`` writes it, with the same ``d``, else None.
+def _canonical(cells):
+    """``(d, values)`` if every cell (str, B > 0) is a number as ``%.<d>f`` writes it, with the same ``d``, else None.
 
     Canonical: an optional ``-``, an integer part without leading zeros, a
     point and ``d`` digits; no sign ``+``, exponent, space, quote or
     negative zero. Two such texts of at most 15 digits are equal exactly
-    when they read as the same float.
+    when they read as the same float. ``values`` (B,) are the floats the
+    cells state (exactly ``float(cell)``: an integer of at most 15 digits
+    divided by ``10**d``, both exact, the division correctly rounded), or
+    None for a cell of more digits.
     """
     first = cells[0]
     dot = first.find(".")
@@ -500,7 +507,13 @@ def _canonical_decimals(cells):
         return None  # a leading zero
     if negative.any() and "-0." + "0" * places + "," in joined:  # a - only starts a cell
         return None  # -0.000
-    return places
+    width = int((ends - digits).max())  # digits and the point
+    if width - 1 > 15:
+        return places, None
+    at = ends[:, None] - width + np.arange(width)  # each cell right-aligned: the point in one column
+    digit = np.where(at >= digits[:, None], data[np.maximum(at, 0)].astype(np.int64) - 48, 0)
+    mantissa = np.delete(digit, width - 1 - places, axis=1) @ 10 ** np.arange(width - 2, -1, -1, dtype=np.int64)
+    return places, np.where(negative, -mantissa, mantissa) / 10.0**places
 
 
 def _no_negative_zero(values, places):
