@@ -20,6 +20,7 @@ sets the ``t`` column.
 import contextlib
 import difflib
 import gc
+import itertools
 import math
 import re
 
@@ -87,24 +88,19 @@ def _is_statement(line):
     return not stripped or stripped[0] == "#"
 
 
-def _header_line(lines):
-    """Number (1-based) of the header: the first line that is not blank or a comment (None: none)."""
-    return next((n for n, line in enumerate(lines, 1) if not _is_statement(line)), None)
-
-
 def read(path):
     """Read a program CSV. Raises ReadError with file:line, field and text."""
     source = read_source(path)
     lines, endings = _split(source.text)
     if lines and not lines[-1]:
         lines.pop()
-    number = _header_line(lines)
+    statement, starts, lengths = _layout(source.text, lines)
+    number = int(np.argmin(statement)) + 1 if len(lines) and not statement.all() else None
     if number is None:
         fail(source.name, 1, source.text[:80], "not a program CSV: no header row")
     header = _header([_value(c).lower() for c in _cells(lines[number - 1])], source.name, number, lines[number - 1])
-    statement = [_is_statement(line) for line in lines]
     statement[number - 1] = True
-    rows = np.flatnonzero(~np.array(statement, dtype=bool)) + 1
+    rows = np.flatnonzero(~statement) + 1
     if not len(rows):
         fail(source.name, len(lines), source.text[-80:], "no target rows after the header")
     statements = [Statement(n, lines[n - 1]) for n in np.flatnonzero(statement) + 1]
@@ -122,9 +118,10 @@ def read(path):
         tool=np.full(n, None, dtype=object), frame=np.full(n, None, dtype=object), line=rows,
         axis_position=np.zeros(n, dtype=bool),
     )
-    lengths = np.fromiter(map(len, lines), dtype=int, count=len(lines))
-    ending_lengths = np.fromiter(map(len, endings[: len(lines) - 1]), dtype=int, count=len(lines) - 1)
-    starts = np.concatenate([[0], np.cumsum(lengths[:-1] + ending_lengths)])
+    if starts is None:
+        lengths = np.fromiter(map(len, lines), dtype=int, count=len(lines))
+        ending_lengths = np.fromiter(map(len, endings[: len(lines) - 1]), dtype=int, count=len(lines) - 1)
+        starts = np.concatenate([[0], np.cumsum(lengths[:-1] + ending_lengths)])
     del lines
 
     def text(number):
@@ -133,6 +130,37 @@ def read(path):
 
     return Program.from_tables("csv", source.name.rsplit(".", 1)[0], statements, motions,
                                TargetTable.of_rows(pose, joints, rows), text, sources=(source,))
+
+
+_ROW_START = np.zeros(256, dtype=bool)
+_ROW_START[0x21:0x7F] = True
+_ROW_START[ord("#")] = False  # a line starting with any other printable ASCII character is no statement
+
+
+def _layout(text, lines):
+    """``(statement, starts, lengths)`` of a text's lines (`_split`, the empty last piece left out).
+
+    ``statement`` (L,) marks blank and comment lines (`_is_statement`):
+    found from the first byte of each line where the text has ``\n``
+    endings only, the doubtful lines (a space, ``#``, a non-ASCII start)
+    checked one by one. ``starts`` and ``lengths`` (L,) are the lines'
+    offsets in ``text``, or None where the text is not ASCII or has other
+    endings.
+    """
+    if "\r" in text or not lines:
+        return np.array([_is_statement(line) for line in lines], dtype=bool), None, None
+    data = np.frombuffer(text.encode("utf-8"), dtype=np.uint8)  # a \n byte is a \n character
+    ends = np.flatnonzero(data == 10)
+    starts = np.concatenate([[0], ends + 1])[: len(lines)]
+    first = np.zeros(len(lines), dtype=np.uint8)
+    inside = starts < len(data)
+    first[inside] = data[starts[inside]]
+    statement = ~_ROW_START[first]
+    for k in np.flatnonzero(statement).tolist():
+        statement[k] = _is_statement(lines[k])
+    if len(data) != len(text):
+        return statement, None, None
+    return statement, starts, np.append(ends, len(data))[: len(lines)] - starts
 
 
 @contextlib.contextmanager
@@ -173,11 +201,19 @@ def _parse_block(name, header, lines, numbers):
     Parsed as arrays; a block with any mistake is checked row by row, which
     names the first one (`_check_row`).
     """
-    b = len(lines)
-    cells = [_cells(line) for line in lines]
-    if any(len(row) != len(header) for row in cells):
-        _check_rows(name, header, lines, numbers)
-    columns = dict(zip(header, zip(*cells)))
+    b, width = len(lines), len(header)
+    joined = ",".join(lines)
+    if '"' not in joined and all(map((width - 1).__eq__, map(str.count, lines, itertools.repeat(",")))):
+        flat = joined.split(",")  # one split of the block: every row has its fields
+        columns = {c: flat[j::width] for j, c in enumerate(header)}
+        del flat
+    else:
+        cells = [_cells(line) for line in lines]
+        if any(len(row) != width for row in cells):
+            _check_rows(name, header, lines, numbers)
+        columns = dict(zip(header, zip(*cells)))
+        del cells
+    del joined
     values, empty = {}, {}
     for column in [c for c in header if c in LIMITS or c in ("speed", "zone")]:
         number, empty[column] = _numbers(columns[column])
@@ -209,10 +245,21 @@ def _parse_block(name, header, lines, numbers):
 def _numbers(cells):
     """Values (B,) of a column's cells (B,) (NaN where empty) and which are empty; values None if a cell is no number.
 
-    Plain numbers (the common case) are converted from the Python str at
-    once; cells with quotes or empty ones go through a str array.
+    Canonical numbers (`_canonical`, the common case) are read from their
+    digits at once; a column of few distinct cells (speeds, zones) converts
+    each distinct one; other plain numbers are converted from the Python
+    str at once; cells with quotes or empty ones go through a str array.
     """
+    found = _canonical(cells) if len(cells) else None
+    if found is not None and found[1] is not None:
+        return found[1], np.zeros(len(cells), dtype=bool)
+    distinct = set(cells) if len(cells) >= 64 else None
     try:
+        if distinct is not None and len(distinct) <= len(cells) // 8:
+            distinct = list(distinct)
+            lookup = dict(zip(distinct, np.array(distinct, dtype=float).tolist()))
+            return np.fromiter(map(lookup.__getitem__, cells), dtype=float, count=len(cells)), \
+                np.zeros(len(cells), dtype=bool)
         return np.array(cells, dtype=float), np.zeros(len(cells), dtype=bool)
     except ValueError:
         pass
