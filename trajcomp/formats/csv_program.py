@@ -499,7 +499,7 @@ def _column(cells, rows, values, min_places, canonical=_UNKNOWN):
     exact way (`_written`, `_in_cells`) and gives its cells with ``%s``.
     """
     if len(rows) == len(cells) and len(cells):
-        found = _canonical(cells) if canonical is _UNKNOWN else canonical
+        found = _canonical(cells, values=False) if canonical is _UNKNOWN else canonical
         if found is not None and found[0] >= min_places and np.abs(values).max() < 1e14 / 10.0 ** found[0]:
             return f"%.{found[0]}f", _no_negative_zero(values, found[0]).tolist()
     if not len(rows):
@@ -518,7 +518,7 @@ _ASCII_NUMBER = np.zeros(256, dtype=bool)
 _ASCII_NUMBER[np.frombuffer(b"0123456789-.,", dtype=np.uint8)] = True
 
 
-def _canonical(cells):
+def _canonical(cells, values=True):
     """``(d, values)`` if every cell (str, B > 0) is a number as ``%.<d>f`` writes it, with the same ``d``, else None.
 
     Canonical: an optional ``-``, an integer part without leading zeros, a
@@ -527,7 +527,7 @@ def _canonical(cells):
     when they read as the same float. ``values`` (B,) are the floats the
     cells state (exactly ``float(cell)``: an integer of at most 15 digits
     divided by ``10**d``, both exact, the division correctly rounded), or
-    None for a cell of more digits.
+    None for a cell of more digits (or when not asked for).
     """
     first = cells[0]
     dot = first.find(".")
@@ -555,7 +555,7 @@ def _canonical(cells):
     if negative.any() and "-0." + "0" * places + "," in joined:  # a - only starts a cell
         return None  # -0.000
     width = int((ends - digits).max())  # digits and the point
-    if width - 1 > 15:
+    if width - 1 > 15 or not values:
         return places, None
     at = ends[:, None] - width + np.arange(width)  # each cell right-aligned: the point in one column
     digit = np.where(at >= digits[:, None], data[np.maximum(at, 0)].astype(np.int64) - 48, 0)
