@@ -76,3 +76,32 @@ def test_content_given_in_pieces_is_written_in_order(tmp_path):
     target = tmp_path / "long.csv"
     write_files_atomic({target: [b"x,y\n", b"1,2\n", b"3,4"]})
     assert target.read_bytes() == b"x,y\n1,2\n3,4"
+
+
+def test_content_given_by_a_generator_is_written_as_it_comes(tmp_path):
+    target = tmp_path / "long.csv"
+    made = []
+
+    def pieces():
+        for piece in (b"x,y\n", b"1,2\n", b"3,4"):
+            made.append(piece)
+            yield piece
+
+    content = pieces()
+    assert not made  # nothing made before the write
+    write_files_atomic({target: content})
+    assert target.read_bytes() == b"x,y\n1,2\n3,4"
+
+
+def test_a_failing_generator_leaves_every_file_untouched(tmp_path):
+    first, second = tmp_path / "a.src", tmp_path / "a.dat"
+    first.write_bytes(b"old src")
+
+    def failing():
+        yield b"new dat, part 1"
+        raise WriteError("a.dat: cannot be written in latin-1")
+
+    with pytest.raises(WriteError, match="latin-1"):
+        write_files_atomic({first: (p for p in [b"new src"]), second: failing()})
+    assert first.read_bytes() == b"old src"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["a.src"]

@@ -157,3 +157,15 @@ def test_a_mistake_in_a_later_block_is_named_by_its_line(tmp_path, monkeypatch, 
     path.write_text("\n".join(rows) + "\n")
     with pytest.raises(ReadError, match=r"typo\.csv:8: field motion: expected PTP or LIN, got 'LNI'"):
         formats.read(path)
+
+
+def test_a_file_writing_bare_fractions_keeps_them_bare_but_never_loses_an_integer_digit(tmp_path):
+    """.5 stays bare (.750), yet 10.5 is 10.500 and -10.25 is -10.250 (not 1.500, -1.250)."""
+    path = tmp_path / "bare.csv"
+    path.write_text("x,y,z,a,b,c\n.5,-.5,1,0,0,0\n.5,.5,1,0,0,0\n")
+    program = formats.read(path)
+    stack = program.cartesian_targets()
+    poses = stack.T.copy()
+    poses[:, :3, 3] = [[10.5, -10.25, 1.0], [0.75, -0.75, 1.0]]
+    formats.write(tmp_path / "out.csv", program.with_targets(stack.index, poses=poses))
+    assert (tmp_path / "out.csv").read_text().splitlines()[1:] == ["10.500,-10.250,1,0,0,0", ".750,-.750,1,0,0,0"]

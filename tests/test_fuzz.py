@@ -108,7 +108,8 @@ def given_frames(program):
 def render(path, program):
     """The files `trajcomp.formats.write` would write, rendered in memory (same checks, same writers)."""
     check_writable(program)
-    return formats.find_format(path).write(program, path)
+    files = formats.find_format(path).write(program, path)
+    return {p: data if isinstance(data, bytes) else b"".join(data) for p, data in files.items()}  # pieces made now
 
 
 def exercise(path, out, robot, correct, to_format):

@@ -55,9 +55,12 @@ def write_files_atomic(files):
 
     Parameters
     ----------
-    files : Mapping[str or Path, bytes or list of bytes]
-        Destination paths and their content (a list: pieces written in order,
-        for a long file that is never joined in memory).
+    files : Mapping[str or Path, bytes or iterable of bytes]
+        Destination paths and their content. An iterable (a list, a
+        generator) gives pieces written in order as they come, for a long
+        file that is never held in memory whole; an exception it raises
+        (a WriteError while the content is made) leaves every file
+        untouched, like a failed write.
 
     Raises
     ------
@@ -88,11 +91,14 @@ def _stage(path, data):
         raise WriteError(f"{path}: cannot write: {exc.strerror}") from exc
     try:
         with os.fdopen(fd, "wb") as handle:
-            handle.writelines(data if isinstance(data, list) else [data])
+            handle.writelines([data] if isinstance(data, (bytes, bytearray, memoryview)) else data)
         os.chmod(tmp, _mode_for(path))
     except OSError as exc:
         Path(tmp).unlink(missing_ok=True)
         raise WriteError(f"{path}: cannot write: {exc}") from exc
+    except BaseException:  # the content's generator failed: no temporary left behind
+        Path(tmp).unlink(missing_ok=True)
+        raise
     return tmp
 
 

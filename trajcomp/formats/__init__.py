@@ -71,7 +71,8 @@ def register_format(name, extensions, reader, writer, *, source="built-in"):
     reader : callable or str
         ``reader(path) -> Program``, or ``"module:function"``.
     writer : callable or str
-        ``writer(program, path) -> {Path: bytes}`` (or a list of bytes pieces, for a long file), or ``"module:function"``.
+        ``writer(program, path) -> {Path: bytes}`` (or an iterable of bytes pieces, e.g. a generator, for a long
+        file), or ``"module:function"``.
     source : str
         Shown by ``trajcomp formats``.
     """
@@ -190,8 +191,9 @@ def input_paths(path, program):
 def write(path, program, format=None, *, protect=()):
     """Write a robot program; its output files (a KRL .src and .dat) land all or none.
 
-    The whole content is produced before anything is written, then
-    committed with `trajcomp.atomic.write_files_atomic`.
+    The content is written to temporary files (a writer's generator of
+    pieces is consumed while writing), then committed with
+    `trajcomp.atomic.write_files_atomic`.
 
     Parameters
     ----------

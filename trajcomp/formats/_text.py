@@ -295,12 +295,13 @@ def check_writable(program):
     (`trajcomp.formats.write`).
     """
     motions, targets = program.motion_table(), program.target_table()
-    used = np.unique(np.concatenate([motions.target, motions.via]))
-    used = used[used >= 0]
-    pose, joints = targets.pose[used], targets.joints[used]
-    bad_pose = np.isinf(pose).any(axis=(1, 2)) | (~targets.is_joint[used] & np.isnan(pose).any(axis=(1, 2)))
+    used = np.zeros(len(targets), dtype=bool)
+    used[motions.target[motions.target >= 0]] = used[motions.via[motions.via >= 0]] = True
+    used = np.flatnonzero(used)  # the targets used, ascending (as np.unique, without its sort or hash of every index)
+    pose, joints = targets.pose, targets.joints  # judged whole, then the used picked: no copy of the arrays
+    bad_pose = (np.isinf(pose).any(axis=(1, 2)) | (~targets.is_joint & np.isnan(pose).any(axis=(1, 2))))[used]
     stated = ~np.isnan(joints).all(axis=1)  # NaN: no joints
-    bad_joints = stated & ~np.isfinite(joints).all(axis=1)
+    bad_joints = (stated & ~np.isfinite(joints).all(axis=1))[used]
     for what, bad in (("pose", bad_pose), ("joints", bad_joints)):
         if bad.any():
             raise WriteError(f"target {where(program.targets[used[np.argmax(bad)]])}: {what} not finite, nothing written")

@@ -20,6 +20,7 @@ sets the ``t`` column.
 import contextlib
 import difflib
 import gc
+import itertools
 import math
 import re
 
@@ -48,6 +49,7 @@ LIMITS = dict.fromkeys(POSE[:3], LENGTH_LIMIT) | dict.fromkeys(POSE[3:], ANGLE_L
 KINDS = {"PTP": JOINT, "LIN": LINEAR}
 KNOWN = POSE + JOINTS + ("motion", "speed", "zone", "t")
 BLOCK = 50_000  # rows parsed or formatted together: vectorized, with bounded temporary memory
+_BARE_ZERO = re.compile(r"^(-?)0\.")  # the 0 of 0.5 and -0.5, for a file that writes .5
 _QUOTED_COMMA = re.compile(r',(?=(?:[^"]*"[^"]*")*[^"]*$)')  # a comma outside double quotes
 
 
@@ -68,24 +70,6 @@ def _split(text):
     return parts[0::2], parts[1::2]
 
 
-def _join(lines, endings):
-    """The text of `_split`'s lines and endings (consumes ``lines``)."""
-    return "".join(_pieces(lines, endings))
-
-
-def _pieces(lines, endings):
-    """The text of `_split`'s lines and endings, `BLOCK` lines a piece; each line is released once joined."""
-    uniform = endings.count("\n") == len(endings)
-    for a in range(0, len(lines), BLOCK):
-        b = min(a + BLOCK, len(lines))
-        if uniform:
-            piece = "\n".join(lines[a:b]) + ("\n" if b < len(lines) else "")
-        else:
-            piece = "".join(map(str.__add__, lines[a:b], endings[a:b])) + (lines[-1] if b == len(lines) else "")
-        lines[a:b] = [None] * (b - a)
-        yield piece
-
-
 def _cells(line):
     """The raw cells of a CSV line: ``",".join(cells) == line``; commas inside quotes kept."""
     return _QUOTED_COMMA.split(line) if '"' in line else line.split(",")
@@ -104,24 +88,19 @@ def _is_statement(line):
     return not stripped or stripped[0] == "#"
 
 
-def _header_line(lines):
-    """Number (1-based) of the header: the first line that is not blank or a comment (None: none)."""
-    return next((n for n, line in enumerate(lines, 1) if not _is_statement(line)), None)
-
-
 def read(path):
     """Read a program CSV. Raises ReadError with file:line, field and text."""
     source = read_source(path)
     lines, endings = _split(source.text)
     if lines and not lines[-1]:
         lines.pop()
-    number = _header_line(lines)
+    statement, starts, lengths = _layout(source.text, lines)
+    number = int(np.argmin(statement)) + 1 if len(lines) and not statement.all() else None
     if number is None:
         fail(source.name, 1, source.text[:80], "not a program CSV: no header row")
     header = _header([_value(c).lower() for c in _cells(lines[number - 1])], source.name, number, lines[number - 1])
-    statement = [_is_statement(line) for line in lines]
     statement[number - 1] = True
-    rows = np.flatnonzero(~np.array(statement, dtype=bool)) + 1
+    rows = np.flatnonzero(~statement) + 1
     if not len(rows):
         fail(source.name, len(lines), source.text[-80:], "no target rows after the header")
     statements = [Statement(n, lines[n - 1]) for n in np.flatnonzero(statement) + 1]
@@ -139,9 +118,10 @@ def read(path):
         tool=np.full(n, None, dtype=object), frame=np.full(n, None, dtype=object), line=rows,
         axis_position=np.zeros(n, dtype=bool),
     )
-    lengths = np.fromiter(map(len, lines), dtype=int, count=len(lines))
-    ending_lengths = np.fromiter(map(len, endings[: len(lines) - 1]), dtype=int, count=len(lines) - 1)
-    starts = np.concatenate([[0], np.cumsum(lengths[:-1] + ending_lengths)])
+    if starts is None:
+        lengths = np.fromiter(map(len, lines), dtype=int, count=len(lines))
+        ending_lengths = np.fromiter(map(len, endings[: len(lines) - 1]), dtype=int, count=len(lines) - 1)
+        starts = np.concatenate([[0], np.cumsum(lengths[:-1] + ending_lengths)])
     del lines
 
     def text(number):
@@ -150,6 +130,37 @@ def read(path):
 
     return Program.from_tables("csv", source.name.rsplit(".", 1)[0], statements, motions,
                                TargetTable.of_rows(pose, joints, rows), text, sources=(source,))
+
+
+_ROW_START = np.zeros(256, dtype=bool)
+_ROW_START[0x21:0x7F] = True
+_ROW_START[ord("#")] = False  # a line starting with any other printable ASCII character is no statement
+
+
+def _layout(text, lines):
+    """``(statement, starts, lengths)`` of a text's lines (`_split`, the empty last piece left out).
+
+    ``statement`` (L,) marks blank and comment lines (`_is_statement`):
+    found from the first byte of each line where the text has ``\n``
+    endings only, the doubtful lines (a space, ``#``, a non-ASCII start)
+    checked one by one. ``starts`` and ``lengths`` (L,) are the lines'
+    offsets in ``text``, or None where the text is not ASCII or has other
+    endings.
+    """
+    if "\r" in text or not lines:
+        return np.array([_is_statement(line) for line in lines], dtype=bool), None, None
+    data = np.frombuffer(text.encode("utf-8"), dtype=np.uint8)  # a \n byte is a \n character
+    ends = np.flatnonzero(data == 10)
+    starts = np.concatenate([[0], ends + 1])[: len(lines)]
+    first = np.zeros(len(lines), dtype=np.uint8)
+    inside = starts < len(data)
+    first[inside] = data[starts[inside]]
+    statement = ~_ROW_START[first]
+    for k in np.flatnonzero(statement).tolist():
+        statement[k] = _is_statement(lines[k])
+    if len(data) != len(text):
+        return statement, None, None
+    return statement, starts, np.append(ends, len(data))[: len(lines)] - starts
 
 
 @contextlib.contextmanager
@@ -190,11 +201,19 @@ def _parse_block(name, header, lines, numbers):
     Parsed as arrays; a block with any mistake is checked row by row, which
     names the first one (`_check_row`).
     """
-    b = len(lines)
-    cells = [_cells(line) for line in lines]
-    if any(len(row) != len(header) for row in cells):
-        _check_rows(name, header, lines, numbers)
-    columns = dict(zip(header, zip(*cells)))
+    b, width = len(lines), len(header)
+    joined = ",".join(lines)
+    if '"' not in joined and all(map((width - 1).__eq__, map(str.count, lines, itertools.repeat(",")))):
+        flat = joined.split(",")  # one split of the block: every row has its fields
+        columns = {c: flat[j::width] for j, c in enumerate(header)}
+        del flat
+    else:
+        cells = [_cells(line) for line in lines]
+        if any(len(row) != width for row in cells):
+            _check_rows(name, header, lines, numbers)
+        columns = dict(zip(header, zip(*cells)))
+        del cells
+    del joined
     values, empty = {}, {}
     for column in [c for c in header if c in LIMITS or c in ("speed", "zone")]:
         number, empty[column] = _numbers(columns[column])
@@ -226,10 +245,21 @@ def _parse_block(name, header, lines, numbers):
 def _numbers(cells):
     """Values (B,) of a column's cells (B,) (NaN where empty) and which are empty; values None if a cell is no number.
 
-    Plain numbers (the common case) are converted from the Python str at
-    once; cells with quotes or empty ones go through a str array.
+    Canonical numbers (`_canonical`, the common case) are read from their
+    digits at once; a column of few distinct cells (speeds, zones) converts
+    each distinct one; other plain numbers are converted from the Python
+    str at once; cells with quotes or empty ones go through a str array.
     """
+    found = _canonical(cells) if len(cells) else None
+    if found is not None and found[1] is not None:
+        return found[1], np.zeros(len(cells), dtype=bool)
+    distinct = set(cells) if len(cells) >= 64 else None
     try:
+        if distinct is not None and len(distinct) <= len(cells) // 8:
+            distinct = list(distinct)
+            lookup = dict(zip(distinct, np.array(distinct, dtype=float).tolist()))
+            return np.fromiter(map(lookup.__getitem__, cells), dtype=float, count=len(cells)), \
+                np.zeros(len(cells), dtype=bool)
         return np.array(cells, dtype=float), np.zeros(len(cells), dtype=bool)
     except ValueError:
         pass
@@ -282,42 +312,260 @@ def _check_row(name, header, line, number):
 
 
 def write(program, path):
-    """The CSV text of a program: patched in place if read from CSV, else generated."""
+    """The CSV text of a program: patched in place if read from CSV, else generated.
+
+    A program read from CSV gives its content as a generator of encoded
+    pieces, a block of lines each, made while `trajcomp.atomic` writes them:
+    the whole output is never held in memory.
+    """
     if program.format == "csv" and program.sources:
-        source = program.sources[0]
-        with _collection_paused():
-            return {path: [encode_text(source, piece) for piece in _pieces(*_patched(program, source.text))]}
+        return {path: _patched_pieces(program, program.sources[0])}
     return {path: _emit(program).encode("utf-8")}
 
 
-def _patched(program, text):
-    """The lines and line endings (`_split`) of ``text`` with the edited targets' numbers rewritten, and j1..j6
-    appended when the file has no such columns."""
-    lines, endings = _split(text)
-    number = _header_line(lines)
-    header = [_value(c).lower() for c in _cells(lines[number - 1])]
+def _patched_pieces(program, source):
+    """The encoded pieces of ``source``'s text with the edited targets' numbers rewritten (`_patched_block`), and
+    j1..j6 appended when the file has no such columns; `BLOCK` lines a piece."""
     targets = program.target_table()
-    edited = np.flatnonzero(targets.edited)
-    for k in range(0, len(edited), BLOCK):
-        rows = edited[k : k + BLOCK]
-        numbers = targets.line[rows].tolist()
-        block = [lines[n - 1] for n in numbers]
-        columns = list(zip(*([line.split(",") for line in block] if _plain(block) else map(_cells, block))))
-        old = {c: _stripped(columns[j]) for j, c in enumerate(header) if c in LIMITS}
-        updates = _pose_texts(targets.pose[rows], ~targets.is_joint[rows], old) if "x" in header else {}
-        if "j1" in header:
-            updates |= _joint_texts(targets.joints[rows], old)
-        for column, (changed, texts) in updates.items():
-            j = header.index(column)
-            columns[j] = _in_cells(columns[j], old[column], changed, texts)
-        for n, line in zip(numbers, map(",".join, zip(*columns))):
-            lines[n - 1] = line
-    if "j1" not in header and np.isfinite(targets.joints[edited]).all(axis=1).any():
-        lines[number - 1] += "," + ",".join(JOINTS)
-        for k in range(0, len(targets), BLOCK):
-            for n, cells in zip(targets.line[k : k + BLOCK].tolist(), _degrees_cells(targets.joints[k : k + BLOCK])):
-                lines[n - 1] += "," + cells
-    return lines, endings
+    order = np.argsort(targets.line, kind="stable")
+    numbers = targets.line[order]
+    header, add_joints = None, False
+    with _collection_paused():
+        for first, chunk in _line_blocks(source.text, BLOCK):
+            lines = _split(chunk)[0]
+            header_at = -1
+            if header is None:
+                header_at = next((k for k, line in enumerate(lines) if not _is_statement(line)), -1)
+                if header_at >= 0:
+                    header = [_value(c).lower() for c in _cells(lines[header_at])]
+                    add_joints = "j1" not in header and bool(
+                        np.isfinite(targets.joints[targets.edited]).all(axis=1).any())
+            del lines
+            a, b = np.searchsorted(numbers, [first, first + _count_lines(chunk) - chunk.endswith("\n")])
+            rows = order[a:b]
+            text = _patched_block(chunk, header_at, header, numbers[a:b] - first, targets.pose[rows],
+                                  targets.is_joint[rows], targets.joints[rows], targets.edited[rows], add_joints)
+            del chunk
+            yield encode_text(source, text)
+            if source.encoding == "utf-8-sig":
+                source = Source(source.name, "", "utf-8")  # the byte order mark starts the first piece only
+
+
+def _line_blocks(text, size):
+    """``(first, chunk)`` of ``text`` in chunks of about ``size`` lines (by the mean line length), each cut after a
+    ``\n``: the number (1-based) of the chunk's first line and its text, line endings included (a ``\r\n`` is never
+    cut; a file of bare ``\r`` endings is one chunk)."""
+    width = max(1, size * len(text) // (text.count("\n") + 1))  # characters of about ``size`` lines
+    first, start = 1, 0
+    while True:
+        end = text.find("\n", start + width - 1) + 1
+        if not end or end == len(text):
+            yield first, text[start:]
+            return
+        chunk = text[start:end]
+        yield first, chunk
+        first += _count_lines(chunk) - 1  # its last piece, empty, is the next chunk's first line
+        start = end
+
+
+def _count_lines(chunk):
+    """Number of `_split` pieces of a chunk, the last (possibly empty) one included."""
+    if "\r" not in chunk:
+        return chunk.count("\n") + 1
+    return len(_split(chunk)[0])
+
+
+def _patched_block(chunk, header_at, header, at, pose, is_joint, joints, edited, add_joints):
+    """The text of a block of lines with its target rows patched: a pure function of plain values.
+
+    Parameters
+    ----------
+    chunk : str
+        Lines with their line endings (`_line_blocks`).
+    header_at : int
+        Index of the header among the chunk's lines, -1 if elsewhere.
+    header : list of str or None
+        Column names (None: no header yet, so no target rows).
+    at : ndarray of int, shape (R,)
+        Indices of the target rows among the chunk's lines.
+    pose, is_joint, joints, edited : ndarray, shape (R, 4, 4), (R,), (R, 6), (R,)
+        The targets of those rows (`TargetTable`).
+    add_joints : bool
+        Append j1..j6 (header and every target row).
+    """
+    if not len(at) or not (add_joints or edited.any()):
+        if header_at < 0 or not add_joints:
+            return chunk
+        at = at[:0]
+    count = len(at)
+    if count and "\r" not in chunk and at[-1] - at[0] == count - 1:  # the rows: a run of lines, as usual
+        start = 0
+        for _ in range(int(at[0])):
+            start = chunk.find("\n", start) + 1
+        body = chunk[start:]
+        ending = "\n" if body.endswith("\n") else ""
+        body = body[: len(body) - len(ending)]
+        if body.count("\n") == count - 1:  # and they end the chunk
+            head = chunk[:start]
+            if header_at >= 0 and add_joints:
+                head = head.split("\n")
+                head[header_at] += "," + ",".join(JOINTS)
+                head = "\n".join(head)
+            return head + _patched_rows(body, count, header, pose, is_joint, joints, edited, add_joints) + ending
+    lines, endings = _split(chunk)
+    if header_at >= 0 and add_joints:
+        lines[header_at] += "," + ",".join(JOINTS)
+    if count:
+        at = at.tolist()
+        rows = _patched_rows("\n".join([lines[k] for k in at]), count, header, pose, is_joint, joints, edited,
+                             add_joints).split("\n")
+        for k, line in zip(at, rows):
+            lines[k] = line
+    return _joined(lines, endings)
+
+
+def _patched_rows(rows, n, header, pose, is_joint, joints, edited, add_joints):
+    """Target rows with the edited ones' numbers rewritten and j1..j6 appended if asked: ``rows`` is the text of
+    ``n`` rows joined by ``\n``, as is the result.
+
+    Each number column is either formatted at once (`_column`) or given as
+    cells; the rows are joined by one %-operation.
+    """
+    width = len(header)
+    flat = rows.replace("\n", ",").split(",") if '"' not in rows else None
+    if flat is None or len(flat) != n * width:
+        columns = [list(c) for c in zip(*map(_cells, rows.split("\n")))]
+    else:
+        columns = [flat[j::width] for j in range(width)]
+    del flat, rows
+    specs = ["%s"] * width
+    updates = {}
+    if "x" in header:
+        updates |= _pose_columns(columns, header, pose, np.flatnonzero(edited & ~is_joint))
+    if "j1" in header:
+        given = np.flatnonzero(edited & np.isfinite(joints).all(axis=1))
+        for c, values in zip(JOINTS, np.degrees(joints[given]).T):
+            updates[c] = _column(columns[header.index(c)], given, values, MIN_PLACES[c])
+    for c, (spec, column) in updates.items():
+        specs[header.index(c)], columns[header.index(c)] = spec, column
+    if add_joints:
+        known = np.isfinite(joints).all(axis=1)
+        if known.all():
+            degrees = np.degrees(joints)
+            specs += ["%.4f"] * 6
+            columns += [_no_negative_zero(d, 4).tolist() for d in degrees.T]
+        else:
+            specs.append("%s")
+            columns.append(_degrees_cells(joints))
+    flat = [None] * (n * len(columns))
+    for j, column in enumerate(columns):
+        flat[j :: len(columns)] = column
+    del columns
+    return "\n".join([",".join(specs)] * n) % tuple(flat)
+
+
+def _pose_columns(columns, header, pose, rows):
+    """``{column: (spec, items)}`` (`_column`) of x..c: raw cells of each column (B,), poses (B, 4, 4), the edited
+    Cartesian rows (R,)."""
+    out = {c: _column(columns[header.index(c)], rows, values, MIN_PLACES[c])
+           for c, values in zip(POSE[:3], pose[rows, :3, 3].T)}
+    if not len(rows):
+        return out
+    abc = [columns[header.index(c)] for c in POSE[3:]]
+    canonical = [_canonical(column) for column in abc]
+    picked = rows.tolist() if len(rows) < len(abc[0]) else None
+    old_abc = np.stack([
+        found[1][rows] if found is not None and found[1] is not None else
+        _numbers(column if picked is None else [column[k] for k in picked])[0]
+        for column, found in zip(abc, canonical)], axis=1)
+    rotation = pose[rows, :3, :3]
+    turned = np.abs(rotation - abc_to_matrix(np.radians(old_abc))).max(axis=(1, 2), initial=0.0) > 1e-12
+    angles = near_angle(np.degrees(matrix_to_abc(rotation[turned])), old_abc[turned])
+    for c, values, column, found in zip(POSE[3:], angles.T, abc, canonical):
+        out[c] = _column(column, rows[turned], values, MIN_PLACES[c], found)
+    return out
+
+
+_UNKNOWN = object()
+
+
+def _column(cells, rows, values, min_places, canonical=_UNKNOWN):
+    """How a column writes new ``values`` (R,) in its ``rows`` (R,): ``(spec, items)`` for the row %-operation.
+
+    ``cells`` (B,) are the column's raw cells (``canonical``: their
+    `_canonical`, if known). A column of canonical numbers, all rows given,
+    is written as floats with its spec ``%.<d>f``: a number that reads back
+    equal to its old cell is then that very text. Any other column goes the
+    exact way (`_written`, `_in_cells`) and gives its cells with ``%s``.
+    """
+    if len(rows) == len(cells) and len(cells):
+        found = _canonical(cells, values=False) if canonical is _UNKNOWN else canonical
+        if found is not None and found[0] >= min_places and np.abs(values).max() < 1e14 / 10.0 ** found[0]:
+            return f"%.{found[0]}f", _no_negative_zero(values, found[0]).tolist()
+    if not len(rows):
+        return "%s", cells
+    rows = rows.tolist()
+    picked = [cells[k] for k in rows]
+    old = _stripped(picked)
+    changed, texts = _written(values, old, min_places)
+    out = list(cells)
+    for k, cell in zip(rows, _in_cells(picked, old, changed, texts)):
+        out[k] = cell
+    return "%s", out
+
+
+_ASCII_NUMBER = np.zeros(256, dtype=bool)
+_ASCII_NUMBER[np.frombuffer(b"0123456789-.,", dtype=np.uint8)] = True
+
+
+def _canonical(cells, values=True):
+    """``(d, values)`` if every cell (str, B > 0) is a number as ``%.<d>f`` writes it, with the same ``d``, else None.
+
+    Canonical: an optional ``-``, an integer part without leading zeros, a
+    point and ``d`` digits; no sign ``+``, exponent, space, quote or
+    negative zero. Two such texts of at most 15 digits are equal exactly
+    when they read as the same float. ``values`` (B,) are the floats the
+    cells state (exactly ``float(cell)``: an integer of at most 15 digits
+    divided by ``10**d``, both exact, the division correctly rounded), or
+    None for a cell of more digits (or when not asked for).
+    """
+    first = cells[0]
+    dot = first.find(".")
+    if dot < 0:
+        return None
+    places = len(first) - dot - 1
+    joined = ",".join(cells) + ","
+    try:
+        data = np.frombuffer(joined.encode("ascii"), dtype=np.uint8)
+    except UnicodeEncodeError:
+        return None
+    if not _ASCII_NUMBER[data].all():
+        return None
+    ends = np.flatnonzero(data == 44)
+    dots = np.flatnonzero(data == 46)
+    if len(ends) != len(cells) or len(dots) != len(cells) or np.any(ends - dots != places + 1):
+        return None
+    starts = np.concatenate([[0], ends[:-1] + 1])
+    negative = data[starts] == 45
+    digits = starts + negative  # where the integer part begins
+    if np.count_nonzero(data == 45) != np.count_nonzero(negative) or np.any(dots <= digits):
+        return None  # a - inside a number, or no integer digit (.5, -.5, -)
+    if np.any((data[digits] == 48) & (dots != digits + 1)):
+        return None  # a leading zero
+    if negative.any() and "-0." + "0" * places + "," in joined:  # a - only starts a cell
+        return None  # -0.000
+    width = int((ends - digits).max())  # digits and the point
+    if width - 1 > 15 or not values:
+        return places, None
+    at = ends[:, None] - width + np.arange(width)  # each cell right-aligned: the point in one column
+    digit = np.where(at >= digits[:, None], data[np.maximum(at, 0)].astype(np.int64) - 48, 0)
+    mantissa = np.delete(digit, width - 1 - places, axis=1) @ 10 ** np.arange(width - 2, -1, -1, dtype=np.int64)
+    return places, np.where(negative, -mantissa, mantissa) / 10.0**places
+
+
+def _no_negative_zero(values, places):
+    """``values`` with those that round to 0 at ``places`` decimals set to +0.0 (never ``-0.000``)."""
+    return np.where(np.round(values, places) == 0.0, 0.0, values)
 
 
 def _in_cells(cells, values, changed, texts):
@@ -379,9 +627,10 @@ def _written(values, old, min_places):
     before[given] = np.array(old[given].tolist(), dtype=float)  # from Python str: 4x faster than a str array's astype
     changed = np.array(texts, dtype=float) != before
     bare = np.strings.startswith(old, ".") | np.strings.startswith(old, "-.") | np.strings.startswith(old, "+.")
-    if (bare & changed).any():
-        texts = np.asarray(texts, dtype=str)
-        texts = np.where(bare, np.strings.replace(np.strings.replace(texts, "-0.", "-."), "0.", ".", count=1), texts)
+    if (bare & changed).any():  # only a leading 0 goes: 10.5 stays 10.5 (an unanchored replace wrote 1.5)
+        texts = list(texts)
+        for k in np.flatnonzero(bare & changed).tolist():
+            texts[k] = _BARE_ZERO.sub(r"\1.", texts[k], count=1)
     return changed, texts
 
 
@@ -442,25 +691,50 @@ def with_times(program, times):
         The program with its source text changed, and the written values.
     """
     source = program.sources[0]
-    lines, endings = _split(source.text)
-    number = _header_line(lines)
-    header = [_value(c).lower() for c in _cells(lines[number - 1])]
     written = _numbers_text(np.asarray(times, dtype=float), np.zeros(len(times), dtype=int), 9)
     rows = program.motion_table().line
-    if "t" in header:
-        j = header.index("t")
-        cells = [_cells(lines[n - 1]) for n in rows.tolist()]
-        column = [row[j] for row in cells]
-        column = _in_cells(column, _stripped(column), np.ones(len(column), dtype=bool), written)
-        for n, row, cell in zip(rows.tolist(), cells, column):
-            row[j] = cell
-            lines[n - 1] = ",".join(row)
-    else:
-        lines[number - 1] += ",t"
-        for n, value in zip(rows, written):
-            lines[n - 1] += "," + value
-    text = _join(lines, endings)
+    order = np.argsort(rows, kind="stable")
+    numbers = rows[order]
+    header, pieces = None, []
+    with _collection_paused():
+        for first, chunk in _line_blocks(source.text, BLOCK):
+            lines, endings = _split(chunk)
+            del chunk
+            if header is None:
+                at = next((k for k, line in enumerate(lines) if not _is_statement(line)), -1)
+                if at >= 0:
+                    header = [_value(c).lower() for c in _cells(lines[at])]
+                    lines[at] += "" if "t" in header else ",t"
+            a, b = np.searchsorted(numbers, [first, first + len(lines) - (lines[-1] == "")])
+            at = (numbers[a:b] - first).tolist()
+            for k, line in zip(at, _timed_rows([lines[k] for k in at], header,
+                                               [written[m] for m in order[a:b].tolist()])):
+                lines[k] = line
+            pieces.append(_joined(lines, endings))
+    text = "".join(pieces)
+    del pieces
     return program.replace(sources=(Source(source.name, text, source.encoding),)), written
+
+
+def _timed_rows(rows, header, texts):
+    """Rows (R,) (str) with their ``t`` cell set to ``texts`` (R,), keeping its quotes and spaces, or ``texts``
+    appended as a last cell when the header has no ``t``: a pure function of the block."""
+    if "t" not in header:
+        return [f"{row},{text}" for row, text in zip(rows, texts)]
+    j = header.index("t")
+    cells = [_cells(row) for row in rows]
+    column = [row[j] for row in cells]
+    column = _in_cells(column, _stripped(column), np.ones(len(column), dtype=bool), texts)
+    for row, cell in zip(cells, column):
+        row[j] = cell
+    return list(map(",".join, cells))
+
+
+def _joined(lines, endings):
+    """The text of `_split`'s lines and endings."""
+    if endings.count("\n") == len(endings):
+        return "\n".join(lines)
+    return "".join(map(str.__add__, lines[:-1], endings)) + lines[-1]
 
 
 def _emit(program):
