@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 
 from trajcomp import formats
+from trajcomp.errors import ReadError
 from trajcomp.formats import csv_program
 from trajcomp.formats.csv_program import _canonical, _column
 
@@ -161,3 +162,35 @@ def test_with_times_in_blocks_equals_one_block(tmp_path, monkeypatch, block, end
     monkeypatch.setattr(csv_program, "BLOCK", block)
     assert with_times(formats.read(path), np.array([0.0, 0.25, 1.0000000005]))[0].sources[0].text == expected
     assert expected.split(ending)[1:3] == ["x,y,z,a,b,c,t", "1,2,3,4,5,6,0.000000000"]
+
+
+@pytest.mark.parametrize("ending", ["\n", "\r\n"])
+def test_two_processes_read_and_write_what_one_does(tmp_path, monkeypatch, ending):
+    """Comments before the header, a byte order mark, quoted and spaced cells, joints appended: the blocks shared
+    between processes give the same arrays and bytes, and a faulty row in a later block the same message."""
+    monkeypatch.setattr(csv_program, "BLOCK", 2)
+    rows = ["# exported", "# by a CAM system", "x,y,z,a,b,c,motion,speed,zone"] + [
+        f'{500 + k:.3f},{k / 7:.4f}, {300 - k:.2f} ,0.0,"90.0",0.0,{"LIN" if k % 3 else "PTP"},50,1' for k in range(11)]
+    path = tmp_path / "in.csv"
+    path.write_bytes(b"\xef\xbb\xbf" + ending.join(rows).encode() + ending.encode())
+    one, two = formats.read(path, workers=1), formats.read(path, workers=2)
+    for name in ("pose", "joints", "line"):
+        np.testing.assert_array_equal(getattr(two.target_table(), name), getattr(one.target_table(), name))
+    assert two.motion_table().kind.tolist() == one.motion_table().kind.tolist()
+    stack = one.cartesian_targets()
+    poses = stack.T.copy()
+    poses[:, :3, 3] += [0.25, -0.5, 1.0]
+    edited = one.with_targets(stack.index, poses=poses, joints=np.full((len(poses), 6), 0.5))
+    for workers in (1, 2):
+        formats.write(tmp_path / f"out{workers}.csv", edited, workers=workers)
+    data = (tmp_path / "out2.csv").read_bytes()
+    assert data == (tmp_path / "out1.csv").read_bytes() and data.count(b"\xef\xbb\xbf") == 1
+    assert data.splitlines()[2].endswith(b",j1,j2,j3,j4,j5,j6")
+    rows[11] = rows[11].replace("LIN", "LINE")
+    path.write_text("\n".join(rows) + "\n")
+    messages = []
+    for workers in (1, 2):
+        with pytest.raises(ReadError) as error:
+            formats.read(path, workers=workers)
+        messages.append(str(error.value))
+    assert messages[0] == messages[1] and "in.csv:12" in messages[0]

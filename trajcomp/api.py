@@ -268,12 +268,13 @@ class Compensator:
         """
         path = Path(path)
         out_path = path.with_name(f"{path.stem}_compensated{path.suffix}") if out_path is None else Path(out_path)
-        program = formats.read(path)
+        program = formats.read(path, workers=self.workers)
         corrected, report = self._compensate(
             program, label=str(path), tools=_named_poses(tools, "tools"), frames=_named_poses(frames, "frames"),
             joint_targets=joint_targets,
         )
-        formats.write(out_path, corrected, protect=() if in_place else formats.input_paths(path, program))
+        formats.write(out_path, corrected, protect=() if in_place else formats.input_paths(path, program),
+                      workers=self.workers)
         return out_path, report
 
     def _hint(self, joints_hint, n):

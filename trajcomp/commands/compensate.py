@@ -114,7 +114,7 @@ class CompensateJob:
         """
         with Stages(self.STAGES, desc=Path(path).name, enabled=self.show_stages) as stages:
             model = _model(self.model)
-            program = formats.read(path)
+            program = formats.read(path, workers=self.workers)
             sources = list(dict.fromkeys(formats.input_paths(path, program)))
             files = [file_entry("program", p) for p in sources]
             correct = program_corrector(model, mode=self.mode, outside=self.outside, label=str(path),
@@ -134,7 +134,7 @@ class CompensateJob:
                 timing = timing_lines(timed, before)
             stages.advance()
             protect = () if self.in_place else sources
-            written = formats.write(output, corrected, protect=protect)
+            written = formats.write(output, corrected, protect=protect, workers=self.workers)
             stages.advance()
             mode = self.mode or model.method
             compliance = compliance_report(

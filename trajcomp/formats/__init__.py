@@ -33,7 +33,8 @@ class Format:
 
     ``reader`` and ``writer`` are callables, or ``"module:function"`` strings
     resolved on first use. ``source`` is ``"built-in"`` or the plugin's
-    entry point.
+    entry point. ``blocks``: the reader and writer work a block of rows at a
+    time and take ``workers``, the processes that share the blocks.
     """
 
     name: str
@@ -41,6 +42,7 @@ class Format:
     reader: object
     writer: object
     source: str = "built-in"
+    blocks: bool = False
 
     def _resolve(self, ref):
         if callable(ref):
@@ -48,18 +50,18 @@ class Format:
         module, _, function = ref.partition(":")
         return getattr(importlib.import_module(module), function)
 
-    def read(self, path):
-        return self._resolve(self.reader)(path)
+    def read(self, path, workers=1):
+        return self._resolve(self.reader)(path, *([workers] if self.blocks else []))
 
-    def write(self, program, path):
-        return self._resolve(self.writer)(program, path)
+    def write(self, program, path, workers=1):
+        return self._resolve(self.writer)(program, path, *([workers] if self.blocks else []))
 
 
 _FORMATS = {}
 _PLUGINS = {"loaded": False, "failed": {}}
 
 
-def register_format(name, extensions, reader, writer, *, source="built-in"):
+def register_format(name, extensions, reader, writer, *, source="built-in", blocks=False):
     """Register (or replace) a format.
 
     Parameters
@@ -75,8 +77,11 @@ def register_format(name, extensions, reader, writer, *, source="built-in"):
         file), or ``"module:function"``.
     source : str
         Shown by ``trajcomp formats``.
+    blocks : bool
+        The reader and writer take a third argument, ``workers``: processes
+        that share their blocks of rows (`trajcomp.parallel.map_blocks`).
     """
-    _FORMATS[name] = Format(name, tuple(e.lower() for e in extensions), reader, writer, source)
+    _FORMATS[name] = Format(name, tuple(e.lower() for e in extensions), reader, writer, source, blocks)
 
 
 for _name, _module, _extensions in (
@@ -86,7 +91,8 @@ for _name, _module, _extensions in (
     ("fanuc_ls", "fanuc_ls", (".ls",)),
     ("urscript", "urscript", (".script", ".urscript")),
 ):
-    register_format(_name, _extensions, f"trajcomp.formats.{_module}:read", f"trajcomp.formats.{_module}:write")
+    register_format(_name, _extensions, f"trajcomp.formats.{_module}:read", f"trajcomp.formats.{_module}:write",
+                    blocks=_name == "csv")
 
 
 def _load_plugins():
@@ -157,7 +163,7 @@ def find_format(path=None, format=None):
     return _FORMATS[format]
 
 
-def read(path, format=None):
+def read(path, format=None, *, workers=1):
     """Read a robot program.
 
     Parameters
@@ -165,6 +171,8 @@ def read(path, format=None):
     path : str or Path
     format : str, optional
         Registry name; default from the extension.
+    workers : int
+        Processes sharing the work of a format that reads blocks of rows (CSV).
 
     Returns
     -------
@@ -179,7 +187,7 @@ def read(path, format=None):
     fmt = find_format(path, format)
     if not path.is_file():
         raise ReadError(f"{path}: no such file")
-    return fmt.read(path)
+    return fmt.read(path, workers)
 
 
 def input_paths(path, program):
@@ -188,7 +196,7 @@ def input_paths(path, program):
     return [path] + [path.parent / source.name for source in program.sources]
 
 
-def write(path, program, format=None, *, protect=()):
+def write(path, program, format=None, *, protect=(), workers=1):
     """Write a robot program; its output files (a KRL .src and .dat) land all or none.
 
     The content is written to temporary files (a writer's generator of
@@ -203,6 +211,8 @@ def write(path, program, format=None, *, protect=()):
         Registry name; default from the extension.
     protect : sequence of Path, optional
         Files that must not be overwritten (the program's inputs, see `input_paths`).
+    workers : int
+        Processes sharing the work of a format that writes blocks of rows (CSV).
 
     Returns
     -------
@@ -219,7 +229,7 @@ def write(path, program, format=None, *, protect=()):
 
     path = Path(path)
     check_writable(program)
-    files = find_format(path, format).write(program, path)
+    files = find_format(path, format).write(program, path, workers)
     kept = {p.resolve() for p in map(Path, protect) if p.exists()}
     clash = [str(out) for out in files if Path(out).resolve() in kept]
     if clash:

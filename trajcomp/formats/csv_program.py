@@ -39,6 +39,7 @@ from trajcomp.formats._text import (
     near_angle,
     read_source,
 )
+from trajcomp.parallel import map_blocks
 from trajcomp.program import JOINT, LINEAR, MotionTable, Program, Source, Statement, TargetTable
 from trajcomp.transforms import abc_to_matrix, matrix_to_abc, matrix_to_pose, pose_to_matrix
 
@@ -88,8 +89,11 @@ def _is_statement(line):
     return not stripped or stripped[0] == "#"
 
 
-def read(path):
-    """Read a program CSV. Raises ReadError with file:line, field and text."""
+def read(path, workers=1):
+    """Read a program CSV, its blocks of rows parsed by ``workers`` processes (`trajcomp.parallel.map_blocks`).
+
+    Raises ReadError with file:line, field and text.
+    """
     source = read_source(path)
     lines, endings = _split(source.text)
     if lines and not lines[-1]:
@@ -107,11 +111,16 @@ def read(path):
     n = len(rows)
     pose, joints, kind, speed, zone = (np.empty((n, 4, 4)), np.empty((n, 6)), np.empty(n, dtype=object),
                                        np.empty(n), np.empty(n))  # filled a block at a time: no second copy
+    firsts = range(0, n, BLOCK)
+
+    def parsed(k):
+        block = rows[firsts[k] : firsts[k] + BLOCK]
+        return _parse_block(source.name, header, [lines[number - 1] for number in block.tolist()], block)
+
     with _collection_paused():
-        for k in range(0, n, BLOCK):
-            block, part = rows[k : k + BLOCK], slice(k, k + BLOCK)
-            pose[part], joints[part], kind[part], speed[part], zone[part] = _parse_block(
-                source.name, header, [lines[number - 1] for number in block.tolist()], block)
+        for k, columns in zip(firsts, map_blocks(parsed, len(firsts), workers)):
+            part = slice(k, k + BLOCK)
+            pose[part], joints[part], kind[part], speed[part], zone[part] = columns
     motions = MotionTable(
         kind=kind, target=np.arange(n), via=np.full(n, -1), speed=speed,
         speed_unit=_repeated("mm/s", n), zone=np.where(zone == 0.0, np.nan, zone),
@@ -311,60 +320,70 @@ def _check_row(name, header, line, number):
         fail(name, number, line, f"field motion: expected PTP or LIN, got {kind!r}")
 
 
-def write(program, path):
+def write(program, path, workers=1):
     """The CSV text of a program: patched in place if read from CSV, else generated.
 
     A program read from CSV gives its content as a generator of encoded
-    pieces, a block of lines each, made while `trajcomp.atomic` writes them:
-    the whole output is never held in memory.
+    pieces, a block of lines each, made while `trajcomp.atomic` writes them
+    (by ``workers`` processes, `trajcomp.parallel.map_blocks`): the whole
+    output is never held in memory.
     """
     if program.format == "csv" and program.sources:
-        return {path: _patched_pieces(program, program.sources[0])}
+        return {path: _patched_pieces(program, program.sources[0], workers)}
     return {path: _emit(program).encode("utf-8")}
 
 
-def _patched_pieces(program, source):
+def _patched_pieces(program, source, workers=1):
     """The encoded pieces of ``source``'s text with the edited targets' numbers rewritten (`_patched_block`), and
     j1..j6 appended when the file has no such columns; `BLOCK` lines a piece."""
     targets = program.target_table()
     order = np.argsort(targets.line, kind="stable")
     numbers = targets.line[order]
-    header, add_joints = None, False
+    text = source.text
+    spans = list(_line_spans(text, BLOCK))
+    header_block, header_at, header = _header_in(text, spans)
+    add_joints = header is not None and "j1" not in header and bool(
+        np.isfinite(targets.joints[targets.edited]).all(axis=1).any())
+    rest = Source(source.name, "", "utf-8") if source.encoding == "utf-8-sig" else source  # BOM: first piece only
+
+    def piece(k):
+        first, start, end = spans[k]
+        chunk = text[start:end]
+        a, b = np.searchsorted(numbers, [first, first + _count_lines(chunk) - chunk.endswith("\n")])
+        rows = order[a:b]
+        patched = _patched_block(chunk, header_at if k == header_block else -1, header if k >= header_block else None,
+                                 numbers[a:b] - first, targets.pose[rows], targets.is_joint[rows],
+                                 targets.joints[rows], targets.edited[rows], add_joints)
+        return encode_text(source if k == 0 else rest, patched)
+
     with _collection_paused():
-        for first, chunk in _line_blocks(source.text, BLOCK):
-            lines = _split(chunk)[0]
-            header_at = -1
-            if header is None:
-                header_at = next((k for k, line in enumerate(lines) if not _is_statement(line)), -1)
-                if header_at >= 0:
-                    header = [_value(c).lower() for c in _cells(lines[header_at])]
-                    add_joints = "j1" not in header and bool(
-                        np.isfinite(targets.joints[targets.edited]).all(axis=1).any())
-            del lines
-            a, b = np.searchsorted(numbers, [first, first + _count_lines(chunk) - chunk.endswith("\n")])
-            rows = order[a:b]
-            text = _patched_block(chunk, header_at, header, numbers[a:b] - first, targets.pose[rows],
-                                  targets.is_joint[rows], targets.joints[rows], targets.edited[rows], add_joints)
-            del chunk
-            yield encode_text(source, text)
-            if source.encoding == "utf-8-sig":
-                source = Source(source.name, "", "utf-8")  # the byte order mark starts the first piece only
+        yield from map_blocks(piece, len(spans), workers)
 
 
-def _line_blocks(text, size):
-    """``(first, chunk)`` of ``text`` in chunks of about ``size`` lines (by the mean line length), each cut after a
-    ``\n``: the number (1-based) of the chunk's first line and its text, line endings included (a ``\r\n`` is never
-    cut; a file of bare ``\r`` endings is one chunk)."""
+def _header_in(text, spans):
+    """``(block, at, names)``: the span (of `_line_spans`) holding the header, its line's index there and the
+    column names; ``(len(spans), -1, None)`` when every line is blank or a comment."""
+    for k, (_, start, end) in enumerate(spans):
+        lines = _split(text[start:end])[0]
+        at = next((i for i, line in enumerate(lines) if not _is_statement(line)), -1)
+        if at >= 0:
+            return k, at, [_value(c).lower() for c in _cells(lines[at])]
+    return len(spans), -1, None
+
+
+def _line_spans(text, size):
+    """``(first, start, end)`` of ``text`` in chunks of about ``size`` lines (by the mean line length), each cut
+    after a ``\n``: the number (1-based) of the chunk's first line and its place ``text[start:end]``, line endings
+    included (a ``\r\n`` is never cut; a file of bare ``\r`` endings is one chunk)."""
     width = max(1, size * len(text) // (text.count("\n") + 1))  # characters of about ``size`` lines
     first, start = 1, 0
     while True:
         end = text.find("\n", start + width - 1) + 1
         if not end or end == len(text):
-            yield first, text[start:]
+            yield first, start, len(text)
             return
-        chunk = text[start:end]
-        yield first, chunk
-        first += _count_lines(chunk) - 1  # its last piece, empty, is the next chunk's first line
+        yield first, start, end
+        first += _count_lines(text[start:end]) - 1  # its last piece, empty, is the next chunk's first line
         start = end
 
 
@@ -381,7 +400,7 @@ def _patched_block(chunk, header_at, header, at, pose, is_joint, joints, edited,
     Parameters
     ----------
     chunk : str
-        Lines with their line endings (`_line_blocks`).
+        Lines with their line endings (`_line_spans`).
     header_at : int
         Index of the header among the chunk's lines, -1 if elsewhere.
     header : list of str or None
@@ -697,9 +716,8 @@ def with_times(program, times):
     numbers = rows[order]
     header, pieces = None, []
     with _collection_paused():
-        for first, chunk in _line_blocks(source.text, BLOCK):
-            lines, endings = _split(chunk)
-            del chunk
+        for first, start, end in _line_spans(source.text, BLOCK):
+            lines, endings = _split(source.text[start:end])
             if header is None:
                 at = next((k for k, line in enumerate(lines) if not _is_statement(line)), -1)
                 if at >= 0:
