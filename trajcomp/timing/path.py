@@ -121,7 +121,10 @@ class RunPath:
         """
         grid, dq = self.grid, self.path(self.grid, 1)
         near = np.stack([self.motion_at(grid), self.motion_at(grid, "right")])
-        velocity = np.min(moves.velocity[near], axis=0) * velocity_scale
+        if moves.velocity.strides[0] == 0:  # the same limits for every motion (a broadcast view): no gather
+            velocity = np.broadcast_to(moves.velocity[0] * velocity_scale, (len(grid), 6))
+        else:
+            velocity = np.min(moves.velocity[near], axis=0) * velocity_scale
         k = np.arange(self.first, self.last + 1)  # tcp[i]: motion first + i (waypoint first's own is not used)
         tcp = moves.tcp_speed[k]
         timed = (moves.min_duration[k] > 0) & (moves.kind[k] != JOINT)
@@ -276,8 +279,11 @@ def _grid(s):
     part = np.arange(pieces.sum()) - np.repeat(np.cumsum(pieces) - pieces, pieces)  # 0 .. p-1 in each interval
     grid = np.r_[np.repeat(s[:-1], pieces) + part / np.repeat(pieces, pieces) * np.repeat(np.diff(s), pieces), s[-1]]
     halves = 0.5 ** np.arange(1, END_REFINEMENT + 1)
-    ends = np.r_[grid[1] * halves, grid[-1] - (grid[-1] - grid[-2]) * halves]
-    return np.unique(np.r_[grid, ends])
+    head, tail = grid[1] * halves[::-1], grid[-1] - (grid[-1] - grid[-2]) * halves
+    merged = np.r_[grid[0], head, grid[1:-1], tail, grid[-1]]  # in order: the ends go inside the end intervals
+    if len(grid) > 2 and np.all(np.diff(merged) > 0.0):
+        return merged
+    return np.unique(merged)  # a coarse grid or coinciding points: sort and merge
 
 
 def tcp_jacobians(robot, moves, owner, q, known=None):
@@ -296,7 +302,10 @@ def tcp_jacobians(robot, moves, owner, q, known=None):
         flange, jac[rows] = fk_and_jacobian(robot, q[rows], tcp=False)
         rotation[rows] = flange[:, :3, :3]
     offset = np.einsum("nij,nj->ni", rotation, moves.tools[moves.tool[owner], :3, 3])  # flange to TCP, base frame
-    jac[:, :3] += np.swapaxes(np.cross(np.swapaxes(jac[:, 3:], 1, 2), offset[:, None, :]), 1, 2)
+    w, r = jac[:, 3:], offset[:, :, None]  # each column's angular part w (n, 3, 6): v += w x offset
+    jac[:, 0] += w[:, 1] * r[:, 2] - w[:, 2] * r[:, 1]
+    jac[:, 1] += w[:, 2] * r[:, 0] - w[:, 0] * r[:, 2]
+    jac[:, 2] += w[:, 0] * r[:, 1] - w[:, 1] * r[:, 0]
     return jac
 
 
