@@ -61,3 +61,23 @@ def test_at_a_join_position_and_velocity_are_continuous_and_the_limits_hold(whol
     _, qd, qdd = windowed.at(t)
     assert np.all(np.abs(qd).max(axis=0) <= UR10.v_max * 1.01)
     assert np.all(np.abs(qdd).max(axis=0) <= UR10.a_max * 1.01)
+
+
+def test_a_window_is_fitted_from_its_own_rows_as_from_the_whole_sequence(helix):
+    """`window_path` sees only the window's rows (what a worker process would get); same path as run_path."""
+    from trajcomp.timing.path import run_path
+    from trajcomp.timing.windows import window_path
+
+    labels = [f"P{k}" for k in range(len(helix))]
+    moves = Moves.from_joints(helix, UR10, tcp_speed=250.0, zone=0.5, labels=labels)
+    lo, hi, part = 700, 2100, (900, 1900)
+    rows = moves.rows(lo, hi + 1)
+    assert len(rows) == hi - lo + 1 and rows.labels[0] == "P700" and rows.labels[-1] == "P2100"
+    assert list(rows.labels[2:4]) == ["P702", "P703"]
+    reference = run_path(moves, UR10, lo, hi, 0.005, part=part)
+    got = window_path(rows, UR10, lo, 0.005, part)
+    assert (got.first, got.last) == (reference.first, reference.last) == part
+    for name in ("s_waypoints", "grid", "tcp_lengths", "grid_rate"):
+        np.testing.assert_array_equal(getattr(got, name), getattr(reference, name))
+    np.testing.assert_array_equal(got.path.spline.c, reference.path.spline.c)
+    assert got.deviation == reference.deviation

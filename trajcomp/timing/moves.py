@@ -90,6 +90,18 @@ class Moves:
     def __len__(self):
         return len(self.q)
 
+    def rows(self, lo, hi):
+        """Waypoints lo .. hi - 1 as a `Moves` of their own: views of these rows, labels looked up on access.
+
+        What fitting a window needs and nothing more (so a worker process
+        could be sent only this). Its first and last waypoints are stops
+        and its first a start, as in any `Moves`; the path fit does not use
+        either.
+        """
+        rows = {f.name: getattr(self, f.name)[lo:hi] for f in dataclasses.fields(self)
+                if f.name not in ("tools", "labels")}
+        return dataclasses.replace(self, labels=_RowLabels(self.labels, lo, hi), **rows)
+
     def tool_of(self, k):
         """T_flange_tool (n, 4, 4) of motions k (n,)."""
         return self.tools[self.tool[k]]
@@ -134,6 +146,21 @@ class Moves:
             labels=labels if labels is not None else WaypointLabels(m),
             motion=np.arange(m),
         )
+
+
+class _RowLabels(Sequence):
+    """Labels lo .. hi - 1 of another sequence, looked up on access."""
+
+    def __init__(self, labels, lo, hi):
+        self.labels, self.lo, self.n = labels, lo, hi - lo
+
+    def __len__(self):
+        return self.n
+
+    def __getitem__(self, k):
+        if isinstance(k, slice):
+            return [self.labels[self.lo + i] for i in range(self.n)[k]]
+        return self.labels[self.lo + range(self.n)[k]]
 
 
 class WaypointLabels(Sequence):

@@ -111,15 +111,16 @@ class RunPath:
         inner = np.searchsorted(self.s_waypoints, s, side=side)
         return self.first + np.clip(inner, 1, len(self.s_waypoints) - 1)
 
-    def speed_bound(self, moves, velocity_scale=1.0, speed_scale=1.0):
+    def speed_bound(self, moves, velocity_scale=1.0, speed_scale=1.0, dq=None):
         """Largest squared path speed x = sd^2 (G,) on the grid, and the joint velocity limits (G, 6) used.
 
         A grid point obeys the joint velocity limits and the programmed TCP
         speed (or, for a linear / circular motion with a programmed time,
         its TCP length over that time) of the motions it belongs to (both,
-        at a waypoint).
+        at a waypoint). ``dq`` (G, 6): q' on the grid, when already evaluated.
         """
-        grid, dq = self.grid, self.path(self.grid, 1)
+        grid = self.grid
+        dq = self.path(grid, 1) if dq is None else dq
         near = np.stack([self.motion_at(grid), self.motion_at(grid, "right")])
         if moves.velocity.strides[0] == 0:  # the same limits for every motion (a broadcast view): no gather
             velocity = np.broadcast_to(moves.velocity[0] * velocity_scale, (len(grid), 6))

@@ -189,8 +189,9 @@ def rest_to_rest_laws(runs, moves, robot):
 def _problem(run, moves, velocity_scale=1.0, acceleration_scale=1.0, speed_scale=1.0):
     """A run's TOPP-RA data: grid (G,), q' and q'' there (G, 6), acceleration limits (6,), x bound (G,),
     joint velocity limits (G, 6)."""
-    x_max, velocity = run.speed_bound(moves, velocity_scale, speed_scale)
-    return (*_path_problem(run, moves, acceleration_scale), np.minimum(x_max, _X_CAP), velocity)
+    grid, dq, ddq, acceleration = _path_problem(run, moves, acceleration_scale)
+    x_max, velocity = run.speed_bound(moves, velocity_scale, speed_scale, dq=dq)
+    return grid, dq, ddq, acceleration, np.minimum(x_max, _X_CAP), velocity
 
 
 def _path_problem(run, moves, acceleration_scale=1.0):
