@@ -209,11 +209,15 @@ def moves_from_program(program, robot, joints, *, tools=None, frames=None):
     rows = np.flatnonzero(table.target >= 0)
     runtime_before = np.cumsum(table.target < 0)[rows]
     start = np.r_[True, runtime_before[1:] != runtime_before[:-1]][: len(rows)]
-    known = np.where(targets.is_joint[:, None], targets.joints, np.asarray(joints, dtype=float))
+    known = np.asarray(joints, dtype=float)
+    if targets.is_joint.any():  # joint targets use their own joints
+        known = np.where(targets.is_joint[:, None], targets.joints, known)
     target, via = table.target[rows], table.via[rows]
     circular = np.flatnonzero(via >= 0)
-    for index, motion in ((target, rows), (via[circular], rows[circular])):
-        missing = np.flatnonzero(np.isnan(known[index]).any(axis=1))
+    q = known[target]
+    for index, motion, values in ((target, rows, q), (via[circular], rows[circular], None)):
+        values = known[index] if values is None else values
+        missing = np.flatnonzero(np.isnan(values).any(axis=1))
         if missing.size:
             k = missing[0]
             raise TimingError(f"{program.where(int(index[k]))}: no joints known for this target "
@@ -228,7 +232,7 @@ def moves_from_program(program, robot, joints, *, tools=None, frames=None):
     labels = program.labels(target)
     speeds = _speed_limits(table, rows, robot, program, labels)
     return Moves(
-        q=known[target], kind=table.kind[rows], via=via_q, stop=np.isnan(zone), zone=np.nan_to_num(zone, nan=0.0),
+        q=q, kind=table.kind[rows], via=via_q, stop=np.isnan(zone), zone=np.nan_to_num(zone, nan=0.0),
         tools=np.array([frame_table.tool(name) for name in names]).reshape(-1, 4, 4), tool=tool, start=start,
         labels=labels, motion=rows, **speeds,
     )
