@@ -177,7 +177,12 @@ def run_path(moves, robot, first, last, tolerance=TOLERANCE, *, part=None):
     grid = _grid(s)  # every sample is a grid point: one Jacobian batch serves the fit and the TCP speed
     k = first + np.clip(np.searchsorted(s_waypoints, grid), 1, len(s_waypoints) - 1)
     row = np.searchsorted(grid, s)  # grid point of each sample
-    jac_grid = tcp_jacobians(robot, moves, k, _interpolated(grid, s, q), (row[known[0]], *known[1:]))
+    at_waypoint = row[known[0]]
+    q_grid = np.empty((len(grid), 6))  # joints of the grid points whose kinematics are not known (not waypoints)
+    other = np.ones(len(grid), dtype=bool)
+    other[at_waypoint] = False
+    q_grid[other] = _interpolated(grid[other], s, q)
+    jac_grid = tcp_jacobians(robot, moves, k, q_grid, (at_waypoint, *known[1:]))
     jac = jac_grid[row]
     travel = _travel(q, jac)
     tcp_lengths = np.diff(travel[waypoint_rows], prepend=0.0)
