@@ -44,18 +44,29 @@ _PULL, _PULLS = 4.0, 8  # weight factor on samples the finest knots leave outsid
 class JointPath:
     """A joint path q(s), s in rad of joint-space arc length (toppra's path interface: the tests time it with toppra).
 
+    A spline of up to `KEPT_DERIVATIVES` coefficients keeps its derivative
+    splines (fastest to evaluate); a longer one (a path through every
+    sample of a long window) evaluates them from its own coefficients, so
+    a timed long run holds one set of coefficients, not three.
+
     Parameters
     ----------
     spline : scipy.interpolate.BSpline
         Cubic, values (6,).
     """
 
+    KEPT_DERIVATIVES = 4096
+
     def __init__(self, spline):
         self.spline = spline
-        self._derivatives = (spline, spline.derivative(1), spline.derivative(2))
+        self._derivatives = None
+        if len(spline.c) <= self.KEPT_DERIVATIVES:
+            self._derivatives = (spline, spline.derivative(1), spline.derivative(2))
 
     def __call__(self, s, order=0):
         """q (order 0), dq/ds (1) or d2q/ds2 (2) at path positions s (N,): shape (N, 6)."""
+        if self._derivatives is None:
+            return self.spline(s, order)
         return self._derivatives[order](s)
 
     @property
