@@ -67,12 +67,13 @@ class Segment:
         Waypoint indices; the segment's motions are first + 1 .. last.
     duration : float
         s.
-    settings : tuple of str
+    settings : tuple of str or Texts
         The speed setting written for each of its motions, as the program
         text (``"v20\\T:=4.213"``, ``"t=4.2130"``, ``"4213msec"``,
         ``"$VEL.CP=0.018991"``, ``"t=4.213000"``); empty until the timing is
         written into a program (`trajcomp.timing.apply_timing`), ``""`` for
-        a motion left as written.
+        a motion left as written. A CSV program's are `Texts` (made on
+        demand, compared equal to the tuple of the same texts).
     """
 
     kind: str
