@@ -182,3 +182,38 @@ def test_the_compensations_planned_joints_time_the_original_as_its_posture_plan_
     reused = retime_compensated(program, corrected, model.nominal, "auto", 0.005, q_planned=report.q_planned)
     assert reused[2] == solved[2] > 9.0  # the cycle time before compensation, s: 80 + 100 mm at 20 mm/s and more
     np.testing.assert_array_equal(reused[1].t, solved[1].t)
+
+
+def test_the_csv_settings_are_the_t_cells_written_and_made_on_demand(tmp_path, monkeypatch):
+    """A CSV's settings (``t=`` and the cell) read against the written file; blocks smaller than a segment."""
+    import csv as csv_module
+
+    from trajcomp.robot import load_robot
+    from trajcomp.timing import result as result_module
+    from trajcomp.timing.result import Texts
+    from trajcomp.timing.writeback import apply_timing, retime_program
+    from tests.test_timing import helix, write_joint_program
+
+    monkeypatch.setattr(result_module, "TEXT_BLOCK", 7)
+    robot = load_robot("ur10")
+    _, q = helix(robot, 120, turns=1)
+    zones = ["1"] * 120
+    zones[60] = ""  # an exact stop: two segments
+    source, output = tmp_path / "path.csv", tmp_path / "timed.csv"
+    write_joint_program(source, q, zone=zones)
+    program = formats.read(source)
+    timed, result = apply_timing(program, retime_program(program, robot, program.target_table().joints), robot)
+    formats.write(output, timed)
+    with output.open() as f:
+        cells = ["t=" + row["t"] for row in csv_module.DictReader(f)]
+    segments = result.segments
+    assert [(s.first, s.last) for s in segments] == [(0, 60), (60, 119)]
+    for s in segments:
+        assert isinstance(s.settings, Texts) and len(s.settings) == s.last - s.first
+        assert list(s.settings) == cells[s.first + 1 : s.last + 1]  # iterated in blocks of 7
+        assert s.settings == tuple(cells[s.first + 1 : s.last + 1]) and s.settings[-1] == cells[s.last]
+        assert list(s.settings[3:10]) == cells[s.first + 4 : s.first + 11]
+        assert s.written == s.last - s.first
+        assert s.speed == f"{cells[s.first + 1]} .. {cells[s.last]} ({s.last - s.first} motions)"
+    with pytest.raises(IndexError):
+        segments[0].settings[60]

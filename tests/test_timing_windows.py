@@ -61,3 +61,43 @@ def test_at_a_join_position_and_velocity_are_continuous_and_the_limits_hold(whol
     _, qd, qdd = windowed.at(t)
     assert np.all(np.abs(qd).max(axis=0) <= UR10.v_max * 1.01)
     assert np.all(np.abs(qdd).max(axis=0) <= UR10.a_max * 1.01)
+
+
+def test_a_window_is_fitted_from_its_own_rows_as_from_the_whole_sequence(helix):
+    """`window_path` sees only the window's rows (what a worker process would get); same path as run_path."""
+    from trajcomp.timing.path import run_path
+    from trajcomp.timing.windows import window_path
+
+    labels = [f"P{k}" for k in range(len(helix))]
+    moves = Moves.from_joints(helix, UR10, tcp_speed=250.0, zone=0.5, labels=labels)
+    lo, hi, part = 700, 2100, (900, 1900)
+    rows = moves.rows(lo, hi + 1)
+    assert len(rows) == hi - lo + 1 and rows.labels[0] == "P700" and rows.labels[-1] == "P2100"
+    assert list(rows.labels[2:4]) == ["P702", "P703"]
+    reference = run_path(moves, UR10, lo, hi, 0.005, part=part)
+    got = window_path(rows, UR10, lo, 0.005, part)
+    assert (got.first, got.last) == (reference.first, reference.last) == part
+    for name in ("s_waypoints", "grid", "tcp_lengths", "grid_rate"):
+        np.testing.assert_array_equal(getattr(got, name), getattr(reference, name))
+    np.testing.assert_array_equal(got.path.spline.c, reference.path.spline.c)
+    assert got.deviation == reference.deviation
+
+
+def test_a_long_path_evaluates_its_derivatives_without_holding_them():
+    """A spline of more than KEPT_DERIVATIVES coefficients: derivatives from its own coefficients, as scipy's."""
+    from scipy.interpolate import make_interp_spline
+
+    from trajcomp.timing.path import JointPath
+
+    s = np.linspace(0.0, 3.0, 6000)
+    q = np.column_stack([np.sin((j + 1) * s) for j in range(6)])
+    spline = make_interp_spline(s, q, k=3)
+    long_path, short_path = JointPath(spline), JointPath(make_interp_spline(s[::4], q[::4], k=3))
+    assert long_path._derivatives is None and short_path._derivatives is not None
+    at = np.linspace(0.0, 3.0, 777)
+    for order in (0, 1, 2):  # the same up to rounding (a second derivative: rounding over the knot spacing squared)
+        np.testing.assert_allclose(long_path(at, order), spline.derivative(order)(at), rtol=1e-8, atol=1e-8)
+    inner = at[(at > 0.1) & (at < 2.9)]  # the curve itself, away from the interpolation's ends
+    np.testing.assert_allclose(long_path(inner, 1)[:, 2], 3.0 * np.cos(3.0 * inner), atol=1e-6)
+    np.testing.assert_allclose(long_path(inner, 2)[:, 2], -9.0 * np.sin(3.0 * inner), atol=1e-4)
+    np.testing.assert_allclose(short_path(inner, 2), long_path(inner, 2), atol=1e-3)

@@ -95,7 +95,7 @@ def timed_program(program, robot, joints, method, tolerance, tools, frames):
 
 def timing_lines(result, before=None):
     """The dense check table, the cycle time(s) and what was written, as text lines."""
-    written = sum(1 for s in result.segments for text in s.settings if text)
+    written = sum(s.written for s in result.segments)
     kinds = ", ".join(sorted({s.kind for s in result.segments}))
     return [*result.lines_of_text(before), f"speed settings written for {written} motions ({kinds})"]
 

@@ -90,6 +90,18 @@ class Moves:
     def __len__(self):
         return len(self.q)
 
+    def rows(self, lo, hi):
+        """Waypoints lo .. hi - 1 as a `Moves` of their own: views of these rows, labels looked up on access.
+
+        What fitting a window needs and nothing more (so a worker process
+        could be sent only this). Its first and last waypoints are stops
+        and its first a start, as in any `Moves`; the path fit does not use
+        either.
+        """
+        rows = {f.name: getattr(self, f.name)[lo:hi] for f in dataclasses.fields(self)
+                if f.name not in ("tools", "labels")}
+        return dataclasses.replace(self, labels=_RowLabels(self.labels, lo, hi), **rows)
+
     def tool_of(self, k):
         """T_flange_tool (n, 4, 4) of motions k (n,)."""
         return self.tools[self.tool[k]]
@@ -134,6 +146,21 @@ class Moves:
             labels=labels if labels is not None else WaypointLabels(m),
             motion=np.arange(m),
         )
+
+
+class _RowLabels(Sequence):
+    """Labels lo .. hi - 1 of another sequence, looked up on access."""
+
+    def __init__(self, labels, lo, hi):
+        self.labels, self.lo, self.n = labels, lo, hi - lo
+
+    def __len__(self):
+        return self.n
+
+    def __getitem__(self, k):
+        if isinstance(k, slice):
+            return [self.labels[self.lo + i] for i in range(self.n)[k]]
+        return self.labels[self.lo + range(self.n)[k]]
 
 
 class WaypointLabels(Sequence):
@@ -182,11 +209,15 @@ def moves_from_program(program, robot, joints, *, tools=None, frames=None):
     rows = np.flatnonzero(table.target >= 0)
     runtime_before = np.cumsum(table.target < 0)[rows]
     start = np.r_[True, runtime_before[1:] != runtime_before[:-1]][: len(rows)]
-    known = np.where(targets.is_joint[:, None], targets.joints, np.asarray(joints, dtype=float))
+    known = np.asarray(joints, dtype=float)
+    if targets.is_joint.any():  # joint targets use their own joints
+        known = np.where(targets.is_joint[:, None], targets.joints, known)
     target, via = table.target[rows], table.via[rows]
     circular = np.flatnonzero(via >= 0)
-    for index, motion in ((target, rows), (via[circular], rows[circular])):
-        missing = np.flatnonzero(np.isnan(known[index]).any(axis=1))
+    q = known[target]
+    for index, motion, values in ((target, rows, q), (via[circular], rows[circular], None)):
+        values = known[index] if values is None else values
+        missing = np.flatnonzero(np.isnan(values).any(axis=1))
         if missing.size:
             k = missing[0]
             raise TimingError(f"{program.where(int(index[k]))}: no joints known for this target "
@@ -201,7 +232,7 @@ def moves_from_program(program, robot, joints, *, tools=None, frames=None):
     labels = program.labels(target)
     speeds = _speed_limits(table, rows, robot, program, labels)
     return Moves(
-        q=known[target], kind=table.kind[rows], via=via_q, stop=np.isnan(zone), zone=np.nan_to_num(zone, nan=0.0),
+        q=q, kind=table.kind[rows], via=via_q, stop=np.isnan(zone), zone=np.nan_to_num(zone, nan=0.0),
         tools=np.array([frame_table.tool(name) for name in names]).reshape(-1, 4, 4), tool=tool, start=start,
         labels=labels, motion=rows, **speeds,
     )

@@ -44,18 +44,29 @@ _PULL, _PULLS = 4.0, 8  # weight factor on samples the finest knots leave outsid
 class JointPath:
     """A joint path q(s), s in rad of joint-space arc length (toppra's path interface: the tests time it with toppra).
 
+    A spline of up to `KEPT_DERIVATIVES` coefficients keeps its derivative
+    splines (fastest to evaluate); a longer one (a path through every
+    sample of a long window) evaluates them from its own coefficients, so
+    a timed long run holds one set of coefficients, not three.
+
     Parameters
     ----------
     spline : scipy.interpolate.BSpline
         Cubic, values (6,).
     """
 
+    KEPT_DERIVATIVES = 4096
+
     def __init__(self, spline):
         self.spline = spline
-        self._derivatives = (spline, spline.derivative(1), spline.derivative(2))
+        self._derivatives = None
+        if len(spline.c) <= self.KEPT_DERIVATIVES:
+            self._derivatives = (spline, spline.derivative(1), spline.derivative(2))
 
     def __call__(self, s, order=0):
         """q (order 0), dq/ds (1) or d2q/ds2 (2) at path positions s (N,): shape (N, 6)."""
+        if self._derivatives is None:
+            return self.spline(s, order)
         return self._derivatives[order](s)
 
     @property
@@ -111,17 +122,21 @@ class RunPath:
         inner = np.searchsorted(self.s_waypoints, s, side=side)
         return self.first + np.clip(inner, 1, len(self.s_waypoints) - 1)
 
-    def speed_bound(self, moves, velocity_scale=1.0, speed_scale=1.0):
+    def speed_bound(self, moves, velocity_scale=1.0, speed_scale=1.0, dq=None):
         """Largest squared path speed x = sd^2 (G,) on the grid, and the joint velocity limits (G, 6) used.
 
         A grid point obeys the joint velocity limits and the programmed TCP
         speed (or, for a linear / circular motion with a programmed time,
         its TCP length over that time) of the motions it belongs to (both,
-        at a waypoint).
+        at a waypoint). ``dq`` (G, 6): q' on the grid, when already evaluated.
         """
-        grid, dq = self.grid, self.path(self.grid, 1)
+        grid = self.grid
+        dq = self.path(grid, 1) if dq is None else dq
         near = np.stack([self.motion_at(grid), self.motion_at(grid, "right")])
-        velocity = np.min(moves.velocity[near], axis=0) * velocity_scale
+        if moves.velocity.strides[0] == 0:  # the same limits for every motion (a broadcast view): no gather
+            velocity = np.broadcast_to(moves.velocity[0] * velocity_scale, (len(grid), 6))
+        else:
+            velocity = np.min(moves.velocity[near], axis=0) * velocity_scale
         k = np.arange(self.first, self.last + 1)  # tcp[i]: motion first + i (waypoint first's own is not used)
         tcp = moves.tcp_speed[k]
         timed = (moves.min_duration[k] > 0) & (moves.kind[k] != JOINT)
@@ -173,7 +188,12 @@ def run_path(moves, robot, first, last, tolerance=TOLERANCE, *, part=None):
     grid = _grid(s)  # every sample is a grid point: one Jacobian batch serves the fit and the TCP speed
     k = first + np.clip(np.searchsorted(s_waypoints, grid), 1, len(s_waypoints) - 1)
     row = np.searchsorted(grid, s)  # grid point of each sample
-    jac_grid = tcp_jacobians(robot, moves, k, _interpolated(grid, s, q), (row[known[0]], *known[1:]))
+    at_waypoint = row[known[0]]
+    q_grid = np.empty((len(grid), 6))  # joints of the grid points whose kinematics are not known (not waypoints)
+    other = np.ones(len(grid), dtype=bool)
+    other[at_waypoint] = False
+    q_grid[other] = _interpolated(grid[other], s, q)
+    jac_grid = tcp_jacobians(robot, moves, k, q_grid, (at_waypoint, *known[1:]))
     jac = jac_grid[row]
     travel = _travel(q, jac)
     tcp_lengths = np.diff(travel[waypoint_rows], prepend=0.0)
@@ -276,8 +296,11 @@ def _grid(s):
     part = np.arange(pieces.sum()) - np.repeat(np.cumsum(pieces) - pieces, pieces)  # 0 .. p-1 in each interval
     grid = np.r_[np.repeat(s[:-1], pieces) + part / np.repeat(pieces, pieces) * np.repeat(np.diff(s), pieces), s[-1]]
     halves = 0.5 ** np.arange(1, END_REFINEMENT + 1)
-    ends = np.r_[grid[1] * halves, grid[-1] - (grid[-1] - grid[-2]) * halves]
-    return np.unique(np.r_[grid, ends])
+    head, tail = grid[1] * halves[::-1], grid[-1] - (grid[-1] - grid[-2]) * halves
+    merged = np.r_[grid[0], head, grid[1:-1], tail, grid[-1]]  # in order: the ends go inside the end intervals
+    if len(grid) > 2 and np.all(np.diff(merged) > 0.0):
+        return merged
+    return np.unique(merged)  # a coarse grid or coinciding points: sort and merge
 
 
 def tcp_jacobians(robot, moves, owner, q, known=None):
@@ -296,7 +319,10 @@ def tcp_jacobians(robot, moves, owner, q, known=None):
         flange, jac[rows] = fk_and_jacobian(robot, q[rows], tcp=False)
         rotation[rows] = flange[:, :3, :3]
     offset = np.einsum("nij,nj->ni", rotation, moves.tools[moves.tool[owner], :3, 3])  # flange to TCP, base frame
-    jac[:, :3] += np.swapaxes(np.cross(np.swapaxes(jac[:, 3:], 1, 2), offset[:, None, :]), 1, 2)
+    w, r = jac[:, 3:], offset[:, :, None]  # each column's angular part w (n, 3, 6): v += w x offset
+    jac[:, 0] += w[:, 1] * r[:, 2] - w[:, 2] * r[:, 1]
+    jac[:, 1] += w[:, 2] * r[:, 0] - w[:, 0] * r[:, 2]
+    jac[:, 2] += w[:, 0] * r[:, 1] - w[:, 1] * r[:, 0]
     return jac
 
 

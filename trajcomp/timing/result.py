@@ -1,11 +1,58 @@
 """What re-timing produced: time stamps, segments with their speed settings, and the dense check."""
 
 import dataclasses
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 
 import numpy as np
 
 from trajcomp.timing.check import LIMIT_TOLERANCE, RATE, evaluate, sample_times
+
+TEXT_BLOCK = 65536  # texts made at a time when `Texts` are iterated
+
+
+class Texts(Sequence):
+    """Non-empty texts of waypoints lo .. hi - 1 made on demand (a long program's settings without a str each).
+
+    Parameters
+    ----------
+    make : callable
+        ``make(lo, hi) -> list of str``: the texts of waypoints lo .. hi - 1,
+        none empty.
+    lo, hi : int
+    """
+
+    def __init__(self, make, lo, hi):
+        self.make, self.lo, self.hi = make, lo, max(hi, lo)
+
+    def __len__(self):
+        return self.hi - self.lo
+
+    def __getitem__(self, i):
+        if isinstance(i, slice):
+            start, stop, step = i.indices(len(self))
+            if step != 1:
+                return tuple(self)[i]
+            return Texts(self.make, self.lo + start, self.lo + stop)
+        i = i + len(self) if i < 0 else i
+        if not 0 <= i < len(self):
+            raise IndexError("text index out of range")
+        return self.make(self.lo + i, self.lo + i + 1)[0]
+
+    def __iter__(self):
+        for lo in range(self.lo, self.hi, TEXT_BLOCK):
+            yield from self.make(lo, min(lo + TEXT_BLOCK, self.hi))
+
+    def __eq__(self, other):
+        if not isinstance(other, (tuple, list, Texts)):
+            return NotImplemented
+        return len(self) == len(other) and all(a == b for a, b in zip(self, other))
+
+    def __hash__(self):
+        return hash(tuple(self))
+
+    def __repr__(self):
+        shown = "" if not len(self) else f": {self[0]!r}" if len(self) == 1 else f": {self[0]!r} .. {self[-1]!r}"
+        return f"Texts({len(self)} texts{shown})"
 
 
 @dataclasses.dataclass(frozen=True)
@@ -20,12 +67,13 @@ class Segment:
         Waypoint indices; the segment's motions are first + 1 .. last.
     duration : float
         s.
-    settings : tuple of str
+    settings : tuple of str or Texts
         The speed setting written for each of its motions, as the program
         text (``"v20\\T:=4.213"``, ``"t=4.2130"``, ``"4213msec"``,
         ``"$VEL.CP=0.018991"``, ``"t=4.213000"``); empty until the timing is
         written into a program (`trajcomp.timing.apply_timing`), ``""`` for
-        a motion left as written.
+        a motion left as written. A CSV program's are `Texts` (made on
+        demand, compared equal to the tuple of the same texts).
     """
 
     kind: str
@@ -35,12 +83,24 @@ class Segment:
     settings: tuple = ()
 
     @property
+    def written(self):
+        """The number of motions a setting was written for."""
+        return len(self.settings) if isinstance(self.settings, Texts) else sum(1 for s in self.settings if s)
+
+    @property
     def speed(self):
         """The speed or time settings written, as one line (``"-"`` when none were)."""
-        written = [s for s in self.settings if s]
-        if not written:
+        if isinstance(self.settings, Texts):  # none empty: no text made but the first and the last
+            first = last = self.settings[0] if len(self.settings) else None
+            if len(self.settings) > 1:
+                last = self.settings[-1]
+            count = len(self.settings)
+        else:
+            written = [s for s in self.settings if s]
+            first, last, count = (written[0], written[-1], len(written)) if written else (None, None, 0)
+        if not count:
             return "-"
-        return written[0] if len(written) == 1 else f"{written[0]} .. {written[-1]} ({len(written)} motions)"
+        return first if count == 1 else f"{first} .. {last} ({count} motions)"
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -157,14 +217,18 @@ class TimingResult:
 
         Parameters
         ----------
-        settings : Mapping[int, str] or Sequence[str]
+        settings : Mapping[int, str] or Sequence[str] or Texts
             ``{waypoint index: text}`` for the waypoints that got one, or a
             text for every waypoint (M,) (a long CSV program: its segments
-            share the texts instead of a dict of them).
+            share the texts instead of a dict of them); `Texts` of every
+            waypoint are sliced, their texts still made on demand.
         """
         if isinstance(settings, Mapping):
             def texts(s):
                 return tuple(settings.get(k, "") for k in range(s.first + 1, s.last + 1))
+        elif isinstance(settings, Texts):
+            def texts(s):
+                return settings[s.first + 1 : s.last + 1]
         else:
             def texts(s):
                 return tuple(settings[s.first + 1 : s.last + 1])

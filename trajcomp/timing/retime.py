@@ -68,16 +68,21 @@ def retime(moves, robot, *, method="auto", tolerance=TOLERANCE):
     if method not in METHODS:
         raise ValueError(f"method must be one of {METHODS}, got {method!r}")
     timeline = _Timeline(moves)
-    arrived = timeline.arrived
-    reached = dataclasses.replace(moves, q=arrived)  # filled in segment by segment
+    reached = moves  # the joints each waypoint is reached with: moves.q until one differs, then a copy
     for batch in _batches(plan_segments(moves, method)):
         kind, first, last = batch[0]
         if kind == "untimed":
             timeline.untimed(last)
             continue
         last = batch[-1][2]
-        _continued(arrived[first], moves.q[first : last + 1], moves.kind[first + 1 : last + 1],
-                   arrived[first + 1 : last + 1])
+        for lo, hi, block in _continued(reached.q[first], moves.q[first : last + 1], moves.kind[first + 1 : last + 1]):
+            rows = slice(first + lo, first + hi)
+            if reached is moves and np.array_equal(block, moves.q[rows]):
+                continue
+            if reached is moves:  # a waypoint reached in another turn than declared: the joints copied once
+                reached = dataclasses.replace(moves, q=moves.q.copy())
+            reached.q[rows] = block
+        timeline.arrived = reached.q
         if last - first == len(batch):  # exact stops after every motion: timed together
             _time_stops(timeline, batch, stop_paths(reached, robot, first, last, tolerance), moves, robot)
             continue
@@ -121,8 +126,10 @@ def _time_stops(timeline, batch, runs, moves, robot):
         timeline.add(kind, first, last, [run], [law], peaks)
 
 
-def _continued(start, declared, kinds, out):
-    """Write into ``out`` (n - 1, 6) the joints a chain of motions reaches its waypoints with from ``start`` (6,).
+def _continued(start, declared, kinds):
+    """The joints a chain of motions reaches its waypoints with from ``start`` (6,), block by block.
+
+    Yields ``(lo, hi, joints (hi - lo, 6))``: waypoints lo .. hi - 1 of the chain (1 <= lo).
 
     ``declared`` (n, 6) are the waypoints' joints, ``kinds`` (n - 1,) the
     motions into waypoints 1 .. n - 1. A joint motion goes to the declared
@@ -137,10 +144,18 @@ def _continued(start, declared, kinds, out):
     for lo in range(1, len(declared), _BLOCK):
         hi = min(lo + _BLOCK, len(declared))
         change = declared[lo:hi] - declared[lo - 1 : hi - 1]
+        joint = kinds[lo - 1 : hi - 1] == JOINT
+        if np.all(np.abs(change) < 0.5 * np.pi):  # no motion wraps: the turns gained hold up to the first joint motion
+            reset = np.argmax(joint) if joint.any() else hi - lo
+            block = declared[lo:hi].copy()
+            block[:reset] += np.round(gained / turn) * turn
+            gained = gained * 0.0 if joint.any() else gained
+            yield lo, hi, block
+            continue
         total = gained + np.cumsum((change + np.pi) % turn - np.pi - change, axis=0)
-        last_joint = np.maximum.accumulate(np.where(kinds[lo - 1 : hi - 1] == JOINT, np.arange(hi - lo), -1))
+        last_joint = np.maximum.accumulate(np.where(joint, np.arange(hi - lo), -1))
         offset = np.where(last_joint[:, None] >= 0, total - total[last_joint], total)
-        out[lo - 1 : hi - 1] = declared[lo:hi] + np.round(offset / turn) * turn
+        yield lo, hi, declared[lo:hi] + np.round(offset / turn) * turn
         gained = offset[-1]
 
 
@@ -221,7 +236,7 @@ class _Timeline:
     def __init__(self, moves):
         self.moves = moves
         self.t, self.tcp_length = np.zeros(len(moves)), np.zeros(len(moves))
-        self.arrived = moves.q.copy()
+        self.arrived = moves.q  # replaced by a copy when a waypoint is reached in another turn
         self.segments, self.pieces, self.peaks, self.untimed_at, self.deviation = [], [], [], [], 0.0
 
     def untimed(self, k):
@@ -276,6 +291,6 @@ class _Timeline:
             motion=moves.motion,
             untimed=tuple(self.untimed_at),
             deviation=self.deviation,
-            warnings=_turn_warnings(moves, self.arrived),
+            warnings=() if self.arrived is moves.q else _turn_warnings(moves, self.arrived),
             pieces=tuple(self.pieces),
         )

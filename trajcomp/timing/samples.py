@@ -66,9 +66,13 @@ class _Geometry:
         self.k = np.arange(first + 1, last + 1)
         self.q_a, self.q_b = moves.q[self.k - 1], moves.q[self.k]
         self.joint = moves.kind[self.k] == JOINT
-        tools = moves.tool_of(self.k)
         self.flange, self.flange_jac = fk_and_jacobian(robot, moves.q[first : last + 1], tcp=False)  # once each
-        T_a, T_b = self.flange[:-1] @ tools, self.flange[1:] @ tools
+        if len(self.k) and np.all(moves.tool[self.k] == moves.tool[first + 1]):  # one tool: each waypoint's TCP pose once
+            T = self.flange @ moves.tools[moves.tool[first + 1]]
+            T_a, T_b = T[:-1], T[1:]
+        else:
+            tools = moves.tool_of(self.k)
+            T_a, T_b = self.flange[:-1] @ tools, self.flange[1:] @ tools
         self.R_a, self.R_b, self.p_a, self.p_b = T_a[:, :3, :3], T_b[:, :3, :3], T_a[:, :3, 3], T_b[:, :3, 3]
         cosine = 0.5 * (np.einsum("nji,nji->n", self.R_a, self.R_b) - 1.0)  # of the turn: (trace(R_a^T R_b) - 1) / 2
         self.angle = np.arccos(np.clip(cosine, -1.0, 1.0))

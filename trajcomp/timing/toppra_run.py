@@ -134,14 +134,14 @@ def toppra_laws(runs, moves, robot, velocity_scale=1.0, acceleration_scale=1.0, 
             laws.append(None)
             start = 0.0
             continue
-        grid, dq, ddq, acceleration, x_max, velocity = _problem(run, moves, *scales)
+        grid, dq, ddq, acceleration = _path_problem(run, moves, acceleration_scale)  # the bound x_max is in h
         x = forward(grid, dq, ddq, acceleration, h, start)
         start = x[-1]
         try:
             laws.append(ConstantAcceleration.from_speeds(grid, np.sqrt(x)))
         except ValueError:
             i = int(np.argmin(x[:-1] + x[1:]))
-            raise _stuck(run, moves, grid, i, x_max, dq, velocity) from None
+            raise _stuck(run, moves, grid, i, dq, run.speed_bound(moves, velocity_scale, speed_scale)[1]) from None
     return laws
 
 
@@ -182,16 +182,22 @@ def rest_to_rest_laws(runs, moves, robot):
             laws.append(ConstantAcceleration.from_speeds(run.grid, np.sqrt(x[lo:hi])))
         except ValueError:
             i = int(np.argmin(x[lo : hi - 1] + x[lo + 1 : hi]))
-            raise _stuck(run, moves, run.grid, i, problem[4], problem[1], problem[5]) from None
+            raise _stuck(run, moves, run.grid, i, problem[1], problem[5]) from None
     return laws
 
 
 def _problem(run, moves, velocity_scale=1.0, acceleration_scale=1.0, speed_scale=1.0):
     """A run's TOPP-RA data: grid (G,), q' and q'' there (G, 6), acceleration limits (6,), x bound (G,),
     joint velocity limits (G, 6)."""
-    x_max, velocity = run.speed_bound(moves, velocity_scale, speed_scale)
+    grid, dq, ddq, acceleration = _path_problem(run, moves, acceleration_scale)
+    x_max, velocity = run.speed_bound(moves, velocity_scale, speed_scale, dq=dq)
+    return grid, dq, ddq, acceleration, np.minimum(x_max, _X_CAP), velocity
+
+
+def _path_problem(run, moves, acceleration_scale=1.0):
+    """What the forward pass needs of a run: grid (G,), q' and q'' there (G, 6), acceleration limits (6,)."""
     acceleration = np.min(moves.acceleration[run.first + 1 : run.last + 1], axis=0) * acceleration_scale
-    return run.grid, run.path(run.grid, 1), run.path(run.grid, 2), acceleration, np.minimum(x_max, _X_CAP), velocity
+    return run.grid, run.path(run.grid, 1), run.path(run.grid, 2), acceleration
 
 
 def _where(run, moves, grid_s):
@@ -202,7 +208,7 @@ def _where(run, moves, grid_s):
     return f"the {moves.kind[k]} motion to {moves.labels[k]}, {share:.0f} % of its way"
 
 
-def _stuck(run, moves, grid, i, x_max, dq, velocity):
+def _stuck(run, moves, grid, i, dq, velocity):
     """TimingError for a path whose speed must be zero over a whole grid interval."""
     ratio = np.abs(dq[i]) / velocity
     j = int(np.argmax(ratio))

@@ -18,6 +18,8 @@ path's direction and curvature may differ between the two fits by their
 it does at every grid point of a TOPP-RA law.
 """
 
+import dataclasses
+
 import numpy as np
 
 from trajcomp.timing.path import run_path
@@ -43,5 +45,32 @@ def run_windows(moves, robot, first, last, tolerance, window=WINDOW):
     if window is None or last - first <= window:
         return [run_path(moves, robot, first, last, tolerance)]
     cuts = np.r_[np.arange(first, last, window), last]
-    return [run_path(moves, robot, max(first, a - OVERLAP), min(last, b + OVERLAP), tolerance, part=(a, b))
-            for a, b in zip(cuts[:-1].tolist(), cuts[1:].tolist())]
+    return [window_path(moves.rows(lo, hi + 1), robot, lo, tolerance, (a, b))
+            for a, b in zip(cuts[:-1].tolist(), cuts[1:].tolist())
+            for lo, hi in [(max(first, a - OVERLAP), min(last, b + OVERLAP))]]
+
+
+def window_path(rows, robot, offset, tolerance, part):
+    """The fitted path (RunPath) of one window: a function of the window's own data alone.
+
+    Parameters
+    ----------
+    rows : Moves
+        The waypoints fitted, ``moves.rows(offset, offset + len(rows))``:
+        the window and its overlaps.
+    robot : Robot
+    offset : int
+        Index of ``rows``' first waypoint in the whole sequence.
+    tolerance : float
+        Path tolerance, mm.
+    part : (int, int)
+        Waypoints ``a..b`` of the whole sequence the window returns.
+
+    Returns
+    -------
+    RunPath
+        Indexed in the whole sequence.
+    """
+    a, b = part
+    run = run_path(rows, robot, 0, len(rows) - 1, tolerance, part=(a - offset, b - offset))
+    return dataclasses.replace(run, first=run.first + offset, last=run.last + offset)

@@ -28,10 +28,11 @@ import numpy as np
 
 from trajcomp.errors import TimingError
 from trajcomp.formats._text import Lines, apply_edits, format_number
-from trajcomp.formats.csv_program import with_times
+from trajcomp.formats.csv_program import _numbers_text, with_times
 from trajcomp.program import JOINT, Span
 from trajcomp.timing.moves import moves_from_program
 from trajcomp.timing.path import TOLERANCE
+from trajcomp.timing.result import Texts
 from trajcomp.timing.retime import retime
 
 MSEC_LIMIT = 32000  # FANUC msec speeds: 1 .. 32000
@@ -91,6 +92,11 @@ def _timed(result):
     return [(k, durations[k]) for k in range(1, len(result.t)) if k not in untimed and durations[k] > 0]
 
 
+def time_texts(times):
+    """The CSV ``t`` cells (list of str) of time stamps (N,), s: as `with_times` writes them (to the ns)."""
+    return _numbers_text(np.asarray(times, dtype=float), np.zeros(len(times), dtype=int), 9)
+
+
 def _ceil(value, places):
     return math.ceil(value * 10**places - 1e-9) / 10**places
 
@@ -100,11 +106,20 @@ def _floor(value, places):
 
 
 def _csv(program, result, robot):
-    """The ``t`` column: each row's time stamp (`trajcomp.formats.csv_program.with_times`)."""
+    """The ``t`` column: each row's time stamp (`trajcomp.formats.csv_program.with_times`).
+
+    The settings are ``t=`` and the text written, made on demand from the
+    time stamps as the writer makes them (no str per waypoint held).
+    """
     times = np.full(len(program.motion_table()), np.nan)
     times[result.motion] = result.t
-    timed, written = with_times(program, times)
-    return timed, ["t=" + written[m] for m in result.motion.tolist()]
+    timed, _ = with_times(program, times)
+    t = result.t
+
+    def make(lo, hi):
+        return ["t=" + text for text in time_texts(t[lo:hi])]
+
+    return timed, Texts(make, 0, len(t))
 
 
 def _rapid(program, result, robot):
