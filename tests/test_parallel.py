@@ -11,7 +11,7 @@ import trajcomp.posture as posture
 from trajcomp import formats
 from trajcomp.compensate import compensate
 from trajcomp.errors import IKError
-from trajcomp.parallel import map_blocks, usable_cores
+from trajcomp.parallel import in_background, map_blocks, usable_cores
 from trajcomp.posture import planned_joints
 from trajcomp.robot import load_robot
 from test_compensate import cell, targets_in_cube  # noqa: F401 (fixture)
@@ -119,3 +119,18 @@ def test_workers_leave_ctrl_c_to_the_parent():
 
     assert set(map_blocks(lambda k: signal.getsignal(signal.SIGINT), 3, 2)) == {signal.SIG_IGN}
     assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
+
+
+def test_a_background_result_comes_from_another_process_only_when_asked():
+    data = np.arange(10.0)
+    later = in_background(lambda: (os.getpid(), data.sum()), 2)
+    pid, total = later()
+    assert pid != os.getpid() and total == 45.0 and multiprocessing.active_children() == []
+    assert in_background(lambda: os.getpid(), 1)() == os.getpid()
+
+    def fails():
+        raise IKError("before: unreachable")
+
+    for workers in (1, 2):
+        with pytest.raises(IKError, match="before: unreachable"):
+            in_background(fails, workers)()

@@ -182,6 +182,10 @@ def test_the_compensations_planned_joints_time_the_original_as_its_posture_plan_
     reused = retime_compensated(program, corrected, model.nominal, "auto", 0.005, q_planned=report.q_planned)
     assert reused[2] == solved[2] > 9.0  # the cycle time before compensation, s: 80 + 100 mm at 20 mm/s and more
     np.testing.assert_array_equal(reused[1].t, solved[1].t)
+    aside = retime_compensated(program, corrected, model.nominal, "auto", 0.005, q_planned=report.q_planned,
+                               workers=2)  # the original timed by another process meanwhile
+    assert aside[2] == solved[2]
+    np.testing.assert_array_equal(aside[1].t, solved[1].t)
 
 
 def test_the_csv_settings_are_the_t_cells_written_and_made_on_demand(tmp_path, monkeypatch):

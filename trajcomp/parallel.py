@@ -15,7 +15,7 @@ import multiprocessing
 import os
 import signal
 
-_TASK = None  # the function of the running `map_blocks`, inherited by its forked workers
+_TASK = None  # the function of the pool being started, inherited by its forked workers
 _LOOKAHEAD = 2  # blocks a worker may compute ahead of the consumer, each
 
 
@@ -67,6 +67,44 @@ def map_blocks(function, count, workers=1):
     finally:  # also when a block failed or the caller stopped: the few blocks under way end, then the workers
         pool.close()  # (Pool.terminate can hang on its task thread; at most workers * _LOOKAHEAD blocks wait)
         pool.join()
+
+
+def in_background(function, workers=1):
+    """``function()`` computed by a forked process while the caller goes on, when ``workers`` > 1.
+
+    Parameters
+    ----------
+    function : callable
+        ``function() -> result``; it may read any data the caller holds. The
+        result must be picklable when ``workers > 1``.
+    workers : int
+        More than 1: compute in another process, now; else in this process,
+        when the result is asked for.
+
+    Returns
+    -------
+    callable
+        ``result()``: the result (waiting for it), or the exception
+        ``function`` raised.
+    """
+    if workers <= 1 or not _can_fork():
+        return function
+    global _TASK
+    _TASK = lambda k: function()  # noqa: E731 (the forked process's task)
+    try:
+        pool = multiprocessing.get_context("fork").Pool(1, ignore_interrupts)
+    finally:
+        _TASK = None
+    pending = pool.apply_async(_run, (0,))
+    pool.close()
+
+    def result():
+        try:
+            return pending.get()
+        finally:
+            pool.join()
+
+    return result
 
 
 def ignore_interrupts():

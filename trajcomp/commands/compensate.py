@@ -130,7 +130,7 @@ class CompensateJob:
             if self.retime != "none":
                 corrected, timed, before = retime_compensated(program, corrected, model.nominal, self.retime,
                                                               self.path_tolerance, self.tools, self.frames,
-                                                              q_planned=report.q_planned)
+                                                              q_planned=report.q_planned, workers=self.workers)
                 timing = timing_lines(timed, before)
             stages.advance()
             protect = () if self.in_place else sources

@@ -12,6 +12,7 @@ from trajcomp.commands._args import add_robot, command_parser, info, robot_of
 from trajcomp.commands._report import add_report_options, criteria_of, emit
 from trajcomp.commands.convert import add_frame_options, add_in_place_option, frame_options, protected_inputs
 from trajcomp.errors import TimingError, TrajcompError
+from trajcomp.parallel import in_background
 from trajcomp.postprocess import as_written_report
 from trajcomp.posture import planned_joints, planned_targets
 from trajcomp.report import compliance_report, file_entry
@@ -108,7 +109,8 @@ def planned(program, index, q):
     return joints
 
 
-def retime_compensated(original, corrected, robot, method, tolerance, tools=None, frames=None, *, q_planned=None):
+def retime_compensated(original, corrected, robot, method, tolerance, tools=None, frames=None, *, q_planned=None,
+                       workers=1):
     """Time a compensated program, and its original for the cycle time before compensation.
 
     Parameters
@@ -128,6 +130,9 @@ def retime_compensated(original, corrected, robot, method, tolerance, tools=None
         motion order (`trajcomp.posture.planned_targets`), rad: the
         compensation's `ProgramReport.q_planned` (rows beyond n, joint
         targets, are not used). Solved again when not given.
+    workers : int
+        More than 1: the original is timed by another process meanwhile
+        (`trajcomp.parallel.in_background`).
 
     Returns
     -------
@@ -150,15 +155,15 @@ def retime_compensated(original, corrected, robot, method, tolerance, tools=None
         index = planned_targets(original)
         q_planned = q_planned[: len(index)]
     after = corrected.target_table().joints
+    before = in_background(lambda: retime_program(original, robot, planned(original, index, q_planned), method=method,
+                                                  tools=tools, frames=frames, tolerance=tolerance).cycle_time, workers)
     try:
-        before = retime_program(original, robot, planned(original, index, q_planned), method=method,
-                                tools=tools, frames=frames, tolerance=tolerance).cycle_time  # only this kept
         if not writable(corrected):
             result = retime_program(corrected, robot, after, method=method, tools=tools, frames=frames,
                                     tolerance=tolerance)
             note = f"the timing is not written: {corrected.format} programs have no speed fields trajcomp writes"
-            return corrected, dataclasses.replace(result, warnings=result.warnings + (note,)), before
+            return corrected, dataclasses.replace(result, warnings=result.warnings + (note,)), before()
         timed, result = timed_program(corrected, robot, after, method, tolerance, tools, frames)
+        return timed, result, before()  # only the original's cycle time is kept
     except TimingError as exc:
         raise TimingError(f"{exc} (compensate with --retime none to keep the program's speeds)") from None
-    return timed, result, before
