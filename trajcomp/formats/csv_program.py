@@ -40,7 +40,7 @@ from trajcomp.formats._text import (
     read_source,
 )
 from trajcomp.parallel import map_blocks
-from trajcomp.program import JOINT, LINEAR, MotionTable, Program, Source, Statement, TargetTable
+from trajcomp.program import JOINT, LINEAR, MotionTable, Program, Source, Statement, TargetTable, repeated
 from trajcomp.transforms import abc_to_matrix, matrix_to_abc, matrix_to_pose, pose_to_matrix
 
 POSE = ("x", "y", "z", "a", "b", "c")
@@ -109,8 +109,8 @@ def read(path, workers=1):
         fail(source.name, len(lines), source.text[-80:], "no target rows after the header")
     statements = [Statement(n, lines[n - 1]) for n in np.flatnonzero(statement) + 1]
     n = len(rows)
-    pose, joints, kind, speed, zone = (np.empty((n, 4, 4)), np.empty((n, 6)), np.empty(n, dtype=object),
-                                       np.empty(n), np.empty(n))  # filled a block at a time: no second copy
+    pose, joints, kind, speed, zone = (np.empty((n, 4, 4)), np.empty((n, 6)) if "j1" in header else None,
+                                       np.empty(n, dtype=object), np.empty(n), np.empty(n))  # filled by blocks
     firsts = range(0, n, BLOCK)
 
     def parsed(k):
@@ -120,11 +120,15 @@ def read(path, workers=1):
     with _collection_paused():
         for k, columns in zip(firsts, map_blocks(parsed, len(firsts), workers)):
             part = slice(k, k + BLOCK)
-            pose[part], joints[part], kind[part], speed[part], zone[part] = columns
+            pose[part], kind[part], speed[part], zone[part] = columns[0], *columns[2:]
+            if joints is not None:
+                joints[part] = columns[1]
+    if joints is None:  # no joint columns: one read-only row of NaN for all (no N x 6 array)
+        joints = np.broadcast_to(np.full(6, np.nan), (n, 6))
     motions = MotionTable(
         kind=kind, target=np.arange(n), via=np.full(n, -1), speed=speed,
-        speed_unit=_repeated("mm/s", n), zone=np.where(zone == 0.0, np.nan, zone),
-        tool=np.full(n, None, dtype=object), frame=np.full(n, None, dtype=object), line=rows,
+        speed_unit=repeated("mm/s", n), zone=np.where(zone == 0.0, np.nan, zone),
+        tool=repeated(None, n), frame=repeated(None, n), line=rows,
         axis_position=np.zeros(n, dtype=bool),
     )
     if starts is None:
@@ -289,13 +293,6 @@ def _stripped(cells):
         return text
     text = np.strings.strip(text)
     return np.where(np.strings.startswith(text, '"'), np.strings.strip(np.strings.strip(text, '"')), text)
-
-
-def _repeated(value, n):
-    """An object array (n,) holding ``value`` n times: one object, not n copies (as ``np.full`` makes of a str)."""
-    out = np.empty(n, dtype=object)
-    out[:] = value
-    return out
 
 
 def _check_rows(name, header, lines, numbers):

@@ -17,7 +17,7 @@ import numpy as np
 
 from trajcomp.errors import TimingError
 from trajcomp.frames import FrameTable
-from trajcomp.program import CIRCULAR, JOINT, LINEAR, _codes
+from trajcomp.program import CIRCULAR, JOINT, LINEAR, _codes, rows_of
 
 KINDS = (JOINT, LINEAR, CIRCULAR)
 
@@ -214,7 +214,7 @@ def moves_from_program(program, robot, joints, *, tools=None, frames=None):
         known = np.where(targets.is_joint[:, None], targets.joints, known)
     target, via = table.target[rows], table.via[rows]
     circular = np.flatnonzero(via >= 0)
-    q = known[target]
+    q = rows_of(known, target)  # the program's own array when its motions take every target in order
     for index, motion, values in ((target, rows, q), (via[circular], rows[circular], None)):
         values = known[index] if values is None else values
         missing = np.flatnonzero(np.isnan(values).any(axis=1))
