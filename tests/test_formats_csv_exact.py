@@ -155,13 +155,31 @@ def test_with_times_in_blocks_equals_one_block(tmp_path, monkeypatch, block, end
     path = tmp_path / "p.csv"
     path.write_bytes(ending.join(["# c", "x,y,z,a,b,c", "1,2,3,4,5,6", "# between", "", "7,8,9,1,2,3",
                                   "4,5,6,7,8,9"]).encode() + ending.encode())
-    timed, written_ = with_times(formats.read(path), np.array([0.0, 0.25, 1.0000000005]))
-    assert written_ == ["0.000000000", "0.250000000", "1.000000001"] or written_ == ["0.000000000", "0.250000000",
-                                                                                     "1.000000000"]
-    expected = timed.sources[0].text
+    formats.write(tmp_path / "one.csv", with_times(formats.read(path), np.array([0.0, 0.25, 1.0000000005])))
+    expected = (tmp_path / "one.csv").read_bytes().decode()
     monkeypatch.setattr(csv_program, "BLOCK", block)
-    assert with_times(formats.read(path), np.array([0.0, 0.25, 1.0000000005]))[0].sources[0].text == expected
+    formats.write(tmp_path / "blocks.csv", with_times(formats.read(path), np.array([0.0, 0.25, 1.0000000005])))
+    assert (tmp_path / "blocks.csv").read_bytes().decode() == expected
     assert expected.split(ending)[1:3] == ["x,y,z,a,b,c,t", "1,2,3,4,5,6,0.000000000"]
+    assert expected.split(ending)[6] in ("4,5,6,7,8,9,1.000000001", "4,5,6,7,8,9,1.000000000")
+
+
+def test_times_go_before_the_joints_the_writer_appends_and_into_a_t_column_it_has(tmp_path):
+    """As a compensated and re-timed program is written: j1..j6 after the new t column; an existing t in place."""
+    from trajcomp.formats.csv_program import with_times
+
+    path = program_csv(tmp_path, ["1.000,2.000,3.000,0.0,0.0,0.0,LIN", "4.000,5.000,6.000,0.0,0.0,0.0,LIN"])
+    program = formats.read(path)
+    stack = program.cartesian_targets()
+    edited = with_times(program.with_targets(stack.index, poses=stack.T, joints=np.zeros((2, 6))), [0.0, 1.5])
+    formats.write(tmp_path / "out.csv", edited)
+    assert (tmp_path / "out.csv").read_text().splitlines() == [
+        "x,y,z,a,b,c,motion,t,j1,j2,j3,j4,j5,j6",
+        "1.000,2.000,3.000,0.0,0.0,0.0,LIN,0.000000000,0.0000,0.0000,0.0000,0.0000,0.0000,0.0000",
+        "4.000,5.000,6.000,0.0,0.0,0.0,LIN,1.500000000,0.0000,0.0000,0.0000,0.0000,0.0000,0.0000"]
+    formats.write(tmp_path / "again.csv", with_times(formats.read(tmp_path / "out.csv"), [0.25, 2.0]))
+    assert [line.split(",")[7] for line in (tmp_path / "again.csv").read_text().splitlines()] == [
+        "t", "0.250000000", "2.000000000"]
 
 
 @pytest.mark.parametrize("ending", ["\n", "\r\n"])

@@ -525,6 +525,10 @@ class Program:
         T_world_frame of the user frames / work objects it defines, mm.
     sources : tuple of Source
         The files it was read from; empty for a program built in memory.
+    times : ndarray, shape (M,), or None
+        Time stamps of its M motions, s, that the writer puts into the
+        program's own time column (a CSV's ``t``: `trajcomp.formats.csv_program.with_times`);
+        None: none set.
     """
 
     format: str
@@ -534,6 +538,7 @@ class Program:
     tools: Mapping = dataclasses.field(default_factory=dict)
     frames: Mapping = dataclasses.field(default_factory=dict)
     sources: tuple = ()
+    times: np.ndarray = None
 
     @classmethod
     def from_tables(cls, format, name, statements, motions, targets, text, sources=()):

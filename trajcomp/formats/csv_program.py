@@ -341,6 +341,12 @@ def _patched_pieces(program, source, workers=1):
     header_block, header_at, header = _header_in(text, spans)
     add_joints = header is not None and "j1" not in header and bool(
         np.isfinite(targets.joints[targets.edited]).all(axis=1).any())
+    times = None
+    if program.times is not None:  # by target (each CSV row is a motion and its target)
+        times = np.full(len(targets), np.nan)
+        motions = program.motion_table()
+        times[motions.target[motions.target >= 0]] = program.times[motions.target >= 0]
+    suffix = ("" if times is None or "t" in header else ",t") + ("," + ",".join(JOINTS) if add_joints else "")
     rest = Source(source.name, "", "utf-8") if source.encoding == "utf-8-sig" else source  # BOM: first piece only
 
     def piece(k):
@@ -350,7 +356,8 @@ def _patched_pieces(program, source, workers=1):
         rows = order[a:b]
         patched = _patched_block(chunk, header_at if k == header_block else -1, header if k >= header_block else None,
                                  numbers[a:b] - first, targets.pose[rows], targets.is_joint[rows],
-                                 targets.joints[rows], targets.edited[rows], add_joints)
+                                 targets.joints[rows], targets.edited[rows], add_joints, suffix,
+                                 None if times is None else time_texts(times[rows]))
         return encode_text(source if k == 0 else rest, patched)
 
     with _collection_paused():
@@ -391,7 +398,7 @@ def _count_lines(chunk):
     return len(_split(chunk)[0])
 
 
-def _patched_block(chunk, header_at, header, at, pose, is_joint, joints, edited, add_joints):
+def _patched_block(chunk, header_at, header, at, pose, is_joint, joints, edited, add_joints, suffix="", times=None):
     """The text of a block of lines with its target rows patched: a pure function of plain values.
 
     Parameters
@@ -407,10 +414,14 @@ def _patched_block(chunk, header_at, header, at, pose, is_joint, joints, edited,
     pose, is_joint, joints, edited : ndarray, shape (R, 4, 4), (R,), (R, 6), (R,)
         The targets of those rows (`TargetTable`).
     add_joints : bool
-        Append j1..j6 (header and every target row).
+        Append j1..j6 (every target row).
+    suffix : str
+        Appended to the header line: the names of the columns added.
+    times : list of str, length R, optional
+        The rows' ``t`` cells (`_patched_rows`).
     """
-    if not len(at) or not (add_joints or edited.any()):
-        if header_at < 0 or not add_joints:
+    if not len(at) or not (add_joints or edited.any() or times is not None):
+        if header_at < 0 or not suffix:
             return chunk
         at = at[:0]
     count = len(at)
@@ -423,26 +434,28 @@ def _patched_block(chunk, header_at, header, at, pose, is_joint, joints, edited,
         body = body[: len(body) - len(ending)]
         if body.count("\n") == count - 1:  # and they end the chunk
             head = chunk[:start]
-            if header_at >= 0 and add_joints:
+            if header_at >= 0 and suffix:
                 head = head.split("\n")
-                head[header_at] += "," + ",".join(JOINTS)
+                head[header_at] += suffix
                 head = "\n".join(head)
-            return head + _patched_rows(body, count, header, pose, is_joint, joints, edited, add_joints) + ending
+            return head + _patched_rows(body, count, header, pose, is_joint, joints, edited, add_joints,
+                                        times) + ending
     lines, endings = _split(chunk)
-    if header_at >= 0 and add_joints:
-        lines[header_at] += "," + ",".join(JOINTS)
+    if header_at >= 0:
+        lines[header_at] += suffix
     if count:
         at = at.tolist()
         rows = _patched_rows("\n".join([lines[k] for k in at]), count, header, pose, is_joint, joints, edited,
-                             add_joints).split("\n")
+                             add_joints, times).split("\n")
         for k, line in zip(at, rows):
             lines[k] = line
     return _joined(lines, endings)
 
 
-def _patched_rows(rows, n, header, pose, is_joint, joints, edited, add_joints):
-    """Target rows with the edited ones' numbers rewritten and j1..j6 appended if asked: ``rows`` is the text of
-    ``n`` rows joined by ``\n``, as is the result.
+def _patched_rows(rows, n, header, pose, is_joint, joints, edited, add_joints, times=None):
+    """Target rows with the edited ones' numbers rewritten, their ``t`` cells set to ``times`` (appended as the last
+    cell when the header has no ``t``) and j1..j6 appended if asked: ``rows`` is the text of ``n`` rows joined by
+    ``\n``, as is the result.
 
     Each number column is either formatted at once (`_column`) or given as
     cells; the rows are joined by one %-operation.
@@ -464,6 +477,12 @@ def _patched_rows(rows, n, header, pose, is_joint, joints, edited, add_joints):
             updates[c] = _column(columns[header.index(c)], given, values, MIN_PLACES[c])
     for c, (spec, column) in updates.items():
         specs[header.index(c)], columns[header.index(c)] = spec, column
+    if times is not None and "t" in header:  # keeping each cell's quotes and spaces
+        j = header.index("t")
+        columns[j] = _in_cells(columns[j], _stripped(columns[j]), np.ones(n, dtype=bool), times)
+    elif times is not None:
+        specs.append("%s")
+        columns.append(times)
     if add_joints:
         known = np.isfinite(joints).all(axis=1)
         if known.all():
@@ -692,7 +711,8 @@ def _degrees_cells(joints):
 
 
 def with_times(program, times):
-    """The program with its ``t`` column (s, to the ns) set, added after the last column when the file has none.
+    """The program with its ``t`` column (s, to the ns) to be set by the writer, added after the last column when the
+    file has none (before the joints the writer appends).
 
     Parameters
     ----------
@@ -703,46 +723,16 @@ def with_times(program, times):
 
     Returns
     -------
-    (Program, list of str)
-        The program with its source text changed, and the written values.
+    Program
+        With `Program.times`: the cells are made a block at a time as the
+        program is written, never as a second copy of its text.
     """
-    source = program.sources[0]
-    written = _numbers_text(np.asarray(times, dtype=float), np.zeros(len(times), dtype=int), 9)
-    rows = program.motion_table().line
-    order = np.argsort(rows, kind="stable")
-    numbers = rows[order]
-    header, pieces = None, []
-    with _collection_paused():
-        for first, start, end in _line_spans(source.text, BLOCK):
-            lines, endings = _split(source.text[start:end])
-            if header is None:
-                at = next((k for k, line in enumerate(lines) if not _is_statement(line)), -1)
-                if at >= 0:
-                    header = [_value(c).lower() for c in _cells(lines[at])]
-                    lines[at] += "" if "t" in header else ",t"
-            a, b = np.searchsorted(numbers, [first, first + len(lines) - (lines[-1] == "")])
-            at = (numbers[a:b] - first).tolist()
-            for k, line in zip(at, _timed_rows([lines[k] for k in at], header,
-                                               [written[m] for m in order[a:b].tolist()])):
-                lines[k] = line
-            pieces.append(_joined(lines, endings))
-    text = "".join(pieces)
-    del pieces
-    return program.replace(sources=(Source(source.name, text, source.encoding),)), written
+    return program.replace(times=np.asarray(times, dtype=float))
 
 
-def _timed_rows(rows, header, texts):
-    """Rows (R,) (str) with their ``t`` cell set to ``texts`` (R,), keeping its quotes and spaces, or ``texts``
-    appended as a last cell when the header has no ``t``: a pure function of the block."""
-    if "t" not in header:
-        return [f"{row},{text}" for row, text in zip(rows, texts)]
-    j = header.index("t")
-    cells = [_cells(row) for row in rows]
-    column = [row[j] for row in cells]
-    column = _in_cells(column, _stripped(column), np.ones(len(column), dtype=bool), texts)
-    for row, cell in zip(cells, column):
-        row[j] = cell
-    return list(map(",".join, cells))
+def time_texts(times):
+    """The ``t`` cells (list of str) of time stamps (N,), s, as the writer writes them: to the ns."""
+    return _numbers_text(np.asarray(times, dtype=float), np.zeros(len(times), dtype=int), 9)
 
 
 def _joined(lines, endings):

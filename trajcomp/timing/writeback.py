@@ -28,7 +28,7 @@ import numpy as np
 
 from trajcomp.errors import TimingError
 from trajcomp.formats._text import Lines, apply_edits, format_number
-from trajcomp.formats.csv_program import _numbers_text, with_times
+from trajcomp.formats.csv_program import time_texts, with_times
 from trajcomp.program import JOINT, Span
 from trajcomp.timing.moves import moves_from_program
 from trajcomp.timing.path import TOLERANCE
@@ -92,11 +92,6 @@ def _timed(result):
     return [(k, durations[k]) for k in range(1, len(result.t)) if k not in untimed and durations[k] > 0]
 
 
-def time_texts(times):
-    """The CSV ``t`` cells (list of str) of time stamps (N,), s: as `with_times` writes them (to the ns)."""
-    return _numbers_text(np.asarray(times, dtype=float), np.zeros(len(times), dtype=int), 9)
-
-
 def _ceil(value, places):
     return math.ceil(value * 10**places - 1e-9) / 10**places
 
@@ -113,7 +108,7 @@ def _csv(program, result, robot):
     """
     times = np.full(len(program.motion_table()), np.nan)
     times[result.motion] = result.t
-    timed, _ = with_times(program, times)
+    timed = with_times(program, times)
     t = result.t
 
     def make(lo, hi):
