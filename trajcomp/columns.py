@@ -38,6 +38,7 @@ import numpy as np
 import yaml
 from scipy.spatial.transform import Rotation
 
+from trajcomp import yaml_text
 from trajcomp.errors import ReadError
 from trajcomp.transforms import matrix_to_abc
 
@@ -179,7 +180,7 @@ def load_layout(path):
     """
     path = str(path)
     try:
-        doc = yaml.safe_load(Path(path).read_text(encoding="utf-8"))
+        doc = yaml_text.load(Path(path).read_text(encoding="utf-8"))
     except (OSError, UnicodeError) as exc:
         raise ReadError(f"{path}: cannot read: {exc}") from exc
     except yaml.YAMLError as exc:

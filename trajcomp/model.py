@@ -32,7 +32,7 @@ from pathlib import Path
 import numpy as np
 import yaml
 
-from trajcomp import __version__
+from trajcomp import __version__, yaml_text
 from trajcomp.atomic import write_files_atomic
 from trajcomp.errors import ModelError
 from trajcomp.grid import field_from_dict
@@ -450,7 +450,7 @@ def load_model(path, robot=None):
     """
     path = Path(path)
     try:
-        doc = yaml.safe_load(path.read_text(encoding="utf-8"))
+        doc = yaml_text.load(path.read_text(encoding="utf-8"))
     except (OSError, UnicodeError) as exc:
         raise ModelError(f"{path}: cannot read: {exc}") from exc
     except yaml.YAMLError as exc:

@@ -32,6 +32,7 @@ from pathlib import Path
 import numpy as np
 import yaml
 
+from trajcomp import yaml_text
 from trajcomp.errors import RobotError
 from trajcomp.transforms import pose_to_matrix
 
@@ -177,7 +178,7 @@ def load_robot(name_or_path):
 def robot_from_yaml(text, label="<robot>"):
     """Parse robot YAML text; ``label`` names the source in error messages."""
     try:
-        doc = yaml.safe_load(text)
+        doc = yaml_text.load(text)
     except yaml.YAMLError as exc:
         raise RobotError(f"{label}: not valid YAML: {exc}") from exc
     if not isinstance(doc, dict):

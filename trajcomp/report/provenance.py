@@ -7,10 +7,9 @@ from pathlib import Path
 
 import yaml
 
-from trajcomp import __version__
+from trajcomp import __version__, yaml_text
 from trajcomp.errors import ReadError
 
-_LOADER = getattr(yaml, "CSafeLoader", yaml.SafeLoader)  # libyaml's safe loader where PyYAML has it: 8x faster
 
 
 def sha256(path):
@@ -44,7 +43,7 @@ def model_entry(path, model, mode):
         The mode the run used.
     """
     try:
-        header = yaml.load(Path(path).read_text(encoding="utf-8"), Loader=_LOADER)
+        header = yaml_text.load(Path(path).read_text(encoding="utf-8"))
     except (OSError, UnicodeError, yaml.YAMLError) as exc:
         raise ReadError(f"{path}: cannot read the model file again for the report: {exc}") from exc
     report = model.report
