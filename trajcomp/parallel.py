@@ -78,17 +78,18 @@ def in_background(function, workers=1):
         ``function() -> result``; it may read any data the caller holds. The
         result must be picklable when ``workers > 1``.
     workers : int
-        More than 1: compute in another process, now; else in this process,
-        when the result is asked for.
+        More than 1: compute in another process, now; else in this
+        process, now (raising what ``function`` raises).
 
     Returns
     -------
     callable
         ``result()``: the result (waiting for it), or the exception
-        ``function`` raised.
+        ``function`` raised in the other process.
     """
     if workers <= 1 or not _can_fork():
-        return function
+        value = function()
+        return lambda: value
     global _TASK
     _TASK = lambda k: function()  # noqa: E731 (the forked process's task)
     try:

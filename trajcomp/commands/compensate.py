@@ -16,6 +16,7 @@ from trajcomp.commands.retime import CHOICES as RETIME_CHOICES
 from trajcomp.commands.retime import LIMIT_MESSAGE, METHOD_HELP, add_tolerance_option, retime_compensated, timing_lines
 from trajcomp.compensate import program_corrector
 from trajcomp.errors import TrajcompError
+from trajcomp.memory import release
 from trajcomp.model import MODES, load_model
 from trajcomp.parallel import usable_cores
 from trajcomp.postprocess import MAX_CORRECTION, compensate_program
@@ -119,23 +120,23 @@ class CompensateJob:
             files = [file_entry("program", p) for p in sources]
             correct = program_corrector(model, mode=self.mode, outside=self.outside, label=str(path),
                                         workers=self.workers)
-            stages.advance()
+            _next(stages)
             corrected, report = compensate_program(
                 program, correct, model.nominal, tools=self.tools, frames=self.frames,
                 joint_targets=self.joint_targets, max_joint_change=self.max_joint_change,
                 max_correction=self.max_correction, workers=self.workers,
             )
-            stages.advance()
+            _next(stages)
             timing, timed, before = [], None, None
             if self.retime != "none":
                 corrected, timed, before = retime_compensated(program, corrected, model.nominal, self.retime,
                                                               self.path_tolerance, self.tools, self.frames,
                                                               q_planned=report.q_planned, workers=self.workers)
                 timing = timing_lines(timed, before)
-            stages.advance()
+            _next(stages)
             protect = () if self.in_place else sources
             written = formats.write(output, corrected, protect=protect, workers=self.workers)
-            stages.advance()
+            _next(stages)
             mode = self.mode or model.method
             compliance = compliance_report(
                 report, model.nominal, criteria=self.criteria, model=model,
@@ -147,7 +148,7 @@ class CompensateJob:
             if self.report:
                 target = Path(self.report) / Path(output).name if self.report_folder else Path(self.report)
                 reports = compliance.write(target, json_only=self.json_only)
-            stages.advance()
+            _next(stages)
         lines = [*summary_lines(compliance.doc), *(f"warning: {w}" for w in report.warnings), *timing,
                  f"wrote {', '.join(map(str, written + reports))}"]
         status, message = batch.PASS, ""
@@ -172,6 +173,12 @@ class CompensateJob:
                 "max_joint_change_deg": float(np.degrees(self.max_joint_change)),
                 "max_correction_mm": self.max_correction, "retime": self.retime,
                 "path_tolerance_mm": self.path_tolerance, **poses}
+
+
+def _next(stages):
+    """End a stage: the memory it freed back to the operating system (`trajcomp.memory`), the bar one step on."""
+    release()
+    stages.advance()
 
 
 @functools.lru_cache(maxsize=4)

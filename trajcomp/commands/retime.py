@@ -12,6 +12,7 @@ from trajcomp.commands._args import add_robot, command_parser, info, robot_of
 from trajcomp.commands._report import add_report_options, criteria_of, emit
 from trajcomp.commands.convert import add_frame_options, add_in_place_option, frame_options, protected_inputs
 from trajcomp.errors import TimingError, TrajcompError
+from trajcomp.memory import release
 from trajcomp.parallel import in_background
 from trajcomp.postprocess import as_written_report
 from trajcomp.posture import planned_joints, planned_targets
@@ -132,7 +133,8 @@ def retime_compensated(original, corrected, robot, method, tolerance, tools=None
         targets, are not used). Solved again when not given.
     workers : int
         More than 1: the original is timed by another process meanwhile
-        (`trajcomp.parallel.in_background`).
+        (`trajcomp.parallel.in_background`); else first, so that only one
+        timing's working memory is held at a time.
 
     Returns
     -------
@@ -155,15 +157,19 @@ def retime_compensated(original, corrected, robot, method, tolerance, tools=None
         index = planned_targets(original)
         q_planned = q_planned[: len(index)]
     after = corrected.target_table().joints
-    before = in_background(lambda: retime_program(original, robot, planned(original, index, q_planned), method=method,
-                                                  tools=tools, frames=frames, tolerance=tolerance).cycle_time, workers)
     try:
-        if not writable(corrected):
+        before = in_background(lambda: retime_program(original, robot, planned(original, index, q_planned),
+                                                      method=method, tools=tools, frames=frames,
+                                                      tolerance=tolerance).cycle_time, workers)
+        release()  # the original's timing's working memory, when it was timed here, before the corrected one's
+        if writable(corrected):
+            timed, result = timed_program(corrected, robot, after, method, tolerance, tools, frames)
+        else:
+            timed = corrected
             result = retime_program(corrected, robot, after, method=method, tools=tools, frames=frames,
                                     tolerance=tolerance)
             note = f"the timing is not written: {corrected.format} programs have no speed fields trajcomp writes"
-            return corrected, dataclasses.replace(result, warnings=result.warnings + (note,)), before()
-        timed, result = timed_program(corrected, robot, after, method, tolerance, tools, frames)
+            result = dataclasses.replace(result, warnings=result.warnings + (note,))
         return timed, result, before()  # only the original's cycle time is kept
     except TimingError as exc:
         raise TimingError(f"{exc} (compensate with --retime none to keep the program's speeds)") from None
