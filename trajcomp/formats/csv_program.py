@@ -618,37 +618,6 @@ def _plain(texts):
     return not ('"' in joined or " " in joined or "\t" in joined)
 
 
-def _pose_texts(pose, cartesian, old):
-    """``{column: (changed (B,), texts (B,))}`` of x..c for edited rows: poses (B, 4, 4), old cell values (B,)."""
-    rows = np.flatnonzero(cartesian)
-    out = {c: _in_rows(rows, *_written(values, old[c][rows], MIN_PLACES[c]), old[c])
-           for c, values in zip(POSE[:3], pose[rows, :3, 3].T)}
-    old_abc = np.stack([old[c][rows] for c in POSE[3:]], axis=1).astype(float)
-    rotation = pose[rows, :3, :3]
-    turned = np.abs(rotation - abc_to_matrix(np.radians(old_abc))).max(axis=(1, 2), initial=0.0) > 1e-12
-    angles = near_angle(np.degrees(matrix_to_abc(rotation[turned])), old_abc[turned])
-    for c, values in zip(POSE[3:], angles.T):
-        out[c] = _in_rows(rows[turned], *_written(values, old[c][rows[turned]], MIN_PLACES[c]), old[c])
-    return out
-
-
-def _joint_texts(joints, old):
-    """``{column: (changed (B,), texts (B,))}`` of j1..j6 for edited rows: joints (B, 6) rad, old cell values (B,)."""
-    rows = np.flatnonzero(np.isfinite(joints).all(axis=1))
-    return {c: _in_rows(rows, *_written(values, old[c][rows], MIN_PLACES[c]), old[c])
-            for c, values in zip(JOINTS, np.degrees(joints[rows]).T)}
-
-
-def _in_rows(rows, changed, texts, old):
-    """``(changed (B,), texts (B,))`` of a column whose rows ``rows`` (R,) got ``changed``, ``texts`` (R,) and
-    whose other rows keep their ``old`` text (B,)."""
-    if len(rows) == len(old):
-        return changed, texts
-    all_changed, all_texts = np.zeros(len(old), dtype=bool), old.astype(object)  # new texts may be longer
-    all_changed[rows], all_texts[rows] = changed, texts
-    return all_changed, all_texts
-
-
 def _written(values, old, min_places):
     """How a file that wrote ``old`` (B,) writes ``values`` (B,): ``(changed (B,), texts (B,))``.
 
