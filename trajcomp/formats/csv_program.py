@@ -109,22 +109,7 @@ def read(path, workers=1):
         fail(source.name, len(lines), source.text[-80:], "no target rows after the header")
     statements = [Statement(n, lines[n - 1]) for n in np.flatnonzero(statement) + 1]
     n = len(rows)
-    pose, joints, kind, speed, zone = (np.empty((n, 4, 4)), np.empty((n, 6)) if "j1" in header else None,
-                                       np.empty(n, dtype=object), np.empty(n), np.empty(n))  # filled by blocks
-    firsts = range(0, n, BLOCK)
-
-    def parsed(k):
-        block = rows[firsts[k] : firsts[k] + BLOCK]
-        return _parse_block(source.name, header, [lines[number - 1] for number in block.tolist()], block)
-
-    with _collection_paused():
-        for k, columns in zip(firsts, map_blocks(parsed, len(firsts), workers)):
-            part = slice(k, k + BLOCK)
-            pose[part], kind[part], speed[part], zone[part] = columns[0], *columns[2:]
-            if joints is not None:
-                joints[part] = columns[1]
-    if joints is None:  # no joint columns: one read-only row of NaN for all (no N x 6 array)
-        joints = np.broadcast_to(np.full(6, np.nan), (n, 6))
+    pose, joints, kind, speed, zone = _parse_rows(source.name, header, lines, rows, workers)
     motions = MotionTable(
         kind=kind, target=np.arange(n), via=np.full(n, -1), speed=speed,
         speed_unit=repeated("mm/s", n), zone=np.where(zone == 0.0, np.nan, zone),
@@ -174,6 +159,30 @@ def _layout(text, lines):
     if len(data) != len(text):
         return statement, None, None
     return statement, starts, np.append(ends, len(data))[: len(lines)] - starts
+
+
+def _parse_rows(name, header, lines, rows, workers):
+    """Columns of the target rows (N,) (line numbers) of ``lines``, a `BLOCK` of rows at a time (`_parse_block`) by
+    ``workers`` processes (`trajcomp.parallel.map_blocks`): poses (N, 4, 4), joints (N, 6) rad (without joint
+    columns one read-only row of NaN for all, not an N x 6 array), kinds, speeds and zones (N,)."""
+    n = len(rows)
+    pose, joints, kind, speed, zone = (np.empty((n, 4, 4)), np.empty((n, 6)) if "j1" in header else None,
+                                       np.empty(n, dtype=object), np.empty(n), np.empty(n))  # filled by blocks
+    firsts = range(0, n, BLOCK)
+
+    def parsed(k):
+        block = rows[firsts[k] : firsts[k] + BLOCK]
+        return _parse_block(name, header, [lines[m - 1] for m in block.tolist()], block)
+
+    with _collection_paused():
+        for k, columns in zip(firsts, map_blocks(parsed, len(firsts), workers)):
+            part = slice(k, k + BLOCK)
+            pose[part], kind[part], speed[part], zone[part] = columns[0], *columns[2:]
+            if joints is not None:
+                joints[part] = columns[1]
+    if joints is None:
+        joints = np.broadcast_to(np.full(6, np.nan), (n, 6))
+    return pose, joints, kind, speed, zone
 
 
 @contextlib.contextmanager
