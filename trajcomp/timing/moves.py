@@ -215,8 +215,7 @@ def moves_from_program(program, robot, joints, *, tools=None, frames=None):
     target, via = table.target[rows], table.via[rows]
     circular = np.flatnonzero(via >= 0)
     q = rows_of(known, target)  # the program's own array when its motions take every target in order
-    for index, motion, values in ((target, rows, q), (via[circular], rows[circular], None)):
-        values = known[index] if values is None else values
+    for index, motion, values in ((target, rows, q), (via[circular], rows[circular], known[via[circular]])):
         missing = np.flatnonzero(np.isnan(values).any(axis=1))
         if missing.size:
             k = missing[0]
