@@ -291,46 +291,76 @@ def _runs(program, robot, index, q, source):
 def _chain(program, robot, index, q, branches, source, workers=1):
     """Fill the undeclared rows, each nearest the joints of the position before it.
 
-    A run of undeclared targets is solved a block of `BLOCK` rows at a time
-    (``branches(rows)``: their closed-form solutions, computed ahead by
-    ``workers`` processes), assuming the arm keeps the branch of its first
-    target and turns continuously (unwrapped joints); the proposal is then
-    checked row by row against the nearest solution to its predecessor, and
-    the run is restarted where another branch or turn is nearer. Smooth
-    paths take one pass per block.
+    A run of undeclared targets is chained a block of `BLOCK` rows at a time
+    (`_chained`). The blocks' closed-form solutions (``branches(rows)``) are
+    computed ahead by ``workers`` processes, each chaining its block on a
+    guess: from the run's anchor when it is known before the plan starts
+    (home, a declared target or a joint target). A block's chain depends
+    on its first row's posture alone, so the guess is taken where its first
+    row is the solution nearest the true predecessor; elsewhere (a joint
+    that turned on by more than half a turn, another branch) the block is
+    chained again here.
     """
     runs = _runs(program, robot, index, q, source)
-    blocks = [rows[begin : begin + BLOCK] for rows, _ in runs for begin in range(0, len(rows), BLOCK)]
-    with contextlib.closing(map_blocks(lambda k: branches(blocks[k]), len(blocks), workers)) as solutions:
-        _chain_runs(program, robot, index, q, source, runs, solutions)
-
-
-def _chain_runs(program, robot, index, q, source, runs, solutions):
-    """`_chain` of ``runs`` (`_runs`), taking each block's branches from the iterator ``solutions``."""
-    for rows, anchor_of in runs:
-        anchor, from_home = anchor_of()
-        for begin in range(0, len(rows), BLOCK):
-            block = rows[begin : begin + BLOCK]
-            q_all, valid = next(solutions)
-            start = 0
-            while start < len(block):
-                first = _nearest(robot, q_all[start : start + 1], valid[start : start + 1], anchor[None])[0]
-                if not np.all(np.isfinite(first)):
+    blocks = [(rows[begin : begin + BLOCK], guess) for rows, anchor_of in runs for guess in [np.array(anchor_of()[0])]
+              for begin in range(0, len(rows), BLOCK)]
+    guessed = map_blocks(lambda k: _guessed_chain(robot, branches, *blocks[k]), len(blocks), workers)
+    with contextlib.closing(guessed) as guesses:
+        for rows, anchor_of in runs:
+            anchor, from_home = anchor_of()
+            for begin in range(0, len(rows), BLOCK):
+                block = rows[begin : begin + BLOCK]
+                first_branches, first_valid, chained = next(guesses)
+                first = _nearest(robot, first_branches, first_valid, anchor[None])[0]
+                if chained is None or not np.array_equal(chained[0], first):
+                    chained = _chained(robot, *branches(block), anchor)
+                reached = np.all(np.isfinite(chained), axis=1)
+                if not reached.all():
                     raise IKError(
-                        f"{program.name}: {program.where(index[block[start]])}: robot {robot.name} cannot reach "
-                        "the target inside its joint limits; the program was not changed"
+                        f"{program.name}: {program.where(index[block[np.argmin(reached)]])}: robot {robot.name} "
+                        "cannot reach the target inside its joint limits; the program was not changed"
                     )
-                branch = _branch_of(q_all[start], first)
-                proposal = np.unwrap(np.vstack([first, q_all[start + 1 :, branch]]), axis=0)
-                best = _nearest(robot, q_all[start + 1 :], valid[start + 1 :], proposal[:-1])
-                agree = np.all(np.abs(best - proposal[1:]) < 1e-9, axis=1)
-                stop = len(agree) if agree.all() else int(np.argmin(agree))
-                q[block[start : start + 1 + stop]] = proposal[: 1 + stop]
-                source[block[start : start + 1 + stop]] = "previous"
+                q[block] = chained
+                source[block] = "previous"
                 if from_home:
-                    source[block[start]] = "home"
-                anchor, from_home = proposal[stop], False
-                start += 1 + stop
+                    source[block[0]] = "home"
+                anchor, from_home = chained[-1], False
+
+
+def _guessed_chain(robot, branches, rows, guess):
+    """A block's first row's solutions (1, 8, 6), their validity (1, 8) and its chain from the joints ``guess`` (6,)
+    (`_chained`; None when the guess is not known: NaN, a target an earlier run solves)."""
+    q_all, valid = branches(rows)
+    chained = _chained(robot, q_all, valid, guess) if np.all(np.isfinite(guess)) else None
+    return q_all[:1], valid[:1], chained
+
+
+def _chained(robot, q_all, valid, anchor):
+    """Joints (B, 6) of a block of undeclared rows, each nearest the joints before it, the first nearest ``anchor``.
+
+    The chain is proposed keeping the branch of the first row with the
+    joints turning continuously (unwrapped); the proposal is checked row by
+    row against the nearest solution (`_nearest`) to its predecessor and
+    proposed again from where another branch or turn is nearer. Smooth
+    paths take one proposal. ``q_all`` (B, 8, 6) and ``valid`` (B, 8) are
+    the rows' closed-form solutions; rows from the first that no solution
+    reaches are NaN.
+    """
+    q = np.full((len(q_all), 6), np.nan)
+    start = 0
+    while start < len(q_all):
+        first = _nearest(robot, q_all[start : start + 1], valid[start : start + 1], anchor[None])[0]
+        if not np.all(np.isfinite(first)):
+            break
+        branch = _branch_of(q_all[start], first)
+        proposal = np.unwrap(np.vstack([first, q_all[start + 1 :, branch]]), axis=0)
+        best = _nearest(robot, q_all[start + 1 :], valid[start + 1 :], proposal[:-1])
+        agree = np.all(np.abs(best - proposal[1:]) < 1e-9, axis=1)
+        stop = len(agree) if agree.all() else int(np.argmin(agree))
+        q[start : start + 1 + stop] = proposal[: 1 + stop]
+        anchor = proposal[stop]
+        start += 1 + stop
+    return q
 
 
 def _branch_of(q_branches, q):
