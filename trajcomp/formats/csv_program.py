@@ -49,7 +49,7 @@ MIN_PLACES = dict.fromkeys(POSE[:3], 3) | dict.fromkeys(POSE[3:], 4) | dict.from
 LIMITS = dict.fromkeys(POSE[:3], LENGTH_LIMIT) | dict.fromkeys(POSE[3:], ANGLE_LIMIT) | dict.fromkeys(JOINTS, JOINT_LIMIT)
 KINDS = {"PTP": JOINT, "LIN": LINEAR}
 KNOWN = POSE + JOINTS + ("motion", "speed", "zone", "t")
-BLOCK = 50_000  # rows parsed or formatted together: vectorized, with bounded temporary memory
+BLOCK = 16_384  # rows parsed or formatted together: vectorized, with bounded temporary memory
 _BARE_ZERO = re.compile(r"^(-?)0\.")  # the 0 of 0.5 and -0.5, for a file that writes .5
 _QUOTED_COMMA = re.compile(r',(?=(?:[^"]*"[^"]*")*[^"]*$)')  # a comma outside double quotes
 
