@@ -163,7 +163,9 @@ def test_krl_restores_the_speed_of_a_motion_that_is_not_retimed(tmp_path):
 
 @pytest.mark.parametrize("joint_targets", ["keep", "compensate"])
 def test_the_compensations_planned_joints_time_the_original_as_its_posture_plan_does(
-        tmp_path, kuka_model, joint_targets):
+        tmp_path, kuka_model, joint_targets, monkeypatch):
+    from trajcomp import parallel
+    from trajcomp.commands import retime as retime_command
     from trajcomp.commands.retime import retime_compensated
     from trajcomp.compensate import program_corrector
     from trajcomp.model import load_model
@@ -186,6 +188,13 @@ def test_the_compensations_planned_joints_time_the_original_as_its_posture_plan_
                                workers=2)  # the original timed by another process meanwhile
     assert aside[2] == solved[2]
     np.testing.assert_array_equal(aside[1].t, solved[1].t)
+    processes = []  # of the original's timing
+    monkeypatch.setattr(retime_command, "in_background",
+                        lambda function, workers: processes.append(workers) or parallel.in_background(function, workers))
+    monkeypatch.setattr(retime_command, "TOGETHER", len(report.q))  # a long program: one timing after the other
+    long = retime_compensated(program, corrected, model.nominal, "auto", 0.005, q_planned=report.q_planned, workers=2)
+    assert processes == [1] and long[2] == solved[2]
+    np.testing.assert_array_equal(long[1].t, solved[1].t)
 
 
 def test_the_csv_settings_are_the_t_cells_written_and_made_on_demand(tmp_path, monkeypatch):

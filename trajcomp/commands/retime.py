@@ -21,6 +21,9 @@ from trajcomp.timing import METHODS
 from trajcomp.timing.path import TOLERANCE
 
 CHOICES = METHODS + ("none",)
+# Targets below which the original and the corrected program are timed at once on two processes. A timing's
+# working memory is ~230 bytes per waypoint: longer programs are timed one after the other (1M points: 0.95 GB, not 1.1).
+TOGETHER = 500_000
 METHOD_HELP = ("auto: TOPP-RA for continuous LIN/CIRC runs, ruckig (jerk-limited) for point-to-point "
                "and stop-to-stop motions; toppra or ruckig: that one for every segment")
 
@@ -132,7 +135,8 @@ def retime_compensated(original, corrected, robot, method, tolerance, tools=None
         compensation's `ProgramReport.q_planned` (rows beyond n, joint
         targets, are not used). Solved again when not given.
     workers : int
-        More than 1: the original is timed by another process meanwhile
+        More than 1, for a program of fewer than `TOGETHER` targets: the
+        original is timed by another process meanwhile
         (`trajcomp.parallel.in_background`); else first, so that only one
         timing's working memory is held at a time.
 
@@ -160,7 +164,8 @@ def retime_compensated(original, corrected, robot, method, tolerance, tools=None
     try:
         before = in_background(lambda: retime_program(original, robot, planned(original, index, q_planned),
                                                       method=method, tools=tools, frames=frames,
-                                                      tolerance=tolerance).cycle_time, workers)
+                                                      tolerance=tolerance).cycle_time,
+                               workers if len(after) < TOGETHER else 1)
         release()  # the original's timing's working memory, when it was timed here, before the corrected one's
         if writable(corrected):
             timed, result = timed_program(corrected, robot, after, method, tolerance, tools, frames)
