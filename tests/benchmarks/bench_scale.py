@@ -7,8 +7,9 @@ program CSV, mm and deg, 3 and 4 decimals) on the virtual UR10 is
 compensated in composite mode and re-timed (the default) by the CLI
 in a fresh process (`python -m trajcomp.cli compensate`), start-up
 included, on one process (`--jobs 1`) and on every usable core (the
-default); the table gives wall time, waypoints/s (a run without
-sampling), and from a second run the peak memory of the process tree
+default); the table gives wall time and waypoints/s (the median of
+`RUNS` runs without sampling: this machine's speed varies by +-10 % from
+run to run), and from another run the peak memory of the process tree
 (summed proportional set sizes: the physical memory the run takes) and
 the peak resident memory of its largest process.
 Also: CLI start-up (`trajcomp --version`) and the compensation core alone
@@ -34,6 +35,8 @@ from trajcomp.model import load_model
 from trajcomp.parallel import usable_cores
 from trajcomp.plan import default_orientation
 from trajcomp.transforms import abc_to_matrix
+
+RUNS = 3  # runs of each size and process count without sampling: the median wall time is reported
 
 
 def helix(robot, n):
@@ -135,8 +138,8 @@ def main_bench(sizes):
         for jobs in sorted({1, usable_cores()}):
             args = ["compensate", str(program), "--model", str(model_path), "-o", str(folder / "out.csv"),
                     "--jobs", str(jobs)]
-            wall = run_cli(args)[0]
-            _, peak, largest = run_cli(args, sample=True)  # a second run: sampling costs CPU
+            wall = float(np.median([run_cli(args)[0] for _ in range(RUNS)]))
+            _, peak, largest = run_cli(args, sample=True)  # another run: sampling costs CPU
             print(f"{n:>10,} {jobs:>5} {wall:>8.2f} {n / wall:>12,.0f} {peak:>8,.0f} {largest:>15,.0f}")
         program.unlink()
     print("targets: >= 50,000 waypoints/s at 300,000; < 1,000 MB at 1,000,000")
