@@ -101,7 +101,8 @@ def planned_joints(program, robot, *, tools=None, frames=None, workers=1):
         program uses but does not define (`trajcomp.frames.FrameTable`).
     workers : int
         Processes that solve blocks of `BLOCK` targets' closed-form branches
-        (`trajcomp.parallel.map_blocks`); the plan does not depend on it.
+        and chain the undeclared ones (`_chain`, `trajcomp.parallel.map_blocks`);
+        the plan does not depend on it.
 
     Returns
     -------
