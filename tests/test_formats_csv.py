@@ -119,7 +119,7 @@ def _mixed_rows():
 @pytest.mark.parametrize("ending", ["\n", "\r\n"])
 def test_rows_read_and_written_in_blocks_equal_one_block(tmp_path, monkeypatch, block, ending):
     """Blocks of 1 to 3 rows (the reader and writer work a block at a time) give the tables and bytes of one block."""
-    from trajcomp.formats import csv_program
+    from trajcomp.formats import _csv_reader, _csv_writer
 
     path = tmp_path / "mixed.csv"
     path.write_bytes(ending.join(_mixed_rows()).encode())  # no line ending after the last row
@@ -134,7 +134,8 @@ def test_rows_read_and_written_in_blocks_equal_one_block(tmp_path, monkeypatch, 
         return program, formats.write(tmp_path / f"out{block}.csv", edited)[0].read_bytes()
 
     reference, expected = run()
-    monkeypatch.setattr(csv_program, "BLOCK", block)
+    monkeypatch.setattr(_csv_reader, "BLOCK", block)  # the blocks read
+    monkeypatch.setattr(_csv_writer, "BLOCK", block)  # and written
     program, written = run()
     for name in ("pose", "joints", "line", "is_joint"):
         np.testing.assert_array_equal(getattr(program.target_table(), name), getattr(reference.target_table(), name))
@@ -147,9 +148,9 @@ def test_rows_read_and_written_in_blocks_equal_one_block(tmp_path, monkeypatch, 
 
 @pytest.mark.parametrize("block", [2, 50_000])
 def test_a_mistake_in_a_later_block_is_named_by_its_line(tmp_path, monkeypatch, block):
-    from trajcomp.formats import csv_program
+    from trajcomp.formats import _csv_reader
 
-    monkeypatch.setattr(csv_program, "BLOCK", block)
+    monkeypatch.setattr(_csv_reader, "BLOCK", block)  # only read: the reader's blocks
     rows = _mixed_rows()
     rows.insert(7, "7,650.0,-98.0,503.0,0.0,90.0,0.0,LNI,50,1,,,,,,")
     path = tmp_path / "typo.csv"
