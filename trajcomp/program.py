@@ -527,7 +527,7 @@ class Program:
         The files it was read from; empty for a program built in memory.
     times : ndarray, shape (M,), or None
         Time stamps of its M motions, s, that the writer puts into the
-        program's own time column (a CSV's ``t``: `trajcomp.formats._csv_writer.with_times`);
+        program's own time column (a CSV's ``t``: `trajcomp.formats.csv_program.with_times`);
         None: none set.
     """
 

@@ -101,7 +101,7 @@ def _floor(value, places):
 
 
 def _csv(program, result, robot):
-    """The ``t`` column: each row's time stamp (`trajcomp.formats._csv_writer.with_times`).
+    """The ``t`` column: each row's time stamp (`trajcomp.formats.csv_program.with_times`).
 
     The settings are ``t=`` and the text written, made on demand from the
     time stamps as the writer makes them (no str per waypoint held).
