@@ -36,6 +36,7 @@ from trajcomp.timing.result import Texts
 from trajcomp.timing.retime import retime
 
 MSEC_LIMIT = 32000  # FANUC msec speeds: 1 .. 32000
+_INDENT = re.compile(r"[ \t]*")
 
 
 def retime_program(program, robot, joints, *, method="auto", tools=None, frames=None, tolerance=TOLERANCE):
@@ -194,7 +195,7 @@ def _krl(program, result, robot):
             continue
         at = motion.spans["motion"]
         line_start = text.rfind("\n", 0, at.start) + 1
-        indent = re.match(r"[ \t]*", text[line_start:]).group()
+        indent = _INDENT.match(text, line_start).group()  # matched in place: a slice would copy the rest of the text
         edits[at.source].append((line_start, line_start, f"{indent}{_krl_statement(group, need)}{newline}"))
         running[group] = need
         if want is not None:
