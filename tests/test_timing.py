@@ -18,7 +18,7 @@ from trajcomp.cli import main
 from trajcomp.errors import TimingError
 from trajcomp.ik import Configuration, configuration_of, ik
 from trajcomp.kinematics import fk
-from trajcomp.program import JOINT, LINEAR
+from trajcomp.program_items import JOINT, LINEAR
 from trajcomp.robot import load_robot
 from trajcomp.timing import Moves, retime
 from trajcomp.timing.toppra_run import ConstantAcceleration

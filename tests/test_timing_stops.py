@@ -7,7 +7,7 @@ import pytest
 
 from trajcomp.ik import ik
 from trajcomp.kinematics import fk
-from trajcomp.program import JOINT, LINEAR
+from trajcomp.program_items import JOINT, LINEAR
 from trajcomp.robot import load_robot
 from trajcomp.timing import Moves, retime
 from trajcomp.timing.path import run_path

@@ -10,7 +10,7 @@ import importlib
 import numpy as np
 import pytest
 
-from trajcomp.program import JOINT, LINEAR
+from trajcomp.program_items import JOINT, LINEAR
 from trajcomp.robot import load_robot
 from trajcomp.timing import Moves, retime
 

@@ -42,7 +42,8 @@ from trajcomp.errors import TrajcompError
 from trajcomp.model import CompensationModel, load_model
 from trajcomp.postprocess import MAX_CORRECTION, compensate_program
 from trajcomp.posture import MAX_JOINT_CHANGE
-from trajcomp.program import LINEAR, Motion, Program, Target
+from trajcomp.program import Program
+from trajcomp.program_items import LINEAR, Motion, Target
 from trajcomp.transforms import matrix_to_pose, pose_to_matrix
 
 log = logging.getLogger(__name__)

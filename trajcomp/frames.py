@@ -10,7 +10,7 @@ missing one is an error, never a guess. Frame ``None`` is the base, tool
 import numpy as np
 
 from trajcomp.errors import TrajcompError
-from trajcomp.program import _codes, rows_of
+from trajcomp.program_tables import _codes, rows_of
 from trajcomp.transforms import invert
 
 

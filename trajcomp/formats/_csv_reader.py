@@ -20,7 +20,9 @@ from trajcomp.formats._csv_cells import (
 )
 from trajcomp.formats._text import ANGLE_LIMIT, JOINT_LIMIT, LENGTH_LIMIT, fail, finite, read_source
 from trajcomp.parallel import map_blocks
-from trajcomp.program import JOINT, LINEAR, MotionTable, Program, Statement, TargetTable, repeated
+from trajcomp.program import Program
+from trajcomp.program_items import JOINT, LINEAR, Statement
+from trajcomp.program_tables import MotionTable, TargetTable, repeated
 from trajcomp.transforms import pose_to_matrix
 
 LIMITS = dict.fromkeys(POSE[:3], LENGTH_LIMIT) | dict.fromkeys(POSE[3:], ANGLE_LIMIT) | dict.fromkeys(JOINTS, JOINT_LIMIT)

@@ -22,7 +22,7 @@ from trajcomp.formats._csv_cells import (
 )
 from trajcomp.formats._text import active_axes, decimals, encode_text, format_number, near_angle
 from trajcomp.parallel import map_blocks
-from trajcomp.program import JOINT, LINEAR, Source
+from trajcomp.program_items import JOINT, LINEAR, Source
 from trajcomp.transforms import abc_to_matrix, matrix_to_abc, matrix_to_pose
 
 MIN_PLACES = dict.fromkeys(POSE[:3], 3) | dict.fromkeys(POSE[3:], 4) | dict.fromkeys(JOINTS, 4)

@@ -22,7 +22,8 @@ from trajcomp.formats._text import (
     unresolved,
     whole_circle,
 )
-from trajcomp.program import CIRCULAR, JOINT, LINEAR, Motion, Program, Span, Statement, Target
+from trajcomp.program import Program
+from trajcomp.program_items import CIRCULAR, JOINT, LINEAR, Motion, Span, Statement, Target
 from trajcomp.transforms import pose_to_matrix
 
 POSE = ("x", "y", "z", "a", "b", "c")

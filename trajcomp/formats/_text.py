@@ -17,7 +17,7 @@ from pathlib import Path
 import numpy as np
 
 from trajcomp.errors import ReadError, WriteError
-from trajcomp.program import CIRCULAR, Source, Span
+from trajcomp.program_items import CIRCULAR, Source, Span
 from trajcomp.transforms import abc_to_matrix, matrix_to_abc
 
 NUMBER = r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?"

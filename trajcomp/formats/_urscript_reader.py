@@ -20,7 +20,8 @@ from trajcomp.formats._text import (
     split_top,
     unresolved,
 )
-from trajcomp.program import CIRCULAR, JOINT, LINEAR, Motion, Program, Span, Statement, Target
+from trajcomp.program import Program
+from trajcomp.program_items import CIRCULAR, JOINT, LINEAR, Motion, Span, Statement, Target
 from trajcomp.transforms import rotvec_to_matrix
 
 POSE = ("x", "y", "z", "rx", "ry", "rz")

@@ -52,7 +52,8 @@ from trajcomp.formats._text import (
     whole_circle,
     write_single_file,
 )
-from trajcomp.program import CIRCULAR, JOINT, LINEAR, Motion, Program, Span, Statement, Target
+from trajcomp.program import Program
+from trajcomp.program_items import CIRCULAR, JOINT, LINEAR, Motion, Span, Statement, Target
 from trajcomp.transforms import matrix_to_pose, pose_to_matrix
 
 XYZWPR = ("x", "y", "z", "w", "p", "r")

@@ -42,7 +42,7 @@ import numpy as np
 from trajcomp.errors import WriteError
 from trajcomp.formats._krl_reader import _DEF, _DEFDAT, _NAME, _PROGRAM_NAME, AXES, MIN_PLACES, POSE, read
 from trajcomp.formats._text import active_axes, encode_text, encode_xyzabc, format_number, mask, numbered, patched
-from trajcomp.program import CIRCULAR, JOINT, LINEAR
+from trajcomp.program_items import CIRCULAR, JOINT, LINEAR
 from trajcomp.transforms import matrix_to_pose
 
 __all__ = ["read", "write"]

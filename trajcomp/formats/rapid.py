@@ -34,7 +34,7 @@ import numpy as np
 from trajcomp.errors import WriteError
 from trajcomp.formats._rapid_reader import CONF, JOINTS, POSITION, QUAT, read
 from trajcomp.formats._text import active_axes, format_number, same_rotation, where, write_single_file
-from trajcomp.program import CIRCULAR, JOINT, LINEAR
+from trajcomp.program_items import CIRCULAR, JOINT, LINEAR
 from trajcomp.transforms import matrix_to_quat, quat_to_matrix
 
 __all__ = ["read", "write"]

@@ -15,7 +15,7 @@ import dataclasses
 
 import numpy as np
 
-from trajcomp.program import JOINT
+from trajcomp.program_items import JOINT
 
 RATE = 1000.0  # Hz
 LIMIT_TOLERANCE = 0.01  # a sampled value may exceed its limit by this share

@@ -17,7 +17,8 @@ import numpy as np
 
 from trajcomp.errors import TimingError
 from trajcomp.frames import FrameTable
-from trajcomp.program import CIRCULAR, JOINT, LINEAR, _codes, rows_of
+from trajcomp.program_items import CIRCULAR, JOINT, LINEAR
+from trajcomp.program_tables import _codes, rows_of
 
 KINDS = (JOINT, LINEAR, CIRCULAR)
 

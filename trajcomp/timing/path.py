@@ -27,7 +27,7 @@ import numpy as np
 from scipy.interpolate import BSpline, make_interp_spline, make_lsq_spline
 
 from trajcomp.kinematics import fk_and_jacobian
-from trajcomp.program import JOINT
+from trajcomp.program_items import JOINT
 from trajcomp.timing.samples import run_samples
 
 TOLERANCE = 0.005  # mm, largest deviation of the timed path from a waypoint or sample

@@ -29,7 +29,7 @@ import itertools
 
 import numpy as np
 
-from trajcomp.program import JOINT
+from trajcomp.program_items import JOINT
 from trajcomp.timing.check import LIMIT_TOLERANCE, Peaks, segment_peaks
 from trajcomp.timing.path import TOLERANCE, stop_paths
 from trajcomp.timing.result import Segment, TimingResult

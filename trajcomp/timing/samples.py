@@ -16,7 +16,7 @@ import numpy as np
 from trajcomp.errors import TimingError
 from trajcomp.ik import branch_index, ik, ik_all, ik_family
 from trajcomp.kinematics import fk, fk_and_jacobian
-from trajcomp.program import CIRCULAR, JOINT
+from trajcomp.program_items import CIRCULAR, JOINT
 from trajcomp.transforms import matrix_to_rotvec, rotvec_to_matrix
 
 STEP_MM = 5.0  # mm, largest TCP step between path samples of a LIN / CIRC

@@ -29,7 +29,7 @@ import numpy as np
 from trajcomp.errors import TimingError
 from trajcomp.formats._text import Lines, apply_edits, format_number
 from trajcomp.formats.csv_program import time_texts, with_times
-from trajcomp.program import JOINT, Span
+from trajcomp.program_items import JOINT, Span
 from trajcomp.timing.moves import moves_from_program
 from trajcomp.timing.path import TOLERANCE
 from trajcomp.timing.result import Texts

@@ -1,0 +1,163 @@
+"""The items of a robot program: one dataclass per thing a program states.
+
+`Source` (a file's text), `Span` (where a number stands in it), `Target` (a
+position), `Motion` and `Statement` (what the program does, in order), and
+the motion kinds `JOINT`, `LINEAR`, `CIRCULAR`. How they make up a program
+is documented in `trajcomp.program`, which holds `trajcomp.program.Program`.
+"""
+
+import dataclasses
+from collections.abc import Mapping
+
+import numpy as np
+
+JOINT, LINEAR, CIRCULAR = "joint", "linear", "circular"
+
+
+@dataclasses.dataclass(frozen=True)
+class Source:
+    """One file of a program: its name, decoded text (line endings kept) and encoding."""
+
+    name: str
+    text: str
+    encoding: str
+
+
+@dataclasses.dataclass(frozen=True)
+class Span:
+    """Where a number (or other token) stands in a `Source`: ``text[start:end]``."""
+
+    source: int
+    start: int
+    end: int
+    text: str
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class Target:
+    """A Cartesian or joint position stated by a program.
+
+    Attributes
+    ----------
+    name : str
+        Point name (``XP1``, ``p10``, ``P[3]``, ``Waypoint_1_p``); ``""`` for
+        an inline target.
+    line : int
+        Line (1-based) where its numbers are written.
+    pose : ndarray, shape (4, 4), or None
+        T_frame_tcp, mm. None for a joint target.
+    joints : ndarray, shape (6,), or None
+        Joint angles, rad: the position of a joint target, or for a
+        Cartesian target the joints it was taught or computed with (UR
+        ``qnear`` / ``Waypoint_q``, CSV ``j1..j6``, compensation output).
+    config : tuple
+        The language's configuration data: KRL ``(S, T)``, RAPID ``(cf1,
+        cf4, cf6, cfx)``, FANUC ``(flip, elbow, front, t1, t4, t6)``; ``()``
+        where the language has none or the file gives none.
+    tool, frame : str or None
+        Tool and frame names the point data itself states (FANUC UT, UF);
+        otherwise the motions using the target state them.
+    external : ndarray, shape (K,), or None
+        External axes as the program states them (KUKA E1..E6, ABB extax
+        eax_a..eax_f, FANUC E1.. of group 1 then the axes of groups 2..),
+        in the controller's units (mm for linear, deg for rotary axes);
+        NaN for an axis the program marks unused (ABB 9E9). Carried
+        unchanged by compensation and conversion: the arm's base is assumed
+        fixed (see `Program.moving_external_axes`). None: none stated.
+    spans : Mapping[str, Span]
+        The target's numbers in the source text by role (``x``, ``q1``,
+        ``j3``, ``s`` ...), as the format module names them.
+    edited : bool
+        Set by `Program.with_targets`; writers rewrite edited targets only.
+    """
+
+    name: str
+    line: int
+    pose: np.ndarray = None
+    joints: np.ndarray = None
+    config: tuple = ()
+    tool: str = None
+    frame: str = None
+    external: np.ndarray = None
+    spans: Mapping = dataclasses.field(default_factory=dict)
+    edited: bool = False
+
+    @property
+    def is_joint(self):
+        """True for a joint-space target (no pose)."""
+        return self.pose is None
+
+    @property
+    def label(self):
+        """``name`` or ``line N`` for messages and reports."""
+        return self.name or f"line {self.line}"
+
+
+@dataclasses.dataclass(frozen=True)
+class Motion:
+    """One motion instruction.
+
+    Attributes
+    ----------
+    kind : {"joint", "linear", "circular"}
+    target : int or None
+        Index into `Program.targets`; None when the position is computed at
+        run time (the motion is not compensated; ``reason`` says why).
+    via : int or None
+        Via (auxiliary) point of a circular motion.
+    speed : float or None
+        In ``speed_unit``; None when the language default applies.
+    speed_unit : str
+        ``"mm/s"`` (TCP speed), ``"%"`` (of joint maximum), ``"rad/s"``,
+        ``"s"`` (motion time).
+    zone : float or None
+        Blend radius, mm; None for an exact stop (fine).
+    tool, frame : str or None
+        Tool and user frame active for this motion.
+    line : int
+    text : str
+        The instruction as written (one line, stripped).
+    reason : str
+        Why ``target`` is None (``"Offs(...) computed at run time"``); ``""``
+        for a compensated motion.
+    refs : tuple of int
+        Targets the motion names without moving to them as stated (the base
+        point of ``Offs(p10, ...)``, the points of a motion whose tool is set
+        at run time).
+    spans : Mapping[str, Span]
+        Where the motion's speed and time fields stand in the source, by
+        role as the format module names them (``speed``, ``t``, ``end``
+        ...): re-timing writes there (`trajcomp.timing.writeback`).
+    axis_position : bool
+        The motion goes to an axis (joint) position stated outside the
+        program (KUKA ``XHOME`` of $config.dat): joint space, kept as written
+        like a joint target, not a motion left uncompensated.
+    """
+
+    kind: str
+    target: int = None
+    via: int = None
+    speed: float = None
+    speed_unit: str = "mm/s"
+    zone: float = None
+    tool: str = None
+    frame: str = None
+    line: int = 0
+    text: str = ""
+    reason: str = ""
+    refs: tuple = ()
+    spans: Mapping = dataclasses.field(default_factory=dict)
+    axis_position: bool = False
+
+
+@dataclasses.dataclass(frozen=True)
+class Statement:
+    """Anything that is not a motion, kept as written.
+
+    ``refs`` are the targets it names (procedure arguments ``MyProc p10;``,
+    ``PR[1]=P[3]``): used by the program, but not by a motion trajcomp sees.
+    """
+
+    line: int
+    text: str
+    refs: tuple = ()
