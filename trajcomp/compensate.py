@@ -9,8 +9,9 @@ for a composite fitted at several orientations, or the nominal one), f the
 additive error field of the mode (zero, the linear error
 model, the raw-error grid or the residual grid) and c the commanded position,
 at which the field was measured. Because f depends on c, the solution is a
-short fixed-point iteration; the field is smooth, so two or three passes
-converge far below the measurement noise (a target stops once the model
+short fixed-point iteration; the field is smooth, so a first pass aimed
+from where the command is expected lands far below the measurement noise,
+and a second or third pass is seldom needed (a target stops once the model
 predicts it lands within `LANDED`).
 """
 
@@ -146,17 +147,24 @@ def _compensate_rows(model, mode, nominal, arm, field, outside, label, targets, 
     Each fixed-point pass solves the rows not yet landed for their goal minus
     the error term at their last commanded position; a row stops once the
     model predicts it lands within `LANDED` of its goal (or after
-    `ITERATIONS` passes).
+    `ITERATIONS` passes). The first pass takes the error term where the
+    command is expected: the goal moved by the error term there and by the
+    model's arm's offset from the nominal arm at the seed (a few
+    micrometres from where it lands).
     """
     goal = targets[:, :3, 3]
     error_term = functools.partial(_error_term, model, mode, field, outside)
-    offset, flagged = error_term(goal)
-    q, command, residual = np.array(seed), np.empty_like(targets), np.empty(len(targets))
+    q, command, residual = np.array(seed), fk(nominal, seed), np.empty(len(targets))
+    passes = ITERATIONS if mode == "linear" or field is not None else 1
+    offset = np.zeros_like(goal)
+    if passes > 1:  # the error term where the command will land, about: most rows then need one pass
+        expected = goal - error_term(goal)[0] + command[:, :3, 3] - arm.fk(q)[:, :3, 3]
+        offset = error_term(expected)[0]
     todo = np.arange(len(targets))
-    for k in range(ITERATIONS if mode == "linear" or field is not None else 1):
+    for k in range(passes):
         aimed = targets[todo]
         aimed[:, :3, 3] = goal[todo] - offset[todo]
-        solved = _solve(arm.robot, nominal, aimed, q[todo], command[todo] if k else None)
+        solved = _solve(arm.robot, nominal, aimed, q[todo], command[todo])
         if not solved.success.all():
             _of_all(solved, todo, len(targets)).raise_on_failure(label, names)
         q[todo] = arm.commanded_joints(solved.q)
