@@ -36,7 +36,6 @@ from pathlib import Path
 
 import numpy as np
 import yaml
-from scipy.spatial.transform import Rotation
 
 from trajcomp import yaml_text
 from trajcomp.errors import ReadError
@@ -219,6 +218,8 @@ def rotation_to_abc(values, convention, scale):
     """
     if convention == ABC:
         return values * scale
+    from scipy.spatial.transform import Rotation  # here: reading A, B, C files never needs scipy
+
     if convention == "quaternion":
         norm = np.linalg.norm(values, axis=1)
         if np.any(norm < 1e-9):

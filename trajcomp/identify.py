@@ -21,7 +21,6 @@ import dataclasses
 import logging
 
 import numpy as np
-from scipy.linalg import qr
 
 from trajcomp import joint_errors
 from trajcomp.errors import CalibrationError
@@ -77,6 +76,8 @@ def analyse_identifiability(jac, names, rtol=1e-3):
         times the largest; below that its effect is redundant with the kept
         ones (or too weak to estimate) and it is fixed.
     """
+    from scipy.linalg import qr  # here: compensating never needs it
+
     if jac.shape[0] > jac.shape[1]:
         jac = np.linalg.qr(jac, mode="r")  # same pivots and singular values, P x P: cheap to pivot
     _, r, perm = qr(jac, mode="economic", pivoting=True)

@@ -17,8 +17,6 @@ applies the same outside policy as the lattice fields.
 import dataclasses
 
 import numpy as np
-from scipy.interpolate import RBFInterpolator
-from scipy.spatial import cKDTree
 
 from trajcomp.errors import CalibrationError, ModelError
 from trajcomp.stats import as_vectors, kfold_indices
@@ -169,6 +167,8 @@ class KNN(_Scattered):
             raise CalibrationError(f"knn: power must be positive, got {self.power}")
         object.__setattr__(self, "points", p)
         object.__setattr__(self, "values", v)
+        from scipy.spatial import cKDTree  # here: compensating with a grid never needs scipy
+
         object.__setattr__(self, "_tree", cKDTree(p))
 
     def _kernel(self, points):
@@ -191,6 +191,8 @@ def _unit_box(points):
 
 def _rbf_solve(x, values, smoothing, **options):
     """scipy RBFInterpolator of scaled points x (N, 3), CalibrationError when it cannot be solved."""
+    from scipy.interpolate import RBFInterpolator  # here: compensating with a grid never needs scipy
+
     try:
         return RBFInterpolator(x, values, smoothing=smoothing, **options)
     except (ValueError, np.linalg.LinAlgError) as exc:

@@ -7,9 +7,15 @@ Frames follow the ``T_a_b`` reading: pose of frame b expressed in frame a.
 """
 
 import numpy as np
-from scipy.spatial.transform import Rotation
 
 _GIMBAL = 1e-12  # cos B below which A and C are coupled (B = +-90 deg)
+
+
+def _rotation():
+    """scipy's Rotation, imported on first use: A, B, C poses never need scipy (0.3 s of a command's start-up)."""
+    from scipy.spatial.transform import Rotation
+
+    return Rotation
 
 
 def _stack(x, width):
@@ -94,28 +100,28 @@ def matrix_to_pose(mat):
 def quat_to_matrix(quat):
     """Rotation matrices from unit quaternions, scalar first ``[w, x, y, z]`` (N, 4)."""
     arr, single = _stack(quat, 4)
-    mat = Rotation.from_quat(arr, scalar_first=True).as_matrix()
+    mat = _rotation().from_quat(arr, scalar_first=True).as_matrix()
     return mat[0] if single else mat
 
 
 def matrix_to_quat(rot):
     """Unit quaternions ``[w, x, y, z]`` with w >= 0 of rotation matrices (N, 3, 3)."""
     rot = np.asarray(rot, dtype=float)
-    quat = Rotation.from_matrix(rot.reshape(-1, 3, 3)).as_quat(canonical=True, scalar_first=True)
+    quat = _rotation().from_matrix(rot.reshape(-1, 3, 3)).as_quat(canonical=True, scalar_first=True)
     return quat[0] if rot.ndim == 2 else quat
 
 
 def rotvec_to_matrix(rotvec):
     """Rotation matrices from rotation vectors (axis times angle, rad), (N, 3)."""
     arr, single = _stack(rotvec, 3)
-    mat = Rotation.from_rotvec(arr).as_matrix()
+    mat = _rotation().from_rotvec(arr).as_matrix()
     return mat[0] if single else mat
 
 
 def matrix_to_rotvec(rot):
     """Rotation vectors (rad) of rotation matrices (N, 3, 3)."""
     rot = np.asarray(rot, dtype=float)
-    vec = Rotation.from_matrix(rot.reshape(-1, 3, 3)).as_rotvec()
+    vec = _rotation().from_matrix(rot.reshape(-1, 3, 3)).as_rotvec()
     return vec[0] if rot.ndim == 2 else vec
 
 

@@ -24,7 +24,6 @@ motion from rest to rest. Its samples come from `trajcomp.timing.samples`
 import dataclasses
 
 import numpy as np
-from scipy.interpolate import BSpline, make_interp_spline, make_lsq_spline
 
 from trajcomp.kinematics import fk_and_jacobian
 from trajcomp.program_items import JOINT
@@ -202,7 +201,7 @@ def run_path(moves, robot, first, last, tolerance=TOLERANCE, *, part=None):
     inside = (grid >= s_a) & (grid <= s_b)
     grid, jac_grid = grid[inside], jac_grid[inside]
     rate = np.linalg.norm(np.einsum("nij,nj->ni", jac_grid[:, :3], spline(grid, 1)), axis=1)
-    path = JointPath(BSpline(spline.t - s_a, spline.c, spline.k))
+    path = JointPath(type(spline)(spline.t - s_a, spline.c, spline.k))  # a BSpline moved to start at s_a
     lengths = tcp_lengths[a - first : b - first + 1].copy()
     lengths[0] = 0.0
     return RunPath(path, s_waypoints[a - first : b - first + 1] - s_a, grid - s_a, a, b, lengths, rate, deviation)
@@ -355,6 +354,8 @@ def _fit(s, q, jac, tol, acceleration):
     the same path speed (noise, or a blended corner): a clean path is
     taken exactly.
     """
+    from scipy.interpolate import make_interp_spline  # here: a run that does not re-time never needs scipy
+
     n = len(s)
     if n < 4:  # a line or a single corner: interpolate, with points added on the straight pieces
         dense = np.union1d(s, np.linspace(s[0], s[-1], 4))
@@ -380,6 +381,8 @@ def _thinned(s, q, jac, tol):
     those samples are weighted `_PULL` times more, up to `_PULLS` times,
     so the fit stays smooth elsewhere.
     """
+    from scipy.interpolate import make_lsq_spline  # here: a run that does not re-time never needs scipy
+
     n = len(s)
     knots = np.unique(np.r_[np.arange(0, n, KNOT_STRIDE), n - 1])
     weight, pulls = np.ones(n), 0
