@@ -317,3 +317,32 @@ def test_a_program_in_metres_is_refused_with_the_unit_named(tmp_path):
     (tmp_path / "metres.csv").write_text("\n".join(rows) + "\n")
     with pytest.raises(IKError, match=r"metres: every target lies within 10 mm of the robot base origin.*metres\?"):
         planned_joints(formats.read(tmp_path / "metres.csv"), robot)
+
+
+def test_the_chain_check_answers_as_the_nearest_solution_does():
+    """The chain's quick check of a proposal gives the nearest-solution search's answer on every kind of row:
+    small steps, another branch nearer, coinciding branches, invalid branches, steps at the joint limits."""
+    robot = load_robot("ur10")
+    rng = np.random.default_rng(11)
+    m, branch = 5000, 3
+    proposal = np.cumsum(np.vstack([rng.uniform(-1.0, 1.0, 6), rng.normal(0.0, 1e-3, (m, 6))]), axis=0)
+    kind = rng.integers(0, 6, m)
+    big = kind == 1  # a step of up to a whole turn
+    proposal[1:][big] += rng.uniform(-np.pi, np.pi, (big.sum(), 6))
+    at_limit = kind == 2  # a joint on, just inside or just beyond its limit
+    joint = rng.integers(0, 6, at_limit.sum())
+    proposal[1:][at_limit, joint] = robot.q_max[joint] + rng.choice([-1e-7, 0.0, 1e-10, 1e-7], at_limit.sum())
+    q_all = rng.uniform(-np.pi, np.pi, (m, 8, 6))
+    q_all[:, branch] = proposal[1:] - 2.0 * np.pi * rng.integers(-1, 2, (m, 6))  # the proposal is a turn of it
+    valid = rng.random((m, 8)) > 0.2
+    valid[:, branch] |= kind != 3  # kind 3: the proposed branch may be invalid
+    nearer = kind == 4  # another branch nearer the previous row
+    q_all[nearer, 6] = proposal[:-1][nearer] + 1e-6
+    valid[nearer, 6] = True
+    same = kind == 5  # another branch coincides with the proposed one (a singular target)
+    q_all[same, 1] = q_all[same, branch]
+    valid[same, 1] = True
+    nearest = posture._nearest(robot, q_all, valid, proposal[:-1])
+    expected = np.all(np.abs(nearest - proposal[1:]) < 1e-9, axis=1)
+    assert 0.3 < expected.mean() < 0.9  # both answers are asked for
+    np.testing.assert_array_equal(posture._nearest_is_proposed(robot, q_all, valid, branch, proposal), expected)

@@ -355,13 +355,37 @@ def _chained(robot, q_all, valid, anchor):
             break
         branch = _branch_of(q_all[start], first)
         proposal = np.unwrap(np.vstack([first, q_all[start + 1 :, branch]]), axis=0)
-        best = _nearest(robot, q_all[start + 1 :], valid[start + 1 :], proposal[:-1])
-        agree = np.all(np.abs(best - proposal[1:]) < 1e-9, axis=1)
+        agree = _nearest_is_proposed(robot, q_all[start + 1 :], valid[start + 1 :], branch, proposal)
         stop = len(agree) if agree.all() else int(np.argmin(agree))
         q[start : start + 1 + stop] = proposal[: 1 + stop]
         anchor = proposal[stop]
         start += 1 + stop
     return q
+
+
+def _nearest_is_proposed(robot, q_all, valid, branch, proposal):
+    """Mask (M,): is row k + 1 of ``proposal`` (M + 1, 6), in ``branch``, the solution `_nearest` row k of it?
+
+    ``q_all`` (M, 8, 6) and ``valid`` (M, 8) are the solutions of the
+    proposal's rows 1 .. M. Where the proposed row is valid, well inside
+    the limits and a small step, and every other branch is farther even at
+    its nearest turn (a lower bound of its distance, whatever the limits),
+    it is the nearest; the other rows are compared with `_nearest` itself.
+    """
+    reference, proposed = proposal[:-1], proposal[1:]
+    step = proposed - reference
+    turned = q_all - reference[:, None, :]
+    turned -= TURN * np.round(turned / TURN)  # each joint at its nearest turn: |turned| <= half a turn
+    floor = np.where(valid, np.einsum("mbj,mbj->mb", turned, turned), np.inf)
+    floor[:, branch] = np.inf
+    sure = (valid[:, branch] & robot.within_limits(proposed, tol=0.0) & (np.abs(step).max(axis=1) < 0.5 * np.pi)
+            & (floor.min(axis=1) > np.einsum("mj,mj->m", step, step) + 1e-9))
+    agree = sure.copy()
+    doubt = np.flatnonzero(~sure)
+    if doubt.size:
+        best = _nearest(robot, q_all[doubt], valid[doubt], reference[doubt])
+        agree[doubt] = np.all(np.abs(best - proposed[doubt]) < 1e-9, axis=1)
+    return agree
 
 
 def _branch_of(q_branches, q):
