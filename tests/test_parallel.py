@@ -11,7 +11,7 @@ import trajcomp.posture as posture
 from trajcomp import formats
 from trajcomp.compensate import compensate
 from trajcomp.errors import IKError
-from trajcomp.parallel import in_background, map_blocks, usable_cores
+from trajcomp.parallel import in_background, map_blocks, meanwhile, usable_cores
 from trajcomp.posture import planned_joints
 from trajcomp.robot import load_robot
 from test_compensate import cell, targets_in_cube  # noqa: F401 (fixture)
@@ -25,6 +25,34 @@ def test_blocks_come_back_in_order_with_the_serial_values():
     for workers in (2, 3):
         assert list(map_blocks(lambda k: (k, data[k].sum()), 50, workers)) == serial
     assert [k for k, _ in serial] == list(range(50))
+
+
+def test_work_meanwhile_runs_here_once_while_the_workers_compute():
+    import time
+
+    busy = []
+
+    def work():
+        start = time.monotonic()
+        time.sleep(1.0)
+        busy.append((os.getpid(), start, time.monotonic()))
+
+    with meanwhile(work):
+        results = list(map_blocks(lambda k: (k, os.getpid(), time.sleep(0.05) or time.monotonic()), 6, 2))
+        assert list(map_blocks(lambda k: k, 3, 2)) == [0, 1, 2]  # a second pool: the work is done
+    ((pid, start, end),) = busy
+    assert pid == os.getpid() and [k for k, *_ in results] == list(range(6))
+    assert all(worker != pid for _, worker, _ in results)
+    assert all(start < finished < end for *_, finished in results)  # every block computed while this one worked
+
+
+def test_work_meanwhile_is_dropped_where_no_pool_starts():
+    ran = []
+    with meanwhile(lambda: ran.append(1)):
+        assert list(map_blocks(lambda k: k, 3, 1)) == [0, 1, 2]  # one process: the blocks run here, in turn
+        assert list(map_blocks(lambda k: k, 1, 2)) == [0]  # one block: no pool either
+    assert list(map_blocks(lambda k: k, 3, 2)) == [0, 1, 2]  # after the block
+    assert ran == []
 
 
 def test_blocks_run_in_other_processes_only_when_asked():

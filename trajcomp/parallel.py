@@ -9,14 +9,18 @@ result back, in block order, as it is needed, so only a few results are
 held at a time. Where ``fork`` is not available, or the caller is itself a
 worker of a pool (a batch's file worker, a Dask worker), the blocks run one
 after the other in this process: the results are the same either way.
+`meanwhile` gives this process work of its own while a pool's workers
+compute.
 """
 
+import contextlib
 import multiprocessing
 import os
 import signal
 
 _TASK = None  # the function of the pool being started, inherited by its forked workers
 _LOOKAHEAD = 2  # blocks a worker may compute ahead of the consumer, each
+_MEANWHILE = []  # work for this process while the next pool's workers compute (`meanwhile`)
 
 
 def usable_cores():
@@ -57,16 +61,39 @@ def map_blocks(function, count, workers=1):
     finally:
         _TASK = None
     try:
+        ahead = count if _MEANWHILE else workers * _LOOKAHEAD  # every block under way while this process is busy
         pending = []
         for k in range(count):
             pending.append(pool.apply_async(_run, (k,)))
-            if len(pending) > workers * _LOOKAHEAD:
+            if len(pending) > ahead:
                 yield pending.pop(0).get()
+        while _MEANWHILE:
+            _MEANWHILE.pop(0)()
         for result in pending:
             yield result.get()
     finally:  # also when a block failed or the caller stopped: the few blocks under way end, then the workers
         pool.close()  # (Pool.terminate can hang on its task thread; at most workers * _LOOKAHEAD blocks wait)
         pool.join()
+
+
+@contextlib.contextmanager
+def meanwhile(function):
+    """Within the block, have ``function()`` run in this process while the workers of a `map_blocks` pool compute.
+
+    For work this process must do anyway that would otherwise hold up the
+    run with a core idle, e.g. importing what a later stage needs (scipy,
+    0.3 s) while the workers of an earlier one compute; the processes
+    forked later inherit it. That pool's blocks are all handed out first,
+    so that its workers go on meanwhile. Where no pool starts in the block
+    (one process, a short program) the work is not done here: what it
+    prepares is then done where it is needed (an import on first use).
+    """
+    _MEANWHILE.append(function)
+    try:
+        yield
+    finally:
+        if function in _MEANWHILE:
+            _MEANWHILE.remove(function)
 
 
 def in_background(function, workers=1):

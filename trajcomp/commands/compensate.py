@@ -1,5 +1,6 @@
 """``trajcomp compensate``: correct robot programs with a compensation model, one file or a batch."""
 
+import contextlib
 import dataclasses
 import functools
 import glob
@@ -18,7 +19,7 @@ from trajcomp.compensate import program_corrector
 from trajcomp.errors import TrajcompError
 from trajcomp.memory import release
 from trajcomp.model import MODES, load_model
-from trajcomp.parallel import usable_cores
+from trajcomp.parallel import meanwhile, usable_cores
 from trajcomp.postprocess import MAX_CORRECTION, compensate_program
 from trajcomp.posture import MAX_JOINT_CHANGE
 from trajcomp.progress import Stages, progress
@@ -121,11 +122,12 @@ class CompensateJob:
             correct = program_corrector(model, mode=self.mode, outside=self.outside, label=str(path),
                                         workers=self.workers)
             _next(stages)
-            corrected, report = compensate_program(
-                program, correct, model.nominal, tools=self.tools, frames=self.frames,
-                joint_targets=self.joint_targets, max_joint_change=self.max_joint_change,
-                max_correction=self.max_correction, workers=self.workers,
-            )
+            with meanwhile(_import_timing) if self.retime != "none" else contextlib.nullcontext():
+                corrected, report = compensate_program(
+                    program, correct, model.nominal, tools=self.tools, frames=self.frames,
+                    joint_targets=self.joint_targets, max_joint_change=self.max_joint_change,
+                    max_correction=self.max_correction, workers=self.workers,
+                )
             _next(stages)
             timing, timed, before = [], None, None
             if self.retime != "none":
@@ -173,6 +175,11 @@ class CompensateJob:
                 "max_joint_change_deg": float(np.degrees(self.max_joint_change)),
                 "max_correction_mm": self.max_correction, "retime": self.retime,
                 "path_tolerance_mm": self.path_tolerance, **poses}
+
+
+def _import_timing():
+    """Import what re-timing needs (scipy's splines, 0.3 s) while the workers plan and compensate."""
+    import scipy.interpolate  # noqa: F401
 
 
 def _next(stages):
