@@ -157,7 +157,7 @@ def _compensate_rows(model, mode, nominal, arm, field, outside, label, targets, 
     q, command, residual = np.array(seed), fk(nominal, seed), np.empty(len(targets))
     passes = ITERATIONS if mode == "linear" or field is not None else 1
     offset = np.zeros_like(goal)
-    if passes > 1:  # the error term where the command will land, about: most rows then need one pass
+    if passes > 1:  # the error term about where the command lands: most rows then land in one pass
         expected = goal - error_term(goal)[0] + command[:, :3, 3] - arm.fk(q)[:, :3, 3]
         offset = error_term(expected)[0]
     todo = np.arange(len(targets))
