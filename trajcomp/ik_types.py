@@ -26,7 +26,7 @@ class Configuration:
     """One of the eight arm configurations (branches) of a closed-form arm.
 
     Defined geometrically from the DH frames, so the flags mean the same for
-    every family (`configuration_of` computes them from joint angles):
+    every family (`trajcomp.ik.configuration_of` computes them from joint angles):
 
     shoulder : {"front", "back"}
         "back" when the wrist point (origin of DH frame 5: the wrist centre
