@@ -303,8 +303,10 @@ def _chain(program, robot, index, q, branches, source, workers=1):
     chained again here.
     """
     runs = _runs(program, robot, index, q, source)
-    blocks = [(rows[begin : begin + BLOCK], guess) for rows, anchor_of in runs for guess in [np.array(anchor_of()[0])]
-              for begin in range(0, len(rows), BLOCK)]
+    blocks = []  # (rows, the guess of the joints before them)
+    for rows, anchor_of in runs:
+        guess = np.array(anchor_of()[0])  # NaN where an earlier run solves the target before the run
+        blocks += [(rows[begin : begin + BLOCK], guess) for begin in range(0, len(rows), BLOCK)]
     guessed = map_blocks(lambda k: _guessed_chain(robot, branches, *blocks[k]), len(blocks), workers)
     with contextlib.closing(guessed) as guesses:
         for rows, anchor_of in runs:
