@@ -10,7 +10,7 @@ from trajcomp.compensate import compensate
 from trajcomp.errors import ModelError
 from trajcomp.kinematics import fk
 from trajcomp.measurements import Measurements
-from trajcomp.model import FORMAT, load_model, save_model
+from trajcomp.model_file import FORMAT, load_model, save_model
 from trajcomp.plan import default_orientation, plan_grid
 from trajcomp.robot import load_robot
 from trajcomp.simulate import VirtualRobot

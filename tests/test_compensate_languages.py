@@ -38,7 +38,7 @@ from trajcomp.configuration import configuration_for
 from trajcomp.ik import configuration_of, ik, ik_all
 from trajcomp.kinematics import fk
 from trajcomp.measurements import Measurements
-from trajcomp.model import save_model
+from trajcomp.model_file import save_model
 from trajcomp.orientations import spread_orientations
 from trajcomp.plan import default_orientation, plan_grid
 from trajcomp.robot import load_robot

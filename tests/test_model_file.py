@@ -7,7 +7,7 @@ import yaml
 from trajcomp.calibrate import calibrate
 from trajcomp.errors import ModelError, WriteError
 from trajcomp.measurements import Measurements
-from trajcomp.model import load_model, save_model, sidecar_path
+from trajcomp.model_file import load_model, save_model, sidecar_path
 from trajcomp.plan import plan_grid
 from trajcomp.robot import load_robot
 from trajcomp.simulate import VirtualRobot

@@ -269,7 +269,7 @@ def _flipped_weld(tmp_path):
 
 def test_a_posture_the_calibration_never_measured_fails_the_verdict(tmp_path, kuka_model, capsys):
     """The KR6 was measured wrist-positive only: a wrist-flipped program is outside the calibrated region."""
-    from trajcomp.model import load_model
+    from trajcomp.model_file import load_model
 
     model = load_model(kuka_model)
     assert len(model.postures) == 1
@@ -283,7 +283,7 @@ def test_a_posture_the_calibration_never_measured_fails_the_verdict(tmp_path, ku
 
 
 def test_the_measured_postures_are_kept_in_the_model_file(tmp_path, kuka_model):
-    from trajcomp.model import load_model, save_model
+    from trajcomp.model_file import load_model, save_model
 
     model = load_model(kuka_model)
     save_model(tmp_path / "again.yaml", model)

@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 from trajcomp.kinematics import fk
-from trajcomp.model import load_model
+from trajcomp.model_file import load_model
 from trajcomp.postprocess import ProgramReport
 from trajcomp.report import Criteria, compliance_report
 from trajcomp.report.measures import joint_jumps, limit_distances, singularity_distances

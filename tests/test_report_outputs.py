@@ -14,7 +14,7 @@ import pytest
 
 from trajcomp.cli import main
 from trajcomp.measurements import Measurements
-from trajcomp.model import load_model
+from trajcomp.model_file import load_model
 from trajcomp.report import Report, calibration_report, schema
 from trajcomp.report.calibration import iso9283, trends
 

@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 from trajcomp.kinematics import fk
-from trajcomp.model import load_model
+from trajcomp.model_file import load_model
 from trajcomp.postprocess import ProgramReport
 from trajcomp.report import compliance_report, schema, summary_lines
 from trajcomp.report import plots, targets

@@ -168,7 +168,7 @@ def test_the_compensations_planned_joints_time_the_original_as_its_posture_plan_
     from trajcomp.commands import retime as retime_command
     from trajcomp.commands.retime import retime_compensated
     from trajcomp.compensate import program_corrector
-    from trajcomp.model import load_model
+    from trajcomp.model_file import load_model
     from trajcomp.postprocess import compensate_program
 
     model = load_model(kuka_model)

@@ -11,7 +11,7 @@ import numpy as np
 
 from trajcomp.calibrate import calibrate
 from trajcomp.measurements import Measurements
-from trajcomp.model import save_model
+from trajcomp.model_file import save_model
 from trajcomp.plan import plan_grid
 from trajcomp.robot import load_robot
 from trajcomp.simulate import VirtualRobot

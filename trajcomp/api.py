@@ -39,7 +39,8 @@ import numpy as np
 from trajcomp import formats
 from trajcomp.compensate import program_corrector
 from trajcomp.errors import TrajcompError
-from trajcomp.model import CompensationModel, load_model
+from trajcomp.model import CompensationModel
+from trajcomp.model_file import load_model
 from trajcomp.postprocess import MAX_CORRECTION, compensate_program
 from trajcomp.posture import MAX_JOINT_CHANGE
 from trajcomp.program import Program

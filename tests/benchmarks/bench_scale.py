@@ -31,7 +31,7 @@ import numpy as np
 from trajcomp.cli import main
 from trajcomp.compensate import compensate
 from trajcomp.ik import ik
-from trajcomp.model import load_model
+from trajcomp.model_file import load_model
 from trajcomp.parallel import usable_cores
 from trajcomp.plan import default_orientation
 from trajcomp.transforms import abc_to_matrix

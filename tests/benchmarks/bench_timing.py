@@ -46,7 +46,7 @@ from trajcomp.commands.retime import planned, retime_compensated  # noqa: E402
 from trajcomp.compensate import program_corrector  # noqa: E402
 from trajcomp.ik import ik  # noqa: E402
 from trajcomp.kinematics import fk  # noqa: E402
-from trajcomp.model import load_model  # noqa: E402
+from trajcomp.model_file import load_model  # noqa: E402
 from trajcomp.postprocess import compensate_program  # noqa: E402
 from trajcomp.posture import planned_joints  # noqa: E402
 from trajcomp.robot import load_robot  # noqa: E402

@@ -19,7 +19,7 @@ from trajcomp.commands._args import (
 from trajcomp.commands._report import add_report_options, emit
 from trajcomp.identify import LOSSES, ORIENTATION_WEIGHT
 from trajcomp.measurements import read_measurements
-from trajcomp.model import save_model
+from trajcomp.model_file import save_model
 from trajcomp.parameters import is_angle
 from trajcomp.stats import ErrorStats, format_table
 from trajcomp.transforms import matrix_to_pose

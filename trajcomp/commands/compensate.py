@@ -18,7 +18,8 @@ from trajcomp.commands.retime import LIMIT_MESSAGE, METHOD_HELP, add_tolerance_o
 from trajcomp.compensate import program_corrector
 from trajcomp.errors import TrajcompError
 from trajcomp.memory import release
-from trajcomp.model import MODES, load_model
+from trajcomp.model import MODES
+from trajcomp.model_file import load_model
 from trajcomp.parallel import meanwhile, usable_cores
 from trajcomp.postprocess import MAX_CORRECTION, compensate_program
 from trajcomp.posture import MAX_JOINT_CHANGE

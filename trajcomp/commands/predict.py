@@ -6,7 +6,8 @@ from trajcomp.calibrate import commanded
 from trajcomp.commands._args import command_parser, info, layout_of
 from trajcomp.commands.validate import add_tracker_options, tracker_pose
 from trajcomp.measurements import read_measurements, write_measurements
-from trajcomp.model import MODES, load_model
+from trajcomp.model import MODES
+from trajcomp.model_file import load_model
 
 
 def add_parser(sub):

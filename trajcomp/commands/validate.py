@@ -11,7 +11,7 @@ from trajcomp.commands._report import add_report_options, criteria_of, emit
 from trajcomp.commands.calibrate import print_stats
 from trajcomp.errors import ReadError
 from trajcomp.measurements import read_measurements
-from trajcomp.model import load_model
+from trajcomp.model_file import load_model
 from trajcomp.report import file_entry, validation_report
 from trajcomp.transforms import abc_to_matrix, invert, rotation_angle_between
 

@@ -1,0 +1,272 @@
+"""The compensation model's file (YAML, ``format: trajcomp-model/2``): `save_model` and `load_model`.
+
+User units (mm, deg) in the file; a grid with many nodes is stored in a
+sidecar ``<model file name>.npz`` named in the YAML, written together with it.
+A model file holds a `trajcomp.model.CompensationModel`: its nominal robot
+(checked against the DH table on reading), the identified parameters, the
+registration, the linear correction and the grids, with the report.
+"""
+
+import datetime
+import io
+import math
+import zipfile
+from pathlib import Path
+
+import numpy as np
+import yaml
+
+from trajcomp import __version__, yaml_text
+from trajcomp.atomic import write_files_atomic
+from trajcomp.errors import ModelError
+from trajcomp.grid import field_from_dict
+from trajcomp.ik import Configuration
+from trajcomp.joint_errors import KIND as JOINT_KIND
+from trajcomp.joint_errors import JointResidual
+from trajcomp.linear import LinearCorrection
+from trajcomp.model import CompensationModel
+from trajcomp.parameters import is_angle
+from trajcomp.robot import load_robot
+from trajcomp.transforms import abc_to_matrix, matrix_to_abc, matrix_to_pose, pose_to_matrix
+
+FORMAT = "trajcomp-model/2"
+SUFFIXES = (".yaml", ".yml")
+_SIDECAR_NODES = 1000  # grids with more nodes go to a sidecar .npz
+
+
+def _pose_user(mat):
+    pose = matrix_to_pose(mat)
+    pose[3:] = np.degrees(pose[3:])
+    return [round(float(v), 9) for v in pose]
+
+
+def _pose_internal(values, where):
+    try:
+        pose = np.array(values, dtype=float).reshape(6)
+    except (TypeError, ValueError):
+        raise ModelError(f"{where}: expected [x, y, z, a, b, c], got {values!r}") from None
+    if not np.isfinite(pose).all():
+        raise ModelError(f"{where}: not finite: {pose.tolist()}")
+    pose[3:] = np.radians(pose[3:])
+    return pose_to_matrix(pose)
+
+
+def sidecar_path(path):
+    """The grid sidecar of model file ``path``: its full name plus ``.npz`` (``model.yaml.npz``).
+
+    Model files end in .yaml or .yml, sidecars in .npz: a sidecar can be
+    neither a model file nor another model's sidecar.
+    """
+    path = Path(path)
+    return path.with_name(path.name + ".npz")
+
+
+def _check_model_path(path):
+    if Path(path).suffix.lower() not in SUFFIXES:
+        raise ModelError(f"{path}: a model file name ends in {' or '.join(SUFFIXES)}")
+
+
+def _robot_fingerprint(robot):
+    std = robot.as_standard()
+    parts = [std.a, np.degrees(std.alpha), std.d, np.degrees(std.theta_offset), np.degrees(std.beta)]
+    return [round(float(v), 6) for part in parts for v in part]
+
+
+def save_model(path, model):
+    """Write a model file and, if its grids are large, its sidecar: both or neither.
+
+    Parameters
+    ----------
+    path : str or Path
+        The model file (``.yaml`` or ``.yml``); a sidecar is written beside
+        it as `sidecar_path`.
+
+    Raises
+    ------
+    ModelError
+        A file name not ending in .yaml or .yml.
+    WriteError
+        A file cannot be written (nothing on disk has changed).
+    """
+    _check_model_path(path)
+    path = Path(path)
+    arrays = {}
+    doc = {
+        "format": FORMAT,
+        "trajcomp_version": __version__,
+        "created": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
+        "robot": {
+            "name": model.nominal.name,
+            "ref": model.robot_ref,
+            "dh_fingerprint": _robot_fingerprint(model.nominal),
+            "tool": _pose_user(model.nominal.T_flange_tool),
+        },
+        "method": model.method,
+        "tracker_to_base": _pose_user(model.T_tracker_base),
+        "measured_frame_in_tcp": [round(float(v), 9) for v in np.degrees(matrix_to_abc(model.R_tcp_target))],
+        "places_other_tools": {"value": bool(model.places_other_tools), "reason": model.other_tools_reason},
+        "postures": [str(Configuration.from_index(b)) for b in model.postures],
+        "parameters": [
+            {
+                "name": name,
+                "delta": float(math.degrees(d) if is_angle(name) else d),
+                "sigma": float(math.degrees(s) if is_angle(name) else s),
+                "unit": "deg" if is_angle(name) else "mm",
+            }
+            for name, d, s in zip(model.dh_names, model.dh_delta, model.dh_sigma)
+        ],
+        "fixed_parameters": dict(model.dh_fixed),
+        "linear": None if model.linear is None else model.linear.to_dict(),
+    }
+    for key in ("grid", "residual"):
+        field = getattr(model, key)
+        if field is None:
+            doc[key] = None
+            continue
+        entry = field.to_dict()
+        big = {k: v for k, v in entry.items() if isinstance(v, list) and np.size(v) > 3 * _SIDECAR_NODES}
+        for name, value in big.items():
+            arrays[f"{key}.{name}"] = np.asarray(value)
+            entry[name] = {"sidecar": f"{key}.{name}"}
+        doc[key] = entry
+    doc["report"] = model.report
+    files = {}
+    if arrays:
+        doc["sidecar"] = sidecar_path(path).name
+        buffer = io.BytesIO()
+        np.savez_compressed(buffer, **arrays)
+        files[sidecar_path(path)] = buffer.getvalue()
+    files[path] = yaml.safe_dump(_plain(doc), sort_keys=False, width=100).encode("utf-8")
+    write_files_atomic(files)
+
+
+def _posture_index(text, path):
+    """Configuration index of a posture written ``shoulder/elbow/wrist`` (``front/up/positive``)."""
+    parts = str(text).split("/")
+    if len(parts) != 3:
+        raise ModelError(f"{path}: field postures: expected shoulder/elbow/wrist, got {text!r}")
+    return Configuration(*parts).index
+
+
+def _plain(value):
+    """Numpy scalars and arrays turned into plain Python for YAML."""
+    if isinstance(value, dict):
+        return {str(k): _plain(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_plain(v) for v in value]
+    if isinstance(value, np.ndarray):
+        return _plain(value.tolist())
+    if isinstance(value, np.generic):
+        return value.item()
+    return value
+
+
+def load_model(path, robot=None):
+    """Read a model file.
+
+    Parameters
+    ----------
+    path : str or Path
+    robot : str, optional
+        The robot the caller expects; a model of another robot is an error.
+
+    Raises
+    ------
+    ModelError
+        Not a trajcomp model, another format version, another robot, a
+        nominal robot whose DH table changed since calibration, a missing or
+        unsafe sidecar, a non-finite number or a malformed field (named).
+    """
+    path = Path(path)
+    try:
+        doc = yaml_text.load(path.read_text(encoding="utf-8"))
+    except (OSError, UnicodeError) as exc:
+        raise ModelError(f"{path}: cannot read: {exc}") from exc
+    except yaml.YAMLError as exc:
+        raise ModelError(f"{path}: not valid YAML: {exc}") from exc
+    if not isinstance(doc, dict) or "format" not in doc:
+        raise ModelError(f"{path}: not a trajcomp model file (no 'format' key)")
+    if doc["format"] != FORMAT:
+        raise ModelError(
+            f"{path}: format {doc['format']!r} is not supported by trajcomp {__version__} "
+            f"(expected {FORMAT}); re-run calibrate with this version"
+        )
+    try:
+        info = doc["robot"]
+        if robot is not None and robot not in (info["name"], info["ref"]):
+            raise ModelError(f"{path}: model is for robot {info['name']!r}, not {robot!r}")
+        nominal = load_robot(info["ref"])
+        if _robot_fingerprint(nominal) != info["dh_fingerprint"]:
+            raise ModelError(f"{path}: the nominal DH table of robot {info['ref']!r} differs from the one calibrated")
+        nominal = nominal.replace(T_flange_tool=_pose_internal(info["tool"], f"{path}: field robot.tool"))
+        arrays = _read_sidecar(path, doc.get("sidecar"))
+        fields = {}
+        for key in ("grid", "residual"):
+            entry = doc.get(key)
+            if entry is not None:
+                entry = {
+                    k: arrays[v["sidecar"]] if isinstance(v, dict) and "sidecar" in v else v
+                    for k, v in entry.items()
+                }
+                joint = entry.get("kind") == JOINT_KIND
+                fields[key] = JointResidual.from_dict(entry) if joint else field_from_dict(entry)
+        params = doc.get("parameters") or []
+        names = [p["name"] for p in params]
+        scale = np.array([math.pi / 180.0 if is_angle(n) else 1.0 for n in names])
+        delta = _finite([p["delta"] for p in params], f"{path}: field parameters.delta") * scale
+        sigma = _finite([p["sigma"] for p in params], f"{path}: field parameters.sigma") * scale
+        target = _finite(doc["measured_frame_in_tcp"], f"{path}: field measured_frame_in_tcp")
+        tools = doc["places_other_tools"]
+        model = CompensationModel(
+            nominal=nominal,
+            robot_ref=info["ref"],
+            method=doc["method"],
+            T_tracker_base=_pose_internal(doc["tracker_to_base"], f"{path}: field tracker_to_base"),
+            dh_names=names,
+            dh_delta=delta,
+            dh_sigma=sigma,
+            dh_fixed=dict(doc.get("fixed_parameters") or {}),
+            linear=None if doc.get("linear") is None else LinearCorrection.from_dict(doc["linear"]),
+            grid=fields.get("grid"),
+            residual=fields.get("residual"),
+            report=doc.get("report") or {},
+            R_tcp_target=abc_to_matrix(np.radians(target.reshape(3))),
+            places_other_tools=bool(tools["value"]),
+            other_tools_reason=str(tools["reason"]),
+            postures=tuple(_posture_index(text, path) for text in doc.get("postures") or ()),
+        )
+    except ModelError as exc:
+        raise ModelError(str(exc) if str(exc).startswith(str(path)) else f"{path}: {exc}") from None
+    except (KeyError, TypeError, ValueError, AttributeError) as exc:
+        raise ModelError(f"{path}: malformed model field: {exc!r}") from exc
+    model.check_mode(model.method)
+    return model
+
+
+def _finite(values, where):
+    """Float array of ``values``; ModelError naming ``where`` if one is not a finite number."""
+    try:
+        array = np.array(values, dtype=float)
+    except (TypeError, ValueError):
+        raise ModelError(f"{where}: expected numbers, got {values!r}") from None
+    if not np.isfinite(array).all():
+        raise ModelError(f"{where}: not finite: {array.tolist()}")
+    return array
+
+
+def _read_sidecar(path, name):
+    """Arrays of a model's sidecar ``name`` (a plain file name beside the model), ``{}`` without one."""
+    if not name:
+        return {}
+    if not isinstance(name, str) or Path(name).name != name or name in (".", "..") or name == path.name:
+        raise ModelError(f"{path}: field sidecar: {name!r} must be the name of a file beside the model, not the model")
+    sidecar = path.parent / name
+    try:
+        with np.load(sidecar, allow_pickle=False) as data:
+            arrays = {k: data[k] for k in data.files}
+    except (OSError, ValueError, EOFError, zipfile.BadZipFile) as exc:
+        raise ModelError(f"{path}: sidecar {sidecar} cannot be read: {exc}") from exc
+    for key, array in arrays.items():
+        if not np.issubdtype(array.dtype, np.number) or not np.isfinite(array).all():
+            raise ModelError(f"{path}: sidecar {sidecar}: array {key} holds values that are not finite numbers")
+    return arrays
