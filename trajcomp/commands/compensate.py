@@ -4,6 +4,7 @@ import contextlib
 import dataclasses
 import functools
 import glob
+import importlib
 import sys
 from pathlib import Path
 
@@ -180,7 +181,7 @@ class CompensateJob:
 
 def _import_timing():
     """Import what re-timing needs (scipy's splines, 0.3 s) while the workers plan and compensate."""
-    import scipy.interpolate  # noqa: F401
+    importlib.import_module("scipy.interpolate")
 
 
 def _next(stages):
