@@ -230,3 +230,32 @@ def test_the_csv_settings_are_the_t_cells_written_and_made_on_demand(tmp_path, m
         assert s.speed == f"{cells[s.first + 1]} .. {cells[s.last]} ({s.last - s.first} motions)"
     with pytest.raises(IndexError):
         segments[0].settings[60]
+
+
+def test_spans_and_lines_move_with_the_edits_as_the_rule_says():
+    """Offsets after text edits, vectorized, against the rule itself: a position moves by every edit ending at or
+    before it; a span's end not by an insertion exactly there (the insertion goes after the span)."""
+    from trajcomp.timing.writeback import _Shift
+
+    rng = np.random.default_rng(4)
+    text = "".join(rng.choice(list("ab \n"), 3000))
+    cuts = np.sort(rng.choice(np.arange(1, len(text)), 400, replace=False))
+    edits = []
+    for a, b in zip(cuts[0::2].tolist(), cuts[1::2].tolist()):
+        edits.append((a, a, "X" * int(rng.integers(0, 4))) if rng.random() < 0.4 else
+                     (a, min(b, a + int(rng.integers(1, 6))), "\n" * int(rng.integers(0, 3)) + "YZ"))
+    edits.sort()
+    shift = _Shift(text, edits)
+    positions = np.r_[cuts, rng.integers(0, len(text) + 1, 500)]
+
+    def moved(p, end):
+        return p + sum(len(t) - (b - a) for a, b, t in edits if b <= p and not (end and a == b == p))
+
+    np.testing.assert_array_equal(shift.starts(positions), [moved(p, False) for p in positions.tolist()])
+    np.testing.assert_array_equal(shift.ends(positions), [moved(p, True) for p in positions.tolist()])
+    old_starts = [0] + [k + 1 for k, c in enumerate(text) if c == "\n"]
+    new_text = shift.new
+    numbers = np.arange(0, len(old_starts) + 3)
+    expected = [n if not 1 <= n <= len(old_starts) else new_text.count("\n", 0, moved(old_starts[n - 1], False)) + 1
+                for n in numbers.tolist()]
+    np.testing.assert_array_equal(shift.lines(numbers), expected)
