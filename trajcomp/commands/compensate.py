@@ -18,7 +18,7 @@ from trajcomp.commands.retime import CHOICES as RETIME_CHOICES
 from trajcomp.commands.retime import LIMIT_MESSAGE, METHOD_HELP, add_tolerance_option, retime_compensated, timing_lines
 from trajcomp.compensate import program_corrector
 from trajcomp.errors import TrajcompError
-from trajcomp.memory import release
+from trajcomp.memory import end_stage, kept_apart
 from trajcomp.model import MODES
 from trajcomp.model_file import load_model
 from trajcomp.parallel import meanwhile, usable_cores
@@ -116,7 +116,7 @@ class CompensateJob:
         The report goes to ``report`` or, with ``report_folder``, to
         ``report / <output name>`` (``.html`` and ``.json``).
         """
-        with Stages(self.STAGES, desc=Path(path).name, enabled=self.show_stages) as stages:
+        with Stages(self.STAGES, desc=Path(path).name, enabled=self.show_stages) as stages, kept_apart():
             model = _model(self.model)
             program = formats.read(path, workers=self.workers)
             sources = list(dict.fromkeys(formats.input_paths(path, program)))
@@ -185,8 +185,8 @@ def _import_timing():
 
 
 def _next(stages):
-    """End a stage: the memory it freed back to the operating system (`trajcomp.memory`), the bar one step on."""
-    release()
+    """End a stage (`trajcomp.memory.end_stage`), the bar one step on."""
+    end_stage()
     stages.advance()
 
 

@@ -23,6 +23,7 @@ from pathlib import Path
 
 from trajcomp.atomic import write_files_atomic
 from trajcomp.errors import ReadError, TrajcompError, WriteError
+from trajcomp.memory import collection_paused
 
 ENTRY_POINT_GROUP = "trajcomp.formats"
 
@@ -187,7 +188,8 @@ def read(path, format=None, *, workers=1):
     fmt = find_format(path, format)
     if not path.is_file():
         raise ReadError(f"{path}: no such file")
-    return fmt.read(path, workers)
+    with collection_paused():  # a program is made of many objects without cycles (`trajcomp.memory`)
+        return fmt.read(path, workers)
 
 
 def input_paths(path, program):
@@ -229,13 +231,14 @@ def write(path, program, format=None, *, protect=(), workers=1):
 
     path = Path(path)
     check_writable(program)
-    files = find_format(path, format).write(program, path, workers)
-    kept = {p.resolve() for p in map(Path, protect) if p.exists()}
-    clash = [str(out) for out in files if Path(out).resolve() in kept]
-    if clash:
-        raise WriteError(
-            f"{', '.join(clash)}: would overwrite the input program; write to another file (-o) "
-            "or give --in-place to replace it"
-        )
-    write_files_atomic(files)
+    with collection_paused():  # the texts are made of many objects without cycles (`trajcomp.memory`)
+        files = find_format(path, format).write(program, path, workers)
+        kept = {p.resolve() for p in map(Path, protect) if p.exists()}
+        clash = [str(out) for out in files if Path(out).resolve() in kept]
+        if clash:
+            raise WriteError(
+                f"{', '.join(clash)}: would overwrite the input program; write to another file (-o) "
+                "or give --in-place to replace it"
+            )
+        write_files_atomic(files)
     return list(files)

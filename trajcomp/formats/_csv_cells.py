@@ -1,10 +1,7 @@
 """What the CSV reader and writer share (see `trajcomp.formats.csv_program`): the column names, the block size, and
 the helpers that split a text into lines and a line into cells, give a cell's value, tell a statement line from a
-target row, read a column of number cells at once (`_numbers`, `_canonical`) and pause garbage collection while
-millions of rows are split."""
+target row and read a column of number cells at once (`_numbers`, `_canonical`)."""
 
-import contextlib
-import gc
 import re
 
 import numpy as np
@@ -48,19 +45,6 @@ def _value(cell):
 def _is_statement(line):
     stripped = line.lstrip()
     return not stripped or stripped[0] == "#"
-
-
-@contextlib.contextmanager
-def _collection_paused():
-    """Cyclic garbage collection paused while rows are split into millions of short-lived lists and tuples
-    (they hold no cycles, yet their count triggers full collections: a third of the time of reading)."""
-    enabled = gc.isenabled()
-    gc.disable()
-    try:
-        yield
-    finally:
-        if enabled:
-            gc.enable()
 
 
 def _numbers(cells):

@@ -12,7 +12,6 @@ from trajcomp.formats._csv_cells import (
     JOINTS,
     POSE,
     _cells,
-    _collection_paused,
     _is_statement,
     _numbers,
     _split,
@@ -115,12 +114,11 @@ def _parse_rows(name, header, lines, rows, workers):
         block = rows[firsts[k] : firsts[k] + BLOCK]
         return _parse_block(name, header, [lines[m - 1] for m in block.tolist()], block)
 
-    with _collection_paused():
-        for k, columns in zip(firsts, map_blocks(parsed, len(firsts), workers)):
-            part = slice(k, k + BLOCK)
-            pose[part], kind[part], speed[part], zone[part] = columns[0], *columns[2:]
-            if joints is not None:
-                joints[part] = columns[1]
+    for k, columns in zip(firsts, map_blocks(parsed, len(firsts), workers)):
+        part = slice(k, k + BLOCK)
+        pose[part], kind[part], speed[part], zone[part] = columns[0], *columns[2:]
+        if joints is not None:
+            joints[part] = columns[1]
     if joints is None:
         joints = np.broadcast_to(np.full(6, np.nan), (n, 6))
     return pose, joints, kind, speed, zone

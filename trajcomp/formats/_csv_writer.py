@@ -12,7 +12,6 @@ from trajcomp.formats._csv_cells import (
     POSE,
     _canonical,
     _cells,
-    _collection_paused,
     _is_statement,
     _numbers,
     _plain,
@@ -72,8 +71,7 @@ def _patched_pieces(program, source, workers=1):
                                  None if times is None else time_texts(times[rows]))
         return encode_text(source if k == 0 else rest, patched)
 
-    with _collection_paused():
-        yield from map_blocks(piece, len(spans), workers)
+    yield from map_blocks(piece, len(spans), workers)
 
 
 def _header_in(text, spans):

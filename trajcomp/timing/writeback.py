@@ -28,6 +28,7 @@ import numpy as np
 from trajcomp.errors import TimingError
 from trajcomp.formats._text import Lines, apply_edits, format_number
 from trajcomp.formats.csv_program import time_texts, with_times
+from trajcomp.memory import collection_paused
 from trajcomp.program_items import JOINT, Span
 from trajcomp.timing.moves import moves_from_program
 from trajcomp.timing.path import TOLERANCE
@@ -246,7 +247,8 @@ def edit_sources(program, edits):
     -------
     Program
     """
-    return _edited(program, [_Shift(source.text, sorted(e)) for source, e in zip(program.sources, edits)])
+    with collection_paused():  # a span and an item object each (`trajcomp.memory`)
+        return _edited(program, [_Shift(source.text, sorted(e)) for source, e in zip(program.sources, edits)])
 
 
 def _edited(program, shifts):
