@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from trajcomp.kinematics import BLOCK, fk, fk_and_jacobian, jacobian, link_frames
+from trajcomp.kinematics import BLOCK, fk, fk_and_jacobian, frame_columns, jacobian, link_frames
 from trajcomp.robot import builtin_robot_names, load_robot, robot_from_yaml
 from trajcomp.transforms import invert
 
@@ -294,3 +294,11 @@ def test_empty_and_single_configurations():
     assert jacobian(robot, np.empty((0, 6))).shape == (0, 6, 6)
     q = np.radians([10.0, -80.0, 70.0, -30.0, 60.0, 5.0])
     np.testing.assert_allclose(fk(robot, q), dh_matrix_product(robot, q[None])[1][0], rtol=0, atol=1e-9)
+
+
+def test_frame_columns_hold_the_link_frames():
+    robot = load_robot("kuka_kr6_r900")
+    q = np.random.default_rng(3).uniform(robot.q_min, robot.q_max, (50, 6))
+    columns = frame_columns(robot, q)
+    assert columns.shape == (7, 4, 3, 50)
+    np.testing.assert_array_equal(columns.transpose(3, 0, 2, 1), link_frames(robot, q)[:, :, :3, :])

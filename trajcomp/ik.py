@@ -43,7 +43,7 @@ from trajcomp.ik_types import (
     IKResult,
     _pose_stack,
 )
-from trajcomp.kinematics import fk, in_blocks, link_frames
+from trajcomp.kinematics import fk, frame_columns, in_blocks
 
 __all__ = [
     "BRANCHES",
@@ -205,20 +205,20 @@ def configuration_of(robot, q):
 
 def branch_index(robot, q):
     """`Configuration.index` (N,) of joint angles q (N, 6), rad, computed from the link frames."""
-    return in_blocks(lambda q: (frames_branch_index(robot, link_frames(robot, q)),), np.atleast_2d(q))[0]
+    return in_blocks(lambda q: (frames_branch_index(robot, frame_columns(robot, q)),), np.atleast_2d(q))[0]
 
 
-def frames_branch_index(robot, frames):
-    """`branch_index` (N,) of link frames (N, 7, 4, 4) (`trajcomp.kinematics.link_frames`)."""
-    origin0, z0 = frames[:, 0, :3, 3], frames[:, 0, :3, 2]
-    x1 = frames[:, 1, :3, 0]
-    shoulder, elbow, wrist_point = (frames[:, i, :3, 3] for i in (1, 2, 5))
-    forward = np.einsum("ni,ni->n", wrist_point - origin0, x1)
-    up = z0 * _up_sign(robot)
+def frames_branch_index(robot, columns):
+    """`branch_index` (N,) of the DH frames' columns (7, 4, 3, N) (`trajcomp.kinematics.frame_columns`)."""
+    origin = columns[:, 3].transpose(2, 0, 1)  # (N, 7, 3): the frames' origins
+    x1, z = columns[1, 0].T, columns[:6, 2].transpose(2, 0, 1)  # (N, 3) and (N, 6, 3): axes
+    shoulder, elbow, wrist_point = (origin[:, i] for i in (1, 2, 5))
+    forward = np.einsum("ni,ni->n", wrist_point - origin[:, 0], x1)
+    up = z[:, 0] * _up_sign(robot)
     ahead = np.sign(forward)[:, None] * x1
-    w, e = frames[:, 4, :3, 3] - shoulder, elbow - shoulder
+    w, e = origin[:, 4] - shoulder, elbow - shoulder
     cross = _dot(w, ahead) * _dot(e, up) - _dot(w, up) * _dot(e, ahead)
-    axes = np.einsum("njk,ji->nik", frames[:, :6, :3, 2], robot.joint_map)
+    axes = np.einsum("njk,ji->nik", z, robot.joint_map)
     triple = _dot(np.cross(axes[:, 3], axes[:, 5]), axes[:, 4])
     return 4 * (forward < 0) + 2 * (cross <= 0) + (triple < 0)
 

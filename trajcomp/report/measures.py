@@ -19,7 +19,7 @@ arm's branch or swing a joint fast.
 import numpy as np
 
 from trajcomp.ik import BRANCHES, Configuration, branch_index, frames_branch_index
-from trajcomp.kinematics import link_frames
+from trajcomp.kinematics import frame_columns, in_blocks
 
 SINGULARITIES = ("shoulder", "elbow", "wrist")
 
@@ -38,15 +38,19 @@ def singularity_distances(robot, q):
     dict of str to ndarray, shape (N,)
         Keys `SINGULARITIES`, see the module docstring.
     """
-    return _singularity_distances(robot, link_frames(robot, np.atleast_2d(q)))
+    def block(q):
+        distances = _singularity_distances(robot, frame_columns(robot, q))
+        return tuple(distances[name] for name in SINGULARITIES)
+
+    return dict(zip(SINGULARITIES, in_blocks(block, np.atleast_2d(q))))
 
 
-def _singularity_distances(robot, frames):
-    """`singularity_distances` of link frames (N, 7, 4, 4)."""
-    origin = frames[..., :3, 3]
-    x1 = frames[:, 1, :3, 0]
+def _singularity_distances(robot, columns):
+    """`singularity_distances` of the DH frames' columns (7, 4, 3, N) (`trajcomp.kinematics.frame_columns`)."""
+    origin = columns[:, 3].transpose(2, 0, 1)  # (N, 7, 3): the frames' origins
+    x1 = columns[1, 0].T
     shoulder = np.abs(np.einsum("ni,ni->n", origin[:, 5] - origin[:, 0], x1))
-    normal = frames[:, 1, :3, 2]
+    normal = columns[1, 2].T
 
     def in_plane(v):
         return v - np.einsum("ni,ni->n", v, normal)[:, None] * normal
@@ -55,7 +59,7 @@ def _singularity_distances(robot, frames):
     to_wrist = in_plane(origin[:, 4] - origin[:, 2])
     bend = np.degrees(np.arctan2(np.linalg.norm(np.cross(to_shoulder, to_wrist), axis=1),
                                  np.einsum("ni,ni->n", to_shoulder, to_wrist)))
-    z = frames[:, :6, :3, 2]  # DH axes; the axis of joint i is column i of the joint map over them
+    z = columns[:6, 2].transpose(2, 0, 1)  # DH axes (N, 6, 3); the axis of joint i is column i of the joint map
     axis4, axis6 = (np.einsum("njk,j->nk", z, robot.joint_map[:, i]) for i in (3, 5))
     wrist = np.degrees(np.arcsin(np.clip(np.linalg.norm(np.cross(axis4, axis6), axis=1), 0.0, 1.0)))
     return {"shoulder": shoulder, "elbow": np.minimum(bend, 180.0 - bend), "wrist": wrist}
@@ -93,8 +97,8 @@ def posture_measures(robot, q, q_planned):
         The branch differs or a joint turned by half a turn or more.
     """
     q, q_planned = np.atleast_2d(q), np.atleast_2d(q_planned)
-    frames = link_frames(robot, q)  # once for both measures
-    branch = frames_branch_index(robot, frames).astype(np.uint8)
+    columns = frame_columns(robot, q)  # once for both measures
+    branch = frames_branch_index(robot, columns).astype(np.uint8)
     branch_planned = branch_index(robot, q_planned).astype(np.uint8)
     turned = np.any(np.abs(q - q_planned) >= np.pi, axis=1)
-    return _singularity_distances(robot, frames), branch, branch_planned, (branch != branch_planned) | turned
+    return _singularity_distances(robot, columns), branch, branch_planned, (branch != branch_planned) | turned
