@@ -198,17 +198,15 @@ def _of_all(solved, rows, n):
 SEED_NEAR = (10.0, 0.05)  # mm, rad: a seed this close to its target starts Gauss-Newton directly
 
 
-def _solve(real, nominal, targets, seed, seed_pose=None):
-    """IK of the real arm for targets (N, 4, 4), seeded by joints (N, 6) or (6,).
+def _solve(real, nominal, targets, seed, seed_pose):
+    """IK of the real arm for targets (N, 4, 4), seeded by joints (N, 6) whose nominal TCP is ``seed_pose`` (N, 4, 4).
 
     Rows whose seed puts the nominal TCP within `SEED_NEAR` of the target
     (planned joints, the previous pass) are refined by Gauss-Newton from
     it, which stays on the seed's branch and turns; the others get the
     nominal closed form's branch nearest the seed first (`ik_near`).
-    ``seed_pose`` (N, 4, 4) is the seed's nominal TCP when already known.
     """
-    seed = np.broadcast_to(np.asarray(seed, dtype=float), (len(targets), 6))
-    error = pose_error(fk(nominal, seed) if seed_pose is None else seed_pose, targets)
+    error = pose_error(seed_pose, targets)
     near = (np.linalg.norm(error[:, :3], axis=1) < SEED_NEAR[0]) & (np.linalg.norm(error[:, 3:], axis=1) < SEED_NEAR[1])
     solved = ik_numeric(real, targets, np.where(near[:, None], seed, np.nan))
     far = np.flatnonzero(~solved.success)
