@@ -15,6 +15,7 @@ from trajcomp.errors import ReadError
 from trajcomp.formats import _csv_reader, _csv_writer
 from trajcomp.formats._csv_cells import _canonical
 from trajcomp.formats._csv_writer import _UNKNOWN, _column
+from trajcomp.formats._fixed_text import joined_rows
 
 CANONICAL = re.compile(r"-?(?:0|[1-9][0-9]*)\.([0-9]+)")
 
@@ -67,9 +68,9 @@ def test_non_canonical_columns_are_refused(cells):
 
 
 def written(cells, values, min_places, canonical=_UNKNOWN):
-    """The cells a column gets (``_column`` rendered as the row %-operation renders it)."""
-    spec, items = _column(cells, np.arange(len(cells)), np.asarray(values, dtype=float), min_places, canonical)
-    return [spec % item for item in items]
+    """The cells a column gets (``_column`` rendered as the writer's rows render it)."""
+    column = _column(cells, np.arange(len(cells)), np.asarray(values, dtype=float), min_places, canonical)
+    return joined_rows([column]).split("\n")
 
 
 def python_reference(old, value, places):
@@ -91,8 +92,8 @@ def test_fast_path_writes_what_python_and_the_exact_path_write(places, min_place
     for nudge in nudges:
         new = np.array([float(c) for c in old]) + nudge
         fast = written(old, new, min_places)
-        spec = _column(old, np.arange(len(old)), new, min_places)[0]
-        assert (spec == f"%.{places}f") == (places >= min_places)  # the fast path where it applies
+        column = _column(old, np.arange(len(old)), new, min_places)
+        assert (isinstance(column, tuple) and column[1] == places) == (places >= min_places)  # the fast path applies
         exact = written(old, new, min_places, canonical=None)  # the per-cell path, texts parsed back
         assert fast == exact
         p = max(places, min_places)
