@@ -75,19 +75,27 @@ def _branches(robot, family, T, seed):
 
 
 def _dh_branches(robot, family, T, theta_seed):
-    """DH angles (N, 8, 6) of the branches in configuration order and the reachable mask (N, 8)."""
+    """DH angles (N, 8, 6) of the branches in configuration order and the reachable mask (N, 8).
+
+    The branches are held on three axes of two, (N, side, elbow, wrist),
+    each quantity on those it depends on: joint 1 on the side of axis 1
+    alone, so it and the rotations it gives are solved twice per target,
+    not eight times; the wrist (UR family) or the planar arm (spherical
+    wrist) four times.
+    """
     std = robot.as_standard()
     a, alpha, d = std.a, std.alpha, std.d
     sa1, s4, s5 = np.sin(alpha[0]), np.sin(alpha[3]), np.sin(alpha[4])
     # Link 6 beyond Rz(theta6) Tz(d6) is fixed: fold it into the flange.
     link6_rest = dh_link_transforms(a[5], alpha[5], 0.0, np.zeros((1, 1)), std.beta[5])[0, 0]
     X = invert(std.T_base_link0) @ T @ invert(link6_rest @ std.T_link6_flange @ std.T_flange_tool)
-    R = X[:, None, :3, :3]
+    R = X[:, None, None, None, :3, :3]  # (N, 1, 1, 1, 3, 3): the branch axes broadcast
     p = X[:, :3, 3] - d[5] * X[:, :3, 2]  # origin of DH frame 5, DH frame 0
+    px, py, pz = (p[:, k, None, None, None] for k in range(3))
+    seed = theta_seed[:, :, None, None, None]  # (N, 6, 1, 1, 1)
 
-    # Branch signs: forward side of axis 1, elbow, joint 5 (see Configuration).
-    bits = (np.arange(BRANCHES)[:, None] >> np.array([2, 1, 0])) & 1
-    side, elbow_sign, wrist_sign = (1 - 2 * bits).T
+    # Branch signs (see Configuration): forward side of axis 1, elbow, joint 5, each on its own axis.
+    side, elbow_sign, wrist_sign = (np.array([1.0, -1.0]).reshape(shape) for shape in ((2, 1, 1), (2, 1), (2,)))
     L3 = np.hypot(a[2], d[3] * np.sin(alpha[2]))
     beta = np.arctan2(-d[3] * np.sin(alpha[2]), a[2])
     elbow_sign = elbow_sign * side * np.sign(-a[1] * sa1 * _up_sign(robot))
@@ -95,20 +103,17 @@ def _dh_branches(robot, family, T, theta_seed):
 
     # Joint 1: the wrist point's offset along z1 is s = d2 + d3 + d4 cos(alpha3).
     s = d[1] + d[2] + d[3] * np.cos(alpha[2])
-    r = np.hypot(p[:, 0], p[:, 1])[:, None]
+    r = np.hypot(px, py)
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):  # r ~ 0: on the axis, handled below
         ratio = s * sa1 / r
     on_axis = r < _SINGULAR_SIN
     reachable = on_axis | (np.abs(ratio) <= 1.0 + _REACH_SLACK)
     lean = np.arcsin(np.clip(np.nan_to_num(ratio), -1.0, 1.0))
-    theta1 = np.arctan2(p[:, 1], p[:, 0])[:, None] + np.where(side > 0, lean, np.pi - lean)
-    theta1 = np.where(on_axis, theta_seed[:, None, 0], theta1)
+    theta1 = np.where(on_axis, seed[:, 0], np.arctan2(py, px) + np.where(side > 0, lean, np.pi - lean))
     turn1 = _cos_sin(theta1)
-    forward = p[:, None, 0] * turn1[0] + p[:, None, 1] * turn1[1] - a[0]
-    height = np.broadcast_to(sa1 * (p[:, None, 2] - d[0]), forward.shape)
+    forward = px * turn1[0] + py * turn1[1] - a[0]
+    height = sa1 * (pz - d[0])
 
-    theta = np.empty(theta1.shape + (6,))
-    theta[..., 0] = theta1
     if family == "spherical":
         theta2, theta3, planar_ok = _planar(forward, height, a[1], L3, beta, elbow_sign)
         turn23 = _cos_sin(theta2 + theta3)
@@ -117,7 +122,7 @@ def _dh_branches(robot, family, T, theta_seed):
         sin5 = np.hypot(r13, r23)
         theta5 = np.arctan2(wrist_sign * sin5, -s4 * s5 * r33)
         toward = wrist_sign * s5
-        theta4 = np.where(sin5 < _SINGULAR_SIN, theta_seed[:, None, 3], np.arctan2(toward * r23, toward * r13))
+        theta4 = np.where(sin5 < _SINGULAR_SIN, seed[:, 3], np.arctan2(toward * r23, toward * r13))
         x6 = _into_link(_cos_sin(theta5), alpha[4], _into_link(_cos_sin(theta4), alpha[3], x36))
         theta6 = np.arctan2(x6[1], x6[0])
     else:
@@ -125,7 +130,7 @@ def _dh_branches(robot, family, T, theta_seed):
         sin5 = np.hypot(r31, r32)
         theta5 = np.arctan2(wrist_sign * sin5, -s4 * s5 * r33)
         toward = wrist_sign * s4
-        theta6 = np.where(sin5 < _SINGULAR_SIN, theta_seed[:, None, 5], np.arctan2(-toward * r32, toward * r31))
+        theta6 = np.where(sin5 < _SINGULAR_SIN, seed[:, 5], np.arctan2(-toward * r32, toward * r31))
         # theta2 + theta3 + theta4 is the angle in the arm plane of column 0 of R_14 = R_01^T R W^T,
         # W = Rx(alpha4) Rz(theta5) Rx(alpha5) Rz(theta6) the wrist's rotation.
         wrist_x = _into_link(_cos_sin(theta6), 0.0, _into_link(_cos_sin(theta5), alpha[4], (1.0, 0.0, 0.0)))
@@ -136,8 +141,11 @@ def _dh_branches(robot, family, T, theta_seed):
             forward - d[4] * s4 * np.sin(theta234), height + d[4] * s4 * np.cos(theta234), a[1], L3, beta, elbow_sign
         )
         theta4 = theta234 - theta2 - theta3
-    theta[..., 1], theta[..., 2], theta[..., 3], theta[..., 4], theta[..., 5] = theta2, theta3, theta4, theta5, theta6
-    reachable = reachable & planar_ok
+    n = len(X)
+    theta = np.empty((n, 2, 2, 2, 6))
+    for j, angle in enumerate((theta1, theta2, theta3, theta4, theta5, theta6)):
+        theta[..., j] = angle
+    theta, reachable = theta.reshape(n, BRANCHES, 6), np.broadcast_to(reachable & planar_ok, (n, 2, 2, 2)).reshape(n, -1)
     theta[~reachable] = np.nan
     return theta, reachable
 
