@@ -66,13 +66,13 @@ class CompensationResult:
     residual: np.ndarray
 
     @classmethod
-    def concatenate(cls, parts, order):
-        """One result of several: rows ``order[k]`` (index array) come from the k-th of ``parts``.
+    def concatenate(cls, parts, order, n):
+        """One result of ``n`` rows made of several: rows ``order[k]`` (index array or slice) come from the k-th of
+        ``parts``.
 
         ``parts`` may be any iterable (a generator): it is consumed once, so
         parts computed one after the other are never all held at once.
         """
-        n = sum(len(rows) for rows in order)
         fields = None
         for part, rows in zip(parts, order):
             if fields is None:
@@ -133,7 +133,7 @@ def compensate(model, targets, *, mode=None, tool=None, seed=None, outside="mode
     chunks = map_blocks(lambda k: rows(targets[starts[k] : starts[k] + CHUNK], seed[starts[k] : starts[k] + CHUNK]),
                         len(starts), workers)
     try:
-        return CompensationResult.concatenate(chunks, [np.arange(i, min(i + CHUNK, len(targets))) for i in starts])
+        return CompensationResult.concatenate(chunks, [slice(i, i + CHUNK) for i in starts], len(targets))
     except TrajcompError:
         # A chunk names its targets from 0 and counts only its own: redo the whole
         # set in one piece (each target is compensated on its own, so it fails the
@@ -232,7 +232,7 @@ def program_corrector(model, *, mode=None, outside="model", label="program", wor
             return on_tool(groups[0][0], targets, seeds, names)
         return CompensationResult.concatenate(
             (on_tool(tool, targets[rows], seeds[rows], [names[k] for k in rows]) for tool, rows in groups),
-            [rows for _, rows in groups],
+            [rows for _, rows in groups], len(targets),
         )
 
     def on_tool(tool, targets, seeds, names):
