@@ -141,11 +141,11 @@ def _dh_branches(robot, family, T, theta_seed):
             forward - d[4] * s4 * np.sin(theta234), height + d[4] * s4 * np.cos(theta234), a[1], L3, beta, elbow_sign
         )
         theta4 = theta234 - theta2 - theta3
-    n = len(X)
-    theta = np.empty((n, 2, 2, 2, 6))
+    theta, every = np.empty((len(X), 2, 2, 2, 6)), np.empty((len(X), 2, 2, 2), dtype=bool)  # each branch's own
     for j, angle in enumerate((theta1, theta2, theta3, theta4, theta5, theta6)):
         theta[..., j] = angle
-    theta, reachable = theta.reshape(n, BRANCHES, 6), np.broadcast_to(reachable & planar_ok, (n, 2, 2, 2)).reshape(n, -1)
+    every[...] = reachable & planar_ok
+    theta, reachable = theta.reshape(len(X), BRANCHES, 6), every.reshape(len(X), BRANCHES)
     theta[~reachable] = np.nan
     return theta, reachable
 
