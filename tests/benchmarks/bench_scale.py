@@ -8,7 +8,7 @@ compensated in composite mode and re-timed (the default) by the CLI
 in a fresh process (`python -m trajcomp.cli compensate`), start-up
 included, on one process (`--jobs 1`) and on every usable core (the
 default); the table gives wall time and waypoints/s (the median of
-`RUNS` runs without sampling: this machine's speed varies by +-10 % from
+`RUNS` runs without sampling: this machine's speed varies by 10-30 % from
 run to run), and from another run the peak memory of the process tree
 (summed proportional set sizes: the physical memory the run takes) and
 the peak resident memory of its largest process.
