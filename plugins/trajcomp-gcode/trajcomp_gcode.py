@@ -222,7 +222,7 @@ def _values(pose, state, read_values):
     """Axis values ``{role: float}`` (file units, deg) of a target pose in the block's orientation style."""
     old = {role: read_values[role] * state.scale if role in POSITION else read_values[role] for role in ROLES}
     if state.style == "abc":
-        out = encode_xyzabc(pose, old, POSITION + ANGLES)
+        out = encode_xyzabc(pose[None], [old], POSITION + ANGLES)[0]
         out.update({role: old[role] for role in ANGLES if role not in out})
     else:
         out = dict(zip(POSITION, pose[:3, 3]))

@@ -20,10 +20,10 @@ from trajcomp.formats._csv_cells import (
     _value,
 )
 from trajcomp.formats._fixed_text import joined_rows
-from trajcomp.formats._text import active_axes, decimals, encode_text, format_number, near_angle
+from trajcomp.formats._text import active_axes, decimals, encode_text, format_number, turned_abc
 from trajcomp.parallel import map_blocks
 from trajcomp.program_items import JOINT, LINEAR, Source
-from trajcomp.transforms import abc_to_matrix, matrix_to_abc, matrix_to_pose
+from trajcomp.transforms import matrix_to_pose
 
 MIN_PLACES = dict.fromkeys(POSE[:3], 3) | dict.fromkeys(POSE[3:], 4) | dict.fromkeys(JOINTS, 4)
 _BARE_ZERO = re.compile(r"^(-?)0\.")  # the 0 of 0.5 and -0.5, for a file that writes .5
@@ -215,9 +215,7 @@ def _pose_columns(columns, header, pose, rows):
         found[1][rows] if found is not None and found[1] is not None else
         _numbers(column if picked is None else [column[k] for k in picked])[0]
         for column, found in zip(abc, canonical)], axis=1)
-    rotation = pose[rows, :3, :3]
-    turned = np.abs(rotation - abc_to_matrix(np.radians(old_abc))).max(axis=(1, 2), initial=0.0) > 1e-12
-    angles = near_angle(np.degrees(matrix_to_abc(rotation[turned])), old_abc[turned])
+    turned, angles = turned_abc(pose[rows, :3, :3], old_abc)
     for c, values, column, found in zip(POSE[3:], angles.T, abc, canonical):
         out[c] = _column(column, rows[turned], values, MIN_PLACES[c], found)
     return out

@@ -202,22 +202,61 @@ def format_number(value, places):
 
 
 def same_rotation(rot, old_rot):
-    """True if a rotation (3, 3) equals the one the file states: its numbers then stay as written."""
-    return bool(np.abs(np.subtract(rot, old_rot)).max() <= 1e-12)
+    """Whether rotations (..., 3, 3) equal the ones the file states (...): their numbers then stay as written."""
+    return np.abs(np.subtract(rot, old_rot)).max(axis=(-2, -1), initial=0.0) <= 1e-12
 
 
-def encode_xyzabc(pose, old, roles):
-    """Numbers of a pose (4, 4) as x, y, z (mm) and A, B, C (deg, R = Rz(A) Ry(B) Rx(C)).
+def turned_abc(rotation, old_abc):
+    """The rows whose rotation differs from the file's, and their A, B, C nearest the file's.
+
+    Parameters
+    ----------
+    rotation : ndarray, shape (N, 3, 3)
+    old_abc : ndarray, shape (N, 3)
+        A, B, C the file states, deg (R = Rz(A) Ry(B) Rx(C)).
+
+    Returns
+    -------
+    turned : ndarray of bool, shape (N,)
+    abc : ndarray, shape (T, 3)
+        A, B, C of the T turned rows, deg, each shifted by whole turns nearest the old one.
+    """
+    turned = ~same_rotation(rotation, abc_to_matrix(np.radians(old_abc)))
+    return turned, near_angle(np.degrees(matrix_to_abc(rotation[turned])), old_abc[turned])
+
+
+def encode_xyzabc(poses, olds, roles):
+    """Numbers of poses (N, 4, 4) as x, y, z (mm) and A, B, C (deg, R = Rz(A) Ry(B) Rx(C)): a dict each.
 
     ``roles`` names the six numbers in that order (FANUC: x, y, z, r, p, w).
-    The angles are chosen nearest the file's ``old`` ones, and left out
-    when the rotation is the one the file states.
+    The angles are chosen nearest the file's ``olds`` (N dicts), and left
+    out where the rotation is the one the file states.
     """
-    out = dict(zip(roles[:3], pose[:3, 3]))
-    old_abc = [old[r] for r in roles[3:]]
-    if not same_rotation(pose[:3, :3], abc_to_matrix(np.radians(old_abc))):
-        for role, angle, reference in zip(roles[3:], np.degrees(matrix_to_abc(pose[:3, :3])), old_abc):
-            out[role] = near_angle(angle, reference)
+    old_abc = np.array([[old[role] for role in roles[3:]] for old in olds], dtype=float).reshape(-1, 3)
+    turned, abc = turned_abc(poses[:, :3, :3], old_abc)
+    angles = iter(abc.tolist())
+    return [dict(zip(roles[:3], position)) | (dict(zip(roles[3:], next(angles))) if turn else {})
+            for position, turn in zip(poses[:, :3, 3].tolist(), turned.tolist())]
+
+
+def encode_targets(targets, olds, joints, cartesian):
+    """The numbers of targets in a language (`target_edits`), the Cartesian ones computed together.
+
+    Parameters
+    ----------
+    targets : list of Target
+    olds : list of dict
+        Each target's numbers in the file, ``{role: float or str}``.
+    joints : callable
+        ``joints(target) -> {role: value}`` of a joint target.
+    cartesian : callable
+        ``cartesian(targets, olds) -> list of {role: value}`` of the
+        Cartesian targets (vectorized over them).
+    """
+    out = [joints(target) if target.is_joint else None for target in targets]
+    rows = [k for k, numbers in enumerate(out) if numbers is None]
+    for k, numbers in zip(rows, cartesian([targets[k] for k in rows], [olds[k] for k in rows]) if rows else ()):
+        out[k] = numbers
     return out
 
 
@@ -234,10 +273,11 @@ def target_edits(program, encode, min_places):
     program : Program
         Read from the sources it carries.
     encode : callable
-        ``encode(target, old) -> {role: float or str}``: the numbers of the
-        target in the language, ``old`` being ``{role: float}`` of the numbers
-        in the file (for choosing among equivalent angles and signs). A
-        ``str`` replaces the span's text as is.
+        ``encode(targets, olds) -> list of {role: float or str}``: the
+        numbers of each edited target in the language (`encode_targets`),
+        ``olds`` being ``{role: float}`` of each one's numbers in the file
+        (for choosing among equivalent angles and signs). A ``str``
+        replaces the span's text as is.
     min_places : Mapping[str, int]
         Fewest decimals per role (at least 0.001 mm for positions).
 
@@ -248,16 +288,10 @@ def target_edits(program, encode, min_places):
         with their original text.
     """
     edits = [[] for _ in program.sources]
-    for target in program.targets:
-        if not target.edited:
-            continue
-        old = {}
-        for role, span in target.spans.items():
-            try:
-                old[role] = float(span.text)
-            except ValueError:
-                old[role] = span.text
-        for role, value in encode(target, old).items():
+    targets = [target for target in program.targets if target.edited]
+    olds = [{role: _number_or_text(span.text) for role, span in target.spans.items()} for target in targets]
+    for target, old, numbers in zip(targets, olds, encode(targets, olds)):
+        for role, value in numbers.items():
             span = target.spans.get(role)
             if span is None:
                 continue
@@ -274,6 +308,14 @@ def target_edits(program, encode, min_places):
             if text != span.text:
                 edits[span.source].append((span.start, span.end, text))
     return edits
+
+
+def _number_or_text(text):
+    """A span's number, or its text where it is none (a name, a bit string)."""
+    try:
+        return float(text)
+    except ValueError:
+        return text
 
 
 def patched(program, encode, min_places):

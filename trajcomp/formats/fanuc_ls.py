@@ -41,6 +41,7 @@ from trajcomp.formats._text import (
     NUMBER,
     Lines,
     active_axes,
+    encode_targets,
     encode_xyzabc,
     fail,
     finite,
@@ -314,15 +315,18 @@ def _config_text(config):
     return f"{config[0]} {config[1]} {config[2]}, {config[3]}, {config[4]}, {config[5]}"
 
 
-def _encode(target, old):
-    if target.is_joint:
-        return dict(zip(JOINTS, np.degrees(target.joints)))
-    out = encode_xyzabc(target.pose, old, ABC_ORDER)
-    if target.config and "config" in old:
-        v = _CONFIG_VALUE.match(old["config"])
-        was = (v.group(1).upper(), v.group(2).upper(), v.group(3).upper(), *map(int, v.groups()[3:]))
-        if tuple(target.config) != was:
-            out["config"] = _config_text(target.config)
+def _encode(targets, olds):
+    return encode_targets(targets, olds, lambda target: dict(zip(JOINTS, np.degrees(target.joints))), _cartesian)
+
+
+def _cartesian(targets, olds):
+    out = encode_xyzabc(np.array([target.pose for target in targets]), olds, ABC_ORDER)
+    for target, old, numbers in zip(targets, olds, out):
+        if target.config and "config" in old:
+            v = _CONFIG_VALUE.match(old["config"])
+            was = (v.group(1).upper(), v.group(2).upper(), v.group(3).upper(), *map(int, v.groups()[3:]))
+            if tuple(target.config) != was:
+                numbers["config"] = _config_text(target.config)
     return out
 
 

@@ -41,7 +41,16 @@ import numpy as np
 
 from trajcomp.errors import WriteError
 from trajcomp.formats._krl_reader import _DEF, _DEFDAT, _NAME, _PROGRAM_NAME, AXES, MIN_PLACES, POSE, read
-from trajcomp.formats._text import active_axes, encode_text, encode_xyzabc, format_number, mask, numbered, patched
+from trajcomp.formats._text import (
+    active_axes,
+    encode_targets,
+    encode_text,
+    encode_xyzabc,
+    format_number,
+    mask,
+    numbered,
+    patched,
+)
 from trajcomp.program_items import CIRCULAR, JOINT, LINEAR
 from trajcomp.transforms import matrix_to_pose
 
@@ -54,13 +63,16 @@ def _status_text(value, old):
     return str(value)
 
 
-def _encode(target, old):
-    if target.is_joint:
-        return dict(zip(AXES, np.degrees(target.joints)))
-    out = encode_xyzabc(target.pose, old, POSE)
-    if target.config:
-        out["s"] = _status_text(target.config[0], old.get("s"))
-        out["t"] = _status_text(target.config[1], old.get("t"))
+def _encode(targets, olds):
+    return encode_targets(targets, olds, lambda target: dict(zip(AXES, np.degrees(target.joints))), _cartesian)
+
+
+def _cartesian(targets, olds):
+    out = encode_xyzabc(np.array([target.pose for target in targets]), olds, POSE)
+    for target, old, numbers in zip(targets, olds, out):
+        if target.config:
+            numbers["s"] = _status_text(target.config[0], old.get("s"))
+            numbers["t"] = _status_text(target.config[1], old.get("t"))
     return out
 
 

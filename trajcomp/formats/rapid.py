@@ -33,7 +33,7 @@ import numpy as np
 
 from trajcomp.errors import WriteError
 from trajcomp.formats._rapid_reader import CONF, JOINTS, POSITION, QUAT, read
-from trajcomp.formats._text import active_axes, format_number, same_rotation, where, write_single_file
+from trajcomp.formats._text import active_axes, encode_targets, format_number, same_rotation, where, write_single_file
 from trajcomp.program_items import CIRCULAR, JOINT, LINEAR
 from trajcomp.transforms import matrix_to_quat, quat_to_matrix
 
@@ -46,16 +46,25 @@ UNUSED = "9E+09"
 _NAME = re.compile(r"^[A-Za-z]\w*$")
 
 
-def _encode(target, old):
-    if target.is_joint:
-        return dict(zip(JOINTS, np.degrees(target.joints)))
-    out = dict(zip(POSITION, target.pose[:3, 3]))
-    old_quat = [old[q] for q in QUAT]
-    if not same_rotation(target.pose[:3, :3], quat_to_matrix(old_quat)):
-        quat = matrix_to_quat(target.pose[:3, :3])
-        out |= dict(zip(QUAT, -quat if np.dot(quat, old_quat) < 0 else quat))
-    if target.config:
-        out |= {c: str(v) for c, v in zip(CONF, target.config)}
+def _encode(targets, olds):
+    return encode_targets(targets, olds, lambda target: dict(zip(JOINTS, np.degrees(target.joints))), _cartesian)
+
+
+def _cartesian(targets, olds):
+    """Position, the quaternion where the rotation differs from the file's (the sign of the file's) and the
+    configuration data of each target."""
+    poses = np.array([target.pose for target in targets])
+    old_quat = np.array([[old[q] for q in QUAT] for old in olds], dtype=float)
+    turned = ~same_rotation(poses[:, :3, :3], quat_to_matrix(old_quat))
+    quat = matrix_to_quat(poses[turned, :3, :3]).reshape(-1, 4)
+    quat = np.where(np.sum(quat * old_quat[turned], axis=1, keepdims=True) < 0, -quat, quat)
+    quats = iter(quat.tolist())
+    out = []
+    for target, position, turn in zip(targets, poses[:, :3, 3].tolist(), turned.tolist()):
+        numbers = dict(zip(POSITION, position)) | (dict(zip(QUAT, next(quats))) if turn else {})
+        if target.config:
+            numbers |= {c: str(v) for c, v in zip(CONF, target.config)}
+        out.append(numbers)
     return out
 
 

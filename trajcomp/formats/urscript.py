@@ -34,7 +34,7 @@ import re
 import numpy as np
 
 from trajcomp.errors import WriteError
-from trajcomp.formats._text import active_axes, format_number, same_rotation, write_single_file
+from trajcomp.formats._text import active_axes, encode_targets, format_number, same_rotation, write_single_file
 from trajcomp.formats._urscript_reader import JOINTS, NEAR, POSE, read
 from trajcomp.program_items import CIRCULAR, JOINT, LINEAR
 from trajcomp.transforms import matrix_to_rotvec, rotvec_to_matrix
@@ -45,24 +45,32 @@ MIN_PLACES = dict.fromkeys(POSE + JOINTS + NEAR, 6)  # 1e-6 m = 0.001 mm; 1e-6 r
 
 
 def _rotvec_near(rot, old):
-    """Rotation vector of ``rot`` (3, 3) closest to ``old`` among its equivalents (angle +- 2 pi)."""
-    vec = matrix_to_rotvec(rot)
-    angle = np.linalg.norm(vec)
-    if angle < 1e-12:
-        return vec
-    other = vec * (1.0 - 2.0 * np.pi / angle)
-    return other if np.linalg.norm(other - old) < np.linalg.norm(vec - old) else vec
+    """Rotation vectors (N, 3) of ``rot`` (N, 3, 3), each the closest to ``old`` (N, 3) among its equivalents
+    (angle +- 2 pi)."""
+    vec = matrix_to_rotvec(rot).reshape(-1, 3)
+    angle = np.linalg.norm(vec, axis=1, keepdims=True)
+    with np.errstate(divide="ignore", invalid="ignore"):  # no rotation: no other equivalent
+        other = vec * (1.0 - 2.0 * np.pi / angle)
+    closer = np.linalg.norm(other - old, axis=1) < np.linalg.norm(vec - old, axis=1)
+    return np.where(closer[:, None] & (angle >= 1e-12), other, vec)
 
 
-def _encode(target, old):
-    if target.is_joint:
-        return dict(zip(JOINTS, target.joints))
-    out = dict(zip(POSE[:3], target.pose[:3, 3] / 1000.0))
-    old_vec = np.array([old[r] for r in POSE[3:]])
-    if not same_rotation(target.pose[:3, :3], rotvec_to_matrix(old_vec)):
-        out |= dict(zip(POSE[3:], _rotvec_near(target.pose[:3, :3], old_vec)))
-    if target.joints is not None:
-        out |= dict(zip(NEAR, target.joints))
+def _encode(targets, olds):
+    return encode_targets(targets, olds, lambda target: dict(zip(JOINTS, target.joints)), _cartesian)
+
+
+def _cartesian(targets, olds):
+    """Position (m), the rotation vector where the rotation differs from the file's, and qnear of each target."""
+    poses = np.array([target.pose for target in targets])
+    old_vec = np.array([[old[r] for r in POSE[3:]] for old in olds], dtype=float)
+    turned = ~same_rotation(poses[:, :3, :3], rotvec_to_matrix(old_vec))
+    vectors = iter(_rotvec_near(poses[turned, :3, :3], old_vec[turned]).tolist())
+    out = []
+    for target, position, turn in zip(targets, (poses[:, :3, 3] / 1000.0).tolist(), turned.tolist()):
+        numbers = dict(zip(POSE[:3], position)) | (dict(zip(POSE[3:], next(vectors))) if turn else {})
+        if target.joints is not None:
+            numbers |= dict(zip(NEAR, target.joints))
+        out.append(numbers)
     return out
 
 
