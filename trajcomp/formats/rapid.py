@@ -56,7 +56,7 @@ def _cartesian(targets, olds):
     poses = np.array([target.pose for target in targets])
     old_quat = np.array([[old[q] for q in QUAT] for old in olds], dtype=float)
     turned = ~same_rotation(poses[:, :3, :3], quat_to_matrix(old_quat))
-    quat = matrix_to_quat(poses[turned, :3, :3]).reshape(-1, 4)
+    quat = matrix_to_quat(poses[turned, :3, :3])
     quat = np.where(np.sum(quat * old_quat[turned], axis=1, keepdims=True) < 0, -quat, quat)
     quats = iter(quat.tolist())
     out = []

@@ -47,7 +47,7 @@ MIN_PLACES = dict.fromkeys(POSE + JOINTS + NEAR, 6)  # 1e-6 m = 0.001 mm; 1e-6 r
 def _rotvec_near(rot, old):
     """Rotation vectors (N, 3) of ``rot`` (N, 3, 3), each the closest to ``old`` (N, 3) among its equivalents
     (angle +- 2 pi)."""
-    vec = matrix_to_rotvec(rot).reshape(-1, 3)
+    vec = matrix_to_rotvec(rot)
     angle = np.linalg.norm(vec, axis=1, keepdims=True)
     with np.errstate(divide="ignore", invalid="ignore"):  # no rotation: no other equivalent
         other = vec * (1.0 - 2.0 * np.pi / angle)
