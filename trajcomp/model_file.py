@@ -26,6 +26,7 @@ from trajcomp.joint_errors import JointResidual
 from trajcomp.linear import LinearCorrection
 from trajcomp.model import CompensationModel
 from trajcomp.parameters import is_angle
+from trajcomp.plain_data import plain
 from trajcomp.robot import load_robot
 from trajcomp.transforms import abc_to_matrix, matrix_to_abc, matrix_to_pose, pose_to_matrix
 
@@ -136,7 +137,7 @@ def save_model(path, model):
         buffer = io.BytesIO()
         np.savez_compressed(buffer, **arrays)
         files[sidecar_path(path)] = buffer.getvalue()
-    files[path] = yaml.safe_dump(_plain(doc), sort_keys=False, width=100).encode("utf-8")
+    files[path] = yaml.safe_dump(plain(doc), sort_keys=False, width=100).encode("utf-8")
     write_files_atomic(files)
 
 
@@ -146,19 +147,6 @@ def _posture_index(text, path):
     if len(parts) != 3:
         raise ModelError(f"{path}: field postures: expected shoulder/elbow/wrist, got {text!r}")
     return Configuration(*parts).index
-
-
-def _plain(value):
-    """Numpy scalars and arrays turned into plain Python for YAML."""
-    if isinstance(value, dict):
-        return {str(k): _plain(v) for k, v in value.items()}
-    if isinstance(value, (list, tuple)):
-        return [_plain(v) for v in value]
-    if isinstance(value, np.ndarray):
-        return _plain(value.tolist())
-    if isinstance(value, np.generic):
-        return value.item()
-    return value
 
 
 def load_model(path, robot=None):

@@ -11,7 +11,6 @@ per-target data carries them as arrays, written beside the JSON as a NumPy
 import dataclasses
 import io
 import json
-import math
 import zipfile
 from importlib import resources
 from pathlib import Path
@@ -19,6 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from trajcomp.atomic import write_files_atomic
+from trajcomp.plain_data import plain
 
 SCHEMA = "trajcomp-report/1"
 
@@ -67,7 +67,7 @@ class Report:
 
     def json_text(self):
         """The JSON document, indented, ending in a newline."""
-        return json.dumps(plain(self.doc), indent=1, allow_nan=False) + "\n"
+        return json.dumps(plain(self.doc, non_finite_as_none=True), indent=1, allow_nan=False) + "\n"
 
     def html_text(self):
         """The self-contained HTML page (figures embedded)."""
@@ -105,21 +105,6 @@ class Report:
         files.update(sidecar)
         write_files_atomic(files)
         return list(files)
-
-
-def plain(value):
-    """``value`` with numpy scalars and arrays as Python numbers and lists, non-finite floats as None."""
-    if isinstance(value, dict):
-        return {str(k): plain(v) for k, v in value.items()}
-    if isinstance(value, (list, tuple)):
-        return [plain(v) for v in value]
-    if isinstance(value, np.ndarray):
-        return plain(value.tolist())
-    if isinstance(value, np.generic):
-        value = value.item()
-    if isinstance(value, float) and not math.isfinite(value):
-        return None
-    return value
 
 
 def schema():
