@@ -95,6 +95,24 @@ def test_running_a_command_imports_no_other_command(tmp_path):
         assert done.stdout.strip().splitlines()[-1] == str(allowed), (argv, done.stdout, done.stderr)
 
 
+@pytest.mark.parametrize("user_setting, threads", [(None, 1), ("2", 2)])
+def test_a_run_computes_on_one_blas_thread_unless_the_user_says(user_setting, threads):
+    """The CLI pins BLAS / OpenMP to one thread per process before numpy loads; a user's setting wins."""
+    import os
+    import subprocess
+    import sys
+
+    pytest.importorskip("threadpoolctl")
+    code = ("from trajcomp.cli import main\nmain(['formats'])\nimport numpy, threadpoolctl\n"
+            "print(sorted({pool['num_threads'] for pool in threadpoolctl.threadpool_info()}))")
+    env = {k: v for k, v in os.environ.items() if k not in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS",
+                                                             "MKL_NUM_THREADS")}
+    if user_setting is not None:
+        env.update(OPENBLAS_NUM_THREADS=user_setting, OMP_NUM_THREADS=user_setting)
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env, check=True)
+    assert done.stdout.strip().splitlines()[-1] == str([threads])
+
+
 @pytest.mark.parametrize("argv", [
     ["calibrate", "meas.csv", "--robot", "ur10", "--columns", "foo", "-o", "m.yaml"],
     ["calibrate", "meas.csv", "--robot", "ur10", "--interpolation", "bogus", "-o", "m.yaml"],
