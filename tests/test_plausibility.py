@@ -1,6 +1,7 @@
 """calibrate refuses data that cannot be what it claims; a single outlier does not stop it."""
 
 import dataclasses
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -10,6 +11,7 @@ from trajcomp.cli import main
 from trajcomp.errors import CalibrationError
 from trajcomp.kinematics import fk
 from trajcomp.measurements import Measurements, write_measurements
+from trajcomp.model_file import save_model
 from trajcomp.plan import plan_grid
 from trajcomp.robot import load_robot
 from trajcomp.simulate import VirtualRobot
@@ -88,3 +90,57 @@ def test_a_single_5_mm_outlier_is_named_left_out_and_its_node_filled_from_the_mo
     clean = calibrate(robot, meas, grid_step=100, folds=0)
     shift = np.abs(model.identified.a - clean.identified.a).max()
     assert shift < 0.01  # mm: the robust fit does not feel it
+
+
+EXAMPLES = Path(__file__).resolve().parents[1] / "examples" / "programs"
+
+
+@pytest.mark.parametrize("argv, named", [
+    (["compensate", "ur/weld.script", "--model", "{model}", "-o", "{out}.script"],
+     "a Universal Robots program (urscript) cannot run on robot kuka_kr6_r900 (KUKA), the arm of the model"),
+    (["compensate", "csv/weld.csv", "--model", "{model}", "--robot", "ur10", "-o", "{out}.csv"],
+     "--robot ur10: the model {model} is for robot kuka_kr6_r900"),
+    (["retime", "kuka/weld.src", "--robot", "ur10", "-o", "{out}.src"],
+     "a KUKA program (krl) cannot run on robot ur10 (Universal Robots), the arm --robot names"),
+    (["convert", "csv/weld.csv", "{out}.ls", "--robot", "abb_irb4600"],
+     "a FANUC program (fanuc_ls) cannot run on robot abb_irb4600 (ABB), the arm --robot names"),
+])
+def test_a_program_model_or_robot_of_another_arm_is_refused_naming_both(kuka_model, tmp_path, capsys, argv, named):
+    """Today a KRL program compensated with a UR10 model passed (exit 0) with a 360 deg joint turn."""
+    out = tmp_path / "out"
+    argv = [a.format(model=kuka_model, out=out) for a in argv]
+    argv[1] = str(EXAMPLES / argv[1])
+    assert main(argv) == 2
+    assert named.format(model=kuka_model) in capsys.readouterr().err
+    assert not list(tmp_path.iterdir())  # nothing written
+
+
+def test_a_csv_program_has_no_vendor_and_runs_on_the_models_arm(kuka_model, tmp_path):
+    program = tmp_path / "p.csv"
+    program.write_text("x,y,z,a,b,c,motion\n500,50,750,0,90,0,PTP\n520,50,750,0,90,0,LIN\n")
+    assert main(["compensate", str(program), "--model", str(kuka_model), "--robot", "kuka_kr6_r900",
+                 "--retime", "none", "-o", str(tmp_path / "out.csv")]) == 0
+
+
+@pytest.mark.parametrize("command", ["validate", "predict"])
+def test_validate_and_predict_refuse_data_of_another_robot(grid, kuka_model, tmp_path, capsys, command):
+    """Today validate with another robot's model exited 1 with 1,436 mm errors and predict exited 0."""
+    _, meas = grid
+    data = tmp_path / "ur10.csv"
+    write_measurements(data, meas)
+    argv = [command, str(kuka_model), str(data)] + (["-o", str(tmp_path / "p.csv")] if command == "predict" else [])
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert "ur10.csv: the commanded joints j1..j6 put robot kuka_kr6_r900's TCP a median" in err
+    assert "data of another robot" in err
+    assert not (tmp_path / "p.csv").exists()
+
+
+def test_validate_refuses_measurements_in_metres(grid, tmp_path, capsys):
+    robot, meas = grid
+    model = calibrate(robot, meas, grid_step=100, folds=0)
+    save_model(tmp_path / "m.yaml", model)
+    data = tmp_path / "metres.csv"
+    write_measurements(data, dataclasses.replace(meas, measured=meas.measured / 1000.0))
+    assert main(["validate", str(tmp_path / "m.yaml"), str(data)]) == 2
+    assert "metres?" in capsys.readouterr().err

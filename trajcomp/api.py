@@ -41,6 +41,7 @@ from trajcomp.compensate import program_corrector
 from trajcomp.errors import TrajcompError
 from trajcomp.model import CompensationModel
 from trajcomp.model_file import load_model
+from trajcomp.plausibility import check_robot_language
 from trajcomp.postprocess import MAX_CORRECTION, compensate_program
 from trajcomp.posture import MAX_JOINT_CHANGE
 from trajcomp.program import Program
@@ -265,12 +266,14 @@ class Compensator:
 
         Raises
         ------
-        ReadError, WriteError, IKError, CompensationError, TrajcompError
-            As ``trajcomp compensate``; nothing is written on error.
+        ReadError, WriteError, IKError, CompensationError, RobotError, TrajcompError
+            As ``trajcomp compensate`` (RobotError: a program in another
+            maker's language than the model's arm); nothing is written on error.
         """
         path = Path(path)
         out_path = path.with_name(f"{path.stem}_compensated{path.suffix}") if out_path is None else Path(out_path)
         program = formats.read(path, workers=self.workers)
+        check_robot_language(path, formats.find_format(format=program.format), self.robot, "the model's arm")
         corrected, report = self._compensate(
             program, label=str(path), tools=_named_poses(tools, "tools"), frames=_named_poses(frames, "frames"),
             joint_targets=joint_targets,

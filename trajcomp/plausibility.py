@@ -1,16 +1,20 @@
-"""Refuse implausible calibration data before it becomes a model.
+"""Refuse implausible input before it becomes a model or a program.
 
 A model drives a physical arm, so data that cannot be what it claims is an
 error, with the reason, not a fit: measurements in metres, joints in
 radians read as degrees, data of another robot, a duplicated or constant
 column, or an identification whose deltas no real arm has. The bounds are
 generous: a bought arm misses by 1-3 mm, its DH parameters are off by
-tenths of a millimetre and hundredths of a degree.
+tenths of a millimetre and hundredths of a degree. The same checks guard
+``validate`` and ``predict`` against data of another arm than the model's,
+and `check_robot_language` a program in one maker's language against an
+arm of another maker.
 """
 
 import numpy as np
 
-from trajcomp.errors import CalibrationError
+from trajcomp.errors import CalibrationError, RobotError
+from trajcomp.kinematics import fk
 from trajcomp.parameters import TOOL_NAMES, is_angle
 
 NOMINAL_ERROR_BOUND = 50.0  # mm, median |measured - nominal| (an unknown TCP of some cm included)
@@ -99,6 +103,42 @@ def check_units(meas, commanded, measured, nominal_error):
         )
 
 
+def check_applied(meas, robot, position, nominal_error):
+    """Refuse rows a model of ``robot`` is applied to (validate, predict) with calibrate's checks.
+
+    `check_columns`; commanded joints that put the arm's TCP elsewhere than
+    the commanded positions the file also gives (another robot's joints);
+    with measured columns, `check_units` against the commanded positions.
+
+    Parameters
+    ----------
+    meas : Measurements
+    robot : Robot
+        The model's nominal arm with its TCP.
+    position : ndarray, shape (N, 3)
+        Commanded TCP positions, mm, base frame (`trajcomp.calibrate.commanded`).
+    nominal_error : ndarray, shape (N,), or None
+        ``|measured - commanded|`` in the base frame, mm; None without
+        measured columns.
+
+    Raises
+    ------
+    CalibrationError
+        With the reason and a hint.
+    """
+    check_columns(meas)
+    if meas.joints is not None and meas.position is not None and len(meas):
+        median = float(np.median(np.linalg.norm(fk(robot, meas.joints)[:, :3, 3] - meas.position, axis=1)))
+        if median > NOMINAL_ERROR_BOUND:
+            raise CalibrationError(
+                f"{meas.path}: the commanded joints j1..j6 put robot {robot.name}'s TCP a median {median:.1f} mm from "
+                f"the commanded x, y, z, beyond the {NOMINAL_ERROR_BOUND:g} mm of any plausible arm error: data of "
+                "another robot or another TCP?"
+            )
+    if nominal_error is not None and len(meas):
+        check_units(meas, position, meas.measured, nominal_error)
+
+
 def check_identification(path, fit, start_tool):
     """Refuse an identification whose deltas or residuals no real arm has.
 
@@ -137,4 +177,35 @@ def check_identification(path, fit, start_tool):
         raise CalibrationError(
             f"{path}: after identification the median residual is still {median:.2f} mm (bound {RESIDUAL_BOUND:g} mm): "
             "the data do not fit this robot's kinematics (another robot, or rows that do not belong together)"
+        )
+
+
+def check_robot_language(path, format, robot, whose):
+    """Refuse a program in one maker's language for an arm of another maker.
+
+    A KRL program runs on a KUKA controller, never on a UR arm; a program
+    CSV (no maker) or an arm whose description names no maker is not
+    checked.
+
+    Parameters
+    ----------
+    path : str or Path
+        The program, for the message.
+    format : Format
+        Its language (`trajcomp.formats.Format`).
+    robot : Robot
+        The arm it is to run on.
+    whose : str
+        Where that arm comes from, for the message: ``"the arm of the model
+        m.yaml"``, ``"the arm --robot names"``.
+
+    Raises
+    ------
+    RobotError
+        Naming the program's maker and language and the arm's.
+    """
+    if format.vendor and robot.vendor and format.vendor.casefold() != robot.vendor.casefold():
+        raise RobotError(
+            f"{path}: a {format.vendor} program ({format.name}) cannot run on robot {robot.name} "
+            f"({robot.vendor}), {whose}: give the arm (or a model of the arm) that runs it"
         )

@@ -5,6 +5,9 @@ A robot YAML file (see ``trajcomp/robots/*.yaml``) holds, in user units
 
 ``name``, ``source``
     Short name and the data sheet the numbers come from.
+``vendor`` (optional)
+    The maker, e.g. ``KUKA``: a program in a maker's language
+    (`trajcomp.formats.Format.vendor`) runs only on that maker's arms.
 ``dh``
     ``convention`` (``standard`` = Craig's distal, or ``modified`` =
     proximal) and six-element lists ``a``, ``alpha``, ``d``,
@@ -67,6 +70,9 @@ class Robot:
     T_base_link0, T_link6_flange, T_flange_tool, T_world_base : ndarray, shape (4, 4)
     source : str
         The data sheet or file the description comes from.
+    vendor : str
+        The maker (``KUKA``, ``ABB``, ``FANUC``, ``Universal Robots``), or
+        ``""`` when the description does not say.
     """
 
     name: str
@@ -88,6 +94,7 @@ class Robot:
     T_world_base: np.ndarray
     source: str = ""
     beta: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(6))
+    vendor: str = ""
 
     def dh_angles(self, q):
         """DH joint angles theta (N, 6), rad, of joint angles q (N, 6), rad."""
@@ -227,6 +234,7 @@ def robot_from_yaml(text, label="<robot>"):
         T_flange_tool=fields.frame("tool"),
         T_world_base=fields.frame("world"),
         source=str(doc.get("source", "")),
+        vendor=str(doc.get("vendor") or ""),
     )
 
 

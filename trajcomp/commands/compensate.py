@@ -17,15 +17,17 @@ from trajcomp.commands.convert import add_frame_options, add_in_place_option, fr
 from trajcomp.commands.retime import CHOICES as RETIME_CHOICES
 from trajcomp.commands.retime import LIMIT_MESSAGE, METHOD_HELP, add_tolerance_option, retime_compensated, timing_lines
 from trajcomp.compensate import program_corrector
-from trajcomp.errors import TrajcompError
+from trajcomp.errors import RobotError, TrajcompError
 from trajcomp.memory import end_stage, kept_apart
 from trajcomp.model import MODES
 from trajcomp.model_file import load_model
 from trajcomp.parallel import meanwhile, usable_cores
+from trajcomp.plausibility import check_robot_language
 from trajcomp.postprocess import MAX_CORRECTION, compensate_program
 from trajcomp.posture import MAX_JOINT_CHANGE
 from trajcomp.progress import Stages, progress
 from trajcomp.report import Criteria, compliance_report, file_entry, model_entry, summary_lines
+from trajcomp.robot import load_robot
 from trajcomp.timing.path import TOLERANCE
 from trajcomp.transforms import matrix_to_pose
 
@@ -48,6 +50,8 @@ def add_parser(sub):
     parser.add_argument("program", nargs="+",
                         help="program file; several files, folders or glob patterns run as a batch")
     parser.add_argument("--model", required=True, help="model file from `trajcomp calibrate`")
+    parser.add_argument("--robot", help="the arm the program runs on (built-in name or robot YAML file): refused "
+                        "unless it is the model's robot")
     parser.add_argument("--mode", choices=MODES, help="compensation mode (default: the model's method)")
     parser.add_argument("--outside", choices=("model", "clamp", "error"), default="model",
                         help="targets outside the grid: model only (flagged; default), nearest grid value, or an error")
@@ -119,6 +123,8 @@ class CompensateJob:
         with Stages(self.STAGES, desc=Path(path).name, enabled=self.show_stages) as stages, kept_apart():
             model = _model(self.model)
             program = formats.read(path, workers=self.workers)
+            check_robot_language(path, formats.find_format(format=program.format), model.nominal,
+                                 f"the arm of the model {self.model}")
             sources = list(dict.fromkeys(formats.input_paths(path, program)))
             files = [file_entry("program", p) for p in sources]
             correct = program_corrector(model, mode=self.mode, outside=self.outside, label=str(path),
@@ -212,7 +218,9 @@ def run(args):
         max_correction=args.max_correction, in_place=args.in_place, criteria=criteria_of(args),
         report=args.report, json_only=args.json_only, retime=args.retime, path_tolerance=args.path_tolerance,
     )
-    _model(job.model)  # a broken model fails the run once, before any file
+    model = _model(job.model)  # a broken model fails the run once, before any file
+    if args.robot is not None and load_robot(args.robot).name != model.nominal.name:
+        raise RobotError(f"--robot {args.robot}: the model {args.model} is for robot {model.nominal.name}")
     first = args.program[0]
     single = len(args.program) == 1 and not Path(first).is_dir() and not glob.has_magic(first) \
         and not Path(args.output).is_dir()

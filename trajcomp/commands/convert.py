@@ -11,6 +11,7 @@ import numpy as np
 
 from trajcomp import formats
 from trajcomp.errors import TrajcompError
+from trajcomp.plausibility import check_robot_language
 from trajcomp.postprocess import convert_program
 from trajcomp.robot import load_robot
 from trajcomp.transforms import pose_to_matrix
@@ -96,7 +97,10 @@ def run(args):
     tools, frames = frame_options(args)
     robot = load_robot(args.robot) if args.robot else None
     program = formats.read(args.input, args.from_format)
-    to_format = formats.find_format(args.output, args.to_format).name
+    to_format = formats.find_format(args.output, args.to_format)
+    if robot is not None:
+        check_robot_language(args.output, to_format, robot, "the arm --robot names")
+    to_format = to_format.name
     converted = convert_program(program, to_format, robot=robot, tools=tools, frames=frames)
     written = formats.write(args.output, converted, to_format, protect=protected_inputs(args, args.input, program))
     skipped = len(program.runtime_motions())

@@ -4,7 +4,7 @@ import dataclasses
 
 from trajcomp.calibrate import commanded
 from trajcomp.commands._args import command_parser, info, layout_of
-from trajcomp.commands.validate import add_tracker_options, tracker_pose
+from trajcomp.commands.validate import add_tracker_options, check_data, tracker_pose
 from trajcomp.measurements import read_measurements, write_measurements
 from trajcomp.model import MODES
 from trajcomp.model_file import load_model
@@ -34,8 +34,9 @@ def run(args):
     joints, position = commanded(model.nominal, meas)
     mode = args.mode or model.method
     model.check_mode(mode)
-    predicted, flagged = model.predict(mode, joints, position)
     T_tracker_base = tracker_pose(args, model, frame)
+    check_data(model, meas, T_tracker_base)
+    predicted, flagged = model.predict(mode, joints, position)
     predicted = predicted @ T_tracker_base[:3, :3].T + T_tracker_base[:3, 3]
     extra = {"px": predicted[:, 0], "py": predicted[:, 1], "pz": predicted[:, 2], "outside_grid": flagged}
     write_measurements(args.output, dataclasses.replace(meas, joints=joints, position=position),

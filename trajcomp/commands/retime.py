@@ -15,6 +15,7 @@ from trajcomp.errors import TimingError, TrajcompError
 from trajcomp.memory import release
 from trajcomp.parallel import in_background
 from trajcomp.postprocess import as_written_report
+from trajcomp.plausibility import check_robot_language
 from trajcomp.posture import planned_joints, planned_targets
 from trajcomp.report import compliance_report, file_entry
 from trajcomp.timing import METHODS
@@ -60,6 +61,7 @@ def add_tolerance_option(parser):
 def run(args):
     robot = robot_of(args)
     program = formats.read(args.program)
+    check_robot_language(args.program, formats.find_format(format=program.format), robot, "the arm --robot names")
     out_format = formats.find_format(args.output).name
     if out_format != program.format:
         raise TrajcompError(f"{args.output}: retime writes the language it reads ({program.format}); "

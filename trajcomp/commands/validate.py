@@ -12,6 +12,7 @@ from trajcomp.commands.calibrate import print_stats
 from trajcomp.errors import ReadError
 from trajcomp.measurements import read_measurements
 from trajcomp.model_file import load_model
+from trajcomp.plausibility import check_applied
 from trajcomp.report import file_entry, validation_report
 from trajcomp.transforms import abc_to_matrix, invert, rotation_angle_between
 
@@ -64,6 +65,13 @@ def tracker_pose(args, model, frame):
     return T_tracker_base
 
 
+def check_data(model, meas, T_tracker_base):
+    """Refuse data the model cannot apply to (another robot, wrong units, a duplicated column): `check_applied`."""
+    _, position = commanded(model.nominal, meas)
+    error = None if meas.measured is None else np.linalg.norm(to_base(T_tracker_base, meas.measured) - position, axis=1)
+    check_applied(meas, model.nominal, position, error)
+
+
 def orientation_lines(model, meas, T_tracker_base):
     """Orientation |error| lines of 6-DoF data for the kinematic modes (empty without measured orientations)."""
     joints, _ = commanded(model.nominal, meas)
@@ -85,6 +93,7 @@ def run(args):
     meas.require_measured()
     frame = args.frame or meas.frame or "base"
     T_tracker_base = tracker_pose(args, model, frame)
+    check_data(model, meas, T_tracker_base)
     placed = dataclasses.replace(model, T_tracker_base=T_tracker_base)  # the data's registration
     files = [file_entry("model", args.model), file_entry("measurements", args.measurements)]
     options = {"columns": None if args.columns is None else dict(args.columns.columns),

@@ -36,6 +36,8 @@ class Format:
     resolved on first use. ``source`` is ``"built-in"`` or the plugin's
     entry point. ``blocks``: the reader and writer work a block of rows at a
     time and take ``workers``, the processes that share the blocks.
+    ``vendor``: the maker whose controllers run the language (compared with
+    `trajcomp.robot.Robot.vendor`), None for a language of no maker (CSV).
     """
 
     name: str
@@ -44,6 +46,7 @@ class Format:
     writer: object
     source: str = "built-in"
     blocks: bool = False
+    vendor: str = None
 
     def _resolve(self, ref):
         if callable(ref):
@@ -62,7 +65,7 @@ _FORMATS = {}
 _PLUGINS = {"loaded": False, "failed": {}}
 
 
-def register_format(name, extensions, reader, writer, *, source="built-in", blocks=False):
+def register_format(name, extensions, reader, writer, *, source="built-in", blocks=False, vendor=None):
     """Register (or replace) a format.
 
     Parameters
@@ -81,19 +84,22 @@ def register_format(name, extensions, reader, writer, *, source="built-in", bloc
     blocks : bool
         The reader and writer take a third argument, ``workers``: processes
         that share their blocks of rows (`trajcomp.parallel.map_blocks`).
+    vendor : str, optional
+        The maker whose controllers run the language (``"KUKA"``); None for
+        a language any arm's program may be written in.
     """
-    _FORMATS[name] = Format(name, tuple(e.lower() for e in extensions), reader, writer, source, blocks)
+    _FORMATS[name] = Format(name, tuple(e.lower() for e in extensions), reader, writer, source, blocks, vendor)
 
 
-for _name, _module, _extensions in (
-    ("csv", "csv_program", (".csv",)),
-    ("krl", "krl", (".src",)),
-    ("rapid", "rapid", (".mod", ".prg", ".modx")),
-    ("fanuc_ls", "fanuc_ls", (".ls",)),
-    ("urscript", "urscript", (".script", ".urscript")),
+for _name, _module, _extensions, _vendor in (
+    ("csv", "csv_program", (".csv",), None),
+    ("krl", "krl", (".src",), "KUKA"),
+    ("rapid", "rapid", (".mod", ".prg", ".modx"), "ABB"),
+    ("fanuc_ls", "fanuc_ls", (".ls",), "FANUC"),
+    ("urscript", "urscript", (".script", ".urscript"), "Universal Robots"),
 ):
     register_format(_name, _extensions, f"trajcomp.formats.{_module}:read", f"trajcomp.formats.{_module}:write",
-                    blocks=_name == "csv")
+                    blocks=_name == "csv", vendor=_vendor)
 
 
 def _load_plugins():
