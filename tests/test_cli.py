@@ -170,7 +170,8 @@ def test_tracker_frame_six_dof_data_through_plan_simulate_calibrate_validate_pre
                  "--tracker=-2000,800,-100,10,0,30", "--six-dof", "-o", str(moved)]) == 0
     lines = moved.read_text().splitlines()
     reference.write_text("\n".join(lines[:2] + lines[2::40]) + "\n")  # a few rows measured in the new placement
-    assert main(["validate", str(model), str(moved), "--frame", "tracker", "--tolerance", "0.05"]) == 1
+    assert main(["validate", str(model), str(moved), "--frame", "tracker", "--tolerance", "0.05"]) == 2
+    assert "Or a tracker moved since its registration (--register" in capsys.readouterr().err
     assert main(["validate", str(model), str(moved), "--frame", "tracker", "--register", str(reference),
                  "--tolerance", "0.05"]) == 0
 

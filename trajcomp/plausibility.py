@@ -59,7 +59,7 @@ def check_columns(meas):
         )
 
 
-def check_units(meas, commanded, measured, nominal_error):
+def check_units(meas, commanded, measured, nominal_error, *, registered=False):
     """Refuse measurements whose scale or error shows wrong units or another robot.
 
     Parameters
@@ -71,6 +71,9 @@ def check_units(meas, commanded, measured, nominal_error):
         Measured positions, mm, in their own frame.
     nominal_error : ndarray, shape (N,)
         ``|measured - commanded|`` after registration, mm.
+    registered : bool
+        The measured frame was placed by a registration made beforehand (a
+        model's, applied to tracker-frame data): the tracker may have moved.
 
     Raises
     ------
@@ -100,10 +103,12 @@ def check_units(meas, commanded, measured, nominal_error):
         raise CalibrationError(
             f"{meas.path}: median |measured - nominal| is {median:.1f} mm, beyond the {NOMINAL_ERROR_BOUND:g} mm "
             "of any plausible arm error: data of another robot or another TCP, or a wrong column mapping?"
+            + (" Or a tracker moved since its registration (--register rows measured in the new placement)?"
+               if registered else "")
         )
 
 
-def check_applied(meas, robot, position, nominal_error):
+def check_applied(meas, robot, position, nominal_error, *, registered=False):
     """Refuse rows a model of ``robot`` is applied to (validate, predict) with calibrate's checks.
 
     `check_columns`; commanded joints that put the arm's TCP elsewhere than
@@ -120,6 +125,8 @@ def check_applied(meas, robot, position, nominal_error):
     nominal_error : ndarray, shape (N,), or None
         ``|measured - commanded|`` in the base frame, mm; None without
         measured columns.
+    registered : bool
+        As `check_units`.
 
     Raises
     ------
@@ -136,7 +143,7 @@ def check_applied(meas, robot, position, nominal_error):
                 "another robot or another TCP?"
             )
     if nominal_error is not None and len(meas):
-        check_units(meas, position, meas.measured, nominal_error)
+        check_units(meas, position, meas.measured, nominal_error, registered=registered)
 
 
 def check_identification(path, fit, start_tool):

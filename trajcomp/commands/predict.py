@@ -35,7 +35,7 @@ def run(args):
     mode = args.mode or model.method
     model.check_mode(mode)
     T_tracker_base = tracker_pose(args, model, frame)
-    check_data(model, meas, T_tracker_base)
+    check_data(model, meas, T_tracker_base, frame)
     predicted, flagged = model.predict(mode, joints, position)
     predicted = predicted @ T_tracker_base[:3, :3].T + T_tracker_base[:3, 3]
     extra = {"px": predicted[:, 0], "py": predicted[:, 1], "pz": predicted[:, 2], "outside_grid": flagged}

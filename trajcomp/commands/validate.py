@@ -65,11 +65,11 @@ def tracker_pose(args, model, frame):
     return T_tracker_base
 
 
-def check_data(model, meas, T_tracker_base):
+def check_data(model, meas, T_tracker_base, frame):
     """Refuse data the model cannot apply to (another robot, wrong units, a duplicated column): `check_applied`."""
     _, position = commanded(model.nominal, meas)
     error = None if meas.measured is None else np.linalg.norm(to_base(T_tracker_base, meas.measured) - position, axis=1)
-    check_applied(meas, model.nominal, position, error)
+    check_applied(meas, model.nominal, position, error, registered=frame == "tracker")
 
 
 def orientation_lines(model, meas, T_tracker_base):
@@ -93,7 +93,7 @@ def run(args):
     meas.require_measured()
     frame = args.frame or meas.frame or "base"
     T_tracker_base = tracker_pose(args, model, frame)
-    check_data(model, meas, T_tracker_base)
+    check_data(model, meas, T_tracker_base, frame)
     placed = dataclasses.replace(model, T_tracker_base=T_tracker_base)  # the data's registration
     files = [file_entry("model", args.model), file_entry("measurements", args.measurements)]
     options = {"columns": None if args.columns is None else dict(args.columns.columns),
