@@ -9,6 +9,7 @@ trapezoid and jerk-limited profiles.
 """
 
 import csv
+import importlib
 
 import numpy as np
 import pytest
@@ -24,6 +25,7 @@ from trajcomp.timing import Moves, retime
 from trajcomp.timing.toppra_run import ConstantAcceleration
 from trajcomp.transforms import abc_to_matrix, matrix_to_abc
 
+retime_module = importlib.import_module("trajcomp.timing.retime")  # the module, not the function
 UR10 = load_robot("ur10")
 KUKA = load_robot("kuka_kr6_r900")
 FD_TOLERANCE = 0.02  # finite differences of a written 1 us-resolution timing, 10 ms apart
@@ -122,9 +124,10 @@ def test_sharp_blended_corners_meet_the_limits_in_the_dense_check(tmp_path):
     assert main(["retime", str(tmp_path / "corners.csv"), "-o", str(tmp_path / "out.csv"), "--robot", "ur10"]) == 0
 
 
-def test_an_overshoot_lower_limits_do_not_reach_is_met_by_running_slower(tmp_path, monkeypatch):
-    """11 lines with 1 mm zones where J2 stays 4-6 % over in the blends however low its acceleration limit:
-    the best timing runs uniformly slower, by no more than the overshoot needs."""
+def test_an_overshoot_refines_the_grid_where_it_happens_not_the_whole_run(tmp_path, monkeypatch):
+    """11 lines with 1 mm zones whose first timing overshoots the acceleration limits in the blends by 2x:
+    the grid is refined there (no uniform slow-down, 11.4 s); without refinement (the last resort) the
+    whole timing runs uniformly slower by what the overshoot needs (16.9 s). Both written within the limits."""
     rows = ["x,y,z,a,b,c,motion,speed,zone", "672.486,76.581,409.615,90,0,180,PTP,,1"] + [
         f"{x},{y},{z},90,0,180,LIN,250,1" for x, y, z in [
             (629.405, 129.418, 669.576), (444.207, 77.914, 669.952), (552.827, 152.554, 444.478),
@@ -136,8 +139,14 @@ def test_an_overshoot_lower_limits_do_not_reach_is_met_by_running_slower(tmp_pat
     original = ConstantAcceleration.stretched
     monkeypatch.setattr(ConstantAcceleration, "stretched",
                         lambda law, factor: stretched.append(factor) or original(law, factor))
-    assert main(["retime", str(tmp_path / "blends.csv"), "-o", str(tmp_path / "out.csv"), "--robot", "ur10"]) == 0
-    assert stretched and all(1.0 < f < 1.05 for f in stretched)  # sqrt of a 4-6 % acceleration overshoot, and margin
+    cycle, default = {}, retime_module._REFINEMENTS
+    for refinements in (default, 0):
+        monkeypatch.setattr(retime_module, "_REFINEMENTS", refinements)
+        assert main(["retime", str(tmp_path / "blends.csv"), "-o", str(tmp_path / "out.csv"), "--robot", "ur10"]) == 0
+        with (tmp_path / "out.csv").open() as f:
+            cycle[refinements] = float(list(csv.DictReader(f))[-1]["t"])
+    assert len(stretched) == 1 and 1.2 < stretched[0] < 1.5  # sqrt of the 2x acceleration overshoot, once
+    assert cycle[0] > 1.4 * cycle[default]
 
 
 def test_a_stretched_law_runs_the_same_path_slower():

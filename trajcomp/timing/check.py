@@ -7,8 +7,9 @@ between grid points is a measured one. Each segment is sampled every
 derivatives and the time law (q' sd, q'' sd^2 + q' sdd), jerk from the
 finite difference of the sampled acceleration (ruckig segments only: a
 TOPP-RA law has piecewise-constant path acceleration, its jerk is not
-bounded), and the TCP speed of linear and circular motions from the
-Jacobian, against the speed the program asked.
+bounded and not measured), and the TCP speed of linear and circular
+motions from the Jacobian at each sample, |J(q) q'| sd, against the speed
+the program asked.
 """
 
 import dataclasses
@@ -16,6 +17,7 @@ import dataclasses
 import numpy as np
 
 from trajcomp.program_items import JOINT
+from trajcomp.timing.path import tcp_jacobians
 
 RATE = 1000.0  # Hz
 LIMIT_TOLERANCE = 0.01  # a sampled value may exceed its limit by this share
@@ -67,7 +69,7 @@ def evaluate(run, law, t):
     return run.path(s), dq * sd[:, None], run.path(s, 2) * (sd**2)[:, None] + dq * sdd[:, None], s, sd
 
 
-def segment_peaks(run, law, moves, *, jerk, rate=RATE):
+def segment_peaks(run, law, moves, robot, *, jerk, rate=RATE):
     """Sample a timed run at ``rate`` and measure its peaks against the limits of each motion.
 
     Parameters
@@ -75,6 +77,8 @@ def segment_peaks(run, law, moves, *, jerk, rate=RATE):
     run : RunPath
     law : ConstantAcceleration or RuckigLaw
     moves : Moves
+    robot : Robot
+        The nominal robot (the TCP Jacobian).
     jerk : bool
         Measure the jerk (ruckig segments).
 
@@ -82,27 +86,45 @@ def segment_peaks(run, law, moves, *, jerk, rate=RATE):
     -------
     Peaks
     """
+    return dense_check(run, law, moves, robot, jerk=jerk, rate=rate)[0]
+
+
+def dense_check(run, law, moves, robot, *, jerk, rate=RATE):
+    """`segment_peaks`, and where: each sample's path position and its largest ratio to a limit.
+
+    Returns
+    -------
+    peaks : Peaks
+    s : ndarray, shape (N,)
+        Path position of each sample, rad.
+    ratio : ndarray, shape (N,)
+        Largest sampled joint velocity, acceleration or TCP speed over its limit at each sample.
+    """
     t = sample_times(law.duration, rate)
     q, qd, qdd, s, sd = evaluate(run, law, t)
     k = run.motion_at(s)
-    velocity, acceleration = np.abs(qd), np.abs(qdd)
+    velocity_ratio, acceleration_ratio = np.abs(qd) / moves.velocity[k], np.abs(qdd) / moves.acceleration[k]
+    speed_ratio = _speed_ratios(moves, robot, k, q, qd)
     jerk_peak = np.full(6, np.nan)
     if jerk and len(t) > 1:
         jerk_peak = np.max(np.abs(np.diff(qdd, axis=0)) / np.diff(t)[:, None], axis=0)
-    return Peaks(
-        velocity=velocity.max(axis=0),
-        acceleration=acceleration.max(axis=0),
+    peaks = Peaks(
+        velocity=np.abs(qd).max(axis=0),
+        acceleration=np.abs(qdd).max(axis=0),
         jerk=jerk_peak,
-        velocity_ratio=np.max(velocity / moves.velocity[k], axis=0),
-        acceleration_ratio=np.max(acceleration / moves.acceleration[k], axis=0),
-        speed_ratio=_speed_ratio(run, moves, k, s, sd),
+        velocity_ratio=velocity_ratio.max(axis=0),
+        acceleration_ratio=acceleration_ratio.max(axis=0),
+        speed_ratio=float(speed_ratio.max(initial=0.0)),
     )
+    return peaks, s, np.maximum(np.maximum(velocity_ratio.max(axis=1), acceleration_ratio.max(axis=1)), speed_ratio)
 
 
-def _speed_ratio(run, moves, k, s, sd):
-    """Peak TCP speed over the programmed one, on samples of linear / circular motions with a speed."""
-    kinds = moves.kind[k]
-    rows = np.flatnonzero((kinds != JOINT) & np.isfinite(moves.tcp_speed[k]))
-    if not rows.size:
-        return 0.0
-    return float(np.max(run.tcp_rate(s[rows]) * np.abs(sd[rows]) / moves.tcp_speed[k[rows]]))
+def _speed_ratios(moves, robot, k, q, qd):
+    """TCP speed |J(q) q'| over the programmed one (N,) of samples on linear / circular motions with a speed, else 0."""
+    ratio = np.zeros(len(k))
+    rows = np.flatnonzero((moves.kind[k] != JOINT) & np.isfinite(moves.tcp_speed[k]))
+    if rows.size:
+        jac = tcp_jacobians(robot, moves, k[rows], q[rows])
+        speed = np.linalg.norm(np.einsum("nij,nj->ni", jac[:, :3], qd[rows]), axis=1)
+        ratio[rows] = speed / moves.tcp_speed[k[rows]]
+    return ratio

@@ -36,6 +36,7 @@ END_REFINEMENT = 10  # halvings of the first and last grid interval (rest at bot
 KNOT_STRIDE = 16  # samples per knot interval of the first thinned fit
 SMOOTHING_GAIN = 1.1  # a thinned path is taken when the exact one needs this much more acceleration
 _DUPLICATE = 1e-9  # rad, joint distance under which two samples are one
+_SAME_JACOBIAN = 1e-7  # rad: a fitted path this close to its samples takes their Jacobians
 _NARROWEST = 2  # samples per knot interval at the finest
 _PULL, _PULLS = 4.0, 8  # weight factor on samples the finest knots leave outside the tolerance, and how often
 
@@ -146,9 +147,24 @@ class RunPath:
             x_tcp = (np.min(tcp[near - self.first], axis=0) * speed_scale / self.grid_rate) ** 2
         return np.minimum(x_joint, np.nan_to_num(x_tcp, nan=np.inf)), velocity
 
-    def tcp_rate(self, s):
-        """|dp/ds| (N,) at path positions s (N,), interpolated on the grid, mm/rad."""
-        return np.interp(s, self.grid, self.grid_rate)
+    def refined(self, moves, robot, s):
+        """This run with grid points added at path positions s (n,) inside it (their TCP rates computed).
+
+        Parameters
+        ----------
+        moves : Moves
+            The sequence the run's waypoint indices refer to (its tools).
+        robot : Robot
+            The nominal robot (the TCP Jacobian).
+        s : ndarray, shape (n,)
+            Path positions, rad; those already on the grid are ignored.
+        """
+        added = np.setdiff1d(s, self.grid)
+        grid = np.union1d(self.grid, added)
+        rate = np.empty(len(grid))
+        new = np.isin(grid, added, assume_unique=True)
+        rate[~new], rate[new] = self.grid_rate, tcp_rates(robot, moves, self.motion_at(added), self.path, added)
+        return dataclasses.replace(self, grid=grid, grid_rate=rate)
 
 
 def run_path(moves, robot, first, last, tolerance=TOLERANCE, *, part=None):
@@ -188,10 +204,7 @@ def run_path(moves, robot, first, last, tolerance=TOLERANCE, *, part=None):
     k = first + np.clip(np.searchsorted(s_waypoints, grid), 1, len(s_waypoints) - 1)
     row = np.searchsorted(grid, s)  # grid point of each sample
     at_waypoint = row[known[0]]
-    q_grid = np.empty((len(grid), 6))  # joints of the grid points whose kinematics are not known (not waypoints)
-    other = np.ones(len(grid), dtype=bool)
-    other[at_waypoint] = False
-    q_grid[other] = _interpolated(grid[other], s, q)
+    q_grid = _interpolated(grid, s, q)
     jac_grid = tcp_jacobians(robot, moves, k, q_grid, (at_waypoint, *known[1:]))
     jac = jac_grid[row]
     travel = _travel(q, jac)
@@ -199,8 +212,8 @@ def run_path(moves, robot, first, last, tolerance=TOLERANCE, *, part=None):
     tol = _tolerances(moves, first, last, travel, owner, waypoint_rows, tcp_lengths, tolerance)
     spline, deviation = _fit(s, q, jac, tol, np.min(moves.acceleration[first + 1 : last + 1], axis=0))
     inside = (grid >= s_a) & (grid <= s_b)
-    grid, jac_grid = grid[inside], jac_grid[inside]
-    rate = np.linalg.norm(np.einsum("nij,nj->ni", jac_grid[:, :3], spline(grid, 1)), axis=1)
+    grid = grid[inside]
+    rate = _grid_rates(robot, moves, k[inside], grid, spline, q_grid[inside], jac_grid[inside])
     path = JointPath(type(spline)(spline.t - s_a, spline.c, spline.k))  # a BSpline moved to start at s_a
     lengths = tcp_lengths[a - first : b - first + 1].copy()
     lengths[0] = 0.0
@@ -230,9 +243,9 @@ def stop_paths(moves, robot, first, last, tolerance=TOLERANCE):
         if size:
             first_point[rows.start] = offset
     at = first_point[known[0]] >= 0
-    jac_all = tcp_jacobians(robot, moves, np.repeat(np.arange(first + 1, last + 1), sizes),
-                            np.concatenate([_interpolated(grid, local, q[rows]) for _, rows, local, grid in runs]),
-                            (first_point[known[0][at]], known[1][at], known[2][at]))
+    owner_all = np.repeat(np.arange(first + 1, last + 1), sizes)
+    q_all = np.concatenate([_interpolated(grid, local, q[rows]) for _, rows, local, grid in runs])
+    jac_all = tcp_jacobians(robot, moves, owner_all, q_all, (first_point[known[0][at]], known[1][at], known[2][at]))
     paths = []
     for (k, rows, local, grid), offset in zip(runs, offsets):
         if not len(grid):
@@ -242,7 +255,8 @@ def stop_paths(moves, robot, first, last, tolerance=TOLERANCE):
         jac = jac_grid[np.searchsorted(grid, local)]
         travel = _travel(q[rows], jac)
         spline, deviation = _fit(local, q[rows], jac, np.full(len(local), tolerance), moves.acceleration[k])
-        rate = np.linalg.norm(np.einsum("nij,nj->ni", jac_grid[:, :3], spline(grid, 1)), axis=1)
+        rate = _grid_rates(robot, moves, owner_all[offset : offset + len(grid)], grid, spline,
+                           q_all[offset : offset + len(grid)], jac_grid)
         paths.append(RunPath(JointPath(spline), local[[0, -1]], grid, k - 1, k, np.array([0.0, travel[-1]]), rate,
                              deviation))
     return paths
@@ -270,6 +284,29 @@ def _collapsed(moves, robot, first, last):
 def _no_path(a, b):
     """The RunPath of waypoints a..b that do not move."""
     return RunPath(None, np.zeros(b - a + 1), np.zeros(1), a, b, np.zeros(b - a + 1), np.zeros(1), 0.0)
+
+
+def _grid_rates(robot, moves, owner, grid, spline, q_samples, jac_samples):
+    """|dp/ds| (G,) of a fitted path at its grid points, mm/rad: the TCP rate the timing bounds.
+
+    ``q_samples`` (G, 6) and ``jac_samples`` (G, 6, 6) are the samples' joints
+    and TCP Jacobians at the grid points (linear between samples); where the
+    fit leaves them (a blended corner it cuts) the Jacobian is computed
+    again on the path itself, so the rate is the path's own.
+    """
+    q_path, dq = spline(grid), spline(grid, 1)
+    jac = jac_samples
+    moved = np.flatnonzero(np.max(np.abs(q_path - q_samples), axis=1) > _SAME_JACOBIAN)
+    if moved.size:
+        jac = jac_samples.copy()
+        jac[moved] = tcp_jacobians(robot, moves, owner[moved], q_path[moved])
+    return np.linalg.norm(np.einsum("nij,nj->ni", jac[:, :3], dq), axis=1)
+
+
+def tcp_rates(robot, moves, owner, path, s):
+    """|J_pos(q(s)) q'(s)| (n,): mm of TCP travel per rad of path at path positions s (n,) of motions ``owner`` (n,)."""
+    jac = tcp_jacobians(robot, moves, owner, path(s))
+    return np.linalg.norm(np.einsum("nij,nj->ni", jac[:, :3], path(s, 1)), axis=1)
 
 
 def _interpolated(grid, s, q):

@@ -14,8 +14,10 @@ Segments (``method="auto"``):
 ``"ruckig"`` times runs with ruckig along their path (1 degree of freedom,
 worst-case bounds). Every segment is then sampled at 1 kHz
 (`trajcomp.timing.check`); where a sample exceeds a limit by more than
-half the tolerance, that limit is lowered by the overshoot and the
-segment timed again.
+half the tolerance, a TOPP-RA segment's grid is refined in the grid
+intervals holding such samples (the rest of the segment keeps its
+timing), a ruckig segment's limit is lowered by the overshoot, and the
+segment is timed again.
 
 Consecutive single motions from rest to rest (a program of exact stops)
 are built and timed together, up to `STOP_BATCH` at a time: one sampling
@@ -30,7 +32,7 @@ import itertools
 import numpy as np
 
 from trajcomp.program_items import JOINT
-from trajcomp.timing.check import LIMIT_TOLERANCE, Peaks, segment_peaks
+from trajcomp.timing.check import LIMIT_TOLERANCE, Peaks, dense_check, segment_peaks
 from trajcomp.timing.path import TOLERANCE, stop_paths
 from trajcomp.timing.result import Segment, TimingResult
 from trajcomp.timing.windows import WINDOW, run_windows
@@ -38,8 +40,11 @@ from trajcomp.timing.windows import WINDOW, run_windows
 METHODS = ("auto", "toppra", "ruckig")
 _BLOCK = 65536  # waypoints per block of the per-waypoint passes over a long run
 STOP_BATCH = 500  # single motions from rest to rest timed together at most
-_RETRIES = 6  # timings of one segment with lowered limits before giving up
-_TARGET = 1.0 + 0.5 * LIMIT_TOLERANCE  # re-time a segment whose samples exceed a limit by more than this
+_RETRIES = 6  # ruckig timings of one segment with lowered limits before giving up
+_REFINEMENTS = 6  # local refinements of a TOPP-RA run's grid where the dense check finds an overshoot
+_SPLIT = 4  # a grid interval to refine is split in this many
+_CURVATURE_STEP = 0.25  # share of a joint's acceleration limit the curvature term may change by across a grid interval
+_TARGET = 1.0005  # re-time a segment whose samples exceed a limit by more than this (1.000 to three digits)
 
 
 def retime(moves, robot, *, method="auto", tolerance=TOLERANCE):
@@ -87,7 +92,7 @@ def retime(moves, robot, *, method="auto", tolerance=TOLERANCE):
             _time_stops(timeline, batch, stop_paths(reached, robot, first, last, tolerance), moves, robot)
             continue
         runs = run_windows(reached, robot, first, last, tolerance, WINDOW if kind == "toppra" else None)
-        timeline.add(kind, first, last, runs, *_timed(kind, runs, moves, robot))
+        timeline.add(kind, first, last, *_timed(kind, runs, moves, robot))
     return timeline.result(robot)
 
 
@@ -120,9 +125,9 @@ def _time_stops(timeline, batch, runs, moves, robot):
             timeline.add(kind, first, last, [run], [None], None)
             continue
         law = law or ruckig_law(run, moves, robot)
-        peaks = segment_peaks(run, law, moves, jerk=kind == "ruckig")
-        if peaks.worst > _TARGET:  # the dense check found an overshoot: the motion alone, with lowered limits
-            (law,), peaks = _timed(kind, [run], moves, robot)
+        peaks = segment_peaks(run, law, moves, robot, jerk=kind == "ruckig")
+        if peaks.worst > _TARGET:  # the dense check found an overshoot: the motion timed again alone
+            (run,), (law,), peaks = _timed(kind, [run], moves, robot)
         timeline.add(kind, first, last, [run], [law], peaks)
 
 
@@ -175,44 +180,92 @@ def plan_segments(moves, method="auto"):
 
 
 def _timed(kind, runs, moves, robot):
-    """Time a run's windows, lowering the limits a sample exceeds until the dense check passes: (laws, Peaks).
-
-    A TOPP-RA run still over a limit after `_RETRIES` timings (an overshoot
-    between grid points that lower limits do not reach, e.g. inside a tight
-    blend where the programmed speed binds) runs its best timing uniformly
-    slower, by the factor that brings every sample within the limits.
-    """
+    """Time a run's windows until the dense check passes: (runs, laws, Peaks), the runs possibly refined."""
     if kind == "toppra":
-        from trajcomp.timing.toppra_run import toppra_laws as laws_of
-    else:  # a ruckig run is one window
-        from trajcomp.timing.ruckig_move import ruckig_law
+        return _toppra_timed(runs, moves, robot)
+    laws, peaks = _ruckig_timed(runs[0], moves, robot)
+    return runs, laws, peaks
 
-        def laws_of(runs, *args):
-            return [ruckig_law(runs[0], *args)]
+
+def _toppra_timed(runs, moves, robot):
+    """TOPP-RA on a run's windows, the grid refined where it is too coarse: (runs, laws, Peaks).
+
+    TOPP-RA holds the limits at grid points, with one path acceleration per
+    grid interval. Between two points the path's curvature (a blended
+    corner) or its TCP rate can take a 1 kHz sample over a limit, and where
+    the curvature's share of the joint acceleration changes a lot across an
+    interval the one path acceleration that suits both ends is slow.
+    Such grid intervals are split in `_SPLIT` and the run timed again, up
+    to `_REFINEMENTS` times: the overshoot shrinks with the square of the
+    interval, and the rest of the run keeps its timing. A run still over a
+    limit after that (not seen on the benchmark's programs) runs its timing
+    uniformly slower by the factor that brings every sample within.
+    """
+    from trajcomp.timing.toppra_run import toppra_laws
+
+    for refinement in range(_REFINEMENTS + 1):
+        laws = toppra_laws(runs, moves, robot)
+        checks = [None if law is None else dense_check(run, law, moves, robot, jerk=False)
+                  for run, law in zip(runs, laws)]
+        peaks = Peaks.worst_of([check[0] for check in checks if check is not None])
+        coarse = [None if law is None else _coarse(run, law, check, moves) for run, law, check in zip(runs, laws, checks)]
+        if not any(c is not None and c.size for c in coarse) or refinement == _REFINEMENTS:
+            break
+        runs = [run if c is None or not c.size else _split(run, c, moves, robot) for run, c in zip(runs, coarse)]
+    if peaks.worst > _TARGET:
+        factor = _TARGET * max(np.sqrt(peaks.acceleration_ratio.max()), peaks.velocity_ratio.max(), peaks.speed_ratio)
+        laws = [None if law is None else law.stretched(factor) for law in laws]
+        peaks = _peaks(runs, laws, moves, robot, jerk=False)
+    return runs, laws, peaks
+
+
+def _coarse(run, law, check, moves):
+    """Grid intervals (n,) of a timed run to split: one holding a sample over `_TARGET`, or across which the
+    joint acceleration the path's curvature takes at the law's speed (q'' sd^2) changes by more than
+    `_CURVATURE_STEP` of a limit."""
+    _, s, ratio = check
+    grid = run.grid
+    over = np.clip(np.searchsorted(grid, s[ratio > _TARGET], side="right") - 1, 0, len(grid) - 2)
+    acceleration = np.min(moves.acceleration[run.first + 1 : run.last + 1], axis=0)
+    demand = np.max(np.abs(run.path(grid, 2)) / acceleration, axis=1)  # per unit squared path speed
+    x = law.sd**2
+    step = np.abs(np.diff(demand)) * np.maximum(x[:-1], x[1:])
+    return np.union1d(over, np.flatnonzero(step > _CURVATURE_STEP))
+
+
+def _split(run, intervals, moves, robot):
+    """The run with grid intervals ``intervals`` (n,) each split in `_SPLIT`."""
+    grid = run.grid
+    split = grid[intervals, None] + np.outer(grid[intervals + 1] - grid[intervals], np.arange(1, _SPLIT) / _SPLIT)
+    return run.refined(moves, robot, split.ravel())
+
+
+def _ruckig_timed(run, moves, robot):
+    """A ruckig law along a run, its limits lowered by what a sample exceeds until the dense check passes.
+
+    ruckig times the path position as one degree of freedom under bounds
+    that hold for the whole run, so a lower bound is the only lever.
+    """
+    from trajcomp.timing.ruckig_move import ruckig_law
+
     velocity, acceleration, speed = np.ones(6), np.ones(6), 1.0
     best = None
     for _ in range(_RETRIES):
-        laws = laws_of(runs, moves, robot, velocity, acceleration, speed)
-        peaks = _peaks(kind, runs, laws, moves)
+        laws = [ruckig_law(run, moves, robot, velocity, acceleration, speed)]
+        peaks = _peaks([run], laws, moves, robot, jerk=True)
         if best is None or peaks.worst < best[1].worst:
             best = laws, peaks
         if peaks.worst <= _TARGET:
             break
         velocity = velocity / np.maximum(peaks.velocity_ratio, 1.0)
-        # an overshoot between grid points shrinks slower than the limit lowered by its ratio: lower it more
         acceleration = acceleration / np.maximum(peaks.acceleration_ratio, 1.0) ** 1.5
         speed = speed / max(peaks.speed_ratio, 1.0)
-    laws, peaks = best
-    if peaks.worst > _TARGET and kind == "toppra":
-        factor = _TARGET * max(np.sqrt(peaks.acceleration_ratio.max()), peaks.velocity_ratio.max(), peaks.speed_ratio)
-        laws = [None if law is None else law.stretched(factor) for law in laws]
-        peaks = _peaks(kind, runs, laws, moves)
-    return laws, peaks
+    return best
 
 
-def _peaks(kind, runs, laws, moves):
+def _peaks(runs, laws, moves, robot, *, jerk):
     """The dense check's worst of a run's timed windows."""
-    return Peaks.worst_of([segment_peaks(run, law, moves, jerk=kind == "ruckig")
+    return Peaks.worst_of([segment_peaks(run, law, moves, robot, jerk=jerk)
                            for run, law in zip(runs, laws) if law is not None])
 
 

@@ -69,7 +69,7 @@ def ruckig_law(run, moves, robot, velocity_scale=1.0, acceleration_scale=1.0, sp
     robot : Robot
         Jerk limits (``inf``: acceleration-limited) and the TCP Jacobian.
     velocity_scale, acceleration_scale, speed_scale : float or ndarray (6,)
-        Factors on the limits (see `trajcomp.timing.toppra_run.toppra_law`).
+        Factors on the limits (lowered where the dense check finds an overshoot).
 
     Returns
     -------

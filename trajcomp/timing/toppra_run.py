@@ -81,7 +81,7 @@ class ConstantAcceleration:
         return self.t[i] + dt
 
 
-def toppra_laws(runs, moves, robot, velocity_scale=1.0, acceleration_scale=1.0, speed_scale=1.0):
+def toppra_laws(runs, moves, robot):
     """The time-optimal constant-acceleration laws of a run's windows, at rest at both ends of the run.
 
     Consecutive windows share a grid point (a waypoint): the backward pass
@@ -101,11 +101,6 @@ def toppra_laws(runs, moves, robot, velocity_scale=1.0, acceleration_scale=1.0, 
         Limits of each motion.
     robot : Robot
         For the TCP Jacobian.
-    velocity_scale, acceleration_scale : float or ndarray (6,)
-        Factors on the joint limits (the dense check lowers them where the
-        path overshoots between grid points).
-    speed_scale : float
-        Factor on the programmed TCP speeds.
 
     Returns
     -------
@@ -118,14 +113,13 @@ def toppra_laws(runs, moves, robot, velocity_scale=1.0, acceleration_scale=1.0, 
         The path speed must be zero over a whole grid interval (a singular
         or kinked path): names the waypoint, its line and the joint.
     """
-    scales = (velocity_scale, acceleration_scale, speed_scale)
     bounds, end = [], 0.0
     for run in reversed(runs):
         if run.path is None:
             bounds.append(None)
             end = 0.0
             continue
-        grid, dq, ddq, acceleration, x_max, _ = _problem(run, moves, *scales)
+        grid, dq, ddq, acceleration, x_max, _ = _problem(run, moves)
         bounds.append(backward(grid, dq, ddq, acceleration, x_max, end))
         end = bounds[-1][0]
     laws, start = [], 0.0
@@ -134,14 +128,14 @@ def toppra_laws(runs, moves, robot, velocity_scale=1.0, acceleration_scale=1.0, 
             laws.append(None)
             start = 0.0
             continue
-        grid, dq, ddq, acceleration = _path_problem(run, moves, acceleration_scale)  # the bound x_max is in h
+        grid, dq, ddq, acceleration = _path_problem(run, moves)  # the bound x_max is in h
         x = forward(grid, dq, ddq, acceleration, h, start)
         start = x[-1]
         try:
             laws.append(ConstantAcceleration.from_speeds(grid, np.sqrt(x)))
         except ValueError:
             i = int(np.argmin(x[:-1] + x[1:]))
-            raise _stuck(run, moves, grid, i, dq, run.speed_bound(moves, velocity_scale, speed_scale)[1]) from None
+            raise _stuck(run, moves, grid, i, dq, run.speed_bound(moves)[1]) from None
     return laws
 
 
@@ -186,17 +180,17 @@ def rest_to_rest_laws(runs, moves, robot):
     return laws
 
 
-def _problem(run, moves, velocity_scale=1.0, acceleration_scale=1.0, speed_scale=1.0):
+def _problem(run, moves):
     """A run's TOPP-RA data: grid (G,), q' and q'' there (G, 6), acceleration limits (6,), x bound (G,),
     joint velocity limits (G, 6)."""
-    grid, dq, ddq, acceleration = _path_problem(run, moves, acceleration_scale)
-    x_max, velocity = run.speed_bound(moves, velocity_scale, speed_scale, dq=dq)
+    grid, dq, ddq, acceleration = _path_problem(run, moves)
+    x_max, velocity = run.speed_bound(moves, dq=dq)
     return grid, dq, ddq, acceleration, np.minimum(x_max, _X_CAP), velocity
 
 
-def _path_problem(run, moves, acceleration_scale=1.0):
+def _path_problem(run, moves):
     """What the forward pass needs of a run: grid (G,), q' and q'' there (G, 6), acceleration limits (6,)."""
-    acceleration = np.min(moves.acceleration[run.first + 1 : run.last + 1], axis=0) * acceleration_scale
+    acceleration = np.min(moves.acceleration[run.first + 1 : run.last + 1], axis=0)
     return run.grid, run.path(run.grid, 1), run.path(run.grid, 2), acceleration
 
 
