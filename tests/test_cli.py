@@ -186,3 +186,54 @@ def test_ctrl_c_exits_130_with_a_line_and_no_traceback(tmp_path, monkeypatch, ca
     assert main(["robots"]) == 130
     err = capsys.readouterr().err
     assert err == "trajcomp: interrupted: what was not finished was not written\n"
+
+
+def _crashing(monkeypatch):
+    import trajcomp.commands.robots as robots
+
+    def crash(args):
+        raise ZeroDivisionError("x" * 5000)  # an unexpected exception whose text is long
+
+    monkeypatch.setattr(robots, "run", crash)
+
+
+def test_an_unexpected_exception_exits_3_as_a_bug_with_its_traceback_saved(monkeypatch, capsys):
+    _crashing(monkeypatch)
+    assert main(["robots"]) == 3
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "this is a bug" in err and "ZeroDivisionError: " + "x" * 200 + "..." in err
+    saved = Path(err.rsplit("traceback saved in ", 1)[1].strip())
+    assert "Traceback (most recent call last)" in saved.read_text() and "def crash" not in err
+    saved.unlink()
+
+
+def test_debug_prints_the_traceback_of_a_crash(monkeypatch, capsys):
+    _crashing(monkeypatch)
+    assert main(["--debug", "robots"]) == 3
+    err = capsys.readouterr().err
+    assert "Traceback (most recent call last)" in err and err.rstrip().endswith("traceback above")
+
+
+def test_sigterm_exits_143_like_an_interrupt_and_leaves_no_temporary(tmp_path):
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    script = (
+        "import sys, time\n"
+        "import trajcomp.atomic as atomic, trajcomp.commands.robots as robots\n"
+        "from trajcomp.cli import main\n"
+        "def slow():\n"
+        "    print('writing', flush=True); yield b'a'; time.sleep(30); yield b'b'\n"
+        "robots.run = lambda args: atomic.write_files_atomic({'out.txt': slow()})\n"
+        "sys.exit(main(['robots']))\n"
+    )
+    process = subprocess.Popen([sys.executable, "-c", script], cwd=tmp_path, stdout=subprocess.PIPE,
+                               stderr=subprocess.PIPE, text=True)
+    assert process.stdout.readline() == "writing\n"
+    time.sleep(0.2)
+    process.send_signal(signal.SIGTERM)
+    _, err = process.communicate(timeout=20)
+    assert process.returncode == 143 and "terminated (SIGTERM)" in err and "Traceback" not in err
+    assert sorted(p.name for p in tmp_path.iterdir()) == []

@@ -10,17 +10,17 @@ cluster), and turns every error of one file into that file's result.
 import dataclasses
 import glob
 import json
-import traceback
 from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
 from trajcomp import __version__, formats
+from trajcomp import crash
 from trajcomp.atomic import write_atomic
 from trajcomp.errors import TrajcompError
-from trajcomp.parallel import ignore_interrupts
+from trajcomp.parallel import init_worker
 
 PASS, FAIL, ERROR, CRASH = "pass", "fail", "error", "crash"
-EXIT_CODES = {PASS: 0, FAIL: 1, ERROR: 2, CRASH: 3}  # a crash is a bug: neither success nor bad input
+EXIT_CODES = {PASS: 0, FAIL: 1, ERROR: 2, CRASH: crash.EXIT_CODE}  # a crash is a bug: neither success nor bad input
 SUMMARY_SCHEMA = "trajcomp-batch/1"
 
 
@@ -101,8 +101,7 @@ def run_one(job, path, output):
     except TrajcompError as exc:
         return FileResult(str(path), status=ERROR, message=str(exc))
     except Exception as exc:  # one file's bug must not stop the batch; it is reported as a crash
-        return FileResult(str(path), status=CRASH, message=f"{type(exc).__name__}: {exc}",
-                          lines=tuple(traceback.format_exc().splitlines()))
+        return FileResult(str(path), status=CRASH, message=crash.bug_message(exc, crash.save_traceback(exc)))
 
 
 def run_batch(job, inputs, outputs, *, jobs=1, scheduler=None, done=None):
@@ -131,7 +130,7 @@ def run_batch(job, inputs, outputs, *, jobs=1, scheduler=None, done=None):
     if jobs <= 1 or len(inputs) <= 1:
         results = (run_one(job, i, o) for i, o in zip(inputs, outputs))
         return [_reported(result, done) for result in results]
-    pool = ProcessPoolExecutor(max_workers=jobs, initializer=ignore_interrupts)
+    pool = ProcessPoolExecutor(max_workers=jobs, initializer=init_worker)
     try:
         return [_reported(result, done) for result in pool.map(run_one, [job] * len(inputs), inputs, outputs)]
     finally:  # interrupted: the files not started are dropped, the running ones finish (each written whole)

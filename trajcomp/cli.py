@@ -2,8 +2,10 @@
 
 Library code raises TrajcompError; this is the only place that prints errors
 and chooses exit codes: 0 success, 1 the result fails a requested tolerance
-or limit, 2 bad usage or bad input; 130 (the shells' code of Ctrl-C) when
-the user interrupts the run, which writes nothing it had not finished.
+or limit, 2 bad usage or bad input, 3 an unexpected exception (a bug:
+`trajcomp.crash`); 130 (the shells' code of Ctrl-C) when the user interrupts
+the run and 143 when it is stopped by SIGTERM (what Docker, systemd and CI
+send), handled alike: what was not finished is not written.
 
 Each process of a run computes on one BLAS / OpenMP thread unless the user
 set the thread variables: the linear algebra here is many small products,
@@ -16,12 +18,18 @@ import argparse
 import importlib
 import logging
 import os
+import signal
 import sys
+import threading
+import traceback
 
 from trajcomp import __version__
+from trajcomp.crash import bug_message, save_traceback
+from trajcomp.crash import EXIT_CODE as CRASHED
 from trajcomp.errors import ToleranceError, TrajcompError
 
 INTERRUPTED = 130  # exit code of a run stopped by Ctrl-C (SIGINT), as shells report it
+TERMINATED = 128 + signal.SIGTERM  # 143: stopped by SIGTERM, as shells report it
 THREAD_VARIABLES = ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS")  # read when numpy loads
 COMMANDS = (
     "robots",
@@ -50,6 +58,8 @@ def build_parser(only=None):
         description="Offline absolute-accuracy compensation for 6-axis robot arms.",
     )
     parser.add_argument("--version", action="version", version=f"trajcomp {__version__}")
+    parser.add_argument("--debug", action="store_true",
+                        help="on an internal error (a bug, exit 3) print its traceback instead of saving it to a file")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
     for name in COMMANDS if only is None else only:
         module = importlib.import_module(f"trajcomp.commands.{name}")
@@ -59,9 +69,18 @@ def build_parser(only=None):
 
 def _needed(argv):
     """The commands a command line needs registered: the one it runs, none for --version, else all (None)."""
+    argv = [a for a in argv if a != "--debug"]
     if argv and argv[0] in COMMANDS:
         return (argv[0],)
     return () if argv == ["--version"] else None
+
+
+class Terminated(KeyboardInterrupt):
+    """SIGTERM, raised where the run is so that it unwinds as after Ctrl-C (temporaries removed)."""
+
+
+def _terminate(signum, frame):
+    raise Terminated
 
 
 def main(argv=None):
@@ -69,10 +88,21 @@ def main(argv=None):
     argv = sys.argv[1:] if argv is None else list(argv)
     for name in THREAD_VARIABLES:  # before the commands import numpy (this module does not)
         os.environ.setdefault(name, "1")
-    parser = build_parser(_needed(argv))
-    args = parser.parse_args(argv)
-    logging.basicConfig(level=logging.WARNING, format="trajcomp: warning: %(message)s")
+    if threading.current_thread() is not threading.main_thread():  # signals go to the main thread only
+        return _run(argv)
+    previous = signal.signal(signal.SIGTERM, _terminate)
     try:
+        return _run(argv)
+    finally:
+        signal.signal(signal.SIGTERM, previous)
+
+
+def _run(argv):
+    """Parse ``argv`` and run its command; the exit code."""
+    args = None
+    try:
+        args = build_parser(_needed(argv)).parse_args(argv)
+        logging.basicConfig(level=logging.WARNING, format="trajcomp: warning: %(message)s")
         return args.run(args) or 0
     except ToleranceError as exc:
         print(f"trajcomp: {exc}", file=sys.stderr)
@@ -80,9 +110,18 @@ def main(argv=None):
     except TrajcompError as exc:
         print(f"trajcomp: error: {exc}", file=sys.stderr)
         return 2
+    except Terminated:
+        print("trajcomp: terminated (SIGTERM): what was not finished was not written", file=sys.stderr)
+        return TERMINATED
     except KeyboardInterrupt:
         print("trajcomp: interrupted: what was not finished was not written", file=sys.stderr)
         return INTERRUPTED
+    except Exception as exc:  # anything else is a bug: say so, keep the traceback, exit 3
+        debug = args.debug if args is not None else "--debug" in argv
+        if debug:
+            traceback.print_exc()
+        print(f"trajcomp: {bug_message(exc, None if debug else save_traceback(exc), printed=debug)}", file=sys.stderr)
+        return CRASHED
 
 
 if __name__ == "__main__":

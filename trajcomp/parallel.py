@@ -14,6 +14,7 @@ compute.
 """
 
 import contextlib
+import ctypes
 import multiprocessing
 import os
 import signal
@@ -21,6 +22,7 @@ import signal
 _TASK = None  # the function of the pool being started, inherited by its forked workers
 _LOOKAHEAD = 2  # blocks a worker may compute ahead of the consumer, each
 _MEANWHILE = []  # work for this process while the next pool's workers compute (`meanwhile`)
+_PR_SET_PDEATHSIG = 1  # prctl option of <linux/prctl.h>: the signal a process gets when its parent dies
 
 
 def usable_cores():
@@ -57,7 +59,7 @@ def map_blocks(function, count, workers=1):
     global _TASK
     _TASK = function
     try:
-        pool = multiprocessing.get_context("fork").Pool(workers, ignore_interrupts)  # they start here, with it
+        pool = multiprocessing.get_context("fork").Pool(workers, init_worker)  # they start here, with it
     finally:
         _TASK = None
     try:
@@ -120,7 +122,7 @@ def in_background(function, workers=1):
     global _TASK
     _TASK = lambda k: function()  # noqa: E731 (the forked process's task)
     try:
-        pool = multiprocessing.get_context("fork").Pool(1, ignore_interrupts)
+        pool = multiprocessing.get_context("fork").Pool(1, init_worker)
     finally:
         _TASK = None
     pending = pool.apply_async(_run, (0,))
@@ -135,9 +137,24 @@ def in_background(function, workers=1):
     return result
 
 
-def ignore_interrupts():
-    """Initializer of worker processes: Ctrl-C is the parent's to handle (it stops them), not theirs to report."""
+def init_worker():
+    """Initializer of worker processes: they die with their parent, and Ctrl-C is the parent's to handle.
+
+    Ctrl-C reaches the whole process group; the parent stops the workers,
+    which do not report it themselves. SIGTERM gets its default action back
+    (a forked worker inherits the parent's handler). On Linux the kernel
+    kills a worker whose parent dies (``PR_SET_PDEATHSIG``), even by
+    SIGKILL, so that no orphan goes on writing outputs.
+    """
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)
+    parent = os.getppid()
+    try:
+        ctypes.CDLL(None, use_errno=True).prctl(_PR_SET_PDEATHSIG, signal.SIGKILL)
+    except (OSError, AttributeError):  # not Linux: workers end when their task queue closes
+        return
+    if os.getppid() != parent:  # the parent died before the request was made
+        os._exit(1)
 
 
 def _run(k):
