@@ -104,3 +104,22 @@ def test_one_missing_file_is_an_error_not_a_folder(tmp_path, kuka_model, capsys)
                  "-o", str(tmp_path / "out.src")]) == 2
     assert "no such file" in capsys.readouterr().err
     assert not (tmp_path / "out.src").exists()
+
+
+def test_a_crash_in_one_file_is_a_bug_report_and_exit_3(cell, tmp_path, kuka_model, monkeypatch):
+    read = formats.read
+
+    def crashing(path, *args, **kwargs):
+        if Path(path).name == "beta.src":
+            raise IndexError("a bug")
+        return read(path, *args, **kwargs)
+
+    monkeypatch.setattr(formats, "read", crashing)
+    out = tmp_path / "out"
+    assert main(["compensate", str(cell / "alpha.src"), str(cell / "beta.src"), "--model", str(kuka_model),
+                 "-o", str(out), "--jobs", "1"]) == 3
+    files = _summary(out / "summary.json")
+    assert files["alpha.src"]["status"] == "pass" and files["beta.src"]["status"] == "crash"
+    message = files["beta.src"]["message"]
+    assert "this is a bug" in message and "IndexError: a bug" in message
+    Path(message.rsplit("traceback saved in ", 1)[1]).unlink()
