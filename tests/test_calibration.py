@@ -64,7 +64,8 @@ def test_outside_policy(setup):
     far = targets[:2].copy()
     far[:, :3, 3] = [[550, 150, 250], [250, 100, 500]]  # below and beside the cube
     assert compensate(model, far, mode="composite").outside.all()
-    with pytest.raises(ModelError, match="outside the compensation grid"):
+    with pytest.raises(ModelError, match=r"2 of 2 targets lie outside the calibrated region \(--outside error\): "
+                       r"target 0: outside the grid; target 1: outside the grid"):
         compensate(model, far, mode="composite", outside="error")
 
 

@@ -237,3 +237,44 @@ def test_sigterm_exits_143_like_an_interrupt_and_leaves_no_temporary(tmp_path):
     _, err = process.communicate(timeout=20)
     assert process.returncode == 143 and "terminated (SIGTERM)" in err and "Traceback" not in err
     assert sorted(p.name for p in tmp_path.iterdir()) == []
+
+
+def _turn_program(path):
+    """A UR10 CSV path whose 4th LIN waypoint declares J6 a turn below where the linear motion reaches it."""
+    from trajcomp.kinematics import fk
+    from trajcomp.robot import load_robot
+    from trajcomp.transforms import matrix_to_pose
+
+    robot = load_robot("ur10")
+    q = robot.home + np.linspace(0.0, 0.3, 5)[:, None] * np.array([0.5, -0.2, 0.3, 0.2, 0.3, 0.6])
+    declared = q.copy()
+    declared[3, 5] -= 2 * np.pi
+    poses = matrix_to_pose(fk(robot, q))
+    rows = [f"{','.join(f'{v:.6f}' for v in [*p[:3], *np.degrees(p[3:])])},{'PTP,' if k == 0 else 'LIN,100'},"
+            + ",".join(f"{v:.6f}" for v in np.degrees(d)) for k, (p, d) in enumerate(zip(poses, declared))]
+    path.write_text("x,y,z,a,b,c,motion,speed,j1,j2,j3,j4,j5,j6\n" + "\n".join(rows) + "\n")
+    return path
+
+
+def test_every_stderr_warning_is_in_the_report(tmp_path, capsys):
+    """The re-timing's warning of a LIN reaching a waypoint in another turn was on stderr only (`"warnings": []`)."""
+    import json
+
+    program = _turn_program(tmp_path / "turn.csv")
+    assert main(["retime", str(program), "--robot", "ur10", "-o", str(tmp_path / "out.csv"),
+                 "--report", str(tmp_path / "r"), "--json-only"]) == 0
+    printed = [line.removeprefix("warning: ") for line in capsys.readouterr().err.splitlines()
+               if line.startswith("warning: ")]
+    assert printed == ["the linear motion reaches turn.csv:5 with J6 at 7.7 deg, not -352.3 (a linear or circular "
+                       "motion turns continuously; the declared turn applies to joint motions)"]
+    assert json.loads((tmp_path / "r.json").read_text())["warnings"] == printed
+
+
+def test_outside_error_names_each_target_by_file_and_line(kuka_model, tmp_path, capsys):
+    program = tmp_path / "p.csv"
+    program.write_text("x,y,z,a,b,c,motion\n500,50,750,0,90,0,PTP\n500,50,950,0,90,0,LIN\n500,50,700,0,90,0,LIN\n")
+    assert main(["compensate", str(program), "--model", str(kuka_model), "--outside", "error",
+                 "-o", str(tmp_path / "out.csv")]) == 2
+    assert ("p.csv: 1 of 3 targets lie outside the calibrated region (--outside error): p.csv:3: outside the grid"
+            in capsys.readouterr().err)
+    assert not (tmp_path / "out.csv").exists()

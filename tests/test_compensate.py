@@ -8,8 +8,9 @@ from trajcomp.compensate import compensate, program_corrector
 from trajcomp.errors import IKError, ModelError
 from trajcomp.ik import IKResult
 from trajcomp.plan import default_orientation
+from trajcomp.postprocess import _compensation_warnings
 from trajcomp.transforms import abc_to_matrix
-from virtual_cell import landing_error, virtual_cell
+from virtual_cell import CORNER, SIDE, landing_error, virtual_cell
 
 
 @pytest.fixture(scope="module")
@@ -53,8 +54,10 @@ def test_failures_in_chunks_are_named_as_in_one_piece(cell, monkeypatch):
 
     outside = targets_in_cube(cell.robot, 30, 3)
     outside[[8, 20], :3, 3] = [[550.0, 150.0, 250.0], [250.0, 100.0, 500.0]]
-    with pytest.raises(ModelError, match=r"target 8 at .* \(2 targets outside\)"):
+    with pytest.raises(ModelError, match=r"2 of 30 targets lie outside .*: target 8: outside the grid; target 20:"):
         compensate(cell.model, outside, outside="error")
+    with pytest.raises(ModelError, match=r"prog.csv: 2 of 30 .*: prog.csv line 10: outside the grid; prog.csv line 22"):
+        compensate(cell.model, outside, outside="error", label="prog.csv", names=names)
 
 
 def test_program_corrector_compensates_each_tool_group_with_its_tool(cell):
@@ -101,3 +104,48 @@ def test_a_failure_among_the_rows_of_a_later_pass_is_counted_among_all_targets()
     names = [f"line {k}" for k in range(5)]
     with pytest.raises(IKError, match=r"^p: no IK solution for 1 of 5 targets \(line 3: unreachable\)$"):
         compensation._of_all(solved, np.array([1, 3]), 5).raise_on_failure("p", names)
+
+
+def test_targets_near_a_face_keep_the_grid_value_where_their_command_leaves_the_grid(cell):
+    """Grid mode gave a target just inside a face no correction when its command left the grid (2 mm off)."""
+    lower, upper = np.array(CORNER), np.array(CORNER) + SIDE
+    centre = (lower + upper) / 2
+    faces = np.repeat(centre[None], 6, axis=0)
+    for axis in range(3):
+        faces[2 * axis, axis], faces[2 * axis + 1, axis] = lower[axis] + 0.01, upper[axis] - 0.01
+    targets = np.tile(np.eye(4), (6, 1, 1))
+    targets[:, :3, :3] = abc_to_matrix(default_orientation(cell.robot))
+    targets[:, :3, 3] = faces
+    result = compensate(cell.model, targets, mode="grid")
+    leaves = result.near_face
+    assert leaves.any() and not leaves.all()  # the correction points out of the grid at some faces only
+    command = result.T_command[:, :3, 3]
+    assert np.array_equal(leaves, np.any((command < lower) | (command > upper), axis=1))
+    assert not result.outside.any()  # the targets are inside: not flagged outside, and not refused
+    np.testing.assert_array_equal(compensate(cell.model, targets, mode="grid", outside="error").near_face, leaves)
+    landed = landing_error(cell, np.degrees(result.q), targets)
+    as_planned = landing_error(cell, np.degrees(compensate(cell.model, targets, mode="none").q), targets)
+    assert as_planned[leaves].min() > 1.5  # what zero correction there gave
+    assert landed.max() < 0.25  # grid mode's accuracy mid-cell (idw8 over 100 mm cells), at every face
+    assert np.linalg.norm(result.correction[leaves], axis=1).min() > 1.0  # really corrected
+
+
+def test_near_face_and_other_tool_targets_are_named_in_the_program_warnings(cell):
+    lower = np.array(CORNER)
+    targets = np.tile(np.eye(4), (3, 1, 1))
+    targets[:, :3, :3] = abc_to_matrix(default_orientation(cell.robot))
+    targets[:, :3, 3] = [lower + [250, 250, 0.01], lower + [250, 250, 250], lower + [250, 0.01, 250]]
+    gripper = np.eye(4)
+    gripper[:3, 3] = [0.0, 30.0, 150.0]
+    tools = np.stack([cell.model.nominal.T_flange_tool, gripper, cell.model.nominal.T_flange_tool])
+    seeds = compensate(cell.model, targets).q
+    correct = program_corrector(cell.model, mode="grid")
+    result = correct(targets, tools, seeds, ["P1 (p.src:3)", "P2 (p.src:4)", "P3 (p.src:5)"])
+    assert not cell.model.places_other_tools
+    assert result.other_tool.tolist() == [False, True, False]
+    warnings = _compensation_warnings(result, ["P1 (p.src:3)", "P2 (p.src:4)", "P3 (p.src:5)"])
+    faces = [w for w in warnings if "near a face" in w]
+    assert len(faces) == (1 if result.near_face.any() else 0)
+    assert all(label in faces[0] for label, near in zip(["P1", "P2", "P3"], result.near_face) if near)
+    assert any(w.startswith("1 targets use a tool other than the calibrated TCP") and w.endswith("P2 (p.src:4)")
+               for w in warnings)

@@ -306,6 +306,8 @@ class Compensator:
         if report.outside_grid.any():
             log.warning("%s: %d of %d targets lie outside the compensation grid: %s policy applied",
                         label, int(report.outside_grid.sum()), len(report.outside_grid), self.outside)
+        for warning in report.warnings:
+            log.warning("%s: %s", label, warning)
         return edited, report
 
 

@@ -17,11 +17,10 @@ predicts it lands within `LANDED`).
 
 import dataclasses
 import functools
-import logging
 
 import numpy as np
 
-from trajcomp.errors import TrajcompError
+from trajcomp.errors import ModelError, TrajcompError
 from trajcomp.frames import tool_groups
 from trajcomp.ik import IKResult, ik_near, ik_numeric, pose_error
 from trajcomp.kinematics import fk
@@ -32,7 +31,6 @@ from trajcomp.plan import batch_seed
 ITERATIONS = 3  # fixed-point passes at most
 LANDED = 1e-5  # mm: a target whose predicted landing error is below this needs no further pass
 CHUNK = 16384  # targets compensated together: the working arrays stay small and memory stays flat
-log = logging.getLogger(__name__)
 
 
 def same_tool(T_a, T_b):
@@ -57,6 +55,15 @@ class CompensationResult:
     residual : ndarray, shape (N,)
         Distance from the target to where the model predicts the arm lands
         with the command, mm: what the fixed-point iteration left.
+    near_face : ndarray, shape (N,) bool
+        Targets inside the grid whose command lies outside it (near a face,
+        the correction moves the command out): the grid's nearest value is
+        used there, as ``outside="clamp"`` would, not zero. All False when
+        not given.
+    other_tool : ndarray, shape (N,) bool
+        Targets on a tool other than the measured TCP, compensated with a
+        model that cannot place other tools (`CompensationModel.places_other_tools`).
+        All False when not given.
     """
 
     T_command: np.ndarray
@@ -64,6 +71,13 @@ class CompensationResult:
     correction: np.ndarray
     outside: np.ndarray
     residual: np.ndarray
+    near_face: np.ndarray = None
+    other_tool: np.ndarray = None
+
+    def __post_init__(self):
+        for name in ("near_face", "other_tool"):
+            if getattr(self, name) is None:
+                object.__setattr__(self, name, np.zeros(len(self.residual), dtype=bool))
 
     @classmethod
     def concatenate(cls, parts, order, n):
@@ -125,20 +139,42 @@ def compensate(model, targets, *, mode=None, tool=None, seed=None, outside="mode
     nominal = model.nominal if tool is None else model.nominal.replace(T_flange_tool=tool)
     seed = batch_seed(nominal, targets) if seed is None else seed
     seed = np.broadcast_to(np.asarray(seed, dtype=float), (len(targets), 6))
-    rows = functools.partial(_compensate_rows, model, mode, nominal, model.arm(mode, tool, outside),
-                             model.error_field(mode), outside, label)
+    policy = "model" if outside == "error" else outside  # "error": the targets outside are refused below, all named
+    arm = model.arm(mode, tool, policy)
+    rows = functools.partial(_compensate_rows, model, mode, nominal, arm, model.error_field(mode), policy, label)
     if len(targets) <= CHUNK:
-        return rows(targets, seed, names)
-    starts = range(0, len(targets), CHUNK)
-    chunks = map_blocks(lambda k: rows(targets[starts[k] : starts[k] + CHUNK], seed[starts[k] : starts[k] + CHUNK]),
-                        len(starts), workers)
-    try:
-        return CompensationResult.concatenate(chunks, [slice(i, i + CHUNK) for i in starts], len(targets))
-    except TrajcompError:
-        # A chunk names its targets from 0 and counts only its own: redo the whole
-        # set in one piece (each target is compensated on its own, so it fails the
-        # same way) for the message naming every failing target of the set.
-        return rows(targets, seed, names)
+        result = rows(targets, seed, names)
+    else:
+        starts = range(0, len(targets), CHUNK)
+        chunks = map_blocks(lambda k: rows(targets[starts[k] : starts[k] + CHUNK],
+                                           seed[starts[k] : starts[k] + CHUNK]), len(starts), workers)
+        try:
+            result = CompensationResult.concatenate(chunks, [slice(i, i + CHUNK) for i in starts], len(targets))
+        except TrajcompError:
+            # A chunk names its targets from 0 and counts only its own: redo the whole
+            # set in one piece (each target is compensated on its own, so it fails the
+            # same way) for the message naming every failing target of the set.
+            result = rows(targets, seed, names)
+    if outside == "error" and result.outside.any():
+        _refuse_outside(model, mode, arm, result, label, names)
+    return result
+
+
+def _refuse_outside(model, mode, arm, result, label, names):
+    """ModelError naming every target outside the calibrated region and why (``outside="error"``)."""
+    field = model.error_field(mode)
+    reasons = [
+        (np.zeros(len(result.q), dtype=bool) if field is None else ~field.contains(result.T_command[:, :3, 3])
+         & ~result.near_face, "outside the grid"),
+        (arm.outside_rows(result.q), "joints outside the joint range the model was calibrated on"),
+        (model.unmeasured_posture(result.q), "in an arm posture the calibration never measured"),
+    ]
+    name = (lambda i: f"target {i}") if names is None else names.__getitem__
+    out = np.flatnonzero(result.outside)
+    shown = "; ".join(f"{name(i)}: " + ", ".join(why for mask, why in reasons if mask[i]) for i in out[:10])
+    more = f"; and {out.size - 10} more" if out.size > 10 else ""
+    raise ModelError(f"{label}: {out.size} of {len(result.q)} targets lie outside the calibrated region "
+                     f"(--outside error): {shown}{more}")
 
 
 def _compensate_rows(model, mode, nominal, arm, field, outside, label, targets, seed, names=None):
@@ -153,7 +189,8 @@ def _compensate_rows(model, mode, nominal, arm, field, outside, label, targets, 
     micrometres from where it lands).
     """
     goal = targets[:, :3, 3]
-    error_term = functools.partial(_error_term, model, mode, field, outside)
+    inside = np.zeros(len(goal), dtype=bool) if field is None else field.contains(goal)
+    error_term = functools.partial(_error_term, model, mode, field, outside, inside)
     q, command, residual = np.array(seed), fk(nominal, seed), np.empty(len(targets))
     passes = ITERATIONS if mode == "linear" or field is not None else 1
     offset = np.zeros_like(goal)
@@ -175,15 +212,25 @@ def _compensate_rows(model, mode, nominal, arm, field, outside, label, targets, 
         if not todo.size:
             break
     outside_region = flagged | arm.outside_rows(q) | model.unmeasured_posture(q, outside)
-    return CompensationResult(command, q, command[:, :3, 3] - goal, outside_region, residual)
+    return CompensationResult(command, q, command[:, :3, 3] - goal, outside_region, residual,
+                              near_face=inside & ~field.contains(command[:, :3, 3]) if field is not None else None)
 
 
-def _error_term(model, mode, field, outside, commanded):
-    """The mode's additive error (N, 3), mm, at commanded positions (N, 3) and the rows outside its grid (N,)."""
-    if field is not None:
-        return evaluate_field(field, commanded, outside=outside)
-    flagged = np.zeros(len(commanded), dtype=bool)
-    return (model.linear.predict_error(commanded) if mode == "linear" else np.zeros_like(commanded)), flagged
+def _error_term(model, mode, field, outside, inside, commanded):
+    """The mode's additive error (N, 3), mm, at commanded positions (N, 3) and the rows outside its grid (N,).
+
+    Rows whose target is ``inside`` (N,) the grid take the grid's nearest
+    value where their command leaves it (near a face): their error is the
+    grid's there, not zero, and they are not outside.
+    """
+    if field is None:
+        flagged = np.zeros(len(commanded), dtype=bool)
+        return (model.linear.predict_error(commanded) if mode == "linear" else np.zeros_like(commanded)), flagged
+    values, flagged = evaluate_field(field, commanded, outside=outside)
+    near_face = inside & flagged
+    if near_face.any():
+        values[near_face] = evaluate_field(field, commanded[near_face], outside="clamp")[0]
+    return values, flagged & ~inside
 
 
 def _of_all(solved, rows, n):
@@ -222,7 +269,8 @@ def program_corrector(model, *, mode=None, outside="model", label="program", wor
     CompensationResult``. Targets are grouped by tool (a program uses few)
     and each group is compensated in one vectorized call. Targets on the
     robot's declared tool are the TCP that was measured: they get the
-    identified tool for the real arm (``tool=None`` of `compensate`).
+    identified tool for the real arm (``tool=None`` of `compensate`); the
+    others are marked ``other_tool`` when the model cannot place other tools.
     ``workers`` processes share the chunks of each group (`compensate`).
     """
 
@@ -237,10 +285,10 @@ def program_corrector(model, *, mode=None, outside="model", label="program", wor
 
     def on_tool(tool, targets, seeds, names):
         measured_tcp = same_tool(tool, model.nominal.T_flange_tool)
-        if not measured_tcp and not model.places_other_tools:
-            log.warning("%s: %d targets use a tool other than the calibrated TCP: %s",
-                        label, len(targets), model.other_tools_reason)
-        return compensate(model, targets, mode=mode, tool=None if measured_tcp else tool, seed=seeds,
-                          outside=outside, label=label, names=names, workers=workers)
+        result = compensate(model, targets, mode=mode, tool=None if measured_tcp else tool, seed=seeds,
+                            outside=outside, label=label, names=names, workers=workers)
+        if measured_tcp or model.places_other_tools:
+            return result
+        return dataclasses.replace(result, other_tool=np.ones(len(targets), dtype=bool))
 
     return correct

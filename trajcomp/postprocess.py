@@ -199,7 +199,25 @@ def compensate_program(program, correct, robot, *, tools=None, frames=None, join
         ),
         **_program_facts(program, joint_index, joint_targets),
     )
+    if result is not None:
+        report = dataclasses.replace(report, warnings=report.warnings + _compensation_warnings(result, labels))
     return edited, report
+
+
+def _compensation_warnings(result, labels):
+    """What a `CompensationResult` did that the user must know: grid values held at a face, tools it cannot place."""
+    out = []
+    for mask, what in (
+        (result.near_face, "lie inside the grid near a face, where the correction moves their command out of it: "
+                           "the grid's nearest value is used there (as --outside clamp), not zero"),
+        (result.other_tool, "use a tool other than the calibrated TCP, which the model cannot place (the model "
+                            "file's other_tools_reason says why): they may miss by tenths of a mm"),
+    ):
+        rows = np.flatnonzero(mask)
+        if rows.size:
+            more = f" and {rows.size - 10} more" if rows.size > 10 else ""
+            out.append(f"{rows.size} targets {what}: {', '.join(labels[k] for k in rows[:10])}{more}")
+    return tuple(out)
 
 
 def as_written_report(program, plan):
