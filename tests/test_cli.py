@@ -278,3 +278,20 @@ def test_outside_error_names_each_target_by_file_and_line(kuka_model, tmp_path, 
     assert ("p.csv: 1 of 3 targets lie outside the calibrated region (--outside error): p.csv:3: outside the grid"
             in capsys.readouterr().err)
     assert not (tmp_path / "out.csv").exists()
+
+
+def test_the_output_keeps_the_input_language_unless_to_says_otherwise(kuka_model, tmp_path, capsys):
+    """`-o out.src` from a CSV silently wrote KRL."""
+    program = tmp_path / "p.csv"
+    program.write_text("x,y,z,a,b,c,motion,speed\n500,50,750,0,90,0,PTP,\n520,50,750,0,90,0,LIN,50\n")
+    base = ["compensate", str(program), "--model", str(kuka_model), "--retime", "none"]
+    assert main(base + ["-o", str(tmp_path / "out.src")]) == 2
+    assert ("out.src: '.src' is the extension of krl programs, but the input is a csv program: the output keeps the "
+            "input's language (name it *.csv), or give --to krl" in capsys.readouterr().err)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["p.csv"]
+    assert main(base + ["-o", str(tmp_path / "out.src"), "--to", "krl"]) == 0
+    src = (tmp_path / "out.src").read_text()
+    assert src.count("PTP ") == 1 and src.count("LIN ") == 1
+    assert "S " in (tmp_path / "out.dat").read_text()  # configuration data computed from the corrected joints
+    assert main(base + ["-o", str(tmp_path / "out.script"), "--to", "urscript"]) == 2  # a UR program for a KR6
+    assert "a Universal Robots program (urscript) cannot run on robot kuka_kr6_r900" in capsys.readouterr().err

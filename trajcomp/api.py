@@ -245,7 +245,8 @@ class Compensator:
         path : str or Path
             The program (its extension names the language).
         out_path : str or Path, optional
-            Where to write; default ``<stem>_compensated<suffix>`` beside it.
+            Where to write, in the input's language (another language's
+            extension is refused); default ``<stem>_compensated<suffix>`` beside it.
         tools : Mapping[str, array_like (4, 4) or (6,)], optional
             Tools (T_flange_tool, mm / deg) the program uses but does not define.
         frames : Mapping[str, array_like (4, 4) or (6,)], optional
@@ -274,12 +275,13 @@ class Compensator:
         out_path = path.with_name(f"{path.stem}_compensated{path.suffix}") if out_path is None else Path(out_path)
         program = formats.read(path, workers=self.workers)
         check_robot_language(path, formats.find_format(format=program.format), self.robot, "the model's arm")
+        out_format = formats.output_format(out_path, program)  # the input's language: never converted silently
         corrected, report = self._compensate(
             program, label=str(path), tools=_named_poses(tools, "tools"), frames=_named_poses(frames, "frames"),
             joint_targets=joint_targets,
         )
-        formats.write(out_path, corrected, protect=() if in_place else formats.input_paths(path, program),
-                      workers=self.workers)
+        formats.write(out_path, corrected, out_format.name,
+                      protect=() if in_place else formats.input_paths(path, program), workers=self.workers)
         return out_path, report
 
     def _hint(self, joints_hint, n):

@@ -23,7 +23,7 @@ from trajcomp.model import MODES
 from trajcomp.model_file import load_model
 from trajcomp.parallel import meanwhile, usable_cores
 from trajcomp.plausibility import check_robot_language
-from trajcomp.postprocess import MAX_CORRECTION, compensate_program
+from trajcomp.postprocess import MAX_CORRECTION, compensate_program, convert_program
 from trajcomp.posture import MAX_JOINT_CHANGE
 from trajcomp.progress import Stages, progress
 from trajcomp.report import Criteria, compliance_report, file_entry, model_entry, summary_lines
@@ -69,7 +69,11 @@ def add_parser(sub):
     add_tolerance_option(parser)
     add_in_place_option(parser)
     parser.add_argument("-o", "--output", required=True,
-                        help="corrected program to write; for a batch, the folder to write into")
+                        help="corrected program to write, in the input's language (an extension of another is "
+                        "refused without --to); for a batch, the folder to write into")
+    parser.add_argument("--to", dest="to_format", metavar="FORMAT",
+                        help="write the corrected program in this language instead (see `trajcomp formats`), as "
+                        "`trajcomp convert` would")
     parser.add_argument("--jobs", type=int, default=usable_cores(), metavar="N",
                         help="processes to use: a batch compensates N files at once, one program shares its "
                         "targets among N (default: the %(default)s cores this machine gives)")
@@ -105,6 +109,7 @@ class CompensateJob:
     json_only: bool = False
     retime: str = "auto"
     path_tolerance: float = TOLERANCE
+    to_format: str = None  # another language to write (--to); default the input's
     show_stages: bool = False  # a bar over STAGES on a terminal (one file; a batch shows files instead)
     workers: int = 1  # processes sharing the compensation of one file (a batch spreads files instead)
 
@@ -125,6 +130,8 @@ class CompensateJob:
             program = formats.read(path, workers=self.workers)
             check_robot_language(path, formats.find_format(format=program.format), model.nominal,
                                  f"the arm of the model {self.model}")
+            out_format = formats.output_format(output, program, self.to_format)
+            check_robot_language(output, out_format, model.nominal, f"the arm of the model {self.model}")
             sources = list(dict.fromkeys(formats.input_paths(path, program)))
             files = [file_entry("program", p) for p in sources]
             correct = program_corrector(model, mode=self.mode, outside=self.outside, label=str(path),
@@ -136,6 +143,9 @@ class CompensateJob:
                     joint_targets=self.joint_targets, max_joint_change=self.max_joint_change,
                     max_correction=self.max_correction, workers=self.workers,
                 )
+            if out_format.name != program.format:
+                corrected = convert_program(corrected, out_format.name, robot=model.nominal, tools=self.tools,
+                                            frames=self.frames)
             _next(stages)
             timing, timed, before = [], None, None
             if self.retime != "none":
@@ -145,7 +155,7 @@ class CompensateJob:
                 timing = timing_lines(timed, before)
             _next(stages)
             protect = () if self.in_place else sources
-            written = formats.write(output, corrected, protect=protect, workers=self.workers)
+            written = formats.write(output, corrected, out_format.name, protect=protect, workers=self.workers)
             _next(stages)
             mode = self.mode or model.method
             compliance = compliance_report(
@@ -179,7 +189,7 @@ class CompensateJob:
         for kind in ("tools", "frames"):
             values = {name: matrix_to_pose(T) for name, T in getattr(self, kind).items()}
             poses[kind] = {name: [*p[:3], *np.degrees(p[3:])] for name, p in values.items()}
-        return {"mode": self.mode, "outside": self.outside, "joint_targets": self.joint_targets,
+        return {"mode": self.mode, "outside": self.outside, "joint_targets": self.joint_targets, "to": self.to_format,
                 "max_joint_change_deg": float(np.degrees(self.max_joint_change)),
                 "max_correction_mm": self.max_correction, "retime": self.retime,
                 "path_tolerance_mm": self.path_tolerance, **poses}
@@ -217,6 +227,7 @@ def run(args):
         joint_targets=args.joint_targets, max_joint_change=np.radians(args.max_joint_change),
         max_correction=args.max_correction, in_place=args.in_place, criteria=criteria_of(args),
         report=args.report, json_only=args.json_only, retime=args.retime, path_tolerance=args.path_tolerance,
+        to_format=args.to_format,
     )
     model = _model(job.model)  # a broken model fails the run once, before any file
     if args.robot is not None and load_robot(args.robot).name != model.nominal.name:
@@ -244,6 +255,9 @@ def run(args):
 def _run_batch(args, job):
     inputs = batch.expand_inputs(args.program)
     outputs = batch.output_paths(inputs, args.output)
+    if args.to_format:
+        suffix = formats.find_format(format=args.to_format).extensions[0]
+        outputs = [path.with_suffix(suffix) for path in outputs]
     Path(args.output).mkdir(parents=True, exist_ok=True)
     with progress(len(inputs), desc="compensate", unit="file") as bar:
         results = batch.run_batch(job, inputs, outputs, jobs=args.jobs, scheduler=args.scheduler,

@@ -170,6 +170,42 @@ def find_format(path=None, format=None):
     return _FORMATS[format]
 
 
+def output_format(output, program, to=None):
+    """The format a program read in one language is written to ``output`` in: its own, unless ``to`` names another.
+
+    Parameters
+    ----------
+    output : str or Path
+        The file to write.
+    program : Program
+        The program as read (``program.format``: its language).
+    to : str, optional
+        Registry name of another language to write (``--to``).
+
+    Returns
+    -------
+    Format
+
+    Raises
+    ------
+    TrajcompError
+        Without ``to``, an output whose extension belongs to another
+        language than the program's (a CSV program to ``out.src``): never
+        converted silently.
+    """
+    if to is not None:
+        return find_format(output, to)
+    own = find_format(format=program.format)
+    written = find_format(output)
+    if written.name != own.name:
+        raise TrajcompError(
+            f"{output}: {Path(output).suffix!r} is the extension of {written.name} programs, but the input is a "
+            f"{own.name} program: the output keeps the input's language (name it *{own.extensions[0]}), or give "
+            f"--to {written.name} to convert it"
+        )
+    return own
+
+
 def read(path, format=None, *, workers=1):
     """Read a robot program.
 
