@@ -1,6 +1,7 @@
 """Scale benchmark: end-to-end CLI throughput and peak memory on long CAM programs (not a timed test).
 
 Run:  python tests/benchmarks/bench_scale.py [N ...]     (default: 100000 300000 1000000)
+      python tests/benchmarks/bench_scale.py languages [N ...]     (default: 20000 100000)
 
 For each N, a helix of N LIN waypoints blended with 1 mm zones (a CAM path;
 program CSV, mm and deg, 3 and 4 decimals) on the virtual UR10 is
@@ -16,9 +17,23 @@ Also: CLI start-up (`trajcomp --version`) and the compensation core alone
 (targets/s on one core).
 Targets (issue 11): >= 50,000 waypoints/s at 300,000 points, < 1 GB peak at
 1,000,000 points, start-up < 0.3 s.
+
+``languages``: the same helix in every language, each on a built-in arm of
+its vendor (CSV and URScript on the UR10, KRL on the KUKA, RAPID on the
+ABB, FANUC LS on the FANUC), in the arm's demo calibration cube with a
+composite model of the virtual arm, and in CSV on each of these arms. Per language, in one run so that the
+figures are ratios that survive a busy machine: the I/O floor (the program
+read and written again by `trajcomp.formats`, no compensation, a fresh
+process; for CSV also pandas' read_csv + to_csv where pandas is
+installed), `trajcomp compensate` (re-timed, every core), its ratio to the
+CSV path on the same arm and to the floor, and its peak memory above that
+of a 100-waypoint program of the same language, per waypoint.
+Targets (issue 25): every language within 2x the CSV path, <= 2 KB per
+waypoint above start-up; CSV within 8x the pandas floor.
 """
 
 import contextlib
+import io
 import os
 import subprocess
 import sys
@@ -30,27 +45,39 @@ import numpy as np
 
 from trajcomp.cli import main
 from trajcomp.compensate import compensate
+from trajcomp.demo import demo_cubes
 from trajcomp.ik import ik
 from trajcomp.model_file import load_model
 from trajcomp.parallel import usable_cores
 from trajcomp.plan import default_orientation
+from trajcomp.robot import load_robot
 from trajcomp.transforms import abc_to_matrix
 
 RUNS = 3  # runs of each size and process count without sampling: the median wall time is reported
+LANGUAGES = {  # built-in arm of a vendor -> its languages (language, extension); CSV first, the reference
+    "ur10": (("csv", ".csv"), ("urscript", ".script")),
+    "kuka_kr6_r900": (("csv", ".csv"), ("krl", ".src")),
+    "abb_irb4600": (("csv", ".csv"), ("rapid", ".mod")),
+    "fanuc_lrmate200id": (("csv", ".csv"), ("fanuc", ".ls")),
+}
 
 
-def helix(robot, n):
-    """Poses (n, 4, 4) of a helix of 20 turns inside the UR10 calibration cube, tool orientation of home."""
+def helix(robot, n, centre=(550.0, 150.0, 600.0), radius=80.0, rise=100.0):
+    """Poses (n, 4, 4) of a helix of 20 turns, tool orientation of home.
+
+    ``centre``, ``radius`` and ``rise`` in mm; by default inside the UR10's calibration cube.
+    """
     t = np.linspace(0.0, 40.0 * np.pi, n)
     T = np.tile(np.eye(4), (n, 1, 1))
     T[:, :3, :3] = abc_to_matrix(default_orientation(robot))
-    T[:, :3, 3] = np.c_[550 + 80 * np.cos(t), 150 + 80 * np.sin(t), 550 + np.linspace(0.0, 100.0, n)]
+    circle = np.c_[radius * np.cos(t), radius * np.sin(t), np.linspace(-rise / 2, rise / 2, n)]
+    T[:, :3, 3] = circle + np.asarray(centre)
     return T
 
 
-def write_program(path, robot, n):
+def write_program(path, robot, n, **placement):
     abc = np.degrees(default_orientation(robot))
-    position = helix(robot, n)[:, :3, 3]
+    position = helix(robot, n, **placement)[:, :3, 3]
     tail = f",{abc[0]:.4f},{abc[1]:.4f},{abc[2]:.4f},LIN,50,1\n"
     with open(path, "w") as out:
         out.write("x,y,z,a,b,c,motion,speed,zone\n")
@@ -58,7 +85,12 @@ def write_program(path, robot, n):
 
 
 def run_cli(args, sample=False):
-    """Wall time (s) and memory of ``python -m trajcomp.cli ARGS`` in a fresh process.
+    """Wall time (s) and memory of ``python -m trajcomp.cli ARGS`` in a fresh process (`run_python`)."""
+    return run_python(["-m", "trajcomp.cli", *args], sample)
+
+
+def run_python(args, sample=False):
+    """Wall time (s) and memory of ``python ARGS`` in a fresh process.
 
     Memory (MB, with ``sample``, which costs the run some CPU): the peak of
     the process tree's physical memory, the sum of its processes'
@@ -68,7 +100,7 @@ def run_cli(args, sample=False):
     """
     start = time.perf_counter()
     with tempfile.TemporaryFile() as err:
-        child = subprocess.Popen([sys.executable, "-m", "trajcomp.cli", *args], stdout=subprocess.DEVNULL, stderr=err)
+        child = subprocess.Popen([sys.executable, *args], stdout=subprocess.DEVNULL, stderr=err)
         tree = 0.0
         while sample and not _ended(child.pid):  # an unsampled run is only waited for: polling takes CPU from it
             tree = max(tree, sum(map(_pss_kb, _tree(child.pid))) / 1024.0)
@@ -78,7 +110,7 @@ def run_cli(args, sample=False):
         child.returncode = os.waitstatus_to_exitcode(status)
         if child.returncode != 0:
             err.seek(0)
-            raise SystemExit(f"trajcomp {' '.join(args)} exited {child.returncode}:\n{err.read()[-2000:].decode()}")
+            raise SystemExit(f"python {' '.join(args)} exited {child.returncode}:\n{err.read()[-2000:].decode()}")
     return wall, tree, usage.ru_maxrss / 1024.0
 
 
@@ -109,13 +141,78 @@ def _pss_kb(pid):
     return 0
 
 
-def make_model(folder):
-    plan, meas, model = folder / "plan.csv", folder / "meas.csv", folder / "model.yaml"
+def make_model(folder, robot="ur10", corner=(300, -100, 300), side=500, step=100):
+    """A composite model of the virtual ``robot`` calibrated on a grid (mm) of the paper's protocol."""
+    plan, meas, model = folder / f"plan-{robot}.csv", folder / f"meas-{robot}.csv", folder / f"model-{robot}.yaml"
     with open(os.devnull, "w") as quiet, contextlib.redirect_stdout(quiet), contextlib.redirect_stderr(quiet):
-        main(["plan", "--robot", "ur10", "--cube", "300,-100,300", "--side", "500", "--step", "100", "-o", str(plan)])
-        main(["simulate", str(plan), "--robot", "ur10", "--seed", "1", "-o", str(meas)])
-        main(["calibrate", str(meas), "--robot", "ur10", "--grid-step", "100", "--folds", "0", "-o", str(model)])
+        main(["plan", "--robot", robot, "--cube", ",".join(f"{v:g}" for v in corner), "--side", f"{side:g}",
+              "--step", f"{step:g}", "-o", str(plan)])
+        main(["simulate", str(plan), "--robot", robot, "--seed", "1", "-o", str(meas)])
+        main(["calibrate", str(meas), "--robot", robot, "--grid-step", f"{step:g}", "--folds", "0", "-o", str(model)])
     return model
+
+
+def quietly(args):
+    """``trajcomp ARGS`` in this process, its output dropped; raises where it fails."""
+    err = io.StringIO()
+    with open(os.devnull, "w") as quiet, contextlib.redirect_stdout(quiet), contextlib.redirect_stderr(err):
+        code = main(args)
+    if code != 0:
+        raise SystemExit(f"trajcomp {' '.join(args)} exited {code}:\n{err.getvalue()[-2000:]}")
+
+
+def language_bench(sizes):
+    """The languages' table (module docstring): floor, compensate, ratios, memory per waypoint."""
+    folder = Path(tempfile.mkdtemp(prefix="trajcomp-languages-"))
+    print(f"{'waypoints':>10} {'language':>9} {'arm':>18} {'floor s':>8} {'compensate s':>13} {'x CSV':>6} "
+          f"{'x floor':>8} {'peak MB':>8} {'KB/waypoint':>12}")
+    arms = {}
+    for robot in LANGUAGES:
+        large = demo_cubes(load_robot(robot))[0]
+        centre = np.add(large.corner, large.side / 2)
+        arms[robot] = make_model(folder, robot, large.corner, large.side, large.step), dict(
+            centre=centre, radius=0.16 * large.side, rise=0.2 * large.side)
+    for n in sizes:
+        csv_time = {}
+        for robot, language, extension in ((r, *pair) for r, pairs in LANGUAGES.items() for pair in pairs):
+            model, placement = arms[robot]
+            paths, place = {}, folder / robot  # KRL: the file name is the program's name (a letter first, no '-')
+            place.mkdir(exist_ok=True)
+            for size in (100, n):
+                source = place / f"helix_{size}.csv"
+                write_program(source, load_robot(robot), size, **placement)
+                paths[size] = source if language == "csv" else place / f"helix_{size}{extension}"
+                if language != "csv":
+                    quietly(["convert", str(source), str(paths[size]), "--robot", robot])
+            program, out = paths[n], place / f"out{extension}"
+            floor = float(np.median([run_python(["-c", "from trajcomp import formats; import sys; "
+                                                 "formats.write(sys.argv[2], formats.read(sys.argv[1]))",
+                                                 str(program), str(out)])[0] for _ in range(RUNS)]))
+            args = ["compensate", str(program), "--model", str(model), "-o", str(out)]
+            wall = float(np.median([run_cli(args)[0] for _ in range(RUNS)]))
+            if language == "csv":
+                csv_time[robot] = wall
+            peak = run_cli(args, sample=True)[1]
+            start = run_cli(["compensate", str(paths[100]), "--model", str(model), "-o", str(out)], sample=True)[1]
+            print(f"{n:>10,} {language:>9} {robot:>18} {floor:>8.2f} {wall:>13.2f} {wall / csv_time[robot]:>6.2f} "
+                  f"{wall / floor:>8.2f} {peak:>8,.0f} {(peak - start) * 1024 / n:>12.2f}", flush=True)
+            if language == "csv" and robot == "ur10":
+                _pandas_floor(program, out, wall)
+    print("targets: every language <= 2x CSV (same arm); <= 2 KB per waypoint above start-up; "
+          "CSV <= 8x the pandas floor")
+
+
+def _pandas_floor(program, out, wall):
+    """Print pandas' read_csv + to_csv of the CSV program (a fresh process) and the CSV path's ratio to it."""
+    try:
+        import pandas  # noqa: F401 (only whether it is installed)
+    except ImportError:
+        print(f"{'':>10} {'pandas':>9} not installed: no pandas floor")
+        return
+    floor = float(np.median([run_python(["-c", "import pandas, sys; pandas.read_csv(sys.argv[1]).to_csv("
+                                         "sys.argv[2], index=False)", str(program), str(out)])[0]
+                             for _ in range(RUNS)]))
+    print(f"{'':>10} {'pandas':>9} {'(CSV floor)':>18} {floor:>8.2f} {'':>13} {'':>6} {wall / floor:>8.2f}")
 
 
 def main_bench(sizes):
@@ -145,4 +242,7 @@ def main_bench(sizes):
 
 
 if __name__ == "__main__":
-    main_bench([int(a) for a in sys.argv[1:]] or [100_000, 300_000, 1_000_000])
+    if sys.argv[1:2] == ["languages"]:
+        language_bench([int(a) for a in sys.argv[2:]] or [20_000, 100_000])
+    else:
+        main_bench([int(a) for a in sys.argv[1:]] or [100_000, 300_000, 1_000_000])
