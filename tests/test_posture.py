@@ -202,7 +202,7 @@ def test_output_over_the_input_is_refused_without_in_place(tmp_path, kuka_model,
     src = _copy_example(tmp_path)
     before = {p.name: p.read_bytes() for p in tmp_path.iterdir()}
     assert main(["compensate", str(src), "--model", str(kuka_model), "-o", str(src)]) == 2
-    assert "would overwrite the input program" in capsys.readouterr().err
+    assert "would overwrite the input" in capsys.readouterr().err
     assert {p.name: p.read_bytes() for p in tmp_path.iterdir()} == before
     (tmp_path / "out").mkdir()
     assert main(["compensate", str(src), "--model", str(kuka_model), "-o", str(tmp_path / "out" / "weld.src")]) == 0

@@ -14,7 +14,49 @@ from pathlib import Path
 from trajcomp.errors import WriteError
 
 
-def write_atomic(path, data, *, newline=None, encoding="utf-8"):
+def refuse_inputs(outputs, inputs, advice="write to another file"):
+    """Refuse outputs that are one of the inputs, or each other.
+
+    A file is the same whatever its name: the same path, a symbolic link to
+    it or a hard link to it (same device and inode).
+
+    Parameters
+    ----------
+    outputs : iterable of str or Path
+        Files about to be written.
+    inputs : iterable of str or Path or None
+        Files the run reads, which must come out untouched (None, and files
+        that do not exist, are ignored).
+    advice : str
+        What the user can do instead, ending the message.
+
+    Raises
+    ------
+    WriteError
+        Naming the output and the input (or the other output) it is.
+    """
+    kept = {_identity(path): path for path in map(Path, filter(None, inputs)) if path.exists()}
+    seen = {}
+    for out in map(Path, outputs):
+        key = _identity(out)
+        if key in kept:
+            same = "" if Path(kept[key]) == out else f" ({kept[key]})"
+            raise WriteError(f"{out}: would overwrite the input{same}; {advice}")
+        if key in seen:
+            raise WriteError(f"{out}: written twice in one run (also as {seen[key]}); {advice}")
+        seen[key] = out
+
+
+def _identity(path):
+    """What tells files apart: (device, inode) of an existing file, else its absolute path."""
+    try:
+        found = os.stat(path)
+    except OSError:
+        return os.path.abspath(path)
+    return found.st_dev, found.st_ino
+
+
+def write_atomic(path, data, *, newline=None, encoding="utf-8", protect=(), advice="write to another file"):
     """Write ``data`` to ``path`` so that the file is either complete or untouched.
 
     Parameters
@@ -26,11 +68,13 @@ def write_atomic(path, data, *, newline=None, encoding="utf-8"):
         Content. ``str`` is encoded with ``encoding``; ``newline`` (``None``:
         ``"\\n"`` becomes the platform line ending, ``""`` keeps the line
         endings ``data`` holds) applies to ``str`` only.
+    protect : sequence of str or Path
+        Inputs ``path`` must not be (`refuse_inputs`, ``advice`` ending its message).
 
     Raises
     ------
     WriteError
-        If the folder does not exist or the file cannot be written.
+        If the folder does not exist, the file cannot be written or is an input.
     """
     if isinstance(data, str):
         if newline is None:
@@ -41,10 +85,10 @@ def write_atomic(path, data, *, newline=None, encoding="utf-8"):
             data = data.encode(encoding)
         except UnicodeError as exc:
             raise WriteError(f"{path}: cannot write: {exc}") from exc
-    write_files_atomic({path: data})
+    write_files_atomic({path: data}, protect=protect, advice=advice)
 
 
-def write_files_atomic(files):
+def write_files_atomic(files, *, protect=(), advice="write to another file"):
     """Write several files all or none.
 
     Every content is first written to a temporary file beside its target;
@@ -61,14 +105,18 @@ def write_files_atomic(files):
         file that is never held in memory whole; an exception it raises
         (a WriteError while the content is made) leaves every file
         untouched, like a failed write.
+    protect : sequence of str or Path
+        Inputs none of the files may be (`refuse_inputs`, which ends its
+        message with ``advice``).
 
     Raises
     ------
     WriteError
-        A folder does not exist or a file cannot be written; nothing on disk
-        has changed.
+        A folder does not exist, a file cannot be written or is an input;
+        nothing on disk has changed.
     """
     files = {Path(path): data for path, data in files.items()}
+    refuse_inputs(files, protect, advice)
     staged = {}
     try:
         for path, data in files.items():

@@ -63,7 +63,7 @@ def expand_inputs(patterns):
         path = Path(pattern)
         if path.is_dir():
             matches = sorted(p for p in path.iterdir() if p.is_file() and p.suffix.lower() in extensions)
-        elif glob.has_magic(pattern):
+        elif is_pattern(pattern):
             matches = sorted(p for p in map(Path, glob.glob(pattern)) if p.is_file() and p.suffix.lower() in extensions)
         else:
             matches = [path]
@@ -71,6 +71,11 @@ def expand_inputs(patterns):
             raise TrajcompError(f"{pattern}: no program file ({', '.join(sorted(extensions))})")
         found += [p for p in matches if p not in found]
     return found
+
+
+def is_pattern(text):
+    """Whether ``text`` is a glob pattern: it has ``*``, ``?`` or ``[`` and names no existing file (``prog[1].csv``)."""
+    return glob.has_magic(text) and not Path(text).exists()
 
 
 def output_paths(inputs, out_dir):

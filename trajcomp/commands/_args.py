@@ -86,6 +86,13 @@ def layout_of(args):
     return load_layout(args.columns_file) if args.columns_file else args.columns
 
 
+def model_inputs(path):
+    """The files a model file ``path`` is read from: itself and its grid sidecar (which need not exist)."""
+    from trajcomp.model_file import sidecar_path
+
+    return [path, sidecar_path(path)]
+
+
 def add_robot(parser, required=True):
     parser.add_argument(
         "--robot",

@@ -38,10 +38,24 @@ def criteria_of(args):
     return Criteria(**{name: getattr(args, name) for name in names if hasattr(args, name)})
 
 
-def emit(report, path, json_only):
-    """Write a report (or its JSON to stdout), print its summary on stderr; the exit code (0 pass, 1 fail)."""
+def emit(report, path, json_only, protect=(), written_before=()):
+    """Write a report (or its JSON to stdout), print its summary on stderr; the exit code (0 pass, 1 fail).
+
+    ``protect``: the run's inputs and outputs, which the report's files may
+    not be. ``written_before``: the run's outputs already on disk; a report
+    that cannot be written then fails the run (exit 1, `ToleranceError`)
+    naming them, since an error of input (exit 2) would say nothing was
+    written.
+    """
+    from trajcomp.errors import ToleranceError, TrajcompError
+
     if path:
-        written = report.write(path, json_only=json_only)
+        try:
+            written = report.write(path, json_only=json_only, protect=protect)
+        except TrajcompError as exc:
+            if not written_before:
+                raise
+            raise ToleranceError(f"{', '.join(map(str, written_before))} written, but not the report: {exc}") from exc
     elif json_only:
         sys.stdout.write(report.json_text())
         written = []

@@ -2,6 +2,7 @@
 
 import numpy as np
 
+from trajcomp.atomic import refuse_inputs
 from trajcomp.calibrate import INTERPOLATIONS, METHODS, calibrate
 from trajcomp.commands._args import (
     add_layout,
@@ -9,6 +10,7 @@ from trajcomp.commands._args import (
     command_parser,
     info,
     layout_of,
+    model_inputs,
     non_negative_int,
     pose,
     positive_number,
@@ -21,6 +23,7 @@ from trajcomp.identify import LOSSES, ORIENTATION_WEIGHT
 from trajcomp.measurements import read_measurements
 from trajcomp.model_file import save_model
 from trajcomp.parameters import is_angle
+from trajcomp.report import report_paths
 from trajcomp.stats import ErrorStats, format_table
 from trajcomp.transforms import matrix_to_pose
 
@@ -93,6 +96,8 @@ def run(args):
     robot = robot_of(args)
     if args.tool is not None:
         robot = robot.replace(T_flange_tool=args.tool)
+    inputs = [args.measurements, args.columns_file, args.robot]
+    refuse_inputs([*model_inputs(args.output), *(report_paths(args.report) if args.report else ())], inputs)
     meas = read_measurements(args.measurements, layout_of(args))
     model = calibrate(
         robot, meas, robot_ref=args.robot, method=args.method, frame=args.frame, grid_step=args.grid_step,
@@ -119,5 +124,6 @@ def run(args):
         options["grid_step"] = None if args.grid_step is None else np.atleast_1d(args.grid_step).tolist()
         options["columns"] = None if args.columns is None else dict(args.columns.columns)
         options["tool"] = None if args.tool is None else [float(v) for v in matrix_to_pose(args.tool)]
-        return emit(calibration_report(model, meas, files=files, options=options), args.report, args.json_only)
+        return emit(calibration_report(model, meas, files=files, options=options), args.report, args.json_only,
+                    protect=[*inputs, *model_inputs(args.output)], written_before=[args.output])
     return 0

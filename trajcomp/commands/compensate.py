@@ -3,7 +3,6 @@
 import contextlib
 import dataclasses
 import functools
-import glob
 import importlib
 import sys
 from pathlib import Path
@@ -11,7 +10,8 @@ from pathlib import Path
 import numpy as np
 
 from trajcomp import batch, formats
-from trajcomp.commands._args import command_parser, info, positive_number
+from trajcomp.atomic import refuse_inputs
+from trajcomp.commands._args import command_parser, info, model_inputs, positive_number
 from trajcomp.commands._report import add_report_options, criteria_of
 from trajcomp.commands.convert import add_frame_options, add_in_place_option, frame_options
 from trajcomp.commands.retime import CHOICES as RETIME_CHOICES
@@ -26,7 +26,7 @@ from trajcomp.plausibility import check_robot_language
 from trajcomp.postprocess import MAX_CORRECTION, compensate_program, convert_program
 from trajcomp.posture import MAX_JOINT_CHANGE
 from trajcomp.progress import Stages, progress
-from trajcomp.report import Criteria, compliance_report, file_entry, model_entry, summary_lines
+from trajcomp.report import Criteria, compliance_report, file_entry, model_entry, report_paths, summary_lines
 from trajcomp.robot import load_robot
 from trajcomp.timing.path import TOLERANCE
 from trajcomp.transforms import matrix_to_pose
@@ -123,8 +123,15 @@ class CompensateJob:
         """Compensate ``path`` into ``output``, judge it and write its report: ``(FileResult, Report)``.
 
         The report goes to ``report`` or, with ``report_folder``, to
-        ``report / <output name>`` (``.html`` and ``.json``).
+        ``report / <output name>`` (``.html`` and ``.json``). No output
+        may be an input (the program's files unless ``in_place``, the
+        model's); a report that cannot be written once the program is
+        makes the file fail (exit 1) with the files written listed, not
+        an input error.
         """
+        target = None
+        if self.report:
+            target = Path(self.report) / Path(output).name if self.report_folder else Path(self.report)
         with Stages(self.STAGES, desc=Path(path).name, enabled=self.show_stages) as stages, kept_apart():
             model = _model(self.model)
             program = formats.read(path, workers=self.workers)
@@ -133,6 +140,8 @@ class CompensateJob:
             out_format = formats.output_format(output, program, self.to_format)
             check_robot_language(output, out_format, model.nominal, f"the arm of the model {self.model}")
             sources = list(dict.fromkeys(formats.input_paths(path, program)))
+            inputs = [*sources, *model_inputs(self.model)]
+            refuse_inputs(report_paths(target) if target else (), [*inputs, output], "give --report another name")
             files = [file_entry("program", p) for p in sources]
             correct = program_corrector(model, mode=self.mode, outside=self.outside, label=str(path),
                                         workers=self.workers)
@@ -154,7 +163,7 @@ class CompensateJob:
                                                               q_planned=report.q_planned, workers=self.workers)
                 timing = timing_lines(timed, before)
             _next(stages)
-            protect = () if self.in_place else sources
+            protect = inputs[len(sources):] if self.in_place else inputs
             written = formats.write(output, corrected, out_format.name, protect=protect, workers=self.workers)
             _next(stages)
             mode = self.mode or model.method
@@ -164,10 +173,12 @@ class CompensateJob:
                 files=files + [file_entry("output", p) for p in written], options=self.options(),
                 timing=timed, cycle_time_before=before if timed is not None else None, workers=self.workers,
             )
-            reports = []
-            if self.report:
-                target = Path(self.report) / Path(output).name if self.report_folder else Path(self.report)
-                reports = compliance.write(target, json_only=self.json_only)
+            reports, unwritten = [], ""
+            if target:
+                try:
+                    reports = compliance.write(target, json_only=self.json_only, protect=[*inputs, *written])
+                except TrajcompError as exc:
+                    unwritten = f"the program is written ({', '.join(map(str, written))}) but not its report: {exc}"
             _next(stages)
         lines = [*summary_lines(compliance.doc), *(f"warning: {w}" for w in report.warnings), *timing,
                  f"wrote {', '.join(map(str, written + reports))}"]
@@ -181,6 +192,8 @@ class CompensateJob:
                             "compensated (positions computed at run time)")
         if timed is not None and not timed.within_limits:
             status, message = batch.FAIL, "; ".join(filter(None, [message, LIMIT_MESSAGE]))
+        if unwritten:
+            status, message = batch.FAIL, "; ".join(filter(None, [unwritten, message]))
         return batch.FileResult(str(path), tuple(map(str, written + reports)), status, message, tuple(lines)), compliance
 
     def options(self):
@@ -233,7 +246,7 @@ def run(args):
     if args.robot is not None and load_robot(args.robot).name != model.nominal.name:
         raise RobotError(f"--robot {args.robot}: the model {args.model} is for robot {model.nominal.name}")
     first = args.program[0]
-    single = len(args.program) == 1 and not Path(first).is_dir() and not glob.has_magic(first) \
+    single = len(args.program) == 1 and not Path(first).is_dir() and not batch.is_pattern(first) \
         and not Path(args.output).is_dir()
     if single:
         result, compliance = dataclasses.replace(job, show_stages=True, workers=args.jobs).run(
@@ -258,13 +271,14 @@ def _run_batch(args, job):
     if args.to_format:
         suffix = formats.find_format(format=args.to_format).extensions[0]
         outputs = [path.with_suffix(suffix) for path in outputs]
+    summary = Path(args.summary) if args.summary else Path(args.output) / "summary.json"
+    refuse_inputs([summary, *outputs], [*inputs, *model_inputs(args.model)], "give --summary another name")
     Path(args.output).mkdir(parents=True, exist_ok=True)
     with progress(len(inputs), desc="compensate", unit="file") as bar:
         results = batch.run_batch(job, inputs, outputs, jobs=args.jobs, scheduler=args.scheduler,
                                   done=lambda result: bar.update(1))
     for result in results:
         info(f"{result.status.upper():5} {result.input}" + (f": {result.message}" if result.message else ""))
-    summary = Path(args.summary) if args.summary else Path(args.output) / "summary.json"
     batch.write_summary(summary, results, model=args.model, mode=args.mode or "model default",
                         jobs=args.jobs, scheduler=args.scheduler)
     counts = {s: sum(r.status == s for r in results) for s in batch.EXIT_CODES}

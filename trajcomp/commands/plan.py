@@ -4,6 +4,7 @@ import argparse
 
 import numpy as np
 
+from trajcomp.atomic import refuse_inputs
 from trajcomp.commands._args import add_robot, command_parser, info, numbers, positive_number, robot_of
 from trajcomp.errors import ToleranceError
 from trajcomp.measurements import Measurements, write_measurements
@@ -50,6 +51,7 @@ def add_parser(sub):
 
 
 def run(args):
+    refuse_inputs([args.output], [args.robot])
     robot = robot_of(args)
     orientation = default_orientation(robot) if args.orientation is None else np.radians(args.orientation)
     if isinstance(args.orientations, int):

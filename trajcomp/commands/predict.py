@@ -2,8 +2,9 @@
 
 import dataclasses
 
+from trajcomp.atomic import refuse_inputs
 from trajcomp.calibrate import commanded
-from trajcomp.commands._args import command_parser, info, layout_of
+from trajcomp.commands._args import command_parser, info, layout_of, model_inputs
 from trajcomp.commands.validate import add_tracker_options, check_data, tracker_pose
 from trajcomp.measurements import read_measurements, write_measurements
 from trajcomp.model import MODES
@@ -28,6 +29,7 @@ def add_parser(sub):
 
 
 def run(args):
+    refuse_inputs([args.output], [*model_inputs(args.model), args.measurements, args.register, args.columns_file])
     model = load_model(args.model)
     meas = read_measurements(args.measurements, layout_of(args))
     frame = args.frame or meas.frame or "base"

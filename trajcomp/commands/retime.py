@@ -8,6 +8,7 @@ import dataclasses
 import numpy as np
 
 from trajcomp import formats
+from trajcomp.atomic import refuse_inputs
 from trajcomp.commands._args import add_robot, command_parser, info, robot_of
 from trajcomp.commands._report import add_report_options, criteria_of, emit
 from trajcomp.commands.convert import add_frame_options, add_in_place_option, frame_options, protected_inputs
@@ -17,7 +18,7 @@ from trajcomp.parallel import in_background
 from trajcomp.postprocess import as_written_report
 from trajcomp.plausibility import check_robot_language
 from trajcomp.posture import planned_joints, planned_targets
-from trajcomp.report import compliance_report, file_entry
+from trajcomp.report import compliance_report, file_entry, report_paths
 from trajcomp.timing import METHODS
 from trajcomp.timing.path import TOLERANCE
 
@@ -67,10 +68,12 @@ def run(args):
         raise TrajcompError(f"{args.output}: retime writes the language it reads ({program.format}); "
                             f"convert the program first (trajcomp convert)")
     tools, frames = frame_options(args)
+    inputs = [*dict.fromkeys(formats.input_paths(args.program, program)), args.robot]
+    refuse_inputs(report_paths(args.report) if args.report else (), inputs, "give --report another name")
     plan = planned_joints(program, robot, tools=tools, frames=frames)
     joints = planned(program, plan.index, plan.q)
     timed, result = timed_program(program, robot, joints, args.method, args.path_tolerance, tools, frames)
-    written = formats.write(args.output, timed, protect=protected_inputs(args, args.program, program))
+    written = formats.write(args.output, timed, protect=protected_inputs(args, args.program, program) + [args.robot])
     for line in timing_lines(result):
         info(line)
     info(f"wrote {', '.join(map(str, written))}")
@@ -80,7 +83,7 @@ def run(args):
         + [file_entry("output", p) for p in written],
         options={"method": args.method, "path_tolerance_mm": args.path_tolerance},
     )
-    code = emit(report, args.report, args.json_only)
+    code = emit(report, args.report, args.json_only, protect=[*inputs, *written], written_before=written)
     if not result.within_limits:
         info(f"trajcomp: {LIMIT_MESSAGE}")
         return 1

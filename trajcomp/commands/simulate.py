@@ -4,6 +4,7 @@ import dataclasses
 
 import numpy as np
 
+from trajcomp.atomic import refuse_inputs
 from trajcomp.calibrate import commanded
 from trajcomp.commands._args import add_robot, command_parser, info, non_negative_int, pose, robot_of
 from trajcomp.errors import ReadError
@@ -38,6 +39,7 @@ def add_parser(sub):
 
 
 def run(args):
+    refuse_inputs([args.output], [args.plan, args.robot])
     robot = robot_of(args)
     meas = read_measurements(args.plan)
     virtual = VirtualRobot.create(robot, args.profile, args.seed)

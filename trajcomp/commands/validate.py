@@ -4,16 +4,16 @@ import dataclasses
 
 import numpy as np
 
-from trajcomp.atomic import write_atomic
+from trajcomp.atomic import refuse_inputs, write_atomic
 from trajcomp.calibrate import commanded, register, to_base
-from trajcomp.commands._args import add_layout, command_parser, info, layout_of
+from trajcomp.commands._args import add_layout, command_parser, info, layout_of, model_inputs
 from trajcomp.commands._report import add_report_options, criteria_of, emit
 from trajcomp.commands.calibrate import print_stats
 from trajcomp.errors import ReadError
 from trajcomp.measurements import read_measurements
 from trajcomp.model_file import load_model
 from trajcomp.plausibility import check_applied
-from trajcomp.report import file_entry, validation_report
+from trajcomp.report import file_entry, report_paths, validation_report
 from trajcomp.transforms import abc_to_matrix, invert, rotation_angle_between
 
 
@@ -88,6 +88,8 @@ def orientation_lines(model, meas, T_tracker_base):
 
 
 def run(args):
+    inputs = [*model_inputs(args.model), args.measurements, args.register, args.columns_file]
+    refuse_inputs(filter(None, [args.json, *(report_paths(args.report) if args.report else ())]), inputs)
     model = load_model(args.model)
     meas = read_measurements(args.measurements, layout_of(args))
     meas.require_measured()
@@ -107,4 +109,4 @@ def run(args):
             print(line)
     if args.json:
         write_atomic(args.json, report.json_text())
-    return emit(report, args.report, args.json_only)
+    return emit(report, args.report, args.json_only, protect=inputs, written_before=[args.json] if args.json else ())

@@ -275,12 +275,6 @@ def write(path, program, format=None, *, protect=(), workers=1):
     check_writable(program)
     with collection_paused():  # the texts are made of many objects without cycles (`trajcomp.memory`)
         files = find_format(path, format).write(program, path, workers)
-        kept = {p.resolve() for p in map(Path, protect) if p.exists()}
-        clash = [str(out) for out in files if Path(out).resolve() in kept]
-        if clash:
-            raise WriteError(
-                f"{', '.join(clash)}: would overwrite the input program; write to another file (-o) "
-                "or give --in-place to replace it"
-            )
-        write_files_atomic(files)
+        write_files_atomic(files, protect=protect,
+                           advice="write to another file (-o) or give --in-place to replace it")
     return list(files)

@@ -18,6 +18,7 @@ _MODULES = {
     "compliance_report": "compliance",
     "file_entry": "provenance",
     "model_entry": "provenance",
+    "report_paths": "document",
     "schema": "document",
     "summary_lines": "summary",
     "validation_report": "calibration",

@@ -75,36 +75,39 @@ class Report:
 
         return render(self)
 
-    def write(self, path, *, json_only=False):
+    def write(self, path, *, json_only=False, protect=()):
         """Write ``PATH.json``, unless ``json_only`` ``PATH.html``, and the sidecar, all or none.
 
         ``PATH`` is ``path`` without a ``.json`` or ``.html`` suffix
         (``cell.report`` gives ``cell.report.json``). The sidecar
         ``PATH.targets.npz`` (only with `data`) is named in the written
-        document's ``full_data.path``.
+        document's ``full_data.path``. None of them may be one of the
+        files ``protect`` names (the run's inputs and outputs).
 
         Returns
         -------
         list of Path
             The files written.
         """
-        path = Path(path)
-        base = path.with_suffix("") if path.suffix.lower() in (".json", ".html") else path
-
-        def named(suffix):
-            return base.with_name(base.name + suffix)
-
+        json_path, html_path, data_path = report_paths(path)
         report, sidecar = self, {}
         if self.data is not None:
-            sidecar[named(".targets.npz")] = npz_bytes(self.data)
+            sidecar[data_path] = npz_bytes(self.data)
             report = dataclasses.replace(self, doc={**self.doc, "full_data": {**self.doc["full_data"],
-                                                                              "path": named(".targets.npz").name}})
-        files = {named(".json"): report.json_text().encode("utf-8")}
+                                                                              "path": data_path.name}})
+        files = {json_path: report.json_text().encode("utf-8")}
         if not json_only:
-            files[named(".html")] = report.html_text().encode("utf-8")
+            files[html_path] = report.html_text().encode("utf-8")
         files.update(sidecar)
-        write_files_atomic(files)
+        write_files_atomic(files, protect=protect, advice="give --report another name")
         return list(files)
+
+
+def report_paths(path):
+    """``(PATH.json, PATH.html, PATH.targets.npz)`` of a report written to ``path`` (`Report.write`), Paths."""
+    path = Path(path)
+    base = path.with_suffix("") if path.suffix.lower() in (".json", ".html") else path
+    return tuple(base.with_name(base.name + suffix) for suffix in (".json", ".html", ".targets.npz"))
 
 
 def schema():
