@@ -34,7 +34,7 @@ from trajcomp import formats
 from trajcomp.calibrate import calibrate
 from trajcomp.cli import main
 from trajcomp.compensate import compensate
-from trajcomp.configuration import configuration_for
+from trajcomp.configuration import BOUNDARY_TOLERANCE, configuration_for, declared_windows
 from trajcomp.ik import configuration_of, ik, ik_all
 from trajcomp.kinematics import fk
 from trajcomp.measurements import Measurements
@@ -413,14 +413,22 @@ def controller_joints(case, program):
 
 
 def joints_of_configuration(language, robot, T_base, config):
-    """The one nominal IK solution (branch and joint turns) whose configuration data are ``config``."""
+    """The nominal IK solution (branch and joint turns) the controller runs for configuration data ``config``.
+
+    As a controller reads them: the branch the flags name, each joint in the window its code names
+    or within BOUNDARY_TOLERANCE of it (a joint on a boundary satisfies both codes); of two
+    candidates on a boundary, the one further inside its window.
+    """
     q_branches, valid = ik_all(robot, T_base[None])
     turns = 2 * np.pi * np.array(list(itertools.product((-1, 0, 1), repeat=6)))
     candidates = (q_branches[0][valid[0]][:, None, :] + turns[None]).reshape(-1, 6)
     candidates = candidates[robot.within_limits(candidates)]
-    match = [q for q, c in zip(candidates, configuration_for(language, robot, candidates)) if tuple(c) == tuple(config)]
-    assert len(match) == 1, f"{language}: {len(match)} solutions have configuration {config}"
-    return match[0]
+    branch, lower, upper = declared_windows(language, [config])
+    flags = [declared_windows(language, [c])[0][0] for c in configuration_for(language, robot, candidates)]
+    outside = np.maximum(lower - candidates, candidates - upper).max(axis=1)
+    match = np.flatnonzero((np.array(flags) == branch[0]) & (outside <= BOUNDARY_TOLERANCE))
+    assert len(match) in (1, 2), f"{language}: {len(match)} solutions have configuration {config}"
+    return candidates[match[np.argmin(outside[match])]]
 
 
 def landing_errors(points, virtual, q):

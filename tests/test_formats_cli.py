@@ -53,8 +53,10 @@ def test_convert_with_tools_and_frames(tmp_path, capsys):
                  "--tool", "2=0,0,200,0,0,0", "--frame", "1=500,0,0,90,0,0"]) == 0
     program = formats.read(out)
     assert "2 computed at run time" in capsys.readouterr().out
-    np.testing.assert_allclose(program.tools["2"][:3, 3], [0, 0, 200])
-    np.testing.assert_allclose(program.frames["1"][:3, 3], [500, 0, 0])
+    # set inline ($TOOL={X ..}): the controller's TOOL_DATA / BASE_DATA tables are never written
+    assert sorted({tuple(program.tools[m.tool][:3, 3]) for m in program.motions if m.target is not None}) == [(0, 0, 200)]
+    assert {tuple(program.frames[m.frame][:3, 3]) for m in program.motions if m.target is not None} == {(500, 0, 0)}
+    assert "TOOL_DATA" not in out.read_text() and "BASE_DATA" not in out.read_text()
 
 
 def test_bad_tool_option_is_a_clear_error():

@@ -160,7 +160,7 @@ def test_undeclared_targets_follow_the_previous_one_not_home(tmp_path):
 def test_a_posture_that_cannot_reach_the_target_is_named_with_its_line(tmp_path):
     robot = load_robot("kuka_kr6_r900")
     program = _krl(tmp_path, {"PGOOD": (445, 0, 790, 0, 90, 0, 2, 2), "PFAR": (2445, 0, 790, 0, 90, 0, 2, 2)},
-                   ["PTP PGOOD", "LIN PFAR"])
+                   ["PTP PGOOD", "PTP PFAR"])
     with pytest.raises(IKError, match=r"PFAR \(post\.dat:3\).*configuration \(2, 2\)"):
         planned_joints(program, robot)
 

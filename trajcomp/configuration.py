@@ -25,6 +25,14 @@ axis 1, elbow up/down, wrist sign) and the joint angles:
 import numpy as np
 
 from trajcomp.ik import configuration_of
+from trajcomp.program_items import JOINT
+
+# A joint this close to the boundary of its code satisfies both codes (RobotStudio writes J4 = J6 = 0 as
+# confdata [0,-1,0,0]; a controller accepts either): declared data are read, and kept, with this slack.
+BOUNDARY_TOLERANCE = np.radians(0.5)  # rad
+# The motion kinds whose target's configuration data the controller uses (KUKA: Status and Turn only bind
+# PTP motions; a LIN or CIRC moves on in the posture the arm is in). Languages not named: every kind.
+BINDING_KINDS = {"krl": frozenset({JOINT})}
 
 
 def _flags(robot, q):
@@ -87,6 +95,100 @@ def configuration_for(format_name, robot, q):
 # Windows are closed intervals that reproduce the encoders' half-open ones to _EDGE: a joint
 # on a boundary (J4 = 0, J6 = 180 deg) belongs to exactly one window, as it has one code.
 _EDGE = 1e-9  # rad
+
+
+def binding(program):
+    """Whether each target's declared configuration data bind its posture: (N_targets,) bool.
+
+    A target binds if some motion of a kind its language reads configuration
+    data for (`BINDING_KINDS`) uses it, as target or via point.
+    """
+    kinds = BINDING_KINDS.get(program.format)
+    table = program.target_table()
+    out = np.zeros(len(table.config), dtype=bool)
+    motions = program.motion_table()
+    use = np.ones(len(motions.kind), dtype=bool) if kinds is None else np.isin(motions.kind, list(kinds))
+    for column in (motions.target, motions.via):
+        out[column[use & (column >= 0)]] = True
+    return out
+
+
+def written_configuration(format_name, robot, declared, q, tolerance=BOUNDARY_TOLERANCE):
+    """The configuration data to write for corrected joints: as declared wherever they still hold.
+
+    Each field the joints still satisfy (within ``tolerance`` of its
+    boundary) is kept as the program wrote it; the others are recomputed
+    from ``q`` (`configuration_for`). Fields the tool does not own are
+    always kept: KUKA Status bits 3-7 (bit 4: taught on an absolutely
+    accurate robot) and Turn bits above A6, FANUC turn digits beyond J1, J4,
+    J6; ABB cfx changes only with the branch.
+
+    Parameters
+    ----------
+    format_name : str
+    robot : Robot
+    declared : sequence of tuple, length N
+        Configuration data as read (``()`` where a target states none: the
+        computed ones are returned).
+    q : ndarray, shape (N, 6)
+        Corrected joints, rad.
+    tolerance : float
+        Slack of each joint window, rad.
+
+    Returns
+    -------
+    list of tuple, length N, or None for a language without configuration data.
+    """
+    computed = configuration_for(format_name, robot, q)
+    if computed is None:
+        return None
+    decode = WINDOWS_BY_FORMAT[format_name]
+    out = []
+    for old, new, joints in zip(declared, computed, np.atleast_2d(q)):
+        if not old:
+            out.append(tuple(new))
+            continue
+        branch, lower, upper = decode(old)
+        branch_kept = branch == decode(new)[0]
+        joint_kept = _satisfied(robot, joints, lower, upper, tolerance)
+        out.append(_MERGE[format_name](tuple(old), tuple(new), branch_kept, joint_kept))
+    return out
+
+
+def _satisfied(robot, joints, lower, upper, tolerance):
+    """(6,) bool: each joint inside its window, or within ``tolerance`` of it with no other turn of it inside.
+
+    A controller takes the turn of a joint inside the window its code names;
+    only where none is does a joint on the window's boundary stand for it.
+    """
+    turns = joints[:, None] + 2 * np.pi * np.array([-2, -1, 1, 2])
+    reachable = (turns >= robot.q_min[:, None]) & (turns <= robot.q_max[:, None])
+    other = np.any(reachable & (turns >= (lower - tolerance)[:, None]) & (turns <= (upper + tolerance)[:, None]), axis=1)
+    strict = (joints >= lower) & (joints <= upper)
+    return strict | ((joints >= lower - tolerance) & (joints <= upper + tolerance) & ~other)
+
+
+def _merge_kuka(old, new, branch_kept, joint_kept):
+    """S: bits 0-2 from ``new`` if the branch changed; T: the bits of joints out of their window."""
+    status = old[0] if branch_kept else (old[0] & ~0b111) | (new[0] & 0b111)
+    moved = int(np.sum((~joint_kept) << np.arange(6)))
+    return (status, (old[1] & ~moved) | (new[1] & moved))
+
+
+def _merge_abb(old, new, branch_kept, joint_kept):
+    """cf1, cf4, cf6 from ``new`` where the joint left its quadrant; cfx if the branch changed."""
+    quadrants = tuple(o if kept else n for o, n, kept in zip(old[:3], new[:3], joint_kept[[0, 3, 5]]))
+    return (*quadrants, old[3] if branch_kept else new[3], *old[4:])
+
+
+def _merge_fanuc(old, new, branch_kept, joint_kept):
+    """Flip, elbow, front from ``new`` if the branch changed; each turn digit of a joint out of its turn."""
+    flags = old[:3] if branch_kept else new[:3]
+    turns = tuple(o if kept else n for o, n, kept in zip(old[3:6], new[3:6], joint_kept[[0, 3, 5]]))
+    return (*flags, *turns, *old[6:])
+
+
+_MERGE = {"krl": _merge_kuka, "rapid": _merge_abb, "fanuc_ls": _merge_fanuc}
 
 
 def _kuka_windows(config):

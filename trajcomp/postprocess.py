@@ -14,7 +14,7 @@ import dataclasses
 
 import numpy as np
 
-from trajcomp.configuration import configuration_for, describe
+from trajcomp.configuration import BOUNDARY_TOLERANCE, binding, configuration_for, describe, written_configuration
 from trajcomp.errors import CompensationError
 from trajcomp.ik import pose_error
 from trajcomp.kinematics import fk
@@ -55,7 +55,11 @@ class ProgramReport:
     predicted_residual : ndarray, shape (N,)
         Distance from the target to the model-predicted landing, mm.
     not_compensated : tuple of (int, str, str)
-        Line, text and reason of motions passed through unchanged.
+        Line, text and reason of motions passed through unchanged (each
+        once), then of statements that pass a point where trajcomp cannot
+        see the motion (a procedure call).
+    motions_left : int
+        How many of ``not_compensated`` are motions.
     unused : tuple of str
         Targets no motion uses: left as written.
     joint_targets : tuple of str
@@ -81,6 +85,7 @@ class ProgramReport:
     outside_grid: np.ndarray
     predicted_residual: np.ndarray
     not_compensated: tuple = ()
+    motions_left: int = 0
     unused: tuple = ()
     joint_targets: tuple = ()
     joint_mode: str = "keep"
@@ -89,15 +94,12 @@ class ProgramReport:
     def lines_of_text(self):
         """Human-readable summary lines."""
         out = [f"compensated targets: {len(self.labels)}"]
-        changed = [f"{label} {d} -> {w}" for label, d, w in zip(self.labels, self.declared, self.written) if d != w]
-        if changed:
-            out.append("configuration data rewritten for the corrected joints (same posture, a joint crosses a "
-                       f"sign or quadrant boundary): {'; '.join(changed)}")
         verb = "compensated" if self.joint_mode == "compensate" else "kept as written"
         if self.joint_targets:
             out.append(f"joint targets {verb}: {', '.join(self.joint_targets)}")
         if self.not_compensated:
-            out.append(f"{len(self.not_compensated)} motions NOT compensated:")
+            out.append(f"{self.motions_left} motions and {len(self.not_compensated) - self.motions_left} "
+                       "points passed to routines NOT compensated:")
             out += [f"  line {line}: {text} ({reason})" for line, text, reason in self.not_compensated]
         if self.unused:
             out.append(f"unused points left as written: {', '.join(self.unused)}")
@@ -176,7 +178,7 @@ def compensate_program(program, correct, robot, *, tools=None, frames=None, join
         check_posture(q_planned, result.q, labels, max_joint_change)
         q, T_command, n = result.q, result.T_command, len(cartesian)
         edited = edited.with_targets(cartesian, poses=in_frames(T_base_frame, T_command[:n]), joints=q[:n],
-                                     configs=configuration_for(program.format, robot, q[:n]))
+                                     configs=_configs(program, robot, cartesian, q[:n]))
         if n < len(rows):
             edited = edited.with_targets(joint_index, joints=q[n:])
     report = ProgramReport(
@@ -192,15 +194,15 @@ def compensate_program(program, correct, robot, *, tools=None, frames=None, join
         posture_source=tuple(source),
         outside_grid=np.zeros(len(rows), dtype=bool) if result is None else result.outside,
         predicted_residual=np.zeros(len(rows)) if result is None else result.residual,
-        not_compensated=program.not_compensated() + tuple(
-            (line, text, f"point {program.targets[i].label} is used here, where trajcomp cannot see the motion "
-                         "(a procedure argument, a run-time expression): left as written")
-            for i, line, text in program.referenced_targets()
-        ),
+        not_compensated=_not_compensated(program, cartesian),
+        motions_left=sum(not m.axis_position for m in program.runtime_motions()),
         **_program_facts(program, joint_index, joint_targets),
     )
     if result is not None:
         report = dataclasses.replace(report, warnings=report.warnings + _compensation_warnings(result, labels))
+    changed = _configuration_changes(report)
+    if changed:
+        report = dataclasses.replace(report, warnings=report.warnings + (changed,))
     return edited, report
 
 
@@ -218,6 +220,62 @@ def _compensation_warnings(result, labels):
             more = f" and {rows.size - 10} more" if rows.size > 10 else ""
             out.append(f"{rows.size} targets {what}: {', '.join(labels[k] for k in rows[:10])}{more}")
     return tuple(out)
+
+
+def _configs(program, robot, index, q):
+    """Configuration data written for the corrected targets ``index`` (N,) at joints ``q`` (N, 6), rad.
+
+    The declared fields the corrected joints still satisfy are kept as
+    written, and so are fields the tool does not own
+    (`trajcomp.configuration.written_configuration`); a target whose data
+    its language does not bind (a KUKA point only LIN or CIRC motions use)
+    keeps them all.
+    """
+    declared = [program.target_table().config[i] for i in index.tolist()]
+    written = written_configuration(program.format, robot, declared, q)
+    if written is None:
+        return None
+    binds = binding(program)[index]
+    return [new if bound else old for old, new, bound in zip(declared, written, binds.tolist())]
+
+
+def _configuration_changes(report):
+    """A warning listing every target whose configuration data the run rewrote ("" if none)."""
+    changed = [f"{label}: {d} -> {w}" for label, d, w in zip(report.labels, report.declared, report.written)
+               if d and d != w]
+    if not changed:
+        return ""
+    more = f" and {len(changed) - 10} more" if len(changed) > 10 else ""
+    return (f"configuration data rewritten for {len(changed)} corrected targets (a joint left the window its "
+            f"data name, beyond {np.degrees(BOUNDARY_TOLERANCE):g} deg): {'; '.join(changed[:10])}{more}")
+
+
+def _not_compensated(program, compensated):
+    """``((line, text, reason), ...)``: every motion left as written once, then the points passed elsewhere.
+
+    A motion built on a compensated point (``Offs(p10, ...)``, ``pose_add(p, ...)``)
+    is said to move with it; a point named only outside motions (a
+    procedure argument) is listed at the statement naming it.
+
+    Parameters
+    ----------
+    compensated : array_like of int
+        Indices of the targets the run corrects.
+    """
+    corrected = set(np.asarray(compensated, dtype=int).tolist())
+    listed = []
+    motions = [motion for motion in program.runtime_motions() if not motion.axis_position]
+    for (_, _, reason), motion in zip(program.not_compensated(), motions):
+        moved = [program.targets[i].label for i in dict.fromkeys(motion.refs) if i in corrected]
+        if moved:
+            reason += (f"; built on {', '.join(moved)}, which {'is' if len(moved) == 1 else 'are'} corrected: "
+                       "it moves with them (its offset itself is not compensated)")
+        listed.append((motion.line, motion.text, reason))
+    lines = {line for line, _, _ in listed}
+    listed += [(line, text, f"point {program.targets[i].label} is used here, where trajcomp cannot see the motion "
+                            "(a procedure argument, a run-time expression): left as written")
+               for i, line, text in program.referenced_targets() if line not in lines]
+    return tuple(listed)
 
 
 def as_written_report(program, plan):
@@ -309,6 +367,9 @@ def _check_correction(correction, labels, bound):
 def convert_program(program, to_format, *, robot=None, tools=None, frames=None):
     """The program re-expressed for another language (written fresh, not patched).
 
+    Into the language it was read from, the program itself: its writer
+    patches the sources, so nothing is dropped or regenerated.
+
     Poses keep their frames where the language has user frames; for CSV and
     URScript they are moved to the base frame (the frames' values must then
     be known). Configuration data are computed from each target's joints,
@@ -330,6 +391,8 @@ def convert_program(program, to_format, *, robot=None, tools=None, frames=None):
     Program
         With no sources: writers generate the text.
     """
+    if to_format == program.format and program.sources:
+        return program  # its own language: written back through the byte-preserving writer, every line kept
     table = FrameTable(program, robot, tools, frames)
     usage = program.usage()
     targets = list(program.targets)

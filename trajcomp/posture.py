@@ -9,7 +9,10 @@ one it means, and that is the one it must run in after compensation:
    and turns.
 2. ``"config"``: configuration data (KUKA S/T, ABB confdata, FANUC CONFIG):
    the branch its flags name, each joint in the window its turn data name
-   (`trajcomp.configuration.declared_windows`).
+   (`trajcomp.configuration.declared_windows`), a joint within
+   `trajcomp.configuration.BOUNDARY_TOLERANCE` of its window's boundary
+   inside it; only where the language binds them (KUKA: PTP motions;
+   a target only LIN or CIRC motions use is placed as in 3.).
 3. ``"previous"``: the program says nothing: the solution nearest the
    joints of the previous position in motion order (target or joint
    target), as the controller moves on from where the arm is.
@@ -29,7 +32,7 @@ import functools
 
 import numpy as np
 
-from trajcomp.configuration import declared_windows
+from trajcomp.configuration import BOUNDARY_TOLERANCE, binding, declared_windows
 from trajcomp.errors import IKError
 from trajcomp.frames import FrameTable, tool_groups
 from trajcomp.ik import ik_all, turn_towards
@@ -126,7 +129,9 @@ def planned_joints(program, robot, *, tools=None, frames=None, workers=1):
     hint = table.joints[index]
     has_hint = np.all(np.isfinite(hint), axis=1)
     _fail_outside_limits(program, robot, index[has_hint], hint[has_hint])
-    configured = np.flatnonzero(~has_hint & np.array([bool(table.config[i]) for i in index.tolist()], dtype=bool))
+    binds = binding(program)[index]
+    stated = np.array([bool(table.config[i]) for i in index.tolist()], dtype=bool)
+    configured = np.flatnonzero(~has_hint & stated & binds)
     branch, lower, upper = declared_windows(program.format, [table.config[i] for i in index[configured].tolist()])
     by_config, declared = configured[branch >= 0], branch >= 0
     q = np.full((n, 6), np.nan)
@@ -202,15 +207,20 @@ def _nearest(robot, q_all, valid, reference):
 
 
 def _in_windows(robot, q_all, valid, branch, lower, upper):
-    """The declared branch (M,) with each joint turned into its window [lower, upper] (M, 6) and the limits."""
+    """The declared branch (M,) with each joint turned into its window [lower, upper] (M, 6) and the limits.
+
+    A joint within `BOUNDARY_TOLERANCE` outside its window is taken where no
+    turn of it lies inside (a joint on a boundary satisfies both codes).
+    """
     rows = np.arange(len(branch))
     q = q_all[rows, branch]
     candidates = q[:, :, None] + TURN * _TURNS
-    low = np.maximum(lower, robot.q_min - _WINDOW_TOL)[:, :, None]
-    high = np.minimum(upper, robot.q_max + _WINDOW_TOL)[:, :, None]
+    low = np.maximum(lower - BOUNDARY_TOLERANCE, robot.q_min - _WINDOW_TOL)[:, :, None]
+    high = np.minimum(upper + BOUNDARY_TOLERANCE, robot.q_max + _WINDOW_TOL)[:, :, None]
     inside = (candidates >= low) & (candidates <= high)
+    on_boundary = (candidates < lower[:, :, None]) | (candidates > upper[:, :, None])
     anchor = np.clip(0.0, lower, upper)[:, :, None]  # half-open windows (KUKA T): the turn nearest zero
-    cost = np.where(inside, np.abs(candidates - anchor), np.inf)
+    cost = np.where(inside, np.abs(candidates - anchor) + on_boundary * 100.0 * TURN, np.inf)
     pick = np.argmin(cost, axis=2)
     chosen = np.take_along_axis(candidates, pick[:, :, None], axis=2)[:, :, 0]
     placed = np.isfinite(np.take_along_axis(cost, pick[:, :, None], axis=2)[:, :, 0]).all(axis=1)

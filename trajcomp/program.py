@@ -238,6 +238,30 @@ class Program:
 
     @functools.cached_property
     def _usage(self):
+        uses = self._uses
+        if uses["clash"].size:
+            j = uses["clash"][0]
+            k, tool, frame = uses["first"][j], uses["tool"], uses["frame"]
+            raise TrajcompError(
+                f"target {self.targets[uses['index'][j]].label} is used with tool/frame {(tool[k], frame[k])} and, "
+                f"at line {uses['line'][j]}, with {(tool[j], frame[j])}: it cannot be compensated for both"
+            )
+        start = uses["start"]
+        return Usage(uses["index"][start], uses["tool"][start], uses["frame"][start])
+
+    @functools.cached_property
+    def _uses(self):
+        """Every use of a target by a motion: its tool and frame, the first use of the same target, the clashes.
+
+        Returns
+        -------
+        dict
+            ``index``, ``line``, ``tool``, ``frame`` (U,) of each use (via
+            before target, program order); ``first`` (U,): the use that first
+            names the same target; ``start``: the first uses, by ascending
+            target; ``clash``: uses with another tool or frame than the
+            first, in program order.
+        """
         motions, targets = self.motion_table(), self.target_table()
         index = np.stack([motions.via, motions.target], axis=1).ravel()  # via before target, program order
         rows = np.repeat(np.arange(len(motions)), 2)
@@ -253,16 +277,39 @@ class Program:
         first = np.ones(len(order), dtype=bool)
         first[1:] = index[order][1:] != index[order][:-1]
         start = order[first]
-        first_key = np.repeat(key[start], np.diff(np.append(np.flatnonzero(first), len(order))))
-        clash = np.flatnonzero(key[order] != first_key)
-        if clash.size:
-            j = order[clash[np.argmin(order[clash])]]
-            k = start[np.searchsorted(index[start], index[j])]
-            raise TrajcompError(
-                f"target {self.targets[index[j]].label} is used with tool/frame {(tool[k], frame[k])} and, "
-                f"at line {motions.line[rows[j]]}, with {(tool[j], frame[j])}: it cannot be compensated for both"
-            )
-        return Usage(index[start], tool[start], frame[start])
+        first_use = np.empty(len(order), dtype=int)
+        first_use[order] = np.repeat(start, np.diff(np.append(np.flatnonzero(first), len(order))))
+        clash = np.sort(np.flatnonzero(key != key[first_use]))
+        return {"index": index, "line": motions.line[rows], "tool": tool, "frame": frame,
+                "first": first_use, "start": start, "clash": clash}
+
+    def with_shared_targets_left(self):
+        """The program with every motion to a point used with several tools or frames left as written.
+
+        One set of numbers cannot be right for two tools or work objects (the
+        same figure drawn in two wobjs, UR with two TCPs, legal programs):
+        each motion using such a point passes through unchanged, listed with
+        the reason (`Motion.reason`), instead of the whole program being
+        refused. The program itself when there is none.
+        """
+        uses = self._uses
+        if not uses["clash"].size:
+            return self
+        shared = set(uses["index"][uses["clash"]].tolist())
+        why = {}
+        for j in uses["clash"].tolist():
+            i, k = int(uses["index"][j]), int(uses["first"][j])
+            why.setdefault(i, f"point {self.targets[i].label} is used with tool/frame "
+                              f"{(uses['tool'][k], uses['frame'][k])} (line {uses['line'][k]}) and "
+                              f"{(uses['tool'][j], uses['frame'][j])} (line {uses['line'][j]}): one set of numbers "
+                              "cannot be right for both, its motions are left as written")
+        items = []
+        for item in self.items:
+            if isinstance(item, Motion) and (points := [i for i in (item.via, item.target) if i in shared]):
+                item = dataclasses.replace(item, target=None, via=None, reason=why[points[0]],
+                                           refs=tuple(dict.fromkeys(item.refs + tuple(points))))
+            items.append(item)
+        return dataclasses.replace(self, items=tuple(items))
 
     def usage(self):
         """Tool and frame of every target, from its own data or the motions using it.

@@ -188,8 +188,10 @@ class CompensateJob:
             status = batch.FAIL
             message = f"the program is written but fails its verdict ({', '.join(failed)}); see the report"
             if report.not_compensated:
-                message += (f"; {len(report.not_compensated)} of {len(program.motions)} motions were not "
-                            "compensated (positions computed at run time)")
+                passed = len(report.not_compensated) - report.motions_left
+                message += (f"; {report.motions_left} of {len(program.motions)} motions were not compensated "
+                            "(positions computed at run time)"
+                            + (f", {passed} points passed to routines left as written" if passed else ""))
         if timed is not None and not timed.within_limits:
             status, message = batch.FAIL, "; ".join(filter(None, [message, LIMIT_MESSAGE]))
         if unwritten:

@@ -220,6 +220,8 @@ def read(path, format=None, *, workers=1):
     Returns
     -------
     Program
+        Motions to a point used with several tools or frames are left as
+        written (`Program.with_shared_targets_left`).
 
     Raises
     ------
@@ -231,7 +233,7 @@ def read(path, format=None, *, workers=1):
     if not path.is_file():
         raise ReadError(f"{path}: no such file")
     with collection_paused():  # a program is made of many objects without cycles (`trajcomp.memory`)
-        return fmt.read(path, workers)
+        return fmt.read(path, workers).with_shared_targets_left()
 
 
 def input_paths(path, program):

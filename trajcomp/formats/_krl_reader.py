@@ -69,6 +69,7 @@ class _Named:
 
     name: str
     line: int
+    parameter: bool = False  # a parameter of the routine the motion is in
 
 
 def _members(body, start, source, name, line, text, numeric=True):
@@ -234,8 +235,11 @@ class _Reader:
                 self.select(which, "0")
             elif value.startswith("{") and value.endswith("}") and value.count("{") == 1:
                 members = _members(value[1:-1], start + m.start(2) + 1, index, name, line_no, original)
-                key = f"{which} line {line_no}"
-                (self.tools if which == "TOOL" else self.frames)[key] = _frame(members, name, line_no, original)
+                table, frame = (self.tools if which == "TOOL" else self.frames), _frame(members, name, line_no, original)
+                # the same value set again is the same tool or base
+                key = next((k for k, T in table.items() if k.startswith(which) and np.array_equal(T, frame)),
+                           f"{which} line {line_no}")
+                table[key] = frame
                 self.select(which, key)
             else:
                 self.select(which, None, f"${which} = {value} set at run time (line {line_no})")
@@ -354,7 +358,7 @@ class _Reader:
             self.targets.append(_point(members, "", name, line_no, original, None))
             return len(self.targets) - 1
         if _NAME.match(stripped):
-            return _Named(stripped, line_no)
+            return _Named(stripped, line_no, stripped.upper() in self.params)
         return None
 
 
@@ -407,14 +411,14 @@ def _resolve(reader, path, dat_path):
         if not isinstance(ref, _Named):
             return ref, ""
         key = ref.name.upper()
+        if ref.parameter:
+            return None, f"{ref.name}: routine parameter, known at run time"
         if key in assigned and key in reader.points:
             return None, f"{ref.name} is changed at run time (line {assigned[key]})"
         if key in reader.points:
             return reader.points[key], ""
         if ref.name.startswith("$"):
             return None, f"{ref.name}: system variable, known at run time"
-        if key in reader.params:
-            return None, f"{ref.name}: routine parameter, known at run time"
         if key in reader.unset:
             return None, reader.unset[key]
         if _HOME.match(ref.name):

@@ -115,6 +115,7 @@ class _Named:
 
     name: str
     line: int
+    parameter: bool = False  # a parameter of the routine the motion is in
 
 
 class _Reader:
@@ -233,7 +234,7 @@ class _Reader:
             self.targets.append(self.literal("jointtarget" if kind == "MOVEABSJ" else "robtarget",
                                              text, shift, "", line, original))
             return len(self.targets) - 1
-        return _Named(text, line) if _NAME.match(text) else None
+        return _Named(text, line, text.lower() in self.params) if _NAME.match(text) else None
 
     def frame_name(self, group, text, line):
         """(key of the tool or work object named ``text``, why it is known only at run time)."""
@@ -354,12 +355,12 @@ def _resolve(reader, masked):
         if not isinstance(ref, _Named):
             return ref, ""
         key = ref.name.lower()
+        if ref.parameter:
+            return None, f"{ref.name}: routine parameter, known at run time"
         if key in assigned and key in reader.points:
             return None, f"{ref.name} is changed at run time (line {assigned[key]})"
         if key in reader.points:
             return reader.points[key], ""
-        if key in reader.params:
-            return None, f"{ref.name}: routine parameter, known at run time"
         if key in reader.unset:
             return None, reader.unset[key]
         missing.append((ref.name, ref.line))

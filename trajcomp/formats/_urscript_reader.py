@@ -221,6 +221,9 @@ class _Reader:
             self.values.pop(name, None)
             return
         self.numbers.pop(name, None)
+        if (listed := _LIST.match(text)) and any(abs(float(v)) > np.radians(JOINT_LIMIT) for v in listed.groups()):
+            self.values.pop(name, None)  # six numbers no joint can hold (gains, limits): data, not a position
+            return
         target = self.literal(text, start + m.start(2), line, original, name)
         if target is None:
             self.values.pop(name, None)
@@ -263,7 +266,8 @@ class _Reader:
             line=line,
             text=text,
             reason=why,
-            refs=tuple(i for i, _, _ in found if isinstance(i, int)) if why else (),
+            refs=tuple(dict.fromkeys([*(i for i, _, _ in found if isinstance(i, int)),
+                                      *self.references(" ".join(a for a, _ in args[:count]))])) if why else (),
             spans=_timing_spans(function, args, count),
         )
 
@@ -283,11 +287,12 @@ class _Reader:
         if tcp is None and m and m.group(1) in self.values and not self.runtime(m.group(1)):
             tcp = self.values[m.group(1)].target
             self.frame_uses.setdefault(m.group(1), line)  # a TCP, like a frame: not a point
-        self.tool = f"set_tcp line {line}"
         if tcp is None or tcp.is_joint:
-            self.tools.pop(self.tool, None)
             self.tool, self.tool_why = None, f"TCP set at run time: set_tcp({text.strip()}) (line {line})"
             return
+        # PolyScope sets the TCP again at every Set node: the same pose is the same tool
+        same = next((key for key, T in self.tools.items() if np.array_equal(T, tcp.pose)), None)
+        self.tool = same or f"set_tcp line {line}"
         self.tools[self.tool], self.tool_why = tcp.pose, ""
 
     def references(self, text, assigned=None):
@@ -357,15 +362,30 @@ def _finish(reader):
     if missing:
         unresolved(reader.source.name, sorted(missing, key=lambda x: x[1]),
                    "they are never assigned a pose in the script")
-    both = sorted(set(reader.frame_uses) & set(reader.point_uses))
-    if both:
-        name = both[0]
-        raise ReadError(f"{reader.source.name}: {name} is used as a frame (line {reader.frame_uses[name]}) and as a "
-                        f"target (line {reader.point_uses[name]}): compensating it would move the frame")
+    for name in sorted(set(reader.frame_uses) & set(reader.point_uses)):
+        _offsets_from_point(reader, name)
     _pair_waypoints(reader)
     for name, value in reader.values.items():
         if value.index is None and not value.target.is_joint and name not in reader.frame_uses:
             reader.use(value)
+
+
+def _offsets_from_point(reader, name):
+    """A point also used as the frame of ``pose_trans`` (``movel(pose_trans(pick_p, p[0,0,-0.1,0,0,0]))``
+    then ``movel(pick_p)``: the approach idiom) stays a point; the motions to offsets from it are computed
+    at run time, built on it."""
+    value = reader.values[name]
+    key = reader.frame_names.pop(id(value), None)
+    reader.frames.pop(key, None)
+    index = reader.use(value)
+    why = f"an offset from the point {name} (pose_trans({name}, ...)), computed at run time"
+    for k, item in enumerate(reader.items):
+        if not isinstance(item, Motion):
+            continue
+        if key is not None and item.frame == key:
+            reader.items[k] = dataclasses.replace(item, target=None, via=None, frame=None, reason=why, refs=(index,))
+        elif item.reason and index not in item.refs and name in _WORD.findall(item.text):
+            reader.items[k] = dataclasses.replace(item, refs=item.refs + (index,))  # pose_add(pick_p, ...)
 
 
 def _pair_waypoints(reader):

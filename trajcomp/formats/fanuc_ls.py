@@ -6,8 +6,8 @@ Read:
   ``UFRAME_NUM`` / ``BENUTZER_NUM``, ``sec`` / ``sek``);
 - /MN motion lines ``J|L|C P[n] speed FINE|CNTn|CRn`` (a C line continues
   with ``: P[m] speed ...``), speeds in ``%``, ``mm/sec``, ``cm/min``,
-  ``deg/sec``, ``sec``, ``msec`` (a speed register or ``max_speed``: no
-  number); ``UFRAME_NUM=n`` / ``UTOOL_NUM=n``. CNTn is read as an n mm blend
+  ``deg/sec``, ``sec``, ``msec`` (a speed register ``R[n:comment]mm/sec``,
+  ``AR[n]`` or ``max_speed``: no number); ``UFRAME_NUM=n`` / ``UTOOL_NUM=n``. CNTn is read as an n mm blend
   (FANUC's CNT is a rounding percentage);
 - /POS entries ``P[n:"comment"]{ GP1: UF : u, UT : t, CONFIG : 'N U T, 0,
   0, 0', X = .. mm, Y, Z, W = .. deg, P, R (, E1 ..) }`` or with J1..J6
@@ -18,9 +18,11 @@ Read:
 Not compensated, with the reason (`Motion.reason`): position registers
 (PR[n], P[R[n]]), run-time modifiers (Offset, Tool_Offset, INC, VOFFSET),
 and motions with a tool or user frame set at run time (``UTOOL[1]=PR[1]``,
-``UTOOL_NUM=R[1]``) from that line on. A motion to a position without a
-/POS entry, or to an untaught one (``X = ********``), is a ReadError; an
-untaught position nothing moves to is fine. Positions named by other
+``UTOOL_NUM=R[1]``) from that line on, and motions to an untaught
+position (``X = ********``: the controller loads the program and faults
+only if that line runs). A motion to a position without a /POS entry is a
+ReadError; a 4-axis arm's CONFIG (``'L, 0, 0, 0'``) too: 4-axis arms are
+not supported. Positions named by other
 instructions (``PR[1]=P[3]``) are `Statement.refs`.
 
 Write: the edited positions' numbers and CONFIG; lines are never added or
@@ -73,7 +75,7 @@ _CONTINUED = re.compile(r"^\s*:(.*)$")
 _MOTION = re.compile(r"^\s*([JLC])\s+(P|PR)\[\s*([^\]:]+?)\s*(?::[^\]]*)?\](.*)$", re.I)
 _POINT = re.compile(r"^\s*P\[\s*([^\]:]+?)\s*(?::[^\]]*)?\](.*)$", re.I)
 _SPEED_TERM = re.compile(
-    r"^\s*(?:(" + NUMBER + r")\s*(" + _UNIT + r")|\S+)\s+(FINE|FEIN|CNT\s*(" + NUMBER + r")?\S*|CR\s*(" + NUMBER
+    r"^\s*(?:(" + NUMBER + r")\s*(" + _UNIT + r")|A?R\[[^\]]*\]\s*(?:" + _UNIT + r")?|\S+)\s+(FINE|FEIN|CNT\s*(" + NUMBER + r")?\S*|CR\s*(" + NUMBER
     + r")?\S*)(?:\s|$)", re.I
 )
 _SPEED_FIELD = re.compile(r"(?:" + NUMBER + r")\s*(?:" + _UNIT + r")(?=\s+(?:FINE|FEIN|CNT|CR))", re.I)
@@ -87,6 +89,7 @@ _FIELD = re.compile(r"\b([XYZWPR]|J\d|E\d)\s*=\s*(" + NUMBER + r"|\*+)\s*(mm|deg
 _FRAME_NUMBER = re.compile(r"\b(UF|UT)\s*:\s*(\d+)", re.I)
 _CONFIG = re.compile(r"(?:CONFIG|KONFIG)\s*:\s*'([^']*)'", re.I)
 _CONFIG_VALUE = re.compile(r"^\s*([NF])\s*([UD])\s*([TB])\s*,\s*(-?\d{1,3})\s*,\s*(-?\d{1,3})\s*,\s*(-?\d{1,3})\s*$", re.I)
+_SCARA_CONFIG = re.compile(r"^\s*[LR]\s*,(?:\s*-?\d{1,3}\s*,?)*\s*$", re.I)
 _TOOL_WORDS = {"UTOOL_NUM": "tool", "WKZ_NUM": "tool", "UFRAME_NUM": "frame", "BENUTZER_NUM": "frame",
                "UTOOL": "tool", "WKZ": "tool", "UFRAME": "frame", "BENUTZER": "frame"}
 
@@ -222,9 +225,10 @@ def _motion(m, points, untaught, name, number, original):
     found, reason = [], ""
     for kind_ref, ref in refs:
         if kind_ref == "P" and ref.isdigit() and int(ref) in untaught:
-            fail(name, number, original, f"P[{ref}] is not taught (its position is ********, line "
-                                         f"{untaught[int(ref)]}): teach it or remove the motion")
-        if runtime or kind_ref == "PR" or not ref.isdigit():
+            found.append(None)
+            reason = reason or (f"P[{ref}] is not taught (its position is ********, line {untaught[int(ref)]}): "
+                                "the controller faults only if this line runs")
+        elif runtime or kind_ref == "PR" or not ref.isdigit():
             found.append(None)
             reason = reason or (f"{runtime.group(1)} applied at run time" if runtime
                                 else f"position register {kind_ref}[{ref}]" if kind_ref == "PR"
@@ -300,6 +304,9 @@ def _positions(source, masked, lines, start, end):
             c = _CONFIG.search(gp)
             if c:
                 v = _CONFIG_VALUE.match(c.group(1))
+                if not v and _SCARA_CONFIG.match(c.group(1)):
+                    fail(source.name, line, original, f"{label}: CONFIG '{c.group(1)}' is a 4-axis arm's (SCARA, "
+                                                      "arm left or right): 4-axis arms are not supported")
                 if not v:
                     fail(source.name, line, original, f"{label}: malformed CONFIG")
                 config = (v.group(1).upper(), v.group(2).upper(), v.group(3).upper(), *map(int, v.groups()[3:]))

@@ -27,7 +27,11 @@ program does not define (no .dat, a cut .dat) is a ReadError naming the
 points; so is a declaration cut off mid-line. Points the program passes to
 routines (``MYPROC(XP1)``) are `Statement.refs`.
 
-Write: the edited points' numbers, with S and T from their configuration.
+Write: the edited points' numbers, with S and T from their configuration
+(`trajcomp.configuration.written_configuration`: Status bits 3-7 kept). A
+program from another language is generated with its tools and bases set
+inline (``$TOOL={X ..}``): the controller's TOOL_DATA and BASE_DATA tables
+are never written.
 KUKA requires the DEF name of the .src and the DEFDAT name of the .dat to be
 the file name: a program written under another name gets both renamed (and
 its .dat written beside it under the same name); written under its own name
@@ -137,12 +141,6 @@ def _emit(program, name):
     axes = active_axes(program, 6, "KRL")
     names, decls = {}, []
     src = [f"DEF {name}( )"]
-    for table, numbers, data in ((program.tools, tools, "TOOL_DATA"), (program.frames, bases, "BASE_DATA")):
-        for key, number in numbers.items():
-            if key is not None and number and key in table:
-                pose = matrix_to_pose(table[key])
-                values = [format_number(v, 6) for v in pose[:3]] + [format_number(v, 9) for v in np.degrees(pose[3:])]
-                src.append(f"  {data}[{number}]={{" + ",".join(f"{p.upper()} {v}" for p, v in zip(POSE, values)) + "}")
     tool = base = speed = zone = None
     for motion in program.motions:
         if motion.target is None:
@@ -150,10 +148,10 @@ def _emit(program, name):
             continue
         if motion.tool != tool:
             tool = motion.tool
-            src.append(f"  $TOOL=TOOL_DATA[{tools[tool]}]" if tool is not None else "  $TOOL=$NULLFRAME")
+            src.append(f"  $TOOL={_selected(tool, program.tools, tools, 'TOOL_DATA')}")
         if motion.frame != base:
             base = motion.frame
-            src.append(f"  $BASE=BASE_DATA[{bases[base]}]" if base is not None else "  $BASE=$NULLFRAME")
+            src.append(f"  $BASE={_selected(base, program.frames, bases, 'BASE_DATA')}")
         if motion.speed is not None and (motion.speed, motion.speed_unit) != speed:
             speed = (motion.speed, motion.speed_unit)
             if motion.speed_unit == "mm/s":
@@ -178,6 +176,18 @@ def _emit(program, name):
     src.append("END")
     dat = [f"DEFDAT {name}"] + decls + ["ENDDAT"]
     return "\r\n".join(src) + "\r\n", "\r\n".join(dat) + "\r\n"
+
+
+def _selected(key, values, numbers, data):
+    """What ``$TOOL`` / ``$BASE`` is set to: the known value inline (the controller's TOOL_DATA / BASE_DATA
+    tables are never written), else the table entry of its number, ``$NULLFRAME`` for none."""
+    if key is None:
+        return "$NULLFRAME"
+    if key in values:
+        pose = matrix_to_pose(values[key])
+        numbers_text = [format_number(v, 6) for v in pose[:3]] + [format_number(v, 9) for v in np.degrees(pose[3:])]
+        return "{" + ",".join(f"{p.upper()} {v}" for p, v in zip(POSE, numbers_text)) + "}"
+    return f"{data}[{numbers[key]}]"
 
 
 def _point_name(target, taken, number):

@@ -19,14 +19,19 @@ Read:
   base frame); a frame the script never assigns (an installation feature
   such as ``Plane_1``) must be given its value;
 - ``set_tcp(p[...])`` or a variable holding one: the tool of the following
-  motions (before it, the installation TCP: the robot description's tool).
+  motions (before it, the installation TCP: the robot description's tool);
+  the same pose set again (PolyScope re-emits it at every Set node) is the
+  same tool.
 Not compensated, with the reason (`Motion.reason`): poses computed at run
 time (pose_add, get_actual_tcp_pose, nested pose_trans ...), variables
 assigned anything but a literal, function parameters, variables assigned
 only further down, motions after a TCP set at run time, servoj / servoc.
-A motion to a variable the script never assigns is a ReadError; so is a
-variable used both as a frame and as a target. Pose variables named by
-other statements are `Statement.refs`.
+A point also used as the frame of ``pose_trans`` (the approach idiom
+``movel(pose_trans(pick_p, p[0,0,-0.1,0,0,0]))`` then ``movel(pick_p)``)
+stays a point: the offsets from it are computed at run time and move with
+it. A six-number list no joint can hold (``Kp = [1000, ...]``) is data.
+A motion to a variable the script never assigns is a ReadError. Pose
+variables named by other statements are `Statement.refs`.
 """
 
 import re
