@@ -18,7 +18,7 @@ from trajcomp.configuration import configuration_for, written_configuration
 from trajcomp.errors import ReadError
 from trajcomp.ik import ik
 from trajcomp.kinematics import fk
-from trajcomp.postprocess import compensate_program
+from trajcomp.postprocess import compensate_program, convert_program
 from trajcomp.posture import planned_joints
 from trajcomp.robot import load_robot
 from trajcomp.transforms import matrix_to_abc, matrix_to_quat
@@ -139,7 +139,8 @@ def test_krl_generated_from_another_language_never_writes_the_tool_table(tmp_pat
         "MODULE p\n  PERS tooldata tGun:=[TRUE,[[0,0,150],[1,0,0,0]],[1,[0,0,10],[1,0,0,0],0,0,0]];\n"
         "  CONST robtarget p1:=[[1135,0,1265],[0,0,1,0],[0,-1,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]];\n"
         "  PROC main()\n    MoveL p1,v100,fine,tGun;\n  ENDPROC\nENDMODULE\n")
-    assert main(["convert", str(tmp_path / "p.mod"), str(tmp_path / "p.src"), "--robot", "abb_irb4600"]) == 0
+    converted = convert_program(formats.read(tmp_path / "p.mod"), "krl", robot=load_robot("abb_irb4600"))
+    formats.write(tmp_path / "p.src", converted)
     src = (tmp_path / "p.src").read_text()
     assert "TOOL_DATA" not in src and "BASE_DATA" not in src
     assert re.search(r"\$TOOL=\{X 0\.000000,Y 0\.000000,Z 150\.000000,A 0\.0+,B 0\.0+,C 0\.0+\}", src)
