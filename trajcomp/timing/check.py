@@ -100,23 +100,51 @@ def dense_check(run, law, moves, robot, *, jerk, rate=RATE):
     ratio : ndarray, shape (N,)
         Largest sampled joint velocity, acceleration or TCP speed over its limit at each sample.
     """
-    t = sample_times(law.duration, rate)
-    q, qd, qdd, s, sd = evaluate(run, law, t)
-    k = run.motion_at(s)
-    velocity_ratio, acceleration_ratio = np.abs(qd) / moves.velocity[k], np.abs(qdd) / moves.acceleration[k]
-    speed_ratio = _speed_ratios(moves, robot, k, q, qd)
-    jerk_peak = np.full(6, np.nan)
-    if jerk and len(t) > 1:
-        jerk_peak = np.max(np.abs(np.diff(qdd, axis=0)) / np.diff(t)[:, None], axis=0)
-    peaks = Peaks(
-        velocity=np.abs(qd).max(axis=0),
-        acceleration=np.abs(qdd).max(axis=0),
-        jerk=jerk_peak,
-        velocity_ratio=velocity_ratio.max(axis=0),
-        acceleration_ratio=acceleration_ratio.max(axis=0),
-        speed_ratio=float(speed_ratio.max(initial=0.0)),
-    )
-    return peaks, s, np.maximum(np.maximum(velocity_ratio.max(axis=1), acceleration_ratio.max(axis=1)), speed_ratio)
+    return dense_checks([run], [law], moves, robot, jerk=[jerk], rate=rate)[0]
+
+
+def dense_checks(runs, laws, moves, robot, *, jerk, rate=RATE):
+    """`dense_check` of several timed runs (a batch of exact stops), their TCP Jacobians computed together.
+
+    Parameters
+    ----------
+    runs : list of RunPath
+    laws : list of ConstantAcceleration or RuckigLaw
+    moves : Moves
+    robot : Robot
+    jerk : list of bool
+        Measure the jerk of each run.
+    rate : float
+        Hz.
+
+    Returns
+    -------
+    list of (Peaks, s (N,), ratio (N,))
+    """
+    parts = []
+    for run, law in zip(runs, laws):
+        t = sample_times(law.duration, rate)
+        q, qd, qdd, s, _ = evaluate(run, law, t)
+        parts.append((t, q, qd, qdd, s, run.motion_at(s)))
+    q, qd, k = (np.concatenate([part[i] for part in parts]) for i in (1, 2, 5))
+    speed_ratios = np.split(_speed_ratios(moves, robot, k, q, qd), np.cumsum([len(part[0]) for part in parts])[:-1])
+    out = []
+    for (t, q, qd, qdd, s, k), speed_ratio, measure_jerk in zip(parts, speed_ratios, jerk):
+        velocity_ratio, acceleration_ratio = np.abs(qd) / moves.velocity[k], np.abs(qdd) / moves.acceleration[k]
+        jerk_peak = np.full(6, np.nan)
+        if measure_jerk and len(t) > 1:
+            jerk_peak = np.max(np.abs(np.diff(qdd, axis=0)) / np.diff(t)[:, None], axis=0)
+        peaks = Peaks(
+            velocity=np.abs(qd).max(axis=0),
+            acceleration=np.abs(qdd).max(axis=0),
+            jerk=jerk_peak,
+            velocity_ratio=velocity_ratio.max(axis=0),
+            acceleration_ratio=acceleration_ratio.max(axis=0),
+            speed_ratio=float(speed_ratio.max(initial=0.0)),
+        )
+        ratio = np.maximum(np.maximum(velocity_ratio.max(axis=1), acceleration_ratio.max(axis=1)), speed_ratio)
+        out.append((peaks, s, ratio))
+    return out
 
 
 def _speed_ratios(moves, robot, k, q, qd):

@@ -200,20 +200,19 @@ def run_path(moves, robot, first, last, tolerance=TOLERANCE, *, part=None):
     s_a, s_b = s_waypoints[a - first], s_waypoints[b - first]
     if s_b <= s_a:
         return _no_path(a, b)
-    grid = _grid(s)  # every sample is a grid point: one Jacobian batch serves the fit and the TCP speed
+    grid = _grid(s)  # every sample is a grid point
     k = first + np.clip(np.searchsorted(s_waypoints, grid), 1, len(s_waypoints) - 1)
-    row = np.searchsorted(grid, s)  # grid point of each sample
-    at_waypoint = row[known[0]]
-    q_grid = _interpolated(grid, s, q)
-    jac_grid = tcp_jacobians(robot, moves, k, q_grid, (at_waypoint, *known[1:]))
-    jac = jac_grid[row]
+    at_sample = np.full(len(grid), -1)
+    at_sample[np.searchsorted(grid, s)] = np.arange(len(s))
+    motion = np.maximum(owner, first + 1)  # of each sample, for its tool (the first sample: the first motion)
+    jac = tcp_jacobians(robot, moves, motion, q, known)
     travel = _travel(q, jac)
     tcp_lengths = np.diff(travel[waypoint_rows], prepend=0.0)
     tol = _tolerances(moves, first, last, travel, owner, waypoint_rows, tcp_lengths, tolerance)
     spline, deviation = _fit(s, q, jac, tol, np.min(moves.acceleration[first + 1 : last + 1], axis=0))
     inside = (grid >= s_a) & (grid <= s_b)
     grid = grid[inside]
-    rate = _grid_rates(robot, moves, k[inside], grid, spline, q_grid[inside], jac_grid[inside])
+    rate = _grid_rates(robot, moves, k[inside], spline(grid), spline(grid, 1), at_sample[inside], (q, motion, jac))
     path = JointPath(type(spline)(spline.t - s_a, spline.c, spline.k))  # a BSpline moved to start at s_a
     lengths = tcp_lengths[a - first : b - first + 1].copy()
     lengths[0] = 0.0
@@ -238,27 +237,29 @@ def stop_paths(moves, robot, first, last, tolerance=TOLERANCE):
         runs.append((k, slice(r0, r1 + 1), local, _grid(local) if r1 > r0 else local[:0]))
     sizes = [len(grid) for *_, grid in runs]
     offsets = np.r_[0, np.cumsum(sizes)]
-    first_point = np.full(len(s), -1)  # grid point (in all grids) of the sample each motion starts at
-    for (_, rows, _, _), offset, size in zip(runs, offsets, sizes):
-        if size:
-            first_point[rows.start] = offset
-    at = first_point[known[0]] >= 0
-    owner_all = np.repeat(np.arange(first + 1, last + 1), sizes)
-    q_all = np.concatenate([_interpolated(grid, local, q[rows]) for _, rows, local, grid in runs])
-    jac_all = tcp_jacobians(robot, moves, owner_all, q_all, (first_point[known[0][at]], known[1][at], known[2][at]))
+    at_sample = np.full(offsets[-1], -1)  # the sample each grid point (in all grids) is, -1 between samples
+    for (_, rows, local, grid), offset in zip(runs, offsets):
+        at_sample[offset + np.searchsorted(grid, local)] = np.arange(rows.start, rows.stop)
+    owner = np.maximum(owner, first + 1)  # the first sample: the first motion's tool
+    jac = tcp_jacobians(robot, moves, owner, q, known)
+    fits = []  # per motion with a grid: spline, deviation, TCP length
+    for k, rows, local, grid in runs:
+        if len(grid):
+            spline, deviation = _fit(local, q[rows], jac[rows], np.full(len(local), tolerance), moves.acceleration[k])
+            fits.append((spline, deviation, _travel(q[rows], jac[rows])[-1]))
+    moving = [grid for *_, grid in runs if len(grid)]
+    rates = _grid_rates(robot, moves, np.repeat(np.arange(first + 1, last + 1), sizes),
+                        np.concatenate([f[0](grid) for f, grid in zip(fits, moving)]),
+                        np.concatenate([f[0](grid, 1) for f, grid in zip(fits, moving)]), at_sample, (q, owner, jac))
+    fits = iter(fits)
     paths = []
     for (k, rows, local, grid), offset in zip(runs, offsets):
         if not len(grid):
             paths.append(_no_path(k - 1, k))
             continue
-        jac_grid = jac_all[offset : offset + len(grid)]
-        jac = jac_grid[np.searchsorted(grid, local)]
-        travel = _travel(q[rows], jac)
-        spline, deviation = _fit(local, q[rows], jac, np.full(len(local), tolerance), moves.acceleration[k])
-        rate = _grid_rates(robot, moves, owner_all[offset : offset + len(grid)], grid, spline,
-                           q_all[offset : offset + len(grid)], jac_grid)
-        paths.append(RunPath(JointPath(spline), local[[0, -1]], grid, k - 1, k, np.array([0.0, travel[-1]]), rate,
-                             deviation))
+        spline, deviation, length = next(fits)
+        paths.append(RunPath(JointPath(spline), local[[0, -1]], grid, k - 1, k, np.array([0.0, length]),
+                             rates[offset : offset + len(grid)], deviation))
     return paths
 
 
@@ -286,20 +287,35 @@ def _no_path(a, b):
     return RunPath(None, np.zeros(b - a + 1), np.zeros(1), a, b, np.zeros(b - a + 1), np.zeros(1), 0.0)
 
 
-def _grid_rates(robot, moves, owner, grid, spline, q_samples, jac_samples):
+def _grid_rates(robot, moves, owner, q_path, dq, at_sample, samples):
     """|dp/ds| (G,) of a fitted path at its grid points, mm/rad: the TCP rate the timing bounds.
 
-    ``q_samples`` (G, 6) and ``jac_samples`` (G, 6, 6) are the samples' joints
-    and TCP Jacobians at the grid points (linear between samples); where the
-    fit leaves them (a blended corner it cuts) the Jacobian is computed
-    again on the path itself, so the rate is the path's own.
+    Parameters
+    ----------
+    robot : Robot
+    moves : Moves
+    owner : ndarray of int, shape (G,)
+        The motion of each grid point (its tool).
+    q_path, dq : ndarray, shape (G, 6)
+        The path's q and q' at the grid points.
+    at_sample : ndarray of int, shape (G,)
+        The sample each grid point is (-1 between samples).
+    samples : (ndarray (n, 6), ndarray of int (n,), ndarray (n, 6, 6))
+        The samples' joints, motions and TCP Jacobians: a grid point on a
+        sample of a motion with the same tool, which the path passes within
+        `_SAME_JACOBIAN`, takes its Jacobian; every other one (between
+        samples, in a blended corner the path cuts) is computed on the path.
     """
-    q_path, dq = spline(grid), spline(grid, 1)
-    jac = jac_samples
-    moved = np.flatnonzero(np.max(np.abs(q_path - q_samples), axis=1) > _SAME_JACOBIAN)
-    if moved.size:
-        jac = jac_samples.copy()
-        jac[moved] = tcp_jacobians(robot, moves, owner[moved], q_path[moved])
+    q_samples, sample_owner, jac_samples = samples
+    jac = np.empty((len(q_path), 6, 6))
+    reuse = at_sample >= 0
+    row = at_sample[reuse]
+    reuse[reuse] = ((np.max(np.abs(q_path[reuse] - q_samples[row]), axis=1) <= _SAME_JACOBIAN)
+                    & (moves.tool[owner[reuse]] == moves.tool[sample_owner[row]]))
+    jac[reuse] = jac_samples[at_sample[reuse]]
+    other = np.flatnonzero(~reuse)
+    if other.size:
+        jac[other] = tcp_jacobians(robot, moves, owner[other], q_path[other])
     return np.linalg.norm(np.einsum("nij,nj->ni", jac[:, :3], dq), axis=1)
 
 

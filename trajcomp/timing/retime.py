@@ -32,7 +32,7 @@ import itertools
 import numpy as np
 
 from trajcomp.program_items import JOINT
-from trajcomp.timing.check import LIMIT_TOLERANCE, Peaks, dense_check, segment_peaks
+from trajcomp.timing.check import LIMIT_TOLERANCE, Peaks, dense_check, dense_checks, segment_peaks
 from trajcomp.timing.path import TOLERANCE, stop_paths
 from trajcomp.timing.result import Segment, TimingResult
 from trajcomp.timing.windows import WINDOW, run_windows
@@ -120,12 +120,16 @@ def _time_stops(timeline, batch, runs, moves, robot):
     by_toppra = [i for i, (kind, *_) in enumerate(batch) if kind == "toppra" and runs[i].path is not None]
     for i, law in zip(by_toppra, rest_to_rest_laws([runs[i] for i in by_toppra], moves, robot)):
         laws[i] = law
-    for (kind, first, last), run, law in zip(batch, runs, laws):
+    moving = [i for i, run in enumerate(runs) if run.path is not None]
+    for i in moving:
+        laws[i] = laws[i] or ruckig_law(runs[i], moves, robot)
+    checks = dict(zip(moving, dense_checks([runs[i] for i in moving], [laws[i] for i in moving], moves, robot,
+                                           jerk=[batch[i][0] == "ruckig" for i in moving])))
+    for i, ((kind, first, last), run, law) in enumerate(zip(batch, runs, laws)):
         if run.path is None:
             timeline.add(kind, first, last, [run], [None], None)
             continue
-        law = law or ruckig_law(run, moves, robot)
-        peaks = segment_peaks(run, law, moves, robot, jerk=kind == "ruckig")
+        peaks = checks[i][0]
         if peaks.worst > _TARGET:  # the dense check found an overshoot: the motion timed again alone
             (run,), (law,), peaks = _timed(kind, [run], moves, robot)
         timeline.add(kind, first, last, [run], [law], peaks)
