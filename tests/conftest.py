@@ -33,3 +33,21 @@ def kuka_model(tmp_path_factory):
     assert main(["calibrate", str(meas), "--robot", "kuka_kr6_r900", "--grid-step", "50", "--folds", "3",
                  "-o", str(model)]) == 0
     return model
+
+
+@pytest.fixture
+def makerless(tmp_path):
+    """``makerless(name)``: the path of a copy of built-in robot ``name`` whose description names no maker.
+
+    Any language's program may run on such an arm (`trajcomp.plausibility.check_robot_language`): for tests of a
+    language's writing and timing on one geometry, where a KUKA arm would run no URScript.
+    """
+    from importlib import resources
+
+    def copy(name):
+        text = resources.files("trajcomp.robots").joinpath(f"{name}.yaml").read_text(encoding="utf-8")
+        path = tmp_path / f"{name}-makerless.yaml"
+        path.write_text("".join(line for line in text.splitlines(keepends=True) if not line.startswith("vendor:")))
+        return str(path)
+
+    return copy

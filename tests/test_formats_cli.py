@@ -33,9 +33,11 @@ def test_formats_lists_builtins(capsys):
     assert ".src" in out and "built-in" in out
 
 
-def test_convert_rapid_to_fanuc_computes_config(tmp_path, capsys):
+def test_convert_rapid_to_fanuc_computes_config(tmp_path, makerless, capsys):
     out = tmp_path / "WELD.LS"
-    assert _run(["convert", str(EXAMPLES / "abb" / "Weld.mod"), str(out), "--robot", "abb_irb4600"]) == 0
+    with pytest.raises(TrajcompError, match=r"a FANUC program \(fanuc_ls\) cannot run on robot abb_irb4600 \(ABB\)"):
+        _run(["convert", str(EXAMPLES / "abb" / "Weld.mod"), str(out), "--robot", "abb_irb4600"])
+    assert _run(["convert", str(EXAMPLES / "abb" / "Weld.mod"), str(out), "--robot", makerless("abb_irb4600")]) == 0
     program = formats.read(out)
     assert len(program.motions) == 5
     assert all(t.config == ("F", "U", "T", 0, 0, 0) for t in program.targets)  # IRB 4600 home wrist: J5 = +89 deg

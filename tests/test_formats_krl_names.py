@@ -56,8 +56,8 @@ def test_a_file_name_krl_cannot_use_is_refused(tmp_path, name):
     assert list(tmp_path.iterdir()) == []
 
 
-def test_convert_names_a_new_krl_program_after_its_file(tmp_path):
+def test_convert_names_a_new_krl_program_after_its_file(tmp_path, makerless):
     assert main(["convert", str(KRL.parent / "csv" / "path.csv"), str(tmp_path / "path_kuka.src"),
-                 "--robot", "ur10"]) == 0
+                 "--robot", makerless("ur10")]) == 0
     assert (tmp_path / "path_kuka.src").read_text().startswith("DEF path_kuka( )")
     assert (tmp_path / "path_kuka.dat").read_text().startswith("DEFDAT path_kuka")

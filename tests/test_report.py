@@ -158,7 +158,7 @@ def _timing(peak_velocity):
         segments=(types.SimpleNamespace(kind="toppra", first=0, last=2, duration=1.0, speed=100.0),),
         peak_velocity=peak_velocity, peak_acceleration=KUKA.a_max * 0.5, peak_jerk=np.ones(6),
         limit_velocity=limit, limit_acceleration=KUKA.a_max, limit_jerk=np.full(6, np.inf),
-        within_limits=bool(np.all(peak_velocity <= limit * 1.01)), warnings=())
+        within_limits=bool(np.all(peak_velocity <= limit * 1.01)), warnings=(), jerk_measured=np.zeros(6, bool))
 
 
 def test_timing_peaks_are_judged_against_the_limits(model):

@@ -69,7 +69,18 @@ def test_retime_writes_a_compliance_report_of_the_program_as_written(tmp_path, c
     doc = _valid(json.loads((tmp_path / "timed.json").read_text()))
     assert doc["command"] == "retime" and doc["verdict"]["result"] == "pass"
     assert doc["timing"]["within_limits"] and doc["timing"]["cycle_time_s"] > 0
-    assert all(t["correction_norm_mm"] == 0.0 for t in doc["targets"]) and len(doc["targets"]) == 5
+    assert len(doc["targets"]) == 5
+    no_model = ("correction_mm", "correction_deg", "correction_norm_mm", "correction_norm_deg", "predicted_residual_mm",
+                "outside_grid")  # a retime report claims nothing a model gives: it said "0 outside the grid"
+    assert all(t[key] is None for t in doc["targets"] for key in no_model)
+    assert all(t["command"] == t["target"] for t in doc["targets"])  # written as programmed
+    summary = doc["summary"]
+    assert summary["outside_grid"] is summary["correction_max_mm"] is summary["residual_max_mm"] is None
+    assert not {"correction_mm", "correction_deg", "predicted_residual_mm"} & set(summary["statistics"])
+    assert any(m.startswith("no compensation model") for m in doc["missing"])
+    ruckig = any(s["kind"] == "ruckig" for s in doc["timing"]["segments"])
+    for row in doc["timing"]["joints"]:  # measured on ruckig segments of a jerk-limited arm only, else null (was 0)
+        assert (row["jerk"]["peak"] is None) == (not ruckig or row["jerk"]["limit"] is None)
     assert [t["posture_source"] for t in doc["targets"]] == ["config"] * 5
     status = {c["id"]: c["status"] for c in doc["verdict"]["criteria"]}
     assert status["residual"] == status["uncompensated"] == "not evaluated"  # nothing was compensated

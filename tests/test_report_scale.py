@@ -278,7 +278,7 @@ def _timing_result(segments, waypoints):
     return SimpleNamespace(peak_velocity=six, limit_velocity=2 * six, peak_acceleration=six,
                            limit_acceleration=2 * six, peak_jerk=six, limit_jerk=np.full(6, np.inf),
                            segments=segments, cycle_time=100.0, within_limits=True,
-                           t=np.linspace(0.0, 100.0, waypoints))
+                           t=np.linspace(0.0, 100.0, waypoints), warnings=(), jerk_measured=np.zeros(6, bool))
 
 
 def test_the_times_of_a_long_joint_program_go_to_the_sidecar(tmp_path):

@@ -24,6 +24,9 @@ TIMING_SLACK = 0.01  # relative: a peak up to 1 % over its limit passes (the tim
 
 
 AS_WRITTEN = "no compensation model: the program runs as written (retime)"
+MODEL_MEASURES = ("correction_mm", "correction_deg", "predicted_residual_mm")  # per-target measures a model gives
+MODEL_FIELDS = ("correction_mm", "correction_deg", "correction_norm_mm", "correction_norm_deg",
+                "predicted_residual_mm", "outside_grid")  # a target's JSON fields that need a model
 
 
 def target_checks(report, measures, criteria, has_grid, mode, compensated=True):
@@ -86,13 +89,15 @@ def timing_section(timing, before=None, times=True):
     limits = {"velocity": ("peak_velocity", "limit_velocity", "deg/s"),
               "acceleration": ("peak_acceleration", "limit_acceleration", "deg/s^2"),
               "jerk": ("peak_jerk", "limit_jerk", "deg/s^3")}
+    measured = {"velocity": np.ones(6, bool), "acceleration": np.ones(6, bool), "jerk": timing.jerk_measured}
     joints = []
     for j in range(6):
         row = {"joint": j + 1}
         for name, (peak, limit, unit) in limits.items():
             p, lim = float(np.degrees(getattr(timing, peak)[j])), float(np.degrees(getattr(timing, limit)[j]))
+            p = p if measured[name][j] else None  # a TOPP-RA law does not bound jerk: not a measured 0
             row[name] = {"peak": p, "limit": lim if np.isfinite(lim) else None, "unit": unit,
-                         "ratio": p / lim if np.isfinite(lim) and lim > 0 else None}
+                         "ratio": p / lim if p is not None and np.isfinite(lim) and lim > 0 else None}
         joints.append(row)
     by_kind = {}
     for segment in timing.segments:
@@ -174,6 +179,9 @@ def compliance_report(report, robot, *, criteria=None, model=None, model_info=No
     if not len(measures):
         missing.append("no compensable motion: the program has no Cartesian target a motion uses, "
                        "so there is nothing to tabulate or plot")
+    if model is None:
+        missing.append(f"{AS_WRITTEN}, so there are no corrections, predicted residuals or grid: those fields of "
+                       "the summary and the targets are null")
     if model is not None and not has_grid:
         missing.append(f"no grid: mode {mode} of this model uses no residual grid, so there is no grid box "
                        "and no outside-grid check")
@@ -201,9 +209,9 @@ def compliance_report(report, robot, *, criteria=None, model=None, model_info=No
                        "model": model_info, "mode": mode, "options": options or {}},
         "criteria": criteria.as_dict(),
         "verdict": verdict(checks),
-        "summary": {**_summary(report, measures), "statistics": statistics(measures, report.labels)},
+        "summary": _summary(report, measures, compensated=model is not None),
         "target_table": table,
-        "targets": target_json(report, robot, measures, flags, index),
+        "targets": _as_run(target_json(report, robot, measures, flags, index), model is not None),
         "not_compensated": [{"line": int(line), "text": text, "reason": reason}
                             for line, text, reason in report.not_compensated[:ROWS]],
         "unused": list(report.unused[:ROWS]),
@@ -216,12 +224,13 @@ def compliance_report(report, robot, *, criteria=None, model=None, model_info=No
             "path": None, "format": "npz", "rows": len(measures),
             "arrays": {name: ARRAYS.get(name, TIMES) for name in data}},
     })
-    figures = _figures(report, robot, measures, doc, model.error_field(mode) if has_grid else None)
+    figures = _figures(report, robot, measures, doc, model.error_field(mode) if has_grid else None,
+                       compensated=model is not None)
     return Report(doc, figures, data)
 
 
-def _figures(report, robot, measures, doc, field):
-    """The compliance figures, drawn lazily; none without targets."""
+def _figures(report, robot, measures, doc, field, compensated=True):
+    """The compliance figures, drawn lazily; none without targets, no grid or correction without a model."""
     figures = []
     n = len(measures)
     if n:
@@ -230,16 +239,21 @@ def _figures(report, robot, measures, doc, field):
         c, v = doc["criteria"], measures.values
         envelope = plots.envelope_note(n)
         figures += [
-            Figure("targets", "Targets and the measured grid",
-                   "Targets in motion order (base frame); crosses lie outside the grid, where only the model applies."
-                   + plots.path_note(n),
+            Figure("targets", "Targets and the measured grid" if compensated else "Targets",
+                   "Targets in motion order (base frame)"
+                   + ("; crosses lie outside the grid, where only the model applies." if compensated else
+                      " (no compensation model: no grid).") + plots.path_note(n),
                    lambda: plots.targets_and_grid(report.T_target[:, :3, 3], np.asarray(report.outside_grid, bool),
                                                   box)),
-            Figure("targets", "Corrections and predicted residuals",
-                   "Top: size of the correction per target. Bottom: distance from the target to where the model "
-                   "predicts the arm lands with the command (log scale), against the tolerance." + envelope,
-                   lambda: plots.corrections(v["correction_mm"], v["correction_deg"], v["predicted_residual_mm"],
-                                             c["tolerance_mm"])),
+        ]
+        if compensated:
+            figures.append(Figure(
+                "targets", "Corrections and predicted residuals",
+                "Top: size of the correction per target. Bottom: distance from the target to where the model "
+                "predicts the arm lands with the command (log scale), against the tolerance." + envelope,
+                lambda: plots.corrections(v["correction_mm"], v["correction_deg"], v["predicted_residual_mm"],
+                                          c["tolerance_mm"])))
+        figures += [
             Figure("posture", "Joints within their ranges",
                    "Each written joint as a fraction of its range; shaded: the limit margin." + envelope,
                    lambda: plots.joint_ranges(np.degrees(np.reshape(report.q, (n, 6))), np.degrees(robot.q_min),
@@ -259,27 +273,43 @@ def _figures(report, robot, measures, doc, field):
     return tuple(figures)
 
 
-def _summary(report, measures):
-    """Counts and worst values over the targets (None where there is no target).
+def _summary(report, measures, compensated=True):
+    """Counts, worst values and statistics over the targets (None where there is no target).
 
     The motions not compensated and the unused points are counted here and
-    listed in the document up to `ROWS`.
+    listed in the document up to `ROWS`. Without compensation (``retime``)
+    what needs a model is None (counts, worst values) or left out
+    (statistics of `MODEL_MEASURES`).
     """
     n = len(report.labels)
     counts = {"not_compensated": len(report.not_compensated), "unused": len(report.unused)}
     if not n:
-        return {"targets": 0, "outside_grid": 0, "configuration_changed": 0, "correction_max_mm": None,
-                "correction_max_deg": None, "residual_max_mm": None, "limit_distance_min_deg": None, **counts}
-    return {
-        **counts,
-        "targets": n,
-        "outside_grid": int(np.sum(report.outside_grid)),
-        "configuration_changed": int(measures.changed.sum()),
-        "correction_max_mm": float(measures.values["correction_mm"].max()),
-        "correction_max_deg": float(measures.values["correction_deg"].max()),
-        "residual_max_mm": float(measures.values["predicted_residual_mm"].max()),
-        "limit_distance_min_deg": float(measures.values["limit_distance_deg"].min()),
-    }
+        out = {"targets": 0, "outside_grid": 0, "configuration_changed": 0, "correction_max_mm": None,
+               "correction_max_deg": None, "residual_max_mm": None, "limit_distance_min_deg": None, **counts}
+    else:
+        out = {
+            **counts,
+            "targets": n,
+            "outside_grid": int(np.sum(report.outside_grid)),
+            "configuration_changed": int(measures.changed.sum()),
+            "correction_max_mm": float(measures.values["correction_mm"].max()),
+            "correction_max_deg": float(measures.values["correction_deg"].max()),
+            "residual_max_mm": float(measures.values["predicted_residual_mm"].max()),
+            "limit_distance_min_deg": float(measures.values["limit_distance_deg"].min()),
+        }
+    out["statistics"] = statistics(measures, report.labels)
+    if not compensated:
+        out.update(dict.fromkeys(("outside_grid", "correction_max_mm", "correction_max_deg", "residual_max_mm")))
+        out["statistics"] = {k: v for k, v in out["statistics"].items() if k not in MODEL_MEASURES}
+    return out
+
+
+def _as_run(rows, compensated):
+    """The target rows, with the fields that need a model (`MODEL_FIELDS`) None when there was none (``retime``)."""
+    if not compensated:
+        for row in rows:
+            row.update(dict.fromkeys(MODEL_FIELDS))
+    return rows
 
 
 def _model_accuracy(model, mode, has_grid, tolerance):

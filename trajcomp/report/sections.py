@@ -82,6 +82,11 @@ def _criteria_text(criteria):
             "does not fail the run; it says why.</p>")
 
 
+def _shown(value, spec, unit=""):
+    """A number formatted with ``spec`` (and ``unit``), or a dash for None (not measured, no model)."""
+    return "—" if value is None else f"{value:{spec}}{unit}"
+
+
 def _names(names, total=None):
     """A list of names (of ``total``, all by default) as text, the first `SHOWN` of them."""
     total = len(names) if total is None else total
@@ -118,13 +123,14 @@ def _targets(doc):
     if not doc["targets"]:
         return "<p>No target was compensated.</p>"
     lead = key_values([
-        ("compensated targets", s["targets"]),
+        ("targets (run as written)" if doc["provenance"]["model"] is None else "compensated targets", s["targets"]),
         ("tabulated below", "every target" if shown["complete"] else f"{shown['rows']} of {shown['targets']}"),
         ("flagged (failing a per-target criterion)", shown["flagged"]),
-        ("outside the grid", s["outside_grid"]),
+        ("outside the grid", _shown(s["outside_grid"], "d")),
         ("posture changed", s["configuration_changed"]),
-        ("largest correction", f"{s['correction_max_mm']:.4f} mm, {s['correction_max_deg']:.4f} deg"),
-        ("largest predicted residual", f"{s['residual_max_mm']:.2e} mm"),
+        ("largest correction", "—" if s["correction_max_mm"] is None
+         else f"{s['correction_max_mm']:.4f} mm, {s['correction_max_deg']:.4f} deg"),
+        ("largest predicted residual", _shown(s["residual_max_mm"], ".2e", " mm")),
         ("smallest joint limit distance", f"{s['limit_distance_min_deg']:.2f} deg"),
         ("unused points (left as written)", _names(doc["unused"], s["unused"])),
         ("joint targets", f"{doc['joint_targets']['mode']}: "
@@ -151,9 +157,10 @@ def _target_tables(doc):
         return ("; ".join([*t["flags"], *why.get(t["index"], [])]),) if why else ()
 
     extra = ("shown for",) if why else ()
-    rows = [(t["index"], t["label"], t["line"], *(f"{v:.3f}" for v in t["target"]), f"{t['correction_norm_mm']:.4f}",
-             f"{t['correction_norm_deg']:.4f}", f"{t['predicted_residual_mm']:.1e}",
-             "outside" if t["outside_grid"] else "inside", *reason(t)) for t in targets]
+    grid = {True: "outside", False: "inside", None: "—"}
+    rows = [(t["index"], t["label"], t["line"], *(f"{v:.3f}" for v in t["target"]),
+             _shown(t["correction_norm_mm"], ".4f"), _shown(t["correction_norm_deg"], ".4f"),
+             _shown(t["predicted_residual_mm"], ".1e"), grid[t["outside_grid"]], *reason(t)) for t in targets]
     poses = table(("#", "target", "line", "x", "y", "z", "a", "b", "c", "correction mm", "correction deg",
                    "residual mm", "grid", *extra), rows, numeric={0, 2, *range(3, 12)},
                   bad=marker({"residual": (11,), "outside_grid": (12,)}), css="wide")
@@ -214,7 +221,7 @@ def _timing(section):
         cells = [f"J{row['joint']}"]
         for name in ("velocity", "acceleration", "jerk"):
             q = row[name]
-            cells += [f"{q['peak']:.1f}", "—" if q["limit"] is None else f"{q['limit']:.1f}",
+            cells += [_shown(q["peak"], ".1f"), "—" if q["limit"] is None else f"{q['limit']:.1f}",
                       "—" if q["ratio"] is None else f"{q['ratio']:.0%}"]
         rows.append(cells)
     over = {(r, c) for r, row in enumerate(section["joints"]) for c, name in ((3, "velocity"), (6, "acceleration"),

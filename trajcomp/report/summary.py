@@ -37,7 +37,9 @@ def summary_lines(doc):
         tolerance = f", tolerance {criteria['tolerance_mm']:g} mm" if criteria else ""
         out = [f"verdict: {verdict['result'].upper()}{tolerance}: {what}", *verdict_lines(verdict)]
     summary = doc.get("summary")
-    if summary and summary["targets"]:
+    if summary and summary["targets"] and summary["correction_max_mm"] is None:
+        out.append(f"  {summary['targets']} targets, run as written (no compensation model)")
+    elif summary and summary["targets"]:
         out.append(f"  {summary['targets']} targets; largest correction {summary['correction_max_mm']:.3f} mm, "
                    f"{summary['correction_max_deg']:.3f} deg; {summary['outside_grid']} outside the grid")
     out += [f"  missing: {m}" for m in doc["missing"]]

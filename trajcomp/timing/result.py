@@ -118,7 +118,7 @@ class TimingResult:
         Largest sampled |joint velocity| (rad/s) and |acceleration| (rad/s^2).
     peak_jerk : ndarray, shape (6,)
         Largest sampled |joint jerk| in ruckig segments of an arm with a
-        jerk limit, rad/s^3; 0 where none was measured (a TOPP-RA law does
+        jerk limit, rad/s^3; 0 where none was measured (`jerk_measured`; a TOPP-RA law does
         not bound jerk, and without a jerk limit ruckig steps the
         acceleration).
     limit_velocity, limit_acceleration, limit_jerk : ndarray, shape (6,)
@@ -169,6 +169,12 @@ class TimingResult:
     deviation: float
     warnings: tuple = ()
     pieces: tuple = dataclasses.field(default=(), repr=False)
+
+    @property
+    def jerk_measured(self):
+        """Mask (6,) of the joints whose `peak_jerk` was measured: ruckig segments of an arm with a jerk limit."""
+        ruckig = any(s.kind == "ruckig" for s in self.segments)
+        return np.isfinite(self.limit_jerk) & ruckig
 
     @property
     def durations(self):
@@ -240,10 +246,8 @@ class TimingResult:
         out = [f"{'joint':<6}{'|v| deg/s':>11}{'limit':>8}{'|a| deg/s^2':>13}{'limit':>8}"
                f"{'|j| deg/s^3':>13}{'limit':>9}"]
         deg = np.degrees
-        ruckig = any(s.kind == "ruckig" for s in self.segments)
         for j in range(6):
-            measured = ruckig and np.isfinite(self.limit_jerk[j])
-            jerk = f"{deg(self.peak_jerk[j]):.0f}" if measured else "-"
+            jerk = f"{deg(self.peak_jerk[j]):.0f}" if self.jerk_measured[j] else "-"
             jerk_limit = "-" if np.isinf(self.limit_jerk[j]) else f"{deg(self.limit_jerk[j]):.0f}"
             out.append(
                 f"J{j + 1:<5}{deg(self.peak_velocity[j]):>11.1f}{deg(self.limit_velocity[j]):>8.0f}"
