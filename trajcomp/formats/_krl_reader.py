@@ -13,6 +13,7 @@ from trajcomp.formats._text import (
     LENGTH_LIMIT,
     NUMBER,
     Lines,
+    check_closed,
     fail,
     finite,
     integer,
@@ -60,6 +61,8 @@ _DEF = re.compile(r"^\s*(?:GLOBAL\s+)?DEF(?:FCT\s+\w+)?\s+(\w+)\s*\(", re.I | re
 _DEF_LINE = re.compile(r"^\s*(?:GLOBAL\s+)?DEF(?:FCT\s+\w+)?\s+\w+\s*\((.*?)\)", re.I)
 _DEFDAT = re.compile(r"^\s*DEFDAT\s+(\w+)", re.I | re.M)
 _ENDDAT = re.compile(r"^\s*ENDDAT\b", re.I | re.M)
+_BLOCK_OPENS = re.compile(r"^[ \t]*(?:GLOBAL\s+)?(DEFFCT|DEF)\b", re.I | re.M)  # a routine or function
+_BLOCK_CLOSES = re.compile(r"^[ \t]*(ENDFCT|END)\b", re.I | re.M)
 _PROGRAM_NAME = re.compile(r"^[A-Za-z_][A-Za-z0-9_]{0,23}$")  # KRL names: 24 characters at most
 
 
@@ -377,6 +380,7 @@ def read(path):
     if not _DEF.search(mask(src.text, ";")):
         raise ReadError(f"{path}: not a KRL program: no DEF line")
     src_index, src_lines, src_masked = reader.add_source(src)
+    check_closed(src, src_masked, _BLOCK_OPENS, _BLOCK_CLOSES, {"DEF": "END", "DEFFCT": "ENDFCT"})
     dat_path = _sibling_dat(path)
     if dat_path is not None:
         dat_index, dat_lines, dat_masked = reader.add_source(read_source(dat_path))

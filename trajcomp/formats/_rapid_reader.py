@@ -11,6 +11,7 @@ from trajcomp.formats._text import (
     LENGTH_LIMIT,
     NUMBER,
     Lines,
+    check_closed,
     fail,
     finite,
     integer,
@@ -67,6 +68,8 @@ _STARTS_MOTION = re.compile(r"^\s*(?:Move|Trigg|Search|Arc|Clad|Spot|Paint|Disp|
 _ROUTINE = re.compile(r"^\s*(?:LOCAL\s+)?(?:PROC|FUNC\s+\w+|TRAP)\s+\w+\s*\((.*)\)", re.I | re.S)
 _ASSIGN = re.compile(r"^\s*([A-Za-z]\w*)((?:\.\w+)*)\s*:=(.*);\s*$", re.S)
 _MODULE = re.compile(r"^\s*MODULE\s+(\w+)", re.I | re.M)
+_BLOCK_OPENS = re.compile(r"^[ \t]*(?:LOCAL\s+)?(MODULE|PROC|FUNC|TRAP)\b", re.I | re.M)
+_BLOCK_CLOSES = re.compile(r"^[ \t]*(ENDMODULE|ENDPROC|ENDFUNC|ENDTRAP)\b", re.I | re.M)
 _NAME = re.compile(r"^[A-Za-z]\w*$")
 _WORD = re.compile(r"[A-Za-z]\w*")
 _OPTION = re.compile(r"\\(\w+)(?:\s*:=\s*([^\\]+))?")
@@ -320,6 +323,8 @@ def read(path):
     module = _MODULE.search(masked)
     if not module:
         raise ReadError(f"{path}: not a RAPID module: no MODULE line")
+    check_closed(source, masked, _BLOCK_OPENS, _BLOCK_CLOSES,
+                 {"MODULE": "ENDMODULE", "PROC": "ENDPROC", "FUNC": "ENDFUNC", "TRAP": "ENDTRAP"})
     reader = _Reader(source)
     for line, start, end in _statements(source, masked):
         text, original = masked[start:end], source.text[start:end]

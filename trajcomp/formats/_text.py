@@ -130,6 +130,52 @@ def fail(source_name, line, text, message):
     raise ReadError(f"{source_name}:{line}: {message}: {text.strip()[:200]!r}")
 
 
+def check_closed(source, masked, opener, closer, closing):
+    """Refuse a text whose last block is never closed: a file cut off in transfer.
+
+    Every controller refuses such a file (a syntax error on loading, or
+    when the program is selected); a reader that took it would compensate
+    and write the part that arrived as if it were the whole program.
+
+    Parameters
+    ----------
+    source : Source
+        The text read (its name is used in the message).
+    masked : str
+        ``source.text`` with comments and strings blanked (`mask`).
+    opener, closer : re.Pattern
+        Line patterns (``re.M``) of the statements that open and close a
+        block, group 1 their keyword (``DEF``, ``PROC``; ``END``, ``ENDPROC``).
+    closing : Mapping[str, str]
+        The closing keyword of each opening keyword (upper case).
+
+    Raises
+    ------
+    ReadError
+        A block open at the end of the text, naming its line and the
+        keyword that should close it.
+    """
+    marks = sorted([(m.start(), m.group(1).upper(), True) for m in opener.finditer(masked)]
+                   + [(m.start(), m.group(1).upper(), False) for m in closer.finditer(masked)])
+    open_blocks = []
+    for at, keyword, opens in marks:
+        if opens:
+            open_blocks.append((at, keyword))
+        elif open_blocks and closing[open_blocks[-1][1]] == keyword:
+            open_blocks.pop()
+    if open_blocks:
+        at, keyword = open_blocks[-1]
+        lines = Lines(source.text)
+        line = lines.number(at)
+        fail(source.name, line, lines.line(line),
+             f"{keyword} has no {closing[keyword]} (the text ends at line {last_line(lines)}): the program is cut off")
+
+
+def last_line(lines):
+    """The number of the last line of `Lines` that holds more than white space (1 for an empty text)."""
+    return lines.number(max(len(lines.text.rstrip()) - 1, 0))
+
+
 def finite(text, source_name, line, original, field, limit=math.inf):
     """The float a number's text states; ReadError naming the field if it is not a number within ``limit``."""
     try:

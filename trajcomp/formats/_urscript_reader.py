@@ -12,6 +12,7 @@ from trajcomp.formats._text import (
     LENGTH_LIMIT,
     NUMBER,
     Lines,
+    check_closed,
     fail,
     finite,
     mask,
@@ -38,6 +39,9 @@ _POSE = re.compile(r"^\s*p\[" + _SIX + r"\]\s*$")
 _LIST = re.compile(r"^\s*\[" + _SIX + r"\]\s*$")
 _ASSIGN = re.compile(r"^\s*(?:global\s+|local\s+)?([A-Za-z_]\w*)\s*=(?!=)\s*(.+?)\s*$")
 _DEF = re.compile(r"^\s*def\s+\w+\s*\((.*?)\)\s*:", re.M)
+_BLOCKS = ("DEF", "SEC", "THREAD", "IF", "WHILE", "FOR")  # statements whose body ends with ``end``
+_BLOCK_OPENS = re.compile(r"^[ \t]*(def|sec|thread|if|while|for)\b[^\n]*:\s*$", re.M)
+_BLOCK_CLOSES = re.compile(r"^[ \t]*(end)\s*$", re.M)
 _CALL = re.compile(r"\b(movej|movel|movep|movec|set_tcp|servoj|servoc)\s*\(")
 _IK = re.compile(r"^\s*get_inverse_kin\s*\((.*)\)\s*$", re.S)
 _POSE_TRANS = re.compile(r"^\s*pose_trans\s*\((.*)\)\s*$", re.S)
@@ -332,6 +336,7 @@ def read(path):
     masked = mask(source.text, "#")
     if not _SIGNS.search(masked):
         raise ReadError(f"{path}: not a URScript program: no def, move or pose literal")
+    check_closed(source, masked, _BLOCK_OPENS, _BLOCK_CLOSES, dict.fromkeys(_BLOCKS, "END"))
     reader = _Reader(source, masked)
     for line, start, end in Lines(source.text):
         text, original = masked[start:end], source.text[start:end]

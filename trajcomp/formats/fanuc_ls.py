@@ -47,6 +47,7 @@ from trajcomp.formats._text import (
     encode_xyzabc,
     fail,
     finite,
+    last_line,
     format_number,
     mask,
     numbered,
@@ -131,8 +132,9 @@ def read(path):
     Raises
     ------
     ReadError
-        Malformed text, numbers out of range, or motions to positions
-        without a /POS entry or not taught.
+        Malformed text, numbers out of range, motions to positions
+        without a /POS entry or not taught, or no /END line (the file is
+        cut off: the controller's loader refuses it too).
     """
     source = read_source(path)
     masked = mask(source.text, "!", quote='"')
@@ -160,6 +162,9 @@ def read(path):
             instructions.append((number, start, end, n.group(2)))
         else:
             instructions.append((number, start, end, None))
+    if section != "END":
+        last = last_line(lines)
+        fail(source.name, last, lines.line(last), "no /END after it: the program is cut off")
     targets, points, untaught = _positions(source, masked, lines, pos_start, pos_end)
     items, state = [], _State()
     for number, start, end, content in instructions:
