@@ -335,6 +335,8 @@ def test_a_point_to_point_motion_takes_the_closed_form_time_and_its_jerk_is_limi
     q, _, qdd = result.at(times)
     jerk = np.abs(np.diff(qdd, axis=0)) / 1e-3
     assert np.all(jerk.max(axis=0) <= UR10.j_max * 1.01)
+    assert result.segments[0].jerk_limited and np.all(result.peak_jerk <= UR10.j_max * 1.01)
+    assert result.peak_jerk[0] > 0.9 * UR10.j_max[0]  # measured: the leading joint reaches its jerk limit
     share = (q - start)[:, :2] / (end - start)[:2]  # phase-synchronized: on the straight joint line
     np.testing.assert_allclose(share[:, 0], share[:, 1], atol=1e-9)
 
@@ -344,7 +346,9 @@ def test_without_a_jerk_limit_a_point_to_point_motion_is_a_trapezoid():
     result = retime(Moves.from_joints(np.array([KUKA.home, end]), KUKA, kind=JOINT), KUKA)
     v, a = KUKA.v_max[2], KUKA.a_max[2]
     assert result.cycle_time == pytest.approx(np.radians(90.0) / v + v / a, rel=1e-6)
-    assert np.all(result.peak_jerk == 0.0)  # not bounded, not measured
+    assert np.all(np.isnan(result.peak_jerk))  # not bounded, not measured: no number
+    assert not result.segments[0].jerk_limited
+    assert result.lines_of_text()[8].startswith("jerk: not bounded in 1 of 1 segments")
 
 
 def test_programmed_joint_speed_and_time_are_honoured():

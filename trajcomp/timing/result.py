@@ -74,6 +74,11 @@ class Segment:
         written into a program (`trajcomp.timing.apply_timing`), ``""`` for
         a motion left as written. A CSV program's are `Texts` (made on
         demand, compared equal to the tuple of the same texts).
+    jerk_limited : bool
+        The joint jerk is bounded by the robot's jerk limits (a ruckig
+        segment of an arm with a jerk limit on every joint); False: not
+        bounded (a TOPP-RA law steps its path acceleration at every grid
+        point; ruckig without a jerk limit steps its acceleration).
     """
 
     kind: str
@@ -81,6 +86,7 @@ class Segment:
     last: int
     duration: float
     settings: tuple = ()
+    jerk_limited: bool = False
 
     @property
     def written(self):
@@ -117,19 +123,19 @@ class TimingResult:
     peak_velocity, peak_acceleration : ndarray, shape (6,)
         Largest sampled |joint velocity| (rad/s) and |acceleration| (rad/s^2).
     peak_jerk : ndarray, shape (6,)
-        Largest sampled |joint jerk| in ruckig segments of an arm with a
-        jerk limit, rad/s^3; 0 where none was measured (`jerk_measured`; a TOPP-RA law does
-        not bound jerk, and without a jerk limit ruckig steps the
-        acceleration).
+        Largest sampled |joint jerk| (finite differences of the 1 kHz
+        acceleration) in the jerk-limited segments, rad/s^3; NaN when no
+        segment is jerk-limited (see `Segment.jerk_limited`: the jerk of
+        the other segments is neither bounded nor measured).
     limit_velocity, limit_acceleration, limit_jerk : ndarray, shape (6,)
         The robot's limits, same units (jerk ``inf`` where unknown).
     within_limits : bool
         No 1 kHz sample exceeds its motion's velocity or acceleration limit
-        (or programmed TCP speed), nor a ruckig segment the jerk limit, by
-        more than 1 %.
+        (or programmed TCP speed), nor a jerk-limited segment the jerk
+        limit, by more than 1 %.
     peak_speed_ratio : float
-        Largest sampled TCP speed over the programmed TCP speed (linear and
-        circular motions; 0 when none has one).
+        Largest sampled TCP speed |J(q) q'| over the programmed TCP speed
+        (linear and circular motions; 0 when none has one).
     q : ndarray, shape (M, 6)
         Joints of each waypoint, rad.
     tcp_length : ndarray, shape (M,)
@@ -172,9 +178,8 @@ class TimingResult:
 
     @property
     def jerk_measured(self):
-        """Mask (6,) of the joints whose `peak_jerk` was measured: ruckig segments of an arm with a jerk limit."""
-        ruckig = any(s.kind == "ruckig" for s in self.segments)
-        return np.isfinite(self.limit_jerk) & ruckig
+        """Mask (6,) of the joints whose `peak_jerk` was measured: in jerk-limited segments (not NaN)."""
+        return ~np.isnan(self.peak_jerk)
 
     @property
     def durations(self):
@@ -218,6 +223,20 @@ class TimingResult:
                 q[inside], qd[inside], qdd[inside], _, _ = evaluate(run, law, t[inside] - start)
         return q, qd, qdd
 
+    @property
+    def jerk_limited_segments(self):
+        """The number of segments whose joint jerk is bounded (`Segment.jerk_limited`)."""
+        return sum(1 for s in self.segments if s.jerk_limited)
+
+    def jerk_statement(self):
+        """What the timing says of the jerk: in how many segments it is bounded, in how many not."""
+        limited, total = self.jerk_limited_segments, len(self.segments)
+        if limited == total:
+            return f"jerk: within the robot's jerk limits in all {total} segments" if total else "jerk: no segment"
+        unbounded = (f"not bounded in {total - limited} of {total} segments (TOPP-RA steps the path "
+                     "acceleration at its grid points; without a jerk limit ruckig steps the acceleration)")
+        return f"jerk: {unbounded}" if not limited else f"jerk: within the limits in {limited} segments, {unbounded}"
+
     def with_settings(self, settings):
         """A copy whose segments carry the written settings.
 
@@ -257,6 +276,7 @@ class TimingResult:
         verdict = "within" if self.within_limits else f"ABOVE (by more than {100 * LIMIT_TOLERANCE:.0f} %)"
         out.append(f"dense check at {RATE:.0f} Hz: {verdict} the limits; peak TCP speed "
                    f"{100 * self.peak_speed_ratio:.1f} % of the programmed speed")
+        out.append(self.jerk_statement())
         cycle = f"cycle time {self.cycle_time:.3f} s"
         if before is not None:
             change = 100.0 * (self.cycle_time - before) / before if before > 0 else 0.0

@@ -72,7 +72,7 @@ def retime(moves, robot, *, method="auto", tolerance=TOLERANCE):
     """
     if method not in METHODS:
         raise ValueError(f"method must be one of {METHODS}, got {method!r}")
-    timeline = _Timeline(moves)
+    timeline = _Timeline(moves, robot)
     reached = moves  # the joints each waypoint is reached with: moves.q until one differs, then a copy
     for batch in _batches(plan_segments(moves, method)):
         kind, first, last = batch[0]
@@ -93,7 +93,7 @@ def retime(moves, robot, *, method="auto", tolerance=TOLERANCE):
             continue
         runs = run_windows(reached, robot, first, last, tolerance, WINDOW if kind == "toppra" else None)
         timeline.add(kind, first, last, *_timed(kind, runs, moves, robot))
-    return timeline.result(robot)
+    return timeline.result()
 
 
 def _batches(plan):
@@ -290,11 +290,12 @@ def _turn_warnings(moves, arrived):
 class _Timeline:
     """What re-timing has found so far, segment by segment, and the `TimingResult` it makes."""
 
-    def __init__(self, moves):
-        self.moves = moves
+    def __init__(self, moves, robot):
+        self.moves, self.robot = moves, robot
         self.t, self.tcp_length = np.zeros(len(moves)), np.zeros(len(moves))
         self.arrived = moves.q  # replaced by a copy when a waypoint is reached in another turn
-        self.segments, self.pieces, self.peaks, self.untimed_at, self.deviation = [], [], [], [], 0.0
+        self.segments, self.pieces, self.untimed_at, self.deviation = [], [], [], 0.0
+        self.peaks, self.checked = [], []  # the dense check's Peaks and the segment of each
 
     def untimed(self, k):
         """Waypoint k is reached by a motion that is not timed (its start is unknown)."""
@@ -314,22 +315,25 @@ class _Timeline:
             self.t[run.last] = start + law.duration
             self.pieces.append((start, run, law))
             start += law.duration
-        self.segments.append(Segment(kind, first, last, start - self.t[first]))
+        jerk_limited = kind == "ruckig" and bool(np.all(np.isfinite(self.robot.j_max)))
+        self.segments.append(Segment(kind, first, last, start - self.t[first], jerk_limited=jerk_limited))
         if peaks is not None:
             self.peaks.append(peaks)
+            self.checked.append(self.segments[-1])
 
-    def result(self, robot):
+    def result(self):
         """The `TimingResult`."""
-        moves, peaks = self.moves, self.peaks
+        moves, peaks, robot = self.moves, self.peaks, self.robot
 
         def peak(name):
             values = np.array([getattr(p, name) for p in peaks]).reshape(-1, 6)
-            return np.max(np.nan_to_num(values, nan=0.0), axis=0, initial=0.0)
+            return np.fmax.reduce(values, axis=0, initial=np.nan) if len(values) else np.full(6, np.nan)
 
-        velocity, acceleration = peak("velocity"), peak("acceleration")
-        jerk = np.where(np.isfinite(robot.j_max), peak("jerk"), 0.0)  # measured in ruckig segments, jerk-limited
+        velocity, acceleration = np.nan_to_num(peak("velocity")), np.nan_to_num(peak("acceleration"))
+        limited = [p.jerk for p, s in zip(peaks, self.checked) if s.jerk_limited]
+        jerk = np.fmax.reduce(np.reshape(limited, (-1, 6)), axis=0, initial=np.nan) if limited else np.full(6, np.nan)
         worst = max([p.worst for p in peaks], default=0.0)
-        jerk_ok = np.all(jerk <= robot.j_max * (1.0 + LIMIT_TOLERANCE))
+        jerk_ok = not np.any(jerk > robot.j_max * (1.0 + LIMIT_TOLERANCE))
         return TimingResult(
             t=self.t,
             cycle_time=float(self.t[-1]) if len(self.t) else 0.0,
