@@ -18,6 +18,7 @@ from trajcomp.postprocess import ProgramReport
 from trajcomp.report import Criteria, compliance_report
 from trajcomp.report.measures import joint_jumps, limit_distances, singularity_distances
 from trajcomp.robot import load_robot
+from trajcomp.timing import Segment
 from trajcomp.transforms import matrix_to_rotvec
 
 KUKA = load_robot("kuka_kr6_r900")
@@ -155,8 +156,8 @@ def _timing(peak_velocity):
     limit = KUKA.v_max
     return types.SimpleNamespace(
         t=np.array([0.0, 0.4, 1.0]), cycle_time=1.0,
-        segments=(types.SimpleNamespace(kind="toppra", first=0, last=2, duration=1.0, speed=100.0),),
-        peak_velocity=peak_velocity, peak_acceleration=KUKA.a_max * 0.5, peak_jerk=np.ones(6),
+        segments=(Segment("toppra", 0, 2, 1.0),), jerk_limited_segments=0, peak_speed_ratio=0.5,
+        peak_velocity=peak_velocity, peak_acceleration=KUKA.a_max * 0.5, peak_jerk=np.full(6, np.nan),
         limit_velocity=limit, limit_acceleration=KUKA.a_max, limit_jerk=np.full(6, np.inf),
         within_limits=bool(np.all(peak_velocity <= limit * 1.01)), warnings=(), jerk_measured=np.zeros(6, bool))
 
@@ -166,7 +167,10 @@ def test_timing_peaks_are_judged_against_the_limits(model):
                              cycle_time_before=1.2)
     assert _criteria(fine.doc)["timing"][0] == "pass"
     assert fine.doc["timing"]["joints"][0]["velocity"]["ratio"] == pytest.approx(0.9)
-    assert fine.doc["timing"]["joints"][0]["jerk"]["limit"] is None
+    assert fine.doc["timing"]["joints"][0]["jerk"] == {"peak": None, "limit": None, "unit": "deg/s^3", "ratio": None}
+    statement = next(c["statement"] for c in fine.doc["verdict"]["criteria"] if c["id"] == "timing")
+    assert "jerk not bounded (not checked)" in statement and "TCP speed" in statement  # claims what was checked
+    assert fine.doc["timing"]["segments"][0]["jerk_limited"] is False
     over = KUKA.v_max.copy()
     over[2] *= 1.05
     fast = compliance_report(_report(_targets()), KUKA, model=model, timing=_timing(over))

@@ -21,6 +21,7 @@ from trajcomp.report import plots, targets
 from trajcomp.report.measures import singularity_distances
 from trajcomp.report.targets import FLAGS, ROWS, WORST, TargetMeasures, worst_targets
 from trajcomp.robot import load_robot
+from trajcomp.timing import Segment
 
 KUKA = load_robot("kuka_kr6_r900")
 N = 50_000
@@ -233,14 +234,12 @@ def test_a_long_path_keeps_a_marker_near_every_target_and_every_isolated_one():
 
 
 def test_the_segments_of_a_program_of_exact_stops_are_counted_and_listed_up_to_the_bound():
-    from types import SimpleNamespace
-
     from trajcomp.report.compliance import timing_section
     from trajcomp.report.sections import _timing
 
     stops = 3 * ROWS  # every motion an exact stop: one segment each
     kinds = np.where(np.arange(stops) % 3 == 0, "ruckig", "toppra")
-    segments = tuple(SimpleNamespace(kind=str(kind), first=k, last=k + 1, duration=0.5 + k % 7)
+    segments = tuple(Segment(str(kind), k, k + 1, 0.5 + k % 7, jerk_limited=kind == "ruckig")
                      for k, kind in enumerate(kinds))
     section = timing_section(_timing_result(segments, stops + 1), times=False)
     durations = np.array([s.duration for s in segments])
@@ -277,8 +276,9 @@ def _timing_result(segments, waypoints):
     six = np.ones(6)
     return SimpleNamespace(peak_velocity=six, limit_velocity=2 * six, peak_acceleration=six,
                            limit_acceleration=2 * six, peak_jerk=six, limit_jerk=np.full(6, np.inf),
-                           segments=segments, cycle_time=100.0, within_limits=True,
-                           t=np.linspace(0.0, 100.0, waypoints), warnings=(), jerk_measured=np.zeros(6, bool))
+                           segments=segments, cycle_time=100.0, within_limits=True, peak_speed_ratio=0.0,
+                           jerk_limited_segments=sum(s.jerk_limited for s in segments), warnings=(),
+                           jerk_measured=np.zeros(6, bool), t=np.linspace(0.0, 100.0, waypoints))
 
 
 def test_the_times_of_a_long_joint_program_go_to_the_sidecar(tmp_path):
@@ -290,7 +290,7 @@ def test_the_times_of_a_long_joint_program_go_to_the_sidecar(tmp_path):
                            written=(), posture_source=(), outside_grid=np.zeros(0, bool),
                            predicted_residual=np.zeros(0))  # joint targets only: no Cartesian target
     waypoints = ROWS + 1
-    segment = SimpleNamespace(kind="toppra", first=0, last=waypoints - 1, duration=100.0)
+    segment = Segment("toppra", 0, waypoints - 1, 100.0)
     result = compliance_report(report, KUKA, timing=_timing_result((segment,), waypoints), command="retime")
     files = result.write(tmp_path / "joints", json_only=True)
     doc = json.loads(files[0].read_text())

@@ -221,7 +221,8 @@ def _timing(section):
         cells = [f"J{row['joint']}"]
         for name in ("velocity", "acceleration", "jerk"):
             q = row[name]
-            cells += [_shown(q["peak"], ".1f"), "—" if q["limit"] is None else f"{q['limit']:.1f}",
+            cells += ["not bounded" if q["peak"] is None else f"{q['peak']:.1f}",
+                      "—" if q["limit"] is None else f"{q['limit']:.1f}",
                       "—" if q["ratio"] is None else f"{q['ratio']:.0%}"]
         rows.append(cells)
     over = {(r, c) for r, row in enumerate(section["joints"]) for c, name in ((3, "velocity"), (6, "acceleration"),
