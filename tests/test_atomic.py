@@ -105,3 +105,112 @@ def test_a_failing_generator_leaves_every_file_untouched(tmp_path):
         write_files_atomic({first: (p for p in [b"new src"]), second: failing()})
     assert first.read_bytes() == b"old src"
     assert sorted(p.name for p in tmp_path.iterdir()) == ["a.src"]
+
+
+STEPS = ("open", "fsync", "chmod", "link", "replace", "unlink", "close")  # the file-system calls of a commit
+
+
+def _count_steps(monkeypatch, on_step):
+    """Route the file-system calls a commit makes through ``on_step(name)`` first."""
+    for name in STEPS:
+        real = getattr(os, name)
+
+        def counted(*args, _real=real, _name=name, **kwargs):
+            on_step(_name)
+            return _real(*args, **kwargs)
+
+        monkeypatch.setattr(os, name, counted)
+
+
+def _krl_set(folder, version):
+    return {folder / "weld.src": f"DEF weld( )\n  PTP P1 ; {version}\nEND\n".encode(),
+            folder / "weld.dat": f"DEFDAT weld\nDECL E6POS P1={{X {version}}}\nENDDAT\n".encode()}
+
+
+def test_a_kill_before_any_step_of_a_commit_leaves_a_set_that_loads_whole(tmp_path, monkeypatch):
+    """Fault injection: the run dies (os._exit, no clean-up) before its k-th file-system call, for every k."""
+    import signal
+
+    steps = []
+    with monkeypatch.context() as counting:
+        _count_steps(counting, steps.append)
+        write_files_atomic(_krl_set(tmp_path, 1))
+        count = len(steps)
+        write_files_atomic(_krl_set(tmp_path, 1))
+        count = len(steps) - count  # the calls of one commit over an existing set
+    assert count >= 10
+    outcomes = {"old": 0, "new": 0}
+    for k in range(count + 1):
+        for path, data in _krl_set(tmp_path, 1).items():
+            path.write_bytes(data)
+        pid = os.fork()
+        if pid == 0:  # the run that is killed
+            calls = []
+
+            def die(name):
+                calls.append(name)
+                if len(calls) > k:
+                    os.kill(os.getpid(), signal.SIGKILL)
+
+            _count_steps(monkeypatch, die)
+            write_files_atomic(_krl_set(tmp_path, 2))
+            os._exit(0)
+        os.waitpid(pid, 0)
+        for left in tmp_path.glob(".*"):
+            os.utime(left, (0, 0))  # the next run comes later
+        atomic.recover(tmp_path, names=["weld.src", "weld.dat"])  # what it does first
+        texts = {p.name: p.read_bytes() for p in tmp_path.iterdir()}
+        assert sorted(texts) == ["weld.dat", "weld.src"], k  # no journal, temporary or backup left
+        versions = {b"1" if b" 1" in text or b"X 1}" in text else b"2" for text in texts.values()}
+        assert len(versions) == 1, f"torn set after a kill before step {k}: {texts}"
+        outcomes["old" if versions == {b"1"} else "new"] += 1
+    assert outcomes["old"] > 0 and outcomes["new"] > 0
+
+
+def test_an_error_at_any_step_of_a_commit_leaves_the_old_set_and_no_stray(tmp_path, monkeypatch):
+    for k in range(40):
+        for path, data in _krl_set(tmp_path, 1).items():
+            path.write_bytes(data)
+        calls = []
+
+        def fail(name):
+            calls.append(name)
+            if len(calls) == k + 1 and name in ("open", "fsync", "link", "replace"):
+                raise OSError(28, "No space left on device")
+
+        with monkeypatch.context() as failing:
+            _count_steps(failing, fail)
+            try:
+                write_files_atomic(_krl_set(tmp_path, 2))
+                new = True
+            except WriteError:
+                new = False
+        texts = {p.name: p.read_bytes() for p in tmp_path.iterdir()}
+        assert texts == {p.name: d for p, d in _krl_set(tmp_path, 2 if new else 1).items()}, k
+
+
+def test_concurrent_runs_writing_one_set_leave_one_runs_set_whole(tmp_path):
+    pids = []
+    for version in range(2, 7):
+        pid = os.fork()
+        if pid == 0:
+            for _ in range(10):
+                write_files_atomic(_krl_set(tmp_path, version))
+            os._exit(0)
+        pids.append(pid)
+    for pid in pids:
+        assert os.waitpid(pid, 0)[1] == 0
+    src, dat = (tmp_path / "weld.src").read_text(), (tmp_path / "weld.dat").read_text()
+    assert src.split("; ")[1].split()[0] == dat.split("X ")[1].split("}")[0]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["weld.dat", "weld.src"]
+
+
+def test_strays_of_a_killed_run_are_removed_by_the_next_run_but_not_those_being_written(tmp_path):
+    (tmp_path / ".weld.src.abc123.tmp").write_bytes(b"")  # left by a killed run
+    (tmp_path / ".weld.src.def456.tmp.bak").write_bytes(b"old")
+    (tmp_path / ".other.txt.xyz.tmp").write_bytes(b"")  # not a file this run writes: left alone
+    (tmp_path / ".weld.src.fresh1.tmp").write_bytes(b"")  # just created by another run, not yet locked
+    for stray in (".weld.src.abc123.tmp", ".weld.src.def456.tmp.bak", ".other.txt.xyz.tmp"):
+        os.utime(tmp_path / stray, (0, 0))
+    write_atomic(tmp_path / "weld.src", b"new\n")
+    assert sorted(p.name for p in tmp_path.iterdir()) == [".other.txt.xyz.tmp", ".weld.src.fresh1.tmp", "weld.src"]

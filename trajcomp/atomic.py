@@ -1,17 +1,52 @@
 """Atomic file output: every file complete or untouched, a set of files all or none.
 
-Content is written to temporary files beside the targets and renamed into
-place. Replaced files keep their permission bits; new files get the usual
-mode for the user's umask (not the 0600 of a bare temporary file).
+Content is written to temporary files beside the targets (``.NAME.XXXX.tmp``),
+flushed to the disk (fsync) and renamed into place; the folder is flushed
+after the renames. Replaced files keep their permission bits; new files get
+the usual mode for the user's umask (not the 0600 of a bare temporary file).
+
+A set of several files (a KRL ``.src`` and its ``.dat``, a model and its
+grid sidecar, a program and its report) is committed through a journal: once
+every temporary is complete on disk, a journal naming each rename is written
+(``.trajcomp-commit.XXXX.json``, itself written whole and renamed into
+place), then the temporaries are renamed, then the journal removed. A run
+killed between two renames (a power cut, an OOM kill, SIGKILL) leaves the
+journal behind, and the next trajcomp run that writes into or reads from
+that folder rolls the set forward: the renames still to do are done, so the
+set on disk is the new one whole, never the new ``.src`` with the old
+``.dat``. Rolling forward rather than back needs no copy of the old files
+and always works, since every new file was complete before the first
+rename. (A rename that fails with an error, rather than a kill, puts the
+replaced files back from hard-link backups: the set is then the old one.)
+
+Runs writing into the same folder commit one after the other (an exclusive
+``flock`` on the folder while its journals are rolled forward, strays
+removed and a set renamed), so two runs writing the same KRL output leave
+one run's pair, not a ``.src`` of one and the ``.dat`` of the other. A
+temporary is locked by the run that writes it until it is renamed; one
+that nobody holds is a stray of a killed run, removed by the next run
+writing that file.
 """
 
+import contextlib
+import json
 import os
 import shutil
+import signal
 import stat
 import tempfile
+import time
 from pathlib import Path
 
 from trajcomp.errors import WriteError
+
+try:
+    import fcntl
+except ImportError:  # not POSIX: no locks (one run at a time per folder is then the user's to ensure)
+    fcntl = None
+
+JOURNAL_PREFIX = ".trajcomp-commit."
+_STRAY_AGE = 10.0  # s: a temporary younger than this may be one another run has created but not yet locked
 
 
 def refuse_inputs(outputs, inputs, advice="write to another file"):
@@ -91,11 +126,13 @@ def write_atomic(path, data, *, newline=None, encoding="utf-8", protect=(), advi
 def write_files_atomic(files, *, protect=(), advice="write to another file"):
     """Write several files all or none.
 
-    Every content is first written to a temporary file beside its target;
-    only when all are on disk are they renamed into place. If a rename
-    fails, the files already replaced are restored from backups and the
-    new ones removed, so a KRL ``.src`` never lands without its ``.dat``
-    nor a model YAML without its grid sidecar.
+    Every content is first written to a temporary file beside its target
+    and flushed to the disk; only when all are there are they renamed into
+    place, through a journal (see the module's docstring), under a lock on
+    each folder. If a rename fails, the files already replaced are restored
+    from backups and the new ones removed, so a KRL ``.src`` never lands
+    without its ``.dat`` nor a model YAML without its grid sidecar; if the
+    run is killed between renames, the next run completes them.
 
     Parameters
     ----------
@@ -117,20 +154,159 @@ def write_files_atomic(files, *, protect=(), advice="write to another file"):
     """
     files = {Path(path): data for path, data in files.items()}
     refuse_inputs(files, protect, advice)
-    staged = {}
+    staged, holds = {}, []
     try:
         for path, data in files.items():
-            staged[path] = _stage(path, data)
-        _commit(staged)
+            staged[path], hold = _stage(path, data)
+            holds.append(hold)
+        with _locked_folders(files):
+            for folder in _folders(files):
+                recover(folder, names=[p.name for p in files if _folder(p) == folder])
+            _commit(staged)
     except BaseException:
         for tmp in staged.values():
             Path(tmp).unlink(missing_ok=True)
         raise
+    finally:
+        for hold in holds:
+            os.close(hold)
+
+
+def recover(folder, names=()):
+    """Roll forward the commits a killed run left in ``folder``, and remove the strays of files ``names``.
+
+    A journal's renames still to do are done (their temporaries are
+    complete: the journal is written only once they are), then the journal
+    and the backups it names are removed (a journal cut off before it was
+    complete names no rename yet done: it is removed). A temporary ``.NAME.XXXX.tmp``
+    (or its ``.bak``) of one of ``names`` that no run holds locked, older
+    than 10 s (a run locks its temporary just after creating it), is a
+    stray of a killed run and removed. The caller holds the folder's lock
+    (`write_files_atomic`), or takes it here.
+
+    Parameters
+    ----------
+    folder : str or Path
+    names : sequence of str
+        File names whose strays to remove.
+
+    Raises
+    ------
+    WriteError
+        A rename of the roll-forward fails (the journal stays for the next run).
+    """
+    folder = Path(folder)
+    try:
+        journals = sorted(folder.glob(JOURNAL_PREFIX + "*.json*"))
+    except OSError:
+        return
+    if not journals and not names:
+        return
+    with _locked_folders([folder / "lock"]):
+        for journal in journals:
+            if journal.suffix == ".json":
+                _roll_forward(journal)
+            else:  # a journal being written when its run was killed: the commit never started
+                journal.unlink(missing_ok=True)
+        for name in names:
+            for stray in folder.glob(f".{_glob_escape(name)}.*.tmp*"):
+                if stray.suffix in (".tmp", ".bak") and _unheld(stray) and _age(stray) > _STRAY_AGE:
+                    stray.unlink(missing_ok=True)
+
+
+def _roll_forward(journal):
+    try:
+        entries = json.loads(journal.read_text(encoding="utf-8"))
+    except FileNotFoundError:  # another run rolled it forward meanwhile
+        return
+    except (OSError, ValueError) as exc:
+        raise WriteError(f"{journal}: an interrupted commit's journal cannot be read: {exc}") from exc
+    try:
+        for tmp, target in entries["renames"]:
+            if os.path.exists(tmp):
+                os.replace(tmp, target)
+        _sync_folders(target for _, target in entries["renames"])
+        for backup in entries["backups"]:
+            Path(backup).unlink(missing_ok=True)
+        journal.unlink()
+    except OSError as exc:
+        raise WriteError(f"{journal}: cannot complete an interrupted commit: {exc}") from exc
+    _sync_folders([journal])
+
+
+def _glob_escape(name):
+    """``name`` with the glob's special characters taken literally."""
+    return "".join(f"[{c}]" if c in "*?[" else c for c in name)
+
+
+def _unheld(path):
+    """Whether no process holds ``path`` locked (a temporary being written is); True on a system without locks."""
+    if fcntl is None:
+        return False  # cannot tell: keep it
+    try:
+        fd = os.open(path, os.O_RDONLY)
+    except OSError:
+        return False
+    try:
+        fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        return True
+    except OSError:
+        return False
+    finally:
+        os.close(fd)
+
+
+def _age(path):
+    """Seconds since ``path`` was last modified (0 if it is gone)."""
+    try:
+        return time.time() - os.stat(path).st_mtime
+    except OSError:
+        return 0.0
+
+
+def _folder(path):
+    return path.parent if str(path.parent) else Path(".")
+
+
+def _folders(paths):
+    """The distinct folders of ``paths`` (absolute), in sorted order (locks are taken in it: no deadlock)."""
+    return sorted({Path(os.path.abspath(_folder(Path(p)))) for p in paths})
+
+
+_HELD = {}  # folder -> its locked descriptor, while this process commits there
+
+
+@contextlib.contextmanager
+def _locked_folders(paths):
+    """An exclusive lock on the folder of each of ``paths`` for the block (none where locks do not exist)."""
+    taken = []
+    try:
+        for folder in _folders(paths):
+            if folder in _HELD or fcntl is None or not folder.is_dir():
+                continue
+            try:
+                fd = os.open(folder, os.O_RDONLY)
+            except OSError as exc:
+                raise WriteError(f"{folder}: cannot lock the folder to write into it: {exc}") from exc
+            _HELD[folder] = fd
+            taken.append(folder)
+            try:
+                fcntl.flock(fd, fcntl.LOCK_EX)
+            except OSError as exc:
+                raise WriteError(f"{folder}: cannot lock the folder to write into it: {exc}") from exc
+        yield
+    finally:
+        for folder in taken:
+            os.close(_HELD.pop(folder))  # closing releases the lock
 
 
 def _stage(path, data):
-    """A temporary file beside ``path`` holding ``data``, with ``path``'s mode; its name."""
-    folder = path.parent if str(path.parent) else Path(".")
+    """A temporary file beside ``path`` holding ``data``, flushed to disk, with ``path``'s mode.
+
+    Returns its name and an open descriptor holding it locked (close it once
+    the temporary is renamed or removed).
+    """
+    folder = _folder(path)
     if not folder.is_dir():
         raise WriteError(f"{path}: folder {folder} does not exist")
     try:
@@ -138,16 +314,28 @@ def _stage(path, data):
     except OSError as exc:
         raise WriteError(f"{path}: cannot write: {exc.strerror}") from exc
     try:
+        if fcntl is not None:
+            fcntl.flock(fd, fcntl.LOCK_EX)
+        hold = os.dup(fd)  # shares the lock, held after the file is closed
+    except OSError as exc:
+        os.close(fd)
+        Path(tmp).unlink(missing_ok=True)
+        raise WriteError(f"{path}: cannot write: {exc}") from exc
+    try:
         with os.fdopen(fd, "wb") as handle:
             handle.writelines([data] if isinstance(data, (bytes, bytearray, memoryview)) else data)
+            handle.flush()
+            os.fsync(handle.fileno())
         os.chmod(tmp, _mode_for(path))
     except OSError as exc:
+        os.close(hold)
         Path(tmp).unlink(missing_ok=True)
         raise WriteError(f"{path}: cannot write: {exc}") from exc
     except BaseException:  # the content's generator failed: no temporary left behind
+        os.close(hold)
         Path(tmp).unlink(missing_ok=True)
         raise
-    return tmp
+    return tmp, hold
 
 
 def _mode_for(path):
@@ -169,23 +357,83 @@ def _backup(path, backup):
     return backup
 
 
+@contextlib.contextmanager
+def _signals_held():
+    """SIGINT and SIGTERM held back during the block, delivered after it (where signal masks exist)."""
+    held = {signal.SIGINT, signal.SIGTERM}
+    try:
+        before = signal.pthread_sigmask(signal.SIG_BLOCK, held)
+    except (AttributeError, OSError):
+        yield
+        return
+    try:
+        yield
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, before)
+
+
+def _sync_folders(paths):
+    """Flush the folders of ``paths`` to disk (their renames and new names); where a folder cannot be, skip."""
+    for folder in _folders(paths):
+        try:
+            fd = os.open(folder, os.O_RDONLY)
+        except OSError:
+            continue
+        try:
+            os.fsync(fd)
+        except OSError:  # a file system without folder fsync
+            pass
+        finally:
+            os.close(fd)
+
+
+def _write_journal(staged, backups):
+    """Write the journal of a commit beside its first file, whole (temporary, fsync, rename); its path."""
+    first = next(iter(staged))
+    entries = {"renames": [[os.path.abspath(tmp), os.path.abspath(path)] for path, tmp in staged.items()],
+               "backups": [os.path.abspath(b) for b in backups.values()]}
+    fd, tmp = tempfile.mkstemp(prefix=JOURNAL_PREFIX, suffix=".json.tmp", dir=_folder(first))
+    journal = Path(tmp[: -len(".tmp")])
+    try:
+        with os.fdopen(fd, "w", encoding="utf-8") as handle:
+            json.dump(entries, handle)
+            handle.flush()
+            os.fsync(handle.fileno())
+        os.replace(tmp, journal)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+    _sync_folders([journal])
+    return journal
+
+
 def _commit(staged):
-    """Rename staged temporaries into place; on failure put every replaced file back."""
-    backups, done = {}, []
+    """Rename staged temporaries into place (through a journal for several); on failure put every replaced file back."""
+    backups, done, journal, path = {}, [], None, None
     try:
         for path in staged:
             if path.exists():
                 backups[path] = _backup(path, f"{staged[path]}.bak")
-        for path, tmp in staged.items():
-            os.replace(tmp, path)
-            done.append(path)
+        if len(staged) > 1:
+            journal = _write_journal(staged, backups)
+        with _signals_held():  # Ctrl-C or SIGTERM arrives after the last rename, not between two
+            for path, tmp in staged.items():
+                os.replace(tmp, path)
+                done.append(path)
+        _sync_folders(staged)
     except OSError as exc:
-        for path in done:
-            if path in backups:
-                os.replace(backups.pop(path), path)
-            else:
-                path.unlink(missing_ok=True)
+        try:
+            for put_back in done:
+                if put_back in backups:
+                    os.replace(backups.pop(put_back), put_back)
+                else:
+                    put_back.unlink(missing_ok=True)
+        except OSError as undo:
+            raise WriteError(f"{path}: cannot write: {exc}; putting the replaced files back failed too ({undo}): "
+                             f"{', '.join(map(str, done))} may be new, the other files old") from exc
         raise WriteError(f"{path}: cannot write: {exc}") from exc
     finally:
         for backup in backups.values():
             Path(backup).unlink(missing_ok=True)
+        if journal is not None:
+            journal.unlink(missing_ok=True)

@@ -21,7 +21,7 @@ import importlib
 from importlib.metadata import entry_points
 from pathlib import Path
 
-from trajcomp.atomic import write_files_atomic
+from trajcomp.atomic import recover, write_files_atomic
 from trajcomp.errors import ReadError, TrajcompError, WriteError
 from trajcomp.memory import collection_paused
 
@@ -232,6 +232,7 @@ def read(path, format=None, *, workers=1):
     fmt = find_format(path, format)
     if not path.is_file():
         raise ReadError(f"{path}: no such file")
+    recover(path.parent)  # a set of files a killed run left half-renamed is completed first
     with collection_paused():  # a program is made of many objects without cycles (`trajcomp.memory`)
         return fmt.read(path, workers).with_shared_targets_left()
 
