@@ -112,8 +112,15 @@ def test_identifiers_are_case_insensitive_and_tool0_wobj0_predefined(tmp_path):
 def test_undeclared_point_is_refused_naming_it(tmp_path):
     path = _module(tmp_path, "    MoveL p10, v100, z10, tool0;\n    MoveL p30, v100, z10, tool0;\n"
                              "    MoveC p40, p20, v100, z10, tool0;\n")
-    with pytest.raises(ReadError, match=r"M\.mod: .*p30 \(line 8\), p40 \(line 9\); declare them in this module"):
+    with pytest.raises(ReadError, match=r"M\.mod: .*p30 \(line 8\), p40 \(line 9\); no module of its folder declares"):
         formats.read(path)
+    # another module of the task declares p30 and p40: left as written, listed with where
+    (tmp_path / "Data.sys").write_text("MODULE Data(SYSMODULE)\n  TASK PERS robtarget p30:=[[1,2,3],[1,0,0,0],"
+                                       "[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]];\n  CONST robtarget p40:=[[1,2,3],"
+                                       "[1,0,0,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]];\nENDMODULE\n")
+    assert [(line, reason) for line, _, reason in formats.read(path).not_compensated()] == [
+        (8, "p30 is declared in another module of the task (Data.sys:2): left as written"),
+        (9, "p40 is declared in another module of the task (Data.sys:3): left as written")]
 
 
 def test_positions_known_only_at_run_time_are_listed_with_their_reason(tmp_path):

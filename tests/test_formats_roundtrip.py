@@ -22,9 +22,14 @@ PROGRAMS = sorted(
 )
 
 
+RAPID_MODULES = {".mod", ".modx", ".sys", ".prg"}
+
+
 def companions(path):
-    """The program file and the files read with it (a KRL .dat)."""
-    return [path] + [p for p in path.parent.iterdir() if p.stem == path.stem and p.suffix.lower() == ".dat"]
+    """The program file and the files read with it (a KRL .dat, the other modules of a RAPID task's folder)."""
+    task = path.suffix.lower() in RAPID_MODULES
+    return [path] + [p for p in path.parent.iterdir() if p != path and (
+        (p.stem == path.stem and p.suffix.lower() == ".dat") or (task and p.suffix.lower() in RAPID_MODULES))]
 
 
 def copy_program(path, folder, newline=None):
@@ -39,8 +44,14 @@ def copy_program(path, folder, newline=None):
     return folder / path.name
 
 
-def write_then_read(program, out):
-    """Write ``program`` to ``out`` and read it back (the shared round-trip helper)."""
+def write_then_read(program, out, source=None):
+    """Write ``program`` to ``out`` and read it back (the shared round-trip helper).
+
+    The files read with ``source`` (the other modules of a RAPID task) are put beside ``out`` first.
+    """
+    for file in companions(source)[1:] if source is not None else ():
+        if file.suffix.lower() != ".dat":
+            (out.parent / file.name).write_bytes(file.read_bytes())
     formats.write(out, program)
     return formats.read(out)
 
@@ -57,7 +68,7 @@ def test_unchanged_program_writes_back_byte_for_byte(path, newline, tmp_path):
     (tmp_path / "out").mkdir()
     source = copy_program(path, tmp_path / "in", newline)
     program = formats.read(source)
-    again = write_then_read(program, tmp_path / "out" / source.name)
+    again = write_then_read(program, tmp_path / "out" / source.name, source)
     for file in companions(source):
         assert (tmp_path / "out" / file.name).read_bytes() == file.read_bytes(), file.name
     assert len(again.targets) == len(program.targets)
@@ -86,7 +97,7 @@ def test_rigid_shift_changes_only_the_compensated_numbers(path, tmp_path):
     stack = program.cartesian_targets()
     moved = stack.T.copy()
     moved[:, :3, 3] += shift
-    again = write_then_read(program.with_targets(stack.index, poses=moved), tmp_path / path.name)
+    again = write_then_read(program.with_targets(stack.index, poses=moved), tmp_path / path.name, path)
 
     allowed = {
         (program.sources[span.source].name, _line_of(program.sources[span.source].text, span.start + 1))

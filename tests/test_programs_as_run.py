@@ -244,3 +244,19 @@ def test_motions_left_are_counted_once_and_offsets_of_a_corrected_point_move_wit
     assert moved.endswith("built on p1, which is corrected: it moves with them (its offset itself is "
                           "not compensated)")
     assert "built on" not in alone and passed.startswith("point p2 is used here")
+
+
+def test_fanuc_backup_shapes_a_controller_loads(tmp_path):
+    """A track's E1 in mm beyond 3,600, a CDn termination, a position stated as RX..RR (seen in spot-welding backups)."""
+    track = ("P[1]{\n   GP1:\n\tUF : 0, UT : 1,\t\tCONFIG : 'N U T, 0, 0, 0',\n\tX =   400.000  mm,\tY =     0.000  mm,"
+             "\tZ =   500.000  mm,\n\tW =   180.000 deg,\tP =     0.000 deg,\tR =     0.000 deg,\n\tE1=  3827.669  mm\n};\n")
+    rail = ("P[2]{\n   GP1:\n\tUF : 1, UT : 2,\t\tCONFIG : 'N U T, 0, 0, 0',\n\tRX =   341.681  mm,\tRY =  -170.477  mm,"
+            "\tRZ =  -671.251  mm,\n\tRW =    29.745 deg,\tRP =   -14.702 deg,\tRR =    72.713 deg,\n\tE1=  2500.000  mm\n};\n")
+    path = tmp_path / "TRACK.LS"
+    path.write_text("/PROG  TRACK\n/ATTR\n/MN\n   1:J P[1] 100% FINE    ;\n"
+                    "   2:L P[2] 2000mm/sec CD100 ACC100    ;\n/POS\n" + track + rail + "/END\n")
+    program = formats.read(path)
+    assert program.targets[0].external.tolist() == [3827.669]
+    assert [m.target for m in program.motions] == [0, None] and program.motions[1].zone == 100.0
+    assert program.not_compensated()[0][2] == ("P[2] is stated as RX, RY, RZ, RW, RP, RR (line 14), a representation "
+                                               "trajcomp does not read: left as written")

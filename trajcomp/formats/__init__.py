@@ -94,7 +94,7 @@ def register_format(name, extensions, reader, writer, *, source="built-in", bloc
 for _name, _module, _extensions, _vendor in (
     ("csv", "csv_program", (".csv",), None),
     ("krl", "krl", (".src",), "KUKA"),
-    ("rapid", "rapid", (".mod", ".prg", ".modx"), "ABB"),
+    ("rapid", "rapid", (".mod", ".prg", ".modx", ".sys"), "ABB"),
     ("fanuc_ls", "fanuc_ls", (".ls",), "FANUC"),
     ("urscript", "urscript", (".script", ".urscript"), "Universal Robots"),
 ):

@@ -2,6 +2,7 @@
 
 import dataclasses
 import re
+from pathlib import Path
 
 import numpy as np
 
@@ -54,6 +55,8 @@ _WOBJDATA = re.compile(
     r"^\s*\[\s*(TRUE|FALSE)\s*,\s*(?:TRUE|FALSE)\s*,\s*\"(\s*)\"\s*,\s*" + _POSE + r"\s*,\s*" + _POSE + r"\s*\]\s*$", re.I
 )
 _POSE_LITERAL = re.compile(r"^\s*" + _POSE + r"\s*$")
+_TASK_POINT = re.compile(r"^[ \t]*(?:(?:LOCAL|TASK)\s+)*(?:CONST|PERS|VAR)\s+(?:robtarget|jointtarget)\s+(\w+)",
+                         re.I | re.M)
 _DECL = re.compile(
     r"^\s*(?:(?:LOCAL|TASK)\s+)*(?:CONST|PERS|VAR)\s+(robtarget|jointtarget|tooldata|wobjdata)\s+(\w+)\s*:=(.*);\s*$",
     re.I | re.S,
@@ -342,14 +345,51 @@ def read(path):
         elif m := _ASSIGN.match(text):
             reader.assignment(m, line, original)
         reader.items.append(Statement(line, original))
-    items = _resolve(reader, masked)
+    items = _resolve(reader, masked, _TaskDeclarations(Path(path)))
     return Program(
         "rapid", module.group(1), items, tuple(reader.targets), reader.tools, reader.frames, (source,)
     )
 
 
-def _resolve(reader, masked):
-    """The items with named points resolved; points assigned at run time and routine arguments found."""
+class _TaskDeclarations:
+    """Where the other modules of a module's task declare a point (the folder's modules, and a backup's
+    TASKn/PROGMOD and TASKn/SYSMOD), read only when the module names a point it does not declare."""
+
+    EXTENSIONS = {".mod", ".modx", ".sys", ".prg"}
+
+    def __init__(self, path):
+        self.path, self.found = path, None
+
+    def _folders(self):
+        folder = self.path.parent
+        if folder.name.upper() in ("PROGMOD", "SYSMOD"):
+            return [folder.parent / "PROGMOD", folder.parent / "SYSMOD"]
+        return [folder]
+
+    def where(self, name):
+        """``"file:line"`` of another module's declaration of point ``name``, or ``""``."""
+        if self.found is None:
+            self.found = {}
+            for folder in self._folders():
+                files = sorted(folder.iterdir()) if folder.is_dir() else []
+                for file in files:
+                    if file == self.path or file.suffix.lower() not in self.EXTENSIONS or not file.is_file():
+                        continue
+                    try:
+                        text = mask(read_source(file).text, "!")
+                    except ReadError:
+                        continue  # a binary or unreadable module declares nothing trajcomp can use
+                    for m in _TASK_POINT.finditer(text):
+                        self.found.setdefault(m.group(1).lower(), f"{file.name}:{text.count(chr(10), 0, m.start()) + 1}")
+        return self.found.get(name.lower(), "")
+
+
+def _resolve(reader, masked, task):
+    """The items with named points resolved; points assigned at run time and routine arguments found.
+
+    A point another module of the task declares (``task``, `_TaskDeclarations`)
+    is left as written and says where.
+    """
     assigned = {}
     for item in reader.items:
         if isinstance(item, Statement) and (m := _ASSIGN.match(mask(item.text, "!"))):
@@ -368,6 +408,8 @@ def _resolve(reader, masked):
             return reader.points[key], ""
         if key in reader.unset:
             return None, reader.unset[key]
+        if where := task.where(ref.name):
+            return None, f"{ref.name} is declared in another module of the task ({where}): left as written"
         missing.append((ref.name, ref.line))
         return None, ""
 
@@ -389,6 +431,5 @@ def _resolve(reader, masked):
             item = dataclasses.replace(item, refs=refs)
         items.append(item)
     if missing:
-        unresolved(reader.source.name, missing, "declare them in this module (trajcomp reads one module; points "
-                                                "of other modules are not known)")
+        unresolved(reader.source.name, missing, "no module of its folder declares them either")
     return tuple(items)

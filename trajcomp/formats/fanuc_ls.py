@@ -5,7 +5,7 @@ Read:
   exports (``CONFIG`` / ``KONFIG``, ``UTOOL_NUM`` / ``WKZ_NUM``,
   ``UFRAME_NUM`` / ``BENUTZER_NUM``, ``sec`` / ``sek``);
 - /MN motion lines ``J|L|C P[n] speed FINE|CNTn|CRn`` (a C line continues
-  with ``: P[m] speed ...``), speeds in ``%``, ``mm/sec``, ``cm/min``,
+  with ``: P[m] speed ...``; FINE, CNTn, CRn or CDn), speeds in ``%``, ``mm/sec``, ``cm/min``,
   ``deg/sec``, ``sec``, ``msec`` (a speed register ``R[n:comment]mm/sec``,
   ``AR[n]`` or ``max_speed``: no number); ``UFRAME_NUM=n`` / ``UTOOL_NUM=n``. CNTn is read as an n mm blend
   (FANUC's CNT is a rounding percentage);
@@ -76,10 +76,10 @@ _CONTINUED = re.compile(r"^\s*:(.*)$")
 _MOTION = re.compile(r"^\s*([JLC])\s+(P|PR)\[\s*([^\]:]+?)\s*(?::[^\]]*)?\](.*)$", re.I)
 _POINT = re.compile(r"^\s*P\[\s*([^\]:]+?)\s*(?::[^\]]*)?\](.*)$", re.I)
 _SPEED_TERM = re.compile(
-    r"^\s*(?:(" + NUMBER + r")\s*(" + _UNIT + r")|A?R\[[^\]]*\]\s*(?:" + _UNIT + r")?|\S+)\s+(FINE|FEIN|CNT\s*(" + NUMBER + r")?\S*|CR\s*(" + NUMBER
+    r"^\s*(?:(" + NUMBER + r")\s*(" + _UNIT + r")|A?R\[[^\]]*\]\s*(?:" + _UNIT + r")?|\S+)\s+(FINE|FEIN|CNT\s*(" + NUMBER + r")?\S*|C[RD]\s*(" + NUMBER
     + r")?\S*)(?:\s|$)", re.I
 )
-_SPEED_FIELD = re.compile(r"(?:" + NUMBER + r")\s*(?:" + _UNIT + r")(?=\s+(?:FINE|FEIN|CNT|CR))", re.I)
+_SPEED_FIELD = re.compile(r"(?:" + NUMBER + r")\s*(?:" + _UNIT + r")(?=\s+(?:FINE|FEIN|CNT|CR|CD))", re.I)
 _RUNTIME = re.compile(r"\b(Offset|Tool_Offset|INC|VOFFSET)\b", re.I)
 _STATE = re.compile(r"^\s*(UFRAME_NUM|UTOOL_NUM|BENUTZER_NUM|WKZ_NUM)\s*=\s*(.*?)\s*;", re.I)
 _SET_FRAME = re.compile(r"^\s*(UFRAME|UTOOL|BENUTZER|WKZ)\s*\[\s*(\d+)\s*\]\s*=\s*(.*?)\s*;", re.I)
@@ -90,6 +90,7 @@ _FIELD = re.compile(r"\b([XYZWPR]|J\d|E\d)\s*=\s*(" + NUMBER + r"|\*+)\s*(mm|deg
 _FRAME_NUMBER = re.compile(r"\b(UF|UT)\s*:\s*(\d+)", re.I)
 _CONFIG = re.compile(r"(?:CONFIG|KONFIG)\s*:\s*'([^']*)'", re.I)
 _CONFIG_VALUE = re.compile(r"^\s*([NF])\s*([UD])\s*([TB])\s*,\s*(-?\d{1,3})\s*,\s*(-?\d{1,3})\s*,\s*(-?\d{1,3})\s*$", re.I)
+_OTHER_REPRESENTATION = re.compile(r"\bR[XYZWPR]\s*=", re.I)
 _SCARA_CONFIG = re.compile(r"^\s*[LR]\s*,(?:\s*-?\d{1,3}\s*,?)*\s*$", re.I)
 _TOOL_WORDS = {"UTOOL_NUM": "tool", "WKZ_NUM": "tool", "UFRAME_NUM": "frame", "BENUTZER_NUM": "frame",
                "UTOOL": "tool", "WKZ": "tool", "UFRAME": "frame", "BENUTZER": "frame"}
@@ -165,7 +166,7 @@ def read(path):
     if section != "END":
         last = last_line(lines)
         fail(source.name, last, lines.line(last), "no /END after it: the program is cut off")
-    targets, points, untaught = _positions(source, masked, lines, pos_start, pos_end)
+    targets, points, unread = _positions(source, masked, lines, pos_start, pos_end)
     items, state = [], _State()
     for number, start, end, content in instructions:
         original = source.text[start:end]
@@ -178,7 +179,7 @@ def read(path):
             refs = tuple(points[int(n)] for n in _POINT_REF.findall(content) if int(n) in points)
             items.append(Statement(number, original, refs=refs))
             continue
-        motion = _motion(m, points, untaught, source.name, number, original)
+        motion = _motion(m, points, unread, source.name, number, original)
         speed = _SPEED_FIELD.search(masked, start, end)  # where re-timing writes the motion's speed
         if speed is not None:
             motion = dataclasses.replace(motion, spans={"speed": Span(0, speed.start(), speed.end(), speed.group())})
@@ -203,7 +204,7 @@ def _with_frames(motion, targets, state):
     return motion
 
 
-def _motion(m, points, untaught, name, number, original):
+def _motion(m, points, unread, name, number, original):
     kind = KINDS[m.group(1).upper()]
     rest = m.group(4)
     refs = [(m.group(2).upper(), m.group(3))]
@@ -229,10 +230,9 @@ def _motion(m, points, untaught, name, number, original):
     runtime = _RUNTIME.search(rest)
     found, reason = [], ""
     for kind_ref, ref in refs:
-        if kind_ref == "P" and ref.isdigit() and int(ref) in untaught:
+        if kind_ref == "P" and ref.isdigit() and int(ref) in unread:
             found.append(None)
-            reason = reason or (f"P[{ref}] is not taught (its position is ********, line {untaught[int(ref)]}): "
-                                "the controller faults only if this line runs")
+            reason = reason or f"P[{ref}] {unread[int(ref)]}"
         elif runtime or kind_ref == "PR" or not ref.isdigit():
             found.append(None)
             reason = reason or (f"{runtime.group(1)} applied at run time" if runtime
@@ -261,10 +261,14 @@ def _motion(m, points, untaught, name, number, original):
 
 
 def _positions(source, masked, lines, start, end):
-    """Targets of the /POS section, ``{P number: target index}`` and ``{P number: line}`` of untaught ones."""
-    targets, points, untaught = [], {}, {}
+    """Targets of the /POS section, ``{P number: target index}`` and ``{P number: why}`` of positions not read.
+
+    Not read: untaught positions (``********``) and positions in a
+    representation trajcomp does not read (``RX = .. mm, .. RR = .. deg``).
+    """
+    targets, points, unread = [], {}, {}
     if start is None:
-        return targets, points, untaught
+        return targets, points, unread
     for m in _POS.finditer(masked, start, end):
         body_start = m.start(2)
         body = masked[body_start:m.end(2)]
@@ -276,14 +280,21 @@ def _positions(source, masked, lines, start, end):
         original = source.text[m.start():m.end()]
         label = f"P[{m.group(1)}]"
         if "*" in "".join(f.group(2) for f in _FIELD.finditer(gp)):
-            untaught[int(m.group(1))] = line
+            unread[int(m.group(1))] = (f"is not taught (its position is ********, line {line}): the controller faults "
+                                       "only if this line runs")
             continue
-        fields = {}
+        fields, units = {}, {}
         for f in _FIELD.finditer(gp):
             fields[f.group(1).lower()] = Span(0, gp_start + f.start(2), gp_start + f.end(2), f.group(2))
+            units[f.group(1).lower()] = f.group(3).lower()
+        if "x" not in fields and "j1" not in fields and _OTHER_REPRESENTATION.search(gp):
+            unread[int(m.group(1))] = (f"is stated as RX, RY, RZ, RW, RP, RR (line {line}), a representation "
+                                       "trajcomp does not read: left as written")
+            continue
 
         def value(role):
-            limit = LENGTH_LIMIT if role in "xyz" else ANGLE_LIMIT if role in "wpr" else JOINT_LIMIT
+            limit = (LENGTH_LIMIT if role in "xyz" or units[role] == "mm"  # a track's E1 in mm
+                     else ANGLE_LIMIT if role in "wpr" else JOINT_LIMIT)
             return finite(fields[role].text, source.name, line, original, f"{label} {role.upper()}", limit)
 
         frames = {f.group(1).upper(): f.group(2) for f in _FRAME_NUMBER.finditer(gp)}
@@ -320,7 +331,7 @@ def _positions(source, masked, lines, start, end):
             target = Target(**where, pose=pose, config=config, spans=spans)
         points[int(m.group(1))] = len(targets)
         targets.append(target)
-    return targets, points, untaught
+    return targets, points, unread
 
 
 def _config_text(config):
