@@ -7,7 +7,7 @@ from trajcomp import joint_errors
 from trajcomp.errors import CalibrationError
 from trajcomp.identify import _Problem, best_fit_transform, identify, outlier_rows
 from trajcomp.kinematics import fk
-from trajcomp.parameters import apply_deltas, candidate_parameters
+from trajcomp.parameters import apply_deltas, candidate_parameters, scales
 from trajcomp.robot import load_robot
 from trajcomp.simulate import ErrorProfile, VirtualRobot
 from trajcomp.transforms import matrix_to_rotvec, pose_to_matrix, rotvec_to_matrix
@@ -33,23 +33,39 @@ def test_recovers_geometric_errors_everywhere(name):
 
 @pytest.mark.parametrize("name", ["ur10", "kuka_kr6_r900", "fanuc_lrmate200id"])
 def test_analytic_jacobian_matches_finite_differences(name):
-    """Every kind of parameter: DH (with Hayati beta and a coupled joint map), tool, target, registration, joint terms."""
+    """Every kind of parameter: DH (Hayati beta, coupled joint map), tool, target, registration, joint terms, splines.
+
+    Spline columns are never stored densely: the normal equations assembled
+    from their sparse basis must equal those of the finite-difference Jacobian.
+    """
     robot = VirtualRobot.create(load_robot(name).replace(T_flange_tool=pose_to_matrix([10, -20, 150, 0.3, 0.2, 0.1])),
                                 "harsh", 3).true_robot.replace(beta=np.array([0, 1e-3, -2e-3, 0, 0, 0]))
     q = random_joints(7, 0)
-    names = candidate_parameters(robot, orientation=True, tracker=True) + joint_errors.term_names()
+    basis = joint_errors.SplineBasis(q.min(axis=0), q.max(axis=0), np.radians([40, 0, 60, 0, 0, 90]))
+    names = (candidate_parameters(robot, orientation=True, tracker=True) + joint_errors.term_names()
+             + basis.names())
     T_tracker_base = pose_to_matrix([1000, 200, -300, 0.5, -0.2, 2.0])
     R_tcp_target = rotvec_to_matrix([0.2, -1.0, 0.4])
     seen = T_tracker_base @ fk(robot, q)
     problem = _Problem(robot, load_robot(name), q, seen[:, :3, 3], seen[:, :3, :3] @ R_tcp_target,
-                       T_tracker_base, R_tcp_target, 100.0)
+                       T_tracker_base, R_tcp_target, 100.0, basis)
     problem.setup(names)
-    _, jac = problem.evaluate(np.zeros(len(names)))
+    start = np.zeros(len(names))
+    residual, jac = problem.evaluate(start)
+    difference = np.empty(residual.shape + (len(names),))
     for k in range(len(names)):
         step = np.zeros(len(names))
         step[k] = 1e-6
-        difference = (problem.evaluate(step, False)[0] - problem.evaluate(-step, False)[0]) / 2e-6
-        np.testing.assert_allclose(jac[:, :, k], difference, atol=1e-6 * max(np.abs(difference).max(), 1), err_msg=names[k])
+        difference[:, :, k] = (problem.evaluate(start + step, False)[0] - problem.evaluate(start - step, False)[0]) / 2e-6
+    weights = np.linspace(0.5, 1.0, len(q))
+    scale = scales(names)
+    a = (difference * scale).reshape(-1, len(names))
+    w = np.repeat(weights, residual.shape[1])
+    normal, gradient = jac.normal_equations(residual, weights, scale)
+    expected = a.T @ (w[:, None] * a)
+    np.testing.assert_allclose(normal, expected, atol=1e-6 * np.abs(expected).max())
+    np.testing.assert_allclose(gradient, a.T @ (w * residual.ravel()), atol=1e-6 * np.abs(gradient).max())
+    assert sum(joint_errors.is_spline(n) for n in names) == len(basis.names()) > 10
 
 
 def test_recovers_a_planted_tcp_and_tracker_registration():

@@ -12,9 +12,18 @@ are measured, the orientation error (rotation vector, rad) times
 ``orientation_weight`` (mm per rad): the stated weighting of one against the
 other. A robust loss (iteratively re-weighted) bounds the pull of any one
 measurement; gross outliers are reported by row, not silently dropped.
-Which parameters the data identify is decided by QR with column pivoting
-of the scaled Jacobian over the whole parameter set; the others stay at
-their starting value and are reported with the reason.
+Which parameters the data identify on their own is decided by QR with
+column pivoting of the scaled Jacobian over the whole parameter set, and
+reported; every candidate is then refined, but only along the directions
+of parameter space the data identify (a truncated pseudo-inverse: singular
+values below ``rtol`` times the largest are not used). A combination the
+data cannot see stays at its starting value (the nominal arm), instead of
+one pivoted parameter absorbing the whole confounded effect: measured at
+one tool orientation, the wrist and tool parameters are such combinations,
+and moving them spoils every other orientation. Where a hidden combination
+joins the arm with a frame of the measurement (base z of the tracker
+registration with d1), the frame moves and the arm stays at nominal
+(`trajcomp.parameters.prior_weights`).
 """
 
 import dataclasses
@@ -32,6 +41,7 @@ from trajcomp.parameters import (
     candidate_parameters,
     is_robot_parameter,
     pose_jacobian,
+    prior_weights,
     scales,
 )
 from trajcomp.transforms import invert, matrix_to_rotvec, rotvec_to_matrix
@@ -53,7 +63,8 @@ class Identifiability:
     ----------
     kept : list of str
     fixed : dict
-        ``{name: reason}`` for parameters left at their starting value.
+        ``{name: reason}`` for parameters the data do not identify on their
+        own: they move only within the combinations the data do identify.
     condition : float
         Condition number of the scaled Jacobian of the kept parameters.
     """
@@ -189,25 +200,77 @@ class KinematicFit:
     orientation_weight: float
 
 
+class _Jacobian:
+    """Derivative of the residual rows: dense columns, and spline columns kept as joint column times basis.
+
+    A spline term's column is the column of its joint's DH angle times the
+    term's basis value; with hundreds of spline terms, each non-zero on a
+    few percent of the rows, the normal equations are assembled from the
+    sparse basis (`normal_equations`) instead of a dense (N, rows, P) array.
+    """
+
+    def __init__(self, dense, theta, dense_index, blocks, size):
+        self.dense, self.theta, self.dense_index, self.blocks, self.size = dense, theta, dense_index, blocks, size
+
+    def matrix(self):
+        """Dense Jacobian (N * rows, P), for problems without spline terms."""
+        return self.dense.reshape(-1, self.size)
+
+    def normal_equations(self, residual, weights, scale):
+        """``(A^T W A, A^T W b)`` (P, P), (P,) of the scaled Jacobian A and residual rows b, rows weighted."""
+        dense = self.dense * scale[self.dense_index]
+        a = dense.reshape(len(dense) * dense.shape[1], -1)
+        w = np.repeat(weights, dense.shape[1])
+        normal = np.zeros((self.size, self.size))
+        gradient = np.zeros(self.size)
+        normal[np.ix_(self.dense_index, self.dense_index)] = a.T @ (w[:, None] * a)
+        gradient[self.dense_index] = a.T @ (w * residual.ravel())
+        weighted = weights[:, None, None] * self.theta  # (N, rows, 6)
+        for index, basis, joint in self.blocks:
+            lever = scale[index][0]  # one scale for all terms of a joint
+            cross = np.einsum("nrp,nr->np", dense, weighted[:, :, joint])  # dense columns x this joint's column
+            normal[np.ix_(self.dense_index, index)] = (basis.T @ cross).T * lever
+            normal[np.ix_(index, self.dense_index)] = (basis.T @ cross) * lever
+            gradient[index] = basis.T @ np.einsum("nr,nr->n", weighted[:, :, joint], residual) * lever
+            for other_index, other_basis, other in self.blocks:
+                product = np.einsum("nr,nr->n", weighted[:, :, joint], self.theta[:, :, other])
+                block = (basis.T @ other_basis.multiply(product[:, None]).tocsc()).toarray()
+                normal[np.ix_(index, other_index)] = block * lever * scale[other_index][0]
+        return normal, gradient
+
+
 class _Problem:
     """State and residuals of one fit: the robot, frames and joint terms being refined."""
 
-    def __init__(self, start, nominal, q, measured, rotation, T_tracker_base, R_tcp_target, weight):
+    def __init__(self, start, nominal, q, measured, rotation, T_tracker_base, R_tcp_target, weight, basis=None):
         self.start, self.nominal, self.q = start, nominal, q
         self.measured, self.rotation = measured, rotation
         self.T_tracker_base, self.R_tcp_target, self.weight = T_tracker_base, R_tcp_target, weight
+        self.basis = basis
 
     def setup(self, names):
         self.names = list(names)
-        self.terms = [n for n in names if joint_errors.is_term(n)]
+        self.terms = [n for n in names if joint_errors.is_term(n) and not joint_errors.is_spline(n)]
         self.features = joint_errors.features(self.nominal, self.q, self.terms)
+        self.blocks = []
+        for j in range(6):
+            index = [k for k, n in enumerate(self.names) if joint_errors.is_spline(n) and joint_errors.term_joint(n) == j]
+            if index:
+                columns = [int(self.names[k].split("_")[1]) for k in index]
+                self.blocks.append((np.array(index), self.basis.matrix(self.q, j)[:, columns].tocsc(), j))
+        self.dense_index = np.array([k for k, n in enumerate(self.names) if not joint_errors.is_spline(n)], dtype=int)
+        self.roughness = np.zeros((len(names), len(names)))
+        if self.blocks:
+            self.roughness = self.basis.roughness(self.names) * self.basis.penalty * len(self.q)
         self.x = np.zeros(len(names))
 
     def state(self, x):
         """Robot, joint errors, registration and target rotation at parameter vector x."""
         robot_names = [n for n in self.names if is_robot_parameter(n) and not joint_errors.is_term(n)]
         robot = apply_deltas(self.start, robot_names, [v for n, v in zip(self.names, x) if n in robot_names])
-        terms = joint_errors.JointResidual(self.terms, [v for n, v in zip(self.names, x) if n in self.terms])
+        term_names = [n for n in self.names if joint_errors.is_term(n)]
+        terms = joint_errors.JointResidual(term_names, [v for n, v in zip(self.names, x) if joint_errors.is_term(n)],
+                                           basis=self.basis if self.blocks else None)
         T_tb, R_target = self.T_tracker_base.copy(), self.R_tcp_target.copy()
         pick = {n: v for n, v in zip(self.names, x)}
         if any(n in pick for n in BASE_NAMES):
@@ -220,11 +283,13 @@ class _Problem:
         return robot, terms, T_tb, R_target
 
     def evaluate(self, x, jacobian=True):
-        """Residual rows (N, 3 or 6) and, optionally, their Jacobian (N, 3 or 6, P) at x."""
-        robot, terms, T_tb, R_target = self.state(x)
+        """Residual rows (N, 3 or 6) and, optionally, their `_Jacobian` at x."""
+        robot, _, T_tb, R_target = self.state(x)
         offsets = np.zeros(self.q.shape)
         for k, name in enumerate(self.terms):
-            offsets[:, joint_errors.term_joint(name)] += self.features[:, k] * terms.values[k]
+            offsets[:, joint_errors.term_joint(name)] += self.features[:, k] * x[self.names.index(name)]
+        for index, basis, joint in self.blocks:
+            offsets[:, joint] += basis @ x[index]
         q = self.q + offsets @ np.linalg.inv(self.nominal.joint_map).T
         geometric = [n for n in self.names if not joint_errors.is_term(n)]
         thetas = [f"theta{j}" for j in range(1, 7)]
@@ -240,15 +305,22 @@ class _Problem:
         if not jacobian:
             return residual, None
         width = residual.shape[1]
+        jac = jac[:, :width]
         jac[:, 3:] *= self.weight
-        full = np.empty((len(q), width, len(self.names)))
-        for k, name in enumerate(self.names):
+        dense = np.empty((len(q), width, len(self.dense_index)))
+        for column, k in enumerate(self.dense_index):
+            name = self.names[k]
             if joint_errors.is_term(name):
-                column = jac[:, :width, len(geometric) + joint_errors.term_joint(name)]
-                full[:, :, k] = column * self.features[:, self.terms.index(name), None]
+                dense[:, :, column] = (jac[:, :, len(geometric) + joint_errors.term_joint(name)]
+                                       * self.features[:, self.terms.index(name), None])
             else:
-                full[:, :, k] = jac[:, :width, geometric.index(name)]
-        return residual, full
+                dense[:, :, column] = jac[:, :, geometric.index(name)]
+        return residual, _Jacobian(dense, jac[:, :, len(geometric):], self.dense_index, self.blocks, len(self.names))
+
+    def penalty(self, x, scale):
+        """The roughness penalty of the spline terms at x (scaled units)."""
+        z = x / scale
+        return float(z @ self.roughness @ z)
 
 
 def _row_norms(residual):
@@ -284,11 +356,11 @@ def _identifiable(problem, names, rtol):
     """`Identifiability` of candidate ``names`` in ``problem`` at its start."""
     problem.setup(names)
     _, jac = problem.evaluate(problem.x)
-    return analyse_identifiability(jac.reshape(-1, len(names)) * scales(names), names, rtol)
+    return analyse_identifiability(jac.matrix() * scales(names), names, rtol)
 
 
-def identify(robot, q, measured, *, rotation=None, frame="base", tool=True, joint_terms=False, loss="huber",
-             rtol=1e-3, orientation_weight=ORIENTATION_WEIGHT, nominal=None, T_tracker_base=None,
+def identify(robot, q, measured, *, rotation=None, frame="base", tool=True, joint_terms=False, splines=None,
+             loss="huber", rtol=1e-3, orientation_weight=ORIENTATION_WEIGHT, nominal=None, T_tracker_base=None,
              R_tcp_target=None):
     """Robust least-squares identification of the arm, its TCP and the tracker registration.
 
@@ -308,6 +380,10 @@ def identify(robot, q, measured, *, rotation=None, frame="base", tool=True, join
         Identify the TCP position in the flange frame.
     joint_terms : bool
         Also identify the joint-error terms (`trajcomp.joint_errors`).
+    splines : SplineBasis, optional
+        Also identify these spline terms of the joint angles, with their
+        roughness penalty (they are not subject to the identifiability
+        analysis: the penalty decides how much of each the data carry).
     loss : {"linear", "soft_l1", "huber", "cauchy"}
         Robust loss on each measurement's residual norm, scale `ROBUST_SCALE`
         median norms.
@@ -350,8 +426,11 @@ def identify(robot, q, measured, *, rotation=None, frame="base", tool=True, join
     names = candidate_parameters(robot, tool=tool, orientation=orient, tracker=register)
     if joint_terms:
         names += joint_errors.term_names()
-    problem = _Problem(robot, nominal, q, measured, rotation, T_tracker_base, R_tcp_target, orientation_weight)
+    problem = _Problem(robot, nominal, q, measured, rotation, T_tracker_base, R_tcp_target, orientation_weight,
+                       splines)
     ident = _identifiable(problem, names, rtol)
+    if splines is not None:
+        names += splines.names()
     kept = ident.kept
     rows = 3 if rotation is None else 6  # residuals per measurement
     if rows * len(q) < 2 * len(kept):
@@ -359,53 +438,79 @@ def identify(robot, q, measured, *, rotation=None, frame="base", tool=True, join
             f"{len(q)} measurements are too few to identify {len(kept)} parameters "
             f"(need at least {int(np.ceil(2 * len(kept) / rows))})"
         )
-    problem.setup(kept)
-    x, weights, jac = _solve(problem, scales(kept), loss)
+    problem.setup(names)
+    scale = scales(names)
+    x, weights, jac = _solve(problem, scale, loss, rtol)
+    normal, _ = jac.normal_equations(problem.evaluate(x, jacobian=False)[0], weights, scale)
+    x = scale * _least_cost(normal + problem.roughness, x / scale, prior_weights(names), rtol)
     residual, _ = problem.evaluate(x, jacobian=False)
     robot_fit, terms, T_tb, R_target = problem.state(x)
     variance = float(np.sum(weights[:, None] * residual**2) / max(residual.size - len(kept), 1))
-    normal, _ = _normal_equations(jac, residual, weights, np.ones(len(kept)))
-    sigma = np.sqrt(np.clip(np.diag(np.linalg.pinv(normal)), 0.0, None) * variance)
+    sigma = scale * np.sqrt(np.clip(np.diag(_truncated_inverse(normal, rtol)), 0.0, None) * variance)
     position = -residual[:, :3]
     rotation_residuals = None if rotation is None else -residual[:, 3:] / orientation_weight
     log.info("identified %d parameters, fixed %d, rms %.4f mm", len(kept), len(ident.fixed),
              np.sqrt(np.mean(np.sum(position**2, axis=1))))
     return KinematicFit(
-        robot=robot_fit, names=kept, delta=x, sigma=sigma, identifiability=ident, joint_errors=terms,
+        robot=robot_fit, names=names, delta=x, sigma=sigma, identifiability=ident, joint_errors=terms,
         residuals=position, rotation_residuals=rotation_residuals, weights=weights,
         outliers=outlier_rows(position), T_tracker_base=T_tb, R_tcp_target=R_target,
         orientation_weight=orientation_weight,
     )
 
 
-def _solve(problem, scale, loss):
+def _least_cost(normal, z, cost, rtol):
+    """The solution z (P,) moved along the combinations the normal equations do not see to its least weighted norm.
+
+    Moving along those combinations does not change the fit; among them the
+    one minimising ``sum((cost * z)**2)`` keeps the costly parameters (the
+    arm's) nearest to where they started.
+    """
+    eigenvalues, vectors = np.linalg.eigh(normal)
+    unseen = vectors[:, eigenvalues < rtol**2 * eigenvalues.max(initial=0.0)]
+    if unseen.shape[1] == 0:
+        return z
+    weighted = unseen * cost[:, None] ** 2
+    return z - unseen @ np.linalg.solve(unseen.T @ weighted, weighted.T @ z)
+
+
+def _truncated_inverse(normal, rtol):
+    """Pseudo-inverse (P, P) of normal equations ``A^T A`` without the directions A sees below ``rtol`` of its best.
+
+    A singular value of A is the square root of an eigenvalue of ``A^T A``:
+    directions whose singular value is below ``rtol`` times the largest are
+    left out (the step has no component along them).
+    """
+    eigenvalues, vectors = np.linalg.eigh(normal)
+    seen = eigenvalues >= rtol**2 * eigenvalues.max(initial=0.0)
+    return (vectors[:, seen] / eigenvalues[seen]) @ vectors[:, seen].T
+
+
+def _solve(problem, scale, loss, rtol):
     """Iteratively re-weighted Gauss-Newton with step halving.
 
     Each step solves the normal equations of the scaled, weighted problem
-    (P x P, cheap for any N). Returns the parameters x (P,), the final
-    weights (N,) and the Jacobian (N, rows, P) at x.
+    (P x P, cheap for any N), the spline terms' roughness penalty added, by
+    `_truncated_inverse`: no step along a direction the data do not
+    identify. Returns the parameters x (P,), the final weights (N,) and
+    the `_Jacobian` at x.
     """
     x = problem.x
     residual, jac = problem.evaluate(x)
     for _ in range(MAX_ITERATIONS):
         weights = robust_weights(_row_norms(residual), loss)
-        normal, gradient = _normal_equations(jac, residual, weights, scale)
-        step = -np.linalg.lstsq(normal, gradient, rcond=None)[0]
-        cost = float(np.sum(weights[:, None] * residual**2))
+        normal, gradient = jac.normal_equations(residual, weights, scale)
+        normal += problem.roughness
+        gradient += problem.roughness @ (x / scale)
+        step = -_truncated_inverse(normal, rtol) @ gradient
+        cost = float(np.sum(weights[:, None] * residual**2)) + problem.penalty(x, scale)
         for _ in range(30):  # halve until the weighted cost does not grow
             trial = x + step * scale
             trial_residual, trial_jac = problem.evaluate(trial)
-            if float(np.sum(weights[:, None] * trial_residual**2)) <= cost * (1 + 1e-12):
+            if float(np.sum(weights[:, None] * trial_residual**2)) + problem.penalty(trial, scale) <= cost * (1 + 1e-12):
                 break
             step = step / 2
         x, residual, jac = trial, trial_residual, trial_jac
         if np.max(np.abs(step), initial=0.0) < STEP_TOLERANCE:
             break
     return x, robust_weights(_row_norms(residual), loss), jac
-
-
-def _normal_equations(jac, residual, weights, scale):
-    """``(A^T A, A^T b)`` of the scaled Jacobian A and residual b, rows weighted."""
-    a = jac.reshape(len(jac) * jac.shape[1], -1) * scale
-    w = np.repeat(weights, jac.shape[1])
-    return a.T @ (w[:, None] * a), a.T @ (w * residual.ravel())

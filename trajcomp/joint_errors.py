@@ -12,6 +12,16 @@ angles themselves, a smooth function of the configuration:
   with gravity along -z of the base frame (a floor-mounted arm); ``c`` then
   lumps the mass there and the joint's stiffness (rad per m of lever).
 
+- a smooth function of the joint's own angle the harmonics do not reach
+  (reducer and encoder cyclic errors of any period, transmission
+  stiffness): ``spline{j}_{k}`` adds ``c B_k(q_j)`` to DH angle ``j``,
+  ``B_k`` the k-th uniform cubic B-spline over the measured range of the
+  joint (`SplineBasis`), its wiggle bounded by a penalty on the second
+  differences of the coefficients. Beyond the measured range the spline is
+  held at its boundary value: it never extrapolates a shape the data did
+  not show (and `JointResidual.contains` says how far beyond it still
+  counts as inside).
+
 The features are computed with the *nominal* robot at the commanded joints,
 so the coefficients enter linearly and the same model serves every tool and
 orientation: a measurement at one orientation corrects the joints, not a
@@ -24,6 +34,7 @@ import dataclasses
 import re
 
 import numpy as np
+from scipy import sparse
 
 from trajcomp.errors import ModelError
 from trajcomp.kinematics import fk, link_frames
@@ -48,15 +59,108 @@ def term_names():
 
 def is_term(name):
     """True for the name of a joint-error term."""
-    return name.startswith(("gear", "grav"))
+    return name.startswith(("gear", "grav", "spline"))
+
+
+def is_spline(name):
+    """True for the name of a spline term (`SplineBasis`)."""
+    return name.startswith("spline")
 
 
 def term_joint(name):
     """0-based joint index a term acts on."""
-    return int(name[4]) - 1
+    return int(name[6 if is_spline(name) else 4]) - 1
 
 
-def features(nominal, q, names):
+def cardinal_cubic(u):
+    """Uniform cubic B-spline (N,) centred at 0, support (-2, 2), at u (N,) in knot steps."""
+    u = np.abs(u)
+    return np.where(u < 1.0, (4.0 - 6.0 * u**2 + 3.0 * u**3) / 6.0, np.where(u < 2.0, (2.0 - u) ** 3 / 6.0, 0.0))
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class SplineBasis:
+    """Uniform cubic B-splines of each joint's angle over its measured range.
+
+    Attributes
+    ----------
+    lower, upper : ndarray, shape (6,)
+        Measured range of each joint's commanded angle, rad.
+    step : ndarray, shape (6,)
+        Knot spacing asked for, rad (0: no spline on that joint). The range
+        is cut into ``ceil(range / step)`` equal intervals (at least one),
+        giving that many plus 3 basis functions.
+    penalty : float
+        Weight of the squared second differences of the coefficients
+        (scaled units, see `trajcomp.parameters.scales`) per measurement.
+    """
+
+    lower: np.ndarray
+    upper: np.ndarray
+    step: np.ndarray
+    penalty: float = 0.0
+
+    def __post_init__(self):
+        lower, upper, step = (np.asarray(v, dtype=float).reshape(-1) for v in (self.lower, self.upper, self.step))
+        if not (lower.shape == upper.shape == step.shape == (6,) and np.all(np.isfinite([*lower, *upper, *step]))
+                and np.all(lower <= upper) and np.all(step >= 0.0)
+                and np.isfinite(self.penalty) and self.penalty >= 0.0):
+            raise ModelError(f"spline basis: need 6 finite lower <= upper, steps >= 0 and a penalty >= 0, got "
+                             f"{lower} .. {upper}, steps {step}, penalty {self.penalty}")
+        for name, value in (("lower", lower), ("upper", upper), ("step", step)):
+            object.__setattr__(self, name, value)
+        object.__setattr__(self, "penalty", float(self.penalty))
+
+    def intervals(self, joint):
+        """Number of knot intervals of a 0-based joint (0: no spline)."""
+        if self.step[joint] == 0.0:
+            return 0
+        return max(1, int(np.ceil((self.upper[joint] - self.lower[joint]) / self.step[joint] - 1e-9)))
+
+    def names(self):
+        """Term names, joint by joint: ``spline{j}_{k}``."""
+        return [f"spline{j + 1}_{k}" for j in range(6) for k in range(self.intervals(j) + 3 if self.intervals(j) else 0)]
+
+    def matrix(self, q, joint):
+        """Basis values (N, K) of a 0-based joint at commanded joints q (N, 6) rad, sparse (4 per row).
+
+        Angles beyond the measured range take the boundary's values.
+        """
+        count = self.intervals(joint)
+        width = max(self.upper[joint] - self.lower[joint], 1e-12) / count
+        u = (np.clip(q[:, joint], self.lower[joint], self.upper[joint]) - self.lower[joint]) / width
+        first = np.minimum(np.floor(u).astype(int), count - 1)  # basis k is centred at knot k - 1
+        columns = first[:, None] + np.arange(4)
+        values = cardinal_cubic(u[:, None] - (columns - 1))
+        rows = np.repeat(np.arange(len(q)), 4)
+        return sparse.csr_matrix((values.ravel(), (rows, columns.ravel())), shape=(len(q), count + 3))
+
+    def roughness(self, names):
+        """Second-difference penalty matrix (T, T) over term ``names`` (zero outside the spline terms)."""
+        out = np.zeros((len(names), len(names)))
+        index = {n: k for k, n in enumerate(names)}
+        for j in range(6):
+            count = self.intervals(j) + 3 if self.intervals(j) else 0
+            for k in range(1, count - 1):
+                pick = [index.get(f"spline{j + 1}_{k + o}") for o in (-1, 0, 1)]
+                if None in pick:
+                    continue
+                second = np.array([1.0, -2.0, 1.0])
+                out[np.ix_(pick, pick)] += np.outer(second, second)
+        return out
+
+    def to_dict(self):
+        """Plain dict for the model file (rad)."""
+        return {"lower": self.lower.tolist(), "upper": self.upper.tolist(), "step": self.step.tolist(),
+                "penalty": self.penalty}
+
+    @classmethod
+    def from_dict(cls, data):
+        """Inverse of `to_dict`."""
+        return cls(data["lower"], data["upper"], data["step"], data.get("penalty", 0.0))
+
+
+def features(nominal, q, names, basis=None):
     """Value of each term's basis function at each configuration.
 
     Parameters
@@ -66,18 +170,28 @@ def features(nominal, q, names):
     q : ndarray, shape (N, 6)
         Commanded joint angles, rad.
     names : sequence of str
-        Term names (`term_names`).
+        Term names (`term_names`, `SplineBasis.names`).
+    basis : SplineBasis, optional
+        Needed by spline terms.
 
     Returns
     -------
     ndarray, shape (N, T)
-        Dimensionless (gear) or m (grav).
+        Dimensionless (gear, spline) or m (grav).
     """
     q = np.atleast_2d(np.asarray(q, dtype=float))
     out = np.empty((len(q), len(names)))
     frames = None
+    splines = {}
     for k, name in enumerate(names):
         j = term_joint(name)
+        if is_spline(name):
+            if basis is None:
+                raise ModelError(f"joint errors: spline term {name!r} without its spline basis")
+            if j not in splines:
+                splines[j] = basis.matrix(q, j).toarray()
+            out[:, k] = splines[j][:, int(name.split("_")[1])]
+            continue
         if name.startswith("gear"):
             harmonic = int(name[-1])
             out[:, k] = (np.sin if name[-2] == "s" else np.cos)(harmonic * q[:, j])
@@ -110,18 +224,21 @@ class JointResidual:
     lower, upper : ndarray, shape (6,)
         Range of the commanded joints it was fitted on, rad: the errors are
         known there (`contains`), extrapolated elsewhere.
+    basis : SplineBasis or None
+        The knots of the spline terms (None: no spline terms).
     """
 
     names: tuple
     values: np.ndarray
     lower: np.ndarray = dataclasses.field(default_factory=lambda: np.full(6, -np.inf))
     upper: np.ndarray = dataclasses.field(default_factory=lambda: np.full(6, np.inf))
+    basis: object = None
     kind = KIND
 
     def __post_init__(self):
         names = tuple(str(n) for n in self.names)
         values = np.asarray(self.values, dtype=float).reshape(-1)
-        known = set(term_names())
+        known = set(term_names()) | set(self.basis.names() if self.basis is not None else ())
         unknown = [n for n in names if n not in known and not _PARAMETER.match(n)]
         if unknown or len(values) != len(names) or not np.isfinite(values).all():
             raise ModelError(
@@ -162,14 +279,15 @@ class JointResidual:
         ``outside`` applies to joints outside the fitted range: ``model``
         leaves their errors out (the refined DH model alone), ``clamp``
         takes them at the nearest joints of the range, ``extrapolate``
-        evaluates the terms anyway.
+        evaluates the terms anyway (spline terms held at their boundary
+        value all the same).
         """
         q = np.atleast_2d(np.asarray(q, dtype=float))
         if outside == "clamp":
             q = self.clamped(q)
         names, values = self.terms
         out = np.zeros(q.shape)
-        for k, contribution in enumerate((features(nominal, q, names) * values).T):
+        for k, contribution in enumerate((features(nominal, q, names, self.basis) * values).T):
             out[:, term_joint(names[k])] += contribution
         if outside == "model":
             out[~self.contains(q)] = 0.0
@@ -195,14 +313,18 @@ class JointResidual:
 
     def to_dict(self):
         """Plain dict for the model file: kind, names, values, joint range (internal units, mm and rad)."""
-        return {"kind": KIND, "names": list(self.names), "values": self.values.tolist(),
-                "lower": self.lower.tolist(), "upper": self.upper.tolist()}
+        out = {"kind": KIND, "names": list(self.names), "values": self.values.tolist(),
+               "lower": self.lower.tolist(), "upper": self.upper.tolist()}
+        if self.basis is not None:
+            out["spline_basis"] = self.basis.to_dict()
+        return out
 
     @classmethod
     def from_dict(cls, data):
         """Inverse of `to_dict`."""
         try:
-            return cls(tuple(data["names"]), data["values"], data["lower"], data["upper"])
+            basis = SplineBasis.from_dict(data["spline_basis"]) if "spline_basis" in data else None
+            return cls(tuple(data["names"]), data["values"], data["lower"], data["upper"], basis)
         except KeyError as exc:
             raise ModelError(f"joint residual: missing key {exc.args[0]!r}") from None
         except (TypeError, ValueError) as exc:

@@ -1,7 +1,7 @@
 """The compensation model: what `calibrate` identified and what it predicts.
 
 A model holds everything `calibrate` identified for one robot: the DH deltas
-with their uncertainties and the parameters left at nominal, the tracker
+with their uncertainties and the parameters not identified on their own, the tracker
 registration, the paper's linear correction, the grid of raw errors and the
 grid of residuals left after the DH model, with fit and cross-validation
 statistics. It predicts where the real arm ends for a command, in each mode:
@@ -53,7 +53,8 @@ class CompensationModel:
     dh_delta, dh_sigma : ndarray, shape (P,)
         Deltas to nominal and standard deviations, mm or rad.
     dh_fixed : dict
-        ``{name: reason}`` of parameters left at nominal.
+        ``{name: reason}`` of parameters the data do not identify on their own
+        (they move only within the combinations the data identify).
     linear : LinearCorrection or None
     grid : residual field or None
         Interpolated raw errors (measured - commanded) over commanded positions.

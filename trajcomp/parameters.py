@@ -26,6 +26,7 @@ import numpy as np
 from trajcomp.kinematics import link_frames
 
 ANGLE_LEVER = 1000.0  # mm: an angle parameter is scaled as its effect at this lever arm
+FRAME_COST = 0.01  # a frame parameter costs this many times an arm parameter along a hidden combination
 TOOL_NAMES = ("tool_x", "tool_y", "tool_z")
 TARGET_NAMES = ("target_rx", "target_ry", "target_rz")
 BASE_NAMES = ("base_x", "base_y", "base_z", "base_rx", "base_ry", "base_rz")
@@ -73,10 +74,23 @@ def is_angle(name):
 def scales(names):
     """Per-parameter scale (P,): 1 for mm, 1 / `ANGLE_LEVER` for angles and joint-error terms (solver units).
 
-    A joint-error term's basis function is of order one (sin, cos, or a
-    lever in m), so its coefficient acts as an angle.
+    A joint-error term's basis function is of order one (sin, cos, a
+    B-spline, or a lever in m), so its coefficient acts as an angle.
     """
-    return np.array([1.0 / ANGLE_LEVER if is_angle(n) or n.startswith(("gear", "grav")) else 1.0 for n in names])
+    return np.array([1.0 / ANGLE_LEVER if is_angle(n) or n.startswith(("gear", "grav", "spline")) else 1.0
+                     for n in names])
+
+
+def prior_weights(names):
+    """Per-parameter cost (P,) of moving a parameter along a combination the data do not identify.
+
+    1 for the arm's parameters (the nominal arm is a prior: its data sheet),
+    `FRAME_COST` for the frames of the measurement (tracker registration,
+    measured target), which have no prior: a combination the data see only
+    together with the arm (base z with d1, the turn about base z with
+    theta1) moves the frame and leaves the arm at nominal.
+    """
+    return np.array([FRAME_COST if n.startswith(("base_", "target_")) else 1.0 for n in names])
 
 
 def is_robot_parameter(name):

@@ -81,7 +81,7 @@ def describe(model):
             for n, d in zip(model.dh_names, model.dh_delta)
         )
         lines.append(f"identified {len(model.dh_names)} parameters: {shown}")
-        lines.append(f"left at nominal: {', '.join(f'{n} ({r})' for n, r in model.dh_fixed.items()) or 'none'}")
+        lines.append(f"not identified on their own: {', '.join(f'{n} ({r})' for n, r in model.dh_fixed.items()) or 'none'}")
         tcp = model.identified.T_flange_tool[:3, 3]
         lines.append(f"TCP in the flange frame: {tcp[0]:.3f}, {tcp[1]:.3f}, {tcp[2]:.3f} mm")
     if not np.allclose(model.T_tracker_base, np.eye(4)):

@@ -336,7 +336,8 @@ def _parameters(params):
            f"deviation); condition number of the scaled Jacobian {params['condition_number']:.1f}.</p>"
            + table(("parameter", "delta", "σ", "unit", "|delta|/σ"), rows, numeric=(1, 2, 4)))
     if params["fixed"]:
-        out += "<h3>Left at nominal</h3>" + table(("parameter", "why"), [(f["name"], f["reason"]) for f in params["fixed"]])
+        out += ("<h3>Not identified on their own (moved only within combinations the data see)</h3>"
+                + table(("parameter", "why"), [(f["name"], f["reason"]) for f in params["fixed"]]))
     return out
 
 
