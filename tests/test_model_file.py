@@ -92,8 +92,71 @@ def test_non_finite_values_in_a_sidecar_are_refused(models, tmp_path):
     arrays[key].flat[7] = np.inf
     with open(sidecar_path(path), "wb") as handle:
         np.savez(handle, **arrays)
+    _name_sidecar_hash(path)  # a pair made by hand, consistent
     with pytest.raises(ModelError, match=rf"array {key} holds values that are not finite"):
         load_model(path)
     sidecar_path(path).write_bytes(b"not a zip file")
+    _name_sidecar_hash(path)
     with pytest.raises(ModelError, match="cannot be read"):
         load_model(path)
+
+
+def _name_sidecar_hash(path):
+    """Have the model at ``path`` name the SHA-256 of the sidecar now beside it."""
+    import hashlib
+
+    text = path.read_text()
+    digest = hashlib.sha256(sidecar_path(path).read_bytes()).hexdigest()
+    path.write_text("\n".join(f"sidecar_sha256: {digest}" if line.startswith("sidecar_sha256:") else line
+                              for line in text.splitlines()) + "\n")
+
+
+def test_a_sidecar_of_another_calibration_or_not_a_file_is_refused(models, tmp_path):
+    import os
+
+    (first, _), (second, _) = models
+    save_model(tmp_path / "a.yaml", first)
+    save_model(tmp_path / "b.yaml", second)
+    assert load_model(tmp_path / "a.yaml").grid is not None
+    sidecar_path(tmp_path / "a.yaml").write_bytes(sidecar_path(tmp_path / "b.yaml").read_bytes())
+    with pytest.raises(ModelError, match=r"a\.yaml\.npz is not the one written with this model \(calibration \w+\)"):
+        load_model(tmp_path / "a.yaml")
+    sidecar_path(tmp_path / "a.yaml").unlink()
+    os.mkfifo(sidecar_path(tmp_path / "a.yaml"))  # reading it would block
+    with pytest.raises(ModelError, match="is not a regular file"):
+        load_model(tmp_path / "a.yaml")
+
+
+def test_a_sidecar_unpacking_beyond_its_bound_is_refused_before_unpacking(models, tmp_path, monkeypatch):
+    import trajcomp.model_file as model_file
+
+    (first, _), _ = models
+    save_model(tmp_path / "a.yaml", first)
+    unpacked = sum(a.nbytes for a in np.load(sidecar_path(tmp_path / "a.yaml")).values())
+    monkeypatch.setattr(model_file, "_SIDECAR_BYTES", unpacked - 1)  # the 1 GiB bound, scaled to this grid
+    monkeypatch.setattr(np, "load", None)  # nothing may be unpacked
+    with pytest.raises(ModelError, match="unpacks to .* bytes, more than a model's grid"):
+        load_model(tmp_path / "a.yaml")
+
+
+@pytest.mark.parametrize("edit, message", [
+    (lambda t: t.replace("format: trajcomp-model/2", "format: trajcomp-model/2\nformat: trajcomp-model/2", 1),
+     "found the key 'format' twice"),
+    (lambda t: t.replace("tracker_to_base:", "tracker_to_base: [1.0e+300, 0, 0, 0, 0, 0]\nold_tracker_to_base:", 1),
+     r"tracker_to_base: a translation beyond 100000 mm"),
+    (lambda t: t.replace("delta: ", "delta: 1.0e+308 #", 1), r"parameters.delta: \w+ = 1e\+308 (mm|deg) is beyond"),
+    (lambda t: "bomb: &b0 [0, 0, 0, 0, 0, 0, 0, 0, 0, 0]\n" + "".join(
+        f"b{i}: &b{i} [{', '.join([f'*b{i - 1}'] * 10)}]\n" for i in range(1, 9)) + t.replace(
+        "tracker_to_base:", "tracker_to_base: *b8\nold_tracker_to_base:", 1), "aliases expand to more than"),
+])
+def test_hostile_model_files_are_refused_quickly_with_a_short_message(models, tmp_path, edit, message):
+    import time
+
+    (first, _), _ = models
+    path = tmp_path / "m.yaml"
+    save_model(path, first)
+    path.write_text(edit(path.read_text()))
+    start = time.perf_counter()
+    with pytest.raises(ModelError, match=message) as refused:
+        load_model(path)
+    assert time.perf_counter() - start < 2 and len(str(refused.value)) < 600

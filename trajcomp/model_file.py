@@ -8,8 +8,11 @@ registration, the linear correction and the grids, with the report.
 """
 
 import datetime
+import hashlib
 import io
 import math
+import stat
+import uuid
 import zipfile
 from pathlib import Path
 
@@ -17,7 +20,7 @@ import numpy as np
 import yaml
 
 from trajcomp import __version__, yaml_text
-from trajcomp.atomic import write_files_atomic
+from trajcomp.atomic import recover, write_files_atomic
 from trajcomp.errors import ModelError
 from trajcomp.grid import field_from_dict
 from trajcomp.ik import Configuration
@@ -33,6 +36,8 @@ from trajcomp.transforms import abc_to_matrix, matrix_to_abc, matrix_to_pose, po
 FORMAT = "trajcomp-model/2"
 SUFFIXES = (".yaml", ".yml")
 _SIDECAR_NODES = 1000  # grids with more nodes go to a sidecar .npz
+_SIDECAR_BYTES = 1 << 30  # largest sidecar read, on disk and its arrays unpacked (a 10 mm grid over 1 m^3: 24 MB)
+_REGISTRATION_BOUND = 1e5  # mm, |translation| of a tracker registration, base, tool or measured-point offset
 
 
 def _pose_user(mat):
@@ -42,12 +47,9 @@ def _pose_user(mat):
 
 
 def _pose_internal(values, where):
-    try:
-        pose = np.array(values, dtype=float).reshape(6)
-    except (TypeError, ValueError):
-        raise ModelError(f"{where}: expected [x, y, z, a, b, c], got {values!r}") from None
-    if not np.isfinite(pose).all():
-        raise ModelError(f"{where}: not finite: {pose.tolist()}")
+    pose = _finite(values, where, count=6)
+    if np.abs(pose[:3]).max() > _REGISTRATION_BOUND:
+        raise ModelError(f"{where}: a translation beyond {_REGISTRATION_BOUND:g} mm: {pose.tolist()}")
     pose[3:] = np.radians(pose[3:])
     return pose_to_matrix(pose)
 
@@ -75,6 +77,10 @@ def _robot_fingerprint(robot):
 
 def save_model(path, model):
     """Write a model file and, if its grids are large, its sidecar: both or neither.
+
+    The model names its sidecar's SHA-256 and a calibration id of its own,
+    so that a sidecar of another calibration (copied, or left by a write
+    that did not complete) is refused on loading, never used silently.
 
     Parameters
     ----------
@@ -132,20 +138,22 @@ def save_model(path, model):
         doc[key] = entry
     doc["report"] = model.report
     files = {}
+    doc["calibration_id"] = uuid.uuid4().hex
     if arrays:
         doc["sidecar"] = sidecar_path(path).name
         buffer = io.BytesIO()
         np.savez_compressed(buffer, **arrays)
         files[sidecar_path(path)] = buffer.getvalue()
+        doc["sidecar_sha256"] = hashlib.sha256(files[sidecar_path(path)]).hexdigest()
     files[path] = yaml.safe_dump(plain(doc), sort_keys=False, width=100).encode("utf-8")
     write_files_atomic(files)
 
 
 def _posture_index(text, path):
     """Configuration index of a posture written ``shoulder/elbow/wrist`` (``front/up/positive``)."""
-    parts = str(text).split("/")
+    parts = text.split("/") if isinstance(text, str) else []
     if len(parts) != 3:
-        raise ModelError(f"{path}: field postures: expected shoulder/elbow/wrist, got {text!r}")
+        raise ModelError(f"{path}: field postures: expected shoulder/elbow/wrist, got {yaml_text.shown(text)}")
     return Configuration(*parts).index
 
 
@@ -166,6 +174,7 @@ def load_model(path, robot=None):
         unsafe sidecar, a non-finite number or a malformed field (named).
     """
     path = Path(path)
+    recover(path.parent)  # a model and sidecar a killed run left half-renamed are completed first
     try:
         doc = yaml_text.load(path.read_text(encoding="utf-8"))
     except (OSError, UnicodeError) as exc:
@@ -176,18 +185,18 @@ def load_model(path, robot=None):
         raise ModelError(f"{path}: not a trajcomp model file (no 'format' key)")
     if doc["format"] != FORMAT:
         raise ModelError(
-            f"{path}: format {doc['format']!r} is not supported by trajcomp {__version__} "
+            f"{path}: format {yaml_text.shown(doc['format'])} is not supported by trajcomp {__version__} "
             f"(expected {FORMAT}); re-run calibrate with this version"
         )
     try:
         info = doc["robot"]
         if robot is not None and robot not in (info["name"], info["ref"]):
-            raise ModelError(f"{path}: model is for robot {info['name']!r}, not {robot!r}")
+            raise ModelError(f"{path}: model is for robot {yaml_text.shown(info['name'])}, not {robot!r}")
         nominal = load_robot(info["ref"])
         if _robot_fingerprint(nominal) != info["dh_fingerprint"]:
-            raise ModelError(f"{path}: the nominal DH table of robot {info['ref']!r} differs from the one calibrated")
+            raise ModelError(f"{path}: the nominal DH table of robot {yaml_text.shown(info['ref'])} differs from the one calibrated")
         nominal = nominal.replace(T_flange_tool=_pose_internal(info["tool"], f"{path}: field robot.tool"))
-        arrays = _read_sidecar(path, doc.get("sidecar"))
+        arrays = _read_sidecar(path, doc.get("sidecar"), doc.get("sidecar_sha256"), doc.get("calibration_id"))
         fields = {}
         for key in ("grid", "residual"):
             entry = doc.get(key)
@@ -202,6 +211,7 @@ def load_model(path, robot=None):
         names = [p["name"] for p in params]
         scale = np.array([math.pi / 180.0 if is_angle(n) else 1.0 for n in names])
         delta = _finite([p["delta"] for p in params], f"{path}: field parameters.delta") * scale
+        _check_bounds(names, delta, f"{path}: field parameters.delta")
         sigma = _finite([p["sigma"] for p in params], f"{path}: field parameters.sigma") * scale
         target = _finite(doc["measured_frame_in_tcp"], f"{path}: field measured_frame_in_tcp")
         tools = doc["places_other_tools"]
@@ -226,34 +236,78 @@ def load_model(path, robot=None):
     except ModelError as exc:
         raise ModelError(str(exc) if str(exc).startswith(str(path)) else f"{path}: {exc}") from None
     except (KeyError, TypeError, ValueError, AttributeError) as exc:
-        raise ModelError(f"{path}: malformed model field: {exc!r}") from exc
+        raise ModelError(f"{path}: malformed model field: {yaml_text.shown(exc)}") from exc
     model.check_mode(model.method)
     return model
 
 
-def _finite(values, where):
-    """Float array of ``values``; ModelError naming ``where`` if one is not a finite number."""
-    try:
-        array = np.array(values, dtype=float)
-    except (TypeError, ValueError):
-        raise ModelError(f"{where}: expected numbers, got {values!r}") from None
+def _finite(values, where, count=None):
+    """Float array of ``values`` (a list of ``count`` numbers, any count if None); ModelError naming ``where`` if not.
+
+    The shape is checked before an array is made, and the message quotes at
+    most 100 characters of the value (a YAML value may be huge).
+    """
+    numbers = isinstance(values, list) and all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in values)
+    if not numbers or (count is not None and len(values) != count):
+        expected = f"a list of {count} numbers" if count else "a list of numbers"
+        raise ModelError(f"{where}: expected {expected}, got {yaml_text.shown(values)}")
+    array = np.array(values, dtype=float)
     if not np.isfinite(array).all():
         raise ModelError(f"{where}: not finite: {array.tolist()}")
     return array
 
 
-def _read_sidecar(path, name):
-    """Arrays of a model's sidecar ``name`` (a plain file name beside the model), ``{}`` without one."""
+def _check_bounds(names, delta, where):
+    """Refuse parameter deltas (mm, rad) no calibration writes: a DH delta beyond the plausibility bounds, others huge."""
+    from trajcomp.plausibility import ANGLE_BOUND, LENGTH_BOUND
+
+    for name, value in zip(names, delta):
+        registration = name.startswith(("base_", "target_", "tool_", "gear", "grav"))
+        bound = (math.pi if registration else ANGLE_BOUND) if is_angle(name) else \
+            (_REGISTRATION_BOUND if registration else LENGTH_BOUND)
+        if abs(value) > bound:
+            shown, limit = (f"{math.degrees(value):.6g} deg", f"{math.degrees(bound):g} deg") if is_angle(name) \
+                else (f"{value:.6g} mm", f"{bound:g} mm")
+            raise ModelError(f"{where}: {name} = {shown} is beyond the {limit} a calibration writes")
+
+
+def _read_sidecar(path, name, sha256=None, calibration=None):
+    """Arrays of a model's sidecar ``name`` (a plain file name beside the model), ``{}`` without one.
+
+    The sidecar must be a regular file (not a FIFO or a device), at most
+    1 GiB on disk and unpacked (sizes read from the archive's directory
+    before anything is unpacked), and of the SHA-256 the model names.
+    """
     if not name:
         return {}
     if not isinstance(name, str) or Path(name).name != name or name in (".", "..") or name == path.name:
-        raise ModelError(f"{path}: field sidecar: {name!r} must be the name of a file beside the model, not the model")
+        raise ModelError(f"{path}: field sidecar: {str(name)[:100]!r} must be the name of a file beside the model, "
+                         "not the model")
     sidecar = path.parent / name
     try:
-        with np.load(sidecar, allow_pickle=False) as data:
-            arrays = {k: data[k] for k in data.files}
+        found = sidecar.stat()
+        if not stat.S_ISREG(found.st_mode):
+            raise ModelError(f"{path}: sidecar {sidecar} is not a regular file")
+        if found.st_size > _SIDECAR_BYTES:
+            raise ModelError(f"{path}: sidecar {sidecar} holds {found.st_size} bytes, more than a model's grid "
+                             f"({_SIDECAR_BYTES} bytes)")
+        data = sidecar.read_bytes()
+    except OSError as exc:
+        raise ModelError(f"{path}: sidecar {sidecar} cannot be read: {exc.strerror}") from exc
+    if sha256 is not None and hashlib.sha256(data).hexdigest() != sha256:
+        raise ModelError(f"{path}: sidecar {sidecar} is not the one written with this model (calibration "
+                         f"{calibration}): its SHA-256 differs; a sidecar of another calibration, or a copy that did "
+                         "not complete: calibrate again or restore the pair")
+    try:
+        with zipfile.ZipFile(io.BytesIO(data)) as archive:
+            unpacked = sum(member.file_size for member in archive.infolist())
+        if unpacked > _SIDECAR_BYTES:
+            raise ModelError(f"{path}: sidecar {sidecar} unpacks to {unpacked} bytes, more than a model's grid "
+                             f"({_SIDECAR_BYTES} bytes)")
+        with np.load(io.BytesIO(data), allow_pickle=False) as loaded:
+            arrays = {k: loaded[k] for k in loaded.files}
     except (OSError, ValueError, EOFError, zipfile.BadZipFile) as exc:
-        raise ModelError(f"{path}: sidecar {sidecar} cannot be read: {exc}") from exc
+        raise ModelError(f"{path}: sidecar {sidecar} cannot be read: {str(exc)[:200]}") from exc
     for key, array in arrays.items():
         if not np.issubdtype(array.dtype, np.number) or not np.isfinite(array).all():
             raise ModelError(f"{path}: sidecar {sidecar}: array {key} holds values that are not finite numbers")

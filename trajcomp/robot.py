@@ -40,6 +40,8 @@ from trajcomp.errors import RobotError
 from trajcomp.transforms import pose_to_matrix
 
 _ROBOT_PACKAGE = "trajcomp.robots"
+MAGNITUDE_BOUND = 1e5  # mm, deg, deg/s, deg/s^2: beyond it a robot file's number is damage (dh.a 1e308), not an arm
+JERK_BOUND = 1e9  # deg/s^3
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -226,7 +228,7 @@ def robot_from_yaml(text, label="<robot>"):
         j_max=(
             np.full(6, np.inf)
             if jerk is None
-            else fields.vector("limits.jerk", jerk, positive=True) * deg
+            else fields.vector("limits.jerk", jerk, positive=True, limit=JERK_BOUND) * deg
         ),
         home=fields.vector("home", doc.get("home", [0] * 6)) * deg,
         T_base_link0=fields.frame("base"),
@@ -251,31 +253,33 @@ class _Fields:
     def text(self, field):
         value = self.doc.get(field)
         if not isinstance(value, str) or not value.strip():
-            self.fail(field, f"expected a non-empty text, got {value!r}")
+            self.fail(field, f"expected a non-empty text, got {yaml_text.shown(value)}")
         return value
 
     def mapping(self, field):
         value = self.doc.get(field)
         if not isinstance(value, dict):
-            self.fail(field, f"expected a mapping, got {value!r}")
+            self.fail(field, f"expected a mapping, got {yaml_text.shown(value)}")
         return value
 
     def choice(self, field, value, allowed):
-        if value not in allowed:
-            self.fail(field, f"expected one of {', '.join(allowed)}, got {value!r}")
+        if not isinstance(value, str) or value not in allowed:
+            self.fail(field, f"expected one of {', '.join(allowed)}, got {yaml_text.shown(value)}")
         return value
 
-    def number(self, field, value):
+    def number(self, field, value, limit=MAGNITUDE_BOUND):
         if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
-            self.fail(field, f"expected a finite number, got {value!r}")
+            self.fail(field, f"expected a finite number, got {yaml_text.shown(value)}")
+        if abs(value) > limit:
+            self.fail(field, f"{value:g} is beyond the {limit:g} of any arm")
         return float(value)
 
-    def vector(self, field, value, size=6, positive=False):
+    def vector(self, field, value, size=6, positive=False, limit=MAGNITUDE_BOUND):
         if not isinstance(value, (list, tuple)) or len(value) != size:
-            self.fail(field, f"expected a list of {size} numbers, got {value!r}")
-        numbers = np.array([self.number(f"{field}[{i}]", v) for i, v in enumerate(value)])
+            self.fail(field, f"expected a list of {size} numbers, got {yaml_text.shown(value)}")
+        numbers = np.array([self.number(f"{field}[{i}]", v, limit) for i, v in enumerate(value)])
         if positive and np.any(numbers <= 0):
-            self.fail(field, f"expected positive numbers, got {value!r}")
+            self.fail(field, f"expected positive numbers, got {numbers.tolist()}")
         return numbers
 
     def frame(self, field):
