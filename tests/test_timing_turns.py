@@ -10,6 +10,9 @@ import importlib
 import numpy as np
 import pytest
 
+from trajcomp.errors import TimingError
+from trajcomp.ik import Configuration, configuration_of, ik
+from trajcomp.kinematics import fk
 from trajcomp.program_items import JOINT, LINEAR
 from trajcomp.robot import load_robot
 from trajcomp.timing import Moves, retime
@@ -59,3 +62,54 @@ def test_a_linear_chain_reaches_a_waypoint_declared_a_turn_off_continuously_and_
     plain = retime(Moves.from_joints(q, UR10, kind=LINEAR, zone=1.0), UR10)
     assert result.cycle_time == pytest.approx(plain.cycle_time, rel=1e-9)
     assert plain.warnings == () and plain.q is not None
+
+
+KUKA = load_robot("kuka_kr6_r900")
+
+
+def near_singular_line(offset, wrist):
+    """Joints (2, 6) at both ends of an 80 mm LIN of the KUKA passing ``offset`` mm from its wrist
+    singularity (A5 = 0), both in the configuration with ``wrist`` flag, as IK gives them (within +-180 deg)."""
+    q_singular = np.radians([10.0, -80.0, 100.0, 0.0, 0.0, 20.0])
+    ends = np.tile(fk(KUKA, q_singular), (2, 1, 1))
+    ends[:, :3, 3] += offset * np.array([0.0, 0.0, 1.0]) + np.outer([-40.0, 40.0], [0.0, 1.0, 0.0])
+    arm = configuration_of(KUKA, q_singular + np.radians([0.0, 0.0, 0.0, 0.0, 5.0, 0.0]))
+    return ik(KUKA, ends, config=Configuration(arm.shoulder, arm.elbow, wrist), seed=q_singular).q
+
+
+def test_a_line_near_the_wrist_singularity_turning_a4_more_than_half_a_turn_is_timed():
+    """A4 turns by -184.6 deg along this LIN (0.5 mm from the singular point): wrapping the declared change to
+    +175.4 deg sent the path the other way and refused it (a 360 deg jump); it is timed, A4 and A6 swinging
+    the way the path goes, and reaches the declared joints."""
+    q = near_singular_line(-0.5, "negative")
+    result = retime(Moves.from_joints(q, KUKA, tcp_speed=250.0), KUKA)
+    np.testing.assert_allclose(result.q, q, atol=1e-9)
+    assert result.within_limits and result.warnings == ()
+    sampled, _, _ = result.at(np.arange(0.0, result.cycle_time, 1e-3))
+    a4 = np.degrees(sampled[:, 3])
+    assert np.abs(np.diff(a4)).max() < 5.0 and np.ptp(a4) > 175.0  # one continuous swing of half a turn
+
+
+def test_a_line_whose_end_is_declared_in_the_turn_the_path_reaches_keeps_that_turn():
+    """On an arm with A4 and A6 ranges of +-350 deg, this LIN turns A4 by -180.9 deg: the end declared at
+    A4 -268.2 deg (the turn the path reaches) is kept, not wrapped to +91.8 deg (which was refused)."""
+    wide = KUKA.replace(q_min=np.radians([-170, -190, -120, -350, -120, -350]),
+                        q_max=np.radians([170, 45, 156, 350, 120, 350]))
+    q = near_singular_line(-0.5, "positive")
+    declared = q.copy()
+    declared[1, 3] -= TURN  # A4 -268.2 deg
+    declared[1, 5] += TURN  # A6 286.6 deg
+    result = retime(Moves.from_joints(declared, wide, tcp_speed=250.0), wide)
+    np.testing.assert_allclose(result.q, declared, atol=1e-9)
+    assert result.within_limits and result.warnings == ()
+
+
+def test_a_line_between_two_declared_configurations_is_refused_as_such():
+    q = near_singular_line(5.0, "positive")
+    flipped = q[1] + np.radians([0.0, 0.0, 0.0, 180.0, 0.0, 180.0])
+    flipped[4] = -flipped[4]  # the same pose with the wrist flipped: another configuration
+    np.testing.assert_allclose(fk(KUKA, flipped), fk(KUKA, q[1]), atol=1e-9)
+    moves = Moves.from_joints(np.array([q[0], flipped]), KUKA, labels=["P1 (weld.dat:3)", "P2 (weld.dat:4)"])
+    with pytest.raises(TimingError, match=r"P2 \(weld.dat:4\): its target is declared in configuration "
+                                          r"\w+/\w+/negative, its start in \w+/\w+/positive; a linear"):
+        retime(moves, KUKA)

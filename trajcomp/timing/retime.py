@@ -27,6 +27,7 @@ the timing it gets alone.
 """
 
 import dataclasses
+import functools
 import itertools
 
 import numpy as np
@@ -35,6 +36,7 @@ from trajcomp.program_items import JOINT
 from trajcomp.timing.check import LIMIT_TOLERANCE, Peaks, dense_check, dense_checks, segment_peaks
 from trajcomp.timing.path import TOLERANCE, stop_paths
 from trajcomp.timing.result import Segment, TimingResult
+from trajcomp.timing.samples import AMBIGUOUS_DEG, swept_changes
 from trajcomp.timing.windows import WINDOW, run_windows
 
 METHODS = ("auto", "toppra", "ruckig")
@@ -80,7 +82,9 @@ def retime(moves, robot, *, method="auto", tolerance=TOLERANCE):
             timeline.untimed(last)
             continue
         last = batch[-1][2]
-        for lo, hi, block in _continued(reached.q[first], moves.q[first : last + 1], moves.kind[first + 1 : last + 1]):
+        swept = functools.partial(_swept, moves, robot, first)
+        for lo, hi, block in _continued(reached.q[first], moves.q[first : last + 1], moves.kind[first + 1 : last + 1],
+                                        swept):
             rows = slice(first + lo, first + hi)
             if reached is moves and np.array_equal(block, moves.q[rows]):
                 continue
@@ -135,7 +139,7 @@ def _time_stops(timeline, batch, runs, moves, robot):
         timeline.add(kind, first, last, [run], [law], peaks)
 
 
-def _continued(start, declared, kinds):
+def _continued(start, declared, kinds, swept=None):
     """The joints a chain of motions reaches its waypoints with from ``start`` (6,), block by block.
 
     Yields ``(lo, hi, joints (hi - lo, 6))``: waypoints lo .. hi - 1 of the chain (1 <= lo).
@@ -145,8 +149,12 @@ def _continued(start, declared, kinds):
     joints. Along linear and circular motions the controller keeps turning
     each joint continuously: a waypoint's declared turn (KUKA T, ABB cf4 /
     cf6, joints a revolution off) does not apply there; each joint moves by
-    its declared change wrapped to less than half a turn per motion. Done
-    in blocks of `_BLOCK` waypoints (bounded memory on long runs).
+    its declared change wrapped to less than half a turn per motion, or,
+    where that turns a joint by more than `AMBIGUOUS_DEG`, by the change
+    ``swept(i (m,), change (m, 6))`` finds along the path of the motions
+    into waypoints i (near a wrist singularity a joint may turn by more
+    than half a turn). Done in blocks of `_BLOCK` waypoints (bounded memory
+    on long runs).
     """
     turn = 2.0 * np.pi
     gained = start - declared[0]  # whole turns gained since the last joint motion, (6,)
@@ -161,11 +169,20 @@ def _continued(start, declared, kinds):
             gained = gained * 0.0 if joint.any() else gained
             yield lo, hi, block
             continue
-        total = gained + np.cumsum((change + np.pi) % turn - np.pi - change, axis=0)
+        wrapped = (change + np.pi) % turn - np.pi
+        ambiguous = np.flatnonzero(~joint & np.any(np.abs(wrapped) > np.radians(AMBIGUOUS_DEG), axis=1))
+        if swept is not None and ambiguous.size:
+            wrapped[ambiguous] = swept(lo + ambiguous, wrapped[ambiguous])
+        total = gained + np.cumsum(wrapped - change, axis=0)
         last_joint = np.maximum.accumulate(np.where(joint, np.arange(hi - lo), -1))
         offset = np.where(last_joint[:, None] >= 0, total - total[last_joint], total)
         yield lo, hi, declared[lo:hi] + np.round(offset / turn) * turn
         gained = offset[-1]
+
+
+def _swept(moves, robot, first, waypoints, change):
+    """`trajcomp.timing.samples.swept_changes` of the motions into waypoints ``first + waypoints`` (m,)."""
+    return swept_changes(moves, robot, first + waypoints, change)
 
 
 def plan_segments(moves, method="auto"):

@@ -8,13 +8,18 @@ the nominal model (the written poses are nominal-model commands), every
 Where neighbouring samples differ by more than `JUMP_DEG` in a joint the
 interval is bisected (a fast wrist swing near a singularity is sampled
 finely); a jump that survives down to 1e-6 of a motion is a pass through
-a singularity and is refused.
+a singularity and is refused. A linear or circular motion keeps the
+arm's configuration (shoulder, elbow and wrist flags): one whose target
+is declared in another configuration than its start is refused as such.
 """
+
+import dataclasses
+import itertools
 
 import numpy as np
 
 from trajcomp.errors import TimingError
-from trajcomp.ik import branch_index, ik, ik_all, ik_family
+from trajcomp.ik import Configuration, branch_index, ik, ik_all, ik_family
 from trajcomp.kinematics import fk, fk_and_jacobian
 from trajcomp.program_items import CIRCULAR, JOINT
 from trajcomp.transforms import matrix_to_rotvec, rotvec_to_matrix
@@ -22,6 +27,7 @@ from trajcomp.transforms import matrix_to_rotvec, rotvec_to_matrix
 STEP_MM = 5.0  # mm, largest TCP step between path samples of a LIN / CIRC
 STEP_DEG = 2.0  # deg, largest orientation or joint step between path samples
 JUMP_DEG = 5.0  # deg, a larger joint step between neighbouring samples is bisected
+AMBIGUOUS_DEG = 120.0  # deg: a linear motion turning a joint by more is followed to learn which way it turns
 _SMALLEST_FRACTION = 1e-6  # of a motion: bisection stops here (singular)
 
 
@@ -85,7 +91,27 @@ class _Geometry:
             via = fk(robot.replace(T_flange_tool=moves.tool_of(self.k[i])), moves.via[self.k[i]])[:3, 3]
             self._set_circle(i, via)
         self.closed_form = ik_family(robot) is not None
-        self.arm_branch = np.full(len(self.k), -1)  # shoulder and elbow flags (branch index // 2), when known
+        self.branch = np.full(len(self.k), -1)  # configuration (branch index) of each linear / circular motion
+        if self.closed_form:
+            self._same_configuration(moves, first, last)
+
+    def _same_configuration(self, moves, first, last):
+        """Refuse a linear or circular motion whose target is declared in another configuration than its start."""
+        cartesian = np.flatnonzero(~self.joint)
+        if not cartesian.size:
+            return
+        branch = branch_index(self.robot, moves.q[first : last + 1])
+        self.branch[cartesian] = branch[cartesian]
+        changed = cartesian[branch[cartesian] != branch[cartesian + 1]]
+        if changed.size:
+            i = changed[0]
+            k = self.k[i]
+            raise TimingError(
+                f"{moves.kind[k]} motion to {moves.labels[k]}: its target is declared in configuration "
+                f"{Configuration.from_index(branch[i + 1])}, its start in {Configuration.from_index(branch[i])}; a "
+                "linear or circular motion keeps the arm's configuration, so the controller refuses it. Change "
+                "the configuration with a joint motion"
+            )
 
     def _set_circle(self, i, via):
         """Centre, radius, plane axes and sweep of circular motion i through ``via`` (3,)."""
@@ -146,12 +172,13 @@ class _Geometry:
         return q
 
     def _continuous(self, arm, T, seed, local, fraction):
-        """IK nearest ``seed`` (n, 6) in each motion's shoulder and elbow side, then checked against the limits.
+        """IK nearest ``seed`` (n, 6) in each motion's configuration, then checked against the limits.
 
         The controller follows the path continuously and stops at a joint
         limit, so the solution is chosen first (a Cartesian motion keeps
-        the arm's shoulder and elbow side; its wrist may turn over) and the
-        limits are checked after. Arms without a closed form are solved
+        the arm's configuration: shoulder, elbow and wrist flags; a pass
+        through the wrist singularity shows as a jump of the wrist joints)
+        and the limits are checked after. Arms without a closed form are solved
         numerically from the seed.
 
         Raises
@@ -166,7 +193,7 @@ class _Geometry:
             q, found = solved.q, solved.success
         else:
             q_all, valid = ik_all(free, T, seed=seed)
-            allowed = valid & (np.arange(8)[None, :] // 2 == self._arm_branch(local)[:, None])
+            allowed = valid & (np.arange(8)[None, :] == self.branch[local][:, None])
             distance = np.where(allowed, np.sum((q_all - seed[:, None]) ** 2, axis=2), np.inf)
             best = np.argmin(distance, axis=1)
             q, found = q_all[np.arange(len(T)), best], np.isfinite(distance[np.arange(len(T)), best])
@@ -179,18 +206,11 @@ class _Geometry:
                 f"at {100 * fraction[bad]:.0f} % of its way")
         if not found[bad]:
             raise TimingError(f"{what}: the path leaves the workspace, or would have to change the arm's "
-                              "shoulder or elbow side")
+                              "configuration")
         j = int(np.flatnonzero((q[bad] < arm.q_min) | (q[bad] > arm.q_max))[0])
         limit = arm.q_max[j] if q[bad, j] > arm.q_max[j] else arm.q_min[j]
         raise TimingError(f"{what}: J{j + 1} would reach {np.degrees(q[bad, j]):.1f} deg, beyond its limit "
                           f"{np.degrees(limit):.1f} deg; the controller cannot run it")
-
-    def _arm_branch(self, local):
-        """Shoulder and elbow flags (branch index // 2) of the start of motions ``local`` (n,)."""
-        unknown = np.unique(local[self.arm_branch[local] < 0])
-        if unknown.size:
-            self.arm_branch[unknown] = branch_index(self.robot, self.q_a[unknown]) // 2
-        return self.arm_branch[local]
 
     def bisect_jumps(self, local, fraction, q):
         """Samples with every interval whose joint step exceeds JUMP_DEG bisected; TimingError at a singular pass."""
@@ -221,6 +241,38 @@ class _Geometry:
             "one point; the controller cannot follow it. Move the path away from the singularity or use a "
             "joint motion"
         )
+
+
+def swept_changes(moves, robot, k, change):
+    """The joint change (n, 6) of linear / circular motions k (n,) along their path, from their declared start.
+
+    ``change`` (n, 6) is each motion's declared change wrapped to less than
+    half a turn, with a joint turning by more than `AMBIGUOUS_DEG`: near a
+    wrist singularity the path may turn a joint by more than half a turn,
+    the other way round. The path is followed (sampled, without joint
+    limits: whether it stays within them is checked when it is timed)
+    towards the wrapped end, then towards the ends with some of the joints
+    turning by more than `AMBIGUOUS_DEG` the other way (fewest first): the
+    first the path reaches without a jump is the change. A motion no way
+    reaches keeps ``change`` (its sampling reports why).
+    """
+    out = np.array(change, dtype=float)
+    free = robot.replace(q_min=np.full(6, -np.inf), q_max=np.full(6, np.inf))
+    for i, motion in enumerate(k):
+        swings = np.flatnonzero(np.abs(out[i]) > np.radians(AMBIGUOUS_DEG))
+        flips = np.array(sorted(itertools.product((0.0, 1.0), repeat=len(swings)), key=sum))  # fewest first
+        candidates = np.tile(out[i], (len(flips), 1))
+        candidates[:, swings] -= flips * np.sign(out[i, swings]) * 2.0 * np.pi
+        start = moves.q[motion - 1]
+        for candidate in candidates:
+            two = dataclasses.replace(moves.rows(motion - 1, motion + 1), q=np.array([start, start + candidate]))
+            try:
+                run_samples(two, free, 0, 1)
+            except TimingError:
+                continue
+            out[i] = candidate
+            break
+    return out
 
 
 def tool_groups(moves, k):
