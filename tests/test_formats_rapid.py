@@ -40,7 +40,7 @@ def test_moves(welding):
     assert (welding.targets[circ.via].name, welding.targets[circ.target].name) == ("pVia", "pEnd")
     assert (circ.speed, circ.zone, circ.tool, circ.frame) == (12.5, 1.0, "tGun", "wTable")
     assert (by_line[27].zone, by_line[27].tool, by_line[27].frame) == (7.5, "tool0", "wobj0")
-    assert by_line[28].frame == "wFixture" and by_line[28].speed is None  # custom speeddata
+    assert by_line[28].frame == "wFixture" and by_line[28].speed == 12.0  # CONST speeddata vWeld: its v_tcp
     assert welding.targets[by_line[29].target].name == "pApproach"  # \Conc
     assert welding.targets[by_line[30].target].is_joint
     assert {m.line for m in welding.runtime_motions()} == {25, 26, 31}  # Offs, RelTool, CRobT

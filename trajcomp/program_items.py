@@ -106,7 +106,8 @@ class Motion:
     via : int or None
         Via (auxiliary) point of a circular motion.
     speed : float or None
-        In ``speed_unit``; None when the language default applies.
+        In ``speed_unit``; None when the language default applies or the
+        speed is set at run time (``speed_why``).
     speed_unit : str
         ``"mm/s"`` (TCP speed), ``"%"`` (of joint maximum), ``"rad/s"``,
         ``"s"`` (motion time).
@@ -128,6 +129,11 @@ class Motion:
         Where the motion's speed and time fields stand in the source, by
         role as the format module names them (``speed``, ``t``, ``end``
         ...): re-timing writes there (`trajcomp.timing.writeback`).
+    speed_why : str
+        Why the speed is known only at run time (``"vWeld: PERS speeddata,
+        set at run time (line 4)"``), ``""`` when the program states it:
+        re-timing leaves such a motion's speed field as written and lists
+        it (`trajcomp.timing.writeback`).
     axis_position : bool
         The motion goes to an axis (joint) position stated outside the
         program (KUKA ``XHOME`` of $config.dat): joint space, kept as written
@@ -148,6 +154,7 @@ class Motion:
     refs: tuple = ()
     spans: Mapping = dataclasses.field(default_factory=dict)
     axis_position: bool = False
+    speed_why: str = ""
 
 
 @dataclasses.dataclass(frozen=True)

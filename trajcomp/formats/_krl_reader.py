@@ -44,9 +44,13 @@ _DECL_BARE = re.compile(r"^\s*(?:DECL\s+)?(?:GLOBAL\s+)?(?:" + POINT_TYPES + r")
 _DATA = re.compile(r"^\s*(TOOL_DATA|BASE_DATA)\s*\[\s*(\d+)\s*\]\s*=\s*(.*?)\s*$", re.I)
 _SYSVAR = re.compile(r"^\s*\$(TOOL|BASE)\s*=\s*(.*?)\s*$", re.I)
 _DATA_REF = re.compile(r"^(TOOL_DATA|BASE_DATA)\s*\[\s*(\d+)\s*\]$", re.I)
-_BAS = re.compile(r"^\s*BAS\s*\(\s*#(TOOL|BASE|VEL_PTP|VEL_CP)\s*,\s*(.*?)\s*\)\s*$", re.I)
+_BAS = re.compile(r"^\s*BAS\s*\(\s*#(TOOL|BASE|VEL_PTP|VEL_CP|PTP_PARAMS|CP_PARAMS)\s*,\s*(.*?)\s*\)\s*$", re.I)
 _ACT = re.compile(r"^\s*(FDAT|PDAT|LDAT)_ACT\s*=\s*(\w+)\s*$", re.I)
-_VEL_CP = re.compile(r"^\s*\$VEL\.CP\s*=\s*(" + NUMBER + r")\s*$", re.I)
+_VEL_CP = re.compile(r"^\s*\$VEL\.CP\s*=\s*(.*?)\s*$", re.I)
+_NUMBER_DECL = re.compile(r"^\s*(?:DECL\s+)?((?:(?:GLOBAL|CONST)\s+)*)(?:REAL|INT)\s+(\w+)\s*=\s*(" + NUMBER + r")\s*$", re.I)
+# a speed in a spline motion's WITH clause: $VEL = SVEL_CP(v, ..), $VEL.CP = v, $VEL_AXIS[n] = SVEL_JOINT(%)
+_WITH_SPEED = re.compile(r"\$VEL(?:\.CP|_AXIS\s*\[\s*\d+\s*\])?\s*=", re.I)
+_WITH_CALL = re.compile(r"\s*(SVEL_CP|SVEL_JOINT)\s*\(", re.I)
 _APO = re.compile(r"^\s*\$APO\.CDIS\s*=\s*(" + NUMBER + r")\s*$", re.I)
 _MOTION = re.compile(r"^\s*(PTP|LIN|CIRC|SPTP|SLIN|SCIRC)(_REL)?\b\s*(.*?)\s*$", re.I)
 _MEMBER = re.compile(r"\s*([A-Za-z_]\w*)\s+(" + NUMBER + r"|'B[01]+')\s*$")
@@ -161,7 +165,36 @@ class _Reader:
         self.params = set()
         self.speed_ptp = self.speed_cp = self.zone = None
         self.speed_spans = {JOINT: None, LINEAR: None}  # the number of the statement that set each speed
+        none_set = "no {} before it in this program: the speed in force is set at run time"
+        self.speed_why = {JOINT: none_set.format("BAS(#VEL_PTP)"), LINEAR: none_set.format("$VEL.CP")}
+        self.numbers = {}  # NAME -> (value, why it is only known at run time) of REAL / INT data declared with one
+        self.assigned = {}  # NAME -> first line of the .src that assigns it
 
+    def scan_assignments(self, masked, lines):
+        """Note the names the .src assigns (a declared speed is a constant only if nothing assigns it)."""
+        for line_no, start, end in lines:
+            text = masked[start:end]
+            if (m := _ASSIGN.match(text)) and not _NUMBER_DECL.match(text):
+                self.assigned.setdefault(m.group(1).upper(), line_no)
+
+    def number_value(self, text, index, line_no, original, field):
+        """``(value, why)`` of a speed's text: a literal or REAL / INT data provably constant in the program.
+
+        Constant: declared with a number in the .dat or .src (CONST, or not
+        GLOBAL) and never assigned by the .src; else its value is set at run
+        time (value None, and why).
+        """
+        name = self.sources[index].name
+        if re.fullmatch(NUMBER, text):
+            return finite(text, name, line_no, original, field), ""
+        key = text.upper()
+        if key in self.params:
+            return None, f"{text}: routine parameter, set at run time (line {line_no})"
+        if key in self.assigned:
+            return None, f"{text} is assigned at run time (line {self.assigned[key]})"
+        if key in self.numbers:
+            return self.numbers[key]
+        return None, f"{field} = {text}: set at run time (line {line_no})"
     def add_source(self, source):
         self.sources.append(source)
         index = len(self.sources) - 1
@@ -182,6 +215,14 @@ class _Reader:
                 members = _members(m.group(3), body_start, index, name, line_no, original)
                 self.points[point.upper()] = len(self.targets)
                 self.targets.append(_point(members, point, name, line_no, original, typ))
+            return True
+        if m := _NUMBER_DECL.match(text):
+            qualifiers = m.group(1).upper().split()
+            if "GLOBAL" in qualifiers and "CONST" not in qualifiers:
+                why = f"{m.group(2)}: GLOBAL data other programs may change, known at run time (line {line_no})"
+                self.numbers[m.group(2).upper()] = (None, why)
+            else:
+                self.numbers[m.group(2).upper()] = (finite(m.group(3), name, line_no, original, m.group(2)), "")
             return True
         if _DECL_START.match(text):
             fail(name, line_no, original, "malformed or cut point declaration")
@@ -248,26 +289,56 @@ class _Reader:
                 self.select(which, None, f"${which} = {value} set at run time (line {line_no})")
         elif m := _BAS.match(text):
             what, value = m.group(1).upper(), m.group(2)
-            if not re.fullmatch(NUMBER, value):
-                if what in ("TOOL", "BASE"):
-                    self.select(what, None, f"BAS(#{what}, {value}) set at run time (line {line_no})")
-                return
-            number = finite(value, name, line_no, original, what)
             if what in ("TOOL", "BASE"):
-                self.select(what, str(integer(value, name, line_no, original, what)))
-            elif what == "VEL_PTP":
-                self.speed_ptp = number
-                self.speed_spans[JOINT] = Span(index, start + m.start(2), start + m.end(2), value)
-            else:
-                self.speed_cp = number * 1000.0
-                self.speed_spans[LINEAR] = Span(index, start + m.start(2), start + m.end(2), value)
+                if not re.fullmatch(NUMBER, value):
+                    self.select(what, None, f"BAS(#{what}, {value}) set at run time (line {line_no})")
+                else:
+                    self.select(what, str(integer(value, name, line_no, original, what)))
+                return
+            self.set_speed(JOINT if what in ("VEL_PTP", "PTP_PARAMS") else LINEAR, m, 2, index, start, line_no,
+                           original, f"BAS(#{what})")
         elif m := _ACT.match(text):
             self.activate(m.group(1).upper(), m.group(2).upper(), name, line_no, original)
         elif m := _VEL_CP.match(text):
-            self.speed_cp = finite(m.group(1), name, line_no, original, "$VEL.CP") * 1000.0
-            self.speed_spans[LINEAR] = Span(index, start + m.start(1), start + m.end(1), m.group(1))
+            self.set_speed(LINEAR, m, 1, index, start, line_no, original, "$VEL.CP")
         elif m := _APO.match(text):
             self.zone = finite(m.group(1), name, line_no, original, "$APO.CDIS")
+
+    def set_speed(self, group, m, at, index, start, line_no, original, field):
+        """A statement sets the speed of the motions of ``group`` (JOINT: %, LINEAR: m/s) to match ``m``'s group ``at``."""
+        value, why = self.number_value(m.group(at), index, line_no, original, field)
+        if group == JOINT:
+            self.speed_ptp = value
+        else:
+            self.speed_cp = None if value is None else value * 1000.0
+        self.speed_spans[group] = Span(index, start + m.start(at), start + m.end(at), m.group(at))
+        self.speed_why[group] = why
+
+    def with_speed(self, clause, at, index, line_no, original, kind):
+        """``(speed, why, span)`` a spline motion's WITH clause sets for it alone; None if it sets none.
+
+        ``$VEL = SVEL_CP(v, ..)`` and ``$VEL.CP = v`` (m/s, returned in
+        mm/s), ``$VEL_AXIS[n] = SVEL_JOINT(p)`` (%); any other ``$VEL``
+        value is set at run time.
+        """
+        for piece, position in split_top(clause, at):
+            m = _WITH_SPEED.search(piece)
+            if m is None or m.start() != len(piece) - len(piece.lstrip()):
+                continue
+            rhs, rhs_at = piece[m.end():], position + m.end()
+            call = _WITH_CALL.match(rhs)
+            if call:
+                args = split_top(rhs[call.end():rhs.rindex(")")], rhs_at + call.end())
+                rhs, rhs_at = args[0]
+            text = rhs.strip()
+            span = Span(index, rhs_at + len(rhs) - len(rhs.lstrip()), rhs_at + len(rhs.rstrip()), text)
+            field = m.group().rstrip("= \t")
+            if not text or (not call and "[" not in m.group() and ".CP" not in m.group().upper()):
+                return None, f"{field}: set at run time (line {line_no})", span
+            value, why = self.number_value(text, index, line_no, original, field)
+            scale = 1000.0 if kind != JOINT else 1.0
+            return (None if value is None else value * scale), why, span
+        return None
 
     def activate(self, kind, data_name, name, line_no, original):
         """FDAT_ACT / PDAT_ACT / LDAT_ACT: tool, base, speed and zone of the next motion."""
@@ -289,6 +360,7 @@ class _Reader:
                 else:
                     self.speed_cp = vel * 1000.0
                 self.speed_spans[JOINT if kind == "PDAT" else LINEAR] = None
+                self.speed_why[JOINT if kind == "PDAT" else LINEAR] = ""
             if "apo_dist" in data:
                 self.zone = finite(data["apo_dist"].text, name, line_no, original, "APO_DIST")
 
@@ -297,8 +369,11 @@ class _Reader:
         name = self.sources[index].name
         kind = KINDS[m.group(1).upper()]
         args, *with_clause = re.split(r"\bWITH\b", m.group(3), maxsplit=1, flags=re.I)
+        own_speed = None
         if with_clause:
             self.spline_frames(with_clause[0], name, line_no, original)
+            clause_at = start + m.start(3) + len(m.group(3)) - len(with_clause[0])
+            own_speed = self.with_speed(with_clause[0], clause_at, index, line_no, original, kind)
         offset = start + m.start(3)
         approx = _APPROX.search(args)
         zone = self.zone if approx else None
@@ -319,10 +394,14 @@ class _Reader:
             if None in found:
                 reason = "position computed at run time: " + " ".join(parts[found.index(None)][0].split())
         reason = reason or self.tool_why or self.base_why
+        group = JOINT if kind == JOINT else LINEAR
         speed, unit = (self.speed_ptp, "%") if kind == JOINT else (self.speed_cp, "mm/s")
+        speed_why = self.speed_why[group]
         spans = {"motion": Span(index, start + m.start(1), start + m.end(1), m.group(1))}
-        if self.speed_spans[JOINT if kind == JOINT else LINEAR] is not None:  # where re-timing writes
-            spans["speed"] = self.speed_spans[JOINT if kind == JOINT else LINEAR]
+        if own_speed is not None:  # this motion's own, in its WITH clause: re-timing writes there
+            speed, speed_why, spans["speed_with"] = own_speed
+        elif self.speed_spans[group] is not None:  # the statement that set it: re-timing writes there
+            spans["speed"] = self.speed_spans[group]
         return Motion(
             kind=kind,
             target=found[-1],
@@ -336,6 +415,7 @@ class _Reader:
             text=original.strip(),
             reason=reason,
             spans=spans,
+            speed_why=speed_why,
         )
 
     def spline_frames(self, clause, name, line_no, original):
@@ -381,6 +461,7 @@ def read(path):
         raise ReadError(f"{path}: not a KRL program: no DEF line")
     src_index, src_lines, src_masked = reader.add_source(src)
     check_closed(src, src_masked, _BLOCK_OPENS, _BLOCK_CLOSES, {"DEF": "END", "DEFFCT": "ENDFCT"})
+    reader.scan_assignments(src_masked, src_lines)
     dat_path = _sibling_dat(path)
     if dat_path is not None:
         dat_index, dat_lines, dat_masked = reader.add_source(read_source(dat_path))

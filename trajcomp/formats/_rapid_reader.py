@@ -77,6 +77,10 @@ _NAME = re.compile(r"^[A-Za-z]\w*$")
 _WORD = re.compile(r"[A-Za-z]\w*")
 _OPTION = re.compile(r"\\(\w+)(?:\s*:=\s*([^\\]+))?")
 _SPEED = re.compile(r"^v(\d+(?:\.\d*)?)$", re.I)
+_DATA_DECL = re.compile(r"^[ \t]*(?:(?:LOCAL|TASK)\s+)*(CONST|PERS|VAR)\s+(speeddata|num)\s+(\w+)\s*(?::=\s*([^;]*?))?\s*;",
+                        re.I | re.M)
+_SPEEDDATA = re.compile(r"^\[\s*(" + NUMBER + r")\s*,[^\]]*\]$")
+VMAX = 5000.0  # mm/s, v_tcp of the predefined speeddata vmax
 _ZONE = re.compile(r"^(fine|z(\d+(?:\.\d*)?))$", re.I)
 
 
@@ -134,6 +138,47 @@ class _Reader:
         self.wobj_parts = {}  # lower name -> (uframe, oframe)
         self.unset = {}  # lower point name -> why its value is known only at run time
         self.params = set()
+        self.data = {}  # lower name of a speeddata or num -> (storage, type, value text, line); None if declared twice
+
+    def scan_data(self, masked):
+        """Note the module's speeddata and num declarations (a motion may use one declared further down)."""
+        lines = Lines(masked)
+        for m in _DATA_DECL.finditer(masked):
+            key = m.group(3).lower()
+            entry = (m.group(1).upper(), m.group(2).lower(), (m.group(4) or "").strip(), lines.number(m.start(1)))
+            self.data[key] = entry if key not in self.data else None
+
+    def constant(self, name, typ, line, original, field, depth=0):
+        """``(value, why)`` of a speeddata (its v_tcp, mm/s) or num named ``name``: stated, or why it is not.
+
+        Stated: a literal, ``vN``, ``vmax``, or a CONST of this module whose
+        value is one of these. PERS and VAR data, routine parameters and
+        data declared elsewhere are set at run time: value None.
+        """
+        if re.fullmatch(NUMBER, name) and typ == "num":
+            return self.number(name, line, original, field), ""
+        if typ == "speeddata" and (m := _SPEED.match(name)):
+            return self.number(m.group(1), line, original, field), ""
+        if typ == "speeddata" and (m := _SPEEDDATA.match(name)):
+            return self.number(m.group(1), line, original, field), ""
+        if typ == "speeddata" and name.lower() == "vmax":
+            return VMAX, ""
+        key = name.lower()
+        if key in self.params:
+            return None, f"{name}: routine parameter, set at run time"
+        if not _NAME.match(name):
+            return None, f"{field} {name}: computed at run time"
+        if key not in self.data:
+            return None, f"{name}: {typ} not declared in this module, set at run time"
+        entry = self.data[key]
+        if entry is None:
+            return None, f"{name}: declared more than once in this module, which one applies is known at run time"
+        storage, declared, value, at = entry
+        if storage != "CONST":
+            return None, f"{name}: {storage} {declared}, set at run time (line {at})"
+        if declared != typ or depth > 8 or not value:
+            return None, f"{name}: {declared} {value}, known at run time (line {at})"
+        return self.constant(value, typ, at, original, field, depth + 1)
 
     def number(self, text, line, original, field, limit=LENGTH_LIMIT):
         return finite(text, self.source.name, line, original, field, limit)
@@ -271,9 +316,12 @@ class _Reader:
         frame, frame_why = self.frame_name("wobj", options.get("wobj", "wobj0"), line)
         reason = "" if None not in found else (
             "position computed at run time: " + " ".join(positional[found.index(None)][0].split()))
-        speed, speed_unit = self.speed(options.get("v"), speed_text, line, original), "mm/s"
-        if options.get("t") and re.fullmatch(NUMBER, options["t"]):  # \T:= the motion's time
-            speed, speed_unit = self.number(options["t"], line, original, "\\T"), "s"
+        speed, speed_why = self.constant(speed_text, "speeddata", line, original, "speed")
+        speed_unit = "mm/s"
+        if options.get("v"):  # \V:= the TCP speed, in place of the speeddata's
+            speed, speed_why = self.constant(options["v"], "num", line, original, "\\V")
+        if options.get("t"):  # \T:= the motion's time: the speeds are not used
+            (speed, speed_why), speed_unit = self.constant(options["t"], "num", line, original, "\\T"), "s"
         return Motion(
             kind=kind,
             target=found[-1],
@@ -287,14 +335,8 @@ class _Reader:
             text=text,
             reason=reason or tool_why or frame_why,
             spans={"speed": _stripped_span(*positional[count])},  # where re-timing writes
+            speed_why=speed_why,
         )
-
-    def speed(self, option, text, line, original):
-        """mm/s of ``\\V:=`` or ``vN``; None for speeddata the module names (vmax, v_weld ...)."""
-        if option and re.fullmatch(NUMBER, option):
-            return self.number(option, line, original, "\\V")
-        m = _SPEED.match(text)
-        return self.number(m.group(1), line, original, "speed") if m else None
 
     def zone(self, option, zones, line, original):
         """mm of ``\\Z:=`` or ``zN``; None for fine or zonedata the module names."""
@@ -329,6 +371,7 @@ def read(path):
     check_closed(source, masked, _BLOCK_OPENS, _BLOCK_CLOSES,
                  {"MODULE": "ENDMODULE", "PROC": "ENDPROC", "FUNC": "ENDFUNC", "TRAP": "ENDTRAP"})
     reader = _Reader(source)
+    reader.scan_data(masked)
     for line, start, end in _statements(source, masked):
         text, original = masked[start:end], source.text[start:end]
         if m := _ROUTINE.match(text):

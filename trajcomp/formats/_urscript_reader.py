@@ -30,6 +30,7 @@ JOINTS = ("j1", "j2", "j3", "j4", "j5", "j6")
 NEAR = ("near1", "near2", "near3", "near4", "near5", "near6")
 KINDS = {"movej": JOINT, "movel": LINEAR, "movep": LINEAR, "movec": CIRCULAR}
 NOT_READ = ("servoj", "servoc")  # motions with a target trajcomp does not compensate (streamed set points)
+DEFAULT_SPEED = {"movej": "1.05", "movel": "0.25", "movep": "0.25", "movec": "0.25"}  # v when not given: rad/s, m/s
 POSITIONAL = {"movej": ("a", "v", "t", "r"), "movel": ("a", "v", "t", "r"), "movep": ("a", "v", "r"),
               "movec": ("a", "v", "r", "mode")}
 
@@ -96,10 +97,10 @@ class _Reader:
         self.direct = set()  # joint-list variables used as motion targets
         self.params = {p.strip().split("=")[0].strip() for m in _DEF.finditer(masked)
                        for p in m.group(1).split(",") if p.strip()}
-        self.set_at_run_time, self.assigned = {}, set()  # name -> line of a non-literal assignment
+        self.set_at_run_time, self.assigned = {}, {}  # name -> line of a non-literal assignment; of every one
         for line, start, end in Lines(masked):
             if m := _ASSIGN.match(masked[start:end]):
-                self.assigned.add(m.group(1))
+                self.assigned.setdefault(m.group(1), []).append(line)
                 if not (_POSE.match(m.group(2)) or _LIST.match(m.group(2)) or re.fullmatch(NUMBER, m.group(2))):
                     self.set_at_run_time.setdefault(m.group(1), line)
 
@@ -249,11 +250,14 @@ class _Reader:
         found = [self.position(a, s, line, original) for a, s in args[:count]]
         options = dict(zip(POSITIONAL[function], (a.strip() for a, _ in args[count:] if "=" not in a)))
         options |= {k.strip(): v.strip() for k, v in (a.split("=", 1) for a, _ in args[count:] if "=" in a)}
-        speed, blend = self.option(options.get("v"), line, original), self.option(options.get("r"), line, original)
+        blend = self.option(options.get("r"), line, original)
+        speed, speed_why = self.speed(options.get("v", DEFAULT_SPEED[function]), line, original, "v")
         speed = None if speed is None else speed * (1.0 if function == "movej" else 1000.0)
         unit = "rad/s" if function == "movej" else "mm/s"
-        if self.option(options.get("t"), line, original):  # t= the motion's time: v and a are ignored
-            speed, unit = self.option(options.get("t"), line, original), "s"
+        if "t" in options:  # t= the motion's time: v and a are ignored (t=0: no time)
+            time, time_why = self.speed(options["t"], line, original, "t")
+            if time != 0.0:
+                speed, unit, speed_why = time, "s", time_why
         frames = {frame for _, frame, _ in found}
         why = next((w for _, _, w in found if w), "") or self.tool_why
         if not why and len(frames) > 1:
@@ -273,7 +277,28 @@ class _Reader:
             refs=tuple(dict.fromkeys([*(i for i, _, _ in found if isinstance(i, int)),
                                       *self.references(" ".join(a for a, _ in args[:count]))])) if why else (),
             spans=_timing_spans(function, args, count),
+            speed_why=speed_why,
         )
+
+    def speed(self, text, line, original, field):
+        """``(value, why)`` of a ``v=`` or ``t=`` argument: a literal or a variable the script assigns once, a literal.
+
+        Any other value (a register read, a variable assigned twice or by
+        an expression, a function parameter) is set at run time: None, and why.
+        """
+        if re.fullmatch(NUMBER, text):
+            return finite(text, self.source.name, line, original, field), ""
+        if not (m := _NAME.match(text)):
+            return None, f"{field}={text}: computed at run time"
+        name = m.group(1)
+        if why := self.runtime(name):
+            return None, why
+        if name in self.numbers and len(self.assigned[name]) == 1:
+            return self.numbers[name], ""
+        if name in self.assigned:
+            lines = ", ".join(map(str, self.assigned[name][:3]))
+            return None, f"{name} is assigned more than once (lines {lines}): its value is known at run time"
+        return None, f"{name} is not assigned in the script: its value is set at run time"
 
     def option(self, text, line, original):
         """A number given as a literal or a variable holding one; None otherwise."""

@@ -6,8 +6,9 @@ Read:
   ``UFRAME_NUM`` / ``BENUTZER_NUM``, ``sec`` / ``sek``);
 - /MN motion lines ``J|L|C P[n] speed FINE|CNTn|CRn`` (a C line continues
   with ``: P[m] speed ...``; FINE, CNTn, CRn or CDn), speeds in ``%``, ``mm/sec``, ``cm/min``,
-  ``deg/sec``, ``sec``, ``msec`` (a speed register ``R[n:comment]mm/sec``,
-  ``AR[n]`` or ``max_speed``: no number); ``UFRAME_NUM=n`` / ``UTOOL_NUM=n``. CNTn is read as an n mm blend
+  ``deg/sec``, ``sec``, ``msec`` (``max_speed``: the arm's limits; a speed
+  register ``R[n:comment]mm/sec`` or ``AR[n]``: set at run time,
+  `Motion.speed_why`); ``UFRAME_NUM=n`` / ``UTOOL_NUM=n``. CNTn is read as an n mm blend
   (FANUC's CNT is a rounding percentage);
 - /POS entries ``P[n:"comment"]{ GP1: UF : u, UT : t, CONFIG : 'N U T, 0,
   0, 0', X = .. mm, Y, Z, W = .. deg, P, R (, E1 ..) }`` or with J1..J6
@@ -221,10 +222,12 @@ def _motion(m, points, unread, name, number, original):
     spec = _SPEED_TERM.match(rest)
     if not spec:
         fail(name, number, original, "motion needs a speed and FINE, CNT or CR")
-    speed, unit = None, "%"
+    speed, unit, speed_why = None, "%", ""
     if spec.group(1) is not None:
         scale, unit = SPEED_UNITS[re.sub("sek$", "sec", spec.group(2).lower())]
         speed = finite(spec.group(1), name, number, original, "speed") * scale
+    elif (term := rest.split()[0]).lower() != "max_speed":  # max_speed: the arm's own limits
+        speed_why = f"speed {term}: a register, set at run time"
     blend = spec.group(4) or spec.group(5)
     zone = finite(blend, name, number, original, "CNT") if blend is not None else None
     runtime = _RUNTIME.search(rest)
@@ -254,6 +257,7 @@ def _motion(m, points, unread, name, number, original):
         text=" ".join(original.split()),
         reason=reason,
         refs=named if reason else (),
+        speed_why=speed_why,
     )
     if reason:
         return dataclasses.replace(motion, target=None, via=None)

@@ -15,7 +15,13 @@ Read:
   ``BAS(#TOOL, n)``, ``BAS(#BASE, n)``, FDAT TOOL_NO / BASE_NO, inline
   ``$TOOL = {X ..}`` and ``TOOL_DATA[n] = {X ..}`` definitions (tool and
   base 0 are the flange and the world); speeds ``$VEL.CP`` (m/s),
-  ``BAS(#VEL_PTP, %)``, ``BAS(#VEL_CP, m/s)``, PDAT / LDAT VEL; zone
+  ``BAS(#VEL_PTP, %)``, ``BAS(#VEL_CP, m/s)``, the inline forms'
+  ``BAS(#PTP_PARAMS, %)`` and ``BAS(#CP_PARAMS, m/s)`` (after their PDAT /
+  LDAT, whose VEL they replace), a spline motion's own ``WITH $VEL =
+  SVEL_CP(m/s, ..)``, ``$VEL.CP = m/s`` or ``$VEL_AXIS[n] =
+  SVEL_JOINT(%)``: a number, or REAL / INT data declared with one (CONST or
+  not GLOBAL) that the .src never assigns; any other value, or no speed set
+  before the motion, is set at run time (`Motion.speed_why`); zone
   ``$APO.CDIS`` or the PDAT / LDAT APO_DIST.
 Not compensated, with the reason (`Motion.reason`): relative motions
 (PTP_REL ...), expressions (geometric operator ``XP1:{X 10}``, function
@@ -152,12 +158,15 @@ def _emit(program, name):
         if motion.frame != base:
             base = motion.frame
             src.append(f"  $BASE={_selected(base, program.frames, bases, 'BASE_DATA')}")
-        if motion.speed is not None and (motion.speed, motion.speed_unit) != speed:
-            speed = (motion.speed, motion.speed_unit)
-            if motion.speed_unit == "mm/s":
-                src.append(f"  $VEL.CP={format_number(motion.speed / 1000.0, 6)}")
-            elif motion.speed_unit == "%":
-                src.append(f"  BAS(#VEL_PTP,{format_number(motion.speed, 3)})")
+        stated = (motion.speed, motion.speed_unit)
+        if motion.speed is None and motion.kind == JOINT and not motion.speed_why:  # the arm's own limits
+            stated = (100.0, "%")
+        if stated[0] is not None and stated != speed:
+            speed = stated
+            if stated[1] == "mm/s":
+                src.append(f"  $VEL.CP={format_number(stated[0] / 1000.0, 6)}")
+            elif stated[1] == "%":
+                src.append(f"  BAS(#VEL_PTP,{format_number(stated[0], 3)})")
         if motion.zone is not None and motion.zone != zone:
             zone = motion.zone
             src.append(f"  $APO.CDIS={format_number(zone, 3)}")

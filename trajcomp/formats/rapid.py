@@ -11,8 +11,12 @@ Read:
   value from that line on;
 - MoveJ / MoveL / MoveC / MoveAbsJ (and their DO / AO / GO / Sync variants,
   TriggL/J/C, ArcL/C, CladL/C) to a declared name or an inline literal, with
-  speeddata ``vN`` / ``\\V:=``, zonedata ``fine`` / ``zN`` / ``\\Z:=``, the
-  tool and ``\\WObj:=``, also after a comma (``tool0,\\WObj:=wobj1``).
+  speeddata ``vN`` / ``vmax`` / ``\\V:=`` / ``\\T:=``, zonedata ``fine`` /
+  ``zN`` / ``\\Z:=``, the tool and ``\\WObj:=``, also after a comma
+  (``tool0,\\WObj:=wobj1``). A named speeddata or num is read where the
+  module proves it constant (a CONST with a literal or another such CONST,
+  its v_tcp); PERS and VAR data, routine parameters and data declared
+  elsewhere are set at run time (`Motion.speed_why`).
   Identifiers are case-insensitive; tool0 (the flange) and wobj0 (the
   world frame) need no declaration.
 Not compensated, with the reason (`Motion.reason`): expressions (Offs,

@@ -5,7 +5,10 @@ Read:
   rx, ry, rz]`` (metres, rotation vector in rad), a joint list ``[q1, ...,
   q6]`` (rad), a variable holding one, ``get_inverse_kin(pose,
   qnear=joints)`` or ``pose_trans(frame, pose)``; speeds ``v=`` (m/s, rad/s
-  for movej) and blends ``r=`` (m), literal or held by a variable;
+  for movej; UR's defaults 0.25 m/s and 1.05 rad/s when not given) and
+  times ``t=``, literal or held by a variable the script assigns once, a
+  literal (any other is set at run time: `Motion.speed_why`), and blends
+  ``r=`` (m);
 - variables ``[global|local] name = p[...]`` / ``= [...]``: a variable is a
   target where a motion uses it (a six-number list only then: gains and
   selection vectors are not points), with PolyScope's pairs ``Waypoint_n_p``

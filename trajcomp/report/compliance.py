@@ -18,7 +18,7 @@ from trajcomp.report.document import Figure, Report
 from trajcomp.report.provenance import grid_box, header
 from trajcomp.report.targets import ARRAYS, ROWS, TIMES, flag_bits, full_data, statistics, table_rows, target_json, \
     target_measures
-from trajcomp.report.verdict import FAIL, PASS, Check, Criteria, accuracy_check, check, not_evaluated, verdict
+from trajcomp.report.verdict import FAIL, LISTED, PASS, Check, Criteria, accuracy_check, check, not_evaluated, verdict
 
 TIMING_SLACK = 0.01  # relative: a peak up to 1 % over its limit passes (the timing's own dense check)
 
@@ -107,6 +107,7 @@ def timing_section(timing, before=None, times=True):
     segments = [{"kind": s.kind, "first": int(s.first), "last": int(s.last), "duration_s": float(s.duration),
                  "speed": getattr(s, "speed", None), "jerk_limited": bool(s.jerk_limited)}
                 for s in timing.segments[:ROWS]]
+    as_written, lowered = getattr(timing, "as_written", ()), getattr(timing, "lowered", ())
     section = {
         "cycle_time_s": float(timing.cycle_time),
         "cycle_time_before_s": None if before is None else float(before),
@@ -117,6 +118,10 @@ def timing_section(timing, before=None, times=True):
         "segment_count": len(timing.segments),
         "segments_by_kind": by_kind,
         "segments": segments,
+        "not_retimed": {"count": len(as_written), "reason": "speed set at run time: the field is left as written",
+                        "motions": [{"waypoint": str(timing.labels[k]), "why": why} for k, why in as_written[:ROWS]]},
+        "lowered": {"count": len(lowered),
+                    "motions": [{"waypoint": str(timing.labels[k]), "detail": text} for k, text in lowered[:ROWS]]},
     }
     if times:
         section["t_s"] = np.round(np.asarray(timing.t, dtype=float), 4).tolist()
@@ -148,6 +153,20 @@ def timing_check(section):
     detail = "; ".join(over) or ("the dense check of the timed path exceeds a limit" if failed else
                                  f"cycle time {section['cycle_time_s']:.3f} s")
     return Check("timing", statement, FAIL if failed else PASS, detail)
+
+
+def speeds_check(section):
+    """The criterion that every timed motion's speed is known (none left as written because it is set at run time)."""
+    statement = "every timed motion's speed known to the re-timing (none set at run time)"
+    if section is None:
+        return not_evaluated("speeds", statement, "the program was not re-timed")
+    kept = section["not_retimed"]
+    if not kept["count"]:
+        return Check("speeds", statement, PASS, "every speed stated or provably constant")
+    return Check("speeds", statement, FAIL,
+                 f"{kept['count']} motion(s) not re-timed, speed set at run time (left as written): "
+                 f"{kept['motions'][0]['why']}", targets=tuple(m["waypoint"] for m in kept["motions"][:LISTED]),
+                 failing=kept["count"])
 
 
 def compliance_report(report, robot, *, criteria=None, model=None, model_info=None, mode=None, files=(),
@@ -216,6 +235,7 @@ def compliance_report(report, robot, *, criteria=None, model=None, model_info=No
                             f"{len(lines)} motion(s) left as written" if lines else "no motion left as written",
                             lines=lines[:ROWS], failing=len(lines)))
     checks.append(timing_check(section))
+    checks.append(speeds_check(section))
     data = None
     if not table["complete"] or long_times:
         data = full_data(report, measures, flags, None if timing is None else timing.t)

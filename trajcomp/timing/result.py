@@ -154,6 +154,13 @@ class TimingResult:
     warnings : tuple of str
         What the timing assumed that differs from the program's declaration
         (a joint turn a linear motion cannot honour).
+    as_written : tuple of (int, str)
+        Waypoints whose motion's speed the program sets at run time (a
+        variable, a register), and why: timed at the arm's limits, but their
+        fields are left as written (set by `trajcomp.timing.apply_timing`).
+    lowered : tuple of (int, str)
+        Waypoints whose stated speed a joint limit forced lower (or whose
+        time it forced longer), with what was written and why.
     """
 
     t: np.ndarray
@@ -175,6 +182,8 @@ class TimingResult:
     deviation: float
     warnings: tuple = ()
     pieces: tuple = dataclasses.field(default=(), repr=False)
+    as_written: tuple = ()
+    lowered: tuple = ()
 
     @property
     def jerk_measured(self):
@@ -237,7 +246,7 @@ class TimingResult:
                      "acceleration at its grid points; without a jerk limit ruckig steps the acceleration)")
         return f"jerk: {unbounded}" if not limited else f"jerk: within the limits in {limited} segments, {unbounded}"
 
-    def with_settings(self, settings):
+    def with_settings(self, settings, as_written=(), lowered=()):
         """A copy whose segments carry the written settings.
 
         Parameters
@@ -247,6 +256,8 @@ class TimingResult:
             text for every waypoint (M,) (a long CSV program: its segments
             share the texts instead of a dict of them); `Texts` of every
             waypoint are sliced, their texts still made on demand.
+        as_written, lowered : tuple of (int, str)
+            The motions left as written and those lowered (the attributes).
         """
         if isinstance(settings, Mapping):
             def texts(s):
@@ -258,7 +269,8 @@ class TimingResult:
             def texts(s):
                 return tuple(settings[s.first + 1 : s.last + 1])
         return dataclasses.replace(self, segments=tuple(dataclasses.replace(s, settings=texts(s))
-                                                        for s in self.segments))
+                                                        for s in self.segments),
+                                   as_written=tuple(as_written), lowered=tuple(lowered))
 
     def lines_of_text(self, before=None):
         """Summary lines: per joint peaks against limits, cycle time (and before, s)."""
@@ -286,5 +298,13 @@ class TimingResult:
             names = ", ".join(self.labels[k] for k in self.untimed[:5])
             more = f" and {len(self.untimed) - 5} more" if len(self.untimed) > 5 else ""
             out.append(f"not timed (the arm's position before the motion is unknown): motions to {names}{more}")
+        if self.as_written:
+            names = ", ".join(self.labels[k] for k, _ in self.as_written[:5])
+            more = f" and {len(self.as_written) - 5} more" if len(self.as_written) > 5 else ""
+            out.append(f"not re-timed, speed set at run time (left as written): {len(self.as_written)} motion(s): "
+                       f"{names}{more}; first: {self.as_written[0][1]}")
+        out += [f"speed lowered by a joint limit: {text}" for _, text in self.lowered[:5]]
+        if len(self.lowered) > 5:
+            out.append(f"speed lowered by a joint limit: {len(self.lowered) - 5} more motion(s) (see the report)")
         out += [f"warning: {w}" for w in self.warnings]
         return out
