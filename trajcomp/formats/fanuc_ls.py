@@ -226,7 +226,7 @@ def _motion(m, points, unread, name, number, original):
     if spec.group(1) is not None:
         scale, unit = SPEED_UNITS[re.sub("sek$", "sec", spec.group(2).lower())]
         speed = finite(spec.group(1), name, number, original, "speed") * scale
-    elif (term := rest.split()[0]).lower() != "max_speed":  # max_speed: the arm's own limits
+    elif (term := " ".join(rest[: spec.start(3)].split())).lower() != "max_speed":  # max_speed: the arm's limits
         speed_why = f"speed {term}: a register, set at run time"
     blend = spec.group(4) or spec.group(5)
     zone = finite(blend, name, number, original, "CNT") if blend is not None else None
