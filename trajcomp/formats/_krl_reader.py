@@ -130,9 +130,17 @@ def _point(members, name, source_name, line, text, typ):
 
 
 def _status_turn(members, source_name, line, text):
+    """``(S, T)`` of a point, each within the bits KUKA defines (S: a status byte, T: one bit per axis A1-A6)."""
     if "s" not in members or "t" not in members:
         return ()
-    return _int(members["s"].text, source_name, line, text, "S"), _int(members["t"].text, source_name, line, text, "T")
+    words = []
+    for field, largest in (("S", 0xFF), ("T", 0x3F)):
+        value = _int(members[field.lower()].text, source_name, line, text, field)
+        if not 0 <= value <= largest:
+            fail(source_name, line, text, f"{field} {members[field.lower()].text[:40]}: outside 0..{largest} "
+                 f"({'the status byte' if field == 'S' else 'one sign bit per axis A1-A6'})")
+        words.append(value)
+    return tuple(words)
 
 
 def _frame(members, source_name, line, text):

@@ -16,11 +16,13 @@ import dataclasses
 
 import numpy as np
 
+from trajcomp.errors import TimingError
 from trajcomp.program_items import JOINT
 from trajcomp.timing.path import tcp_jacobians
 
 RATE = 1000.0  # Hz
 LIMIT_TOLERANCE = 0.01  # a sampled value may exceed its limit by this share
+MAX_SAMPLES = 1_000_000  # per run between two stops (1,000 s at 1 kHz): the check's memory grows with them
 
 
 @dataclasses.dataclass(frozen=True)
@@ -123,6 +125,11 @@ def dense_checks(runs, laws, moves, robot, *, jerk, rate=RATE):
     """
     parts = []
     for run, law in zip(runs, laws):
+        if not law.duration * rate <= MAX_SAMPLES:
+            first, last = run.motion_at(np.array([0.0, run.length]), side="right")
+            raise TimingError(f"the motions from {moves.labels[first]} to {moves.labels[last]} last {law.duration:.4g} s "
+                              f"between two stops at their programmed speeds, beyond the {MAX_SAMPLES / rate:g} s the "
+                              "dense check covers: a speed no process uses (a unit or a typo?)")
         t = sample_times(law.duration, rate)
         q, qd, qdd, s, _ = evaluate(run, law, t)
         parts.append((t, q, qd, qdd, s, run.motion_at(s)))

@@ -296,7 +296,7 @@ def _urscript(program, result, robot, plan):
     edits, settings = [], {}
     for k in sorted({**plan.times, **plan.cruise}):
         motion = program.motions[result.motion[k]]
-        function = re.match(r"\s*(\w+)", motion.text).group(1)
+        function = re.search(r"(\w+)\s*\(", motion.text).group(1)  # also after a sign (``+movel(...)``)
         if k in plan.cruise:
             key, value = "v", format_number(_floor(plan.cruise[k] / 1000.0, 6), 6)
         elif function in ("movej", "movel"):
