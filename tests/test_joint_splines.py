@@ -8,13 +8,15 @@ import pytest
 from trajcomp import joint_errors
 from trajcomp.calibrate import calibrate
 from trajcomp.compensate import compensate
-from trajcomp.identify import identify
+from trajcomp.identify import identify, region_folds
 from trajcomp.joint_errors import JointResidual, SplineBasis
 from trajcomp.kinematics import fk
 from trajcomp.measurements import Measurements
 from trajcomp.model_file import load_model, save_model
 from trajcomp.parameters import scales
 from trajcomp.plan import default_orientation, plan_grid
+from trajcomp.report.calibration import calibration_report
+from trajcomp.report.html import render
 from trajcomp.robot import load_robot
 from trajcomp.simulate import ErrorProfile, VirtualRobot
 from trajcomp.transforms import abc_to_matrix, rotvec_to_matrix
@@ -80,12 +82,12 @@ def test_spline_residual_round_trips_through_the_model_file(tmp_path):
     meas = Measurements(joints=q, position=plan.position[plan.reachable],
                         measured=VirtualRobot.create(robot, "paper", 1).measure(q, np.random.default_rng(0)),
                         lines=np.arange(len(q)) + 2)
-    model = calibrate(robot, meas, interpolation="joint", folds=0)
+    model = calibrate(robot, meas, method="dh", folds=0)
     basis = SplineBasis(q.min(axis=0), q.max(axis=0), np.radians([5, 5, 0, 0, 0, 0]), penalty=0.01)
     names = basis.names()
     values = np.random.default_rng(5).normal(0.0, 1e-5, len(names))
     residual = JointResidual(names, values, q.min(axis=0), q.max(axis=0), basis)
-    model = dataclasses.replace(model, residual=residual)
+    model = dataclasses.replace(model, residual=residual, method="composite")
     save_model(tmp_path / "m.yaml", model)
     loaded = load_model(tmp_path / "m.yaml").residual
     assert loaded.names == residual.names and loaded.basis.penalty == 0.01
@@ -149,3 +151,38 @@ def test_spline_terms_stop_at_the_measured_range(outside):
     assert offsets[1] == offsets[0] != 0.0
     assert residual.contains(q).tolist() == [True, True, False]
     assert offsets[2] == (offsets[0] if outside == "clamp" else 0.0)
+
+
+def test_region_folds_hold_out_whole_slabs_never_interleaved_rows():
+    position = np.random.default_rng(0).uniform(-100.0, 100.0, (200, 3)) * [1.0, 4.0, 2.0]
+    regions, words = region_folds(position, 4)
+    assert sorted(np.concatenate(regions).tolist()) == list(range(200)) and "along y" in words
+    spans = [(position[r, 1].min(), position[r, 1].max()) for r in regions]
+    assert all(high < low for (_, high), (low, _) in zip(spans, spans[1:]))  # disjoint slabs, in order
+
+
+def test_calibrate_chooses_splines_on_held_out_regions_and_records_the_choice():
+    """A joint-2 error no harmonic holds: the selection takes splines, says why, and the choice lands better."""
+    robot = load_robot("ur10")
+    q = joints_in_range(300, 6)
+    true = VirtualRobot.create(robot, ErrorProfile("geometric", length_sigma=0.3, angle_sigma=np.radians(0.03)),
+                               seed=4).true_robot
+
+    def landed(joints):
+        reached = joints.copy()
+        reached[:, 1] += planted_error(joints)
+        return fk(true, reached)[:, :3, 3]
+
+    meas = Measurements(joints=q, position=fk(robot, q)[:, :3, 3], measured=landed(q), lines=np.arange(len(q)) + 2)
+    model = calibrate(robot, meas, interpolation="joint", folds=0)
+    record = model.report["joint_splines"]
+    assert record["step_deg"] > 0 and record["joints"] == [1, 2, 3, 4, 5] and "slabs" in record["regions"]
+    without = [c["held_out_mm"] for c in record["candidates"] if c["step_deg"] == 0]
+    assert len(without) == 1 and min(c["held_out_mm"] for c in record["candidates"]) < 0.5 * without[0]
+    fresh = joints_in_range(200, 7)
+    error = np.linalg.norm(model.arm("composite").fk(fresh)[:, :3, 3] - landed(fresh), axis=1)
+    assert error.mean() < 0.01
+    stated = calibration_report(model, meas).doc["joint_errors"]
+    assert stated["splines"] == record and stated["terms"]["spline"] > 0
+    np.testing.assert_allclose(stated["measured_range_deg"]["upper"], np.degrees(q.max(axis=0)), atol=1e-3)
+    assert "Joint-angle error model" in render(calibration_report(model, meas))

@@ -33,6 +33,7 @@ import numpy as np
 
 from trajcomp import joint_errors
 from trajcomp.errors import CalibrationError
+from trajcomp.joint_errors import SplineBasis
 from trajcomp.kinematics import fk
 from trajcomp.parameters import (
     BASE_NAMES,
@@ -215,6 +216,18 @@ class _Jacobian:
     def matrix(self):
         """Dense Jacobian (N * rows, P), for problems without spline terms."""
         return self.dense.reshape(-1, self.size)
+
+    def rows(self, pick):
+        """The Jacobian of the measurements ``pick`` (index or mask over N) alone."""
+        blocks = [(index, basis[pick], joint) for index, basis, joint in self.blocks]
+        return _Jacobian(self.dense[pick], self.theta[pick], self.dense_index, blocks, self.size)
+
+    def apply(self, step):
+        """Change (N, rows) of the residual rows for a parameter step (P,) (solver units times scale)."""
+        out = self.dense @ step[self.dense_index]
+        for index, basis, joint in self.blocks:
+            out += self.theta[:, :, joint] * (basis @ step[index])[:, None]
+        return out
 
     def normal_equations(self, residual, weights, scale):
         """``(A^T W A, A^T W b)`` (P, P), (P,) of the scaled Jacobian A and residual rows b, rows weighted."""
@@ -514,3 +527,150 @@ def _solve(problem, scale, loss, rtol):
         if np.max(np.abs(step), initial=0.0) < STEP_TOLERANCE:
             break
     return x, robust_weights(_row_norms(residual), loss), jac
+
+
+@dataclasses.dataclass(frozen=True)
+class SplineChoice:
+    """What `select_splines` chose, and why.
+
+    Attributes
+    ----------
+    fit : KinematicFit or None
+        The joint fit with the chosen spline terms (None: none was better
+        on held-out regions than the fit without).
+    basis : SplineBasis or None
+    table : list of dict
+        Every candidate (``step_deg``, ``penalty``; step 0 = no spline
+        terms) with its held-out mean position error ``held_out_mm``.
+    regions : str
+        How the held-out regions were drawn.
+    """
+
+    fit: object
+    basis: object
+    table: list
+    regions: str
+
+
+def region_folds(position, folds):
+    """Held-out regions: ``folds`` slabs of equal count along the longest extent of commanded positions (N, 3).
+
+    Returns
+    -------
+    list of ndarray of int
+        Row indices of each region.
+    str
+        The regions in words.
+    """
+    axis = int(np.argmax(np.ptp(position, axis=0)))
+    order = np.argsort(position[:, axis], kind="stable")
+    edges = position[order[np.linspace(0, len(order) - 1, folds + 1).round().astype(int)], axis]
+    return (np.array_split(order, folds),
+            f"{folds} slabs of the commanded positions along {'xyz'[axis]} (edges {np.round(edges, 1).tolist()} mm)")
+
+
+def select_splines(fit, start, nominal, q, measured, *, rotation=None, joints=(0, 1, 2, 3, 4), steps=(2.0, 4.0, 8.0),
+                   penalties=(1e-5, 1e-4, 1e-3, 1e-2), folds=4, position=None,
+                   orientation_weight=ORIENTATION_WEIGHT):
+    """Choose spline terms of the joint angles by held-out regions and fit them on a joint fit.
+
+    For each knot step and penalty, the spline terms and the parameters of
+    ``fit`` are fitted together on all regions but one (`region_folds`) and
+    the mean position error is taken on the region held out; the candidate
+    with the least held-out error over all regions wins, the no-spline
+    candidate (``fit``'s parameters refitted the same way) included. Rows
+    are never interleaved: a region's neighbours are not in its training
+    set. The problem is linearised at ``fit`` (its errors are
+    milliradians: one Gauss-Newton step of `identify` with the spline terms
+    added), which is also how the chosen terms are fitted on all rows.
+
+    Parameters
+    ----------
+    fit : KinematicFit
+        Joint fit of the measurements in the base frame (``joint_terms``),
+        from ``start``.
+    start, nominal : Robot
+        The robot ``fit`` started from and the robot of the joint features.
+    q : ndarray, shape (N, 6)
+        Commanded joints, rad.
+    measured : ndarray, shape (N, 3)
+        Measured positions, mm, base frame.
+    rotation : ndarray, shape (N, 3, 3), optional
+        Measured orientations, base frame.
+    joints : tuple of int
+        0-based joints given spline terms.
+    steps : tuple of float
+        Knot steps tried, deg.
+    penalties : tuple of float
+        Roughness penalties tried (`SplineBasis.penalty`).
+    folds : int
+        Number of held-out regions (0: no selection, the first step and
+        penalty are fitted).
+    position : ndarray, shape (N, 3), optional
+        Commanded positions the regions are drawn in (default: FK of ``start``).
+
+    Returns
+    -------
+    SplineChoice
+    """
+    position = fk(start, q)[:, :3, 3] if position is None else position
+    regions, words = region_folds(position, folds) if folds > 1 else ([], "none: the one candidate given is fitted")
+    lower, upper = q.min(axis=0), q.max(axis=0)
+    table, best = [], None
+    for step in steps:
+        spacing = np.zeros(6)
+        spacing[list(joints)] = np.radians(step)
+        basis = SplineBasis(lower, upper, spacing, 1.0)
+        problem = _Problem(start, nominal, q, measured, rotation, np.eye(4), fit.R_tcp_target, orientation_weight, basis)
+        problem.setup(list(fit.names) + basis.names())
+        scale = scales(problem.names)
+        x = np.concatenate([fit.delta, np.zeros(len(problem.names) - len(fit.names))])
+        residual, jac = problem.evaluate(x)
+        total = jac.normal_equations(residual, fit.weights, scale)
+        held_parts = [jac.rows(rows).normal_equations(residual[rows], fit.weights[rows], scale) for rows in regions]
+        spline = np.array([joint_errors.is_spline(n) for n in problem.names])
+        rough = basis.roughness(problem.names)
+        for penalty in ((0.0,) if step == steps[0] and regions else ()) + tuple(penalties):
+            use = ~spline if penalty == 0.0 else np.ones(len(spline), dtype=bool)
+            error = []
+            for rows, (held_normal, held_gradient) in zip(regions, held_parts):
+                train = len(q) - len(rows)
+                z = _penalised_step(total[0] - held_normal, total[1] - held_gradient, rough * penalty * train, use)
+                moved = residual[rows] + jac.rows(rows).apply(z * scale)
+                error.append(np.linalg.norm(moved[:, :3], axis=1))
+            mean = float(np.concatenate(error).mean()) if regions else 0.0
+            table.append({"step_deg": step if penalty else 0.0, "penalty": penalty, "held_out_mm": round(mean, 5)})
+            if best is None or mean < best[0]:
+                best = (mean, step, penalty, problem, residual, jac, total, rough, use, scale, x)
+    mean, step, penalty, problem, residual, jac, total, rough, use, scale, x = best
+    if penalty == 0.0:
+        return SplineChoice(None, None, table, words)
+    z = _penalised_step(total[0], total[1], rough * penalty * len(q), use)
+    basis = dataclasses.replace(problem.basis, penalty=penalty)
+    problem.basis = basis
+    x = x + z * scale
+    moved, _ = problem.evaluate(x, jacobian=False)
+    _, terms, _, _ = problem.state(x)
+    position_error = -moved[:, :3]
+    chosen = dataclasses.replace(fit, names=problem.names, delta=x, sigma=np.zeros(len(x)), joint_errors=terms,
+                                 residuals=position_error,
+                                 rotation_residuals=None if rotation is None else -moved[:, 3:] / orientation_weight,
+                                 outliers=outlier_rows(position_error))
+    return SplineChoice(chosen, basis, table, words)
+
+
+def _penalised_step(normal, gradient, roughness, use):
+    """Step (P,) in solver units minimising the linearised cost plus the roughness, over the parameters ``use``.
+
+    A relative ridge of 1e-9 on the diagonal settles the exact redundancies
+    (a spline's constant with its joint's zero, d2 with d3) at no cost to
+    the fit.
+    """
+    from scipy.linalg import cho_factor, cho_solve
+
+    pick = np.flatnonzero(use)
+    matrix = normal[np.ix_(pick, pick)] + roughness[np.ix_(pick, pick)]
+    matrix[np.diag_indices_from(matrix)] += 1e-9 * np.abs(np.diag(matrix)).max()
+    out = np.zeros(len(use))
+    out[pick] = -cho_solve(cho_factor(matrix), gradient[pick])
+    return out

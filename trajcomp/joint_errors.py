@@ -34,7 +34,6 @@ import dataclasses
 import re
 
 import numpy as np
-from scipy import sparse
 
 from trajcomp.errors import ModelError
 from trajcomp.kinematics import fk, link_frames
@@ -126,6 +125,8 @@ class SplineBasis:
 
         Angles beyond the measured range take the boundary's values.
         """
+        from scipy import sparse  # here: models without spline terms never need it
+
         count = self.intervals(joint)
         width = max(self.upper[joint] - self.lower[joint], 1e-12) / count
         u = (np.clip(q[:, joint], self.lower[joint], self.upper[joint]) - self.lower[joint]) / width

@@ -204,6 +204,7 @@ def calibration_report(model, meas, *, files=(), options=None):
                            for n, d, s in zip(model.dh_names, model.dh_delta, model.dh_sigma)],
             "fixed": [{"name": n, "reason": r} for n, r in model.dh_fixed.items()],
             "condition_number": (stored.get("identifiability") or {}).get("condition")},
+        "joint_errors": _joint_errors(model),
         "outliers": {"file": meas.path, "lines": outlier_lines},
         "validity": {
             "measured_box": {"lower": position.min(axis=0).tolist(), "upper": position.max(axis=0).tolist()},
@@ -221,6 +222,24 @@ def calibration_report(model, meas, *, files=(), options=None):
         "missing": missing,
     })
     return Report(doc, _figures(doc, position, errors, excluded, after, model, "fit"))
+
+
+def _joint_errors(model):
+    """The joint-angle error model of the composite, as the report states it (None without one)."""
+    residual = model.residual
+    if getattr(residual, "kind", None) != "joint":
+        return None
+    names, _ = residual.terms
+    families = {family: sum(n.startswith(family) for n in names) for family in ("gear", "grav", "spline")}
+    return {
+        "terms": families,
+        "splines": model.report.get("joint_splines"),
+        "measured_range_deg": {"lower": np.degrees(residual.lower).round(3).tolist(),
+                               "upper": np.degrees(residual.upper).round(3).tolist()},
+        "beyond_range": "a spline term is held at its value at the edge of the measured range of its joint (no shape "
+                        "is extrapolated); a target more than 5 deg beyond the range of any joint is outside the "
+                        "calibrated region and gets no joint-error term",
+    }
 
 
 def validation_report(model, meas, *, criteria, files=(), options=None):

@@ -282,6 +282,8 @@ def calibration_sections(doc):
     parts.append(("maps", "Error maps before and after", f"<p>{esc(doc['maps_note'])}</p>"))
     if doc["kind"] == "calibration":
         parts.append(("parameters", "Identified parameters", _parameters(doc["parameters"])))
+        if doc.get("joint_errors"):
+            parts.append(("joint_errors", "Joint-angle error model", _joint_errors(doc["joint_errors"])))
         parts.append(("validity", "What the model is valid for", _validity(doc["validity"])))
         parts.append(("outliers", "Outliers", _outliers(doc["outliers"])))
     if doc["warnings"]:
@@ -343,6 +345,24 @@ def _parameters(params):
     if params["fixed"]:
         out += ("<h3>Not identified on their own (moved only within combinations the data see)</h3>"
                 + table(("parameter", "why"), [(f["name"], f["reason"]) for f in params["fixed"]]))
+    return out
+
+
+def _joint_errors(j):
+    terms = ", ".join(f"{count} {family}" for family, count in j["terms"].items() if count) or "none"
+    out = f"<p>Terms: {esc(terms)}. Beyond the measured joint range: {esc(j['beyond_range'])}.</p>"
+    out += table(("joint", "measured from (deg)", "to (deg)"),
+                 [(k + 1, f"{lo:.1f}", f"{hi:.1f}") for k, (lo, hi) in
+                  enumerate(zip(j["measured_range_deg"]["lower"], j["measured_range_deg"]["upper"]))], numeric=(1, 2))
+    splines = j.get("splines")
+    if splines:
+        chosen = (f"knots every {splines['step_deg']:g} deg on joints {splines['joints']}, penalty {splines['penalty']:g}"
+                  if splines["step_deg"] else "no spline terms")
+        out += f"<p>Chosen on held-out regions ({esc(splines.get('regions', ''))}): {esc(chosen)}.</p>"
+        if splines.get("candidates"):
+            out += table(("knot step (deg)", "penalty", "held-out mean |error| (mm)"),
+                         [(f"{c['step_deg']:g}", f"{c['penalty']:g}", f"{c['held_out_mm']:.4f}")
+                          for c in splines["candidates"]], numeric=(0, 1, 2))
     return out
 
 
