@@ -30,9 +30,9 @@ def joints_in_range(n, seed):
 
 
 def planted_error(q):
-    """Angle error (N,) rad of joint 2: a bump and a ripple of 13 deg period, no harmonic of the joint's turn."""
+    """Angle error (N,) rad of joint 2: a bump and a ripple of 40 deg period, beyond the harmonics of the model."""
     return np.radians(0.01) * (np.exp(-((q[:, 1] + np.radians(80)) / np.radians(15)) ** 2)
-                               + 0.5 * np.sin(q[:, 1] * 360 / 13))
+                               + 0.5 * np.sin(q[:, 1] * 360 / 40))
 
 
 def test_cubic_basis_is_a_partition_of_unity_and_holds_its_boundary_value():

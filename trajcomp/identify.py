@@ -54,6 +54,7 @@ ORIENTATION_WEIGHT = 100.0  # mm/rad: 1 mrad of orientation error weighs as 0.1 
 ROBUST_SCALE = 3.0  # the loss turns robust beyond this many median residual norms
 MAX_ITERATIONS = 50
 STEP_TOLERANCE = 1e-7  # mm (or rad * ANGLE_LEVER): converged when no scaled parameter moves more
+MEASUREMENTS_PER_SPLINE = 3  # a knot step is tried only with at least this many measurements per spline term
 
 
 @dataclasses.dataclass(frozen=True)
@@ -578,7 +579,9 @@ def select_splines(fit, start, nominal, q, measured, *, rotation=None, joints=(0
     ``fit`` are fitted together on all regions but one (`region_folds`) and
     the mean position error is taken on the region held out; the candidate
     with the least held-out error over all regions wins, the no-spline
-    candidate (``fit``'s parameters refitted the same way) included. Rows
+    candidate (``fit``'s parameters refitted the same way) included. A
+    knot step giving more than one spline term per
+    `MEASUREMENTS_PER_SPLINE` measurements is not tried. Rows
     are never interleaved: a region's neighbours are not in its training
     set. The problem is linearised at ``fit`` (its errors are
     milliradians: one Gauss-Newton step of `identify` with the spline terms
@@ -621,6 +624,8 @@ def select_splines(fit, start, nominal, q, measured, *, rotation=None, joints=(0
         spacing = np.zeros(6)
         spacing[list(joints)] = np.radians(step)
         basis = SplineBasis(lower, upper, spacing, 1.0)
+        if len(q) < MEASUREMENTS_PER_SPLINE * len(basis.names()) and regions:
+            continue  # too sparse for this many terms: the penalty alone would shape them
         problem = _Problem(start, nominal, q, measured, rotation, np.eye(4), fit.R_tcp_target, orientation_weight, basis)
         problem.setup(list(fit.names) + basis.names())
         scale = scales(problem.names)
@@ -630,7 +635,7 @@ def select_splines(fit, start, nominal, q, measured, *, rotation=None, joints=(0
         held_parts = [jac.rows(rows).normal_equations(residual[rows], fit.weights[rows], scale) for rows in regions]
         spline = np.array([joint_errors.is_spline(n) for n in problem.names])
         rough = basis.roughness(problem.names)
-        for penalty in ((0.0,) if step == steps[0] and regions else ()) + tuple(penalties):
+        for penalty in ((0.0,) if not table and regions else ()) + tuple(penalties):
             use = ~spline if penalty == 0.0 else np.ones(len(spline), dtype=bool)
             error = []
             for rows, (held_normal, held_gradient) in zip(regions, held_parts):
@@ -642,9 +647,9 @@ def select_splines(fit, start, nominal, q, measured, *, rotation=None, joints=(0
             table.append({"step_deg": step if penalty else 0.0, "penalty": penalty, "held_out_mm": round(mean, 5)})
             if best is None or mean < best[0]:
                 best = (mean, step, penalty, problem, residual, jac, total, rough, use, scale, x)
-    mean, step, penalty, problem, residual, jac, total, rough, use, scale, x = best
-    if penalty == 0.0:
+    if best is None or best[2] == 0.0:
         return SplineChoice(None, None, table, words)
+    mean, step, penalty, problem, residual, jac, total, rough, use, scale, x = best
     z = _penalised_step(total[0], total[1], rough * penalty * len(q), use)
     basis = dataclasses.replace(problem.basis, penalty=penalty)
     problem.basis = basis
