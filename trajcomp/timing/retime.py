@@ -241,17 +241,20 @@ def _toppra_timed(runs, moves, robot):
 
 
 def _coarse(run, law, check, moves):
-    """Grid intervals (n,) of a timed run to split: one holding a sample over `_TARGET`, or across which the
-    joint acceleration the path's curvature takes at the law's speed (q'' sd^2) changes by more than
-    `_CURVATURE_STEP` of a limit."""
+    """Grid intervals (n,) of a timed run to split: one holding a sample over `_TARGET`, or `_curved` at the
+    law's squared speed."""
     _, s, ratio = check
-    grid = run.grid
-    over = np.clip(np.searchsorted(grid, s[ratio > _TARGET], side="right") - 1, 0, len(grid) - 2)
+    over = np.clip(np.searchsorted(run.grid, s[ratio > _TARGET], side="right") - 1, 0, len(run.grid) - 2)
+    return np.union1d(over, _curved(run, law.sd**2, moves))
+
+
+def _curved(run, x, moves):
+    """Grid intervals (n,) across which the joint acceleration the path's curvature takes at squared path
+    speeds x (G,) (q'' sd^2) changes by more than `_CURVATURE_STEP` of a limit."""
     acceleration = np.min(moves.acceleration[run.first + 1 : run.last + 1], axis=0)
-    demand = np.max(np.abs(run.path(grid, 2)) / acceleration, axis=1)  # per unit squared path speed
-    x = law.sd**2
+    demand = np.max(np.abs(run.path(run.grid, 2)) / acceleration, axis=1)  # per unit squared path speed
     step = np.abs(np.diff(demand)) * np.maximum(x[:-1], x[1:])
-    return np.union1d(over, np.flatnonzero(step > _CURVATURE_STEP))
+    return np.flatnonzero(step > _CURVATURE_STEP)
 
 
 def _split(run, intervals, moves, robot):
