@@ -2,8 +2,11 @@
 
 Each case mutates one program file (a KRL .src or its .dat) once: a flipped
 bit, an inserted or deleted byte, a duplicated or deleted line, two digits
-swapped, or a number replaced by an extreme one (``1e999``, ``nan``,
-``-0``, a 400-digit integer). The mutated program is read; if it reads, it
+swapped, a number replaced by an extreme one (``1e999``, ``nan``, ``-0``, a
+400-digit integer) or blown up (``1e308``, ``1e-320``, ``1e-28``, 400
+digits), the file cut off at a random byte, a line repeated 1,000 times, or
+punctuation put before a line's first word (``+movel(...)``). These
+operators found the crashes of issue 26. The mutated program is read; if it reads, it
 is written back in its own language, compensated with a small UR10 model
 (tools and frames it does not define are given values) and written, and
 converted to another language (the case's seed picks it) and written;
@@ -40,9 +43,12 @@ SEEDS = sorted(
     p for folder in (ROOT / "examples" / "programs", Path(__file__).parent / "data" / "programs")
     for p in folder.rglob("*") if p.is_file() and p.suffix.lower() not in (".txt", ".md")
 )
-CASES_PER_FILE = 150
+CASES_PER_FILE = 30  # the suite's sample; tests/benchmarks/bench_fuzz.py runs 150 per file, re-timing included
 LANGUAGES = {"csv": ".csv", "krl": ".src", "rapid": ".mod", "fanuc_ls": ".ls", "urscript": ".script"}
 EXTREMES = (b"1e999", b"nan", b"-0", b"9" * 400, b"-1e-320", b"0x10", b"1.5.2")
+BLOW_UPS = (b"1e308", b"-1e308", b"1e-320", b"1e-28", b"1" + b"0" * 400, b"0." + b"0" * 400 + b"1")
+KINDS = ("flip", "insert", "delete", "duplicate line", "delete line", "swap digits", "extreme", "blow up",
+         "truncate", "repeat line", "leading punctuation")
 _NUMBER = re.compile(rb"[-+]?\d+(?:\.\d*)?(?:[eE][-+]?\d+)?")
 
 
@@ -62,10 +68,12 @@ def cell():
 
 def mutate(data, rng):
     """``(mutated bytes, description)``: one random edit of ``data``."""
-    kind = rng.choice(("flip", "insert", "delete", "duplicate line", "delete line", "swap digits", "extreme"))
+    kind = rng.choice(KINDS)
     if not data:
         return b"\n", "empty -> newline"
     at = rng.randrange(len(data))
+    if kind == "truncate":
+        return data[:at], f"cut off at byte {at}"
     if kind == "flip":
         return data[:at] + bytes([data[at] ^ (1 << rng.randrange(8))]) + data[at + 1:], f"flip bit at {at}"
     if kind == "insert":
@@ -79,12 +87,19 @@ def mutate(data, rng):
         return b"".join(lines[:k + 1] + lines[k:]), f"duplicate line {k + 1}"
     if kind == "delete line":
         return b"".join(lines[:k] + lines[k + 1:]), f"delete line {k + 1}"
+    if kind == "repeat line":
+        return b"".join(lines[:k] + [lines[k]] * 1000 + lines[k + 1:]), f"line {k + 1} x1000"
+    if kind == "leading punctuation":
+        indent = len(lines[k]) - len(lines[k].lstrip())
+        mark = rng.choice(b"+-*/!.,;:#@$%&=<>?")
+        return b"".join(lines[:k] + [lines[k][:indent] + bytes([mark]) + lines[k][indent:]] + lines[k + 1:]), \
+            f"{bytes([mark])!r} before line {k + 1}"
     numbers = list(_NUMBER.finditer(data))
     if not numbers:
         return data, "no number"
     m = rng.choice(numbers)
-    if kind == "extreme":
-        value = rng.choice(EXTREMES)
+    if kind in ("extreme", "blow up"):
+        value = rng.choice(EXTREMES if kind == "extreme" else BLOW_UPS)
         return data[:m.start()] + value + data[m.end():], f"number at {m.start()} -> {value[:12]!r}"
     digits = [i for i in range(len(data) - 1) if chr(data[i]).isdigit() and chr(data[i + 1]).isdigit()]
     if not digits:

@@ -294,8 +294,12 @@ def _decimals(texts):
 
 
 def _numbers_text(values, places, min_places):
-    """Texts (list of str) of values (B,) with ``max(places, min_places)`` decimals each, never ``-0``."""
-    places = np.maximum(places, min_places)
+    """Texts (list of str) of values (B,) with ``max(places, min_places)`` decimals each (at most 20), never ``-0``.
+
+    A float holds 17 significant digits: the decimals a cell wrote beyond 20
+    (a 400-digit fraction) carry nothing, and rounding to them overflows.
+    """
+    places = np.minimum(np.maximum(places, min_places), 20)
     texts = np.empty(len(values), dtype=object)
     for p in np.unique(places):
         pick = places == p
