@@ -260,3 +260,22 @@ def test_fanuc_backup_shapes_a_controller_loads(tmp_path):
     assert [m.target for m in program.motions] == [0, None] and program.motions[1].zone == 100.0
     assert program.not_compensated()[0][2] == ("P[2] is stated as RX, RY, RZ, RW, RP, RR (line 14), a representation "
                                                "trajcomp does not read: left as written")
+
+
+def test_krl_points_of_config_dat_or_another_data_list_are_listed_not_refused(tmp_path):
+    program_folder, system = tmp_path / "KRC" / "R1" / "Program", tmp_path / "KRC" / "R1" / "System"
+    program_folder.mkdir(parents=True)
+    system.mkdir()
+    (program_folder / "weld.src").write_text("DEF weld( )\nPTP XP1\nLIN XSHARED\nLIN XTABLE\nLIN XNOWHERE\nEND\n")
+    (program_folder / "weld.dat").write_text("DEFDAT weld\nDECL E6POS XP1={X 445,Y 0,Z 790,A 0,B 90,C 0,S 2,T 2}\n"
+                                             "ENDDAT\n")
+    (program_folder / "table.dat").write_text("DEFDAT table PUBLIC\nDECL GLOBAL E6POS XTABLE={X 1,Y 0,Z 7,A 0,B 90,"
+                                              "C 0,S 2,T 2}\nENDDAT\n")
+    (system / "$config.dat").write_text("DEFDAT $CONFIG\nDECL GLOBAL E6POS XSHARED={X 445,Y 0,Z 700,A 0,B 90,C 0,"
+                                        "S 2,T 2}\nENDDAT\n")
+    with pytest.raises(ReadError, match=r"XNOWHERE \(line 5\); are they declared in weld\.dat\?"):
+        formats.read(program_folder / "weld.src")
+    (program_folder / "weld.src").write_text("DEF weld( )\nPTP XP1\nLIN XSHARED\nLIN XTABLE\nEND\n")
+    assert [reason for _, _, reason in formats.read(program_folder / "weld.src").not_compensated()] == [
+        "XSHARED is declared in another data list of the controller ($config.dat:2): left as written",
+        "XTABLE is declared in another data list of the controller (table.dat:2): left as written"]

@@ -81,7 +81,8 @@ def test_retime_writes_a_compliance_report_of_the_program_as_written(tmp_path, c
     ruckig = any(s["kind"] == "ruckig" for s in doc["timing"]["segments"])
     for row in doc["timing"]["joints"]:  # measured on ruckig segments of a jerk-limited arm only, else null (was 0)
         assert (row["jerk"]["peak"] is None) == (not ruckig or row["jerk"]["limit"] is None)
-    assert [t["posture_source"] for t in doc["targets"]] == ["config"] * 5
+    # PTP P1, LIN P2..P4, PTP P5: KUKA Status and Turn bind PTP targets only
+    assert [t["posture_source"] for t in doc["targets"]] == ["config", "previous", "previous", "previous", "config"]
     status = {c["id"]: c["status"] for c in doc["verdict"]["criteria"]}
     assert status["residual"] == status["uncompensated"] == "not evaluated"  # nothing was compensated
     assert status["joint_limits"] == status["timing"] == "pass"

@@ -12,6 +12,7 @@ from trajcomp.formats._text import (
     JOINT_LIMIT,
     LENGTH_LIMIT,
     NUMBER,
+    DeclaredElsewhere,
     Lines,
     check_closed,
     fail,
@@ -60,6 +61,7 @@ _WORD = re.compile(r"[A-Za-z_$][\w$]*")
 _ASSIGN = re.compile(r"^\s*([A-Za-z_]\w*)\s*(?:\.\w+|\[[^\]]*\])*\s*=(?!=)")
 _WITH_TOOL = re.compile(r"\$TOOL\s*=\s*STOOL2\s*\(\s*(\w+)\s*\)", re.I)
 _WITH_BASE = re.compile(r"\$BASE\s*=\s*SBASE\s*\(\s*(\w+)\s*\.\s*BASE_NO\s*\)", re.I)
+_GLOBAL_POINT = re.compile(r"^[ \t]*(?:DECL\s+)?(?:GLOBAL\s+)?(?:" + POINT_TYPES + r")\s+(\w+)\s*=", re.I | re.M)
 _HOME = re.compile(r"^XHOME\d*$", re.I)
 _DEF = re.compile(r"^\s*(?:GLOBAL\s+)?DEF(?:FCT\s+\w+)?\s+(\w+)\s*\(", re.I | re.M)
 _DEF_LINE = re.compile(r"^\s*(?:GLOBAL\s+)?DEF(?:FCT\s+\w+)?\s+\w+\s*\((.*?)\)", re.I)
@@ -494,6 +496,9 @@ def _resolve(reader, path, dat_path):
     holds a run-time value, so none of its motions is compensated.
     """
     assigned, items = {}, []
+    # other data lists beside it, and $config.dat beside it or in a backup's R1/System (KRC/R1/Program/x.src)
+    elsewhere = DeclaredElsewhere(dat_path or path, [path.parent, path.parent.parent / "System",
+                                                     path.parent.parent.parent / "System"], (".dat",), _GLOBAL_POINT, ";")
     for item in reader.items:
         if isinstance(item, Statement) and (m := _ASSIGN.match(mask(item.text, ";"))):
             assigned.setdefault(m.group(1).upper(), item.line)
@@ -516,6 +521,8 @@ def _resolve(reader, path, dat_path):
             return None, reader.unset[key]
         if _HOME.match(ref.name):
             return None, f"{ref.name}: home position of $config.dat, not in this program (left as written)"
+        if where := elsewhere.where(ref.name):
+            return None, f"{ref.name} is declared in another data list of the controller ({where}): left as written"
         missing.append((ref.name, ref.line))
         return None, ""
 
@@ -538,7 +545,8 @@ def _resolve(reader, path, dat_path):
                 item = dataclasses.replace(item, refs=refs)
         items.append(item)
     if missing:
-        hint = (f"are they declared in {dat_path.name}? (cut or damaged data list; points of $config.dat are not read)"
-                if dat_path is not None else f"no {path.stem}.dat beside {path.name}")
+        hint = (f"are they declared in {dat_path.name}? (cut or damaged data list; no other data list beside it, "
+                "nor $config.dat, declares them)" if dat_path is not None else
+                f"no {path.stem}.dat beside {path.name}, nor another data list declaring them")
         unresolved(path.name, missing, hint)
     return tuple(items)

@@ -11,6 +11,7 @@ from trajcomp.formats._text import (
     JOINT_LIMIT,
     LENGTH_LIMIT,
     NUMBER,
+    DeclaredElsewhere,
     Lines,
     check_closed,
     fail,
@@ -56,7 +57,7 @@ _WOBJDATA = re.compile(
 )
 _POSE_LITERAL = re.compile(r"^\s*" + _POSE + r"\s*$")
 _TASK_POINT = re.compile(r"^[ \t]*(?:(?:LOCAL|TASK)\s+)*(?:CONST|PERS|VAR)\s+(?:robtarget|jointtarget)\s+(\w+)",
-                         re.I | re.M)
+                         re.I | re.M)  # a point another module of the task declares (`DeclaredElsewhere`)
 _DECL = re.compile(
     r"^\s*(?:(?:LOCAL|TASK)\s+)*(?:CONST|PERS|VAR)\s+(robtarget|jointtarget|tooldata|wobjdata)\s+(\w+)\s*:=(.*);\s*$",
     re.I | re.S,
@@ -388,49 +389,20 @@ def read(path):
         elif m := _ASSIGN.match(text):
             reader.assignment(m, line, original)
         reader.items.append(Statement(line, original))
-    items = _resolve(reader, masked, _TaskDeclarations(Path(path)))
+    folder = Path(path).parent
+    folders = [folder.parent / "PROGMOD", folder.parent / "SYSMOD"] if folder.name.upper() in ("PROGMOD", "SYSMOD") \
+        else [folder]  # a backup's TASKn holds its modules in PROGMOD and SYSMOD
+    items = _resolve(reader, masked, DeclaredElsewhere(Path(path), folders, (".mod", ".modx", ".sys", ".prg"),
+                                                       _TASK_POINT, "!"))
     return Program(
         "rapid", module.group(1), items, tuple(reader.targets), reader.tools, reader.frames, (source,)
     )
 
 
-class _TaskDeclarations:
-    """Where the other modules of a module's task declare a point (the folder's modules, and a backup's
-    TASKn/PROGMOD and TASKn/SYSMOD), read only when the module names a point it does not declare."""
-
-    EXTENSIONS = {".mod", ".modx", ".sys", ".prg"}
-
-    def __init__(self, path):
-        self.path, self.found = path, None
-
-    def _folders(self):
-        folder = self.path.parent
-        if folder.name.upper() in ("PROGMOD", "SYSMOD"):
-            return [folder.parent / "PROGMOD", folder.parent / "SYSMOD"]
-        return [folder]
-
-    def where(self, name):
-        """``"file:line"`` of another module's declaration of point ``name``, or ``""``."""
-        if self.found is None:
-            self.found = {}
-            for folder in self._folders():
-                files = sorted(folder.iterdir()) if folder.is_dir() else []
-                for file in files:
-                    if file == self.path or file.suffix.lower() not in self.EXTENSIONS or not file.is_file():
-                        continue
-                    try:
-                        text = mask(read_source(file).text, "!")
-                    except ReadError:
-                        continue  # a binary or unreadable module declares nothing trajcomp can use
-                    for m in _TASK_POINT.finditer(text):
-                        self.found.setdefault(m.group(1).lower(), f"{file.name}:{text.count(chr(10), 0, m.start()) + 1}")
-        return self.found.get(name.lower(), "")
-
-
 def _resolve(reader, masked, task):
     """The items with named points resolved; points assigned at run time and routine arguments found.
 
-    A point another module of the task declares (``task``, `_TaskDeclarations`)
+    A point another module of the task declares (``task``, `DeclaredElsewhere`)
     is left as written and says where.
     """
     assigned = {}
@@ -451,7 +423,7 @@ def _resolve(reader, masked, task):
             return reader.points[key], ""
         if key in reader.unset:
             return None, reader.unset[key]
-        if where := task.where(ref.name):
+        if where := task.where(ref.name.lower()):
             return None, f"{ref.name} is declared in another module of the task ({where}): left as written"
         missing.append((ref.name, ref.line))
         return None, ""

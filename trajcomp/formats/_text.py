@@ -203,6 +203,46 @@ def unresolved(source_name, missing, hint):
     raise ReadError(f"{source_name}: motions to points the program does not define: {shown}{more}; {hint}")
 
 
+class DeclaredElsewhere:
+    """Where the other files of a program's controller declare a point: RAPID modules of the same task,
+    KUKA data lists beside the program and ``$config.dat``. Read only when a program names a point it
+    does not declare itself.
+
+    Parameters
+    ----------
+    path : Path
+        The program's file (not searched).
+    folders : sequence of Path
+        Folders whose files are searched (missing ones are skipped).
+    extensions : sequence of str
+        File extensions searched, lower case with the dot.
+    pattern : re.Pattern
+        Group 1: the declared point's name, in the file's masked text.
+    comment : str
+        The language's comment mark (`mask`).
+    """
+
+    def __init__(self, path, folders, extensions, pattern, comment):
+        self.path, self.folders, self.extensions = Path(path), list(folders), set(extensions)
+        self.pattern, self.comment, self.found = pattern, comment, None
+
+    def where(self, name):
+        """``"file:line"`` of another file's declaration of point ``name`` (matched without case), or ``""``."""
+        if self.found is None:
+            self.found = {}
+            for file in (f for folder in self.folders if folder.is_dir() for f in sorted(folder.iterdir())):
+                if file == self.path or file.suffix.lower() not in self.extensions or not file.is_file():
+                    continue
+                try:
+                    text = mask(read_source(file).text, self.comment)
+                except ReadError:
+                    continue  # a binary or unreadable file declares nothing trajcomp can use
+                lines = Lines(text)
+                for m in self.pattern.finditer(text):
+                    self.found.setdefault(m.group(1).lower(), f"{file.name}:{lines.number(m.start())}")
+        return self.found.get(name.lower(), "")
+
+
 def whole_circle(motion):
     """A circular motion with both its via and end point, or none of them (run time).
 

@@ -28,9 +28,10 @@ Not compensated, with the reason (`Motion.reason`): relative motions
 calls, array elements), system variables (``$POS_ACT``), routine
 parameters, points declared without a value or changed by the program at
 run time (``XP1.Z = ...``), motions after a tool or base set at run time,
-and the home positions ``XHOME``.. of $config.dat. A motion to a point the
-program does not define (no .dat, a cut .dat) is a ReadError naming the
-points; so is a declaration cut off mid-line. Points the program passes to
+the home positions ``XHOME``.. of $config.dat, and points another data
+list beside the program or $config.dat (beside it or in a backup's
+R1/System) declares. A motion to a point no data list defines (no .dat, a
+cut .dat) is a ReadError naming the points; so is a declaration cut off mid-line. Points the program passes to
 routines (``MYPROC(XP1)``) are `Statement.refs`.
 
 Write: the edited points' numbers, with S and T from their configuration
