@@ -22,7 +22,7 @@ def setup():
     robot = load_robot("ur10")
     virtual = VirtualRobot.create(robot, "paper", seed=1)
     rng = np.random.default_rng(5)
-    plan = plan_grid(robot, (300, -100, 300), 500, 100)
+    plan = plan_grid(robot, (300, -100, 300), 500, 100, one_posture=False)  # as the demo plans it
     q = plan.joints[plan.reachable]
     meas = Measurements(joints=q, position=plan.position[plan.reachable], measured=virtual.measure(q, rng),
                         lines=np.arange(len(q)) + 2, path="virtual.csv")

@@ -14,7 +14,7 @@ UR5_COLUMNS = ",".join([f"j{i}=joint_{i}" for i in range(1, 7)] + ["x=x_t", "y=y
 
 def test_plan_simulate_calibrate_validate_predict(tmp_path, capsys):
     plan, meas, model = tmp_path / "plan.csv", tmp_path / "meas.csv", tmp_path / "model.yaml"
-    assert main(["plan", "--robot", "ur10", "--cube", "300,-100,300", "--side", "500", "--step", "100", "-o", str(plan)]) == 0
+    assert main(["plan", "--robot", "ur10", "--cube", "300,-100,300", "--side", "400", "--step", "100", "-o", str(plan)]) == 0
     assert main(["simulate", str(plan), "--robot", "ur10", "--seed", "1", "-o", str(meas)]) == 0
     assert main(["calibrate", str(meas), "--robot", "ur10", "--grid-step", "100", "-o", str(model)]) == 0
     assert "cross-validation" in capsys.readouterr().out
@@ -295,3 +295,24 @@ def test_the_output_keeps_the_input_language_unless_to_says_otherwise(kuka_model
     assert "S " in (tmp_path / "out.dat").read_text()  # configuration data computed from the corrected joints
     assert main(base + ["-o", str(tmp_path / "out.script"), "--to", "urscript"]) == 2  # a UR program for a KR6
     assert "a Universal Robots program (urscript) cannot run on robot kuka_kr6_r900" in capsys.readouterr().err
+
+
+def test_plan_keeps_one_arm_posture_and_lists_the_targets_it_cannot_reach(tmp_path, capsys):
+    """7 of the paper cube's 216 targets were silently planned in another arm branch (sign-flipped errors)."""
+    from trajcomp.ik import branch_index
+    from trajcomp.measurements import read_measurements
+    from trajcomp.robot import load_robot
+
+    plan = tmp_path / "plan.csv"
+    assert main(["plan", "--robot", "ur10", "--cube", "300,-100,300", "--side", "500", "--step", "100",
+                 "-o", str(plan)]) == 1
+    err = capsys.readouterr().err
+    corners = ["800.000,400.000,700.000", "800.000,-100.000,800.000", "800.000,100.000,800.000",
+               "800.000,200.000,800.000", "800.000,300.000,800.000", "700.000,400.000,800.000",
+               "800.000,400.000,800.000"]
+    for corner in corners:
+        assert (f"unreachable target {corner} at 90.00,0.00,180.00 deg: not in the grid's arm posture "
+                "front/down/negative, only in back/up/negative") in err
+    assert "7 of 216 targets are unreachable" in err
+    rows = read_measurements(plan)
+    assert len(rows) == 209 and set(branch_index(load_robot("ur10"), rows.joints).tolist()) == {3}

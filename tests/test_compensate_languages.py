@@ -371,7 +371,7 @@ def cells(tmp_path_factory):
             robot = load_robot(robot_file)
             corner, side, step = CUBES[name]
             virtual = VirtualRobot.create(robot, "paper", seed=1)
-            plan = plan_grid(robot, corner, side, step)
+            plan = plan_grid(robot, corner, side, step, one_posture=False)  # re-solved in `posture` below
             assert plan.reachable.all(), name
             joints = np.array([declared_joints(robot, T, posture) for T in fk(robot, plan.joints)])
             rng = np.random.default_rng(11)

@@ -21,7 +21,7 @@ from trajcomp.simulate import VirtualRobot
 def grid():
     """The paper's large cube measured on the virtual UR10 (216 points, one orientation)."""
     robot = load_robot("ur10")
-    plan = plan_grid(robot, (300, -100, 300), 500, 100)
+    plan = plan_grid(robot, (300, -100, 300), 500, 100, one_posture=False)  # as the demo plans it
     virtual = VirtualRobot.create(robot, "paper", seed=1)
     meas = Measurements(joints=plan.joints, position=plan.position, lines=np.arange(len(plan.joints)) + 2,
                         measured=virtual.measure(plan.joints, np.random.default_rng(3)), path="grid.csv")

@@ -35,7 +35,7 @@ def virtual_cell(tmp_path_factory):
     if "ur10" not in _CELLS:
         robot = load_robot("ur10")
         virtual = VirtualRobot.create(robot, "paper", seed=1)
-        plan = plan_grid(robot, CORNER, SIDE, STEP)
+        plan = plan_grid(robot, CORNER, SIDE, STEP, one_posture=False)  # the demo's paper cube, as it plans it
         measured = virtual.measure(plan.joints, np.random.default_rng(11))
         meas = Measurements(joints=plan.joints, position=plan.position, measured=measured,
                             lines=np.arange(len(plan.joints)) + 2, path="ur10-grid.csv")

@@ -118,7 +118,11 @@ def demo_cubes(robot):
     the arms' reaches (`shoulder_and_reach`), the large step rounded to
     10 mm and the small one to 1 mm. When a grid vertex is out of reach in
     that place, both cubes move together by whole large steps (up to two
-    per axis, nearest placement first). The UR10 gets the paper's cubes.
+    per axis, nearest placement first). The UR10 gets the paper's cubes,
+    each vertex solved nearest the grid's seed (`plan_grid` with
+    ``one_posture=False``): seven corner vertices of the large cube are
+    reached only in another arm posture than the rest, which `trajcomp plan`
+    refuses, so the demo's large-cube grid mixes two postures.
 
     Returns
     -------
@@ -141,7 +145,7 @@ def demo_cubes(robot):
     for shift in _SHIFTS:
         offset = scaled[0].step * np.asarray(shift)
         cubes = tuple(dataclasses.replace(c, corner=np.add(c.corner, offset)) for c in scaled)
-        if all(plan_grid(robot, c.corner, c.side, c.step).reachable.all() for c in cubes):
+        if all(plan_grid(robot, c.corner, c.side, c.step, one_posture=False).reachable.all() for c in cubes):
             return cubes
     raise TrajcompError(
         f"demo: robot {robot.name}: no placement of the paper's cubes scaled to its reach ({reach:.0f} mm, "
@@ -153,7 +157,7 @@ def run_cube(virtual, cube, *, validation=40, seed=0):
     """Calibrate on one cube's grid and validate compensation at random targets."""
     robot = virtual.nominal
     rng = np.random.default_rng([seed, len(cube.name)])
-    plan = plan_grid(robot, cube.corner, cube.side, cube.step)
+    plan = plan_grid(robot, cube.corner, cube.side, cube.step, one_posture=False)
     q = plan.joints[plan.reachable]
     meas = Measurements(joints=q, position=plan.position[plan.reachable], measured=virtual.measure(q, rng),
                         lines=np.arange(len(q)) + 1, path=f"<virtual {cube.name} cube>")

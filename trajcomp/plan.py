@@ -14,7 +14,7 @@ import numpy as np
 
 from trajcomp.errors import TrajcompError
 from trajcomp.identify import identifiability
-from trajcomp.ik import ik
+from trajcomp.ik import Configuration, branch_index, ik, ik_family
 from trajcomp.kinematics import fk
 from trajcomp.transforms import abc_to_matrix, matrix_to_abc
 
@@ -35,6 +35,10 @@ class Plan:
     reachable : ndarray, shape (N,) bool
     reason : ndarray, shape (N,) str
         Why a target is unreachable ('' where reachable).
+    posture : ndarray, shape (N,) int
+        The arm posture (`Configuration` index) of each target's grid: one
+        per orientation (-1 for a robot without closed-form IK, whose
+        targets are each solved nearest the grid's seed).
     """
 
     position: np.ndarray
@@ -42,6 +46,7 @@ class Plan:
     joints: np.ndarray
     reachable: np.ndarray
     reason: np.ndarray
+    posture: np.ndarray = None
 
 
 def grid_points(corner, side, step):
@@ -94,12 +99,14 @@ def batch_seed(robot, targets):
     return result.q[0] if result.success[0] else robot.home
 
 
-def plan_grid(robot, corner, side, step, orientation=None):
+def plan_grid(robot, corner, side, step, orientation=None, one_posture=True):
     """Plan a cubic measurement grid and solve every target with nominal IK.
 
-    The targets of each orientation are solved on the branch nearest its
-    `batch_seed`, so that each orientation's grid is measured in one arm
-    configuration.
+    The targets of each orientation are solved in one arm posture (branch),
+    that of its `batch_seed`: a grid measured across postures mixes errors
+    of different sign in its interpolation. Targets that posture cannot
+    reach are unreachable, with the posture that would reach them as the
+    reason, never solved silently in another.
 
     Parameters
     ----------
@@ -109,15 +116,25 @@ def plan_grid(robot, corner, side, step, orientation=None):
     orientation : array_like, shape (3,) or (K, 3), optional
         A, B, C in rad, one orientation or several; default: the home
         configuration's TCP orientation.
+    one_posture : bool
+        False: each target on the branch nearest the seed, postures mixed
+        where the seed's does not reach (the demo's paper cube on the UR10).
     """
     nodes = grid_points(corner, side, step)
     orientations = np.atleast_2d(default_orientation(robot) if orientation is None else orientation).astype(float)
-    solved = []
+    solved, postures = [], []
+    closed_form = ik_family(robot) is not None
     for abc in orientations:
         targets = np.tile(np.eye(4), (len(nodes), 1, 1))
         targets[:, :3, :3] = abc_to_matrix(abc)
         targets[:, :3, 3] = nodes
-        solved.append(ik(robot, targets, seed=batch_seed(robot, targets)))
+        seed = batch_seed(robot, targets)
+        posture = int(branch_index(robot, seed)[0]) if closed_form else -1
+        result = ik(robot, targets, seed=seed)
+        if one_posture and closed_form:
+            result = _in_posture(robot, targets, seed, posture, result)
+        solved.append(result)
+        postures.append(np.full(len(nodes), posture))
 
     def order(stack):
         """Per-orientation arrays (K, nodes, ...) -> node-major (nodes * K, ...)."""
@@ -132,7 +149,22 @@ def plan_grid(robot, corner, side, step, orientation=None):
         joints=joints,
         reachable=success,
         reason=order([np.asarray(r.reason) for r in solved]),
+        posture=order(postures),
     )
+
+
+def _in_posture(robot, targets, seed, posture, nearest):
+    """IKResult of targets (N, 4, 4) in branch ``posture``; where that fails, the reason names the posture
+    ``nearest`` (the branch nearest the seed) reaches them in."""
+    result = ik(robot, targets, seed=seed, config=posture)
+    elsewhere = ~result.success & nearest.success
+    if elsewhere.any():
+        others = branch_index(robot, nearest.q[elsewhere])
+        reason = result.reason.astype(object)
+        reason[elsewhere] = [f"not in the grid's arm posture {Configuration.from_index(posture)}, only in "
+                             f"{Configuration.from_index(b)}" for b in others]
+        result = dataclasses.replace(result, reason=reason.astype(str))
+    return result
 
 
 def orientations_needed(robot, plan, *, frame="tracker", joint_terms=True):

@@ -81,7 +81,7 @@ def tool_table():
                                ("point on the tool axis, 6-DoF", [0, 0, 150], True),
                                ("target 50 mm beside it, positions", [40, -30, 150], False)):
         probe = cell.replace(T_flange_tool=pose_to_matrix([*target, 0.0, 0.0, 0.0]))
-        plan = plan_grid(probe, (300, -100, 300), 500, 100, orientations)
+        plan = plan_grid(probe, (300, -100, 300), 500, 100, orientations, one_posture=False)
         q = plan.joints[plan.reachable]
         noise = np.random.default_rng(11)
         seen = fk(virtual.true_robot.replace(T_flange_tool=probe.T_flange_tool), virtual.reached_joints(q))

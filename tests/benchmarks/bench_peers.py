@@ -168,7 +168,7 @@ def virtual_cell():
     """The virtual UR10, its 216 measurements on the cube, the composite model and validation data."""
     robot = load_robot("ur10")
     virtual = VirtualRobot.create(robot, "paper", seed=1)
-    plan = plan_grid(robot, *CUBE)
+    plan = plan_grid(robot, *CUBE, one_posture=False)  # as the demo plans it
     measured = virtual.measure(plan.joints, np.random.default_rng(11))
     meas = Measurements(joints=plan.joints, position=plan.position, measured=measured,
                         lines=np.arange(len(plan.joints)) + 2, path="grid")

@@ -7,6 +7,7 @@ import numpy as np
 from trajcomp.atomic import refuse_inputs
 from trajcomp.commands._args import add_robot, command_parser, info, numbers, positive_number, robot_of
 from trajcomp.errors import ToleranceError
+from trajcomp.ik import Configuration
 from trajcomp.measurements import Measurements, write_measurements
 from trajcomp.orientations import locates_flange, orientation_spread, spread_orientations
 from trajcomp.plan import default_orientation, orientations_needed, plan_grid
@@ -30,11 +31,13 @@ def add_parser(sub):
     parser = command_parser(
         sub, "plan", "plan a cubic measurement grid",
         "Plan a cubic grid of TCP targets, at one tool orientation or several, and solve them "
-        "with the nominal kinematics. Writes the measurement CSV layout without measured columns "
+        "with the nominal kinematics in one arm posture per orientation (that nearest the home pose "
+        "at the grid's centre). Writes the measurement CSV layout without measured columns "
         "(each node at every orientation in turn) and says from how many orientations on the "
-        "identification has all the parameters it can have. Unreachable targets are listed on "
-        "stderr and as comments in the file, and make the exit code 1.",
-        "trajcomp plan --robot ur10 --cube 300,-100,300 --side 500 --step 100 --orientations 5 -o plan.csv",
+        "identification has all the parameters it can have. Unreachable targets (out of reach, or "
+        "reached only in another posture) are listed on stderr and as comments in the file, and make the "
+        "exit code 1.",
+        "trajcomp plan --robot ur10 --cube 300,-100,300 --side 400 --step 100 --orientations 5 -o plan.csv",
     )
     add_robot(parser)
     parser.add_argument("--cube", type=numbers(3), required=True, metavar="X,Y,Z", help="lowest corner, mm")
@@ -67,7 +70,9 @@ def run(args):
     meas = Measurements(joints=plan.joints[ok], position=plan.position[ok], orientation=plan.orientation[ok],
                         lines=np.flatnonzero(ok))
     write_measurements(args.output, meas, comments=[f"trajcomp plan for robot {robot.name}"] + lost)
-    info(f"{args.output}: {ok.sum()} of {len(ok)} targets reachable, {len(orientations)} orientation(s)")
+    postures = ", ".join(str(Configuration.from_index(b)) for b in dict.fromkeys(plan.posture.tolist()) if b >= 0)
+    info(f"{args.output}: {ok.sum()} of {len(ok)} targets reachable, {len(orientations)} orientation(s)"
+         + (f", arm posture {postures}" if postures else ""))
     for line in describe_needs(robot, plan, orientations):
         info(line)
     for line in lost[:10]:
