@@ -316,3 +316,22 @@ def test_plan_keeps_one_arm_posture_and_lists_the_targets_it_cannot_reach(tmp_pa
     assert "7 of 216 targets are unreachable" in err
     rows = read_measurements(plan)
     assert len(rows) == 209 and set(branch_index(load_robot("ur10"), rows.joints).tolist()) == {3}
+
+
+def test_motions_left_untimed_are_in_the_report_warnings(tmp_path, capsys):
+    """After a motion computed at run time the arm's position is unknown: the next motion is not timed, and says so."""
+    import json
+    import shutil
+
+    examples = Path(__file__).resolve().parents[1] / "examples" / "programs" / "kuka"
+    src = (examples / "weld.src").read_text().replace("  LIN P4\n", "  LIN_REL {Z 10}\n  LIN P4\n")
+    (tmp_path / "weld.src").write_text(src)
+    shutil.copy(examples / "weld.dat", tmp_path / "weld.dat")
+    (tmp_path / "out").mkdir()
+    assert main(["retime", str(tmp_path / "weld.src"), "-o", str(tmp_path / "out" / "weld.src"), "--robot",
+                 "kuka_kr6_r900", "--report", str(tmp_path / "r"), "--json-only"]) == 0
+    printed = [line.removeprefix("warning: ") for line in capsys.readouterr().err.splitlines()
+               if line.startswith("warning: ")]
+    assert any(w.startswith("not timed (the arm's position before the motion is unknown): motions to P4")
+               for w in printed)
+    assert json.loads((tmp_path / "r.json").read_text())["warnings"] == printed

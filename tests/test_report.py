@@ -159,7 +159,7 @@ def _timing(peak_velocity):
         segments=(Segment("toppra", 0, 2, 1.0),), jerk_limited_segments=0, peak_speed_ratio=0.5,
         peak_velocity=peak_velocity, peak_acceleration=KUKA.a_max * 0.5, peak_jerk=np.full(6, np.nan),
         limit_velocity=limit, limit_acceleration=KUKA.a_max, limit_jerk=np.full(6, np.inf),
-        within_limits=bool(np.all(peak_velocity <= limit * 1.01)), warnings=(), jerk_measured=np.zeros(6, bool))
+        within_limits=bool(np.all(peak_velocity <= limit * 1.01)), notices=(), jerk_measured=np.zeros(6, bool))
 
 
 def test_timing_peaks_are_judged_against_the_limits(model):

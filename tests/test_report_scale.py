@@ -277,7 +277,7 @@ def _timing_result(segments, waypoints):
     return SimpleNamespace(peak_velocity=six, limit_velocity=2 * six, peak_acceleration=six,
                            limit_acceleration=2 * six, peak_jerk=six, limit_jerk=np.full(6, np.inf),
                            segments=segments, cycle_time=100.0, within_limits=True, peak_speed_ratio=0.0,
-                           jerk_limited_segments=sum(s.jerk_limited for s in segments), warnings=(),
+                           jerk_limited_segments=sum(s.jerk_limited for s in segments), notices=(),
                            jerk_measured=np.zeros(6, bool), t=np.linspace(0.0, 100.0, waypoints))
 
 

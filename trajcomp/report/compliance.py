@@ -253,7 +253,7 @@ def compliance_report(report, robot, *, criteria=None, model=None, model_info=No
         "unused": list(report.unused[:ROWS]),
         "joint_targets": {"mode": report.joint_mode, "labels": list(report.joint_targets[:ROWS]),
                           "count": len(report.joint_targets)},
-        "warnings": list(report.warnings) + ([] if timing is None else list(timing.warnings)),  # all stderr warns
+        "warnings": list(report.warnings) + ([] if timing is None else list(timing.notices)),  # all stderr warns
         "timing": section,
         "missing": missing,
         "full_data": None if data is None else {

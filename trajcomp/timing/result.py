@@ -186,6 +186,16 @@ class TimingResult:
     lowered: tuple = ()
 
     @property
+    def notices(self):
+        """What the user must know of this timing (tuple of str): the motions left untimed, then `warnings`."""
+        if not self.untimed:
+            return tuple(self.warnings)
+        names = ", ".join(self.labels[k] for k in self.untimed[:5])
+        more = f" and {len(self.untimed) - 5} more" if len(self.untimed) > 5 else ""
+        return (f"not timed (the arm's position before the motion is unknown): motions to {names}{more}",
+                *self.warnings)
+
+    @property
     def jerk_measured(self):
         """Mask (6,) of the joints whose `peak_jerk` was measured: in jerk-limited segments (not NaN)."""
         return ~np.isnan(self.peak_jerk)
@@ -294,10 +304,6 @@ class TimingResult:
             change = 100.0 * (self.cycle_time - before) / before if before > 0 else 0.0
             cycle = f"cycle time before compensation {before:.3f} s, after {self.cycle_time:.3f} s ({change:+.2f} %)"
         out.append(cycle)
-        if self.untimed:
-            names = ", ".join(self.labels[k] for k in self.untimed[:5])
-            more = f" and {len(self.untimed) - 5} more" if len(self.untimed) > 5 else ""
-            out.append(f"not timed (the arm's position before the motion is unknown): motions to {names}{more}")
         if self.as_written:
             names = ", ".join(self.labels[k] for k, _ in self.as_written[:5])
             more = f" and {len(self.as_written) - 5} more" if len(self.as_written) > 5 else ""
@@ -306,5 +312,5 @@ class TimingResult:
         out += [f"speed lowered by a joint limit: {text}" for _, text in self.lowered[:5]]
         if len(self.lowered) > 5:
             out.append(f"speed lowered by a joint limit: {len(self.lowered) - 5} more motion(s) (see the report)")
-        out += [f"warning: {w}" for w in self.warnings]
+        out += [f"warning: {w}" for w in self.notices]
         return out
