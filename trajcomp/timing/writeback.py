@@ -107,6 +107,9 @@ def apply_timing(program, result, robot):
             f"{program.name}: timing can be written into CSV, KRL, RAPID, FANUC LS and URScript programs read "
             f"from a file, not into a {program.format} program{'' if program.sources else ' built in memory'}"
         )
+    if program.format == "csv":  # its rows are the trajectory: every one gets its time stamp
+        timed, settings = _csv(program, result)
+        return timed, result.with_settings(settings)
     plan = _plan(program, result, robot)
     timed, settings = writer(program, result, robot, plan)
     return timed, result.with_settings(settings, as_written=plan.as_written, lowered=plan.notes(result, settings))
@@ -259,7 +262,7 @@ def _floor(value, places):
     return max(math.floor(value * 10**places + 1e-9), 1) / 10**places
 
 
-def _csv(program, result, robot, plan):
+def _csv(program, result):
     """The ``t`` column: each row's time stamp (`trajcomp.formats.csv_program.with_times`).
 
     The rows are the trajectory (a CSV program has no speed field of the
