@@ -347,8 +347,13 @@ def _krl(program, result, robot, plan):
     settings = {}
 
     def edit(span, value):
+        """Write ``value`` over ``span`` (and in its fold's header); the statement as it now reads."""
         edits[span.source].append((span.start, span.end, value))
         edits[span.source].extend(folds[span.source].header_edits(span, value))
+        text = program.sources[span.source].text
+        start, end = text.rfind("\n", 0, span.start) + 1, text.find("\n", span.end)
+        end = len(text) if end < 0 else end
+        return " ".join((text[start:span.start] + value + text[span.end:end]).split())
 
     running = {"ptp": None, "cp": None}  # the speed value in force as the program runs down
     governing = {"ptp": None, "cp": None}  # (source, offset) of the statement that set it
@@ -357,8 +362,7 @@ def _krl(program, result, robot, plan):
         k, want = wanted.get(m, (None, None))
         if "speed_with" in motion.spans:  # the motion's own speed, in its WITH clause: the modal one stays
             if want is not None:
-                edit(motion.spans["speed_with"], want)
-                settings[k] = f"WITH {_krl_statement(group, want)}"
+                settings[k] = edit(motion.spans["speed_with"], want)
             continue
         span = motion.spans.get("speed")
         key = None if span is None else (span.source, span.start)
@@ -366,12 +370,12 @@ def _krl(program, result, robot, plan):
             governing[group] = key
             running[group] = None if span is None else span.text
             if span is not None and want is not None:
-                edit(span, want)
+                settings[k] = edit(span, want)
                 running[group] = want
         need = want if want is not None else (None if span is None else span.text)
         if need is None or (running[group] is not None and _same(need, running[group])):
             if want is not None:
-                settings[k] = _krl_statement(group, want)
+                settings.setdefault(k, _krl_statement(group, want))
             continue
         at = motion.spans["motion"]
         source_text = program.sources[at.source].text
