@@ -57,7 +57,7 @@ def test_compensate_writes_a_valid_report_and_a_self_contained_page(tmp_path, ku
     assert [t["index"] for t in doc["targets"]] == [1, 2, 3, 4, 5] and not any(t["flags"] for t in doc["targets"])
     assert doc["timing"]["within_limits"] and doc["timing"]["cycle_time_before_s"] > 0  # compensate re-times
     figures = _self_contained((tmp_path / "weld-report.html").read_text())
-    assert len(figures) == 5 and all(png.startswith(b"\x89PNG\r\n\x1a\n") for png in figures)
+    assert len(figures) == 6 and all(png.startswith(b"\x89PNG\r\n\x1a\n") for png in figures)
 
 
 def test_retime_writes_a_compliance_report_of_the_program_as_written(tmp_path, capsys):

@@ -67,7 +67,16 @@ def _sweep(outside):
     return ProgramReport(
         labels=Labels(), lines=k + 2, tools=(None,) * N, frames=(None,) * N, T_target=T_target,
         T_command=T_command, correction=correction, q=q, q_planned=planned, declared=("",) * N,
-        written=("",) * N, posture_source=("previous",) * N, outside_grid=mask, predicted_residual=residual)
+        written=("",) * N, posture_source=("previous",) * N, outside_grid=mask, predicted_residual=residual,
+        landing=crafted_landing(residual))
+
+
+def crafted_landing(residual, held_out=0.02):
+    """The landing fields of a crafted run: a held-out error of ``held_out`` mm near every target, all measured."""
+    n = len(residual)
+    zeros, none = np.zeros(n), np.zeros(n, bool)
+    return {"estimate_mm": held_out + residual, "held_out_mm": np.full(n, held_out), "unseen_mm": zeros,
+            "orientation_beyond_deg": zeros, "unmeasured_posture": none, "other_tool": none}
 
 
 @pytest.fixture(scope="module")
@@ -101,7 +110,11 @@ def test_statistics_cover_every_target(sweep):
     expected = {
         "correction_mm": np.linalg.norm(report.correction[:, :3], axis=1),
         "correction_deg": np.abs(report.correction[:, 5]),
-        "predicted_residual_mm": report.predicted_residual,
+        "landing_estimate_mm": report.landing["estimate_mm"],
+        "held_out_mm": report.landing["held_out_mm"],
+        "unseen_mm": report.landing["unseen_mm"],
+        "orientation_beyond_deg": report.landing["orientation_beyond_deg"],
+        "convergence_mm": report.predicted_residual,
         "limit_distance_deg": np.minimum(q - lower, upper - q).min(axis=1),
         "wrist_deg": np.degrees(np.arcsin(np.abs(np.sin(report.q[:, 4])))),  # axes 4 and 6 meet at A5
         "shoulder_mm": singular["shoulder"],
@@ -139,7 +152,7 @@ def test_the_table_holds_every_flagged_target_and_the_worst(sweep):
         k = row["index"] - 1
         want = [key for key, failing in EXPECTED.items() if k in failing]
         assert row["flags"] == want and row["label"] == f"sweep.csv:{k + 2}"
-    assert set(table["worst"]["predicted_residual_mm"][:3]) == {k + 1 for k in RESIDUAL}
+    assert set(table["worst"]["landing_estimate_mm"][:3]) == {k + 1 for k in RESIDUAL}
     stats = doc["summary"]["statistics"]
     for name, worst in table["worst"].items():  # the worst target of each measure first, every listed one tabulated
         assert worst[0] == stats[name]["worst"] and 1 <= len(worst) <= WORST and set(worst) <= set(index), name
@@ -208,7 +221,7 @@ def test_the_worst_places_are_separate_local_extremes_worst_first():
     wave[[525, 1_725]] = [3.0, 2.0]
     plateau = np.ones(3_000)
     plateau[[7, 8, 9]] = 0.5  # a plateau of three equally worst targets (a minimum measure)
-    values = {name: wave for name in ("correction_mm", "correction_deg", "predicted_residual_mm", "jump_deg")}
+    values = {name: wave for name in ("correction_mm", "correction_deg", "convergence_mm", "jump_deg")}
     values.update({name: plateau for name in ("limit_distance_deg", "shoulder_mm", "elbow_deg", "wrist_deg")})
     measures = TargetMeasures(values, np.zeros(3_000, np.uint8), np.zeros(3_000, np.uint8), np.zeros(3_000, bool))
     worst = worst_targets(measures, count=5)

@@ -69,7 +69,9 @@ class Filtered:
         Command minus target in the robot base frame: dx, dy, dz (mm) and
         rotation vector (deg).
     outside_grid : ndarray of bool, shape (N,)
-        Targets outside the calibrated grid (handled by the ``outside`` policy).
+        Targets outside the calibrated region: the grid, the joint range of a
+        joint residual or the arm postures measured (handled by the
+        ``outside`` policy); ``report.landing`` tells them apart.
     report : ProgramReport
         Everything compensation knows about each target (planned joints,
         posture source, predicted residual, warnings).
@@ -229,7 +231,8 @@ class Compensator:
         edited, report = self._compensate(program, label="filter_targets")
         command = np.array([t.pose for t in edited.targets]).reshape(n, 4, 4)
         joints = np.degrees(np.array([t.joints for t in edited.targets]).reshape(n, 6))
-        return Filtered(_in_form(command, form), joints, report.correction, report.outside_grid, report)
+        outside = report.outside_grid | report.landing["unmeasured_posture"]
+        return Filtered(_in_form(command, form), joints, report.correction, outside, report)
 
     def filter_program(self, path, out_path=None, *, tools=None, frames=None, joint_targets="keep", in_place=False):
         """Compensate a robot program file and write the corrected program.

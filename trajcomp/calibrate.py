@@ -27,7 +27,8 @@ import logging
 import numpy as np
 
 from trajcomp.errors import CalibrationError
-from trajcomp.grid import KINDS, METHODS as LATTICE_INTERPOLATORS, fit_field
+from trajcomp import landing
+from trajcomp.grid import KINDS, METHODS as LATTICE_INTERPOLATORS, detect_lattice, fit_field
 from trajcomp.identify import LOSSES, ORIENTATION_WEIGHT, best_fit_transform, identify, outlier_rows, select_splines
 from trajcomp.ik import branch_index, ik
 from trajcomp.joint_errors import KIND as JOINT_KIND
@@ -353,24 +354,26 @@ def calibrate(robot, meas, *, robot_ref=None, method="composite", frame=None, gr
     report["fit"] = {m: ErrorStats.from_errors(e).as_dict() for m, e in
                      mode_errors(model, _rows(joints, keep), position[keep], measured[keep]).items()}
     if folds > 1:
-        report["cross_validation"] = cross_validate(
-            robot, _rows(joints, keep), position[keep], measured[keep], _rows(rotation_base, keep),
-            options | {"R_tcp_target": None if dh is None else dh.R_tcp_target, "splines": parts.selection},
-            folds, seed, progress,
-        )
+        data = (robot, _rows(joints, keep), position[keep], measured[keep], _rows(rotation_base, keep),
+                options | {"R_tcp_target": None if dh is None else dh.R_tcp_target, "splines": parts.selection})
+        held = fold_errors(*data, folds, seed, progress)
+        report["cross_validation"] = {"folds": folds, "interpolation": held.pop("interpolation")} | {
+            m: ErrorStats.from_errors(e).as_dict() for m, e in held.items()}
+        report["landing"] = _landing(robot, dh, frame, data, held, folds, progress, meas.orientation)
     for message in warnings:
         log.warning(message)
     return model
 
 
-def cross_validate(robot, joints, position, measured, rotation, options, folds, seed, progress=None):
-    """k-fold cross-validation statistics per mode, as a dict of ErrorStats dicts.
+def fold_errors(robot, joints, position, measured, rotation, options, folds, seed, progress=None):
+    """Held-out errors (N, 3) per mode of k-fold cross-validation, in row order, and the interpolator used.
 
     The folds fit in the base frame (the tracker registration of the full
     fit). Held-out nodes leave holes in a lattice, so the folds evaluate the
     lattice interpolators (idw8, trilinear) by their scattered counterpart,
-    inverse-distance weighting over the 8 nearest training nodes; the report
-    names the interpolator the folds used.
+    inverse-distance weighting over the 8 nearest training nodes; the
+    ``interpolation`` entry names the interpolator the folds used
+    (`plane_errors` holds out with the lattice interpolator itself).
     """
     if len(position) < 2 * folds:
         raise CalibrationError(f"{len(position)} measurements are too few for {folds}-fold cross-validation")
@@ -383,7 +386,72 @@ def cross_validate(robot, joints, position, measured, rotation, options, folds, 
         parts = _Parts(robot, _rows(joints, train), position[train], measured[train], _rows(rotation, train), **options)
         model = parts.model(robot, robot.name, options["method"], np.eye(4), {}, (False, ""))
         for mode, err in mode_errors(model, _rows(joints, test), position[test], measured[test]).items():
-            collected.setdefault(mode, []).append(err)
-    return {"folds": folds, "interpolation": options["kind"]} | {
-        m: ErrorStats.from_errors(np.concatenate(e)).as_dict() for m, e in collected.items()
-    }
+            collected.setdefault(mode, np.full((len(position), 3), np.nan))[test] = err
+    return {"interpolation": options["kind"], **collected}
+
+
+def cross_validate(robot, joints, position, measured, rotation, options, folds, seed, progress=None):
+    """k-fold cross-validation statistics per mode, as a dict of ErrorStats dicts (see `fold_errors`)."""
+    held = fold_errors(robot, joints, position, measured, rotation, options, folds, seed, progress)
+    return {"folds": folds, "interpolation": held.pop("interpolation")} | {
+        m: ErrorStats.from_errors(e).as_dict() for m, e in held.items()}
+
+
+def plane_errors(robot, joints, position, measured, rotation, options, progress=None):
+    """Held-out |error| (N,) per mode of a lattice model, with its own lattice interpolator.
+
+    For each axis and each parity, every other node plane along the axis is
+    left out; the model refitted on the others (a lattice twice as coarse
+    along that axis) is evaluated at the planes left out inside its box.
+    Each row keeps its largest held-out |error| over the axes; rows never
+    held out (the corners of the lattice) are NaN.
+    """
+    _, index = detect_lattice(position)
+    held = {}
+    options = options | {"grid_step": None}
+    for axis in range(3):
+        for parity in (0, 1):
+            train = index[:, axis] % 2 == parity
+            planes = np.unique(index[train, axis])
+            test = ~train & (index[:, axis] > planes.min()) & (index[:, axis] < planes.max())
+            if len(planes) < 2 or not test.any():
+                continue
+            if progress:
+                progress(f"held-out node planes along {'xyz'[axis]} ({'even' if parity else 'odd'})")
+            try:
+                parts = _Parts(robot, _rows(joints, train), position[train], measured[train], _rows(rotation, train),
+                               **options)
+            except CalibrationError:  # too few planes left to fit: this axis gives no held-out errors
+                continue
+            model = parts.model(robot, robot.name, options["method"], np.eye(4), {}, (False, ""))
+            for mode, err in mode_errors(model, _rows(joints, test), position[test], measured[test]).items():
+                norms = held.setdefault(mode, np.full(len(position), np.nan))
+                norms[test] = np.fmax(norms[test], np.linalg.norm(err, axis=1))
+    return held
+
+
+def _landing(robot, dh, frame, data, held, folds, progress, orientation):
+    """The plain-data `trajcomp.landing.LandingData` of a calibration (its report's ``landing``).
+
+    ``data`` are the rows the statistics use ``(robot, joints, position,
+    measured, rotation, options)``; ``held`` their k-fold errors per mode.
+    """
+    _, joints, position, measured, rotation, options = data
+    if options["kind"] in LATTICE_INTERPOLATORS:
+        norms = plane_errors(*data, progress)
+        method = (f"{options['kind']} on the lattice with every other node plane along each axis held out "
+                  "(cells twice as long along that axis)")
+    else:
+        norms = {mode: np.linalg.norm(e, axis=1) for mode, e in held.items()}
+        method = f"{folds}-fold cross-validation, residual {options['kind']}"
+    rows = np.isfinite(next(iter(norms.values())))
+    parameters = ([], np.zeros(0), np.zeros((0, 0)), np.zeros(0))
+    if dh is not None:
+        parameters = landing.posterior(
+            robot, dh.robot, joints, rotation, frame=frame, residuals=measured - fk(dh.robot, joints)[:, :3, 3],
+            R_tcp_target=dh.R_tcp_target, fitted=dict(zip(dh.names, dh.delta)))
+    rotations = fk(robot, joints)[:, :3, :3] if joints is not None else (
+        abc_to_matrix(orientation) if orientation is not None else None)
+    built = landing.build({mode: v[rows] for mode, v in norms.items()}, position[rows], method, parameters,
+                          rotations)
+    return built.to_dict()

@@ -20,6 +20,7 @@ import functools
 
 import numpy as np
 
+from trajcomp import landing
 from trajcomp.errors import ModelError, TrajcompError
 from trajcomp.frames import tool_groups
 from trajcomp.ik import IKResult, ik_near, ik_numeric, pose_error
@@ -54,7 +55,8 @@ class CompensationResult:
         Targets outside the grid, handled by the ``outside`` policy.
     residual : ndarray, shape (N,)
         Distance from the target to where the model predicts the arm lands
-        with the command, mm: what the fixed-point iteration left.
+        with the command, mm: what the fixed-point iteration left (its
+        convergence, not an accuracy).
     near_face : ndarray, shape (N,) bool
         Targets inside the grid whose command lies outside it (near a face,
         the correction moves the command out): the grid's nearest value is
@@ -64,6 +66,18 @@ class CompensationResult:
         Targets on a tool other than the measured TCP, compensated with a
         model that cannot place other tools (`CompensationModel.places_other_tools`).
         All False when not given.
+    held_out, unseen : ndarray, shape (N,)
+        The two parts of the landing estimate (`trajcomp.landing`), mm: the
+        model's held-out errors near the target, and what the measurements
+        could not see at its orientation, tool and posture (NaN when not
+        given: no estimate).
+    orientation_beyond : ndarray, shape (N,)
+        Angle of the target's orientation beyond the measured ones, deg
+        (0 when not given).
+    unmeasured_posture : ndarray, shape (N,) bool
+        Targets in an arm posture the calibration did not measure (outside
+        the calibrated region, but not ``outside`` the grid). All False when
+        not given.
     """
 
     T_command: np.ndarray
@@ -73,11 +87,24 @@ class CompensationResult:
     residual: np.ndarray
     near_face: np.ndarray = None
     other_tool: np.ndarray = None
+    held_out: np.ndarray = None
+    unseen: np.ndarray = None
+    orientation_beyond: np.ndarray = None
+    unmeasured_posture: np.ndarray = None
 
     def __post_init__(self):
-        for name in ("near_face", "other_tool"):
+        n = len(self.residual)
+        defaults = {"near_face": np.zeros(n, bool), "other_tool": np.zeros(n, bool), "held_out": np.full(n, np.nan),
+                    "unseen": np.full(n, np.nan), "orientation_beyond": np.zeros(n),
+                    "unmeasured_posture": np.zeros(n, bool)}
+        for name, value in defaults.items():
             if getattr(self, name) is None:
-                object.__setattr__(self, name, np.zeros(len(self.residual), dtype=bool))
+                object.__setattr__(self, name, value)
+
+    @property
+    def estimate(self):
+        """Landing estimate (N,), mm: held-out + unseen + the convergence residual (`trajcomp.landing`)."""
+        return self.held_out + self.unseen + self.residual
 
     @classmethod
     def concatenate(cls, parts, order, n):
@@ -116,7 +143,8 @@ def compensate(model, targets, *, mode=None, tool=None, seed=None, outside="mode
         Joint seed choosing the IK branch; default: `batch_seed` of the targets.
     outside : {"model", "clamp", "error"}
         Policy for targets outside the grid, or outside the joint range of a
-        joint residual (see `CompensationModel.predict`).
+        joint residual (see `CompensationModel.predict`), or in an arm posture
+        the calibration did not measure (``error`` refuses them).
     label : str
         Names the set of targets in error messages (e.g. the program file).
     names : sequence of str, length N, optional
@@ -141,7 +169,8 @@ def compensate(model, targets, *, mode=None, tool=None, seed=None, outside="mode
     seed = np.broadcast_to(np.asarray(seed, dtype=float), (len(targets), 6))
     policy = "model" if outside == "error" else outside  # "error": the targets outside are refused below, all named
     arm = model.arm(mode, tool, policy)
-    rows = functools.partial(_compensate_rows, model, mode, nominal, arm, model.error_field(mode), policy, label)
+    rows = functools.partial(_compensate_rows, model, mode, nominal, arm, model.error_field(mode), policy, label,
+                             tool)
     if len(targets) <= CHUNK:
         result = rows(targets, seed, names)
     else:
@@ -155,7 +184,7 @@ def compensate(model, targets, *, mode=None, tool=None, seed=None, outside="mode
             # set in one piece (each target is compensated on its own, so it fails the
             # same way) for the message naming every failing target of the set.
             result = rows(targets, seed, names)
-    if outside == "error" and result.outside.any():
+    if outside == "error" and (result.outside | result.unmeasured_posture).any():
         _refuse_outside(model, mode, arm, result, label, names)
     return result
 
@@ -170,14 +199,14 @@ def _refuse_outside(model, mode, arm, result, label, names):
         (model.unmeasured_posture(result.q), "in an arm posture the calibration never measured"),
     ]
     name = (lambda i: f"target {i}") if names is None else names.__getitem__
-    out = np.flatnonzero(result.outside)
+    out = np.flatnonzero(result.outside | result.unmeasured_posture)
     shown = "; ".join(f"{name(i)}: " + ", ".join(why for mask, why in reasons if mask[i]) for i in out[:10])
     more = f"; and {out.size - 10} more" if out.size > 10 else ""
     raise ModelError(f"{label}: {out.size} of {len(result.q)} targets lie outside the calibrated region "
                      f"(--outside error): {shown}{more}")
 
 
-def _compensate_rows(model, mode, nominal, arm, field, outside, label, targets, seed, names=None):
+def _compensate_rows(model, mode, nominal, arm, field, outside, label, tool, targets, seed, names=None):
     """`compensate` of targets (N, 4, 4) from joint seeds (N, 6) with the mode's arm and error field.
 
     Each fixed-point pass solves the rows not yet landed for their goal minus
@@ -211,9 +240,14 @@ def _compensate_rows(model, mode, nominal, arm, field, outside, label, targets, 
         todo = todo[residual[todo] >= LANDED]
         if not todo.size:
             break
-    outside_region = flagged | arm.outside_rows(q) | model.unmeasured_posture(q, outside)
-    return CompensationResult(command, q, command[:, :3, 3] - goal, outside_region, residual,
-                              near_face=inside & ~field.contains(command[:, :3, 3]) if field is not None else None)
+    posture = model.unmeasured_posture(q, outside)
+    other_tool = tool is not None and not same_tool(tool, model.nominal.T_flange_tool) and not model.places_other_tools
+    estimate = landing.estimate(model, mode, q, targets, tool, posture, other_tool)
+    return CompensationResult(command, q, command[:, :3, 3] - goal, flagged | arm.outside_rows(q), residual,
+                              near_face=inside & ~field.contains(command[:, :3, 3]) if field is not None else None,
+                              other_tool=np.full(len(q), other_tool), held_out=estimate.held_out,
+                              unseen=estimate.unseen, orientation_beyond=estimate.orientation,
+                              unmeasured_posture=posture)
 
 
 def _error_term(model, mode, field, outside, inside, commanded):
@@ -285,10 +319,7 @@ def program_corrector(model, *, mode=None, outside="model", label="program", wor
 
     def on_tool(tool, targets, seeds, names):
         measured_tcp = same_tool(tool, model.nominal.T_flange_tool)
-        result = compensate(model, targets, mode=mode, tool=None if measured_tcp else tool, seed=seeds,
-                            outside=outside, label=label, names=names, workers=workers)
-        if measured_tcp or model.places_other_tools:
-            return result
-        return dataclasses.replace(result, other_tool=np.ones(len(targets), dtype=bool))
+        return compensate(model, targets, mode=mode, tool=None if measured_tcp else tool, seed=seeds,
+                          outside=outside, label=label, names=names, workers=workers)
 
     return correct

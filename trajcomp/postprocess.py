@@ -52,8 +52,10 @@ class ProgramReport:
     posture_source : tuple of str, length N
         ``"joints"``, ``"config"``, ``"previous"`` or ``"home"`` (`trajcomp.posture`).
     outside_grid : ndarray of bool, shape (N,)
+        Targets outside the measured grid or the joint range of a joint residual.
     predicted_residual : ndarray, shape (N,)
-        Distance from the target to the model-predicted landing, mm.
+        Distance from the target to the model-predicted landing, mm: the
+        compensation's convergence (the model agreeing with itself).
     not_compensated : tuple of (int, str, str)
         Line, text and reason of motions passed through unchanged (each
         once), then of statements that pass a point where trajcomp cannot
@@ -68,6 +70,11 @@ class ProgramReport:
         ``"keep"`` or ``"compensate"``.
     warnings : tuple of str
         What the run could do but the user must know.
+    landing : dict of str to ndarray, shape (N,), or None
+        The landing estimate (None: no model): ``estimate_mm`` (what the
+        verdict judges), its parts ``held_out_mm`` and ``unseen_mm``,
+        ``orientation_beyond_deg``, ``unmeasured_posture`` and ``other_tool``
+        (`trajcomp.compensate.CompensationResult`).
     """
 
     labels: tuple
@@ -90,6 +97,7 @@ class ProgramReport:
     joint_targets: tuple = ()
     joint_mode: str = "keep"
     warnings: tuple = ()
+    landing: dict = None
 
     def lines_of_text(self):
         """Human-readable summary lines."""
@@ -197,6 +205,7 @@ def compensate_program(program, correct, robot, *, tools=None, frames=None, join
         not_compensated=_not_compensated(program, cartesian),
         motions_left=sum(not m.axis_position for m in program.runtime_motions()),
         **_program_facts(program, joint_index, joint_targets),
+        landing=None if result is None else landing_of(result),
     )
     if result is not None:
         report = dataclasses.replace(report, warnings=report.warnings + _compensation_warnings(result, labels))
@@ -276,6 +285,13 @@ def _not_compensated(program, compensated):
                             "(a procedure argument, a run-time expression): left as written")
                for i, line, text in program.referenced_targets() if line not in lines]
     return tuple(listed)
+
+
+def landing_of(result):
+    """The `ProgramReport.landing` arrays of a `CompensationResult`."""
+    return {"estimate_mm": result.estimate, "held_out_mm": result.held_out, "unseen_mm": result.unseen,
+            "orientation_beyond_deg": result.orientation_beyond, "unmeasured_posture": result.unmeasured_posture,
+            "other_tool": result.other_tool}
 
 
 def as_written_report(program, plan):

@@ -55,7 +55,10 @@ def program_report(n):
     return robot, ProgramReport(
         labels=labels, lines=k + 2, tools=(None,) * n, frames=(None,) * n, T_target=T_target, T_command=T_command,
         correction=correction, q=q, q_planned=q, declared=("",) * n, written=("",) * n,
-        posture_source=("previous",) * n, outside_grid=outside, predicted_residual=residual)
+        posture_source=("previous",) * n, outside_grid=outside, predicted_residual=residual,
+        landing={"estimate_mm": 0.02 + residual, "held_out_mm": np.full(n, 0.02), "unseen_mm": np.zeros(n),
+                 "orientation_beyond_deg": np.zeros(n), "unmeasured_posture": np.zeros(n, bool),
+                 "other_tool": np.zeros(n, bool)})
 
 
 def measure(n, folder):

@@ -18,7 +18,7 @@ def add_report_options(parser, *, verdict="posture"):
                        help="only the JSON report, no page or plots: to PATH.json with --report, else to stdout")
     if verdict:
         group.add_argument("--tolerance", type=float, default=0.1, metavar="MM",
-                           help="largest acceptable landing error: per target (predicted residual) and for 95 %% of "
+                           help="largest acceptable landing error: per target (its landing estimate) and for 95 %% of "
                            "the model's held-out points (default %(default)g mm)")
     if verdict == "posture":
         group.add_argument("--limit-margin", type=float, default=1.0, metavar="DEG",

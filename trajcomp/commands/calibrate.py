@@ -18,7 +18,7 @@ from trajcomp.commands._args import (
     robot_of,
     steps,
 )
-from trajcomp.commands._report import add_report_options, emit
+from trajcomp.commands._report import add_report_options, criteria_of, emit
 from trajcomp.identify import LOSSES, ORIENTATION_WEIGHT
 from trajcomp.measurements import read_measurements
 from trajcomp.model_file import save_model
@@ -60,7 +60,7 @@ def add_parser(sub):
     parser.add_argument("--seed", type=non_negative_int, default=0, help="seed of the fold split (default 0)")
     add_layout(parser)
     parser.add_argument("-o", "--output", required=True, help="model file to write (.yaml)")
-    add_report_options(parser, verdict=None)
+    add_report_options(parser, verdict="accuracy")
     parser.set_defaults(run=run)
 
 
@@ -124,6 +124,7 @@ def run(args):
         options["grid_step"] = None if args.grid_step is None else np.atleast_1d(args.grid_step).tolist()
         options["columns"] = None if args.columns is None else dict(args.columns.columns)
         options["tool"] = None if args.tool is None else [float(v) for v in matrix_to_pose(args.tool)]
-        return emit(calibration_report(model, meas, files=files, options=options), args.report, args.json_only,
-                    protect=[*inputs, *model_inputs(args.output)], written_before=[args.output])
+        report = calibration_report(model, meas, criteria=criteria_of(args), files=files, options=options)
+        return emit(report, args.report, args.json_only, protect=[*inputs, *model_inputs(args.output)],
+                    written_before=[args.output])
     return 0

@@ -15,7 +15,8 @@ from trajcomp.kinematics import fk
 from trajcomp.report import plots
 from trajcomp.report.document import Figure, Report
 from trajcomp.report.provenance import grid_box, header
-from trajcomp.report.verdict import accuracy_check, verdict
+from trajcomp import landing
+from trajcomp.report.verdict import Criteria, accuracy_check, verdict
 from trajcomp.stats import AXES, ErrorStats
 from trajcomp.transforms import abc_to_matrix, matrix_to_abc, matrix_to_pose
 
@@ -142,7 +143,23 @@ def _files_and_robot(model, files, options):
             "options": options or {}}
 
 
-def calibration_report(model, meas, *, files=(), options=None):
+def held_out_check(model, tolerance):
+    """The calibration's headline criterion: 95 % of the held-out errors of the model's mode within the tolerance.
+
+    Held out with the interpolator the compensation uses (`trajcomp.landing`);
+    a model without them falls back to its k-fold cross-validation, else the
+    criterion is not evaluated.
+    """
+    mode = model.method
+    data = landing.of_model(model)
+    if data is not None and mode in data.held_out:
+        return accuracy_check(data.held_out[mode], mode, tolerance, f"held-out ({data.method})")
+    cv = model.report.get("cross_validation") or {}
+    return accuracy_check(cv.get(mode), mode, tolerance, f"{cv.get('folds', 'k')}-fold cross-validation", missing=(
+        "no held-out errors: calibrated with --folds 0, so the fit statistics flatter the model"))
+
+
+def calibration_report(model, meas, *, criteria=None, files=(), options=None):
     """The calibration report of a model and the measurements it was identified from.
 
     Parameters
@@ -152,6 +169,9 @@ def calibration_report(model, meas, *, files=(), options=None):
         the fit and cross-validation statistics).
     meas : Measurements
         The measurements (all rows; outliers are marked by line).
+    criteria : Criteria, optional
+        Its tolerance judges the held-out accuracy of the model's mode
+        (`held_out_check`; default 0.1 mm).
     files : sequence of dict
         `trajcomp.report.provenance.file_entry` of inputs and outputs.
     options : dict, optional
@@ -161,6 +181,7 @@ def calibration_report(model, meas, *, files=(), options=None):
     -------
     Report
     """
+    criteria = criteria or Criteria()
     joints, position, measured, errors = _data(model, meas)
     stored = model.report
     outlier_lines = list(stored.get("outlier_lines") or [])
@@ -185,7 +206,8 @@ def calibration_report(model, meas, *, files=(), options=None):
     doc = header("calibration", "calibrate")
     doc.update({
         "provenance": _files_and_robot(model, files, options),
-        "verdict": None,
+        "criteria": criteria.as_dict(),
+        "verdict": verdict([held_out_check(model, criteria.tolerance)]),
         "method": model.method,
         "modes": list(model.modes),
         "points": len(meas),
@@ -194,6 +216,8 @@ def calibration_report(model, meas, *, files=(), options=None):
         "cross_validation": None if cv is None else {
             "folds": cv["folds"], "interpolation": cv.get("interpolation"),
             "modes": {m: s for m, s in cv.items() if isinstance(s, dict)}},
+        "held_out": None if "landing" not in stored else {
+            "method": stored["landing"]["method"], "modes": stored["landing"]["held_out"]},
         "iso9283": iso,
         "trends": trends(position[~excluded], errors["none"][~excluded]),
         "linear": None if model.linear is None else model.linear.to_dict(),

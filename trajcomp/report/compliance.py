@@ -13,7 +13,9 @@ compensable motion, no grid in the mode, no re-timing) is listed under
 
 import numpy as np
 
+from trajcomp import landing
 from trajcomp.report import plots
+from trajcomp.report.measures import BRANCH_NAMES
 from trajcomp.report.document import Figure, Report
 from trajcomp.report.provenance import grid_box, header
 from trajcomp.report.targets import ARRAYS, ROWS, TIMES, flag_bits, full_data, statistics, table_rows, target_json, \
@@ -24,16 +26,22 @@ TIMING_SLACK = 0.01  # relative: a peak up to 1 % over its limit passes (the tim
 
 
 AS_WRITTEN = "no compensation model: the program runs as written (retime)"
-MODEL_MEASURES = ("correction_mm", "correction_deg", "predicted_residual_mm")  # per-target measures a model gives
-MODEL_FIELDS = ("correction_mm", "correction_deg", "correction_norm_mm", "correction_norm_deg",
-                "predicted_residual_mm", "outside_grid")  # a target's JSON fields that need a model
+MODEL_MEASURES = ("correction_mm", "correction_deg", "convergence_mm")  # per-target measures a model gives
+MODEL_FIELDS = ("correction_mm", "correction_deg", "correction_norm_mm", "correction_norm_deg", "convergence_mm",
+                "outside_grid")  # a target's JSON fields that need a model (the landing ones are None without)
 
 
-def target_checks(report, measures, criteria, has_grid, mode, compensated=True):
+def target_checks(report, measures, criteria, has_grid, mode, model=None):
     """The per-target criteria of the verdict and their failing masks.
 
-    Without compensation the residual and grid criteria are not evaluated;
-    without targets, none is.
+    Without compensation (``model`` None) the landing, grid and coverage
+    criteria are not evaluated; without targets, none is. A target passes
+    the landing criterion (``residual``) only with an estimate within the
+    tolerance; one beyond the measured orientations, on a tool the model
+    cannot place or in an unmeasured posture also fails the criterion that
+    says why (orientation and tool: unless its estimate is within the
+    tolerance; posture: always, as the estimate cannot see gear and
+    compliance errors of another branch).
 
     Returns
     -------
@@ -44,8 +52,13 @@ def target_checks(report, measures, criteria, has_grid, mode, compensated=True):
     labels = report.labels
     c = criteria
     statements = {
-        "residual": f"predicted residual of every target within {c.tolerance:g} mm",
-        "outside_grid": "every target inside the measured grid",
+        "residual": f"estimated landing error of every target within {c.tolerance:g} mm",
+        "outside_grid": "every target inside the measured grid (and the joint range of a joint residual)",
+        "orientation": (f"every target's orientation within the measured ones (+{landing.ORIENTATION_MARGIN:g} deg), "
+                        f"or its estimated landing error within {c.tolerance:g} mm"),
+        "tool": (f"every target on the measured TCP, or the model places other tools, or its estimated landing "
+                 f"error within {c.tolerance:g} mm"),
+        "posture": "every target in an arm posture (shoulder/elbow/wrist branch) the calibration measured",
         "configuration": "every target keeps its declared posture (arm branch and joint turns)",
         "joint_limits": f"every joint at least {c.limit_margin:g} deg from its limits",
         "singularity": (f"every target at least {c.singularity_margin:g} deg from elbow and wrist singularities "
@@ -54,29 +67,70 @@ def target_checks(report, measures, criteria, has_grid, mode, compensated=True):
     if not len(labels):
         return [not_evaluated(key, text, "no compensated target") for key, text in statements.items()], {}
     v = measures.values
-    masks = {"residual": v["predicted_residual_mm"] > c.tolerance,
-             "outside_grid": np.asarray(report.outside_grid, dtype=bool),
+    n = len(labels)
+    masks = {"outside_grid": np.asarray(report.outside_grid, dtype=bool),
              "configuration": measures.changed,
              "joint_limits": v["limit_distance_deg"] < c.limit_margin,
              "singularity": ((v["shoulder_mm"] < c.shoulder_margin) | (v["elbow_deg"] < c.singularity_margin)
                              | (v["wrist_deg"] < c.singularity_margin))}
     details = {
-        "residual": f"largest {v['predicted_residual_mm'].max():.2e} mm",
-        "outside_grid": f"{int(masks['outside_grid'].sum())} of {len(labels)} targets outside",
+        "outside_grid": f"{int(masks['outside_grid'].sum())} of {n} targets outside",
         "configuration": f"{int(masks['configuration'].sum())} targets changed branch or turned a joint by half a turn",
         "joint_limits": f"smallest distance {v['limit_distance_deg'].min():.2f} deg",
         "singularity": (f"smallest: shoulder {v['shoulder_mm'].min():.1f} mm, elbow {v['elbow_deg'].min():.2f} deg, "
                         f"wrist {v['wrist_deg'].min():.2f} deg"),
     }
     skipped = {}
-    if not compensated:
-        skipped = {"residual": AS_WRITTEN, "outside_grid": AS_WRITTEN}
-    elif not has_grid:
-        skipped = {"outside_grid": f"mode {mode} uses no grid: every target gets the same kind of correction"}
+    if model is None:
+        skipped = dict.fromkeys(("residual", "outside_grid", "orientation", "tool", "posture"), AS_WRITTEN)
+    else:
+        found = _landing_checks(report, v, c.tolerance, model)
+        for key, (mask, detail) in found.items():
+            if mask is None:
+                skipped[key] = detail
+            else:
+                masks[key], details[key] = mask, detail
+        if not has_grid:
+            skipped["outside_grid"] = f"mode {mode} uses no grid: every target gets the same kind of correction"
     masks = {key: mask for key, mask in masks.items() if key not in skipped}
     checks = [not_evaluated(key, text, skipped[key]) if key in skipped
               else check(key, text, masks[key], labels, details[key]) for key, text in statements.items()]
     return checks, masks
+
+
+def _landing_checks(report, v, tolerance, model):
+    """``{criterion: (failing mask or None, detail)}`` of the landing and coverage criteria (None: not evaluated)."""
+    data = report.landing
+    if data is None:
+        return dict.fromkeys(("residual", "orientation", "tool", "posture"),
+                             (None, "the run has no landing estimate (compensated without the model's statistics)"))
+    estimate, convergence = v["landing_estimate_mm"], v["convergence_mm"]
+    within = estimate <= tolerance  # False where there is no estimate
+    out = {}
+    if np.isnan(v["held_out_mm"]).all():
+        out["residual"] = (None, "no landing estimate: the model has no held-out errors (calibrated with --folds 0 "
+                                 "or by an older trajcomp); calibrate with --folds 5 to evaluate it")
+    else:
+        worst = int(np.nanargmax(estimate)) if np.isfinite(estimate).any() else 0
+        out["residual"] = (~within, f"largest {estimate[worst]:.4f} mm at {report.labels[worst]} (held-out "
+                                    f"{v['held_out_mm'][worst]:.4f} + unseen {v['unseen_mm'][worst]:.4f} mm); "
+                                    f"{int((~within).sum())} targets above; convergence at most {convergence.max():.1e} mm")
+    beyond = v["orientation_beyond_deg"] > 0
+    out["orientation"] = (beyond & ~within, (
+        f"{int(beyond.sum())} targets beyond the measured orientations (up to {v['orientation_beyond_deg'].max():.1f} "
+        f"deg beyond), {int((beyond & ~within).sum())} of them with an estimate above the tolerance"))
+    other = np.asarray(data["other_tool"], dtype=bool)
+    if model.places_other_tools:
+        out["tool"] = (np.zeros(len(other), bool), f"{int(other.sum())} targets on another tool; the model places "
+                                                   f"other tools ({model.other_tools_reason})")
+    else:
+        out["tool"] = (other & ~within, f"{int(other.sum())} targets on a tool other than the measured TCP, "
+                                        f"{int((other & ~within).sum())} of them with an estimate above the tolerance; "
+                                        f"the model cannot place other tools: {model.other_tools_reason}")
+    posture = np.asarray(data["unmeasured_posture"], dtype=bool)
+    measured = ", ".join(BRANCH_NAMES[b] for b in model.postures) or "not recorded"
+    out["posture"] = (posture, f"{int(posture.sum())} targets in a posture not measured (measured: {measured})")
+    return out
 
 
 def timing_section(timing, before=None, times=True):
@@ -207,7 +261,7 @@ def compliance_report(report, robot, *, criteria=None, model=None, model_info=No
     mode = mode or (model.method if model is not None else None)
     has_grid = model is not None and model.error_field(mode) is not None
     measures = target_measures(report, robot, workers)
-    checks, masks = target_checks(report, measures, criteria, has_grid, mode, compensated=model is not None)
+    checks, masks = target_checks(report, measures, criteria, has_grid, mode, model)
     flags = flag_bits(masks) if masks else np.zeros(len(measures), np.uint8)
     index, table = table_rows(flags, measures)
     missing = []
@@ -215,7 +269,7 @@ def compliance_report(report, robot, *, criteria=None, model=None, model_info=No
         missing.append("no compensable motion: the program has no Cartesian target a motion uses, "
                        "so there is nothing to tabulate or plot")
     if model is None:
-        missing.append(f"{AS_WRITTEN}, so there are no corrections, predicted residuals or grid: those fields of "
+        missing.append(f"{AS_WRITTEN}, so there are no corrections, landing estimates or grid: those fields of "
                        "the summary and the targets are null")
     if model is not None and not has_grid:
         missing.append(f"no grid: mode {mode} of this model uses no residual grid, so there is no grid box "
@@ -226,7 +280,7 @@ def compliance_report(report, robot, *, criteria=None, model=None, model_info=No
         missing.append("no timing: the program was not re-timed, so there are no cycle time and no peak "
                        "joint velocity, acceleration or jerk")
     if model is not None:
-        checks.insert(1, _model_accuracy(model, mode, has_grid, criteria.tolerance))
+        checks.insert(1, _model_accuracy(model, mode, has_grid, criteria.tolerance, measures))
     lines = tuple(int(line) for line, *_ in report.not_compensated)
     if model is None:
         checks.append(not_evaluated("uncompensated", "every motion compensated", AS_WRITTEN))
@@ -260,12 +314,15 @@ def compliance_report(report, robot, *, criteria=None, model=None, model_info=No
             "path": None, "format": "npz", "rows": len(measures),
             "arrays": {name: ARRAYS.get(name, TIMES) for name in data}},
     })
-    figures = _figures(report, robot, measures, doc, model.error_field(mode) if has_grid else None,
+    figures = _figures(report, robot, measures, doc, model.error_field(mode) if has_grid else None, timing,
                        compensated=model is not None)
     return Report(doc, figures, data)
 
 
-def _figures(report, robot, measures, doc, field, compensated=True):
+TIMELINE = 4000  # instants at which the joint motion figure samples the timed program
+
+
+def _figures(report, robot, measures, doc, field, timing=None, compensated=True):
     """The compliance figures, drawn lazily; none without targets, no grid or correction without a model."""
     figures = []
     n = len(measures)
@@ -274,21 +331,29 @@ def _figures(report, robot, measures, doc, field, compensated=True):
         box = None if box is None else (box["lower"], box["upper"])
         c, v = doc["criteria"], measures.values
         envelope = plots.envelope_note(n)
+        data = report.landing or {}
+        posture = data.get("unmeasured_posture")
+        orientation = None if "orientation_beyond_deg" not in v else v["orientation_beyond_deg"] > 0
         figures += [
             Figure("targets", "Targets and the measured grid" if compensated else "Targets",
                    "Targets in motion order (base frame)"
-                   + ("; crosses lie outside the grid, where only the model applies." if compensated else
+                   + ("; crosses lie outside the grid, where only the model applies; triangles are in an arm posture "
+                      "the calibration did not measure and diamonds beyond the measured orientations (inside the "
+                      "grid box, but not where the model was measured)." if compensated else
                       " (no compensation model: no grid).") + plots.path_note(n),
                    lambda: plots.targets_and_grid(report.T_target[:, :3, 3], np.asarray(report.outside_grid, bool),
-                                                  box)),
+                                                  box, posture, orientation)),
         ]
         if compensated:
             figures.append(Figure(
-                "targets", "Corrections and predicted residuals",
-                "Top: size of the correction per target. Bottom: distance from the target to where the model "
-                "predicts the arm lands with the command (log scale), against the tolerance." + envelope,
-                lambda: plots.corrections(v["correction_mm"], v["correction_deg"], v["predicted_residual_mm"],
-                                          c["tolerance_mm"])))
+                "targets", "Corrections and landing estimates",
+                "Top: size of the correction per target. Bottom (log scale): the landing estimate the verdict "
+                "judges (held-out errors of the model near the target, widened where its orientation, tool or "
+                "posture lies outside what was measured) and the convergence of the compensation (distance from "
+                "the target to where the model itself predicts the arm lands: the model agreeing with itself, "
+                "not an accuracy), against the tolerance." + envelope,
+                lambda: plots.corrections(v["correction_mm"], v["correction_deg"], v.get("landing_estimate_mm"),
+                                          v["convergence_mm"], c["tolerance_mm"])))
         figures += [
             Figure("posture", "Joints within their ranges",
                    "Each written joint as a fraction of its range; shaded: the limit margin." + envelope,
@@ -304,13 +369,28 @@ def _figures(report, robot, measures, doc, field, compensated=True):
         ]
     if doc["timing"] is not None:
         figures.append(Figure("timing", "Peaks against limits", "Peak joint velocity, acceleration and jerk of "
-                              "the re-timed program as a percentage of the robot's limits.",
+                              "the re-timed program as a percentage of the robot's limits (from the 1 kHz check).",
                               lambda: plots.timing_peaks(doc["timing"])))
+    if timing is not None and timing.cycle_time > 0:
+        figures.append(Figure(
+            "timing", "Joint motion over time against the limits",
+            f"The re-timed program sampled at {TIMELINE} instants: each joint's position in its range (shaded: "
+            f"the limit margin of {doc['criteria']['limit_margin_deg']:g} deg), |velocity| and |acceleration| as a "
+            "percentage of the joint's limit (red: 100 %). Peaks between the instants are in the table above (1 kHz).",
+            lambda: _joint_motion(timing, robot, doc["criteria"]["limit_margin_deg"])))
     return tuple(figures)
 
 
+def _joint_motion(timing, robot, margin):
+    """The joint motion figure of a timing (`plots.joint_motion`), sampled at `TIMELINE` instants."""
+    t = np.linspace(0.0, timing.cycle_time, TIMELINE)
+    q, qd, qdd = (np.degrees(a) for a in timing.at(t))
+    limits = (np.degrees(a) for a in (robot.q_min, robot.q_max, timing.limit_velocity, timing.limit_acceleration))
+    return plots.joint_motion(t, q, qd, qdd, *limits, margin)
+
+
 def _summary(report, measures, compensated=True):
-    """Counts, worst values and statistics over the targets (None where there is no target).
+    """Counts, worst values and statistics over the targets (None where there is no target or no estimate).
 
     The motions not compensated and the unused points are counted here and
     listed in the document up to `ROWS`. Without compensation (``retime``)
@@ -319,23 +399,32 @@ def _summary(report, measures, compensated=True):
     """
     n = len(report.labels)
     counts = {"not_compensated": len(report.not_compensated), "unused": len(report.unused)}
+    keys = ("correction_max_mm", "correction_max_deg", "estimate_max_mm", "convergence_max_mm",
+            "limit_distance_min_deg")
     if not n:
-        out = {"targets": 0, "outside_grid": 0, "configuration_changed": 0, "correction_max_mm": None,
-               "correction_max_deg": None, "residual_max_mm": None, "limit_distance_min_deg": None, **counts}
+        out = {"targets": 0, "outside_grid": 0, "orientation_beyond": 0, "other_tool": 0, "unmeasured_posture": 0,
+               "configuration_changed": 0, **dict.fromkeys(keys), **counts}
     else:
+        v, data = measures.values, report.landing
+        estimate = v.get("landing_estimate_mm")
         out = {
             **counts,
             "targets": n,
             "outside_grid": int(np.sum(report.outside_grid)),
+            "orientation_beyond": 0 if data is None else int(np.sum(v["orientation_beyond_deg"] > 0)),
+            "other_tool": 0 if data is None else int(np.sum(data["other_tool"])),
+            "unmeasured_posture": 0 if data is None else int(np.sum(data["unmeasured_posture"])),
             "configuration_changed": int(measures.changed.sum()),
-            "correction_max_mm": float(measures.values["correction_mm"].max()),
-            "correction_max_deg": float(measures.values["correction_deg"].max()),
-            "residual_max_mm": float(measures.values["predicted_residual_mm"].max()),
-            "limit_distance_min_deg": float(measures.values["limit_distance_deg"].min()),
+            "correction_max_mm": float(v["correction_mm"].max()),
+            "correction_max_deg": float(v["correction_deg"].max()),
+            "estimate_max_mm": None if estimate is None or np.isnan(estimate).all() else float(np.nanmax(estimate)),
+            "convergence_max_mm": float(v["convergence_mm"].max()),
+            "limit_distance_min_deg": float(v["limit_distance_deg"].min()),
         }
     out["statistics"] = statistics(measures, report.labels)
     if not compensated:
-        out.update(dict.fromkeys(("outside_grid", "correction_max_mm", "correction_max_deg", "residual_max_mm")))
+        out.update(dict.fromkeys(("outside_grid", "orientation_beyond", "other_tool", "unmeasured_posture",
+                                  "correction_max_mm", "correction_max_deg", "convergence_max_mm")))
         out["statistics"] = {k: v for k, v in out["statistics"].items() if k not in MODEL_MEASURES}
     return out
 
@@ -348,13 +437,26 @@ def _as_run(rows, compensated):
     return rows
 
 
-def _model_accuracy(model, mode, has_grid, tolerance):
-    """The model-accuracy check: held-out (cross-validation) errors; in-sample fit errors only for a mode without grid.
+def _model_accuracy(model, mode, has_grid, tolerance, measures):
+    """The model-accuracy check: the held-out errors of the mode near the targets, same interpolator.
 
-    A residual grid reproduces the nodes it was fitted to, so the fit errors
-    of a grid mode are near zero whatever its accuracy between nodes: without
-    cross-validation (``calibrate --folds 0``) the criterion is not evaluated.
+    95 % of the targets' held-out errors nearby (`trajcomp.landing`) within
+    the tolerance. A model without them (``--folds 0``, or written by an
+    older trajcomp) falls back to its cross-validation statistics; a grid's
+    fit errors reproduce its own nodes, so a grid mode without
+    cross-validation is not evaluated.
     """
+    data = landing.of_model(model)
+    held = measures.values.get("held_out_mm")
+    if data is not None and held is not None and np.isfinite(held).any():
+        statement = (f"95 % of the targets' held-out errors nearby (mode {mode}; {data.method}) within "
+                     f"{tolerance:g} mm")
+        p95 = float(np.nanpercentile(held, 95))
+        overall = data.held_out.get(mode) or {}
+        return Check("model_accuracy", statement, PASS if p95 <= tolerance else FAIL,
+                     f"p95 over the targets {p95:.4f} mm (largest {np.nanmax(held):.4f}); over all "
+                     f"{overall.get('n', 0)} held-out points p95 {overall.get('p95', float('nan')):.4f}, max "
+                     f"{overall.get('max', float('nan')):.4f} mm")
     cv = model.report.get("cross_validation") or {}
     if mode in cv:
         return accuracy_check(cv[mode], mode, tolerance, f"{cv['folds']}-fold cross-validation")

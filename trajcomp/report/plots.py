@@ -78,17 +78,22 @@ def error_maps(position, maps, limit_box=None):
     fig, axes = plt.subplots(len(maps), 2, figsize=(WIDTH, 3.6 * len(maps)), squeeze=False, constrained_layout=True)
     for row, (title, values) in enumerate(maps):
         order = np.argsort(values)  # largest errors drawn last, on top
+        top = max(float(np.percentile(values, 99)), 1e-9)
+        above = int(np.sum(values > top))
         for col, (i, j) in enumerate(((0, 1), (0, 2))):
             ax = axes[row, col]
             art = ax.scatter(position[order, i], position[order, j], c=values[order], s=14, cmap="viridis",
-                             vmin=0.0, vmax=max(float(np.percentile(values, 99)), 1e-9), linewidths=0)
+                             vmin=0.0, vmax=top, linewidths=0)
             if limit_box is not None:
                 _box(ax, limit_box, i, j)
             ax.set_aspect("equal", adjustable="datalim")
             ax.set_xlabel(f"{AXES[i]} (mm)")
             ax.set_ylabel(f"{AXES[j]} (mm)")
             ax.set_title(f"{title}: {'top' if col == 0 else 'side'} view")
-        fig.colorbar(art, ax=axes[row, :], label="|error| (mm)", shrink=0.9)
+        label = "|error| (mm)" if not above else (
+            f"|error| (mm); scale clipped at the 99th percentile {top:.3g} mm:\n{above} points above it (largest "
+            f"{values.max():.3g} mm) drawn in its top colour")
+        fig.colorbar(art, ax=axes[row, :], label=label, shrink=0.9, extend="max" if above else "neither")
     return fig
 
 
@@ -200,25 +205,34 @@ def path_note(n, points=POINTS):
             "one outside the grid.")
 
 
-def targets_and_grid(target, outside, grid_box=None):
-    """The targets in motion order over the top and side views, outside-grid ones marked, with the grid box.
+def targets_and_grid(target, outside, grid_box=None, posture=None, orientation=None):
+    """The targets in motion order over the top and side views, with the grid box and the uncovered ones marked.
 
-    Long paths (`path_note`): the line through every k-th target, at most
-    `POINTS`; the markers thinned by `one_per_cell`, so none is lost.
+    Crosses: outside the grid; triangles: in an arm posture the calibration
+    did not measure; diamonds: oriented beyond the measured orientations
+    (``posture``, ``orientation``: boolean masks (N,), optional). Long paths
+    (`path_note`): the line through every k-th target, at most `POINTS`;
+    the markers thinned by `one_per_cell`, so none is lost.
     """
     plt = pyplot()
     fig, axes = plt.subplots(1, 2, figsize=(WIDTH, 4.0), constrained_layout=True)
     step = _stride(len(target))
     path = np.r_[np.arange(0, len(target), step), len(target) - 1] if len(target) else np.zeros(0, int)
+    none = np.zeros(len(target), dtype=bool)
+    posture = none if posture is None else np.asarray(posture, dtype=bool)
+    orientation = none if orientation is None else np.asarray(orientation, dtype=bool)
+    kinds = (("inside the grid, measured posture and orientation", ~(outside | posture | orientation), "o", _INSIDE, 18),
+             ("orientation beyond the measured ones", orientation & ~(outside | posture), "D", "#7d3c98", 30),
+             ("arm posture not measured", posture & ~outside, "^", "#d35400", 36),
+             ("outside the grid", outside, "x", _OUTSIDE, 40))
     for ax, (i, j) in zip(axes, ((0, 1), (0, 2))):
         ax.plot(target[path, i], target[path, j], color=_LIMIT, lw=0.8, zorder=1)
-        inside, crossed = target[~outside][:, [i, j]], target[outside][:, [i, j]]
-        inside, crossed = inside[one_per_cell(inside)], crossed[one_per_cell(crossed)]
-        ax.scatter(inside[:, 0], inside[:, 1], s=18 if step == 1 else 4, color=_INSIDE, label="inside the grid",
-                   zorder=2)
-        if len(crossed):
-            ax.scatter(crossed[:, 0], crossed[:, 1], s=40 if step == 1 else 16, marker="x", color=_OUTSIDE,
-                       label="outside the grid", zorder=3)
+        for z, (label, mask, marker, color, size) in enumerate(kinds):
+            shown = target[mask][:, [i, j]]
+            shown = shown[one_per_cell(shown)]
+            if len(shown) or not z:
+                ax.scatter(shown[:, 0], shown[:, 1], s=size if step == 1 else size / 4, marker=marker, color=color,
+                           label=label, zorder=2 + z)
         if grid_box is not None:
             _box(ax, grid_box, i, j)
         ax.set_aspect("equal", adjustable="datalim")
@@ -228,8 +242,12 @@ def targets_and_grid(target, outside, grid_box=None):
     return fig
 
 
-def corrections(correction_mm, correction_deg, residual, tolerance):
-    """Per target: position and orientation correction, and the predicted residual against the tolerance."""
+def corrections(correction_mm, correction_deg, estimate, convergence, tolerance):
+    """Per target: position and orientation correction; the landing estimate and the convergence against the tolerance.
+
+    ``estimate`` (N,) mm may be None (no model) or hold NaN (no estimate):
+    then only the convergence is drawn.
+    """
     plt = pyplot()
     fig, (top, bottom) = plt.subplots(2, 1, figsize=(WIDTH, 4.8), sharex=True, constrained_layout=True)
     _series(top, correction_mm, "o-", _INSIDE, ms=3)
@@ -239,12 +257,14 @@ def corrections(correction_mm, correction_deg, residual, tolerance):
     twin.set_ylabel("orientation (deg)", color="#d35400")
     twin.grid(False)
     top.set_title("correction applied (command − target)")
-    _series(bottom, np.maximum(residual, 1e-9), "o", _INSIDE, ms=3)
+    if estimate is not None and np.isfinite(estimate).any():
+        _series(bottom, np.maximum(estimate, 1e-9), "o", _INSIDE, ms=3, label="landing estimate")
+    _series(bottom, np.maximum(convergence, 1e-9), ".", _LIMIT, ms=2, label="convergence (model vs itself)")
     bottom.set_yscale("log")
     bottom.axhline(tolerance, color=_OUTSIDE, lw=1.5, label=f"tolerance {tolerance:g} mm")
-    bottom.set_ylabel("predicted residual (mm)")
+    bottom.set_ylabel("mm")
     bottom.set_xlabel("target (motion order)")
-    bottom.legend(fontsize=8, loc="center right")
+    bottom.legend(fontsize=8, loc="lower right")
     _integer_ticks(bottom)
     return fig
 
@@ -279,6 +299,44 @@ def singularities(distances, margins):
         ax.set_title(f"{name} ({unit})")
         ax.set_xlabel("target")
         _integer_ticks(ax)
+    return fig
+
+
+def joint_motion(t, q, qd, qdd, q_min, q_max, v_max, a_max, margin):
+    """Joint position, velocity and acceleration over time against the limits, one panel each.
+
+    Position as a fraction of each joint's range (the limit margin shaded),
+    |velocity| and |acceleration| as a percentage of each joint's limit.
+
+    Parameters
+    ----------
+    t : ndarray, shape (S,)
+        Sample times, s.
+    q, qd, qdd : ndarray, shape (S, 6)
+        deg, deg/s, deg/s^2.
+    q_min, q_max, v_max, a_max : ndarray, shape (6,)
+        The limits, same units.
+    margin : float
+        Limit margin, deg.
+    """
+    plt = pyplot()
+    fig, axes = plt.subplots(3, 1, figsize=(WIDTH, 6.6), sharex=True, constrained_layout=True)
+    span = q_max - q_min
+    for j in range(q.shape[1]):
+        axes[0].plot(t, (q[:, j] - q_min[j]) / span[j], color=f"C{j}", lw=1, label=f"J{j + 1}")
+        axes[1].plot(t, 100 * np.abs(qd[:, j]) / v_max[j], color=f"C{j}", lw=1)
+        axes[2].plot(t, 100 * np.abs(qdd[:, j]) / a_max[j], color=f"C{j}", lw=1)
+    band = float(np.max(margin / span))
+    axes[0].axhspan(0, band, color=_OUTSIDE, alpha=0.15)
+    axes[0].axhspan(1 - band, 1, color=_OUTSIDE, alpha=0.15)
+    axes[0].set_ylim(-0.02, 1.02)
+    axes[0].set_ylabel("position in range\n(0 = min, 1 = max)")
+    axes[0].legend(ncols=6, fontsize=8, loc="upper center")
+    for ax, name in zip(axes[1:], ("|velocity|", "|acceleration|")):
+        ax.axhline(100, color=_OUTSIDE, lw=1.5)
+        ax.set_ylim(0, 110)
+        ax.set_ylabel(f"{name}\n% of limit")
+    axes[2].set_xlabel("time (s)")
     return fig
 
 

@@ -95,7 +95,9 @@ def _names(names, total=None):
 
 
 STATISTICS = {"correction_mm": "correction, position", "correction_deg": "correction, orientation",
-              "predicted_residual_mm": "predicted residual", "limit_distance_deg": "nearest joint limit",
+              "landing_estimate_mm": "landing estimate", "held_out_mm": "held-out error nearby",
+              "unseen_mm": "unseen (orientation, tool, posture)", "orientation_beyond_deg": "orientation beyond measured",
+              "convergence_mm": "convergence (model vs itself)", "limit_distance_deg": "nearest joint limit",
               "shoulder_mm": "shoulder singularity", "elbow_deg": "elbow singularity",
               "wrist_deg": "wrist singularity", "jump_deg": "largest joint change"}
 
@@ -127,10 +129,16 @@ def _targets(doc):
         ("tabulated below", "every target" if shown["complete"] else f"{shown['rows']} of {shown['targets']}"),
         ("flagged (failing a per-target criterion)", shown["flagged"]),
         ("outside the grid", _shown(s["outside_grid"], "d")),
+        ("beyond the measured orientations", _shown(s["orientation_beyond"], "d")),
+        ("on a tool the model cannot place", _shown(s["other_tool"], "d")),
+        ("in an arm posture not measured", _shown(s["unmeasured_posture"], "d")),
         ("posture changed", s["configuration_changed"]),
         ("largest correction", "—" if s["correction_max_mm"] is None
          else f"{s['correction_max_mm']:.4f} mm, {s['correction_max_deg']:.4f} deg"),
-        ("largest predicted residual", _shown(s["residual_max_mm"], ".2e", " mm")),
+        ("largest landing estimate", "—" if s["estimate_max_mm"] is None
+         else f"{s['estimate_max_mm']:.4f} mm (tolerance {doc['criteria']['tolerance_mm']:g} mm)"),
+        ("largest convergence residual", "—" if s["convergence_max_mm"] is None
+         else f"{s['convergence_max_mm']:.1e} mm (the model agreeing with itself)"),
         ("smallest joint limit distance", f"{s['limit_distance_min_deg']:.2f} deg"),
         ("unused points (left as written)", _names(doc["unused"], s["unused"])),
         ("joint targets", f"{doc['joint_targets']['mode']}: "
@@ -157,13 +165,26 @@ def _target_tables(doc):
         return ("; ".join([*t["flags"], *why.get(t["index"], [])]),) if why else ()
 
     extra = ("shown for",) if why else ()
-    grid = {True: "outside", False: "inside", None: "—"}
-    rows = [(t["index"], t["label"], t["line"], *(f"{v:.3f}" for v in t["target"]),
-             _shown(t["correction_norm_mm"], ".4f"), _shown(t["correction_norm_deg"], ".4f"),
-             _shown(t["predicted_residual_mm"], ".1e"), grid[t["outside_grid"]], *reason(t)) for t in targets]
-    poses = table(("#", "target", "line", "x", "y", "z", "a", "b", "c", "correction mm", "correction deg",
-                   "residual mm", "grid", *extra), rows, numeric={0, 2, *range(3, 12)},
-                  bad=marker({"residual": (11,), "outside_grid": (12,)}), css="wide")
+
+    def where(t):
+        places = ["outside grid" if t["outside_grid"] else "", "posture not measured" if t["unmeasured_posture"] else "",
+                  f"orientation {t['orientation_beyond_deg']:.1f}° beyond measured" if t["orientation_beyond_deg"] else "",
+                  "tool the model cannot place" if t["other_tool"] else ""]
+        return ", ".join(p for p in places if p) or "measured"
+
+    rows = [(t["index"], t["label"], t["line"], _shown(t["landing_estimate_mm"], ".4f"), _shown(t["held_out_mm"], ".4f"),
+             _shown(t["unseen_mm"], ".4f"), _shown(t["convergence_mm"], ".0e"), where(t), *reason(t)) for t in targets]
+    estimates = table(("#", "target", "line", "landing estimate mm", "held-out nearby mm", "unseen mm",
+                       "convergence mm", "where the measurements cover it", *extra), rows, numeric={0, 2, 3, 4, 5, 6},
+                      bad=marker({"residual": (3,), "outside_grid": (7,), "orientation": (7,), "tool": (7,),
+                                  "posture": (7,)}))
+    if all(t["landing_estimate_mm"] is None and t["held_out_mm"] is None for t in targets):
+        estimates = "<p>No landing estimate: the program runs as written, without a compensation model.</p>"
+    rows = [(t["index"], t["label"], *(f"{v:.3f}" for v in t["target"]), *(f"{v:.3f}" for v in t["command"]),
+             *(("—",) * 3 if t["correction_mm"] is None else (f"{v:+.4f}" for v in t["correction_mm"])),
+             _shown(t["correction_norm_deg"], ".4f")) for t in targets]
+    poses = table(("#", "target", "x", "y", "z", "a", "b", "c", "cmd x", "cmd y", "cmd z", "cmd a", "cmd b", "cmd c",
+                   "dx", "dy", "dz", "d°"), rows, numeric={0, *range(2, 18)}, css="wide")
     rows = []
     for t in targets:
         limit = t["limit_distance_deg"]
@@ -179,9 +200,14 @@ def _target_tables(doc):
                      *extra), rows, numeric={0, *range(5, 16)},
                     bad=marker({"configuration": (2, 4), "joint_limits": (11,), "singularity": (12, 13, 14)}),
                     css="wide")
-    return (lead + "<h3>Poses and corrections</h3><p>Targets in the robot base frame (mm; A, B, C in deg); "
-            "correction = command − target; residual = distance from the target to where the model predicts "
-            "the arm lands with the command.</p>" + '<div class="scroll">' + poses + "</div>"
+    return (lead + "<h3>Landing estimates</h3><p>How far from its target the arm may land, the figure the verdict "
+            "judges: held-out (the largest error of the model near the target at measured points held out of its "
+            "fit, with the mode and interpolator the compensation used) + unseen (what the measurements could not "
+            "see at the target's orientation, tool and posture) + convergence (the compensation's own residual: "
+            "the model agreeing with itself, not an accuracy).</p>" + '<div class="scroll">' + estimates + "</div>"
+            + "<h3>Poses and corrections</h3><p>Target and command (cmd: the pose sent to the controller) in the "
+            "robot base frame (mm; A, B, C in deg); dx, dy, dz = command − target (mm); d° the orientation "
+            "correction (deg).</p>" + '<div class="scroll">' + poses + "</div>"
             + "<h3>Posture</h3><p>Written joints (deg), the branch (shoulder/elbow/wrist) they put the arm in, "
             "the nearest joint limit, the distance to each singularity, and the largest joint change from the "
             "previous target.</p>" + '<div class="scroll">' + posture + "</div>")
@@ -302,10 +328,15 @@ def _statistics(doc):
     out = ("<p>|measured − predicted| per mode (mm). Norms are the headline; signed per-axis means can cancel. "
            "The fit is on the measurements the model was identified from; cross-validation holds each fold out.</p>"
            "<h3>Fit</h3>" + stats_table(doc["fit"]))
-    cv = doc["cross_validation"]
+    cv, held = doc["cross_validation"], doc["held_out"]
     if cv is not None:
         out += (f"<h3>{cv['folds']}-fold cross-validation (interpolator {esc(cv['interpolation'])})</h3>"
                 + stats_table(cv["modes"]))
+    if held is not None:
+        out += ("<h3>Held out with the compensation's own interpolator (the verdict's figures)</h3>"
+                f"<p>{esc(held['method'])}. The compensation judges each target by the largest of these errors "
+                "near it, widened where its orientation, tool or posture lies outside what was measured.</p>"
+                + stats_table(held["modes"]))
     return out
 
 

@@ -27,7 +27,13 @@ WORST = 10  # worst places (local extremes) of each measure in a summarised tabl
 MEASURES = {
     "correction_mm": ("mm", "max", "position correction |command - target|"),
     "correction_deg": ("deg", "max", "orientation correction (rotation angle)"),
-    "predicted_residual_mm": ("mm", "max", "predicted residual (target to model-predicted landing)"),
+    "landing_estimate_mm": ("mm", "max", "landing estimate: held-out error near the target + what the measurements "
+                            "could not see at its orientation, tool and posture + convergence"),
+    "held_out_mm": ("mm", "max", "held-out error of the model near the target (same mode and interpolator)"),
+    "unseen_mm": ("mm", "max", "part of the estimate from parameters the measurements could not see"),
+    "orientation_beyond_deg": ("deg", "max", "orientation beyond the measured ones"),
+    "convergence_mm": ("mm", "max", "convergence: target to the model's own predicted landing (the model agreeing "
+                       "with itself, not an accuracy)"),
     "limit_distance_deg": ("deg", "min", "distance of the nearest joint to its limit"),
     "shoulder_mm": ("mm", "min", "shoulder singularity distance"),
     "elbow_deg": ("deg", "min", "elbow singularity distance"),
@@ -35,7 +41,9 @@ MEASURES = {
     "jump_deg": ("deg", "max", "largest joint change from the previous target"),
 }
 KINEMATIC = ("limit_distance_deg", "shoulder_mm", "elbow_deg", "wrist_deg", "jump_deg")  # from the joints
-FLAGS = ("residual", "outside_grid", "configuration", "joint_limits", "singularity")  # bit k of `flags`
+LANDING = ("landing_estimate_mm", "held_out_mm", "unseen_mm", "orientation_beyond_deg")  # from a model only
+FLAGS = ("residual", "outside_grid", "configuration", "joint_limits", "singularity", "orientation", "tool",
+         "posture")  # bit k of `flags`
 
 
 @dataclasses.dataclass(frozen=True)
@@ -45,7 +53,8 @@ class TargetMeasures:
     Attributes
     ----------
     values : dict of str to ndarray, shape (N,)
-        One array per `MEASURES` key, in its unit.
+        One array per `MEASURES` key, in its unit (the `LANDING` ones only
+        for a compensated run).
     branch, branch_planned : ndarray of uint8, shape (N,)
         Branch index of the written and of the planned joints (`BRANCH_NAMES`).
     changed : ndarray of bool, shape (N,)
@@ -72,8 +81,11 @@ def target_measures(report, robot, workers=1):
     q, q_planned = np.reshape(report.q, (n, 6)), np.reshape(report.q_planned, (n, 6))
     correction = np.reshape(report.correction, (n, 6))
     values = {"correction_mm": np.linalg.norm(correction[:, :3], axis=1),
-              "correction_deg": np.linalg.norm(correction[:, 3:], axis=1),
-              "predicted_residual_mm": np.asarray(report.predicted_residual, dtype=float).reshape(n)}
+              "correction_deg": np.linalg.norm(correction[:, 3:], axis=1)}
+    if report.landing is not None:
+        values |= {name: np.asarray(report.landing[key], dtype=float).reshape(n) for name, key in zip(
+            LANDING, ("estimate_mm", "held_out_mm", "unseen_mm", "orientation_beyond_deg"))}
+    values["convergence_mm"] = np.asarray(report.predicted_residual, dtype=float).reshape(n)
     values |= {name: np.empty(n) for name in KINEMATIC}
     branch, branch_planned, changed = np.empty(n, np.uint8), np.empty(n, np.uint8), np.empty(n, bool)
     starts = range(0, n, BLOCK)
@@ -121,7 +133,7 @@ def statistics(measures, labels):
     if not len(measures):
         return {}
     out = {}
-    for name, (unit, end, _) in MEASURES.items():
+    for name, (unit, end, _) in _present(measures):
         v = measures.values[name]
         p5, median, p95 = np.percentile(v, [5, 50, 95])
         worst = int(np.argmax(v) if end == "max" else np.argmin(v))
@@ -129,6 +141,11 @@ def statistics(measures, labels):
                      "mean": float(v.mean()), "p95": float(p95), "max": float(v.max()), "worst": worst + 1,
                      "worst_label": str(labels[worst])}
     return out
+
+
+def _present(measures):
+    """The `MEASURES` items a run has values of."""
+    return [(name, spec) for name, spec in MEASURES.items() if name in measures.values]
 
 
 def flag_bits(masks):
@@ -152,8 +169,9 @@ def worst_targets(measures, count=WORST):
     target (as numpy's argmax/argmin) is always listed first.
     """
     out = {}
-    for name, (_, end, _) in MEASURES.items():
+    for name, (_, end, _) in _present(measures):
         v = measures.values[name] if end == "max" else -measures.values[name]
+        v = np.nan_to_num(v, nan=np.inf)  # a target without an estimate is among the worst
         padded = np.concatenate(([-np.inf], v, [-np.inf]))
         candidates = np.flatnonzero((v > padded[:-2]) & (v >= padded[2:]))
         top = candidates
@@ -222,7 +240,7 @@ def target_json(report, robot, measures, flags, index):
         "correction_deg": _round(correction[:, 3:], 5),
         "correction_norm_mm": _round(v["correction_mm"], 4),
         "correction_norm_deg": _round(v["correction_deg"], 5),
-        "predicted_residual_mm": v["predicted_residual_mm"].tolist(),
+        "convergence_mm": v["convergence_mm"].tolist(),
         "outside_grid": np.asarray(report.outside_grid, dtype=bool)[index].tolist(),
         "joints_deg": _round(np.degrees(q_row), 4),
         "planned_joints_deg": _round(np.degrees(np.reshape(report.q_planned, (-1, 6))[index]), 4),
@@ -233,6 +251,7 @@ def target_json(report, robot, measures, flags, index):
         "wrist_deg": _round(v["wrist_deg"], 3),
         "jump_deg": _round(np.degrees(q_row - previous), 3),
     }
+    landing = _landing_rows(report, v, index)
     rows = []
     for r, k in enumerate(index.tolist()):
         c = {name: values[r] for name, values in columns.items()}
@@ -241,7 +260,7 @@ def target_json(report, robot, measures, flags, index):
             "tool": report.tools[k], "frame": report.frames[k],
             "target": c["target"], "command": c["command"], "correction_mm": c["correction_mm"],
             "correction_deg": c["correction_deg"], "correction_norm_mm": c["correction_norm_mm"],
-            "correction_norm_deg": c["correction_norm_deg"], "predicted_residual_mm": c["predicted_residual_mm"],
+            "correction_norm_deg": c["correction_norm_deg"], **landing[r], "convergence_mm": c["convergence_mm"],
             "outside_grid": c["outside_grid"], "joints_deg": c["joints_deg"],
             "planned_joints_deg": c["planned_joints_deg"], "posture_source": report.posture_source[k],
             "declared": report.declared[k], "written": report.written[k],
@@ -252,6 +271,17 @@ def target_json(report, robot, measures, flags, index):
             "flags": [key for b, key in enumerate(FLAGS) if flags[k] >> b & 1],
         })
     return rows
+
+
+def _landing_rows(report, values, index):
+    """The landing fields of the rows ``index`` (all None without a model), list of dict."""
+    keys = ("landing_estimate_mm", "held_out_mm", "unseen_mm", "orientation_beyond_deg", "unmeasured_posture",
+            "other_tool")
+    if report.landing is None:
+        return [dict.fromkeys(keys) for _ in index]
+    columns = [*(_round(values[name], 5) for name in LANDING),
+               *(np.asarray(report.landing[key], dtype=bool)[index].tolist() for key in keys[4:])]
+    return [dict(zip(keys, row)) for row in zip(*columns)]
 
 
 # What each sidecar array holds (the document's ``full_data.arrays``).
@@ -266,7 +296,7 @@ ARRAYS = {
     "branch_planned": "(N,) uint8: branch of the planned (declared) posture, index into branch_names",
     "branch_names": "(8,) str: shoulder/elbow/wrist branch names",
     "flags": "(N,) uint8: bit k set where the target fails criterion flag_names[k]",
-    "flag_names": "(5,) str: the per-target criteria of the flag bits",
+    "flag_names": "(8,) str: the per-target criteria of the flag bits",
 }
 TIMES = "(M,) float64: time stamp of each waypoint of the re-timed program, s"
 
@@ -285,7 +315,7 @@ def full_data(report, measures, flags, t=None):
         "line": lambda: np.asarray(report.lines, dtype=np.int32).reshape(n),
         "position_mm": lambda: np.asarray(report.T_target[:, :3, 3], dtype=np.float32),
         "joints_deg": lambda: np.degrees(np.reshape(report.q, (n, 6))).astype(np.float32),
-        **{name: (lambda name=name: measures.values[name].astype(np.float32)) for name in MEASURES},
+        **{name: (lambda name=name: measures.values[name].astype(np.float32)) for name, _ in _present(measures)},
         "outside_grid": lambda: np.asarray(report.outside_grid, dtype=bool).reshape(n),
         "configuration_changed": lambda: measures.changed,
         "branch": lambda: measures.branch,

@@ -23,8 +23,9 @@ class Criteria:
     Attributes
     ----------
     tolerance : float
-        Largest acceptable landing error, mm: per target (predicted residual)
-        and for 95 % of the model's held-out points (model accuracy).
+        Largest acceptable landing error, mm: per target (its landing
+        estimate, `trajcomp.landing`) and for 95 % of the model's held-out
+        points (model accuracy).
     limit_margin : float
         Smallest acceptable distance of a joint to its position limit, deg.
     singularity_margin : float
