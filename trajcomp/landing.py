@@ -51,7 +51,7 @@ from trajcomp.parameters import candidate_parameters, is_angle, is_robot_paramet
 from trajcomp.stats import ErrorStats
 from trajcomp.transforms import abc_to_matrix, matrix_to_abc, rotation_angle_between
 
-NEAREST = 8  # held-out points whose largest error bounds the error near a target
+NEAREST = 20  # held-out points whose largest error bounds the error near a target (about 1.5 cells of a lattice)
 LOOKUP = 11  # nodes per axis of the lookup lattice of the held-out errors
 COVERAGE = 2.0  # standard deviations (of the RMS norm) the unseen part adds: >= 95 % of a 3-D Gaussian |error|
 ORIENTATION_MARGIN = 1.0  # deg beyond the measured orientations' largest deviation still counted as measured
@@ -301,7 +301,7 @@ class Estimate:
         return self.held_out + self.unseen
 
 
-def estimate(model, mode, q, T_target, tool=None, postures=None):
+def estimate(model, mode, q, T_target, tool=None, postures=None, other_tool=False):
     """Landing estimate of compensated targets.
 
     Parameters
@@ -317,6 +317,12 @@ def estimate(model, mode, q, T_target, tool=None, postures=None):
     postures : ndarray of bool, shape (N,), optional
         Targets in an arm posture the calibration did not measure: their
         reference configuration is taken in a measured posture.
+    other_tool : bool
+        ``tool`` is not the measured TCP. With a model that cannot place
+        other tools, the measured TCP's offset error stays with the
+        measured tool, unknown for the program's: the estimate adds the
+        identified offset and `COVERAGE` times the posterior RMS of the
+        offset.
 
     Returns
     -------
@@ -347,6 +353,12 @@ def estimate(model, mode, q, T_target, tool=None, postures=None):
         mean = data.shift[robot_rows]
     unseen = np.linalg.norm(jac @ mean, axis=1) + COVERAGE * np.sqrt(
         np.maximum(np.einsum("nip,pq,niq->n", jac, covariance, jac), 0.0))
+    if other_tool and not model.places_other_tools and "tool_x" in names:
+        offset = [names.index(name) for name in ("tool_x", "tool_y", "tool_z")]
+        unseen = unseen + np.linalg.norm(data.identified[robot_rows][offset]) + COVERAGE * np.sqrt(
+            np.trace(covariance[np.ix_(offset, offset)]))
+    if not names:  # no kinematic model: nothing tells how another orientation or tool lands
+        unseen = np.where((beyond > 0) | other_tool, np.nan, unseen)
     return Estimate(data.near_errors(mode, position), unseen, beyond)
 
 
