@@ -268,7 +268,7 @@ def _flipped_weld(tmp_path):
 
 
 def test_a_posture_the_calibration_never_measured_fails_the_verdict(tmp_path, kuka_model, capsys):
-    """The KR6 was measured wrist-positive only: a wrist-flipped program is outside the calibrated region."""
+    """The KR6 was measured wrist-positive only: a wrist-flipped program fails the posture criterion (not the grid's)."""
     from trajcomp.model_file import load_model
 
     model = load_model(kuka_model)
@@ -276,7 +276,9 @@ def test_a_posture_the_calibration_never_measured_fails_the_verdict(tmp_path, ku
     src = _flipped_weld(tmp_path)
     (tmp_path / "out").mkdir()
     assert main(["compensate", str(src), "--model", str(kuka_model), "-o", str(tmp_path / "out" / "weld.src")]) == 1
-    assert "5 of 5 targets outside" in capsys.readouterr().err
+    err = capsys.readouterr().err
+    assert "5 targets in a posture not measured" in err and "posture" in err.splitlines()[-1]
+    assert "0 of 5 targets outside" in err  # inside the grid box: not reported outside the grid
     assert main(["compensate", str(src), "--model", str(kuka_model), "--outside", "error",
                  "-o", str(tmp_path / "out" / "weld.src")]) == 2
     assert "never measured" in capsys.readouterr().err

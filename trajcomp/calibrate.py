@@ -390,20 +390,13 @@ def fold_errors(robot, joints, position, measured, rotation, options, folds, see
     return {"interpolation": options["kind"], **collected}
 
 
-def cross_validate(robot, joints, position, measured, rotation, options, folds, seed, progress=None):
-    """k-fold cross-validation statistics per mode, as a dict of ErrorStats dicts (see `fold_errors`)."""
-    held = fold_errors(robot, joints, position, measured, rotation, options, folds, seed, progress)
-    return {"folds": folds, "interpolation": held.pop("interpolation")} | {
-        m: ErrorStats.from_errors(e).as_dict() for m, e in held.items()}
-
-
 def plane_errors(robot, joints, position, measured, rotation, options, progress=None):
-    """Held-out |error| (N,) per mode of a lattice model, with its own lattice interpolator.
+    """Held-out errors (N, 3) per mode of a lattice model, with its own lattice interpolator.
 
     For each axis and each parity, every other node plane along the axis is
     left out; the model refitted on the others (a lattice twice as coarse
     along that axis) is evaluated at the planes left out inside its box.
-    Each row keeps its largest held-out |error| over the axes; rows never
+    Each row keeps its largest held-out error over the axes; rows never
     held out (the corners of the lattice) are NaN.
     """
     _, index = detect_lattice(position)
@@ -425,8 +418,9 @@ def plane_errors(robot, joints, position, measured, rotation, options, progress=
                 continue
             model = parts.model(robot, robot.name, options["method"], np.eye(4), {}, (False, ""))
             for mode, err in mode_errors(model, _rows(joints, test), position[test], measured[test]).items():
-                norms = held.setdefault(mode, np.full(len(position), np.nan))
-                norms[test] = np.fmax(norms[test], np.linalg.norm(err, axis=1))
+                errors = held.setdefault(mode, np.full((len(position), 3), np.nan))
+                larger = ~(np.linalg.norm(errors[test], axis=1) >= np.linalg.norm(err, axis=1))  # NaN: not yet held out
+                errors[np.flatnonzero(test)[larger]] = err[larger]
     return held
 
 
@@ -434,17 +428,16 @@ def _landing(robot, dh, frame, data, held, folds, progress, orientation):
     """The plain-data `trajcomp.landing.LandingData` of a calibration (its report's ``landing``).
 
     ``data`` are the rows the statistics use ``(robot, joints, position,
-    measured, rotation, options)``; ``held`` their k-fold errors per mode.
+    measured, rotation, options)``; ``held`` their k-fold errors (N, 3) per mode.
     """
     _, joints, position, measured, rotation, options = data
     if options["kind"] in LATTICE_INTERPOLATORS:
-        norms = plane_errors(*data, progress)
+        held = plane_errors(*data, progress)
         method = (f"{options['kind']} on the lattice with every other node plane along each axis held out "
                   "(cells twice as long along that axis)")
     else:
-        norms = {mode: np.linalg.norm(e, axis=1) for mode, e in held.items()}
         method = f"{folds}-fold cross-validation, residual {options['kind']}"
-    rows = np.isfinite(next(iter(norms.values())))
+    rows = np.isfinite(next(iter(held.values()))).all(axis=1)
     parameters = ([], np.zeros(0), np.zeros((0, 0)), np.zeros(0))
     if dh is not None:
         parameters = landing.posterior(
@@ -452,6 +445,6 @@ def _landing(robot, dh, frame, data, held, folds, progress, orientation):
             R_tcp_target=dh.R_tcp_target, fitted=dict(zip(dh.names, dh.delta)))
     rotations = fk(robot, joints)[:, :3, :3] if joints is not None else (
         abc_to_matrix(orientation) if orientation is not None else None)
-    built = landing.build({mode: v[rows] for mode, v in norms.items()}, position[rows], method, parameters,
+    built = landing.build({mode: e[rows] for mode, e in held.items()}, position[rows], method, parameters,
                           rotations)
     return built.to_dict()

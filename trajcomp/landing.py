@@ -252,8 +252,8 @@ def build(held, points, method, parameters, rotations):
 
     Parameters
     ----------
-    held : dict of str to ndarray, shape (M,)
-        Held-out |error| per mode at ``points``, mm.
+    held : dict of str to ndarray, shape (M, 3)
+        Held-out errors per mode at ``points``, mm.
     points : ndarray, shape (M, 3)
         Commanded positions of the held-out rows, mm.
     method : str
@@ -264,11 +264,10 @@ def build(held, points, method, parameters, rotations):
         Commanded TCP orientations of the measurements (None: unknown, any
         orientation counts as measured).
     """
-    origin, step, near = near_lookup(points, held)
+    origin, step, near = near_lookup(points, {mode: np.linalg.norm(e, axis=1) for mode, e in held.items()})
     names, shift, covariance, deltas = parameters
     reference, spread = (np.eye(3), np.pi) if rotations is None else orientation_reference(rotations)
-    stats = {mode: ErrorStats.from_errors(np.column_stack([e, np.zeros((len(e), 2))])).as_dict()
-             for mode, e in held.items()}
+    stats = {mode: ErrorStats.from_errors(e).as_dict() for mode, e in held.items()}
     return LandingData(stats, method, origin, step, near, list(names), shift, covariance, deltas, reference, spread)
 
 

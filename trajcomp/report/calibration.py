@@ -153,7 +153,7 @@ def held_out_check(model, tolerance):
     mode = model.method
     data = landing.of_model(model)
     if data is not None and mode in data.held_out:
-        return accuracy_check(data.held_out[mode], mode, tolerance, f"held-out ({data.method})")
+        return accuracy_check(data.held_out[mode], mode, tolerance, "held-out (with its own interpolator)")
     cv = model.report.get("cross_validation") or {}
     return accuracy_check(cv.get(mode), mode, tolerance, f"{cv.get('folds', 'k')}-fold cross-validation", missing=(
         "no held-out errors: calibrated with --folds 0, so the fit statistics flatter the model"))
@@ -300,12 +300,14 @@ def validation_report(model, meas, *, criteria, files=(), options=None):
 def _maps_note(model, after, data):
     if data == "validation":
         return (f"|measured − predicted| at the validation points with no compensation (before) and with mode "
-                f"{after} (after). Note the different colour scales.")
+                f"{after} (after). Note the different colour scales; each ends at the 99th percentile of its "
+                "map, and a map with points above it says so (they take the top colour).")
     why = "" if after == model.method else (
         f" The {model.method} mode is not shown: its grid reproduces the measured nodes, so its errors there are "
         "zero by construction; the cross-validation above is its honest accuracy.")
     return (f"|measured − predicted| at the measured points with no compensation (before) and with mode {after} "
-            f"(after, fit).{why} Note the different colour scales.")
+            f"(after, fit).{why} Note the different colour scales; each ends at the 99th percentile of its map, "
+            "and a map with points above it says so (they take the top colour).")
 
 
 def _figures(doc, position, errors, excluded, after, model, data):
@@ -316,9 +318,13 @@ def _figures(doc, position, errors, excluded, after, model, data):
     maps = [("before (none)", np.linalg.norm(errors["none"][keep], axis=1)),
             (f"after ({after})", np.linalg.norm(errors[after][keep], axis=1))]
     tables = ({"fit": doc["fit"]} | ({f"{doc['cross_validation']['folds']}-fold CV": doc["cross_validation"]["modes"]}
-                                      if doc["cross_validation"] else {})) if data == "fit" else {"validation": doc["modes"]}
+                                      if doc["cross_validation"] else {})
+              | ({"held out (own interpolator)": doc["held_out"]["modes"]} if doc["held_out"] else {})
+              ) if data == "fit" else {"validation": doc["modes"]}
     return (
-        Figure("statistics", "Mean and 95th percentile |error| per mode", "Log scale; lower is better.",
+        Figure("statistics", "Mean and 95th percentile |error| per mode",
+               "Log scale; lower is better. A grid reproduces its own nodes, so its fit errors are zero and show no "
+               "bar; the held-out figures are its accuracy." if data == "fit" else "Log scale; lower is better.",
                lambda: plots.mode_statistics(tables)),
         Figure("trends", "Error per axis against each commanded coordinate",
                "Each error component (measured − commanded) against each commanded coordinate, with its "

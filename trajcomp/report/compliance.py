@@ -116,11 +116,13 @@ def _landing_checks(report, v, tolerance, model):
                                     f"{v['held_out_mm'][worst]:.4f} + unseen {v['unseen_mm'][worst]:.4f} mm); "
                                     f"{int((~within).sum())} targets above; convergence at most {convergence.max():.1e} mm")
     beyond = v["orientation_beyond_deg"] > 0
-    out["orientation"] = (beyond & ~within, (
+    out["orientation"] = (beyond & ~within, "every target within the measured orientations" if not beyond.any() else (
         f"{int(beyond.sum())} targets beyond the measured orientations (up to {v['orientation_beyond_deg'].max():.1f} "
         f"deg beyond), {int((beyond & ~within).sum())} of them with an estimate above the tolerance"))
     other = np.asarray(data["other_tool"], dtype=bool)
-    if model.places_other_tools:
+    if not other.any():
+        out["tool"] = (other, "every target on the measured TCP")
+    elif model.places_other_tools:
         out["tool"] = (np.zeros(len(other), bool), f"{int(other.sum())} targets on another tool; the model places "
                                                    f"other tools ({model.other_tools_reason})")
     else:
@@ -449,14 +451,14 @@ def _model_accuracy(model, mode, has_grid, tolerance, measures):
     data = landing.of_model(model)
     held = measures.values.get("held_out_mm")
     if data is not None and held is not None and np.isfinite(held).any():
-        statement = (f"95 % of the targets' held-out errors nearby (mode {mode}; {data.method}) within "
-                     f"{tolerance:g} mm")
+        statement = (f"95 % of the targets' held-out errors nearby (mode {mode}, held out with its own "
+                     f"interpolator) within {tolerance:g} mm")
         p95 = float(np.nanpercentile(held, 95))
         overall = data.held_out.get(mode) or {}
         return Check("model_accuracy", statement, PASS if p95 <= tolerance else FAIL,
                      f"p95 over the targets {p95:.4f} mm (largest {np.nanmax(held):.4f}); over all "
                      f"{overall.get('n', 0)} held-out points p95 {overall.get('p95', float('nan')):.4f}, max "
-                     f"{overall.get('max', float('nan')):.4f} mm")
+                     f"{overall.get('max', float('nan')):.4f} mm; held out: {data.method}")
     cv = model.report.get("cross_validation") or {}
     if mode in cv:
         return accuracy_check(cv[mode], mode, tolerance, f"{cv['folds']}-fold cross-validation")

@@ -86,8 +86,11 @@ def banner(verdict, what):
     result = verdict["result"]
     failed = sum(c["status"] == "fail" for c in verdict["criteria"])
     evaluated = sum(c["status"] != "not evaluated" for c in verdict["criteria"])
-    text = (f"{failed} of {evaluated} evaluated criteria fail" if failed
-            else f"all {evaluated} evaluated criteria pass")
+    failing = [c["statement"] for c in verdict["criteria"] if c["status"] == "fail"]
+    text = (f"{failed} of {evaluated} evaluated criteria fail: " + "; ".join(failing) if failed
+            else f"all {evaluated} evaluated criteria pass"
+            + (f": {verdict['criteria'][0]['statement']} ({verdict['criteria'][0]['detail']})"
+               if len(verdict["criteria"]) == 1 else ""))
     return (f'<div class="banner {result}"><div class="word">{result.upper()}</div>'
             f"<div>{esc(what)}<br>{esc(text)}</div></div>")
 

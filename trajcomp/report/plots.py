@@ -89,11 +89,12 @@ def error_maps(position, maps, limit_box=None):
             ax.set_aspect("equal", adjustable="datalim")
             ax.set_xlabel(f"{AXES[i]} (mm)")
             ax.set_ylabel(f"{AXES[j]} (mm)")
-            ax.set_title(f"{title}: {'top' if col == 0 else 'side'} view")
-        label = "|error| (mm)" if not above else (
-            f"|error| (mm); scale clipped at the 99th percentile {top:.3g} mm:\n{above} points above it (largest "
-            f"{values.max():.3g} mm) drawn in its top colour")
-        fig.colorbar(art, ax=axes[row, :], label=label, shrink=0.9, extend="max" if above else "neither")
+            clipped = "" if not above or col else (
+                f"\ncolour scale clipped at its 99th percentile ({top:.3g} mm):\n{above} point{'s' * (above > 1)} above "
+                f"it, up to {values.max():.3g} mm, in the top colour")
+            ax.set_title(f"{title}: {'top' if col == 0 else 'side'} view{clipped}", fontsize=9, loc="left")
+        fig.colorbar(art, ax=axes[row, :], label="|error| (mm)" + (", clipped ▲" if above else ""), shrink=0.9,
+                     extend="max" if above else "neither")
     return fig
 
 
@@ -109,7 +110,7 @@ def mode_statistics(tables):
     fig, ax = plt.subplots(figsize=(WIDTH, 3.4), constrained_layout=True)
     modes = list(dict.fromkeys(m for table in tables.values() for m in table))
     width = 0.8 / (2 * len(tables))
-    colors = ("#1f5fa8", "#8fb3dd", "#c0392b", "#e6a39c")
+    colors = ("#1f5fa8", "#8fb3dd", "#c0392b", "#e6a39c", "#1e7d45", "#9fd3b0")
     k = 0
     for name, table in tables.items():
         for stat in ("mean", "p95"):

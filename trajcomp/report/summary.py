@@ -40,7 +40,9 @@ def summary_lines(doc):
     if summary and summary["targets"] and summary["correction_max_mm"] is None:
         out.append(f"  {summary['targets']} targets, run as written (no compensation model)")
     elif summary and summary["targets"]:
+        estimate = summary.get("estimate_max_mm")
         out.append(f"  {summary['targets']} targets; largest correction {summary['correction_max_mm']:.3f} mm, "
-                   f"{summary['correction_max_deg']:.3f} deg; {summary['outside_grid']} outside the grid")
+                   f"{summary['correction_max_deg']:.3f} deg; {summary['outside_grid']} outside the grid"
+                   + ("" if estimate is None else f"; largest landing estimate {estimate:.3f} mm"))
     out += [f"  missing: {m}" for m in doc["missing"]]
     return out
