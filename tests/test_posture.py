@@ -278,7 +278,7 @@ def test_a_posture_the_calibration_never_measured_fails_the_verdict(tmp_path, ku
     assert main(["compensate", str(src), "--model", str(kuka_model), "-o", str(tmp_path / "out" / "weld.src")]) == 1
     err = capsys.readouterr().err
     assert "5 targets in a posture not measured" in err and "posture" in err.splitlines()[-1]
-    assert "0 of 5 targets outside" in err  # inside the grid box: not reported outside the grid
+    assert "; 0 outside the grid" in err  # inside the grid box: not reported outside the grid
     assert main(["compensate", str(src), "--model", str(kuka_model), "--outside", "error",
                  "-o", str(tmp_path / "out" / "weld.src")]) == 2
     assert "never measured" in capsys.readouterr().err

@@ -70,13 +70,15 @@ def test_retime_writes_a_compliance_report_of_the_program_as_written(tmp_path, c
     assert doc["command"] == "retime" and doc["verdict"]["result"] == "pass"
     assert doc["timing"]["within_limits"] and doc["timing"]["cycle_time_s"] > 0
     assert len(doc["targets"]) == 5
-    no_model = ("correction_mm", "correction_deg", "correction_norm_mm", "correction_norm_deg", "predicted_residual_mm",
-                "outside_grid")  # a retime report claims nothing a model gives: it said "0 outside the grid"
+    no_model = ("correction_mm", "correction_deg", "correction_norm_mm", "correction_norm_deg", "convergence_mm",
+                "outside_grid", "landing_estimate_mm", "held_out_mm", "unseen_mm", "orientation_beyond_deg",
+                "unmeasured_posture", "other_tool")  # a retime report claims nothing a model gives: it said "0 outside"
     assert all(t[key] is None for t in doc["targets"] for key in no_model)
     assert all(t["command"] == t["target"] for t in doc["targets"])  # written as programmed
     summary = doc["summary"]
-    assert summary["outside_grid"] is summary["correction_max_mm"] is summary["residual_max_mm"] is None
-    assert not {"correction_mm", "correction_deg", "predicted_residual_mm"} & set(summary["statistics"])
+    assert summary["outside_grid"] is summary["correction_max_mm"] is summary["convergence_max_mm"] is None
+    assert summary["estimate_max_mm"] is summary["unmeasured_posture"] is None
+    assert not {"correction_mm", "correction_deg", "convergence_mm", "landing_estimate_mm"} & set(summary["statistics"])
     assert any(m.startswith("no compensation model") for m in doc["missing"])
     ruckig = any(s["kind"] == "ruckig" for s in doc["timing"]["segments"])
     for row in doc["timing"]["joints"]:  # measured on ruckig segments of a jerk-limited arm only, else null (was 0)

@@ -2,7 +2,7 @@
 
 from pathlib import Path
 
-from trajcomp.report.verdict import FAIL, NOT_EVALUATED
+from trajcomp.report.verdict import FAIL, NOT_EVALUATED, PASS
 
 NAMED = 6  # targets named per failed criterion
 
@@ -14,14 +14,23 @@ def _concerns(criterion):
     return ", ".join(named[:NAMED]) + more
 
 
+HEADLINE = ("residual", "model_accuracy")  # criteria whose figures are shown even when they pass
+
+
 def verdict_lines(verdict):
-    """One line per criterion: status, id, what was found and, when failed, what it concerns."""
-    out = []
+    """One line per failed, unevaluated or headline criterion (status, id, what was found and, when failed, what it
+    concerns), then one line naming the other criteria that pass."""
+    out, passed = [], []
     for c in verdict["criteria"]:
+        if c["status"] == PASS and c["id"] not in HEADLINE:
+            passed.append(c["id"])
+            continue
         status = {FAIL: "FAIL", NOT_EVALUATED: "  --"}.get(c["status"], "pass")
         found = c["detail"] if c["status"] != NOT_EVALUATED else f"not evaluated: {c['detail']}"
         concerns = f": {_concerns(c)}" if c["status"] == FAIL and (c["targets"] or c["lines"]) else ""
         out.append(f"  {status}  {c['id']:<15} {found}{concerns}")
+    if passed:
+        out.append(f"  pass  {', '.join(passed)} (the report has what each found)")
     return out
 
 
