@@ -155,3 +155,23 @@ def test_the_shipped_layouts_read_the_real_files_as_their_authors_wrote_them(nam
         np.testing.assert_allclose(meas.measured[0], [-430.32784075885013 - 2.144122241149887,
                                                       -6.2740647628546 - 3.5212622371454003,
                                                       -98.6368469428076 + 0.8144149428075877])
+
+
+def test_a_damaged_file_is_refused_at_its_first_bad_row_and_rows_are_bounded(tmp_path, monkeypatch):
+    import trajcomp.measurements as measurements
+
+    path = tmp_path / "headers.csv"
+    with open(path, "w") as handle:  # a header repeated: refused at line 2, not once 100,000 rows are in memory
+        handle.write("j1,j2,j3,j4,j5,j6\n" * 100_000)
+    read = []
+    real_float = float
+    monkeypatch.setattr(measurements, "float", lambda text: read.append(text) or real_float(text), raising=False)
+    with pytest.raises(ReadError, match=r"headers\.csv:2: field j1: not a number: 'j1'"):
+        read_measurements(path)
+    assert len(read) == 1
+    monkeypatch.setattr(measurements, "MAX_ROWS", 3)
+    path.write_text("j1,j2,j3,j4,j5,j6\n" + "0,1,2,3,4,5\n" * 4)
+    with pytest.raises(ReadError, match=r"headers\.csv:5: more than 3 data rows"):
+        read_measurements(path)
+    path.write_text("j1,j2,j3,j4,j5,j6\n" + "0,1,2,3,4,5\n" * 3)
+    assert len(read_measurements(path)) == 3

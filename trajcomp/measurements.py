@@ -34,6 +34,8 @@ from trajcomp.errors import ReadError
 __all__ = ["Measurements", "parse_mapping", "read_measurements", "format_measurements", "write_measurements"]
 
 MAX_FIELD = 1000  # characters: no number in a measurement file is longer
+MAX_ROWS = 1_000_000  # data rows of one measurement file (a tracker run of 5,892 poses is a large one)
+MAX_COLUMNS = 1000  # fields of one row
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -107,30 +109,35 @@ def _parse_expression(expression, header, path, field):
 
 
 def _rows(path, layout):
-    """Non-empty, non-comment rows ``[(line, cells)]`` of a file, cells with the decimal mark made '.'."""
+    """Non-empty, non-comment rows ``(line, cells)`` of a file as they are read, the decimal mark made '.'.
+
+    Streamed: a damaged file is refused at its first bad row, not once all
+    of it is in memory. A field longer than `MAX_FIELD` characters, a row of
+    more than `MAX_COLUMNS` fields and more than `MAX_ROWS` data rows are refused.
+    """
     try:
         with open(path, encoding="utf-8-sig", newline="") as handle:
-            text = handle.read()
+            reader = csv.reader(handle, delimiter=layout.delimiter)
+            count = 0
+            for row in reader:
+                number = reader.line_num
+                if not row or not any(cell.strip() for cell in row) or row[0].lstrip().startswith("#"):
+                    continue
+                long = [cell for cell in row if len(cell) > MAX_FIELD]
+                if long:
+                    raise ReadError(
+                        f"{path}:{number}: a field of {len(long[0])} characters is too long (at most {MAX_FIELD})"
+                    )
+                if len(row) > MAX_COLUMNS:
+                    raise ReadError(f"{path}:{number}: {len(row)} fields, more than the {MAX_COLUMNS} a row may have")
+                count += 1
+                if count > MAX_ROWS + 1:
+                    raise ReadError(f"{path}:{number}: more than {MAX_ROWS} data rows; split the file")
+                yield number, [cell.replace(",", ".") for cell in row] if layout.decimal == "," else row
     except (OSError, UnicodeError) as exc:
         raise ReadError(f"{path}: cannot read: {exc}") from exc
-    rows = []
-    reader = csv.reader(io.StringIO(text), delimiter=layout.delimiter)
-    try:
-        for row in reader:
-            number = reader.line_num
-            if not row or not any(cell.strip() for cell in row) or row[0].lstrip().startswith("#"):
-                continue
-            long = [cell for cell in row if len(cell) > MAX_FIELD]
-            if long:
-                raise ReadError(
-                    f"{path}:{number}: a field of {len(long[0])} characters is too long (at most {MAX_FIELD})"
-                )
-            if layout.decimal == ",":
-                row = [cell.replace(",", ".") for cell in row]
-            rows.append((number, row))
     except csv.Error as exc:
         raise ReadError(f"{path}:{reader.line_num}: {exc}") from None
-    return rows
 
 
 def read_measurements(path, layout=None):
@@ -158,20 +165,18 @@ def read_measurements(path, layout=None):
     if layout is None or isinstance(layout, dict):
         layout = Layout(columns=dict(layout or {}))
     rows = _rows(path, layout)
-    if not rows:
+    first = next(rows, None)
+    if first is None:
         raise ReadError(f"{path}: no header row")
-    header_line, header = rows[0]
+    header_line, header = first
     header = [cell.strip() for cell in header]
     mapping = dict(layout.columns)
     for field in FIELDS:
         if field not in mapping and field in header:
             mapping[field] = field
     terms = {field: _parse_expression(expr, header, path, field) for field, expr in mapping.items()}
-    data = rows[1:]
-    if not data:
-        raise ReadError(f"{path}: header on line {header_line} but no data rows")
-    values = {field: np.empty(len(data)) for field in terms}
-    for r, (number, row) in enumerate(data):
+    values, numbers = {field: [] for field in terms}, []
+    for number, row in rows:
         if len(row) != len(header):
             raise ReadError(f"{path}:{number}: expected {len(header)} fields as in the header, got {len(row)}")
         for field, field_terms in terms.items():
@@ -185,8 +190,12 @@ def read_measurements(path, layout=None):
                 if not math.isfinite(number_value):
                     raise ReadError(f"{path}:{number}: field {header[column]}: not a finite number: {cell!r}")
                 total += sign * number_value
-            values[field][r] = total
-    lines = np.array([number for number, _ in data])
+            values[field].append(total)
+        numbers.append(number)
+    if not numbers:
+        raise ReadError(f"{path}: header on line {header_line} but no data rows")
+    values = {field: np.array(column) for field, column in values.items()}
+    lines = np.array(numbers)
 
     def group(names, scale=1.0):
         present = [n for n in names if n in values]
