@@ -22,6 +22,7 @@ from trajcomp.timing.path import tcp_jacobians
 
 RATE = 1000.0  # Hz
 LIMIT_TOLERANCE = 0.01  # a sampled value may exceed its limit by this share
+_JACOBIAN_BLOCK = 65536  # samples whose TCP Jacobians are held at a time
 MAX_SAMPLES = 1_000_000  # per run between two stops (1,000 s at 1 kHz): the check's memory grows with them
 
 
@@ -158,8 +159,9 @@ def _speed_ratios(moves, robot, k, q, qd):
     """TCP speed |J(q) q'| over the programmed one (N,) of samples on linear / circular motions with a speed, else 0."""
     ratio = np.zeros(len(k))
     rows = np.flatnonzero((moves.kind[k] != JOINT) & np.isfinite(moves.tcp_speed[k]))
-    if rows.size:
-        jac = tcp_jacobians(robot, moves, k[rows], q[rows])
-        speed = np.linalg.norm(np.einsum("nij,nj->ni", jac[:, :3], qd[rows]), axis=1)
-        ratio[rows] = speed / moves.tcp_speed[k[rows]]
+    for lo in range(0, len(rows), _JACOBIAN_BLOCK):  # the Jacobians of a block at a time: bounded memory
+        part = rows[lo : lo + _JACOBIAN_BLOCK]
+        jac = tcp_jacobians(robot, moves, k[part], q[part])
+        speed = np.linalg.norm(np.einsum("nij,nj->ni", jac[:, :3], qd[part]), axis=1)
+        ratio[part] = speed / moves.tcp_speed[k[part]]
     return ratio
