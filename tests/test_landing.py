@@ -32,7 +32,7 @@ def cell(tmp_path_factory):
     """Nominal UR10, its virtual copy, the composite model (2 folds) of the large cube and its file."""
     robot = load_robot("ur10")
     virtual = VirtualRobot.create(robot, "paper", seed=1)
-    plan = plan_grid(robot, (300.0, -100.0, 300.0), 500.0, 100.0)
+    plan = plan_grid(robot, (300.0, -100.0, 300.0), 500.0, 100.0, one_posture=False)  # the demo's paper cube
     meas = Measurements(joints=plan.joints, position=plan.position, lines=np.arange(len(plan.joints)) + 2,
                         measured=virtual.measure(plan.joints, np.random.default_rng(11)), path="cube.csv")
     model = calibrate(robot, meas, grid_step=100.0, folds=2)

@@ -220,7 +220,7 @@ def tilt_table(seeds=(1, 2, 3), count=200, tolerance=0.1):
     worst_cover, false_pass = 1.0, 0
     for seed in seeds:
         virtual = VirtualRobot.create(robot, "paper", seed=seed)
-        plan = plan_grid(robot, (300, -100, 300), 500, 100)
+        plan = plan_grid(robot, (300, -100, 300), 500, 100, one_posture=False)  # the paper cube, as the demo plans it
         meas = Measurements(joints=plan.joints, position=plan.position,
                             measured=virtual.measure(plan.joints, np.random.default_rng(seed + 10)),
                             lines=np.arange(len(plan.joints)) + 2, path="<virtual large cube>")
