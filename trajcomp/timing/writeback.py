@@ -486,6 +486,8 @@ def edit_sources(program, edits):
     -------
     Program
     """
+    if not any(edits):  # nothing written (every speed kept): the program as it is
+        return program
     with collection_paused():  # a span and an item object each (`trajcomp.memory`)
         return _edited(program, [_Shift(source.text, sorted(e)) for source, e in zip(program.sources, edits)])
 
