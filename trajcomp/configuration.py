@@ -142,28 +142,26 @@ def written_configuration(format_name, robot, declared, q, tolerance=BOUNDARY_TO
     computed = configuration_for(format_name, robot, q)
     if computed is None:
         return None
-    decode = WINDOWS_BY_FORMAT[format_name]
-    out = []
-    for old, new, joints in zip(declared, computed, np.atleast_2d(q)):
-        if not old:
-            out.append(tuple(new))
-            continue
-        branch, lower, upper = decode(old)
-        branch_kept = branch == decode(new)[0]
-        joint_kept = _satisfied(robot, joints, lower, upper, tolerance)
-        out.append(_MERGE[format_name](tuple(old), tuple(new), branch_kept, joint_kept))
-    return out
+    q = np.atleast_2d(q)
+    branch, lower, upper = declared_windows(format_name, declared)
+    branch_kept = branch == declared_windows(format_name, computed)[0]
+    joint_kept = _satisfied(robot, q, lower, upper, tolerance)
+    merge = _MERGE[format_name]
+    return [merge(tuple(old), tuple(new), kept, joints) if old else tuple(new)
+            for old, new, kept, joints in zip(declared, computed, branch_kept.tolist(), joint_kept)]
 
 
 def _satisfied(robot, joints, lower, upper, tolerance):
-    """(6,) bool: each joint inside its window, or within ``tolerance`` of it with no other turn of it inside.
+    """(N, 6) bool: each joint of ``joints`` (N, 6) inside its window [lower, upper] (N, 6), or within
+    ``tolerance`` of it with no other turn of it inside.
 
     A controller takes the turn of a joint inside the window its code names;
     only where none is does a joint on the window's boundary stand for it.
     """
-    turns = joints[:, None] + 2 * np.pi * np.array([-2, -1, 1, 2])
+    turns = joints[..., None] + 2 * np.pi * np.array([-2, -1, 1, 2])
     reachable = (turns >= robot.q_min[:, None]) & (turns <= robot.q_max[:, None])
-    other = np.any(reachable & (turns >= (lower - tolerance)[:, None]) & (turns <= (upper + tolerance)[:, None]), axis=1)
+    inside = (turns >= (lower - tolerance)[..., None]) & (turns <= (upper + tolerance)[..., None])
+    other = np.any(reachable & inside, axis=-1)
     strict = (joints >= lower) & (joints <= upper)
     return strict | ((joints >= lower - tolerance) & (joints <= upper + tolerance) & ~other)
 
@@ -171,7 +169,7 @@ def _satisfied(robot, joints, lower, upper, tolerance):
 def _merge_kuka(old, new, branch_kept, joint_kept):
     """S: bits 0-2 from ``new`` if the branch changed; T: the bits of joints out of their window."""
     status = old[0] if branch_kept else (old[0] & ~0b111) | (new[0] & 0b111)
-    moved = int(np.sum((~joint_kept) << np.arange(6)))
+    moved = sum(1 << j for j, kept in enumerate(joint_kept.tolist()) if not kept)
     return (status, (old[1] & ~moved) | (new[1] & moved))
 
 
@@ -191,40 +189,47 @@ def _merge_fanuc(old, new, branch_kept, joint_kept):
 _MERGE = {"krl": _merge_kuka, "rapid": _merge_abb, "fanuc_ls": _merge_fanuc}
 
 
-def _kuka_windows(config):
-    """Branch and joint windows of a KUKA ``(S, T)``: T bit i set means axis i+1 < 0."""
-    status, turn = (int(v) for v in config)
-    back = bool(status & 1)
-    up = bool(status & 2) != back
-    bits = (turn >> np.arange(6)) & 1
+def _kuka_windows(configs):
+    """Branch (M,) and joint windows (M, 6) of KUKA ``(S, T)`` rows: T bit i set means axis i+1 < 0."""
+    status, turn = np.array([[int(v) for v in config[:2]] for config in configs], dtype=np.int64).T
+    back = (status & 1) > 0
+    up = ((status & 2) > 0) != back
+    bits = ((turn[:, None] >> np.arange(6)) & 1) > 0
     lower = np.where(bits, -np.inf, -_EDGE)
     upper = np.where(bits, -2 * _EDGE, np.inf)
-    return _branch(back, up, bool(status & 4)), lower, upper
+    return _branch(back, up, (status & 4) > 0), lower, upper
 
 
-def _abb_windows(config):
-    """Branch and joint windows of ABB confdata: joints 1, 4, 6 in quadrants [cf, cf + 1) * 90 deg."""
-    cf1, cf4, cf6, cfx = (int(v) for v in config)
-    back = bool(cfx & 4)
-    up = bool(cfx & 2) == back
-    lower, upper = np.full(6, -np.inf), np.full(6, np.inf)
-    for joint, quadrant in zip((0, 3, 5), (cf1, cf4, cf6)):
-        lower[joint], upper[joint] = quadrant * np.pi / 2 - _EDGE, (quadrant + 1) * np.pi / 2 - 2 * _EDGE
-    return _branch(back, up, bool(cfx & 1)), lower, upper
+def _quadrant_windows(codes, joints, to_lower, to_upper):
+    """Windows (M, 6) of ``joints`` from integer codes (M, 3): ``to_lower(code)``, ``to_upper(code)``; others free."""
+    lower, upper = np.full((len(codes), 6), -np.inf), np.full((len(codes), 6), np.inf)
+    lower[:, joints], upper[:, joints] = to_lower(codes), to_upper(codes)
+    return lower, upper
 
 
-def _fanuc_windows(config):
-    """Branch and joint windows of FANUC CONFIG: joints 1, 4, 6 in turn t, ((2t - 1) pi, (2t + 1) pi]."""
-    flip, elbow, front, *turns = config
-    lower, upper = np.full(6, -np.inf), np.full(6, np.inf)
-    for joint, turn in zip((0, 3, 5), turns):
-        lower[joint], upper[joint] = (2 * int(turn) - 1) * np.pi + _EDGE, (2 * int(turn) + 1) * np.pi
-    return _branch(front == "B", elbow == "U", flip == "N"), lower, upper
+def _abb_windows(configs):
+    """Branch and joint windows of ABB confdata rows: joints 1, 4, 6 in quadrants [cf, cf + 1) * 90 deg."""
+    values = np.array([[int(v) for v in config[:4]] for config in configs], dtype=np.int64)
+    cfx = values[:, 3]
+    back = (cfx & 4) > 0
+    up = ((cfx & 2) > 0) == back
+    lower, upper = _quadrant_windows(values[:, :3], [0, 3, 5], lambda c: c * np.pi / 2 - _EDGE,
+                                     lambda c: (c + 1) * np.pi / 2 - 2 * _EDGE)
+    return _branch(back, up, (cfx & 1) > 0), lower, upper
+
+
+def _fanuc_windows(configs):
+    """Branch and joint windows of FANUC CONFIG rows: joints 1, 4, 6 in turn t, ((2t - 1) pi, (2t + 1) pi]."""
+    flags = np.array([config[:3] for config in configs], dtype=object).reshape(-1, 3)
+    turns = np.array([[int(v) for v in config[3:6]] for config in configs], dtype=np.int64).reshape(-1, 3)
+    lower, upper = _quadrant_windows(turns, [0, 3, 5], lambda t: (2 * t - 1) * np.pi + _EDGE,
+                                     lambda t: (2 * t + 1) * np.pi)
+    return _branch(flags[:, 2] == "B", flags[:, 1] == "U", flags[:, 0] == "N"), lower, upper
 
 
 def _branch(back, up, negative):
-    """`trajcomp.ik.Configuration` index of the flags."""
-    return 4 * back + 2 * (not up) + negative
+    """`trajcomp.ik.Configuration` index (M,) of the flags (M,) bool."""
+    return 4 * back.astype(int) + 2 * (~up).astype(int) + negative.astype(int)
 
 
 WINDOWS_BY_FORMAT = {"krl": _kuka_windows, "rapid": _abb_windows, "fanuc_ls": _fanuc_windows}
@@ -250,11 +255,9 @@ def declared_windows(format_name, configs):
     branch = np.full(n, -1)
     lower, upper = np.full((n, 6), -np.inf), np.full((n, 6), np.inf)
     decode = WINDOWS_BY_FORMAT.get(format_name)
-    if decode is None:
-        return branch, lower, upper
-    for k, config in enumerate(configs):
-        if config:
-            branch[k], lower[k], upper[k] = decode(config)
+    stated = [k for k, config in enumerate(configs) if config]
+    if decode is not None and stated:
+        branch[stated], lower[stated], upper[stated] = decode([configs[k] for k in stated])
     return branch, lower, upper
 
 

@@ -241,11 +241,13 @@ def _configs(program, robot, index, q):
     keeps them all.
     """
     declared = [program.target_table().config[i] for i in index.tolist()]
-    written = written_configuration(program.format, robot, declared, q)
+    binds = np.flatnonzero(binding(program)[index])
+    written = written_configuration(program.format, robot, [declared[k] for k in binds.tolist()], q[binds])
     if written is None:
         return None
-    binds = binding(program)[index]
-    return [new if bound else old for old, new, bound in zip(declared, written, binds.tolist())]
+    for k, config in zip(binds.tolist(), written):
+        declared[k] = config
+    return declared
 
 
 def _configuration_changes(report):

@@ -289,7 +289,8 @@ class _Reader:
                 self.select(which, "0")
             elif value.startswith("{") and value.endswith("}") and value.count("{") == 1:
                 members = _members(value[1:-1], start + m.start(2) + 1, index, name, line_no, original)
-                table, frame = (self.tools if which == "TOOL" else self.frames), _frame(members, name, line_no, original)
+                table = self.tools if which == "TOOL" else self.frames
+                frame = _frame(members, name, line_no, original)
                 # the same value set again is the same tool or base
                 key = next((k for k, T in table.items() if k.startswith(which) and np.array_equal(T, frame)),
                            f"{which} line {line_no}")
@@ -497,8 +498,8 @@ def _resolve(reader, path, dat_path):
     """
     assigned, items = {}, []
     # other data lists beside it, and $config.dat beside it or in a backup's R1/System (KRC/R1/Program/x.src)
-    elsewhere = DeclaredElsewhere(dat_path or path, [path.parent, path.parent.parent / "System",
-                                                     path.parent.parent.parent / "System"], (".dat",), _GLOBAL_POINT, ";")
+    folders = [path.parent, path.parent.parent / "System", path.parent.parent.parent / "System"]
+    elsewhere = DeclaredElsewhere(dat_path or path, folders, (".dat",), _GLOBAL_POINT, ";")
     for item in reader.items:
         if isinstance(item, Statement) and (m := _ASSIGN.match(mask(item.text, ";"))):
             assigned.setdefault(m.group(1).upper(), item.line)
