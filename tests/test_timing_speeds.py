@@ -243,3 +243,11 @@ def test_a_lowered_cruise_speed_holds_the_joint_limits_at_its_slowest_point(tmp_
     faster_v, faster_a = cruise_demand(robot, p1, p2, 1.05 * written)
     assert max(np.max(faster_v / robot.v_max), np.max(faster_a / robot.a_max)) > 1.0  # the slowest point binds
     assert report["timing"]["lowered"]["count"] == 1
+
+
+def test_converting_a_speed_set_at_run_time_says_so(tmp_path, capsys):
+    """A PERS speeddata has no value another language could take: the converted motion's default is named."""
+    path = rapid_module(tmp_path, ["PERS speeddata vWeld := [20,500,5000,1000];"], ["MoveL P2, vWeld, fine, tool0;"])
+    assert main(["convert", str(path), str(tmp_path / "speeds.csv"), "--robot", "abb_irb4600"]) == 0
+    assert ("1 whose speed is set at run time written with csv's default speed: set it before running (first: "
+            "line 7, vWeld: PERS speeddata, set at run time (line 4))") in capsys.readouterr().out

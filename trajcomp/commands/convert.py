@@ -104,6 +104,9 @@ def run(args):
     converted = convert_program(program, to_format, robot=robot, tools=tools, frames=frames)
     written = formats.write(args.output, converted, to_format, protect=protected_inputs(args, args.input, program))
     skipped = len(program.runtime_motions())
+    unknown = [m for m in program.motions if m.speed_why and not m.reason]  # a variable's speed cannot be carried over
     print(f"wrote {', '.join(str(p) for p in written)}: {len(converted.motions) - skipped} motions"
-          + (f", {skipped} computed at run time written as comments" if skipped else ""))
+          + (f", {skipped} computed at run time written as comments" if skipped else "")
+          + (f", {len(unknown)} whose speed is set at run time written with {to_format}'s default speed: set it "
+             f"before running (first: line {unknown[0].line}, {unknown[0].speed_why})" if unknown else ""))
     return 0
