@@ -107,7 +107,7 @@ def test_single_orientation_fit_leaves_unseen_parameter_combinations_at_nominal(
     robot = load_robot("ur10")
     virtual = VirtualRobot.create(robot, "paper", 1)
     rng = np.random.default_rng(1)
-    plan = plan_grid(robot, (300, -100, 300), 500, 100)
+    plan = plan_grid(robot, (300, -100, 300), 500, 100, one_posture=False)  # the paper cube, as the demo plans it
     q = plan.joints[plan.reachable]
     fit = identify(robot, q, virtual.measure(q, rng))
     model = calibrate(robot, Measurements(joints=q, position=plan.position[plan.reachable],

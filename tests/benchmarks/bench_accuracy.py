@@ -271,7 +271,7 @@ def sparse_table():
             for seed in (1, 2, 3):
                 virtual = VirtualRobot.create(robot, "paper", seed)
                 rng = np.random.default_rng(seed)
-                plan = plan_grid(robot, (300, -100, 300), 500, step)
+                plan = plan_grid(robot, (300, -100, 300), 500, step, one_posture=False)
                 q = plan.joints[plan.reachable]
                 meas = Measurements(joints=q, position=plan.position[plan.reachable], measured=virtual.measure(q, rng),
                                     lines=np.arange(len(q)) + 2)
@@ -283,7 +283,7 @@ def sparse_table():
     for seed in (1, 2, 3):
         virtual = VirtualRobot.create(robot, "paper", seed)
         rng = np.random.default_rng(seed)
-        plan = plan_grid(robot, (300, -100, 300), 500, 100)
+        plan = plan_grid(robot, (300, -100, 300), 500, 100, one_posture=False)
         q = plan.joints[plan.reachable]
         meas = Measurements(joints=q, position=plan.position[plan.reachable], measured=virtual.measure(q, rng),
                             lines=np.arange(len(q)) + 2)
