@@ -442,7 +442,8 @@ def _landing(robot, dh, frame, data, held, folds, progress, orientation):
     if dh is not None:
         parameters = landing.posterior(
             robot, dh.robot, joints, rotation, frame=frame, residuals=measured - fk(dh.robot, joints)[:, :3, 3],
-            R_tcp_target=dh.R_tcp_target, fitted=dict(zip(dh.names, dh.delta)))
+            R_tcp_target=dh.R_tcp_target, fitted=dict(zip(dh.names, dh.delta)),
+            hidden=sum(is_robot_parameter(n) for n in dh.identifiability.fixed))
     rotations = fk(robot, joints)[:, :3, :3] if joints is not None else (
         abc_to_matrix(orientation) if orientation is not None else None)
     built = landing.build({mode: e[rows] for mode, e in held.items()}, position[rows], method, parameters,

@@ -18,9 +18,8 @@ unseen
     What the measurements could not see. The arm's kinematic parameters
     are known only as far as the measured configurations constrain them:
     a linear Gaussian posterior, its prior the size of the identified
-    deltas (lengths and angles separately: the unseen parameters of an arm
-    are taken to be as far off as the seen ones), its noise the fit's
-    residual. Where the target's orientation, tool or posture differs from
+    deltas (the unseen parameters of an arm are taken to be as far off as
+    the seen ones; see `posterior`), its noise the fit's residual. Where the target's orientation, tool or posture differs from
     the measured ones, the parameters the measurements could not see move
     its landing: the estimate adds ``|J' mu| + 2 sqrt(trace(J' C J'^T))``
     mm, with ``C`` the posterior covariance, ``mu`` the expected parameter
@@ -47,7 +46,7 @@ from trajcomp.ik import ik
 from trajcomp.ik_closed_form import ik_family
 from trajcomp.joint_errors import KIND as JOINT_KIND
 from trajcomp.identify import mean_rotation
-from trajcomp.parameters import candidate_parameters, is_angle, is_robot_parameter, pose_jacobian
+from trajcomp.parameters import ANGLE_LEVER, candidate_parameters, is_angle, is_robot_parameter, pose_jacobian
 from trajcomp.stats import ErrorStats
 from trajcomp.transforms import abc_to_matrix, matrix_to_abc, rotation_angle_between
 
@@ -184,7 +183,7 @@ def near_lookup(points, errors):
     return lower, step, near
 
 
-def posterior(robot, identified, joints, rotation, *, frame, residuals, R_tcp_target, fitted):
+def posterior(robot, identified, joints, rotation, *, frame, residuals, R_tcp_target, fitted, hidden=0):
     """Posterior mean shift, covariance and identified values of the arm's parameters (linear Gaussian).
 
     The posterior rests on the measured positions only (orientations
@@ -209,6 +208,14 @@ def posterior(robot, identified, joints, rotation, *, frame, residuals, R_tcp_ta
     R_tcp_target : ndarray, shape (3, 3)
     fitted : dict of str to float
         Identified deltas from the nominal robot, mm or rad.
+    hidden : int
+        How many of the robot parameters of ``fitted`` the data do not
+        identify on their own: a fit that moves only along the identified
+        combinations (the minimum-norm solution) spreads the error over all
+        of them, so their RMS understates the size of one parameter's error
+        by ``sqrt(P / (P - hidden))``, which the prior puts back. Lengths and
+        angles then bound each other through `ANGLE_LEVER` (an angle error
+        at least the length error over 1 m, and the reverse).
 
     Returns
     -------
@@ -224,7 +231,11 @@ def posterior(robot, identified, joints, rotation, *, frame, residuals, R_tcp_ta
     angle = np.array([is_angle(n) for n in names])
     lengths = [abs(v) for n, v in fitted.items() if is_robot_parameter(n) and not is_angle(n)]
     angles = [abs(v) for n, v in fitted.items() if is_robot_parameter(n) and is_angle(n)]
-    prior = np.where(angle, _rms(angles, PRIOR_FLOOR[1]), _rms(lengths, PRIOR_FLOOR[0]))
+    seen = len(lengths) + len(angles)
+    spread = np.sqrt(seen / max(seen - hidden, 1))
+    length, turn = spread * _rms(lengths, PRIOR_FLOOR[0]), spread * _rms(angles, PRIOR_FLOOR[1])
+    length, turn = max(length, turn * ANGLE_LEVER), max(turn, length / ANGLE_LEVER)
+    prior = np.where(angle, turn, length)
     prior = np.where(robot_part, prior, np.where(angle, NUISANCE_PRIOR[1], NUISANCE_PRIOR[0]))
     jac = pose_jacobian(identified, joints, names, R_tcp_target)[1][:, :3, :].reshape(-1, len(names))
     residual = residuals.reshape(-1)
