@@ -214,3 +214,14 @@ def test_strays_of_a_killed_run_are_removed_by_the_next_run_but_not_those_being_
         os.utime(tmp_path / stray, (0, 0))
     write_atomic(tmp_path / "weld.src", b"new\n")
     assert sorted(p.name for p in tmp_path.iterdir()) == [".other.txt.xyz.tmp", ".weld.src.fresh1.tmp", "weld.src"]
+
+
+def test_a_file_system_without_locks_is_written_unlocked(tmp_path, monkeypatch):
+    import errno
+
+    def no_locks(fd, operation):
+        raise OSError(errno.ENOLCK, "No locks available")
+
+    monkeypatch.setattr(atomic.fcntl, "flock", no_locks)
+    write_files_atomic(_krl_set(tmp_path, 3))
+    assert (tmp_path / "weld.dat").read_text().endswith("{X 3}\nENDDAT\n")

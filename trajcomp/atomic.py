@@ -29,6 +29,7 @@ writing that file.
 """
 
 import contextlib
+import errno
 import json
 import os
 import shutil
@@ -46,6 +47,7 @@ except ImportError:  # not POSIX: no locks (one run at a time per folder is then
     fcntl = None
 
 JOURNAL_PREFIX = ".trajcomp-commit."
+_NO_LOCKS = (errno.ENOLCK, errno.EOPNOTSUPP, errno.EINVAL)  # a file system without flock: write unlocked
 _STRAY_AGE = 10.0  # s: a temporary younger than this may be one another run has created but not yet locked
 
 
@@ -290,14 +292,20 @@ def _locked_folders(paths):
                 raise WriteError(f"{folder}: cannot lock the folder to write into it: {exc}") from exc
             _HELD[folder] = fd
             taken.append(folder)
-            try:
-                fcntl.flock(fd, fcntl.LOCK_EX)
-            except OSError as exc:
-                raise WriteError(f"{folder}: cannot lock the folder to write into it: {exc}") from exc
+            _lock(fd, folder)
         yield
     finally:
         for folder in taken:
             os.close(_HELD.pop(folder))  # closing releases the lock
+
+
+def _lock(fd, path):
+    """An exclusive flock on ``fd`` (waiting for it); none on a file system without locks."""
+    try:
+        fcntl.flock(fd, fcntl.LOCK_EX)
+    except OSError as exc:
+        if exc.errno not in _NO_LOCKS:
+            raise WriteError(f"{path}: cannot lock it to write: {exc}") from exc
 
 
 def _stage(path, data):
@@ -315,9 +323,9 @@ def _stage(path, data):
         raise WriteError(f"{path}: cannot write: {exc.strerror}") from exc
     try:
         if fcntl is not None:
-            fcntl.flock(fd, fcntl.LOCK_EX)
+            _lock(fd, path)
         hold = os.dup(fd)  # shares the lock, held after the file is closed
-    except OSError as exc:
+    except (OSError, WriteError) as exc:
         os.close(fd)
         Path(tmp).unlink(missing_ok=True)
         raise WriteError(f"{path}: cannot write: {exc}") from exc
