@@ -247,9 +247,12 @@ class _Jacobian:
             normal[np.ix_(index, self.dense_index)] = (basis.T @ cross) * lever
             gradient[index] = basis.T @ np.einsum("nr,nr->n", weighted[:, :, joint], residual) * lever
             for other_index, other_basis, other in self.blocks:
+                if other < joint:
+                    continue  # the transpose of a block already filled
                 product = np.einsum("nr,nr->n", weighted[:, :, joint], self.theta[:, :, other])
-                block = (basis.T @ other_basis.multiply(product[:, None]).tocsc()).toarray()
-                normal[np.ix_(index, other_index)] = block * lever * scale[other_index][0]
+                block = (basis.T @ other_basis.multiply(product[:, None]).tocsc()).toarray() * lever * scale[other_index][0]
+                normal[np.ix_(index, other_index)] = block
+                normal[np.ix_(other_index, index)] = block.T
         return normal, gradient
 
 
