@@ -191,13 +191,21 @@ _MERGE = {"krl": _merge_kuka, "rapid": _merge_abb, "fanuc_ls": _merge_fanuc}
 
 def _kuka_windows(configs):
     """Branch (M,) and joint windows (M, 6) of KUKA ``(S, T)`` rows: T bit i set means axis i+1 < 0."""
-    status, turn = np.array([[int(v) for v in config[:2]] for config in configs], dtype=np.int64).T
+    status, turn = _integers(configs, 0, 2).T
     back = (status & 1) > 0
     up = ((status & 2) > 0) != back
     bits = ((turn[:, None] >> np.arange(6)) & 1) > 0
     lower = np.where(bits, -np.inf, -_EDGE)
     upper = np.where(bits, -2 * _EDGE, np.inf)
     return _branch(back, up, (status & 4) > 0), lower, upper
+
+
+def _integers(configs, start, stop):
+    """Fields ``start:stop`` of configuration rows as an int64 array (M, stop - start), clipped to +-2**40: no
+    code that large names a reachable window, and a damaged file's 1e308 stays an unreachable code."""
+    limit = 1 << 40
+    rows = [[max(-limit, min(limit, int(v))) for v in config[start:stop]] for config in configs]
+    return np.array(rows, dtype=np.int64).reshape(-1, stop - start)
 
 
 def _quadrant_windows(codes, joints, to_lower, to_upper):
@@ -209,7 +217,7 @@ def _quadrant_windows(codes, joints, to_lower, to_upper):
 
 def _abb_windows(configs):
     """Branch and joint windows of ABB confdata rows: joints 1, 4, 6 in quadrants [cf, cf + 1) * 90 deg."""
-    values = np.array([[int(v) for v in config[:4]] for config in configs], dtype=np.int64)
+    values = _integers(configs, 0, 4)
     cfx = values[:, 3]
     back = (cfx & 4) > 0
     up = ((cfx & 2) > 0) == back
@@ -221,7 +229,7 @@ def _abb_windows(configs):
 def _fanuc_windows(configs):
     """Branch and joint windows of FANUC CONFIG rows: joints 1, 4, 6 in turn t, ((2t - 1) pi, (2t + 1) pi]."""
     flags = np.array([config[:3] for config in configs], dtype=object).reshape(-1, 3)
-    turns = np.array([[int(v) for v in config[3:6]] for config in configs], dtype=np.int64).reshape(-1, 3)
+    turns = _integers(configs, 3, 6)
     lower, upper = _quadrant_windows(turns, [0, 3, 5], lambda t: (2 * t - 1) * np.pi + _EDGE,
                                      lambda t: (2 * t + 1) * np.pi)
     return _branch(flags[:, 2] == "B", flags[:, 1] == "U", flags[:, 0] == "N"), lower, upper
