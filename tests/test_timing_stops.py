@@ -51,6 +51,21 @@ def test_each_stop_to_stop_motion_takes_the_time_it_takes_alone(stops, monkeypat
     assert result.within_limits
 
 
+@pytest.mark.parametrize("repeats", [
+    [0, 1, 1, 1],  # a motion, then stops that do not move, the last of the batch among them
+    [0, 0, 0],  # no motion moves
+])
+def test_stops_that_do_not_move_take_no_time_wherever_they_stand(repeats):
+    """Repeated waypoints at the end of a batch of stops (a line x1000 in a RAPID program crashed the timing)."""
+    q = UR10.home + np.radians(30.0) * np.array(repeats)[:, None] * np.eye(6)[0]
+    moves = Moves.from_joints(np.r_[UR10.home[None], q], UR10, kind=np.array([JOINT] * (len(q) + 1), dtype=object),
+                              tcp_speed=np.full(len(q) + 1, np.inf), stop=True)
+    result = retime(moves, UR10)
+    expected = [alone(moves, k) for k in range(1, len(moves))]
+    np.testing.assert_allclose(np.diff(result.t), expected, rtol=1e-6, atol=1e-9)
+    assert np.count_nonzero(np.diff(result.t)) == int(any(repeats))
+
+
 def test_every_stop_is_at_rest_and_the_limits_hold_between(stops):
     result = retime(stops, UR10)
     _, qd_stop, _ = result.at(result.t[1:-1])

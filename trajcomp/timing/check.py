@@ -124,6 +124,8 @@ def dense_checks(runs, laws, moves, robot, *, jerk, rate=RATE):
     -------
     list of (Peaks, s (N,), ratio (N,))
     """
+    if not runs:
+        return []
     parts = []
     for run, law in zip(runs, laws):
         if not law.duration * rate <= MAX_SAMPLES:

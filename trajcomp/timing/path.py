@@ -236,10 +236,13 @@ def stop_paths(moves, robot, first, last, tolerance=TOLERANCE):
         local = s[r0 : r1 + 1] - s[r0]
         runs.append((k, slice(r0, r1 + 1), local, _grid(local) if r1 > r0 else local[:0]))
     sizes = [len(grid) for *_, grid in runs]
+    if not any(sizes):
+        return [_no_path(k - 1, k) for k, *_ in runs]
     offsets = np.r_[0, np.cumsum(sizes)]
     at_sample = np.full(offsets[-1], -1)  # the sample each grid point (in all grids) is, -1 between samples
     for (_, rows, local, grid), offset in zip(runs, offsets):
-        at_sample[offset + np.searchsorted(grid, local)] = np.arange(rows.start, rows.stop)
+        if len(grid):  # a motion that does not move has no grid point of its own
+            at_sample[offset + np.searchsorted(grid, local)] = np.arange(rows.start, rows.stop)
     owner = np.maximum(owner, first + 1)  # the first sample: the first motion's tool
     jac = tcp_jacobians(robot, moves, owner, q, known)
     fits = []  # per motion with a grid: spline, deviation, TCP length
