@@ -196,7 +196,7 @@ def _refuse_outside(model, mode, arm, result, label, names):
         (np.zeros(len(result.q), dtype=bool) if field is None else ~field.contains(result.T_command[:, :3, 3])
          & ~result.near_face, "outside the grid"),
         (arm.outside_rows(result.q), "joints outside the joint range the model was calibrated on"),
-        (model.unmeasured_posture(result.q), "in an arm posture the calibration never measured"),
+        (result.unmeasured_posture, "in an arm posture the calibration never measured"),
     ]
     name = (lambda i: f"target {i}") if names is None else names.__getitem__
     out = np.flatnonzero(result.outside | result.unmeasured_posture)
@@ -240,7 +240,7 @@ def _compensate_rows(model, mode, nominal, arm, field, outside, label, tool, tar
         todo = todo[residual[todo] >= LANDED]
         if not todo.size:
             break
-    posture = model.unmeasured_posture(q, outside)
+    posture = model.unmeasured_posture(q)
     other_tool = tool is not None and not same_tool(tool, model.nominal.T_flange_tool) and not model.places_other_tools
     estimate = landing.estimate(model, mode, q, targets, tool, posture, other_tool)
     return CompensationResult(command, q, command[:, :3, 3] - goal, flagged | arm.outside_rows(q), residual,

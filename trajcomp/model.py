@@ -26,7 +26,7 @@ import dataclasses
 import numpy as np
 
 from trajcomp.errors import ModelError
-from trajcomp.ik import Configuration, branch_index
+from trajcomp.ik import branch_index
 from trajcomp.joint_errors import KIND as JOINT_KIND
 from trajcomp.kinematics import fk
 from trajcomp.parameters import apply_deltas
@@ -99,29 +99,15 @@ class CompensationModel:
     other_tools_reason: str = "not stated"
     postures: tuple = ()
 
-    def unmeasured_posture(self, q, outside="model"):
+    def unmeasured_posture(self, q):
         """Mask (N,) of commanded joints q (N, 6) rad in an arm branch the calibration did not measure.
 
         All False when the model does not record its postures.
-
-        Raises
-        ------
-        ModelError
-            With the ``error`` policy, naming the first such row and its branch.
         """
         q = np.atleast_2d(q)
         if not self.postures:
             return np.zeros(len(q), dtype=bool)
-        branch = branch_index(self.nominal, q)
-        out = ~np.isin(branch, self.postures)
-        if outside == "error" and out.any():
-            first = int(np.flatnonzero(out)[0])
-            raise ModelError(
-                f"target {first}: arm posture {Configuration.from_index(branch[first])} was never measured (the "
-                f"calibration measured {', '.join(str(Configuration.from_index(b)) for b in self.postures)}; "
-                f"{int(out.sum())} targets in other postures)"
-            )
-        return out
+        return ~np.isin(branch_index(self.nominal, q), self.postures)
 
     @property
     def identified(self):
