@@ -33,16 +33,20 @@ def random_lines(n, seed, robot=UR10):
 
 
 def reference(moves, result, robot):
-    """Cycle time (s) of TOPP-RA on the timed paths with REFINE times their first grid, and its worst 1 kHz ratio."""
-    moves = dataclasses.replace(moves, q=result.q)
+    """Cycle time (s) of TOPP-RA on the same paths with REFINE times their first grid, and its worst 1 kHz ratio."""
+    moves = dataclasses.replace(moves, q=result.q)  # the joints the timing ran through (turns kept)
     total, worst = 0.0, 0.0
     for kind, first, last in plan_segments(moves, "toppra"):
+        if kind == "untimed":
+            continue
         run = run_path(moves, robot, first, last)
-        fine = run.refined(moves, robot, (run.grid[:-1, None] + np.outer(np.diff(run.grid),
-                                                                          np.arange(1, REFINE) / REFINE)).ravel())
-        law = toppra_laws([fine], moves, robot)[0]
+        if run.path is None:
+            continue
+        run = run.refined(moves, robot, (run.grid[:-1, None] + np.outer(np.diff(run.grid),
+                                                                         np.arange(1, REFINE) / REFINE)).ravel())
+        law = toppra_laws([run], moves, robot)[0]
         total += law.duration
-        worst = max(worst, segment_peaks(fine, law, moves, robot, jerk=False).worst)
+        worst = max(worst, segment_peaks(run, law, moves, robot, jerk=False).worst)
     return total, worst
 
 

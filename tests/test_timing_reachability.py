@@ -26,7 +26,7 @@ def helix_joints(n, turns=3, radius=60.0, rise=-80.0):
     return ik(UR10, T, seed=UR10.home).raise_on_failure().q
 
 
-class _SpeedBound(toppra.constraint.LinearConstraint):
+class SpeedBound(toppra.constraint.LinearConstraint):
     """0 <= x_i <= x_max_i, as toppra takes it."""
 
     def __init__(self, x_max):
@@ -40,7 +40,7 @@ class _SpeedBound(toppra.constraint.LinearConstraint):
 def toppra_speeds(run, x_max, acceleration):
     limits = toppra.constraint.JointAccelerationConstraint(
         acceleration, discretization_scheme=toppra.constraint.DiscretizationType.Interpolation)
-    solver = toppra.algorithm.TOPPRA([_SpeedBound(x_max), limits], run.path, gridpoints=run.grid,
+    solver = toppra.algorithm.TOPPRA([SpeedBound(x_max), limits], run.path, gridpoints=run.grid,
                                      solver_wrapper="seidel")
     _, sd, _, _ = solver.compute_parameterization(0.0, 0.0, return_data=True)
     return sd**2

@@ -38,7 +38,6 @@ for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "NUME
     os.environ[_var] = "1"
 
 import contextlib  # noqa: E402
-import dataclasses  # noqa: E402
 import io  # noqa: E402
 import sys  # noqa: E402
 import tempfile  # noqa: E402
@@ -60,12 +59,14 @@ from trajcomp.model_file import load_model  # noqa: E402
 from trajcomp.postprocess import compensate_program  # noqa: E402
 from trajcomp.posture import planned_joints  # noqa: E402
 from trajcomp.robot import load_robot  # noqa: E402
-from trajcomp.timing import Moves, moves_from_program, plan_segments, retime  # noqa: E402
-from trajcomp.timing.check import segment_peaks  # noqa: E402
+from trajcomp.timing import Moves, moves_from_program, retime  # noqa: E402
 from trajcomp.timing.path import run_path  # noqa: E402
 from trajcomp.timing.reachability import squared_speeds  # noqa: E402
-from trajcomp.timing.toppra_run import toppra_laws  # noqa: E402
 from trajcomp.transforms import abc_to_matrix, matrix_to_abc  # noqa: E402
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+from test_timing_dense import REFINE, reference  # noqa: E402 (the suite's 16x-grid reference)
+from test_timing_reachability import SpeedBound  # noqa: E402 (0 <= x <= x_max as toppra takes it)
 
 ROOT = Path(__file__).resolve().parents[2]
 EXAMPLES = {  # file, robot, calibration cube corner and side (README), grid step
@@ -75,7 +76,6 @@ EXAMPLES = {  # file, robot, calibration cube corner and side (README), grid ste
     "URScript": ("examples/programs/ur/weld.script", "ur10", "-750,-200,500", 200),
     "CSV": ("examples/programs/csv/weld.csv", "ur10", "-750,-200,500", 200),
 }
-REFINE = 16  # reference grid: each interval split in this many
 UR10 = load_robot("ur10")
 
 
@@ -87,24 +87,6 @@ def helix(n, turns=10, radius=50.0, rise=-100.0, robot=UR10):
     T[:, 1, 3] += radius * np.sin(angle)
     T[:, 2, 3] += np.linspace(0.0, rise, n)
     return ik(robot, T, seed=robot.home).raise_on_failure().q, T
-
-
-def reference(moves, result, robot):
-    """Cycle time (s) of TOPP-RA on the same paths with REFINE times the grid, and its worst 1 kHz ratio."""
-    moves = dataclasses.replace(moves, q=result.q)  # the joints the timing ran through (turns kept)
-    total, worst = 0.0, 0.0
-    for kind, first, last in plan_segments(moves, "toppra"):
-        if kind == "untimed":
-            continue
-        run = run_path(moves, robot, first, last)
-        if run.path is None:
-            continue
-        run = run.refined(moves, robot, (run.grid[:-1, None] + np.outer(np.diff(run.grid),
-                                                                         np.arange(1, REFINE) / REFINE)).ravel())
-        law = toppra_laws([run], moves, robot)[0]
-        total += law.duration
-        worst = max(worst, segment_peaks(run, law, moves, robot, jerk=False).worst)
-    return total, worst
 
 
 def limits_row(name, moves, robot):
@@ -241,17 +223,6 @@ def main(quick=False):
     return 0
 
 
-class _SpeedBound(toppra.constraint.LinearConstraint):
-    """0 <= x_i <= x_max_i, as toppra takes it (as in tests/test_timing_reachability.py)."""
-
-    def __init__(self, x_max):
-        super().__init__()
-        self.dof, self.x_max = 6, x_max
-
-    def compute_constraint_params(self, path, gridpoints, *args, **kwargs):
-        return None, None, None, None, None, None, np.column_stack([np.zeros_like(self.x_max), self.x_max])
-
-
 def passes_against_toppra(moves):
     """Seconds of the reachability passes on a run's whole path and grid, ((ours, grid size), toppra's seidel)."""
     run = run_path(moves, UR10, 0, len(moves) - 1)
@@ -261,7 +232,7 @@ def passes_against_toppra(moves):
                for _ in range(3))
     limits = toppra.constraint.JointAccelerationConstraint(
         UR10.a_max, discretization_scheme=toppra.constraint.DiscretizationType.Interpolation)
-    solver = toppra.algorithm.TOPPRA([_SpeedBound(x_max), limits], run.path, gridpoints=run.grid,
+    solver = toppra.algorithm.TOPPRA([SpeedBound(x_max), limits], run.path, gridpoints=run.grid,
                                      solver_wrapper="seidel")
     theirs = _timed(lambda: solver.compute_parameterization(0.0, 0.0))
     return (ours, len(run.grid)), theirs
