@@ -9,6 +9,7 @@ arm would refuse them too) stops a run. Byte-exact read/write of every file
 is tests/test_formats_roundtrip.py.
 """
 
+import functools
 from pathlib import Path
 
 import numpy as np
@@ -38,14 +39,17 @@ def test_the_corpus_holds_programs_of_every_language():
     assert len(REAL) >= 35 and {lang: languages.count(lang) >= 1 for lang in ARM} == dict.fromkeys(ARM, True)
 
 
-@pytest.fixture(scope="module")
-def runs():
-    """Per program: ``"compensated"``, ``"nothing to compensate"`` or the IKError's message."""
-    return {}
+@functools.cache
+def _compensated(path):
+    """The program at ``path`` read and compensated on its maker's built-in arm.
 
-
-@pytest.mark.parametrize("path", REAL, ids=lambda p: str(p.relative_to(DATA / "programs" / "real")))
-def test_a_real_program_is_compensated_or_refused_as_its_controller_would(path, runs, tmp_path):
+    Returns
+    -------
+    tuple
+        ``(program, edited, report)``, or ``(program, message, None)`` with the
+        IKError's message when that arm cannot reach it. Cached: the corpus test
+        below sees every program whichever xdist worker ran its own test.
+    """
     program = formats.read(path)
     robot = load_robot(ARM[program.format])
     stated = {str(n): np.eye(4) for n in range(1, 33)}  # the controller's tool and frame tables: not in the files
@@ -53,10 +57,16 @@ def test_a_real_program_is_compensated_or_refused_as_its_controller_would(path, 
         edited, report = compensate_program(program, _unchanged, robot, tools=stated, frames=stated,
                                             joint_targets="compensate")
     except IKError as error:  # another arm than the built-in one of its maker
-        assert "cannot reach" in str(error) or "cannot be reached" in str(error) or "outside the limits" in str(error)
-        runs[path] = str(error)
+        return program, str(error), None
+    return program, edited, report
+
+
+@pytest.mark.parametrize("path", REAL, ids=lambda p: str(p.relative_to(DATA / "programs" / "real")))
+def test_a_real_program_is_compensated_or_refused_as_its_controller_would(path, tmp_path):
+    program, edited, report = _compensated(path)
+    if report is None:
+        assert "cannot reach" in edited or "cannot be reached" in edited or "outside the limits" in edited
         return
-    runs[path] = "compensated" if len(report.labels) else "nothing to compensate"
     lines = [line for line, _, _ in report.not_compensated]
     assert len(lines) == len(set(lines))  # a motion listed once
     assert report.motions_left <= len(program.motions)
@@ -68,11 +78,12 @@ def test_a_real_program_is_compensated_or_refused_as_its_controller_would(path, 
     assert formats.read(written[0]).format == program.format
 
 
-def test_every_language_has_a_real_program_compensated(runs):
-    done = {formats.find_format(p).name for p, outcome in runs.items() if outcome == "compensated"}
+def test_every_language_has_a_real_program_compensated():
+    runs = {path: _compensated(path) for path in REAL}
+    done = {program.format for program, _, report in runs.values() if report is not None and len(report.labels)}
     # the one real URScript program is RoboDK's for a UR10e, beyond the built-in UR10's reach at line 76; the
     # FANUC backups are of spot-welding arms far larger than the LR Mate, or move only to positions left as written
-    assert done >= {"krl", "rapid"}, runs
+    assert done >= {"krl", "rapid"}, {path.name: edited for path, (_, edited, report) in runs.items() if report is None}
 
 
 @pytest.mark.parametrize("path", REFUSED, ids=lambda p: p.name)
