@@ -17,8 +17,8 @@ import numpy as np
 
 import trajcomp
 from trajcomp.demo import PAPER_CUBES, run_cube
-from trajcomp.robot import load_robot
-from trajcomp.simulate import VirtualRobot
+from trajcomp.arm.robot import load_robot
+from trajcomp.calibration.simulate import VirtualRobot
 
 
 def main(model_path=None):

@@ -39,13 +39,13 @@ def kuka_model(tmp_path_factory):
 def makerless(tmp_path):
     """``makerless(name)``: the path of a copy of built-in robot ``name`` whose description names no maker.
 
-    Any language's program may run on such an arm (`trajcomp.plausibility.check_robot_language`): for tests of a
+    Any language's program may run on such an arm (`trajcomp.calibration.plausibility.check_robot_language`): for tests of a
     language's writing and timing on one geometry, where a KUKA arm would run no URScript.
     """
     from importlib import resources
 
     def copy(name):
-        text = resources.files("trajcomp.robots").joinpath(f"{name}.yaml").read_text(encoding="utf-8")
+        text = resources.files("trajcomp.arm.robots").joinpath(f"{name}.yaml").read_text(encoding="utf-8")
         path = tmp_path / f"{name}-makerless.yaml"
         path.write_text("".join(line for line in text.splitlines(keepends=True) if not line.startswith("vendor:")))
         return str(path)

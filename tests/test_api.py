@@ -20,11 +20,11 @@ from scipy.spatial.transform import Rotation
 from virtual_cell import landing_error, virtual_cell
 
 import trajcomp
-import trajcomp.compensate as compensation
+import trajcomp.compensation.targets as compensation
 from trajcomp import api, formats
 from trajcomp.errors import CompensationError, IKError, ModelError, TrajcompError, WriteError
-from trajcomp.ik import configuration_of, ik_all
-from trajcomp.kinematics import fk
+from trajcomp.arm.ik import configuration_of, ik_all
+from trajcomp.arm.kinematics import fk
 
 ROOT = Path(__file__).resolve().parents[1]
 POSE = np.array([550.0, 100.0, 550.0, 90.0, 0.0, 180.0])  # inside the calibrated cube, the measured orientation

@@ -5,8 +5,8 @@ import stat
 
 import pytest
 
-from trajcomp import atomic
-from trajcomp.atomic import write_atomic, write_files_atomic
+from trajcomp.support import atomic
+from trajcomp.support.atomic import write_atomic, write_files_atomic
 from trajcomp.errors import WriteError
 
 

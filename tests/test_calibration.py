@@ -5,16 +5,16 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from trajcomp.calibrate import calibrate
-from trajcomp.compensate import compensate
+from trajcomp.calibration.calibrate import calibrate
+from trajcomp.compensation.targets import compensate
 from trajcomp.errors import ModelError
-from trajcomp.kinematics import fk
-from trajcomp.measurements import Measurements
-from trajcomp.model_file import FORMAT, load_model, save_model
-from trajcomp.plan import default_orientation, plan_grid
-from trajcomp.robot import load_robot
-from trajcomp.simulate import VirtualRobot
-from trajcomp.transforms import abc_to_matrix
+from trajcomp.arm.kinematics import fk
+from trajcomp.calibration.measurements import Measurements
+from trajcomp.model.model_file import FORMAT, load_model, save_model
+from trajcomp.calibration.measurement_plan import default_orientation, plan_grid
+from trajcomp.arm.robot import load_robot
+from trajcomp.calibration.simulate import VirtualRobot
+from trajcomp.arm.transforms import abc_to_matrix
 
 
 @pytest.fixture(scope="module")
@@ -127,7 +127,7 @@ def test_gross_outlier_is_reported_and_left_out(setup):
 
 def test_compensated_csv_program_lands_on_its_targets(setup, tmp_path):
     from trajcomp.cli import main
-    from trajcomp.measurements import read_measurements
+    from trajcomp.calibration.measurements import read_measurements
 
     _, virtual, model, _ = setup
     save_model(tmp_path / "model.yaml", model)
@@ -145,8 +145,8 @@ def test_compensated_csv_program_lands_on_its_targets(setup, tmp_path):
 @pytest.fixture(scope="module")
 def tilted():
     """The virtual UR10 with a target 40 mm off the flange axis, measured at five orientations."""
-    from trajcomp.orientations import spread_orientations
-    from trajcomp.transforms import pose_to_matrix
+    from trajcomp.calibration.orientations import spread_orientations
+    from trajcomp.arm.transforms import pose_to_matrix
 
     robot = load_robot("ur10").replace(T_flange_tool=pose_to_matrix([40.0, -30.0, 100.0, 0.0, 0.0, 0.0]))
     virtual = VirtualRobot.create(robot, "paper", seed=3)

@@ -88,7 +88,7 @@ def test_running_a_command_imports_no_other_command(tmp_path):
     import sys
 
     code = ("import sys\nfrom trajcomp.cli import main\ntry:\n    main({argv})\nfinally:\n"
-            "    print(sorted(m for m in sys.modules if m.startswith(('trajcomp.commands.', 'trajcomp.calibrate', "
+            "    print(sorted(m for m in sys.modules if m.startswith(('trajcomp.commands.', 'trajcomp.calibration.calibrate', "
             "'trajcomp.report', 'matplotlib', 'scipy.interpolate'))))")
     for argv, allowed in ((["formats"], ["trajcomp.commands.formats"]), (["--version"], [])):
         done = subprocess.run([sys.executable, "-c", code.format(argv=argv)], capture_output=True, text=True)
@@ -222,7 +222,7 @@ def test_sigterm_exits_143_like_an_interrupt_and_leaves_no_temporary(tmp_path):
 
     script = (
         "import sys, time\n"
-        "import trajcomp.atomic as atomic, trajcomp.commands.robots as robots\n"
+        "import trajcomp.support.atomic as atomic, trajcomp.commands.robots as robots\n"
         "from trajcomp.cli import main\n"
         "def slow():\n"
         "    print('writing', flush=True); yield b'a'; time.sleep(30); yield b'b'\n"
@@ -241,9 +241,9 @@ def test_sigterm_exits_143_like_an_interrupt_and_leaves_no_temporary(tmp_path):
 
 def _turn_program(path):
     """A UR10 CSV path whose 4th LIN waypoint declares J6 a turn below where the linear motion reaches it."""
-    from trajcomp.kinematics import fk
-    from trajcomp.robot import load_robot
-    from trajcomp.transforms import matrix_to_pose
+    from trajcomp.arm.kinematics import fk
+    from trajcomp.arm.robot import load_robot
+    from trajcomp.arm.transforms import matrix_to_pose
 
     robot = load_robot("ur10")
     q = robot.home + np.linspace(0.0, 0.3, 5)[:, None] * np.array([0.5, -0.2, 0.3, 0.2, 0.3, 0.6])
@@ -299,9 +299,9 @@ def test_the_output_keeps_the_input_language_unless_to_says_otherwise(kuka_model
 
 def test_plan_keeps_one_arm_posture_and_lists_the_targets_it_cannot_reach(tmp_path, capsys):
     """7 of the paper cube's 216 targets were silently planned in another arm branch (sign-flipped errors)."""
-    from trajcomp.ik import branch_index
-    from trajcomp.measurements import read_measurements
-    from trajcomp.robot import load_robot
+    from trajcomp.arm.ik import branch_index
+    from trajcomp.calibration.measurements import read_measurements
+    from trajcomp.arm.robot import load_robot
 
     plan = tmp_path / "plan.csv"
     assert main(["plan", "--robot", "ur10", "--cube", "300,-100,300", "--side", "500", "--step", "100",

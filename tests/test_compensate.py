@@ -3,13 +3,13 @@
 import numpy as np
 import pytest
 
-import trajcomp.compensate as compensation
-from trajcomp.compensate import compensate, program_corrector
+import trajcomp.compensation.targets as compensation
+from trajcomp.compensation.targets import compensate, program_corrector
 from trajcomp.errors import IKError, ModelError
-from trajcomp.ik import IKResult
-from trajcomp.plan import default_orientation
-from trajcomp.postprocess import _compensation_warnings
-from trajcomp.transforms import abc_to_matrix
+from trajcomp.arm.ik import IKResult
+from trajcomp.calibration.measurement_plan import default_orientation
+from trajcomp.compensation.program import _compensation_warnings
+from trajcomp.arm.transforms import abc_to_matrix
 from virtual_cell import CORNER, SIDE, landing_error, virtual_cell
 
 

@@ -31,18 +31,18 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 from trajcomp import formats
-from trajcomp.calibrate import calibrate
+from trajcomp.calibration.calibrate import calibrate
 from trajcomp.cli import main
-from trajcomp.compensate import compensate
-from trajcomp.configuration import BOUNDARY_TOLERANCE, configuration_for, declared_windows
-from trajcomp.ik import configuration_of, ik, ik_all
-from trajcomp.kinematics import fk
-from trajcomp.measurements import Measurements
-from trajcomp.model_file import save_model
-from trajcomp.orientations import spread_orientations
-from trajcomp.plan import default_orientation, plan_grid
-from trajcomp.robot import load_robot
-from trajcomp.simulate import VirtualRobot
+from trajcomp.compensation.targets import compensate
+from trajcomp.programs.configuration import BOUNDARY_TOLERANCE, configuration_for, declared_windows
+from trajcomp.arm.ik import configuration_of, ik, ik_all
+from trajcomp.arm.kinematics import fk
+from trajcomp.calibration.measurements import Measurements
+from trajcomp.model.model_file import save_model
+from trajcomp.calibration.orientations import spread_orientations
+from trajcomp.calibration.measurement_plan import default_orientation, plan_grid
+from trajcomp.arm.robot import load_robot
+from trajcomp.calibration.simulate import VirtualRobot
 
 LANDED = 0.05  # mm, largest landing error of a compensated target
 MISSED = 0.2  # mm, smallest landing error of an uncompensated target
@@ -365,7 +365,7 @@ def cells(tmp_path_factory):
     def cell(name, posture="home"):
         if (name, posture) not in made:
             folder = tmp_path_factory.mktemp(name)
-            yaml_text = resources.files("trajcomp.robots").joinpath(f"{name}.yaml").read_text(encoding="utf-8")
+            yaml_text = resources.files("trajcomp.arm.robots").joinpath(f"{name}.yaml").read_text(encoding="utf-8")
             robot_file = folder / f"{name}_tool.yaml"
             robot_file.write_text(yaml_text + f"tool: [{fixed(TOOL, 1)}]\n")
             robot = load_robot(robot_file)

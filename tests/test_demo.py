@@ -5,10 +5,10 @@ import pytest
 
 from trajcomp.demo import PAPER_CUBES, Cube, demo_cubes, run_demo
 from trajcomp.errors import TrajcompError
-from trajcomp.kinematics import fk
-from trajcomp.plan import default_orientation, grid_points, plan_grid
-from trajcomp.robot import builtin_robot_names, load_robot
-from trajcomp.transforms import abc_to_matrix
+from trajcomp.arm.kinematics import fk
+from trajcomp.calibration.measurement_plan import default_orientation, grid_points, plan_grid
+from trajcomp.arm.robot import builtin_robot_names, load_robot
+from trajcomp.arm.transforms import abc_to_matrix
 
 
 def test_the_paper_arm_gets_the_paper_cubes():

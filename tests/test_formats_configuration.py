@@ -3,8 +3,8 @@
 import numpy as np
 import pytest
 
-from trajcomp.configuration import abb_confdata, fanuc_config, kuka_status_turn
-from trajcomp.robot import load_robot
+from trajcomp.programs.configuration import abb_confdata, fanuc_config, kuka_status_turn
+from trajcomp.arm.robot import load_robot
 
 
 @pytest.fixture(scope="module")

@@ -7,13 +7,13 @@ import pytest
 
 from trajcomp import formats
 from trajcomp.errors import TrajcompError, WriteError
-from trajcomp.postprocess import FRAMELESS, compensate_program, convert_program
-from trajcomp.robot import load_robot
-from trajcomp.compensate import CompensationResult
-from trajcomp.configuration import abb_confdata, kuka_status_turn
-from trajcomp.frames import FrameTable
-from trajcomp.kinematics import fk
-from trajcomp.transforms import invert, matrix_to_pose, pose_to_matrix
+from trajcomp.compensation.program import FRAMELESS, compensate_program, convert_program
+from trajcomp.arm.robot import load_robot
+from trajcomp.compensation.targets import CompensationResult
+from trajcomp.programs.configuration import abb_confdata, kuka_status_turn
+from trajcomp.programs.frames import FrameTable
+from trajcomp.arm.kinematics import fk
+from trajcomp.arm.transforms import invert, matrix_to_pose, pose_to_matrix
 
 DATA = Path(__file__).parent / "data" / "programs"
 GOLDEN = {

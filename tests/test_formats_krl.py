@@ -7,10 +7,10 @@ import numpy as np
 import pytest
 
 from trajcomp import formats
-from trajcomp.configuration import kuka_status_turn
+from trajcomp.programs.configuration import kuka_status_turn
 from trajcomp.errors import ReadError, WriteError
-from trajcomp.robot import load_robot
-from trajcomp.transforms import abc_to_matrix
+from trajcomp.arm.robot import load_robot
+from trajcomp.arm.transforms import abc_to_matrix
 
 WELD = Path(__file__).parent / "data" / "programs" / "krl" / "weld.src"
 
@@ -177,7 +177,7 @@ def test_external_axes_are_read_and_their_motion_detected(tmp_path):
 
 
 def test_external_axes_are_carried_by_conversion_and_zero_ones_left_out(tmp_path):
-    from trajcomp.postprocess import convert_program
+    from trajcomp.compensation.program import convert_program
 
     dat = DAT.replace("S 2,T 2}", "S 2,T 2,E1 0.0,E2 0.0}").replace("Z 6,A 0,B 0,C 0,S 2,T 2,E1 0.0", "Z 6,A 0,B 0,C 0,S 2,T 2,E1 -250.5")
     program = formats.read(_write(tmp_path, SRC, dat))

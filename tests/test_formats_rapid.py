@@ -7,7 +7,7 @@ import pytest
 
 from trajcomp import formats
 from trajcomp.errors import ReadError
-from trajcomp.transforms import quat_to_matrix
+from trajcomp.arm.transforms import quat_to_matrix
 
 WELDING = Path(__file__).parent / "data" / "programs" / "rapid" / "Welding.mod"
 
@@ -200,7 +200,7 @@ def test_real_compas_rrc_module_with_a_moving_track(tmp_path):
     assert {m.frame for m in program.motions} == {"DefaultFrame", "wobj0"}
     assert program.targets[1].external[0] == 681.92 and np.isnan(program.targets[1].external[1:]).all()
     assert program.moving_external_axes() == ("E1",)
-    from trajcomp.postprocess import convert_program
+    from trajcomp.compensation.program import convert_program
 
     formats.write(tmp_path / "track.src", convert_program(program, "krl"))  # no robot: no S/T, the track is kept
     again = formats.read(tmp_path / "track.src")

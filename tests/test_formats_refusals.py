@@ -8,7 +8,7 @@ import pytest
 
 from trajcomp import formats
 from trajcomp.errors import ReadError, WriteError
-from trajcomp.postprocess import convert_program
+from trajcomp.compensation.program import convert_program
 
 PATH = Path(__file__).parent / "data" / "programs" / "csv" / "path.csv"
 

@@ -7,7 +7,7 @@ import pytest
 
 from trajcomp import formats
 from trajcomp.errors import ReadError, TrajcompError
-from trajcomp.program import Program
+from trajcomp.programs.program import Program
 
 
 def test_lookup_by_extension_and_name():
@@ -47,7 +47,7 @@ def plugins(monkeypatch, tmp_path):
     module = tmp_path / "toyformat.py"
     module.write_text(
         "from trajcomp.formats import register_format\n"
-        "from trajcomp.program import Program\n"
+        "from trajcomp.programs.program import Program\n"
         "def read(path):\n"
         "    return Program('toy', 'toy', (), ())\n"
         "def write(program, path):\n"

@@ -13,7 +13,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from trajcomp import atomic, formats
+from trajcomp import formats
+from trajcomp.support import atomic
 from trajcomp.errors import WriteError
 
 DATA = Path(__file__).parent / "data" / "programs"

@@ -27,16 +27,16 @@ import numpy as np
 import pytest
 
 from trajcomp import formats
-from trajcomp.calibrate import calibrate
-from trajcomp.compensate import program_corrector
+from trajcomp.calibration.calibrate import calibrate
+from trajcomp.compensation.targets import program_corrector
 from trajcomp.errors import TrajcompError
 from trajcomp.formats._text import check_writable
-from trajcomp.measurements import Measurements
-from trajcomp.plan import plan_grid
-from trajcomp.postprocess import compensate_program, convert_program
-from trajcomp.robot import load_robot
-from trajcomp.simulate import VirtualRobot
-from trajcomp.transforms import pose_to_matrix
+from trajcomp.calibration.measurements import Measurements
+from trajcomp.calibration.measurement_plan import plan_grid
+from trajcomp.compensation.program import compensate_program, convert_program
+from trajcomp.arm.robot import load_robot
+from trajcomp.calibration.simulate import VirtualRobot
+from trajcomp.arm.transforms import pose_to_matrix
 
 ROOT = Path(__file__).parent.parent
 SEEDS = sorted(
@@ -179,8 +179,8 @@ def test_mutated_programs_never_crash(seed_file, cell, tmp_path):
 
 def test_found_a_wrist_point_a_denormal_off_the_base_axis_solves_without_overflow():
     """Fuzz find: ``p[0, 0, 0.05, -1e-320, 0, 0]`` put the UR10 wrist point 1e-318 mm off axis 1 (ik overflow)."""
-    from trajcomp.ik import ik
-    from trajcomp.transforms import rotvec_to_matrix
+    from trajcomp.arm.ik import ik
+    from trajcomp.arm.transforms import rotvec_to_matrix
 
     robot = load_robot("ur10")
     T = np.eye(4)

@@ -7,7 +7,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from trajcomp.errors import CalibrationError, ModelError
-from trajcomp.grid import Lattice, ResidualGrid, detect_lattice, node_counts
+from trajcomp.model.grid import Lattice, ResidualGrid, detect_lattice, node_counts
 
 
 def lattice_points(origin, step, shape):

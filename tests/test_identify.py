@@ -3,14 +3,14 @@
 import numpy as np
 import pytest
 
-from trajcomp import joint_errors
+from trajcomp.model import joint_errors
 from trajcomp.errors import CalibrationError
-from trajcomp.identify import _Problem, best_fit_transform, identify, outlier_rows
-from trajcomp.kinematics import fk
-from trajcomp.parameters import apply_deltas, candidate_parameters, scales
-from trajcomp.robot import load_robot
-from trajcomp.simulate import ErrorProfile, VirtualRobot
-from trajcomp.transforms import matrix_to_rotvec, pose_to_matrix, rotvec_to_matrix
+from trajcomp.calibration.identify import _Problem, best_fit_transform, identify, outlier_rows
+from trajcomp.arm.kinematics import fk
+from trajcomp.arm.parameters import apply_deltas, candidate_parameters, scales
+from trajcomp.arm.robot import load_robot
+from trajcomp.calibration.simulate import ErrorProfile, VirtualRobot
+from trajcomp.arm.transforms import matrix_to_rotvec, pose_to_matrix, rotvec_to_matrix
 
 GEOMETRIC = ErrorProfile("geometric", length_sigma=0.5, angle_sigma=np.radians(0.05), tool_sigma=0.2)
 

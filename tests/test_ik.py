@@ -9,7 +9,7 @@ from hypothesis import strategies as st
 from scipy.optimize import brentq
 
 from trajcomp.errors import IKError
-from trajcomp.ik import (
+from trajcomp.arm.ik import (
     POS_TOL,
     ROT_TOL,
     Configuration,
@@ -20,9 +20,9 @@ from trajcomp.ik import (
     ik_near,
     ik_numeric,
 )
-from trajcomp.kinematics import fk, jacobian, link_frames
-from trajcomp.robot import builtin_robot_names, load_robot
-from trajcomp.transforms import rotation_angle_between
+from trajcomp.arm.kinematics import fk, jacobian, link_frames
+from trajcomp.arm.robot import builtin_robot_names, load_robot
+from trajcomp.arm.transforms import rotation_angle_between
 
 ROBOTS = builtin_robot_names()
 SPHERICAL = ["kuka_kr6_r900", "abb_irb4600", "fanuc_lrmate200id"]

@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 
 from trajcomp.errors import CalibrationError, ModelError
-from trajcomp.grid import KINDS, ResidualGrid, field_from_dict, fit_field
-from trajcomp.interpolate import KNN, RBF
+from trajcomp.model.grid import KINDS, ResidualGrid, field_from_dict, fit_field
+from trajcomp.model.interpolate import KNN, RBF
 
 
 def smooth_field(p):

@@ -5,21 +5,21 @@ import dataclasses
 import numpy as np
 import pytest
 
-from trajcomp import joint_errors
-from trajcomp.calibrate import calibrate
-from trajcomp.compensate import compensate
-from trajcomp.identify import identify, region_folds
-from trajcomp.joint_errors import JointResidual, SplineBasis
-from trajcomp.kinematics import fk
-from trajcomp.measurements import Measurements
-from trajcomp.model_file import load_model, save_model
-from trajcomp.parameters import scales
-from trajcomp.plan import default_orientation, plan_grid
+from trajcomp.model import joint_errors
+from trajcomp.calibration.calibrate import calibrate
+from trajcomp.compensation.targets import compensate
+from trajcomp.calibration.identify import identify, region_folds
+from trajcomp.model.joint_errors import JointResidual, SplineBasis
+from trajcomp.arm.kinematics import fk
+from trajcomp.calibration.measurements import Measurements
+from trajcomp.model.model_file import load_model, save_model
+from trajcomp.arm.parameters import scales
+from trajcomp.calibration.measurement_plan import default_orientation, plan_grid
 from trajcomp.report.calibration import calibration_report
 from trajcomp.report.html import render
-from trajcomp.robot import load_robot
-from trajcomp.simulate import ErrorProfile, VirtualRobot
-from trajcomp.transforms import abc_to_matrix, rotvec_to_matrix
+from trajcomp.arm.robot import load_robot
+from trajcomp.calibration.simulate import ErrorProfile, VirtualRobot
+from trajcomp.arm.transforms import abc_to_matrix, rotvec_to_matrix
 
 RANGE = np.radians([[-60, 60], [-120, -40], [40, 130], [-150, -30], [60, 120], [-90, 90]])
 
@@ -132,7 +132,7 @@ def test_single_orientation_fit_leaves_unseen_parameter_combinations_at_nominal(
 
 def _scaled_jacobian(robot, q, names):
     """Position Jacobian (3N, P) of the nominal robot per scaled parameter."""
-    from trajcomp.parameters import pose_jacobian
+    from trajcomp.arm.parameters import pose_jacobian
 
     _, jac = pose_jacobian(robot, q, names)
     return jac[:, :3].reshape(-1, len(names)) * scales(names)

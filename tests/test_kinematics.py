@@ -9,9 +9,9 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from trajcomp.kinematics import BLOCK, fk, fk_and_jacobian, frame_columns, jacobian, link_frames
-from trajcomp.robot import builtin_robot_names, load_robot, robot_from_yaml
-from trajcomp.transforms import invert
+from trajcomp.arm.kinematics import BLOCK, fk, fk_and_jacobian, frame_columns, jacobian, link_frames
+from trajcomp.arm.robot import builtin_robot_names, load_robot, robot_from_yaml
+from trajcomp.arm.transforms import invert
 
 X, Y, Z = np.eye(3)
 
@@ -205,7 +205,7 @@ def dh_matrix_product(robot, q):
 
     Standard links ``Rz(theta) Tz(d) Tx(a) Rx(alpha) Ry(beta)``, modified
     links ``Rx(alpha) Tx(a) Rz(theta) Tz(d)``; theta = joint map times q plus
-    the offsets. Written independently of trajcomp.kinematics.
+    the offsets. Written independently of trajcomp.arm.kinematics.
     """
 
     def rotation(axis, angles):

@@ -11,18 +11,18 @@ import json
 import numpy as np
 import pytest
 
-from trajcomp import landing
-from trajcomp.calibrate import calibrate
+from trajcomp.model import landing
+from trajcomp.calibration.calibrate import calibrate
 from trajcomp.cli import main
-from trajcomp.compensate import compensate
-from trajcomp.ik import Configuration, ik
-from trajcomp.kinematics import fk
-from trajcomp.measurements import Measurements
-from trajcomp.model_file import save_model
-from trajcomp.plan import default_orientation, plan_grid
-from trajcomp.robot import load_robot
-from trajcomp.simulate import VirtualRobot
-from trajcomp.transforms import abc_to_matrix, matrix_to_abc, pose_to_matrix, rotvec_to_matrix
+from trajcomp.compensation.targets import compensate
+from trajcomp.arm.ik import Configuration, ik
+from trajcomp.arm.kinematics import fk
+from trajcomp.calibration.measurements import Measurements
+from trajcomp.model.model_file import save_model
+from trajcomp.calibration.measurement_plan import default_orientation, plan_grid
+from trajcomp.arm.robot import load_robot
+from trajcomp.calibration.simulate import VirtualRobot
+from trajcomp.arm.transforms import abc_to_matrix, matrix_to_abc, pose_to_matrix, rotvec_to_matrix
 
 TOLERANCE = 0.1
 

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from trajcomp.errors import CalibrationError, ModelError
-from trajcomp.linear import LinearCorrection, fit_linear
+from trajcomp.model.linear import LinearCorrection, fit_linear
 
 RNG = np.random.default_rng(11)
 # the paper's large cube: corner (300, -100, 300), side 500, step 100

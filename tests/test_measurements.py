@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from trajcomp.columns import Layout, load_layout
+from trajcomp.calibration.layout import Layout, load_layout
 from trajcomp.errors import ReadError
-from trajcomp.measurements import Measurements, parse_mapping, read_measurements, write_measurements
+from trajcomp.calibration.measurements import Measurements, parse_mapping, read_measurements, write_measurements
 
 
 def write(tmp_path, text, name="m.csv"):
@@ -158,7 +158,7 @@ def test_the_shipped_layouts_read_the_real_files_as_their_authors_wrote_them(nam
 
 
 def test_a_damaged_file_is_refused_at_its_first_bad_row_and_rows_are_bounded(tmp_path, monkeypatch):
-    import trajcomp.measurements as measurements
+    import trajcomp.calibration.measurements as measurements
 
     path = tmp_path / "headers.csv"
     with open(path, "w") as handle:  # a header repeated: refused at line 2, not once 100,000 rows are in memory

@@ -5,7 +5,7 @@ import ctypes
 import numpy as np
 import pytest
 
-from trajcomp.memory import release
+from trajcomp.support.memory import release
 
 
 def resident_mb():
@@ -41,7 +41,7 @@ def test_release_is_harmless_when_nothing_is_free():
 def test_collection_is_paused_within_the_block_and_as_it_was_after():
     import gc
 
-    from trajcomp.memory import collection_paused
+    from trajcomp.support.memory import collection_paused
 
     assert gc.isenabled()
     with collection_paused():
@@ -61,7 +61,7 @@ def test_a_compensate_run_leaves_nothing_out_of_the_collectors_scans(tmp_path, k
     import shutil
     from pathlib import Path
 
-    from trajcomp import memory
+    from trajcomp.support import memory
     from trajcomp.cli import main
 
     frozen = []

@@ -4,13 +4,13 @@ import numpy as np
 import pytest
 import yaml
 
-from trajcomp.calibrate import calibrate
+from trajcomp.calibration.calibrate import calibrate
 from trajcomp.errors import ModelError, WriteError
-from trajcomp.measurements import Measurements
-from trajcomp.model_file import load_model, save_model, sidecar_path
-from trajcomp.plan import plan_grid
-from trajcomp.robot import load_robot
-from trajcomp.simulate import VirtualRobot
+from trajcomp.calibration.measurements import Measurements
+from trajcomp.model.model_file import load_model, save_model, sidecar_path
+from trajcomp.calibration.measurement_plan import plan_grid
+from trajcomp.arm.robot import load_robot
+from trajcomp.calibration.simulate import VirtualRobot
 
 
 def small_cube_model(seed):
@@ -128,7 +128,7 @@ def test_a_sidecar_of_another_calibration_or_not_a_file_is_refused(models, tmp_p
 
 
 def test_a_sidecar_unpacking_beyond_its_bound_is_refused_before_unpacking(models, tmp_path, monkeypatch):
-    import trajcomp.model_file as model_file
+    import trajcomp.model.model_file as model_file
 
     (first, _), _ = models
     save_model(tmp_path / "a.yaml", first)

@@ -4,11 +4,11 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from trajcomp.kinematics import fk
-from trajcomp.orientations import axis_offset, orientation_spread, spread_orientations
-from trajcomp.plan import default_orientation, orientations_needed, plan_grid
-from trajcomp.robot import load_robot
-from trajcomp.transforms import pose_to_matrix
+from trajcomp.arm.kinematics import fk
+from trajcomp.calibration.orientations import axis_offset, orientation_spread, spread_orientations
+from trajcomp.calibration.measurement_plan import default_orientation, orientations_needed, plan_grid
+from trajcomp.arm.robot import load_robot
+from trajcomp.arm.transforms import pose_to_matrix
 
 
 def test_spread_orientations_tilt_the_tool_about_its_own_x_and_y_axes():

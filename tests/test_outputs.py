@@ -11,7 +11,7 @@ from trajcomp.cli import main
 
 ROOT = Path(__file__).resolve().parents[1]
 KUKA = ROOT / "examples" / "programs" / "kuka"
-ROBOT = ROOT / "trajcomp" / "robots" / "kuka_kr6_r900.yaml"
+ROBOT = ROOT / "trajcomp" / "arm" / "robots" / "kuka_kr6_r900.yaml"
 
 
 @pytest.fixture

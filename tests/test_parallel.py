@@ -6,14 +6,14 @@ import os
 import numpy as np
 import pytest
 
-import trajcomp.compensate as compensation
-import trajcomp.posture as posture
+import trajcomp.compensation.targets as compensation
+import trajcomp.compensation.posture as posture
 from trajcomp import formats
-from trajcomp.compensate import compensate
+from trajcomp.compensation.targets import compensate
 from trajcomp.errors import IKError
-from trajcomp.parallel import in_background, map_blocks, meanwhile, usable_cores
-from trajcomp.posture import planned_joints
-from trajcomp.robot import load_robot
+from trajcomp.support.parallel import in_background, map_blocks, meanwhile, usable_cores
+from trajcomp.compensation.posture import planned_joints
+from trajcomp.arm.robot import load_robot
 from test_compensate import cell, targets_in_cube  # noqa: F401 (fixture)
 
 pytestmark = pytest.mark.skipif("fork" not in multiprocessing.get_all_start_methods(), reason="needs fork")
@@ -174,7 +174,7 @@ def test_pool_workers_die_with_their_parent_even_when_it_is_killed(tmp_path):
     script = (
         "import os, time\n"
         "from concurrent.futures import ProcessPoolExecutor\n"
-        "from trajcomp.parallel import init_worker\n"
+        "from trajcomp.support.parallel import init_worker\n"
         "pool = ProcessPoolExecutor(2, initializer=init_worker)\n"
         "print(pool.submit(os.getpid).result(), flush=True)\n"
         "pool.submit(time.sleep, 60); pool.submit(time.sleep, 60)\n"

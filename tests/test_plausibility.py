@@ -6,15 +6,15 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from trajcomp.calibrate import calibrate
+from trajcomp.calibration.calibrate import calibrate
 from trajcomp.cli import main
 from trajcomp.errors import CalibrationError
-from trajcomp.kinematics import fk
-from trajcomp.measurements import Measurements, write_measurements
-from trajcomp.model_file import save_model
-from trajcomp.plan import plan_grid
-from trajcomp.robot import load_robot
-from trajcomp.simulate import VirtualRobot
+from trajcomp.arm.kinematics import fk
+from trajcomp.calibration.measurements import Measurements, write_measurements
+from trajcomp.model.model_file import save_model
+from trajcomp.calibration.measurement_plan import plan_grid
+from trajcomp.arm.robot import load_robot
+from trajcomp.calibration.simulate import VirtualRobot
 
 
 @pytest.fixture(scope="module")

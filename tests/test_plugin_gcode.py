@@ -19,7 +19,7 @@ from trajcomp import formats
 from trajcomp.api import Compensator
 from trajcomp.cli import main
 from trajcomp.errors import ReadError, WriteError
-from trajcomp.ik import ik
+from trajcomp.arm.ik import ik
 
 PLUGIN = Path(__file__).resolve().parents[1] / "plugins" / "trajcomp-gcode"
 LANDED = 0.05  # mm (the tilted last target of PROGRAM is farthest from the calibrated orientation)

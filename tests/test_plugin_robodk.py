@@ -17,8 +17,8 @@ from virtual_cell import landing_error, virtual_cell
 
 import trajcomp
 from trajcomp.errors import TrajcompError
-from trajcomp.ik import ik
-from trajcomp.kinematics import fk
+from trajcomp.arm.ik import ik
+from trajcomp.arm.kinematics import fk
 
 PLUGIN = Path(__file__).resolve().parents[1] / "plugins" / "trajcomp-robodk"
 LANDED = 0.03  # mm

@@ -1,6 +1,6 @@
 """The posture a program declares is the one it is solved, compensated and written in.
 
-References are independent of `trajcomp.posture`: configuration data are
+References are independent of `trajcomp.compensation.posture`: configuration data are
 checked by re-encoding joints with the language's encoder, joints against
 forward kinematics, and the singular case against a real IK solve.
 """
@@ -12,17 +12,18 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from trajcomp import formats, posture
+from trajcomp import formats
+from trajcomp.compensation import posture
 from trajcomp.cli import main
-from trajcomp.compensate import CompensationResult
-from trajcomp.configuration import configuration_for, declared_windows
+from trajcomp.compensation.targets import CompensationResult
+from trajcomp.programs.configuration import configuration_for, declared_windows
 from trajcomp.errors import CompensationError, IKError
-from trajcomp.ik import configuration_of, ik, ik_all
-from trajcomp.kinematics import fk
-from trajcomp.postprocess import compensate_program
-from trajcomp.posture import planned_joints
-from trajcomp.robot import load_robot
-from trajcomp.transforms import matrix_to_abc
+from trajcomp.arm.ik import configuration_of, ik, ik_all
+from trajcomp.arm.kinematics import fk
+from trajcomp.compensation.program import compensate_program
+from trajcomp.compensation.posture import planned_joints
+from trajcomp.arm.robot import load_robot
+from trajcomp.arm.transforms import matrix_to_abc
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples" / "programs"
 ROBOTS = {"krl": "kuka_kr6_r900", "rapid": "abb_irb4600", "fanuc_ls": "fanuc_lrmate200id"}
@@ -269,7 +270,7 @@ def _flipped_weld(tmp_path):
 
 def test_a_posture_the_calibration_never_measured_fails_the_verdict(tmp_path, kuka_model, capsys):
     """The KR6 was measured wrist-positive only: a wrist-flipped program fails the posture criterion (not the grid's)."""
-    from trajcomp.model_file import load_model
+    from trajcomp.model.model_file import load_model
 
     model = load_model(kuka_model)
     assert len(model.postures) == 1
@@ -285,7 +286,7 @@ def test_a_posture_the_calibration_never_measured_fails_the_verdict(tmp_path, ku
 
 
 def test_the_measured_postures_are_kept_in_the_model_file(tmp_path, kuka_model):
-    from trajcomp.model_file import load_model, save_model
+    from trajcomp.model.model_file import load_model, save_model
 
     model = load_model(kuka_model)
     save_model(tmp_path / "again.yaml", model)

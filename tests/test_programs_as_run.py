@@ -13,15 +13,15 @@ import pytest
 
 from trajcomp import formats
 from trajcomp.cli import main
-from trajcomp.compensate import CompensationResult
-from trajcomp.configuration import configuration_for, written_configuration
+from trajcomp.compensation.targets import CompensationResult
+from trajcomp.programs.configuration import configuration_for, written_configuration
 from trajcomp.errors import ReadError
-from trajcomp.ik import ik
-from trajcomp.kinematics import fk
-from trajcomp.postprocess import compensate_program, convert_program
-from trajcomp.posture import planned_joints
-from trajcomp.robot import load_robot
-from trajcomp.transforms import matrix_to_abc, matrix_to_quat
+from trajcomp.arm.ik import ik
+from trajcomp.arm.kinematics import fk
+from trajcomp.compensation.program import compensate_program, convert_program
+from trajcomp.compensation.posture import planned_joints
+from trajcomp.arm.robot import load_robot
+from trajcomp.arm.transforms import matrix_to_abc, matrix_to_quat
 
 OFFSET = np.array([0.3, -0.2, 0.1])  # mm, the stand-in correction
 

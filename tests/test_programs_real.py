@@ -16,10 +16,10 @@ import numpy as np
 import pytest
 
 from trajcomp import formats
-from trajcomp.compensate import CompensationResult
+from trajcomp.compensation.targets import CompensationResult
 from trajcomp.errors import IKError, ReadError
-from trajcomp.postprocess import compensate_program
-from trajcomp.robot import load_robot
+from trajcomp.compensation.program import compensate_program
+from trajcomp.arm.robot import load_robot
 
 DATA = Path(__file__).parent / "data"
 REAL = sorted(p for p in (DATA / "programs" / "real").rglob("*")

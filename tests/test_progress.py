@@ -2,7 +2,7 @@
 
 import io
 
-from trajcomp.progress import Stages, is_terminal, progress
+from trajcomp.support.progress import Stages, is_terminal, progress
 
 
 class Terminal(io.StringIO):

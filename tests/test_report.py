@@ -12,15 +12,15 @@ import types
 import numpy as np
 import pytest
 
-from trajcomp.kinematics import fk
-from trajcomp.model_file import load_model
-from trajcomp import landing
-from trajcomp.postprocess import ProgramReport, landing_of
+from trajcomp.arm.kinematics import fk
+from trajcomp.model.model_file import load_model
+from trajcomp.model import landing
+from trajcomp.compensation.program import ProgramReport, landing_of
 from trajcomp.report import Criteria, compliance_report
 from trajcomp.report.measures import joint_jumps, limit_distances, singularity_distances
-from trajcomp.robot import load_robot
+from trajcomp.arm.robot import load_robot
 from trajcomp.timing import Segment
-from trajcomp.transforms import matrix_to_rotvec
+from trajcomp.arm.transforms import matrix_to_rotvec
 
 KUKA = load_robot("kuka_kr6_r900")
 HOME = np.radians([0.0, -90.0, 90.0, 0.0, 90.0, 0.0])
@@ -54,7 +54,7 @@ def test_limit_distances_and_jumps_by_hand():
 def _report(q, q_planned=None, *, outside=None, residual=None, not_compensated=(), model=None):
     """A ProgramReport of targets at FK(q) compensated by 1 mm in x, in the declared posture q_planned.
 
-    With a model, its landing estimate at those targets in their declared posture (`trajcomp.landing`).
+    With a model, its landing estimate at those targets in their declared posture (`trajcomp.model.landing`).
     """
     n = len(q)
     T_target = fk(KUKA, q)

@@ -13,8 +13,8 @@ import numpy as np
 import pytest
 
 from trajcomp.cli import main
-from trajcomp.measurements import Measurements
-from trajcomp.model_file import load_model
+from trajcomp.calibration.measurements import Measurements
+from trajcomp.model.model_file import load_model
 from trajcomp.report import Report, calibration_report, schema
 from trajcomp.report.calibration import iso9283, trends
 
@@ -158,7 +158,7 @@ def test_iso9283_accuracy_and_repeatability_by_hand():
 def test_calibration_report_with_repeats_is_valid_and_embeds_its_figures(kuka_model, tmp_path):
     folder = Path(kuka_model).parent
     model = load_model(kuka_model)
-    from trajcomp.measurements import read_measurements
+    from trajcomp.calibration.measurements import read_measurements
 
     meas = read_measurements(folder / "meas.csv")
     twice = Measurements(joints=np.vstack([meas.joints, meas.joints[:5]]),

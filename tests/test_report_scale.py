@@ -13,14 +13,14 @@ import jsonschema
 import numpy as np
 import pytest
 
-from trajcomp.kinematics import fk
-from trajcomp.model_file import load_model
-from trajcomp.postprocess import ProgramReport
+from trajcomp.arm.kinematics import fk
+from trajcomp.model.model_file import load_model
+from trajcomp.compensation.program import ProgramReport
 from trajcomp.report import compliance_report, schema, summary_lines
 from trajcomp.report import plots, targets
 from trajcomp.report.measures import singularity_distances
 from trajcomp.report.targets import FLAGS, ROWS, WORST, TargetMeasures, worst_targets
-from trajcomp.robot import load_robot
+from trajcomp.arm.robot import load_robot
 from trajcomp.timing import Segment
 
 KUKA = load_robot("kuka_kr6_r900")

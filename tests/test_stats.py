@@ -7,7 +7,7 @@ from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
 from trajcomp.errors import CalibrationError
-from trajcomp.stats import ErrorStats, as_vectors, format_table, kfold_indices
+from trajcomp.model.stats import ErrorStats, as_vectors, format_table, kfold_indices
 
 
 def test_hand_computed_two_vectors():

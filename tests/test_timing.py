@@ -17,13 +17,13 @@ import ruckig
 
 from trajcomp.cli import main
 from trajcomp.errors import TimingError
-from trajcomp.ik import Configuration, configuration_of, ik
-from trajcomp.kinematics import fk
-from trajcomp.program_items import JOINT, LINEAR
-from trajcomp.robot import load_robot
+from trajcomp.arm.ik import Configuration, configuration_of, ik
+from trajcomp.arm.kinematics import fk
+from trajcomp.programs.items import JOINT, LINEAR
+from trajcomp.arm.robot import load_robot
 from trajcomp.timing import Moves, retime
 from trajcomp.timing.toppra_run import ConstantAcceleration
-from trajcomp.transforms import abc_to_matrix, matrix_to_abc
+from trajcomp.arm.transforms import abc_to_matrix, matrix_to_abc
 
 retime_module = importlib.import_module("trajcomp.timing.retime")  # the module, not the function
 UR10 = load_robot("ur10")

@@ -12,9 +12,9 @@ import dataclasses
 import numpy as np
 import pytest
 
-from trajcomp.ik import ik
-from trajcomp.kinematics import fk
-from trajcomp.robot import load_robot
+from trajcomp.arm.ik import ik
+from trajcomp.arm.kinematics import fk
+from trajcomp.arm.robot import load_robot
 from trajcomp.timing import Moves, plan_segments, retime
 from trajcomp.timing.check import segment_peaks
 from trajcomp.timing.path import run_path

@@ -182,12 +182,12 @@ def test_krl_restores_the_speed_of_a_motion_that_is_not_retimed(tmp_path):
 @pytest.mark.parametrize("joint_targets", ["keep", "compensate"])
 def test_the_compensations_planned_joints_time_the_original_as_its_posture_plan_does(
         tmp_path, kuka_model, joint_targets, monkeypatch):
-    from trajcomp import parallel
+    from trajcomp.support import parallel
     from trajcomp.commands import retime as retime_command
     from trajcomp.commands.retime import retime_compensated
-    from trajcomp.compensate import program_corrector
-    from trajcomp.model_file import load_model
-    from trajcomp.postprocess import compensate_program
+    from trajcomp.compensation.targets import program_corrector
+    from trajcomp.model.model_file import load_model
+    from trajcomp.compensation.program import compensate_program
 
     model = load_model(kuka_model)
     shutil.copy(EXAMPLES / "kuka" / "weld.dat", tmp_path / "weld.dat")
@@ -219,7 +219,7 @@ def test_the_csv_settings_are_the_t_cells_written_and_made_on_demand(tmp_path, m
     """A CSV's settings (``t=`` and the cell) read against the written file; blocks smaller than a segment."""
     import csv as csv_module
 
-    from trajcomp.robot import load_robot
+    from trajcomp.arm.robot import load_robot
     from trajcomp.timing import result as result_module
     from trajcomp.timing.result import Texts
     from trajcomp.timing.writeback import apply_timing, retime_program

@@ -6,9 +6,9 @@ import toppra
 import toppra.algorithm
 import toppra.constraint
 
-from trajcomp.ik import ik
-from trajcomp.kinematics import fk
-from trajcomp.robot import load_robot
+from trajcomp.arm.ik import ik
+from trajcomp.arm.kinematics import fk
+from trajcomp.arm.robot import load_robot
 from trajcomp.timing import Moves
 from trajcomp.timing.path import run_path
 from trajcomp.timing import reachability

@@ -22,8 +22,8 @@ import pytest
 
 from trajcomp import formats
 from trajcomp.cli import main
-from trajcomp.ik import ik
-from trajcomp.robot import load_robot
+from trajcomp.arm.ik import ik
+from trajcomp.arm.robot import load_robot
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples" / "programs"
 RAPID_POINT = "[[{x},{y},{z}],[0,0,1,0],[0,0,0,0],[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]]"

@@ -5,10 +5,10 @@ import importlib
 import numpy as np
 import pytest
 
-from trajcomp.ik import ik
-from trajcomp.kinematics import fk
-from trajcomp.program_items import JOINT, LINEAR
-from trajcomp.robot import load_robot
+from trajcomp.arm.ik import ik
+from trajcomp.arm.kinematics import fk
+from trajcomp.programs.items import JOINT, LINEAR
+from trajcomp.arm.robot import load_robot
 from trajcomp.timing import Moves, retime
 from trajcomp.timing.path import run_path
 from trajcomp.timing.ruckig_move import ruckig_law

@@ -11,10 +11,10 @@ import numpy as np
 import pytest
 
 from trajcomp.errors import TimingError
-from trajcomp.ik import Configuration, configuration_of, ik
-from trajcomp.kinematics import fk
-from trajcomp.program_items import JOINT, LINEAR
-from trajcomp.robot import load_robot
+from trajcomp.arm.ik import Configuration, configuration_of, ik
+from trajcomp.arm.kinematics import fk
+from trajcomp.programs.items import JOINT, LINEAR
+from trajcomp.arm.robot import load_robot
 from trajcomp.timing import Moves, retime
 
 retime_module = importlib.import_module("trajcomp.timing.retime")  # the module, not the function

@@ -5,9 +5,9 @@ import importlib
 import numpy as np
 import pytest
 
-from trajcomp.ik import ik
-from trajcomp.kinematics import fk
-from trajcomp.robot import load_robot
+from trajcomp.arm.ik import ik
+from trajcomp.arm.kinematics import fk
+from trajcomp.arm.robot import load_robot
 from trajcomp.timing import Moves, retime
 
 UR10 = load_robot("ur10")

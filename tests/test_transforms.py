@@ -5,7 +5,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
-from trajcomp.transforms import (
+from trajcomp.arm.transforms import (
     abc_to_matrix,
     invert,
     matrix_to_abc,

@@ -6,9 +6,9 @@ import pytest
 import yaml
 
 import trajcomp
-from trajcomp import yaml_text
+from trajcomp.support import yaml_text
 
-FILES = sorted((Path(trajcomp.__file__).parent / "robots").glob("*.yaml")) + sorted(
+FILES = sorted((Path(trajcomp.__file__).parent / "arm" / "robots").glob("*.yaml")) + sorted(
     (Path(__file__).resolve().parents[1] / "examples" / "columns").glob("*.yaml"))
 
 

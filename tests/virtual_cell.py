@@ -9,12 +9,12 @@ import dataclasses
 
 import numpy as np
 
-from trajcomp.calibrate import calibrate
-from trajcomp.measurements import Measurements
-from trajcomp.model_file import save_model
-from trajcomp.plan import plan_grid
-from trajcomp.robot import load_robot
-from trajcomp.simulate import VirtualRobot
+from trajcomp.calibration.calibrate import calibrate
+from trajcomp.calibration.measurements import Measurements
+from trajcomp.model.model_file import save_model
+from trajcomp.calibration.measurement_plan import plan_grid
+from trajcomp.arm.robot import load_robot
+from trajcomp.calibration.simulate import VirtualRobot
 
 CORNER, SIDE, STEP = (300.0, -100.0, 300.0), 500.0, 100.0
 

@@ -24,7 +24,7 @@ turns nearest the hint, and the command's joints are in that posture; a
 correction that would leave it is refused (`trajcomp.IKError`). Without a
 hint, each pose takes the posture nearest the joints of the pose before it
 (the first: nearest the robot's home), as a controller moves on from where
-the arm is. Everything else is `trajcomp.postprocess.compensate_program`'s:
+the arm is. Everything else is `trajcomp.compensation.program.compensate_program`'s:
 this module feeds it a small in-memory program.
 """
 
@@ -37,16 +37,16 @@ from pathlib import Path
 import numpy as np
 
 from trajcomp import formats
-from trajcomp.compensate import program_corrector
+from trajcomp.compensation.targets import program_corrector
 from trajcomp.errors import TrajcompError
-from trajcomp.model import CompensationModel
-from trajcomp.model_file import load_model
-from trajcomp.plausibility import check_robot_language
-from trajcomp.postprocess import MAX_CORRECTION, compensate_program
-from trajcomp.posture import MAX_JOINT_CHANGE
-from trajcomp.program import Program
-from trajcomp.program_items import LINEAR, Motion, Target
-from trajcomp.transforms import matrix_to_pose, pose_to_matrix
+from trajcomp.model.compensation_model import CompensationModel
+from trajcomp.model.model_file import load_model
+from trajcomp.calibration.plausibility import check_robot_language
+from trajcomp.compensation.program import MAX_CORRECTION, compensate_program
+from trajcomp.compensation.posture import MAX_JOINT_CHANGE
+from trajcomp.programs.program import Program
+from trajcomp.programs.items import LINEAR, Motion, Target
+from trajcomp.arm.transforms import matrix_to_pose, pose_to_matrix
 
 log = logging.getLogger(__name__)
 
@@ -103,7 +103,7 @@ class Compensator:
         Largest plausible position correction, mm.
     workers : int
         Processes that share the targets of a long path or program
-        (`trajcomp.parallel.map_blocks`; forked, on POSIX); the results do
+        (`trajcomp.support.parallel.map_blocks`; forked, on POSIX); the results do
         not depend on it. Default 1: this process only, safe inside a host
         application's threads.
 
@@ -132,7 +132,7 @@ class Compensator:
 
     @property
     def robot(self):
-        """The nominal robot the model compensates (`trajcomp.robot.Robot`)."""
+        """The nominal robot the model compensates (`trajcomp.arm.robot.Robot`)."""
         return self.model.nominal
 
     def __repr__(self):

@@ -3,7 +3,7 @@
 Library code raises TrajcompError; this is the only place that prints errors
 and chooses exit codes: 0 success, 1 the result fails a requested tolerance
 or limit, 2 bad usage or bad input, 3 an unexpected exception (a bug:
-`trajcomp.crash`); 130 (the shells' code of Ctrl-C) when the user interrupts
+`trajcomp.support.crash`); 130 (the shells' code of Ctrl-C) when the user interrupts
 the run and 143 when it is stopped by SIGTERM (what Docker, systemd and CI
 send), handled alike: what was not finished is not written.
 
@@ -24,8 +24,8 @@ import threading
 import traceback
 
 from trajcomp import __version__
-from trajcomp.crash import bug_message, save_traceback
-from trajcomp.crash import EXIT_CODE as CRASHED
+from trajcomp.support.crash import bug_message, save_traceback
+from trajcomp.support.crash import EXIT_CODE as CRASHED
 from trajcomp.errors import ToleranceError, TrajcompError
 
 INTERRUPTED = 130  # exit code of a run stopped by Ctrl-C (SIGINT), as shells report it

@@ -14,19 +14,19 @@ import itertools
 import numpy as np
 
 from trajcomp import formats
-from trajcomp.atomic import write_atomic
-from trajcomp.calibrate import calibrate
-from trajcomp.compensate import compensate, program_corrector
+from trajcomp.support.atomic import write_atomic
+from trajcomp.calibration.calibrate import calibrate
+from trajcomp.compensation.targets import compensate, program_corrector
 from trajcomp.errors import TrajcompError
-from trajcomp.ik import ik
-from trajcomp.kinematics import fk, link_frames
-from trajcomp.measurements import Measurements, read_measurements
-from trajcomp.postprocess import compensate_program
-from trajcomp.plan import batch_seed, default_orientation, plan_grid
-from trajcomp.robot import load_robot
-from trajcomp.simulate import VirtualRobot
-from trajcomp.stats import ErrorStats
-from trajcomp.transforms import abc_to_matrix
+from trajcomp.arm.ik import ik
+from trajcomp.arm.kinematics import fk, link_frames
+from trajcomp.calibration.measurements import Measurements, read_measurements
+from trajcomp.compensation.program import compensate_program
+from trajcomp.calibration.measurement_plan import batch_seed, default_orientation, plan_grid
+from trajcomp.arm.robot import load_robot
+from trajcomp.calibration.simulate import VirtualRobot
+from trajcomp.model.stats import ErrorStats
+from trajcomp.arm.transforms import abc_to_matrix
 
 # Mean signed error per axis (mm) over 40 random points, from the paper.
 PAPER = {

@@ -54,8 +54,8 @@ from trajcomp.formats._text import (
     numbered,
     read_source,
 )
-from trajcomp.program import JOINT, LINEAR, Motion, Program, Span, Statement, Target
-from trajcomp.transforms import abc_to_matrix, matrix_to_abc
+from trajcomp.programs.program import JOINT, LINEAR, Motion, Program, Span, Statement, Target
+from trajcomp.arm.transforms import abc_to_matrix, matrix_to_abc
 
 POSITION, ANGLES, AXIS = ("x", "y", "z"), ("a", "b", "c"), ("i", "j", "k")
 ROLES = POSITION + ANGLES + AXIS

@@ -13,8 +13,8 @@ import numpy as np
 
 from trajcomp.errors import ReadError
 from trajcomp.formats import register_format
-from trajcomp.program import JOINT, LINEAR, Motion, Program, Statement, Target
-from trajcomp.transforms import matrix_to_pose, pose_to_matrix
+from trajcomp.programs.program import JOINT, LINEAR, Motion, Program, Statement, Target
+from trajcomp.arm.transforms import matrix_to_pose, pose_to_matrix
 
 KINDS = {"PTP": JOINT, "LIN": LINEAR}
 

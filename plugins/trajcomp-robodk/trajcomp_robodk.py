@@ -33,9 +33,9 @@ import numpy as np
 from trajcomp import __version__
 from trajcomp.api import compensator
 from trajcomp.errors import TrajcompError
-from trajcomp.ik import configuration_of
-from trajcomp.kinematics import fk
-from trajcomp.transforms import rotation_angle_between
+from trajcomp.arm.ik import configuration_of
+from trajcomp.arm.kinematics import fk
+from trajcomp.arm.transforms import rotation_angle_between
 
 HINT_POSITION = 1.0  # mm: largest distance between a pose and the nominal pose of its RoboDK joints
 HINT_ROTATION = 1.0  # deg: largest rotation between them
@@ -225,7 +225,7 @@ def conf_after(robot, conf_RLF, q_before, q_after):
     """RoboDK configuration flags ``[REAR, LOWERARM, FLIP]`` of corrected joints.
 
     A flag changes where trajcomp's matching flag of the arm configuration
-    (shoulder back, elbow down, wrist negative; `trajcomp.ik.Configuration`)
+    (shoulder back, elbow down, wrist negative; `trajcomp.arm.ik.Configuration`)
     differs between the planned and the corrected joints, whatever polarity
     a brand gives it.
 

@@ -29,7 +29,7 @@ Run:  python tests/benchmarks/bench_accuracy.py [virtual|sparse|tools|ur5|ur10|t
 5. ``tilt``: virtual UR10, paper profile, the paper's large cube measured
    in one orientation: targets tilted by 0, +-5, +-15, +-30 deg, true
    landing error against the per-target landing estimate the verdict
-   judges (`trajcomp.landing`). Target: the estimate covers the true error
+   judges (`trajcomp.model.landing`). Target: the estimate covers the true error
    for >= 95 % of the targets at every tilt, and no target whose true
    error exceeds the tolerance passes.
 """
@@ -40,18 +40,18 @@ from pathlib import Path
 
 import numpy as np
 
-from trajcomp.calibrate import calibrate, commanded, mode_errors, to_base
-from trajcomp.columns import Layout, load_layout
-from trajcomp.compensate import compensate
+from trajcomp.calibration.calibrate import calibrate, commanded, mode_errors, to_base
+from trajcomp.calibration.layout import Layout, load_layout
+from trajcomp.compensation.targets import compensate
 from trajcomp.demo import format_comparison, run_demo
-from trajcomp.kinematics import fk
-from trajcomp.measurements import Measurements, read_measurements
-from trajcomp.orientations import spread_orientations
-from trajcomp.plan import default_orientation, plan_grid
-from trajcomp.robot import load_robot
-from trajcomp.simulate import VirtualRobot
-from trajcomp.stats import ErrorStats, format_table
-from trajcomp.transforms import abc_to_matrix, matrix_to_abc, pose_to_matrix, rotvec_to_matrix
+from trajcomp.arm.kinematics import fk
+from trajcomp.calibration.measurements import Measurements, read_measurements
+from trajcomp.calibration.orientations import spread_orientations
+from trajcomp.calibration.measurement_plan import default_orientation, plan_grid
+from trajcomp.arm.robot import load_robot
+from trajcomp.calibration.simulate import VirtualRobot
+from trajcomp.model.stats import ErrorStats, format_table
+from trajcomp.arm.transforms import abc_to_matrix, matrix_to_abc, pose_to_matrix, rotvec_to_matrix
 
 ROOT = Path(__file__).resolve().parents[2]
 DATA = ROOT.parent / "shared" / "data"

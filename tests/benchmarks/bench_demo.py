@@ -16,8 +16,8 @@ import numpy as np
 
 from trajcomp.demo import run_demo
 from trajcomp.errors import TrajcompError
-from trajcomp.robot import builtin_robot_names, load_robot
-from trajcomp.simulate import PROFILES
+from trajcomp.arm.robot import builtin_robot_names, load_robot
+from trajcomp.calibration.simulate import PROFILES
 
 
 def main():

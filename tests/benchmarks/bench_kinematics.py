@@ -16,9 +16,9 @@ import time  # noqa: E402
 
 import numpy as np  # noqa: E402
 
-from trajcomp.ik import ik, ik_all, ik_near, ik_numeric  # noqa: E402
-from trajcomp.kinematics import fk, jacobian  # noqa: E402
-from trajcomp.robot import builtin_robot_names, load_robot  # noqa: E402
+from trajcomp.arm.ik import ik, ik_all, ik_near, ik_numeric  # noqa: E402
+from trajcomp.arm.kinematics import fk, jacobian  # noqa: E402
+from trajcomp.arm.robot import builtin_robot_names, load_robot  # noqa: E402
 
 REPEATS = 3
 

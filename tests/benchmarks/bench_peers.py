@@ -17,7 +17,7 @@ every figure is per core; each time is the best of three runs.
    and at 2,000 validation points against the virtual arm's noise-free
    residual (accuracy), beside scipy's RegularGridInterpolator and
    RBFInterpolator on the same data.
-3. Identification: trajcomp's fit (`trajcomp.identify.identify`: analytic
+3. Identification: trajcomp's fit (`trajcomp.calibration.identify.identify`: analytic
    Jacobian, identifiability by QR, robust loss) beside a plain scipy least_squares over all 24 DH deltas and the TCP
    with finite differences, on the same 216 measurements; accuracy is the
    DH model's mean landing error at the validation points.
@@ -37,17 +37,17 @@ import numpy as np  # noqa: E402
 from scipy.interpolate import RBFInterpolator, RegularGridInterpolator  # noqa: E402
 from scipy.optimize import least_squares  # noqa: E402
 
-from trajcomp.calibrate import calibrate  # noqa: E402
-from trajcomp.identify import identify  # noqa: E402
-from trajcomp.ik import configuration_of, ik  # noqa: E402
-from trajcomp.interpolate import RBF  # noqa: E402
-from trajcomp.kinematics import fk, link_frames  # noqa: E402
-from trajcomp.measurements import Measurements  # noqa: E402
-from trajcomp.parameters import apply_deltas  # noqa: E402
-from trajcomp.plan import plan_grid  # noqa: E402
-from trajcomp.robot import load_robot  # noqa: E402
-from trajcomp.simulate import VirtualRobot  # noqa: E402
-from trajcomp.transforms import rotation_angle_between  # noqa: E402
+from trajcomp.calibration.calibrate import calibrate  # noqa: E402
+from trajcomp.calibration.identify import identify  # noqa: E402
+from trajcomp.arm.ik import configuration_of, ik  # noqa: E402
+from trajcomp.model.interpolate import RBF  # noqa: E402
+from trajcomp.arm.kinematics import fk, link_frames  # noqa: E402
+from trajcomp.calibration.measurements import Measurements  # noqa: E402
+from trajcomp.arm.parameters import apply_deltas  # noqa: E402
+from trajcomp.calibration.measurement_plan import plan_grid  # noqa: E402
+from trajcomp.arm.robot import load_robot  # noqa: E402
+from trajcomp.calibration.simulate import VirtualRobot  # noqa: E402
+from trajcomp.arm.transforms import rotation_angle_between  # noqa: E402
 
 REPEATS = 3
 CUBE = ((300.0, -100.0, 300.0), 500.0, 100.0)  # the paper's large cube: corner, side, step (mm)

@@ -44,14 +44,14 @@ from pathlib import Path
 import numpy as np
 
 from trajcomp.cli import main
-from trajcomp.compensate import compensate
+from trajcomp.compensation.targets import compensate
 from trajcomp.demo import demo_cubes
-from trajcomp.ik import ik
-from trajcomp.model_file import load_model
-from trajcomp.parallel import usable_cores
-from trajcomp.plan import default_orientation
-from trajcomp.robot import load_robot
-from trajcomp.transforms import abc_to_matrix
+from trajcomp.arm.ik import ik
+from trajcomp.model.model_file import load_model
+from trajcomp.support.parallel import usable_cores
+from trajcomp.calibration.measurement_plan import default_orientation
+from trajcomp.arm.robot import load_robot
+from trajcomp.arm.transforms import abc_to_matrix
 
 RUNS = 3  # runs of each size and process count without sampling: the median wall time is reported
 LANGUAGES = {  # built-in arm of a vendor -> its languages (language, extension); CSV first, the reference

@@ -18,13 +18,13 @@ import inspect
 
 import numpy as np
 
-from trajcomp.calibrate import calibrate
-from trajcomp.compensate import compensate
-from trajcomp.measurements import Measurements
-from trajcomp.plan import default_orientation, plan_grid
-from trajcomp.robot import load_robot
-from trajcomp.simulate import VirtualRobot
-from trajcomp.transforms import abc_to_matrix, rotvec_to_matrix
+from trajcomp.calibration.calibrate import calibrate
+from trajcomp.compensation.targets import compensate
+from trajcomp.calibration.measurements import Measurements
+from trajcomp.calibration.measurement_plan import default_orientation, plan_grid
+from trajcomp.arm.robot import load_robot
+from trajcomp.calibration.simulate import VirtualRobot
+from trajcomp.arm.transforms import abc_to_matrix, rotvec_to_matrix
 
 COUNT = 40  # targets per seed
 

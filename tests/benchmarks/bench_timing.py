@@ -52,17 +52,17 @@ import toppra.constraint  # noqa: E402
 from trajcomp import formats  # noqa: E402
 from trajcomp.cli import main as cli  # noqa: E402
 from trajcomp.commands.retime import planned, retime_compensated  # noqa: E402
-from trajcomp.compensate import program_corrector  # noqa: E402
-from trajcomp.ik import ik  # noqa: E402
-from trajcomp.kinematics import fk  # noqa: E402
-from trajcomp.model_file import load_model  # noqa: E402
-from trajcomp.postprocess import compensate_program  # noqa: E402
-from trajcomp.posture import planned_joints  # noqa: E402
-from trajcomp.robot import load_robot  # noqa: E402
+from trajcomp.compensation.targets import program_corrector  # noqa: E402
+from trajcomp.arm.ik import ik  # noqa: E402
+from trajcomp.arm.kinematics import fk  # noqa: E402
+from trajcomp.model.model_file import load_model  # noqa: E402
+from trajcomp.compensation.program import compensate_program  # noqa: E402
+from trajcomp.compensation.posture import planned_joints  # noqa: E402
+from trajcomp.arm.robot import load_robot  # noqa: E402
 from trajcomp.timing import Moves, moves_from_program, retime  # noqa: E402
 from trajcomp.timing.path import run_path  # noqa: E402
 from trajcomp.timing.reachability import squared_speeds  # noqa: E402
-from trajcomp.transforms import abc_to_matrix, matrix_to_abc  # noqa: E402
+from trajcomp.arm.transforms import abc_to_matrix, matrix_to_abc  # noqa: E402
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from test_timing_dense import REFINE, reference  # noqa: E402 (the suite's 16x-grid reference)

@@ -29,9 +29,9 @@ import dataclasses
 import numpy as np
 
 from trajcomp.errors import IKError
-from trajcomp.ik_closed_form import _branches, _closed_form_family, _up_sign, ik_family, turn_towards
-from trajcomp.ik_numeric import _dot, _norm, ik_numeric, pose_error
-from trajcomp.ik_types import (
+from trajcomp.arm.ik_closed_form import _branches, _closed_form_family, _up_sign, ik_family, turn_towards
+from trajcomp.arm.ik_numeric import _dot, _norm, ik_numeric, pose_error
+from trajcomp.arm.ik_types import (
     BRANCHES,
     JOINT_LIMITS,
     NOT_CONVERGED,
@@ -43,7 +43,7 @@ from trajcomp.ik_types import (
     IKResult,
     _pose_stack,
 )
-from trajcomp.kinematics import fk, frame_columns, in_blocks
+from trajcomp.arm.kinematics import fk, frame_columns, in_blocks
 
 __all__ = [
     "BRANCHES",
@@ -209,7 +209,7 @@ def branch_index(robot, q):
 
 
 def frames_branch_index(robot, columns):
-    """`branch_index` (N,) of the DH frames' columns (7, 4, 3, N) (`trajcomp.kinematics.frame_columns`)."""
+    """`branch_index` (N,) of the DH frames' columns (7, 4, 3, N) (`trajcomp.arm.kinematics.frame_columns`)."""
     origin = columns[:, 3].transpose(2, 0, 1)  # (N, 7, 3): the frames' origins
     x1, z = columns[1, 0].T, columns[:6, 2].transpose(2, 0, 1)  # (N, 3) and (N, 6, 3): axes
     shoulder, elbow, wrist_point = (origin[:, i] for i in (1, 2, 5))

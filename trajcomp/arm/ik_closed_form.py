@@ -1,7 +1,7 @@
-"""Closed-form IK of the two arm families (`trajcomp.ik.ik_family`): all eight branches, vectorized.
+"""Closed-form IK of the two arm families (`trajcomp.arm.ik.ik_family`): all eight branches, vectorized.
 
-The families and the branch numbering are described in `trajcomp.ik`, the
-public entry point (`trajcomp.ik.ik`, `trajcomp.ik.ik_all`); this module
+The families and the branch numbering are described in `trajcomp.arm.ik`, the
+public entry point (`trajcomp.arm.ik.ik`, `trajcomp.arm.ik.ik_all`); this module
 holds the family test, the solution of the DH angles of every branch and
 the choice of joint turns inside the limits (`turn_towards`).
 """
@@ -9,9 +9,9 @@ the choice of joint turns inside the limits (`turn_towards`).
 import numpy as np
 
 from trajcomp.errors import IKError
-from trajcomp.ik_types import BRANCHES
-from trajcomp.kinematics import dh_link_transforms
-from trajcomp.transforms import invert
+from trajcomp.arm.ik_types import BRANCHES
+from trajcomp.arm.kinematics import dh_link_transforms
+from trajcomp.arm.transforms import invert
 
 _ZERO = 1e-9  # tolerance of the family tests on DH numbers (mm, rad)
 _SINGULAR_SIN = 1e-10  # |sin| of joint 5 (or distance/mm on axis 1) below which a joint is free

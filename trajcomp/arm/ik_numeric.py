@@ -1,13 +1,13 @@
 """Numerical IK: damped Gauss-Newton on the full pose (`ik_numeric`) and the pose error it minimizes.
 
 Used for arms of no closed-form family, and to refine the nominal
-closed-form solution on an identified arm (`trajcomp.ik.ik_near`).
-`ik_numeric` and `pose_error` are re-exported by `trajcomp.ik`.
+closed-form solution on an identified arm (`trajcomp.arm.ik.ik_near`).
+`ik_numeric` and `pose_error` are re-exported by `trajcomp.arm.ik`.
 """
 
 import numpy as np
 
-from trajcomp.ik_types import (
+from trajcomp.arm.ik_types import (
     JOINT_LIMITS,
     NOT_CONVERGED,
     POS_TOL,
@@ -17,7 +17,7 @@ from trajcomp.ik_types import (
     IKResult,
     _pose_stack,
 )
-from trajcomp.kinematics import fk_and_jacobian, in_blocks, jacobian
+from trajcomp.arm.kinematics import fk_and_jacobian, in_blocks, jacobian
 
 _ROT_SCALE = 1000.0  # mm/rad, weight of orientation against position error in Gauss-Newton
 _MAX_STEP = 0.3  # rad, largest joint step of one Gauss-Newton iteration

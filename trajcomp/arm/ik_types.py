@@ -1,8 +1,8 @@
 """IK types and constants shared by the solvers: tolerances, failure reasons, `Configuration`, `IKResult`.
 
-The public names are re-exported by `trajcomp.ik`, the module to import them
+The public names are re-exported by `trajcomp.arm.ik`, the module to import them
 from; this one imports nothing of the other IK modules, so that all of them
-(`trajcomp.ik_closed_form`, `trajcomp.ik_numeric`, `trajcomp.ik`) can use it.
+(`trajcomp.arm.ik_closed_form`, `trajcomp.arm.ik_numeric`, `trajcomp.arm.ik`) can use it.
 """
 
 import dataclasses
@@ -26,7 +26,7 @@ class Configuration:
     """One of the eight arm configurations (branches) of a closed-form arm.
 
     Defined geometrically from the DH frames, so the flags mean the same for
-    every family (`trajcomp.ik.configuration_of` computes them from joint angles):
+    every family (`trajcomp.arm.ik.configuration_of` computes them from joint angles):
 
     shoulder : {"front", "back"}
         "back" when the wrist point (origin of DH frame 5: the wrist centre

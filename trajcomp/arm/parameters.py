@@ -23,7 +23,7 @@ differences. Lengths mm, angles rad.
 
 import numpy as np
 
-from trajcomp.kinematics import link_frames
+from trajcomp.arm.kinematics import link_frames
 
 ANGLE_LEVER = 1000.0  # mm: an angle parameter is scaled as its effect at this lever arm
 FRAME_COST = 0.01  # a frame parameter costs this many times an arm parameter along a hidden combination

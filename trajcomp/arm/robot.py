@@ -1,6 +1,6 @@
 """Robot descriptions: DH table, joint map, limits and fixed frames, loaded from YAML.
 
-A robot YAML file (see ``trajcomp/robots/*.yaml``) holds, in user units
+A robot YAML file (see ``trajcomp/arm/robots/*.yaml``) holds, in user units
 (mm, deg):
 
 ``name``, ``source``
@@ -35,11 +35,11 @@ from pathlib import Path
 import numpy as np
 import yaml
 
-from trajcomp import yaml_text
+from trajcomp.support import yaml_text
 from trajcomp.errors import RobotError
-from trajcomp.transforms import pose_to_matrix
+from trajcomp.arm.transforms import pose_to_matrix
 
-_ROBOT_PACKAGE = "trajcomp.robots"
+_ROBOT_PACKAGE = "trajcomp.arm.robots"
 MAGNITUDE_BOUND = 1e5  # mm, deg, deg/s, deg/s^2: beyond it a robot file's number is damage (dh.a 1e308), not an arm
 JERK_BOUND = 1e9  # deg/s^3
 

@@ -4,7 +4,7 @@ One call fits every part the data allows (the paper's linear correction, the
 kinematic identification with TCP and tracker registration, the grid of raw
 errors, and the composite's residual after the kinematic model), so that
 `validate` can compare the modes on the same model. Data that cannot be what
-it claims is refused (`trajcomp.plausibility`). Gross outliers are named by
+it claims is refused (`trajcomp.calibration.plausibility`). Gross outliers are named by
 line; the robust loss bounds their pull on the fit, and they are left out of
 the grids and statistics, their nodes filled from the model. Fit and k-fold cross-validation statistics are
 recorded in the model's report.
@@ -13,7 +13,7 @@ The composite's residual depends on the data: measured at one tool
 orientation (the paper's protocol), it is a field over the commanded
 position (``idw8`` by default); measured at several orientations or with
 orientations (6-DoF), it is the joint-angle error model of
-`trajcomp.joint_errors`, identified with a refinement of the DH parameters,
+`trajcomp.model.joint_errors`, identified with a refinement of the DH parameters,
 which holds at any orientation and for any tool; its spline terms (knot
 step and penalty) are chosen on held-out regions of the measurements, never
 on interleaved rows, and the choice with every candidate's held-out error
@@ -27,21 +27,21 @@ import logging
 import numpy as np
 
 from trajcomp.errors import CalibrationError
-from trajcomp import landing
-from trajcomp.grid import KINDS, METHODS as LATTICE_INTERPOLATORS, detect_lattice, fit_field
-from trajcomp.identify import LOSSES, ORIENTATION_WEIGHT, best_fit_transform, identify, outlier_rows, select_splines
-from trajcomp.ik import branch_index, ik
-from trajcomp.joint_errors import KIND as JOINT_KIND
-from trajcomp.joint_errors import JointResidual, is_term
-from trajcomp.kinematics import fk
-from trajcomp.linear import fit_linear
-from trajcomp.model import CompensationModel
-from trajcomp.orientations import MIN_AXIS_OFFSET, MIN_SPREAD, axis_offset, locates_flange, orientation_spread
-from trajcomp.parameters import is_robot_parameter
-from trajcomp.plan import batch_seed
-from trajcomp.plausibility import check_columns, check_identification, check_units
-from trajcomp.stats import ErrorStats, kfold_indices
-from trajcomp.transforms import abc_to_matrix, invert, pose_to_matrix
+from trajcomp.model import landing
+from trajcomp.model.grid import KINDS, METHODS as LATTICE_INTERPOLATORS, detect_lattice, fit_field
+from trajcomp.calibration.identify import LOSSES, ORIENTATION_WEIGHT, best_fit_transform, identify, outlier_rows, select_splines
+from trajcomp.arm.ik import branch_index, ik
+from trajcomp.model.joint_errors import KIND as JOINT_KIND
+from trajcomp.model.joint_errors import JointResidual, is_term
+from trajcomp.arm.kinematics import fk
+from trajcomp.model.linear import fit_linear
+from trajcomp.model.compensation_model import CompensationModel
+from trajcomp.calibration.orientations import MIN_AXIS_OFFSET, MIN_SPREAD, axis_offset, locates_flange, orientation_spread
+from trajcomp.arm.parameters import is_robot_parameter
+from trajcomp.calibration.measurement_plan import batch_seed
+from trajcomp.calibration.plausibility import check_columns, check_identification, check_units
+from trajcomp.model.stats import ErrorStats, kfold_indices
+from trajcomp.arm.transforms import abc_to_matrix, invert, pose_to_matrix
 
 log = logging.getLogger(__name__)
 
@@ -80,7 +80,7 @@ def register(model, joints, position, measured):
 
     The model's predicted positions (its default mode) of the reference rows
     are fitted rigidly to their measured positions (tracker frame), as
-    `trajcomp.identify.best_fit_transform`.
+    `trajcomp.calibration.identify.best_fit_transform`.
 
     Raises
     ------
@@ -109,7 +109,7 @@ class _Parts:
     """The fitted parts of a model, from one training set in the base frame.
 
     ``dh`` may be given (the full-data fit, which also registered the
-    tracker). Gross outliers (`trajcomp.identify.outlier_rows` of the best
+    tracker). Gross outliers (`trajcomp.calibration.identify.outlier_rows` of the best
     kinematic model's residuals: the joint residual's when there is one)
     pull little on the robust fits; the linear fit and the scattered fields
     leave them out, the lattice grids fill their nodes from the model.
@@ -180,7 +180,7 @@ def _joint_residual(nominal, dh, joints, position, measured, rotation, loss, ori
 
     The harmonic and gravity terms are identified with the DH refinement;
     spline terms of joints 1-5 are chosen on held-out regions and fitted on
-    top (`trajcomp.identify.select_splines`), or, with ``splines`` given
+    top (`trajcomp.calibration.identify.select_splines`), or, with ``splines`` given
     (``{"step_deg", "penalty"}`` of an earlier choice; step 0: none), fitted
     as given. Joint 6 gets none: it turns the TCP about its own axis, which
     a point on the axis hardly sees.
@@ -425,7 +425,7 @@ def plane_errors(robot, joints, position, measured, rotation, options, progress=
 
 
 def _landing(robot, dh, frame, data, held, folds, progress, orientation):
-    """The plain-data `trajcomp.landing.LandingData` of a calibration (its report's ``landing``).
+    """The plain-data `trajcomp.model.landing.LandingData` of a calibration (its report's ``landing``).
 
     ``data`` are the rows the statistics use ``(robot, joints, position,
     measured, rotation, options)``; ``held`` their k-fold errors (N, 3) per mode.

@@ -1,9 +1,9 @@
 """Kinematic identification: one robust least-squares fit of the whole arm.
 
-Unknowns (see `trajcomp.parameters`): DH deltas, the TCP position in the
+Unknowns (see `trajcomp.arm.parameters`): DH deltas, the TCP position in the
 flange frame, for 6-DoF data the orientation of the measured frame, for
 tracker-frame data the base registration, and optionally the joint-error
-terms of `trajcomp.joint_errors`. All are refined together by Gauss-Newton
+terms of `trajcomp.model.joint_errors`. All are refined together by Gauss-Newton
 on the analytic Jacobian, vectorized over the N measurements, starting from
 the nominal robot (and a best-fit registration of its TCP positions).
 
@@ -23,7 +23,7 @@ one tool orientation, the wrist and tool parameters are such combinations,
 and moving them spoils every other orientation. Where a hidden combination
 joins the arm with a frame of the measurement (base z of the tracker
 registration with d1), the frame moves and the arm stays at nominal
-(`trajcomp.parameters.prior_weights`).
+(`trajcomp.arm.parameters.prior_weights`).
 """
 
 import dataclasses
@@ -31,11 +31,11 @@ import logging
 
 import numpy as np
 
-from trajcomp import joint_errors
+from trajcomp.model import joint_errors
 from trajcomp.errors import CalibrationError
-from trajcomp.joint_errors import SplineBasis
-from trajcomp.kinematics import fk
-from trajcomp.parameters import (
+from trajcomp.model.joint_errors import SplineBasis
+from trajcomp.arm.kinematics import fk
+from trajcomp.arm.parameters import (
     BASE_NAMES,
     TARGET_NAMES,
     apply_deltas,
@@ -45,7 +45,7 @@ from trajcomp.parameters import (
     prior_weights,
     scales,
 )
-from trajcomp.transforms import invert, matrix_to_rotvec, rotvec_to_matrix
+from trajcomp.arm.transforms import invert, matrix_to_rotvec, rotvec_to_matrix
 
 log = logging.getLogger(__name__)
 
@@ -396,7 +396,7 @@ def identify(robot, q, measured, *, rotation=None, frame="base", tool=True, join
     tool : bool
         Identify the TCP position in the flange frame.
     joint_terms : bool
-        Also identify the joint-error terms (`trajcomp.joint_errors`).
+        Also identify the joint-error terms (`trajcomp.model.joint_errors`).
     splines : SplineBasis, optional
         Also identify these spline terms of the joint angles, with their
         roughness penalty (they are not subject to the identifiability

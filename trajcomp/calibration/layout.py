@@ -37,9 +37,9 @@ from pathlib import Path
 import numpy as np
 import yaml
 
-from trajcomp import yaml_text
+from trajcomp.support import yaml_text
 from trajcomp.errors import ReadError
-from trajcomp.transforms import matrix_to_abc
+from trajcomp.arm.transforms import matrix_to_abc
 
 JOINTS = ("j1", "j2", "j3", "j4", "j5", "j6")
 POSITION = ("x", "y", "z")

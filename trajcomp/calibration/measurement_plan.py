@@ -13,10 +13,10 @@ import dataclasses
 import numpy as np
 
 from trajcomp.errors import TrajcompError
-from trajcomp.identify import identifiability
-from trajcomp.ik import Configuration, branch_index, ik, ik_family
-from trajcomp.kinematics import fk
-from trajcomp.transforms import abc_to_matrix, matrix_to_abc
+from trajcomp.calibration.identify import identifiability
+from trajcomp.arm.ik import Configuration, branch_index, ik, ik_family
+from trajcomp.arm.kinematics import fk
+from trajcomp.arm.transforms import abc_to_matrix, matrix_to_abc
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -176,7 +176,7 @@ def orientations_needed(robot, plan, *, frame="tracker", joint_terms=True):
     plan : Plan
         Its orientations are taken in their order; unreachable targets are left out.
     frame, joint_terms
-        As `trajcomp.identify.identify`.
+        As `trajcomp.calibration.identify.identify`.
 
     Returns
     -------

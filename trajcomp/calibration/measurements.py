@@ -4,7 +4,7 @@ Columns: ``j1..j6`` commanded joints (deg), ``x,y,z[,a,b,c]`` commanded TCP
 pose (mm, deg), ``mx,my,mz`` measured TCP position (mm), optional
 ``mrx,mry,mrz`` measured orientation (deg). Files in another layout (other
 column names, delimiter, decimal comma, units, rotation conventions) are read
-through an explicit `trajcomp.columns.Layout`, never by guessing.
+through an explicit `trajcomp.calibration.layout.Layout`, never by guessing.
 """
 
 import csv
@@ -15,8 +15,8 @@ import re
 
 import numpy as np
 
-from trajcomp.atomic import write_atomic
-from trajcomp.columns import (
+from trajcomp.support.atomic import write_atomic
+from trajcomp.calibration.layout import (
     FIELDS,
     JOINTS,
     MEASURED,

@@ -14,8 +14,8 @@ arm of another maker.
 import numpy as np
 
 from trajcomp.errors import CalibrationError, RobotError
-from trajcomp.kinematics import fk
-from trajcomp.parameters import TOOL_NAMES, is_angle
+from trajcomp.arm.kinematics import fk
+from trajcomp.arm.parameters import TOOL_NAMES, is_angle
 
 NOMINAL_ERROR_BOUND = 50.0  # mm, median |measured - nominal| (an unknown TCP of some cm included)
 RESIDUAL_BOUND = 2.0  # mm, median residual after identification
@@ -121,7 +121,7 @@ def check_applied(meas, robot, position, nominal_error, *, registered=False):
     robot : Robot
         The model's nominal arm with its TCP.
     position : ndarray, shape (N, 3)
-        Commanded TCP positions, mm, base frame (`trajcomp.calibrate.commanded`).
+        Commanded TCP positions, mm, base frame (`trajcomp.calibration.calibrate.commanded`).
     nominal_error : ndarray, shape (N,), or None
         ``|measured - commanded|`` in the base frame, mm; None without
         measured columns.

@@ -26,8 +26,8 @@ import dataclasses
 
 import numpy as np
 
-from trajcomp.kinematics import dh_link_transforms, fk, link_frames
-from trajcomp.transforms import rotvec_to_matrix
+from trajcomp.arm.kinematics import dh_link_transforms, fk, link_frames
+from trajcomp.arm.transforms import rotvec_to_matrix
 
 GRAVITY = np.array([0.0, 0.0, -9.81])  # m/s^2, in the base frame
 

@@ -6,10 +6,10 @@ import sys
 
 import numpy as np
 
-from trajcomp.columns import load_layout, parse_mapping
+from trajcomp.calibration.layout import load_layout, parse_mapping
 from trajcomp.errors import TrajcompError
-from trajcomp.robot import load_robot
-from trajcomp.transforms import pose_to_matrix
+from trajcomp.arm.robot import load_robot
+from trajcomp.arm.transforms import pose_to_matrix
 
 
 def numbers(count):
@@ -64,7 +64,7 @@ def pose(text):
 
 
 def mapping(text):
-    """An argparse type: a column mapping ``FIELD=EXPR,...`` (`trajcomp.columns.parse_mapping`)."""
+    """An argparse type: a column mapping ``FIELD=EXPR,...`` (`trajcomp.calibration.layout.parse_mapping`)."""
     try:
         return parse_mapping(text)
     except TrajcompError as exc:
@@ -88,7 +88,7 @@ def layout_of(args):
 
 def model_inputs(path):
     """The files a model file ``path`` is read from: itself and its grid sidecar (which need not exist)."""
-    from trajcomp.model_file import sidecar_path
+    from trajcomp.model.model_file import sidecar_path
 
     return [path, sidecar_path(path)]
 

@@ -2,8 +2,8 @@
 
 import numpy as np
 
-from trajcomp.atomic import refuse_inputs
-from trajcomp.calibrate import INTERPOLATIONS, METHODS, calibrate
+from trajcomp.support.atomic import refuse_inputs
+from trajcomp.calibration.calibrate import INTERPOLATIONS, METHODS, calibrate
 from trajcomp.commands._args import (
     add_layout,
     add_robot,
@@ -19,13 +19,13 @@ from trajcomp.commands._args import (
     steps,
 )
 from trajcomp.commands._report import add_report_options, criteria_of, emit
-from trajcomp.identify import LOSSES, ORIENTATION_WEIGHT
-from trajcomp.measurements import read_measurements
-from trajcomp.model_file import save_model
-from trajcomp.parameters import is_angle
+from trajcomp.calibration.identify import LOSSES, ORIENTATION_WEIGHT
+from trajcomp.calibration.measurements import read_measurements
+from trajcomp.model.model_file import save_model
+from trajcomp.arm.parameters import is_angle
 from trajcomp.report import report_paths
-from trajcomp.stats import ErrorStats, format_table
-from trajcomp.transforms import matrix_to_pose
+from trajcomp.model.stats import ErrorStats, format_table
+from trajcomp.arm.transforms import matrix_to_pose
 
 
 def add_parser(sub):

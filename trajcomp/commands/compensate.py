@@ -9,27 +9,28 @@ from pathlib import Path
 
 import numpy as np
 
-from trajcomp import batch, formats
-from trajcomp.atomic import refuse_inputs
+from trajcomp import formats
+from trajcomp.compensation import batch
+from trajcomp.support.atomic import refuse_inputs
 from trajcomp.commands._args import command_parser, info, model_inputs, positive_number
 from trajcomp.commands._report import add_report_options, criteria_of
 from trajcomp.commands.convert import add_frame_options, add_in_place_option, frame_options
 from trajcomp.commands.retime import CHOICES as RETIME_CHOICES
 from trajcomp.commands.retime import LIMIT_MESSAGE, METHOD_HELP, add_tolerance_option, retime_compensated, timing_lines
-from trajcomp.compensate import program_corrector
+from trajcomp.compensation.targets import program_corrector
 from trajcomp.errors import RobotError, TrajcompError
-from trajcomp.memory import end_stage, kept_apart
-from trajcomp.model import MODES
-from trajcomp.model_file import load_model
-from trajcomp.parallel import meanwhile, usable_cores
-from trajcomp.plausibility import check_robot_language
-from trajcomp.postprocess import MAX_CORRECTION, compensate_program, convert_program
-from trajcomp.posture import MAX_JOINT_CHANGE
-from trajcomp.progress import Stages, progress
+from trajcomp.support.memory import end_stage, kept_apart
+from trajcomp.model.compensation_model import MODES
+from trajcomp.model.model_file import load_model
+from trajcomp.support.parallel import meanwhile, usable_cores
+from trajcomp.calibration.plausibility import check_robot_language
+from trajcomp.compensation.program import MAX_CORRECTION, compensate_program, convert_program
+from trajcomp.compensation.posture import MAX_JOINT_CHANGE
+from trajcomp.support.progress import Stages, progress
 from trajcomp.report import Criteria, compliance_report, file_entry, model_entry, report_paths, summary_lines
-from trajcomp.robot import load_robot
+from trajcomp.arm.robot import load_robot
 from trajcomp.timing.path import TOLERANCE
-from trajcomp.transforms import matrix_to_pose
+from trajcomp.arm.transforms import matrix_to_pose
 
 
 def add_parser(sub):
@@ -216,7 +217,7 @@ def _import_timing():
 
 
 def _next(stages):
-    """End a stage (`trajcomp.memory.end_stage`), the bar one step on."""
+    """End a stage (`trajcomp.support.memory.end_stage`), the bar one step on."""
     end_stage()
     stages.advance()
 

@@ -11,10 +11,10 @@ import numpy as np
 
 from trajcomp import formats
 from trajcomp.errors import TrajcompError
-from trajcomp.plausibility import check_robot_language
-from trajcomp.postprocess import convert_program
-from trajcomp.robot import load_robot
-from trajcomp.transforms import pose_to_matrix
+from trajcomp.calibration.plausibility import check_robot_language
+from trajcomp.compensation.program import convert_program
+from trajcomp.arm.robot import load_robot
+from trajcomp.arm.transforms import pose_to_matrix
 
 
 def add_frame_options(parser):

@@ -4,9 +4,9 @@ from pathlib import Path
 
 from trajcomp.commands._args import command_parser, info, non_negative_int
 from trajcomp.demo import PAPER_ROBOT, format_comparison, run_demo, run_program
-from trajcomp.model_file import save_model
-from trajcomp.robot import load_robot
-from trajcomp.simulate import PROFILES
+from trajcomp.model.model_file import save_model
+from trajcomp.arm.robot import load_robot
+from trajcomp.calibration.simulate import PROFILES
 
 
 def add_parser(sub):

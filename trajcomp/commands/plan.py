@@ -4,14 +4,14 @@ import argparse
 
 import numpy as np
 
-from trajcomp.atomic import refuse_inputs
+from trajcomp.support.atomic import refuse_inputs
 from trajcomp.commands._args import add_robot, command_parser, info, numbers, positive_number, robot_of
 from trajcomp.errors import ToleranceError
-from trajcomp.ik import Configuration
-from trajcomp.measurements import Measurements, write_measurements
-from trajcomp.orientations import locates_flange, orientation_spread, spread_orientations
-from trajcomp.plan import default_orientation, orientations_needed, plan_grid
-from trajcomp.transforms import abc_to_matrix
+from trajcomp.arm.ik import Configuration
+from trajcomp.calibration.measurements import Measurements, write_measurements
+from trajcomp.calibration.orientations import locates_flange, orientation_spread, spread_orientations
+from trajcomp.calibration.measurement_plan import default_orientation, orientations_needed, plan_grid
+from trajcomp.arm.transforms import abc_to_matrix
 
 
 def orientation_list(text):

@@ -2,13 +2,13 @@
 
 import dataclasses
 
-from trajcomp.atomic import refuse_inputs
-from trajcomp.calibrate import commanded
+from trajcomp.support.atomic import refuse_inputs
+from trajcomp.calibration.calibrate import commanded
 from trajcomp.commands._args import command_parser, info, layout_of, model_inputs
 from trajcomp.commands.validate import add_tracker_options, check_data, tracker_pose
-from trajcomp.measurements import read_measurements, write_measurements
-from trajcomp.model import MODES
-from trajcomp.model_file import load_model
+from trajcomp.calibration.measurements import read_measurements, write_measurements
+from trajcomp.model.compensation_model import MODES
+from trajcomp.model.model_file import load_model
 
 
 def add_parser(sub):

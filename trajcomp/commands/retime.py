@@ -8,16 +8,16 @@ import dataclasses
 import numpy as np
 
 from trajcomp import formats
-from trajcomp.atomic import refuse_inputs
+from trajcomp.support.atomic import refuse_inputs
 from trajcomp.commands._args import add_robot, command_parser, info, robot_of
 from trajcomp.commands._report import add_report_options, criteria_of, emit
 from trajcomp.commands.convert import add_frame_options, add_in_place_option, frame_options, protected_inputs
 from trajcomp.errors import TimingError, TrajcompError
-from trajcomp.memory import release
-from trajcomp.parallel import in_background
-from trajcomp.postprocess import as_written_report
-from trajcomp.plausibility import check_robot_language
-from trajcomp.posture import planned_joints, planned_targets
+from trajcomp.support.memory import release
+from trajcomp.support.parallel import in_background
+from trajcomp.compensation.program import as_written_report
+from trajcomp.calibration.plausibility import check_robot_language
+from trajcomp.compensation.posture import planned_joints, planned_targets
 from trajcomp.report import compliance_report, file_entry, report_paths
 from trajcomp.timing import METHODS
 from trajcomp.timing.path import TOLERANCE
@@ -111,7 +111,7 @@ def timing_lines(result, before=None):
 
 
 def planned(program, index, q):
-    """Joints (N, 6) of a program's N targets: q (n, 6) of targets index (n,) (a `trajcomp.posture.Plan`), NaN
+    """Joints (N, 6) of a program's N targets: q (n, 6) of targets index (n,) (a `trajcomp.compensation.posture.Plan`), NaN
     elsewhere."""
     joints = np.full((len(program.target_table()), 6), np.nan)
     joints[index] = q
@@ -136,13 +136,13 @@ def retime_compensated(original, corrected, robot, method, tolerance, tools=None
         Tools and frames the program uses but does not define.
     q_planned : ndarray, shape (n, 6), optional
         The original's Cartesian targets in their declared postures, in
-        motion order (`trajcomp.posture.planned_targets`), rad: the
+        motion order (`trajcomp.compensation.posture.planned_targets`), rad: the
         compensation's `ProgramReport.q_planned` (rows beyond n, joint
         targets, are not used). Solved again when not given.
     workers : int
         More than 1, for a program of fewer than `TOGETHER` targets: the
         original is timed by another process meanwhile
-        (`trajcomp.parallel.in_background`); else first, so that only one
+        (`trajcomp.support.parallel.in_background`); else first, so that only one
         timing's working memory is held at a time.
 
     Returns

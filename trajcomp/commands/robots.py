@@ -1,7 +1,7 @@
 """``trajcomp robots``: list the built-in robots."""
 
 from trajcomp.commands._args import command_parser
-from trajcomp.robot import builtin_robot_names, load_robot
+from trajcomp.arm.robot import builtin_robot_names, load_robot
 
 
 def add_parser(sub):

@@ -4,14 +4,14 @@ import dataclasses
 
 import numpy as np
 
-from trajcomp.atomic import refuse_inputs
-from trajcomp.calibrate import commanded
+from trajcomp.support.atomic import refuse_inputs
+from trajcomp.calibration.calibrate import commanded
 from trajcomp.commands._args import add_robot, command_parser, info, non_negative_int, pose, robot_of
 from trajcomp.errors import ReadError
-from trajcomp.kinematics import fk
-from trajcomp.measurements import read_measurements, write_measurements
-from trajcomp.simulate import PROFILES, VirtualRobot
-from trajcomp.transforms import matrix_to_abc
+from trajcomp.arm.kinematics import fk
+from trajcomp.calibration.measurements import read_measurements, write_measurements
+from trajcomp.calibration.simulate import PROFILES, VirtualRobot
+from trajcomp.arm.transforms import matrix_to_abc
 
 
 def add_parser(sub):

@@ -4,17 +4,17 @@ import dataclasses
 
 import numpy as np
 
-from trajcomp.atomic import refuse_inputs, write_atomic
-from trajcomp.calibrate import commanded, register, to_base
+from trajcomp.support.atomic import refuse_inputs, write_atomic
+from trajcomp.calibration.calibrate import commanded, register, to_base
 from trajcomp.commands._args import add_layout, command_parser, info, layout_of, model_inputs
 from trajcomp.commands._report import add_report_options, criteria_of, emit
 from trajcomp.commands.calibrate import print_stats
 from trajcomp.errors import ReadError
-from trajcomp.measurements import read_measurements
-from trajcomp.model_file import load_model
-from trajcomp.plausibility import check_applied
+from trajcomp.calibration.measurements import read_measurements
+from trajcomp.model.model_file import load_model
+from trajcomp.calibration.plausibility import check_applied
 from trajcomp.report import file_entry, report_paths, validation_report
-from trajcomp.transforms import abc_to_matrix, invert, rotation_angle_between
+from trajcomp.arm.transforms import abc_to_matrix, invert, rotation_angle_between
 
 
 def add_parser(sub):

@@ -14,10 +14,10 @@ from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
 from trajcomp import __version__, formats
-from trajcomp import crash
-from trajcomp.atomic import write_atomic
+from trajcomp.support import crash
+from trajcomp.support.atomic import write_atomic
 from trajcomp.errors import TrajcompError
-from trajcomp.parallel import init_worker
+from trajcomp.support.parallel import init_worker
 
 PASS, FAIL, ERROR, CRASH = "pass", "fail", "error", "crash"
 EXIT_CODES = {PASS: 0, FAIL: 1, ERROR: 2, CRASH: crash.EXIT_CODE}  # a crash is a bug: neither success nor bad input

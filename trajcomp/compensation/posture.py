@@ -9,8 +9,8 @@ one it means, and that is the one it must run in after compensation:
    and turns.
 2. ``"config"``: configuration data (KUKA S/T, ABB confdata, FANUC CONFIG):
    the branch its flags name, each joint in the window its turn data name
-   (`trajcomp.configuration.declared_windows`), a joint within
-   `trajcomp.configuration.BOUNDARY_TOLERANCE` of its window's boundary
+   (`trajcomp.programs.configuration.declared_windows`), a joint within
+   `trajcomp.programs.configuration.BOUNDARY_TOLERANCE` of its window's boundary
    inside it; only where the language binds them (KUKA: PTP motions;
    a target only LIN or CIRC motions use is placed as in 3.).
 3. ``"previous"``: the program says nothing: the solution nearest the
@@ -32,11 +32,11 @@ import functools
 
 import numpy as np
 
-from trajcomp.configuration import BOUNDARY_TOLERANCE, binding, declared_windows
+from trajcomp.programs.configuration import BOUNDARY_TOLERANCE, binding, declared_windows
 from trajcomp.errors import IKError
-from trajcomp.frames import FrameTable, tool_groups
-from trajcomp.ik import ik_all, turn_towards
-from trajcomp.parallel import map_blocks
+from trajcomp.programs.frames import FrameTable, tool_groups
+from trajcomp.arm.ik import ik_all, turn_towards
+from trajcomp.support.parallel import map_blocks
 
 TURN = 2.0 * np.pi
 MAX_JOINT_CHANGE = np.radians(5.0)  # rad: default bound of the joint change a correction may cause
@@ -101,10 +101,10 @@ def planned_joints(program, robot, *, tools=None, frames=None, workers=1):
         The nominal robot (closed-form IK family).
     tools, frames : Mapping[str, ndarray (4, 4)], optional
         Tools (T_flange_tool) and user frames (T_world_frame), mm, the
-        program uses but does not define (`trajcomp.frames.FrameTable`).
+        program uses but does not define (`trajcomp.programs.frames.FrameTable`).
     workers : int
         Processes that solve blocks of `BLOCK` targets' closed-form branches
-        and chain the undeclared ones (`_chain`, `trajcomp.parallel.map_blocks`);
+        and chain the undeclared ones (`_chain`, `trajcomp.support.parallel.map_blocks`);
         the plan does not depend on it.
 
     Returns

@@ -1,10 +1,10 @@
 """Apply corrected poses to robot programs, and convert programs between languages.
 
 `compensate_program` solves every target a program's motions use in the
-posture the program declares (`trajcomp.posture`), asks a ``correct``
+posture the program declares (`trajcomp.compensation.posture`), asks a ``correct``
 callable (the compensation core) once for all of them, seeded there,
 refuses corrections that are implausible or leave the posture, brings the
-commands back to each target's own frame (`trajcomp.frames`) and writes
+commands back to each target's own frame (`trajcomp.programs.frames`) and writes
 them into the program with configuration data recomputed from the
 corrected joints. `convert_program` re-expresses a program in another
 language.
@@ -14,13 +14,13 @@ import dataclasses
 
 import numpy as np
 
-from trajcomp.configuration import BOUNDARY_TOLERANCE, binding, configuration_for, describe, written_configuration
+from trajcomp.programs.configuration import BOUNDARY_TOLERANCE, binding, configuration_for, describe, written_configuration
 from trajcomp.errors import CompensationError
-from trajcomp.ik import pose_error
-from trajcomp.kinematics import fk
-from trajcomp.frames import FrameTable, in_frames
-from trajcomp.posture import MAX_JOINT_CHANGE, check_posture, planned_joints
-from trajcomp.program import Program
+from trajcomp.arm.ik import pose_error
+from trajcomp.arm.kinematics import fk
+from trajcomp.programs.frames import FrameTable, in_frames
+from trajcomp.compensation.posture import MAX_JOINT_CHANGE, check_posture, planned_joints
+from trajcomp.programs.program import Program
 
 FRAMELESS = frozenset({"csv", "urscript"})  # languages whose poses are always in the base frame
 
@@ -50,7 +50,7 @@ class ProgramReport:
     declared, written : tuple of str, length N
         Configuration data as the language writes them (``""`` where none).
     posture_source : tuple of str, length N
-        ``"joints"``, ``"config"``, ``"previous"`` or ``"home"`` (`trajcomp.posture`).
+        ``"joints"``, ``"config"``, ``"previous"`` or ``"home"`` (`trajcomp.compensation.posture`).
     outside_grid : ndarray of bool, shape (N,)
         Targets outside the measured grid or the joint range of a joint residual.
     predicted_residual : ndarray, shape (N,)
@@ -74,7 +74,7 @@ class ProgramReport:
         The landing estimate (None: no model): ``estimate_mm`` (what the
         verdict judges), its parts ``held_out_mm`` and ``unseen_mm``,
         ``orientation_beyond_deg``, ``unmeasured_posture`` and ``other_tool``
-        (`trajcomp.compensate.CompensationResult`).
+        (`trajcomp.compensation.targets.CompensationResult`).
     """
 
     labels: tuple
@@ -120,7 +120,7 @@ def compensate_program(program, correct, robot, *, tools=None, frames=None, join
     """A program whose targets are replaced by their compensated commands, in their declared postures.
 
     Every target is first solved with the nominal robot in the posture the
-    program declares (`trajcomp.posture.planned_joints`); the compensation
+    program declares (`trajcomp.compensation.posture.planned_joints`); the compensation
     is seeded there and must stay there.
 
     Parameters
@@ -131,7 +131,7 @@ def compensate_program(program, correct, robot, *, tools=None, frames=None, join
         names (N,)) -> CompensationResult``: the nominal-model TCP pose that
         makes the real arm land on each target and its joints (rad), solved
         next to the seed joints. Called once, for all targets (see
-        `trajcomp.compensate.program_corrector`).
+        `trajcomp.compensation.targets.program_corrector`).
     robot : Robot
         The nominal robot (posture, configuration data, joint-target poses,
         base placement and default tool).
@@ -147,7 +147,7 @@ def compensate_program(program, correct, robot, *, tools=None, frames=None, join
         Largest plausible position correction, mm.
     workers : int
         Processes that share the posture planning (`planned_joints`); give
-        ``correct`` as many (`trajcomp.compensate.program_corrector`).
+        ``correct`` as many (`trajcomp.compensation.targets.program_corrector`).
 
     Returns
     -------
@@ -236,7 +236,7 @@ def _configs(program, robot, index, q):
 
     The declared fields the corrected joints still satisfy are kept as
     written, and so are fields the tool does not own
-    (`trajcomp.configuration.written_configuration`); a target whose data
+    (`trajcomp.programs.configuration.written_configuration`); a target whose data
     its language does not bind (a KUKA point only LIN or CIRC motions use)
     keeps them all.
     """
@@ -302,7 +302,7 @@ def as_written_report(program, plan):
     Parameters
     ----------
     program : Program
-    plan : trajcomp.posture.Plan
+    plan : trajcomp.compensation.posture.Plan
         Its Cartesian targets in their declared postures (`planned_joints`).
     """
     n = len(plan.index)

@@ -20,14 +20,14 @@ import functools
 
 import numpy as np
 
-from trajcomp import landing
+from trajcomp.model import landing
 from trajcomp.errors import ModelError, TrajcompError
-from trajcomp.frames import tool_groups
-from trajcomp.ik import IKResult, ik_near, ik_numeric, pose_error
-from trajcomp.kinematics import fk
-from trajcomp.model import evaluate_field
-from trajcomp.parallel import map_blocks
-from trajcomp.plan import batch_seed
+from trajcomp.programs.frames import tool_groups
+from trajcomp.arm.ik import IKResult, ik_near, ik_numeric, pose_error
+from trajcomp.arm.kinematics import fk
+from trajcomp.model.compensation_model import evaluate_field
+from trajcomp.support.parallel import map_blocks
+from trajcomp.calibration.measurement_plan import batch_seed
 
 ITERATIONS = 3  # fixed-point passes at most
 LANDED = 1e-5  # mm: a target whose predicted landing error is below this needs no further pass
@@ -67,7 +67,7 @@ class CompensationResult:
         model that cannot place other tools (`CompensationModel.places_other_tools`).
         All False when not given.
     held_out, unseen : ndarray, shape (N,)
-        The two parts of the landing estimate (`trajcomp.landing`), mm: the
+        The two parts of the landing estimate (`trajcomp.model.landing`), mm: the
         model's held-out errors near the target, and what the measurements
         could not see at its orientation, tool and posture (NaN when not
         given: no estimate).
@@ -103,7 +103,7 @@ class CompensationResult:
 
     @property
     def estimate(self):
-        """Landing estimate (N,), mm: held-out + unseen + the convergence residual (`trajcomp.landing`)."""
+        """Landing estimate (N,), mm: held-out + unseen + the convergence residual (`trajcomp.model.landing`)."""
         return self.held_out + self.unseen + self.residual
 
     @classmethod
@@ -152,7 +152,7 @@ def compensate(model, targets, *, mode=None, tool=None, seed=None, outside="mode
         ``target k`` (0-based).
     workers : int
         Processes that compensate chunks of `CHUNK` targets at once
-        (`trajcomp.parallel.map_blocks`); the result does not depend on it.
+        (`trajcomp.support.parallel.map_blocks`); the result does not depend on it.
 
     Raises
     ------
@@ -297,7 +297,7 @@ def _solve(real, nominal, targets, seed, seed_pose):
 
 
 def program_corrector(model, *, mode=None, outside="model", label="program", workers=1):
-    """The ``correct`` callable of `trajcomp.postprocess.compensate_program` for a model.
+    """The ``correct`` callable of `trajcomp.compensation.program.compensate_program` for a model.
 
     ``correct(targets (N, 4, 4), tools (N, 4, 4), seeds (N, 6), names) ->
     CompensationResult``. Targets are grouped by tool (a program uses few)

@@ -21,9 +21,9 @@ import importlib
 from importlib.metadata import entry_points
 from pathlib import Path
 
-from trajcomp.atomic import recover, write_files_atomic
+from trajcomp.support.atomic import recover, write_files_atomic
 from trajcomp.errors import ReadError, TrajcompError, WriteError
-from trajcomp.memory import collection_paused
+from trajcomp.support.memory import collection_paused
 
 ENTRY_POINT_GROUP = "trajcomp.formats"
 
@@ -37,7 +37,7 @@ class Format:
     entry point. ``blocks``: the reader and writer work a block of rows at a
     time and take ``workers``, the processes that share the blocks.
     ``vendor``: the maker whose controllers run the language (compared with
-    `trajcomp.robot.Robot.vendor`), None for a language of no maker (CSV).
+    `trajcomp.arm.robot.Robot.vendor`), None for a language of no maker (CSV).
     """
 
     name: str
@@ -83,7 +83,7 @@ def register_format(name, extensions, reader, writer, *, source="built-in", bloc
         Shown by ``trajcomp formats``.
     blocks : bool
         The reader and writer take a third argument, ``workers``: processes
-        that share their blocks of rows (`trajcomp.parallel.map_blocks`).
+        that share their blocks of rows (`trajcomp.support.parallel.map_blocks`).
     vendor : str, optional
         The maker whose controllers run the language (``"KUKA"``); None for
         a language any arm's program may be written in.
@@ -233,7 +233,7 @@ def read(path, format=None, *, workers=1):
     if not path.is_file():
         raise ReadError(f"{path}: no such file")
     recover(path.parent)  # a set of files a killed run left half-renamed is completed first
-    with collection_paused():  # a program is made of many objects without cycles (`trajcomp.memory`)
+    with collection_paused():  # a program is made of many objects without cycles (`trajcomp.support.memory`)
         return fmt.read(path, workers).with_shared_targets_left()
 
 
@@ -248,7 +248,7 @@ def write(path, program, format=None, *, protect=(), workers=1):
 
     The content is written to temporary files (a writer's generator of
     pieces is consumed while writing), then committed with
-    `trajcomp.atomic.write_files_atomic`.
+    `trajcomp.support.atomic.write_files_atomic`.
 
     Parameters
     ----------
@@ -276,7 +276,7 @@ def write(path, program, format=None, *, protect=(), workers=1):
 
     path = Path(path)
     check_writable(program)
-    with collection_paused():  # the texts are made of many objects without cycles (`trajcomp.memory`)
+    with collection_paused():  # the texts are made of many objects without cycles (`trajcomp.support.memory`)
         files = find_format(path, format).write(program, path, workers)
         write_files_atomic(files, protect=protect,
                            advice="write to another file (-o) or give --in-place to replace it")

@@ -18,11 +18,11 @@ from trajcomp.formats._csv_cells import (
     _value,
 )
 from trajcomp.formats._text import ANGLE_LIMIT, JOINT_LIMIT, LENGTH_LIMIT, fail, finite, read_source
-from trajcomp.parallel import map_blocks
-from trajcomp.program import Program
-from trajcomp.program_items import JOINT, LINEAR, Statement
-from trajcomp.program_tables import MotionTable, TargetTable, repeated
-from trajcomp.transforms import pose_to_matrix
+from trajcomp.support.parallel import map_blocks
+from trajcomp.programs.program import Program
+from trajcomp.programs.items import JOINT, LINEAR, Statement
+from trajcomp.programs.tables import MotionTable, TargetTable, repeated
+from trajcomp.arm.transforms import pose_to_matrix
 
 LIMITS = dict.fromkeys(POSE[:3], LENGTH_LIMIT) | dict.fromkeys(POSE[3:], ANGLE_LIMIT) | dict.fromkeys(JOINTS, JOINT_LIMIT)
 KINDS = {"PTP": JOINT, "LIN": LINEAR}
@@ -30,7 +30,7 @@ KNOWN = POSE + JOINTS + ("motion", "speed", "zone", "t")
 
 
 def read(path, workers=1):
-    """Read a program CSV, its blocks of rows parsed by ``workers`` processes (`trajcomp.parallel.map_blocks`).
+    """Read a program CSV, its blocks of rows parsed by ``workers`` processes (`trajcomp.support.parallel.map_blocks`).
 
     Raises ReadError with file:line, field and text.
     """
@@ -103,7 +103,7 @@ def _layout(text, lines):
 
 def _parse_rows(name, header, lines, rows, workers):
     """Columns of the target rows (N,) (line numbers) of ``lines``, a `BLOCK` of rows at a time (`_parse_block`) by
-    ``workers`` processes (`trajcomp.parallel.map_blocks`): poses (N, 4, 4), joints (N, 6) rad (without joint
+    ``workers`` processes (`trajcomp.support.parallel.map_blocks`): poses (N, 4, 4), joints (N, 6) rad (without joint
     columns one read-only row of NaN for all, not an N x 6 array), kinds, speeds and zones (N,)."""
     n = len(rows)
     pose, joints, kind, speed, zone = (np.empty((n, 4, 4)), np.empty((n, 6)) if "j1" in header else None,

@@ -21,9 +21,9 @@ from trajcomp.formats._csv_cells import (
 )
 from trajcomp.formats._fixed_text import joined_rows
 from trajcomp.formats._text import active_axes, decimals, encode_text, format_number, turned_abc
-from trajcomp.parallel import map_blocks
-from trajcomp.program_items import JOINT, LINEAR, Source
-from trajcomp.transforms import matrix_to_pose
+from trajcomp.support.parallel import map_blocks
+from trajcomp.programs.items import JOINT, LINEAR, Source
+from trajcomp.arm.transforms import matrix_to_pose
 
 MIN_PLACES = dict.fromkeys(POSE[:3], 3) | dict.fromkeys(POSE[3:], 4) | dict.fromkeys(JOINTS, 4)
 _BARE_ZERO = re.compile(r"^(-?)0\.")  # the 0 of 0.5 and -0.5, for a file that writes .5
@@ -33,8 +33,8 @@ def write(program, path, workers=1):
     """The CSV text of a program: patched in place if read from CSV, else generated.
 
     A program read from CSV gives its content as a generator of encoded
-    pieces, a block of lines each, made while `trajcomp.atomic` writes them
-    (by ``workers`` processes, `trajcomp.parallel.map_blocks`): the whole
+    pieces, a block of lines each, made while `trajcomp.support.atomic` writes them
+    (by ``workers`` processes, `trajcomp.support.parallel.map_blocks`): the whole
     output is never held in memory.
     """
     if program.format == "csv" and program.sources:

@@ -24,9 +24,9 @@ from trajcomp.formats._text import (
     unresolved,
     whole_circle,
 )
-from trajcomp.program import Program
-from trajcomp.program_items import CIRCULAR, JOINT, LINEAR, Motion, Span, Statement, Target
-from trajcomp.transforms import pose_to_matrix
+from trajcomp.programs.program import Program
+from trajcomp.programs.items import CIRCULAR, JOINT, LINEAR, Motion, Span, Statement, Target
+from trajcomp.arm.transforms import pose_to_matrix
 
 POSE = ("x", "y", "z", "a", "b", "c")
 AXES = ("a1", "a2", "a3", "a4", "a5", "a6")

@@ -24,9 +24,9 @@ from trajcomp.formats._text import (
     unresolved,
     whole_circle,
 )
-from trajcomp.program import Program
-from trajcomp.program_items import CIRCULAR, JOINT, LINEAR, Motion, Span, Statement, Target
-from trajcomp.transforms import quat_to_matrix
+from trajcomp.programs.program import Program
+from trajcomp.programs.items import CIRCULAR, JOINT, LINEAR, Motion, Span, Statement, Target
+from trajcomp.arm.transforms import quat_to_matrix
 
 POSITION = ("x", "y", "z")
 QUAT = ("q1", "q2", "q3", "q4")

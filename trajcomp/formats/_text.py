@@ -17,8 +17,8 @@ from pathlib import Path
 import numpy as np
 
 from trajcomp.errors import ReadError, WriteError
-from trajcomp.program_items import CIRCULAR, Source, Span
-from trajcomp.transforms import abc_to_matrix, matrix_to_abc
+from trajcomp.programs.items import CIRCULAR, Source, Span
+from trajcomp.arm.transforms import abc_to_matrix, matrix_to_abc
 
 NUMBER = r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?"
 # Magnitudes no robot program states: beyond them a number is a typo or damage, not a position.

@@ -21,9 +21,9 @@ from trajcomp.formats._text import (
     split_top,
     unresolved,
 )
-from trajcomp.program import Program
-from trajcomp.program_items import CIRCULAR, JOINT, LINEAR, Motion, Span, Statement, Target
-from trajcomp.transforms import rotvec_to_matrix
+from trajcomp.programs.program import Program
+from trajcomp.programs.items import CIRCULAR, JOINT, LINEAR, Motion, Span, Statement, Target
+from trajcomp.arm.transforms import rotvec_to_matrix
 
 POSE = ("x", "y", "z", "rx", "ry", "rz")
 JOINTS = ("j1", "j2", "j3", "j4", "j5", "j6")

@@ -57,9 +57,9 @@ from trajcomp.formats._text import (
     whole_circle,
     write_single_file,
 )
-from trajcomp.program import Program
-from trajcomp.program_items import CIRCULAR, JOINT, LINEAR, Motion, Span, Statement, Target
-from trajcomp.transforms import matrix_to_pose, pose_to_matrix
+from trajcomp.programs.program import Program
+from trajcomp.programs.items import CIRCULAR, JOINT, LINEAR, Motion, Span, Statement, Target
+from trajcomp.arm.transforms import matrix_to_pose, pose_to_matrix
 
 XYZWPR = ("x", "y", "z", "w", "p", "r")
 ABC_ORDER = ("x", "y", "z", "r", "p", "w")  # A = R, B = P, C = W

@@ -35,7 +35,7 @@ cut .dat) is a ReadError naming the points; so is a declaration cut off mid-line
 routines (``MYPROC(XP1)``) are `Statement.refs`.
 
 Write: the edited points' numbers, with S and T from their configuration
-(`trajcomp.configuration.written_configuration`: Status bits 3-7 kept). A
+(`trajcomp.programs.configuration.written_configuration`: Status bits 3-7 kept). A
 program from another language is generated with its tools and bases set
 inline (``$TOOL={X ..}``): the controller's TOOL_DATA and BASE_DATA tables
 are never written.
@@ -62,8 +62,8 @@ from trajcomp.formats._text import (
     numbered,
     patched,
 )
-from trajcomp.program_items import CIRCULAR, JOINT, LINEAR
-from trajcomp.transforms import matrix_to_pose
+from trajcomp.programs.items import CIRCULAR, JOINT, LINEAR
+from trajcomp.arm.transforms import matrix_to_pose
 
 __all__ = ["read", "write"]
 

@@ -40,8 +40,8 @@ import numpy as np
 from trajcomp.errors import WriteError
 from trajcomp.formats._rapid_reader import CONF, JOINTS, POSITION, QUAT, read
 from trajcomp.formats._text import active_axes, encode_targets, format_number, same_rotation, where, write_single_file
-from trajcomp.program_items import CIRCULAR, JOINT, LINEAR
-from trajcomp.transforms import matrix_to_quat, quat_to_matrix
+from trajcomp.programs.items import CIRCULAR, JOINT, LINEAR
+from trajcomp.arm.transforms import matrix_to_quat, quat_to_matrix
 
 __all__ = ["read", "write"]
 

@@ -44,8 +44,8 @@ import numpy as np
 from trajcomp.errors import WriteError
 from trajcomp.formats._text import active_axes, encode_targets, format_number, same_rotation, write_single_file
 from trajcomp.formats._urscript_reader import JOINTS, NEAR, POSE, read
-from trajcomp.program_items import CIRCULAR, JOINT, LINEAR
-from trajcomp.transforms import matrix_to_rotvec, rotvec_to_matrix
+from trajcomp.programs.items import CIRCULAR, JOINT, LINEAR
+from trajcomp.arm.transforms import matrix_to_rotvec, rotvec_to_matrix
 
 __all__ = ["read", "write"]
 

@@ -18,7 +18,7 @@ statistics. It predicts where the real arm ends for a command, in each mode:
 It also says whether it can place a tool other than the one measured
 (`CompensationModel.places_other_tools`, with the reason).
 
-Reading and writing its file is in `trajcomp.model_file`.
+Reading and writing its file is in `trajcomp.model.model_file`.
 """
 
 import dataclasses
@@ -26,10 +26,10 @@ import dataclasses
 import numpy as np
 
 from trajcomp.errors import ModelError
-from trajcomp.ik import branch_index
-from trajcomp.joint_errors import KIND as JOINT_KIND
-from trajcomp.kinematics import fk
-from trajcomp.parameters import apply_deltas
+from trajcomp.arm.ik import branch_index
+from trajcomp.model.joint_errors import KIND as JOINT_KIND
+from trajcomp.arm.kinematics import fk
+from trajcomp.arm.parameters import apply_deltas
 
 MODES = ("none", "linear", "dh", "grid", "composite")
 
@@ -73,7 +73,7 @@ class CompensationModel:
     other_tools_reason : str
         Why (or why not), in words.
     postures : tuple of int
-        Arm branches (`trajcomp.ik.Configuration` indices) the measurements
+        Arm branches (`trajcomp.arm.ik.Configuration` indices) the measurements
         were taken in; empty when unknown (positions without joints, or a
         model file written before they were recorded). Errors of another
         branch were never measured: gear and compliance errors follow the

@@ -12,7 +12,7 @@ holds one error vector per node and interpolates it inside the grid box with
 - ``trilinear``: standard trilinear interpolation on the nominal lattice.
 
 :func:`fit_field` builds any residual field by name (the two above, or the
-scattered ``knn`` and ``rbf`` of :mod:`trajcomp.interpolate`) and
+scattered ``knn`` and ``rbf`` of :mod:`trajcomp.model.interpolate`) and
 :func:`field_from_dict` reads any of them back. All lengths are millimetres.
 """
 
@@ -21,8 +21,8 @@ import dataclasses
 import numpy as np
 
 from trajcomp.errors import CalibrationError, ModelError
-from trajcomp.interpolate import KNN, RBF, VERTEX_HIT, bounded_evaluate, fmt_point, in_box
-from trajcomp.stats import AXES, as_vectors
+from trajcomp.model.interpolate import KNN, RBF, VERTEX_HIT, bounded_evaluate, fmt_point, in_box
+from trajcomp.model.stats import AXES, as_vectors
 
 METHODS = ("idw8", "trilinear")
 KINDS = (*METHODS, KNN.kind, RBF.kind)
@@ -403,8 +403,8 @@ def fit_field(points, values, step=None, interpolation="idw8", **options):
     **options
         ``idw8``/``trilinear``: ``tol``, ``measured`` of
         :meth:`ResidualGrid.from_points`; ``knn``: ``k``, ``power`` of
-        :class:`~trajcomp.interpolate.KNN`; ``rbf``: the options of
-        :meth:`~trajcomp.interpolate.RBF.fit`.
+        :class:`~trajcomp.model.interpolate.KNN`; ``rbf``: the options of
+        :meth:`~trajcomp.model.interpolate.RBF.fit`.
 
     Returns
     -------

@@ -1,7 +1,7 @@
 """Interpolation of scattered residuals, and the domain policy of every residual field.
 
 A residual field maps positions (N, 3) mm to residual errors (N, 3) mm. The
-lattice fields (``idw8``, ``trilinear``) live in :mod:`trajcomp.grid`; this
+lattice fields (``idw8``, ``trilinear``) live in :mod:`trajcomp.model.grid`; this
 module holds the fields of scattered data, which need no lattice:
 
 - :class:`KNN` (``knn``): inverse-distance weighting over the k nearest
@@ -19,7 +19,7 @@ import dataclasses
 import numpy as np
 
 from trajcomp.errors import CalibrationError, ModelError
-from trajcomp.stats import as_vectors, kfold_indices
+from trajcomp.model.stats import as_vectors, kfold_indices
 
 OUTSIDE = ("error", "clamp", "nan")
 VERTEX_HIT = 1e-6
@@ -143,7 +143,7 @@ class KNN(_Scattered):
     """Inverse-distance weighting over the ``k`` nearest data points.
 
     Weights ``1 / d**power`` normalized to one; a query within
-    :data:`~trajcomp.grid.VERTEX_HIT` of a data point takes its value.
+    :data:`~trajcomp.model.grid.VERTEX_HIT` of a data point takes its value.
 
     Attributes
     ----------

@@ -27,7 +27,7 @@ so the coefficients enter linearly and the same model serves every tool and
 orientation: a measurement at one orientation corrects the joints, not a
 point in space, and does not pollute the prediction at another. The
 coefficients are identified with a refinement of the DH parameters
-(`trajcomp.identify`), held together as a `JointResidual`.
+(`trajcomp.calibration.identify`), held together as a `JointResidual`.
 """
 
 import dataclasses
@@ -36,8 +36,8 @@ import re
 import numpy as np
 
 from trajcomp.errors import ModelError
-from trajcomp.kinematics import fk, link_frames
-from trajcomp.parameters import apply_deltas
+from trajcomp.arm.kinematics import fk, link_frames
+from trajcomp.arm.parameters import apply_deltas
 
 KIND = "joint"
 HARMONICS = (1, 2)
@@ -91,7 +91,7 @@ class SplineBasis:
         giving that many plus 3 basis functions.
     penalty : float
         Weight of the squared second differences of the coefficients
-        (scaled units, see `trajcomp.parameters.scales`) per measurement.
+        (scaled units, see `trajcomp.arm.parameters.scales`) per measurement.
     """
 
     lower: np.ndarray
@@ -218,7 +218,7 @@ class JointResidual:
     ----------
     names : tuple of str
         Term names (`term_names`) and, fitted together with them, DH and
-        tool parameter names (`trajcomp.parameters`) refining the robot the
+        tool parameter names (`trajcomp.arm.parameters`) refining the robot the
         residual is added to.
     values : ndarray, shape (P,)
         Term coefficients, rad (gear) or rad/m (grav); parameter deltas, mm or rad.

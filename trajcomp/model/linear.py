@@ -15,7 +15,7 @@ import itertools
 import numpy as np
 
 from trajcomp.errors import CalibrationError, ModelError
-from trajcomp.stats import AXES, as_vectors
+from trajcomp.model.stats import AXES, as_vectors
 
 ERRORS = ("dx", "dy", "dz")
 CRITERIA = ("bic", "aic")

@@ -2,7 +2,7 @@
 
 User units (mm, deg) in the file; a grid with many nodes is stored in a
 sidecar ``<model file name>.npz`` named in the YAML, written together with it.
-A model file holds a `trajcomp.model.CompensationModel`: its nominal robot
+A model file holds a `trajcomp.model.compensation_model.CompensationModel`: its nominal robot
 (checked against the DH table on reading), the identified parameters, the
 registration, the linear correction and the grids, with the report.
 """
@@ -19,19 +19,20 @@ from pathlib import Path
 import numpy as np
 import yaml
 
-from trajcomp import __version__, yaml_text
-from trajcomp.atomic import recover, write_files_atomic
+from trajcomp import __version__
+from trajcomp.support import yaml_text
+from trajcomp.support.atomic import recover, write_files_atomic
 from trajcomp.errors import ModelError
-from trajcomp.grid import field_from_dict
-from trajcomp.ik import Configuration
-from trajcomp.joint_errors import KIND as JOINT_KIND
-from trajcomp.joint_errors import JointResidual
-from trajcomp.linear import LinearCorrection
-from trajcomp.model import CompensationModel
-from trajcomp.parameters import is_angle
-from trajcomp.plain_data import plain
-from trajcomp.robot import load_robot
-from trajcomp.transforms import abc_to_matrix, matrix_to_abc, matrix_to_pose, pose_to_matrix
+from trajcomp.model.grid import field_from_dict
+from trajcomp.arm.ik import Configuration
+from trajcomp.model.joint_errors import KIND as JOINT_KIND
+from trajcomp.model.joint_errors import JointResidual
+from trajcomp.model.linear import LinearCorrection
+from trajcomp.model.compensation_model import CompensationModel
+from trajcomp.arm.parameters import is_angle
+from trajcomp.support.plain_data import plain
+from trajcomp.arm.robot import load_robot
+from trajcomp.arm.transforms import abc_to_matrix, matrix_to_abc, matrix_to_pose, pose_to_matrix
 
 FORMAT = "trajcomp-model/2"
 SUFFIXES = (".yaml", ".yml")
@@ -259,7 +260,7 @@ def _finite(values, where, count=None):
 
 def _check_bounds(names, delta, where):
     """Refuse parameter deltas (mm, rad) no calibration writes: a DH delta beyond the plausibility bounds, others huge."""
-    from trajcomp.plausibility import ANGLE_BOUND, LENGTH_BOUND
+    from trajcomp.calibration.plausibility import ANGLE_BOUND, LENGTH_BOUND
 
     for name, value in zip(names, delta):
         registration = name.startswith(("base_", "target_", "tool_", "gear", "grav"))

@@ -2,7 +2,7 @@
 
 A Cartesian target is reached by several joint solutions; each language
 names the one it means with its own flags. All of them follow from the
-branch of the arm (`trajcomp.ik.configuration_of`: shoulder front/back of
+branch of the arm (`trajcomp.arm.ik.configuration_of`: shoulder front/back of
 axis 1, elbow up/down, wrist sign) and the joint angles:
 
 - KUKA S and T (KSS system software manual, "Status" and "Turn"): S bit 0
@@ -24,8 +24,8 @@ axis 1, elbow up/down, wrist sign) and the joint angles:
 
 import numpy as np
 
-from trajcomp.ik import configuration_of
-from trajcomp.program_items import JOINT
+from trajcomp.arm.ik import configuration_of
+from trajcomp.programs.items import JOINT
 
 # A joint this close to the boundary of its code satisfies both codes (RobotStudio writes J4 = J6 = 0 as
 # confdata [0,-1,0,0]; a controller accepts either): declared data are read, and kept, with this slack.
@@ -236,7 +236,7 @@ def _fanuc_windows(configs):
 
 
 def _branch(back, up, negative):
-    """`trajcomp.ik.Configuration` index (M,) of the flags (M,) bool."""
+    """`trajcomp.arm.ik.Configuration` index (M,) of the flags (M,) bool."""
     return 4 * back.astype(int) + 2 * (~up).astype(int) + negative.astype(int)
 
 

@@ -10,8 +10,8 @@ missing one is an error, never a guess. Frame ``None`` is the base, tool
 import numpy as np
 
 from trajcomp.errors import TrajcompError
-from trajcomp.program_tables import _codes, rows_of
-from trajcomp.transforms import invert
+from trajcomp.programs.tables import _codes, rows_of
+from trajcomp.arm.transforms import invert
 
 
 class FrameTable:

@@ -3,7 +3,7 @@
 `Source` (a file's text), `Span` (where a number stands in it), `Target` (a
 position), `Motion` and `Statement` (what the program does, in order), and
 the motion kinds `JOINT`, `LINEAR`, `CIRCULAR`. How they make up a program
-is documented in `trajcomp.program`, which holds `trajcomp.program.Program`.
+is documented in `trajcomp.programs.program`, which holds `trajcomp.programs.program.Program`.
 """
 
 import dataclasses

@@ -36,11 +36,11 @@ from collections.abc import Mapping, Sequence
 import numpy as np
 
 from trajcomp.errors import TrajcompError
-from trajcomp.program_items import CIRCULAR, JOINT, LINEAR, Motion, Source, Span, Statement, Target
-from trajcomp.program_tables import ItemRows, LineLabels, MotionTable, TargetRows, TargetTable, _codes
+from trajcomp.programs.items import CIRCULAR, JOINT, LINEAR, Motion, Source, Span, Statement, Target
+from trajcomp.programs.tables import ItemRows, LineLabels, MotionTable, TargetRows, TargetTable, _codes
 
 # The program model as format plugins import it (README "Plugins", plugins/trajcomp-points): the item
-# classes are defined in trajcomp.program_items and stay importable from here.
+# classes are defined in trajcomp.programs.items and stay importable from here.
 __all__ = ["CIRCULAR", "JOINT", "LINEAR", "Motion", "PoseStack", "Program", "Source", "Span", "Statement",
            "Target", "Usage"]
 

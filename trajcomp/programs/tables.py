@@ -1,7 +1,7 @@
 """The column form of a program: its motions and targets as arrays.
 
 `MotionTable` and `TargetTable` hold all motions and targets of a program as
-columns (what the pipeline stages read, see `trajcomp.program`), with the
+columns (what the pipeline stages read, see `trajcomp.programs.program`), with the
 row helpers that keep long columns from being copied (`rows_of`,
 `every_row`, `repeated`, `read_only`), `_codes` for object columns, and the
 sequences that show a table as `Motion` / `Target` objects built on access
@@ -13,7 +13,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from trajcomp.program_items import Motion, Target
+from trajcomp.programs.items import Motion, Target
 
 @dataclasses.dataclass(frozen=True, eq=False)
 class MotionTable:
@@ -165,7 +165,7 @@ class TargetTable:
         )
 
     def with_rows(self, index, *, poses=None, joints=None, configs=None):
-        """A copy with rows ``index`` replaced and marked edited (see `trajcomp.program.Program.with_targets`)."""
+        """A copy with rows ``index`` replaced and marked edited (see `trajcomp.programs.program.Program.with_targets`)."""
         changes = {"edited": self.edited.copy()}
         changes["edited"][index] = True
         if poses is not None:

@@ -1,24 +1,24 @@
 """Calibration and validation reports: accuracy per mode, ISO 9283, error trends and maps, parameters, validity.
 
 The per-point errors are recomputed here from the measurements and the
-model (`trajcomp.calibrate.mode_errors`); the fit and cross-validation
+model (`trajcomp.calibration.calibrate.mode_errors`); the fit and cross-validation
 statistics are those `calibrate` stored in the model.
 """
 
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from trajcomp.calibrate import commanded, mode_errors, to_base
-from trajcomp.grid import ResidualGrid
-from trajcomp.parameters import is_angle
-from trajcomp.kinematics import fk
+from trajcomp.calibration.calibrate import commanded, mode_errors, to_base
+from trajcomp.model.grid import ResidualGrid
+from trajcomp.arm.parameters import is_angle
+from trajcomp.arm.kinematics import fk
 from trajcomp.report import plots
 from trajcomp.report.document import Figure, Report
 from trajcomp.report.provenance import grid_box, header
-from trajcomp import landing
+from trajcomp.model import landing
 from trajcomp.report.verdict import Criteria, accuracy_check, verdict
-from trajcomp.stats import AXES, ErrorStats
-from trajcomp.transforms import abc_to_matrix, matrix_to_abc, matrix_to_pose
+from trajcomp.model.stats import AXES, ErrorStats
+from trajcomp.arm.transforms import abc_to_matrix, matrix_to_abc, matrix_to_pose
 
 ISO_CYCLES = 30  # cycles per pose of the ISO 9283 test
 
@@ -146,7 +146,7 @@ def _files_and_robot(model, files, options):
 def held_out_check(model, tolerance):
     """The calibration's headline criterion: 95 % of the held-out errors of the model's mode within the tolerance.
 
-    Held out with the interpolator the compensation uses (`trajcomp.landing`);
+    Held out with the interpolator the compensation uses (`trajcomp.model.landing`);
     a model without them falls back to its k-fold cross-validation, else the
     criterion is not evaluated.
     """
@@ -165,7 +165,7 @@ def calibration_report(model, meas, *, criteria=None, files=(), options=None):
     Parameters
     ----------
     model : CompensationModel
-        As returned by `trajcomp.calibrate.calibrate` (its ``report`` holds
+        As returned by `trajcomp.calibration.calibrate.calibrate` (its ``report`` holds
         the fit and cross-validation statistics).
     meas : Measurements
         The measurements (all rows; outliers are marked by line).

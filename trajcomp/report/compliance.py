@@ -1,6 +1,6 @@
 """The compliance report of a compensated (and re-timed) program, as a JSON-ready dict.
 
-Built from the run's `trajcomp.postprocess.ProgramReport` (one row per
+Built from the run's `trajcomp.compensation.program.ProgramReport` (one row per
 compensated target, motion order), the nominal robot, the model and, when
 the program was re-timed, the `trajcomp.timing` result. Every criterion of
 the verdict is stated with its threshold; each failing one counts and
@@ -13,7 +13,7 @@ compensable motion, no grid in the mode, no re-timing) is listed under
 
 import numpy as np
 
-from trajcomp import landing
+from trajcomp.model import landing
 from trajcomp.report import plots
 from trajcomp.report.measures import BRANCH_NAMES
 from trajcomp.report.document import Figure, Report
@@ -442,7 +442,7 @@ def _as_run(rows, compensated):
 def _model_accuracy(model, mode, has_grid, tolerance, measures):
     """The model-accuracy check: the held-out errors of the mode near the targets, same interpolator.
 
-    95 % of the targets' held-out errors nearby (`trajcomp.landing`) within
+    95 % of the targets' held-out errors nearby (`trajcomp.model.landing`) within
     the tolerance. A model without them (``--folds 0``, or written by an
     older trajcomp) falls back to its cross-validation statistics; a grid's
     fit errors reproduce its own nodes, so a grid mode without

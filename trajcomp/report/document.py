@@ -17,8 +17,8 @@ from pathlib import Path
 
 import numpy as np
 
-from trajcomp.atomic import write_files_atomic
-from trajcomp.plain_data import plain
+from trajcomp.support.atomic import write_files_atomic
+from trajcomp.support.plain_data import plain
 
 SCHEMA = "trajcomp-report/1"
 

@@ -1,7 +1,7 @@
 """Posture measures of joint vectors: limit distances, singularity distances, jumps, branches.
 
 The singularity distances are those of the branch flags of
-`trajcomp.ik.configuration_of`: each flag flips exactly where its measure
+`trajcomp.arm.ik.configuration_of`: each flag flips exactly where its measure
 reaches zero, so a small measure means a small correction can switch the
 arm's branch or swing a joint fast.
 
@@ -18,8 +18,8 @@ arm's branch or swing a joint fast.
 
 import numpy as np
 
-from trajcomp.ik import BRANCHES, Configuration, branch_index, frames_branch_index
-from trajcomp.kinematics import frame_columns, in_blocks
+from trajcomp.arm.ik import BRANCHES, Configuration, branch_index, frames_branch_index
+from trajcomp.arm.kinematics import frame_columns, in_blocks
 
 SINGULARITIES = ("shoulder", "elbow", "wrist")
 
@@ -46,7 +46,7 @@ def singularity_distances(robot, q):
 
 
 def _singularity_distances(robot, columns):
-    """`singularity_distances` of the DH frames' columns (7, 4, 3, N) (`trajcomp.kinematics.frame_columns`)."""
+    """`singularity_distances` of the DH frames' columns (7, 4, 3, N) (`trajcomp.arm.kinematics.frame_columns`)."""
     origin = columns[:, 3].transpose(2, 0, 1)  # (N, 7, 3): the frames' origins
     x1 = columns[1, 0].T
     shoulder = np.abs(np.einsum("ni,ni->n", origin[:, 5] - origin[:, 0], x1))

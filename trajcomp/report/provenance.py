@@ -7,7 +7,8 @@ from pathlib import Path
 
 import yaml
 
-from trajcomp import __version__, yaml_text
+from trajcomp import __version__
+from trajcomp.support import yaml_text
 from trajcomp.errors import ReadError
 
 

@@ -14,9 +14,9 @@ import dataclasses
 
 import numpy as np
 
-from trajcomp.parallel import map_blocks
+from trajcomp.support.parallel import map_blocks
 from trajcomp.report.measures import BRANCH_NAMES, joint_jumps, limit_distances, posture_measures
-from trajcomp.transforms import matrix_to_pose
+from trajcomp.arm.transforms import matrix_to_pose
 
 CHUNK = 2048  # targets per pass of the kinematic measures
 BLOCK = 16 * CHUNK  # targets per task of a process computing the kinematic measures
@@ -75,7 +75,7 @@ def target_measures(report, robot, workers=1):
 
     The kinematic measures are computed in chunks of `CHUNK` targets, a
     `BLOCK` of them by each of ``workers`` processes
-    (`trajcomp.parallel.map_blocks`); the result does not depend on it.
+    (`trajcomp.support.parallel.map_blocks`); the result does not depend on it.
     """
     n = len(report.labels)
     q, q_planned = np.reshape(report.q, (n, 6)), np.reshape(report.q_planned, (n, 6))

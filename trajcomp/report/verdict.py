@@ -24,7 +24,7 @@ class Criteria:
     ----------
     tolerance : float
         Largest acceptable landing error, mm: per target (its landing
-        estimate, `trajcomp.landing`) and for 95 % of the model's held-out
+        estimate, `trajcomp.model.landing`) and for 95 % of the model's held-out
         points (model accuracy).
     limit_margin : float
         Smallest acceptable distance of a joint to its position limit, deg.
@@ -108,7 +108,7 @@ def accuracy_check(stats, mode, tolerance, source, missing=None):
     Parameters
     ----------
     stats : dict or None
-        Statistics dict of the mode (`trajcomp.stats.ErrorStats.as_dict`).
+        Statistics dict of the mode (`trajcomp.model.stats.ErrorStats.as_dict`).
     mode : str
     tolerance : float
         mm.

@@ -17,7 +17,7 @@ import dataclasses
 import numpy as np
 
 from trajcomp.errors import TimingError
-from trajcomp.program_items import JOINT
+from trajcomp.programs.items import JOINT
 from trajcomp.timing.path import tcp_jacobians
 
 RATE = 1000.0  # Hz

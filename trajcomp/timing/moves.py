@@ -16,9 +16,9 @@ from collections.abc import Sequence
 import numpy as np
 
 from trajcomp.errors import TimingError
-from trajcomp.frames import FrameTable
-from trajcomp.program_items import CIRCULAR, JOINT, LINEAR
-from trajcomp.program_tables import _codes, rows_of
+from trajcomp.programs.frames import FrameTable
+from trajcomp.programs.items import CIRCULAR, JOINT, LINEAR
+from trajcomp.programs.tables import _codes, rows_of
 
 KINDS = (JOINT, LINEAR, CIRCULAR)
 
@@ -194,7 +194,7 @@ def moves_from_program(program, robot, joints, *, tools=None, frames=None):
         Joints (rad) of the program's N targets (compensated, or planned in
         the declared posture), NaN where not known; joint targets use their own.
     tools, frames : Mapping[str, ndarray (4, 4)], optional
-        Tools and frames the program uses but does not define (`trajcomp.frames.FrameTable`).
+        Tools and frames the program uses but does not define (`trajcomp.programs.frames.FrameTable`).
 
     Returns
     -------

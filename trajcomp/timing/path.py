@@ -25,8 +25,8 @@ import dataclasses
 
 import numpy as np
 
-from trajcomp.kinematics import fk_and_jacobian
-from trajcomp.program_items import JOINT
+from trajcomp.arm.kinematics import fk_and_jacobian
+from trajcomp.programs.items import JOINT
 from trajcomp.timing.samples import run_samples
 
 TOLERANCE = 0.005  # mm, largest deviation of the timed path from a waypoint or sample

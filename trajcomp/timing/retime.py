@@ -32,7 +32,7 @@ import itertools
 
 import numpy as np
 
-from trajcomp.program_items import JOINT
+from trajcomp.programs.items import JOINT
 from trajcomp.timing.check import LIMIT_TOLERANCE, Peaks, dense_check, dense_checks, segment_peaks
 from trajcomp.timing.path import TOLERANCE, stop_paths
 from trajcomp.timing.result import Segment, TimingResult

@@ -19,10 +19,10 @@ import itertools
 import numpy as np
 
 from trajcomp.errors import TimingError
-from trajcomp.ik import Configuration, branch_index, ik, ik_all, ik_family
-from trajcomp.kinematics import fk, fk_and_jacobian
-from trajcomp.program_items import CIRCULAR, JOINT
-from trajcomp.transforms import matrix_to_rotvec, rotvec_to_matrix
+from trajcomp.arm.ik import Configuration, branch_index, ik, ik_all, ik_family
+from trajcomp.arm.kinematics import fk, fk_and_jacobian
+from trajcomp.programs.items import CIRCULAR, JOINT
+from trajcomp.arm.transforms import matrix_to_rotvec, rotvec_to_matrix
 
 STEP_MM = 5.0  # mm, largest TCP step between path samples of a LIN / CIRC
 STEP_DEG = 2.0  # deg, largest orientation or joint step between path samples

@@ -12,7 +12,7 @@ TCP keeps between the controller's own ramps; a time (RAPID ``\\T``, UR
   the largest one it can keep at its slowest point, and the timing lists it
   (`TimingResult.lowered`);
 - a motion whose speed the program sets at run time (a variable, register,
-  PERS speeddata: `trajcomp.program_items.Motion.speed_why`) keeps its field
+  PERS speeddata: `trajcomp.programs.items.Motion.speed_why`) keeps its field
   as written and is listed (`TimingResult.as_written`): never replaced by a
   speed the tool cannot compare with it;
 - any other motion (joint motions, motions with a stated time) gets its
@@ -52,8 +52,8 @@ import numpy as np
 from trajcomp.errors import TimingError
 from trajcomp.formats._text import NUMBER, Lines, apply_edits, format_number
 from trajcomp.formats.csv_program import time_texts, with_times
-from trajcomp.memory import collection_paused
-from trajcomp.program_items import JOINT, Span
+from trajcomp.support.memory import collection_paused
+from trajcomp.programs.items import JOINT, Span
 from trajcomp.timing.moves import moves_from_program
 from trajcomp.timing.path import TOLERANCE
 from trajcomp.timing.result import Texts
@@ -488,7 +488,7 @@ def edit_sources(program, edits):
     """
     if not any(edits):  # nothing written (every speed kept): the program as it is
         return program
-    with collection_paused():  # a span and an item object each (`trajcomp.memory`)
+    with collection_paused():  # a span and an item object each (`trajcomp.support.memory`)
         return _edited(program, [_Shift(source.text, sorted(e)) for source, e in zip(program.sources, edits)])
 
 
