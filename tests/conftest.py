@@ -39,7 +39,7 @@ def kuka_model(tmp_path_factory):
 def makerless(tmp_path):
     """``makerless(name)``: the path of a copy of built-in robot ``name`` whose description names no maker.
 
-    Any language's program may run on such an arm (`trajcomp.calibration.plausibility.check_robot_language`): for tests of a
+    Any language's program may run on such an arm (`trajcomp.formats.check_robot_language`): for tests of a
     language's writing and timing on one geometry, where a KUKA arm would run no URScript.
     """
     from importlib import resources

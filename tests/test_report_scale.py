@@ -295,8 +295,6 @@ def _timing_result(segments, waypoints):
 
 
 def test_the_times_of_a_long_joint_program_go_to_the_sidecar(tmp_path):
-    from types import SimpleNamespace
-
     empty = np.zeros((0, 6))
     report = ProgramReport(labels=(), lines=np.zeros(0, int), tools=(), frames=(), T_target=np.zeros((0, 4, 4)),
                            T_command=np.zeros((0, 4, 4)), correction=empty, q=empty, q_planned=empty, declared=(),

@@ -41,7 +41,6 @@ from trajcomp.compensation.targets import program_corrector
 from trajcomp.errors import TrajcompError
 from trajcomp.model.compensation_model import CompensationModel
 from trajcomp.model.model_file import load_model
-from trajcomp.calibration.plausibility import check_robot_language
 from trajcomp.compensation.program import MAX_CORRECTION, compensate_program
 from trajcomp.compensation.posture import MAX_JOINT_CHANGE
 from trajcomp.programs.program import Program
@@ -277,7 +276,7 @@ class Compensator:
         path = Path(path)
         out_path = path.with_name(f"{path.stem}_compensated{path.suffix}") if out_path is None else Path(out_path)
         program = formats.read(path, workers=self.workers)
-        check_robot_language(path, formats.find_format(format=program.format), self.robot, "the model's arm")
+        formats.check_robot_language(path, formats.find_format(format=program.format), self.robot, "the model's arm")
         out_format = formats.output_format(out_path, program)  # the input's language: never converted silently
         corrected, report = self._compensate(
             program, label=str(path), tools=_named_poses(tools, "tools"), frames=_named_poses(frames, "frames"),

@@ -18,11 +18,11 @@ from trajcomp.support.atomic import write_atomic
 from trajcomp.calibration.calibrate import calibrate
 from trajcomp.compensation.targets import compensate, program_corrector
 from trajcomp.errors import TrajcompError
-from trajcomp.arm.ik import ik
+from trajcomp.arm.ik import batch_seed, ik
 from trajcomp.arm.kinematics import fk, link_frames
 from trajcomp.calibration.measurements import Measurements, read_measurements
 from trajcomp.compensation.program import compensate_program
-from trajcomp.calibration.measurement_plan import batch_seed, default_orientation, plan_grid
+from trajcomp.calibration.measurement_plan import default_orientation, plan_grid
 from trajcomp.arm.robot import load_robot
 from trajcomp.calibration.simulate import VirtualRobot
 from trajcomp.model.stats import ErrorStats

@@ -252,3 +252,18 @@ def _config_indices(config, n):
     if len(index) not in (1, n):
         raise IKError(f"config: expected one configuration or {n}, got {len(index)}")
     return np.broadcast_to(index, (n,))
+
+
+def batch_seed(robot, targets):
+    """One joint seed (6,) rad for a batch of targets (N, 4, 4).
+
+    The solution nearest the robot's home configuration at the batch's mean
+    position (first target's orientation): seeding every target from it keeps
+    the batch in one arm posture and on one side of every joint's turn, where
+    seeding each from home would flip joint 1 across +-180 deg and mix arm
+    postures inside one workspace region.
+    """
+    centre = targets[:1].copy()
+    centre[0, :3, 3] = targets[:, :3, 3].mean(axis=0)
+    result = ik(robot, centre, seed=robot.home)
+    return result.q[0] if result.success[0] else robot.home

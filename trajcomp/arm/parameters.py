@@ -30,6 +30,8 @@ FRAME_COST = 0.01  # a frame parameter costs this many times an arm parameter al
 TOOL_NAMES = ("tool_x", "tool_y", "tool_z")
 TARGET_NAMES = ("target_rx", "target_ry", "target_rz")
 BASE_NAMES = ("base_x", "base_y", "base_z", "base_rx", "base_ry", "base_rz")
+LENGTH_BOUND = 20.0  # mm, the largest plausible |delta| of a DH length (a bought arm: tenths of a mm)
+ANGLE_BOUND = np.radians(3.0)  # rad, the largest plausible |delta| of a DH angle (a bought arm: hundredths of a deg)
 _PARALLEL = 1e-6  # |sin(alpha)| below which consecutive axes are parallel
 
 

@@ -143,3 +143,9 @@ def rotation_angle_between(rot_a, rot_b):
     skew = np.stack([rel[..., 2, 1] - rel[..., 1, 2], rel[..., 0, 2] - rel[..., 2, 0], rel[..., 1, 0] - rel[..., 0, 1]], -1)
     # atan2 keeps full precision for small angles, where arccos(cos) cannot resolve below ~1e-8 rad.
     return np.arctan2(0.5 * np.linalg.norm(skew, axis=-1), cos)
+
+
+def mean_rotation(rotations):
+    """The rotation (3, 3) nearest, in the chordal sense, to a stack of rotations (N, 3, 3)."""
+    u, _, vt = np.linalg.svd(np.sum(rotations, axis=0))
+    return u @ np.diag([1.0, 1.0, np.sign(np.linalg.det(u @ vt))]) @ vt

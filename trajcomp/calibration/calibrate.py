@@ -30,7 +30,7 @@ from trajcomp.errors import CalibrationError
 from trajcomp.model import landing
 from trajcomp.model.grid import KINDS, METHODS as LATTICE_INTERPOLATORS, detect_lattice, fit_field
 from trajcomp.calibration.identify import LOSSES, ORIENTATION_WEIGHT, best_fit_transform, identify, outlier_rows, select_splines
-from trajcomp.arm.ik import branch_index, ik
+from trajcomp.arm.ik import batch_seed, branch_index, ik
 from trajcomp.model.joint_errors import KIND as JOINT_KIND
 from trajcomp.model.joint_errors import JointResidual, is_term
 from trajcomp.arm.kinematics import fk
@@ -38,7 +38,6 @@ from trajcomp.model.linear import fit_linear
 from trajcomp.model.compensation_model import CompensationModel
 from trajcomp.calibration.orientations import MIN_AXIS_OFFSET, MIN_SPREAD, axis_offset, locates_flange, orientation_spread
 from trajcomp.arm.parameters import is_robot_parameter
-from trajcomp.calibration.measurement_plan import batch_seed
 from trajcomp.calibration.plausibility import check_columns, check_identification, check_units
 from trajcomp.model.stats import ErrorStats, kfold_indices
 from trajcomp.arm.transforms import abc_to_matrix, invert, pose_to_matrix

@@ -45,7 +45,7 @@ from trajcomp.arm.parameters import (
     prior_weights,
     scales,
 )
-from trajcomp.arm.transforms import invert, matrix_to_rotvec, rotvec_to_matrix
+from trajcomp.arm.transforms import invert, matrix_to_rotvec, mean_rotation, rotvec_to_matrix
 
 log = logging.getLogger(__name__)
 
@@ -116,12 +116,6 @@ def best_fit_transform(src, dst):
     out[:3, :3] = rot
     out[:3, 3] = cd - rot @ cs
     return out
-
-
-def mean_rotation(rotations):
-    """The rotation (3, 3) nearest, in the chordal sense, to a stack of rotations (N, 3, 3)."""
-    u, _, vt = np.linalg.svd(np.sum(rotations, axis=0))
-    return u @ np.diag([1.0, 1.0, np.sign(np.linalg.det(u @ vt))]) @ vt
 
 
 def outlier_rows(residuals, threshold=6.0, min_excess=0.5):

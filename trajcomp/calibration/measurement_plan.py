@@ -14,7 +14,7 @@ import numpy as np
 
 from trajcomp.errors import TrajcompError
 from trajcomp.calibration.identify import identifiability
-from trajcomp.arm.ik import Configuration, branch_index, ik, ik_family
+from trajcomp.arm.ik import Configuration, batch_seed, branch_index, ik, ik_family
 from trajcomp.arm.kinematics import fk
 from trajcomp.arm.transforms import abc_to_matrix, matrix_to_abc
 
@@ -82,21 +82,6 @@ def grid_points(corner, side, step):
 def default_orientation(robot):
     """TCP orientation A, B, C (rad) of the robot's home configuration."""
     return matrix_to_abc(fk(robot, robot.home)[:3, :3])
-
-
-def batch_seed(robot, targets):
-    """One joint seed (6,) rad for a batch of targets (N, 4, 4).
-
-    The solution nearest the robot's home configuration at the batch's mean
-    position (first target's orientation): seeding every target from it keeps
-    the batch in one arm posture and on one side of every joint's turn, where
-    seeding each from home would flip joint 1 across +-180 deg and mix arm
-    postures inside one workspace region.
-    """
-    centre = targets[:1].copy()
-    centre[0, :3, 3] = targets[:, :3, 3].mean(axis=0)
-    result = ik(robot, centre, seed=robot.home)
-    return result.q[0] if result.success[0] else robot.home
 
 
 def plan_grid(robot, corner, side, step, orientation=None, one_posture=True):

@@ -14,9 +14,8 @@ Position measurements of one point locate the flange only when
 
 import numpy as np
 
-from trajcomp.calibration.identify import mean_rotation
 from trajcomp.arm.kinematics import fk, link_frames
-from trajcomp.arm.transforms import abc_to_matrix, matrix_to_abc, matrix_to_rotvec, rotvec_to_matrix
+from trajcomp.arm.transforms import abc_to_matrix, matrix_to_abc, matrix_to_rotvec, mean_rotation, rotvec_to_matrix
 
 MIN_SPREAD = 5.0  # deg RMS about each of two axes: below it the flange is not located
 MIN_AXIS_OFFSET = 20.0  # mm from the last axis a measured point needs for position data to see the axis direction

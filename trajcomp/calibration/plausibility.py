@@ -6,21 +6,17 @@ radians read as degrees, data of another robot, a duplicated or constant
 column, or an identification whose deltas no real arm has. The bounds are
 generous: a bought arm misses by 1-3 mm, its DH parameters are off by
 tenths of a millimetre and hundredths of a degree. The same checks guard
-``validate`` and ``predict`` against data of another arm than the model's,
-and `check_robot_language` a program in one maker's language against an
-arm of another maker.
+``validate`` and ``predict`` against data of another arm than the model's.
 """
 
 import numpy as np
 
-from trajcomp.errors import CalibrationError, RobotError
+from trajcomp.errors import CalibrationError
 from trajcomp.arm.kinematics import fk
-from trajcomp.arm.parameters import TOOL_NAMES, is_angle
+from trajcomp.arm.parameters import ANGLE_BOUND, LENGTH_BOUND, TOOL_NAMES, is_angle
 
 NOMINAL_ERROR_BOUND = 50.0  # mm, median |measured - nominal| (an unknown TCP of some cm included)
 RESIDUAL_BOUND = 2.0  # mm, median residual after identification
-LENGTH_BOUND = 20.0  # mm, |delta| of a DH length
-ANGLE_BOUND = np.radians(3.0)  # rad, |delta| of a DH angle
 TOOL_BOUND = 60.0  # mm, how far the identified TCP may move from the nominal one
 SCALE_BOUND = 3.0  # ratio of measured to commanded spread beyond which units differ
 _GROUPS = {"measured": ("mx", "my", "mz"), "position": ("x", "y", "z")}  # joints may repeat: UR j6 = j1 tool down
@@ -184,35 +180,4 @@ def check_identification(path, fit, start_tool):
         raise CalibrationError(
             f"{path}: after identification the median residual is still {median:.2f} mm (bound {RESIDUAL_BOUND:g} mm): "
             "the data do not fit this robot's kinematics (another robot, or rows that do not belong together)"
-        )
-
-
-def check_robot_language(path, format, robot, whose):
-    """Refuse a program in one maker's language for an arm of another maker.
-
-    A KRL program runs on a KUKA controller, never on a UR arm; a program
-    CSV (no maker) or an arm whose description names no maker is not
-    checked.
-
-    Parameters
-    ----------
-    path : str or Path
-        The program, for the message.
-    format : Format
-        Its language (`trajcomp.formats.Format`).
-    robot : Robot
-        The arm it is to run on.
-    whose : str
-        Where that arm comes from, for the message: ``"the arm of the model
-        m.yaml"``, ``"the arm --robot names"``.
-
-    Raises
-    ------
-    RobotError
-        Naming the program's maker and language and the arm's.
-    """
-    if format.vendor and robot.vendor and format.vendor.casefold() != robot.vendor.casefold():
-        raise RobotError(
-            f"{path}: a {format.vendor} program ({format.name}) cannot run on robot {robot.name} "
-            f"({robot.vendor}), {whose}: give the arm (or a model of the arm) that runs it"
         )

@@ -23,7 +23,6 @@ from trajcomp.support.memory import end_stage, kept_apart
 from trajcomp.model.compensation_model import MODES
 from trajcomp.model.model_file import load_model
 from trajcomp.support.parallel import meanwhile, usable_cores
-from trajcomp.calibration.plausibility import check_robot_language
 from trajcomp.compensation.program import MAX_CORRECTION, compensate_program, convert_program
 from trajcomp.compensation.posture import MAX_JOINT_CHANGE
 from trajcomp.support.progress import Stages, progress
@@ -136,10 +135,10 @@ class CompensateJob:
         with Stages(self.STAGES, desc=Path(path).name, enabled=self.show_stages) as stages, kept_apart():
             model = _model(self.model)
             program = formats.read(path, workers=self.workers)
-            check_robot_language(path, formats.find_format(format=program.format), model.nominal,
+            formats.check_robot_language(path, formats.find_format(format=program.format), model.nominal,
                                  f"the arm of the model {self.model}")
             out_format = formats.output_format(output, program, self.to_format)
-            check_robot_language(output, out_format, model.nominal, f"the arm of the model {self.model}")
+            formats.check_robot_language(output, out_format, model.nominal, f"the arm of the model {self.model}")
             sources = list(dict.fromkeys(formats.input_paths(path, program)))
             inputs = [*sources, *model_inputs(self.model)]
             refuse_inputs(report_paths(target) if target else (), [*inputs, output], "give --report another name")

@@ -11,7 +11,6 @@ import numpy as np
 
 from trajcomp import formats
 from trajcomp.errors import TrajcompError
-from trajcomp.calibration.plausibility import check_robot_language
 from trajcomp.compensation.program import convert_program
 from trajcomp.arm.robot import load_robot
 from trajcomp.arm.transforms import pose_to_matrix
@@ -99,7 +98,7 @@ def run(args):
     program = formats.read(args.input, args.from_format)
     to_format = formats.find_format(args.output, args.to_format)
     if robot is not None:
-        check_robot_language(args.output, to_format, robot, "the arm --robot names")
+        formats.check_robot_language(args.output, to_format, robot, "the arm --robot names")
     to_format = to_format.name
     converted = convert_program(program, to_format, robot=robot, tools=tools, frames=frames)
     written = formats.write(args.output, converted, to_format, protect=protected_inputs(args, args.input, program))

@@ -16,7 +16,6 @@ from trajcomp.errors import TimingError, TrajcompError
 from trajcomp.support.memory import release
 from trajcomp.support.parallel import in_background
 from trajcomp.compensation.program import as_written_report
-from trajcomp.calibration.plausibility import check_robot_language
 from trajcomp.compensation.posture import planned_joints, planned_targets
 from trajcomp.report import compliance_report, file_entry, report_paths
 from trajcomp.timing import METHODS
@@ -62,7 +61,7 @@ def add_tolerance_option(parser):
 def run(args):
     robot = robot_of(args)
     program = formats.read(args.program)
-    check_robot_language(args.program, formats.find_format(format=program.format), robot, "the arm --robot names")
+    formats.check_robot_language(args.program, formats.find_format(format=program.format), robot, "the arm --robot names")
     out_format = formats.find_format(args.output).name
     if out_format != program.format:
         raise TrajcompError(f"{args.output}: retime writes the language it reads ({program.format}); "

@@ -23,11 +23,10 @@ import numpy as np
 from trajcomp.model import landing
 from trajcomp.errors import ModelError, TrajcompError
 from trajcomp.programs.frames import tool_groups
-from trajcomp.arm.ik import IKResult, ik_near, ik_numeric, pose_error
+from trajcomp.arm.ik import IKResult, batch_seed, ik_near, ik_numeric, pose_error
 from trajcomp.arm.kinematics import fk
 from trajcomp.model.compensation_model import evaluate_field
 from trajcomp.support.parallel import map_blocks
-from trajcomp.calibration.measurement_plan import batch_seed
 
 ITERATIONS = 3  # fixed-point passes at most
 LANDED = 1e-5  # mm: a target whose predicted landing error is below this needs no further pass

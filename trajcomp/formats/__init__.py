@@ -22,7 +22,7 @@ from importlib.metadata import entry_points
 from pathlib import Path
 
 from trajcomp.support.atomic import recover, write_files_atomic
-from trajcomp.errors import ReadError, TrajcompError, WriteError
+from trajcomp.errors import ReadError, RobotError, TrajcompError
 from trajcomp.support.memory import collection_paused
 
 ENTRY_POINT_GROUP = "trajcomp.formats"
@@ -281,3 +281,34 @@ def write(path, program, format=None, *, protect=(), workers=1):
         write_files_atomic(files, protect=protect,
                            advice="write to another file (-o) or give --in-place to replace it")
     return list(files)
+
+
+def check_robot_language(path, format, robot, whose):
+    """Refuse a program in one maker's language for an arm of another maker.
+
+    A KRL program runs on a KUKA controller, never on a UR arm; a program
+    CSV (no maker) or an arm whose description names no maker is not
+    checked.
+
+    Parameters
+    ----------
+    path : str or Path
+        The program, for the message.
+    format : Format
+        Its language (`trajcomp.formats.Format`).
+    robot : Robot
+        The arm it is to run on.
+    whose : str
+        Where that arm comes from, for the message: ``"the arm of the model
+        m.yaml"``, ``"the arm --robot names"``.
+
+    Raises
+    ------
+    RobotError
+        Naming the program's maker and language and the arm's.
+    """
+    if format.vendor and robot.vendor and format.vendor.casefold() != robot.vendor.casefold():
+        raise RobotError(
+            f"{path}: a {format.vendor} program ({format.name}) cannot run on robot {robot.name} "
+            f"({robot.vendor}), {whose}: give the arm (or a model of the arm) that runs it"
+        )

@@ -45,10 +45,9 @@ from trajcomp.errors import ModelError
 from trajcomp.arm.ik import ik
 from trajcomp.arm.ik_closed_form import ik_family
 from trajcomp.model.joint_errors import KIND as JOINT_KIND
-from trajcomp.calibration.identify import mean_rotation
 from trajcomp.arm.parameters import ANGLE_LEVER, candidate_parameters, is_angle, is_robot_parameter, pose_jacobian
 from trajcomp.model.stats import ErrorStats
-from trajcomp.arm.transforms import abc_to_matrix, matrix_to_abc, rotation_angle_between
+from trajcomp.arm.transforms import abc_to_matrix, matrix_to_abc, mean_rotation, rotation_angle_between
 
 NEAREST = 20  # held-out points whose largest error bounds the error near a target (about 1.5 cells of a lattice)
 LOOKUP = 11  # nodes per axis of the lookup lattice of the held-out errors

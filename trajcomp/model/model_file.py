@@ -260,7 +260,7 @@ def _finite(values, where, count=None):
 
 def _check_bounds(names, delta, where):
     """Refuse parameter deltas (mm, rad) no calibration writes: a DH delta beyond the plausibility bounds, others huge."""
-    from trajcomp.calibration.plausibility import ANGLE_BOUND, LENGTH_BOUND
+    from trajcomp.arm.parameters import ANGLE_BOUND, LENGTH_BOUND
 
     for name, value in zip(names, delta):
         registration = name.startswith(("base_", "target_", "tool_", "gear", "grav"))
