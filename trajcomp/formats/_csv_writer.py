@@ -2,8 +2,6 @@
 rewritten in the file's own number format; any other program written as a new CSV (see
 `trajcomp.formats.csv_program`)."""
 
-import re
-
 import numpy as np
 
 from trajcomp.formats._csv_cells import (
@@ -20,13 +18,12 @@ from trajcomp.formats._csv_cells import (
     _value,
 )
 from trajcomp.formats._fixed_text import joined_rows
-from trajcomp.formats._text import active_axes, decimals, encode_text, format_number, turned_abc
+from trajcomp.formats._text import BARE_ZERO, active_axes, column_decimals, encode_text, format_number, turned_abc
 from trajcomp.support.parallel import map_blocks
 from trajcomp.programs.items import JOINT, LINEAR, Source
 from trajcomp.arm.transforms import matrix_to_pose
 
 MIN_PLACES = dict.fromkeys(POSE[:3], 3) | dict.fromkeys(POSE[3:], 4) | dict.fromkeys(JOINTS, 4)
-_BARE_ZERO = re.compile(r"^(-?)0\.")  # the 0 of 0.5 and -0.5, for a file that writes .5
 
 
 def write(program, path, workers=1):
@@ -270,7 +267,7 @@ def _written(values, old, min_places):
     bare where the file writes it so; ``changed`` is False where the number
     reads back equal to the old one (its text is then kept).
     """
-    texts = _numbers_text(values, _decimals(old), min_places)
+    texts = _numbers_text(values, column_decimals(old), min_places)
     before = np.full(len(old), np.nan)
     given = old != ""
     before[given] = np.array(old[given].tolist(), dtype=float)  # from Python str: 4x faster than a str array's astype
@@ -279,18 +276,8 @@ def _written(values, old, min_places):
     if (bare & changed).any():  # only a leading 0 goes: 10.5 stays 10.5 (an unanchored replace wrote 1.5)
         texts = list(texts)
         for k in np.flatnonzero(bare & changed).tolist():
-            texts[k] = _BARE_ZERO.sub(r"\1.", texts[k], count=1)
+            texts[k] = BARE_ZERO.sub(r"\1.", texts[k], count=1)
     return changed, texts
-
-
-def _decimals(texts):
-    """Digits after the decimal point of number texts (B,) (`decimals`), ndarray of int."""
-    texts = np.asarray(texts, dtype=str)
-    dot = np.strings.find(texts, ".")
-    places = np.where(dot >= 0, np.strings.str_len(texts) - dot - 1, 0)
-    exponent = (np.strings.find(texts, "e") >= 0) | (np.strings.find(texts, "E") >= 0)
-    places[exponent] = [decimals(t) for t in texts[exponent]]
-    return places
 
 
 def _numbers_text(values, places, min_places):

@@ -25,7 +25,7 @@ from trajcomp.formats._text import (
     whole_circle,
 )
 from trajcomp.programs.program import Program
-from trajcomp.programs.items import CIRCULAR, JOINT, LINEAR, Motion, Span, Statement, Target
+from trajcomp.programs.items import CIRCULAR, JOINT, LINEAR, Motion, Span, SpanColumns, Statement, Target
 from trajcomp.arm.transforms import pose_to_matrix
 
 POSE = ("x", "y", "z", "a", "b", "c")
@@ -70,6 +70,14 @@ _ENDDAT = re.compile(r"^\s*ENDDAT\b", re.I | re.M)
 _BLOCK_OPENS = re.compile(r"^[ \t]*(?:GLOBAL\s+)?(DEFFCT|DEF)\b", re.I | re.M)  # a routine or function
 _BLOCK_CLOSES = re.compile(r"^[ \t]*(ENDFCT|END)\b", re.I | re.M)
 _PROGRAM_NAME = re.compile(r"^[A-Za-z_][A-Za-z0-9_]{0,23}$")  # KRL names: 24 characters at most
+# A Cartesian point declared as KUKA's editors and CAM post-processors write it, one a line:
+# DECL E6POS XP1={X 1.0,Y 2.0,Z 3.0,A 0.0,B 90.0,C 0.0,S 2,T 35,E1 0.0,..,E6 0.0} (S, T and E1..E6 optional):
+# read a whole data list of them at once (`_written_points`); any other declaration goes line by line.
+_EXTERNAL_MEMBERS = "".join(f"(?:,E{k}[ ]({NUMBER})" for k in range(1, 7)) + ")?" * 6
+_WRITTEN_POINT = re.compile(
+    r"^[ \t]*DECL[ \t]+(?:GLOBAL[ \t]+)?(?:E6POS|POS|FRAME)[ \t]+(\w+)[ \t]*=[ \t]*\{"
+    + ",".join(f"{p.upper()}[ ]({NUMBER})" for p in POSE) + r"(?:,S[ ](\d+),T[ ](\d+))?"
+    + _EXTERNAL_MEMBERS + r"\}[ \t]*\r?$", re.I | re.M)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -152,6 +160,57 @@ def _frame(members, source_name, line, text):
     vector = _values(members, POSE, source_name, line, text)
     vector[3:] = np.radians(vector[3:])
     return pose_to_matrix(vector)
+
+
+def _written_points(index, masked, lines):
+    """The Cartesian points of a data list declared as KUKA writes them (`_WRITTEN_POINT`), read at once.
+
+    A declaration whose numbers a line-by-line read would refuse (out of
+    range, S or T beyond their bits) is left out: that read then names it.
+
+    Parameters
+    ----------
+    index : int
+        The data list's source index.
+    masked : str
+        Its text, comments and strings blanked (`trajcomp.formats._text.mask`).
+    lines : Lines
+        Its lines.
+
+    Returns
+    -------
+    dict
+        ``{line number: Target}``, the targets' spans `SpanColumns` rows.
+    """
+    found = list(_WRITTEN_POINT.finditer(masked))
+    if not found:
+        return {}
+    groups = [m.groups() for m in found]
+    texts = np.array([g[1:] for g in groups], dtype=object)  # (N, 14): x..c, s, t, e1..e6; None where absent
+    given = texts != None  # noqa: E711 (elementwise)
+    numbers = np.full(texts.shape, np.nan)
+    numbers[given] = np.array(texts[given].tolist(), dtype=float)
+    pose, status, external = numbers[:, :6], numbers[:, 6:8], numbers[:, 8:]
+    limits = np.array([LIMITS[p] for p in POSE])
+    good = np.isfinite(pose).all(axis=1) & (np.abs(pose) <= limits).all(axis=1)
+    good &= ~given[:, 6] | ((status[:, 0] <= 0xFF) & (status[:, 1] <= 0x3F))
+    good &= (np.isfinite(external) & (np.abs(external) <= LENGTH_LIMIT) | ~given[:, 8:]).all(axis=1)
+    keep = np.flatnonzero(good)
+    vector = pose[keep].copy()
+    vector[:, 3:] = np.radians(vector[:, 3:])
+    matrices = pose_to_matrix(vector)
+    at = np.array([[m.start(k) for k in range(2, 10)] + [m.end(k) for k in range(2, 10)] for m in found])
+    columns = SpanColumns(index, lines.text, POSE + ("s", "t"), np.where(given[:, :8], at[:, :8], -1),
+                          at[:, 8:])
+    line = np.searchsorted(lines.starts, [m.start() for m in found], side="right").tolist()
+    out = {}
+    for row, k in enumerate(keep.tolist()):
+        count = int(given[k, 8:].sum())
+        out[line[k]] = Target(
+            name=groups[k][0], line=line[k], pose=matrices[row],
+            external=external[k, :count].copy() if count else None,
+            config=(int(status[k, 0]), int(status[k, 1])) if given[k, 6] else (), spans=columns.row(k))
+    return out
 
 
 def _sibling_dat(path):
@@ -480,8 +539,13 @@ def read(path):
             raise ReadError(f"{dat_path}: not a KRL data list: no DEFDAT line")
         if not _ENDDAT.search(dat_masked):
             raise ReadError(f"{dat_path}: no ENDDAT: the data list is cut off")
+        written = _written_points(dat_index, dat_masked, dat_lines)
         for line_no, start, end in dat_lines:
-            reader.declarations(dat_index, dat_masked, line_no, start, end)
+            if line_no in written:
+                reader.points[written[line_no].name.upper()] = len(reader.targets)
+                reader.targets.append(written[line_no])
+            else:
+                reader.declarations(dat_index, dat_masked, line_no, start, end)
     for line_no, start, end in src_lines:
         reader.statement(src_index, src_masked, line_no, start, end)
     items = _resolve(reader, path, dat_path)

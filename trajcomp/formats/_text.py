@@ -17,7 +17,8 @@ from pathlib import Path
 import numpy as np
 
 from trajcomp.errors import ReadError, WriteError
-from trajcomp.programs.items import CIRCULAR, Source, Span
+from trajcomp.formats._fixed_text import joined_rows
+from trajcomp.programs.items import CIRCULAR, Source, Span, SpanRow
 from trajcomp.arm.transforms import abc_to_matrix, matrix_to_abc
 
 NUMBER = r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?"
@@ -371,29 +372,94 @@ def target_edits(program, encode, min_places):
     -------
     list of list of (start, end, text)
         Edits per source; numbers equal at the written precision are left
-        with their original text.
+        with their original text. The numbers are formatted together
+        (`written_numbers`).
     """
     edits = [[] for _ in program.sources]
     targets = [target for target in program.targets if target.edited]
-    olds = [{role: _number_or_text(span.text) for role, span in target.spans.items()} for target in targets]
-    for target, old, numbers in zip(targets, olds, encode(targets, olds)):
-        for role, value in numbers.items():
-            span = target.spans.get(role)
+    spans_of = [_fields(target.spans) for target in targets]
+    olds = [{role: _number_or_text(span[3]) for role, span in spans.items()} for spans in spans_of]
+    numbers = []  # (source, start, end, old text, value, old value, fewest decimals) of every number to write
+    for target, spans, old, values_ in zip(targets, spans_of, olds, encode(targets, olds)):
+        for role, value in values_.items():
+            span = spans.get(role)
             if span is None:
                 continue
             if isinstance(value, str):
-                text = value
-            else:
-                if not math.isfinite(value):
-                    raise WriteError(f"target {where(target)}: {role} is not a finite number, nothing written")
-                text = format_number(value, max(decimals(span.text), min_places.get(role, 0)))
-                if float(text) == old[role]:
-                    continue
-                if re.match(r"[-+]?\.", span.text):  # the file writes .5, not 0.5
-                    text = re.sub(r"^(-?)0\.", r"\1.", text)
-            if text != span.text:
-                edits[span.source].append((span.start, span.end, text))
+                if value != span[3]:
+                    edits[span[0]].append((span[1], span[2], value))
+                continue
+            if not math.isfinite(value):
+                raise WriteError(f"target {where(target)}: {role} is not a finite number, nothing written")
+            old_value = old[role]
+            numbers.append(span + (value, old_value if isinstance(old_value, float) else math.nan,
+                                   min_places.get(role, 0)))
+    if numbers:
+        sources, starts, ends, old_texts, values, old_values, places = zip(*numbers)
+        changed, texts = written_numbers(np.array(values), old_texts, np.array(old_values),
+                                         np.maximum(column_decimals(old_texts), places))
+        for k in np.flatnonzero(changed).tolist():
+            if texts[k] != old_texts[k]:
+                edits[sources[k]].append((starts[k], ends[k], texts[k]))
     return edits
+
+
+def _fields(spans):
+    """``{role: (source, start, end, text)}`` of a target's spans (a `SpanRow`'s without a `Span` object each)."""
+    if isinstance(spans, SpanRow):
+        return spans.fields()
+    return {role: (span.source, span.start, span.end, span.text) for role, span in spans.items()}
+
+
+def column_decimals(texts):
+    """Digits after the decimal point of number texts (N,) (`decimals`), ndarray of int."""
+    texts = np.asarray(texts, dtype=str)
+    dot = np.strings.find(texts, ".")
+    places = np.where(dot >= 0, np.strings.str_len(texts) - dot - 1, 0)
+    exponent = (np.strings.find(texts, "e") >= 0) | (np.strings.find(texts, "E") >= 0)
+    places[exponent] = [decimals(t) for t in texts[exponent]]
+    return places
+
+
+def written_numbers(values, old_texts, old_values, places):
+    """How a file writes new numbers over old ones, all at once: what `format_number` writes each.
+
+    Parameters
+    ----------
+    values : ndarray, shape (N,)
+        The new numbers (finite).
+    old_texts : sequence of str, length N
+        The texts they replace.
+    old_values : ndarray, shape (N,)
+        The old numbers (NaN where the old text is none).
+    places : ndarray of int, shape (N,)
+        Decimals to write each with.
+
+    Returns
+    -------
+    changed : ndarray of bool, shape (N,)
+        False where the new text reads back equal to the old number (the
+        old text then stays).
+    texts : list of str
+        ``"%.<places>f"`` of each value, never ``-0``; ``.5`` without its
+        0 where the old text wrote a bare point.
+    """
+    texts = np.empty(len(values), dtype=object)
+    for p in np.unique(places).tolist():
+        pick = np.flatnonzero(places == p)
+        texts[pick] = joined_rows([(values[pick], p)]).split("\n")
+    for k in np.flatnonzero(np.signbit(values) & (values > -(10.0 ** -places))).tolist():  # what may write -0
+        if float(texts[k]) == 0.0:
+            texts[k] = texts[k][1:]
+    texts = texts.tolist()
+    changed = np.array(texts, dtype=float) != old_values
+    for k in np.flatnonzero(changed).tolist():
+        if old_texts[k][:1] == "." or old_texts[k][:2] in ("-.", "+."):  # the file writes .5, not 0.5
+            texts[k] = BARE_ZERO.sub(r"\1.", texts[k], count=1)
+    return changed, texts
+
+
+BARE_ZERO = re.compile(r"^(-?)0\.")  # the 0 of 0.5 and -0.5, for a file that writes .5
 
 
 def _number_or_text(text):

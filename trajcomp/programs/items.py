@@ -33,6 +33,69 @@ class Span:
     text: str
 
 
+class SpanColumns:
+    """The spans of many items in one source, as columns: what a reader of long programs keeps.
+
+    Each item's spans are a `SpanRow` (a Mapping like ``{role: Span}``)
+    built on access: a long program holds two integer arrays instead of a
+    `Span` object per number.
+
+    Parameters
+    ----------
+    source : int
+        Index of the `Source` in the program.
+    text : str
+        That source's text.
+    roles : sequence of str
+        The roles, in the order an item's spans list them.
+    start, end : ndarray of int, shape (N, R)
+        Offsets of each item's span of each role in ``text``; ``start`` -1
+        where the item has no span of that role.
+    """
+
+    def __init__(self, source, text, roles, start, end):
+        self.source, self.text, self.roles = source, text, tuple(roles)
+        self.column = {role: j for j, role in enumerate(self.roles)}
+        self.start, self.end = start, end
+
+    def __len__(self):
+        return len(self.start)
+
+    def row(self, k):
+        """The spans of item ``k``."""
+        return SpanRow(self, k)
+
+
+class SpanRow(Mapping):
+    """The spans of one item of `SpanColumns`: ``{role: Span}`` built on access."""
+
+    __slots__ = ("columns", "k")
+
+    def __init__(self, columns, k):
+        self.columns, self.k = columns, k
+
+    def __getitem__(self, role):
+        columns = self.columns
+        j = columns.column.get(role)
+        start = -1 if j is None else int(columns.start[self.k, j])
+        if start < 0:
+            raise KeyError(role)
+        end = int(columns.end[self.k, j])
+        return Span(columns.source, start, end, columns.text[start:end])
+
+    def __iter__(self):
+        return (role for role, start in zip(self.columns.roles, self.columns.start[self.k].tolist()) if start >= 0)
+
+    def __len__(self):
+        return int((self.columns.start[self.k] >= 0).sum())
+
+    def fields(self):
+        """``{role: (source, start, end, text)}``: the spans' fields, no `Span` object built."""
+        columns = self.columns
+        return {role: (columns.source, start, end, columns.text[start:end]) for role, start, end in
+                zip(columns.roles, columns.start[self.k].tolist(), columns.end[self.k].tolist()) if start >= 0}
+
+
 @dataclasses.dataclass(frozen=True, eq=False)
 class Target:
     """A Cartesian or joint position stated by a program.
