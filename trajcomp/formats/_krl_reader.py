@@ -25,7 +25,7 @@ from trajcomp.formats._text import (
     whole_circle,
 )
 from trajcomp.programs.program import Program
-from trajcomp.programs.items import CIRCULAR, JOINT, LINEAR, Motion, Span, SpanColumns, Statement, Target
+from trajcomp.programs.items import CIRCULAR, JOINT, LINEAR, Motion, Span, SpanColumns, Statement, Target, replaced
 from trajcomp.arm.transforms import pose_to_matrix
 
 POSE = ("x", "y", "z", "a", "b", "c")
@@ -319,12 +319,12 @@ class _Reader:
         original = self.sources[index].text[start:end]
         if m := _DEF_LINE.match(text):
             self.params = {p.split(":")[0].strip().upper() for p in m.group(1).split(",") if p.strip()}
-        if self.declarations(index, masked, line_no, start, end):
-            self.items.append(Statement(line_no, original))
-            return
-        m = _MOTION.match(text)
+        m = _MOTION.match(text)  # first: most lines of a long program are motions, and no declaration is one
         if m:
             self.items.append(self.motion(m, index, start, line_no, original))
+            return
+        if self.declarations(index, masked, line_no, start, end):
+            self.items.append(Statement(line_no, original))
             return
         self.state(text, index, start, name, line_no, original)
         self.items.append(Statement(line_no, original))
@@ -602,7 +602,7 @@ def _resolve(reader, path, dat_path):
                 item = dataclasses.replace(item, target=None, via=None, reason=reason, axis_position=home,
                                            refs=known + tuple(i for i in (via, target) if isinstance(i, int)))
             else:
-                item = whole_circle(dataclasses.replace(item, target=target, via=via))
+                item = whole_circle(replaced(item, target=target, via=via))
         else:
             named = {w.upper() for w in _WORD.findall(mask(item.text, ";"))}
             refs = tuple(reader.points[w] for w in sorted(named) if w in reader.points)

@@ -25,7 +25,7 @@ from trajcomp.formats._text import (
     whole_circle,
 )
 from trajcomp.programs.program import Program
-from trajcomp.programs.items import CIRCULAR, JOINT, LINEAR, Motion, Span, Statement, Target
+from trajcomp.programs.items import CIRCULAR, JOINT, LINEAR, Motion, Span, Statement, Target, replaced
 from trajcomp.arm.transforms import quat_to_matrix
 
 POSITION = ("x", "y", "z")
@@ -441,7 +441,7 @@ def _resolve(reader, masked, task):
                 item = dataclasses.replace(item, target=None, via=None, reason=reason, refs=named(item.text)
                                            + tuple(i for i in (via, target) if isinstance(i, int)))
             else:
-                item = whole_circle(dataclasses.replace(item, target=target, via=via))
+                item = whole_circle(replaced(item, target=target, via=via))
         elif not _DECL.match(mask(item.text, "!")) and (refs := named(item.text)):
             item = dataclasses.replace(item, refs=refs)
         items.append(item)

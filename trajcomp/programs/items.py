@@ -33,6 +33,18 @@ class Span:
     text: str
 
 
+def replaced(item, **changes):
+    """A copy of a program item (`Target`, `Motion`, `Statement`) with some fields changed.
+
+    What `dataclasses.replace` gives, without running ``__init__`` again:
+    the items check nothing on construction, and a long program replaces
+    one per target (about 6x faster).
+    """
+    copy = object.__new__(type(item))
+    copy.__dict__.update(item.__dict__, **changes)
+    return copy
+
+
 class SpanColumns:
     """The spans of many items in one source, as columns: what a reader of long programs keeps.
 

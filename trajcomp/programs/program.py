@@ -36,8 +36,8 @@ from collections.abc import Mapping, Sequence
 import numpy as np
 
 from trajcomp.errors import TrajcompError
-from trajcomp.programs.items import CIRCULAR, JOINT, LINEAR, Motion, Source, Span, Statement, Target
-from trajcomp.programs.tables import ItemRows, LineLabels, MotionTable, TargetRows, TargetTable, _codes
+from trajcomp.programs.items import CIRCULAR, JOINT, LINEAR, Motion, Source, Span, Statement, Target, replaced
+from trajcomp.programs.tables import ItemRows, LineLabels, MotionTable, TargetRows, TargetTable, _codes, _Rows
 
 # The program model as format plugins import it (README "Plugins", plugins/trajcomp-points): the item
 # classes are defined in trajcomp.programs.items and stay importable from here.
@@ -363,11 +363,12 @@ class Program:
         return f"{target.name} ({place})" if target.name else place
 
     def labels(self, index):
-        """`where` of many targets (N,): a sequence of str (built on access for a table-backed program)."""
+        """`where` of many targets (N,): a sequence of str, each built on access (messages name a few)."""
         if isinstance(self.targets, TargetRows):
             lines = self.target_table().line[np.asarray(index, dtype=int)]
             return LineLabels(self.sources[0].name, lines) if self.sources else [f"line {n}" for n in lines]
-        return [self.where(i) for i in index]
+        index = np.asarray(index, dtype=int)
+        return _Rows(len(index), lambda k: self.where(int(index[k])))
 
     def with_targets(self, index, *, poses=None, joints=None, configs=None):
         """A new program with some targets replaced and marked edited.
@@ -396,7 +397,7 @@ class Program:
                 change["joints"] = np.asarray(joints[k], dtype=float)
             if configs is not None:
                 change["config"] = tuple(configs[k])
-            targets[i] = dataclasses.replace(targets[i], **change)
+            targets[i] = replaced(targets[i], **change)
         return dataclasses.replace(self, targets=tuple(targets))
 
     def replace(self, **changes):
