@@ -252,8 +252,8 @@ def _configs(program, robot, index, q):
 
 def _configuration_changes(report):
     """A warning listing every target whose configuration data the run rewrote ("" if none)."""
-    changed = [f"{label}: {d} -> {w}" for label, d, w in zip(report.labels, report.declared, report.written)
-               if d and d != w]
+    changed = [f"{report.labels[k]}: {d} -> {w}" for k, (d, w) in enumerate(zip(report.declared, report.written))
+               if d and d != w]  # a label is built for a changed target only (`Program.labels`)
     if not changed:
         return ""
     more = f" and {len(changed) - 10} more" if len(changed) > 10 else ""

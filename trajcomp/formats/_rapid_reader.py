@@ -25,7 +25,7 @@ from trajcomp.formats._text import (
     whole_circle,
 )
 from trajcomp.programs.program import Program
-from trajcomp.programs.items import CIRCULAR, JOINT, LINEAR, Motion, Span, Statement, Target, replaced
+from trajcomp.programs.items import CIRCULAR, JOINT, LINEAR, Motion, Span, SpanColumns, Statement, Target, replaced
 from trajcomp.arm.transforms import quat_to_matrix
 
 POSITION = ("x", "y", "z")
@@ -75,6 +75,7 @@ _MODULE = re.compile(r"^\s*MODULE\s+(\w+)", re.I | re.M)
 _BLOCK_OPENS = re.compile(r"^[ \t]*(?:LOCAL\s+)?(MODULE|PROC|FUNC|TRAP)\b", re.I | re.M)
 _BLOCK_CLOSES = re.compile(r"^[ \t]*(ENDMODULE|ENDPROC|ENDFUNC|ENDTRAP)\b", re.I | re.M)
 _NAME = re.compile(r"^[A-Za-z]\w*$")
+_NUMBER = re.compile(NUMBER)
 _WORD = re.compile(r"[A-Za-z]\w*")
 _OPTION = re.compile(r"\\(\w+)(?:\s*:=\s*([^\\]+))?")
 _SPEED = re.compile(r"^v(\d+(?:\.\d*)?)$", re.I)
@@ -83,6 +84,13 @@ _DATA_DECL = re.compile(r"^[ \t]*(?:(?:LOCAL|TASK)\s+)*(CONST|PERS|VAR)\s+(speed
 _SPEEDDATA = re.compile(r"^\[\s*(" + NUMBER + r")\s*,[^\]]*\]$")
 VMAX = 5000.0  # mm/s, v_tcp of the predefined speeddata vmax
 _ZONE = re.compile(r"^(fine|z(\d+(?:\.\d*)?))$", re.I)
+# A robtarget declared on one line as RobotStudio and CAM post-processors write it, no blanks in its value:
+# CONST robtarget p1:=[[x,y,z],[q1,q2,q3,q4],[cf1,cf4,cf6,cfx],[ea,..,ef]]; -- read a whole module of them at once
+# (`_written_points`); any other declaration goes statement by statement.
+_NUMBERS = [",".join([f"({NUMBER})"] * count) for count in (3, 4, 4, 6)]
+_WRITTEN_POINT = re.compile(
+    r"^[ \t]*(?:(?:LOCAL|TASK)[ \t]+)*(?:CONST|PERS|VAR)[ \t]+robtarget[ \t]+(\w+)[ \t]*:=[ \t]*\[\["
+    + r"\],\[".join(_NUMBERS) + r"\]\][ \t]*;()[ \t]*\r?$", re.I | re.M)
 
 
 def pose(values):
@@ -91,6 +99,47 @@ def pose(values):
     T[:3, :3] = quat_to_matrix(values[3:7])
     T[:3, 3] = values[:3]
     return T
+
+
+def _written_points(source, masked):
+    """The robtargets of a module declared on one line as RAPID tools write them (`_WRITTEN_POINT`), read at once.
+
+    A declaration whose numbers the statement-by-statement read would
+    refuse (out of range, not a rotation, a configuration that is not a
+    whole number) is left out: that read then names it.
+
+    Returns
+    -------
+    dict
+        ``{line start offset: (name, statement end offset, Target)}``; the
+        targets' spans are `SpanColumns` rows.
+    """
+    found = list(_WRITTEN_POINT.finditer(masked))
+    if not found:
+        return {}
+    numbers = np.array([m.groups()[1:18] for m in found], dtype=float)  # (N, 17): x..q4, cf1..cfx, ea..ef
+    position, quat, config, external = numbers[:, :3], numbers[:, 3:7], numbers[:, 7:11], numbers[:, 11:]
+    good = (np.isfinite(numbers[:, :11]) & (np.abs(numbers[:, :11]) <= LENGTH_LIMIT)).all(axis=1)
+    good &= (np.isfinite(external) & (np.abs(external) <= 1e10)).all(axis=1)
+    good &= np.abs(np.linalg.norm(quat, axis=1) - 1.0) <= QUAT_TOLERANCE - 1e-9  # at the bound: as the one read
+    good &= (config == np.trunc(config)).all(axis=1)
+    keep = np.flatnonzero(good)
+    T = np.tile(np.eye(4), (len(keep), 1, 1))
+    T[:, :3, :3] = quat_to_matrix(quat[keep])
+    T[:, :3, 3] = position[keep]
+    external = np.where(np.abs(external) >= UNUSED_AXIS, np.nan, external)
+    at = np.array([[m.start(k) for k in range(2, 13)] + [m.end(k) for k in range(2, 13)] for m in found])
+    columns = SpanColumns(0, source.text, POSITION + QUAT + CONF, at[:, :11], at[:, 11:])
+    lines = np.searchsorted(Lines(source.text).starts, [m.start() for m in found], side="right").tolist()
+    configs = config.astype(int).tolist()
+    out = {}
+    for row, k in enumerate(keep.tolist()):
+        m = found[k]
+        axes = None if np.isnan(external[k]).all() else external[k]
+        out[m.start()] = (m.group(1), m.end(19), Target(name=m.group(1), line=lines[k], pose=T[row],
+                                                        config=tuple(configs[k]), spans=columns.row(k),
+                                                        external=axes))
+    return out
 
 
 def _statements(source, masked):
@@ -117,7 +166,7 @@ def _statements(source, masked):
 
 def _bare(argument):
     """An argument without its optional parts (``\\V:=...``, ``\\WObj:=...``, ``\\NoEOffs``)."""
-    return re.sub(r"\\.*", "", argument, flags=re.S).strip()
+    return argument.partition("\\")[0].strip()
 
 
 @dataclasses.dataclass(frozen=True)
@@ -156,7 +205,7 @@ class _Reader:
         value is one of these. PERS and VAR data, routine parameters and
         data declared elsewhere are set at run time: value None.
         """
-        if re.fullmatch(NUMBER, name) and typ == "num":
+        if typ == "num" and _NUMBER.fullmatch(name):
             return self.number(name, line, original, field), ""
         if typ == "speeddata" and (m := _SPEED.match(name)):
             return self.number(m.group(1), line, original, field), ""
@@ -341,7 +390,7 @@ class _Reader:
 
     def zone(self, option, zones, line, original):
         """mm of ``\\Z:=`` or ``zN``; None for fine or zonedata the module names."""
-        if option and re.fullmatch(NUMBER, option):
+        if option and _NUMBER.fullmatch(option):
             return self.number(option, line, original, "\\Z") or None
         m = _ZONE.match(zones[0]) if zones else None
         if m is None or m.group(2) is None:
@@ -373,8 +422,15 @@ def read(path):
                  {"MODULE": "ENDMODULE", "PROC": "ENDPROC", "FUNC": "ENDFUNC", "TRAP": "ENDTRAP"})
     reader = _Reader(source)
     reader.scan_data(masked)
+    written = _written_points(source, masked)
     for line, start, end in _statements(source, masked):
         text, original = masked[start:end], source.text[start:end]
+        if (point := written.get(start)) is not None and point[1] == end:  # a robtarget read with the others
+            name, _, target = point
+            reader.points[name.lower()] = len(reader.targets)
+            reader.targets.append(target)
+            reader.items.append(Statement(line, original))
+            continue
         if m := _ROUTINE.match(text):
             reader.params = {_WORD.findall(p.split("{")[0])[-1].lower() for p in m.group(1).split(",")
                              if _WORD.findall(p.split("{")[0])}
