@@ -519,7 +519,7 @@ def test_only_numbers_change(run):
     """Same lines and statements: the corrected files differ from the originals in target numbers only."""
     original, corrected = run["original"], run["corrected"]
     if run["case"].language == "csv":
-        pytest.skip("a program CSV gains j1..j6 columns (conventions.md)")
+        pytest.skip("a program CSV gains j1..j6 columns (docs/conventions.md)")
     for before, after in zip(original.sources, corrected.sources, strict=True):
         assert len(before.text.splitlines()) == len(after.text.splitlines())
         for a, b in zip(before.text.splitlines(), after.text.splitlines()):

@@ -34,7 +34,7 @@ EXPECTED = {"residual": RESIDUAL, "outside_grid": OUTSIDE, "configuration": [FLI
 
 
 class Labels:
-    """A lazy sequence of labels, as a table-backed program gives them (contract 1)."""
+    """A lazy sequence of labels, as a table-backed program gives them (`ProgramReport.labels`)."""
 
     def __len__(self):
         return N
@@ -283,7 +283,7 @@ def test_motions_not_compensated_unused_points_and_joint_targets_are_counted_and
 
 
 def _timing_result(segments, waypoints):
-    """A stand-in `trajcomp.timing` result (contract 3) of ``waypoints`` within the limits."""
+    """A stand-in `trajcomp.timing.result.TimingResult` of ``waypoints`` within the limits."""
     from types import SimpleNamespace
 
     six = np.ones(6)

@@ -1,7 +1,7 @@
 """How a measurement file is laid out: the explicit column mapping.
 
 trajcomp never guesses a layout. The standard measurement CSV
-(conventions.md) needs no mapping; any other file is read through a
+(docs/conventions.md) needs no mapping; any other file is read through a
 `Layout`, given on the command line (``--columns j1=joint_1,mx=x_t+x_dif``)
 or as a YAML mapping file (``--columns-file layout.yaml``)::
 

@@ -1,4 +1,4 @@
-"""The measurement CSV (conventions.md): read with located errors, write atomically.
+"""The measurement CSV (docs/conventions.md): read with located errors, write atomically.
 
 Columns: ``j1..j6`` commanded joints (deg), ``x,y,z[,a,b,c]`` commanded TCP
 pose (mm, deg), ``mx,my,mz`` measured TCP position (mm), optional

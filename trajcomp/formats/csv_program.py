@@ -1,4 +1,4 @@
-"""Program CSV (conventions.md): one target per row, TCP poses in the robot base frame.
+"""Program CSV (docs/conventions.md): one target per row, TCP poses in the robot base frame.
 
 Columns ``x,y,z,a,b,c`` (mm, deg; A, B, C intrinsic Z-Y'-X''), optional
 ``motion`` (PTP | LIN), ``speed`` (mm/s), ``zone`` (mm), ``j1..j6`` (deg)

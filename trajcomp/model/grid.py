@@ -1,7 +1,7 @@
 """The residual error field: lattice detection, the lattice interpolators, one entry point.
 
 The calibration run measures the error at the vertices of a regular,
-axis-aligned lattice (method.md). :func:`detect_lattice` recovers that lattice
+axis-aligned lattice (docs/method.md). :func:`detect_lattice` recovers that lattice
 from scattered commanded positions with a tolerance; :class:`ResidualGrid`
 holds one error vector per node and interpolates it inside the grid box with
 

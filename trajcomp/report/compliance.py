@@ -136,7 +136,7 @@ def _landing_checks(report, v, tolerance, model):
 
 
 def timing_section(timing, before=None, times=True):
-    """The timing dict of a `trajcomp.timing` result (contract 3), with the cycle time ``before`` (s) if known.
+    """The timing dict of a `trajcomp.timing.result.TimingResult`, with the cycle time ``before`` (s) if known.
 
     ``times``: with the time stamp of every waypoint (``t_s``); a report of
     more than `ROWS` waypoints keeps them in its sidecar instead. The segments (one per stretch
@@ -232,7 +232,7 @@ def compliance_report(report, robot, *, criteria=None, model=None, model_info=No
     Parameters
     ----------
     report : ProgramReport
-        What the compensation did (contract 1 of the brief).
+        What the compensation did (`trajcomp.compensation.program.ProgramReport`).
     robot : Robot
         The nominal robot.
     criteria : Criteria, optional
@@ -247,7 +247,7 @@ def compliance_report(report, robot, *, criteria=None, model=None, model_info=No
     options : dict, optional
         The run's options as given, for provenance.
     timing : TimingResult, optional
-        The re-timing of the corrected program (contract 3).
+        The re-timing of the corrected program (`trajcomp.timing.result.TimingResult`).
     cycle_time_before : float, optional
         Cycle time of the program before, s.
     command : str
