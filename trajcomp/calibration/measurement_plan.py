@@ -20,7 +20,7 @@ from trajcomp.arm.transforms import abc_to_matrix, matrix_to_abc
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
-class Plan:
+class MeasurementPlan:
     """Grid targets of a measurement run.
 
     Attributes
@@ -128,7 +128,7 @@ def plan_grid(robot, corner, side, step, orientation=None, one_posture=True):
 
     success = order([r.success for r in solved])
     joints = np.where(success[:, None], order([r.q for r in solved]), np.nan)
-    return Plan(
+    return MeasurementPlan(
         position=np.repeat(nodes, len(orientations), axis=0),
         orientation=np.tile(orientations, (len(nodes), 1)),
         joints=joints,
@@ -158,7 +158,7 @@ def orientations_needed(robot, plan, *, frame="tracker", joint_terms=True):
     Parameters
     ----------
     robot : Robot
-    plan : Plan
+    plan : MeasurementPlan
         Its orientations are taken in their order; unreachable targets are left out.
     frame, joint_terms
         As `trajcomp.calibration.identify.identify`.

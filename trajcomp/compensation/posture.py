@@ -47,7 +47,7 @@ BLOCK = 16_384  # undeclared targets whose eight branches are held at once: boun
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
-class Plan:
+class PlannedJoints:
     """Nominal joints of a program's targets in their declared postures.
 
     Attributes
@@ -79,7 +79,7 @@ def motion_order(program):
 
 
 def planned_targets(program):
-    """Indices of the Cartesian targets motions use, in motion order: the rows of `planned_joints`' `Plan`."""
+    """Indices of the Cartesian targets motions use, in motion order: the rows of `planned_joints`' `PlannedJoints`."""
     order = motion_order(program)
     return order[~program.target_table().is_joint[order]]
 
@@ -109,7 +109,7 @@ def planned_joints(program, robot, *, tools=None, frames=None, workers=1):
 
     Returns
     -------
-    Plan
+    PlannedJoints
         The Cartesian targets motions use, in motion order.
 
     Raises
@@ -143,7 +143,7 @@ def planned_joints(program, robot, *, tools=None, frames=None, workers=1):
                               by_config, branch[declared], lower[declared], upper[declared])
     _fail_unreachable(program, robot, index, q, source)
     _chain(program, robot, index, q, branches, source, workers)
-    return Plan(index, q, tuple(source), T_base_frame, T_flange_tool, T_base_tcp)
+    return PlannedJoints(index, q, tuple(source), T_base_frame, T_flange_tool, T_base_tcp)
 
 
 def check_posture(q_planned, q, labels, bound=MAX_JOINT_CHANGE):

@@ -302,7 +302,7 @@ def as_written_report(program, plan):
     Parameters
     ----------
     program : Program
-    plan : trajcomp.compensation.posture.Plan
+    plan : trajcomp.compensation.posture.PlannedJoints
         Its Cartesian targets in their declared postures (`planned_joints`).
     """
     n = len(plan.index)
