@@ -58,7 +58,7 @@ from trajcomp.formats._text import (
     write_single_file,
 )
 from trajcomp.programs.program import Program
-from trajcomp.programs.items import CIRCULAR, JOINT, LINEAR, Motion, Span, Statement, Target
+from trajcomp.programs.items import CIRCULAR, JOINT, LINEAR, Motion, Span, SpanColumns, Statement, Target, replaced
 from trajcomp.arm.transforms import matrix_to_pose, pose_to_matrix
 
 XYZWPR = ("x", "y", "z", "w", "p", "r")
@@ -92,6 +92,14 @@ _FRAME_NUMBER = re.compile(r"\b(UF|UT)\s*:\s*(\d+)", re.I)
 _CONFIG = re.compile(r"(?:CONFIG|KONFIG)\s*:\s*'([^']*)'", re.I)
 _CONFIG_VALUE = re.compile(r"^\s*([NF])\s*([UD])\s*([TB])\s*,\s*(-?\d{1,3})\s*,\s*(-?\d{1,3})\s*,\s*(-?\d{1,3})\s*$", re.I)
 _OTHER_REPRESENTATION = re.compile(r"\bR[XYZWPR]\s*=", re.I)
+# A Cartesian position of group 1 alone as the teach pendant and CAM post-processors write it (any white space):
+# P[1]{ GP1: UF : 0, UT : 1, CONFIG : 'N U T, 0, 0, 0', X = .. mm, Y = .. mm, Z = .. mm, W = .. deg, P = .. deg,
+# R = .. deg }; -- read a whole /POS section of them at once (`_written_positions`); any other goes one by one.
+_WRITTEN_POSITION = re.compile(
+    r"P\[\s*(\d+)\s*(?::\s*\"[^\"]*\")?\s*\]\s*\{\s*GP1\s*:\s*UF\s*:\s*(\d+)\s*,\s*UT\s*:\s*(\d+)\s*,\s*"
+    r"CONFIG\s*:\s*'([^']*)'\s*,\s*"
+    + r"\s*,\s*".join(f"{c}\\s*=\\s*({NUMBER})\\s*{'mm' if c in 'XYZ' else 'deg'}" for c in "XYZWPR")
+    + r"\s*\};", re.I)
 _SCARA_CONFIG = re.compile(r"^\s*[LR]\s*,(?:\s*-?\d{1,3}\s*,?)*\s*$", re.I)
 _TOOL_WORDS = {"UTOOL_NUM": "tool", "WKZ_NUM": "tool", "UFRAME_NUM": "frame", "BENUTZER_NUM": "frame",
                "UTOOL": "tool", "WKZ": "tool", "UFRAME": "frame", "BENUTZER": "frame"}
@@ -183,7 +191,7 @@ def read(path):
         motion = _motion(m, points, unread, source.name, number, original)
         speed = _SPEED_FIELD.search(masked, start, end)  # where re-timing writes the motion's speed
         if speed is not None:
-            motion = dataclasses.replace(motion, spans={"speed": Span(0, speed.start(), speed.end(), speed.group())})
+            motion = replaced(motion, spans={"speed": Span(0, speed.start(), speed.end(), speed.group())})
         items.append(_with_frames(motion, targets, state))
     tools, frames = {"0": np.eye(4)}, {"0": np.eye(4)}
     return Program("fanuc_ls", name, tuple(items), tuple(targets), tools, frames, (source,))
@@ -191,7 +199,7 @@ def read(path):
 
 def _with_frames(motion, targets, state):
     """The motion with the tool and frame it runs with; not compensated if one is set at run time."""
-    motion = dataclasses.replace(motion, tool=state.tool, frame=state.frame)
+    motion = replaced(motion, tool=state.tool, frame=state.frame)
     for index in (motion.via, motion.target):
         if index is None:
             continue
@@ -264,6 +272,39 @@ def _motion(m, points, unread, name, number, original):
     return whole_circle(motion)
 
 
+def _written_positions(source, masked, lines, start, end):
+    """The positions of the /POS section written as the pendant writes them (`_WRITTEN_POSITION`), read at once.
+
+    A position whose numbers or configuration the one-by-one read would
+    refuse is left out: that read then names it.
+
+    Returns
+    -------
+    dict
+        ``{offset of its P[: (end offset, Target)}``; the targets' spans are `SpanColumns` rows.
+    """
+    found = list(_WRITTEN_POSITION.finditer(masked, start, end))
+    configs = [_CONFIG_VALUE.match(m.group(4)) for m in found]
+    numbers = np.array([m.groups()[4:] for m in found], dtype=float).reshape(-1, 6)  # x, y, z, w, p, r
+    limits = np.array([LENGTH_LIMIT] * 3 + [ANGLE_LIMIT] * 3)
+    good = (np.isfinite(numbers) & (np.abs(numbers) <= limits)).all(axis=1) & np.array([c is not None for c in configs],
+                                                                                       dtype=bool)
+    keep = np.flatnonzero(good)
+    vector = np.concatenate([numbers[keep, :3], np.radians(numbers[keep, 5:2:-1])], axis=1)  # A, B, C = R, P, W
+    poses = pose_to_matrix(vector.reshape(-1, 6))
+    at = np.array([[m.start(k) for k in (5, 6, 7, 8, 9, 10, 4)] + [m.end(k) for k in (5, 6, 7, 8, 9, 10, 4)]
+                   for m in found], dtype=int).reshape(-1, 14)
+    columns = SpanColumns(0, source.text, XYZWPR + ("config",), at[:, :7], at[:, 7:])
+    line = np.searchsorted(lines.starts, [m.start() for m in found], side="right").tolist()
+    out = {}
+    for row, k in enumerate(keep.tolist()):
+        m, v = found[k], configs[k]
+        config = (v.group(1).upper(), v.group(2).upper(), v.group(3).upper(), *map(int, v.groups()[3:]))
+        out[m.start()] = (m.end(), Target(name=f"P[{m.group(1)}]", line=line[k], tool=m.group(3), frame=m.group(2),
+                                          pose=poses[row], config=config, spans=columns.row(k)))
+    return out
+
+
 def _positions(source, masked, lines, start, end):
     """Targets of the /POS section, ``{P number: target index}`` and ``{P number: why}`` of positions not read.
 
@@ -273,7 +314,12 @@ def _positions(source, masked, lines, start, end):
     targets, points, unread = [], {}, {}
     if start is None:
         return targets, points, unread
+    written = _written_positions(source, masked, lines, start, end)
     for m in _POS.finditer(masked, start, end):
+        if (position := written.get(m.start())) is not None and position[0] == m.end():  # read with the others
+            points[int(m.group(1))] = len(targets)
+            targets.append(position[1])
+            continue
         body_start = m.start(2)
         body = masked[body_start:m.end(2)]
         groups = {int(g.group(1)): (body_start + g.start(2), g.group(2)) for g in _GROUP.finditer(body)}
