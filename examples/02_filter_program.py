@@ -2,7 +2,8 @@
 
 Reads the program in its language (CSV, KRL, RAPID, FANUC LS, URScript or a
 plugin format), replaces every Cartesian target by its command in the
-posture the program declares and writes it back in the same language.
+posture the program declares, re-times it and writes it back in the same
+language with its verdict, as `trajcomp compensate` does.
 
     python examples/02_filter_program.py [model.yaml [program [output]]]
 
@@ -29,10 +30,11 @@ def main(model_path=None, program=PROGRAM, output=None):
         model_path = run_cube(VirtualRobot.create(load_robot("ur10"), "paper", seed=1), PAPER_CUBES[0]).model
     program = Path(program)
     output = Path(output or f"{program.stem}_compensated{program.suffix}")
-    written, report = trajcomp.filter_program(program, output, model=model_path)
+    run = trajcomp.filter_program(program, output, model=model_path)
+    report = run.report
 
     size = np.linalg.norm(report.correction[:, :3], axis=1)
-    print(f"{program} -> {written}")
+    print(f"{program} -> {', '.join(map(str, run.written))}: {'PASS' if run.passed else 'FAIL'}")
     print(f"{len(report.labels)} targets compensated, corrections {size.min():.3f} to {size.max():.3f} mm; "
           f"postures: {', '.join(sorted(set(report.posture_source)))}")
     for line in report.lines_of_text()[1:]:

@@ -174,7 +174,8 @@ def test_what_cannot_be_right_is_refused(cell, comp, branches):
 def test_a_program_file_is_compensated_and_written(cell, comp, tmp_path):
     program = tmp_path / "path.csv"
     shutil.copy(ROOT / "examples" / "ur10_path.csv", program)
-    out, report = comp.filter_program(program)
+    run = comp.filter_program(program)
+    out, report = run.written[0], run.report
     assert out == tmp_path / "path_compensated.csv"
     original, corrected = formats.read(program), formats.read(out)
     targets = original.cartesian_targets().T
@@ -184,8 +185,8 @@ def test_a_program_file_is_compensated_and_written(cell, comp, tmp_path):
     with pytest.raises(WriteError, match="would overwrite the input"):
         comp.filter_program(program, program)
     before = program.read_bytes()
-    written, _ = comp.filter_program(program, program, in_place=True)
-    assert written == program and program.read_bytes() != before
+    assert comp.filter_program(program, program, in_place=True).written == (program,)
+    assert program.read_bytes() != before
 
 
 def test_module_functions_load_a_model_file_once_per_version(cell, tmp_path, branches):

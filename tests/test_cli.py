@@ -95,6 +95,21 @@ def test_running_a_command_imports_no_other_command(tmp_path):
         assert done.stdout.strip().splitlines()[-1] == str(allowed), (argv, done.stdout, done.stderr)
 
 
+def test_the_list_of_commands_imports_none_of_them_nor_numpy():
+    """`trajcomp --help` lists every command with its one-line help from `trajcomp.commands.COMMANDS` alone."""
+    import subprocess
+    import sys
+
+    from trajcomp.commands import COMMANDS
+
+    code = ("import sys\nfrom trajcomp.cli import main\ntry:\n    main(['--help'])\nexcept SystemExit:\n    pass\n"
+            "print([m for m in sys.modules if m == 'numpy' or m.startswith('trajcomp.commands.')])")
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    assert done.stdout.strip().splitlines()[-1] == "[]", (done.stdout, done.stderr)
+    for name, summary in COMMANDS.items():
+        assert f"{name}" in done.stdout and summary in done.stdout
+
+
 @pytest.mark.parametrize("user_setting, threads", [(None, 1), ("2", 2)])
 def test_a_run_computes_on_one_blas_thread_unless_the_user_says(user_setting, threads):
     """The CLI pins BLAS / OpenMP to one thread per process before numpy loads; a user's setting wins."""

@@ -163,7 +163,8 @@ def test_a_tool_axis_program_lands(gcode, cell, tmp_path):
 def test_modal_words_are_inserted_where_the_correction_needs_them(gcode, cell, tmp_path):
     """Read back, the output states exactly the compensated commands (to the digits written)."""
     source = write(tmp_path, "path.nc", PROGRAM)
-    out, report = Compensator(cell.model_path).filter_program(source, tools={"1": np.zeros(6)})
+    run = Compensator(cell.model_path).filter_program(source, tools={"1": np.zeros(6)})
+    out, report = run.written[0], run.report
     back = formats.read(out)
     written = np.array([back.targets[m.target].pose for m in back.motions])
     np.testing.assert_allclose(written[:, :3, 3], report.T_command[:, :3, 3], atol=6e-4)

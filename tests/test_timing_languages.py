@@ -183,8 +183,8 @@ def test_krl_restores_the_speed_of_a_motion_that_is_not_retimed(tmp_path):
 def test_the_compensations_planned_joints_time_the_original_as_its_posture_plan_does(
         tmp_path, kuka_model, joint_targets, monkeypatch):
     from trajcomp.support import parallel
-    from trajcomp.commands import retime as retime_command
-    from trajcomp.commands.retime import retime_compensated
+    from trajcomp.compensation import pipeline
+    from trajcomp.compensation.pipeline import retime_compensated
     from trajcomp.compensation.targets import program_corrector
     from trajcomp.model.model_file import load_model
     from trajcomp.compensation.program import compensate_program
@@ -207,9 +207,9 @@ def test_the_compensations_planned_joints_time_the_original_as_its_posture_plan_
     assert aside[2] == solved[2]
     np.testing.assert_array_equal(aside[1].t, solved[1].t)
     processes = []  # of the original's timing
-    monkeypatch.setattr(retime_command, "in_background",
+    monkeypatch.setattr(pipeline, "in_background",
                         lambda function, workers: processes.append(workers) or parallel.in_background(function, workers))
-    monkeypatch.setattr(retime_command, "TOGETHER", len(report.q))  # a long program: one timing after the other
+    monkeypatch.setattr(pipeline, "TOGETHER", len(report.q))  # a long program: one timing after the other
     long = retime_compensated(program, corrected, model.nominal, "auto", 0.005, q_planned=report.q_planned, workers=2)
     assert processes == [1] and long[2] == solved[2]
     np.testing.assert_array_equal(long[1].t, solved[1].t)

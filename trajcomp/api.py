@@ -12,7 +12,8 @@ version) and delegate to one::
     comp = trajcomp.Compensator("model.yaml")
     command, joints, correction = comp.filter_target(
         [550, 100, 550, 90, 0, 180], joints_hint=[10, -80, 100, -110, -90, 0])
-    out, report = comp.filter_program("weld.src", "weld_compensated.src")
+    run = comp.filter_program("weld.src", "weld_compensated.src", report="weld")
+    run.passed, run.written
 
 Units at this boundary: mm and degrees. A pose is a homogeneous matrix
 (4, 4) in mm or ``x, y, z, a, b, c`` (mm, deg; A, B, C = intrinsic
@@ -36,7 +37,7 @@ from pathlib import Path
 
 import numpy as np
 
-from trajcomp import formats
+from trajcomp.compensation.pipeline import CompensationJob
 from trajcomp.compensation.targets import program_corrector
 from trajcomp.errors import TrajcompError
 from trajcomp.model.compensation_model import CompensationModel
@@ -46,6 +47,8 @@ from trajcomp.compensation.posture import MAX_JOINT_CHANGE
 from trajcomp.programs.program import Program
 from trajcomp.programs.items import LINEAR, Motion, Target
 from trajcomp.arm.transforms import matrix_to_pose, pose_to_matrix
+from trajcomp.report import Criteria
+from trajcomp.timing.path import TOLERANCE
 
 log = logging.getLogger(__name__)
 
@@ -105,6 +108,9 @@ class Compensator:
         (`trajcomp.support.parallel.map_blocks`; forked, on POSIX); the results do
         not depend on it. Default 1: this process only, safe inside a host
         application's threads.
+    source : str or Path, optional
+        The file a loaded ``model`` came from: named, with its checksum, in
+        the reports of `filter_program` (a model in memory is named as such).
 
     Raises
     ------
@@ -113,8 +119,11 @@ class Compensator:
     """
 
     def __init__(self, model, *, mode=None, outside="model", max_joint_change=np.degrees(MAX_JOINT_CHANGE),
-                 max_correction=MAX_CORRECTION, workers=1):
-        self.model = model if isinstance(model, CompensationModel) else load_model(model)
+                 max_correction=MAX_CORRECTION, workers=1, source=None):
+        if isinstance(model, CompensationModel):
+            self.model, self.model_file = model, None if source is None else str(source)
+        else:
+            self.model, self.model_file = load_model(model), str(Path(model).resolve())
         self.mode = mode or self.model.method
         self.model.check_mode(self.mode)
         if outside not in ("model", "clamp", "error"):
@@ -233,14 +242,18 @@ class Compensator:
         outside = report.outside_grid | report.landing["unmeasured_posture"]
         return Filtered(_in_form(command, form), joints, report.correction, outside, report)
 
-    def filter_program(self, path, out_path=None, *, tools=None, frames=None, joint_targets="keep", in_place=False):
-        """Compensate a robot program file and write the corrected program.
+    def filter_program(self, path, out_path=None, *, tools=None, frames=None, joint_targets="keep", in_place=False,
+                       retime="auto", path_tolerance=TOLERANCE, criteria=None, report=None, json_only=False):
+        """Compensate a robot program file, re-time it, write it and judge it, as ``trajcomp compensate`` does.
 
         The file is read in its language (`trajcomp.formats`, plugins
         included), every Cartesian target is replaced by its command in the
         posture the program declares, configuration data are rewritten from
-        the corrected joints, and the program is written in the same
-        language; only the numbers of the targets change.
+        the corrected joints, the program is re-timed under the arm's
+        limits (never faster than programmed) and written in the same
+        language, and its verdict is computed: the same job
+        (`trajcomp.compensation.pipeline.CompensationJob`) as the command
+        line's, so the same bytes and verdict for the same options.
 
         Parameters
         ----------
@@ -258,33 +271,45 @@ class Compensator:
             Joint-space targets: kept as written, or compensated as the pose they stand for.
         in_place : bool
             Allow ``out_path`` to replace the input program (refused otherwise).
+        retime : {"auto", "toppra", "ruckig", "none"}
+            Re-time the corrected program under the arm's limits (``trajcomp
+            compensate --retime``); "none" keeps the program's speed fields.
+        path_tolerance : float
+            Largest distance of the timed joint path from a waypoint, mm.
+        criteria : Criteria, optional
+            The verdict's criteria (`trajcomp.report.Criteria`); default
+            ``--tolerance 0.1`` and the command line's margins.
+        report : str or Path, optional
+            Write the compliance report as ``report.html`` and ``report.json``.
+        json_only : bool
+            Only ``report.json``.
 
         Returns
         -------
-        out_path : Path
-        report : ProgramReport
-            One row per compensated target; ``report.not_compensated`` lists
-            motions whose position is computed at run time (written as they
-            were: the program is then not fully corrected).
+        ProgramRun
+            ``.written`` (the files written, program first), ``.passed``
+            (the verdict), ``.compliance`` (the report: ``.doc`` is its
+            JSON), ``.report`` (per target; ``.not_compensated`` lists
+            motions whose position is computed at run time) and ``.timing``.
 
         Raises
         ------
-        ReadError, WriteError, IKError, CompensationError, RobotError, TrajcompError
+        ReadError, WriteError, IKError, CompensationError, RobotError, TimingError, TrajcompError
             As ``trajcomp compensate`` (RobotError: a program in another
             maker's language than the model's arm); nothing is written on error.
         """
         path = Path(path)
         out_path = path.with_name(f"{path.stem}_compensated{path.suffix}") if out_path is None else Path(out_path)
-        program = formats.read(path, workers=self.workers)
-        formats.check_robot_language(path, formats.find_format(format=program.format), self.robot, "the model's arm")
-        out_format = formats.output_format(out_path, program)  # the input's language: never converted silently
-        corrected, report = self._compensate(
-            program, label=str(path), tools=_named_poses(tools, "tools"), frames=_named_poses(frames, "frames"),
-            joint_targets=joint_targets,
+        job = CompensationJob(
+            self.model_file or self.model, mode=self.mode, outside=self.outside,
+            tools=_named_poses(tools, "tools") or {}, frames=_named_poses(frames, "frames") or {},
+            joint_targets=joint_targets, max_joint_change=np.radians(self.max_joint_change),
+            max_correction=self.max_correction, in_place=in_place, criteria=criteria or Criteria(), report=report,
+            json_only=json_only, retime=retime, path_tolerance=path_tolerance, workers=self.workers,
         )
-        formats.write(out_path, corrected, out_format.name,
-                      protect=() if in_place else formats.input_paths(path, program), workers=self.workers)
-        return out_path, report
+        run = job.run(path, out_path)
+        _log_warnings(str(path), run.report, self.outside)
+        return run
 
     def _hint(self, joints_hint, n):
         """Hint joints (n, 6), rad, of a (6,) or (n, 6) array in deg, finite and inside the joint limits."""
@@ -307,12 +332,17 @@ class Compensator:
             program, correct, self.robot, max_joint_change=np.radians(self.max_joint_change),
             max_correction=self.max_correction, workers=self.workers, **options,
         )
-        if report.outside_grid.any():
-            log.warning("%s: %d of %d targets lie outside the compensation grid: %s policy applied",
-                        label, int(report.outside_grid.sum()), len(report.outside_grid), self.outside)
-        for warning in report.warnings:
-            log.warning("%s: %s", label, warning)
+        _log_warnings(label, report, self.outside)
         return edited, report
+
+
+def _log_warnings(label, report, outside):
+    """Log what compensation warns of: targets outside the grid and each warning of the report."""
+    if report.outside_grid.any():
+        log.warning("%s: %d of %d targets lie outside the compensation grid: %s policy applied",
+                    label, int(report.outside_grid.sum()), len(report.outside_grid), outside)
+    for warning in report.warnings:
+        log.warning("%s: %s", label, warning)
 
 
 def compensator(model, **options):
@@ -334,7 +364,7 @@ def compensator(model, **options):
             version = path.stat().st_mtime_ns
         except OSError as exc:
             raise TrajcompError(f"{model}: cannot read the model file: {exc.strerror}") from exc
-        model = _load(path, version)
+        return Compensator(_load(path, version), source=path, **options)
     return Compensator(model, **options)
 
 
@@ -349,10 +379,11 @@ def filter_targets(poses, tool=None, frame=None, joints_hint=None, names=None, *
 
 
 def filter_program(path, out_path=None, *, model, tools=None, frames=None, joint_targets="keep", in_place=False,
-                   **options):
+                   retime="auto", path_tolerance=TOLERANCE, criteria=None, report=None, json_only=False, **options):
     """`Compensator.filter_program` with a model file, model or Compensator (see `compensator`)."""
     return compensator(model, **options).filter_program(
-        path, out_path, tools=tools, frames=frames, joint_targets=joint_targets, in_place=in_place)
+        path, out_path, tools=tools, frames=frames, joint_targets=joint_targets, in_place=in_place, retime=retime,
+        path_tolerance=path_tolerance, criteria=criteria, report=report, json_only=json_only)
 
 
 @functools.lru_cache(maxsize=8)

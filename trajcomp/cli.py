@@ -26,32 +26,21 @@ import traceback
 from trajcomp import __version__
 from trajcomp.support.crash import bug_message, save_traceback
 from trajcomp.support.crash import EXIT_CODE as CRASHED
+from trajcomp.commands import COMMANDS
 from trajcomp.errors import ToleranceError, TrajcompError
 
 INTERRUPTED = 130  # exit code of a run stopped by Ctrl-C (SIGINT), as shells report it
 TERMINATED = 128 + signal.SIGTERM  # 143: stopped by SIGTERM, as shells report it
 THREAD_VARIABLES = ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS")  # read when numpy loads
-COMMANDS = (
-    "robots",
-    "plan",
-    "simulate",
-    "calibrate",
-    "predict",
-    "validate",
-    "demo",
-    "compensate",
-    "formats",
-    "convert",
-    "retime",
-)
 
 
 def build_parser(only=None):
-    """The argument parser with every sub-command registered, or only those named in ``only``.
+    """The argument parser with the sub-commands named in ``only`` registered, or every one's one-line help.
 
     Each command's module imports what its work needs (numpy, scipy,
     matplotlib...): registering only the command being run keeps the
-    others' imports out of its start-up.
+    others' imports out of its start-up, and ``trajcomp --help`` (``only``
+    None: no command given) lists `COMMANDS` without importing any.
     """
     parser = argparse.ArgumentParser(
         prog="trajcomp",
@@ -61,9 +50,11 @@ def build_parser(only=None):
     parser.add_argument("--debug", action="store_true",
                         help="on an internal error (a bug, exit 3) print its traceback instead of saving it to a file")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
-    for name in COMMANDS if only is None else only:
-        module = importlib.import_module(f"trajcomp.commands.{name}")
-        module.add_parser(sub)
+    if only is None:
+        for name, summary in COMMANDS.items():
+            sub.add_parser(name, help=summary)
+    for name in only or ():
+        importlib.import_module(f"trajcomp.commands.{name}").add_parser(sub)
     return parser
 
 

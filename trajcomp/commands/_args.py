@@ -6,6 +6,7 @@ import sys
 
 import numpy as np
 
+from trajcomp.commands import COMMANDS
 from trajcomp.calibration.layout import load_layout, parse_mapping
 from trajcomp.errors import TrajcompError
 from trajcomp.arm.robot import load_robot
@@ -86,13 +87,6 @@ def layout_of(args):
     return load_layout(args.columns_file) if args.columns_file else args.columns
 
 
-def model_inputs(path):
-    """The files a model file ``path`` is read from: itself and its grid sidecar (which need not exist)."""
-    from trajcomp.model.model_file import sidecar_path
-
-    return [path, sidecar_path(path)]
-
-
 def add_robot(parser, required=True):
     parser.add_argument(
         "--robot",
@@ -105,8 +99,8 @@ def robot_of(args):
     return load_robot(args.robot)
 
 
-def command_parser(sub, name, help, description, *examples):
-    """A sub-command parser with its one-line help, description and example command lines.
+def command_parser(sub, name, description, *examples):
+    """A sub-command parser with its one-line help (`trajcomp.commands.COMMANDS`), description and examples.
 
     The examples are shown under ``example:`` in ``--help``; tests/test_docs.py
     runs them in order from the root of a clone, so each must work as written.
@@ -114,7 +108,7 @@ def command_parser(sub, name, help, description, *examples):
     label = "example" if len(examples) == 1 else "examples"
     return sub.add_parser(
         name,
-        help=help,
+        help=COMMANDS[name],
         description=description,
         epilog=f"{label}:\n" + "\n".join(f"  {example}" for example in examples),
         formatter_class=argparse.RawDescriptionHelpFormatter,

@@ -10,7 +10,6 @@ from trajcomp.commands._args import (
     command_parser,
     info,
     layout_of,
-    model_inputs,
     non_negative_int,
     pose,
     positive_number,
@@ -21,7 +20,7 @@ from trajcomp.commands._args import (
 from trajcomp.commands._report import add_report_options, criteria_of, emit
 from trajcomp.calibration.identify import LOSSES, ORIENTATION_WEIGHT
 from trajcomp.calibration.measurements import read_measurements
-from trajcomp.model.model_file import save_model
+from trajcomp.model.model_file import model_files, save_model
 from trajcomp.arm.parameters import is_angle
 from trajcomp.report import report_paths
 from trajcomp.model.stats import ErrorStats, format_table
@@ -30,7 +29,7 @@ from trajcomp.arm.transforms import matrix_to_pose
 
 def add_parser(sub):
     parser = command_parser(
-        sub, "calibrate", "identify a compensation model",
+        sub, "calibrate",
         "Identify a compensation model from measurements: the paper's linear correction, the "
         "arm's kinematics with the TCP and (tracker frame) the base registration in one robust "
         "least-squares fit with identifiability analysis, and the residual: a grid over positions "
@@ -104,7 +103,7 @@ def run(args):
     if args.tool is not None:
         robot = robot.replace(T_flange_tool=args.tool)
     inputs = [args.measurements, args.columns_file, args.robot]
-    refuse_inputs([*model_inputs(args.output), *(report_paths(args.report) if args.report else ())], inputs)
+    refuse_inputs([*model_files(args.output), *(report_paths(args.report) if args.report else ())], inputs)
     meas = read_measurements(args.measurements, layout_of(args))
     model = calibrate(
         robot, meas, robot_ref=args.robot, method=args.method, frame=args.frame, grid_step=args.grid_step,
@@ -132,6 +131,6 @@ def run(args):
         options["columns"] = None if args.columns is None else dict(args.columns.columns)
         options["tool"] = None if args.tool is None else [float(v) for v in matrix_to_pose(args.tool)]
         report = calibration_report(model, meas, criteria=criteria_of(args), files=files, options=options)
-        return emit(report, args.report, args.json_only, protect=[*inputs, *model_inputs(args.output)],
+        return emit(report, args.report, args.json_only, protect=[*inputs, *model_files(args.output)],
                     written_before=[args.output])
     return 0

@@ -9,6 +9,7 @@ import math
 
 import numpy as np
 
+from trajcomp.commands import COMMANDS
 from trajcomp import formats
 from trajcomp.errors import TrajcompError
 from trajcomp.compensation.program import convert_program
@@ -71,7 +72,7 @@ def frame_options(args):
 def add_parser(sub):
     parser = sub.add_parser(
         "convert",
-        help="rewrite a robot program in another language",
+        help=COMMANDS["convert"],
         description="Read a robot program (KRL, RAPID, FANUC LS, URScript or program CSV) and write it in "
         "the language of OUT's extension. Poses are kept to 1e-6 mm; configuration data (KUKA S/T, ABB "
         "confdata, FANUC CONFIG) are computed with the robot's kinematics, so give --robot when the "

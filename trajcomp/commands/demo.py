@@ -11,7 +11,7 @@ from trajcomp.calibration.simulate import PROFILES
 
 def add_parser(sub):
     parser = command_parser(
-        sub, "demo", "run the paper's protocol on the virtual robot",
+        sub, "demo",
         "Calibrate a virtual arm on the paper's two grids (100 mm and 10 mm steps on its "
         "UR10; scaled to the reach of any other arm, which the output names), validate "
         "compensation at 40 random targets per cube in every mode, print the paper's table "

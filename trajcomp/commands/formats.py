@@ -2,13 +2,14 @@
 
 import argparse
 
+from trajcomp.commands import COMMANDS
 from trajcomp import formats
 
 
 def add_parser(sub):
     parser = sub.add_parser(
         "formats",
-        help="list the robot program formats",
+        help=COMMANDS["formats"],
         description="List the program formats trajcomp reads and writes, their file extensions and where they "
         "come from (built-in, or a plugin of the 'trajcomp.formats' entry-point group).",
         epilog="example:\n  trajcomp formats",

@@ -29,7 +29,7 @@ def orientation_list(text):
 
 def add_parser(sub):
     parser = command_parser(
-        sub, "plan", "plan a cubic measurement grid",
+        sub, "plan",
         "Plan a cubic grid of TCP targets, at one tool orientation or several, and solve them "
         "with the nominal kinematics in one arm posture per orientation (that nearest the home pose "
         "at the grid's centre). Writes the measurement CSV layout without measured columns "

@@ -4,16 +4,16 @@ import dataclasses
 
 from trajcomp.support.atomic import refuse_inputs
 from trajcomp.calibration.calibrate import commanded
-from trajcomp.commands._args import command_parser, info, layout_of, model_inputs
+from trajcomp.commands._args import command_parser, info, layout_of
 from trajcomp.commands.validate import add_tracker_options, check_data, tracker_pose
 from trajcomp.calibration.measurements import read_measurements, write_measurements
 from trajcomp.model.compensation_model import MODES
-from trajcomp.model.model_file import load_model
+from trajcomp.model.model_file import load_model, model_files
 
 
 def add_parser(sub):
     parser = command_parser(
-        sub, "predict", "predict reached TCP positions",
+        sub, "predict",
         "For each commanded row of a measurement CSV, predict the reached TCP position "
         "(columns px, py, pz added) with a mode of the model: in the base frame, or with "
         "--frame tracker in the tracker frame (the model's registration, or --register rows "
@@ -29,7 +29,7 @@ def add_parser(sub):
 
 
 def run(args):
-    refuse_inputs([args.output], [*model_inputs(args.model), args.measurements, args.register, args.columns_file])
+    refuse_inputs([args.output], [*model_files(args.model), args.measurements, args.register, args.columns_file])
     model = load_model(args.model)
     meas = read_measurements(args.measurements, layout_of(args))
     frame = args.frame or meas.frame or "base"

@@ -6,7 +6,7 @@ from trajcomp.arm.robot import builtin_robot_names, load_robot
 
 def add_parser(sub):
     parser = command_parser(
-        sub, "robots", "list the built-in robots",
+        sub, "robots",
         "List the built-in robots with their DH convention and data sheet.",
         "trajcomp robots",
     )

@@ -16,7 +16,7 @@ from trajcomp.arm.transforms import matrix_to_abc
 
 def add_parser(sub):
     parser = command_parser(
-        sub, "simulate", "measure a plan on the virtual robot",
+        sub, "simulate",
         "Run a plan (measurement CSV with j1..j6 or x..c) on the virtual robot and write "
         "the measurement CSV with the measured TCP positions mx, my, mz added (and with "
         "--six-dof the measured orientation mrx, mry, mrz), in the base frame or, with "

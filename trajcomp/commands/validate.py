@@ -6,12 +6,12 @@ import numpy as np
 
 from trajcomp.support.atomic import refuse_inputs, write_atomic
 from trajcomp.calibration.calibrate import commanded, register, to_base
-from trajcomp.commands._args import add_layout, command_parser, info, layout_of, model_inputs
+from trajcomp.commands._args import add_layout, command_parser, info, layout_of
 from trajcomp.commands._report import add_report_options, criteria_of, emit
 from trajcomp.commands.calibrate import print_stats
 from trajcomp.errors import ReadError
 from trajcomp.calibration.measurements import read_measurements
-from trajcomp.model.model_file import load_model
+from trajcomp.model.model_file import load_model, model_files
 from trajcomp.calibration.plausibility import check_applied
 from trajcomp.report import file_entry, report_paths, validation_report
 from trajcomp.arm.transforms import abc_to_matrix, invert, rotation_angle_between
@@ -19,7 +19,7 @@ from trajcomp.arm.transforms import abc_to_matrix, invert, rotation_angle_betwee
 
 def add_parser(sub):
     parser = command_parser(
-        sub, "validate", "check a model against measurements",
+        sub, "validate",
         "Print the statistics of |measured - predicted| per mode (none, linear, dh, grid, "
         "composite) on a measurement CSV, e.g. a second run of validation points, and of the "
         "orientation error for 6-DoF data. Tracker-frame data go through the model's "
@@ -88,7 +88,7 @@ def orientation_lines(model, meas, T_tracker_base):
 
 
 def run(args):
-    inputs = [*model_inputs(args.model), args.measurements, args.register, args.columns_file]
+    inputs = [*model_files(args.model), args.measurements, args.register, args.columns_file]
     refuse_inputs(filter(None, [args.json, *(report_paths(args.report) if args.report else ())]), inputs)
     model = load_model(args.model)
     meas = read_measurements(args.measurements, layout_of(args))

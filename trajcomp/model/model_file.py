@@ -65,6 +65,11 @@ def sidecar_path(path):
     return path.with_name(path.name + ".npz")
 
 
+def model_files(path):
+    """The files of model file ``path``: itself and its grid sidecar (which need not exist), as given and Path."""
+    return [path, sidecar_path(path)]
+
+
 def _check_model_path(path):
     if Path(path).suffix.lower() not in SUFFIXES:
         raise ModelError(f"{path}: a model file name ends in {' or '.join(SUFFIXES)}")

@@ -37,21 +37,22 @@ def model_entry(path, model, mode):
 
     Parameters
     ----------
-    path : str or Path
-        The model file as given.
+    path : str or Path or None
+        The model file as given; None for a model in memory (then no file,
+        checksum or date).
     model : CompensationModel
     mode : str
         The mode the run used.
     """
     try:
-        header = yaml_text.load(Path(path).read_text(encoding="utf-8"))
+        header = {} if path is None else yaml_text.load(Path(path).read_text(encoding="utf-8"))
     except (OSError, UnicodeError, yaml.YAMLError) as exc:
         raise ReadError(f"{path}: cannot read the model file again for the report: {exc}") from exc
     report = model.report
     field = model.error_field(mode)
     return {
-        "path": str(path),
-        "sha256": sha256(path),
+        "path": "(a model in memory)" if path is None else str(path),
+        "sha256": None if path is None else sha256(path),
         "created": header.get("created"),
         "trajcomp_version": header.get("trajcomp_version"),
         "robot": model.robot_ref,

@@ -271,7 +271,7 @@ def _model_table(model):
                                        f"to {_vector(grid['upper'], 1)} mm")
     cv = model.get("cross_validation") or {}
     out = key_values([
-        ("file", model["path"]), ("SHA-256", Raw(f'<span class="hash">{esc(model["sha256"])}</span>')),
+        ("file", model["path"]), ("SHA-256", Raw(f'<span class="hash">{esc(model["sha256"] or "none (no file)")}</span>')),
         ("created", model["created"]), ("written by trajcomp", model["trajcomp_version"]),
         ("robot", model["robot"]), ("method / mode used", f"{model['method']} / {model['mode']}"),
         ("modes available", ", ".join(model["modes"])), ("grid", box),

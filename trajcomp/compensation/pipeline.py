@@ -1,0 +1,401 @@
+"""The program pipeline: read, plan postures, compensate, re-time, write, judge.
+
+Every face of trajcomp runs these jobs: ``trajcomp compensate`` (one file,
+or a batch on local processes or a Dask cluster), ``trajcomp retime``, the
+Python API (`trajcomp.Compensator.filter_program`) and the plugins. The
+same program and options give the same bytes and the same verdict through
+each of them (tests/test_pipeline.py).
+
+`CompensationJob` compensates one program file with a model;
+`RetimeJob` times one under an arm's limits without a model. Both are
+picklable, so a batch sends them to its workers, and both return a
+`ProgramRun`: the files written, the compliance report and what each stage
+found.
+"""
+
+import contextlib
+import dataclasses
+import functools
+import importlib
+from pathlib import Path
+
+import numpy as np
+
+from trajcomp import formats
+from trajcomp.arm.transforms import matrix_to_pose
+from trajcomp.compensation import batch
+from trajcomp.compensation.posture import MAX_JOINT_CHANGE, planned_joints, planned_targets
+from trajcomp.compensation.program import MAX_CORRECTION, as_written_report, compensate_program, convert_program
+from trajcomp.compensation.targets import program_corrector
+from trajcomp.errors import TimingError, TrajcompError
+from trajcomp.model.compensation_model import CompensationModel
+from trajcomp.model.model_file import load_model, model_files
+from trajcomp.report import Criteria, compliance_report, file_entry, model_entry, report_paths, summary_lines
+from trajcomp.support.atomic import refuse_inputs
+from trajcomp.support.memory import end_stage, kept_apart, release
+from trajcomp.support.parallel import in_background, meanwhile
+from trajcomp.support.progress import Stages
+from trajcomp.timing import METHODS
+from trajcomp.timing.path import TOLERANCE
+
+RETIME_CHOICES = METHODS + ("none",)
+# Targets below which the original and the corrected program are timed at once on two processes. A timing's
+# working memory is ~230 bytes per waypoint: longer programs are timed one after the other (1M points: 0.95 GB, not 1.1).
+TOGETHER = 500_000
+LIMIT_MESSAGE = "the timing exceeds a limit by more than 1 % in the 1 kHz check (table above): check it before running"
+STAGES = ("read", "compensate", "re-time", "write", "report")
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class ProgramRun:
+    """What a job did with one program file.
+
+    Attributes
+    ----------
+    result : batch.FileResult
+        Status (pass or fail), the files written and the lines to show.
+    compliance : Report
+        The compliance report (``.passed``, ``.doc``), written or not.
+    report : ProgramReport
+        Per target: planned and corrected joints, landing estimate, warnings.
+    timing : TimingResult or None
+        The timing of the written program; None when it was not re-timed.
+    """
+
+    result: batch.FileResult
+    compliance: object
+    report: object
+    timing: object = None
+
+    @property
+    def passed(self):
+        """Whether the run passed: its verdict, the timing's 1 kHz check and its report written (bool)."""
+        return self.result.status == batch.PASS
+
+    @property
+    def written(self):
+        """The files written, program files first, then report files (tuple of Path)."""
+        return tuple(map(Path, self.result.outputs))
+
+
+@dataclasses.dataclass(frozen=True)
+class CompensationJob:
+    """Compensate one program file into one output: read, plan, compensate, re-time, write, judge.
+
+    The unit of work of every face (picklable: a batch sends it to its
+    workers). Attributes are the options of ``trajcomp compensate``;
+    ``tools`` and ``frames`` are parsed values (T (4, 4), mm) and
+    ``max_joint_change`` is in rad.
+
+    ``model`` is a model file (loaded once per process) or a loaded
+    `CompensationModel` (its report then names no file).
+    """
+
+    model: object
+    mode: str = None
+    outside: str = "model"
+    tools: dict = dataclasses.field(default_factory=dict)
+    frames: dict = dataclasses.field(default_factory=dict)
+    joint_targets: str = "keep"
+    max_joint_change: float = MAX_JOINT_CHANGE
+    max_correction: float = MAX_CORRECTION
+    in_place: bool = False
+    criteria: Criteria = Criteria()
+    report: str = None
+    report_folder: bool = False
+    json_only: bool = False
+    retime: str = "auto"
+    path_tolerance: float = TOLERANCE
+    to_format: str = None  # another language to write (--to); default the input's
+    show_stages: bool = False  # a bar over STAGES on a terminal (one file; a batch shows files instead)
+    workers: int = 1  # processes sharing the compensation of one file (a batch spreads files instead)
+
+    def __call__(self, path, output):
+        """Compensate ``path`` into ``output``; a `batch.FileResult` (raises TrajcompError on bad input)."""
+        return self.run(path, output).result
+
+    def run(self, path, output):
+        """Compensate ``path`` into ``output``, judge it and write its report: a `ProgramRun`.
+
+        The report goes to ``report`` or, with ``report_folder``, to
+        ``report / <output name>`` (``.html`` and ``.json``). No output
+        may be an input (the program's files unless ``in_place``, the
+        model's); a report that cannot be written once the program is
+        makes the file fail (exit 1) with the files written listed, not
+        an input error.
+        """
+        if self.retime not in RETIME_CHOICES:
+            raise TrajcompError(f"retime: expected one of {', '.join(RETIME_CHOICES)}, got {self.retime!r}")
+        target = _report_target(self.report, self.report_folder, output)
+        with Stages(STAGES, desc=Path(path).name, enabled=self.show_stages) as stages, kept_apart():
+            model = loaded_model(self.model)
+            whose = "the arm of the model" + (f" {self.model}" if isinstance(self.model, (str, Path)) else "")
+            program = formats.read(path, workers=self.workers)
+            formats.check_robot_language(path, formats.find_format(format=program.format), model.nominal, whose)
+            out_format = formats.output_format(output, program, self.to_format)
+            formats.check_robot_language(output, out_format, model.nominal, whose)
+            sources = list(dict.fromkeys(formats.input_paths(path, program)))
+            inputs = [*sources, *([] if isinstance(self.model, CompensationModel) else model_files(self.model))]
+            refuse_inputs(report_paths(target) if target else (), [*inputs, output], "give --report another name")
+            correct = program_corrector(model, mode=self.mode, outside=self.outside, label=str(path),
+                                        workers=self.workers)
+            _next(stages)
+            with meanwhile(_import_timing) if self.retime != "none" else contextlib.nullcontext():
+                corrected, report = compensate_program(
+                    program, correct, model.nominal, tools=self.tools, frames=self.frames,
+                    joint_targets=self.joint_targets, max_joint_change=self.max_joint_change,
+                    max_correction=self.max_correction, workers=self.workers,
+                )
+            if out_format.name != program.format:
+                corrected = convert_program(corrected, out_format.name, robot=model.nominal, tools=self.tools,
+                                            frames=self.frames)
+            _next(stages)
+            timing, timed, before = [], None, None
+            if self.retime != "none":
+                corrected, timed, before = retime_compensated(program, corrected, model.nominal, self.retime,
+                                                              self.path_tolerance, self.tools, self.frames,
+                                                              q_planned=report.q_planned, workers=self.workers)
+                timing = timing_lines(timed, before)
+            _next(stages)
+            protect = inputs[len(sources):] if self.in_place else inputs
+            written = formats.write(output, corrected, out_format.name, protect=protect, workers=self.workers)
+            _next(stages)
+            mode = self.mode or model.method
+            compliance = compliance_report(
+                report, model.nominal, criteria=self.criteria, model=model,
+                model_info=_model_info(self.model, mode), mode=mode,
+                files=[file_entry("program", p) for p in sources] + [file_entry("output", p) for p in written],
+                options=self.options(), timing=timed, cycle_time_before=before if timed is not None else None,
+                workers=self.workers,
+            )
+            reports, unwritten = _write_report(compliance, target, self.json_only, [*inputs, *written], written)
+            _next(stages)
+        lines = [*summary_lines(compliance.doc), *(f"warning: {w}" for w in report.warnings), *timing,
+                 f"wrote {', '.join(map(str, written + reports))}"]
+        status, message = batch.PASS, ""
+        if not compliance.passed:
+            failed = [c["id"] for c in compliance.doc["verdict"]["criteria"] if c["status"] == "fail"]
+            status = batch.FAIL
+            message = f"the program is written but fails its verdict ({', '.join(failed)}); see the report"
+            if report.not_compensated:
+                passed = len(report.not_compensated) - report.motions_left
+                message += (f"; {report.motions_left} of {len(program.motions)} motions were not compensated "
+                            "(positions computed at run time)"
+                            + (f", {passed} points passed to routines left as written" if passed else ""))
+        if timed is not None and not timed.within_limits:
+            status, message = batch.FAIL, "; ".join(filter(None, [message, LIMIT_MESSAGE]))
+        if unwritten:
+            status, message = batch.FAIL, "; ".join(filter(None, [unwritten, message]))
+        result = batch.FileResult(str(path), tuple(map(str, written + reports)), status, message, tuple(lines))
+        return ProgramRun(result, compliance, report, timed)
+
+    def options(self):
+        """The run's options as user values, for the report's provenance."""
+        poses = {}
+        for kind in ("tools", "frames"):
+            values = {name: matrix_to_pose(T) for name, T in getattr(self, kind).items()}
+            poses[kind] = {name: [*p[:3], *np.degrees(p[3:])] for name, p in values.items()}
+        return {"mode": self.mode, "outside": self.outside, "joint_targets": self.joint_targets, "to": self.to_format,
+                "max_joint_change_deg": float(np.degrees(self.max_joint_change)),
+                "max_correction_mm": self.max_correction, "retime": self.retime,
+                "path_tolerance_mm": self.path_tolerance, **poses}
+
+
+@dataclasses.dataclass(frozen=True)
+class RetimeJob:
+    """Time one program file under an arm's limits and write the timing into it: read, plan, re-time, write, judge.
+
+    ``robot`` is the arm (a `trajcomp.arm.robot.Robot`); ``robot_file``
+    its file when it came from one (an input no output may replace).
+    Other attributes are the options of ``trajcomp retime``.
+    """
+
+    robot: object
+    robot_file: str = None
+    method: str = "auto"
+    path_tolerance: float = TOLERANCE
+    tools: dict = dataclasses.field(default_factory=dict)
+    frames: dict = dataclasses.field(default_factory=dict)
+    in_place: bool = False
+    criteria: Criteria = Criteria()
+    report: str = None
+    json_only: bool = False
+
+    def run(self, path, output):
+        """Time ``path`` into ``output`` (same language), judge it and write its report: a `ProgramRun`."""
+        program = formats.read(path)
+        formats.check_robot_language(path, formats.find_format(format=program.format), self.robot, "the arm --robot names")
+        out_format = formats.find_format(output).name
+        if out_format != program.format:
+            raise TrajcompError(f"{output}: retime writes the language it reads ({program.format}); "
+                                f"convert the program first (trajcomp convert)")
+        sources = list(dict.fromkeys(formats.input_paths(path, program)))
+        inputs = [*sources, *([self.robot_file] if self.robot_file else [])]
+        refuse_inputs(report_paths(self.report) if self.report else (), inputs, "give --report another name")
+        plan = planned_joints(program, self.robot, tools=self.tools, frames=self.frames)
+        joints = planned(program, plan.index, plan.q)
+        timed, timing = timed_program(program, self.robot, joints, self.method, self.path_tolerance, self.tools,
+                                      self.frames)
+        protect = inputs[len(sources):] if self.in_place else inputs
+        written = formats.write(output, timed, protect=protect)
+        report = as_written_report(program, plan)
+        compliance = compliance_report(
+            report, self.robot, criteria=self.criteria, command="retime", timing=timing,
+            files=[file_entry("program", p) for p in sources] + [file_entry("output", p) for p in written],
+            options={"method": self.method, "path_tolerance_mm": self.path_tolerance},
+        )
+        reports, unwritten = _write_report(compliance, self.report and Path(self.report), self.json_only,
+                                           [*inputs, *written], written)
+        lines = [*timing_lines(timing), f"wrote {', '.join(map(str, written))}", *summary_lines(compliance.doc)]
+        if reports:
+            lines.append(f"report: {', '.join(map(str, reports))}")
+        failures = [unwritten, "" if compliance.passed else "the program is written but fails its verdict; see the "
+                    "report", "" if timing.within_limits else LIMIT_MESSAGE]
+        message = "; ".join(filter(None, failures))
+        result = batch.FileResult(str(path), tuple(map(str, written + reports)), batch.FAIL if message else batch.PASS,
+                                  message, tuple(lines))
+        return ProgramRun(result, compliance, report, timing)
+
+
+def planned(program, index, q):
+    """Joints (N, 6) of a program's N targets: q (n, 6) of targets index (n,)
+    (`trajcomp.compensation.posture.PlannedJoints`), NaN elsewhere."""
+    joints = np.full((len(program.target_table()), 6), np.nan)
+    joints[index] = q
+    return joints
+
+
+def timed_program(program, robot, joints, method, tolerance, tools, frames):
+    """``(program with the timing written into its speed fields, TimingResult)``."""
+    from trajcomp.timing.writeback import apply_timing, retime_program
+
+    if not tolerance > 0:
+        raise TrajcompError(f"--path-tolerance: expected a positive number of mm, got {tolerance}")
+    result = retime_program(program, robot, joints, method=method, tools=tools, frames=frames, tolerance=tolerance)
+    return apply_timing(program, result, robot)
+
+
+def timing_lines(result, before=None):
+    """The dense check table, the cycle time(s) and what was written, as text lines."""
+    written = sum(s.written for s in result.segments)
+    kinds = ", ".join(sorted({s.kind for s in result.segments}))
+    return [*result.lines_of_text(before), f"speed settings written for {written} motions ({kinds})"]
+
+
+def retime_compensated(original, corrected, robot, method, tolerance, tools=None, frames=None, *, q_planned=None,
+                       workers=1):
+    """Time a compensated program, and its original for the cycle time before compensation.
+
+    Parameters
+    ----------
+    original, corrected : Program
+        Before and after compensation (the corrected targets carry their joints).
+    robot : Robot
+        The nominal robot.
+    method : str
+        One of `trajcomp.timing.METHODS`.
+    tolerance : float
+        Path tolerance, mm.
+    tools, frames : Mapping[str, ndarray (4, 4)], optional
+        Tools and frames the program uses but does not define.
+    q_planned : ndarray, shape (n, 6), optional
+        The original's Cartesian targets in their declared postures, in
+        motion order (`trajcomp.compensation.posture.planned_targets`), rad: the
+        compensation's `ProgramReport.q_planned` (rows beyond n, joint
+        targets, are not used). Solved again when not given.
+    workers : int
+        More than 1, for a program of fewer than `TOGETHER` targets: the
+        original is timed by another process meanwhile
+        (`trajcomp.support.parallel.in_background`); else first, so that only one
+        timing's working memory is held at a time.
+
+    Returns
+    -------
+    (Program, TimingResult, float)
+        The corrected program with its timing written (as it was, with a
+        warning in the timing, for a language without writable speed
+        fields), the timing, and the original program's cycle time (s).
+
+    Raises
+    ------
+    TimingError
+        With a hint to compensate without re-timing.
+    """
+    from trajcomp.timing.writeback import retime_program, writable
+
+    if q_planned is None:
+        plan = planned_joints(original, robot, tools=tools, frames=frames)
+        index, q_planned = plan.index, plan.q
+    else:
+        index = planned_targets(original)
+        q_planned = q_planned[: len(index)]
+    after = corrected.target_table().joints
+    try:
+        before = in_background(lambda: retime_program(original, robot, planned(original, index, q_planned),
+                                                      method=method, tools=tools, frames=frames,
+                                                      tolerance=tolerance).cycle_time,
+                               workers if len(after) < TOGETHER else 1)
+        release()  # the original's timing's working memory, when it was timed here, before the corrected one's
+        if writable(corrected):
+            timed, result = timed_program(corrected, robot, after, method, tolerance, tools, frames)
+        else:
+            timed = corrected
+            result = retime_program(corrected, robot, after, method=method, tools=tools, frames=frames,
+                                    tolerance=tolerance)
+            note = f"the timing is not written: {corrected.format} programs have no speed fields trajcomp writes"
+            result = dataclasses.replace(result, warnings=result.warnings + (note,))
+        return timed, result, before()  # only the original's cycle time is kept
+    except TimingError as exc:
+        raise TimingError(f"{exc} (compensate with --retime none to keep the program's speeds)") from None
+
+
+def loaded_model(model):
+    """The `CompensationModel` of a job: ``model`` itself, or its file loaded once per process."""
+    return model if isinstance(model, CompensationModel) else _model_file(str(model))
+
+
+@functools.lru_cache(maxsize=4)
+def _model_file(path):
+    """The model file, loaded once per process (a batch worker serves many files)."""
+    return load_model(path)
+
+
+def _model_info(model, mode):
+    """The report's model entry (file checksum, date, statistics), once per process for a file."""
+    if isinstance(model, CompensationModel):
+        return model_entry(None, model, mode)
+    return _file_model_info(str(model), mode)
+
+
+@functools.lru_cache(maxsize=4)
+def _file_model_info(path, mode):
+    return model_entry(path, _model_file(path), mode)
+
+
+def _report_target(report, folder, output):
+    """Where a job's report goes: ``report``, or ``report / <output name>`` for a batch's folder; None for none."""
+    if not report:
+        return None
+    return Path(report) / Path(output).name if folder else Path(report)
+
+
+def _write_report(compliance, target, json_only, protect, written):
+    """Write the report to ``target`` (when given): ``(report files, "")``, or ``([], why)`` when it cannot be
+    written once the program is (``written``)."""
+    if not target:
+        return [], ""
+    try:
+        return compliance.write(target, json_only=json_only, protect=protect), ""
+    except TrajcompError as exc:
+        return [], f"the program is written ({', '.join(map(str, written))}) but not its report: {exc}"
+
+
+def _import_timing():
+    """Import what re-timing needs (scipy's splines, 0.3 s) while the workers plan and compensate."""
+    importlib.import_module("scipy.interpolate")
+
+
+def _next(stages):
+    """End a stage (`trajcomp.support.memory.end_stage`), the bar one step on."""
+    end_stage()
+    stages.advance()
