@@ -186,3 +186,39 @@ def test_calibrate_chooses_splines_on_held_out_regions_and_records_the_choice():
     assert stated["splines"] == record and stated["terms"]["spline"] > 0
     np.testing.assert_allclose(stated["measured_range_deg"]["upper"], np.degrees(q.max(axis=0)), atol=1e-3)
     assert "Joint-angle error model" in render(calibration_report(model, meas))
+
+
+def test_a_field_over_positions_goes_on_top_of_the_joint_residual_where_it_wins_on_held_out_regions(tmp_path):
+    """An error of the place, not of the joints (a smooth wave along x), is left to a knn field on top.
+
+    Each commanded position is measured once (no position at two
+    orientations), so the field is offered; the choice, the field and the
+    other-tools verdict survive the model file, and the model predicts the
+    wave at positions it never measured.
+    """
+    robot = load_robot("ur10")
+    q = joints_in_range(300, 9)
+    position = fk(robot, q)[:, :3, 3]
+    true = VirtualRobot.create(robot, ErrorProfile("geometric", length_sigma=0.3, angle_sigma=np.radians(0.03)),
+                               seed=5).true_robot
+
+    def landed(joints):
+        reached = fk(true, joints)[:, :3, 3]
+        return reached + np.column_stack([np.zeros((len(joints), 2)), 0.1 * np.sin(reached[:, 0] / 80.0)])
+
+    meas = Measurements(joints=q, position=position, measured=landed(q), lines=np.arange(len(q)) + 2)
+    model = calibrate(robot, meas, interpolation="joint", folds=0)
+    record = model.report["joint_splines"]
+    assert record["field"] == "knn" and model.residual_field.kind == "knn" and not model.places_other_tools
+    chosen = [c for c in record["candidates"] if c["step_deg"] == record["step_deg"] and c["penalty"] == record["penalty"]]
+    assert chosen[0]["with_field_mm"] < chosen[0]["held_out_mm"]  # the wave is what the joint model cannot hold
+    save_model(tmp_path / "m.yaml", model)
+    loaded = load_model(tmp_path / "m.yaml")
+    fresh = joints_in_range(100, 10)
+    fresh_position = fk(robot, fresh)[:, :3, 3]
+    predicted = loaded.predict("composite", fresh, fresh_position, outside="clamp")[0]
+    np.testing.assert_allclose(predicted, model.predict("composite", fresh, fresh_position, outside="clamp")[0])
+    without = model.arm("composite").fk(fresh)[:, :3, 3]
+    truth = landed(fresh)
+    assert np.linalg.norm(predicted - truth, axis=1).mean() < 0.7 * np.linalg.norm(without - truth, axis=1).mean()
+    assert calibration_report(model, meas).doc["joint_errors"]["field_on_top"] == "knn"

@@ -54,6 +54,7 @@ ORIENTATION_WEIGHT = 100.0  # mm/rad: 1 mrad of orientation error weighs as 0.1 
 ROBUST_SCALE = 3.0  # the loss turns robust beyond this many median residual norms
 MAX_ITERATIONS = 50
 STEP_TOLERANCE = 1e-7  # mm (or rad * ANGLE_LEVER): converged when no scaled parameter moves more
+COST_TOLERANCE = 1e-5  # or when a step lowers the weighted cost by less than this fraction (its RMS by 5 ppm)
 MEASUREMENTS_PER_SPLINE = 3  # a knot step is tried only with at least this many measurements per spline term
 
 
@@ -372,7 +373,7 @@ def _identifiable(problem, names, rtol):
 
 def identify(robot, q, measured, *, rotation=None, frame="base", tool=True, joint_terms=False, splines=None,
              loss="huber", rtol=1e-3, orientation_weight=ORIENTATION_WEIGHT, nominal=None, T_tracker_base=None,
-             R_tcp_target=None):
+             R_tcp_target=None, start_values=None):
     """Robust least-squares identification of the arm, its TCP and the tracker registration.
 
     Parameters
@@ -407,6 +408,9 @@ def identify(robot, q, measured, *, rotation=None, frame="base", tool=True, join
     T_tracker_base, R_tcp_target : ndarray, optional
         Given registration (4, 4) and measured-frame orientation (3, 3): kept
         fixed. Default: estimated, starting from a best fit of ``robot``.
+    start_values : dict, optional
+        ``{name: value}`` the fit starts from (an earlier fit's parameters,
+        mm or rad); the others start at 0.
 
     Returns
     -------
@@ -450,6 +454,8 @@ def identify(robot, q, measured, *, rotation=None, frame="base", tool=True, join
             f"(need at least {int(np.ceil(2 * len(kept) / rows))})"
         )
     problem.setup(names)
+    if start_values:
+        problem.x = np.array([start_values.get(name, 0.0) for name in names])
     scale = scales(names)
     x, weights, jac = _solve(problem, scale, loss, rtol)
     normal, _ = jac.normal_equations(problem.evaluate(x, jacobian=False)[0], weights, scale)
@@ -498,7 +504,7 @@ def _truncated_inverse(normal, rtol):
 
 
 def _solve(problem, scale, loss, rtol):
-    """Iteratively re-weighted Gauss-Newton with step halving.
+    """Iteratively re-weighted Gauss-Newton with step halving, from ``problem.x``.
 
     Each step solves the normal equations of the scaled, weighted problem
     (P x P, cheap for any N), the spline terms' roughness penalty added, by
@@ -521,8 +527,9 @@ def _solve(problem, scale, loss, rtol):
             if float(np.sum(weights[:, None] * trial_residual**2)) + problem.penalty(trial, scale) <= cost * (1 + 1e-12):
                 break
             step = step / 2
+        lowered = cost - (float(np.sum(weights[:, None] * trial_residual**2)) + problem.penalty(trial, scale))
         x, residual, jac = trial, trial_residual, trial_jac
-        if np.max(np.abs(step), initial=0.0) < STEP_TOLERANCE:
+        if np.max(np.abs(step), initial=0.0) < STEP_TOLERANCE or lowered < COST_TOLERANCE * cost:
             break
     return x, robust_weights(_row_norms(residual), loss), jac
 
@@ -534,20 +541,25 @@ class SplineChoice:
     Attributes
     ----------
     fit : KinematicFit or None
-        The joint fit with the chosen spline terms (None: none was better
-        on held-out regions than the fit without).
+        The joint fit with the chosen spline terms (None: the candidate
+        without spline terms won).
     basis : SplineBasis or None
     table : list of dict
-        Every candidate (``step_deg``, ``penalty``; step 0 = no spline
-        terms) with its held-out mean position error ``held_out_mm``.
+        Every candidate with its held-out mean position error: ``step_deg``
+        and ``penalty`` of its spline terms (step 0 = none),
+        ``held_out_mm`` and, when a residual field was tried on top,
+        ``with_field_mm``.
     regions : str
         How the held-out regions were drawn.
+    field : bool
+        True when the chosen candidate takes the residual field on top.
     """
 
     fit: object
     basis: object
     table: list
     regions: str
+    field: bool = False
 
 
 def region_folds(position, folds):
@@ -567,22 +579,64 @@ def region_folds(position, folds):
             f"{folds} slabs of the commanded positions along {'xyz'[axis]} (edges {np.round(edges, 1).tolist()} mm)")
 
 
+class _Candidates:
+    """Held-out scoring of linearised candidate fits over regions, keeping the best (`select_splines`)."""
+
+    def __init__(self, regions, position, field):
+        self.regions, self.position, self.field = regions, position, field
+        self.table, self.best = [], None
+
+    def linearise(self, problem, x, weights):
+        """Residual rows, `_Jacobian`, scales and the normal equations of all rows and of each region, at x."""
+        scale = scales(problem.names)
+        residual, jac = problem.evaluate(x)
+        total = jac.normal_equations(residual, weights, scale)
+        held = [jac.rows(rows).normal_equations(residual[rows], weights[rows], scale) for rows in self.regions]
+        return residual, jac, scale, total, held
+
+    def score(self, entry, linear, roughness, use, payload):
+        """Held-out mean errors of one candidate (without and with the field on top), added to the table."""
+        residual, jac, scale, total, held = linear
+        plain, on_top = [], []
+        count = len(residual)
+        for rows, (held_normal, held_gradient) in zip(self.regions, held):
+            z = _penalised_step(total[0] - held_normal, total[1] - held_gradient,
+                                roughness * (count - len(rows)), use)
+            moved = residual[:, :3] + jac.apply(z * scale)[:, :3]
+            plain.append(np.linalg.norm(moved[rows], axis=1))
+            if self.field is not None:
+                train = np.setdiff1d(np.arange(count), rows)
+                predicted = self.field(self.position[train], moved[train], self.position[rows])
+                on_top.append(np.linalg.norm(moved[rows] - predicted, axis=1))
+        entry["held_out_mm"] = round(float(np.concatenate(plain).mean()), 5)
+        scores = [(entry["held_out_mm"], False)]
+        if self.field is not None:
+            entry["with_field_mm"] = round(float(np.concatenate(on_top).mean()), 5)
+            scores.append((entry["with_field_mm"], True))
+        self.table.append(entry)
+        for mean, field in scores:
+            if self.best is None or mean < self.best[0]:
+                self.best = (mean, field, payload)
+
+
 def select_splines(fit, start, nominal, q, measured, *, rotation=None, joints=(0, 1, 2, 3, 4), steps=(2.0, 4.0, 8.0),
                    penalties=(1e-5, 1e-4, 1e-3, 1e-2), folds=4, position=None,
-                   orientation_weight=ORIENTATION_WEIGHT):
-    """Choose spline terms of the joint angles by held-out regions and fit them on a joint fit.
+                   orientation_weight=ORIENTATION_WEIGHT, field=None, loss="huber"):
+    """Choose the joint model's spline terms (and a residual field on top) by held-out regions, and fit them.
 
     For each knot step and penalty, the spline terms and the parameters of
     ``fit`` are fitted together on all regions but one (`region_folds`) and
-    the mean position error is taken on the region held out; the candidate
-    with the least held-out error over all regions wins, the no-spline
-    candidate (``fit``'s parameters refitted the same way) included. A
-    knot step giving more than one spline term per
-    `MEASUREMENTS_PER_SPLINE` measurements is not tried. Rows
-    are never interleaved: a region's neighbours are not in its training
-    set. The problem is linearised at ``fit`` (its errors are
+    the mean position error is taken on the region held out, with and
+    without the residual ``field`` fitted on the training regions'
+    residuals on top; the candidate with the least held-out error over all
+    regions wins, the candidate without spline terms (``fit``'s
+    parameters refitted the same way) included. A knot step giving more than one
+    spline term per `MEASUREMENTS_PER_SPLINE` measurements is not tried.
+    Rows are never interleaved: a region's neighbours are not in its
+    training set. The candidates are linearised at ``fit`` (its errors are
     milliradians: one Gauss-Newton step of `identify` with the spline terms
-    added), which is also how the chosen terms are fitted on all rows.
+    added); the chosen spline terms are then fitted on all rows by
+    `identify` itself, iterated to convergence with the robust loss.
 
     Parameters
     ----------
@@ -605,9 +659,18 @@ def select_splines(fit, start, nominal, q, measured, *, rotation=None, joints=(0
         Roughness penalties tried (`SplineBasis.penalty`).
     folds : int
         Number of held-out regions (0: no selection, the first step and
-        penalty are fitted).
+        penalty are fitted, with the field on top when one is given).
     position : ndarray, shape (N, 3), optional
-        Commanded positions the regions are drawn in (default: FK of ``start``).
+        Commanded positions the regions are drawn in and the field is
+        fitted over (default: FK of ``start``).
+    orientation_weight : float
+        mm per rad of orientation residual.
+    field : callable, optional
+        ``field(points (T, 3), residuals (T, 3), queries (H, 3)) -> (H, 3)``:
+        the residual field over commanded positions, mm, fitted on the
+        training rows and evaluated at the held-out ones.
+    loss : str
+        Robust loss of the final fit (`identify`).
 
     Returns
     -------
@@ -616,49 +679,43 @@ def select_splines(fit, start, nominal, q, measured, *, rotation=None, joints=(0
     position = fk(start, q)[:, :3, 3] if position is None else position
     regions, words = region_folds(position, folds) if folds > 1 else ([], "none: the one candidate given is fitted")
     lower, upper = q.min(axis=0), q.max(axis=0)
-    table, best = [], None
+    if not regions:
+        spacing = np.zeros(6)
+        spacing[list(joints)] = np.radians(steps[0])
+        basis = SplineBasis(lower, upper, spacing, penalties[0])
+        return SplineChoice(_spline_fit(fit, start, nominal, q, measured, rotation, basis, orientation_weight, loss),
+                            basis, [], words, field=field is not None)
+    candidates = _Candidates(regions, position, field)
+    plain = _Problem(start, nominal, q, measured, rotation, np.eye(4), fit.R_tcp_target, orientation_weight)
+    plain.setup(list(fit.names))
+    every = np.ones(len(plain.names), dtype=bool)
+    candidates.score({"step_deg": 0.0, "penalty": 0.0}, candidates.linearise(plain, fit.delta, fit.weights),
+                     np.zeros((len(every), len(every))), every, None)
     for step in steps:
         spacing = np.zeros(6)
         spacing[list(joints)] = np.radians(step)
         basis = SplineBasis(lower, upper, spacing, 1.0)
-        if len(q) < MEASUREMENTS_PER_SPLINE * len(basis.names()) and regions:
+        if len(q) < MEASUREMENTS_PER_SPLINE * len(basis.names()):
             continue  # too sparse for this many terms: the penalty alone would shape them
         problem = _Problem(start, nominal, q, measured, rotation, np.eye(4), fit.R_tcp_target, orientation_weight, basis)
         problem.setup(list(fit.names) + basis.names())
-        scale = scales(problem.names)
         x = np.concatenate([fit.delta, np.zeros(len(problem.names) - len(fit.names))])
-        residual, jac = problem.evaluate(x)
-        total = jac.normal_equations(residual, fit.weights, scale)
-        held_parts = [jac.rows(rows).normal_equations(residual[rows], fit.weights[rows], scale) for rows in regions]
-        spline = np.array([joint_errors.is_spline(n) for n in problem.names])
+        linear = candidates.linearise(problem, x, fit.weights)
         rough = basis.roughness(problem.names)
-        for penalty in ((0.0,) if not table and regions else ()) + tuple(penalties):
-            use = ~spline if penalty == 0.0 else np.ones(len(spline), dtype=bool)
-            error = []
-            for rows, (held_normal, held_gradient) in zip(regions, held_parts):
-                train = len(q) - len(rows)
-                z = _penalised_step(total[0] - held_normal, total[1] - held_gradient, rough * penalty * train, use)
-                moved = residual[rows] + jac.rows(rows).apply(z * scale)
-                error.append(np.linalg.norm(moved[:, :3], axis=1))
-            mean = float(np.concatenate(error).mean()) if regions else 0.0
-            table.append({"step_deg": step if penalty else 0.0, "penalty": penalty, "held_out_mm": round(mean, 5)})
-            if best is None or mean < best[0]:
-                best = (mean, step, penalty, problem, residual, jac, total, rough, use, scale, x)
-    if best is None or best[2] == 0.0:
-        return SplineChoice(None, None, table, words)
-    mean, step, penalty, problem, residual, jac, total, rough, use, scale, x = best
-    z = _penalised_step(total[0], total[1], rough * penalty * len(q), use)
-    basis = dataclasses.replace(problem.basis, penalty=penalty)
-    problem.basis = basis
-    x = x + z * scale
-    moved, _ = problem.evaluate(x, jacobian=False)
-    _, terms, _, _ = problem.state(x)
-    position_error = -moved[:, :3]
-    chosen = dataclasses.replace(fit, names=problem.names, delta=x, sigma=np.zeros(len(x)), joint_errors=terms,
-                                 residuals=position_error,
-                                 rotation_residuals=None if rotation is None else -moved[:, 3:] / orientation_weight,
-                                 outliers=outlier_rows(position_error))
-    return SplineChoice(chosen, basis, table, words)
+        for penalty in penalties:
+            candidates.score({"step_deg": step, "penalty": penalty}, linear, rough * penalty,
+                             np.ones(len(problem.names), dtype=bool), dataclasses.replace(basis, penalty=penalty))
+    _, on_top, basis = candidates.best
+    fitted = None if basis is None else _spline_fit(fit, start, nominal, q, measured, rotation, basis,
+                                                    orientation_weight, loss)
+    return SplineChoice(fitted, basis, candidates.table, words, on_top)
+
+
+def _spline_fit(fit, start, nominal, q, measured, rotation, basis, orientation_weight, loss):
+    """The joint fit with spline terms ``basis`` added, by `identify` from ``start`` (the kinematic fit) and ``fit``."""
+    return identify(start, q, measured, rotation=rotation, joint_terms=True, splines=basis, loss=loss,
+                    nominal=nominal, orientation_weight=orientation_weight, R_tcp_target=fit.R_tcp_target,
+                    start_values=dict(zip(fit.names, fit.delta)))
 
 
 def _penalised_step(normal, gradient, roughness, use):

@@ -3,7 +3,7 @@
 import numpy as np
 
 from trajcomp.support.atomic import refuse_inputs
-from trajcomp.calibration.calibrate import INTERPOLATIONS, METHODS, calibrate
+from trajcomp.calibration.calibrate import INTERPOLATIONS, METHODS, calibrate, selection_words
 from trajcomp.commands._args import (
     add_layout,
     add_robot,
@@ -87,13 +87,9 @@ def describe(model):
         base = matrix_to_pose(model.T_tracker_base)
         lines.append("base in the tracker frame: " + ", ".join(f"{v:.3f}" for v in base[:3])
                      + " mm, " + ", ".join(f"{v:.4f}" for v in np.degrees(base[3:])) + " deg")
-    splines = model.report.get("joint_splines")
-    if splines and splines.get("candidates"):
-        held = {(c["step_deg"], c["penalty"]): c["held_out_mm"] for c in splines["candidates"]}
-        chosen = (f"knots every {splines['step_deg']:g} deg on joints {splines['joints']}, penalty {splines['penalty']:g}"
-                  if splines["step_deg"] else "none")
-        lines.append(f"joint splines: {chosen}, chosen on {splines['regions']}: held-out mean "
-                     f"{held[(splines['step_deg'], splines['penalty'])]:.4f} mm, without splines {held[(0.0, 0.0)]:.4f}")
+    choice = model.report.get("joint_splines")
+    if choice and choice.get("candidates"):
+        lines.append(f"composite residual chosen on {choice['regions']}: " + selection_words(choice))
     lines.append(f"other tools: {'yes' if model.places_other_tools else 'no'}: {model.other_tools_reason}")
     return lines
 

@@ -11,9 +11,10 @@ statistics. It predicts where the real arm ends for a command, in each mode:
 ``dh``         forward kinematics of the identified robot;
 ``grid``       commanded + interpolated raw error;
 ``composite``  identified robot + residual: a field over the commanded
-               position (the paper's grid, for single-orientation data), or
-               joint-angle errors over the configuration (`JointResidual`,
-               for data at several orientations: right at any orientation).
+               position (the paper's grid), or joint-angle errors over the
+               configuration (`JointResidual`: right at any orientation),
+               with or without a field over the commanded position on top,
+               as chosen on held-out regions.
 
 It also says whether it can place a tool other than the one measured
 (`CompensationModel.places_other_tools`, with the reason).
@@ -61,6 +62,9 @@ class CompensationModel:
     residual : residual field, JointResidual or None
         Residuals after the DH model: a field over the commanded position,
         or joint-angle errors over the configuration.
+    residual_field : residual field or None
+        With a `JointResidual`, the field over the commanded position of the
+        residuals it leaves, added on top in mode composite (None: none).
     report : dict
         Fit and cross-validation statistics, warnings, provenance.
     R_tcp_target : ndarray, shape (3, 3)
@@ -94,6 +98,7 @@ class CompensationModel:
     grid: object
     residual: object
     report: dict
+    residual_field: object = None
     R_tcp_target: np.ndarray = dataclasses.field(default_factory=lambda: np.eye(3))
     places_other_tools: bool = False
     other_tools_reason: str = "not stated"
@@ -160,7 +165,7 @@ class CompensationModel:
     def error_field(self, mode):
         """The field over commanded positions ``mode`` adds (raw-error grid, residual grid), else None."""
         field = {"grid": self.grid, "composite": self.residual}.get(mode)
-        return None if getattr(field, "kind", None) == JOINT_KIND else field
+        return self.residual_field if getattr(field, "kind", None) == JOINT_KIND else field
 
     def predict(self, mode, joints, position, *, interpolation=None, outside="model"):
         """Predicted reached TCP positions.

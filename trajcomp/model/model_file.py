@@ -131,7 +131,7 @@ def save_model(path, model):
         "fixed_parameters": dict(model.dh_fixed),
         "linear": None if model.linear is None else model.linear.to_dict(),
     }
-    for key in ("grid", "residual"):
+    for key in ("grid", "residual", "residual_field"):
         field = getattr(model, key)
         if field is None:
             doc[key] = None
@@ -204,7 +204,7 @@ def load_model(path, robot=None):
         nominal = nominal.replace(T_flange_tool=_pose_internal(info["tool"], f"{path}: field robot.tool"))
         arrays = _read_sidecar(path, doc.get("sidecar"), doc.get("sidecar_sha256"), doc.get("calibration_id"))
         fields = {}
-        for key in ("grid", "residual"):
+        for key in ("grid", "residual", "residual_field"):
             entry = doc.get(key)
             if entry is not None:
                 entry = {
@@ -233,6 +233,7 @@ def load_model(path, robot=None):
             linear=None if doc.get("linear") is None else LinearCorrection.from_dict(doc["linear"]),
             grid=fields.get("grid"),
             residual=fields.get("residual"),
+            residual_field=fields.get("residual_field"),
             report=doc.get("report") or {},
             R_tcp_target=abc_to_matrix(np.radians(target.reshape(3))),
             places_other_tools=bool(tools["value"]),

@@ -233,7 +233,8 @@ def calibration_report(model, meas, *, criteria=None, files=(), options=None):
         "validity": {
             "measured_box": {"lower": position.min(axis=0).tolist(), "upper": position.max(axis=0).tolist()},
             "grids": {name: None if getattr(model, name, None) is None or getattr(getattr(model, name), "kind", "") == "joint"
-                      else grid_box(getattr(model, name)) for name in ("grid", "residual")},
+                      else grid_box(getattr(model, name)) for name in ("grid", "residual", "residual_field")
+                      if name != "residual_field" or model.residual_field is not None},
             "orientations": orientations(rotations),
             "tool": {"pose": tool.tolist(),
                      "identified_offset_mm": [float(v) for v in identified_tool]
@@ -258,6 +259,7 @@ def _joint_errors(model):
     return {
         "terms": families,
         "splines": model.report.get("joint_splines"),
+        "field_on_top": None if model.residual_field is None else model.residual_field.kind,
         "measured_range_deg": {"lower": np.degrees(residual.lower).round(3).tolist(),
                                "upper": np.degrees(residual.upper).round(3).tolist()},
         "beyond_range": "a spline term is held at its value at the edge of the measured range of its joint (no shape "

@@ -389,11 +389,14 @@ def _joint_errors(j):
     if splines:
         chosen = (f"knots every {splines['step_deg']:g} deg on joints {splines['joints']}, penalty {splines['penalty']:g}"
                   if splines["step_deg"] else "no spline terms")
+        if j.get("field_on_top"):
+            chosen += f", a {j['field_on_top']} field over the commanded positions on top"
         out += f"<p>Chosen on held-out regions ({esc(splines.get('regions', ''))}): {esc(chosen)}.</p>"
         if splines.get("candidates"):
-            out += table(("knot step (deg)", "penalty", "held-out mean |error| (mm)"),
-                         [(f"{c['step_deg']:g}", f"{c['penalty']:g}", f"{c['held_out_mm']:.4f}")
-                          for c in splines["candidates"]], numeric=(0, 1, 2))
+            out += table(("knot step (deg)", "penalty", "held-out mean |error| (mm)", "with the field on top (mm)"),
+                         [(f"{c['step_deg']:g}", f"{c['penalty']:g}", f"{c['held_out_mm']:.4f}",
+                           f"{c['with_field_mm']:.4f}" if "with_field_mm" in c else "-")
+                          for c in splines["candidates"]], numeric=(0, 1, 2, 3))
     return out
 
 
