@@ -123,7 +123,7 @@ class _Parts:
     """
 
     def __init__(self, robot, joints, position, measured, rotation, *, method, grid_step, kind, loss,
-                 orientation_weight, R_tcp_target=None, dh=None, splines=None):
+                 orientation_weight, R_tcp_target=None, dh=None, splines=None, start_values=None):
         self.dh = dh
         self.grid = None
         self.residual = None
@@ -139,7 +139,7 @@ class _Parts:
             self.left_out[self.dh.outliers] = True
             if method == "composite" and kind == JOINT_KIND:
                 self.residual, self.selection = _joint_residual(robot, self.dh, joints, position, measured, rotation,
-                                                                loss, orientation_weight, splines)
+                                                                loss, orientation_weight, splines, start_values)
                 modelled = fk(self.residual.robot(self.dh.robot), self.residual.reached(robot, joints))[:, :3, 3]
                 self.left_out = np.zeros(len(position), dtype=bool)
                 self.left_out[outlier_rows(measured - modelled)] = True
@@ -187,7 +187,8 @@ def _field(position, values, left_out, kind, grid_step):
     return fit_field(position[~left_out], values[~left_out], interpolation=kind)
 
 
-def _joint_residual(nominal, dh, joints, position, measured, rotation, loss, orientation_weight, splines=None):
+def _joint_residual(nominal, dh, joints, position, measured, rotation, loss, orientation_weight, splines=None,
+                    start_values=None):
     """Joint-error terms and a DH refinement on top of the kinematic fit (frames as that fit found them).
 
     The harmonic and gravity terms are identified with the DH refinement;
@@ -195,9 +196,10 @@ def _joint_residual(nominal, dh, joints, position, measured, rotation, loss, ori
     the commanded positions on top are chosen on held-out regions
     (`trajcomp.calibration.identify.select_splines`; the field only where no commanded
     position was measured in two orientations, `shares_positions`), or, with ``splines`` given (the record of an
-    earlier choice; step 0: no splines), fitted as given. Joint 6 gets no
-    spline: it turns the TCP about its own axis, which a point on the axis
-    hardly sees.
+    earlier choice; step 0: no splines), fitted as given, starting from
+    ``start_values`` (``{name: value}`` of a fit of more rows, the
+    cross-validation's full fit). Joint 6 gets no spline: it turns the TCP
+    about its own axis, which a point on the axis hardly sees.
 
     Returns
     -------
@@ -212,7 +214,8 @@ def _joint_residual(nominal, dh, joints, position, measured, rotation, loss, ori
         basis = SplineBasis(joints.min(axis=0), joints.max(axis=0),
                             np.radians(splines["step_deg"]) * np.isin(np.arange(6), spline_joints), splines["penalty"])
         refined = identify(dh.robot, joints, measured, rotation=rotation, joint_terms=True, splines=basis, loss=loss,
-                           nominal=nominal, orientation_weight=orientation_weight, R_tcp_target=dh.R_tcp_target)
+                           nominal=nominal, orientation_weight=orientation_weight, R_tcp_target=dh.R_tcp_target,
+                           start_values=start_values)
         record = dict(splines)
     else:
         refined = identify(dh.robot, joints, measured, rotation=rotation, joint_terms=True, loss=loss, nominal=nominal,
@@ -423,7 +426,9 @@ def calibrate(robot, meas, *, robot_ref=None, method="composite", frame=None, gr
                      mode_errors(model, _rows(joints, keep), position[keep], measured[keep]).items()}
     if folds > 1:
         data = (robot, _rows(joints, keep), position[keep], measured[keep], _rows(rotation_base, keep),
-                options | {"R_tcp_target": None if dh is None else dh.R_tcp_target, "splines": parts.selection})
+                options | {"R_tcp_target": None if dh is None else dh.R_tcp_target, "splines": parts.selection,
+                           "start_values": None if kind != JOINT_KIND else dict(zip(model.residual.names,
+                                                                                    model.residual.values))})
         held = fold_errors(*data, folds, seed, progress)
         report["cross_validation"] = {"folds": folds, "interpolation": held.pop("interpolation")} | {
             m: ErrorStats.from_errors(e).as_dict() for m, e in held.items()}
