@@ -26,6 +26,7 @@ NUMBER = r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?"
 LENGTH_LIMIT = 1e6  # mm (a kilometre)
 ANGLE_LIMIT = 1e4  # deg
 JOINT_LIMIT = 3600.0  # deg (ten turns)
+_BRACKET_OR_COMMA = re.compile(r"[{}\[\](),]")  # what `split_top` looks at
 
 
 def read_source(path, name=None):
@@ -114,12 +115,14 @@ def split_top(text, offset=0):
     ``start`` is the piece's offset in the source (``offset`` is where ``text`` begins).
     """
     parts, depth, start = [], 0, 0
-    for k, ch in enumerate(text):
+    for m in _BRACKET_OR_COMMA.finditer(text):  # the other characters count for nothing: skipped by the regex
+        ch = m.group()
         if ch in "{[(":
             depth += 1
         elif ch in "}])":
             depth -= 1
-        elif ch == "," and depth == 0:
+        elif depth == 0:
+            k = m.start()
             parts.append((text[start:k], offset + start))
             start = k + 1
     parts.append((text[start:], offset + start))

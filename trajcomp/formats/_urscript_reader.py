@@ -50,16 +50,33 @@ _NAME = re.compile(r"^\s*([A-Za-z_]\w*)\s*$")
 _WORD = re.compile(r"[A-Za-z_]\w*")
 _NUMBERS_ONLY = re.compile(r"^\s*p\[[\s\d.eE+,-]*\]\s*$")
 _SIGNS = re.compile(r"(?m)^\s*def\s+\w+\s*\(|\b(?:movej|movel|movep|movec)\s*\(|\bp\[")
+_PARENTHESIS = re.compile(r"[()]")
+# every pose literal of the script, whose rotations are computed together (`_literal_poses`)
+_POSE_LITERAL = re.compile(r"\bp\[" + _SIX + r"\]")
 
 
 def _closing(text, open_at):
     """Index of the parenthesis closing the one at ``open_at``."""
     depth = 0
-    for k in range(open_at, len(text)):
-        depth += {"(": 1, ")": -1}.get(text[k], 0)
+    for m in _PARENTHESIS.finditer(text, open_at):
+        depth += 1 if m.group() == "(" else -1
         if depth == 0:
-            return k
+            return m.start()
     return -1
+
+
+def _literal_poses(masked):
+    """The poses of the script's pose literals, computed together: ``{offset of the literal's x: T (4, 4)}``, mm.
+
+    Literals with a number out of range are left out (their reading refuses them).
+    """
+    found = list(_POSE_LITERAL.finditer(masked))
+    values = np.array([m.groups() for m in found], dtype=float).reshape(-1, 6)
+    keep = np.flatnonzero((np.isfinite(values) & (np.abs(values) <= LENGTH_LIMIT / 1000.0)).all(axis=1))
+    T = np.tile(np.eye(4), (len(keep), 1, 1))
+    T[:, :3, :3] = rotvec_to_matrix(values[keep, 3:])
+    T[:, :3, 3] = values[keep, :3] * 1000.0
+    return {found[k].start(1): T[row] for row, k in enumerate(keep.tolist())}
 
 
 def pose(values):
@@ -95,6 +112,7 @@ class _Reader:
         self.tools, self.tool, self.tool_why = {}, None, ""
         self.frame_uses, self.point_uses = {}, {}  # variable -> first line used as frame / as point
         self.direct = set()  # joint-list variables used as motion targets
+        self.poses = _literal_poses(masked)
         self.params = {p.strip().split("=")[0].strip() for m in _DEF.finditer(masked)
                        for p in m.group(1).split(",") if p.strip()}
         self.set_at_run_time, self.assigned = {}, {}  # name -> line of a non-literal assignment; of every one
@@ -112,7 +130,9 @@ class _Reader:
         if m := _POSE.match(text):
             values = [finite(m.group(k), self.source.name, line, original, f"{name or 'pose'} {r}", LENGTH_LIMIT / 1000.0)
                       for k, r in enumerate(POSE, start=1)]
-            return Target(name=name, line=line, pose=pose(values), spans=spans(0, m, POSE, offset))
+            computed = self.poses.get(offset + m.start(1))
+            return Target(name=name, line=line, pose=pose(values) if computed is None else computed,
+                          spans=spans(0, m, POSE, offset))
         if m := _LIST.match(text):
             joints = np.array([finite(m.group(k), self.source.name, line, original, f"{name or 'list'} {r}",
                                       np.radians(JOINT_LIMIT)) for k, r in enumerate(JOINTS, start=1)])
