@@ -1,11 +1,20 @@
 """The RoboDK post processor wrapper in plugins/trajcomp-robodk, driven as RoboDK drives a post.
 
-A stand-in vendor post records every call. References: the virtual UR10 the
-model was calibrated on (where the recorded joints really put the TCP),
-closed-form nominal IK (the joints RoboDK would plan), and the API's own
-answer for the same targets, tool and frame.
+The target path (a language trajcomp does not read): a stand-in vendor post
+records every call. References: the virtual UR10 the model was calibrated
+on (where the recorded joints really put the TCP), closed-form nominal IK
+(the joints RoboDK would plan), and the API's own answer for the same
+targets, tool and frame.
+
+The program path: real RoboDK vendor posts (tests/data/robodk_posts, as
+published) write the program; the reference is the plain vendor post's
+program compensated by ``trajcomp compensate`` (the CLI), which the adapter
+must match byte for byte, with the same verdict.
 """
 
+import dataclasses
+import importlib.util
+import json
 import sys
 import warnings
 from pathlib import Path
@@ -16,11 +25,15 @@ from scipy.spatial.transform import Rotation
 from virtual_cell import landing_error, virtual_cell
 
 import trajcomp
+from trajcomp.cli import main
 from trajcomp.errors import TrajcompError
 from trajcomp.arm.ik import ik
 from trajcomp.arm.kinematics import fk
+from trajcomp.model.model_file import load_model
+from trajcomp.programs.configuration import abb_confdata
 
 PLUGIN = Path(__file__).resolve().parents[1] / "plugins" / "trajcomp-robodk"
+POSTS = Path(__file__).resolve().parent / "data" / "robodk_posts"
 LANDED = 0.03  # mm
 MISSED = 0.5  # mm
 FRAME = (100.0, 50.0, 0.0, 15.0, 0.0, 0.0)  # the station's reference frame in the robot base: mm, deg
@@ -160,7 +173,8 @@ def test_types_and_everything_else_pass_through(generated):
     assert calls[0] == ("ProgStart", ("weld",)) and calls[4] == ("setSpeed", (100.0,))
     assert calls[2][1][1:] == (1, "Frame 1") and calls[-1] == ("ProgSave", ("/tmp/robodk", "weld"))
     assert calls[5] == ("MoveJ", (None, generated["home"], None))  # a joint move: as RoboDK gave it
-    assert calls[1][1] == ("compensated by trajcomp 0.1.0: robot ur10, mode composite", True)
+    assert calls[1][1] == ("compensated pose by pose by trajcomp 0.1.0: robot ur10, mode composite; trajcomp does "
+                           "not read this post's programs, so this one is not re-timed and has no verdict", True)
     assert calls[-3][1][0].startswith("trajcomp: 4 poses compensated, largest correction ")
     for pose, joints, conf in moves(calls):
         assert type(pose) is Mat and isinstance(joints, list) and len(joints) == 6
@@ -205,3 +219,153 @@ def test_flags_follow_a_joint_across_its_boundary(robodk_plugin, cell):
     assert robodk_plugin.conf_after(cell.robot, (1, 0, 0), after, before) == (1, 0, 1)
     assert robodk_plugin.conf_after(cell.robot, [1, 0, 1], before, before + 0.1) == [1, 0, 1]
     assert robodk_plugin.conf_after(cell.robot, None, before, after) is None
+
+
+# ------------------------------------------------------- the program path: real vendor posts
+
+CIRCLE = [(470.0, 20.0, 720.0), (510.0, 40.0, 740.0), (540.0, 70.0, 730.0), (560.0, 30.0, 760.0),
+          (500.0, 90.0, 700.0)]  # KR6 targets in its base, mm: inside the kuka_model cube (400, -50, 650) + 200
+ABB_PATH = [(1120.0, -180.0, 820.0), (1080.0, -200.0, 860.0), (1150.0, -120.0, 840.0), (1180.0, -200.0, 800.0),
+            (1100.0, -100.0, 880.0)]  # IRB 4600 targets in its base, mm: inside the abb_model cube
+
+
+@dataclasses.dataclass(frozen=True)
+class Station:
+    """A RoboDK station: the vendor post of its robot, the model, the reference frame and the planned moves."""
+
+    post: str  # the vendor post's module in tests/data/robodk_posts
+    model: Path
+    robot: object  # the model's nominal robot, with its calibrated TCP
+    frame: np.ndarray  # T_base_frame (4, 4), mm
+    targets: np.ndarray  # T_frame_tool (5, 4, 4), mm
+    joints: np.ndarray  # (5, 6) deg, the joints RoboDK plans: nominal IK in one posture
+    flags: list  # [REAR, LOWERARM, FLIP] of each target's joints
+    speed: float  # mm/s of setSpeed, or None: the post's default
+
+
+def station(post, model_path, frame, T_base, seed_deg, speed=None):
+    """A `Station` planning targets ``T_base`` (N, 4, 4) mm in the posture nearest ``seed_deg``.
+
+    The flags are those of the planned joints as ABB's confdata holds them (cfx = 4 REAR + 2 LOWERARM + FLIP,
+    `trajcomp.programs.configuration.abb_confdata`): RoboDK gives each target the flags of its joints.
+    """
+    robot = load_model(model_path).nominal
+    q = ik(robot, T_base, seed=np.radians(seed_deg)).q
+    flags = [[(cfx >> shift) & 1 for shift in (2, 1, 0)] for *_, cfx in abb_confdata(robot, q)]
+    return Station(post, model_path, robot, frame, np.linalg.inv(frame) @ T_base, np.degrees(q), flags, speed)
+
+
+@pytest.fixture(scope="module")
+def abb_model(tmp_path_factory):
+    """A model of the virtual IRB 4600 on a small cube (27 points, folds 0: about 1 s)."""
+    folder = tmp_path_factory.mktemp("abb")
+    plan, meas, model = folder / "plan.csv", folder / "meas.csv", folder / "abb.yaml"
+    assert main(["plan", "--robot", "abb_irb4600", "--cube", "1000,-300,700", "--side", "240", "--step", "120",
+                 "-o", str(plan)]) == 0
+    assert main(["simulate", str(plan), "--robot", "abb_irb4600", "--seed", "1", "-o", str(meas)]) == 0
+    assert main(["calibrate", str(meas), "--robot", "abb_irb4600", "--grid-step", "120", "--folds", "0",
+                 "-o", str(model)]) == 0
+    return model
+
+
+@pytest.fixture(scope="module")
+def stations(cell, kuka_model, abb_model):
+    pytest.importorskip("robodk")
+    irb = np.array([matrix((*p, -180.0, 0.0, 180.0)) for p in ABB_PATH])
+    ur10 = matrix(FRAME) @ np.array([matrix(t) for t in TARGETS + [(520.0, -40.0, 530.0, 75.0, 0.0, 180.0)]])
+    kr6 = np.array([matrix((*p, 0.0, 90.0, 0.0)) for p in CIRCLE])
+    return {"krl": station("KUKA_KRC4", kuka_model, matrix((30.0, -20.0, 0.0, 10.0, 0.0, 0.0)),
+                           matrix((-30.0, 20.0, 0.0, 0.0, 0.0, 0.0)) @ kr6, [0, -90, 90, 0, 90, 0], 100.0),
+            # without setSpeed: this post then assigns its speed variable once, a speed trajcomp can re-time
+            "urscript": station("Universal_Robots_SCRIPT", cell.model_path, matrix(FRAME), ur10,
+                                [27, -185, 91, 4, -90, 27]),
+            "rapid": station("ABB_RAPID_IRC5", abb_model, matrix((50.0, 20.0, 0.0, 5.0, 0.0, 0.0)), irb,
+                             [-16, 4, 40, 0, 45, -16], 150.0)}
+
+
+def vendor_post(name):
+    """The vendor post ``name``'s RobotPost, imported afresh: RoboDK runs each post in a new interpreter, and
+    these keep a program's lines in class attributes."""
+    spec = importlib.util.spec_from_file_location(name, POSTS / f"{name}.py")
+    module = importlib.util.module_from_spec(spec)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", PendingDeprecationWarning)  # from robodk import *
+        warnings.simplefilter("ignore", DeprecationWarning)  # '\M' in a string of the ABB post, as published
+        spec.loader.exec_module(module)
+    return module.RobotPost
+
+
+def write_program(RobotPost, station, folder, tool=None):
+    """Generate 'weld' through ``RobotPost`` as RoboDK does; the post and the program file it saved."""
+    from robodk.robomath import Mat
+
+    post = RobotPost(station.post, station.robot.name, 6)
+    pose = [Mat(T.tolist()) for T in station.targets]
+    joints = [list(q) for q in station.joints]
+    post.ProgStart("weld")
+    post.RunMessage("Program generated by RoboDK", True)
+    post.setFrame(Mat(station.frame.tolist()), 1, "Frame 1")
+    post.setTool(Mat((station.robot.T_flange_tool if tool is None else tool).tolist()), 1, "Tool 1")
+    if station.speed is not None:
+        post.setSpeed(station.speed)
+    flags = station.flags
+    post.MoveJ(pose[0], joints[0], flags[0])
+    post.MoveL(pose[1], joints[1], flags[1])
+    post.MoveC(pose[2], joints[2], pose[3], joints[3], flags[2], flags[3])
+    post.MoveL(pose[4], joints[4], flags[4])
+    post.ProgFinish("weld")
+    post.ProgSave(str(folder), "weld")
+    return post, folder / f"weld.{post.PROG_EXT}"
+
+
+def verdict(folder, program):
+    """The verdict of the report beside ``program``, its folder's name replaced."""
+    return json.loads(Path(f"{program}.json").read_text().replace(str(folder), "<folder>"))["verdict"]
+
+
+@pytest.mark.parametrize("language", ["krl", "rapid", "urscript"])
+def test_the_adapter_writes_the_program_and_verdict_of_the_cli(language, stations, robodk_plugin, tmp_path, capsys):
+    s = stations[language]
+    adapter, plain = tmp_path / "adapter", tmp_path / "plain"
+    adapter.mkdir(), plain.mkdir()
+    RobotPost = robodk_plugin.compensated_post(vendor_post(s.post), model=s.model, json_only=True)
+    assert issubclass(RobotPost, robodk_plugin.ProgramPost)
+    post, written = write_program(RobotPost, s, adapter)
+    _, reference = write_program(vendor_post(s.post), s, plain)
+    planned = reference.read_bytes()
+    code = main(["compensate", str(reference), "--model", str(s.model), "--joint-targets", "compensate",
+                 "--in-place", "-o", str(reference), "--report", str(reference), "--json-only"])
+    assert written.read_bytes() == reference.read_bytes() != planned
+    [run] = post.runs
+    assert code in (0, 1) and run.passed == (code == 0)
+    assert verdict(adapter, written) == verdict(plain, reference) == json.loads(json.dumps(
+        run.compliance.doc["verdict"]).replace(str(adapter), "<folder>"))
+    assert sorted(p.name for p in adapter.iterdir()) == sorted(p.name for p in plain.iterdir())
+    shown = capsys.readouterr().out  # RoboDK shows what a post prints, and its LOG
+    assert f"SAVED: {written}\n" in shown
+    for line in (f"\nverdict: {'PASS' if code == 0 else 'FAIL'}, tolerance 0.1 mm", f"\nwrote {written}, "):
+        assert line in shown and line in "\n" + post.LOG
+
+
+def test_a_refused_program_is_moved_aside_not_left_under_its_name(stations, robodk_plugin, tmp_path):
+    s = stations["krl"]
+    RobotPost = robodk_plugin.compensated_post(vendor_post(s.post), model=s.model, max_correction=0.1)
+    with pytest.raises(TrajcompError, match=r"0\.1 mm.*kept as .*weld\.src\.uncompensated, not compensated"):
+        write_program(RobotPost, s, tmp_path)
+    assert [p.name for p in tmp_path.iterdir()] == ["weld.src.uncompensated"]
+
+
+def test_the_program_path_keeps_the_station_check(stations, robodk_plugin, tmp_path):
+    s = stations["urscript"]
+    RobotPost = robodk_plugin.compensated_post(vendor_post(s.post), model=s.model)
+    with pytest.raises(TrajcompError, match=r"MoveJ #1: .* 5.000 mm .* not the calibrated one"):
+        write_program(RobotPost, s, tmp_path, tool=s.robot.T_flange_tool @ matrix((0, 0, 5.0, 0, 0, 0)))
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_a_language_trajcomp_does_not_read_takes_the_target_path(robodk_plugin, cell):
+    motoman = type("RobotPost", (VendorPost,), {"PROG_EXT": "JBI"})
+    post = robodk_plugin.compensated_post(motoman, model=cell.model_path)("Motoman", "UR10", 6)
+    assert isinstance(post, robodk_plugin.TargetPost)
+    post.ProgStart("weld")
+    assert "trajcomp does not read .JBI's programs, so this one is not re-timed" in post.vendor.calls[1][1][0]
