@@ -164,11 +164,17 @@ def test_a_damaged_file_is_refused_at_its_first_bad_row_and_rows_are_bounded(tmp
     with open(path, "w") as handle:  # a header repeated: refused at line 2, not once 100,000 rows are in memory
         handle.write("j1,j2,j3,j4,j5,j6\n" * 100_000)
     read = []
-    real_float = float
-    monkeypatch.setattr(measurements, "float", lambda text: read.append(text) or real_float(text), raising=False)
+    real_rows = measurements._rows
+
+    def counted(*args):
+        for row in real_rows(*args):
+            read.append(row)
+            yield row
+
+    monkeypatch.setattr(measurements, "_rows", counted)
     with pytest.raises(ReadError, match=r"headers\.csv:2: field j1: not a number: 'j1'"):
         read_measurements(path)
-    assert len(read) == 1
+    assert len(read) <= 65  # the header and the first block of rows
     monkeypatch.setattr(measurements, "MAX_ROWS", 3)
     path.write_text("j1,j2,j3,j4,j5,j6\n" + "0,1,2,3,4,5\n" * 4)
     with pytest.raises(ReadError, match=r"headers\.csv:5: more than 3 data rows"):

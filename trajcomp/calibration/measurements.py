@@ -11,6 +11,7 @@ import csv
 import dataclasses
 import io
 import math
+import operator
 import re
 
 import numpy as np
@@ -36,6 +37,7 @@ __all__ = ["Measurements", "parse_mapping", "read_measurements", "format_measure
 MAX_FIELD = 1000  # characters: no number in a measurement file is longer
 MAX_ROWS = 1_000_000  # data rows of one measurement file (a tracker run of 5,892 poses is a large one)
 MAX_COLUMNS = 1000  # fields of one row
+_BLOCK = 16384  # rows converted to numbers at once
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -121,12 +123,12 @@ def _rows(path, layout):
             count = 0
             for row in reader:
                 number = reader.line_num
-                if not row or not any(cell.strip() for cell in row) or row[0].lstrip().startswith("#"):
+                if not row or row[0].lstrip().startswith("#") or not "".join(row).strip():
                     continue
-                long = [cell for cell in row if len(cell) > MAX_FIELD]
-                if long:
+                if max(map(len, row)) > MAX_FIELD:
+                    long = next(cell for cell in row if len(cell) > MAX_FIELD)
                     raise ReadError(
-                        f"{path}:{number}: a field of {len(long[0])} characters is too long (at most {MAX_FIELD})"
+                        f"{path}:{number}: a field of {len(long)} characters is too long (at most {MAX_FIELD})"
                     )
                 if len(row) > MAX_COLUMNS:
                     raise ReadError(f"{path}:{number}: {len(row)} fields, more than the {MAX_COLUMNS} a row may have")
@@ -138,6 +140,84 @@ def _rows(path, layout):
         raise ReadError(f"{path}: cannot read: {exc}") from exc
     except csv.Error as exc:
         raise ReadError(f"{path}:{reader.line_num}: {exc}") from None
+
+
+def _combined(table, terms):
+    """The sum (N,) of a mapping expression's signed columns ``[(sign, index), ...]`` of ``table`` (a view for one
+    column unsigned: the fields of a standard file take no memory of their own)."""
+    (sign, first), *others = terms
+    total = table[:, first] if sign == 1.0 else sign * table[:, first]
+    for sign, column in others:
+        total = total + sign * table[:, column]
+    return total
+
+
+def _table(path, header, columns, rows):
+    """The numbers of ``columns`` (indices into ``header``) of every data row, and the rows' line numbers.
+
+    Rows are converted a block at a time (a few rows first, then up to
+    `_BLOCK`): memory holds the numbers and one block of text, and a file
+    damaged early is refused after its first rows. A row with another
+    field count than the header, a cell that is not a number or not finite,
+    are refused naming the first such row's line and field.
+
+    Returns
+    -------
+    table : ndarray, shape (N, len(columns))
+    lines : ndarray of int, shape (N,)
+    """
+    blocks, lines, cells, numbers = [], [], [], []
+    size = 64
+    pick = operator.itemgetter(*columns) if len(columns) > 1 else lambda row: [row[c] for c in columns]
+
+    def convert():
+        nonlocal size
+        if cells:
+            blocks.append(_numbers(path, header, columns, cells, numbers))
+            lines.append(np.array(numbers))
+            cells.clear()
+            numbers.clear()
+            size = min(2 * size, _BLOCK)
+
+    for number, row in rows:
+        if len(row) != len(header):
+            convert()  # a bad cell in an earlier row is named first
+            raise ReadError(f"{path}:{number}: expected {len(header)} fields as in the header, got {len(row)}")
+        cells.append(pick(row))
+        numbers.append(number)
+        if len(cells) >= size:
+            convert()
+    convert()
+    table = np.concatenate(blocks) if blocks else np.empty((0, len(columns)))
+    return table, np.concatenate(lines) if lines else np.empty(0, dtype=int)
+
+
+def _numbers(path, header, columns, cells, numbers):
+    """Float array (n, len(columns)) of a block of text ``cells``; ReadError at the first bad one, by line and field.
+
+    numpy converts a block at once (it reads a number as ``float()`` does); a
+    block it refuses, or holding a NaN or infinity, is read again cell by
+    cell to name the first bad one.
+    """
+    try:
+        block = np.array(cells, dtype=np.float64)
+    except ValueError:
+        block = None
+    if block is not None and np.isfinite(block).all():
+        return block
+    checked = []
+    for number, row in zip(numbers, cells):
+        checked.append([])
+        for column, cell in zip(columns, row):
+            cell = cell.strip()
+            try:
+                value = float(cell)
+            except ValueError:
+                raise ReadError(f"{path}:{number}: field {header[column]}: not a number: {cell!r}") from None
+            if not math.isfinite(value):
+                raise ReadError(f"{path}:{number}: field {header[column]}: not a finite number: {cell!r}")
+            checked[-1].append(value)
+    return np.array(checked)
 
 
 def read_measurements(path, layout=None):
@@ -175,27 +255,13 @@ def read_measurements(path, layout=None):
         if field not in mapping and field in header:
             mapping[field] = field
     terms = {field: _parse_expression(expr, header, path, field) for field, expr in mapping.items()}
-    values, numbers = {field: [] for field in terms}, []
-    for number, row in rows:
-        if len(row) != len(header):
-            raise ReadError(f"{path}:{number}: expected {len(header)} fields as in the header, got {len(row)}")
-        for field, field_terms in terms.items():
-            total = 0.0
-            for sign, column in field_terms:
-                cell = row[column].strip()
-                try:
-                    number_value = float(cell)
-                except ValueError:
-                    raise ReadError(f"{path}:{number}: field {header[column]}: not a number: {cell!r}") from None
-                if not math.isfinite(number_value):
-                    raise ReadError(f"{path}:{number}: field {header[column]}: not a finite number: {cell!r}")
-                total += sign * number_value
-            values[field].append(total)
-        numbers.append(number)
-    if not numbers:
+    columns = sorted({column for field_terms in terms.values() for _, column in field_terms})
+    table, lines = _table(path, header, columns, rows)
+    if not len(lines):
         raise ReadError(f"{path}: header on line {header_line} but no data rows")
-    values = {field: np.array(column) for field, column in values.items()}
-    lines = np.array(numbers)
+    at = {column: k for k, column in enumerate(columns)}
+    values = {field: _combined(table, [(sign, at[column]) for sign, column in field_terms])
+              for field, field_terms in terms.items()}
 
     def group(names, scale=1.0):
         present = [n for n in names if n in values]
