@@ -66,7 +66,7 @@ def test_yaml_and_sidecar_are_written_all_or_none(models, tmp_path):
     (lambda doc: doc["parameters"][1].update(sigma=float("inf")), "parameters.sigma: not finite"),
     (lambda doc: doc.update(tracker_to_base=[0, 0, float("nan"), 0, 0, 0]), "tracker_to_base: not finite"),
     (lambda doc: doc["robot"].update(tool=[0, 0, float("inf"), 0, 0, 0]), "robot.tool: not finite"),
-    (lambda doc: doc["linear"]["dx"].update(intercept=float("nan")), "linear correction"),
+    (lambda doc: doc["linear"]["dx"].update(intercept=float("nan")), r"field linear\.dx\.intercept: nan is beyond"),
     (lambda doc: doc.update(sidecar="../elsewhere.npz"), "sidecar: '../elsewhere.npz' must be the name of a file"),
     (lambda doc: doc.update(sidecar="cell.yaml"), "must be the name of a file beside the model, not the model"),
 ])

@@ -25,3 +25,24 @@ def test_plain_types_only_and_the_same_error_class():
     for bad in ("a: [1, 2", "!!python/object:os.system {}"):
         with pytest.raises(yaml.YAMLError):
             yaml_text.load(bad)
+
+
+@pytest.mark.parametrize("text", ["[" * 100_000 + "]" * 100_000, "- " * 100_000 + "1", "{a: " * 2000 + "1" + "}" * 2000])
+def test_collections_nested_beyond_the_bound_are_refused_before_libyaml_builds_them(text):
+    # 100,000 '[' were a segmentation fault in libyaml's recursive composer (exit 139, no message)
+    with pytest.raises(yaml.YAMLError, match=r"nested more than 100 deep \(line 1\)"):
+        yaml_text.load(text)
+
+
+def test_collections_nested_to_the_bound_are_read():
+    text = "b: " + "[" * 99 + "1" + "]" * 99  # the document's mapping and 99 lists: 100 deep
+    nested = yaml_text.load(text)["b"]
+    for _ in range(99):
+        assert len(nested) == 1
+        nested = nested[0]
+    assert nested == 1
+
+
+def test_an_integer_of_more_digits_than_python_converts_is_a_yaml_error():
+    with pytest.raises(yaml.YAMLError, match=r"a value cannot be read: Exceeds the limit \(4300 digits\)"):
+        yaml_text.load("delta: " + "9" * 5000)  # was a ValueError: an internal error, exit 3

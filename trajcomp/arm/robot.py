@@ -171,16 +171,22 @@ def load_robot(name_or_path):
         text = source.read_text(encoding="utf-8")
     else:
         path = Path(text_name)
-        if not path.is_file():
+        try:
+            found = path.is_file()
+        except OSError:  # a name longer than the system allows (is_file() answers False to most errors)
+            found = False
+        if not found:
             raise RobotError(
-                f"unknown robot {text_name!r}: not a built-in name "
+                f"unknown robot {yaml_text.shown(text_name)}: not a built-in name "
                 f"({', '.join(builtin_robot_names())}) and no such file"
             )
         label = str(path)
         try:
-            text = path.read_text(encoding="utf-8")
+            text = yaml_text.read(path)
         except (OSError, UnicodeError) as exc:
             raise RobotError(f"{label}: cannot read: {exc}") from exc
+        except yaml.YAMLError as exc:
+            raise RobotError(f"{label}: not a robot file: {exc}") from exc
     return robot_from_yaml(text, label)
 
 

@@ -32,7 +32,6 @@ converted to A, B, C when read.
 import dataclasses
 import math
 import re
-from pathlib import Path
 
 import numpy as np
 import yaml
@@ -179,7 +178,7 @@ def load_layout(path):
     """
     path = str(path)
     try:
-        doc = yaml_text.load(Path(path).read_text(encoding="utf-8"))
+        doc = yaml_text.load(yaml_text.read(path))
     except (OSError, UnicodeError) as exc:
         raise ReadError(f"{path}: cannot read: {exc}") from exc
     except yaml.YAMLError as exc:

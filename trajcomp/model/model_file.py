@@ -22,14 +22,14 @@ import yaml
 from trajcomp import __version__
 from trajcomp.support import yaml_text
 from trajcomp.support.atomic import recover, write_files_atomic
-from trajcomp.errors import ModelError
+from trajcomp.errors import IKError, ModelError, RobotError
 from trajcomp.model.grid import field_from_dict
 from trajcomp.arm.ik import Configuration
 from trajcomp.model.joint_errors import KIND as JOINT_KIND
 from trajcomp.model.joint_errors import JointResidual
 from trajcomp.model.linear import LinearCorrection
 from trajcomp.model.compensation_model import CompensationModel
-from trajcomp.arm.parameters import is_angle
+from trajcomp.arm.parameters import TOOL_NAMES, candidate_parameters, is_angle
 from trajcomp.support.plain_data import plain
 from trajcomp.arm.robot import load_robot
 from trajcomp.arm.transforms import abc_to_matrix, matrix_to_abc, matrix_to_pose, pose_to_matrix
@@ -37,8 +37,9 @@ from trajcomp.arm.transforms import abc_to_matrix, matrix_to_abc, matrix_to_pose
 FORMAT = "trajcomp-model/2"
 SUFFIXES = (".yaml", ".yml")
 _SIDECAR_NODES = 1000  # grids with more nodes go to a sidecar .npz
-_SIDECAR_BYTES = 1 << 30  # largest sidecar read, on disk and its arrays unpacked (a 10 mm grid over 1 m^3: 24 MB)
+_SIDECAR_BYTES = 64 << 20  # largest sidecar read, on disk and its arrays unpacked (a 10 mm grid over 1 m^3: 24 MB)
 _REGISTRATION_BOUND = 1e5  # mm, |translation| of a tracker registration, base, tool or measured-point offset
+_FIELD_BOUND = 1e6  # |value| of a grid, residual or linear correction entry (mm, mm/mm, rad)
 
 
 def _pose_user(mat):
@@ -160,7 +161,69 @@ def _posture_index(text, path):
     parts = text.split("/") if isinstance(text, str) else []
     if len(parts) != 3:
         raise ModelError(f"{path}: field postures: expected shoulder/elbow/wrist, got {yaml_text.shown(text)}")
-    return Configuration(*parts).index
+    try:
+        return Configuration(*parts).index
+    except IKError as exc:
+        raise ModelError(f"{path}: field postures: {exc}") from None
+
+
+def _nominal_robot(ref, path):
+    """The robot a model names (a built-in name or a robot file); ModelError naming the model's field if not."""
+    if not isinstance(ref, str):
+        raise ModelError(f"{path}: field robot.ref: expected a robot name, got {yaml_text.shown(ref)}")
+    try:
+        return load_robot(ref)
+    except RobotError as exc:
+        raise ModelError(f"{path}: field robot.ref: {exc}") from None
+
+
+def _check_names(names, nominal, where):
+    """Refuse parameter names the nominal robot has not, or given twice (deltas would be applied twice)."""
+    known = set(candidate_parameters(nominal, tool=False, orientation=True, tracker=True)) | set(TOOL_NAMES)
+    seen = set()
+    for name in names:
+        if not isinstance(name, str) or name not in known:
+            raise ModelError(f"{where}: {yaml_text.shown(name)} is no parameter of robot {nominal.name}")
+        if name in seen:
+            raise ModelError(f"{where}: {name} is given twice")
+        seen.add(name)
+
+
+def _check_magnitudes(value, where):
+    """Refuse a number in ``value`` (nested lists and mappings) that is not finite or beyond `_FIELD_BOUND`.
+
+    The grids' origins, steps and errors (mm), the linear correction's
+    intercepts (mm) and slopes (mm/mm), the joint residual's coefficients
+    and joint ranges (rad) are all far below it: beyond it a value is damage
+    (``1e308``), which would overflow into infinities downstream.
+    """
+    if isinstance(value, dict):
+        for key, child in value.items():
+            _check_magnitudes(child, f"{where}.{key}")
+    elif isinstance(value, list):
+        for child in value:
+            _check_magnitudes(child, where)
+    elif isinstance(value, (int, float)) and not isinstance(value, bool) and not abs(value) <= _FIELD_BOUND:
+        raise ModelError(f"{where}: {yaml_text.shown(value)} is beyond {_FIELD_BOUND:g} or not finite")
+
+
+def _check_report(model):
+    """Refuse a report whose sections other code reads are not of their shape (the landing data are read now)."""
+    report = model.report
+    if not isinstance(report, dict):
+        raise ModelError(f"field report: expected a mapping, got {yaml_text.shown(report)}")
+    for key in ("fit", "cross_validation", "measurements", "identifiability"):
+        if not isinstance(report.get(key, {}), dict):
+            raise ModelError(f"field report.{key}: expected a mapping, got {yaml_text.shown(report[key])}")
+    for key in ("fit", "cross_validation"):
+        for mode, stats in report.get(key, {}).items():
+            values = [v for value in stats.values() for v in (value if isinstance(value, list) else [value])] \
+                if isinstance(stats, dict) else []
+            if not all(v is None or isinstance(v, (int, float)) for v in values):
+                raise ModelError(f"field report.{key}.{mode}: expected numbers, got {yaml_text.shown(stats)}")
+    from trajcomp.model.landing import of_model  # here: the landing estimate's imports are not every command's
+
+    of_model(model)
 
 
 def load_model(path, robot=None):
@@ -182,7 +245,7 @@ def load_model(path, robot=None):
     path = Path(path)
     recover(path.parent)  # a model and sidecar a killed run left half-renamed are completed first
     try:
-        doc = yaml_text.load(path.read_text(encoding="utf-8"))
+        doc = yaml_text.load(yaml_text.read(path))
     except (OSError, UnicodeError) as exc:
         raise ModelError(f"{path}: cannot read: {exc}") from exc
     except yaml.YAMLError as exc:
@@ -198,12 +261,14 @@ def load_model(path, robot=None):
         info = doc["robot"]
         if robot is not None and robot not in (info["name"], info["ref"]):
             raise ModelError(f"{path}: model is for robot {yaml_text.shown(info['name'])}, not {robot!r}")
-        nominal = load_robot(info["ref"])
+        nominal = _nominal_robot(info["ref"], path)
         if _robot_fingerprint(nominal) != info["dh_fingerprint"]:
             raise ModelError(f"{path}: the nominal DH table of robot {yaml_text.shown(info['ref'])} differs from the one calibrated")
         nominal = nominal.replace(T_flange_tool=_pose_internal(info["tool"], f"{path}: field robot.tool"))
         arrays = _read_sidecar(path, doc.get("sidecar"), doc.get("sidecar_sha256"), doc.get("calibration_id"))
         fields = {}
+        for key in ("grid", "residual", "residual_field", "linear"):
+            _check_magnitudes(doc.get(key), f"{path}: field {key}")
         for key in ("grid", "residual", "residual_field"):
             entry = doc.get(key)
             if entry is not None:
@@ -215,6 +280,7 @@ def load_model(path, robot=None):
                 fields[key] = JointResidual.from_dict(entry) if joint else field_from_dict(entry)
         params = doc.get("parameters") or []
         names = [p["name"] for p in params]
+        _check_names(names, nominal, f"{path}: field parameters.name")
         scale = np.array([math.pi / 180.0 if is_angle(n) else 1.0 for n in names])
         delta = _finite([p["delta"] for p in params], f"{path}: field parameters.delta") * scale
         _check_bounds(names, delta, f"{path}: field parameters.delta")
@@ -240,11 +306,12 @@ def load_model(path, robot=None):
             other_tools_reason=str(tools["reason"]),
             postures=tuple(_posture_index(text, path) for text in doc.get("postures") or ()),
         )
-    except ModelError as exc:
+        model.check_mode(model.method)
+        _check_report(model)
+    except (ModelError, IKError) as exc:
         raise ModelError(str(exc) if str(exc).startswith(str(path)) else f"{path}: {exc}") from None
     except (KeyError, TypeError, ValueError, AttributeError) as exc:
         raise ModelError(f"{path}: malformed model field: {yaml_text.shown(exc)}") from exc
-    model.check_mode(model.method)
     return model
 
 
@@ -278,12 +345,38 @@ def _check_bounds(names, delta, where):
             raise ModelError(f"{where}: {name} = {shown} is beyond the {limit} a calibration writes")
 
 
+def _array_bytes(archive, member, where):
+    """Bytes of the array an ``.npy`` member of an ``.npz`` holds, from its header (nothing else is unpacked).
+
+    Raises
+    ------
+    ModelError
+        A member that is not an ``.npy`` array of numbers, or whose header
+        states another size than the member's (numpy would allocate what the
+        header states before reading: terabytes for a crafted header).
+    """
+    readers = {(1, 0): np.lib.format.read_array_header_1_0, (2, 0): np.lib.format.read_array_header_2_0}
+    if not member.filename.endswith(".npy"):
+        raise ModelError(f"{where}: member {member.filename[:100]!r} is not an array (.npy)")
+    with archive.open(member) as handle:
+        version = np.lib.format.read_magic(handle)
+        if version not in readers:
+            raise ModelError(f"{where}: member {member.filename[:100]!r}: .npy version {version} is not read")
+        shape, _, dtype = readers[version](handle)
+        stated = math.prod(shape) * dtype.itemsize
+        if dtype.hasobject or stated != member.file_size - handle.tell():
+            raise ModelError(f"{where}: member {member.filename[:100]!r} states {stated} bytes of {dtype} in "
+                             f"{member.file_size - handle.tell()}")
+    return stated
+
+
 def _read_sidecar(path, name, sha256=None, calibration=None):
     """Arrays of a model's sidecar ``name`` (a plain file name beside the model), ``{}`` without one.
 
     The sidecar must be a regular file (not a FIFO or a device), at most
-    1 GiB on disk and unpacked (sizes read from the archive's directory
-    before anything is unpacked), and of the SHA-256 the model names.
+    64 MiB on disk and unpacked (sizes read from the arrays' headers before
+    anything is unpacked), and of the SHA-256 the model names; its arrays
+    must be numbers within `_FIELD_BOUND`.
     """
     if not name:
         return {}
@@ -307,7 +400,7 @@ def _read_sidecar(path, name, sha256=None, calibration=None):
                          "not complete: calibrate again or restore the pair")
     try:
         with zipfile.ZipFile(io.BytesIO(data)) as archive:
-            unpacked = sum(member.file_size for member in archive.infolist())
+            unpacked = sum(_array_bytes(archive, member, f"{path}: sidecar {sidecar}") for member in archive.infolist())
         if unpacked > _SIDECAR_BYTES:
             raise ModelError(f"{path}: sidecar {sidecar} unpacks to {unpacked} bytes, more than a model's grid "
                              f"({_SIDECAR_BYTES} bytes)")
@@ -316,6 +409,7 @@ def _read_sidecar(path, name, sha256=None, calibration=None):
     except (OSError, ValueError, EOFError, zipfile.BadZipFile) as exc:
         raise ModelError(f"{path}: sidecar {sidecar} cannot be read: {str(exc)[:200]}") from exc
     for key, array in arrays.items():
-        if not np.issubdtype(array.dtype, np.number) or not np.isfinite(array).all():
-            raise ModelError(f"{path}: sidecar {sidecar}: array {key} holds values that are not finite numbers")
+        if not np.issubdtype(array.dtype, np.number) or not np.all(np.abs(array) <= _FIELD_BOUND):
+            raise ModelError(f"{path}: sidecar {sidecar}: array {key} holds values that are not finite numbers "
+                             f"within {_FIELD_BOUND:g}")
     return arrays
