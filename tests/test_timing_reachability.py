@@ -73,9 +73,9 @@ def test_rest_points_split_the_grid_into_independent_runs():
 
 def sequential_speeds(s, dq, ddq, acceleration, x_max):
     """Reference: the two TOPP-RA passes as plain loops over the grid (rest at both ends)."""
-    from trajcomp.timing.reachability import _Bands
+    from trajcomp.timing.reachability import Bands
 
-    bands = _Bands(np.diff(s), dq, ddq, acceleration)
+    bands = Bands.of_path(np.diff(s), dq, ddq, acceleration)
     x_max = x_max.copy()
     x_max[[0, -1]] = 0.0
     h = np.append(bands.largest_x(x_max[:-1]), 0.0)

@@ -8,7 +8,7 @@ import pytest
 from trajcomp.arm.ik import ik
 from trajcomp.arm.kinematics import fk
 from trajcomp.arm.robot import load_robot
-from trajcomp.timing import Moves, retime
+from trajcomp.timing import Moves, retime, toppra_run
 
 UR10 = load_robot("ur10")
 retime_module = importlib.import_module("trajcomp.timing.retime")  # the module, not the function of that name
@@ -41,6 +41,18 @@ def test_a_windowed_run_is_timed_as_the_whole_run(whole_and_windowed):
     assert len(windowed.segments) == 1 and windowed.within_limits
     np.testing.assert_allclose(windowed.t, whole.t, rtol=0, atol=1e-6 * whole.cycle_time)
     assert np.all(np.diff(windowed.t) > 0)  # every waypoint stamped, in order
+
+
+def test_windows_solved_one_by_one_give_the_timing_of_windows_solved_together(helix, whole_and_windowed):
+    """The passes across windows: each window its own problem (bounds handed over at the joins) or all three
+    laid end to end as one (one set of sweeps) are the same recurrence."""
+    _, together = whole_and_windowed
+    moves = Moves.from_joints(helix, UR10, tcp_speed=250.0, zone=0.5)
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setattr(retime_module, "WINDOW", 1000)
+        patch.setattr(toppra_run, "GROUP_POINTS", 1)
+        alone = retime(moves, UR10)
+    np.testing.assert_allclose(alone.t, together.t, rtol=1e-12, atol=0)
 
 
 def test_at_a_join_position_and_velocity_are_continuous_and_the_limits_hold(whole_and_windowed):

@@ -18,12 +18,12 @@ import numpy as np
 
 from trajcomp.errors import TimingError
 from trajcomp.programs.items import JOINT
-from trajcomp.timing.path import tcp_jacobians
+from trajcomp.timing.path import tcp_speeds
 
 RATE = 1000.0  # Hz
 LIMIT_TOLERANCE = 0.01  # a sampled value may exceed its limit by this share
-_JACOBIAN_BLOCK = 65536  # samples whose TCP Jacobians are held at a time
-MAX_SAMPLES = 1_000_000  # per run between two stops (1,000 s at 1 kHz): the check's memory grows with them
+BLOCK = 16384  # samples checked at a time: the check's memory does not grow with the duration
+MAX_SAMPLES = 3_600_000  # per run between two stops (an hour at 1 kHz): its check takes seconds per million
 
 
 @dataclasses.dataclass(frozen=True)
@@ -92,22 +92,24 @@ def segment_peaks(run, law, moves, robot, *, jerk, rate=RATE):
     return dense_check(run, law, moves, robot, jerk=jerk, rate=rate)[0]
 
 
-def dense_check(run, law, moves, robot, *, jerk, rate=RATE):
-    """`segment_peaks`, and where: each sample's path position and its largest ratio to a limit.
+def dense_check(run, law, moves, robot, *, jerk, over=np.inf, rate=RATE):
+    """`segment_peaks`, and where the samples exceed ``over`` times a limit.
 
     Returns
     -------
     peaks : Peaks
-    s : ndarray, shape (N,)
-        Path position of each sample, rad.
-    ratio : ndarray, shape (N,)
-        Largest sampled joint velocity, acceleration or TCP speed over its limit at each sample.
+    s : ndarray, shape (m,)
+        Path position (rad) of each sample whose largest ratio of a joint
+        velocity, acceleration or the TCP speed to its limit exceeds ``over``.
     """
-    return dense_checks([run], [law], moves, robot, jerk=[jerk], rate=rate)[0]
+    return dense_checks([run], [law], moves, robot, jerk=[jerk], over=over, rate=rate)[0]
 
 
-def dense_checks(runs, laws, moves, robot, *, jerk, rate=RATE):
+def dense_checks(runs, laws, moves, robot, *, jerk, over=np.inf, rate=RATE):
     """`dense_check` of several timed runs (a batch of exact stops), their TCP Jacobians computed together.
+
+    The samples of all runs are taken in blocks of `BLOCK` (consecutive
+    runs share a block), so the memory is flat in the runs' duration.
 
     Parameters
     ----------
@@ -117,53 +119,98 @@ def dense_checks(runs, laws, moves, robot, *, jerk, rate=RATE):
     robot : Robot
     jerk : list of bool
         Measure the jerk of each run.
+    over : float
+        Ratio to a limit above which a sample's path position is returned.
     rate : float
         Hz.
 
     Returns
     -------
-    list of (Peaks, s (N,), ratio (N,))
+    list of (Peaks, s (m,))
     """
-    if not runs:
-        return []
-    parts = []
+    step = 1.0 / rate
+    counts = []  # samples of each run: every 1/rate s from 0, and the end (`sample_times`)
     for run, law in zip(runs, laws):
         if not law.duration * rate <= MAX_SAMPLES:
             first, last = run.motion_at(np.array([0.0, run.length]), side="right")
             raise TimingError(f"the motions from {moves.labels[first]} to {moves.labels[last]} last {law.duration:.4g} s "
                               f"between two stops at their programmed speeds, beyond the {MAX_SAMPLES / rate:g} s the "
                               "dense check covers: a speed no process uses (a unit or a typo?)")
-        t = sample_times(law.duration, rate)
-        q, qd, qdd, s, _ = evaluate(run, law, t)
-        parts.append((t, q, qd, qdd, s, run.motion_at(s)))
-    q, qd, k = (np.concatenate([part[i] for part in parts]) for i in (1, 2, 5))
-    speed_ratios = np.split(_speed_ratios(moves, robot, k, q, qd), np.cumsum([len(part[0]) for part in parts])[:-1])
-    out = []
-    for (t, q, qd, qdd, s, k), speed_ratio, measure_jerk in zip(parts, speed_ratios, jerk):
-        velocity_ratio, acceleration_ratio = np.abs(qd) / moves.velocity[k], np.abs(qdd) / moves.acceleration[k]
-        jerk_peak = np.full(6, np.nan)
-        if measure_jerk and len(t) > 1:
-            jerk_peak = np.max(np.abs(np.diff(qdd, axis=0)) / np.diff(t)[:, None], axis=0)
-        peaks = Peaks(
-            velocity=np.abs(qd).max(axis=0),
-            acceleration=np.abs(qdd).max(axis=0),
-            jerk=jerk_peak,
-            velocity_ratio=velocity_ratio.max(axis=0),
-            acceleration_ratio=acceleration_ratio.max(axis=0),
-            speed_ratio=float(speed_ratio.max(initial=0.0)),
-        )
+        counts.append(int(np.ceil(law.duration / step)) + 1)
+    found = [_Found(measure) for measure in jerk]
+    for block in _blocks(counts, BLOCK):
+        parts = []
+        for i, lo, hi in block:
+            t = np.arange(lo, hi) * step
+            if hi == counts[i]:
+                t[-1] = laws[i].duration
+            q, qd, qdd, s, _ = evaluate(runs[i], laws[i], t)
+            parts.append((t, q, qd, qdd, s, runs[i].motion_at(s)))
+        q, qd, k = (np.concatenate([part[j] for part in parts]) for j in (1, 2, 5))
+        speed_ratios = np.split(_speed_ratios(moves, robot, k, q, qd), np.cumsum([len(part[0]) for part in parts])[:-1])
+        for (i, _, _), (t, _, qd, qdd, s, k), speed_ratio in zip(block, parts, speed_ratios):
+            found[i].add(t, qd, qdd, s, speed_ratio, moves.velocity[k], moves.acceleration[k], over)
+    return [(f.peaks(), f.s_over()) for f in found]
+
+
+def _blocks(counts, size):
+    """Blocks of at most ``size`` samples of runs with ``counts`` (R,) samples: lists of (run, lo, hi)."""
+    block, room = [], size
+    for i, count in enumerate(counts):
+        lo = 0
+        while lo < count:
+            hi = min(count, lo + room)
+            block.append((i, lo, hi))
+            room -= hi - lo
+            lo = hi
+            if not room:
+                yield block
+                block, room = [], size
+    if block:
+        yield block
+
+
+class _Found:
+    """The running peaks of one run's samples, taken block by block."""
+
+    def __init__(self, jerk):
+        self.measure_jerk = jerk
+        self.velocity, self.acceleration, self.velocity_ratio, self.acceleration_ratio = np.zeros((4, 6))
+        self.jerk = np.zeros(6) if jerk else np.full(6, np.nan)
+        self.speed_ratio, self.over, self.last, self.samples = 0.0, [], None, 0
+
+    def add(self, t, qd, qdd, s, speed_ratio, velocity, acceleration, over):
+        """Samples at times t (N,): joint velocities and accelerations (N, 6), path positions s (N,), TCP
+        speed ratios (N,), and the limits (N, 6) of each sample's motion."""
+        velocity_ratio, acceleration_ratio = np.abs(qd) / velocity, np.abs(qdd) / acceleration
+        self.samples += len(t)
+        np.maximum(self.velocity, np.abs(qd).max(axis=0), out=self.velocity)
+        np.maximum(self.acceleration, np.abs(qdd).max(axis=0), out=self.acceleration)
+        np.maximum(self.velocity_ratio, velocity_ratio.max(axis=0), out=self.velocity_ratio)
+        np.maximum(self.acceleration_ratio, acceleration_ratio.max(axis=0), out=self.acceleration_ratio)
+        self.speed_ratio = max(self.speed_ratio, float(speed_ratio.max(initial=0.0)))
+        if self.measure_jerk:  # finite differences, across the block before too
+            times, accelerations = (t, qdd) if self.last is None else (np.r_[self.last[0], t], np.vstack([self.last[1], qdd]))
+            if len(times) > 1:
+                jerk = np.abs(np.diff(accelerations, axis=0)) / np.diff(times)[:, None]
+                np.maximum(self.jerk, jerk.max(axis=0), out=self.jerk)
+            self.last = t[-1], qdd[-1]
         ratio = np.maximum(np.maximum(velocity_ratio.max(axis=1), acceleration_ratio.max(axis=1)), speed_ratio)
-        out.append((peaks, s, ratio))
-    return out
+        self.over.append(s[ratio > over])
+
+    def peaks(self):
+        jerk = self.jerk if self.measure_jerk and self.samples > 1 else np.full(6, np.nan)
+        return Peaks(velocity=self.velocity, acceleration=self.acceleration, jerk=jerk,
+                     velocity_ratio=self.velocity_ratio, acceleration_ratio=self.acceleration_ratio,
+                     speed_ratio=self.speed_ratio)
+
+    def s_over(self):
+        return np.concatenate(self.over) if self.over else np.zeros(0)
 
 
 def _speed_ratios(moves, robot, k, q, qd):
     """TCP speed |J(q) q'| over the programmed one (N,) of samples on linear / circular motions with a speed, else 0."""
     ratio = np.zeros(len(k))
     rows = np.flatnonzero((moves.kind[k] != JOINT) & np.isfinite(moves.tcp_speed[k]))
-    for lo in range(0, len(rows), _JACOBIAN_BLOCK):  # the Jacobians of a block at a time: bounded memory
-        part = rows[lo : lo + _JACOBIAN_BLOCK]
-        jac = tcp_jacobians(robot, moves, k[part], q[part])
-        speed = np.linalg.norm(np.einsum("nij,nj->ni", jac[:, :3], qd[part]), axis=1)
-        ratio[part] = speed / moves.tcp_speed[k[part]]
+    ratio[rows] = tcp_speeds(robot, moves, k[rows], q[rows], qd[rows]) / moves.tcp_speed[k[rows]]
     return ratio

@@ -25,7 +25,7 @@ import dataclasses
 
 import numpy as np
 
-from trajcomp.arm.kinematics import fk_and_jacobian
+from trajcomp.arm.kinematics import fk_and_jacobian, frame_columns
 from trajcomp.programs.items import JOINT
 from trajcomp.timing.samples import run_samples
 
@@ -324,8 +324,24 @@ def _grid_rates(robot, moves, owner, q_path, dq, at_sample, samples):
 
 def tcp_rates(robot, moves, owner, path, s):
     """|J_pos(q(s)) q'(s)| (n,): mm of TCP travel per rad of path at path positions s (n,) of motions ``owner`` (n,)."""
-    jac = tcp_jacobians(robot, moves, owner, path(s))
-    return np.linalg.norm(np.einsum("nij,nj->ni", jac[:, :3], path(s, 1)), axis=1)
+    return tcp_speeds(robot, moves, owner, path(s), path(s, 1))
+
+
+def tcp_speeds(robot, moves, owner, q, qd):
+    """|J_pos(q) qd| (n,): the TCP speed of configurations q (n, 6) moving at qd (n, 6), each with the tool
+    of its motion ``owner`` (n,); mm per unit of qd's time (rad/s: mm/s).
+
+    The velocity of the TCP point summed over the DH axes, z_i x (p - o_i)
+    times the axis rate, from the DH frames (`trajcomp.kinematics.frame_columns`)
+    without forming the Jacobians.
+    """
+    columns = frame_columns(robot, q)  # (7, 4, 3, n): column k (axes, origin) of DH frame i
+    flange = robot.T_link6_flange
+    to_tcp = flange[:3, 3, None] + flange[:3, :3] @ moves.tools[moves.tool[owner], :3, 3].T  # (3, n), link 6 frame
+    tcp = columns[6, 3] + np.einsum("kcn,kn->cn", columns[6, :3], to_tcp)
+    axes, lever = columns[:6, 2], tcp[None] - columns[:6, 3]  # (6, 3, n)
+    moment = np.cross(axes, lever, axis=1)
+    return np.linalg.norm(np.einsum("icn,in->cn", moment, robot.joint_map @ np.asarray(qd).T), axis=0)
 
 
 def _interpolated(grid, s, q):

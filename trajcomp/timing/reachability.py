@@ -28,7 +28,11 @@ braking) of R grid points thus settles in about R / chunk_length rounds
 of chunk_length steps: O(G) work and O(R + chunk_length) vectorized steps,
 where a wave of one grid point per step re-evaluated a whole ramp at each
 step (O(R^2): 17-20 s on a 100,000-point Lissajous path). The result is
-exactly the sequential recurrence's.
+exactly the sequential recurrence's. A step costs a few numpy calls on
+contiguous (chunks, 12) columns, so the time is about R + chunk_length
+steps: consecutive windows of a long run are solved as one problem
+(`Bands.joined`, `trajcomp.timing.toppra_run.toppra_laws`), so that a
+ramp is swept once, not once per window.
 """
 
 import numpy as np
@@ -59,40 +63,55 @@ def squared_speeds(s, dq, ddq, acceleration, x_max, rest):
     """
     x_max = np.array(x_max, dtype=float)
     x_max[rest] = 0.0
-    return forward(s, dq, ddq, acceleration, backward(s, dq, ddq, acceleration, x_max, end=0.0), start=0.0)
+    bands = Bands.of_path(np.diff(s), dq, ddq, acceleration)
+    return forward(bands, backward(bands, x_max, end=0.0), start=0.0)
 
 
-def backward(s, dq, ddq, acceleration, x_max, end):
+def backward(bands, x_max, end):
     """The controllable bounds h (G,): from x_i <= h_i the path can go on to x_{G-1} <= ``end``.
 
-    Parameters as `squared_speeds`; ``end`` is the bound at the last grid
-    point (0: rest there; for a window, the next window's bound).
+    Parameters
+    ----------
+    bands : Bands
+        Of the G - 1 grid intervals.
+    x_max : ndarray, shape (G,)
+        Upper bound of x at each grid point, finite.
+    end : float
+        The bound at the last grid point (0: rest there; for a window, the next window's bound).
     """
-    bands = _Bands(np.diff(s), dq, ddq, np.asarray(acceleration, dtype=float))
-    h = np.append(bands.largest_x(x_max[:-1]), min(end, x_max[-1]))
+    largest = bands.largest_x(x_max[:-1])
+    h = np.append(largest, min(end, x_max[-1]))
     chunks = _Chunks(len(h))
     with np.errstate(divide="ignore", invalid="ignore"):
         rising = bands.sigma > 0.0  # x_i <= (h_{i+1} + w) / sigma for the bands with sigma > 0
         inverse = chunks.laid(np.where(rising, 1.0 / bands.sigma, 0.0), 0.0)
         offset = chunks.laid(np.where(rising, bands.w / bands.sigma, np.inf), np.inf)
-    largest = chunks.laid(bands.largest[:-1], np.inf)
+    largest = chunks.laid(largest, np.inf)
+    reach = np.empty(inverse.shape[1:])
 
-    def step(o, h_next):  # h_i (n,) of the intervals in column o from h_{i+1} (n,)
-        return np.minimum(largest[:, o], np.min(h_next[:, None] * inverse[:, o] + offset[:, o], axis=1))
+    def step(o, h_next, out):  # out = h_i (n,) of the intervals in column o from h_{i+1} (n,)
+        np.multiply(inverse[o], h_next[:, None], out=reach)
+        np.add(reach, offset[o], out=reach)
+        np.minimum.reduce(reach, axis=1, out=out)
+        np.minimum(out, largest[o], out=out)
 
     return chunks.settle(h, step, reverse=True)
 
 
-def forward(s, dq, ddq, acceleration, h, start):
-    """The greedy forward pass: x (G,) from x_0 = ``start`` (<= h_0), as fast as h and the bands allow."""
-    bands = _Bands(np.diff(s), dq, ddq, np.asarray(acceleration, dtype=float))
+def forward(bands, h, start):
+    """The greedy forward pass: x (G,) from x_0 = ``start`` (<= h_0), as fast as h (G,) and the bands
+    (`Bands` of the G - 1 intervals) allow."""
     x = h.copy()
     x[0] = start
     chunks = _Chunks(len(h))
     sigma, w, h_next = chunks.laid(bands.sigma, 0.0), chunks.laid(bands.w, np.inf), chunks.laid(h[1:], 0.0)
+    reach = np.empty(sigma.shape[1:])
 
-    def step(o, x):  # x_{i+1} (n,) of the intervals in column o from x_i (n,)
-        return np.minimum(h_next[:, o], np.min(sigma[:, o] * x[:, None] + w[:, o], axis=1))
+    def step(o, x, out):  # out = x_{i+1} (n,) of the intervals in column o from x_i (n,)
+        np.multiply(sigma[o], x[:, None], out=reach)
+        np.add(reach, w[o], out=reach)
+        np.minimum.reduce(reach, axis=1, out=out)
+        np.minimum(out, h_next[o], out=out)
 
     return np.maximum(chunks.settle(x, step, reverse=False), 0.0)
 
@@ -103,11 +122,13 @@ def chunk_length(stages):
 
 
 class _Chunks:
-    """The intervals of a grid of ``points`` points as (n, L) chunks of L consecutive intervals.
+    """The intervals of a grid of ``points`` points as n chunks of L consecutive intervals, laid column-major.
 
-    Interval c * L + o is row c, column o; the last chunk is padded with
-    intervals that bound nothing, and the values of the grid points with
-    0 beyond the last point (finite: a padded interval's 0 * value stays 0).
+    Interval c * L + o is column o, chunk c: per-interval data is laid out
+    (L, n, ...), so that one step of a sweep (column o of every chunk)
+    reads contiguous memory. The last chunk is padded with intervals that
+    bound nothing, and the values of the grid points with 0 beyond the
+    last point (finite: a padded interval's 0 * value stays 0).
     """
 
     def __init__(self, points):
@@ -116,63 +137,87 @@ class _Chunks:
         self.count = -(-(points - 1) // self.length)
 
     def laid(self, per_interval, fill):
-        """Per-interval values (G - 1, ...) as (n, L, ...), padded with ``fill``."""
-        pad = np.full((self.count * self.length - len(per_interval), *per_interval.shape[1:]), fill)
-        return np.concatenate([per_interval, pad]).reshape(self.count, self.length, *per_interval.shape[1:])
+        """Per-interval values (G - 1, ...) as (L, n, ...), padded with ``fill``."""
+        L, full = self.length, len(per_interval) // self.length  # chunks without padding
+        out = np.empty((L, self.count, *per_interval.shape[1:]))
+        chunks = np.swapaxes(out, 0, 1)  # (n, L, ...) view: one copy into the laid-out array
+        chunks[:full] = per_interval[: full * L].reshape(full, L, *per_interval.shape[1:])
+        if full < self.count:
+            chunks[full, : len(per_interval) - full * L] = per_interval[full * L :]
+            chunks[full, len(per_interval) - full * L :] = fill
+        return out
 
     def settle(self, values, step, *, reverse):
         """The recurrence over ``values`` (G,), a new array (G,): backward ``values[i] = min(values[i],
-        step(values[i + 1]))``, forward ``values[i + 1] = step(values[i])``, ``step(o, v)`` for column o.
+        step(values[i + 1]))``, forward ``values[i + 1] = step(values[i])``; ``step(o, v, out)`` writes
+        column o's result from v (n,) into out (n,).
 
         All chunks are swept at once; the sweeps are repeated while a value
-        a chunk started from (its border) changed during the sweep.
+        a chunk started from (its border: the next chunk's first point
+        backward, its own first point forward) changed during the sweep.
         """
-        L = self.length
-        padded = np.concatenate([values, np.zeros(self.count * L + 1 - len(values))])
-        table = padded[:-1].reshape(self.count, L)
-        borders = padded[L::L]  # each chunk's point after its last interval: the next chunk's first point
+        L, n = self.length, self.count
+        padded = np.concatenate([values, np.zeros(n * L + 1 - len(values))])
+        table = padded[:-1].reshape(n, L).T.copy()  # (L, n): table[o, c] is point c * L + o
+        borders = np.append(table[0, 1:], padded[-1])  # each chunk's point after its last interval
+        out = np.empty(n)
         while True:
             if reverse:
-                before = borders.copy()
-                table[:, L - 1] = np.minimum(table[:, L - 1], step(L - 1, borders))
+                step(L - 1, borders, out)
+                np.minimum(table[L - 1], out, out=table[L - 1])
                 for o in range(L - 2, -1, -1):
-                    table[:, o] = np.minimum(table[:, o], step(o, table[:, o + 1]))
-                if np.array_equal(borders, before):
-                    return padded[: self.points]
+                    step(o, table[o + 1], out)
+                    np.minimum(table[o], out, out=table[o])
+                if np.array_equal(table[0, 1:], borders[:-1]):
+                    break
+                borders[:-1] = table[0, 1:]
             else:
-                before = table[:, 0].copy()
+                before = table[0].copy()
                 for o in range(L - 1):
-                    table[:, o + 1] = step(o, table[:, o])
-                borders[:] = step(L - 1, table[:, L - 1])
-                if np.array_equal(table[:, 0], before):
-                    return padded[: self.points]
+                    step(o, table[o], table[o + 1])
+                step(L - 1, table[L - 1], borders)
+                table[0, 1:] = borders[:-1]
+                if np.array_equal(table[0], before):
+                    break
+        padded[:-1], padded[-1] = table.T.ravel(), borders[-1]
+        return padded[: self.points]
 
 
-class _Bands:
-    """The bands ``sigma x_i - w <= x_{i+1} <= sigma x_i + w`` (G-1, 12) of every interval, and x_i-only bounds."""
+class Bands:
+    """The bands ``sigma x_i - w <= x_{i+1} <= sigma x_i + w`` of grid intervals, and x_i-only bounds.
 
-    def __init__(self, ds, dq, ddq, acceleration):
+    Attributes
+    ----------
+    sigma, w : ndarray, shape (I, 12)
+        Per interval: joint j's acceleration limit at the interval's start
+        (first 6) and end (last 6); w = inf where the joint does not move.
+    x_bound : ndarray, shape (I,)
+        Bound on x_i alone (a joint that does not move).
+    """
+
+    def __init__(self, sigma, w, x_bound):
+        self.sigma, self.w, self.x_bound = sigma, w, x_bound
+
+    @classmethod
+    def of_path(cls, ds, dq, ddq, acceleration):
+        """The bands of a grid's intervals ds (G - 1,), from q', q'' (G, 6) at the grid points and the joint
+        acceleration limits (6,) or (G - 1, 6), rad/s^2."""
         # alpha x_i + beta x_{i+1} in [-a, a]: joint j at the interval's start (first 6), at its end (last 6)
         two_ds = 2.0 * ds[:, None]
         beta = np.hstack([dq[:-1] / two_ds, dq[1:] / two_ds + ddq[1:]])
         alpha = np.hstack([ddq[:-1] - dq[:-1] / two_ds, -dq[1:] / two_ds])
+        acceleration = np.asarray(acceleration, dtype=float)
         a = np.concatenate([acceleration, acceleration], axis=-1)
         moving = beta != 0.0
         with np.errstate(divide="ignore", invalid="ignore"):
-            self.sigma = np.where(moving, -alpha / beta, 0.0)
-            self.w = np.where(moving, a / np.abs(beta), np.inf)
-            self.x_bound = np.min(np.where(moving, np.inf, a / np.abs(alpha)), axis=1)
+            return cls(np.where(moving, -alpha / beta, 0.0), np.where(moving, a / np.abs(beta), np.inf),
+                       np.min(np.where(moving, np.inf, a / np.abs(alpha)), axis=1))
 
-    def backward(self, i, h_next):
-        """Largest x_i (n,) of intervals i (n,) from which x_{i+1} <= h_next (n,) can be kept (and X_i)."""
-        sigma = self.sigma[i]
-        with np.errstate(divide="ignore", invalid="ignore"):
-            reach = np.where(sigma > 0.0, (h_next[:, None] + self.w[i]) / sigma, np.inf)
-        return np.minimum(self.largest[i], np.min(reach, axis=1))
-
-    def forward(self, i, x):
-        """Largest x_{i+1} (n,) the bands of intervals i (n,) allow from x_i = x (n,)."""
-        return np.min(self.sigma[i] * x[:, None] + self.w[i], axis=1)
+    @classmethod
+    def joined(cls, parts):
+        """The bands of consecutive grids laid end to end (each grid's last point the next one's first):
+        the intervals of every part (list of Bands), in order."""
+        return cls(*(np.concatenate([getattr(part, name) for part in parts]) for name in ("sigma", "w", "x_bound")))
 
     def largest_x(self, x_max):
         """X_i (G-1,): the largest x_i <= x_max (G-1,) with some x_{i+1} >= 0 inside every band.
@@ -196,5 +241,4 @@ class _Bands:
             slope = sigma[rows, iu] - np.where(bottom > 0.0, sigma[rows, il], 0.0)
             todo, gap, slope = todo[bad], gap[bad], slope[bad]
             x[todo] = np.maximum(x[todo] - gap / np.minimum(slope, -1e-300), 0.0)
-        self.largest = np.append(x, 0.0)
         return x

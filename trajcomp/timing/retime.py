@@ -226,7 +226,7 @@ def _toppra_timed(runs, moves, robot):
 
     for refinement in range(_REFINEMENTS + 1):
         laws = toppra_laws(runs, moves, robot)
-        checks = [None if law is None else dense_check(run, law, moves, robot, jerk=False)
+        checks = [None if law is None else dense_check(run, law, moves, robot, jerk=False, over=_TARGET)
                   for run, law in zip(runs, laws)]
         peaks = Peaks.worst_of([check[0] for check in checks if check is not None])
         coarse = [None if law is None else _coarse(run, law, check, moves) for run, law, check in zip(runs, laws, checks)]
@@ -241,10 +241,11 @@ def _toppra_timed(runs, moves, robot):
 
 
 def _coarse(run, law, check, moves):
-    """Grid intervals (n,) of a timed run to split: one holding a sample over `_TARGET`, or `_curved` at the
-    law's squared speed."""
-    _, s, ratio = check
-    over = np.clip(np.searchsorted(run.grid, s[ratio > _TARGET], side="right") - 1, 0, len(run.grid) - 2)
+    """Grid intervals (n,) of a timed run to split: one holding a sample over `_TARGET` (``check``: the
+    `trajcomp.timing.check.dense_check` of the run with ``over=_TARGET``), or `_curved` at the law's squared
+    speed."""
+    _, s_over = check
+    over = np.clip(np.searchsorted(run.grid, s_over, side="right") - 1, 0, len(run.grid) - 2)
     return np.union1d(over, _curved(run, law.sd**2, moves))
 
 

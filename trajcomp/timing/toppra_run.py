@@ -22,9 +22,10 @@ import dataclasses
 import numpy as np
 
 from trajcomp.errors import TimingError
-from trajcomp.timing.reachability import backward, forward, squared_speeds
+from trajcomp.timing.reachability import Bands, backward, forward, squared_speeds
 
 _X_CAP = 1e12  # (rad/s)^2 ceiling of the squared path speed where no limit binds
+GROUP_POINTS = 1 << 17  # grid points of consecutive windows solved as one problem at most
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -84,14 +85,17 @@ class ConstantAcceleration:
 def toppra_laws(runs, moves, robot):
     """The time-optimal constant-acceleration laws of a run's windows, at rest at both ends of the run.
 
-    Consecutive windows share a grid point (a waypoint): the backward pass
-    goes through the windows from the last to the first, each ending at
-    the bound its successor found for the shared point, and the forward
-    pass from the first to the last, each starting at the speed its
-    predecessor reached there. So the path speed is continuous at every
-    join and the laws are those of one TOPP-RA problem over the whole run
-    (each interval with its own window's path). A window without length
-    is a rest point.
+    Consecutive windows share a grid point (a waypoint). They are solved
+    in groups of up to `GROUP_POINTS` grid points, each group one problem
+    (the windows' intervals laid end to end, each with its own window's
+    path): the backward pass goes through the groups from the last to the
+    first, each ending at the bound its successor found for the shared
+    point, and the forward pass from the first to the last, each starting
+    at the speed its predecessor reached there. So the path speed is
+    continuous at every join and the laws are those of one TOPP-RA problem
+    over the whole run, and a group's passes sweep its windows together
+    (a long ramp across windows settles in one set of sweeps). A window
+    without length is a rest point.
 
     Parameters
     ----------
@@ -113,30 +117,66 @@ def toppra_laws(runs, moves, robot):
         The path speed must be zero over a whole grid interval (a singular
         or kinked path): names the waypoint, its line and the joint.
     """
-    bounds, end = [], 0.0
-    for run in reversed(runs):
-        if run.path is None:
-            bounds.append(None)
+    groups = _groups(runs)
+    bounds, end = [None] * len(runs), 0.0
+    for group in reversed(groups):
+        if runs[group[0]].path is None:
             end = 0.0
             continue
-        grid, dq, ddq, acceleration, x_max, _ = _problem(run, moves)
-        bounds.append(backward(grid, dq, ddq, acceleration, x_max, end))
-        end = bounds[-1][0]
-    laws, start = [], 0.0
-    for run, h in zip(runs, reversed(bounds)):
-        if run.path is None:
-            laws.append(None)
+        bands, offsets, x_max = _joined_problem([runs[i] for i in group], moves, with_bound=True)
+        h = backward(bands, x_max, end)
+        for i, lo, hi in zip(group, offsets[:-1], offsets[1:]):
+            bounds[i] = h[lo : hi + 1]
+        end = h[0]
+    laws, start = [None] * len(runs), 0.0
+    for group in groups:
+        if runs[group[0]].path is None:
             start = 0.0
             continue
-        grid, dq, ddq, acceleration = _path_problem(run, moves)  # the bound x_max is in h
-        x = forward(grid, dq, ddq, acceleration, h, start)
+        bands, offsets, _ = _joined_problem([runs[i] for i in group], moves, with_bound=False)
+        x = forward(bands, np.concatenate([bounds[group[0]], *(bounds[i][1:] for i in group[1:])]), start)
         start = x[-1]
-        try:
-            laws.append(ConstantAcceleration.from_speeds(grid, np.sqrt(x)))
-        except ValueError:
-            i = int(np.argmin(x[:-1] + x[1:]))
-            raise _stuck(run, moves, grid, i, dq, run.speed_bound(moves)[1]) from None
+        for i, lo, hi in zip(group, offsets[:-1], offsets[1:]):
+            run, x_run = runs[i], x[lo : hi + 1]
+            try:
+                laws[i] = ConstantAcceleration.from_speeds(run.grid, np.sqrt(x_run))
+            except ValueError:
+                stop = int(np.argmin(x_run[:-1] + x_run[1:]))
+                raise _stuck(run, moves, run.grid, stop, run.path(run.grid, 1), run.speed_bound(moves)[1]) from None
     return laws
+
+
+def _groups(runs):
+    """Indices of consecutive windows solved together (lists): up to `GROUP_POINTS` grid points; a window
+    without length alone."""
+    groups, points = [], 0
+    for i, run in enumerate(runs):
+        alone = run.path is None
+        if not groups or alone or runs[groups[-1][-1]].path is None or points + len(run.grid) > GROUP_POINTS:
+            groups.append([i])
+            points = len(run.grid)
+        else:
+            groups[-1].append(i)
+            points += len(run.grid) - 1
+    return groups
+
+
+def _joined_problem(runs, moves, *, with_bound):
+    """Consecutive windows with paths as one problem: their `Bands` laid end to end, the offsets (W + 1,)
+    of each window's first grid point in it (and of the last point), and with ``with_bound`` the bound
+    on x (G,) (at a shared point the lower of the two windows')."""
+    parts, bound, offsets = [], [], [0]
+    for run in runs:
+        grid, dq, ddq, acceleration = _path_problem(run, moves)
+        parts.append(Bands.of_path(np.diff(grid), dq, ddq, acceleration))
+        offsets.append(offsets[-1] + len(grid) - 1)
+        if with_bound:
+            x_max = np.minimum(run.speed_bound(moves, dq=dq)[0], _X_CAP)
+            if bound:
+                bound[-1][-1] = min(bound[-1][-1], x_max[0])
+                x_max = x_max[1:]
+            bound.append(x_max)
+    return Bands.joined(parts), np.array(offsets), (np.concatenate(bound) if with_bound else None)
 
 
 def rest_to_rest_laws(runs, moves, robot):
