@@ -25,7 +25,7 @@ import dataclasses
 
 import numpy as np
 
-from trajcomp.arm.kinematics import fk_and_jacobian, frame_columns
+from trajcomp.arm.kinematics import fk_and_jacobian, frame_columns, in_blocks
 from trajcomp.programs.items import JOINT
 from trajcomp.timing.samples import run_samples
 
@@ -310,16 +310,15 @@ def _grid_rates(robot, moves, owner, q_path, dq, at_sample, samples):
         samples, in a blended corner the path cuts) is computed on the path.
     """
     q_samples, sample_owner, jac_samples = samples
-    jac = np.empty((len(q_path), 6, 6))
+    rate = np.empty(len(q_path))
     reuse = at_sample >= 0
     row = at_sample[reuse]
     reuse[reuse] = ((np.max(np.abs(q_path[reuse] - q_samples[row]), axis=1) <= _SAME_JACOBIAN)
                     & (moves.tool[owner[reuse]] == moves.tool[sample_owner[row]]))
-    jac[reuse] = jac_samples[at_sample[reuse]]
+    rate[reuse] = np.linalg.norm(np.einsum("nij,nj->ni", jac_samples[at_sample[reuse], :3], dq[reuse]), axis=1)
     other = np.flatnonzero(~reuse)
-    if other.size:
-        jac[other] = tcp_jacobians(robot, moves, owner[other], q_path[other])
-    return np.linalg.norm(np.einsum("nij,nj->ni", jac[:, :3], dq), axis=1)
+    rate[other] = tcp_speeds(robot, moves, owner[other], q_path[other], dq[other])
+    return rate
 
 
 def tcp_rates(robot, moves, owner, path, s):
@@ -335,18 +334,19 @@ def tcp_speeds(robot, moves, owner, q, qd):
     times the axis rate, from the DH frames (`trajcomp.kinematics.frame_columns`)
     without forming the Jacobians.
     """
-    columns = frame_columns(robot, q)  # (7, 4, 3, n): column k (axes, origin) of DH frame i
+    if not len(owner):
+        return np.zeros(0)
     flange = robot.T_link6_flange
-    to_tcp = flange[:3, 3, None] + flange[:3, :3] @ moves.tools[moves.tool[owner], :3, 3].T  # (3, n), link 6 frame
-    tcp = columns[6, 3] + np.einsum("kcn,kn->cn", columns[6, :3], to_tcp)
-    axes, lever = columns[:6, 2], tcp[None] - columns[:6, 3]  # (6, 3, n)
-    moment = np.cross(axes, lever, axis=1)
-    return np.linalg.norm(np.einsum("icn,in->cn", moment, robot.joint_map @ np.asarray(qd).T), axis=0)
 
+    def speeds(owner, q, qd):
+        columns = frame_columns(robot, q)  # (7, 4, 3, n): column k (axes, origin) of DH frame i
+        to_tcp = flange[:3, 3, None] + flange[:3, :3] @ moves.tools[moves.tool[owner], :3, 3].T  # (3, n), link 6
+        tcp = columns[6, 3] + np.einsum("kcn,kn->cn", columns[6, :3], to_tcp)
+        axes, lever = columns[:6, 2], tcp[None] - columns[:6, 3]  # (6, 3, n)
+        moment = np.cross(axes, lever, axis=1)
+        return (np.linalg.norm(np.einsum("icn,in->cn", moment, robot.joint_map @ qd.T), axis=0),)
 
-def _interpolated(grid, s, q):
-    """Joints (G, 6) at path positions grid (G,), linear between the samples (s (n,), q (n, 6))."""
-    return np.column_stack([np.interp(grid, s, q[:, j]) for j in range(6)])
+    return in_blocks(speeds, np.asarray(owner), np.asarray(q, dtype=float), np.asarray(qd, dtype=float))[0]
 
 
 def _travel(q, jac):
