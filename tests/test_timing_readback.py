@@ -1,0 +1,131 @@
+"""The written speed fields, read back as each controller reads them, never run faster than programmed.
+
+The example weld with its lines asked for 3 m/s, more than the arms can
+cruise at on those lines, is re-timed in each robot language; the written
+program is read again (`trajcomp.formats.read`: the field each motion's
+controller runs) and every timed motion is run the controller's way,
+independently of the timing:
+
+- a cruise speed (KRL ``$VEL.CP``, RAPID ``\\V``, UR ``v=``, FANUC
+  ``mm/sec``) on a line: the TCP cruises at it along the straight line,
+  every 1 ms solved by IK and differentiated: no faster than the
+  programmed 3 m/s, joint velocity and acceleration within the limits;
+- a time (RAPID ``\\T``, UR ``t=``, FANUC ``msec``) or a KRL PTP
+  percentage on a joint motion: the joints move synchronously on their
+  line, the path accelerating at the first joint's acceleration limit and
+  cruising so that the motion takes that time (KRL: cruising at the
+  percentage of the leading axis's velocity limit), sampled every 1 ms:
+  joint velocity within the limits and the programmed joint speed (KRL,
+  FANUC percentage; UR's default 1.05 rad/s), the TCP speed within RAPID's
+  v1000.
+"""
+
+import shutil
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from trajcomp import formats
+from trajcomp.cli import main
+from trajcomp.commands.retime import planned
+from trajcomp.ik import ik
+from trajcomp.kinematics import fk, jacobian
+from trajcomp.posture import planned_joints
+from trajcomp.program_items import JOINT, LINEAR
+from trajcomp.robot import load_robot
+from trajcomp.timing import moves_from_program
+
+EXAMPLES = Path(__file__).resolve().parents[1] / "examples" / "programs"
+FAST = 3000.0  # mm/s asked of the lines
+PROGRAMS = {  # language: file, robot, the lines' speed made 3 m/s, the joint motions' programmed speed
+    "krl": ("kuka/weld.src", "kuka_kr6_r900", ("$VEL.CP=0.020000", "$VEL.CP=3.000000"), {"%": 50.0}),
+    "rapid": ("abb/Weld.mod", "abb_irb4600", ("v20,", "v3000,"), {"mm/s": 1000.0}),
+    "fanuc_ls": ("fanuc/WELD.LS", "fanuc_lrmate200id", ("20mm/sec", "3000mm/sec"), {"%": 50.0}),
+    "urscript": ("ur/weld.script", "ur10", ("v=0.020000", "v=3.000000"), {"rad/s": 1.05}),
+}
+RATE = 1000.0  # Hz
+SLACK = 1.0005  # 1.000 to three digits
+
+
+def written(tmp_path, language):
+    """The fast weld re-timed through the CLI: (program read back from the output, robot, joint speed asked)."""
+    source, robot_name, (old, new), joint_speed = PROGRAMS[language]
+    folder = tmp_path / "in"
+    shutil.copytree((EXAMPLES / source).parent, folder)
+    path = folder / Path(source).name
+    assert path.read_text().count(old) >= 1
+    path.write_text(path.read_text().replace(old, new))
+    output = tmp_path / "out" / path.name
+    output.parent.mkdir()
+    assert main(["retime", str(path), "-o", str(output), "--robot", robot_name]) == 0
+    return formats.read(output), load_robot(robot_name), joint_speed
+
+
+def line_demand(robot, start, end, speed):
+    """Joint velocity and acceleration (each (n, 6)) of the TCP cruising at ``speed`` (mm/s) on the line from
+    pose ``start`` to ``end`` (4, 4), one orientation: IK every 1 ms, central differences."""
+    step = speed / RATE
+    count = int(np.ceil(np.linalg.norm(end[:3, 3] - start[:3, 3]) / step)) + 1
+    poses = np.repeat(start[None], count, axis=0)
+    poses[:, :3, 3] = start[:3, 3] + np.linspace(0.0, 1.0, count)[:, None] * (end[:3, 3] - start[:3, 3])
+    solved = ik(robot, poses, seed=ik(robot, poses[:1]).q[0])
+    assert solved.success.all()
+    dt = np.linalg.norm(end[:3, 3] - start[:3, 3]) / (count - 1) / speed
+    return np.gradient(solved.q, dt, axis=0), (solved.q[2:] - 2.0 * solved.q[1:-1] + solved.q[:-2]) / dt**2
+
+
+def joint_line(robot, q_a, q_b, duration=None, percent=100.0):
+    """A synchronized joint motion from q_a to q_b (6,) the controller's way: path s in [0, 1] accelerating at
+    the first joint's acceleration limit, cruising at the speed that takes ``duration`` s (or, None, at
+    ``percent`` of the leading axis's velocity limit), sampled every 1 ms: (q, qd, qdd) (n, 6) each."""
+    change = q_b - q_a
+    moving = np.abs(change) > 1e-12
+    accel = np.min(robot.a_max[moving] / np.abs(change[moving]))
+    if duration is None:
+        cruise = min(np.min(percent / 100.0 * robot.v_max[moving] / np.abs(change[moving])), np.sqrt(accel))
+        duration = 1.0 / cruise + cruise / accel
+    assert accel * duration**2 >= 4.0 - 1e-9  # reachable in that time at that acceleration
+    cruise = 0.5 * (accel * duration - np.sqrt(max(accel**2 * duration**2 - 4.0 * accel, 0.0)))
+    ramp = cruise / accel
+    t = np.r_[np.arange(0.0, duration, 1.0 / RATE), duration]
+    s_dot = np.minimum(np.minimum(accel * t, cruise), accel * (duration - t))
+    s_ddot = np.where(t < ramp, accel, np.where(t > duration - ramp, -accel, 0.0))
+    s = np.where(t < ramp, 0.5 * accel * t**2,
+                 np.where(t > duration - ramp, 1.0 - 0.5 * accel * (duration - t) ** 2, 0.5 * cruise * ramp + cruise * (t - ramp)))
+    return q_a + s[:, None] * change, s_dot[:, None] * change, s_ddot[:, None] * change
+
+
+@pytest.mark.parametrize("language", sorted(PROGRAMS))
+def test_the_written_fields_run_the_controllers_way_never_faster_than_programmed(tmp_path, language):
+    program, robot, joint_speed = written(tmp_path, language)
+    plan = planned_joints(program, robot)
+    moves = moves_from_program(program, robot, planned(program, plan.index, plan.q))
+    checked = set()
+    for k in range(1, len(moves.q)):
+        if moves.start[k]:  # from an unknown position: not timed, left as written
+            continue
+        motion = program.motions[moves.motion[k]]
+        tool = robot.replace(T_flange_tool=moves.tools[moves.tool[k]])
+        if moves.kind[k] == LINEAR:
+            assert motion.speed_unit == "mm/s" and motion.speed <= FAST  # a cruise speed, never above 3 m/s
+            velocity, acceleration = line_demand(tool, fk(tool, moves.q[k - 1]), fk(tool, moves.q[k]), motion.speed)
+            assert np.max(np.abs(velocity) / robot.v_max) <= SLACK
+            assert np.max(np.abs(acceleration) / robot.a_max) <= SLACK
+            checked.add("cruise")
+            continue
+        assert moves.kind[k] == JOINT
+        if motion.speed_unit == "s":
+            q, qd, qdd = joint_line(robot, moves.q[k - 1], moves.q[k], duration=motion.speed)
+            checked.add("time")
+        else:  # KRL: the percentage of the leading axis's velocity limit
+            assert motion.speed_unit == "%" and motion.speed <= joint_speed["%"]
+            q, qd, qdd = joint_line(robot, moves.q[k - 1], moves.q[k], percent=motion.speed)
+            checked.add("percent")
+        limit = np.minimum(robot.v_max, robot.v_max * joint_speed.get("%", 100.0) / 100.0)
+        limit = np.minimum(limit, joint_speed.get("rad/s", np.inf))
+        assert np.max(np.abs(qd) / limit) <= SLACK and np.max(np.abs(qdd) / robot.a_max) <= SLACK
+        if "mm/s" in joint_speed:  # RAPID's MoveJ: the TCP speed of its speeddata
+            tcp = np.linalg.norm(np.einsum("nij,nj->ni", jacobian(tool, q)[:, :3], qd), axis=1)
+            assert np.max(tcp) <= joint_speed["mm/s"] * SLACK
+    assert checked == ({"cruise", "percent"} if language == "krl" else {"cruise", "time"})
