@@ -17,8 +17,9 @@ motion from rest to rest. Its samples come from `trajcomp.timing.samples`
    the Jacobian) and of each joint, or within the programmed zone radius
    near a blended corner. The tolerance keeps the compensated positions.
 3. `JointPath` wraps the spline for TOPP-RA; grid points are every sample,
-   subdivided to at least `MIN_GRID` intervals, and refined towards both
-   ends, where the arm starts and stops.
+   subdivided to at least `MIN_GRID` intervals (`STOP_GRID` for a single
+   motion from rest to rest: it accelerates, cruises and brakes), and
+   refined towards both ends, where the arm starts and stops.
 """
 
 import dataclasses
@@ -32,6 +33,7 @@ from trajcomp.timing.samples import run_samples
 TOLERANCE = 0.005  # mm, largest deviation of the timed path from a waypoint or sample
 ROTATION_PER_MM = 1e-3  # rad of orientation tolerance per mm of position tolerance
 MIN_GRID = 200  # fewest TOPP-RA grid intervals of a run
+STOP_GRID = 50  # fewest grid intervals of a single motion from rest to rest (accelerate, cruise, brake)
 END_REFINEMENT = 10  # halvings of the first and last grid interval (rest at both ends)
 KNOT_STRIDE = 16  # samples per knot interval of the first thinned fit
 SMOOTHING_GAIN = 1.1  # a thinned path is taken when the exact one needs this much more acceleration
@@ -44,10 +46,12 @@ _PULL, _PULLS = 4.0, 8  # weight factor on samples the finest knots leave outsid
 class JointPath:
     """A joint path q(s), s in rad of joint-space arc length (toppra's path interface: the tests time it with toppra).
 
-    A spline of up to `KEPT_DERIVATIVES` coefficients keeps its derivative
-    splines (fastest to evaluate); a longer one (a path through every
-    sample of a long window) evaluates them from its own coefficients, so
-    a timed long run holds one set of coefficients, not three.
+    A spline of `FEWEST_KEPT` to `KEPT_DERIVATIVES` coefficients keeps its
+    derivative splines (faster to evaluate: about 15 %); a longer one (a
+    path through every sample of a long window) evaluates them from its
+    own coefficients, so a timed long run holds one set of coefficients,
+    not three, and so does a short one (a motion between two stops, whose
+    derivative splines cost as much as its fit and more than they save).
 
     Parameters
     ----------
@@ -56,11 +60,12 @@ class JointPath:
     """
 
     KEPT_DERIVATIVES = 4096
+    FEWEST_KEPT = 64
 
     def __init__(self, spline):
         self.spline = spline
         self._derivatives = None
-        if len(spline.c) <= self.KEPT_DERIVATIVES:
+        if self.FEWEST_KEPT <= len(spline.c) <= self.KEPT_DERIVATIVES:
             self._derivatives = (spline, spline.derivative(1), spline.derivative(2))
 
     def __call__(self, s, order=0):
@@ -200,7 +205,7 @@ def run_path(moves, robot, first, last, tolerance=TOLERANCE, *, part=None):
     s_a, s_b = s_waypoints[a - first], s_waypoints[b - first]
     if s_b <= s_a:
         return _no_path(a, b)
-    grid = _grid(s)  # every sample is a grid point
+    grid = _grid(s, STOP_GRID if last == first + 1 else MIN_GRID)  # every sample is a grid point
     k = first + np.clip(np.searchsorted(s_waypoints, grid), 1, len(s_waypoints) - 1)
     at_sample = np.full(len(grid), -1)
     at_sample[np.searchsorted(grid, s)] = np.arange(len(s))
@@ -234,7 +239,7 @@ def stop_paths(moves, robot, first, last, tolerance=TOLERANCE):
     runs = []  # per motion: (k, sample rows, local path positions, grid)
     for k, r0, r1 in zip(range(first + 1, last + 1), waypoint_rows[:-1].tolist(), waypoint_rows[1:].tolist()):
         local = s[r0 : r1 + 1] - s[r0]
-        runs.append((k, slice(r0, r1 + 1), local, _grid(local) if r1 > r0 else local[:0]))
+        runs.append((k, slice(r0, r1 + 1), local, _grid(local, STOP_GRID) if r1 > r0 else local[:0]))
     sizes = [len(grid) for *_, grid in runs]
     if not any(sizes):
         return [_no_path(k - 1, k) for k, *_ in runs]
@@ -355,14 +360,14 @@ def _travel(q, jac):
     return np.r_[0.0, np.cumsum(steps)]
 
 
-def _grid(s):
-    """Grid points: every sample s (n,), intervals longer than 1/MIN_GRID of the path subdivided evenly.
+def _grid(s, intervals=MIN_GRID):
+    """Grid points: every sample s (n,), intervals longer than 1/``intervals`` of the path subdivided evenly.
 
     The first and last intervals are also halved `END_REFINEMENT` times
     towards the ends: the path speed is constant-acceleration from rest to
     the first grid point, so a coarse first interval would slow the start.
     """
-    longest = s[-1] / MIN_GRID
+    longest = s[-1] / intervals
     pieces = np.maximum(np.ceil(np.diff(s) / longest).astype(int), 1)
     part = np.arange(pieces.sum()) - np.repeat(np.cumsum(pieces) - pieces, pieces)  # 0 .. p-1 in each interval
     grid = np.r_[np.repeat(s[:-1], pieces) + part / np.repeat(pieces, pieces) * np.repeat(np.diff(s), pieces), s[-1]]
