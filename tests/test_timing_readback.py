@@ -27,13 +27,13 @@ import numpy as np
 import pytest
 
 from trajcomp import formats
+from trajcomp.arm.ik import ik
+from trajcomp.arm.kinematics import fk, jacobian
+from trajcomp.arm.robot import load_robot
 from trajcomp.cli import main
 from trajcomp.commands.retime import planned
-from trajcomp.ik import ik
-from trajcomp.kinematics import fk, jacobian
-from trajcomp.posture import planned_joints
-from trajcomp.program_items import JOINT, LINEAR
-from trajcomp.robot import load_robot
+from trajcomp.compensation.posture import planned_joints
+from trajcomp.programs.items import JOINT, LINEAR
 from trajcomp.timing import moves_from_program
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples" / "programs"
@@ -91,8 +91,9 @@ def joint_line(robot, q_a, q_b, duration=None, percent=100.0):
     t = np.r_[np.arange(0.0, duration, 1.0 / RATE), duration]
     s_dot = np.minimum(np.minimum(accel * t, cruise), accel * (duration - t))
     s_ddot = np.where(t < ramp, accel, np.where(t > duration - ramp, -accel, 0.0))
-    s = np.where(t < ramp, 0.5 * accel * t**2,
-                 np.where(t > duration - ramp, 1.0 - 0.5 * accel * (duration - t) ** 2, 0.5 * cruise * ramp + cruise * (t - ramp)))
+    cruising = 0.5 * cruise * ramp + cruise * (t - ramp)
+    s = np.where(t < ramp, 0.5 * accel * t**2, np.where(t > duration - ramp, 1.0 - 0.5 * accel * (duration - t) ** 2,
+                                                         cruising))
     return q_a + s[:, None] * change, s_dot[:, None] * change, s_ddot[:, None] * change
 
 

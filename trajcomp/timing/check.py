@@ -190,7 +190,9 @@ class _Found:
         np.maximum(self.acceleration_ratio, acceleration_ratio.max(axis=0), out=self.acceleration_ratio)
         self.speed_ratio = max(self.speed_ratio, float(speed_ratio.max(initial=0.0)))
         if self.measure_jerk:  # finite differences, across the block before too
-            times, accelerations = (t, qdd) if self.last is None else (np.r_[self.last[0], t], np.vstack([self.last[1], qdd]))
+            times, accelerations = t, qdd
+            if self.last is not None:
+                times, accelerations = np.r_[self.last[0], t], np.vstack([self.last[1], qdd])
             if len(times) > 1:
                 jerk = np.abs(np.diff(accelerations, axis=0)) / np.diff(times)[:, None]
                 np.maximum(self.jerk, jerk.max(axis=0), out=self.jerk)
@@ -199,12 +201,14 @@ class _Found:
         self.over.append(s[ratio > over])
 
     def peaks(self):
+        """The `Peaks` of the samples added so far."""
         jerk = self.jerk if self.measure_jerk and self.samples > 1 else np.full(6, np.nan)
         return Peaks(velocity=self.velocity, acceleration=self.acceleration, jerk=jerk,
                      velocity_ratio=self.velocity_ratio, acceleration_ratio=self.acceleration_ratio,
                      speed_ratio=self.speed_ratio)
 
     def s_over(self):
+        """Path positions (m,) of the samples added so far whose largest ratio to a limit exceeded ``over``."""
         return np.concatenate(self.over) if self.over else np.zeros(0)
 
 
