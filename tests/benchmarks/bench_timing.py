@@ -1,8 +1,8 @@
 """Re-timing: limits held at 1 kHz, cycle time against a feasible reference, and speed on one core.
 
 Run as ``python tests/benchmarks/bench_timing.py`` (``--quick``: the
-random programs up to 300 waypoints, no 100,000-point runs). Threads are
-pinned to one.
+random programs up to 300 waypoints, no 100,000-point runs; ``speed``:
+table 3 alone, at full size). Threads are pinned to one.
 
 1. Limits and optimality (targets of issue 20), for random blended
    programs of 30-2000 LIN waypoints on the UR10 (within 150 mm of its
@@ -196,7 +196,20 @@ def main(quick=False):
     print(f"  rounded poses, IK again: exact spline {exact.cycle_time:.3f} s (crawls), within 0.005 mm "
           f"{smooth.cycle_time:.3f} s (deviation {smooth.deviation:.4f} mm), clean {ours.cycle_time:.3f} s")
 
-    print("\n3. re-timing time on one core (best of 3)")
+    print()
+    speed_table(q, quick)
+
+    print("\n4. cycle time before and after compensation (auto: TOPP-RA runs, ruckig point-to-point)")
+    print(f"  {'program':10s} {'before s':>9s} {'after s':>9s} {'change':>8s}")
+    for name, (before, after, within) in cycles.items():
+        print(f"  {name:10s} {before:>9.3f} {after:>9.3f} {100 * (after - before) / before:>+7.2f}%"
+              + ("" if within else "  (limits exceeded)"))
+    return 0
+
+
+def speed_table(q, quick):
+    """Table 3: re-timing time of the CAM paths (``q``: the 10,000-waypoint helix) and the passes against toppra."""
+    print("3. re-timing time on one core (best of 3)")
     runs = [("helix, 1,000 waypoints", Moves.from_joints(helix(1000)[0], UR10, tcp_speed=250.0, zone=0.5), 0.1),
             ("helix, 10,000 waypoints", Moves.from_joints(q, UR10, tcp_speed=250.0, zone=0.5), 0.5)]
     if not quick:
@@ -214,13 +227,6 @@ def main(quick=False):
         ours, theirs = passes_against_toppra(moves)
         print(f"  passes on the {name} path (grid {ours[1]:,}): {ours[0]:.3f} s, toppra seidel {theirs:.3f} s "
               f"{'ok' if ours[0] <= theirs else 'SLOWER'}")
-
-    print("\n4. cycle time before and after compensation (auto: TOPP-RA runs, ruckig point-to-point)")
-    print(f"  {'program':10s} {'before s':>9s} {'after s':>9s} {'change':>8s}")
-    for name, (before, after, within) in cycles.items():
-        print(f"  {name:10s} {before:>9.3f} {after:>9.3f} {100 * (after - before) / before:>+7.2f}%"
-              + ("" if within else "  (limits exceeded)"))
-    return 0
 
 
 def passes_against_toppra(moves):
@@ -245,4 +251,7 @@ def _timed(work):
 
 
 if __name__ == "__main__":
+    if "speed" in sys.argv[1:]:  # table 3 alone, full size
+        speed_table(helix(10000)[0], quick=False)
+        sys.exit(0)
     sys.exit(main(quick="--quick" in sys.argv[1:]))
