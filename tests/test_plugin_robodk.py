@@ -30,7 +30,7 @@ from trajcomp.errors import TrajcompError
 from trajcomp.arm.ik import ik
 from trajcomp.arm.kinematics import fk
 from trajcomp.model.model_file import load_model
-from trajcomp.programs.configuration import abb_confdata
+from trajcomp.programs.configuration import abb_confdata, fanuc_config
 
 PLUGIN = Path(__file__).resolve().parents[1] / "plugins" / "trajcomp-robodk"
 POSTS = Path(__file__).resolve().parent / "data" / "robodk_posts"
@@ -225,6 +225,9 @@ def test_flags_follow_a_joint_across_its_boundary(robodk_plugin, cell):
 
 CIRCLE = [(470.0, 20.0, 720.0), (510.0, 40.0, 740.0), (540.0, 70.0, 730.0), (560.0, 30.0, 760.0),
           (500.0, 90.0, 700.0)]  # KR6 targets in its base, mm: inside the kuka_model cube (400, -50, 650) + 200
+FANUC_PATH = [(420.0, 20.0, 420.0), (400.0, -20.0, 440.0), (450.0, 40.0, 400.0), (380.0, 60.0, 430.0),
+              (430.0, -40.0, 410.0)]  # LR Mate targets in its base, mm: inside the FANUC model's cube
+FANUC_FRAME = (20.0, -10.0, 0.0, 10.0, 0.0, 0.0)  # its user frame 1 in the base: mm, deg
 ABB_PATH = [(1120.0, -180.0, 820.0), (1080.0, -200.0, 860.0), (1150.0, -120.0, 840.0), (1180.0, -200.0, 800.0),
             (1100.0, -100.0, 880.0)]  # IRB 4600 targets in its base, mm: inside the abb_model cube
 
@@ -241,36 +244,44 @@ class Station:
     joints: np.ndarray  # (5, 6) deg, the joints RoboDK plans: nominal IK in one posture
     flags: list  # [REAR, LOWERARM, FLIP] of each target's joints
     speed: float  # mm/s of setSpeed, or None: the post's default
+    circle: bool  # the third and fourth targets as a MoveC (else two MoveL)
 
 
-def station(post, model_path, frame, T_base, seed_deg, speed=None):
-    """A `Station` planning targets ``T_base`` (N, 4, 4) mm in the posture nearest ``seed_deg``.
+def flags_of(robot, q, post):
+    """RoboDK's ``[REAR, LOWERARM, FLIP]`` of joints q (N, 6) rad, in the polarity the vendor ``post`` reads.
 
-    The flags are those of the planned joints as ABB's confdata holds them (cfx = 4 REAR + 2 LOWERARM + FLIP,
-    `trajcomp.programs.configuration.abb_confdata`): RoboDK gives each target the flags of its joints.
+    The FANUC post writes FLIP as 'F' (J5 >= 0), LOWERARM as 'D', REAR as 'B' (`trajcomp.programs.configuration.
+    fanuc_config`); the ABB post writes cfx = 4 REAR + 2 LOWERARM + FLIP (`abb_confdata`); the others ignore them.
     """
+    if post == "Fanuc_R30iA":
+        return [[int(front == "B"), int(elbow == "D"), int(flip == "F")] for flip, elbow, front, *_ in
+                fanuc_config(robot, q)]
+    return [[(cfx >> shift) & 1 for shift in (2, 1, 0)] for *_, cfx in abb_confdata(robot, q)]
+
+
+def station(post, model_path, frame, T_base, seed_deg, speed=None, circle=True):
+    """A `Station` planning targets ``T_base`` (N, 4, 4) mm in the posture nearest ``seed_deg``, with RoboDK's flags."""
     robot = load_model(model_path).nominal
     q = ik(robot, T_base, seed=np.radians(seed_deg)).q
-    flags = [[(cfx >> shift) & 1 for shift in (2, 1, 0)] for *_, cfx in abb_confdata(robot, q)]
-    return Station(post, model_path, robot, frame, np.linalg.inv(frame) @ T_base, np.degrees(q), flags, speed)
+    return Station(post, model_path, robot, frame, np.linalg.inv(frame) @ T_base, np.degrees(q),
+                   flags_of(robot, q, post), speed, circle)
 
 
-@pytest.fixture(scope="module")
-def abb_model(tmp_path_factory):
-    """A model of the virtual IRB 4600 on a small cube (27 points, folds 0: about 1 s)."""
-    folder = tmp_path_factory.mktemp("abb")
-    plan, meas, model = folder / "plan.csv", folder / "meas.csv", folder / "abb.yaml"
-    assert main(["plan", "--robot", "abb_irb4600", "--cube", "1000,-300,700", "--side", "240", "--step", "120",
-                 "-o", str(plan)]) == 0
-    assert main(["simulate", str(plan), "--robot", "abb_irb4600", "--seed", "1", "-o", str(meas)]) == 0
-    assert main(["calibrate", str(meas), "--robot", "abb_irb4600", "--grid-step", "120", "--folds", "0",
-                 "-o", str(model)]) == 0
+def small_model(folder, robot, corner):
+    """A model of the virtual ``robot`` on a cube at ``corner`` (side 240, step 120: 27 points, folds 0: about 1 s)."""
+    plan, meas, model = folder / "plan.csv", folder / "meas.csv", folder / f"{robot}.yaml"
+    assert main(["plan", "--robot", robot, "--cube", corner, "--side", "240", "--step", "120", "-o", str(plan)]) == 0
+    assert main(["simulate", str(plan), "--robot", robot, "--seed", "1", "-o", str(meas)]) == 0
+    assert main(["calibrate", str(meas), "--robot", robot, "--grid-step", "120", "--folds", "0", "-o", str(model)]) == 0
     return model
 
 
 @pytest.fixture(scope="module")
-def stations(cell, kuka_model, abb_model):
+def stations(cell, kuka_model, tmp_path_factory):
     pytest.importorskip("robodk")
+    abb_model = small_model(tmp_path_factory.mktemp("abb"), "abb_irb4600", "1000,-300,700")
+    fanuc_model = small_model(tmp_path_factory.mktemp("fanuc"), "fanuc_lrmate200id", "320,-100,300")
+    lrmate = np.array([matrix((*p, 0.0, 180.0, 0.0)) for p in FANUC_PATH])
     irb = np.array([matrix((*p, -180.0, 0.0, 180.0)) for p in ABB_PATH])
     ur10 = matrix(FRAME) @ np.array([matrix(t) for t in TARGETS + [(520.0, -40.0, 530.0, 75.0, 0.0, 180.0)]])
     kr6 = np.array([matrix((*p, 0.0, 90.0, 0.0)) for p in CIRCLE])
@@ -280,7 +291,11 @@ def stations(cell, kuka_model, abb_model):
             "urscript": station("Universal_Robots_SCRIPT", cell.model_path, matrix(FRAME), ur10,
                                 [27, -185, 91, 4, -90, 27]),
             "rapid": station("ABB_RAPID_IRC5", abb_model, matrix((50.0, 20.0, 0.0, 5.0, 0.0, 0.0)), irb,
-                             [-16, 4, 40, 0, 45, -16], 150.0)}
+                             [-16, 4, 40, 0, 45, -16], 150.0),
+            # the post writes UFRAME_NUM=1 and UTOOL_NUM=1 (RoboDK's numbers), values kept by the controller;
+            # it writes a circle on two lines without the pendant's ':' (refused): no MoveC
+            "fanuc_ls": station("Fanuc_R30iA", fanuc_model, matrix(FANUC_FRAME), lrmate, [0, 0, 0, 0, -90, 0],
+                                100.0, circle=False)}
 
 
 def vendor_post(name):
@@ -311,7 +326,11 @@ def write_program(RobotPost, station, folder, tool=None):
     flags = station.flags
     post.MoveJ(pose[0], joints[0], flags[0])
     post.MoveL(pose[1], joints[1], flags[1])
-    post.MoveC(pose[2], joints[2], pose[3], joints[3], flags[2], flags[3])
+    if station.circle:
+        post.MoveC(pose[2], joints[2], pose[3], joints[3], flags[2], flags[3])
+    else:
+        post.MoveL(pose[2], joints[2], flags[2])
+        post.MoveL(pose[3], joints[3], flags[3])
     post.MoveL(pose[4], joints[4], flags[4])
     post.ProgFinish("weld")
     post.ProgSave(str(folder), "weld")
@@ -323,18 +342,24 @@ def verdict(folder, program):
     return json.loads(Path(f"{program}.json").read_text().replace(str(folder), "<folder>"))["verdict"]
 
 
-@pytest.mark.parametrize("language", ["krl", "rapid", "urscript"])
+@pytest.mark.parametrize("language", ["krl", "rapid", "fanuc_ls", "urscript"])
 def test_the_adapter_writes_the_program_and_verdict_of_the_cli(language, stations, robodk_plugin, tmp_path, capsys):
     s = stations[language]
     adapter, plain = tmp_path / "adapter", tmp_path / "plain"
     adapter.mkdir(), plain.mkdir()
-    RobotPost = robodk_plugin.compensated_post(vendor_post(s.post), model=s.model, json_only=True)
+    named = {}
+    if language == "fanuc_ls":  # the values of the tool and frame numbers the program uses but does not define
+        tool = s.robot.T_flange_tool
+        named = {"tools": {"1": [*tool[:3, 3], *Rotation.from_matrix(tool[:3, :3]).as_euler("ZYX", degrees=True)]},
+                 "frames": {"1": list(FANUC_FRAME)}}
+    options = [f"--{kind[:-1]}=1={','.join(map(repr, map(float, value['1'])))}" for kind, value in named.items()]
+    RobotPost = robodk_plugin.compensated_post(vendor_post(s.post), model=s.model, json_only=True, **named)
     assert issubclass(RobotPost, robodk_plugin.ProgramPost)
     post, written = write_program(RobotPost, s, adapter)
     _, reference = write_program(vendor_post(s.post), s, plain)
     planned = reference.read_bytes()
     code = main(["compensate", str(reference), "--model", str(s.model), "--joint-targets", "compensate",
-                 "--in-place", "-o", str(reference), "--report", str(reference), "--json-only"])
+                 "--in-place", "-o", str(reference), "--report", str(reference), "--json-only", *options])
     assert written.read_bytes() == reference.read_bytes() != planned
     [run] = post.runs
     assert code in (0, 1) and run.passed == (code == 0)

@@ -67,7 +67,7 @@ UNCOMPENSATED = ".uncompensated"  # suffix a refused program is moved to
 
 
 def compensated_post(vendor_post, model, *, joint_targets="compensate", retime="auto", criteria=None, json_only=False,
-                     **options):
+                     tools=None, frames=None, **options):
     """A RobotPost class that compensates what ``vendor_post`` writes.
 
     Parameters
@@ -88,6 +88,10 @@ def compensated_post(vendor_post, model, *, joint_targets="compensate", retime="
     json_only : bool
         Program path: only the report's JSON beside the program, no page
         (``--json-only``; the page's plots take seconds).
+    tools, frames : Mapping[str, array_like (4, 4) or (6,)], optional
+        Program path: tools (T_flange_tool) and user frames (T_world_frame),
+        mm / deg, that the written program uses but does not define, e.g. a
+        FANUC ``UFRAME_NUM=3`` (``--tool`` / ``--frame``).
     **options
         `trajcomp.Compensator` options: ``mode``, ``outside``,
         ``max_joint_change`` (deg), ``max_correction`` (mm).
@@ -103,7 +107,8 @@ def compensated_post(vendor_post, model, *, joint_targets="compensate", retime="
     attributes = {"VENDOR_POST": vendor_post, "COMPENSATOR": comp}
     if _language(vendor_post) is None:
         return type(f"Compensated{vendor_post.__name__}", (TargetPost,), attributes)
-    settings = {"joint_targets": joint_targets, "retime": retime, "criteria": criteria, "json_only": json_only}
+    settings = {"joint_targets": joint_targets, "retime": retime, "criteria": criteria, "json_only": json_only,
+                "tools": tools, "frames": frames}
     return type(f"Compensated{vendor_post.__name__}", (ProgramPost,), {**attributes, "SETTINGS": settings})
 
 
