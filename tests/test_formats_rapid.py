@@ -114,13 +114,18 @@ def test_undeclared_point_is_refused_naming_it(tmp_path):
                              "    MoveC p40, p20, v100, z10, tool0;\n")
     with pytest.raises(ReadError, match=r"M\.mod: .*p30 \(line 8\), p40 \(line 9\); no module of its folder declares"):
         formats.read(path)
-    # another module of the task declares p30 and p40: left as written, listed with where
+    # another module of the task declares p30 and p40: read from it (a LOCAL point there is not seen)
     (tmp_path / "Data.sys").write_text("MODULE Data(SYSMODULE)\n  TASK PERS robtarget p30:=[[1,2,3],[1,0,0,0],"
                                        "[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]];\n  CONST robtarget p40:=[[1,2,3],"
                                        "[1,0,0,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]];\nENDMODULE\n")
-    assert [(line, reason) for line, _, reason in formats.read(path).not_compensated()] == [
-        (8, "p30 is declared in another module of the task (Data.sys:2): left as written"),
-        (9, "p40 is declared in another module of the task (Data.sys:3): left as written")]
+    program = formats.read(path)
+    assert program.not_compensated() == () and [s.name for s in program.sources] == ["M.mod", "Data.sys"]
+    via_point = program.motions[2].via
+    assert [program.where(i) for i in (program.motions[1].target, via_point)] == ["p30 (Data.sys:2)", "p40 (Data.sys:3)"]
+    (tmp_path / "Data.sys").write_text("MODULE Data(SYSMODULE)\n  LOCAL CONST robtarget p30:=[[1,2,3],[1,0,0,0],"
+                                       "[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]];\nENDMODULE\n")
+    with pytest.raises(ReadError, match=r"p30 \(line 8\), p40 \(line 9\); no module of its folder declares"):
+        formats.read(path)
 
 
 def test_positions_known_only_at_run_time_are_listed_with_their_reason(tmp_path):

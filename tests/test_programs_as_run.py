@@ -262,7 +262,7 @@ def test_fanuc_backup_shapes_a_controller_loads(tmp_path):
                                                "trajcomp does not read: left as written")
 
 
-def test_krl_points_of_config_dat_or_another_data_list_are_listed_not_refused(tmp_path):
+def test_krl_points_of_config_dat_or_another_data_list_are_read_not_refused(tmp_path):
     program_folder, system = tmp_path / "KRC" / "R1" / "Program", tmp_path / "KRC" / "R1" / "System"
     program_folder.mkdir(parents=True)
     system.mkdir()
@@ -276,6 +276,6 @@ def test_krl_points_of_config_dat_or_another_data_list_are_listed_not_refused(tm
     with pytest.raises(ReadError, match=r"XNOWHERE \(line 5\); are they declared in weld\.dat\?"):
         formats.read(program_folder / "weld.src")
     (program_folder / "weld.src").write_text("DEF weld( )\nPTP XP1\nLIN XSHARED\nLIN XTABLE\nEND\n")
-    assert [reason for _, _, reason in formats.read(program_folder / "weld.src").not_compensated()] == [
-        "XSHARED is declared in another data list of the controller ($config.dat:2): left as written",
-        "XTABLE is declared in another data list of the controller (table.dat:2): left as written"]
+    program = formats.read(program_folder / "weld.src")  # read where declared (tests/test_programs_tasks.py)
+    assert program.not_compensated() == ()
+    assert [program.where(m.target) for m in program.motions[1:]] == ["XSHARED ($config.dat:2)", "XTABLE (table.dat:2)"]

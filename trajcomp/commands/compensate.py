@@ -21,6 +21,7 @@ from trajcomp.compensation.pipeline import RETIME_CHOICES, CompensationJob, load
 from trajcomp.compensation.posture import MAX_JOINT_CHANGE
 from trajcomp.compensation.program import MAX_CORRECTION
 from trajcomp.errors import RobotError, TrajcompError
+from trajcomp.formats.task import groups as task_groups
 from trajcomp.model.compensation_model import MODES
 from trajcomp.model.model_file import model_files
 from trajcomp.support.atomic import refuse_inputs
@@ -113,18 +114,24 @@ def run(args):
         raise TrajcompError("--json-only: a batch writes one report per program; give --report FOLDER")
     if args.report:
         Path(args.report).mkdir(parents=True, exist_ok=True)
-    return _run_batch(args, dataclasses.replace(job, report_folder=True))
+    return _run_batch(args, dataclasses.replace(job, report_folder=True, output_root=args.output))
 
 
 def _run_batch(args, job):
-    inputs = batch.expand_inputs(args.program)
-    outputs = batch.output_paths(inputs, args.output)
+    found = batch.expand_inputs(args.program)
+    outputs = batch.output_paths(found, args.output)
+    inputs = [path for path, _ in found]
     if args.to_format:
         suffix = formats.find_format(format=args.to_format).extensions[0]
         outputs = [path.with_suffix(suffix) for path in outputs]
     summary = Path(args.summary) if args.summary else Path(args.output) / "summary.json"
     refuse_inputs([summary, *outputs], [*inputs, *model_files(args.model)], "give --summary another name")
-    Path(args.output).mkdir(parents=True, exist_ok=True)
+    for folder in dict.fromkeys(path.parent for path in outputs):  # a backup's layout is kept
+        folder.mkdir(parents=True, exist_ok=True)
+    # the files of one task that share points run as one program (a shared point corrected once)
+    tasks = task_groups(inputs) if not args.to_format else [[k] for k in range(len(inputs))]
+    inputs = [inputs[g[0]] if len(g) == 1 else tuple(inputs[k] for k in g) for g in tasks]
+    outputs = [outputs[g[0]] if len(g) == 1 else tuple(outputs[k] for k in g) for g in tasks]
     with progress(len(inputs), desc="compensate", unit="file") as bar:
         results = batch.run_batch(job, inputs, outputs, jobs=args.jobs, scheduler=args.scheduler,
                                   done=lambda result: bar.update(1))

@@ -50,7 +50,17 @@ class FileResult:
 
 
 def expand_inputs(patterns):
-    """Program files named by paths, folders (their program files) and glob patterns, in order, once each.
+    """Program files named by paths, folders and glob patterns, in order, once each.
+
+    A folder gives its program files and those of its subfolders (hidden
+    ones left out): a controller backup keeps its layout (a RAPID task's
+    PROGMOD and SYSMOD, a KUKA backup's R1/Program).
+
+    Returns
+    -------
+    list of (Path, PurePath)
+        Each file, and where it is written under the output folder: its
+        path under the folder named, else its name.
 
     Raises
     ------
@@ -58,18 +68,22 @@ def expand_inputs(patterns):
         A pattern that matches no program file, naming it.
     """
     extensions = {e for f in formats.formats() for e in f.extensions}
-    found = []
+    found, seen = [], set()
     for pattern in patterns:
         path = Path(pattern)
         if path.is_dir():
-            matches = sorted(p for p in path.iterdir() if p.is_file() and p.suffix.lower() in extensions)
+            matches = [(p, p.relative_to(path)) for p in sorted(path.rglob("*"))
+                       if p.is_file() and p.suffix.lower() in extensions
+                       and not any(part.startswith(".") for part in p.relative_to(path).parts)]
         elif is_pattern(pattern):
-            matches = sorted(p for p in map(Path, glob.glob(pattern)) if p.is_file() and p.suffix.lower() in extensions)
+            matches = [(p, Path(p.name)) for p in sorted(map(Path, glob.glob(pattern)))
+                       if p.is_file() and p.suffix.lower() in extensions]
         else:
-            matches = [path]
+            matches = [(path, Path(path.name))]
         if not matches:
             raise TrajcompError(f"{pattern}: no program file ({', '.join(sorted(extensions))})")
-        found += [p for p in matches if p not in found]
+        found += [(p, relative) for p, relative in matches if p not in seen]
+        seen.update(p for p, _ in matches)
     return found
 
 
@@ -79,34 +93,49 @@ def is_pattern(text):
 
 
 def output_paths(inputs, out_dir):
-    """``out_dir / name`` of every input (Path list).
+    """``out_dir / relative`` of every input (Path list).
+
+    Parameters
+    ----------
+    inputs : sequence of (Path, PurePath)
+        As `expand_inputs` gives them.
+    out_dir : str or Path
 
     Raises
     ------
     TrajcompError
-        Two inputs of the same file name (their outputs would collide), or
-        ``out_dir`` is a file.
+        Two inputs written to the same file (their outputs would collide),
+        or ``out_dir`` is a file.
     """
     out_dir = Path(out_dir)
     if out_dir.exists() and not out_dir.is_dir():
         raise TrajcompError(f"{out_dir}: with several programs, -o names a folder, and this is a file")
     seen = {}
-    for path in inputs:
-        key = path.name.lower()  # KRL and Windows controllers do not tell case apart
+    for path, relative in inputs:
+        key = relative.as_posix().lower()  # KRL and Windows controllers do not tell case apart
         if key in seen:
-            raise TrajcompError(f"{seen[key]} and {path} would both be written to {out_dir / path.name}")
+            raise TrajcompError(f"{seen[key]} and {path} would both be written to {out_dir / relative}")
         seen[key] = path
-    return [out_dir / path.name for path in inputs]
+    return [out_dir / relative for _, relative in inputs]
 
 
 def run_one(job, path, output):
-    """``job(path, output)`` with every exception turned into the file's result."""
+    """``job(path, output)`` with every exception turned into the file's result.
+
+    ``path`` and ``output`` are one file each, or tuples of the files of
+    one task compensated together (`trajcomp.formats.task.groups`).
+    """
     try:
-        return job(Path(path), Path(output))
+        return job(*((tuple(map(Path, p)) if isinstance(p, tuple) else Path(p)) for p in (path, output)))
     except TrajcompError as exc:
-        return FileResult(str(path), status=ERROR, message=str(exc))
+        return FileResult(named(path), status=ERROR, message=str(exc))
     except Exception as exc:  # one file's bug must not stop the batch; it is reported as a crash
-        return FileResult(str(path), status=CRASH, message=crash.bug_message(exc, crash.save_traceback(exc)))
+        return FileResult(named(path), status=CRASH, message=crash.bug_message(exc, crash.save_traceback(exc)))
+
+
+def named(path):
+    """A batch input for its result: a file, or the files of one task joined by ``" + "``."""
+    return " + ".join(map(str, path)) if isinstance(path, tuple) else str(path)
 
 
 def run_batch(job, inputs, outputs, *, jobs=1, scheduler=None, done=None):

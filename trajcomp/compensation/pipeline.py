@@ -109,6 +109,7 @@ class CompensationJob:
     to_format: str = None  # another language to write (--to); default the input's
     show_stages: bool = False  # a bar over STAGES on a terminal (one file; a batch shows files instead)
     workers: int = 1  # processes sharing the compensation of one file (a batch spreads files instead)
+    output_root: str = None  # the folder every output stays in (a batch's); default the output's own folder
 
     def __call__(self, path, output):
         """Compensate ``path`` into ``output``; a `batch.FileResult` (raises TrajcompError on bad input)."""
@@ -117,20 +118,26 @@ class CompensationJob:
     def run(self, path, output):
         """Compensate ``path`` into ``output``, judge it and write its report: a `ProgramRun`.
 
-        The report goes to ``report`` or, with ``report_folder``, to
-        ``report / <output name>`` (``.html`` and ``.json``). No output
-        may be an input (the program's files unless ``in_place``, the
-        model's); a report that cannot be written once the program is
-        makes the file fail (exit 1) with the files written listed, not
-        an input error.
+        ``path`` and ``output`` may be tuples: the files of one task that
+        share points (`trajcomp.formats.task.groups`), compensated as one
+        program written beside the first output as they lie beside the
+        first file. The report goes to ``report`` or, with
+        ``report_folder``, to ``report / <output name>`` (``.html`` and
+        ``.json``). No output may be an input (the program's files unless
+        ``in_place``, the model's); a report that cannot be written once
+        the program is makes the file fail (exit 1) with the files written
+        listed, not an input error.
         """
+        task = path if isinstance(path, tuple) else None
+        if task is not None:
+            path, output = task[0], output[0]
         if self.retime not in RETIME_CHOICES:
             raise TrajcompError(f"retime: expected one of {', '.join(RETIME_CHOICES)}, got {self.retime!r}")
         target = _report_target(self.report, self.report_folder, output)
         with Stages(STAGES, desc=Path(path).name, enabled=self.show_stages) as stages, kept_apart():
             model = loaded_model(self.model)
             whose = "the arm of the model" + (f" {self.model}" if isinstance(self.model, (str, Path)) else "")
-            program = formats.read(path, workers=self.workers)
+            program = formats.read(path, workers=self.workers) if task is None else formats.read_task(task)
             formats.check_robot_language(path, formats.find_format(format=program.format), model.nominal, whose)
             out_format = formats.output_format(output, program, self.to_format)
             formats.check_robot_language(output, out_format, model.nominal, whose)
@@ -158,7 +165,8 @@ class CompensationJob:
                 timing = timing_lines(timed, before)
             _next(stages)
             protect = inputs[len(sources):] if self.in_place else inputs
-            written = formats.write(output, corrected, out_format.name, protect=protect, workers=self.workers)
+            written = formats.write(output, corrected, out_format.name, protect=protect, workers=self.workers,
+                                    root=self.output_root)
             _next(stages)
             mode = self.mode or model.method
             compliance = compliance_report(
@@ -186,7 +194,8 @@ class CompensationJob:
             status, message = batch.FAIL, "; ".join(filter(None, [message, LIMIT_MESSAGE]))
         if unwritten:
             status, message = batch.FAIL, "; ".join(filter(None, [unwritten, message]))
-        result = batch.FileResult(str(path), tuple(map(str, written + reports)), status, message, tuple(lines))
+        result = batch.FileResult(batch.named(task or path), tuple(map(str, written + reports)), status, message,
+                                  tuple(lines))
         return ProgramRun(result, compliance, report, timed)
 
     def options(self):

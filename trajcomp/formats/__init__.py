@@ -18,6 +18,7 @@ Plugins are imported lazily, on the first lookup that needs them.
 
 import dataclasses
 import importlib
+import os
 from importlib.metadata import entry_points
 from pathlib import Path
 
@@ -38,6 +39,9 @@ class Format:
     time and take ``workers``, the processes that share the blocks.
     ``vendor``: the maker whose controllers run the language (compared with
     `trajcomp.arm.robot.Robot.vendor`), None for a language of no maker (CSV).
+    ``tasks``: a program may use points other files of its controller
+    declare (`trajcomp.formats.task`): a batch reads such files first to
+    compensate those that share points together.
     """
 
     name: str
@@ -47,6 +51,7 @@ class Format:
     source: str = "built-in"
     blocks: bool = False
     vendor: str = None
+    tasks: bool = False
 
     def _resolve(self, ref):
         if callable(ref):
@@ -65,7 +70,7 @@ _FORMATS = {}
 _PLUGINS = {"loaded": False, "failed": {}}
 
 
-def register_format(name, extensions, reader, writer, *, source="built-in", blocks=False, vendor=None):
+def register_format(name, extensions, reader, writer, *, source="built-in", blocks=False, vendor=None, tasks=False):
     """Register (or replace) a format.
 
     Parameters
@@ -87,8 +92,11 @@ def register_format(name, extensions, reader, writer, *, source="built-in", bloc
     vendor : str, optional
         The maker whose controllers run the language (``"KUKA"``); None for
         a language any arm's program may be written in.
+    tasks : bool
+        A program may use points other files of its controller declare
+        (its reader puts them in companion sources, `trajcomp.programs.items.Source`).
     """
-    _FORMATS[name] = Format(name, tuple(e.lower() for e in extensions), reader, writer, source, blocks, vendor)
+    _FORMATS[name] = Format(name, tuple(e.lower() for e in extensions), reader, writer, source, blocks, vendor, tasks)
 
 
 for _name, _module, _extensions, _vendor in (
@@ -99,7 +107,7 @@ for _name, _module, _extensions, _vendor in (
     ("urscript", "urscript", (".script", ".urscript"), "Universal Robots"),
 ):
     register_format(_name, _extensions, f"trajcomp.formats.{_module}:read", f"trajcomp.formats.{_module}:write",
-                    blocks=_name == "csv", vendor=_vendor)
+                    blocks=_name == "csv", vendor=_vendor, tasks=_name in ("krl", "rapid"))
 
 
 def _load_plugins():
@@ -237,14 +245,36 @@ def read(path, format=None, *, workers=1):
         return fmt.read(path, workers).with_shared_targets_left()
 
 
+def read_task(paths, format=None):
+    """Several files of one controller that share points, read as one program (`trajcomp.formats.task.merge`).
+
+    Parameters
+    ----------
+    paths : sequence of str or Path
+        Program files of one language (a RAPID task's modules, KUKA
+        programs using one ``$config.dat``); the first names the program.
+    format : str, optional
+        Registry name; default from the extensions.
+
+    Raises
+    ------
+    ReadError
+        As `read`, for any of the files.
+    """
+    from trajcomp.formats.task import merge
+
+    return merge([read(path, format) for path in paths])
+
+
 def input_paths(path, program):
-    """The files a program read from ``path`` came from (a KRL .src and its .dat)."""
+    """The files a program read from ``path`` came from (a KRL .src and its .dat, the other modules of a RAPID
+    task, $config.dat it uses points of)."""
     path = Path(path)
-    return [path] + [path.parent / source.name for source in program.sources]
+    return [path] + [Path(source.path) if source.path else path.parent / source.name for source in program.sources]
 
 
-def write(path, program, format=None, *, protect=(), workers=1):
-    """Write a robot program; its output files (a KRL .src and .dat) land all or none.
+def write(path, program, format=None, *, protect=(), workers=1, root=None):
+    """Write a robot program; its output files (a KRL .src and .dat, the other files of its task) land all or none.
 
     The content is written to temporary files (a writer's generator of
     pieces is consumed while writing), then committed with
@@ -260,6 +290,12 @@ def write(path, program, format=None, *, protect=(), workers=1):
         Files that must not be overwritten (the program's inputs, see `input_paths`).
     workers : int
         Processes sharing the work of a format that writes blocks of rows (CSV).
+    root : str or Path, optional
+        The folder every output must stay in (a batch's output folder);
+        default the folder of ``path``. The other files of the program's
+        task are written where they lie relative to it (`trajcomp.formats.task`),
+        their folders made inside ``root``; one that would land outside is
+        refused unless it is written over itself (in place).
 
     Returns
     -------
@@ -269,8 +305,9 @@ def write(path, program, format=None, *, protect=(), workers=1):
     Raises
     ------
     WriteError
-        An output is one of the ``protect`` files, or cannot be written, or
-        a number to write is not finite (``nan``, ``inf``: never into robot code).
+        An output is one of the ``protect`` files, lies outside ``root``,
+        or cannot be written, or a number to write is not finite (``nan``,
+        ``inf``: never into robot code).
     """
     from trajcomp.formats._text import check_writable  # lazily, like the format modules
 
@@ -278,6 +315,7 @@ def write(path, program, format=None, *, protect=(), workers=1):
     check_writable(program)
     with collection_paused():  # the texts are made of many objects without cycles (`trajcomp.support.memory`)
         files = find_format(path, format).write(program, path, workers)
+        _task_folders(files, path, program, Path(root) if root is not None else path.parent)
         write_files_atomic(files, protect=protect,
                            advice="write to another file (-o) or give --in-place to replace it")
     return list(files)
@@ -312,3 +350,28 @@ def check_robot_language(path, format, robot, whose):
             f"{path}: a {format.vendor} program ({format.name}) cannot run on robot {robot.name} "
             f"({robot.vendor}), {whose}: give the arm (or a model of the arm) that runs it"
         )
+
+
+def _task_folders(files, path, program, root):
+    """Make the folders of the files written beside ``path`` (the other files of its task) inside ``root``.
+
+    Raises
+    ------
+    WriteError
+        A file outside ``root`` that is not a file of the program written
+        over itself (in place).
+    """
+    own = {os.path.abspath(source.path) for source in program.sources if source.path}
+    top = os.path.abspath(root)
+    for file in files:
+        place = os.path.normpath(os.path.abspath(file))
+        if Path(file) == path or place in own:
+            continue
+        if os.path.commonpath([place, top]) != top:
+            raise WriteError(
+                f"{place}: {Path(file).name}, a file of the program's task whose points are corrected, would be "
+                f"written outside the output's folder {root}: compensate the controller's backup folder into an "
+                "output folder (its layout is kept), or give --in-place"
+            )
+        if os.path.isdir(top):  # a missing output folder is refused when the files are committed
+            os.makedirs(os.path.dirname(place), exist_ok=True)

@@ -61,7 +61,9 @@ _WORD = re.compile(r"[A-Za-z_$][\w$]*")
 _ASSIGN = re.compile(r"^\s*([A-Za-z_]\w*)\s*(?:\.\w+|\[[^\]]*\])*\s*=(?!=)")
 _WITH_TOOL = re.compile(r"\$TOOL\s*=\s*STOOL2\s*\(\s*(\w+)\s*\)", re.I)
 _WITH_BASE = re.compile(r"\$BASE\s*=\s*SBASE\s*\(\s*(\w+)\s*\.\s*BASE_NO\s*\)", re.I)
-_GLOBAL_POINT = re.compile(r"^[ \t]*(?:DECL\s+)?(?:GLOBAL\s+)?(?:" + POINT_TYPES + r")\s+(\w+)\s*=", re.I | re.M)
+# a point another data list declares, with a value or without (`DeclaredElsewhere`)
+_GLOBAL_POINT = re.compile(r"^[ \t]*(?:DECL\s+)?(?:GLOBAL\s+)?(?:" + POINT_TYPES + r")\s+(\w+)\s*(?:=|$)", re.I | re.M)
+_GLOBAL_WORD = re.compile(r"\bGLOBAL\b", re.I)
 _HOME = re.compile(r"^XHOME\d*$", re.I)
 _DEF = re.compile(r"^\s*(?:GLOBAL\s+)?DEF(?:FCT\s+\w+)?\s+(\w+)\s*\(", re.I | re.M)
 _DEF_LINE = re.compile(r"^\s*(?:GLOBAL\s+)?DEF(?:FCT\s+\w+)?\s+\w+\s*\((.*?)\)", re.I)
@@ -238,6 +240,20 @@ class _Reader:
         self.speed_why = {JOINT: none_set.format("BAS(#VEL_PTP)"), LINEAR: none_set.format("$VEL.CP")}
         self.numbers = {}  # NAME -> (value, why it is only known at run time) of REAL / INT data declared with one
         self.assigned = {}  # NAME -> first line of the .src that assigns it
+        self.shared = set()  # NAMEs of GLOBAL points: other programs may assign them
+        self.companions = {}  # file -> (source index, Lines, masked text) of other data lists read
+
+    def declared_in(self, file, line_no):
+        """Read the point another data list (``$config.dat``, a GLOBAL one) declares at ``file``:``line_no``.
+
+        The file is read once, as a companion source (`Source`): its point is
+        corrected there, for every program that uses it.
+        """
+        if file not in self.companions:
+            self.companions[file] = self.add_source(read_source(file, companion=True))
+        index, lines, masked = self.companions[file]
+        start = lines.starts[line_no - 1]
+        self.declarations(index, masked, line_no, start, start + len(lines.line(line_no)))
 
     def scan_assignments(self, masked, lines):
         """Note the names the .src assigns (a declared speed is a constant only if nothing assigns it)."""
@@ -282,6 +298,8 @@ class _Reader:
                 self.data[point.upper()] = _members(m.group(3), body_start, index, name, line_no, original, False)
             else:
                 members = _members(m.group(3), body_start, index, name, line_no, original)
+                if _GLOBAL_WORD.search(text, 0, m.start(2)):
+                    self.shared.add(point.upper())
                 self.points[point.upper()] = len(self.targets)
                 self.targets.append(_point(members, point, name, line_no, original, typ))
             return True
@@ -296,8 +314,9 @@ class _Reader:
         if _DECL_START.match(text):
             fail(name, line_no, original, "malformed or cut point declaration")
         if m := _DECL_BARE.match(text):
+            place = f"{name}:{line_no}" if self.sources[index].companion else f"line {line_no}"
             for point in re.split(r"\s*,\s*", m.group(1)):
-                self.unset[point.upper()] = f"{point} is declared without a value (set at run time, line {line_no})"
+                self.unset[point.upper()] = f"{point} is declared without a value (set at run time, {place})"
             return True
         m = _DATA.match(text)
         if m:
@@ -542,8 +561,11 @@ def read(path):
         written = _written_points(dat_index, dat_masked, dat_lines)
         for line_no, start, end in dat_lines:
             if line_no in written:
-                reader.points[written[line_no].name.upper()] = len(reader.targets)
+                name = written[line_no].name.upper()
+                reader.points[name] = len(reader.targets)
                 reader.targets.append(written[line_no])
+                if _GLOBAL_WORD.search(dat_masked, start, end):  # other programs see it, and may assign it
+                    reader.shared.add(name)
             else:
                 reader.declarations(dat_index, dat_masked, line_no, start, end)
     for line_no, start, end in src_lines:
@@ -552,6 +574,11 @@ def read(path):
     return Program(
         "krl", path.stem, items, tuple(reader.targets), reader.tools, reader.frames, tuple(reader.sources)
     )
+
+
+def _visible(file, match):
+    """Whether a program sees a point another data list declares: all of ``$config.dat``'s, GLOBAL ones of others."""
+    return file.name.lower() == "$config.dat" or _GLOBAL_WORD.search(match.group(0)) is not None
 
 
 def _resolve(reader, path, dat_path):
@@ -563,7 +590,8 @@ def _resolve(reader, path, dat_path):
     assigned, items = {}, []
     # other data lists beside it, and $config.dat beside it or in a backup's R1/System (KRC/R1/Program/x.src)
     folders = [path.parent, path.parent.parent / "System", path.parent.parent.parent / "System"]
-    elsewhere = DeclaredElsewhere(dat_path or path, folders, (".dat",), _GLOBAL_POINT, ";")
+    elsewhere = DeclaredElsewhere(dat_path or path, folders, (".dat",), _GLOBAL_POINT, ";", assignment=_ASSIGN,
+                                  code=(".src", ".sub"), visible=_visible)
     for item in reader.items:
         if isinstance(item, Statement) and (m := _ASSIGN.match(mask(item.text, ";"))):
             assigned.setdefault(m.group(1).upper(), item.line)
@@ -578,16 +606,19 @@ def _resolve(reader, path, dat_path):
             return None, f"{ref.name}: routine parameter, known at run time"
         if key in assigned and key in reader.points:
             return None, f"{ref.name} is changed at run time (line {assigned[key]})"
-        if key in reader.points:
-            return reader.points[key], ""
         if ref.name.startswith("$"):
             return None, f"{ref.name}: system variable, known at run time"
+        if _HOME.match(ref.name) and key not in reader.points:
+            return None, f"{ref.name}: home position of $config.dat, not in this program (left as written)"
+        if key not in reader.points and key not in reader.unset and (found := elsewhere.find(key)):
+            reader.declared_in(*found)
+            reader.shared.add(key)
+        if key in reader.points:
+            if key in reader.shared and (where := elsewhere.assigned(key)):
+                return None, f"{ref.name} is changed at run time ({where})"
+            return reader.points[key], ""
         if key in reader.unset:
             return None, reader.unset[key]
-        if _HOME.match(ref.name):
-            return None, f"{ref.name}: home position of $config.dat, not in this program (left as written)"
-        if where := elsewhere.where(ref.name):
-            return None, f"{ref.name} is declared in another data list of the controller ({where}): left as written"
         missing.append((ref.name, ref.line))
         return None, ""
 

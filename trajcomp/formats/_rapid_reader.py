@@ -56,8 +56,10 @@ _WOBJDATA = re.compile(
     r"^\s*\[\s*(TRUE|FALSE)\s*,\s*(?:TRUE|FALSE)\s*,\s*\"(\s*)\"\s*,\s*" + _POSE + r"\s*,\s*" + _POSE + r"\s*\]\s*$", re.I
 )
 _POSE_LITERAL = re.compile(r"^\s*" + _POSE + r"\s*$")
-_TASK_POINT = re.compile(r"^[ \t]*(?:(?:LOCAL|TASK)\s+)*(?:CONST|PERS|VAR)\s+(?:robtarget|jointtarget)\s+(\w+)",
-                         re.I | re.M)  # a point another module of the task declares (`DeclaredElsewhere`)
+# a point another module of the task declares (`DeclaredElsewhere`): a LOCAL one is not seen outside its module
+_TASK_POINT = re.compile(r"^[ \t]*(?:TASK\s+)?(?:CONST|PERS|VAR)\s+(?:robtarget|jointtarget)\s+(\w+)", re.I | re.M)
+_ASSIGNED_POINT = re.compile(r"^\s*([A-Za-z]\w*)(?:\.\w+)*\s*:=")  # a statement giving a point (or a part of it) a value
+_STORAGE = re.compile(r"^\s*((?:(?:LOCAL|TASK)\s+)*)(CONST|PERS|VAR)\b", re.I)
 _DECL = re.compile(
     r"^\s*(?:(?:LOCAL|TASK)\s+)*(?:CONST|PERS|VAR)\s+(robtarget|jointtarget|tooldata|wobjdata)\s+(\w+)\s*:=(.*);\s*$",
     re.I | re.S,
@@ -70,6 +72,7 @@ _STARTS_DECL = re.compile(r"^\s*(?:(?:LOCAL|TASK)\s+)*(?:CONST|PERS|VAR)\b", re.
 _INSTRUCTION = re.compile(r"^\s*([A-Za-z]\w*)\b(.*);\s*$", re.S)
 _STARTS_MOTION = re.compile(r"^\s*(?:Move|Trigg|Search|Arc|Clad|Spot|Paint|Disp|Contact)\w*\b", re.I)
 _ROUTINE = re.compile(r"^\s*(?:LOCAL\s+)?(?:PROC|FUNC\s+\w+|TRAP)\s+\w+\s*\((.*)\)", re.I | re.S)
+_STARTS_ROUTINE = re.compile(r"^\s*(?:LOCAL\s+)?(?:PROC|FUNC\s+\w+|TRAP)\s+\w+\s*\(", re.I)
 _ASSIGN = re.compile(r"^\s*([A-Za-z]\w*)((?:\.\w+)*)\s*:=(.*);\s*$", re.S)
 _MODULE = re.compile(r"^\s*MODULE\s+(\w+)", re.I | re.M)
 _BLOCK_OPENS = re.compile(r"^[ \t]*(?:LOCAL\s+)?(MODULE|PROC|FUNC|TRAP)\b", re.I | re.M)
@@ -143,24 +146,27 @@ def _written_points(source, masked):
 
 
 def _statements(source, masked):
-    """``(line, start, end)`` of each statement: declarations and motions up to their ``;``, else one line."""
+    """``(line, start, end)`` of each statement: declarations and motions up to their ``;``, a routine's head
+    up to the ``)`` of its parameters, else one line."""
     lines = Lines(source.text)
     out, pending = [], None
     for number, start, end in lines:
         if pending is not None:
-            if ";" in masked[start:end]:
-                out.append((pending[0], pending[1], start + masked[start:end].index(";") + 1))
+            if pending[2] in masked[start:end]:
+                out.append((pending[0], pending[1], start + masked[start:end].index(pending[2]) + 1))
                 pending = None
             continue
         text = masked[start:end]
-        if (_STARTS_DECL.match(text) or _STARTS_MOTION.match(text)) and ";" not in text:
-            pending = (number, start)
-        elif _STARTS_DECL.match(text) or _STARTS_MOTION.match(text):
+        closer = ";" if _STARTS_DECL.match(text) or _STARTS_MOTION.match(text) else \
+            ")" if _STARTS_ROUTINE.match(text) else None
+        if closer is not None and closer not in text:
+            pending = (number, start, closer)
+        elif closer == ";":
             out.append((number, start, start + text.index(";") + 1))
         else:
             out.append((number, start, end))
     if pending is not None:
-        fail(source.name, pending[0], source.text[pending[1]:pending[1] + 80], "statement without ';'")
+        fail(source.name, pending[0], source.text[pending[1]:pending[1] + 80], f"statement without '{pending[2]}'")
     return out
 
 
@@ -179,9 +185,11 @@ class _Named:
 
 
 class _Reader:
-    def __init__(self, source):
-        self.source = source
+    def __init__(self, source, index=0):
+        self.source, self.index = source, index  # the module read, and its index among the program's sources
         self.targets, self.items, self.points = [], [], {}
+        self.shared = set()  # lower names of the module's points other modules may assign (PERS, VAR, not LOCAL)
+        self.companions = {}  # file -> (source index, Source, masked text, {line: (start, end)}) of other modules read
         self.tools, self.frames = dict(PREDEFINED[0]), dict(PREDEFINED[1])
         self.active = {"tool": {"tool0": "tool0"}, "wobj": {"wobj0": "wobj0"}}  # lower name -> key of its value
         self.why = {}  # lower name of a tool or work object -> why its value is known only at run time
@@ -242,7 +250,7 @@ class _Reader:
                 fail(self.source.name, line, original, "malformed jointtarget")
             joints = np.radians([self.number(m.group(k), line, original, f"{label} joint {k}", JOINT_LIMIT)
                                  for k in range(1, 7)])
-            return Target(name=name, line=line, joints=joints, spans=spans(0, m, JOINTS, offset),
+            return Target(name=name, line=line, joints=joints, spans=spans(self.index, m, JOINTS, offset),
                           external=self.external(m, 7, line, original, label))
         m = _ROBTARGET.match(text)
         if not m:
@@ -253,7 +261,7 @@ class _Reader:
         config = tuple(integer(m.group(k), self.source.name, line, original, f"{label} confdata {c}")
                        for k, c in zip(range(8, 12), CONF))
         return Target(name=name, line=line, pose=pose(values), config=config,
-                      spans=spans(0, m, POSITION + QUAT + CONF, offset),
+                      spans=spans(self.index, m, POSITION + QUAT + CONF, offset),
                       external=self.external(m, 12, line, original, label))
 
     def check_quaternion(self, quat, line, original, label):
@@ -280,6 +288,9 @@ class _Reader:
         kind, name, value = m.group(1).lower(), m.group(2), m.group(3)
         offset = start + m.start(3)
         if kind in ("robtarget", "jointtarget"):
+            storage = _STORAGE.match(original)
+            if storage and storage.group(2).upper() != "CONST" and "LOCAL" not in storage.group(1).upper():
+                self.shared.add(name.lower())
             self.points[name.lower()] = len(self.targets)
             self.targets.append(self.literal(kind, value, offset, name, line, original))
             return
@@ -388,6 +399,28 @@ class _Reader:
             speed_why=speed_why,
         )
 
+    def declared_in(self, file, line):
+        """The point another module of the task declares at ``file``:``line``: its target index, or why its value
+        is known only at run time (declared without one).
+
+        The module is read once, as a companion source (`Source`): its point
+        is corrected there, for every module that uses it.
+        """
+        if file not in self.companions:
+            source = read_source(file, companion=True)
+            masked = mask(source.text, "!")
+            statements = {number: (start, end) for number, start, end in _statements(source, masked)}
+            self.companions[file] = (self.index + len(self.companions) + 1, source, masked, statements)
+        index, source, masked, statements = self.companions[file]
+        start, end = statements[line]
+        m = _DECL.match(masked[start:end])
+        if m is None:
+            return f"{source.name}:{line} declares it without a value (set at run time)"
+        module = _Reader(source, index)
+        module.declaration(m, start, line, source.text[start:end])
+        self.targets.append(module.targets[-1])
+        return len(self.targets) - 1
+
     def zone(self, option, zones, line, original):
         """mm of ``\\Z:=`` or ``zN``; None for fine or zonedata the module names."""
         if option and _NUMBER.fullmatch(option):
@@ -432,7 +465,8 @@ def read(path):
             reader.items.append(Statement(line, original))
             continue
         if m := _ROUTINE.match(text):
-            reader.params = {_WORD.findall(p.split("{")[0])[-1].lower() for p in m.group(1).split(",")
+            # parameters: separated by commas, an optional one introduced by '\' (alternatives by '|')
+            reader.params = {_WORD.findall(p.split("{")[0])[-1].lower() for p in re.split(r"[,\\|]", m.group(1))
                              if _WORD.findall(p.split("{")[0])}
         if m := _DECL.match(text):
             reader.declaration(m, start, line, original)
@@ -448,23 +482,27 @@ def read(path):
     folder = Path(path).parent
     folders = [folder.parent / "PROGMOD", folder.parent / "SYSMOD"] if folder.name.upper() in ("PROGMOD", "SYSMOD") \
         else [folder]  # a backup's TASKn holds its modules in PROGMOD and SYSMOD
-    items = _resolve(reader, masked, DeclaredElsewhere(Path(path), folders, (".mod", ".modx", ".sys", ".prg"),
-                                                       _TASK_POINT, "!"))
+    modules = (".mod", ".modx", ".sys", ".prg")
+    items = _resolve(reader, DeclaredElsewhere(Path(path), folders, modules, _TASK_POINT, "!",
+                                               assignment=_ASSIGNED_POINT))
+    companions = tuple(source for _, source, _, _ in reader.companions.values())
     return Program(
-        "rapid", module.group(1), items, tuple(reader.targets), reader.tools, reader.frames, (source,)
+        "rapid", module.group(1), items, tuple(reader.targets), reader.tools, reader.frames, (source, *companions)
     )
 
 
-def _resolve(reader, masked, task):
+def _resolve(reader, task):
     """The items with named points resolved; points assigned at run time and routine arguments found.
 
     A point another module of the task declares (``task``, `DeclaredElsewhere`)
-    is left as written and says where.
+    is read from that module (`_Reader.declared_in`) unless some module
+    assigns it; so is one of the module's own PERS or VAR points that
+    another module assigns.
     """
     assigned = {}
     for item in reader.items:
         if isinstance(item, Statement) and (m := _ASSIGN.match(mask(item.text, "!"))):
-            assigned.setdefault(m.group(1).lower(), item.line)
+            assigned.setdefault(m.group(1).lower(), f"line {item.line}")
     missing = []
 
     def lookup(ref):
@@ -473,14 +511,19 @@ def _resolve(reader, masked, task):
         key = ref.name.lower()
         if ref.parameter:
             return None, f"{ref.name}: routine parameter, known at run time"
-        if key in assigned and key in reader.points:
-            return None, f"{ref.name} is changed at run time (line {assigned[key]})"
+        if key not in reader.points and key not in reader.unset and (found := task.find(key)):
+            declared = reader.declared_in(*found)
+            if isinstance(declared, str):
+                reader.unset[key] = f"{ref.name}: {declared}"
+            else:
+                reader.points[key] = declared
+                reader.shared.add(key)
         if key in reader.points:
+            if changed := assigned.get(key) or (task.assigned(key) if key in reader.shared else ""):
+                return None, f"{ref.name} is changed at run time ({changed})"
             return reader.points[key], ""
         if key in reader.unset:
             return None, reader.unset[key]
-        if where := task.where(ref.name.lower()):
-            return None, f"{ref.name} is declared in another module of the task ({where}): left as written"
         missing.append((ref.name, ref.line))
         return None, ""
 
@@ -488,11 +531,18 @@ def _resolve(reader, masked, task):
         words = {w.lower() for w in _WORD.findall(mask(text, "!"))}
         return tuple(reader.points[w] for w in sorted(words) if w in reader.points)
 
+    def changed(name, what):
+        """Why a tool or work object another module declares is known only at run time: some module assigns it."""
+        if name is None or name in (reader.tools if what == "tool" else reader.frames):
+            return ""
+        where = assigned.get(name.lower()) or task.assigned(name.lower())
+        return f"{what} {name} is changed at run time ({where})" if where else ""
+
     items = []
     for item in reader.items:
         if isinstance(item, Motion):
             (via, via_why), (target, why) = lookup(item.via), lookup(item.target)
-            reason = via_why or why or item.reason
+            reason = via_why or why or item.reason or changed(item.tool, "tool") or changed(item.frame, "work object")
             if reason:
                 item = dataclasses.replace(item, target=None, via=None, reason=reason, refs=named(item.text)
                                            + tuple(i for i in (via, target) if isinstance(i, int)))

@@ -11,6 +11,7 @@ import bisect
 import dataclasses
 import functools
 import math
+import os
 import re
 from pathlib import Path
 
@@ -29,8 +30,10 @@ JOINT_LIMIT = 3600.0  # deg (ten turns)
 _BRACKET_OR_COMMA = re.compile(r"[{}\[\](),]")  # what `split_top` looks at
 
 
-def read_source(path, name=None):
+def read_source(path, name=None, companion=False):
     """Decode a text file exactly: UTF-8 (with or without BOM), else Latin-1.
+
+    ``companion``: the file is read for the points a program uses from it (`Source`).
 
     Raises
     ------
@@ -50,7 +53,7 @@ def read_source(path, name=None):
     except UnicodeDecodeError:
         encoding = "latin-1"
         text = data.decode(encoding)
-    return Source(name or path.name, text, encoding)
+    return Source(name or path.name, text, encoding, str(path), companion)
 
 
 def mask(text, comment, quote='"'):
@@ -208,9 +211,9 @@ def unresolved(source_name, missing, hint):
 
 
 class DeclaredElsewhere:
-    """Where the other files of a program's controller declare a point: RAPID modules of the same task,
-    KUKA data lists beside the program and ``$config.dat``. Read only when a program names a point it
-    does not declare itself.
+    """Where the other files of a program's controller declare and assign a point: RAPID modules of the same
+    task, KUKA data lists beside the program and ``$config.dat``. Read only when a program names a point it
+    does not declare itself, or one that other files may change.
 
     Parameters
     ----------
@@ -219,32 +222,70 @@ class DeclaredElsewhere:
     folders : sequence of Path
         Folders whose files are searched (missing ones are skipped).
     extensions : sequence of str
-        File extensions searched, lower case with the dot.
+        Extensions of the files that declare points, lower case with the dot.
     pattern : re.Pattern
         Group 1: the declared point's name, in the file's masked text.
     comment : str
         The language's comment mark (`mask`).
+    assignment : re.Pattern, optional
+        Group 1: the name of a point a statement gives a value (``p10 :=``, ``XP1 =``), per line.
+    code : sequence of str, optional
+        Extensions of the files whose statements may assign points (default: ``extensions``).
+    visible : callable, optional
+        ``visible(file, match) -> bool``: whether a declaration ``pattern`` matched is seen by the program
+        (a KUKA point of another data list only if GLOBAL); default all.
     """
 
-    def __init__(self, path, folders, extensions, pattern, comment):
+    def __init__(self, path, folders, extensions, pattern, comment, assignment=None, code=None, visible=None):
         self.path, self.folders, self.extensions = Path(path), list(folders), set(extensions)
-        self.pattern, self.comment, self.found = pattern, comment, None
+        self.pattern, self.comment, self.assignment = pattern, comment, assignment
+        self.code, self.visible = set(code or extensions), visible or (lambda file, match: True)
+        self.found, self.assignments = None, None
 
-    def where(self, name):
-        """``"file:line"`` of another file's declaration of point ``name`` (matched without case), or ``""``."""
+    def _files(self, extensions):
+        for folder in self.folders:
+            if folder.is_dir():
+                for file in sorted(folder.iterdir()):
+                    if file != self.path and file.suffix.lower() in extensions and file.is_file():
+                        yield file
+
+    def _masked(self, file):
+        """The masked text of a file and its `Lines`, or None for a binary or unreadable one (it declares nothing)."""
+        try:
+            text = mask(read_source(file).text, self.comment)
+        except ReadError:
+            return None
+        return text, Lines(text)
+
+    def find(self, name):
+        """``(file, line)`` of another file's declaration of point ``name`` (matched without case), or None."""
         if self.found is None:
             self.found = {}
-            for file in (f for folder in self.folders if folder.is_dir() for f in sorted(folder.iterdir())):
-                if file == self.path or file.suffix.lower() not in self.extensions or not file.is_file():
-                    continue
-                try:
-                    text = mask(read_source(file).text, self.comment)
-                except ReadError:
-                    continue  # a binary or unreadable file declares nothing trajcomp can use
-                lines = Lines(text)
-                for m in self.pattern.finditer(text):
-                    self.found.setdefault(m.group(1).lower(), f"{file.name}:{lines.number(m.start())}")
-        return self.found.get(name.lower(), "")
+            for file in self._files(self.extensions):
+                if (masked := self._masked(file)) is not None:
+                    for m in self.pattern.finditer(masked[0]):
+                        if self.visible(file, m):
+                            self.found.setdefault(m.group(1).lower(), (file, masked[1].number(m.start())))
+        return self.found.get(name.lower())
+
+    def where(self, name):
+        """``"file:line"`` of another file's declaration of point ``name``, or ``""``."""
+        found = self.find(name)
+        return f"{found[0].name}:{found[1]}" if found else ""
+
+    def assigned(self, name):
+        """``"file:line"`` of another file's statement giving point ``name`` a value at run time, or ``""``."""
+        if self.assignment is None:
+            return ""
+        if self.assignments is None:
+            self.assignments = {}
+            for file in self._files(self.code):
+                if (masked := self._masked(file)) is not None:
+                    text, lines = masked
+                    for number, start, end in lines:
+                        if m := self.assignment.match(text[start:end]):
+                            self.assignments.setdefault(m.group(1).lower(), f"{file.name}:{number}")
+        return self.assignments.get(name.lower(), "")
 
 
 def whole_circle(motion):
@@ -569,8 +610,34 @@ def write_single_file(program, path, format_name, encode, min_places, emit):
     """
     path = Path(path)
     if program.format == format_name and program.sources:
-        return {path: encode_text(program.sources[0], patched(program, encode, min_places)[0])}
+        texts = patched(program, encode, min_places)
+        return {path: encode_text(program.sources[0], texts[0])} | companion_outputs(program, texts, path)
     return {path: emit(program, path.stem).encode("utf-8")}
+
+
+def companion_outputs(program, texts, path, own=1):
+    """``{file: bytes}`` of a program's sources beyond the ``own`` first ones (those written as ``path``).
+
+    Each lies where it lay relative to the program's first file (another
+    module of its task beside it, ``../System/$config.dat`` of a KUKA
+    backup); a companion (`Source`) is written only when its points changed.
+    `trajcomp.formats.write` refuses a file that would land outside the
+    output's folder.
+
+    Parameters
+    ----------
+    program : Program
+    texts : sequence of str
+        The text of every source as written (`patched`).
+    path : Path
+        Where the program's first file is written.
+    own : int
+        How many first sources the language's writer places itself.
+    """
+    home = Path(program.sources[0].path).parent
+    return {Path(path).parent / os.path.relpath(source.path, home): encode_text(source, text)
+            for source, text in zip(program.sources[own:], texts[own:])
+            if not (source.companion and text == source.text)}
 
 
 def apply_edits(text, edits):

@@ -28,9 +28,12 @@ Not compensated, with the reason (`Motion.reason`): relative motions
 calls, array elements), system variables (``$POS_ACT``), routine
 parameters, points declared without a value or changed by the program at
 run time (``XP1.Z = ...``), motions after a tool or base set at run time,
-the home positions ``XHOME``.. of $config.dat, and points another data
-list beside the program or $config.dat (beside it or in a backup's
-R1/System) declares. A motion to a point no data list defines (no .dat, a
+the home positions ``XHOME``.. of $config.dat, and points another program
+assigns (GLOBAL ones). A point another data list beside the program
+declares GLOBAL, or $config.dat (beside it or in a backup's R1/System),
+is read from that file (a companion `Source`): corrected there, which is
+written back beside the output (`trajcomp.formats._text.companion_outputs`)
+when it changed. A motion to a point no data list defines (no .dat, a
 cut .dat) is a ReadError naming the points; so is a declaration cut off mid-line. Points the program passes to
 routines (``MYPROC(XP1)``) are `Statement.refs`.
 
@@ -54,6 +57,7 @@ from trajcomp.errors import WriteError
 from trajcomp.formats._krl_reader import _DEF, _DEFDAT, _NAME, _PROGRAM_NAME, AXES, MIN_PLACES, POSE, read
 from trajcomp.formats._text import (
     active_axes,
+    companion_outputs,
     encode_targets,
     encode_text,
     encode_xyzabc,
@@ -110,10 +114,12 @@ def write(program, path):
     dat = path.with_suffix(".dat" if path.suffix.islower() else ".DAT")
     if patch:
         texts = patched(program, _encode, MIN_PLACES)
+        own = 2 if len(program.sources) > 1 and not program.sources[1].companion else 1  # the .src and its .dat
         if not same_name:
-            texts = [_renamed(text, pattern, path.stem) for text, pattern in zip(texts, (_DEF, _DEFDAT))]
-        outs = [path, dat][: len(texts)]
-        return {out: encode_text(source, text) for out, source, text in zip(outs, program.sources, texts)}
+            texts[:own] = [_renamed(text, pattern, path.stem) for text, pattern in zip(texts[:own], (_DEF, _DEFDAT))]
+        outs = [path, dat][:own]
+        return {out: encode_text(source, text) for out, source, text in zip(outs, program.sources, texts)} | \
+            companion_outputs(program, texts, path, own)
     src_text, dat_text = _emit(program, path.stem)
     return {path: src_text.encode("latin-1"), dat: dat_text.encode("latin-1")}
 

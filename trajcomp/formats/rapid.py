@@ -23,10 +23,13 @@ Not compensated, with the reason (`Motion.reason`): expressions (Offs,
 RelTool, CRobT, array elements), routine parameters, points declared without
 a value or assigned in the code, tools and work objects changed at run time
 or not supported (stationary tool, robot-held work object), and motion
-instructions trajcomp does not read (SearchL, MoveExtJ ...), and points
-another module of the task declares (a module of the same folder, or of a
-backup's TASKn/PROGMOD and SYSMOD). A motion to a point no module declares
-is a ReadError naming the points; so are
+instructions trajcomp does not read (SearchL, MoveExtJ ...), points,
+tools and work objects another module of the task assigns. A point
+another module of the task declares (not LOCAL; a module of the same
+folder, or of a backup's TASKn/PROGMOD and SYSMOD) is read from that module
+(a companion `Source`): corrected there, which is written back beside the
+output (`trajcomp.formats._text.companion_outputs`) when it changed. A
+motion to a point no module declares is a ReadError naming the points; so are
 numbers out of range and quaternions that are not rotations. Points passed
 to routines (``MyProc p10;``) are `Statement.refs`.
 

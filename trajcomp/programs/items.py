@@ -16,11 +16,21 @@ JOINT, LINEAR, CIRCULAR = "joint", "linear", "circular"
 
 @dataclasses.dataclass(frozen=True)
 class Source:
-    """One file of a program: its name, decoded text (line endings kept) and encoding."""
+    """One file of a program: its name, decoded text (line endings kept) and encoding.
+
+    ``path`` is where it was read from (None for a text built in memory).
+    A ``companion`` is another file of the controller read for the points
+    the program uses from it (another module of a RAPID task, a KUKA data
+    list or ``$config.dat``, FANUC position registers): its points are
+    corrected where they are declared, and it is written back only when
+    they changed (`trajcomp.formats._text.companion_outputs`).
+    """
 
     name: str
     text: str
     encoding: str
+    path: str = None
+    companion: bool = False
 
 
 @dataclasses.dataclass(frozen=True)

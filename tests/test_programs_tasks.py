@@ -1,0 +1,244 @@
+"""Programs as controllers hold them (issue 22, item 2): a program with the other files of its controller.
+
+A RAPID module with the other modules of its task, a KRL program with the
+controller's ``$config.dat`` and GLOBAL data lists: a point declared in
+another file is read from it, corrected where it is declared (once, for
+every file using it) and every changed file is written together. Each test
+is a minimal program of that shape.
+"""
+
+import json
+import re
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from test_programs_as_run import OFFSET, _krl_point, _stand_in
+from trajcomp import formats
+from trajcomp.cli import main
+from trajcomp.programs.configuration import configuration_for
+from trajcomp.errors import ReadError, WriteError
+from trajcomp.formats.task import groups
+from trajcomp.arm.kinematics import fk
+from trajcomp.compensation.program import compensate_program
+from trajcomp.arm.robot import load_robot
+from trajcomp.arm.transforms import matrix_to_quat
+
+UNUSED = "[9E9,9E9,9E9,9E9,9E9,9E9]"
+
+
+def _robtarget(robot, q):
+    """A robtarget literal of the ABB arm at joints ``q`` (deg), with its confdata."""
+    T = fk(robot, np.radians(q)[None])[0]
+    conf = configuration_for("rapid", robot, np.radians(q)[None])[0]
+    position = ",".join(f"{v:.3f}" for v in T[:3, 3])
+    quat = ",".join(f"{v:.8f}" for v in matrix_to_quat(T[:3, :3]))
+    return f"[[{position}],[{quat}],[{','.join(map(str, conf))}],{UNUSED}]"
+
+
+def _task(folder, robot):
+    """A RAPID task: Main.mod moves to its own p10 and to p30, p40 that Data.sys declares (and a jointtarget)."""
+    folder.mkdir(parents=True, exist_ok=True)
+    (folder / "Data.sys").write_text(
+        "MODULE Data(SYSMODULE)\n"
+        f"  TASK PERS robtarget p30:={_robtarget(robot, [5, 10, 15, 0, 50, 0])};\n"
+        f"  CONST robtarget p40:=\n    {_robtarget(robot, [-5, 12, 10, 0, 55, 0])};\n"
+        "  CONST jointtarget jHome:=[[0,0,0,0,30,0],[9E9,9E9,9E9,9E9,9E9,9E9]];\nENDMODULE\n")
+    (folder / "Main.mod").write_text(
+        f"MODULE Main\n  CONST robtarget p10:={_robtarget(robot, [0, 10, 15, 0, 50, 0])};\n"
+        "  PROC main()\n    MoveAbsJ jHome,v1000,fine,tool0;\n    MoveJ p10,v1000,z10,tool0;\n"
+        "    MoveL p30,v100,z10,tool0;\n    MoveL p40,v100,fine,tool0;\n  ENDPROC\nENDMODULE\n")
+    return folder / "Main.mod"
+
+
+def _position(text, name):
+    """x, y, z of robtarget ``name`` in a module's text."""
+    m = re.search(name + r"\s*:=\s*\[\[([^\]]*)\]", text)
+    return np.array([float(v) for v in m.group(1).split(",")])
+
+
+def test_a_rapid_point_another_module_declares_is_corrected_there_and_written_beside(tmp_path):
+    robot = load_robot("abb_irb4600")
+    main_mod = _task(tmp_path / "task", robot)
+    data_before = (tmp_path / "task" / "Data.sys").read_text()
+    (tmp_path / "out").mkdir()
+    program = formats.read(main_mod)
+    assert program.not_compensated() == ()
+    assert [(s.name, s.companion) for s in program.sources] == [("Main.mod", False), ("Data.sys", True)]
+    assert [program.where(m.target) for m in program.motions] == [
+        "jHome (Data.sys:5)", "p10 (Main.mod:2)", "p30 (Data.sys:2)", "p40 (Data.sys:3)"]
+    edited, report = compensate_program(program, _stand_in(robot), robot)
+    written = formats.write(tmp_path / "out" / "Main.mod", edited)
+    assert sorted(p.name for p in written) == ["Data.sys", "Main.mod"]
+    data_after = (tmp_path / "out" / "Data.sys").read_text()
+    for name in ("p30", "p40"):  # moved by the stand-in's offset where Data.sys declares them
+        np.testing.assert_allclose(_position(data_after, name) - _position(data_before, name), OFFSET, atol=1e-3)
+    # nothing but the corrected numbers changed: the jointtarget (kept) and every other byte as written
+    assert [line for line in data_after.splitlines() if "robtarget" not in line and "[[" not in line] == \
+        [line for line in data_before.splitlines() if "robtarget" not in line and "[[" not in line]
+    assert formats.read(tmp_path / "out" / "Main.mod").not_compensated() == ()
+
+
+def test_a_companion_whose_points_did_not_change_is_not_written(tmp_path):
+    robot = load_robot("abb_irb4600")
+    folder = tmp_path / "task"
+    folder.mkdir()
+    (folder / "Data.sys").write_text("MODULE Data(SYSMODULE)\n  CONST jointtarget jHome:=[[0,0,0,0,30,0],"
+                                     "[9E9,9E9,9E9,9E9,9E9,9E9]];\nENDMODULE\n")
+    (folder / "Main.mod").write_text(f"MODULE Main\n  CONST robtarget p10:={_robtarget(robot, [0, 10, 15, 0, 50, 0])};\n"
+                                     "  PROC main()\n    MoveAbsJ jHome,v1000,fine,tool0;\n"
+                                     "    MoveJ p10,v1000,z10,tool0;\n  ENDPROC\nENDMODULE\n")
+    edited, _ = compensate_program(formats.read(folder / "Main.mod"), _stand_in(robot), robot)  # joints kept
+    (tmp_path / "out").mkdir()
+    assert [p.name for p in formats.write(tmp_path / "out" / "Main.mod", edited)] == ["Main.mod"]
+
+
+def test_changed_files_are_written_all_or_none(tmp_path):
+    robot = load_robot("abb_irb4600")
+    edited, _ = compensate_program(formats.read(_task(tmp_path / "task", robot)), _stand_in(robot), robot)
+    (tmp_path / "out" / "Data.sys").mkdir(parents=True)  # the companion cannot be written there
+    with pytest.raises(WriteError):
+        formats.write(tmp_path / "out" / "Main.mod", edited)
+    assert not (tmp_path / "out" / "Main.mod").exists()
+
+
+def test_a_companion_beside_the_program_is_an_input_and_is_not_overwritten_without_in_place(tmp_path):
+    robot = load_robot("abb_irb4600")
+    main_mod = _task(tmp_path, robot)
+    before = (tmp_path / "Data.sys").read_text()
+    program = formats.read(main_mod)
+    edited, _ = compensate_program(program, _stand_in(robot), robot)
+    with pytest.raises(WriteError, match="Data.sys"):
+        formats.write(tmp_path / "Main_corrected.mod", edited, protect=formats.input_paths(main_mod, program))
+    assert not (tmp_path / "Main_corrected.mod").exists()
+    formats.write(main_mod, edited)  # in place: both files replaced together
+    np.testing.assert_allclose(_position((tmp_path / "Data.sys").read_text(), "p30"), _position(before, "p30") + OFFSET,
+                               atol=1e-3)
+
+
+def test_rapid_points_modules_change_at_run_time_are_listed_with_where(tmp_path):
+    robot = load_robot("abb_irb4600")
+    main_mod = _task(tmp_path, robot)
+    (tmp_path / "Main.mod").write_text(main_mod.read_text().replace("CONST robtarget p10", "PERS robtarget p10"))
+    (tmp_path / "Teach.mod").write_text("MODULE Teach\n  PROC teach()\n    p10.trans.z := 500;\n"
+                                        "    p30 := CRobT();\n  ENDPROC\nENDMODULE\n")
+    assert [reason for _, _, reason in formats.read(main_mod).not_compensated()] == [
+        "p10 is changed at run time (Teach.mod:3)", "p30 is changed at run time (Teach.mod:4)"]
+    # a point another module declares without a value, and a LOCAL one no other module sees
+    (tmp_path / "Teach.mod").write_text("MODULE Teach\n  VAR robtarget pHit;\n  LOCAL CONST robtarget pMine:="
+                                        f"{_robtarget(robot, [0, 10, 15, 0, 50, 0])};\nENDMODULE\n")
+    (tmp_path / "Main.mod").write_text(main_mod.read_text().replace("MoveL p40", "MoveL pHit"))
+    assert formats.read(main_mod).not_compensated()[0][2] == "pHit: Teach.mod:2 declares it without a value " \
+                                                              "(set at run time)"
+    (tmp_path / "Main.mod").write_text(main_mod.read_text().replace("MoveL pHit", "MoveL pMine"))
+    with pytest.raises(ReadError, match=r"pMine \(line 7\); no module of its folder declares"):
+        formats.read(main_mod)
+
+
+def test_a_routine_head_over_several_lines_with_an_optional_parameter_is_read(tmp_path):
+    """L_support.sys of a real backup: ``PROC CheckE6Ax(\\n jointtarget ExpectJoint\\n \\switch ArmOnly)``."""
+    (tmp_path / "L.sys").write_text("MODULE L(SYSMODULE)\n PROC CheckE6Ax(\n    jointtarget ExpectJoint\n"
+                                    "    \\switch ArmOnly)\n    MoveAbsJ ExpectJoint,v200,fine,tool0;\n"
+                                    "  ENDPROC\nENDMODULE\n")
+    assert formats.read(tmp_path / "L.sys").not_compensated() == (
+        (5, "MoveAbsJ ExpectJoint,v200,fine,tool0;", "ExpectJoint: routine parameter, known at run time"),)
+
+
+# ------------------------------------------------------------------ KUKA: $config.dat and GLOBAL data lists
+
+
+def _krc(tmp_path, robot):
+    """A KRC backup: R1/Program/weld.src using XSHARED of R1/System/$config.dat and XTABLE of a GLOBAL list."""
+    program_folder, system = tmp_path / "KRC" / "R1" / "Program", tmp_path / "KRC" / "R1" / "System"
+    program_folder.mkdir(parents=True)
+    system.mkdir()
+    point = "{{X {:.3f},Y {:.3f},Z {:.3f},A {:.4f},B {:.4f},C {:.4f},S {},T {}}}".format
+    (program_folder / "weld.src").write_text("DEF weld( )\nPTP XP1\nLIN XSHARED\nLIN XTABLE\nEND\n")
+    (program_folder / "weld.dat").write_text(
+        f"DEFDAT weld\nDECL E6POS XP1={point(*_krl_point(robot, [0, -90, 90, 0, 45, 0]))}\nENDDAT\n")
+    (program_folder / "table.dat").write_text(
+        f"DEFDAT table PUBLIC\nDECL GLOBAL E6POS XTABLE={point(*_krl_point(robot, [5, -85, 95, 0, 40, 0]))}\n"
+        "DECL E6POS XPRIVATE={X 1,Y 0,Z 7,A 0,B 90,C 0,S 2,T 2}\nDECL GLOBAL FRAME XLATER\nENDDAT\n")
+    (system / "$config.dat").write_text(
+        f"DEFDAT $CONFIG\nE6AXIS XHOME={{A1 0,A2 -90,A3 90,A4 0,A5 0,A6 0}}\n"
+        f"DECL GLOBAL E6POS XSHARED={point(*_krl_point(robot, [-5, -88, 92, 0, 42, 0]))}\nENDDAT\n")
+    return program_folder / "weld.src"
+
+
+def _xyz(text, name):
+    m = re.search(name + r"=\{X ([-\d.]+),Y ([-\d.]+),Z ([-\d.]+)", text)
+    return np.array([float(v) for v in m.groups()])
+
+
+def test_krl_points_of_config_dat_and_global_data_lists_are_corrected_where_declared(tmp_path):
+    robot = load_robot("kuka_kr6_r900")
+    weld = _krc(tmp_path, robot)
+    program = formats.read(weld)
+    assert program.not_compensated() == ()
+    assert [program.where(m.target) for m in program.motions] == [
+        "XP1 (weld.dat:2)", "XSHARED ($config.dat:3)", "XTABLE (table.dat:2)"]
+    edited, _ = compensate_program(program, _stand_in(robot), robot)
+    config = weld.parents[1] / "System" / "$config.dat"
+    before = {p: p.read_text() for p in (weld, config, weld.with_name("table.dat"))}
+    # written elsewhere, $config.dat (../System) would leave the output's folder: refused, nothing written
+    with pytest.raises(WriteError, match=r"System/\$config\.dat: \$config\.dat, .* outside the output's folder"):
+        formats.write(tmp_path / "out" / "weld.src", edited)
+    assert not (tmp_path / "out").exists()
+    written = formats.write(weld, edited)  # in place: the .src, its .dat, table.dat and $config.dat together
+    assert sorted(p.name for p in written) == ["$config.dat", "table.dat", "weld.dat", "weld.src"]
+    assert weld.read_text() == before[weld]
+    np.testing.assert_allclose(_xyz(config.read_text(), "XSHARED") - _xyz(before[config], "XSHARED"), OFFSET,
+                               atol=1e-3)
+    assert "XHOME={A1 0,A2 -90" in config.read_text()
+
+
+def test_krl_points_other_programs_cannot_see_or_that_they_change(tmp_path):
+    robot = load_robot("kuka_kr6_r900")
+    weld = _krc(tmp_path, robot)
+    weld.write_text("DEF weld( )\nPTP XP1\nLIN XLATER\nLIN XPRIVATE\nEND\n")
+    # a point another data list declares without GLOBAL: no other program sees it (the controller refuses too)
+    with pytest.raises(ReadError, match=r"XPRIVATE \(line 4\)"):
+        formats.read(weld)
+    weld.write_text("DEF weld( )\nPTP XP1\nLIN XLATER\nLIN XTABLE\nEND\n")
+    (weld.parent / "teach.src").write_text("DEF teach( )\nXTABLE.Z = 500\nEND\n")
+    assert [reason for _, _, reason in formats.read(weld).not_compensated()] == [
+        "XLATER is declared without a value (set at run time, table.dat:4)",
+        "XTABLE is changed at run time (teach.src:2)"]
+
+
+def test_programs_of_a_backup_sharing_a_point_run_as_one_and_keep_its_layout(tmp_path, kuka_model):
+    robot = load_robot("kuka_kr6_r900")
+    weld = _krc(tmp_path, robot)
+    (weld.parent / "seam.src").write_text("DEF seam( )\nPTP XSHARED\nEND\n")
+    (weld.parent / "alone.src").write_text(weld.read_text().replace("weld", "alone").replace("LIN XSHARED\n", "")
+                                           .replace("LIN XTABLE\n", ""))
+    (weld.parent / "alone.dat").write_text(weld.with_suffix(".dat").read_text().replace("weld", "alone"))
+    paths = [weld.parent / name for name in ("alone.src", "seam.src", "weld.src")]
+    assert groups(paths) == [[0], [1, 2]]  # seam and weld both use XSHARED of $config.dat
+    out = tmp_path / "out"
+    code = main(["compensate", str(tmp_path / "KRC"), "--model", str(kuka_model), "-o", str(out), "--jobs", "1",
+                 "--retime", "none"])
+    summary = json.loads((out / "summary.json").read_text())
+    inputs = [Path(name).name for f in summary["files"] for name in f["input"].split(" + ")]
+    assert inputs == ["alone.src", "seam.src", "weld.src"] and len(summary["files"]) == 2
+    assert code == summary["exit_code"] and {f["status"] for f in summary["files"]} <= {"pass", "fail"}
+    shared = _xyz((out / "R1" / "System" / "$config.dat").read_text(), "XSHARED")
+    original = _xyz((tmp_path / "KRC" / "R1" / "System" / "$config.dat").read_text(), "XSHARED")
+    assert 0.01 < np.linalg.norm(shared - original) < 10.0  # corrected once, in the one $config.dat written
+    for name in ("weld.src", "weld.dat", "seam.src", "table.dat", "alone.src", "alone.dat"):
+        assert (out / "R1" / "Program" / name).is_file()
+
+
+def test_a_task_read_as_one_program_holds_a_shared_point_once_and_keeps_different_tools_apart(tmp_path):
+    robot = load_robot("kuka_kr6_r900")
+    weld = _krc(tmp_path, robot)
+    (weld.parent / "a.src").write_text("DEF a( )\n$TOOL={X 0,Y 0,Z 100,A 0,B 0,C 0}\nLIN XSHARED\nEND\n")
+    (weld.parent / "b.src").write_text("DEF b( )\n$TOOL={X 0,Y 0,Z 200,A 0,B 0,C 0}\nLIN XSHARED\nEND\n")
+    program = formats.read_task([weld.parent / "a.src", weld.parent / "b.src"])
+    assert [s.name for s in program.sources] == ["a.src", "$config.dat", "b.src"]
+    assert len(program.targets) == 1 and sorted(program.tools) == ["0", "TOOL line 2", "TOOL line 2 (b.src)"]
+    # one set of numbers cannot serve both tools: each motion is left as written and listed (issue 22, item 3)
+    assert [reason.split(":")[0] for _, _, reason in program.not_compensated()] == [
+        "point XSHARED is used with tool/frame ('TOOL line 2', None) (line 3) and ('TOOL line 2 (b.src)', None) "
+        "(line 3)"] * 2
