@@ -78,10 +78,11 @@ def test_malformed_point_names_file_line_and_text(tmp_path):
         formats.read(path)
 
 
-def test_malformed_inline_target(tmp_path):
-    path = _write(tmp_path, "DEF p( )\nLIN {X 1,Y 2,Z 3}\nEND\n")
-    with pytest.raises(ReadError, match=r"p\.src:2: point lacks A, B, C: 'LIN \{X 1,Y 2,Z 3\}'"):
-        formats.read(path)
+def test_partial_inline_target_is_the_current_position_in_its_other_members(tmp_path):
+    """``LIN {Z 500}`` (a real palletiser's lift): the members not given are the arm's current ones: run time."""
+    path = _write(tmp_path, "DEF p( )\nLIN {X 1,Y 2,Z 3}\nPTP {A1 10}\nEND\n")
+    assert [reason for _, _, reason in formats.read(path).not_compensated()] == [
+        "position computed at run time: {X 1,Y 2,Z 3}", "position computed at run time: {A1 10}"]
 
 
 def test_motion_without_target(tmp_path):

@@ -27,10 +27,12 @@ RAPID_MODULES = {".mod", ".modx", ".sys", ".prg"}
 
 
 def companions(path):
-    """The program file and the files read with it (a KRL .dat, the other modules of a RAPID task's folder)."""
+    """The program file and the files read with it (a KRL .dat, the data lists and $config.dat beside it whose
+    points it uses, the other modules of a RAPID task's folder)."""
     task = path.suffix.lower() in RAPID_MODULES
+    read_with = {Path(source.path).name for source in formats.read(path).sources[1:]}
     return [path] + [p for p in path.parent.iterdir() if p != path and (
-        (p.stem == path.stem and p.suffix.lower() == ".dat") or (task and p.suffix.lower() in RAPID_MODULES))]
+        p.name in read_with or (task and p.suffix.lower() in RAPID_MODULES))]
 
 
 def copy_program(path, folder, newline=None):
@@ -51,7 +53,7 @@ def write_then_read(program, out, source=None):
     The files read with ``source`` (the other modules of a RAPID task) are put beside ``out`` first.
     """
     for file in companions(source)[1:] if source is not None else ():
-        if file.suffix.lower() != ".dat":
+        if not (file.suffix.lower() == ".dat" and file.stem.lower() == source.stem.lower()):  # written with it
             (out.parent / file.name).write_bytes(file.read_bytes())
     formats.write(out, program)
     return formats.read(out)

@@ -242,3 +242,23 @@ def test_a_task_read_as_one_program_holds_a_shared_point_once_and_keeps_differen
     assert [reason.split(":")[0] for _, _, reason in program.not_compensated()] == [
         "point XSHARED is used with tool/frame ('TOOL line 2', None) (line 3) and ('TOOL line 2 (b.src)', None) "
         "(line 3)"] * 2
+
+
+REAL = Path(__file__).parent / "data" / "programs" / "real"
+
+
+def test_real_backups_resolve_points_and_tools_across_their_files():
+    """An ABB backup's TASK1 (points in Point_ALL.mod, tools in Tool_Create.mod) and a KUKA palletiser's folder
+    (points in the GLOBAL list varglobal.dat, $config.dat beside): tests/data/programs/real/SOURCES.txt."""
+    program = formats.read(REAL / "rapid" / "keen1949_TASK1" / "PROGMOD" / "Homeing_Init.mod")
+    assert program.not_compensated() == () and len(program.motions) == 9
+    assert {s.name for s in program.sources if s.companion} == {"Point_ALL.mod", "Tool_Create.mod"}
+    assert {program.where(m.target).split(" (")[1].split(":")[0] for m in program.motions} == {"Point_ALL.mod"}
+    np.testing.assert_allclose(program.tools["tool3"][:3, 3], [-41.8404, 134.725, 0.0])  # Tool_Create.mod:22
+    # a module of the same backup naming points no module declares: the controller cannot load it either
+    with pytest.raises(ReadError, match="Point_Assemble"):
+        formats.read(Path(__file__).parent / "data" / "refused" / "rapid" / "keen1949_Teachpoint.mod")
+    reasons = [reason for _, _, reason in formats.read(REAL / "krl" / "bpf2pltzpk2" / "pickup.src").not_compensated()]
+    assert reasons[0] == "BefPikPos is declared without a value (set at run time, varglobal.dat:166)"
+    assert [reason for _, _, reason in formats.read(REAL / "krl" / "bpf2pltzpk2" / "gotoorigin.src").not_compensated()] \
+        == ["position computed at run time: {Z 500}"] * 2  # LIN {Z 500}: was refused

@@ -527,6 +527,8 @@ class _Reader:
         if stripped.startswith("{") and stripped.endswith("}") and stripped.count("{") == 1:
             body_at = at + piece.index("{") + 1
             members = _members(stripped[1:-1], body_at, index, name, line_no, original)
+            if not set(AXES if "a1" in members else POSE) <= set(members):
+                return None  # LIN {Z 500}: the members not given are the arm's current ones, known at run time
             self.targets.append(_point(members, "", name, line_no, original, None))
             return len(self.targets) - 1
         if _NAME.match(stripped):

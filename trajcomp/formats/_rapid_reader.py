@@ -58,6 +58,7 @@ _WOBJDATA = re.compile(
 _POSE_LITERAL = re.compile(r"^\s*" + _POSE + r"\s*$")
 # a point another module of the task declares (`DeclaredElsewhere`): a LOCAL one is not seen outside its module
 _TASK_POINT = re.compile(r"^[ \t]*(?:TASK\s+)?(?:CONST|PERS|VAR)\s+(?:robtarget|jointtarget)\s+(\w+)", re.I | re.M)
+_TASK_FRAME = re.compile(r"^[ \t]*(?:TASK\s+)?(?:CONST|PERS|VAR)\s+(?:tooldata|wobjdata)\s+(\w+)", re.I | re.M)
 _ASSIGNED_POINT = re.compile(r"^\s*([A-Za-z]\w*)(?:\.\w+)*\s*:=")  # a statement giving a point (or a part of it) a value
 _STORAGE = re.compile(r"^\s*((?:(?:LOCAL|TASK)\s+)*)(CONST|PERS|VAR)\b", re.I)
 _DECL = re.compile(
@@ -400,10 +401,10 @@ class _Reader:
         )
 
     def declared_in(self, file, line):
-        """The point another module of the task declares at ``file``:``line``: its target index, or why its value
-        is known only at run time (declared without one).
+        """The declaration another module of the task makes at ``file``:``line`` (a point, a tool or a work
+        object), read by a `_Reader` of that module; None if it is declared without a value.
 
-        The module is read once, as a companion source (`Source`): its point
+        The module is read once, as a companion source (`Source`): a point
         is corrected there, for every module that uses it.
         """
         if file not in self.companions:
@@ -415,11 +416,30 @@ class _Reader:
         start, end = statements[line]
         m = _DECL.match(masked[start:end])
         if m is None:
-            return f"{source.name}:{line} declares it without a value (set at run time)"
+            return None
         module = _Reader(source, index)
         module.declaration(m, start, line, source.text[start:end])
+        return module
+
+    def point_in(self, file, line):
+        """Target index of the point another module declares at ``file``:``line``, or why it is known only at
+        run time (declared without a value)."""
+        module = self.declared_in(file, line)
+        if module is None:
+            return f"{Path(file).name}:{line} declares it without a value (set at run time)"
         self.targets.append(module.targets[-1])
         return len(self.targets) - 1
+
+    def frame_in(self, file, line, name, group):
+        """The tool (``group`` "tool") or work object another module declares at ``file``:``line``: its name as
+        declared, and why its value is known only at run time (``""`` if it is not)."""
+        module = self.declared_in(file, line)
+        if module is None:
+            return name, f"{name}: {Path(file).name}:{line} declares it without a value (set at run time)"
+        self.tools |= module.tools
+        self.frames |= module.frames
+        declared = module.active[group].get(name.lower())
+        return (declared, "") if declared else (name, module.why.get(name.lower(), ""))
 
     def zone(self, option, zones, line, original):
         """mm of ``\\Z:=`` or ``zN``; None for fine or zonedata the module names."""
@@ -484,20 +504,22 @@ def read(path):
         else [folder]  # a backup's TASKn holds its modules in PROGMOD and SYSMOD
     modules = (".mod", ".modx", ".sys", ".prg")
     items = _resolve(reader, DeclaredElsewhere(Path(path), folders, modules, _TASK_POINT, "!",
-                                               assignment=_ASSIGNED_POINT))
+                                               assignment=_ASSIGNED_POINT),
+                     DeclaredElsewhere(Path(path), folders, modules, _TASK_FRAME, "!"))
     companions = tuple(source for _, source, _, _ in reader.companions.values())
     return Program(
         "rapid", module.group(1), items, tuple(reader.targets), reader.tools, reader.frames, (source, *companions)
     )
 
 
-def _resolve(reader, task):
+def _resolve(reader, task, frames):
     """The items with named points resolved; points assigned at run time and routine arguments found.
 
     A point another module of the task declares (``task``, `DeclaredElsewhere`)
-    is read from that module (`_Reader.declared_in`) unless some module
+    is read from that module (`_Reader.point_in`) unless some module
     assigns it; so is one of the module's own PERS or VAR points that
-    another module assigns.
+    another module assigns. So are tools and work objects another module
+    declares (``frames``).
     """
     assigned = {}
     for item in reader.items:
@@ -512,7 +534,7 @@ def _resolve(reader, task):
         if ref.parameter:
             return None, f"{ref.name}: routine parameter, known at run time"
         if key not in reader.points and key not in reader.unset and (found := task.find(key)):
-            declared = reader.declared_in(*found)
+            declared = reader.point_in(*found)
             if isinstance(declared, str):
                 reader.unset[key] = f"{ref.name}: {declared}"
             else:
@@ -531,18 +553,24 @@ def _resolve(reader, task):
         words = {w.lower() for w in _WORD.findall(mask(text, "!"))}
         return tuple(reader.points[w] for w in sorted(words) if w in reader.points)
 
-    def changed(name, what):
-        """Why a tool or work object another module declares is known only at run time: some module assigns it."""
-        if name is None or name in (reader.tools if what == "tool" else reader.frames):
-            return ""
-        where = assigned.get(name.lower()) or task.assigned(name.lower())
-        return f"{what} {name} is changed at run time ({where})" if where else ""
+    def elsewhere(name, group):
+        """A tool (``group`` "tool") or work object the module uses but does not declare: its name as another
+        module declares it, and why its value is known only at run time (some module assigns it)."""
+        if name is None or name in (reader.tools if group == "tool" else reader.frames):
+            return name, ""
+        what = "tool" if group == "tool" else "work object"
+        if where := assigned.get(name.lower()) or task.assigned(name.lower()):
+            return name, f"{what} {name} is changed at run time ({where})"
+        found = frames.find(name.lower())
+        return reader.frame_in(*found, name, group) if found else (name, "")
 
     items = []
     for item in reader.items:
         if isinstance(item, Motion):
             (via, via_why), (target, why) = lookup(item.via), lookup(item.target)
-            reason = via_why or why or item.reason or changed(item.tool, "tool") or changed(item.frame, "work object")
+            (tool, tool_why), (frame, frame_why) = elsewhere(item.tool, "tool"), elsewhere(item.frame, "wobj")
+            item = dataclasses.replace(item, tool=tool, frame=frame)
+            reason = via_why or why or item.reason or tool_why or frame_why
             if reason:
                 item = dataclasses.replace(item, target=None, via=None, reason=reason, refs=named(item.text)
                                            + tuple(i for i in (via, target) if isinstance(i, int)))
