@@ -205,7 +205,7 @@ def test_urscript_polyscope_shapes_are_read(tmp_path):
     assert program.frames == {}
 
 
-def test_a_point_used_with_two_work_objects_is_left_and_listed_the_rest_compensated(tmp_path):
+def test_a_point_used_with_two_work_objects_is_written_as_a_corrected_copy_per_use(tmp_path):
     robot = load_robot("abb_irb4600")
     targets = []
     for k, q in enumerate(([0.0, 0.0, 0.0, 0.0, 30.0, 0.0], [10.0, 5.0, 5.0, 0.0, 30.0, 0.0])):
@@ -221,10 +221,14 @@ def test_a_point_used_with_two_work_objects_is_left_and_listed_the_rest_compensa
                     "    MoveL p2,v100,fine,tool0\\WObj:=wB;\n  ENDPROC\nENDMODULE\n")
     program = formats.read(path)
     edited, report = compensate_program(program, _stand_in(robot), robot)
-    assert list(report.labels) == ["p1 (two.mod:4)"]
-    assert report.motions_left == 2 and [line for line, _, _ in report.not_compensated] == [8, 9]
-    assert re.match(r"point p2 is used with tool/frame \('tool0', 'wA'\) \(line 8\) and \('tool0', 'wB'\) "
-                    r"\(line 9\)", report.not_compensated[0][2])
+    # the use in wB goes to a copy declared after p2 (tests/test_programs_tasks.py: the copies in detail)
+    assert list(report.labels) == ["p1 (two.mod:4)", "p2 (two.mod:5)", "p2_2 (two.mod:6)"]
+    assert report.motions_left == 0 and report.not_compensated == ()
+    assert report.warnings[0] == ("point p2 is used with tool/frame ('tool0', 'wB') (line 10) besides its first use: "
+                                  "written as a copy p2_2 after it (two.mod:6), corrected for that use")
+    formats.write(tmp_path / "out.mod", edited)
+    lines = (tmp_path / "out.mod").read_text().splitlines()
+    assert lines[5].startswith("  CONST robtarget p2_2:=[[") and lines[9] == "    MoveL p2_2,v100,fine,tool0\\WObj:=wB;"
 
 
 def test_motions_left_are_counted_once_and_offsets_of_a_corrected_point_move_with_it(tmp_path):

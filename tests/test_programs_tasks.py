@@ -237,11 +237,57 @@ def test_a_task_read_as_one_program_holds_a_shared_point_once_and_keeps_differen
     (weld.parent / "b.src").write_text("DEF b( )\n$TOOL={X 0,Y 0,Z 200,A 0,B 0,C 0}\nLIN XSHARED\nEND\n")
     program = formats.read_task([weld.parent / "a.src", weld.parent / "b.src"])
     assert [s.name for s in program.sources] == ["a.src", "$config.dat", "b.src"]
-    assert len(program.targets) == 1 and sorted(program.tools) == ["0", "TOOL line 2", "TOOL line 2 (b.src)"]
-    # one set of numbers cannot serve both tools: each motion is left as written and listed (issue 22, item 3)
-    assert [reason.split(":")[0] for _, _, reason in program.not_compensated()] == [
-        "point XSHARED is used with tool/frame ('TOOL line 2', None) (line 3) and ('TOOL line 2 (b.src)', None) "
-        "(line 3)"] * 2
+    assert sorted(program.tools) == ["0", "TOOL line 2", "TOOL line 2 (b.src)"]
+    # one set of numbers cannot serve both tools: b.src's use goes to a copy declared after XSHARED in $config.dat
+    assert [program.where(m.target) for m in program.motions] == ["XSHARED ($config.dat:3)", "XSHARED_2 ($config.dat:4)"]
+    assert "DECL GLOBAL E6POS XSHARED_2={X " in program.sources[1].text
+    assert "LIN XSHARED_2\n" in program.sources[2].text and program.not_compensated() == ()
+
+
+# ------------------------------------------------------------------ a point used with several tools or frames
+
+
+def test_each_further_use_of_a_point_gets_a_corrected_copy_named_and_reported(tmp_path):
+    robot = load_robot("kuka_kr6_r900")
+    weld = _krc(tmp_path, robot)
+    weld.write_text("DEF weld( )\nBAS(#TOOL,1)\nPTP XP1\nLIN XTABLE\nBAS(#TOOL,2)\nLIN XTABLE\nPTP XP1\n"
+                    "BAS(#TOOL,1)\nLIN XTABLE\nEND\n")
+    flange = {"1": np.eye(4), "2": np.eye(4)}
+    flange["2"][2, 3] = 50.0
+    program = formats.read(weld)
+    assert [program.where(m.target) for m in program.motions] == [
+        "XP1 (weld.dat:2)", "XTABLE (table.dat:2)", "XTABLE_2 (table.dat:3)", "XP1_2 (weld.dat:3)",
+        "XTABLE (table.dat:2)"]
+    edited, report = compensate_program(program, _stand_in(robot), robot, tools=flange)
+    assert report.warnings[:2] == (
+        "point XTABLE is used with tool/frame ('2', None) (line 6) besides its first use: written as a copy "
+        "XTABLE_2 after it (table.dat:3), corrected for that use",
+        "point XP1 is used with tool/frame ('2', None) (line 7) besides its first use: written as a copy XP1_2 "
+        "after it (weld.dat:3), corrected for that use")
+    formats.write(weld, edited)
+    table = weld.with_name("table.dat").read_text().splitlines()
+    assert table[1].startswith("DECL GLOBAL E6POS XTABLE={X ") and table[2].startswith("DECL GLOBAL E6POS XTABLE_2={X ")
+    assert table[3].startswith("DECL E6POS XPRIVATE=")  # the rest as it was
+    assert weld.read_text().splitlines()[5:7] == ["LIN XTABLE_2", "PTP XP1_2"]
+    again = formats.read(weld)  # the written task reads back with no point shared: each copy is its own
+    assert again.notes == () and again.not_compensated() == ()
+    # each copy is solved for its own tool: the same TCP target, the flange 50 mm back along the tool axis
+    T = {label.split(" ")[0]: T for label, T in zip(report.labels, report.T_target)}
+    q = {label.split(" ")[0]: q for label, q in zip(report.labels, report.q)}
+    np.testing.assert_allclose(T["XTABLE_2"], T["XTABLE"], atol=1e-9)
+    flanges = {name: fk(robot, q[name][None], tcp=False)[0] for name in ("XTABLE", "XTABLE_2")}
+    np.testing.assert_allclose(flanges["XTABLE"][:3, 3] - flanges["XTABLE_2"][:3, 3], 50.0 * T["XTABLE"][:3, 2],
+                               atol=1e-6)
+
+
+def test_a_point_a_language_cannot_copy_keeps_its_motions_as_written_and_listed(tmp_path):
+    path = tmp_path / "two.script"
+    path.write_text("def prog():\n  pick = p[0.5, -0.2, 0.4, 0, 3.14159, 0]\n  set_tcp(p[0,0,0.1,0,0,0])\n"
+                    "  movel(pick, a=1.2, v=0.25)\n  set_tcp(p[0,0,0.2,0,0,0])\n  movel(pick, a=1.2, v=0.25)\nend\n")
+    program = formats.read(path)
+    assert [line for line, _, _ in program.not_compensated()] == [4, 6] and program.notes == ()
+    assert program.not_compensated()[0][2].endswith("one set of numbers cannot be right for both, its motions are "
+                                                    "left as written")
 
 
 REAL = Path(__file__).parent / "data" / "programs" / "real"

@@ -353,11 +353,12 @@ def _program_facts(program, joint_index, joint_mode):
 
 
 def _warnings(program):
-    """What the user must know about a compensated program: external axes that move."""
+    """What the user must know about a compensated program: its notes (copies of a point per use), external axes
+    that move."""
     moving = program.moving_external_axes()
     if not moving:
-        return ()
-    return (f"the program moves external axes {', '.join(moving)} (a track or positioner): the compensation "
+        return program.notes
+    return program.notes + (f"the program moves external axes {', '.join(moving)} (a track or positioner): the compensation "
             "assumes the arm's base is fixed, so targets reached after a base move are corrected for the "
             "calibrated base only",)
 

@@ -41,7 +41,9 @@ class Format:
     `trajcomp.arm.robot.Robot.vendor`), None for a language of no maker (CSV).
     ``tasks``: a program may use points other files of its controller
     declare (`trajcomp.formats.task`): a batch reads such files first to
-    compensate those that share points together.
+    compensate those that share points together. ``copies``: a point
+    used with several tools or frames can be written as a copy per use
+    (`trajcomp.formats.uses`); otherwise its motions are left as written.
     """
 
     name: str
@@ -52,6 +54,7 @@ class Format:
     blocks: bool = False
     vendor: str = None
     tasks: bool = False
+    copies: bool = False
 
     def _resolve(self, ref):
         if callable(ref):
@@ -70,7 +73,8 @@ _FORMATS = {}
 _PLUGINS = {"loaded": False, "failed": {}}
 
 
-def register_format(name, extensions, reader, writer, *, source="built-in", blocks=False, vendor=None, tasks=False):
+def register_format(name, extensions, reader, writer, *, source="built-in", blocks=False, vendor=None, tasks=False,
+                    copies=False):
     """Register (or replace) a format.
 
     Parameters
@@ -95,8 +99,13 @@ def register_format(name, extensions, reader, writer, *, source="built-in", bloc
     tasks : bool
         A program may use points other files of its controller declare
         (its reader puts them in companion sources, `trajcomp.programs.items.Source`).
+    copies : bool
+        Points are declared by name and their motions name them (spans
+        ``target_name``, ``via_name``): a point used with several tools or
+        frames is written as a copy per use (`trajcomp.formats.uses`).
     """
-    _FORMATS[name] = Format(name, tuple(e.lower() for e in extensions), reader, writer, source, blocks, vendor, tasks)
+    _FORMATS[name] = Format(name, tuple(e.lower() for e in extensions), reader, writer, source, blocks, vendor, tasks,
+                            copies)
 
 
 for _name, _module, _extensions, _vendor in (
@@ -107,7 +116,8 @@ for _name, _module, _extensions, _vendor in (
     ("urscript", "urscript", (".script", ".urscript"), "Universal Robots"),
 ):
     register_format(_name, _extensions, f"trajcomp.formats.{_module}:read", f"trajcomp.formats.{_module}:write",
-                    blocks=_name == "csv", vendor=_vendor, tasks=_name in ("krl", "rapid"))
+                    blocks=_name == "csv", vendor=_vendor, tasks=_name in ("krl", "rapid"),
+                    copies=_name in ("krl", "rapid"))
 
 
 def _load_plugins():
@@ -228,8 +238,9 @@ def read(path, format=None, *, workers=1):
     Returns
     -------
     Program
-        Motions to a point used with several tools or frames are left as
-        written (`Program.with_shared_targets_left`).
+        A point used with several tools or frames is written as a copy per
+        use where the language declares points by name (`uses_resolved`);
+        otherwise its motions are left as written.
 
     Raises
     ------
@@ -242,7 +253,17 @@ def read(path, format=None, *, workers=1):
         raise ReadError(f"{path}: no such file")
     recover(path.parent)  # a set of files a killed run left half-renamed is completed first
     with collection_paused():  # a program is made of many objects without cycles (`trajcomp.support.memory`)
-        return fmt.read(path, workers).with_shared_targets_left()
+        return uses_resolved(fmt.read(path, workers), fmt)
+
+
+def uses_resolved(program, fmt):
+    """``program`` with each point used with several tools or frames copied per use (`trajcomp.formats.uses`,
+    languages with ``copies``), the motions of any such point left otherwise (`Program.with_shared_targets_left`)."""
+    if fmt.copies:
+        from trajcomp.formats.uses import per_use  # lazily, like the format modules
+
+        program = per_use(program)
+    return program.with_shared_targets_left()
 
 
 def read_task(paths, format=None):
@@ -263,7 +284,8 @@ def read_task(paths, format=None):
     """
     from trajcomp.formats.task import merge
 
-    return merge([read(path, format) for path in paths])
+    programs = [read(path, format) for path in paths]
+    return uses_resolved(merge(programs), find_format(paths[0], format))
 
 
 def input_paths(path, program):

@@ -19,6 +19,7 @@ from trajcomp.formats._text import (
     finite,
     integer,
     mask,
+    name_span,
     read_source,
     split_top,
     unresolved,
@@ -482,11 +483,14 @@ class _Reader:
             found = [self.target(piece, at, index, name, line_no, original) for piece, at in parts[:wanted]]
             if None in found:
                 reason = "position computed at run time: " + " ".join(parts[found.index(None)][0].split())
+        roles = ("via_name", "target_name")[2 - wanted:]
+        names = {role: name_span(piece, at, index) for role, (piece, at), point in zip(roles, parts, found)
+                 if isinstance(point, _Named)}  # where a per-use copy's name is written (`trajcomp.formats.uses`)
         reason = reason or self.tool_why or self.base_why
         group = JOINT if kind == JOINT else LINEAR
         speed, unit = (self.speed_ptp, "%") if kind == JOINT else (self.speed_cp, "mm/s")
         speed_why = self.speed_why[group]
-        spans = {"motion": Span(index, start + m.start(1), start + m.end(1), m.group(1))}
+        spans = {"motion": Span(index, start + m.start(1), start + m.end(1), m.group(1))} | names
         if own_speed is not None:  # this motion's own, in its WITH clause: re-timing writes there
             speed, speed_why, spans["speed_with"] = own_speed
         elif self.speed_spans[group] is not None:  # the statement that set it: re-timing writes there

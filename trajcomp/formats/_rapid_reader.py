@@ -18,6 +18,7 @@ from trajcomp.formats._text import (
     finite,
     integer,
     mask,
+    name_span,
     read_source,
     spans,
     split_top,
@@ -372,6 +373,9 @@ class _Reader:
         if len(positional) < count + 3 or tool_at >= len(positional):
             fail(self.source.name, line, original, f"{instruction} needs {count + 3} arguments")
         found = [self.position(p, s, keyword, line, original) for p, s in positional[:count]]
+        roles = ("via_name", "target_name")[2 - count:]
+        names = {role: name_span(p, s, self.index) for role, (p, s), point in zip(roles, positional, found)
+                 if isinstance(point, _Named)}  # where a per-use copy's name is written (`trajcomp.formats.uses`)
         speed_text = _bare(positional[count][0])
         zones = [_bare(p) for p, _ in positional[count + 1:tool_at + 1] if _ZONE.match(_bare(p))]
         tool, tool_why = self.frame_name("tool", _bare(positional[tool_at][0]), line)
@@ -396,7 +400,7 @@ class _Reader:
             line=line,
             text=text,
             reason=reason or tool_why or frame_why,
-            spans={"speed": _stripped_span(*positional[count])},  # where re-timing writes
+            spans={"speed": _stripped_span(*positional[count])} | names,  # where re-timing writes, the points' names
             speed_why=speed_why,
         )
 

@@ -315,6 +315,18 @@ def spans(source, match, roles, offset=0):
     return out
 
 
+def name_span(piece, at, source):
+    """Where the point name a motion argument ``piece`` (at offset ``at``) starts with stands (`Span`), or None.
+
+    Per-use copies of a point (`trajcomp.formats.uses`) rename it there.
+    """
+    m = _LEADING_NAME.match(piece)
+    return None if m is None else Span(source, at + m.start(1), at + m.end(1), m.group(1))
+
+
+_LEADING_NAME = re.compile(r"\s*([A-Za-z_$][\w$]*)")
+
+
 def values(spans_, roles):
     """The numbers of some roles as floats."""
     return [float(spans_[role].text) for role in roles]

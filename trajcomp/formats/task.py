@@ -45,8 +45,8 @@ def merge(programs):
     Returns
     -------
     Program
-        Named after the first; motions to a point used with several tools
-        or frames are left as written (`Program.with_shared_targets_left`).
+        Named after the first (a point the files use with several tools or
+        frames is resolved by `trajcomp.formats.read_task`).
     """
     languages = {program.format for program in programs}
     if len(languages) > 1:
@@ -68,8 +68,8 @@ def merge(programs):
                  for kind, table in (("tools", tools), ("frames", frames))}
         items += [_moved_item(item, index, moved, names) for item in program.items]
     first = programs[0]
-    return Program(first.format, first.name, tuple(items), tuple(targets), tools, frames,
-                   tuple(sources)).with_shared_targets_left()
+    notes = tuple(note for program in programs for note in program.notes)
+    return Program(first.format, first.name, tuple(items), tuple(targets), tools, frames, tuple(sources), notes=notes)
 
 
 def _joined(target, moved, targets, places):

@@ -111,6 +111,9 @@ class Program:
         Time stamps of its M motions, s, that the writer puts into the
         program's own time column (a CSV's ``t``: `trajcomp.formats.csv_program.with_times`);
         None: none set.
+    notes : tuple of str
+        What reading did to the program that its report must say (a point
+        written as a copy per use, `trajcomp.formats.uses`).
     """
 
     format: str
@@ -121,6 +124,7 @@ class Program:
     frames: Mapping = dataclasses.field(default_factory=dict)
     sources: tuple = ()
     times: np.ndarray = None
+    notes: tuple = ()
 
     @classmethod
     def from_tables(cls, format, name, statements, motions, targets, text, sources=()):

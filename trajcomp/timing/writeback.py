@@ -558,4 +558,4 @@ class _Shift:
         return np.where(inside, np.searchsorted(self.new_starts, moved, side="right"), numbers)
 
     def source_like(self, source):
-        return source.__class__(source.name, self.new, source.encoding)
+        return dataclasses.replace(source, text=self.new)  # its file and role (`Source.companion`) kept
