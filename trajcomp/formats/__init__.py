@@ -23,7 +23,7 @@ from importlib.metadata import entry_points
 from pathlib import Path
 
 from trajcomp.support.atomic import recover, write_files_atomic
-from trajcomp.errors import ReadError, RobotError, TrajcompError
+from trajcomp.errors import ReadError, RobotError, TrajcompError, WriteError
 from trajcomp.support.memory import collection_paused
 
 ENTRY_POINT_GROUP = "trajcomp.formats"
