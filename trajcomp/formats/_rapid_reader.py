@@ -286,15 +286,20 @@ class _Reader:
             self.check_quaternion(numbers[start + 3:start + 7], line, original, name)
         return numbers
 
+    def point(self, name, target, original):
+        """Add a point the module declares (``original``: its declaration, whose storage says whether other
+        modules may assign it: PERS or VAR, not LOCAL)."""
+        storage = _STORAGE.match(original)
+        if storage and storage.group(2).upper() != "CONST" and "LOCAL" not in storage.group(1).upper():
+            self.shared.add(name.lower())
+        self.points[name.lower()] = len(self.targets)
+        self.targets.append(target)
+
     def declaration(self, m, start, line, original):
         kind, name, value = m.group(1).lower(), m.group(2), m.group(3)
         offset = start + m.start(3)
         if kind in ("robtarget", "jointtarget"):
-            storage = _STORAGE.match(original)
-            if storage and storage.group(2).upper() != "CONST" and "LOCAL" not in storage.group(1).upper():
-                self.shared.add(name.lower())
-            self.points[name.lower()] = len(self.targets)
-            self.targets.append(self.literal(kind, value, offset, name, line, original))
+            self.point(name, self.literal(kind, value, offset, name, line, original), original)
             return
         pattern = _TOOLDATA if kind == "tooldata" else _WOBJDATA
         d = pattern.match(value)
@@ -483,9 +488,7 @@ def read(path):
     for line, start, end in _statements(source, masked):
         text, original = masked[start:end], source.text[start:end]
         if (point := written.get(start)) is not None and point[1] == end:  # a robtarget read with the others
-            name, _, target = point
-            reader.points[name.lower()] = len(reader.targets)
-            reader.targets.append(target)
+            reader.point(point[0], point[2], original)
             reader.items.append(Statement(line, original))
             continue
         if m := _ROUTINE.match(text):
