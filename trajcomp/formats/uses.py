@@ -15,9 +15,8 @@ written, listed (`Program.with_shared_targets_left`).
 import dataclasses
 import re
 
-from trajcomp.formats._text import Lines
+from trajcomp.formats._text import Lines, edit_sources
 from trajcomp.programs.items import Motion, Span
-from trajcomp.timing.writeback import edit_sources
 
 NAME_LENGTH = 24  # KUKA's limit on names; RAPID allows 32
 

@@ -50,10 +50,9 @@ import re
 import numpy as np
 
 from trajcomp.errors import TimingError
-from trajcomp.formats._text import NUMBER, Lines, apply_edits, format_number
+from trajcomp.formats._text import NUMBER, edit_sources, format_number
 from trajcomp.formats.csv_program import time_texts, with_times
-from trajcomp.support.memory import collection_paused
-from trajcomp.programs.items import JOINT, Span
+from trajcomp.programs.items import JOINT
 from trajcomp.timing.moves import moves_from_program
 from trajcomp.timing.path import TOLERANCE
 from trajcomp.timing.result import Texts
@@ -470,92 +469,3 @@ def _ptp_percent(delta, duration, robot):
 
 
 _WRITERS = {"csv": _csv, "rapid": _rapid, "urscript": _urscript, "fanuc_ls": _fanuc, "krl": _krl}
-
-
-def edit_sources(program, edits):
-    """The program with text edits applied to its sources and every span and line number moved along.
-
-    Parameters
-    ----------
-    program : Program
-    edits : sequence of list of (start, end, text)
-        Per source; non-overlapping; an insertion (start == end) goes before
-        a span starting there and after a span ending there.
-
-    Returns
-    -------
-    Program
-    """
-    if not any(edits):  # nothing written (every speed kept): the program as it is
-        return program
-    with collection_paused():  # a span and an item object each (`trajcomp.support.memory`)
-        return _edited(program, [_Shift(source.text, sorted(e)) for source, e in zip(program.sources, edits)])
-
-
-def _edited(program, shifts):
-    """`edit_sources` of the edits ``shifts`` (one `_Shift` per source)."""
-    sources = tuple(s.source_like(source) for s, source in zip(shifts, program.sources))
-    every_target = list(program.targets)
-    targets = [t for t in every_target if t.spans]  # a target without spans keeps its line
-    things = targets + list(program.items)  # statements and motions are lines of the first file
-    spans = [getattr(thing, "spans", {}) for thing in things]
-    moved = iter(_moved_spans(shifts, [span for of in spans for span in of.values()]))
-    first_file = [0] * (len(things) - len(targets))
-    lines = _moved_lines(shifts, [next(iter(t.spans.values())).source for t in targets] + first_file,
-                         [thing.line for thing in things])
-    edited = iter([dataclasses.replace(thing, line=line, **({"spans": {role: next(moved) for role in of}} if of else {}))
-                   for thing, of, line in zip(things, spans, lines)])
-    return program.replace(sources=sources, targets=tuple(next(edited) if t.spans else t for t in every_target),
-                           items=tuple(edited))
-
-
-def _moved_spans(shifts, spans):
-    """The spans (list of Span) in the edited texts, each source's positions moved at once."""
-    source = np.array([span.source for span in spans], dtype=int)
-    start = np.array([span.start for span in spans], dtype=int)
-    end = np.array([span.end for span in spans], dtype=int)
-    for k, shift in enumerate(shifts):
-        rows = np.flatnonzero(source == k)
-        start[rows] = shift.starts(start[rows])
-        end[rows] = np.maximum(shift.ends(end[rows]), start[rows])
-    texts = [shift.new for shift in shifts]
-    return [Span(k, a, b, texts[k][a:b]) for k, a, b in zip(source.tolist(), start.tolist(), end.tolist())]
-
-
-def _moved_lines(shifts, sources, numbers):
-    """Line numbers (list of int) in the edited texts of lines ``numbers`` of ``sources``."""
-    source, number = np.array(sources, dtype=int), np.array(numbers, dtype=int)
-    for k, shift in enumerate(shifts):
-        rows = np.flatnonzero(source == k)
-        number[rows] = shift.lines(number[rows])
-    return number.tolist()
-
-
-class _Shift:
-    """Offsets and line numbers of a text before edits mapped to the edited text, for arrays of them."""
-
-    def __init__(self, text, edits):
-        self.old, self.new = text, apply_edits(text, edits)
-        self.edit_ends = np.array([e[1] for e in edits], dtype=int)
-        self.insertions = np.array([e[0] for e in edits if e[0] == e[1]], dtype=int)  # ascending, as the edits
-        self.delta = np.cumsum([0] + [len(e[2]) - (e[1] - e[0]) for e in edits])
-        self.old_starts = np.array(Lines(self.old).starts)
-        self.new_starts = np.array(Lines(self.new).starts)
-
-    def starts(self, positions):
-        """New offsets of span starts (n,): after every edit ending at or before them."""
-        return positions + self.delta[np.searchsorted(self.edit_ends, positions, side="right")]
-
-    def ends(self, positions):
-        """New offsets of span ends (n,): after every edit ending at or before them, except insertions at them."""
-        at = np.searchsorted(self.insertions, positions, side="right") - np.searchsorted(self.insertions, positions)
-        return positions + self.delta[np.searchsorted(self.edit_ends, positions, side="right") - at]
-
-    def lines(self, numbers):
-        """New numbers of lines (n,) (by their starts); numbers outside the text as they are."""
-        inside = (numbers >= 1) & (numbers <= len(self.old_starts))
-        moved = self.starts(self.old_starts[np.clip(numbers, 1, len(self.old_starts)) - 1])
-        return np.where(inside, np.searchsorted(self.new_starts, moved, side="right"), numbers)
-
-    def source_like(self, source):
-        return dataclasses.replace(source, text=self.new)  # its file and role (`Source.companion`) kept
