@@ -125,8 +125,10 @@ def test_compensated_through_the_cli_it_lands(gcode, cell, tmp_path):
     source = write(tmp_path, "path.nc", PROGRAM, "\r\n")
     out = tmp_path / "out" / "path.nc"
     out.parent.mkdir()
+    # written, and the verdict fails: one target tilts 6.7 deg beyond the measured orientations, its landing
+    # estimate (0.13 mm) above the 0.1 mm tolerance
     assert main(["compensate", str(source), "--model", str(cell.model_path), "--tool", "1=0,0,0,0,0,0",
-                 "-o", str(out)]) == 0
+                 "-o", str(out)]) == 1
     original, corrected = formats.read(source), formats.read(out)
     targets = np.array([original.targets[m.target].pose for m in original.motions])
     commands = np.array([corrected.targets[m.target].pose for m in corrected.motions])
@@ -144,7 +146,8 @@ def test_compensated_through_the_cli_it_lands(gcode, cell, tmp_path):
 def test_a_tool_axis_program_lands(gcode, cell, tmp_path):
     source = write(tmp_path, "axis.nc", TOOL_AXIS)
     out = tmp_path / "axis-out.nc"
-    assert main(["compensate", str(source), "--model", str(cell.model_path), "-o", str(out)]) == 0
+    # written; the verdict fails on the two targets tilted far beyond the measured orientation (estimates 0.13 mm)
+    assert main(["compensate", str(source), "--model", str(cell.model_path), "-o", str(out)]) == 1
     targets = np.array([t.pose for t in formats.read(source).targets])
     text = out.read_text()
     ijk = [tuple(map(float, m)) for m in re.findall(r"I(\S+) J(\S+) K(\S+)", text)]

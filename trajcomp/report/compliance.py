@@ -37,7 +37,8 @@ def target_checks(report, measures, criteria, has_grid, mode, model=None):
     Without compensation (``model`` None) the landing, grid and coverage
     criteria are not evaluated; without targets, none is. A target passes
     the landing criterion (``residual``) only with an estimate within the
-    tolerance; one beyond the measured orientations, on a tool the model
+    tolerance (none, from a model without held-out errors: every target
+    fails it); one beyond the measured orientations, on a tool the model
     cannot place or in an unmeasured posture also fails the criterion that
     says why (orientation and tool: unless its estimate is within the
     tolerance; posture: always, as the estimate cannot see gear and
@@ -101,15 +102,18 @@ def target_checks(report, measures, criteria, has_grid, mode, model=None):
 def _landing_checks(report, v, tolerance, model):
     """``{criterion: (failing mask or None, detail)}`` of the landing and coverage criteria (None: not evaluated)."""
     data = report.landing
+    unknown = np.ones(len(report.labels), bool)  # a target passes only with an estimate within the tolerance
     if data is None:
-        return dict.fromkeys(("residual", "orientation", "tool", "posture"),
-                             (None, "the run has no landing estimate (compensated without the model's statistics)"))
+        return {"residual": (unknown, "no landing estimate: the run was compensated without the model's statistics"),
+                **dict.fromkeys(("orientation", "tool", "posture"),
+                                (None, "the run has no landing estimate (compensated without the model's statistics)"))}
     estimate, convergence = v["landing_estimate_mm"], v["convergence_mm"]
     within = estimate <= tolerance  # False where there is no estimate
     out = {}
     if np.isnan(v["held_out_mm"]).all():
-        out["residual"] = (None, "no landing estimate: the model has no held-out errors (calibrated with --folds 0 "
-                                 "or by an older trajcomp); calibrate with --folds 5 to evaluate it")
+        out["residual"] = (unknown, "no landing estimate: the model has no held-out errors (calibrated with --folds 0 "
+                                    "or by an older trajcomp), so no target is known to land within the tolerance; "
+                                    "calibrate with --folds 5")
     else:
         worst = int(np.nanargmax(estimate)) if np.isfinite(estimate).any() else 0
         out["residual"] = (~within, f"largest {estimate[worst]:.4f} mm at {report.labels[worst]} (held-out "
