@@ -16,6 +16,7 @@ import dataclasses
 import importlib.util
 import json
 import sys
+import time
 import warnings
 from pathlib import Path
 
@@ -310,7 +311,7 @@ def vendor_post(name):
     return module.RobotPost
 
 
-def write_program(RobotPost, station, folder, tool=None):
+def write_program(RobotPost, station, folder, tool=None, show_result=False):
     """Generate 'weld' through ``RobotPost`` as RoboDK does; the post and the program file it saved."""
     from robodk.robomath import Mat
 
@@ -333,7 +334,7 @@ def write_program(RobotPost, station, folder, tool=None):
         post.MoveL(pose[3], joints[3], flags[3])
     post.MoveL(pose[4], joints[4], flags[4])
     post.ProgFinish("weld")
-    post.ProgSave(str(folder), "weld")
+    post.ProgSave(str(folder), "weld", False, show_result)
     return post, folder / f"weld.{post.PROG_EXT}"
 
 
@@ -394,3 +395,19 @@ def test_a_language_trajcomp_does_not_read_takes_the_target_path(robodk_plugin, 
     assert isinstance(post, robodk_plugin.TargetPost)
     post.ProgStart("weld")
     assert "trajcomp does not read .JBI's programs, so this one is not re-timed" in post.vendor.calls[1][1][0]
+
+
+def test_the_program_shown_is_the_compensated_one(stations, robodk_plugin, tmp_path):
+    s = stations["urscript"]
+    RobotPost = robodk_plugin.compensated_post(vendor_post(s.post), model=s.model, json_only=True)
+    shown = tmp_path / "shown"  # RoboDK's show_result: an editor given the program's path (not waited for)
+    editor = [sys.executable, "-c", f"import os, shutil, sys; shutil.copy(sys.argv[1], {str(shown)!r} + '.part'); "
+                                    f"os.replace({str(shown)!r} + '.part', {str(shown)!r})"]
+    folder = tmp_path / "programs"
+    folder.mkdir()
+    post, written = write_program(RobotPost, s, folder, show_result=editor)
+    for _ in range(300):
+        if shown.exists():
+            break
+        time.sleep(0.1)
+    assert shown.read_bytes() == written.read_bytes() and post.runs[0].passed
