@@ -7,7 +7,8 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 from trajcomp.calibration.layout import Layout, load_layout
-from trajcomp.errors import ReadError
+from trajcomp.arm.robot import load_robot
+from trajcomp.errors import CalibrationError, ReadError
 from trajcomp.calibration.measurements import Measurements, parse_mapping, read_measurements, write_measurements
 
 
@@ -175,9 +176,27 @@ def test_a_damaged_file_is_refused_at_its_first_bad_row_and_rows_are_bounded(tmp
     with pytest.raises(ReadError, match=r"headers\.csv:2: field j1: not a number: 'j1'"):
         read_measurements(path)
     assert len(read) <= 65  # the header and the first block of rows
-    monkeypatch.setattr(measurements, "MAX_ROWS", 3)
     path.write_text("j1,j2,j3,j4,j5,j6\n" + "0,1,2,3,4,5\n" * 4)
-    with pytest.raises(ReadError, match=r"headers\.csv:5: more than 3 data rows"):
-        read_measurements(path)
+    with pytest.raises(ReadError, match=r"headers\.csv:5: more than 3 data rows; split the file"):
+        read_measurements(path, max_rows=3)
     path.write_text("j1,j2,j3,j4,j5,j6\n" + "0,1,2,3,4,5\n" * 3)
-    assert len(read_measurements(path)) == 3
+    assert len(read_measurements(path, max_rows=3)) == 3
+    assert measurements.read_measurements.__defaults__[1] == measurements.MAX_ROWS == 1_000_000
+
+
+def test_calibrate_refuses_more_rows_than_it_fits_at_the_first_row_beyond(tmp_path, monkeypatch, capsys):
+    import trajcomp.calibration.calibrate as calibration
+    import trajcomp.commands.calibrate as command
+    from trajcomp.cli import main
+
+    monkeypatch.setattr(command, "MAX_ROWS", 5)  # the command's bound (100,000) read as it is when it runs
+    path = tmp_path / "meas.csv"
+    path.write_text("# many\nj1,j2,j3,j4,j5,j6,mx,my,mz\n" + "0,-90,90,-90,-90,0,1,2,3\n" * 6 + "0,0,0,0,0,0,x,y,z\n")
+    assert main(["calibrate", str(path), "--robot", "ur10", "-o", str(tmp_path / "m.yaml")]) == 2
+    err = capsys.readouterr().err  # line 8 is the 6th data row: refused there, line 9 (not numbers) never read
+    assert f"{path}:8: more than 5 data rows; calibrate fits at most {calibration.MAX_ROWS}" in err
+    assert not (tmp_path / "m.yaml").exists()
+    monkeypatch.setattr(calibration, "MAX_ROWS", 5)  # the library refuses as well (Measurements built in memory)
+    path.with_name("seven.csv").write_text("j1,j2,j3,j4,j5,j6,mx,my,mz\n" + "0,-90,90,-90,-90,0,1,2,3\n" * 7)
+    with pytest.raises(CalibrationError, match=r"7 measurements; calibrate fits at most 5"):
+        calibration.calibrate(load_robot("ur10"), read_measurements(path.with_name("seven.csv")))

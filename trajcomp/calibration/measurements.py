@@ -35,7 +35,7 @@ from trajcomp.errors import ReadError
 __all__ = ["Measurements", "parse_mapping", "read_measurements", "format_measurements", "write_measurements"]
 
 MAX_FIELD = 1000  # characters: no number in a measurement file is longer
-MAX_ROWS = 1_000_000  # data rows of one measurement file (a tracker run of 5,892 poses is a large one)
+MAX_ROWS = 1_000_000  # data rows of one measurement file (a tracker run of 5,892 poses is a large one): 57 s, 288 MB
 MAX_COLUMNS = 1000  # fields of one row
 _BLOCK = 16384  # rows converted to numbers at once
 
@@ -110,12 +110,14 @@ def _parse_expression(expression, header, path, field):
     return terms
 
 
-def _rows(path, layout):
+def _rows(path, layout, max_rows=MAX_ROWS, why="split the file"):
     """Non-empty, non-comment rows ``(line, cells)`` of a file as they are read, the decimal mark made '.'.
 
     Streamed: a damaged file is refused at its first bad row, not once all
     of it is in memory. A field longer than `MAX_FIELD` characters, a row of
-    more than `MAX_COLUMNS` fields and more than `MAX_ROWS` data rows are refused.
+    more than `MAX_COLUMNS` fields and more than ``max_rows`` data rows (at the
+    first row beyond: nothing more is read) are refused, the message saying
+    ``why``.
     """
     try:
         with open(path, encoding="utf-8-sig", newline="") as handle:
@@ -133,8 +135,8 @@ def _rows(path, layout):
                 if len(row) > MAX_COLUMNS:
                     raise ReadError(f"{path}:{number}: {len(row)} fields, more than the {MAX_COLUMNS} a row may have")
                 count += 1
-                if count > MAX_ROWS + 1:
-                    raise ReadError(f"{path}:{number}: more than {MAX_ROWS} data rows; split the file")
+                if count > max_rows + 1:
+                    raise ReadError(f"{path}:{number}: more than {max_rows} data rows; {why}")
                 yield number, [cell.replace(",", ".") for cell in row] if layout.decimal == "," else row
     except (OSError, UnicodeError) as exc:
         raise ReadError(f"{path}: cannot read: {exc}") from exc
@@ -220,7 +222,7 @@ def _numbers(path, header, columns, cells, numbers):
     return np.array(checked)
 
 
-def read_measurements(path, layout=None):
+def read_measurements(path, layout=None, max_rows=MAX_ROWS, why="split the file"):
     """Read a measurement file.
 
     Parameters
@@ -229,6 +231,9 @@ def read_measurements(path, layout=None):
     layout : Layout or dict, optional
         The file's layout (a plain dict is taken as its ``columns``); fields
         not mapped are read from columns of their own name when present.
+    max_rows : int
+        Data rows read at most; a file of more is refused at the first row
+        beyond (the message ends with ``why``: what to do about it).
 
     Returns
     -------
@@ -244,7 +249,7 @@ def read_measurements(path, layout=None):
     path = str(path)
     if layout is None or isinstance(layout, dict):
         layout = Layout(columns=dict(layout or {}))
-    rows = _rows(path, layout)
+    rows = _rows(path, layout, max_rows, why)
     first = next(rows, None)
     if first is None:
         raise ReadError(f"{path}: no header row")

@@ -3,7 +3,9 @@
 import numpy as np
 
 from trajcomp.support.atomic import refuse_inputs
-from trajcomp.calibration.calibrate import INTERPOLATIONS, METHODS, calibrate, selection_words
+from trajcomp.calibration.calibrate import (
+    INTERPOLATIONS, MAX_ROWS, METHODS, calibrate, selection_words, too_many_rows,
+)
 from trajcomp.commands._args import (
     add_layout,
     add_robot,
@@ -100,7 +102,7 @@ def run(args):
         robot = robot.replace(T_flange_tool=args.tool)
     inputs = [args.measurements, args.columns_file, args.robot]
     refuse_inputs([*model_files(args.output), *(report_paths(args.report) if args.report else ())], inputs)
-    meas = read_measurements(args.measurements, layout_of(args))
+    meas = read_measurements(args.measurements, layout_of(args), max_rows=MAX_ROWS, why=too_many_rows())
     model = calibrate(
         robot, meas, robot_ref=args.robot, method=args.method, frame=args.frame, grid_step=args.grid_step,
         interpolation=args.interpolation, loss=args.loss, folds=args.folds, seed=args.seed, progress=progress,
