@@ -46,3 +46,16 @@ def test_a_motion_after_a_sign_is_retimed_not_a_crash(tmp_path, kuka_model):
     script.write_text("def p():\n  movej([0, -1.57, 1.57, 0, 1.57, 0], a=1, v=0.5)\n"
                       "  +movej([0.1, -1.57, 1.57, 0, 1.57, 0], a=1, v=0.5)\nend\n")
     assert main(["retime", str(script), "--robot", "ur10", "-o", str(tmp_path / "out.script")]) in (0, 1)
+
+
+def test_an_output_pipe_closed_by_its_reader_is_exit_141_not_a_crash():
+    import subprocess
+    import sys
+
+    # `trajcomp robots | head -0`: the reader is gone before anything is written (was exit 3, "internal error")
+    child = subprocess.Popen([sys.executable, "-m", "trajcomp.cli", "robots"], stdout=subprocess.PIPE,
+                             stderr=subprocess.PIPE, text=True)
+    child.stdout.close()  # before the child, still importing, writes its first line
+    stderr = child.stderr.read()
+    assert child.wait() == 141
+    assert "internal error" not in stderr and "Exception ignored" not in stderr

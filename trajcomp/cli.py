@@ -5,7 +5,8 @@ and chooses exit codes: 0 success, 1 the result fails a requested tolerance
 or limit, 2 bad usage or bad input, 3 an unexpected exception (a bug:
 `trajcomp.support.crash`); 130 (the shells' code of Ctrl-C) when the user interrupts
 the run and 143 when it is stopped by SIGTERM (what Docker, systemd and CI
-send), handled alike: what was not finished is not written.
+send), handled alike: what was not finished is not written; 141 (SIGPIPE's)
+when the reader of its output went away (``| head``).
 
 Each process of a run computes on one BLAS / OpenMP thread unless the user
 set the thread variables: the linear algebra here is many small products,
@@ -31,6 +32,7 @@ from trajcomp.errors import ToleranceError, TrajcompError
 
 INTERRUPTED = 130  # exit code of a run stopped by Ctrl-C (SIGINT), as shells report it
 TERMINATED = 128 + signal.SIGTERM  # 143: stopped by SIGTERM, as shells report it
+PIPE_CLOSED = 128 + signal.SIGPIPE  # 141: the output's reader went away, as shells report a tool SIGPIPE stops
 THREAD_VARIABLES = ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS")  # read when numpy loads
 
 
@@ -107,6 +109,9 @@ def _run(argv):
     except KeyboardInterrupt:
         print("trajcomp: interrupted: what was not finished was not written", file=sys.stderr)
         return INTERRUPTED
+    except BrokenPipeError:  # stdout's reader closed it (`trajcomp robots | head -1`): no bug, nothing to say
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())  # what is left unflushed goes nowhere at exit
+        return PIPE_CLOSED
     except Exception as exc:  # anything else is a bug: say so, keep the traceback, exit 3
         debug = args.debug if args is not None else "--debug" in argv
         if debug:
