@@ -207,7 +207,8 @@ def test_a_field_over_positions_goes_on_top_of_the_joint_residual_where_it_wins_
         return reached + np.column_stack([np.zeros((len(joints), 2)), 0.1 * np.sin(reached[:, 0] / 80.0)])
 
     meas = Measurements(joints=q, position=position, measured=landed(q), lines=np.arange(len(q)) + 2)
-    model = calibrate(robot, meas, interpolation="joint", folds=0)
+    model = calibrate(robot, meas, interpolation="joint", folds=2)
+    assert model.report["cross_validation"]["interpolation"] == "joint with a knn field on top"
     record = model.report["joint_splines"]
     assert record["field"] == "knn" and model.residual_field.kind == "knn" and not model.places_other_tools
     chosen = [c for c in record["candidates"] if c["step_deg"] == record["step_deg"] and c["penalty"] == record["penalty"]]

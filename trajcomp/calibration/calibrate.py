@@ -456,7 +456,8 @@ def fold_errors(robot, joints, position, measured, rotation, options, folds, see
     lattice interpolators (idw8, trilinear) by their scattered counterpart,
     inverse-distance weighting over the 8 nearest training nodes; the
     ``interpolation`` entry names the interpolator the folds used
-    (`plane_errors` holds out with the lattice interpolator itself).
+    (`plane_errors` holds out with the lattice interpolator itself) and the
+    field a joint residual takes on top.
     """
     if len(position) < 2 * folds:
         raise CalibrationError(f"{len(position)} measurements are too few for {folds}-fold cross-validation")
@@ -470,7 +471,8 @@ def fold_errors(robot, joints, position, measured, rotation, options, folds, see
         model = parts.model(robot, robot.name, options["method"], np.eye(4), {}, (False, ""))
         for mode, err in mode_errors(model, _rows(joints, test), position[test], measured[test]).items():
             collected.setdefault(mode, np.full((len(position), 3), np.nan))[test] = err
-    return {"interpolation": options["kind"], **collected}
+    field = (options.get("splines") or {}).get("field") if options["kind"] == JOINT_KIND else None
+    return {"interpolation": options["kind"] + (f" with a {field} field on top" if field else ""), **collected}
 
 
 def plane_errors(robot, joints, position, measured, rotation, options, progress=None):
