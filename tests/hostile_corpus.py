@@ -352,7 +352,7 @@ def _robot_cases():
     yield edited("limits swapped", {**ur10, "limits": {**limits, "position_min": limits["position_max"],
                                                        "position_max": limits["position_min"]}}, r"position_min")
     yield edited("direction 0", {**ur10, "joints": {"direction": [0] * 6}}, r"joints\.direction")
-    yield edited("j3 coupling 1e5", {**ur10, "joints": {"j3_coupling": 1e5}})
+    yield edited("j3 coupling 1e5", {**ur10, "joints": {"j3_coupling": 1e5}}, r"j3_coupling: 100000 is beyond the 10")
     yield edited("convention weird", {**ur10, "dh": {**ur10["dh"], "convention": "weird"}}, r"dh\.convention")
     yield edited("home beyond the limits", {**ur10, "home": [720] * 6})
     yield edited("tool 100 m long", {**ur10, "tool": [0, 0, 99999, 0, 0, 0]})
@@ -534,7 +534,8 @@ def violations(case, outcomes, folder):
 
 
 _ALSO_NAMED = {  # what else a refusal may name instead of the hostile file: what it is about
-    "robot": r"robot ur10\b|program\.csv:\d+",  # the robot by its name, or the program line it cannot run
+    "robot": r"robot ur10\b|program\.csv:\d+|meas\.csv: identified",  # the robot by its name, the program line it
+    # cannot run, or the measurements it cannot have made ("data of another robot")
     "layout": r"meas\.csv",  # the measurements as read through the layout
     "model": r"(?!)",
     "measurements": r"(?!)",

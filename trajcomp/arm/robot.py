@@ -42,6 +42,7 @@ from trajcomp.arm.transforms import pose_to_matrix
 _ROBOT_PACKAGE = "trajcomp.arm.robots"
 MAGNITUDE_BOUND = 1e5  # mm, deg, deg/s, deg/s^2: beyond it a robot file's number is damage (dh.a 1e308), not an arm
 JERK_BOUND = 1e9  # deg/s^3
+COUPLING_BOUND = 10.0  # |j3_coupling|: FANUC's is 1 (1e5 made every joint-3 angle a thousand turns: IK ran for minutes)
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -208,7 +209,7 @@ def robot_from_yaml(text, label="<robot>"):
     if not np.all(np.isin(direction, (-1.0, 1.0))):
         raise RobotError(f"{label}: field joints.direction: each entry must be 1 or -1, got {direction.tolist()}")
     joint_map = np.diag(direction)
-    joint_map[2, 1] = fields.number("joints.j3_coupling", joints.get("j3_coupling", 0.0))
+    joint_map[2, 1] = fields.number("joints.j3_coupling", joints.get("j3_coupling", 0.0), limit=COUPLING_BOUND)
     q_min = fields.vector("limits.position_min", limits.get("position_min")) * deg
     q_max = fields.vector("limits.position_max", limits.get("position_max")) * deg
     bad = np.flatnonzero(q_min >= q_max)

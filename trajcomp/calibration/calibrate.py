@@ -510,7 +510,8 @@ def plane_errors(robot, joints, position, measured, rotation, options, progress=
 
 
 def _landing(robot, dh, frame, data, held, folds, progress, orientation):
-    """The plain-data `trajcomp.model.landing.LandingData` of a calibration (its report's ``landing``).
+    """The plain-data `trajcomp.model.landing.LandingData` of a calibration (its report's ``landing``), or None
+    when no held-out errors could be computed.
 
     ``data`` are the rows the statistics use ``(robot, joints, position,
     measured, rotation, options)``; ``held`` their k-fold errors (N, 3) per mode.
@@ -522,6 +523,8 @@ def _landing(robot, dh, frame, data, held, folds, progress, orientation):
                   "(cells twice as long along that axis)")
     else:
         method = f"{folds}-fold cross-validation, residual {options['kind']}"
+    if not held:  # no plane could be held out (outliers left too few): no landing data, as with --folds 0
+        return None
     rows = np.isfinite(next(iter(held.values()))).all(axis=1)
     parameters = ([], np.zeros(0), np.zeros((0, 0)), np.zeros(0))
     if dh is not None:

@@ -2,6 +2,7 @@
 
 import numpy as np
 
+from trajcomp.errors import CalibrationError
 from trajcomp.support.atomic import refuse_inputs
 from trajcomp.calibration.calibrate import (
     INTERPOLATIONS, MAX_ROWS, METHODS, calibrate, selection_words, too_many_rows,
@@ -103,11 +104,16 @@ def run(args):
     inputs = [args.measurements, args.columns_file, args.robot]
     refuse_inputs([*model_files(args.output), *(report_paths(args.report) if args.report else ())], inputs)
     meas = read_measurements(args.measurements, layout_of(args), max_rows=MAX_ROWS, why=too_many_rows())
-    model = calibrate(
-        robot, meas, robot_ref=args.robot, method=args.method, frame=args.frame, grid_step=args.grid_step,
-        interpolation=args.interpolation, loss=args.loss, folds=args.folds, seed=args.seed, progress=progress,
-        orientation_weight=args.orientation_weight,
-    )
+    try:
+        model = calibrate(
+            robot, meas, robot_ref=args.robot, method=args.method, frame=args.frame, grid_step=args.grid_step,
+            interpolation=args.interpolation, loss=args.loss, folds=args.folds, seed=args.seed, progress=progress,
+            orientation_weight=args.orientation_weight,
+        )
+    except CalibrationError as exc:  # what the data cannot give names the file ("2 measurements are too few...")
+        if str(args.measurements) in str(exc):
+            raise
+        raise CalibrationError(f"{args.measurements}: {exc}") from None
     save_model(args.output, model)
     report = model.report
     for line in describe(model):
