@@ -712,14 +712,20 @@ def edit_sources(program, edits):
     if not any(edits):  # nothing written (every speed kept): the program as it is
         return program
     with collection_paused():  # a span and an item object each (`trajcomp.support.memory`)
-        return _edited(program, [_Shift(source.text, sorted(e)) for source, e in zip(program.sources, edits)])
+        return _edited(program, [_Shift(source.text, sorted(e)) for source, e in zip(program.sources, edits)],
+                       {k for k, e in enumerate(edits) if e})
 
 
-def _edited(program, shifts):
-    """`edit_sources` of the edits ``shifts`` (one `_Shift` per source)."""
+def _edited(program, shifts, changed):
+    """`edit_sources` of the edits ``shifts`` (one `_Shift` per source); ``changed``: the sources edited.
+
+    A target stated in a source without edits (a KRL .dat when speed lines
+    go into the .src) keeps its spans and line as they are.
+    """
     sources = tuple(s.source_like(source) for s, source in zip(shifts, program.sources))
     every_target = list(program.targets)
-    targets = [t for t in every_target if t.spans]  # a target without spans keeps its line
+    moving = [bool(t.spans) and next(iter(t.spans.values())).source in changed for t in every_target]
+    targets = [t for t, move in zip(every_target, moving) if move]  # a target without spans keeps its line
     things = targets + list(program.items)  # statements and motions are lines of the first file
     spans = [getattr(thing, "spans", {}) for thing in things]
     moved = iter(_moved_spans(shifts, [span for of in spans for span in of.values()]))
@@ -728,7 +734,8 @@ def _edited(program, shifts):
                          [thing.line for thing in things])
     edited = iter([dataclasses.replace(thing, line=line, **({"spans": {role: next(moved) for role in of}} if of else {}))
                    for thing, of, line in zip(things, spans, lines)])
-    return program.replace(sources=sources, targets=tuple(next(edited) if t.spans else t for t in every_target),
+    return program.replace(sources=sources, targets=tuple(next(edited) if move else t
+                                                          for t, move in zip(every_target, moving)),
                            items=tuple(edited))
 
 

@@ -1,0 +1,102 @@
+"""The robot languages' declarations read at once (KRL, RAPID, FANUC LS, URScript) against the line-by-line read, and
+the numbers of edited targets formatted together against `format_number`."""
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from trajcomp import formats
+from trajcomp.errors import ReadError
+from trajcomp.formats import _krl_reader, _rapid_reader, _urscript_reader, fanuc_ls
+from trajcomp.formats._text import format_number, written_numbers
+
+DATA = Path(__file__).parent / "data"
+EXAMPLES = Path(__file__).parent.parent / "examples" / "programs"
+AT_ONCE = {  # language -> (module, the function reading declarations at once)
+    ".src": (_krl_reader, "_written_points"),
+    ".mod": (_rapid_reader, "_written_points"),
+    ".ls": (fanuc_ls, "_written_positions"),
+    ".script": (_urscript_reader, "_literal_poses"),
+}
+CORPUS = sorted(p for root in (DATA / "programs", EXAMPLES) for p in root.rglob("*")
+                if p.suffix.lower() in AT_ONCE)
+
+
+def _seen(program):
+    """Everything a read gives, comparable: targets' numbers bit for bit, spans, items."""
+    def bits(array):
+        return None if array is None else np.asarray(array).tobytes()
+
+    targets = [(t.name, t.line, bits(t.pose), bits(t.joints), t.config, t.tool, t.frame, bits(t.external),
+                dict(t.spans), t.edited) for t in program.targets]
+    return targets, [repr(item) for item in program.items], sorted(program.tools), sorted(program.frames)
+
+
+def _line_by_line(path, monkeypatch):
+    """The program read with no declaration read at once."""
+    module, function = AT_ONCE[path.suffix.lower()]
+    with monkeypatch.context() as patch:
+        patch.setattr(module, function, lambda *args: {})
+        return formats.read(path)
+
+
+@pytest.mark.parametrize("path", CORPUS, ids=lambda p: p.name)
+def test_a_corpus_program_reads_the_same_at_once_and_line_by_line(path, monkeypatch):
+    try:
+        at_once = formats.read(path)
+    except ReadError as error:
+        with pytest.raises(ReadError) as refused:
+            _line_by_line(path, monkeypatch)
+        assert str(refused.value) == str(error)
+        return
+    assert _seen(at_once) == _seen(_line_by_line(path, monkeypatch))
+
+
+def _krl(tmp_path, lines):
+    (tmp_path / "p.src").write_text("DEF p( )\n  PTP XP1\n  LIN XP2 C_DIS\n  LIN XP3\nEND\n")
+    (tmp_path / "p.dat").write_text("DEFDAT p\n" + "".join(f"{line}\n" for line in lines) + "ENDDAT\n")
+    return tmp_path / "p.src"
+
+
+@pytest.mark.parametrize("third", [
+    "DECL E6POS XP3={X 1.5,Y -2,Z .25,A 0,B 90,C 0,S 2,T 35,E1 10,E2 0}",  # as KUKA writes it, external axes
+    "DECL E6POS XP3={X 1.5, Y -2,Z .25,A 0,B 90,C 0}",  # a blank after a comma: read line by line
+    "DECL POS XP3={X 1.5,Y -2,Z .25,A 0,B 90,C 0,S 'B010',T 'B100011'}",  # bit strings: line by line
+])
+def test_krl_points_written_otherwise_read_the_same(tmp_path, monkeypatch, third):
+    path = _krl(tmp_path, ["DECL E6POS XP1={X 500,Y 0,Z 600,A 0,B 90,C 0,S 2,T 35}",
+                           "DECL E6POS XP2={X 510.25,Y 1e1,Z 600,A -180,B 89.5,C 0.001,S 6,T 27}", third])
+    program = formats.read(path)
+    assert program.targets[2].name == "XP3" and np.allclose(program.targets[2].pose[:3, 3], [1.5, -2, 0.25])
+    assert _seen(program) == _seen(_line_by_line(path, monkeypatch))
+
+
+@pytest.mark.parametrize("bad, message", [
+    ("DECL E6POS XP2={X 1e9,Y 0,Z 0,A 0,B 0,C 0,S 2,T 35}", "X: '1e9' is out of range"),
+    ("DECL E6POS XP2={X 1,Y 0,Z 0,A 0,B 0,C 0,S 2,T 99}", "T 99: outside 0..63"),
+])
+def test_krl_point_the_line_read_refuses_is_refused_naming_its_line(tmp_path, bad, message):
+    path = _krl(tmp_path, ["DECL E6POS XP1={X 500,Y 0,Z 600,A 0,B 90,C 0,S 2,T 35}", bad,
+                           "DECL E6POS XP3={X 1,Y 0,Z 0,A 0,B 0,C 0}"])
+    with pytest.raises(ReadError, match=f"p.dat:3: .*{message}"):
+        formats.read(path)
+
+
+def test_numbers_formatted_together_are_what_format_number_writes():
+    rng = np.random.default_rng(7)
+    values = np.concatenate([rng.normal(0, 300, 500), rng.normal(0, 1e-3, 200),
+                             [0.0, -0.0, 0.0005, -0.0005, -0.0004, 0.00049999, 2.5, -2.5, 1e-9, -1e-9, 123456.7895]])
+    places = rng.integers(0, 10, len(values))
+    old_texts = np.where(rng.random(len(values)) < 0.2, ".5", "1.0").tolist()
+    old_values = np.array([float(t) for t in old_texts])
+    old_values[::7] = values[::7]  # some numbers stay the same
+    changed, texts = written_numbers(values, old_texts, old_values, places)
+    for value, old_text, old_value, p, change, text in zip(values.tolist(), old_texts, old_values.tolist(),
+                                                           places.tolist(), changed.tolist(), texts):
+        expected = format_number(value, p)
+        assert change == (float(expected) != old_value or math.isnan(old_value))
+        if change and old_text.startswith("."):
+            expected = expected.replace("0.", ".", 1) if expected.startswith(("0.", "-0.")) else expected
+        assert text == expected
