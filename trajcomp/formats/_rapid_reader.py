@@ -126,7 +126,9 @@ def _written_points(source, masked):
     position, quat, config, external = numbers[:, :3], numbers[:, 3:7], numbers[:, 7:11], numbers[:, 11:]
     good = (np.isfinite(numbers[:, :11]) & (np.abs(numbers[:, :11]) <= LENGTH_LIMIT)).all(axis=1)
     good &= (np.isfinite(external) & (np.abs(external) <= 1e10)).all(axis=1)
-    good &= np.abs(np.linalg.norm(quat, axis=1) - 1.0) <= QUAT_TOLERANCE - 1e-9  # at the bound: as the one read
+    norm = np.full(len(quat), np.inf)
+    norm[good] = np.linalg.norm(quat[good], axis=1)  # of numbers within range only (1e308 squared overflows)
+    good &= np.abs(norm - 1.0) <= QUAT_TOLERANCE - 1e-9  # at the bound: as the one read
     good &= (config == np.trunc(config)).all(axis=1)
     keep = np.flatnonzero(good)
     T = np.tile(np.eye(4), (len(keep), 1, 1))
