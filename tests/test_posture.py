@@ -311,6 +311,16 @@ def test_a_ptp_to_xhome_is_a_joint_position_kept_not_a_motion_left_uncompensated
     assert report.joint_targets == ("PTP XHOME (line 2)", "PTP XHOME (line 4)")
 
 
+def test_a_ptp_to_where_the_arm_is_is_kept_as_a_joint_position(tmp_path):
+    """``PTP $AXIS_ACT``, which RoboDK's KRC posts and KUKA's BCO runs start with: kept, not a motion left as
+    written (which failed every such program's verdict); ``LIN $POS_ACT`` still is one."""
+    robot = load_robot("kuka_kr6_r900")
+    program = _krl(tmp_path, {"P1": (445, 0, 790, 0, 90, 0, 2, 2)}, ["PTP $AXIS_ACT", "PTP P1", "LIN $POS_ACT"])
+    _, report = compensate_program(program, _stand_in(robot, np.array([0.1, 0.0, 0.0])), robot)
+    assert [line for line, _, _ in report.not_compensated] == [4]
+    assert report.joint_targets == ("PTP $AXIS_ACT (line 2)",)
+
+
 def test_a_program_in_metres_is_refused_with_the_unit_named(tmp_path):
     """Positions a thousand times too small all lie inside the robot's base: refused, the unit named."""
     robot = load_robot("ur10")

@@ -65,7 +65,7 @@ _WITH_BASE = re.compile(r"\$BASE\s*=\s*SBASE\s*\(\s*(\w+)\s*\.\s*BASE_NO\s*\)", 
 # a point another data list declares, with a value or without (`DeclaredElsewhere`)
 _GLOBAL_POINT = re.compile(r"^[ \t]*(?:DECL\s+)?(?:GLOBAL\s+)?(?:" + POINT_TYPES + r")\s+(\w+)\s*(?:=|$)", re.I | re.M)
 _GLOBAL_WORD = re.compile(r"\bGLOBAL\b", re.I)
-_HOME = re.compile(r"^XHOME\d*$", re.I)
+_HOME = re.compile(r"^(XHOME\d*|\$AXIS_ACT)$", re.I)  # axis positions stated outside the program: kept
 _DEF = re.compile(r"^\s*(?:GLOBAL\s+)?DEF(?:FCT\s+\w+)?\s+(\w+)\s*\(", re.I | re.M)
 _DEF_LINE = re.compile(r"^\s*(?:GLOBAL\s+)?DEF(?:FCT\s+\w+)?\s+\w+\s*\((.*?)\)", re.I)
 _DEFDAT = re.compile(r"^\s*DEFDAT\s+(\w+)", re.I | re.M)

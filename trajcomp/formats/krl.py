@@ -28,7 +28,7 @@ Not compensated, with the reason (`Motion.reason`): relative motions
 calls, array elements), system variables (``$POS_ACT``), routine
 parameters, points declared without a value or changed by the program at
 run time (``XP1.Z = ...``), motions after a tool or base set at run time,
-the home positions ``XHOME``.. of $config.dat, and points another program
+the home positions ``XHOME``.. of $config.dat and ``$AXIS_ACT`` (axis positions: kept like joint targets), and points another program
 assigns (GLOBAL ones). A point another data list beside the program
 declares GLOBAL, or $config.dat (beside it or in a backup's R1/System),
 is read from that file (a companion `Source`): corrected there, which is

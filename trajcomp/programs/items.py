@@ -221,8 +221,9 @@ class Motion:
         it (`trajcomp.timing.writeback`).
     axis_position : bool
         The motion goes to an axis (joint) position stated outside the
-        program (KUKA ``XHOME`` of $config.dat): joint space, kept as written
-        like a joint target, not a motion left uncompensated.
+        program (KUKA ``XHOME`` of $config.dat, ``$AXIS_ACT``: where the arm
+        is, as RoboDK's and KUKA's programs start): joint space, kept as
+        written like a joint target, not a motion left uncompensated.
     """
 
     kind: str
