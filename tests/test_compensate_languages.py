@@ -377,7 +377,7 @@ def cells(tmp_path_factory):
             rng = np.random.default_rng(11)
             meas = Measurements(joints=joints, position=plan.position, measured=virtual.measure(joints, rng),
                                 lines=np.arange(len(joints)) + 2, path=f"{name}.csv")
-            model = calibrate(robot, meas, robot_ref=str(robot_file), method="composite", grid_step=step, folds=0)
+            model = calibrate(robot, meas, robot_ref=str(robot_file), method="composite", grid_step=step, folds=3)
             save_model(folder / "model.yaml", model)
             made[name, posture] = (robot, virtual, model, folder / "model.yaml")
         return made[name, posture]
