@@ -21,8 +21,9 @@ def forwarding(old, new):
     def __getattr__(name):
         if name.startswith("__"):
             raise AttributeError(name)
+        value = getattr(importlib.import_module(new), name)  # AttributeError, unwarned, for a name never there
         warnings.warn(f"{old} moved to {new} (trajcomp 0.1 wings); import {name} from {new}: the old name goes "
                       "in trajcomp 0.2", DeprecationWarning, stacklevel=2)
-        return getattr(importlib.import_module(new), name)
+        return value
 
     return __getattr__
