@@ -77,13 +77,20 @@ def load(text):
 def _check_depth(text):
     """Raise ``yaml.YAMLError`` if collections nest deeper than `MAX_DEPTH` (the parser's events: no recursion)."""
     depth = 0
-    for event in yaml.parse(text, Loader=_BASE):
-        if isinstance(event, yaml.CollectionStartEvent):
-            depth += 1
-            if depth > MAX_DEPTH:
-                raise yaml.YAMLError(f"collections nested more than {MAX_DEPTH} deep (line {event.start_mark.line + 1})")
-        elif isinstance(event, yaml.CollectionEndEvent):
-            depth -= 1
+    try:
+        for event in yaml.parse(text, Loader=_BASE):
+            if isinstance(event, yaml.CollectionStartEvent):
+                depth += 1
+                if depth > MAX_DEPTH:
+                    raise yaml.YAMLError(f"collections nested more than {MAX_DEPTH} deep "
+                                         f"(line {event.start_mark.line + 1})")
+            elif isinstance(event, yaml.CollectionEndEvent):
+                depth -= 1
+    except yaml.MarkedYAMLError as exc:  # newer PyYAML (6.0.4) stops a scan nesting 1,000 deep itself, first
+        if "nesting depth" not in str(exc.problem):
+            raise
+        raise yaml.YAMLError(f"collections nested more than {MAX_DEPTH} deep "
+                             f"(line {exc.problem_mark.line + 1})") from None
 
 
 def shown(value):
