@@ -91,7 +91,8 @@ class _Fixed:
     def of(cls, values, places):
         values = np.asarray(values, dtype=float)
         with np.errstate(over="ignore", invalid="ignore"):  # of huge and non-finite values: formatted by Python
-            scaled = np.abs(values * 10.0**places)  # 10**places is exact: within half an ulp of the true product
+            scaled = np.abs(values * np.power(10.0, places))  # exact: within half an ulp of the true product;
+            # inf beyond 308 places (a mutated number's), which Python then formats
             doubtful = (scaled - np.floor(scaled) == 0.5) | ~(scaled < _SAFE)
         units = np.rint(np.where(doubtful, 0.0, scaled)).astype(np.int64)
         texts = [f"{v:.{places}f}" for v in values[doubtful].tolist()]

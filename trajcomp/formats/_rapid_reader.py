@@ -138,13 +138,13 @@ def _written_points(source, masked):
     at = np.array([[m.start(k) for k in range(2, 13)] + [m.end(k) for k in range(2, 13)] for m in found])
     columns = SpanColumns(0, source.text, POSITION + QUAT + CONF, at[:, :11], at[:, 11:])
     lines = np.searchsorted(Lines(source.text).starts, [m.start() for m in found], side="right").tolist()
-    configs = config.astype(int).tolist()
+    configs = config[keep].astype(int).tolist()  # of the rows kept only: a refused row's 1e308 has no int
     out = {}
     for row, k in enumerate(keep.tolist()):
         m = found[k]
         axes = None if np.isnan(external[k]).all() else external[k]
         out[m.start()] = (m.group(1), m.end(19), Target(name=m.group(1), line=lines[k], pose=T[row],
-                                                        config=tuple(configs[k]), spans=columns.row(k),
+                                                        config=tuple(configs[row]), spans=columns.row(k),
                                                         external=axes))
     return out
 
