@@ -107,3 +107,29 @@ def test_the_api_keeps_the_speeds_when_asked_and_then_writes_what_the_command_li
     assert out["api"].read_bytes() == out["cli"].read_bytes()
     timed = trajcomp.Compensator(model).filter_program(source, out["timed"])  # re-timed by default: the 20 mm/s
     assert timed.timing.cycle_time > 9.0 and timed.compliance.doc["timing"]["cycle_time_s"] > 9.0  # weld kept
+
+
+def test_the_api_compensates_with_the_model_file_as_it_is_now_not_as_a_cache_kept_it(models, tmp_path):
+    """A host application keeps its process: a model file recalibrated under the same name is the one used."""
+    import dataclasses
+    import hashlib
+    import os
+
+    from trajcomp.model.model_file import load_model, save_model
+
+    program, robot, corner, side = CASES["krl"]
+    source = _copy(program, tmp_path / "in")
+    path = tmp_path / "cell.yaml"
+    model = load_model(models(robot, corner, side))
+    save_model(path, model)
+    out = {name: tmp_path / name / program.name for name in ("before", "after", "reference")}
+    for name in out:
+        out[name].parent.mkdir()
+    trajcomp.filter_program(source, out["before"], model=path, retime="none")
+    save_model(path, dataclasses.replace(model, dh_delta=model.dh_delta * 0.5))  # recalibrated: other deltas
+    os.utime(path, ns=(path.stat().st_atime_ns, path.stat().st_mtime_ns + 10**9))  # surely a newer version
+    after = trajcomp.filter_program(source, out["after"], model=path, retime="none")
+    trajcomp.Compensator(load_model(path)).filter_program(source, out["reference"], retime="none")
+    points = {name: path.with_suffix(".dat").read_bytes() for name, path in out.items()}  # the corrected targets
+    assert points["after"] == points["reference"] != points["before"]
+    assert after.compliance.doc["provenance"]["model"]["sha256"] == hashlib.sha256(path.read_bytes()).hexdigest()

@@ -301,7 +301,7 @@ class Compensator:
         path = Path(path)
         out_path = path.with_name(f"{path.stem}_compensated{path.suffix}") if out_path is None else Path(out_path)
         job = CompensationJob(
-            self.model_file or self.model, mode=self.mode, outside=self.outside,
+            self.model, model_file=self.model_file, mode=self.mode, outside=self.outside,
             tools=_named_poses(tools, "tools") or {}, frames=_named_poses(frames, "frames") or {},
             joint_targets=joint_targets, max_joint_change=np.radians(self.max_joint_change),
             max_correction=self.max_correction, in_place=in_place, criteria=criteria or Criteria(), report=report,

@@ -88,10 +88,13 @@ class CompensationJob:
     ``max_joint_change`` is in rad.
 
     ``model`` is a model file (loaded once per process) or a loaded
-    `CompensationModel` (its report then names no file).
+    `CompensationModel`, used as it is: ``model_file`` then names the file
+    it came from (the report's provenance, an input no output may replace),
+    or None for a model made in memory (its report names no file).
     """
 
     model: object
+    model_file: str = None
     mode: str = None
     outside: str = "model"
     tools: dict = dataclasses.field(default_factory=dict)
@@ -136,13 +139,13 @@ class CompensationJob:
         target = _report_target(self.report, self.report_folder, output)
         with Stages(STAGES, desc=Path(path).name, enabled=self.show_stages) as stages, kept_apart():
             model = loaded_model(self.model)
-            whose = "the arm of the model" + (f" {self.model}" if isinstance(self.model, (str, Path)) else "")
+            whose = "the arm of the model" + (f" {self.source}" if self.source else "")
             program = formats.read(path, workers=self.workers) if task is None else formats.read_task(task)
             formats.check_robot_language(path, formats.find_format(format=program.format), model.nominal, whose)
             out_format = formats.output_format(output, program, self.to_format)
             formats.check_robot_language(output, out_format, model.nominal, whose)
             sources = list(dict.fromkeys(formats.input_paths(path, program)))
-            inputs = [*sources, *([] if isinstance(self.model, CompensationModel) else model_files(self.model))]
+            inputs = [*sources, *(model_files(self.source) if self.source else [])]
             refuse_inputs(report_paths(target) if target else (), [*inputs, output], "give --report another name")
             correct = program_corrector(model, mode=self.mode, outside=self.outside, label=str(path),
                                         workers=self.workers)
@@ -171,7 +174,7 @@ class CompensationJob:
             mode = self.mode or model.method
             compliance = compliance_report(
                 report, model.nominal, criteria=self.criteria, model=model,
-                model_info=_model_info(self.model, mode), mode=mode,
+                model_info=_model_info(self.model, mode, self.source), mode=mode,
                 files=[file_entry("program", p) for p in sources] + [file_entry("output", p) for p in written],
                 options=self.options(), timing=timed, cycle_time_before=before if timed is not None else None,
                 workers=self.workers,
@@ -197,6 +200,11 @@ class CompensationJob:
         result = batch.FileResult(batch.named(task or path), tuple(map(str, written + reports)), status, message,
                                   tuple(lines))
         return ProgramRun(result, compliance, report, timed)
+
+    @property
+    def source(self):
+        """The model's file (str), or None for a model made in memory."""
+        return self.model_file if isinstance(self.model, CompensationModel) else str(self.model)
 
     def options(self):
         """The run's options as user values, for the report's provenance."""
@@ -369,11 +377,12 @@ def _model_file(path):
     return load_model(path)
 
 
-def _model_info(model, mode):
-    """The report's model entry (file checksum, date, statistics), once per process for a file."""
+def _model_info(model, mode, source):
+    """The report's model entry (file checksum, date, statistics): once per process for a file a job loads, of
+    ``source`` (its file, or None) for a loaded model."""
     if isinstance(model, CompensationModel):
-        return model_entry(None, model, mode)
-    return _file_model_info(str(model), mode)
+        return model_entry(source, model, mode)
+    return _file_model_info(source, mode)
 
 
 @functools.lru_cache(maxsize=4)
