@@ -9,16 +9,19 @@ import pytest
 
 from trajcomp import formats
 from trajcomp.errors import ReadError
-from trajcomp.formats import _krl_reader, _rapid_reader, _urscript_reader, fanuc_ls
-from trajcomp.formats._text import format_number, written_numbers
+from trajcomp.formats.fanuc import reader as fanuc_reader
+from trajcomp.formats.krl import reader as krl_reader
+from trajcomp.formats.rapid import reader as rapid_reader
+from trajcomp.formats.urscript import reader as urscript_reader
+from trajcomp.formats.text import format_number, written_numbers
 
 DATA = Path(__file__).parent / "data"
 EXAMPLES = Path(__file__).parent.parent / "examples" / "programs"
 AT_ONCE = {  # language -> (module, the function reading declarations at once)
-    ".src": (_krl_reader, "_written_points"),
-    ".mod": (_rapid_reader, "_written_points"),
-    ".ls": (fanuc_ls, "_written_positions"),
-    ".script": (_urscript_reader, "_literal_poses"),
+    ".src": (krl_reader, "_written_points"),
+    ".mod": (rapid_reader, "_written_points"),
+    ".ls": (fanuc_reader, "_written_positions"),
+    ".script": (urscript_reader, "_literal_poses"),
 }
 CORPUS = sorted(p for root in (DATA / "programs", EXAMPLES) for p in root.rglob("*")
                 if p.suffix.lower() in AT_ONCE)

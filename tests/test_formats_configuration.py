@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from trajcomp.programs.configuration import abb_confdata, fanuc_config, kuka_status_turn
+from trajcomp.formats.configuration import abb_confdata, fanuc_config, kuka_status_turn
 from trajcomp.arm.robot import load_robot
 
 

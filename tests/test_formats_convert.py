@@ -10,7 +10,7 @@ from trajcomp.errors import TrajcompError, WriteError
 from trajcomp.compensation.program import FRAMELESS, compensate_program, convert_program
 from trajcomp.arm.robot import load_robot
 from trajcomp.compensation.targets import CompensationResult
-from trajcomp.programs.configuration import abb_confdata, kuka_status_turn
+from trajcomp.formats.configuration import abb_confdata, kuka_status_turn
 from trajcomp.programs.frames import FrameTable
 from trajcomp.arm.kinematics import fk
 from trajcomp.arm.transforms import invert, matrix_to_pose, pose_to_matrix

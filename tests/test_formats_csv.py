@@ -92,7 +92,7 @@ def test_other_columns_are_kept_and_t_is_known(tmp_path):
 def test_a_program_re_timed_again_gets_its_t_column_rewritten_in_place(tmp_path):
     """A CSV that already has t (a re-timed output, retimed or compensated again): each t cell is
     replaced, keeping its quotes and spaces, and nothing else changes."""
-    from trajcomp.formats.csv_program import with_times
+    from trajcomp.formats.csv.writer import with_times
 
     path = tmp_path / "timed.csv"
     path.write_text('x,y,z,a,b,c,t,id\n1,2,3,4,5,6,0.0,a\n7,8,9,1,2,3, 1.5 ,b\n4,5,6,7,8,9,"2.5",c\n')
@@ -119,7 +119,7 @@ def _mixed_rows():
 @pytest.mark.parametrize("ending", ["\n", "\r\n"])
 def test_rows_read_and_written_in_blocks_equal_one_block(tmp_path, monkeypatch, block, ending):
     """Blocks of 1 to 3 rows (the reader and writer work a block at a time) give the tables and bytes of one block."""
-    from trajcomp.formats import _csv_reader, _csv_writer
+    from trajcomp.formats.csv import reader as csv_reader, writer as csv_writer
 
     path = tmp_path / "mixed.csv"
     path.write_bytes(ending.join(_mixed_rows()).encode())  # no line ending after the last row
@@ -134,8 +134,8 @@ def test_rows_read_and_written_in_blocks_equal_one_block(tmp_path, monkeypatch, 
         return program, formats.write(tmp_path / f"out{block}.csv", edited)[0].read_bytes()
 
     reference, expected = run()
-    monkeypatch.setattr(_csv_reader, "BLOCK", block)  # the blocks read
-    monkeypatch.setattr(_csv_writer, "BLOCK", block)  # and written
+    monkeypatch.setattr(csv_reader, "BLOCK", block)  # the blocks read
+    monkeypatch.setattr(csv_writer, "BLOCK", block)  # and written
     program, written = run()
     for name in ("pose", "joints", "line", "is_joint"):
         np.testing.assert_array_equal(getattr(program.target_table(), name), getattr(reference.target_table(), name))
@@ -148,9 +148,9 @@ def test_rows_read_and_written_in_blocks_equal_one_block(tmp_path, monkeypatch, 
 
 @pytest.mark.parametrize("block", [2, 50_000])
 def test_a_mistake_in_a_later_block_is_named_by_its_line(tmp_path, monkeypatch, block):
-    from trajcomp.formats import _csv_reader
+    from trajcomp.formats.csv import reader as csv_reader
 
-    monkeypatch.setattr(_csv_reader, "BLOCK", block)  # only read: the reader's blocks
+    monkeypatch.setattr(csv_reader, "BLOCK", block)  # only read: the reader's blocks
     rows = _mixed_rows()
     rows.insert(7, "7,650.0,-98.0,503.0,0.0,90.0,0.0,LNI,50,1,,,,,,")
     path = tmp_path / "typo.csv"

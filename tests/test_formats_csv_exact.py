@@ -12,10 +12,10 @@ import pytest
 
 from trajcomp import formats
 from trajcomp.errors import ReadError
-from trajcomp.formats import _csv_reader, _csv_writer
-from trajcomp.formats._csv_cells import _canonical
-from trajcomp.formats._csv_writer import _UNKNOWN, _column
-from trajcomp.formats._fixed_text import joined_rows
+from trajcomp.formats.csv import reader as csv_reader, writer as csv_writer
+from trajcomp.formats.csv.cells import _canonical
+from trajcomp.formats.csv.writer import _UNKNOWN, _column
+from trajcomp.formats.fixed_text import joined_rows
 
 CANONICAL = re.compile(r"-?(?:0|[1-9][0-9]*)\.([0-9]+)")
 
@@ -128,8 +128,8 @@ def moved(path, out, dx):
 def test_columns_of_every_form_keep_their_cells_where_the_number_stays(tmp_path, monkeypatch, block):
     """Canonical, fewer decimals than the least written (kept), more decimals (kept as many), -0.000, quoted, spaced,
     an exponent: only the numbers that change are rewritten, in the column's decimals."""
-    monkeypatch.setattr(_csv_reader, "BLOCK", block)  # the blocks read
-    monkeypatch.setattr(_csv_writer, "BLOCK", block)  # and written
+    monkeypatch.setattr(csv_reader, "BLOCK", block)  # the blocks read
+    monkeypatch.setattr(csv_writer, "BLOCK", block)  # and written
     rows = ["1.000,2.0,3.00000,0.0,0.0,0.0,LIN", "-0.000,2.5,-3.12345,0.0,0.0,0.0,LIN",
             '"4.000", 5.0 ,1e1,0.0,0.0,0.0,PTP', "7.250,8.0,9.00001,0.0,0.0,0.0,LIN"]
     path = program_csv(tmp_path, rows)
@@ -141,8 +141,8 @@ def test_columns_of_every_form_keep_their_cells_where_the_number_stays(tmp_path,
 
 @pytest.mark.parametrize("block", [1, 3, 50_000])
 def test_a_file_with_a_byte_order_mark_gets_one_whatever_the_blocks(tmp_path, monkeypatch, block):
-    monkeypatch.setattr(_csv_reader, "BLOCK", block)  # the blocks read
-    monkeypatch.setattr(_csv_writer, "BLOCK", block)  # and written
+    monkeypatch.setattr(csv_reader, "BLOCK", block)  # the blocks read
+    monkeypatch.setattr(csv_writer, "BLOCK", block)  # and written
     path = tmp_path / "bom.csv"
     path.write_bytes(b"\xef\xbb\xbfx,y,z,a,b,c\n" + b"".join(b"%d.000,0.000,0.000,0.0,0.0,0.0\n" % k for k in range(7)))
     moved(path, tmp_path / "out.csv", [1.0, 0.0, 0.0])
@@ -154,15 +154,15 @@ def test_a_file_with_a_byte_order_mark_gets_one_whatever_the_blocks(tmp_path, mo
 @pytest.mark.parametrize("block", [1, 2, 50_000])
 @pytest.mark.parametrize("ending", ["\n", "\r\n", "\r"])
 def test_with_times_in_blocks_equals_one_block(tmp_path, monkeypatch, block, ending):
-    from trajcomp.formats.csv_program import with_times
+    from trajcomp.formats.csv.writer import with_times
 
     path = tmp_path / "p.csv"
     path.write_bytes(ending.join(["# c", "x,y,z,a,b,c", "1,2,3,4,5,6", "# between", "", "7,8,9,1,2,3",
                                   "4,5,6,7,8,9"]).encode() + ending.encode())
     formats.write(tmp_path / "one.csv", with_times(formats.read(path), np.array([0.0, 0.25, 1.0000000005])))
     expected = (tmp_path / "one.csv").read_bytes().decode()
-    monkeypatch.setattr(_csv_reader, "BLOCK", block)  # the blocks read
-    monkeypatch.setattr(_csv_writer, "BLOCK", block)  # and written
+    monkeypatch.setattr(csv_reader, "BLOCK", block)  # the blocks read
+    monkeypatch.setattr(csv_writer, "BLOCK", block)  # and written
     formats.write(tmp_path / "blocks.csv", with_times(formats.read(path), np.array([0.0, 0.25, 1.0000000005])))
     assert (tmp_path / "blocks.csv").read_bytes().decode() == expected
     assert expected.split(ending)[1:3] == ["x,y,z,a,b,c,t", "1,2,3,4,5,6,0.000000000"]
@@ -171,7 +171,7 @@ def test_with_times_in_blocks_equals_one_block(tmp_path, monkeypatch, block, end
 
 def test_times_go_before_the_joints_the_writer_appends_and_into_a_t_column_it_has(tmp_path):
     """As a compensated and re-timed program is written: j1..j6 after the new t column; an existing t in place."""
-    from trajcomp.formats.csv_program import with_times
+    from trajcomp.formats.csv.writer import with_times
 
     path = program_csv(tmp_path, ["1.000,2.000,3.000,0.0,0.0,0.0,LIN", "4.000,5.000,6.000,0.0,0.0,0.0,LIN"])
     program = formats.read(path)
@@ -191,8 +191,8 @@ def test_times_go_before_the_joints_the_writer_appends_and_into_a_t_column_it_ha
 def test_two_processes_read_and_write_what_one_does(tmp_path, monkeypatch, ending):
     """Comments before the header, a byte order mark, quoted and spaced cells, joints appended: the blocks shared
     between processes give the same arrays and bytes, and a faulty row in a later block the same message."""
-    monkeypatch.setattr(_csv_reader, "BLOCK", 2)  # the blocks read
-    monkeypatch.setattr(_csv_writer, "BLOCK", 2)  # and written
+    monkeypatch.setattr(csv_reader, "BLOCK", 2)  # the blocks read
+    monkeypatch.setattr(csv_writer, "BLOCK", 2)  # and written
     rows = ["# exported", "# by a CAM system", "x,y,z,a,b,c,motion,speed,zone"] + [
         f'{500 + k:.3f},{k / 7:.4f}, {300 - k:.2f} ,0.0,"90.0",0.0,{"LIN" if k % 3 else "PTP"},50,1' for k in range(11)]
     path = tmp_path / "in.csv"

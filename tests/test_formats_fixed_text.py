@@ -1,11 +1,11 @@
-"""Rows laid out as bytes (`trajcomp.formats._fixed_text`) against Python's own ``'%.<d>f' % v`` and str.join."""
+"""Rows laid out as bytes (`trajcomp.formats.fixed_text`) against Python's own ``'%.<d>f' % v`` and str.join."""
 
 import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from trajcomp.formats._fixed_text import joined_rows
+from trajcomp.formats.fixed_text import joined_rows
 
 TIES_AND_EDGES = [0.0, -0.0, 0.5, -0.5, 1.5, 2.5, -2.5, 0.125, -0.375, 0.0625, 2.675, 1.0005, 1.0015, 0.0005,
                   -0.0005, 9.9995, -9.9995, 999.9999, 0.1 + 0.2, 1 / 3, 1e-300, -1e-300, 5e-324, 1e15, -1e15,

@@ -31,7 +31,7 @@ from trajcomp.errors import TrajcompError
 from trajcomp.arm.ik import ik
 from trajcomp.arm.kinematics import fk
 from trajcomp.model.model_file import load_model
-from trajcomp.programs.configuration import abb_confdata, fanuc_config
+from trajcomp.formats.configuration import abb_confdata, fanuc_config
 
 PLUGIN = Path(__file__).resolve().parents[1] / "plugins" / "trajcomp-robodk"
 POSTS = Path(__file__).resolve().parent / "data" / "robodk_posts"
@@ -251,7 +251,7 @@ class Station:
 def flags_of(robot, q, post):
     """RoboDK's ``[REAR, LOWERARM, FLIP]`` of joints q (N, 6) rad, in the polarity the vendor ``post`` reads.
 
-    The FANUC post writes FLIP as 'F' (J5 >= 0), LOWERARM as 'D', REAR as 'B' (`trajcomp.programs.configuration.
+    The FANUC post writes FLIP as 'F' (J5 >= 0), LOWERARM as 'D', REAR as 'B' (`trajcomp.formats.configuration.
     fanuc_config`); the ABB post writes cfx = 4 REAR + 2 LOWERARM + FLIP (`abb_confdata`); the others ignore them.
     """
     if post == "Fanuc_R30iA":

@@ -16,7 +16,7 @@ from trajcomp import formats
 from trajcomp.compensation import posture
 from trajcomp.cli import main
 from trajcomp.compensation.targets import CompensationResult
-from trajcomp.programs.configuration import configuration_for, declared_windows
+from trajcomp.formats.configuration import configuration_for, declared_windows
 from trajcomp.errors import CompensationError, IKError
 from trajcomp.arm.ik import configuration_of, ik, ik_all
 from trajcomp.arm.kinematics import fk

@@ -14,7 +14,7 @@ import pytest
 from trajcomp import formats
 from trajcomp.cli import main
 from trajcomp.compensation.targets import CompensationResult
-from trajcomp.programs.configuration import configuration_for, written_configuration
+from trajcomp.formats.configuration import configuration_for, written_configuration
 from trajcomp.errors import ReadError
 from trajcomp.arm.ik import ik
 from trajcomp.arm.kinematics import fk

@@ -17,7 +17,7 @@ import pytest
 from test_programs_as_run import OFFSET, _krl_point, _stand_in
 from trajcomp import formats
 from trajcomp.cli import main
-from trajcomp.programs.configuration import configuration_for
+from trajcomp.formats.configuration import configuration_for
 from trajcomp.errors import ReadError, WriteError
 from trajcomp.formats.task import groups
 from trajcomp.arm.kinematics import fk

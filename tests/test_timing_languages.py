@@ -253,7 +253,7 @@ def test_the_csv_settings_are_the_t_cells_written_and_made_on_demand(tmp_path, m
 def test_spans_and_lines_move_with_the_edits_as_the_rule_says():
     """Offsets after text edits, vectorized, against the rule itself: a position moves by every edit ending at or
     before it; a span's end not by an insertion exactly there (the insertion goes after the span)."""
-    from trajcomp.formats._text import _Shift
+    from trajcomp.formats.text import _Shift
 
     rng = np.random.default_rng(4)
     text = "".join(rng.choice(list("ab \n"), 3000))

@@ -43,7 +43,7 @@ import numpy as np
 
 from trajcomp.errors import ReadError, WriteError
 from trajcomp.formats import register_format
-from trajcomp.formats._text import (
+from trajcomp.formats.text import (
     NUMBER,
     Lines,
     apply_edits,

@@ -9,8 +9,8 @@ one it means, and that is the one it must run in after compensation:
    and turns.
 2. ``"config"``: configuration data (KUKA S/T, ABB confdata, FANUC CONFIG):
    the branch its flags name, each joint in the window its turn data name
-   (`trajcomp.programs.configuration.declared_windows`), a joint within
-   `trajcomp.programs.configuration.BOUNDARY_TOLERANCE` of its window's boundary
+   (`trajcomp.formats.configuration.declared_windows`), a joint within
+   `trajcomp.formats.configuration.BOUNDARY_TOLERANCE` of its window's boundary
    inside it; only where the language binds them (KUKA: PTP motions;
    a target only LIN or CIRC motions use is placed as in 3.).
 3. ``"previous"``: the program says nothing: the solution nearest the
@@ -32,7 +32,7 @@ import functools
 
 import numpy as np
 
-from trajcomp.programs.configuration import BOUNDARY_TOLERANCE, binding, declared_windows
+from trajcomp.formats.configuration import BOUNDARY_TOLERANCE, binding, declared_windows
 from trajcomp.errors import IKError
 from trajcomp.programs.frames import FrameTable, tool_groups
 from trajcomp.arm.ik import ik_all, turn_towards

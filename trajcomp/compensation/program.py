@@ -14,7 +14,7 @@ import dataclasses
 
 import numpy as np
 
-from trajcomp.programs.configuration import BOUNDARY_TOLERANCE, binding, configuration_for, describe, written_configuration
+from trajcomp.formats.configuration import BOUNDARY_TOLERANCE, binding, configuration_for, describe, written_configuration
 from trajcomp.errors import CompensationError
 from trajcomp.arm.ik import pose_error
 from trajcomp.arm.kinematics import fk
@@ -236,7 +236,7 @@ def _configs(program, robot, index, q):
 
     The declared fields the corrected joints still satisfy are kept as
     written, and so are fields the tool does not own
-    (`trajcomp.programs.configuration.written_configuration`); a target whose data
+    (`trajcomp.formats.configuration.written_configuration`); a target whose data
     its language does not bind (a KUKA point only LIN or CIRC motions use)
     keeps them all.
     """

@@ -108,18 +108,6 @@ def register_format(name, extensions, reader, writer, *, source="built-in", bloc
                             copies)
 
 
-for _name, _module, _extensions, _vendor in (
-    ("csv", "csv_program", (".csv",), None),
-    ("krl", "krl", (".src",), "KUKA"),
-    ("rapid", "rapid", (".mod", ".prg", ".modx", ".sys"), "ABB"),
-    ("fanuc_ls", "fanuc_ls", (".ls",), "FANUC"),
-    ("urscript", "urscript", (".script", ".urscript"), "Universal Robots"),
-):
-    register_format(_name, _extensions, f"trajcomp.formats.{_module}:read", f"trajcomp.formats.{_module}:write",
-                    blocks=_name == "csv", vendor=_vendor, tasks=_name in ("krl", "rapid"),
-                    copies=_name in ("krl", "rapid"))
-
-
 def _load_plugins():
     """Import every ``trajcomp.formats`` entry point once; remember the ones that fail."""
     if _PLUGINS["loaded"]:
@@ -331,7 +319,7 @@ def write(path, program, format=None, *, protect=(), workers=1, root=None):
         or cannot be written, or a number to write is not finite (``nan``,
         ``inf``: never into robot code).
     """
-    from trajcomp.formats._text import check_writable  # lazily, like the format modules
+    from trajcomp.formats.text import check_writable  # lazily, like the format modules
 
     path = Path(path)
     check_writable(program)
@@ -397,3 +385,9 @@ def _task_folders(files, path, program, root):
             )
         if os.path.isdir(top):  # a missing output folder is refused when the files are committed
             os.makedirs(os.path.dirname(place), exist_ok=True)
+
+
+# The built-in languages, one folder each; each registers itself on import, as a plugin does.
+BUILT_IN = ("csv", "krl", "rapid", "fanuc", "urscript")
+for _language in BUILT_IN:
+    importlib.import_module(f"{__name__}.{_language}")

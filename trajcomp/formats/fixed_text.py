@@ -29,7 +29,7 @@ def joined_rows(columns):
     columns : list
         Each either ``(values, places)``: floats (N,) written as ``"%.<places>f" % value`` (``places`` 0 to 15;
         0 writes no point), or a sequence of N str cells written as they are (holding no NUL character, which
-        a text file read never has: `trajcomp.formats._text.read_source`).
+        a text file read never has: `trajcomp.formats.text.read_source`).
 
     Returns
     -------

@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from trajcomp.errors import ReadError, WriteError
-from trajcomp.formats._fixed_text import joined_rows
+from trajcomp.formats.fixed_text import joined_rows
 from trajcomp.programs.items import CIRCULAR, Source, Span, SpanRow
 from trajcomp.arm.transforms import abc_to_matrix, matrix_to_abc
 from trajcomp.support.memory import collection_paused

@@ -15,7 +15,7 @@ written, listed (`Program.with_shared_targets_left`).
 import dataclasses
 import re
 
-from trajcomp.formats._text import Lines, edit_sources
+from trajcomp.formats.text import Lines, edit_sources
 from trajcomp.programs.items import Motion, Span
 
 NAME_LENGTH = 24  # KUKA's limit on names; RAPID allows 32

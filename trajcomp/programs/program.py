@@ -109,7 +109,7 @@ class Program:
         The files it was read from; empty for a program built in memory.
     times : ndarray, shape (M,), or None
         Time stamps of its M motions, s, that the writer puts into the
-        program's own time column (a CSV's ``t``: `trajcomp.formats.csv_program.with_times`);
+        program's own time column (a CSV's ``t``: `trajcomp.formats.csv.writer.with_times`);
         None: none set.
     notes : tuple of str
         What reading did to the program that its report must say (a point

@@ -50,8 +50,8 @@ import re
 import numpy as np
 
 from trajcomp.errors import TimingError
-from trajcomp.formats._text import NUMBER, edit_sources, format_number
-from trajcomp.formats.csv_program import time_texts, with_times
+from trajcomp.formats.text import NUMBER, edit_sources, format_number
+from trajcomp.formats.csv.writer import time_texts, with_times
 from trajcomp.programs.items import JOINT
 from trajcomp.timing.moves import moves_from_program
 from trajcomp.timing.path import TOLERANCE
@@ -262,7 +262,7 @@ def _floor(value, places):
 
 
 def _csv(program, result):
-    """The ``t`` column: each row's time stamp (`trajcomp.formats.csv_program.with_times`).
+    """The ``t`` column: each row's time stamp (`trajcomp.formats.csv.writer.with_times`).
 
     The rows are the trajectory (a CSV program has no speed field of the
     controller's), so every row is timed. The settings are ``t=`` and the

@@ -17,7 +17,6 @@ joints, ``j1..j6`` (added as columns when the file has none); `with_times`
 sets the ``t`` column.
 """
 
-from trajcomp.formats._csv_reader import read
-from trajcomp.formats._csv_writer import time_texts, with_times, write
+from trajcomp.formats import register_format
 
-__all__ = ["read", "write", "with_times", "time_texts"]
+register_format("csv", [".csv"], f"{__name__}.reader:read", f"{__name__}.writer:write", blocks=True)

@@ -1,4 +1,4 @@
-"""What the CSV reader and writer share (see `trajcomp.formats.csv_program`): the column names, the block size, and
+"""What the CSV reader and writer share (see `trajcomp.formats.csv`): the column names, the block size, and
 the helpers that split a text into lines and a line into cells, give a cell's value, tell a statement line from a
 target row and read a column of number cells at once (`_numbers`, `_canonical`)."""
 

@@ -1,5 +1,5 @@
 """The program CSV reader: the header and target rows into the columns of a `Program`, a block of rows at a time
-(see `trajcomp.formats.csv_program`)."""
+(see `trajcomp.formats.csv`)."""
 
 import difflib
 import itertools
@@ -7,7 +7,7 @@ import math
 
 import numpy as np
 
-from trajcomp.formats._csv_cells import (
+from trajcomp.formats.csv.cells import (
     BLOCK,
     JOINTS,
     POSE,
@@ -17,7 +17,7 @@ from trajcomp.formats._csv_cells import (
     _split,
     _value,
 )
-from trajcomp.formats._text import ANGLE_LIMIT, JOINT_LIMIT, LENGTH_LIMIT, fail, finite, read_source
+from trajcomp.formats.text import ANGLE_LIMIT, JOINT_LIMIT, LENGTH_LIMIT, fail, finite, read_source
 from trajcomp.support.parallel import map_blocks
 from trajcomp.programs.program import Program
 from trajcomp.programs.items import JOINT, LINEAR, Statement

@@ -1,10 +1,10 @@
 """The program CSV writer: a program read from CSV patched in place, a block of lines at a time, its edited rows
 rewritten in the file's own number format; any other program written as a new CSV (see
-`trajcomp.formats.csv_program`)."""
+`trajcomp.formats.csv`)."""
 
 import numpy as np
 
-from trajcomp.formats._csv_cells import (
+from trajcomp.formats.csv.cells import (
     BLOCK,
     JOINTS,
     POSE,
@@ -17,8 +17,8 @@ from trajcomp.formats._csv_cells import (
     _stripped,
     _value,
 )
-from trajcomp.formats._fixed_text import joined_rows
-from trajcomp.formats._text import BARE_ZERO, active_axes, column_decimals, encode_text, format_number, turned_abc
+from trajcomp.formats.fixed_text import joined_rows
+from trajcomp.formats.text import BARE_ZERO, active_axes, column_decimals, encode_text, format_number, turned_abc
 from trajcomp.support.parallel import map_blocks
 from trajcomp.programs.items import JOINT, LINEAR, Source
 from trajcomp.arm.transforms import matrix_to_pose

@@ -7,7 +7,7 @@ from pathlib import Path
 import numpy as np
 
 from trajcomp.errors import ReadError
-from trajcomp.formats._text import (
+from trajcomp.formats.text import (
     ANGLE_LIMIT,
     JOINT_LIMIT,
     LENGTH_LIMIT,
@@ -176,7 +176,7 @@ def _written_points(index, masked, lines):
     index : int
         The data list's source index.
     masked : str
-        Its text, comments and strings blanked (`trajcomp.formats._text.mask`).
+        Its text, comments and strings blanked (`trajcomp.formats.text.mask`).
     lines : Lines
         Its lines.
 

@@ -1,48 +1,12 @@
-"""ABB RAPID modules (.mod, .prg, .modx).
-
-Read:
-- declarations ``[LOCAL|TASK] CONST|PERS|VAR robtarget p10 :=
-  [[x,y,z],[q1,q2,q3,q4],[cf1,cf4,cf6,cfx],[eax_a,...,eax_f]];`` (mm,
-  quaternion scalar first; the external axes carried unchanged, 9E9 =
-  unused), ``jointtarget`` (deg), ``tooldata`` (its tframe: the tool) and
-  ``wobjdata`` (uframe * oframe: the work object), possibly spread over
-  several lines; ``tool.tframe := [..]`` / ``wobj.uframe := [..]`` with a
-  literal pose (as RoboDK writes them) give the tool or work object a new
-  value from that line on;
-- MoveJ / MoveL / MoveC / MoveAbsJ (and their DO / AO / GO / Sync variants,
-  TriggL/J/C, ArcL/C, CladL/C) to a declared name or an inline literal, with
-  speeddata ``vN`` / ``vmax`` / ``\\V:=`` / ``\\T:=``, zonedata ``fine`` /
-  ``zN`` / ``\\Z:=``, the tool and ``\\WObj:=``, also after a comma
-  (``tool0,\\WObj:=wobj1``). A named speeddata or num is read where the
-  module proves it constant (a CONST with a literal or another such CONST,
-  its v_tcp); PERS and VAR data, routine parameters and data declared
-  elsewhere are set at run time (`Motion.speed_why`).
-  Identifiers are case-insensitive; tool0 (the flange) and wobj0 (the
-  world frame) need no declaration.
-Not compensated, with the reason (`Motion.reason`): expressions (Offs,
-RelTool, CRobT, array elements), routine parameters, points declared without
-a value or assigned in the code, tools and work objects changed at run time
-or not supported (stationary tool, robot-held work object), and motion
-instructions trajcomp does not read (SearchL, MoveExtJ ...), points,
-tools and work objects another module of the task assigns. A point
-another module of the task declares (not LOCAL; a module of the same
-folder, or of a backup's TASKn/PROGMOD and SYSMOD) is read from that module
-(a companion `Source`): corrected there, which is written back beside the
-output (`trajcomp.formats._text.companion_outputs`) when it changed. A
-motion to a point no module declares is a ReadError naming the points; so are
-numbers out of range and quaternions that are not rotations. Points passed
-to routines (``MyProc p10;``) are `Statement.refs`.
-
-Write: the edited targets' numbers, with confdata from their configuration.
-"""
+"""The RAPID writer: the edited robtargets into the module as read, or a module generated from another language (see `trajcomp.formats.rapid`)."""
 
 import re
 
 import numpy as np
 
 from trajcomp.errors import WriteError
-from trajcomp.formats._rapid_reader import CONF, JOINTS, POSITION, QUAT, read
-from trajcomp.formats._text import active_axes, encode_targets, format_number, same_rotation, where, write_single_file
+from trajcomp.formats.rapid.reader import CONF, JOINTS, POSITION, QUAT, read
+from trajcomp.formats.text import active_axes, encode_targets, format_number, same_rotation, where, write_single_file
 from trajcomp.programs.items import CIRCULAR, JOINT, LINEAR
 from trajcomp.arm.transforms import matrix_to_quat, quat_to_matrix
 

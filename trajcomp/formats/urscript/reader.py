@@ -7,7 +7,7 @@ from pathlib import Path
 import numpy as np
 
 from trajcomp.errors import ReadError
-from trajcomp.formats._text import (
+from trajcomp.formats.text import (
     JOINT_LIMIT,
     LENGTH_LIMIT,
     NUMBER,

@@ -1,49 +1,12 @@
-"""Universal Robots URScript (.script, .urscript).
-
-Read:
-- ``movej``, ``movel``, ``movep``, ``movec`` to a pose literal ``p[x, y, z,
-  rx, ry, rz]`` (metres, rotation vector in rad), a joint list ``[q1, ...,
-  q6]`` (rad), a variable holding one, ``get_inverse_kin(pose,
-  qnear=joints)`` or ``pose_trans(frame, pose)``; speeds ``v=`` (m/s, rad/s
-  for movej; UR's defaults 0.25 m/s and 1.05 rad/s when not given) and
-  times ``t=``, literal or held by a variable the script assigns once, a
-  literal (any other is set at run time: `Motion.speed_why`), and blends
-  ``r=`` (m);
-- variables ``[global|local] name = p[...]`` / ``= [...]``: a variable is a
-  target where a motion uses it (a six-number list only then: gains and
-  selection vectors are not points), with PolyScope's pairs ``Waypoint_n_p``
-  / ``Waypoint_n_q``: the ``_q`` list (like a ``qnear`` literal or
-  variable) holds the joints of the pose and is rewritten with the
-  corrected joints;
-- frames: the first argument of ``pose_trans`` (a literal or a variable
-  holding one, as RoboDK writes ``ref_frame = p[...]`` then
-  ``movel(pose_trans(ref_frame, p[...]))``) is the frame of the second,
-  like a KUKA base or an ABB work object (`Program.frames`, in the robot
-  base frame); a frame the script never assigns (an installation feature
-  such as ``Plane_1``) must be given its value;
-- ``set_tcp(p[...])`` or a variable holding one: the tool of the following
-  motions (before it, the installation TCP: the robot description's tool);
-  the same pose set again (PolyScope re-emits it at every Set node) is the
-  same tool.
-Not compensated, with the reason (`Motion.reason`): poses computed at run
-time (pose_add, get_actual_tcp_pose, nested pose_trans ...), variables
-assigned anything but a literal, function parameters, variables assigned
-only further down, motions after a TCP set at run time, servoj / servoc.
-A point also used as the frame of ``pose_trans`` (the approach idiom
-``movel(pose_trans(pick_p, p[0,0,-0.1,0,0,0]))`` then ``movel(pick_p)``)
-stays a point: the offsets from it are computed at run time and move with
-it. A six-number list no joint can hold (``Kp = [1000, ...]``) is data.
-A motion to a variable the script never assigns is a ReadError. Pose
-variables named by other statements are `Statement.refs`.
-"""
+"""The URScript writer: the edited poses into the script as read, or a script generated from another language (see `trajcomp.formats.urscript`)."""
 
 import re
 
 import numpy as np
 
 from trajcomp.errors import WriteError
-from trajcomp.formats._text import active_axes, encode_targets, format_number, same_rotation, write_single_file
-from trajcomp.formats._urscript_reader import JOINTS, NEAR, POSE, read
+from trajcomp.formats.text import active_axes, encode_targets, format_number, same_rotation, write_single_file
+from trajcomp.formats.urscript.reader import JOINTS, NEAR, POSE, read
 from trajcomp.programs.items import CIRCULAR, JOINT, LINEAR
 from trajcomp.arm.transforms import matrix_to_rotvec, rotvec_to_matrix
 
