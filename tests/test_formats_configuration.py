@@ -3,7 +3,9 @@
 import numpy as np
 import pytest
 
-from trajcomp.formats.configuration import abb_confdata, fanuc_config, kuka_status_turn
+from trajcomp.formats.fanuc.configuration import encode as fanuc_config
+from trajcomp.formats.krl.configuration import encode as kuka_status_turn
+from trajcomp.formats.rapid.configuration import encode as abb_confdata
 from trajcomp.arm.robot import load_robot
 
 

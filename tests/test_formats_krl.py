@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from trajcomp import formats
-from trajcomp.formats.configuration import kuka_status_turn
+from trajcomp.formats.krl.configuration import encode as kuka_status_turn
 from trajcomp.errors import ReadError, WriteError
 from trajcomp.arm.robot import load_robot
 from trajcomp.arm.transforms import abc_to_matrix

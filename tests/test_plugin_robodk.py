@@ -31,7 +31,8 @@ from trajcomp.errors import TrajcompError
 from trajcomp.arm.ik import ik
 from trajcomp.arm.kinematics import fk
 from trajcomp.model.model_file import load_model
-from trajcomp.formats.configuration import abb_confdata, fanuc_config
+from trajcomp.formats.fanuc.configuration import encode as fanuc_config
+from trajcomp.formats.rapid.configuration import encode as abb_confdata
 
 PLUGIN = Path(__file__).resolve().parents[1] / "plugins" / "trajcomp-robodk"
 POSTS = Path(__file__).resolve().parent / "data" / "robodk_posts"

@@ -220,12 +220,12 @@ def test_the_csv_settings_are_the_t_cells_written_and_made_on_demand(tmp_path, m
     import csv as csv_module
 
     from trajcomp.arm.robot import load_robot
-    from trajcomp.timing import result as result_module
-    from trajcomp.timing.result import Texts
+    from trajcomp.formats import text as text_module
+    from trajcomp.formats.text import Texts
     from trajcomp.timing.writeback import apply_timing, retime_program
     from tests.test_timing import helix, write_joint_program
 
-    monkeypatch.setattr(result_module, "TEXT_BLOCK", 7)
+    monkeypatch.setattr(text_module, "TEXT_BLOCK", 7)
     robot = load_robot("ur10")
     _, q = helix(robot, 120, turns=1)
     zones = ["1"] * 120

@@ -14,6 +14,7 @@ import dataclasses
 
 import numpy as np
 
+from trajcomp.formats import find_format
 from trajcomp.formats.configuration import BOUNDARY_TOLERANCE, binding, configuration_for, describe, written_configuration
 from trajcomp.errors import CompensationError
 from trajcomp.arm.ik import pose_error
@@ -22,7 +23,6 @@ from trajcomp.programs.frames import FrameTable, in_frames
 from trajcomp.compensation.posture import MAX_JOINT_CHANGE, check_posture, planned_joints
 from trajcomp.programs.program import Program
 
-FRAMELESS = frozenset({"csv", "urscript"})  # languages whose poses are always in the base frame
 
 
 MAX_CORRECTION = 10.0  # mm, default bound of a plausible correction of a calibrated arm
@@ -416,15 +416,16 @@ def convert_program(program, to_format, *, robot=None, tools=None, frames=None):
     usage = program.usage()
     targets = list(program.targets)
     motions = program.motions
-    if to_format in FRAMELESS:
+    language = find_format(format=to_format)
+    if language.frameless:  # its poses are always in the base frame
         for i, (_, frame) in usage.items():
             if targets[i].pose is not None and frame is not None:
                 targets[i] = dataclasses.replace(targets[i], pose=table.frame(frame) @ targets[i].pose, frame=None)
         motions = tuple(dataclasses.replace(m, frame=None) for m in motions)
     cartesian = [i for i in sorted(usage) if not targets[i].is_joint]
-    needs_config = to_format in ("krl", "rapid", "fanuc_ls")
+    needs_config = language.configuration is not None
     unknown = any(targets[i].joints is None for i in cartesian)
-    if robot is not None and unknown and (needs_config or to_format in FRAMELESS):
+    if robot is not None and unknown and (needs_config or language.frameless):
         plan = planned_joints(program, robot, tools=tools, frames=frames)
         for i, joints in zip(plan.index, plan.q):
             if targets[i].joints is None:

@@ -1,10 +1,23 @@
 """The program format registry: read and write robot programs by extension or name.
 
-Each format is one module exposing ``read(path) -> Program`` and
-``write(program, path) -> {path: bytes}`` (the writer returns the content of
-every file it produces, e.g. a KRL .src and its .dat; `write` puts them on
-disk atomically). Formats are registered with `register_format`; the
-built-in ones are registered by module name and imported on first use only.
+Each language is one folder here (``formats/urscript/``: the simplest to
+copy) whose ``__init__`` describes the language and registers it with
+`register_format`; its modules are imported on first use only:
+
+- ``reader.py``: ``read(path) -> Program``;
+- ``writer.py``: ``write(program, path) -> {path: bytes}`` (the content of
+  every file it produces, e.g. a KRL .src and its .dat; `write` puts them on
+  disk atomically);
+- ``speeds.py``, optional: ``write_speeds(program, result, robot, plan)``,
+  the re-timing written into the program's own speed and time fields
+  (`trajcomp.timing.writeback`);
+- ``configuration.py``, optional: the arm configuration data its targets
+  declare (``encode``, ``windows``, ``merge``, ``describe``:
+  `trajcomp.formats.configuration`).
+
+Adding a language is one folder with these faces and one line in
+`BUILT_IN` (or, outside trajcomp, an entry point). The text toolkit the
+built-in languages share is public: `trajcomp.formats.text`.
 
 Third-party packages add formats through the entry-point group
 ``trajcomp.formats``: an entry point names a module (or object) whose import
@@ -33,17 +46,10 @@ ENTRY_POINT_GROUP = "trajcomp.formats"
 class Format:
     """A registered format.
 
-    ``reader`` and ``writer`` are callables, or ``"module:function"`` strings
-    resolved on first use. ``source`` is ``"built-in"`` or the plugin's
-    entry point. ``blocks``: the reader and writer work a block of rows at a
-    time and take ``workers``, the processes that share the blocks.
-    ``vendor``: the maker whose controllers run the language (compared with
-    `trajcomp.arm.robot.Robot.vendor`), None for a language of no maker (CSV).
-    ``tasks``: a program may use points other files of its controller
-    declare (`trajcomp.formats.task`): a batch reads such files first to
-    compensate those that share points together. ``copies``: a point
-    used with several tools or frames can be written as a copy per use
-    (`trajcomp.formats.uses`); otherwise its motions are left as written.
+    ``reader``, ``writer`` and ``speeds`` are callables, or
+    ``"module:function"`` strings resolved on first use; ``configuration`` is
+    a module or a module's name. The other fields are described in
+    `register_format`.
     """
 
     name: str
@@ -55,6 +61,10 @@ class Format:
     vendor: str = None
     tasks: bool = False
     copies: bool = False
+    speeds: object = None
+    timed_rows: bool = False
+    configuration: object = None
+    frameless: bool = False
 
     def _resolve(self, ref):
         if callable(ref):
@@ -68,13 +78,22 @@ class Format:
     def write(self, program, path, workers=1):
         return self._resolve(self.writer)(program, path, *([workers] if self.blocks else []))
 
+    def write_speeds(self, program, result, robot, plan):
+        """The language's ``speeds`` hook: ``(program with its speed and time fields set, settings)``."""
+        return self._resolve(self.speeds)(program, result, robot, plan)
+
+    def configuration_data(self):
+        """The module of the language's configuration data (`trajcomp.formats.configuration`), or None."""
+        ref = self.configuration
+        return importlib.import_module(ref) if isinstance(ref, str) else ref
+
 
 _FORMATS = {}
 _PLUGINS = {"loaded": False, "failed": {}}
 
 
 def register_format(name, extensions, reader, writer, *, source="built-in", blocks=False, vendor=None, tasks=False,
-                    copies=False):
+                    copies=False, speeds=None, timed_rows=False, configuration=None, frameless=False):
     """Register (or replace) a format.
 
     Parameters
@@ -94,18 +113,38 @@ def register_format(name, extensions, reader, writer, *, source="built-in", bloc
         The reader and writer take a third argument, ``workers``: processes
         that share their blocks of rows (`trajcomp.support.parallel.map_blocks`).
     vendor : str, optional
-        The maker whose controllers run the language (``"KUKA"``); None for
-        a language any arm's program may be written in.
+        The maker whose controllers run the language (``"KUKA"``, compared
+        with `trajcomp.arm.robot.Robot.vendor`); None for a language any
+        arm's program may be written in (CSV).
     tasks : bool
         A program may use points other files of its controller declare
-        (its reader puts them in companion sources, `trajcomp.programs.items.Source`).
+        (its reader puts them in companion sources, `trajcomp.programs.items.Source`;
+        a batch reads such files first, `trajcomp.formats.task`).
     copies : bool
         Points are declared by name and their motions name them (spans
         ``target_name``, ``via_name``): a point used with several tools or
-        frames is written as a copy per use (`trajcomp.formats.uses`).
+        frames is written as a copy per use (`trajcomp.formats.uses`);
+        otherwise its motions are left as written.
+    speeds : callable or str, optional
+        ``speeds(program, result, robot, plan) -> (Program, settings)``, or
+        ``"module:function"``: a re-timing written into the program's own
+        speed and time fields (`trajcomp.timing.writeback.apply_timing`:
+        ``plan`` says what to write per waypoint, ``settings`` is what was
+        written per waypoint). None: timing cannot be written in the language.
+    timed_rows : bool
+        The program's rows are the trajectory (CSV): every one gets its time
+        stamp, and ``speeds`` is given no plan (None).
+    configuration : module or str, optional
+        The module (or its name) of the configuration data the language's
+        targets declare (`trajcomp.formats.configuration`); None for a
+        language whose targets declare none (their joints are written as
+        joints, or the controller chooses).
+    frameless : bool
+        The language's poses are always in the robot's base frame (no work
+        object, base or user frame).
     """
     _FORMATS[name] = Format(name, tuple(e.lower() for e in extensions), reader, writer, source, blocks, vendor, tasks,
-                            copies)
+                            copies, speeds, timed_rows, configuration, frameless)
 
 
 def _load_plugins():
@@ -143,6 +182,13 @@ def plugin_failures():
     return dict(_PLUGINS["failed"])
 
 
+def registered(name):
+    """The `Format` registered as ``name`` (plugins included), or None (a program built in memory, ``"api"``)."""
+    if name not in _FORMATS:
+        _load_plugins()
+    return _FORMATS.get(name)
+
+
 def find_format(path=None, format=None):
     """The `Format` named ``format``, or else the one owning ``path``'s extension.
 
@@ -154,8 +200,6 @@ def find_format(path=None, format=None):
     """
     if format is None and path is None:
         raise TrajcompError("give a path or a format name")
-    if format is not None and format not in _FORMATS:
-        _load_plugins()
     if format is None:
         suffix = Path(path).suffix.lower()
         found = [f for f in _FORMATS.values() if suffix in f.extensions]
@@ -169,7 +213,7 @@ def find_format(path=None, format=None):
                 f"{_plugin_failures()}"
             )
         return found[0]
-    if format not in _FORMATS:
+    if registered(format) is None:
         raise TrajcompError(
             f"unknown program format {format!r}; known: {', '.join(sorted(_FORMATS))}{_plugin_failures()}"
         )
@@ -387,7 +431,7 @@ def _task_folders(files, path, program, root):
             os.makedirs(os.path.dirname(place), exist_ok=True)
 
 
-# The built-in languages, one folder each; each registers itself on import, as a plugin does.
+# The built-in languages, one folder each under formats/; each registers itself on import, as a plugin does.
 BUILT_IN = ("csv", "krl", "rapid", "fanuc", "urscript")
 for _language in BUILT_IN:
     importlib.import_module(f"{__name__}.{_language}")

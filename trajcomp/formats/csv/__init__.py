@@ -19,4 +19,12 @@ sets the ``t`` column.
 
 from trajcomp.formats import register_format
 
-register_format("csv", [".csv"], f"{__name__}.reader:read", f"{__name__}.writer:write", blocks=True)
+register_format(
+    "csv", [".csv"],
+    f"{__name__}.reader:read",
+    f"{__name__}.writer:write",
+    blocks=True,
+    timed_rows=True,
+    speeds=f"{__name__}.speeds:write_speeds",
+    frameless=True,
+)

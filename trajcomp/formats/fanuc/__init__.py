@@ -32,4 +32,11 @@ removed, so LINE_COUNT stays right. Generated programs count their lines.
 
 from trajcomp.formats import register_format
 
-register_format("fanuc_ls", [".ls"], f"{__name__}.reader:read", f"{__name__}.reader:write", vendor="FANUC")
+register_format(
+    "fanuc_ls", [".ls"],
+    f"{__name__}.reader:read",
+    f"{__name__}.reader:write",
+    vendor="FANUC",
+    speeds=f"{__name__}.speeds:write_speeds",
+    configuration=f"{__name__}.configuration",
+)

@@ -50,4 +50,13 @@ its .dat written beside it under the same name); written under its own name
 
 from trajcomp.formats import register_format
 
-register_format("krl", [".src"], f"{__name__}.reader:read", f"{__name__}.writer:write", vendor="KUKA", tasks=True, copies=True)
+register_format(
+    "krl", [".src"],
+    f"{__name__}.reader:read",
+    f"{__name__}.writer:write",
+    vendor="KUKA",
+    tasks=True,
+    copies=True,
+    speeds=f"{__name__}.speeds:write_speeds",
+    configuration=f"{__name__}.configuration",
+)

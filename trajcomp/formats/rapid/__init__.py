@@ -38,4 +38,13 @@ Write: the edited targets' numbers, with confdata from their configuration.
 
 from trajcomp.formats import register_format
 
-register_format("rapid", [".mod", ".prg", ".modx", ".sys"], f"{__name__}.reader:read", f"{__name__}.writer:write", vendor="ABB", tasks=True, copies=True)
+register_format(
+    "rapid", [".mod", ".prg", ".modx", ".sys"],
+    f"{__name__}.reader:read",
+    f"{__name__}.writer:write",
+    vendor="ABB",
+    tasks=True,
+    copies=True,
+    speeds=f"{__name__}.speeds:write_speeds",
+    configuration=f"{__name__}.configuration",
+)

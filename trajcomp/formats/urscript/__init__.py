@@ -39,4 +39,11 @@ variables named by other statements are `Statement.refs`.
 
 from trajcomp.formats import register_format
 
-register_format("urscript", [".script", ".urscript"], f"{__name__}.reader:read", f"{__name__}.writer:write", vendor="Universal Robots")
+register_format(
+    "urscript", [".script", ".urscript"],
+    f"{__name__}.reader:read",
+    f"{__name__}.writer:write",
+    vendor="Universal Robots",
+    speeds=f"{__name__}.speeds:write_speeds",
+    frameless=True,
+)

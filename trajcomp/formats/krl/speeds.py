@@ -1,0 +1,260 @@
+"""Re-timing written into a KRL program: ``$VEL.CP`` and ``BAS(#VEL_PTP, %)`` (`trajcomp.timing.writeback`)."""
+
+import bisect
+import math
+import re
+
+import numpy as np
+
+from trajcomp.formats.text import NUMBER, edit_sources, floor_places, format_number
+from trajcomp.programs.items import JOINT
+
+_INDENT = re.compile(r"[ \t]*")
+
+
+def write_speeds(program, result, robot, plan):
+    """A lowered cruise speed is written ``$VEL.CP`` (m/s), a joint motion's time ``BAS(#VEL_PTP, %)``.
+
+    KRL speeds are modal: the statement that sets a motion's speed
+    (``$VEL.CP``, ``BAS``, the ``BAS(#CP_PARAMS, v)`` of an inline form, a
+    spline's ``WITH $VEL``) is edited when it serves that motion first, else
+    a line is inserted before the motion; a motion after it that keeps its
+    speed gets its original value back. An edit inside an inline form's
+    fold edits the speed its header shows too; a line inserted for a motion
+    inside one goes before the fold.
+
+    Parameters
+    ----------
+    program : Program
+        Read from a file (its sources are edited).
+    result : TimingResult
+        Its timing (`trajcomp.timing.writeback.retime_program`).
+    robot : Robot
+        Joint limits.
+    plan : SpeedPlan
+        What to write per waypoint k (`trajcomp.timing.writeback.SpeedPlan`):
+        ``times[k]`` s or ``cruise[k]`` mm/s; waypoint k is the end of motion
+        ``result.motion[k]``.
+
+    Returns
+    -------
+    (Program, dict of int to str)
+        The program with the fields written, and the setting written per waypoint.
+    """
+    wanted = {}
+    for k in sorted({**plan.times, **plan.cruise}):
+        m = int(result.motion[k])
+        if k in plan.cruise:
+            wanted[m] = (k, format_number(floor_places(plan.cruise[k] / 1000.0, 6), 6))
+        elif program.motions[m].kind == JOINT:
+            percent = _ptp_percent(result.q[k] - result.q[k - 1], plan.times[k], robot)
+            if percent is not None:
+                wanted[m] = (k, str(percent))
+    folds = [_Folds(source.text) for source in program.sources]
+    text = program.sources[0].text
+    newline = "\r\n" if "\r\n" in text else "\n"
+    edits = [[] for _ in program.sources]
+    settings = {}
+
+    def edit(span, value):
+        """Write ``value`` over ``span`` (and in its fold's header); the statement as it now reads."""
+        edits[span.source].append((span.start, span.end, value))
+        edits[span.source].extend(folds[span.source].header_edits(span, value))
+        text = program.sources[span.source].text
+        start, end = text.rfind("\n", 0, span.start) + 1, text.find("\n", span.end)
+        end = len(text) if end < 0 else end
+        return " ".join((text[start:span.start] + value + text[span.end:end]).split())
+
+    running = {"ptp": None, "cp": None}  # the speed value in force as the program runs down
+    governing = {"ptp": None, "cp": None}  # (source, offset) of the statement that set it
+    for m, motion in enumerate(program.motions):
+        group = "ptp" if motion.kind == JOINT else "cp"
+        k, want = wanted.get(m, (None, None))
+        if "speed_with" in motion.spans:  # the motion's own speed, in its WITH clause: the modal one stays
+            if want is not None:
+                settings[k] = edit(motion.spans["speed_with"], want)
+            continue
+        span = motion.spans.get("speed")
+        key = None if span is None else (span.source, span.start)
+        if key != governing[group]:  # a new statement sets this motion's speed
+            governing[group] = key
+            running[group] = None if span is None else span.text
+            if span is not None and want is not None:
+                settings[k] = edit(span, want)
+                running[group] = want
+        need = want if want is not None else (None if span is None else span.text)
+        if need is None or (running[group] is not None and _same(need, running[group])):
+            if want is not None:
+                settings.setdefault(k, _krl_statement(group, want))
+            continue
+        at = motion.spans["motion"]
+        source_text = program.sources[at.source].text
+        line_start = folds[at.source].outside(source_text.rfind("\n", 0, at.start) + 1)
+        indent = _INDENT.match(source_text, line_start).group()  # in place: a slice would copy the rest
+        edits[at.source].append((line_start, line_start, f"{indent}{_krl_statement(group, need)}{newline}"))
+        running[group] = need
+        if want is not None:
+            settings[k] = _krl_statement(group, want)
+    return edit_sources(program, [sorted(set(e)) for e in edits]), settings
+
+
+def _same(a, b):
+    """Two KRL speed values are the same: equal numbers, or the same text (a name)."""
+    try:
+        return float(a) == float(b)
+    except ValueError:
+        return a.strip().upper() == b.strip().upper()
+
+
+def _krl_statement(group, value):
+    return f"$VEL.CP={value}" if group == "cp" else f"BAS(#VEL_PTP,{value})"
+
+
+_FOLD = re.compile(r"^[ \t]*;[ \t]*(END)?FOLD\b", re.I | re.M)
+# the speed an inline form's header (and its parameter fold) shows: Vel=0.2 m/s, %P .. 5:0.2, Kuka.VelocityPath=0.2
+_HEADER_SPEED = re.compile(r"(?:\bVel\s*=\s*|\bKuka\.Velocity\w*\s*=\s*|%P\b[^\r\n]*?,\s*5\s*:\s*)(" + NUMBER + ")", re.I)
+
+
+class _Folds:
+    """The inline-form folds of a KRL text (``;FOLD .. ;%{PE}`` .. ``;ENDFOLD``): where they start and end."""
+
+    def __init__(self, text):
+        self.text = text
+        self.folds, stack = [], []  # (start of the ;FOLD line, end of the ;ENDFOLD line) of inline forms
+        for m in _FOLD.finditer(text):
+            if m.group(1) is None:
+                end = text.find("\n", m.start())
+                stack.append((m.start(), "%{PE}" in text[m.start():end if end >= 0 else len(text)].upper()))
+            elif stack:
+                begin, inline = stack.pop()
+                if inline:
+                    self.folds.append((begin, m.end()))
+        self.folds.sort()
+
+    def enclosing(self, offset):
+        """``(start, end)`` of the inline form's fold around ``offset``, or None (inline forms do not nest)."""
+        at = bisect.bisect_right(self.folds, (offset, math.inf)) - 1
+        return self.folds[at] if at >= 0 and offset < self.folds[at][1] else None
+
+    def outside(self, offset):
+        """Where a line inserted at line start ``offset`` goes: before the inline form's fold around it."""
+        fold = self.enclosing(offset)
+        return offset if fold is None else fold[0]
+
+    def header_edits(self, span, value):
+        """Edits (start, end, text) that make the fold around ``span`` show speed ``value`` where it showed the old one."""
+        fold = self.enclosing(span.start)
+        if fold is None or not re.fullmatch(NUMBER, span.text.strip()):
+            return []
+        old = float(span.text)
+        out = []
+        for line in re.finditer(r"^[ \t]*;[^\r\n]*", self.text[fold[0]:span.start], re.M):  # its comment lines
+            for m in _HEADER_SPEED.finditer(line.group()):
+                if float(m.group(1)) == old:
+                    at = fold[0] + line.start() + m.start(1)
+                    out.append((at, at + len(m.group(1)), value))
+        return out
+
+
+def _ptp_percent(delta, duration, robot):
+    """Integer % of axis speed with which a synchronized PTP takes ``duration``; None if any would.
+
+    The axes move in phase along the joint line, the line parameter l from
+    0 to 1 with acceleration a_l = min_j a_j / |delta_j| (the leading axis
+    at its limit). A trapezoid of l that takes T cruises at
+    v_l = (a_l T - sqrt(a_l^2 T^2 - 4 a_l)) / 2, and the percentage is the
+    largest v_l |delta_j| / v_max_j, rounded down (never faster), at least 1.
+    None when T is the acceleration-limited time (no cruise, whatever the
+    percentage): the program's own value then stands.
+    """
+    distance = np.abs(delta)
+    moving = distance > 0
+    if not moving.any():
+        return None
+    a = np.min(robot.a_max[moving] / distance[moving])
+    root = (a * duration) ** 2 - 4.0 * a
+    if root <= 1e-6 * (a * duration) ** 2:
+        return None
+    speed = 0.5 * (a * duration - np.sqrt(root))
+    return max(math.floor(100.0 * speed * np.max(distance / robot.v_max) + 1e-9), 1)
+
+
+def _same(a, b):
+    """Two KRL speed values are the same: equal numbers, or the same text (a name)."""
+    try:
+        return float(a) == float(b)
+    except ValueError:
+        return a.strip().upper() == b.strip().upper()
+
+
+def _krl_statement(group, value):
+    return f"$VEL.CP={value}" if group == "cp" else f"BAS(#VEL_PTP,{value})"
+
+
+_FOLD = re.compile(r"^[ \t]*;[ \t]*(END)?FOLD\b", re.I | re.M)
+# the speed an inline form's header (and its parameter fold) shows: Vel=0.2 m/s, %P .. 5:0.2, Kuka.VelocityPath=0.2
+_HEADER_SPEED = re.compile(r"(?:\bVel\s*=\s*|\bKuka\.Velocity\w*\s*=\s*|%P\b[^\r\n]*?,\s*5\s*:\s*)(" + NUMBER + ")", re.I)
+
+
+class _Folds:
+    """The inline-form folds of a KRL text (``;FOLD .. ;%{PE}`` .. ``;ENDFOLD``): where they start and end."""
+
+    def __init__(self, text):
+        self.text = text
+        self.folds, stack = [], []  # (start of the ;FOLD line, end of the ;ENDFOLD line) of inline forms
+        for m in _FOLD.finditer(text):
+            if m.group(1) is None:
+                end = text.find("\n", m.start())
+                stack.append((m.start(), "%{PE}" in text[m.start():end if end >= 0 else len(text)].upper()))
+            elif stack:
+                begin, inline = stack.pop()
+                if inline:
+                    self.folds.append((begin, m.end()))
+        self.folds.sort()
+
+    def enclosing(self, offset):
+        """``(start, end)`` of the inline form's fold around ``offset``, or None (inline forms do not nest)."""
+        at = bisect.bisect_right(self.folds, (offset, math.inf)) - 1
+        return self.folds[at] if at >= 0 and offset < self.folds[at][1] else None
+
+    def outside(self, offset):
+        """Where a line inserted at line start ``offset`` goes: before the inline form's fold around it."""
+        fold = self.enclosing(offset)
+        return offset if fold is None else fold[0]
+
+    def header_edits(self, span, value):
+        """Edits (start, end, text) that make the fold around ``span`` show speed ``value`` where it showed the old one."""
+        fold = self.enclosing(span.start)
+        if fold is None or not re.fullmatch(NUMBER, span.text.strip()):
+            return []
+        old = float(span.text)
+        out = []
+        for line in re.finditer(r"^[ \t]*;[^\r\n]*", self.text[fold[0]:span.start], re.M):  # its comment lines
+            for m in _HEADER_SPEED.finditer(line.group()):
+                if float(m.group(1)) == old:
+                    at = fold[0] + line.start() + m.start(1)
+                    out.append((at, at + len(m.group(1)), value))
+        return out
+
+
+def _ptp_percent(delta, duration, robot):
+    """Integer % of axis speed with which a synchronized PTP takes ``duration``; None if any would.
+
+    The axes move in phase along the joint line, the line parameter l from
+    0 to 1 with acceleration a_l = min_j a_j / |delta_j| (the leading axis
+    at its limit). A trapezoid of l that takes T cruises at
+    v_l = (a_l T - sqrt(a_l^2 T^2 - 4 a_l)) / 2, and the percentage is the
+    largest v_l |delta_j| / v_max_j, rounded down (never faster), at least 1.
+    None when T is the acceleration-limited time (no cruise, whatever the
+    percentage): the program's own value then stands.
+    """
+    distance = np.abs(delta)
+    moving = distance > 0
+    if not moving.any():
+        return None
+    a = np.min(robot.a_max[moving] / distance[moving])
+    root = (a * duration) ** 2 - 4.0 * a
+    if root <= 1e-6 * (a * duration) ** 2:
+        return None
+    speed = 0.5 * (a * duration - np.sqrt(root))
+    return max(math.floor(100.0 * speed * np.max(distance / robot.v_max) + 1e-9), 1)
