@@ -228,3 +228,43 @@ def controller_joints(cell, T_base):
 def skeleton(line):
     """A G-code line without its axis words."""
     return re.sub(rb"\s*[XYZABCIJK][-+.\d]+", b"", line)
+
+
+def test_feeds_the_arm_cannot_keep_are_lowered_in_the_f_words_and_restored_after(gcode, tmp_path):
+    """Asked for 3 m/s on its lines, the path is re-timed: read back as the controller reads its modal F, every
+    line is cruised within the joint limits (IK every 1 ms, independent of the timing), never above the feed
+    asked; the slow block after the fast ones keeps its own feed, and the block after that its modal one."""
+    from test_timing_readback import SLACK, line_demand
+
+    from trajcomp.arm.robot import load_robot
+
+    text = PROGRAM.replace("N40 G1 Z550. F1200.", "N40 G1 Z550. F180000.").replace("N70 Y140.", "N70 Y140. F600")
+    source = write(tmp_path, "fast.nc", text)
+    out = tmp_path / "out" / "fast.nc"
+    out.parent.mkdir()
+    robot = load_robot("ur10")
+    assert main(["retime", str(source), "-o", str(out), "--robot", "ur10", "--tool", "1=0,0,0,0,0,0"]) == 0
+    back = formats.read(out)
+    speeds = [m.speed for m in back.motions]
+    assert all(v < 3000.0 for v in speeds[1:4]) and speeds[4] == pytest.approx(10.0) and speeds[5] == 10.0
+    poses = [back.targets[m.target].pose for m in back.motions]
+    for start, end, speed in zip(poses[:-1], poses[1:], speeds[1:]):
+        velocity, acceleration = line_demand(robot, start, end, speed)
+        assert np.max(np.abs(velocity) / robot.v_max) <= SLACK and np.max(np.abs(acceleration) / robot.a_max) <= SLACK
+    before, after = source.read_text().splitlines(), out.read_text().splitlines()
+    assert [re.sub(r" ?F[\d.]+", "", line) for line in before] == [re.sub(r" ?F[\d.]+", "", line) for line in after]
+
+
+def test_a_lowered_modal_feed_is_stated_on_its_block_and_the_former_one_restored_on_the_next(gcode, tmp_path):
+    from types import SimpleNamespace
+
+    from trajcomp_gcode import write_speeds
+
+    program = formats.read(write(tmp_path, "path.nc", PROGRAM))
+    plan = SimpleNamespace(cruise={2: 10.0}, times={})  # waypoint 2 ends motion 2, N50 (modal F1200 = 20 mm/s)
+    timed, settings = write_speeds(program, SimpleNamespace(motion=np.arange(6)), None, plan)
+    lines = timed.sources[0].text.splitlines()
+    assert settings == {2: "F600.0"}
+    assert lines[6:9] == ["N50 X500. Y20. F600.0", "N60 X560.123 Y60.5 Z480. F1200. ; modal A B C", "N70 Y140."]
+    assert [m.speed for m in formats.read(write(tmp_path, "back.nc", timed.sources[0].text)).motions] == \
+        [None, 20.0, 10.0, 20.0, 20.0, 20.0]

@@ -33,6 +33,13 @@ Write
     writes back byte for byte. Programs from other languages are written
     fresh (``G21 G90 G94``, one block per motion, other statements as
     comments).
+
+Re-timing (`write_speeds`)
+    A feed the arm cannot keep along its whole line within its joint limits
+    is lowered in the block's ``F`` (rounded down); ``F`` is modal, so the
+    next block that moved at the former feed gets it back. Rapids (``G0``)
+    run at the controller's own limits and G-code states no motion time
+    (``G93`` inverse time is not written): those blocks keep their words.
 """
 
 import dataclasses
@@ -48,8 +55,10 @@ from trajcomp.formats.text import (
     Lines,
     apply_edits,
     decimals,
+    edit_sources,
     encode_text,
     encode_xyzabc,
+    floor_places,
     format_number,
     numbered,
     read_source,
@@ -321,9 +330,58 @@ def _generate(program):
     return "\n".join(lines) + "\n"
 
 
+def write_speeds(program, result, robot, plan):
+    """Lowered cruise speeds written in the feed words of a G-code program read from a file.
+
+    Parameters
+    ----------
+    program : Program
+        Read from a file.
+    result : TimingResult
+        Its timing (waypoint k ends motion ``result.motion[k]``).
+    robot : Robot
+        Unused: the plan holds the speeds.
+    plan : SpeedPlan
+        ``cruise[k]``: the TCP speed, mm/s, motion k's line is kept at
+        (`trajcomp.timing.writeback.SpeedPlan`); its ``times`` have no
+        G-code field.
+
+    Returns
+    -------
+    (Program, dict of int to str)
+        The program with ``F`` edited or inserted (file units/min, one
+        decimal, rounded down), and ``F..`` per lowered waypoint.
+    """
+    source = program.sources[0]
+    lowered = {program.motions[result.motion[k]].line: (k, v) for k, v in plan.cruise.items()}
+    edits, settings = [], {}
+    feed_text, written = None, None  # the input's modal feed word, and the feed the output states
+    for block, state in _blocks(source, source.name):
+        if "F" in block.words:
+            feed_text = block.words["F"][1].text
+            written = state.feed
+        if not block.moves or state.motion != 1 or state.feed is None:
+            continue
+        k, speed = lowered.get(block.line, (None, None))
+        if k is not None:
+            text = format_number(floor_places(speed * 60.0 / state.scale, 1), 1)
+            settings[k] = f"F{text}"
+        elif written != state.feed:  # the block ran at the input's modal feed, which the output changed
+            text = feed_text
+        else:
+            continue
+        if "F" in block.words:
+            span = block.words["F"][1]
+            edits.append((span.start, span.end, text))
+        else:
+            edits.append((block.insert_at, block.insert_at, f" F{text}"))
+        written = float(text)
+    return edit_sources(program, [edits]), settings
+
+
 def _comment(text):
     """Text made safe inside a G-code comment (no parentheses)."""
     return text.replace("(", "[").replace(")", "]").strip()
 
 
-register_format("gcode", (".nc", ".ngc", ".gcode"), read, write)
+register_format("gcode", (".nc", ".ngc", ".gcode"), read, write, speeds=write_speeds)
