@@ -94,3 +94,20 @@ def test_mask_blanks_comments_and_string_contents_keeping_offsets():
     text = 'LIN P1 ; go "fast"\r\nMSG="a;b" ; c\nX="ab\ncd'
     assert mask(text, ";") == 'LIN P1 ' + " " * 11 + '\r\nMSG="   " ' + " " * 3 + '\nX="  \n  '
     assert mask("a // b\n// c", "//") == "a     \n    "
+
+
+@pytest.mark.parametrize("language", formats.BUILT_IN)
+def test_a_built_in_language_is_one_folder_that_registers_its_own_modules(language):
+    """Adding a language is a folder and a line in BUILT_IN: its reader, writer, speed fields and configuration
+    data (where it has some) are modules of its folder, registered from there, with the hooks' names."""
+    import importlib
+
+    package = f"trajcomp.formats.{language}"
+    (fmt,) = [f for f in formats.formats() if f.reader.startswith(package + ".")]
+    for ref in (fmt.reader, fmt.writer, fmt.speeds):
+        module, function = ref.split(":")
+        assert module.rsplit(".", 1)[0] == package and callable(getattr(importlib.import_module(module), function))
+    if fmt.configuration is not None:
+        data = fmt.configuration_data()
+        assert data.__name__ == f"{package}.configuration"
+        assert all(callable(getattr(data, hook)) for hook in ("encode", "windows", "merge", "describe"))
