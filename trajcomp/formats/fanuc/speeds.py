@@ -10,23 +10,9 @@ MSEC_LIMIT = 32000  # FANUC msec speeds: 1 .. 32000
 def write_speeds(program, result, robot, plan):
     """A timed motion's speed becomes ``Tmsec`` (``T sec`` beyond 32 s); a lowered cruise speed ``v mm/sec``.
 
-    Parameters
-    ----------
-    program : Program
-        Read from a file (its sources are edited).
-    result : TimingResult
-        Its timing (`trajcomp.timing.writeback.retime_program`).
-    robot : Robot
-        Joint limits.
-    plan : SpeedPlan
-        What to write per waypoint k (`trajcomp.timing.writeback.SpeedPlan`):
-        ``times[k]`` s or ``cruise[k]`` mm/s; waypoint k is the end of motion
-        ``result.motion[k]``.
-
-    Returns
-    -------
-    (Program, dict of int to str)
-        The program with the fields written, and the setting written per waypoint.
+    The ``speeds`` hook of the format (`trajcomp.formats.register_format`): ``plan.times[k]`` (s) and
+    ``plan.cruise[k]`` (mm/s) are written for waypoint k, the end of motion ``result.motion[k]``; returns the
+    program with its fields written and the setting written per waypoint.
     """
     edits, settings = [], {}
     for k in sorted({**plan.times, **plan.cruise}):

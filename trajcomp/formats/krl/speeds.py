@@ -23,23 +23,9 @@ def write_speeds(program, result, robot, plan):
     fold edits the speed its header shows too; a line inserted for a motion
     inside one goes before the fold.
 
-    Parameters
-    ----------
-    program : Program
-        Read from a file (its sources are edited).
-    result : TimingResult
-        Its timing (`trajcomp.timing.writeback.retime_program`).
-    robot : Robot
-        Joint limits.
-    plan : SpeedPlan
-        What to write per waypoint k (`trajcomp.timing.writeback.SpeedPlan`):
-        ``times[k]`` s or ``cruise[k]`` mm/s; waypoint k is the end of motion
-        ``result.motion[k]``.
-
-    Returns
-    -------
-    (Program, dict of int to str)
-        The program with the fields written, and the setting written per waypoint.
+    The ``speeds`` hook of the format (`trajcomp.formats.register_format`): ``plan.times[k]`` (s) and
+    ``plan.cruise[k]`` (mm/s) are written for waypoint k, the end of motion ``result.motion[k]``; returns the
+    program with its fields written and the setting written per waypoint.
     """
     wanted = {}
     for k in sorted({**plan.times, **plan.cruise}):
@@ -96,87 +82,6 @@ def write_speeds(program, result, robot, plan):
         if want is not None:
             settings[k] = _krl_statement(group, want)
     return edit_sources(program, [sorted(set(e)) for e in edits]), settings
-
-
-def _same(a, b):
-    """Two KRL speed values are the same: equal numbers, or the same text (a name)."""
-    try:
-        return float(a) == float(b)
-    except ValueError:
-        return a.strip().upper() == b.strip().upper()
-
-
-def _krl_statement(group, value):
-    return f"$VEL.CP={value}" if group == "cp" else f"BAS(#VEL_PTP,{value})"
-
-
-_FOLD = re.compile(r"^[ \t]*;[ \t]*(END)?FOLD\b", re.I | re.M)
-# the speed an inline form's header (and its parameter fold) shows: Vel=0.2 m/s, %P .. 5:0.2, Kuka.VelocityPath=0.2
-_HEADER_SPEED = re.compile(r"(?:\bVel\s*=\s*|\bKuka\.Velocity\w*\s*=\s*|%P\b[^\r\n]*?,\s*5\s*:\s*)(" + NUMBER + ")", re.I)
-
-
-class _Folds:
-    """The inline-form folds of a KRL text (``;FOLD .. ;%{PE}`` .. ``;ENDFOLD``): where they start and end."""
-
-    def __init__(self, text):
-        self.text = text
-        self.folds, stack = [], []  # (start of the ;FOLD line, end of the ;ENDFOLD line) of inline forms
-        for m in _FOLD.finditer(text):
-            if m.group(1) is None:
-                end = text.find("\n", m.start())
-                stack.append((m.start(), "%{PE}" in text[m.start():end if end >= 0 else len(text)].upper()))
-            elif stack:
-                begin, inline = stack.pop()
-                if inline:
-                    self.folds.append((begin, m.end()))
-        self.folds.sort()
-
-    def enclosing(self, offset):
-        """``(start, end)`` of the inline form's fold around ``offset``, or None (inline forms do not nest)."""
-        at = bisect.bisect_right(self.folds, (offset, math.inf)) - 1
-        return self.folds[at] if at >= 0 and offset < self.folds[at][1] else None
-
-    def outside(self, offset):
-        """Where a line inserted at line start ``offset`` goes: before the inline form's fold around it."""
-        fold = self.enclosing(offset)
-        return offset if fold is None else fold[0]
-
-    def header_edits(self, span, value):
-        """Edits (start, end, text) that make the fold around ``span`` show speed ``value`` where it showed the old one."""
-        fold = self.enclosing(span.start)
-        if fold is None or not re.fullmatch(NUMBER, span.text.strip()):
-            return []
-        old = float(span.text)
-        out = []
-        for line in re.finditer(r"^[ \t]*;[^\r\n]*", self.text[fold[0]:span.start], re.M):  # its comment lines
-            for m in _HEADER_SPEED.finditer(line.group()):
-                if float(m.group(1)) == old:
-                    at = fold[0] + line.start() + m.start(1)
-                    out.append((at, at + len(m.group(1)), value))
-        return out
-
-
-def _ptp_percent(delta, duration, robot):
-    """Integer % of axis speed with which a synchronized PTP takes ``duration``; None if any would.
-
-    The axes move in phase along the joint line, the line parameter l from
-    0 to 1 with acceleration a_l = min_j a_j / |delta_j| (the leading axis
-    at its limit). A trapezoid of l that takes T cruises at
-    v_l = (a_l T - sqrt(a_l^2 T^2 - 4 a_l)) / 2, and the percentage is the
-    largest v_l |delta_j| / v_max_j, rounded down (never faster), at least 1.
-    None when T is the acceleration-limited time (no cruise, whatever the
-    percentage): the program's own value then stands.
-    """
-    distance = np.abs(delta)
-    moving = distance > 0
-    if not moving.any():
-        return None
-    a = np.min(robot.a_max[moving] / distance[moving])
-    root = (a * duration) ** 2 - 4.0 * a
-    if root <= 1e-6 * (a * duration) ** 2:
-        return None
-    speed = 0.5 * (a * duration - np.sqrt(root))
-    return max(math.floor(100.0 * speed * np.max(distance / robot.v_max) + 1e-9), 1)
 
 
 def _same(a, b):

@@ -6,23 +6,9 @@ from trajcomp.formats.text import ceil_places, edit_sources, floor_places, forma
 def write_speeds(program, result, robot, plan):
     """A timed motion's speed data get ``\\T:=`` (a time, s) or ``\\V:=`` (a lowered cruise TCP speed, mm/s).
 
-    Parameters
-    ----------
-    program : Program
-        Read from a file (its sources are edited).
-    result : TimingResult
-        Its timing (`trajcomp.timing.writeback.retime_program`).
-    robot : Robot
-        Joint limits.
-    plan : SpeedPlan
-        What to write per waypoint k (`trajcomp.timing.writeback.SpeedPlan`):
-        ``times[k]`` s or ``cruise[k]`` mm/s; waypoint k is the end of motion
-        ``result.motion[k]``.
-
-    Returns
-    -------
-    (Program, dict of int to str)
-        The program with the fields written, and the setting written per waypoint.
+    The ``speeds`` hook of the format (`trajcomp.formats.register_format`): ``plan.times[k]`` (s) and
+    ``plan.cruise[k]`` (mm/s) are written for waypoint k, the end of motion ``result.motion[k]``; returns the
+    program with its fields written and the setting written per waypoint.
     """
     edits, settings = [], {}
     for k in sorted({**plan.times, **plan.cruise}):

@@ -8,23 +8,9 @@ from trajcomp.formats.text import ceil_places, edit_sources, floor_places, forma
 def write_speeds(program, result, robot, plan):
     """A timed movej / movel gets ``t=`` (s); a lowered cruise speed is written ``v=`` (m/s).
 
-    Parameters
-    ----------
-    program : Program
-        Read from a file (its sources are edited).
-    result : TimingResult
-        Its timing (`trajcomp.timing.writeback.retime_program`).
-    robot : Robot
-        Joint limits.
-    plan : SpeedPlan
-        What to write per waypoint k (`trajcomp.timing.writeback.SpeedPlan`):
-        ``times[k]`` s or ``cruise[k]`` mm/s; waypoint k is the end of motion
-        ``result.motion[k]``.
-
-    Returns
-    -------
-    (Program, dict of int to str)
-        The program with the fields written, and the setting written per waypoint.
+    The ``speeds`` hook of the format (`trajcomp.formats.register_format`): ``plan.times[k]`` (s) and
+    ``plan.cruise[k]`` (mm/s) are written for waypoint k, the end of motion ``result.motion[k]``; returns the
+    program with its fields written and the setting written per waypoint.
     """
     edits, settings = [], {}
     for k in sorted({**plan.times, **plan.cruise}):
