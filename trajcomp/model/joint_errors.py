@@ -120,34 +120,63 @@ class SplineBasis:
         """Term names, joint by joint: ``spline{j}_{k}``."""
         return [f"spline{j + 1}_{k}" for j in range(6) for k in range(self.intervals(j) + 3 if self.intervals(j) else 0)]
 
-    def matrix(self, q, joint):
-        """Basis values (N, K) of a 0-based joint at commanded joints q (N, 6) rad, sparse (4 per row).
+    def support(self, q, joint):
+        """The 4 basis functions of a 0-based joint that are non-zero at each of commanded joints q (N, 6) rad.
 
         Angles beyond the measured range take the boundary's values.
-        """
-        from scipy import sparse  # here: models without spline terms never need it
 
+        Returns
+        -------
+        columns : ndarray of int, shape (N, 4)
+            Their indices k (term ``spline{joint + 1}_{k}``).
+        values : ndarray, shape (N, 4)
+            Their values (dimensionless, summing to 1).
+        """
         count = self.intervals(joint)
         width = max(self.upper[joint] - self.lower[joint], 1e-12) / count
         u = (np.clip(q[:, joint], self.lower[joint], self.upper[joint]) - self.lower[joint]) / width
         first = np.minimum(np.floor(u).astype(int), count - 1)  # basis k is centred at knot k - 1
         columns = first[:, None] + np.arange(4)
-        values = cardinal_cubic(u[:, None] - (columns - 1))
+        return columns, cardinal_cubic(u[:, None] - (columns - 1))
+
+    def matrix(self, q, joint):
+        """Basis values (N, K) of a 0-based joint at commanded joints q (N, 6) rad, sparse (4 per row, `support`)."""
+        from scipy import sparse  # here: models without spline terms never need it
+
+        columns, values = self.support(q, joint)
         rows = np.repeat(np.arange(len(q)), 4)
-        return sparse.csr_matrix((values.ravel(), (rows, columns.ravel())), shape=(len(q), count + 3))
+        return sparse.csr_matrix((values.ravel(), (rows, columns.ravel())), shape=(len(q), self.intervals(joint) + 3))
+
+    def offsets(self, q, names, values):
+        """DH-angle errors (N, 6) rad of spline terms ``names`` with coefficients ``values`` (rad), at joints q (N, 6) rad.
+
+        Other names in ``names`` are ignored.
+        """
+        out = np.zeros((len(q), 6))
+        coefficients = {n: v for n, v in zip(names, values) if is_spline(n)}
+        for joint in range(6):
+            count = self.intervals(joint) + 3 if self.intervals(joint) else 0
+            if not count:
+                continue
+            own = np.array([coefficients.get(f"spline{joint + 1}_{k}", 0.0) for k in range(count)])
+            columns, weights = self.support(q, joint)
+            out[:, joint] = np.einsum("nk,nk->n", weights, own[columns])
+        return out
 
     def roughness(self, names):
-        """Second-difference penalty matrix (T, T) over term ``names`` (zero outside the spline terms)."""
+        """Second-difference penalty matrix (T, T) over term ``names`` (zero outside the spline terms).
+
+        A second difference enters only where its three terms are all in ``names``.
+        """
         out = np.zeros((len(names), len(names)))
         index = {n: k for k, n in enumerate(names)}
+        second = np.array([1.0, -2.0, 1.0])
         for j in range(6):
             count = self.intervals(j) + 3 if self.intervals(j) else 0
-            for k in range(1, count - 1):
-                pick = [index.get(f"spline{j + 1}_{k + o}") for o in (-1, 0, 1)]
-                if None in pick:
-                    continue
-                second = np.array([1.0, -2.0, 1.0])
-                out[np.ix_(pick, pick)] += np.outer(second, second)
+            triples = np.array([[index.get(f"spline{j + 1}_{k + o}", -1) for o in (-1, 0, 1)]
+                                for k in range(1, count - 1)], dtype=int).reshape(-1, 3)
+            triples = triples[(triples >= 0).all(axis=1)]
+            np.add.at(out, (triples[:, :, None], triples[:, None, :]), np.outer(second, second))
         return out
 
     def to_dict(self):
@@ -161,8 +190,8 @@ class SplineBasis:
         return cls(data["lower"], data["upper"], data["step"], data.get("penalty", 0.0))
 
 
-def features(nominal, q, names, basis=None):
-    """Value of each term's basis function at each configuration.
+def features(nominal, q, names):
+    """Value of each gear and gravity term's basis function at each configuration.
 
     Parameters
     ----------
@@ -171,28 +200,19 @@ def features(nominal, q, names, basis=None):
     q : ndarray, shape (N, 6)
         Commanded joint angles, rad.
     names : sequence of str
-        Term names (`term_names`, `SplineBasis.names`).
-    basis : SplineBasis, optional
-        Needed by spline terms.
+        Term names (`term_names`; spline terms are evaluated by their
+        `SplineBasis`).
 
     Returns
     -------
     ndarray, shape (N, T)
-        Dimensionless (gear, spline) or m (grav).
+        Dimensionless (gear) or m (grav).
     """
     q = np.atleast_2d(np.asarray(q, dtype=float))
     out = np.empty((len(q), len(names)))
     frames = None
-    splines = {}
     for k, name in enumerate(names):
         j = term_joint(name)
-        if is_spline(name):
-            if basis is None:
-                raise ModelError(f"joint errors: spline term {name!r} without its spline basis")
-            if j not in splines:
-                splines[j] = basis.matrix(q, j).toarray()
-            out[:, k] = splines[j][:, int(name.split("_")[1])]
-            continue
         if name.startswith("gear"):
             harmonic = int(name[-1])
             out[:, k] = (np.sin if name[-2] == "s" else np.cos)(harmonic * q[:, j])
@@ -287,9 +307,11 @@ class JointResidual:
         if outside == "clamp":
             q = self.clamped(q)
         names, values = self.terms
-        out = np.zeros(q.shape)
-        for k, contribution in enumerate((features(nominal, q, names, self.basis) * values).T):
-            out[:, term_joint(names[k])] += contribution
+        smooth = [k for k, n in enumerate(names) if not is_spline(n)]
+        joint_of_term = np.eye(6)[[term_joint(names[k]) for k in smooth]].reshape(-1, 6)  # (T, 6)
+        out = (features(nominal, q, [names[k] for k in smooth]) * values[smooth]) @ joint_of_term
+        if self.basis is not None:
+            out += self.basis.offsets(q, names, values)
         if outside == "model":
             out[~self.contains(q)] = 0.0
         return out
