@@ -183,7 +183,8 @@ def test_fanuc_circle_with_a_register_point_passes_through_whole(tmp_path):
     program = formats.read(path)
     circle = program.motions[0]
     assert (circle.target, circle.via, circle.refs) == (None, None, (0,))
-    assert circle.reason == "position register PR[2]"
+    assert circle.reason == ("position register PR[2]: its value is the controller's; no POSREG.VA beside the "
+                             "program (its backup's)")
 
 
 def test_a_circle_without_its_via_point_is_never_written(tmp_path):

@@ -19,7 +19,7 @@ from trajcomp.errors import WriteError
 
 DATA = Path(__file__).parent / "data" / "programs"
 PROGRAMS = sorted(
-    p for p in DATA.rglob("*") if p.is_file() and p.suffix.lower() != ".dat" and p.suffix.lower() != ".txt"
+    p for p in DATA.rglob("*") if p.is_file() and p.suffix.lower() not in (".dat", ".txt", ".va")
 )
 
 
@@ -28,11 +28,13 @@ RAPID_MODULES = {".mod", ".modx", ".sys", ".prg"}
 
 def companions(path):
     """The program file and the files read with it (a KRL .dat, the data lists and $config.dat beside it whose
-    points it uses, the other modules of a RAPID task's folder)."""
-    task = path.suffix.lower() in RAPID_MODULES
+    points it uses, the other modules of a RAPID task's folder, a FANUC backup's POSREG.VA and the other
+    programs beside it, which may set its registers)."""
     read_with = {Path(source.path).name for source in formats.read(path).sources[1:]}
+    suffix = path.suffix.lower()
+    task = RAPID_MODULES if suffix in RAPID_MODULES else {".ls"} if suffix == ".ls" and read_with else set()
     return [path] + [p for p in path.parent.iterdir() if p != path and (
-        p.name in read_with or (task and p.suffix.lower() in RAPID_MODULES))]
+        p.name in read_with or p.suffix.lower() in task)]
 
 
 def copy_program(path, folder, newline=None):

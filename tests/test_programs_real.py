@@ -23,7 +23,7 @@ from trajcomp.arm.robot import load_robot
 
 DATA = Path(__file__).parent / "data"
 REAL = sorted(p for p in (DATA / "programs" / "real").rglob("*")
-              if p.is_file() and p.suffix.lower() not in (".dat", ".txt"))
+              if p.is_file() and p.suffix.lower() not in (".dat", ".txt", ".va"))
 REFUSED = sorted(p for p in (DATA / "refused").rglob("*") if p.is_file())
 ARM = {"krl": "kuka_kr6_r900", "rapid": "abb_irb4600", "fanuc_ls": "fanuc_lrmate200id", "urscript": "ur10"}
 

@@ -16,8 +16,17 @@ Read:
   A, B, C = R, P, W. UF 0 and UT 0 are the world frame and the faceplate.
   E1.. of group 1, then the axes of groups 2.. (servo gun, positioner) are
   the target's external axes, carried unchanged.
+Position registers: a motion to ``PR[n]`` goes to the value the backup's
+POSREG.VA lists (beside the program or in the folder above it,
+`trajcomp.formats.fanuc.posreg`), in the active UTOOL_NUM and UFRAME_NUM;
+the register is corrected there and written into a POSREG.VA beside the
+output with the program.
 Not compensated, with the reason (`Motion.reason`): position registers
-(PR[n], P[R[n]]), run-time modifiers (Offset, Tool_Offset, INC, VOFFSET),
+without a value in POSREG.VA (none beside the program, uninitialized,
+``********``) or set at run time by the program or another TP listing
+beside it (``PR[n]=LPOS``, ``PR[n,i]=``, ``PR[R[k]]=``), a Cartesian
+register before any UTOOL_NUM / UFRAME_NUM, indirect positions
+(``P[R[n]]``), run-time modifiers (Offset, Tool_Offset, INC, VOFFSET),
 and motions with a tool or user frame set at run time (``UTOOL[1]=PR[1]``,
 ``UTOOL_NUM=R[1]``) from that line on, and motions to an untaught
 position (``X = ********``: the controller loads the program and faults
@@ -39,4 +48,5 @@ register_format(
     vendor="FANUC",
     speeds=f"{__name__}.speeds:write_speeds",
     configuration=f"{__name__}.configuration",
+    tasks=True,
 )

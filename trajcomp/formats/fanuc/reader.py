@@ -146,6 +146,12 @@ def read(path):
         last = last_line(lines)
         fail(source.name, last, lines.line(last), "no /END after it: the program is cut off")
     targets, points, unread = _positions(source, masked, lines, pos_start, pos_end)
+    from trajcomp.formats.fanuc import posreg  # it reads positions as this module does
+
+    sources, registers, register_why, notes = (source,), {}, {}, ()
+    if posreg.used_registers(masked):
+        registers_source, registers, register_why, notes = posreg.resolve(path, masked, lines, targets, 1)
+        sources += (registers_source,) if registers_source is not None else ()
     items, state = [], _State()
     for number, start, end, content in instructions:
         original = source.text[start:end]
@@ -158,13 +164,13 @@ def read(path):
             refs = tuple(points[int(n)] for n in _POINT_REF.findall(content) if int(n) in points)
             items.append(Statement(number, original, refs=refs))
             continue
-        motion = _motion(m, points, unread, source.name, number, original)
+        motion = _motion(m, points, unread, source.name, number, original, registers, register_why)
         speed = _SPEED_FIELD.search(masked, start, end)  # where re-timing writes the motion's speed
         if speed is not None:
             motion = replaced(motion, spans={"speed": Span(0, speed.start(), speed.end(), speed.group())})
         items.append(_with_frames(motion, targets, state))
     tools, frames = {"0": np.eye(4)}, {"0": np.eye(4)}
-    return Program("fanuc_ls", name, tuple(items), tuple(targets), tools, frames, (source,))
+    return Program("fanuc_ls", name, tuple(items), tuple(targets), tools, frames, sources, notes=notes)
 
 
 def _with_frames(motion, targets, state):
@@ -177,13 +183,17 @@ def _with_frames(motion, targets, state):
         tool = target.tool if target.tool is not None else state.tool
         frame = target.frame if target.frame is not None else state.frame
         why = ("" if target.is_joint else state.reason("tool", tool)) or state.reason("frame", frame)
+        if not why and not target.is_joint and target.name.startswith("PR[") and None in (tool, frame):
+            unset = " and ".join(word for word, number in (("UTOOL_NUM", tool), ("UFRAME_NUM", frame)) if number is None)
+            why = (f"{target.name} is a position in the tool and user frame active when the line runs: the program "
+                   f"sets no {unset} before it")
         if why:
             points = tuple(i for i in (motion.via, motion.target) if i is not None)
             return dataclasses.replace(motion, target=None, via=None, reason=why, refs=motion.refs + points)
     return motion
 
 
-def _motion(m, points, unread, name, number, original):
+def _motion(m, points, unread, name, number, original, registers, register_why):
     kind = KINDS[m.group(1).upper()]
     rest = m.group(4)
     refs = [(m.group(2).upper(), m.group(3))]
@@ -214,16 +224,19 @@ def _motion(m, points, unread, name, number, original):
         if kind_ref == "P" and ref.isdigit() and int(ref) in unread:
             found.append(None)
             reason = reason or f"P[{ref}] {unread[int(ref)]}"
+        elif kind_ref == "PR" and not runtime and ref in registers:  # read from POSREG.VA (`posreg`)
+            found.append(registers[ref])
         elif runtime or kind_ref == "PR" or not ref.isdigit():
             found.append(None)
             reason = reason or (f"{runtime.group(1)} applied at run time" if runtime
-                                else f"position register {kind_ref}[{ref}]" if kind_ref == "PR"
+                                else f"position register PR[{ref}]{register_why.get(ref, '')}" if kind_ref == "PR"
                                 else f"P[{ref}]: position index computed at run time")
         elif int(ref) not in points:
             fail(name, number, original, f"P[{ref}] has no entry in /POS")
         else:
             found.append(points[int(ref)])
-    named = tuple(points[int(r)] for k, r in refs if k == "P" and r.isdigit() and int(r) in points)
+    named = tuple(points[int(r)] if k == "P" else registers[r] for k, r in refs
+                  if (k == "P" and r.isdigit() and int(r) in points) or (k == "PR" and r in registers))
     motion = Motion(
         kind=kind,
         target=found[-1],
