@@ -7,6 +7,7 @@ every file using it) and every changed file is written together. Each test
 is a minimal program of that shape.
 """
 
+import gzip
 import json
 import re
 from pathlib import Path
@@ -23,7 +24,7 @@ from trajcomp.formats.task import groups
 from trajcomp.arm.kinematics import fk
 from trajcomp.compensation.program import compensate_program
 from trajcomp.arm.robot import load_robot
-from trajcomp.arm.transforms import matrix_to_quat
+from trajcomp.arm.transforms import matrix_to_quat, matrix_to_rotvec
 
 UNUSED = "[9E9,9E9,9E9,9E9,9E9,9E9]"
 
@@ -308,3 +309,53 @@ def test_real_backups_resolve_points_and_tools_across_their_files():
     assert reasons[0] == "BefPikPos is declared without a value (set at run time, varglobal.dat:166)"
     assert [reason for _, _, reason in formats.read(REAL / "krl" / "bpf2pltzpk2" / "gotoorigin.src").not_compensated()] \
         == ["position computed at run time: {Z 500}"] * 2  # LIN {Z 500}: was refused
+
+
+# ------------------------------------------------------------------ PolyScope: a .urp beside the .script
+
+URP = """<?xml version="1.0" encoding="UTF-8"?>
+<URProgram name="pick">
+  <children>
+    <MainProgram runOnlyOnce="false">
+      <children>
+        <Move motionType="MoveJ" speed="1.0471975511965976" acceleration="1.3962634015954636" useActiveTCP="true">
+          <children>
+            <Waypoint type="Fixed" name="Waypoint_1" kinematicsFlags="1">
+              <motionParameters/>
+              <position>
+                <JointAngles angles="0.0, -1.2, 1.4, -1.7, -1.57, 0.0"/>
+                <TCPOffset pose="0.0, 0.0, 0.0, 0.0, 0.0, 0.0"/>
+              </position>
+              <BaseToFeature pose="0.0, 0.0, 0.0, 0.0, 0.0, 0.0"/>
+            </Waypoint>
+          </children>
+        </Move>
+      </children>
+    </MainProgram>
+  </children>
+</URProgram>
+"""  # HAND-WRITTEN, in the layout of a PolyScope 3.x/5.x .urp (gzip XML) as public notes quote it
+
+
+def test_a_polyscope_urp_beside_the_script_is_named_in_the_report_as_not_corrected(tmp_path):
+    robot = load_robot("ur10")
+    q = np.array([0.0, -1.2, 1.4, -1.7, -1.57, 0.0])
+    T = fk(robot, q[None])[0]
+    pose = ", ".join(f"{v:.6f}" for v in [*(T[:3, 3] / 1000.0), *matrix_to_rotvec(T[:3, :3])])
+    script = tmp_path / "pick.script"
+    script.write_text("def pick():\n  global Waypoint_1_p=p[" + pose + "]\n  global Waypoint_1_q=["
+                      + ", ".join(map(str, q)) + "]\n  movej(get_inverse_kin(Waypoint_1_p, qnear=Waypoint_1_q), "
+                      "a=1.39, v=1.04)\nend\n")
+    assert formats.read(script).notes == ()  # no PolyScope program beside it: nothing to say
+    (tmp_path / "pick.urp").write_bytes(gzip.compress(URP.encode()))
+    urp = (tmp_path / "pick.urp").read_bytes()
+    program = formats.read(script)
+    assert [s.name for s in program.sources] == ["pick.script"]  # the .urp is not read as a file of the program
+    edited, report = compensate_program(program, _stand_in(robot), robot)
+    assert report.warnings == (
+        "pick.urp beside pick.script is PolyScope's program, from which the controller generates the script: "
+        "trajcomp corrects the script only, pick.urp is not corrected (its waypoints are joint angles under the "
+        "arm's own calibrated kinematics); run the corrected script, and do not open and save pick.urp over it (nor "
+        "a copy of it beside the output): PolyScope would regenerate the script from the uncorrected waypoints",)
+    assert [p.name for p in formats.write(script, edited)] == ["pick.script"]
+    assert (tmp_path / "pick.urp").read_bytes() == urp  # left exactly as it was

@@ -33,7 +33,9 @@ A point also used as the frame of ``pose_trans`` (the approach idiom
 ``movel(pose_trans(pick_p, p[0,0,-0.1,0,0,0]))`` then ``movel(pick_p)``)
 stays a point: the offsets from it are computed at run time and move with
 it. A six-number list no joint can hold (``Kp = [1000, ...]``) is data.
-A motion to a variable the script never assigns is a ReadError. Pose
+A motion to a variable the script never assigns is a ReadError.
+PolyScope's program saved beside the script (``name.urp``) is not read
+nor written; the report says so (`trajcomp.formats.urscript.polyscope`). Pose
 variables named by other statements are `Statement.refs`.
 """
 

@@ -21,6 +21,7 @@ from trajcomp.formats.text import (
     split_top,
     unresolved,
 )
+from trajcomp.formats.urscript.polyscope import notes as polyscope_notes
 from trajcomp.programs.program import Program
 from trajcomp.programs.items import CIRCULAR, JOINT, LINEAR, Motion, Span, Statement, Target
 from trajcomp.arm.transforms import rotvec_to_matrix
@@ -401,7 +402,7 @@ def read(path):
         reader.items.append(Statement(line, original, refs=refs))
     _finish(reader)
     return Program("urscript", Path(path).stem, tuple(reader.items), tuple(reader.targets), reader.tools,
-                   reader.frames, (source,))
+                   reader.frames, (source,), notes=polyscope_notes(path))
 
 
 def _finish(reader):
