@@ -396,7 +396,7 @@ def _identifiable(problem, names, rtol):
 
 def identify(robot, q, measured, *, rotation=None, frame="base", tool=True, joint_terms=False, splines=None,
              loss="huber", rtol=1e-3, orientation_weight=ORIENTATION_WEIGHT, nominal=None, T_tracker_base=None,
-             R_tcp_target=None, start_values=None):
+             R_tcp_target=None, start_values=None, identifiability=None):
     """Robust least-squares identification of the arm, its TCP and the tracker registration.
 
     Parameters
@@ -434,6 +434,10 @@ def identify(robot, q, measured, *, rotation=None, frame="base", tool=True, join
     start_values : dict, optional
         ``{name: value}`` the fit starts from (an earlier fit's parameters,
         mm or rad); the others start at 0.
+    identifiability : Identifiability, optional
+        What these measurements identify of the candidate parameters from
+        this ``robot``, when known (an earlier fit's with the same
+        arguments but ``splines`` and ``start_values``): not analysed again.
 
     Returns
     -------
@@ -466,7 +470,7 @@ def identify(robot, q, measured, *, rotation=None, frame="base", tool=True, join
         names += joint_errors.term_names()
     problem = _Problem(robot, nominal, q, measured, rotation, T_tracker_base, R_tcp_target, orientation_weight,
                        splines)
-    ident = _identifiable(problem, names, rtol)
+    ident = _identifiable(problem, names, rtol) if identifiability is None else identifiability
     if splines is not None:
         names += splines.names()
     kept = ident.kept
@@ -541,15 +545,28 @@ class Linearisation:
         Step through a Cholesky factorisation with a relative ridge instead
         (`_penalised_step`: cheaper than the eigendecomposition `rtol` needs;
         the selection's candidates, which step from no spline terms at all).
+    parts : list of ndarray of int, optional
+        Row indices partitioning the rows (held-out regions): the normal
+        equations of the whole are summed from theirs, which are kept in
+        ``parts`` as ``(rows, Jacobian of the rows, normal equations)``.
     """
 
-    def __init__(self, problem, x, weights=None, loss="huber", identifiability=None, rtol=1e-3, ridge=False):
+    def __init__(self, problem, x, weights=None, loss="huber", identifiability=None, rtol=1e-3, ridge=False,
+                 parts=None):
         self.problem, self.x, self.identifiability = problem, np.asarray(x, dtype=float), identifiability
         self.rtol, self.ridge = rtol, ridge
         self.scale = scales(problem.names)
         self.residual, self.jac = problem.evaluate(self.x)
         self.weights = robust_weights(_row_norms(self.residual), loss) if weights is None else weights
-        self.normal, self.gradient = self.jac.normal_equations(self.residual, self.weights, self.scale)
+        if parts is None:
+            self.normal, self.gradient = self.jac.normal_equations(self.residual, self.weights, self.scale)
+            return
+        self.parts = []
+        for rows in parts:
+            jac = self.jac.rows(rows)
+            self.parts.append((rows, jac, jac.normal_equations(self.residual[rows], self.weights[rows], self.scale)))
+        self.normal = sum(held[0] for _, _, held in self.parts)
+        self.gradient = sum(held[1] for _, _, held in self.parts)
 
     def held_out(self, rows):
         """Normal equations (P, P), (P,) of the measurements ``rows`` (indices) alone, in solver units."""
@@ -729,22 +746,21 @@ class _Candidates:
         self.table, self.best = [], None
 
     def linearise(self, problem, x, weights):
-        """The `Linearisation` of a candidate's problem at x (P,), and the normal equations of each region."""
-        linear = Linearisation(problem, x, weights, ridge=True)
-        return linear, [linear.held_out(rows) for rows in self.regions]
+        """The `Linearisation` of a candidate's problem at x (P,), with the regions' normal equations."""
+        return Linearisation(problem, x, weights, ridge=True, parts=self.regions)
 
-    def score(self, entry, linearised, roughness, payload):
+    def score(self, entry, linear, roughness, payload):
         """Held-out mean errors of one candidate (without and with the field on top), added to the table.
 
         ``roughness`` (P, P) is its roughness penalty per measurement.
         """
-        linear, held = linearised
         plain, on_top = [], []
         count = len(linear.residual)
-        for rows, normal in zip(self.regions, held):
-            moved = linear.residual[:, :3] + linear.jac.apply(linear.without(rows, roughness, normal) - linear.x)[:, :3]
-            plain.append(np.linalg.norm(moved[rows], axis=1))
+        for rows, jac, held in linear.parts:
+            step = linear.without(rows, roughness, held) - linear.x
+            plain.append(np.linalg.norm(linear.residual[rows, :3] + jac.apply(step)[:, :3], axis=1))
             if self.field is not None:
+                moved = linear.residual[:, :3] + linear.jac.apply(step)[:, :3]
                 train = np.setdiff1d(np.arange(count), rows)
                 predicted = self.field(self.position[train], moved[train], self.position[rows])
                 on_top.append(np.linalg.norm(moved[rows] - predicted, axis=1))
@@ -854,7 +870,7 @@ def _spline_fit(fit, start, nominal, q, measured, rotation, basis, orientation_w
     """The joint fit with spline terms ``basis`` added, by `identify` from ``start`` (the kinematic fit) and ``fit``."""
     return identify(start, q, measured, rotation=rotation, joint_terms=True, splines=basis, loss=loss,
                     nominal=nominal, orientation_weight=orientation_weight, R_tcp_target=fit.R_tcp_target,
-                    start_values=dict(zip(fit.names, fit.delta)))
+                    start_values=dict(zip(fit.names, fit.delta)), identifiability=fit.identifiability)
 
 
 def _penalised_step(matrix, gradient):
