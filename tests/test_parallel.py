@@ -197,3 +197,21 @@ def _alive(pid):
             return handle.read().split(")")[-1].split()[0] != "Z"
     except FileNotFoundError:
         return False
+
+
+@pytest.mark.parametrize("user_setting, threads", [(None, 1), ("2", 2)])
+def test_workers_forked_from_an_application_compute_on_one_blas_thread_unless_the_user_says(user_setting, threads):
+    """An application (no thread variables) loaded numpy with two BLAS threads: each worker computes on one."""
+    import subprocess
+    import sys
+
+    code = ("import numpy, threadpoolctl\nthreadpoolctl.threadpool_limits(2)\n"
+            "from trajcomp.support.parallel import map_blocks\n"
+            "print(sorted({p['num_threads'] for k in map_blocks(lambda k: threadpoolctl.threadpool_info(), 2, 2)"
+            " for p in k if p['user_api'] == 'blas'}))")
+    env = {k: v for k, v in os.environ.items() if k not in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS",
+                                                             "MKL_NUM_THREADS")}
+    if user_setting is not None:
+        env.update(OPENBLAS_NUM_THREADS=user_setting)
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env, check=True)
+    assert done.stdout.strip() == str([threads])

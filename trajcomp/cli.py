@@ -9,10 +9,7 @@ send), handled alike: what was not finished is not written; 141 (SIGPIPE's)
 when the reader of its output went away (``| head``).
 
 Each process of a run computes on one BLAS / OpenMP thread unless the user
-set the thread variables: the linear algebra here is many small products,
-and threads of their own fight the run's worker processes and whatever
-else shares the machine (calibrating 5,892 measurements beside one
-CPU-bound process took 30-49 s with OpenBLAS's threads, 13-18 s without).
+set the thread variables (`trajcomp.support.threads`).
 """
 
 import argparse
@@ -27,13 +24,13 @@ import traceback
 from trajcomp import __version__
 from trajcomp.support.crash import bug_message, save_traceback
 from trajcomp.support.crash import EXIT_CODE as CRASHED
+from trajcomp.support.threads import THREAD_VARIABLES
 from trajcomp.commands import COMMANDS
 from trajcomp.errors import ToleranceError, TrajcompError
 
 INTERRUPTED = 130  # exit code of a run stopped by Ctrl-C (SIGINT), as shells report it
 TERMINATED = 128 + signal.SIGTERM  # 143: stopped by SIGTERM, as shells report it
 PIPE_CLOSED = 128 + signal.SIGPIPE  # 141: the output's reader went away, as shells report a tool SIGPIPE stops
-THREAD_VARIABLES = ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS")  # read when numpy loads
 
 
 def build_parser(only=None):

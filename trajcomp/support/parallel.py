@@ -19,6 +19,8 @@ import multiprocessing
 import os
 import signal
 
+from trajcomp.support.threads import pin_loaded
+
 _TASK = None  # the function of the pool being started, inherited by its forked workers
 _LOOKAHEAD = 2  # blocks a worker may compute ahead of the consumer, each
 _MEANWHILE = []  # work for this process while the next pool's workers compute (`meanwhile`)
@@ -138,14 +140,19 @@ def in_background(function, workers=1):
 
 
 def init_worker():
-    """Initializer of worker processes: they die with their parent, and Ctrl-C is the parent's to handle.
+    """Initializer of worker processes: one BLAS thread each, they die with their parent, and Ctrl-C is the
+    parent's to handle.
 
-    Ctrl-C reaches the whole process group; the parent stops the workers,
+    A worker computes on one BLAS / OpenMP thread unless the user set the
+    thread variables (`trajcomp.support.threads.pin_loaded`: a process
+    forked from an application that loaded numpy with a thread per core
+    would otherwise run that many in each worker). Ctrl-C reaches the whole process group; the parent stops the workers,
     which do not report it themselves. SIGTERM gets its default action back
     (a forked worker inherits the parent's handler). On Linux the kernel
     kills a worker whose parent dies (``PR_SET_PDEATHSIG``), even by
     SIGKILL, so that no orphan goes on writing outputs.
     """
+    pin_loaded()
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     signal.signal(signal.SIGTERM, signal.SIG_DFL)
     parent = os.getppid()
