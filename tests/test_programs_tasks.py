@@ -359,3 +359,23 @@ def test_a_polyscope_urp_beside_the_script_is_named_in_the_report_as_not_correct
         "a copy of it beside the output): PolyScope would regenerate the script from the uncorrected waypoints",)
     assert [p.name for p in formats.write(script, edited)] == ["pick.script"]
     assert (tmp_path / "pick.urp").read_bytes() == urp  # left exactly as it was
+
+
+def test_a_task_of_several_files_names_the_file_of_each_motion_it_lists(tmp_path, kuka_model):
+    robot = load_robot("kuka_kr6_r900")
+    weld = _krc(tmp_path, robot)
+    weld.write_text("DEF weld( )\nPTP XP1\nLIN XSHARED\nLIN {Z 500}\nEND\n")
+    (weld.parent / "seam.src").write_text("DEF seam( )\nPTP XSHARED\n\nLIN {Z 400}\nEND\n")
+    task = formats.read_task([weld, weld.parent / "seam.src"])
+    # line 4 of each file: the place names the file, not a line number of the wrong one
+    assert task.not_compensated() == (("weld.src:4", "LIN {Z 500}", "position computed at run time: {Z 500}"),
+                                      ("seam.src:4", "LIN {Z 400}", "position computed at run time: {Z 400}"))
+    assert formats.read(weld).not_compensated()[0][0] == 4  # a program of one file: its line number alone
+    _, report = compensate_program(task, _stand_in(robot), robot)
+    assert "  seam.src:4: LIN {Z 400} (position computed at run time: {Z 400})" in report.lines_of_text()
+    out = tmp_path / "out"
+    main(["compensate", str(tmp_path / "KRC"), "--model", str(kuka_model), "-o", str(out), "--jobs", "1",
+          "--retime", "none", "--report", str(tmp_path / "reports")])
+    (document,) = [json.loads(p.read_text()) for p in (tmp_path / "reports").rglob("*.json")]
+    assert [(m.get("file"), m["line"], m["text"]) for m in document["not_compensated"]] == [
+        ("seam.src", 4, "LIN {Z 400}"), ("weld.src", 4, "LIN {Z 500}")]

@@ -56,10 +56,11 @@ class ProgramReport:
     predicted_residual : ndarray, shape (N,)
         Distance from the target to the model-predicted landing, mm: the
         compensation's convergence (the model agreeing with itself).
-    not_compensated : tuple of (int, str, str)
+    not_compensated : tuple of (int or str, str, str)
         Line, text and reason of motions passed through unchanged (each
         once), then of statements that pass a point where trajcomp cannot
-        see the motion (a procedure call).
+        see the motion (a procedure call); the line is ``"file:line"`` in a
+        program joined from several files (`Program.place`).
     motions_left : int
         How many of ``not_compensated`` are motions.
     unused : tuple of str
@@ -108,7 +109,8 @@ class ProgramReport:
         if self.not_compensated:
             out.append(f"{self.motions_left} motions and {len(self.not_compensated) - self.motions_left} "
                        "points passed to routines NOT compensated:")
-            out += [f"  line {line}: {text} ({reason})" for line, text, reason in self.not_compensated]
+            out += [f"  {line if isinstance(line, str) else f'line {line}'}: {text} ({reason})"
+                    for line, text, reason in self.not_compensated]
         if self.unused:
             out.append(f"unused points left as written: {', '.join(self.unused)}")
         out += [f"warning: {w}" for w in self.warnings]
@@ -276,12 +278,12 @@ def _not_compensated(program, compensated):
     corrected = set(np.asarray(compensated, dtype=int).tolist())
     listed = []
     motions = [motion for motion in program.runtime_motions() if not motion.axis_position]
-    for (_, _, reason), motion in zip(program.not_compensated(), motions):
+    for (place, _, reason), motion in zip(program.not_compensated(), motions):
         moved = [program.targets[i].label for i in dict.fromkeys(motion.refs) if i in corrected]
         if moved:
             reason += (f"; built on {', '.join(moved)}, which {'is' if len(moved) == 1 else 'are'} corrected: "
                        "it moves with them (its offset itself is not compensated)")
-        listed.append((motion.line, motion.text, reason))
+        listed.append((place, motion.text, reason))
     lines = {line for line, _, _ in listed}
     listed += [(line, text, f"point {program.targets[i].label} is used here, where trajcomp cannot see the motion "
                             "(a procedure argument, a run-time expression): left as written")

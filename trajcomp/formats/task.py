@@ -46,7 +46,9 @@ def merge(programs):
     -------
     Program
         Named after the first (a point the files use with several tools or
-        frames is resolved by `trajcomp.formats.read_task`).
+        frames is resolved by `trajcomp.formats.read_task`); each item names
+        the file it is written in (`Motion.source`), so that its place is
+        ``file:line`` (`Program.place`).
     """
     languages = {program.format for program in programs}
     if len(languages) > 1:
@@ -97,7 +99,7 @@ def _named(values, table, file):
 
 def _moved_item(item, index, moved, names):
     """An item of one program with its targets, spans, tools and frames in the joined program."""
-    change = {"refs": tuple(index[i] for i in item.refs)}
+    change = {"refs": tuple(index[i] for i in item.refs), "source": moved[item.source]}
     if isinstance(item, Motion):
         change |= {
             "target": None if item.target is None else index[item.target],

@@ -80,8 +80,10 @@ def per_use(program):
         for k, role in uses:
             item = items[motion_items[k]]
             items[motion_items[k]] = dataclasses.replace(item, **{role.split("_")[0]: len(targets) - 1})
-        lines = ", ".join(str(items[motion_items[k]].line) for k, _ in uses)
-        notes.append(f"point {original.name} is used with tool/frame {key} (line{'s' * (len(uses) > 1)} {lines}) "
+        places = [edited.place(items[motion_items[k]]) for k, _ in uses]  # "b.src:3" in a task of several files
+        lines = ", ".join(map(str, places))
+        lines = lines if isinstance(places[0], str) else f"line{'s' * (len(uses) > 1)} {lines}"
+        notes.append(f"point {original.name} is used with tool/frame {key} ({lines}) "
                      "besides its first use: "
                      f"written as a copy {name} after it ({edited.sources[source].name}:{targets[-1].line}), "
                      "corrected for that use")

@@ -224,6 +224,9 @@ class Motion:
         program (KUKA ``XHOME`` of $config.dat, ``$AXIS_ACT``: where the arm
         is, as RoboDK's and KUKA's programs start): joint space, kept as
         written like a joint target, not a motion left uncompensated.
+    source : int
+        Index into `Program.sources` of the file the motion is written in:
+        0 but in a program joined from several files (`trajcomp.formats.task`).
     """
 
     kind: str
@@ -241,6 +244,7 @@ class Motion:
     spans: Mapping = dataclasses.field(default_factory=dict)
     axis_position: bool = False
     speed_why: str = ""
+    source: int = 0
 
 
 @dataclasses.dataclass(frozen=True)
@@ -249,8 +253,11 @@ class Statement:
 
     ``refs`` are the targets it names (procedure arguments ``MyProc p10;``,
     ``PR[1]=P[3]``): used by the program, but not by a motion trajcomp sees.
+    ``source``: index into `Program.sources` of the file it is written in,
+    as `Motion.source`.
     """
 
     line: int
     text: str
     refs: tuple = ()
+    source: int = 0

@@ -175,9 +175,20 @@ class Program:
         return tuple(self.motions[k] for k in np.flatnonzero(self.motion_table().target < 0))
 
     def not_compensated(self):
-        """``((line, text, reason), ...)`` of the motions passed through unchanged, in program order."""
-        return tuple((m.line, m.text, m.reason or "position computed at run time")
+        """``((line, text, reason), ...)`` of the motions passed through unchanged, in program order; ``line`` as
+        `place` gives it."""
+        return tuple((self.place(m), m.text, m.reason or "position computed at run time")
                      for m in self.runtime_motions() if not m.axis_position)
+
+    def place(self, item):
+        """Where a motion or statement is written: its line (int), or ``"file:line"`` (str) in a program joined
+        from several files whose items lie in more than one (a task, `trajcomp.formats.task.merge`)."""
+        return f"{self.sources[item.source].name}:{item.line}" if self._joined else item.line
+
+    @functools.cached_property
+    def _joined(self):
+        """Items of this program lie in more than one of its files."""
+        return not isinstance(self.items, ItemRows) and any(item.source for item in self.items)
 
     def _referencing_items(self):
         """The items that name targets outside compensated motions (``refs``)."""
@@ -194,12 +205,12 @@ class Program:
 
         Returns
         -------
-        tuple of (int, int, str)
-            ``(target index, line, text)`` of each naming item, in program order.
+        tuple of (int, int or str, str)
+            ``(target index, line, text)`` of each naming item, in program order; ``line`` as `place` gives it.
         """
         used = set(self.usage_table().index.tolist())
         return tuple(
-            (i, item.line, item.text.strip())
+            (i, self.place(item), item.text.strip())
             for item in self._referencing_items()
             for i in dict.fromkeys(item.refs)
             if i not in used

@@ -287,7 +287,7 @@ def compliance_report(report, robot, *, criteria=None, model=None, model_info=No
                        "joint velocity, acceleration or jerk")
     if model is not None:
         checks.insert(1, _model_accuracy(model, mode, has_grid, criteria.tolerance, measures))
-    lines = tuple(int(line) for line, *_ in report.not_compensated)
+    lines = tuple(_line_and_file(place)[0] for place, *_ in report.not_compensated)
     if model is None:
         checks.append(not_evaluated("uncompensated", "every motion compensated", AS_WRITTEN))
     else:
@@ -308,8 +308,8 @@ def compliance_report(report, robot, *, criteria=None, model=None, model_info=No
         "summary": _summary(report, measures, compensated=model is not None),
         "target_table": table,
         "targets": _as_run(target_json(report, robot, measures, flags, index), model is not None),
-        "not_compensated": [{"line": int(line), "text": text, "reason": reason}
-                            for line, text, reason in report.not_compensated[:ROWS]],
+        "not_compensated": [_not_compensated_entry(place, text, reason)
+                            for place, text, reason in report.not_compensated[:ROWS]],
         "unused": list(report.unused[:ROWS]),
         "joint_targets": {"mode": report.joint_mode, "labels": list(report.joint_targets[:ROWS]),
                           "count": len(report.joint_targets)},
@@ -471,3 +471,17 @@ def _model_accuracy(model, mode, has_grid, tolerance, measures):
             f"the model has no cross-validation of mode {mode} (calibrated with --folds 0): its fit errors are the "
             "residual grid reproducing its own nodes, not an accuracy; calibrate with --folds 5 to evaluate it"))
     return accuracy_check((model.report.get("fit") or {}).get(mode), mode, tolerance, "calibration fit (in-sample)")
+
+
+def _line_and_file(place):
+    """``(line, file)`` of a place `Program.place` gives: ``12`` -> ``(12, None)``, ``"b.src:12"`` -> ``(12, "b.src")``."""
+    if isinstance(place, str):
+        file, _, line = place.rpartition(":")
+        return int(line), file
+    return int(place), None
+
+
+def _not_compensated_entry(place, text, reason):
+    """One motion of the report's ``not_compensated`` list; ``file`` names its file in a program of several files."""
+    line, file = _line_and_file(place)
+    return {"line": line, **({"file": file} if file else {}), "text": text, "reason": reason}

@@ -220,8 +220,9 @@ def _not_compensated(doc):
     which = "These motions were" if listed == total else f"{total} motions were (the first {listed} listed)"
     return (f'<div class="callout"><p>{which} left exactly as written; they do not land where the '
             "model would put them.</p></div>"
-            + table(("line", "statement", "why"), [(m["line"], Raw(f"<code>{esc(m['text'])}</code>"), m["reason"])
-                                                   for m in doc["not_compensated"]], numeric=(0,)))
+            + table(("line", "statement", "why"),
+                    [(f"{m['file']}:{m['line']}" if "file" in m else m["line"], Raw(f"<code>{esc(m['text'])}</code>"),
+                      m["reason"]) for m in doc["not_compensated"]], numeric=(0,)))
 
 
 def _posture_text(doc):
