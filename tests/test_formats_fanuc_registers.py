@@ -175,3 +175,18 @@ def test_a_register_is_compensated_where_the_backup_holds_it_once_for_the_progra
     task = formats.read_task([path, folder / "SEAM.LS"])
     assert [task.where(m.target) for m in task.motions] == [
         "PR[3] (POSREG.VA:10)", "PR[1] (POSREG.VA:2)", "PR[2] (POSREG.VA:6)", "PR[2] (POSREG.VA:6)"]
+
+
+def test_a_register_used_with_two_tools_lists_each_motion_with_why_no_copy_is_written(tmp_path):
+    robot = load_robot("fanuc_lrmate200id")
+    path = _cell(tmp_path, robot, "UFRAME_NUM=0\nUTOOL_NUM=1\nL PR[1] 100mm/sec FINE\nUTOOL_NUM=2\n"
+                                  "L PR[1] 100mm/sec FINE\nJ PR[3] 50% FINE")
+    program = formats.read(path)
+    why = ("one set of numbers cannot be right for both, and no copy is written: a position register holds one "
+           "position (a copy would need a register the controller does not use); left as written")
+    assert program.not_compensated() == (
+        (7, "3: L PR[1] 100mm/sec FINE ;", f"point PR[1] is used here with tool/frame ('1', '0') and with ('2', '0') "
+                                           f"at line 9: {why}"),
+        (9, "5: L PR[1] 100mm/sec FINE ;", f"point PR[1] is used here with tool/frame ('2', '0') and with ('1', '0') "
+                                           f"at line 7: {why}"))
+    assert program.where(program.motions[2].target) == "PR[3] (POSREG.VA:10)"  # the joint register: one position

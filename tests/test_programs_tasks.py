@@ -281,14 +281,58 @@ def test_each_further_use_of_a_point_gets_a_corrected_copy_named_and_reported(tm
                                atol=1e-6)
 
 
-def test_a_point_a_language_cannot_copy_keeps_its_motions_as_written_and_listed(tmp_path):
+def _ur_pose(robot, q):
+    """``x, y, z, rx, ry, rz`` (m, rad) of the UR arm's TCP at joints ``q`` (rad), as a URScript pose literal."""
+    T = fk(robot, np.asarray(q)[None])[0]
+    return ", ".join(f"{v:.6f}" for v in [*(T[:3, 3] / 1000.0), *matrix_to_rotvec(T[:3, :3])])
+
+
+def test_a_urscript_pose_variable_used_with_two_tcps_gets_a_copy_per_tcp(tmp_path):
+    robot = load_robot("ur10")
     path = tmp_path / "two.script"
-    path.write_text("def prog():\n  pick = p[0.5, -0.2, 0.4, 0, 3.14159, 0]\n  set_tcp(p[0,0,0.1,0,0,0])\n"
-                    "  movel(pick, a=1.2, v=0.25)\n  set_tcp(p[0,0,0.2,0,0,0])\n  movel(pick, a=1.2, v=0.25)\nend\n")
+    path.write_text(f"def prog():\n  pick = p[{_ur_pose(robot, [0.2, -1.2, 1.4, -1.7, -1.57, 0.3])}]\n"
+                    "  set_tcp(p[0,0,0.1,0,0,0])\n  movel(pick, a=1.2, v=0.25)\n  set_tcp(p[0,0,0.2,0,0,0])\n"
+                    "  movel(pick, a=1.2, v=0.25) # pick again\nend\n")
+    program = formats.read(path)  # the name twice on line 6 (a comment): the line is not renamed, nothing copied
+    assert [reason for _, _, reason in program.not_compensated()] == [
+        "point pick is used here with tool/frame ('set_tcp line 3', None) and with ('set_tcp line 5', None) at line 6: "
+        "one set of numbers cannot be right for both, and no copy is written: its name is not written once in 6: "
+        "movel(pick, a=1.2, v=0.25) # pick again; left as written",
+        "point pick is used here with tool/frame ('set_tcp line 5', None) and with ('set_tcp line 3', None) at line 4: "
+        "one set of numbers cannot be right for both, and no copy is written: its name is not written once in 6: "
+        "movel(pick, a=1.2, v=0.25) # pick again; left as written"]
+    path.write_text(path.read_text().replace(" # pick again", ""))
     program = formats.read(path)
-    assert [line for line, _, _ in program.not_compensated()] == [4, 6] and program.notes == ()
-    assert program.not_compensated()[0][2].endswith("one set of numbers cannot be right for both, its motions are "
-                                                    "left as written")
+    assert program.sources[0].text.splitlines()[1:3] == [
+        f"  pick = p[{_ur_pose(robot, [0.2, -1.2, 1.4, -1.7, -1.57, 0.3])}]",
+        f"  pick_2 = p[{_ur_pose(robot, [0.2, -1.2, 1.4, -1.7, -1.57, 0.3])}]"]
+    assert [program.where(m.target) for m in program.motions] == ["pick (two.script:2)", "pick_2 (two.script:3)"]
+    assert program.not_compensated() == () and len(program.notes) == 1
+    edited, report = compensate_program(program, _stand_in(robot), robot)
+    formats.write(path, edited)
+    assert "  movel(pick_2, a=1.2, v=0.25)" in path.read_text() and formats.read(path).notes == ()
+    # each copy solved for its own TCP: the same target, the flange 100 mm further back along the tool axis
+    T = dict(zip((label.split(" ")[0] for label in report.labels), report.T_target))
+    q = dict(zip((label.split(" ")[0] for label in report.labels), report.q))
+    np.testing.assert_allclose(T["pick_2"], T["pick"], atol=1e-9)
+    flanges = {name: fk(robot, q[name][None], tcp=False)[0] for name in ("pick", "pick_2")}
+    np.testing.assert_allclose(flanges["pick"][:3, 3] - flanges["pick_2"][:3, 3], 100.0 * T["pick"][:3, 2], atol=1e-6)
+
+
+def test_a_point_that_cannot_be_copied_lists_each_motion_with_its_tool_and_why(tmp_path):
+    path = tmp_path / "pair.script"  # PolyScope's pair: the joints of Waypoint_1_p are Waypoint_1_q's list
+    path.write_text("def prog():\n  global Waypoint_1_p=p[0.5, -0.2, 0.4, 0, 3.14159, 0]\n"
+                    "  global Waypoint_1_q=[0.1, -1.2, 1.4, -1.7, -1.57, 0.0]\n  set_tcp(p[0,0,0.1,0,0,0])\n"
+                    "  movej(get_inverse_kin(Waypoint_1_p, qnear=Waypoint_1_q), a=1.39, v=1.04)\n"
+                    "  set_tcp(p[0,0,0.2,0,0,0])\n  movel(Waypoint_1_p, a=1.2, v=0.25)\nend\n")
+    program = formats.read(path)
+    assert program.notes == () and [(line, reason) for line, _, reason in program.not_compensated()] == [
+        (5, "point Waypoint_1_p is used here with tool/frame ('set_tcp line 4', None) and with ('set_tcp line 6', "
+            "None) at line 7: one set of numbers cannot be right for both, and no copy is written: its joints are a "
+            "list another variable holds (pair.script line 3), which a copy would share; left as written"),
+        (7, "point Waypoint_1_p is used here with tool/frame ('set_tcp line 6', None) and with ('set_tcp line 4', "
+            "None) at line 5: one set of numbers cannot be right for both, and no copy is written: its joints are a "
+            "list another variable holds (pair.script line 3), which a copy would share; left as written")]
 
 
 REAL = Path(__file__).parent / "data" / "programs" / "real"

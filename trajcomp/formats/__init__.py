@@ -290,11 +290,11 @@ def read(path, format=None, *, workers=1):
 
 def uses_resolved(program, fmt):
     """``program`` with each point used with several tools or frames copied per use (`trajcomp.formats.uses`,
-    languages with ``copies``), the motions of any such point left otherwise (`Program.with_shared_targets_left`)."""
-    if fmt.copies:
+    languages with ``copies``), the motions of any such point left otherwise, each listed with why."""
+    if fmt.copies or program.with_shared_targets_left() is not program:
         from trajcomp.formats.uses import per_use  # lazily, like the format modules
 
-        program = per_use(program)
+        program = per_use(program, copies=fmt.copies)
     return program.with_shared_targets_left()
 
 

@@ -34,6 +34,9 @@ A point also used as the frame of ``pose_trans`` (the approach idiom
 stays a point: the offsets from it are computed at run time and move with
 it. A six-number list no joint can hold (``Kp = [1000, ...]``) is data.
 A motion to a variable the script never assigns is a ReadError.
+A pose variable used with two TCPs gets a copy per TCP (``pick_2``,
+`trajcomp.formats.uses`), unless its joints are another list's (PolyScope's
+``Waypoint_n_q``): then its motions are listed.
 PolyScope's program saved beside the script (``name.urp``) is not read
 nor written; the report says so (`trajcomp.formats.urscript.polyscope`). Pose
 variables named by other statements are `Statement.refs`.
@@ -48,4 +51,5 @@ register_format(
     vendor="Universal Robots",
     speeds=f"{__name__}.speeds:write_speeds",
     frameless=True,
+    copies=True,
 )
