@@ -42,8 +42,8 @@ from trajcomp.compensation.targets import program_corrector
 from trajcomp.errors import TrajcompError
 from trajcomp.model.compensation_model import CompensationModel
 from trajcomp.model.model_file import load_model
-from trajcomp.compensation.program import MAX_CORRECTION, compensate_program
-from trajcomp.compensation.posture import MAX_JOINT_CHANGE
+from trajcomp.compensation.options import MAX_CORRECTION, MAX_JOINT_CHANGE
+from trajcomp.compensation.program import compensate_program
 from trajcomp.programs.program import Program
 from trajcomp.programs.items import LINEAR, Motion, Target
 from trajcomp.arm.transforms import matrix_to_pose, pose_to_matrix

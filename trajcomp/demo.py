@@ -24,6 +24,7 @@ from trajcomp.calibration.measurements import Measurements, read_measurements
 from trajcomp.compensation.program import compensate_program
 from trajcomp.calibration.measurement_plan import default_orientation, plan_grid
 from trajcomp.arm.robot import load_robot
+from trajcomp.calibration.profiles import PAPER_ROBOT
 from trajcomp.calibration.simulate import VirtualRobot
 from trajcomp.model.stats import ErrorStats
 from trajcomp.arm.transforms import abc_to_matrix
@@ -65,7 +66,6 @@ class Cube:
         return f"{self.name} cube: corner {corner}, side {self.side:g}, step {self.step:g} mm ({points} points)"
 
 
-PAPER_ROBOT = "ur10"  # the arm class of the paper's cubes
 PAPER_CUBES = (Cube("large", (300.0, -100.0, 300.0), 500.0, 100.0), Cube("small", (500.0, 100.0, 500.0), 100.0, 10.0))
 # Placements tried around the scaled paper cubes: shifts of up to two large
 # steps per axis, nearest first.

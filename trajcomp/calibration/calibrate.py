@@ -26,11 +26,11 @@ import logging
 
 import numpy as np
 
+from trajcomp.calibration.options import INTERPOLATIONS, LOSSES, METHODS, ORIENTATION_WEIGHT
 from trajcomp.errors import CalibrationError
 from trajcomp.model import landing
-from trajcomp.model.grid import KINDS, METHODS as LATTICE_INTERPOLATORS, TOLERANCE, detect_lattice, fit_field
-from trajcomp.calibration.identify import (LOSSES, ORIENTATION_WEIGHT, best_fit_transform, identify, linearise,
-                                          outlier_rows, select_splines)
+from trajcomp.model.grid import METHODS as LATTICE_INTERPOLATORS, TOLERANCE, detect_lattice, fit_field
+from trajcomp.calibration.identify import best_fit_transform, identify, linearise, outlier_rows, select_splines
 from trajcomp.arm.ik import batch_seed, branch_index, ik
 from trajcomp.model.joint_errors import KIND as JOINT_KIND
 from trajcomp.model.joint_errors import JointResidual, is_term
@@ -45,8 +45,6 @@ from trajcomp.arm.transforms import abc_to_matrix, invert, pose_to_matrix
 
 log = logging.getLogger(__name__)
 
-METHODS = ("linear", "dh", "grid", "composite")
-INTERPOLATIONS = ("auto", JOINT_KIND, *KINDS)
 MAX_ROWS = 100_000  # measurements one calibration fits: 12 min and 1.3 GB (2-core machine shared by 6 runs)
 FIELD_ON_TOP = "knn"  # the residual field a joint residual may take on top: scattered, so held-out rows leave no hole
 

@@ -31,6 +31,7 @@ import logging
 
 import numpy as np
 
+from trajcomp.calibration.options import LOSSES, ORIENTATION_WEIGHT
 from trajcomp.model import joint_errors
 from trajcomp.errors import CalibrationError
 from trajcomp.model.joint_errors import SplineBasis
@@ -49,8 +50,6 @@ from trajcomp.arm.transforms import invert, matrix_to_rotvec, mean_rotation, rot
 
 log = logging.getLogger(__name__)
 
-LOSSES = ("linear", "soft_l1", "huber", "cauchy")
-ORIENTATION_WEIGHT = 100.0  # mm/rad: 1 mrad of orientation error weighs as 0.1 mm of position error
 ROBUST_SCALE = 3.0  # the loss turns robust beyond this many median residual norms
 MAX_ITERATIONS = 50
 STEP_TOLERANCE = 1e-7  # mm (or rad * ANGLE_LEVER): converged when no scaled parameter moves more

@@ -1,22 +1,24 @@
-"""Argument types and helpers shared by the sub-commands."""
+"""Argument types and helpers shared by the sub-commands.
+
+Building a parser imports none of the library: the types import what they
+convert with (numpy, the layout reader) when an option is parsed, so that
+``trajcomp NAME --help`` starts without them.
+"""
 
 import argparse
 import math
 import sys
 
-import numpy as np
-
 from trajcomp.commands import COMMANDS
-from trajcomp.calibration.layout import load_layout, parse_mapping
 from trajcomp.errors import TrajcompError
-from trajcomp.arm.robot import load_robot
-from trajcomp.arm.transforms import pose_to_matrix
 
 
 def numbers(count):
     """An argparse type: ``count`` comma-separated numbers, as a float array."""
 
     def parse(text):
+        import numpy as np
+
         try:
             values = np.array([float(v) for v in text.split(",")])
         except ValueError:
@@ -52,6 +54,8 @@ def positive_number(text):
 
 def steps(text):
     """An argparse type: one positive step, or three (x, y, z), mm."""
+    import numpy as np
+
     values = [positive_number(v) for v in text.split(",")]
     if len(values) not in (1, 3):
         raise argparse.ArgumentTypeError(f"expected one step or three (x,y,z), got {text!r}")
@@ -60,12 +64,18 @@ def steps(text):
 
 def pose(text):
     """An argparse type: ``x,y,z,a,b,c`` (mm, deg) as a matrix (4, 4), mm and rad."""
+    import numpy as np
+
+    from trajcomp.arm.transforms import pose_to_matrix
+
     values = numbers(6)(text)
     return pose_to_matrix(np.concatenate([values[:3], np.radians(values[3:])]))
 
 
 def mapping(text):
     """An argparse type: a column mapping ``FIELD=EXPR,...`` (`trajcomp.calibration.layout.parse_mapping`)."""
+    from trajcomp.calibration.layout import parse_mapping
+
     try:
         return parse_mapping(text)
     except TrajcompError as exc:
@@ -84,6 +94,8 @@ def add_layout(parser):
 
 def layout_of(args):
     """The measurement layout the options name, or None for the standard layout."""
+    from trajcomp.calibration.layout import load_layout
+
     return load_layout(args.columns_file) if args.columns_file else args.columns
 
 
@@ -96,6 +108,9 @@ def add_robot(parser, required=True):
 
 
 def robot_of(args):
+    """The `trajcomp.arm.robot.Robot` ``--robot`` names."""
+    from trajcomp.arm.robot import load_robot
+
     return load_robot(args.robot)
 
 

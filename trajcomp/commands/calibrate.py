@@ -1,12 +1,6 @@
 """``trajcomp calibrate``: identify a compensation model from measurements."""
 
-import numpy as np
-
-from trajcomp.errors import CalibrationError
-from trajcomp.support.atomic import refuse_inputs
-from trajcomp.calibration.calibrate import (
-    INTERPOLATIONS, MAX_ROWS, METHODS, calibrate, selection_words, too_many_rows,
-)
+from trajcomp.calibration.options import INTERPOLATIONS, LOSSES, METHODS, ORIENTATION_WEIGHT
 from trajcomp.commands._args import (
     add_layout,
     add_robot,
@@ -21,13 +15,6 @@ from trajcomp.commands._args import (
     steps,
 )
 from trajcomp.commands._report import add_report_options, criteria_of, emit
-from trajcomp.calibration.identify import LOSSES, ORIENTATION_WEIGHT
-from trajcomp.calibration.measurements import read_measurements
-from trajcomp.model.model_file import model_files, save_model
-from trajcomp.arm.parameters import is_angle
-from trajcomp.report import report_paths
-from trajcomp.model.stats import ErrorStats, format_table
-from trajcomp.arm.transforms import matrix_to_pose
 
 
 def add_parser(sub):
@@ -68,6 +55,8 @@ def add_parser(sub):
 
 def print_stats(title, stats):
     """Print a table of per-mode statistics dicts (as in a model report)."""
+    from trajcomp.model.stats import ErrorStats, format_table
+
     rows = {mode: ErrorStats(**{**s, "signed_mean": tuple(s["signed_mean"]), "std": tuple(s["std"])})
             for mode, s in stats.items() if isinstance(s, dict)}
     print(title)
@@ -76,6 +65,12 @@ def print_stats(title, stats):
 
 def describe(model):
     """Lines on what was identified: parameters, TCP, registration, other tools."""
+    import numpy as np
+
+    from trajcomp.arm.parameters import is_angle
+    from trajcomp.arm.transforms import matrix_to_pose
+    from trajcomp.calibration.calibrate import selection_words
+
     lines = []
     if model.dh_names:
         shown = ", ".join(
@@ -98,6 +93,16 @@ def describe(model):
 
 
 def run(args):
+    import numpy as np
+
+    from trajcomp.arm.transforms import matrix_to_pose
+    from trajcomp.calibration.calibrate import MAX_ROWS, calibrate, too_many_rows
+    from trajcomp.calibration.measurements import read_measurements
+    from trajcomp.errors import CalibrationError
+    from trajcomp.model.model_file import model_files, save_model
+    from trajcomp.report import calibration_report, file_entry, report_paths
+    from trajcomp.support.atomic import refuse_inputs
+
     robot = robot_of(args)
     if args.tool is not None:
         robot = robot.replace(T_flange_tool=args.tool)
@@ -126,8 +131,6 @@ def run(args):
                         report["cross_validation"])
     info(f"wrote {args.output}")
     if args.report or args.json_only:
-        from trajcomp.report import calibration_report, file_entry
-
         files = [file_entry("measurements", args.measurements), file_entry("model", args.output)]
         options = {k: v for k, v in vars(args).items() if k in ("robot", "method", "interpolation", "frame", "loss",
                                                                  "folds", "seed", "orientation_weight", "columns_file")}

@@ -5,28 +5,19 @@ file runs it here, a batch in workers (`trajcomp.compensation.batch`).
 """
 
 import dataclasses
+import math
 import sys
 from pathlib import Path
 
-import numpy as np
-
 from trajcomp import formats
-from trajcomp.arm.robot import load_robot
 from trajcomp.commands._args import command_parser, info, positive_number
 from trajcomp.commands._report import add_report_options, criteria_of
 from trajcomp.commands.convert import add_frame_options, add_in_place_option, frame_options
 from trajcomp.commands.retime import METHOD_HELP, add_tolerance_option
-from trajcomp.compensation import batch
-from trajcomp.compensation.pipeline import RETIME_CHOICES, CompensationJob, loaded_model
-from trajcomp.compensation.posture import MAX_JOINT_CHANGE
-from trajcomp.compensation.program import MAX_CORRECTION
+from trajcomp.compensation.options import MAX_CORRECTION, MAX_JOINT_CHANGE, RETIME_CHOICES
 from trajcomp.errors import RobotError, TrajcompError
-from trajcomp.formats.task import groups as task_groups
-from trajcomp.model.compensation_model import MODES
-from trajcomp.model.model_file import model_files
-from trajcomp.support.atomic import refuse_inputs
+from trajcomp.model.options import MODES
 from trajcomp.support.parallel import usable_cores
-from trajcomp.support.progress import progress
 
 
 def add_parser(sub):
@@ -55,7 +46,7 @@ def add_parser(sub):
     add_frame_options(parser)
     parser.add_argument("--joint-targets", choices=("keep", "compensate"), default="keep",
                         help="joint-space targets: keep them (default) or compensate the pose they stand for")
-    parser.add_argument("--max-joint-change", type=positive_number, default=float(np.degrees(MAX_JOINT_CHANGE)), metavar="DEG",
+    parser.add_argument("--max-joint-change", type=positive_number, default=math.degrees(MAX_JOINT_CHANGE), metavar="DEG",
                         help="largest joint change a correction may cause before the target counts as leaving "
                         "its posture (default %(default)g deg)")
     parser.add_argument("--max-correction", type=positive_number, default=MAX_CORRECTION, metavar="MM",
@@ -84,12 +75,16 @@ def add_parser(sub):
 
 
 def run(args):
+    from trajcomp.arm.robot import load_robot
+    from trajcomp.compensation import batch
+    from trajcomp.compensation.pipeline import CompensationJob, loaded_model
+
     if args.jobs < 1:
         raise TrajcompError(f"--jobs: expected a whole number of at least 1, got {args.jobs}")
     tools, frames = frame_options(args)
     job = CompensationJob(
         model=str(Path(args.model).resolve()), mode=args.mode, outside=args.outside, tools=tools, frames=frames,
-        joint_targets=args.joint_targets, max_joint_change=np.radians(args.max_joint_change),
+        joint_targets=args.joint_targets, max_joint_change=math.radians(args.max_joint_change),
         max_correction=args.max_correction, in_place=args.in_place, criteria=criteria_of(args),
         report=args.report, json_only=args.json_only, retime=args.retime, path_tolerance=args.path_tolerance,
         to_format=args.to_format,
@@ -118,6 +113,12 @@ def run(args):
 
 
 def _run_batch(args, job):
+    from trajcomp.compensation import batch
+    from trajcomp.formats.task import groups as task_groups
+    from trajcomp.model.model_file import model_files
+    from trajcomp.support.atomic import refuse_inputs
+    from trajcomp.support.progress import progress
+
     found = batch.expand_inputs(args.program)
     outputs = batch.output_paths(found, args.output)
     inputs = [path for path, _ in found]

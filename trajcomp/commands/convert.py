@@ -4,17 +4,11 @@ Also home of the tool and frame options shared by the commands that read
 programs (``--tool NAME=x,y,z,a,b,c``, ``--frame``/``--base``/``--wobj``).
 """
 
-import argparse
 import math
 
-import numpy as np
-
-from trajcomp.commands import COMMANDS
 from trajcomp import formats
+from trajcomp.commands._args import command_parser
 from trajcomp.errors import TrajcompError
-from trajcomp.compensation.program import convert_program
-from trajcomp.arm.robot import load_robot
-from trajcomp.arm.transforms import pose_to_matrix
 
 
 def add_frame_options(parser):
@@ -51,6 +45,10 @@ def parse_frame_values(values, option):
     TrajcompError
         A malformed value, naming the option and the text.
     """
+    import numpy as np
+
+    from trajcomp.arm.transforms import pose_to_matrix
+
     out = {}
     for text in values:
         name, _, numbers = text.partition("=")
@@ -70,18 +68,15 @@ def frame_options(args):
 
 
 def add_parser(sub):
-    parser = sub.add_parser(
-        "convert",
-        help=COMMANDS["convert"],
-        description="Read a robot program (KRL, RAPID, FANUC LS, URScript or program CSV) and write it in "
+    parser = command_parser(
+        sub, "convert",
+        "Read a robot program (KRL, RAPID, FANUC LS, URScript or program CSV) and write it in "
         "the language of OUT's extension. Poses are kept to 1e-6 mm; configuration data (KUKA S/T, ABB "
         "confdata, FANUC CONFIG) are computed with the robot's kinematics, so give --robot when the "
         "target language needs them. Motions whose position is computed at run time are written as "
         "comments.",
-        epilog="examples:\n"
-        "  trajcomp convert examples/programs/kuka/weld.src weld.csv --robot kuka_kr6_r900\n"
-        "  trajcomp convert examples/programs/csv/weld.csv weld.script",
-        formatter_class=argparse.RawDescriptionHelpFormatter,
+        "trajcomp convert examples/programs/kuka/weld.src weld.csv --robot kuka_kr6_r900",
+        "trajcomp convert examples/programs/csv/weld.csv weld.script",
     )
     parser.add_argument("input", metavar="IN", help="program to read")
     parser.add_argument("output", metavar="OUT", help="program to write (format from the extension)")
@@ -94,6 +89,9 @@ def add_parser(sub):
 
 
 def run(args):
+    from trajcomp.arm.robot import load_robot
+    from trajcomp.compensation.program import convert_program
+
     tools, frames = frame_options(args)
     robot = load_robot(args.robot) if args.robot else None
     program = formats.read(args.input, args.from_format)

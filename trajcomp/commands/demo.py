@@ -2,11 +2,8 @@
 
 from pathlib import Path
 
+from trajcomp.calibration.profiles import PAPER_ROBOT, PROFILES
 from trajcomp.commands._args import command_parser, info, non_negative_int
-from trajcomp.demo import PAPER_ROBOT, format_comparison, run_demo, run_program
-from trajcomp.model.model_file import save_model
-from trajcomp.arm.robot import load_robot
-from trajcomp.calibration.simulate import PROFILES
 
 
 def add_parser(sub):
@@ -28,6 +25,10 @@ def add_parser(sub):
 
 
 def run(args):
+    from trajcomp.arm.robot import load_robot
+    from trajcomp.demo import format_comparison, run_demo, run_program
+    from trajcomp.model.model_file import save_model
+
     robot = load_robot(args.robot)
     out = Path(args.output_dir)
     out.mkdir(parents=True, exist_ok=True)

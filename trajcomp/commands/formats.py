@@ -1,19 +1,15 @@
 """``trajcomp formats``: list the robot program formats, built-in and plugins."""
 
-import argparse
-
-from trajcomp.commands import COMMANDS
 from trajcomp import formats
+from trajcomp.commands._args import command_parser
 
 
 def add_parser(sub):
-    parser = sub.add_parser(
-        "formats",
-        help=COMMANDS["formats"],
-        description="List the program formats trajcomp reads and writes, their file extensions and where they "
+    parser = command_parser(
+        sub, "formats",
+        "List the program formats trajcomp reads and writes, their file extensions and where they "
         "come from (built-in, or a plugin of the 'trajcomp.formats' entry-point group).",
-        epilog="example:\n  trajcomp formats",
-        formatter_class=argparse.RawDescriptionHelpFormatter,
+        "trajcomp formats",
     )
     parser.set_defaults(run=run)
 

@@ -2,16 +2,8 @@
 
 import argparse
 
-import numpy as np
-
-from trajcomp.support.atomic import refuse_inputs
 from trajcomp.commands._args import add_robot, command_parser, info, numbers, positive_number, robot_of
 from trajcomp.errors import ToleranceError
-from trajcomp.arm.ik import Configuration
-from trajcomp.calibration.measurements import Measurements, write_measurements
-from trajcomp.calibration.orientations import locates_flange, orientation_spread, spread_orientations
-from trajcomp.calibration.measurement_plan import default_orientation, orientations_needed, plan_grid
-from trajcomp.arm.transforms import abc_to_matrix
 
 
 def orientation_list(text):
@@ -24,6 +16,8 @@ def orientation_list(text):
         if not 1 <= count <= 50:
             raise argparse.ArgumentTypeError(f"expected 1 to 50 orientations, got {count}")
         return count
+    import numpy as np
+
     return np.radians(np.array([numbers(3)(item) for item in text.split(";") if item.strip()]))
 
 
@@ -54,6 +48,14 @@ def add_parser(sub):
 
 
 def run(args):
+    import numpy as np
+
+    from trajcomp.arm.ik import Configuration
+    from trajcomp.calibration.measurement_plan import default_orientation, plan_grid
+    from trajcomp.calibration.measurements import Measurements, write_measurements
+    from trajcomp.calibration.orientations import spread_orientations
+    from trajcomp.support.atomic import refuse_inputs
+
     refuse_inputs([args.output], [args.robot])
     robot = robot_of(args)
     orientation = default_orientation(robot) if args.orientation is None else np.radians(args.orientation)
@@ -84,6 +86,10 @@ def run(args):
 
 def describe_needs(robot, plan, orientations):
     """Lines saying how many orientations the identification needs (tracker positions, joint errors included)."""
+    from trajcomp.arm.transforms import abc_to_matrix
+    from trajcomp.calibration.measurement_plan import orientations_needed
+    from trajcomp.calibration.orientations import locates_flange, orientation_spread
+
     if not plan.reachable.any():
         return []
     counts, candidates = orientations_needed(robot, plan)

@@ -2,13 +2,9 @@
 
 import dataclasses
 
-from trajcomp.support.atomic import refuse_inputs
-from trajcomp.calibration.calibrate import commanded
 from trajcomp.commands._args import command_parser, info, layout_of
 from trajcomp.commands.validate import add_tracker_options, check_data, tracker_pose
-from trajcomp.calibration.measurements import read_measurements, write_measurements
-from trajcomp.model.compensation_model import MODES
-from trajcomp.model.model_file import load_model, model_files
+from trajcomp.model.options import MODES
 
 
 def add_parser(sub):
@@ -29,6 +25,11 @@ def add_parser(sub):
 
 
 def run(args):
+    from trajcomp.calibration.calibrate import commanded
+    from trajcomp.calibration.measurements import read_measurements, write_measurements
+    from trajcomp.model.model_file import load_model, model_files
+    from trajcomp.support.atomic import refuse_inputs
+
     refuse_inputs([args.output], [*model_files(args.model), args.measurements, args.register, args.columns_file])
     model = load_model(args.model)
     meas = read_measurements(args.measurements, layout_of(args))

@@ -8,10 +8,7 @@ import sys
 from trajcomp.commands._args import add_robot, command_parser, info, robot_of
 from trajcomp.commands._report import add_report_options, criteria_of
 from trajcomp.commands.convert import add_frame_options, add_in_place_option, frame_options
-from trajcomp.compensation.pipeline import RetimeJob
-from trajcomp.compensation.batch import EXIT_CODES
-from trajcomp.timing import METHODS
-from trajcomp.timing.path import TOLERANCE
+from trajcomp.timing.options import METHODS, TOLERANCE
 
 METHOD_HELP = ("auto: TOPP-RA for continuous LIN/CIRC runs, ruckig (jerk-limited) for point-to-point "
                "and stop-to-stop motions; toppra or ruckig: that one for every segment")
@@ -47,6 +44,9 @@ def add_tolerance_option(parser):
 
 
 def run(args):
+    from trajcomp.compensation.batch import EXIT_CODES
+    from trajcomp.compensation.pipeline import RetimeJob
+
     tools, frames = frame_options(args)
     job = RetimeJob(robot_of(args), robot_file=args.robot, method=args.method, path_tolerance=args.path_tolerance,
                     tools=tools, frames=frames, in_place=args.in_place, criteria=criteria_of(args),

@@ -1,7 +1,6 @@
 """``trajcomp robots``: list the built-in robots."""
 
 from trajcomp.commands._args import command_parser
-from trajcomp.arm.robot import builtin_robot_names, load_robot
 
 
 def add_parser(sub):
@@ -14,6 +13,8 @@ def add_parser(sub):
 
 
 def run(args):
+    from trajcomp.arm.robot import builtin_robot_names, load_robot
+
     for name in builtin_robot_names():
         robot = load_robot(name)
         print(f"{name:20s} {robot.convention:8s} {robot.source}")

@@ -2,16 +2,9 @@
 
 import dataclasses
 
-import numpy as np
-
-from trajcomp.support.atomic import refuse_inputs
-from trajcomp.calibration.calibrate import commanded
+from trajcomp.calibration.profiles import PROFILES
 from trajcomp.commands._args import add_robot, command_parser, info, non_negative_int, pose, robot_of
 from trajcomp.errors import ReadError
-from trajcomp.arm.kinematics import fk
-from trajcomp.calibration.measurements import read_measurements, write_measurements
-from trajcomp.calibration.simulate import PROFILES, VirtualRobot
-from trajcomp.arm.transforms import matrix_to_abc
 
 
 def add_parser(sub):
@@ -39,6 +32,15 @@ def add_parser(sub):
 
 
 def run(args):
+    import numpy as np
+
+    from trajcomp.arm.kinematics import fk
+    from trajcomp.arm.transforms import matrix_to_abc
+    from trajcomp.calibration.calibrate import commanded
+    from trajcomp.calibration.measurements import read_measurements, write_measurements
+    from trajcomp.calibration.simulate import VirtualRobot
+    from trajcomp.support.atomic import refuse_inputs
+
     refuse_inputs([args.output], [args.plan, args.robot])
     robot = robot_of(args)
     meas = read_measurements(args.plan)

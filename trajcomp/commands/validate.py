@@ -2,19 +2,10 @@
 
 import dataclasses
 
-import numpy as np
-
-from trajcomp.support.atomic import refuse_inputs, write_atomic
-from trajcomp.calibration.calibrate import commanded, register, to_base
 from trajcomp.commands._args import add_layout, command_parser, info, layout_of
 from trajcomp.commands._report import add_report_options, criteria_of, emit
 from trajcomp.commands.calibrate import print_stats
 from trajcomp.errors import ReadError
-from trajcomp.calibration.measurements import read_measurements
-from trajcomp.model.model_file import load_model, model_files
-from trajcomp.calibration.plausibility import check_applied
-from trajcomp.report import file_entry, report_paths, validation_report
-from trajcomp.arm.transforms import abc_to_matrix, invert, rotation_angle_between
 
 
 def add_parser(sub):
@@ -48,6 +39,11 @@ def add_tracker_options(parser):
 
 def tracker_pose(args, model, frame):
     """T_tracker_base (4, 4) for the data: identity (base frame), the model's, or registered from --register."""
+    import numpy as np
+
+    from trajcomp.calibration.calibrate import commanded, register, to_base
+    from trajcomp.calibration.measurements import read_measurements
+
     if frame != "tracker":
         if args.register:
             raise ReadError("--register needs tracker-frame data (--frame tracker or a layout with frame: tracker)")
@@ -67,6 +63,11 @@ def tracker_pose(args, model, frame):
 
 def check_data(model, meas, T_tracker_base, frame):
     """Refuse data the model cannot apply to (another robot, wrong units, a duplicated column): `check_applied`."""
+    import numpy as np
+
+    from trajcomp.calibration.calibrate import commanded, to_base
+    from trajcomp.calibration.plausibility import check_applied
+
     _, position = commanded(model.nominal, meas)
     error = None if meas.measured is None else np.linalg.norm(to_base(T_tracker_base, meas.measured) - position, axis=1)
     check_applied(meas, model.nominal, position, error, registered=frame == "tracker")
@@ -74,6 +75,11 @@ def check_data(model, meas, T_tracker_base, frame):
 
 def orientation_lines(model, meas, T_tracker_base):
     """Orientation |error| lines of 6-DoF data for the kinematic modes (empty without measured orientations)."""
+    import numpy as np
+
+    from trajcomp.arm.transforms import abc_to_matrix, invert, rotation_angle_between
+    from trajcomp.calibration.calibrate import commanded
+
     joints, _ = commanded(model.nominal, meas)
     if meas.measured_orientation is None or joints is None:
         return []
@@ -88,6 +94,11 @@ def orientation_lines(model, meas, T_tracker_base):
 
 
 def run(args):
+    from trajcomp.calibration.measurements import read_measurements
+    from trajcomp.model.model_file import load_model, model_files
+    from trajcomp.report import file_entry, report_paths, validation_report
+    from trajcomp.support.atomic import refuse_inputs, write_atomic
+
     inputs = [*model_files(args.model), args.measurements, args.register, args.columns_file]
     refuse_inputs(filter(None, [args.json, *(report_paths(args.report) if args.report else ())]), inputs)
     model = load_model(args.model)

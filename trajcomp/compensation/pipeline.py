@@ -24,8 +24,9 @@ import numpy as np
 from trajcomp import formats
 from trajcomp.arm.transforms import matrix_to_pose
 from trajcomp.compensation import batch
-from trajcomp.compensation.posture import MAX_JOINT_CHANGE, planned_joints, planned_targets
-from trajcomp.compensation.program import MAX_CORRECTION, as_written_report, compensate_program, convert_program
+from trajcomp.compensation.options import MAX_CORRECTION, MAX_JOINT_CHANGE, RETIME_CHOICES
+from trajcomp.compensation.posture import planned_joints, planned_targets
+from trajcomp.compensation.program import as_written_report, compensate_program, convert_program
 from trajcomp.compensation.targets import program_corrector
 from trajcomp.errors import TimingError, TrajcompError
 from trajcomp.model.compensation_model import CompensationModel
@@ -35,10 +36,8 @@ from trajcomp.support.atomic import refuse_inputs
 from trajcomp.support.memory import end_stage, kept_apart, release
 from trajcomp.support.parallel import in_background, meanwhile
 from trajcomp.support.progress import Stages
-from trajcomp.timing import METHODS
-from trajcomp.timing.path import TOLERANCE
+from trajcomp.timing.options import TOLERANCE
 
-RETIME_CHOICES = METHODS + ("none",)
 # Targets below which the original and the corrected program are timed at once on two processes. A timing's
 # working memory is ~230 bytes per waypoint: longer programs are timed one after the other (1M points: 0.95 GB, not 1.1).
 TOGETHER = 500_000

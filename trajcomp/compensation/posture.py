@@ -32,6 +32,7 @@ import functools
 
 import numpy as np
 
+from trajcomp.compensation.options import MAX_JOINT_CHANGE
 from trajcomp.formats.configuration import BOUNDARY_TOLERANCE, binding, declared_windows
 from trajcomp.errors import IKError
 from trajcomp.programs.frames import FrameTable, tool_groups
@@ -39,7 +40,6 @@ from trajcomp.arm.ik import ik_all, turn_towards
 from trajcomp.support.parallel import map_blocks
 
 TURN = 2.0 * np.pi
-MAX_JOINT_CHANGE = np.radians(5.0)  # rad: default bound of the joint change a correction may cause
 _WINDOW_TOL = 1e-9  # rad, slack of the joint limits
 _TURNS = np.arange(-3, 4)  # whole turns tried when placing a joint in its window
 METRES_BOX = 10.0  # mm: targets all this close to the base origin are positions in metres

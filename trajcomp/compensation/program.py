@@ -20,12 +20,10 @@ from trajcomp.errors import CompensationError
 from trajcomp.arm.ik import pose_error
 from trajcomp.arm.kinematics import fk
 from trajcomp.programs.frames import FrameTable, in_frames
-from trajcomp.compensation.posture import MAX_JOINT_CHANGE, check_posture, planned_joints
+from trajcomp.compensation.options import MAX_CORRECTION, MAX_JOINT_CHANGE
+from trajcomp.compensation.posture import check_posture, planned_joints
 from trajcomp.programs.program import Program
 
-
-
-MAX_CORRECTION = 10.0  # mm, default bound of a plausible correction of a calibrated arm
 
 
 @dataclasses.dataclass(frozen=True, eq=False)

@@ -31,8 +31,7 @@ from trajcomp.arm.ik import branch_index
 from trajcomp.model.joint_errors import KIND as JOINT_KIND
 from trajcomp.arm.kinematics import fk
 from trajcomp.arm.parameters import apply_deltas
-
-MODES = ("none", "linear", "dh", "grid", "composite")
+from trajcomp.model.options import MODES
 
 
 @dataclasses.dataclass(frozen=True, eq=False)

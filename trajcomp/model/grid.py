@@ -22,10 +22,9 @@ import numpy as np
 
 from trajcomp.errors import CalibrationError, ModelError
 from trajcomp.model.interpolate import KNN, RBF, VERTEX_HIT, bounded_evaluate, fmt_point, in_box
+from trajcomp.model.options import FIELD_KINDS as KINDS, LATTICE_KINDS as METHODS
 from trajcomp.model.stats import AXES, as_vectors
 
-METHODS = ("idw8", "trilinear")
-KINDS = (*METHODS, KNN.kind, RBF.kind)
 TOLERANCE = 0.5
 """Default lattice tolerance, mm: largest distance per axis of a point from its node."""
 _CORNERS = np.array([[i, j, k] for i in (0, 1) for j in (0, 1) for k in (0, 1)])

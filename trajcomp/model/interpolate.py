@@ -19,6 +19,7 @@ import dataclasses
 import numpy as np
 
 from trajcomp.errors import CalibrationError, ModelError
+from trajcomp.model.options import KNN_KIND, RBF_KIND
 from trajcomp.model.stats import as_vectors, kfold_indices
 
 OUTSIDE = ("error", "clamp", "nan")
@@ -157,7 +158,7 @@ class KNN(_Scattered):
 
     k: int = 8
     power: float = 1.0
-    kind = "knn"
+    kind = KNN_KIND
 
     def __post_init__(self):
         p, v = _scattered_data(self.points, self.values)
@@ -227,7 +228,7 @@ class RBF(_Scattered):
     kernel: str = "thin_plate_spline"
     epsilon: float = None
     neighbors: int = None
-    kind = "rbf"
+    kind = RBF_KIND
 
     def __post_init__(self):
         p, v = _scattered_data(self.points, self.values)

@@ -38,8 +38,8 @@ import numpy as np
 from trajcomp.errors import ModelError
 from trajcomp.arm.kinematics import fk, link_frames
 from trajcomp.arm.parameters import apply_deltas
+from trajcomp.model.options import JOINT_KIND as KIND
 
-KIND = "joint"
 HARMONICS = (1, 2)
 GRAVITY = np.array([0.0, 0.0, -1.0])  # unit weight direction, base frame
 _PARAMETER = re.compile(r"^(?:(?:a|alpha|d|theta|beta)[1-6]|tool_[xyz])$")

@@ -13,11 +13,44 @@ into the program's speed fields.
 - `trajcomp.timing.ruckig_move`: jerk-limited rest-to-rest motion with ruckig;
 - `trajcomp.timing.check`: the dense 1 kHz check;
 - `trajcomp.timing.retime`: segments and the `TimingResult`;
-- `trajcomp.timing.writeback`: the timing as each language's speed fields.
+- `trajcomp.timing.writeback`: the timing as each language's speed fields;
+- `trajcomp.timing.options`: the methods and the path tolerance, without numpy (for the command line).
+
+The names below are imported from their module on first use, so that a
+command's ``--help`` can read `trajcomp.timing.options` without loading the
+timing (numpy, scipy, ruckig).
 """
 
-from trajcomp.timing.moves import Moves, moves_from_program
-from trajcomp.timing.result import Segment, TimingResult
-from trajcomp.timing.retime import METHODS, plan_segments, retime
+import importlib
+import sys
+import types
 
-__all__ = ["METHODS", "Moves", "Segment", "TimingResult", "moves_from_program", "plan_segments", "retime"]
+_MODULES = {
+    "METHODS": "options",
+    "Moves": "moves",
+    "Segment": "result",
+    "TimingResult": "result",
+    "moves_from_program": "moves",
+    "plan_segments": "retime",
+    "retime": "retime",
+}
+__all__ = sorted(_MODULES)
+
+
+def __getattr__(name):
+    if name not in _MODULES:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    return getattr(importlib.import_module(f"{__name__}.{_MODULES[name]}"), name)
+
+
+class _Package(types.ModuleType):
+    """This package: ``trajcomp.timing.retime`` stays the function when the import system sets the module of that
+    name as an attribute (which it does whenever the module is first imported, by anyone)."""
+
+    def __setattr__(self, name, value):
+        if name == "retime" and isinstance(value, types.ModuleType):
+            value = value.retime
+        super().__setattr__(name, value)
+
+
+sys.modules[__name__].__class__ = _Package

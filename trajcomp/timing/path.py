@@ -28,9 +28,9 @@ import numpy as np
 
 from trajcomp.arm.kinematics import fk_and_jacobian, frame_columns, in_blocks
 from trajcomp.programs.items import JOINT
+from trajcomp.timing.options import TOLERANCE
 from trajcomp.timing.samples import run_samples
 
-TOLERANCE = 0.005  # mm, largest deviation of the timed path from a waypoint or sample
 ROTATION_PER_MM = 1e-3  # rad of orientation tolerance per mm of position tolerance
 MIN_GRID = 200  # fewest TOPP-RA grid intervals of a run
 STOP_GRID = 50  # fewest grid intervals of a single motion from rest to rest (accelerate, cruise, brake)

@@ -34,12 +34,12 @@ import numpy as np
 
 from trajcomp.programs.items import JOINT
 from trajcomp.timing.check import LIMIT_TOLERANCE, Peaks, dense_check, dense_checks, segment_peaks
-from trajcomp.timing.path import TOLERANCE, stop_paths
+from trajcomp.timing.options import METHODS, TOLERANCE
+from trajcomp.timing.path import stop_paths
 from trajcomp.timing.result import Segment, TimingResult
 from trajcomp.timing.samples import AMBIGUOUS_DEG, swept_changes
 from trajcomp.timing.windows import WINDOW, run_windows
 
-METHODS = ("auto", "toppra", "ruckig")
 _BLOCK = 65536  # waypoints per block of the per-waypoint passes over a long run
 STOP_BATCH = 500  # single motions from rest to rest timed together at most
 _RETRIES = 6  # ruckig timings of one segment with lowered limits before giving up
