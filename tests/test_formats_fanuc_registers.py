@@ -55,6 +55,9 @@ def test_a_real_backup_s_register_is_read_from_its_posreg_va_and_registers_set_a
         "position register PR[25] is set at run time (line 32, PR[25:MAX GUN OPENING]=JPOS)")
     reasons = {reason for _, _, reason in formats.read(BACKUP / "td_gun1.ls").not_compensated()}
     assert "Tool_Offset applied at run time" in reasons
+    # a program none of whose registers is read does not take posreg.va along: a batch runs each program alone
+    assert [s.name for s in formats.read(BACKUP / "opensgg2.ls").sources] == ["opensgg2.ls"]
+    assert groups(sorted(BACKUP.glob("*.ls"))) == [[0], [1], [2], [3]]
 
 
 def test_a_corrected_register_is_written_into_the_posreg_va_beside_the_output_and_nothing_else(tmp_path):

@@ -108,7 +108,8 @@ def resolve(program_path, masked, lines, targets, index):
     Returns
     -------
     source : Source or None
-        POSREG.VA as a companion source, None when there is none.
+        POSREG.VA as a companion source; None when there is none or none of
+        its registers is read (all set at run time, uninitialized ...).
     registers : dict
         ``{"n": target index}`` of the registers whose motions are compensated.
     why : dict
@@ -152,7 +153,8 @@ def resolve(program_path, masked, lines, targets, index):
              f"run corrects them in the {source.name} written beside the output, which the controller does not read "
              "with the program: set its registers to those values (DATA > Position Reg); a KAREL program or another "
              "task that sets them at run time is beyond what trajcomp reads",) if registers else ()
-    return source, registers, why, notes
+    # a listing none of whose registers is read is no file of the program: nothing to write, no batch group to join
+    return (source if registers else None), registers, why, notes
 
 
 def _entries(text):
