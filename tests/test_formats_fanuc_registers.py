@@ -193,3 +193,15 @@ def test_a_register_used_with_two_tools_lists_each_motion_with_why_no_copy_is_wr
         (9, "5: L PR[1] 100mm/sec FINE ;", f"point PR[1] is used here with tool/frame ('2', '0') and with ('1', '0') "
                                            f"at line 7: {why}"))
     assert program.where(program.motions[2].target) == "PR[3] (POSREG.VA:10)"  # the joint register: one position
+
+
+def test_a_position_whose_index_a_register_holds_is_listed_not_refused(tmp_path):
+    """``L P[R[3]] ...`` was refused ("motion needs a speed"): the controller runs it, to P[value of R[3]]."""
+    path = tmp_path / "T.LS"
+    path.write_text(_program("t", "L P[R[3]] 100mm/sec FINE\nL P[R[3:idx]] 100mm/sec CNT10\nJ PR[R[4]] 50% FINE\n"
+                                  "L P[AR[1]] R[2]mm/sec FINE"))
+    assert formats.read(path).not_compensated() == (
+        (5, "1: L P[R[3]] 100mm/sec FINE ;", "P[R[3]]: position index computed at run time"),
+        (6, "2: L P[R[3:idx]] 100mm/sec CNT10 ;", "P[R[3:idx]]: position index computed at run time"),
+        (7, "3: J PR[R[4]] 50% FINE ;", "position register PR[R[4]]: its number is set at run time"),
+        (8, "4: L P[AR[1]] R[2]mm/sec FINE ;", "P[AR[1]]: position index computed at run time"))

@@ -26,7 +26,7 @@ without a value in POSREG.VA (none beside the program, uninitialized,
 ``********``) or set at run time by the program or another TP listing
 beside it (``PR[n]=LPOS``, ``PR[n,i]=``, ``PR[R[k]]=``), a Cartesian
 register before any UTOOL_NUM / UFRAME_NUM, indirect positions
-(``P[R[n]]``), run-time modifiers (Offset, Tool_Offset, INC, VOFFSET),
+(``P[R[n]]``, ``P[AR[n]]``, ``PR[R[n]]``), run-time modifiers (Offset, Tool_Offset, INC, VOFFSET),
 and motions with a tool or user frame set at run time (``UTOOL[1]=PR[1]``,
 ``UTOOL_NUM=R[1]``) from that line on, and motions to an untaught
 position (``X = ********``: the controller loads the program and faults

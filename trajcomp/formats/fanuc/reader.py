@@ -44,8 +44,9 @@ _UNIT = r"%|mm/se[ck]|cm/min|inch/min|deg/se[ck]|mse[ck]|se[ck]"
 _SECTION = re.compile(r"^/(PROG|ATTR|APPL|MN|POS|END)\b")
 _NUMBERED = re.compile(r"^\s*(\d+):(.*)$")
 _CONTINUED = re.compile(r"^\s*:(.*)$")
-_MOTION = re.compile(r"^\s*([JLC])\s+(P|PR)\[\s*([^\]:]+?)\s*(?::[^\]]*)?\](.*)$", re.I)
-_POINT = re.compile(r"^\s*P\[\s*([^\]:]+?)\s*(?::[^\]]*)?\](.*)$", re.I)
+_INDEX = r"((?:A?R\[[^\]]*\]|[^\]:\[])+?)"  # P[3], or P[R[3]] / P[R[3:idx]]: an index a register holds
+_MOTION = re.compile(r"^\s*([JLC])\s+(P|PR)\[\s*" + _INDEX + r"\s*(?::[^\]]*)?\](.*)$", re.I)
+_POINT = re.compile(r"^\s*P\[\s*" + _INDEX + r"\s*(?::[^\]]*)?\](.*)$", re.I)
 _SPEED_TERM = re.compile(
     r"^\s*(?:(" + NUMBER + r")\s*(" + _UNIT + r")|A?R\[[^\]]*\]\s*(?:" + _UNIT + r")?|\S+)\s+(FINE|FEIN|CNT\s*(" + NUMBER + r")?\S*|C[RD]\s*(" + NUMBER
     + r")?\S*)(?:\s|$)", re.I
@@ -198,7 +199,7 @@ def _motion(m, points, unread, name, number, original, registers, register_why):
     rest = m.group(4)
     refs = [(m.group(2).upper(), m.group(3))]
     if kind == CIRCULAR:
-        second = _POINT.search(rest) or re.search(r"\b(PR)\[\s*([^\]:]+?)\s*(?::[^\]]*)?\](.*)$", rest, re.I)
+        second = _POINT.search(rest) or re.search(r"\b(PR)\[\s*" + _INDEX + r"\s*(?::[^\]]*)?\](.*)$", rest, re.I)
         if not second:
             fail(name, number, original, "C needs a via point and an end point")
         if second.re is _POINT:
@@ -229,7 +230,9 @@ def _motion(m, points, unread, name, number, original, registers, register_why):
         elif runtime or kind_ref == "PR" or not ref.isdigit():
             found.append(None)
             reason = reason or (f"{runtime.group(1)} applied at run time" if runtime
-                                else f"position register PR[{ref}]{register_why.get(ref, '')}" if kind_ref == "PR"
+                                else f"position register PR[{ref}]"
+                                     + register_why.get(ref, "" if ref.isdigit() else ": its number is set at run time")
+                                if kind_ref == "PR"
                                 else f"P[{ref}]: position index computed at run time")
         elif int(ref) not in points:
             fail(name, number, original, f"P[{ref}] has no entry in /POS")
