@@ -130,6 +130,33 @@ def command_parser(sub, name, description, *examples):
     )
 
 
+def languages():
+    """The program languages of the format registry with maker and extensions, for a help text.
+
+    ``"csv (.csv), krl (KUKA .src), ..., and the plugins' (`trajcomp formats`)"``:
+    a language added by a folder is listed without a word of the commands
+    changed. Plugins are named, not imported: building a parser must not
+    import what they import (`trajcomp.formats.formats`).
+    """
+    from trajcomp import formats
+
+    known = [f"{fmt.name} ({' '.join(filter(None, [fmt.vendor, *fmt.extensions]))})"
+             for fmt in formats.formats(plugins=False)]
+    return ", ".join(known) + ", and the plugins' (`trajcomp formats` lists them)"
+
+
+def language_names(declaring=None):
+    """The names of the registry's languages for a help text: ``"csv, fanuc_ls, ..."`` (plugins as in `languages`).
+
+    ``declaring``: only the languages whose `trajcomp.formats.Format`
+    declares that capability (``"speeds"``, ``"configuration"``).
+    """
+    from trajcomp import formats
+
+    return ", ".join(fmt.name for fmt in formats.formats(plugins=False)
+                     if declaring is None or getattr(fmt, declaring))
+
+
 def info(message):
     """A progress or report line on stderr."""
     print(message, file=sys.stderr)

@@ -10,7 +10,7 @@ import sys
 from pathlib import Path
 
 from trajcomp import formats
-from trajcomp.commands._args import command_parser, info, positive_number
+from trajcomp.commands._args import command_parser, info, language_names, languages, positive_number
 from trajcomp.commands._report import add_report_options, criteria_of
 from trajcomp.commands.convert import add_frame_options, add_in_place_option, frame_options
 from trajcomp.commands.retime import METHOD_HELP, add_tolerance_option
@@ -23,15 +23,14 @@ from trajcomp.support.parallel import usable_cores
 def add_parser(sub):
     parser = command_parser(
         sub, "compensate",
-        "Read a program (CSV, KUKA KRL, ABB RAPID, FANUC LS, URScript; see `trajcomp formats`), "
-        "replace every Cartesian target by the command that makes the real arm land on it, in the "
-        "posture the program declares (configuration data, turns, qnear, joints; else the previous "
-        "target's), recompute configuration data from the corrected joints and write the program in "
-        "the same format. A target that cannot keep its posture, or whose correction is implausibly "
-        "large, stops the run (exit 2) and nothing is written. Every run ends with a verdict against "
-        "stated criteria (residual within --tolerance, targets inside the grid, posture kept, joint "
-        "limit and singularity margins, every motion compensated); a failing verdict exits 1 with the "
-        "program written and the report saying why.",
+        "Read a program, replace every Cartesian target by the command that makes the real arm land on "
+        "it, in the posture the program declares (configuration data, turns, qnear, joints; else the "
+        "previous target's), recompute configuration data from the corrected joints and write the program "
+        f"in the same format. Languages: {languages()}. A target that cannot keep its "
+        "posture, or whose correction is implausibly large, stops the run (exit 2) and nothing is written. "
+        "Every run ends with a verdict against stated criteria (residual within --tolerance, targets inside "
+        "the grid, posture kept, joint limit and singularity margins, every motion compensated); a failing "
+        "verdict exits 1 with the program written and the report saying why.",
         "trajcomp compensate examples/ur10_path.csv --model model.yaml --mode composite -o ur10_path.compensated.csv",
         "trajcomp compensate 'examples/*.csv' --model model.yaml -o corrected/ --jobs 2 --report corrected/reports",
     )
@@ -60,7 +59,7 @@ def add_parser(sub):
                         help="corrected program to write, in the input's language (an extension of another is "
                         "refused without --to); for a batch, the folder to write into")
     parser.add_argument("--to", dest="to_format", metavar="FORMAT",
-                        help="write the corrected program in this language instead (see `trajcomp formats`), as "
+                        help=f"write the corrected program in this language instead ({language_names()} or a plugin's), as "
                         "`trajcomp convert` would")
     parser.add_argument("--jobs", type=int, default=usable_cores(), metavar="N",
                         help="processes to use: a batch compensates N files at once, one program shares its "

@@ -7,7 +7,7 @@ programs (``--tool NAME=x,y,z,a,b,c``, ``--frame``/``--base``/``--wobj``).
 import math
 
 from trajcomp import formats
-from trajcomp.commands._args import command_parser
+from trajcomp.commands._args import command_parser, language_names, languages
 from trajcomp.errors import TrajcompError
 
 
@@ -70,19 +70,20 @@ def frame_options(args):
 def add_parser(sub):
     parser = command_parser(
         sub, "convert",
-        "Read a robot program (KRL, RAPID, FANUC LS, URScript or program CSV) and write it in "
-        "the language of OUT's extension. Poses are kept to 1e-6 mm; configuration data (KUKA S/T, ABB "
-        "confdata, FANUC CONFIG) are computed with the robot's kinematics, so give --robot when the "
-        "target language needs them. Motions whose position is computed at run time are written as "
-        "comments.",
+        "Read a robot program and write it in the language of OUT's extension. Languages: "
+        f"{languages()}. Poses are kept to 1e-6 mm; configuration data (in "
+        f"{language_names('configuration')}) are computed with the robot's kinematics, so give --robot when "
+        "the target language needs them. Motions whose position is computed at run time are written as comments.",
         "trajcomp convert examples/programs/kuka/weld.src weld.csv --robot kuka_kr6_r900",
         "trajcomp convert examples/programs/csv/weld.csv weld.script",
     )
     parser.add_argument("input", metavar="IN", help="program to read")
     parser.add_argument("output", metavar="OUT", help="program to write (format from the extension)")
     parser.add_argument("--robot", help="built-in robot name or robot YAML file (for configuration data)")
-    parser.add_argument("--from", dest="from_format", metavar="FORMAT", help="input format (default: extension)")
-    parser.add_argument("--to", dest="to_format", metavar="FORMAT", help="output format (default: extension)")
+    parser.add_argument("--from", dest="from_format", metavar="FORMAT",
+                        help=f"input format: {language_names()} or a plugin's (default: from the extension)")
+    parser.add_argument("--to", dest="to_format", metavar="FORMAT",
+                        help=f"output format: {language_names()} or a plugin's (default: from the extension)")
     add_frame_options(parser)
     add_in_place_option(parser)
     parser.set_defaults(run=run)

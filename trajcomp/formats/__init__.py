@@ -32,7 +32,6 @@ Plugins are imported lazily, on the first lookup that needs them.
 import dataclasses
 import importlib
 import os
-from importlib.metadata import entry_points
 from pathlib import Path
 
 from trajcomp.support.atomic import recover, write_files_atomic
@@ -147,6 +146,14 @@ def register_format(name, extensions, reader, writer, *, source="built-in", bloc
                             copies, speeds, timed_rows, configuration, frameless)
 
 
+def entry_points(group):
+    """The installed entry points of ``group`` (`importlib.metadata.entry_points`, imported here on first use:
+    it costs a command's start-up more than the registry does)."""
+    from importlib import metadata
+
+    return metadata.entry_points(group=group)
+
+
 def _load_plugins():
     """Import every ``trajcomp.formats`` entry point once; remember the ones that fail."""
     if _PLUGINS["loaded"]:
@@ -170,9 +177,15 @@ def _plugin_failures():
     return "; plugins that failed to import: " + "; ".join(f"{n} ({why})" for n, why in failed.items())
 
 
-def formats():
-    """All registered formats (plugins included), sorted by name."""
-    _load_plugins()
+def formats(plugins=True):
+    """All registered formats (plugins included), sorted by name.
+
+    ``plugins=False``: only those registered so far (the built-in ones, and
+    plugins a lookup has already imported), without importing the others:
+    for a help text, which must not import a plugin (nor what it imports).
+    """
+    if plugins:
+        _load_plugins()
     return [_FORMATS[name] for name in sorted(_FORMATS)]
 
 
