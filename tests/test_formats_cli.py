@@ -36,11 +36,17 @@ def test_convert_rapid_to_fanuc_computes_config(tmp_path, makerless, capsys):
     out = tmp_path / "WELD.LS"
     with pytest.raises(TrajcompError, match=r"a FANUC program \(fanuc_ls\) cannot run on robot abb_irb4600 \(ABB\)"):
         _run(["convert", str(EXAMPLES / "abb" / "Weld.mod"), str(out), "--robot", "abb_irb4600"])
-    assert _run(["convert", str(EXAMPLES / "abb" / "Weld.mod"), str(out), "--robot", makerless("abb_irb4600")]) == 0
+    capsys.readouterr()
+    # the first MoveJ's v1000 (a TCP speed along a joint motion) becomes a FANUC J % only with its start known
+    assert _run(["convert", str(EXAMPLES / "abb" / "Weld.mod"), str(out), "--robot", makerless("abb_irb4600")]) == 1
     program = formats.read(out)
     assert len(program.motions) == 5
     assert all(t.config == ("F", "U", "T", 0, 0, 0) for t in program.targets)  # IRB 4600 home wrist: J5 = +89 deg
-    assert "wrote" in capsys.readouterr().out
+    printed, err = capsys.readouterr()
+    assert "wrote" in printed
+    assert "line 9 (MoveJ P1, v1000, z5, tool0;): speed 1000 mm/s cannot be converted (its start is unknown): " \
+           "written at fanuc_ls's slowest speed" in err
+    assert [(m.speed, m.speed_unit) for m in program.motions[:1]] == [(1.0, "%")]
 
 
 def test_convert_needs_undefined_tools(tmp_path):
@@ -50,10 +56,13 @@ def test_convert_needs_undefined_tools(tmp_path):
 
 def test_convert_with_tools_and_frames(tmp_path, capsys):
     out = tmp_path / "pick.src"
+    # without a robot, the 2 s of L P[6] has no KRL $VEL.CP: written at 1 mm/s and listed (exit 1)
     assert _run(["convert", str(DATA / "fanuc" / "PICK_PLACE.LS"), str(out), "--tool", "1=0,0,100,0,0,0",
-                 "--tool", "2=0,0,200,0,0,0", "--frame", "1=500,0,0,90,0,0"]) == 0
+                 "--tool", "2=0,0,200,0,0,0", "--frame", "1=500,0,0,90,0,0"]) == 1
     program = formats.read(out)
-    assert "2 computed at run time" in capsys.readouterr().out
+    out_text, err = capsys.readouterr()
+    assert "2 computed at run time" in out_text
+    assert "line 35 (12:L P[6] 2sec CNT10 ;): speed 2 s cannot be converted (no robot given)" in err
     # set inline ($TOOL={X ..}): the controller's TOOL_DATA / BASE_DATA tables are never written
     assert sorted({tuple(program.tools[m.tool][:3, 3]) for m in program.motions if m.target is not None}) == [(0, 0, 200)]
     assert {tuple(program.frames[m.frame][:3, 3]) for m in program.motions if m.target is not None} == {(500, 0, 0)}

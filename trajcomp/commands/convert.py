@@ -5,6 +5,7 @@ programs (``--tool NAME=x,y,z,a,b,c``, ``--frame``/``--base``/``--wobj``).
 """
 
 import math
+import sys
 
 from trajcomp import formats
 from trajcomp.commands._args import command_parser, language_names, languages
@@ -73,7 +74,10 @@ def add_parser(sub):
         "Read a robot program and write it in the language of OUT's extension. Languages: "
         f"{languages()}. Poses are kept to 1e-6 mm; configuration data (in "
         f"{language_names('configuration')}) are computed with the robot's kinematics, so give --robot when "
-        "the target language needs them. Motions whose position is computed at run time are written as comments.",
+        "the target language needs them. Motions whose position is computed at run time are written as comments. "
+        "Speeds are written in the target language's units, never faster than the source runs them (give --robot "
+        "to convert between joint and TCP speeds); a speed that cannot be carried over is written as the "
+        "language's slowest, listed, and the exit code is 1.",
         "trajcomp convert examples/programs/kuka/weld.src weld.csv --robot kuka_kr6_r900",
         "trajcomp convert examples/programs/csv/weld.csv weld.script",
     )
@@ -87,6 +91,9 @@ def add_parser(sub):
     add_frame_options(parser)
     add_in_place_option(parser)
     parser.set_defaults(run=run)
+
+
+LISTED = 20  # motions named on stderr
 
 
 def run(args):
@@ -103,9 +110,15 @@ def run(args):
     converted = convert_program(program, to_format, robot=robot, tools=tools, frames=frames)
     written = formats.write(args.output, converted, to_format, protect=protected_inputs(args, args.input, program))
     skipped = len(program.runtime_motions())
-    unknown = [m for m in program.motions if m.speed_why and not m.reason]  # a variable's speed cannot be carried over
     print(f"wrote {', '.join(str(p) for p in written)}: {len(converted.motions) - skipped} motions"
-          + (f", {skipped} computed at run time written as comments" if skipped else "")
-          + (f", {len(unknown)} whose speed is set at run time written with {to_format}'s default speed: set it "
-             f"before running (first: line {unknown[0].line}, {unknown[0].speed_why})" if unknown else ""))
-    return 0
+          + (f", {skipped} computed at run time written as comments" if skipped else ""))
+    if converted is program:  # its own language: every field kept as written
+        return 0
+    unknown = [m for m in converted.motions if m.speed_why and m.target is not None]  # written at the slowest
+    for motion in unknown[:LISTED]:
+        print(f"trajcomp: warning: line {motion.line} ({motion.text}): {motion.speed_why}", file=sys.stderr)
+    if unknown:
+        more = f" (the first {LISTED} listed)" if len(unknown) > LISTED else ""
+        print(f"trajcomp: {len(unknown)} motion(s) whose speed could not be carried over are written at "
+              f"{to_format}'s slowest speed{more}: set their speeds before running", file=sys.stderr)
+    return 1 if unknown else 0

@@ -337,7 +337,7 @@ def retime_compensated(original, corrected, robot, method, tolerance, tools=None
     TimingError
         With a hint to compensate without re-timing.
     """
-    from trajcomp.timing.writeback import retime_program, writable
+    from trajcomp.timing.writeback import retime_program, run_time_speeds, writable
 
     if q_planned is None:
         plan = planned_joints(original, robot, tools=tools, frames=frames)
@@ -359,7 +359,8 @@ def retime_compensated(original, corrected, robot, method, tolerance, tools=None
             result = retime_program(corrected, robot, after, method=method, tools=tools, frames=frames,
                                     tolerance=tolerance)
             note = f"the timing is not written: {corrected.format} programs have no speed fields trajcomp writes"
-            result = dataclasses.replace(result, warnings=result.warnings + (note,))
+            result = dataclasses.replace(result, warnings=result.warnings + (note,),
+                                         as_written=run_time_speeds(corrected, result))
         return timed, result, before()  # only the original's cycle time is kept
     except TimingError as exc:
         raise TimingError(f"{exc} (compensate with --retime none to keep the program's speeds)") from None

@@ -15,8 +15,9 @@ import dataclasses
 import numpy as np
 
 from trajcomp.formats import find_format
+from trajcomp.formats.speeds import MotionGeometry, convert_speeds
 from trajcomp.formats.configuration import BOUNDARY_TOLERANCE, binding, configuration_for, describe, written_configuration
-from trajcomp.errors import CompensationError
+from trajcomp.errors import CompensationError, TimingError
 from trajcomp.arm.ik import pose_error
 from trajcomp.arm.kinematics import fk
 from trajcomp.programs.frames import FrameTable, in_frames
@@ -393,6 +394,11 @@ def convert_program(program, to_format, *, robot=None, tools=None, frames=None):
     URScript they are moved to the base frame (the frames' values must then
     be known). Configuration data are computed from each target's joints,
     or from nominal IK when the joints are unknown and a robot is given.
+    Speeds are stated in the language's units, each motion no faster than
+    its source's controller runs it (`trajcomp.formats.speeds.convert_speeds`,
+    with the robot's limits and each motion's geometry); a speed that
+    cannot be carried over is written as the language's slowest and the
+    motion says why in its ``speed_why``.
 
     Parameters
     ----------
@@ -425,11 +431,14 @@ def convert_program(program, to_format, *, robot=None, tools=None, frames=None):
     cartesian = [i for i in sorted(usage) if not targets[i].is_joint]
     needs_config = language.configuration is not None
     unknown = any(targets[i].joints is None for i in cartesian)
-    if robot is not None and unknown and (needs_config or language.frameless):
+    if robot is not None and unknown:
         plan = planned_joints(program, robot, tools=tools, frames=frames)
         for i, joints in zip(plan.index, plan.q):
             if targets[i].joints is None:
                 targets[i] = dataclasses.replace(targets[i], joints=joints)
+    if language.speed_units is not None:
+        motions = convert_speeds(motions, language.speed_units, robot,
+                                 _geometry(program, robot, targets, tools, frames), language.name)
     for i in range(len(targets)):
         known = targets[i].joints is not None and not targets[i].is_joint and robot is not None and needs_config
         config = configuration_for(to_format, robot, targets[i].joints[None])[0] if known else ()
@@ -442,3 +451,17 @@ def convert_program(program, to_format, *, robot=None, tools=None, frames=None):
         tools={**(tools or {}), **program.tools},
         frames={**(frames or {}), **program.frames},
     )
+
+
+def _geometry(program, robot, targets, tools, frames):
+    """The `MotionGeometry` of ``program``'s motions with ``targets``' joints; None without a robot or joints."""
+    if robot is None:
+        return None
+    from trajcomp.timing.moves import moves_from_program
+
+    joints = np.array([np.full(6, np.nan) if t.joints is None else t.joints for t in targets]).reshape(-1, 6)
+    try:
+        moves = moves_from_program(program, robot, joints, tools=tools, frames=frames)
+    except TimingError:  # a target without joints, a speed that is not positive: no geometry to convert with
+        return None
+    return MotionGeometry.of(program, robot, moves)

@@ -64,6 +64,7 @@ class Format:
     timed_rows: bool = False
     configuration: object = None
     frameless: bool = False
+    speed_units: object = None
 
     def _resolve(self, ref):
         if callable(ref):
@@ -92,7 +93,8 @@ _PLUGINS = {"loaded": False, "failed": {}}
 
 
 def register_format(name, extensions, reader, writer, *, source="built-in", blocks=False, vendor=None, tasks=False,
-                    copies=False, speeds=None, timed_rows=False, configuration=None, frameless=False):
+                    copies=False, speeds=None, timed_rows=False, configuration=None, frameless=False,
+                    speed_units=None):
     """Register (or replace) a format.
 
     Parameters
@@ -141,9 +143,17 @@ def register_format(name, extensions, reader, writer, *, source="built-in", bloc
     frameless : bool
         The language's poses are always in the robot's base frame (no work
         object, base or user frame).
+    speed_units : Mapping[str, tuple of str], optional
+        Per motion kind (``"joint"``, ``"linear"``, ``"circular"``), the
+        speed units a program generated in the language states (`Motion`'s
+        ``speed_unit``: ``"%"``, ``"rad/s"``, ``"mm/s"``, ``"s"``; ``"v_ori"``:
+        an orientation speed beside the TCP speed), the one a converted
+        speed takes first: a program converted into the language gets its
+        speeds in them, never faster (`trajcomp.formats.speeds.convert_speeds`).
+        None: speeds are converted as they are, the writer's choice.
     """
     _FORMATS[name] = Format(name, tuple(e.lower() for e in extensions), reader, writer, source, blocks, vendor, tasks,
-                            copies, speeds, timed_rows, configuration, frameless)
+                            copies, speeds, timed_rows, configuration, frameless, speed_units)
 
 
 def entry_points(group):

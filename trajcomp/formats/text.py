@@ -351,6 +351,25 @@ def floor_places(value, places):
     return max(math.floor(value * 10**places + 1e-9), 1) / 10**places
 
 
+def written_speed(motion, language):
+    """``(speed, unit)`` a generated program of ``language`` (a registered name) writes for ``motion``.
+
+    Raises
+    ------
+    WriteError
+        A speed in a unit the language does not state (its format's
+        ``speed_units``): the program must be converted into it first
+        (`trajcomp.compensation.program.convert_program`), never written faster.
+    """
+    from trajcomp.formats import find_format
+
+    units = find_format(format=language).speed_units[motion.kind]
+    if motion.speed is not None and motion.speed_unit not in units:
+        raise WriteError(f"line {motion.line}: a {motion.kind} motion's speed in {motion.speed_unit} cannot be written "
+                         f"in {language} (convert the program into it first: its speeds are converted no faster)")
+    return motion.speed, motion.speed_unit
+
+
 def format_number(value, places):
     """``value`` with ``places`` decimals, never ``-0``."""
     text = f"{value:.{places}f}"

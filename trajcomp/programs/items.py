@@ -194,8 +194,12 @@ class Motion:
         In ``speed_unit``; None when the language default applies or the
         speed is set at run time (``speed_why``).
     speed_unit : str
-        ``"mm/s"`` (TCP speed), ``"%"`` (of joint maximum), ``"rad/s"``,
+        ``"mm/s"`` (TCP speed), ``"%"`` (of joint maximum), ``"rad/s"``
+        (a joint motion's leading axis; a linear one's orientation),
         ``"s"`` (motion time).
+    orientation_speed : float or None
+        An orientation speed that bounds the motion beside its TCP speed
+        (RAPID speeddata's v_ori), rad/s; None where none does.
     zone : float or None
         Blend radius, mm; None for an exact stop (fine).
     tool, frame : str or None
@@ -245,6 +249,7 @@ class Motion:
     axis_position: bool = False
     speed_why: str = ""
     source: int = 0
+    orientation_speed: float = None
 
 
 @dataclasses.dataclass(frozen=True)

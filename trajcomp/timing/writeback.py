@@ -100,6 +100,18 @@ def apply_timing(program, result, robot):
     return timed, result.with_settings(settings, as_written=plan.as_written, lowered=plan.notes(result, settings))
 
 
+def run_time_speeds(program, result):
+    """``((k, why), ...)``: the waypoints of a timing whose motion's speed the program does not state.
+
+    Every one, timed or not: a program converted from another language
+    whose speeds could not be carried over (written at the language's
+    slowest, `trajcomp.formats.speeds.convert_speeds`), whose timing is not
+    written into it, lists them all (`TimingResult.as_written`).
+    """
+    motions = program.motions
+    return tuple((k, motions[m].speed_why) for k, m in enumerate(result.motion.tolist()) if motions[m].speed_why)
+
+
 def writable(program):
     """True if `apply_timing` can write into this program (its language has a ``speeds`` hook, read from a file)."""
     language = registered(program.format)

@@ -18,7 +18,16 @@ from trajcomp.formats.csv.cells import (
     _value,
 )
 from trajcomp.formats.fixed_text import joined_rows
-from trajcomp.formats.text import BARE_ZERO, active_axes, column_decimals, encode_text, format_number, turned_abc
+from trajcomp.formats.text import (
+    BARE_ZERO,
+    active_axes,
+    column_decimals,
+    encode_text,
+    floor_places,
+    format_number,
+    turned_abc,
+    written_speed,
+)
 from trajcomp.support.parallel import map_blocks
 from trajcomp.programs.items import JOINT, LINEAR, Source
 from trajcomp.arm.transforms import matrix_to_pose
@@ -367,7 +376,8 @@ def _row_text(target, motion, kind, with_joints):
     else:
         pose = matrix_to_pose(target.pose)
         cells = [format_number(v, 6) for v in pose[:3]] + [format_number(v, 9) for v in np.degrees(pose[3:])]
-    speed = format_number(motion.speed, 3) if motion.speed is not None and motion.speed_unit == "mm/s" else ""
+    value, _ = written_speed(motion, "csv")
+    speed = format_number(floor_places(value, 3), 3) if value is not None else ""  # mm/s, rounded down
     zone = format_number(motion.zone, 3) if motion.zone is not None else ""
     cells += ["PTP" if kind == JOINT else "LIN", speed, zone]
     if with_joints:

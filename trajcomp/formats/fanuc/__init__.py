@@ -47,6 +47,7 @@ register_format(
     f"{__name__}.reader:write",
     vendor="FANUC",
     speeds=f"{__name__}.speeds:write_speeds",
+    speed_units={"joint": ("%", "s"), "linear": ("mm/s", "s", "rad/s"), "circular": ("mm/s", "s")},
     configuration=f"{__name__}.configuration",
     tasks=True,
 )

@@ -1,6 +1,7 @@
 """The FANUC LS reader and writer: /MN motion lines and /POS positions into a `Program` and back (see `trajcomp.formats.fanuc`)."""
 
 import dataclasses
+import math
 import re
 from pathlib import Path
 
@@ -26,7 +27,9 @@ from trajcomp.formats.text import (
     where,
     whole_circle,
     write_single_file,
+    written_speed,
 )
+from trajcomp.formats.fanuc.speeds import time_field
 from trajcomp.programs.program import Program
 from trajcomp.programs.items import CIRCULAR, JOINT, LINEAR, Motion, Span, SpanColumns, Statement, Target, replaced
 from trajcomp.arm.transforms import matrix_to_pose, pose_to_matrix
@@ -415,10 +418,19 @@ DEFAULT_GROUP\t= 1,*,*,*,*;
 CONTROL_CODE\t= 00000000 00000000;"""
 
 
+WRITTEN_UNITS = {"%": "%", "mm/s": "mm/sec", "rad/s": "deg/sec"}  # a generated program's speed units
+
+
 def _speed(motion):
-    if motion.speed is not None and motion.speed_unit == ("%" if motion.kind == JOINT else "mm/s"):
-        return f"{motion.speed:g}{'%' if motion.kind == JOINT else 'mm/sec'}"
-    return "100%" if motion.kind == JOINT else "100mm/sec"
+    """The speed of a generated motion: ``p%``, ``v mm/sec``, ``w deg/sec`` (whole numbers, rounded down), a time
+    (`time_field`, rounded up) or ``max_speed`` / ``100%`` (the arm's limits)."""
+    value, unit = written_speed(motion, "fanuc_ls")
+    if value is None:
+        return "100%" if motion.kind == JOINT else "max_speed"
+    if unit == "s":
+        return time_field(value)
+    whole = max(math.floor((np.degrees(value) if unit == "rad/s" else value) + 1e-9), 1)
+    return f"{whole}{WRITTEN_UNITS[unit]}"
 
 
 def _emit(program, name):

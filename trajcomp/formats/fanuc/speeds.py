@@ -22,8 +22,13 @@ def write_speeds(program, result, robot, plan):
         if k in plan.cruise:
             written = f"{max(math.floor(plan.cruise[k] + 1e-9), 1)}mm/sec"
         else:
-            ms = math.ceil(plan.times[k] * 1000.0 - 1e-6)
-            written = f"{ms}msec" if ms <= MSEC_LIMIT else f"{format_number(ceil_places(plan.times[k], 1), 1)}sec"
+            written = time_field(plan.times[k])
         edits.append((span.start, span.end, written))
         settings[k] = written
     return edit_sources(program, [edits]), settings
+
+
+def time_field(seconds):
+    """A motion time as FANUC writes it, rounded up: ``Tmsec`` up to 32 s, else ``T sec`` (0.1 s)."""
+    ms = math.ceil(seconds * 1000.0 - 1e-6)
+    return f"{ms}msec" if ms <= MSEC_LIMIT else f"{format_number(ceil_places(seconds, 1), 1)}sec"

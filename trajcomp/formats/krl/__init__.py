@@ -58,5 +58,6 @@ register_format(
     tasks=True,
     copies=True,
     speeds=f"{__name__}.speeds:write_speeds",
+    speed_units={"joint": ("%",), "linear": ("mm/s",), "circular": ("mm/s",)},
     configuration=f"{__name__}.configuration",
 )

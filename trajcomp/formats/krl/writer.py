@@ -13,10 +13,12 @@ from trajcomp.formats.text import (
     encode_targets,
     encode_text,
     encode_xyzabc,
+    floor_places,
     format_number,
     mask,
     numbered,
     patched,
+    written_speed,
 )
 from trajcomp.programs.items import CIRCULAR, JOINT, LINEAR
 from trajcomp.arm.transforms import matrix_to_pose
@@ -106,7 +108,8 @@ def _emit(program, name):
     axes = active_axes(program, 6, "KRL")
     names, decls = {}, []
     src = [f"DEF {name}( )"]
-    tool = base = speed = zone = None
+    tool = base = zone = None
+    speeds = {}  # the value each modal speed statement was last given: BAS(#VEL_PTP) %, $VEL.CP mm/s
     for motion in program.motions:
         if motion.target is None:
             src.append(f"  ; not converted: {motion.text}")
@@ -117,15 +120,14 @@ def _emit(program, name):
         if motion.frame != base:
             base = motion.frame
             src.append(f"  $BASE={_selected(base, program.frames, bases, 'BASE_DATA')}")
-        stated = (motion.speed, motion.speed_unit)
-        if motion.speed is None and motion.kind == JOINT and not motion.speed_why:  # the arm's own limits
-            stated = (100.0, "%")
-        if stated[0] is not None and stated != speed:
-            speed = stated
-            if stated[1] == "mm/s":
-                src.append(f"  $VEL.CP={format_number(stated[0] / 1000.0, 6)}")
-            elif stated[1] == "%":
-                src.append(f"  BAS(#VEL_PTP,{format_number(stated[0], 3)})")
+        value, _ = written_speed(motion, "krl")
+        if motion.kind == JOINT:  # a PTP runs at BAS(#VEL_PTP): stated for every one (the arm's limits: 100 %)
+            statement = f"BAS(#VEL_PTP,{format_number(floor_places(100.0 if value is None else value, 3), 3)})"
+        else:  # $VEL.CP, m/s; none stated: the arm's limits, any speed in force is no faster
+            statement = None if value is None else f"$VEL.CP={format_number(floor_places(value / 1000.0, 6), 6)}"
+        if statement is not None and speeds.get(motion.kind == JOINT) != statement:
+            speeds[motion.kind == JOINT] = statement
+            src.append(f"  {statement}")
         if motion.zone is not None and motion.zone != zone:
             zone = motion.zone
             src.append(f"  $APO.CDIS={format_number(zone, 3)}")

@@ -46,5 +46,6 @@ register_format(
     tasks=True,
     copies=True,
     speeds=f"{__name__}.speeds:write_speeds",
+    speed_units={"joint": ("s", "mm/s", "v_ori"), "linear": ("mm/s", "s", "v_ori"), "circular": ("mm/s", "s", "v_ori")},
     configuration=f"{__name__}.configuration",
 )

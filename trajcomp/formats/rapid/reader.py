@@ -86,8 +86,12 @@ _OPTION = re.compile(r"\\(\w+)(?:\s*:=\s*([^\\]+))?")
 _SPEED = re.compile(r"^v(\d+(?:\.\d*)?)$", re.I)
 _DATA_DECL = re.compile(r"^[ \t]*(?:(?:LOCAL|TASK)\s+)*(CONST|PERS|VAR)\s+(speeddata|num)\s+(\w+)\s*(?::=\s*([^;]*?))?\s*;",
                         re.I | re.M)
-_SPEEDDATA = re.compile(r"^\[\s*(" + NUMBER + r")\s*,[^\]]*\]$")
+_SPEEDDATA = re.compile(r"^\[\s*(" + NUMBER + r")\s*,\s*(" + NUMBER + r")\s*,[^\]]*\]$")  # [v_tcp, v_ori, ..]
 VMAX = 5000.0  # mm/s, v_tcp of the predefined speeddata vmax
+PREDEFINED_V_ORI = 500.0  # deg/s, v_ori of every predefined speeddata (v5 .. v7000, vmax)
+# instructions that cannot change a speeddata: a VAR speeddata assigned before them is still in force after them
+_STRAIGHT = {"confj", "confl", "tpwrite", "tperase", "waittime", "setdo", "setao", "setgo", "set", "reset", "pulsedo",
+             "singarea", "pathresol", "accset"}
 _ZONE = re.compile(r"^(fine|z(\d+(?:\.\d*)?))$", re.I)
 # A robtarget declared on one line as RobotStudio and CAM post-processors write it, no blanks in its value:
 # CONST robtarget p1:=[[x,y,z],[q1,q2,q3,q4],[cf1,cf4,cf6,cfx],[ea,..,ef]]; -- read a whole module of them at once
@@ -201,14 +205,46 @@ class _Reader:
         self.unset = {}  # lower point name -> why its value is known only at run time
         self.params = set()
         self.data = {}  # lower name of a speeddata or num -> (storage, type, value text, line); None if declared twice
+        self.in_force = {}  # lower name of a VAR speeddata -> (value, why) a straight-line assignment gave it
+        self.touched = {}  # lower name of a VAR speeddata -> first line of a statement that may change it
+        self.task = None  # the other modules of the task (`DeclaredElsewhere`), which may assign a VAR too
 
     def scan_data(self, masked):
-        """Note the module's speeddata and num declarations (a motion may use one declared further down)."""
+        """Note the module's speeddata and num declarations (a motion may use one declared further down), and
+        where a statement other than its declaration and motions may change a VAR speeddata."""
         lines = Lines(masked)
         for m in _DATA_DECL.finditer(masked):
             key = m.group(3).lower()
             entry = (m.group(1).upper(), m.group(2).lower(), (m.group(4) or "").strip(), lines.number(m.start(1)))
             self.data[key] = entry if key not in self.data else None
+        names = [key for key, entry in self.data.items() if entry is not None and entry[:2] == ("VAR", "speeddata")]
+        if not names:
+            return
+        for m in re.finditer(r"\b(" + "|".join(map(re.escape, names)) + r")\b", masked, re.I):
+            line = lines.number(m.start())
+            text = lines.line(line)
+            if not (_STARTS_MOTION.match(text) or _STARTS_DECL.match(text)):
+                self.touched.setdefault(m.group(1).lower(), line)
+
+    def flow(self, text, line, original):
+        """Follow the VAR speeddata a statement (not a motion) gives a value or may change.
+
+        An assignment of a literal (or a constant) is in force for the
+        motions after it while the code runs straight: a routine's start, a
+        branch, a loop, a label or any instruction but those of `_STRAIGHT`
+        (a routine call may change it) ends it.
+        """
+        if not self.touched:
+            return
+        if m := _ASSIGN.match(text):
+            key = m.group(1).lower()
+            if key in self.touched:
+                self.in_force[key] = (None, f"{m.group(1)} is changed at run time (line {line})") if m.group(2) \
+                    else self.constant(m.group(3).strip(), "speeddata", line, original, m.group(1))
+            return
+        word = _WORD.match(text.strip())
+        if word and word.group().lower() not in _STRAIGHT and not _STARTS_DECL.match(text):
+            self.in_force.clear()
 
     def constant(self, name, typ, line, original, field, depth=0):
         """``(value, why)`` of a speeddata (its v_tcp, mm/s) or num named ``name``: stated, or why it is not.
@@ -220,11 +256,11 @@ class _Reader:
         if typ == "num" and _NUMBER.fullmatch(name):
             return self.number(name, line, original, field), ""
         if typ == "speeddata" and (m := _SPEED.match(name)):
-            return self.number(m.group(1), line, original, field), ""
+            return (self.number(m.group(1), line, original, field), PREDEFINED_V_ORI), ""
         if typ == "speeddata" and (m := _SPEEDDATA.match(name)):
-            return self.number(m.group(1), line, original, field), ""
+            return (self.number(m.group(1), line, original, field), self.number(m.group(2), line, original, field)), ""
         if typ == "speeddata" and name.lower() == "vmax":
-            return VMAX, ""
+            return (VMAX, PREDEFINED_V_ORI), ""
         key = name.lower()
         if key in self.params:
             return None, f"{name}: routine parameter, set at run time"
@@ -236,11 +272,30 @@ class _Reader:
         if entry is None:
             return None, f"{name}: declared more than once in this module, which one applies is known at run time"
         storage, declared, value, at = entry
+        if storage == "VAR" and declared == typ == "speeddata":
+            return self.variable(name, value, at, original, field, depth)
         if storage != "CONST":
             return None, f"{name}: {storage} {declared}, set at run time (line {at})"
         if declared != typ or depth > 8 or not value:
             return None, f"{name}: {declared} {value}, known at run time (line {at})"
         return self.constant(value, typ, at, original, field, depth + 1)
+
+    def variable(self, name, value, at, original, field, depth):
+        """``(value, why)`` of VAR speeddata ``name`` (declared at line ``at`` with ``value``) where a motion uses it.
+
+        Known: the value a straight-line assignment before the motion gave it
+        (`flow`), or its declared value if no statement of the module, and
+        none of another module of the task, may change it (only motions use
+        it). Else set at run time.
+        """
+        key = name.lower()
+        if key in self.in_force:
+            return self.in_force[key]
+        elsewhere = self.task.assigned(key) if self.task is not None else ""
+        if key in self.touched or elsewhere or not value:
+            where = f"line {self.touched[key]}" if key in self.touched else elsewhere or f"declared at line {at}"
+            return None, f"{name}: VAR speeddata, set at run time ({where})"
+        return self.constant(value, "speeddata", at, original, field, depth + 1)
 
     def number(self, text, line, original, field, limit=LENGTH_LIMIT):
         return finite(text, self.source.name, line, original, field, limit)
@@ -389,12 +444,13 @@ class _Reader:
         frame, frame_why = self.frame_name("wobj", options.get("wobj", "wobj0"), line)
         reason = "" if None not in found else (
             "position computed at run time: " + " ".join(positional[found.index(None)][0].split()))
-        speed, speed_why = self.constant(speed_text, "speeddata", line, original, "speed")
-        speed_unit = "mm/s"
-        if options.get("v"):  # \V:= the TCP speed, in place of the speeddata's
+        data, speed_why = self.constant(speed_text, "speeddata", line, original, "speed")
+        (speed, orientation), speed_unit = data or (None, None), "mm/s"
+        if options.get("v"):  # \V:= the TCP speed, in place of the speeddata's (its v_ori stays)
             speed, speed_why = self.constant(options["v"], "num", line, original, "\\V")
         if options.get("t"):  # \T:= the motion's time: the speeds are not used
             (speed, speed_why), speed_unit = self.constant(options["t"], "num", line, original, "\\T"), "s"
+            orientation = None
         return Motion(
             kind=kind,
             target=found[-1],
@@ -409,6 +465,7 @@ class _Reader:
             reason=reason or tool_why or frame_why,
             spans={"speed": _stripped_span(*positional[count])} | names,  # where re-timing writes, the points' names
             speed_why=speed_why,
+            orientation_speed=np.radians(orientation) if orientation else None,
         )
 
     def declared_in(self, file, line):
@@ -485,6 +542,11 @@ def read(path):
     check_closed(source, masked, _BLOCK_OPENS, _BLOCK_CLOSES,
                  {"MODULE": "ENDMODULE", "PROC": "ENDPROC", "FUNC": "ENDFUNC", "TRAP": "ENDTRAP"})
     reader = _Reader(source)
+    folder = Path(path).parent
+    folders = [folder.parent / "PROGMOD", folder.parent / "SYSMOD"] if folder.name.upper() in ("PROGMOD", "SYSMOD") \
+        else [folder]  # a backup's TASKn holds its modules in PROGMOD and SYSMOD
+    modules = (".mod", ".modx", ".sys", ".prg")
+    reader.task = DeclaredElsewhere(Path(path), folders, modules, _TASK_POINT, "!", assignment=_ASSIGNED_POINT)
     reader.scan_data(masked)
     written = _written_points(source, masked)
     for line, start, end in _statements(source, masked):
@@ -507,14 +569,9 @@ def read(path):
             continue
         elif m := _ASSIGN.match(text):
             reader.assignment(m, line, original)
+        reader.flow(text, line, original)
         reader.items.append(Statement(line, original))
-    folder = Path(path).parent
-    folders = [folder.parent / "PROGMOD", folder.parent / "SYSMOD"] if folder.name.upper() in ("PROGMOD", "SYSMOD") \
-        else [folder]  # a backup's TASKn holds its modules in PROGMOD and SYSMOD
-    modules = (".mod", ".modx", ".sys", ".prg")
-    items = _resolve(reader, DeclaredElsewhere(Path(path), folders, modules, _TASK_POINT, "!",
-                                               assignment=_ASSIGNED_POINT),
-                     DeclaredElsewhere(Path(path), folders, modules, _TASK_FRAME, "!"))
+    items = _resolve(reader, reader.task, DeclaredElsewhere(Path(path), folders, modules, _TASK_FRAME, "!"))
     companions = tuple(source for _, source, _, _ in reader.companions.values())
     return Program(
         "rapid", module.group(1), items, tuple(reader.targets), reader.tools, reader.frames, (source, *companions)

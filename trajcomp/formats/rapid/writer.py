@@ -5,8 +5,18 @@ import re
 import numpy as np
 
 from trajcomp.errors import WriteError
-from trajcomp.formats.rapid.reader import CONF, JOINTS, POSITION, QUAT, read
-from trajcomp.formats.text import active_axes, encode_targets, format_number, same_rotation, where, write_single_file
+from trajcomp.formats.rapid.reader import CONF, JOINTS, POSITION, PREDEFINED_V_ORI, QUAT, read
+from trajcomp.formats.text import (
+    active_axes,
+    ceil_places,
+    encode_targets,
+    floor_places,
+    format_number,
+    same_rotation,
+    where,
+    write_single_file,
+    written_speed,
+)
 from trajcomp.programs.items import CIRCULAR, JOINT, LINEAR
 from trajcomp.arm.transforms import matrix_to_quat, quat_to_matrix
 
@@ -62,11 +72,19 @@ def _identifier(name, prefix, default):
 
 
 def _speed(motion):
-    if motion.speed is None or motion.speed_unit != "mm/s":
-        return "v1000"
-    if motion.speed in SPEEDS:
-        return f"v{motion.speed:g}"
-    return f"v1000\\V:={format_number(motion.speed, 3)}"
+    """The speed data of a generated motion: ``vN``, ``vmax``, a literal with its v_ori, ``\\V`` or ``\\T``."""
+    value, unit = written_speed(motion, "rapid")
+    if value is None:
+        return "vmax"  # the arm's limits
+    if unit == "s":
+        return f"vmax\\T:={format_number(ceil_places(value, 3), 3)}"
+    v_tcp = floor_places(value, 3)
+    if motion.orientation_speed is not None and np.degrees(motion.orientation_speed) < PREDEFINED_V_ORI:
+        v_ori = floor_places(np.degrees(motion.orientation_speed), 3)
+        return f"[{format_number(v_tcp, 3)},{format_number(v_ori, 3)},5000,1000]"
+    if v_tcp in SPEEDS:
+        return f"v{v_tcp:g}"
+    return f"v1000\\V:={format_number(v_tcp, 3)}"
 
 
 def _zone(motion):

@@ -50,6 +50,7 @@ register_format(
     f"{__name__}.writer:write",
     vendor="Universal Robots",
     speeds=f"{__name__}.speeds:write_speeds",
+    speed_units={"joint": ("rad/s", "s"), "linear": ("mm/s", "s"), "circular": ("mm/s",)},
     frameless=True,
     copies=True,
 )

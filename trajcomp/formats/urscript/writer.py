@@ -5,7 +5,16 @@ import re
 import numpy as np
 
 from trajcomp.errors import WriteError
-from trajcomp.formats.text import active_axes, encode_targets, format_number, same_rotation, write_single_file
+from trajcomp.formats.text import (
+    active_axes,
+    ceil_places,
+    encode_targets,
+    floor_places,
+    format_number,
+    same_rotation,
+    write_single_file,
+    written_speed,
+)
 from trajcomp.formats.urscript.reader import JOINTS, NEAR, POSE, read
 from trajcomp.programs.items import CIRCULAR, JOINT, LINEAR
 from trajcomp.arm.transforms import matrix_to_rotvec, rotvec_to_matrix
@@ -91,8 +100,11 @@ def _emit(program, name):
         positions = [_position(program.targets[i], motion.kind) for i in (motion.via, motion.target) if i is not None]
         function_name = {JOINT: "movej", LINEAR: "movel", CIRCULAR: "movec"}[motion.kind]
         options = []
-        if motion.speed is not None and motion.speed_unit == ("rad/s" if motion.kind == JOINT else "mm/s"):
-            options.append(f"v={format_number(motion.speed / (1.0 if motion.kind == JOINT else 1000.0), 6)}")
+        value, unit = written_speed(motion, "urscript")  # none: UR's default speed, no faster than the arm's limits
+        if unit == "s" and value is not None:
+            options.append(f"t={format_number(ceil_places(value, 4), 4)}")
+        elif value is not None:  # movej: the leading axis, rad/s; else the TCP, m/s
+            options.append(f"v={format_number(floor_places(value / (1.0 if unit == 'rad/s' else 1000.0), 6), 6)}")
         if motion.zone is not None:
             options.append(f"r={format_number(motion.zone / 1000.0, 6)}")
         lines.append(f"  {function_name}({', '.join(positions + options)})")

@@ -1,0 +1,263 @@
+"""A motion's speed field as its controller runs it, and the same speed carried into another language, never faster.
+
+Each language states a motion's speed in its own units (`register_format`'s
+``speed_units``): a percentage of every axis's speed (KRL PTP, FANUC J),
+the speed of the leading axis (UR movej, rad/s), a TCP speed (mm/s; for a
+joint motion, RAPID MoveJ and program CSV, the TCP's speed along the
+joint path), an orientation speed (FANUC L ``deg/sec``, rad/s; RAPID's
+v_ori, `trajcomp.programs.items.Motion.orientation_speed`), or the motion's
+total time (s). They compare through one number, the motion's cruise rate
+c: the motion's path parameter runs from 0 to 1, accelerating at the rate
+the slowest joint allows (a = min_j a_max_j / |dq_j|), cruising at c, then
+braking (a trapezoid; the controller's own ramps). A field that makes c no
+larger runs every joint and the TCP no faster, and takes no less time:
+
+- ``%`` p: c = min_j p/100 v_max_j / |dq_j|; the leading axis's v (rad/s):
+  c = v / max_j |dq_j|;
+- a TCP speed v: c = v / L along a line or circle of L mm, v / max |dp/ds|
+  along a joint motion's path; an orientation speed w: w / max |dphi/ds|;
+- a time T: the cruise of the trapezoid that takes T,
+  c = (a T - sqrt(a^2 T^2 - 4 a)) / 2;
+- no field (FANUC ``max_speed``, a CSV row without speed): the arm's
+  limits, c = min_j v_max_j / |dq_j|.
+
+`convert_speeds` writes each motion of a program in the units of another
+language: the same unit is kept exactly; a percentage and a leading-axis
+speed convert with the robot's velocity limits alone (no faster for any
+motion); anything else through the motion's geometry (`MotionGeometry`,
+its start must be known) and rounded at the written resolution by the
+writer (speeds down, times up). A speed that cannot be carried over (set
+at run time, a motion whose start is unknown, no robot) is written as the
+language's slowest (``SLOWEST``) and listed in the motion's ``speed_why``.
+"""
+
+import dataclasses
+
+import numpy as np
+
+from trajcomp.arm.kinematics import fk_and_jacobian
+from trajcomp.arm.transforms import rotation_angle_between
+from trajcomp.programs.items import CIRCULAR, JOINT
+
+SAMPLES = 65  # points of a joint motion's path where its TCP and orientation rates are evaluated
+RATE_MARGIN = 1.01  # the sampled peak of |dp/ds| raised by this much (the true peak lies between samples)
+SLOWEST = {"%": 1.0, "rad/s": np.radians(1.0), "mm/s": 1.0}  # the slowest reading written where none is known
+
+
+@dataclasses.dataclass(frozen=True)
+class MotionGeometry:
+    """What each motion of a program moves, for those whose start and end joints are known.
+
+    Attributes
+    ----------
+    known : ndarray of bool, shape (M,)
+        Over the program's M motions: the motion's start and end joints are
+        known (the others have NaN below).
+    dq : ndarray, shape (M, 6)
+        Joint change, rad.
+    length : ndarray, shape (M,)
+        TCP path length of a linear or circular motion, mm; for a joint
+        motion the peak TCP rate max |dp/ds| along its joint path.
+    turn : ndarray, shape (M,)
+        Reorientation of a linear or circular motion, rad; for a joint
+        motion the peak orientation rate max |dphi/ds|.
+    """
+
+    known: np.ndarray
+    dq: np.ndarray
+    length: np.ndarray
+    turn: np.ndarray
+
+    @classmethod
+    def of(cls, program, robot, moves):
+        """The geometry of ``program``'s motions from their `trajcomp.timing.moves.Moves` (timed waypoints)."""
+        m = len(program.motions)
+        known = np.zeros(m, dtype=bool)
+        dq, length, turn = np.full((m, 6), np.nan), np.full(m, np.nan), np.full(m, np.nan)
+        for k in np.flatnonzero(~moves.start).tolist():
+            index = int(moves.motion[k])
+            tool = robot.replace(T_flange_tool=moves.tools[moves.tool[k]])
+            q_a, q_b = moves.q[k - 1], moves.q[k]
+            known[index], dq[index] = True, q_b - q_a
+            if moves.kind[k] == JOINT:
+                s = np.linspace(0.0, 1.0, SAMPLES)[:, None]
+                _, J = fk_and_jacobian(tool, q_a + s * (q_b - q_a))
+                rates = np.einsum("nij,j->ni", J, q_b - q_a)
+                length[index] = RATE_MARGIN * np.linalg.norm(rates[:, :3], axis=1).max()
+                turn[index] = RATE_MARGIN * np.linalg.norm(rates[:, 3:], axis=1).max()
+                continue
+            ends = [q_a, moves.via[k], q_b] if moves.kind[k] == CIRCULAR else [q_a, q_b]
+            T, _ = fk_and_jacobian(tool, np.array(ends))
+            length[index] = _arc_length(T[:, :3, 3])
+            turn[index] = rotation_angle_between(T[0, :3, :3], T[-1, :3, :3])
+        return cls(known, dq, length, turn)
+
+
+def _arc_length(points):
+    """Length (mm) of the line through 2 points (2, 3), or of the circle's arc from the first through the second
+    to the third (3, 3)."""
+    if len(points) == 2:
+        return float(np.linalg.norm(points[1] - points[0]))
+    a, b, c = points[1] - points[0], points[2] - points[1], points[2] - points[0]
+    cross = np.linalg.norm(np.cross(points[1] - points[0], points[2] - points[0]))
+    if cross < 1e-9 * max(np.linalg.norm(c) ** 2, 1e-12):  # collinear: a line
+        return float(np.linalg.norm(a) + np.linalg.norm(b))
+    radius = np.linalg.norm(a) * np.linalg.norm(b) * np.linalg.norm(c) / (2.0 * cross)
+    half = np.arcsin(np.clip(np.linalg.norm(c) / (2.0 * radius), 0.0, 1.0))
+    # the via point lies on the arc: the arc is the major one when the via is beyond the chord's far side
+    centre_side = np.dot(a, c) * np.dot(b, c) < 0 or np.linalg.norm(a) ** 2 + np.linalg.norm(b) ** 2 < np.dot(c, c)
+    angle = 2.0 * np.pi - 2.0 * half if centre_side else 2.0 * half
+    return float(radius * angle)
+
+
+def cruise_rate(kind, speed, unit, orientation_speed, geometry, index, robot):
+    """The cruise rate c (1/s) at which motion ``index`` runs under its speed field (see the module).
+
+    Parameters
+    ----------
+    kind : str
+        The motion's kind (`trajcomp.programs.items`).
+    speed : float or None
+        Its speed in ``unit``; None for the arm's limits.
+    unit : str
+        ``"%"``, ``"rad/s"``, ``"mm/s"`` or ``"s"``.
+    orientation_speed : float or None
+        An orientation speed bounding it too (RAPID v_ori), rad/s.
+    geometry : MotionGeometry
+    index : int
+        The motion's index; its geometry must be known.
+    robot : Robot
+
+    Returns
+    -------
+    float
+    """
+    dq = np.abs(geometry.dq[index])
+    moving = dq > 0
+    if not moving.any():
+        return np.inf
+    limit = np.min(robot.v_max[moving] / dq[moving])
+    rates = [limit]
+    if speed is not None and unit == "%":
+        rates.append(speed / 100.0 * limit)
+    elif speed is not None and unit == "rad/s" and kind == JOINT:
+        rates.append(speed / dq.max())
+    elif speed is not None and unit == "rad/s":
+        rates.append(_per(speed, geometry.turn[index]))
+    elif speed is not None and unit == "mm/s":
+        rates.append(_per(speed, geometry.length[index]))
+    elif speed is not None and unit == "s":
+        a = path_acceleration(dq, robot)
+        root = (a * speed) ** 2 - 4.0 * a
+        rates.append(np.sqrt(a) if root <= 0 else 0.5 * (a * speed - np.sqrt(root)))
+    if orientation_speed is not None:
+        rates.append(_per(orientation_speed, geometry.turn[index]))
+    return float(min(rates))
+
+
+def _per(speed, extent):
+    return np.inf if not extent > 0 else speed / extent
+
+
+def path_acceleration(dq, robot):
+    """The path parameter's acceleration (1/s^2) when the joint that limits it accelerates at its limit."""
+    dq = np.abs(dq)
+    moving = dq > 0
+    return float(np.min(robot.a_max[moving] / dq[moving]))
+
+
+def field_of_rate(kind, rate, unit, geometry, index, robot):
+    """The value in ``unit`` (%, rad/s, mm/s or s) at which motion ``index`` runs at cruise rate ``rate`` (1/s).
+
+    The inverse of `cruise_rate` for one unit; None where the unit cannot
+    state it (a percentage below 1 or above 100, a TCP speed of a motion
+    whose TCP does not move).
+    """
+    dq = np.abs(geometry.dq[index])
+    if unit == "%":
+        percent = min(100.0 * rate * np.max(dq / robot.v_max), 100.0)
+        return percent if percent >= 1.0 else None
+    if unit == "rad/s":
+        extent = dq.max() if kind == JOINT else geometry.turn[index]
+    elif unit == "mm/s":
+        extent = geometry.length[index]
+    else:
+        a = path_acceleration(dq, robot)
+        return 2.0 / np.sqrt(a) if rate >= np.sqrt(a) else 1.0 / rate + rate / a
+    return rate * extent if extent > 0 else None
+
+
+def convert_speeds(motions, units, robot=None, geometry=None, language=""):
+    """``motions`` with their speeds in ``units``, each no faster than as read (see the module).
+
+    Parameters
+    ----------
+    motions : Sequence[Motion]
+        A program's motions.
+    units : Mapping[str, tuple of str]
+        Per motion kind, the units the language states (its
+        ``speed_units``), the one to convert into first; ``"v_ori"`` among
+        them: an orientation speed beside a TCP speed (RAPID's speeddata).
+    robot : Robot, optional
+        Its velocity limits convert a percentage to a leading-axis speed and back.
+    geometry : MotionGeometry, optional
+        Of the program's motions, with ``robot``: every other conversion.
+    language : str
+        The language's name, for the listing.
+
+    Returns
+    -------
+    tuple of Motion
+        Motions whose speed could not be carried over have the language's
+        slowest speed (`SLOWEST`, the first of its units there) and say why
+        in ``speed_why``.
+    """
+    out = []
+    for index, motion in enumerate(motions):
+        stated = units[motion.kind]
+        if motion.target is None:
+            out.append(motion)
+            continue
+        speed, unit, why = _converted(motion, index, stated, robot, geometry)
+        orientation = motion.orientation_speed if "v_ori" in stated else None
+        if why:
+            unit = next(u for u in stated if u in SLOWEST)
+            speed, why = SLOWEST[unit], f"{why}: written at {language}'s slowest speed, set it before running"
+            orientation = SLOWEST["rad/s"] if "v_ori" in stated else None
+        out.append(dataclasses.replace(motion, speed=speed, speed_unit=unit, speed_why=why,
+                                       orientation_speed=orientation))
+    return tuple(out)
+
+
+def _converted(motion, index, stated, robot, geometry):
+    """``(speed, unit, why)`` of one motion in the units ``stated``; ``why`` says why it could not be."""
+    if motion.speed_why:
+        return None, None, motion.speed_why
+    speed, unit = motion.speed, motion.speed_unit
+    known = robot is not None and geometry is not None and geometry.known[index]
+    dropped = motion.orientation_speed is not None and "v_ori" not in stated  # a bound the target cannot state
+    if dropped and known:  # it matters only where it binds
+        free = cruise_rate(motion.kind, speed, unit, None, geometry, index, robot)
+        dropped = cruise_rate(motion.kind, speed, unit, motion.orientation_speed, geometry, index, robot) < free
+    if speed is None and not dropped:
+        return None, stated[0], ""  # the arm's limits: the language's own default
+    if unit in stated and not dropped:
+        return speed, unit, ""
+    if robot is not None and motion.kind == JOINT and not dropped:
+        if "%" in stated and unit == "rad/s":  # every joint at most v: p = v / max v_max
+            return min(100.0 * speed / np.max(robot.v_max), 100.0), "%", ""
+        if "rad/s" in stated and unit == "%":  # the leading axis at p of the slowest one's limit
+            return speed / 100.0 * np.min(robot.v_max), "rad/s", ""
+    shown = "the arm's limits" if speed is None else f"{speed:g} {unit}"
+    if not known:
+        what = "no robot given" if robot is None else "its start is unknown"
+        return None, None, f"speed {shown} cannot be converted ({what})"
+    if not np.any(geometry.dq[index]):  # the arm does not move: any speed is no faster
+        return None, stated[0], ""
+    rate = cruise_rate(motion.kind, speed, unit, motion.orientation_speed, geometry, index, robot)
+    for target_unit in stated:
+        value = None if target_unit == "v_ori" else field_of_rate(motion.kind, rate, target_unit, geometry, index,
+                                                                   robot)
+        if value is not None and np.isfinite(value):
+            return value, target_unit, ""
+    return None, None, f"speed {shown} cannot be stated in these units"
