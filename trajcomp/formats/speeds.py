@@ -40,7 +40,9 @@ from trajcomp.arm.transforms import rotation_angle_between
 from trajcomp.programs.items import CIRCULAR, JOINT
 
 SAMPLES = 65  # points of a joint motion's path where its TCP and orientation rates are evaluated
-RATE_MARGIN = 1.01  # the sampled peak of |dp/ds| raised by this much (the true peak lies between samples)
+# a joint motion's sampled peak |dp/ds| raised by this much where a TCP speed is read (its true peak lies between
+# samples, never below them): the rate read is never above the controller's; written, the sampled peak itself
+RATE_MARGIN = 1.01
 SLOWEST = {"%": 1.0, "rad/s": np.radians(1.0), "mm/s": 1.0}  # the slowest reading written where none is known
 
 
@@ -57,10 +59,11 @@ class MotionGeometry:
         Joint change, rad.
     length : ndarray, shape (M,)
         TCP path length of a linear or circular motion, mm; for a joint
-        motion the peak TCP rate max |dp/ds| along its joint path.
+        motion the peak TCP rate max |dp/ds| along its joint path
+        (`SAMPLES` points: at most the true peak).
     turn : ndarray, shape (M,)
         Reorientation of a linear or circular motion, rad; for a joint
-        motion the peak orientation rate max |dphi/ds|.
+        motion the peak orientation rate max |dphi/ds| (likewise).
     """
 
     known: np.ndarray
@@ -83,8 +86,8 @@ class MotionGeometry:
                 s = np.linspace(0.0, 1.0, SAMPLES)[:, None]
                 _, J = fk_and_jacobian(tool, q_a + s * (q_b - q_a))
                 rates = np.einsum("nij,j->ni", J, q_b - q_a)
-                length[index] = RATE_MARGIN * np.linalg.norm(rates[:, :3], axis=1).max()
-                turn[index] = RATE_MARGIN * np.linalg.norm(rates[:, 3:], axis=1).max()
+                length[index] = np.linalg.norm(rates[:, :3], axis=1).max()
+                turn[index] = np.linalg.norm(rates[:, 3:], axis=1).max()
                 continue
             ends = [q_a, moves.via[k], q_b] if moves.kind[k] == CIRCULAR else [q_a, q_b]
             T, _ = fk_and_jacobian(tool, np.array(ends))
@@ -137,21 +140,22 @@ def cruise_rate(kind, speed, unit, orientation_speed, geometry, index, robot):
     if not moving.any():
         return np.inf
     limit = np.min(robot.v_max[moving] / dq[moving])
+    margin = RATE_MARGIN if kind == JOINT else 1.0
     rates = [limit]
     if speed is not None and unit == "%":
         rates.append(speed / 100.0 * limit)
     elif speed is not None and unit == "rad/s" and kind == JOINT:
         rates.append(speed / dq.max())
     elif speed is not None and unit == "rad/s":
-        rates.append(_per(speed, geometry.turn[index]))
+        rates.append(_per(speed, margin * geometry.turn[index]))
     elif speed is not None and unit == "mm/s":
-        rates.append(_per(speed, geometry.length[index]))
+        rates.append(_per(speed, margin * geometry.length[index]))
     elif speed is not None and unit == "s":
         a = path_acceleration(dq, robot)
         root = (a * speed) ** 2 - 4.0 * a
         rates.append(np.sqrt(a) if root <= 0 else 0.5 * (a * speed - np.sqrt(root)))
     if orientation_speed is not None:
-        rates.append(_per(orientation_speed, geometry.turn[index]))
+        rates.append(_per(orientation_speed, margin * geometry.turn[index]))
     return float(min(rates))
 
 
