@@ -74,3 +74,54 @@ def test_every_stop_is_at_rest_and_the_limits_hold_between(stops):
     _, qd, qdd = result.at(t)
     assert np.all(np.abs(qd).max(axis=0) <= UR10.v_max * 1.01)
     assert np.all(np.abs(qdd).max(axis=0) <= UR10.a_max * 1.01)
+
+
+def test_each_stop_path_laid_out_is_its_spline(stops):
+    """The laid-out cubic pieces of the stops' paths are each motion's own spline; a motion of fewer than 4
+    samples is the not-a-knot spline scipy makes through its samples and its polyline's points at every third
+    of the path."""
+    from scipy.interpolate import make_interp_spline
+
+    from trajcomp.timing.path import stop_paths
+    from trajcomp.timing.samples import run_samples
+
+    paths = stop_paths(stops, UR10, 0, len(stops) - 1)
+    short = 0
+    for r, i in enumerate(paths.moving.tolist()):
+        run = paths.runs[i]
+        u = np.linspace(0.0, run.length, 57)
+        q = run_samples(stops, UR10, run.first, run.last)[0]
+        s = np.r_[0.0, np.cumsum(np.linalg.norm(np.diff(q, axis=0), axis=1))]
+        dense = np.union1d(s, np.linspace(0.0, s[-1], 4))
+        expected = make_interp_spline(dense, make_interp_spline(s, q, k=1)(dense), k=3) if len(q) < 4 else run.path
+        for order in range(3):
+            scale = max(np.abs(expected(u, order)).max(), 1.0)
+            np.testing.assert_allclose(paths.pieces(np.full(len(u), r), u, order), expected(u, order), atol=1e-9 * scale)
+            np.testing.assert_allclose(run.path(u, order), expected(u, order), atol=1e-9 * scale)
+        short += len(q) < 4
+    assert 1 <= short < len(paths.moving)
+
+
+@pytest.mark.parametrize("block", [None, 250])  # 250 samples: a motion or two per block, the longest alone
+def test_stops_checked_together_measure_what_each_measures_alone(stops, block, monkeypatch):
+    """The batched 1 kHz check of exact stops gives each motion the peaks of the dense check of it alone."""
+    from trajcomp.timing import check
+    from trajcomp.timing.check import dense_check, rest_to_rest_checks
+
+    if block is not None:
+        monkeypatch.setattr(check, "BLOCK", block)
+    from trajcomp.timing.path import stop_paths
+    from trajcomp.timing.toppra_run import rest_to_rest_laws
+
+    paths = stop_paths(stops, UR10, 0, len(stops) - 1)
+    lines = np.array([r for r, i in enumerate(paths.moving) if stops.kind[i + 1] != JOINT])
+    laws = rest_to_rest_laws(paths, lines, stops)
+    peaks, worst = rest_to_rest_checks(paths, lines, laws, stops, UR10)
+    for r, i in enumerate(paths.moving[lines]):
+        run = paths.runs[i]
+        alone = toppra_laws([run], stops, UR10)[0]
+        np.testing.assert_allclose(laws.law(r).t, alone.t, rtol=1e-9, atol=1e-12)
+        expected = dense_check(run, alone, stops, UR10, jerk=False)[0]
+        for name in ("velocity", "acceleration", "velocity_ratio", "acceleration_ratio", "speed_ratio"):
+            np.testing.assert_allclose(getattr(peaks[r], name), getattr(expected, name), rtol=1e-7, atol=1e-9)
+        assert np.isnan(peaks[r].jerk).all() and worst[r] == pytest.approx(expected.worst, rel=1e-7)

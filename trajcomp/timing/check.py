@@ -153,6 +153,67 @@ def dense_checks(runs, laws, moves, robot, *, jerk, over=np.inf, rate=RATE):
     return [(f.peaks(), f.s_over()) for f in found]
 
 
+def rest_to_rest_checks(stops, paths, laws, moves, robot, *, rate=RATE):
+    """`segment_peaks` of paths timed from rest to rest with constant-acceleration laws, sampled together.
+
+    The samples of consecutive paths are taken in blocks of about `BLOCK`
+    (a path with more is checked alone, by `dense_check`), evaluated and
+    reduced per path at once: a program of exact stops is thousands of
+    short paths.
+
+    Parameters
+    ----------
+    stops : StopPaths
+    paths : ndarray of int, shape (R,)
+        Which of its paths (indices into ``stops.moving``).
+    laws : ConstantAccelerations
+        Law r: path ``paths[r]`` (`trajcomp.timing.toppra_run.rest_to_rest_laws`).
+    moves : Moves
+    robot : Robot
+    rate : float
+        Hz.
+
+    Returns
+    -------
+    peaks : list of Peaks
+        One per path, jerk not measured.
+    worst : ndarray, shape (R,)
+        `Peaks.worst` of each.
+    """
+    step = 1.0 / rate
+    counts = np.ceil(laws.durations / step).astype(int) + 1  # `sample_times`: every 1/rate s from 0, and the end
+    out, worst = [None] * len(paths), np.zeros(len(paths))
+    for r in np.flatnonzero(counts > BLOCK):
+        out[r] = dense_check(stops.runs[stops.moving[paths[r]]], laws.law(r), moves, robot, jerk=False, rate=rate)[0]
+        worst[r] = out[r].worst
+    small = np.flatnonzero(counts <= BLOCK)
+    motion = stops.motion[paths]
+    not_measured = np.full(6, np.nan)
+    for block in np.split(small, np.flatnonzero(np.diff(np.cumsum(counts[small]) // BLOCK)) + 1):
+        if not block.size:
+            continue
+        n = counts[block]
+        law = np.repeat(block, n)
+        begins = np.cumsum(n) - n
+        t = (np.arange(n.sum()) - np.repeat(begins, n)) * step
+        t[begins + n - 1] = laws.durations[block]
+        s, sd, sdd = laws(law, t)
+        path = paths[law]
+        s = np.clip(s, 0.0, stops.pieces.ends[path])
+        q, dq, ddq = stops.pieces.derivatives(path, s)
+        qd, qdd = dq * sd[:, None], ddq * (sd**2)[:, None] + dq * sdd[:, None]
+        k = motion[law]
+        velocity, acceleration = np.abs(qd), np.abs(qdd)
+        columns = [velocity, acceleration, velocity / moves.velocity[k], acceleration / moves.acceleration[k],
+                   _speed_ratios(moves, robot, k, q, qd)[:, None]]
+        peaks = [np.maximum.reduceat(column, begins) for column in columns]
+        worst[block] = np.max(np.hstack(peaks[2:]), axis=1)
+        for j, r in enumerate(block.tolist()):
+            out[r] = Peaks(velocity=peaks[0][j], acceleration=peaks[1][j], jerk=not_measured,
+                           velocity_ratio=peaks[2][j], acceleration_ratio=peaks[3][j], speed_ratio=float(peaks[4][j, 0]))
+    return out, worst
+
+
 def _blocks(counts, size):
     """Blocks of at most ``size`` samples of runs with ``counts`` (R,) samples: lists of (run, lo, hi)."""
     block, room = [], size

@@ -55,7 +55,7 @@ class JointPath:
 
     Parameters
     ----------
-    spline : scipy.interpolate.BSpline
+    spline : scipy.interpolate.BSpline or scipy.interpolate.PPoly
         Cubic, values (6,).
     """
 
@@ -65,8 +65,11 @@ class JointPath:
     def __init__(self, spline):
         self.spline = spline
         self._derivatives = None
-        if self.FEWEST_KEPT <= len(spline.c) <= self.KEPT_DERIVATIVES:
+        knots = getattr(spline, "t", None)  # a BSpline's; a PPoly has breakpoints x
+        if knots is not None and self.FEWEST_KEPT <= len(spline.c) <= self.KEPT_DERIVATIVES:
             self._derivatives = (spline, spline.derivative(1), spline.derivative(2))
+        ends = spline.x if knots is None else knots[spline.k : len(knots) - spline.k]
+        self._interval = (ends[0], ends[-1])
 
     def __call__(self, s, order=0):
         """q (order 0), dq/ds (1) or d2q/ds2 (2) at path positions s (N,): shape (N, 6)."""
@@ -80,8 +83,85 @@ class JointPath:
 
     @property
     def path_interval(self):
-        k = self.spline.k
-        return np.array([self.spline.t[k], self.spline.t[-k - 1]])
+        return np.array(self._interval)
+
+class CubicPieces:
+    """Cubic joint paths laid end to end, evaluated together (motions from rest to rest: thousands of short paths).
+
+    Path r is the pieces ``offsets[r] .. offsets[r + 1] - 1``, piece i the
+    cubic ``c[i, 0] d^3 + c[i, 1] d^2 + c[i, 2] d + c[i, 3]`` of
+    d = s - ``start[i]``, s the path's own position (0 at its start,
+    ``ends[r]`` at its end).
+
+    Parameters
+    ----------
+    start : ndarray, shape (P,)
+        Path position where each piece begins, rad.
+    c : ndarray, shape (P, 4, 6)
+        Coefficients, highest power first.
+    counts : ndarray of int, shape (R,)
+        Pieces of each path (at least one).
+    ends : ndarray, shape (R,)
+        Length of each path, rad.
+    """
+
+    def __init__(self, start, c, counts, ends):
+        self.start, self.c, self.ends = start, c, ends
+        self.offsets = np.r_[0, np.cumsum(counts)]
+        self._shift = np.r_[0.0, np.cumsum(ends + 1.0)[:-1]]  # paths apart on one axis, for the piece lookup
+        self._key = start + np.repeat(self._shift, counts)
+        self._by_power = None  # c as (4, P, 6), and each path's breakpoints followed by its end: for `ppoly`
+        self._breaks = np.empty(len(start) + len(ends))
+        self._breaks[np.arange(len(start)) + np.repeat(np.arange(len(ends)), counts)] = start
+        self._breaks[self.offsets[1:] + np.arange(len(ends))] = ends
+
+    def __call__(self, path, s, order=0):
+        """q (order 0), dq/ds (1) or d2q/ds2 (2), shape (N, 6), of paths ``path`` (N,) at their positions s (N,)."""
+        return self.derivatives(path, s, (order,))[0]
+
+    def derivatives(self, path, s, orders=(0, 1, 2)):
+        """`__call__` of each order in ``orders``: a list of (N, 6), the pieces looked up once."""
+        i = np.searchsorted(self._key, s + self._shift[path], side="right") - 1
+        i = np.clip(i, self.offsets[path], self.offsets[path + 1] - 1)
+        d = (s - self.start[i])[:, None]
+        c = self.c[i]
+        c0, c1, c2, c3 = c[:, 0], c[:, 1], c[:, 2], c[:, 3]
+        out = []
+        for order in orders:
+            if order == 0:
+                out.append(((c0 * d + c1) * d + c2) * d + c3)
+            elif order == 1:
+                out.append((3.0 * c0 * d + 2.0 * c1) * d + c2)
+            else:
+                out.append(6.0 * c0 * d + 2.0 * c1)
+        return out
+
+    def ppoly(self, r):
+        """Path r as a scipy PPoly."""
+        from scipy.interpolate import PPoly
+
+        if self._by_power is None:
+            self._by_power = np.ascontiguousarray(self.c.transpose(1, 0, 2))
+        lo, hi = self.offsets[r], self.offsets[r + 1]
+        return PPoly.construct_fast(self._by_power[:, lo:hi], self._breaks[lo + r : hi + r + 1])
+
+    @classmethod
+    def of_spline(cls, spline, length):
+        """The pieces (one path) of a cubic BSpline on [0, length]: its polynomial on each knot interval."""
+        knots = np.unique(spline.t[(spline.t >= 0.0) & (spline.t < length)])
+        c = np.stack([spline(knots, nu) / factor for nu, factor in ((3, 6.0), (2, 2.0), (1, 1.0), (0, 1.0))], axis=1)
+        return cls(knots, c, np.array([len(knots)]), np.array([length]))
+
+    @classmethod
+    def joined(cls, parts, paths):
+        """Pieces of several `CubicPieces` in one, path ``paths[j][r]`` of the result being path r of ``parts[j]``."""
+        label = np.concatenate([np.repeat(p, np.diff(part.offsets)) for part, p in zip(parts, paths)])
+        order = np.argsort(label, kind="stable")
+        ends = np.empty(sum(len(p) for p in paths))
+        for part, p in zip(parts, paths):
+            ends[p] = part.ends
+        return cls(np.concatenate([part.start for part in parts])[order],
+                   np.concatenate([part.c for part in parts])[order], np.bincount(label, minlength=len(ends)), ends)
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -142,15 +222,8 @@ class RunPath:
             velocity = np.broadcast_to(moves.velocity[0] * velocity_scale, (len(grid), 6))
         else:
             velocity = np.min(moves.velocity[near], axis=0) * velocity_scale
-        k = np.arange(self.first, self.last + 1)  # tcp[i]: motion first + i (waypoint first's own is not used)
-        tcp = moves.tcp_speed[k]
-        timed = (moves.min_duration[k] > 0) & (moves.kind[k] != JOINT)
-        timed[0] = False
-        tcp[timed] = np.minimum(tcp[timed], self.tcp_lengths[timed] / moves.min_duration[k[timed]])
-        with np.errstate(divide="ignore", invalid="ignore"):
-            x_joint = np.min((velocity / np.abs(dq)) ** 2, axis=1)
-            x_tcp = (np.min(tcp[near - self.first], axis=0) * speed_scale / self.grid_rate) ** 2
-        return np.minimum(x_joint, np.nan_to_num(x_tcp, nan=np.inf)), velocity
+        tcp = tcp_limits(moves, np.arange(self.first + 1, self.last + 1), self.tcp_lengths[1:])
+        return squared_speed_bound(dq, self.grid_rate, velocity, np.min(tcp[near - self.first - 1], axis=0) * speed_scale), velocity
 
     def refined(self, moves, robot, s):
         """This run with grid points added at path positions s (n,) inside it (their TCP rates computed).
@@ -170,6 +243,24 @@ class RunPath:
         new = np.isin(grid, added, assume_unique=True)
         rate[~new], rate[new] = self.grid_rate, tcp_rates(robot, moves, self.motion_at(added), self.path, added)
         return dataclasses.replace(self, grid=grid, grid_rate=rate)
+
+
+def tcp_limits(moves, k, lengths):
+    """TCP speed limit (n,) of motions k (n,) with TCP lengths (n,) mm: the programmed speed, or for a linear /
+    circular motion with a programmed time, its length over that time if lower; mm/s (``inf``: none)."""
+    tcp = moves.tcp_speed[k]
+    timed = (moves.min_duration[k] > 0) & (moves.kind[k] != JOINT)
+    tcp[timed] = np.minimum(tcp[timed], lengths[timed] / moves.min_duration[k[timed]])
+    return tcp
+
+
+def squared_speed_bound(dq, rate, velocity, tcp):
+    """Largest squared path speed x = sd^2 (G,) at points with q' ``dq`` (G, 6) and TCP rate |dp/ds| ``rate``
+    (G,) under joint velocity limits ``velocity`` (G, 6) and TCP speed limits ``tcp`` (G,)."""
+    with np.errstate(divide="ignore", invalid="ignore"):
+        x_joint = np.min((velocity / np.abs(dq)) ** 2, axis=1)
+        x_tcp = (tcp / rate) ** 2
+    return np.minimum(x_joint, np.nan_to_num(x_tcp, nan=np.inf))
 
 
 def run_path(moves, robot, first, last, tolerance=TOLERANCE, *, part=None):
@@ -218,57 +309,113 @@ def run_path(moves, robot, first, last, tolerance=TOLERANCE, *, part=None):
     inside = (grid >= s_a) & (grid <= s_b)
     grid = grid[inside]
     rate = _grid_rates(robot, moves, k[inside], spline(grid), spline(grid, 1), at_sample[inside], (q, motion, jac))
-    path = JointPath(type(spline)(spline.t - s_a, spline.c, spline.k))  # a BSpline moved to start at s_a
+    path = JointPath(_moved(spline, s_a))
     lengths = tcp_lengths[a - first : b - first + 1].copy()
     lengths[0] = 0.0
     return RunPath(path, s_waypoints[a - first : b - first + 1] - s_a, grid - s_a, a, b, lengths, rate, deviation)
 
 
+@dataclasses.dataclass(frozen=True, eq=False)
+class StopPaths:
+    """The paths of consecutive motions from rest to rest (`stop_paths`), and their grids laid end to end.
+
+    Attributes
+    ----------
+    runs : list of RunPath
+        One per motion, in order.
+    moving : ndarray of int, shape (R,)
+        Index in `runs` of each motion that has a path; path r below is ``runs[moving[r]]``.
+    pieces : CubicPieces
+        The R paths.
+    motion : ndarray of int, shape (R,)
+        The motion (waypoint index k) of each path.
+    tcp_length : ndarray, shape (R,)
+        TCP length of each path, mm.
+    sizes : ndarray of int, shape (R,)
+        Grid points of each path.
+    grid : ndarray, shape (G,)
+        The paths' grids, each from 0 (its own path positions), laid end to end.
+    dq, ddq : ndarray, shape (G, 6)
+        q' and q'' at the grid points.
+    rate : ndarray, shape (G,)
+        |dp/ds| at the grid points, mm/rad.
+    """
+
+    runs: list
+    moving: np.ndarray
+    pieces: CubicPieces
+    motion: np.ndarray
+    tcp_length: np.ndarray
+    sizes: np.ndarray
+    grid: np.ndarray
+    dq: np.ndarray
+    ddq: np.ndarray
+    rate: np.ndarray
+
+    def points(self, paths):
+        """Rows (n,) of the grid points of paths ``paths`` (m,) in the laid-out arrays, path by path."""
+        offsets = np.cumsum(self.sizes) - self.sizes
+        sizes = self.sizes[paths]
+        return np.arange(sizes.sum()) + np.repeat(offsets[paths] - (np.cumsum(sizes) - sizes), sizes)
+
+
 def stop_paths(moves, robot, first, last, tolerance=TOLERANCE):
     """The paths of motions first + 1 .. last, each from rest to rest (every waypoint an exact stop), built together.
 
-    One sampling, one Jacobian batch for all the motions; each is then
-    fitted on its own samples, exactly as `run_path` of that motion alone.
+    One sampling, one Jacobian batch, one grid construction and one fit
+    of the motions of fewer than four samples (`_through_samples`) for all
+    the motions; a longer one is fitted on its own samples (`_fit`). Each
+    path is the one `run_path` gives that motion alone.
 
     Returns
     -------
-    list of RunPath
-        One per motion, in order.
+    StopPaths
     """
     q, owner, s, waypoint_rows, known = _collapsed(moves, robot, first, last)
-    runs = []  # per motion: (k, sample rows, local path positions, grid)
-    for k, r0, r1 in zip(range(first + 1, last + 1), waypoint_rows[:-1].tolist(), waypoint_rows[1:].tolist()):
-        local = s[r0 : r1 + 1] - s[r0]
-        runs.append((k, slice(r0, r1 + 1), local, _grid(local, STOP_GRID) if r1 > r0 else local[:0]))
-    sizes = [len(grid) for *_, grid in runs]
-    if not any(sizes):
-        return [_no_path(k - 1, k) for k, *_ in runs]
-    offsets = np.r_[0, np.cumsum(sizes)]
-    at_sample = np.full(offsets[-1], -1)  # the sample each grid point (in all grids) is, -1 between samples
-    for (_, rows, local, grid), offset in zip(runs, offsets):
-        if len(grid):  # a motion that does not move has no grid point of its own
-            at_sample[offset + np.searchsorted(grid, local)] = np.arange(rows.start, rows.stop)
+    k = np.arange(first + 1, last + 1)
+    lo, hi = waypoint_rows[:-1], waypoint_rows[1:]
+    moving = np.flatnonzero(hi > lo)
+    runs = [_no_path(m - 1, m) for m in k.tolist()]
+    if not moving.size:
+        none = np.zeros(0, dtype=int)
+        return StopPaths(runs, moving, None, none, np.zeros(0), none, np.zeros(0), np.zeros((0, 6)), np.zeros((0, 6)),
+                         np.zeros(0))
+    lo, hi, k = lo[moving], hi[moving], k[moving]
+    counts = hi - lo + 1  # samples of each path (consecutive paths share the waypoint between them)
+    rows = np.arange(counts.sum()) + np.repeat(lo - (np.cumsum(counts) - counts), counts)
+    path_of_row = np.repeat(np.arange(len(counts)), counts)
+    local = s[rows] - s[lo][path_of_row]  # each path's positions from 0
+    grid, sizes, at = _grids(local, counts, STOP_GRID)
     owner = np.maximum(owner, first + 1)  # the first sample: the first motion's tool
     jac = tcp_jacobians(robot, moves, owner, q, known)
-    fits = []  # per motion with a grid: spline, deviation, TCP length
-    for k, rows, local, grid in runs:
-        if len(grid):
-            spline, deviation = _fit(local, q[rows], jac[rows], np.full(len(local), tolerance), moves.acceleration[k])
-            fits.append((spline, deviation, _travel(q[rows], jac[rows])[-1]))
-    moving = [grid for *_, grid in runs if len(grid)]
-    rates = _grid_rates(robot, moves, np.repeat(np.arange(first + 1, last + 1), sizes),
-                        np.concatenate([f[0](grid) for f, grid in zip(fits, moving)]),
-                        np.concatenate([f[0](grid, 1) for f, grid in zip(fits, moving)]), at_sample, (q, owner, jac))
-    fits = iter(fits)
-    paths = []
-    for (k, rows, local, grid), offset in zip(runs, offsets):
-        if not len(grid):
-            paths.append(_no_path(k - 1, k))
-            continue
-        spline, deviation, length = next(fits)
-        paths.append(RunPath(JointPath(spline), local[[0, -1]], grid, k - 1, k, np.array([0.0, length]),
-                             rates[offset : offset + len(grid)], deviation))
-    return paths
+    steps = np.linalg.norm(np.einsum("nij,nj->ni", jac[1:, :3], np.diff(q, axis=0)), axis=1)
+    lengths = np.add.reduceat(steps, lo)  # TCP length of each path (its samples follow each other), mm
+    deviation = np.zeros(len(k))
+    few = counts < 4
+    parts, paths, splines = [], [], {}
+    if few.any():
+        parts.append(_through_samples(local[few[path_of_row]], q[rows[few[path_of_row]]], counts[few]))
+        paths.append(np.flatnonzero(few))
+    begins = np.cumsum(counts) - counts
+    for r in np.flatnonzero(~few).tolist():  # a longer motion: fitted alone, noise and all (`_fit`)
+        mine = slice(begins[r], begins[r] + counts[r])
+        splines[r], deviation[r] = _fit(local[mine], q[rows[mine]], jac[rows[mine]], np.full(counts[r], tolerance),
+                                        moves.acceleration[k[r]])
+        parts.append(CubicPieces.of_spline(splines[r], local[mine][-1]))
+        paths.append([r])
+    pieces = CubicPieces.joined(parts, paths) if len(parts) > 1 else parts[0]
+    path_of_point = np.repeat(np.arange(len(k)), sizes)
+    q_grid, dq, ddq = pieces.derivatives(path_of_point, grid)
+    at_sample = np.full(len(grid), -1)  # the sample each grid point is, -1 between samples
+    at_sample[at] = rows
+    rates = _grid_rates(robot, moves, k[path_of_point], q_grid, dq, at_sample, (q, owner, jac))
+    offsets = np.r_[0, np.cumsum(sizes)]
+    for r, i in enumerate(moving.tolist()):
+        spline = splines[r] if r in splines else pieces.ppoly(r)
+        o, p = offsets[r], offsets[r + 1]
+        runs[i] = RunPath(JointPath(spline), np.array([0.0, pieces.ends[r]]), grid[o:p], k[r] - 1, k[r],
+                          np.array([0.0, lengths[r]]), rates[o:p], float(deviation[r]))
+    return StopPaths(runs, moving, pieces, k, lengths, sizes, grid, dq, ddq, rates)
 
 
 def _collapsed(moves, robot, first, last):
@@ -293,6 +440,13 @@ def _collapsed(moves, robot, first, last):
 def _no_path(a, b):
     """The RunPath of waypoints a..b that do not move."""
     return RunPath(None, np.zeros(b - a + 1), np.zeros(1), a, b, np.zeros(b - a + 1), np.zeros(1), 0.0)
+
+
+def _moved(spline, ds):
+    """The same BSpline or PPoly with its path positions moved by ``-ds`` (rad): it starts ``ds`` earlier."""
+    if getattr(spline, "t", None) is None:
+        return type(spline).construct_fast(spline.c, spline.x - ds)
+    return type(spline).construct_fast(spline.t - ds, spline.c, spline.k)
 
 
 def _grid_rates(robot, moves, owner, q_path, dq, at_sample, samples):
@@ -347,9 +501,10 @@ def tcp_speeds(robot, moves, owner, q, qd):
         columns = frame_columns(robot, q)  # (7, 4, 3, n): column k (axes, origin) of DH frame i
         to_tcp = flange[:3, 3, None] + flange[:3, :3] @ moves.tools[moves.tool[owner], :3, 3].T  # (3, n), link 6
         tcp = columns[6, 3] + np.einsum("kcn,kn->cn", columns[6, :3], to_tcp)
-        axes, lever = columns[:6, 2], tcp[None] - columns[:6, 3]  # (6, 3, n)
-        moment = np.cross(axes, lever, axis=1)
-        return (np.linalg.norm(np.einsum("icn,in->cn", moment, robot.joint_map @ qd.T), axis=0),)
+        turning, lever = columns[:6, 2] * (robot.joint_map @ qd.T)[:, None], tcp[None] - columns[:6, 3]  # (6, 3, n)
+        x, y, z = (np.sum(turning[:, a] * lever[:, b] - turning[:, b] * lever[:, a], axis=0)
+                   for a, b in ((1, 2), (2, 0), (0, 1)))  # the cross products' components, summed over the axes
+        return (np.sqrt(x * x + y * y + z * z),)
 
     return in_blocks(speeds, np.asarray(owner), np.asarray(q, dtype=float), np.asarray(qd, dtype=float))[0]
 
@@ -361,22 +516,78 @@ def _travel(q, jac):
 
 
 def _grid(s, intervals=MIN_GRID):
-    """Grid points: every sample s (n,), intervals longer than 1/``intervals`` of the path subdivided evenly.
+    """Grid points of one path's samples s (n,) from 0 (`_grids`)."""
+    return _grids(s, np.array([len(s)]), intervals)[0]
+
+
+def _grids(s, counts, intervals):
+    """Grid points of paths laid end to end: every sample, intervals longer than 1/``intervals`` of the path
+    subdivided evenly.
 
     The first and last intervals are also halved `END_REFINEMENT` times
     towards the ends: the path speed is constant-acceleration from rest to
     the first grid point, so a coarse first interval would slow the start.
+
+    Parameters
+    ----------
+    s : ndarray, shape (n,)
+        Path positions of the paths' samples, each path's from 0, increasing.
+    counts : ndarray of int, shape (R,)
+        Samples of each path (at least 2).
+    intervals : int
+
+    Returns
+    -------
+    grid : ndarray, shape (G,)
+        The paths' grids laid end to end.
+    sizes : ndarray of int, shape (R,)
+        Grid points of each path.
+    at : ndarray of int, shape (n,)
+        Index in ``grid`` of each sample.
     """
-    longest = s[-1] / intervals
-    pieces = np.maximum(np.ceil(np.diff(s) / longest).astype(int), 1)
+    ends = np.cumsum(counts) - 1  # last sample of each path
+    length = s[ends]
+    within = np.ones(len(s) - 1, dtype=bool)
+    within[ends[:-1]] = False  # sample intervals inside a path
+    ds = np.diff(s)[within]
+    path = np.repeat(np.arange(len(counts)), counts - 1)
+    pieces = np.maximum(np.ceil(ds / (length / intervals)[path]).astype(int), 1)
     part = np.arange(pieces.sum()) - np.repeat(np.cumsum(pieces) - pieces, pieces)  # 0 .. p-1 in each interval
-    grid = np.r_[np.repeat(s[:-1], pieces) + part / np.repeat(pieces, pieces) * np.repeat(np.diff(s), pieces), s[-1]]
-    halves = 0.5 ** np.arange(1, END_REFINEMENT + 1)
-    head, tail = grid[1] * halves[::-1], grid[-1] - (grid[-1] - grid[-2]) * halves
-    merged = np.r_[grid[0], head, grid[1:-1], tail, grid[-1]]  # in order: the ends go inside the end intervals
-    if len(grid) > 2 and np.all(np.diff(merged) > 0.0):
-        return merged
-    return np.unique(merged)  # a coarse grid or coinciding points: sort and merge
+    points = np.repeat(np.delete(s, ends), pieces) + part / np.repeat(pieces, pieces) * np.repeat(ds, pieces)
+    per_path = np.bincount(path, weights=pieces, minlength=len(counts)).astype(int)  # points before the end
+    e = END_REFINEMENT
+    sizes = per_path + 1 + 2 * e
+    offsets = np.cumsum(sizes) - sizes
+    before = np.cumsum(per_path) - per_path  # first point of each path in ``points``
+    grid = np.empty(sizes.sum())
+    index = np.arange(len(points)) - np.repeat(before, per_path)  # of each point in its path's grid before merging
+    grid[np.repeat(offsets, per_path) + index + e * (index >= 1)] = points
+    grid[offsets + sizes - 1] = length
+    halves = 0.5 ** np.arange(1, e + 1)
+    second = np.where(per_path >= 2, points[np.minimum(before + 1, len(points) - 1)], length)
+    penultimate = points[before + per_path - 1]  # the last point before each path's end
+    grid[offsets[:, None] + 1 + np.arange(e)] = second[:, None] * halves[::-1]  # in order: inside the end intervals
+    grid[offsets[:, None] + per_path[:, None] + e + np.arange(e)] = (length[:, None]
+                                                                     - (length - penultimate)[:, None] * halves)
+    sample = np.zeros(len(s), dtype=int)  # of each sample in its path's grid before merging: 0, then pieces summed
+    first = ends - counts + 1
+    later = np.ones(len(s), dtype=bool)
+    later[first] = False
+    sample[later] = np.cumsum(pieces) - np.repeat(before, counts - 1)
+    at = np.repeat(offsets, counts) + sample + e * (sample >= 1) + e * (sample == np.repeat(per_path, counts))
+    steps = np.diff(grid)
+    steps[offsets[1:] - 1] = 1.0  # across paths
+    bad = np.flatnonzero((per_path < 2) | (np.minimum.reduceat(steps, offsets) <= 0.0))
+    if not bad.size:
+        return grid, sizes, at
+    paths = np.split(grid, offsets[1:])  # a coarse grid or coinciding points: sort and merge
+    for r in bad:
+        paths[r] = np.unique(paths[r])
+    sizes = np.array([len(p) for p in paths])
+    grid = np.concatenate(paths)
+    at = np.repeat(np.cumsum(sizes) - sizes, counts) + np.concatenate(
+        [np.searchsorted(p, s[a : b + 1]) for p, a, b in zip(paths, first, ends)])
+    return grid, sizes, at
 
 
 def tcp_jacobians(robot, moves, owner, q, known=None):
@@ -434,9 +645,8 @@ def _fit(s, q, jac, tol, acceleration):
     from scipy.interpolate import make_interp_spline  # here: a run that does not re-time never needs scipy
 
     n = len(s)
-    if n < 4:  # a line or a single corner: interpolate, with points added on the straight pieces
-        dense = np.union1d(s, np.linspace(s[0], s[-1], 4))
-        return make_interp_spline(dense, make_interp_spline(s, q, k=1)(dense), k=3), 0.0
+    if n < 4:  # a line or a single corner
+        return _through_samples(s, q, np.array([n])).ppoly(0), 0.0
     exact = make_interp_spline(s, q, k=3)
     demand = _demand(exact, s, acceleration)
     if n >= 4 * KNOT_STRIDE and np.all(tol <= tol.min()):  # no corner to cut: is the exact path noisy?
@@ -447,6 +657,97 @@ def _fit(s, q, jac, tol, acceleration):
     if thinned is None or demand <= SMOOTHING_GAIN * _demand(thinned, s, acceleration):
         return exact, 0.0
     return thinned, deviation
+
+
+def _through_samples(s, q, counts):
+    """The cubic splines of paths of fewer than 4 samples each (a line, or a single corner), laid end to end.
+
+    A path of 2 samples is their joint line; one of 3 interpolates the
+    polyline of its samples at the samples and at every third of the path
+    (a not-a-knot spline needs 4 points; on a straight piece it is the line).
+
+    Parameters
+    ----------
+    s : ndarray, shape (n,)
+        Path positions of the samples, each path's from 0, rad.
+    q : ndarray, shape (n, 6)
+        Joints of the samples, rad.
+    counts : ndarray of int, shape (R,)
+        Samples of each path (2 or 3).
+
+    Returns
+    -------
+    CubicPieces
+    """
+    ends = np.cumsum(counts) - 1
+    line = counts == 2
+    parts, paths = [], []
+    if line.any():
+        a, b = ends[line] - 1, ends[line]
+        c = np.zeros((len(a), 4, 6))
+        c[:, 2], c[:, 3] = (q[b] - q[a]) / s[b, None], q[a]
+        parts.append(CubicPieces(np.zeros(len(a)), c, np.ones(len(a), dtype=int), s[b]))
+        paths.append(np.flatnonzero(line))
+    if not line.all():
+        rows = ~np.repeat(line, counts)
+        parts.append(_through_corners(s[rows], q[rows], counts[~line]))
+        paths.append(np.flatnonzero(~line))
+    return CubicPieces.joined(parts, paths) if len(parts) > 1 else parts[0]
+
+
+def _through_corners(s, q, counts):
+    """`_through_samples` of paths of 3 samples (or more): the not-a-knot spline through the polyline of the
+    samples at the samples and at every third of the path."""
+    ends = np.cumsum(counts) - 1
+    length = s[ends]
+    path = np.repeat(np.arange(len(counts)), counts)
+    thirds = np.arange(4) * (length[:, None] / 3.0)  # as np.linspace
+    thirds[:, -1] = length
+    x, label = np.r_[s, thirds.ravel()], np.r_[path, np.repeat(np.arange(len(counts)), 4)]
+    order = np.lexsort((x, label))
+    x, label = x[order], label[order]
+    keep = np.r_[True, (np.diff(x) != 0.0) | (np.diff(label) != 0)]
+    x, label = x[keep], label[keep]
+    shift = np.r_[0.0, np.cumsum(length + 1.0)[:-1]]  # the paths apart on one axis, to find each point's samples
+    j = np.searchsorted(s + shift[path], x + shift[label], side="right") - 1
+    j = np.clip(j, (ends - counts + 1)[label], ends[label] - 1)
+    y = q[j] + (q[j + 1] - q[j]) * ((x - s[j]) / (s[j + 1] - s[j]))[:, None]
+    return _not_a_knot(x, y, np.bincount(label, minlength=len(counts)))
+
+
+def _not_a_knot(x, y, counts):
+    """Not-a-knot cubic splines through points (x (n,), y (n, 6)) of paths laid end to end, as scipy's
+    CubicSpline builds one (the slopes from one banded system, here of all the paths): `CubicPieces`.
+
+    ``counts`` (R,): points of each path (at least 4); x increases within a path.
+    """
+    from scipy.linalg import solve_banded  # here: a run that does not re-time never needs scipy
+
+    last = np.cumsum(counts) - 1
+    first = last - counts + 1
+    dx = np.diff(x)
+    slope = np.diff(y, axis=0) / dx[:, None]
+    inner = np.ones(len(x), dtype=bool)
+    inner[first], inner[last] = False, False
+    i = np.flatnonzero(inner)
+    A = np.zeros((3, len(x)))  # banded: A[0, j + 1] row j's upper entry, A[1, j] its diagonal, A[2, j - 1] its lower
+    b = np.empty(y.shape)
+    A[1, i], A[0, i + 1], A[2, i - 1] = 2.0 * (dx[i - 1] + dx[i]), dx[i - 1], dx[i]
+    b[i] = 3.0 * (dx[i, None] * slope[i - 1] + dx[i - 1, None] * slope[i])
+    d = x[first + 2] - x[first]
+    A[1, first], A[0, first + 1] = dx[first + 1], d
+    b[first] = (((dx[first] + 2.0 * d) * dx[first + 1])[:, None] * slope[first]
+                + (dx[first] ** 2)[:, None] * slope[first + 1]) / d[:, None]
+    d = x[last] - x[last - 2]
+    A[1, last], A[2, last - 1] = dx[last - 2], d
+    b[last] = ((dx[last - 1] ** 2)[:, None] * slope[last - 2]
+               + ((2.0 * d + dx[last - 1]) * dx[last - 2])[:, None] * slope[last - 1]) / d[:, None]
+    m = solve_banded((1, 1), A, b, overwrite_ab=True, overwrite_b=True, check_finite=False)  # slopes at the points
+    piece = np.delete(np.arange(len(x) - 1), last[:-1])  # the intervals inside a path
+    h, slope = dx[piece, None], slope[piece]
+    t = (m[piece] + m[piece + 1] - 2.0 * slope) / h
+    c = np.stack([t / h, (slope - m[piece]) / h - t, m[piece], y[piece]], axis=1)
+    return CubicPieces(x[piece], c, counts - 1, x[last])
 
 
 def _thinned(s, q, jac, tol):

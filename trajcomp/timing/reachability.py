@@ -40,7 +40,7 @@ import numpy as np
 LONGEST_CHUNK = 256  # grid intervals per chunk at most (about the square root of the grid below that)
 
 
-def squared_speeds(s, dq, ddq, acceleration, x_max, rest):
+def squared_speeds(s, dq, ddq, acceleration, x_max, rest, *, ramp=None):
     """Time-optimal squared path speeds x (G,) under joint acceleration limits and speed bounds.
 
     Parameters
@@ -55,6 +55,10 @@ def squared_speeds(s, dq, ddq, acceleration, x_max, rest):
         Upper bound of x at each grid point (joint velocity, TCP speed), finite.
     rest : array_like of int
         Grid points where the path speed is 0 (at least the first and the last).
+    ramp : int, optional
+        Most grid intervals between two rest points (independent runs in
+        one problem): chunks no longer than that settle in one or two
+        sweeps. Default: about the square root of the grid (`chunk_length`).
 
     Returns
     -------
@@ -64,10 +68,11 @@ def squared_speeds(s, dq, ddq, acceleration, x_max, rest):
     x_max = np.array(x_max, dtype=float)
     x_max[rest] = 0.0
     bands = Bands.of_path(np.diff(s), dq, ddq, acceleration)
-    return forward(bands, backward(bands, x_max, end=0.0), start=0.0)
+    length = None if ramp is None else min(ramp, chunk_length(len(s) - 1))
+    return forward(bands, backward(bands, x_max, end=0.0, length=length), start=0.0, length=length)
 
 
-def backward(bands, x_max, end):
+def backward(bands, x_max, end, *, length=None):
     """The controllable bounds h (G,): from x_i <= h_i the path can go on to x_{G-1} <= ``end``.
 
     Parameters
@@ -78,10 +83,12 @@ def backward(bands, x_max, end):
         Upper bound of x at each grid point, finite.
     end : float
         The bound at the last grid point (0: rest there; for a window, the next window's bound).
+    length : int, optional
+        Grid intervals per chunk; default `chunk_length`.
     """
     largest = bands.largest_x(x_max[:-1])
     h = np.append(largest, min(end, x_max[-1]))
-    chunks = _Chunks(len(h))
+    chunks = _Chunks(len(h), length)
     with np.errstate(divide="ignore", invalid="ignore"):
         rising = bands.sigma > 0.0  # x_i <= (h_{i+1} + w) / sigma for the bands with sigma > 0
         inverse = chunks.laid(np.where(rising, 1.0 / bands.sigma, 0.0), 0.0)
@@ -98,12 +105,12 @@ def backward(bands, x_max, end):
     return chunks.settle(h, step, reverse=True)
 
 
-def forward(bands, h, start):
+def forward(bands, h, start, *, length=None):
     """The greedy forward pass: x (G,) from x_0 = ``start`` (<= h_0), as fast as h (G,) and the bands
-    (`Bands` of the G - 1 intervals) allow."""
+    (`Bands` of the G - 1 intervals) allow; ``length``: grid intervals per chunk (default `chunk_length`)."""
     x = h.copy()
     x[0] = start
-    chunks = _Chunks(len(h))
+    chunks = _Chunks(len(h), length)
     sigma, w, h_next = chunks.laid(bands.sigma, 0.0), chunks.laid(bands.w, np.inf), chunks.laid(h[1:], 0.0)
     reach = np.empty(sigma.shape[1:])
 
@@ -131,9 +138,9 @@ class _Chunks:
     last point (finite: a padded interval's 0 * value stays 0).
     """
 
-    def __init__(self, points):
+    def __init__(self, points, length=None):
         self.points = points
-        self.length = chunk_length(points - 1)
+        self.length = chunk_length(points - 1) if length is None else max(int(length), 1)
         self.count = -(-(points - 1) // self.length)
 
     def laid(self, per_interval, fill):
@@ -204,14 +211,22 @@ class Bands:
         acceleration limits (6,) or (G - 1, 6), rad/s^2."""
         # alpha x_i + beta x_{i+1} in [-a, a]: joint j at the interval's start (first 6), at its end (last 6)
         two_ds = 2.0 * ds[:, None]
-        beta = np.hstack([dq[:-1] / two_ds, dq[1:] / two_ds + ddq[1:]])
-        alpha = np.hstack([ddq[:-1] - dq[:-1] / two_ds, -dq[1:] / two_ds])
+        beta, alpha = np.empty((2, len(ds), 12))  # filled in place: these are the largest arrays of a long run
+        np.divide(dq[:-1], two_ds, out=beta[:, :6])
+        np.divide(dq[1:], two_ds, out=alpha[:, 6:])
+        np.add(alpha[:, 6:], ddq[1:], out=beta[:, 6:])
+        np.subtract(ddq[:-1], beta[:, :6], out=alpha[:, :6])
+        np.negative(alpha[:, 6:], out=alpha[:, 6:])
         acceleration = np.asarray(acceleration, dtype=float)
         a = np.concatenate([acceleration, acceleration], axis=-1)
-        moving = beta != 0.0
         with np.errstate(divide="ignore", invalid="ignore"):
-            return cls(np.where(moving, -alpha / beta, 0.0), np.where(moving, a / np.abs(beta), np.inf),
-                       np.min(np.where(moving, np.inf, a / np.abs(alpha)), axis=1))
+            sigma = np.negative(alpha / beta)
+            w = a / np.abs(beta)
+            still = beta == 0.0  # a joint that does not move: no band, a bound on x_i alone
+            if not still.any():
+                return cls(sigma, w, np.full(len(ds), np.inf))
+            sigma[still], w[still] = 0.0, np.inf
+            return cls(sigma, w, np.min(np.where(still, a / np.abs(alpha), np.inf), axis=1))
 
     @classmethod
     def joined(cls, parts):
@@ -228,9 +243,11 @@ class Bands:
         """
         x = np.minimum(x_max, self.x_bound)
         todo = np.arange(len(x))
+        sigma, w = self.sigma, self.w  # every interval at first (no copy), then those still left
         for _ in range(100):
-            sigma, w = self.sigma[todo], self.w[todo]
-            upper, lower = sigma * x[todo, None] + w, sigma * x[todo, None] - w
+            upper = sigma * x[todo, None]
+            lower = upper - w
+            upper += w
             iu, il = np.argmin(upper, axis=1), np.argmax(lower, axis=1)
             rows = np.arange(len(todo))
             top, bottom = upper[rows, iu], lower[rows, il]
@@ -239,6 +256,6 @@ class Bands:
             if not bad.any():
                 break
             slope = sigma[rows, iu] - np.where(bottom > 0.0, sigma[rows, il], 0.0)
-            todo, gap, slope = todo[bad], gap[bad], slope[bad]
+            todo, gap, slope, sigma, w = todo[bad], gap[bad], slope[bad], sigma[bad], w[bad]
             x[todo] = np.maximum(x[todo] - gap / np.minimum(slope, -1e-300), 0.0)
         return x

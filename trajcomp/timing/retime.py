@@ -20,10 +20,12 @@ timing), a ruckig segment's limit is lowered by the overshoot, and the
 segment is timed again.
 
 Consecutive single motions from rest to rest (a program of exact stops)
-are built and timed together, up to `STOP_BATCH` at a time: one sampling
-and one Jacobian batch for their paths, one TOPP-RA problem for their
-TOPP-RA laws (`trajcomp.timing.toppra_run.rest_to_rest_laws`); each is
-the timing it gets alone.
+are built and timed together, up to `STOP_BATCH` at a time, as arrays
+laid end to end: one sampling, one Jacobian batch, one grid and one fit
+of their short paths (`trajcomp.timing.path.stop_paths`), one TOPP-RA
+problem for their TOPP-RA laws (`trajcomp.timing.toppra_run.rest_to_rest_laws`)
+and one 1 kHz check of those (`trajcomp.timing.check.rest_to_rest_checks`);
+each is the timing it gets alone.
 """
 
 import dataclasses
@@ -33,7 +35,8 @@ import itertools
 import numpy as np
 
 from trajcomp.programs.items import JOINT
-from trajcomp.timing.check import LIMIT_TOLERANCE, Peaks, dense_check, dense_checks, segment_peaks
+from trajcomp.timing.check import (LIMIT_TOLERANCE, Peaks, dense_check, dense_checks, rest_to_rest_checks,
+                                   segment_peaks)
 from trajcomp.timing.options import METHODS, TOLERANCE
 from trajcomp.timing.path import stop_paths
 from trajcomp.timing.result import Segment, TimingResult
@@ -115,28 +118,29 @@ def _batches(plan):
             yield from ([segment] for segment in group)
 
 
-def _time_stops(timeline, batch, runs, moves, robot):
-    """Time single motions from rest to rest: TOPP-RA ones as one problem, ruckig ones each; check each."""
+def _time_stops(timeline, batch, stops, moves, robot):
+    """Time single motions from rest to rest (`StopPaths`): TOPP-RA ones as one problem and checked together,
+    ruckig ones each; a motion the dense check finds over a limit is timed again alone."""
     from trajcomp.timing.ruckig_move import ruckig_law
     from trajcomp.timing.toppra_run import rest_to_rest_laws
 
-    laws = [None] * len(runs)
-    by_toppra = [i for i, (kind, *_) in enumerate(batch) if kind == "toppra" and runs[i].path is not None]
-    for i, law in zip(by_toppra, rest_to_rest_laws([runs[i] for i in by_toppra], moves, robot)):
-        laws[i] = law
-    moving = [i for i, run in enumerate(runs) if run.path is not None]
-    for i in moving:
-        laws[i] = laws[i] or ruckig_law(runs[i], moves, robot)
-    checks = dict(zip(moving, dense_checks([runs[i] for i in moving], [laws[i] for i in moving], moves, robot,
-                                           jerk=[batch[i][0] == "ruckig" for i in moving])))
-    for i, ((kind, first, last), run, law) in enumerate(zip(batch, runs, laws)):
-        if run.path is None:
-            timeline.add(kind, first, last, [run], [None], None)
-            continue
-        peaks = checks[i][0]
-        if peaks.worst > _TARGET:  # the dense check found an overshoot: the motion timed again alone
-            (run,), (law,), peaks = _timed(kind, [run], moves, robot)
-        timeline.add(kind, first, last, [run], [law], peaks)
+    runs = list(stops.runs)
+    laws, peaks, worst = [None] * len(runs), [None] * len(runs), np.zeros(len(runs))
+    by_toppra = np.array([r for r, i in enumerate(stops.moving.tolist()) if batch[i][0] == "toppra"], dtype=int)
+    if by_toppra.size:
+        timed = rest_to_rest_laws(stops, by_toppra, moves)
+        checked, worst[stops.moving[by_toppra]] = rest_to_rest_checks(stops, by_toppra, timed, moves, robot)
+        for r, i in enumerate(stops.moving[by_toppra].tolist()):
+            laws[i], peaks[i] = timed.law(r), checked[r]
+    by_ruckig = [i for i in stops.moving.tolist() if laws[i] is None]
+    for i in by_ruckig:
+        laws[i] = ruckig_law(runs[i], moves, robot)
+    for i, (checked, _) in zip(by_ruckig, dense_checks([runs[i] for i in by_ruckig], [laws[i] for i in by_ruckig],
+                                                       moves, robot, jerk=[True] * len(by_ruckig))):
+        peaks[i], worst[i] = checked, checked.worst
+    for i in np.flatnonzero(worst > _TARGET):  # the dense check found an overshoot: the motion timed again alone
+        (runs[i],), (laws[i],), peaks[i] = _timed(batch[i][0], [runs[i]], moves, robot)
+    timeline.add_stops(batch, runs, laws, peaks)
 
 
 def _continued(start, declared, kinds, swept=None):
@@ -341,6 +345,23 @@ class _Timeline:
         if peaks is not None:
             self.peaks.append(peaks)
             self.checked.append(self.segments[-1])
+
+    def add_stops(self, batch, runs, laws, peaks):
+        """Single motions from rest to rest, segments ``batch`` [(kind, k - 1, k)], timed as ``runs`` with ``laws``
+        (None for a motion without length), checked to ``peaks`` (None likewise)."""
+        k = np.array([last for _, _, last in batch], dtype=int)
+        durations = np.array([0.0 if law is None else law.duration for law in laws])
+        self.tcp_length[k] = [run.tcp_lengths[-1] for run in runs]
+        self.deviation = max(self.deviation, *(run.deviation for run in runs))
+        self.t[k] = np.cumsum(np.r_[self.t[k[0] - 1], durations])[1:]
+        jerk_limited = bool(np.all(np.isfinite(self.robot.j_max)))
+        for (kind, first, last), run, law, checked in zip(batch, runs, laws, peaks):
+            self.segments.append(Segment(kind, first, last, float(self.t[last] - self.t[first]),
+                                         jerk_limited=jerk_limited and kind == "ruckig"))
+            if law is not None:
+                self.pieces.append((float(self.t[first]), run, law))
+                self.peaks.append(checked)
+                self.checked.append(self.segments[-1])
 
     def result(self):
         """The `TimingResult`."""

@@ -22,6 +22,7 @@ import dataclasses
 import numpy as np
 
 from trajcomp.errors import TimingError
+from trajcomp.timing.path import squared_speed_bound, tcp_limits
 from trajcomp.timing.reachability import Bands, backward, forward, squared_speeds
 
 _X_CAP = 1e12  # (rad/s)^2 ceiling of the squared path speed where no limit binds
@@ -49,13 +50,17 @@ class ConstantAcceleration:
 
     @classmethod
     def from_speeds(cls, s, sd):
-        """The law of grid points s (G,) and speeds sd (G,) (toppra's ParametrizeConstAccel)."""
-        ds = np.diff(s)
-        with np.errstate(divide="ignore"):
-            dt = 2.0 * ds / (sd[:-1] + sd[1:])
-        if not np.all(np.isfinite(dt)):
+        """The law of grid points s (G,) and speeds sd (G,) (toppra's ParametrizeConstAccel).
+
+        Raises
+        ------
+        ValueError
+            The path speed is zero on a whole interval.
+        """
+        laws = ConstantAccelerations.from_speeds(s, sd, np.array([len(s)]))
+        if laws.stuck.size:
             raise ValueError("the path speed is zero on a whole interval")
-        return cls(s, sd, np.r_[0.0, np.cumsum(dt)], 0.5 * np.diff(sd**2) / ds)
+        return laws.law(0)
 
     @property
     def duration(self):
@@ -80,6 +85,58 @@ class ConstantAcceleration:
         with np.errstate(invalid="ignore", divide="ignore"):
             dt = np.where(ahead > 0, 2.0 * ahead / (self.sd[i] + root), 0.0)
         return self.t[i] + dt
+
+
+class ConstantAccelerations:
+    """Constant-acceleration laws laid end to end (motions from rest to rest: thousands of short laws).
+
+    Law r is grid points ``offsets[r] .. offsets[r + 1] - 1`` of the
+    arrays, its times from 0.
+
+    Attributes
+    ----------
+    s, sd, t : ndarray, shape (G,)
+        Grid points (each law's path positions), path speed and time there.
+    u : ndarray, shape (G,)
+        Path acceleration on the interval each grid point begins (0 at a law's last point).
+    offsets : ndarray of int, shape (R + 1,)
+    stuck : ndarray of int, shape (m,)
+        Grid points (indices into the arrays) beginning an interval on which the path speed is zero at both
+        ends (no law: the path cannot be run there).
+    """
+
+    def __init__(self, s, sd, t, u, offsets, stuck):
+        self.s, self.sd, self.t, self.u, self.offsets, self.stuck = s, sd, t, u, offsets, stuck
+        self.durations = t[offsets[1:] - 1]
+        self._shift = np.r_[0.0, np.cumsum(self.durations + 1.0)[:-1]]  # the laws apart in time, for the lookup
+        self._key = t + np.repeat(self._shift, np.diff(offsets))
+
+    @classmethod
+    def from_speeds(cls, s, sd, sizes):
+        """The laws of grids s (G,) with speeds sd (G,), ``sizes`` (R,) points each (at least 2)."""
+        offsets = np.r_[0, np.cumsum(sizes)]
+        ds = np.diff(s)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            dt = 2.0 * ds / (sd[:-1] + sd[1:])
+            u = np.append(0.5 * np.diff(sd**2) / ds, 0.0)
+        between = offsets[1:-1] - 1  # the steps from one law's last point to the next one's first
+        dt[between], u[between] = 0.0, 0.0
+        stuck = np.flatnonzero(~np.isfinite(dt))
+        elapsed = np.r_[0.0, np.cumsum(dt)]
+        return cls(s, sd, elapsed - np.repeat(elapsed[offsets[:-1]], sizes), u, offsets, stuck)
+
+    def law(self, r):
+        """Law r as a `ConstantAcceleration` (views)."""
+        lo, hi = self.offsets[r], self.offsets[r + 1]
+        return ConstantAcceleration(self.s[lo:hi], self.sd[lo:hi], self.t[lo:hi], self.u[lo : hi - 1])
+
+    def __call__(self, law, t):
+        """s, sd, sdd (each (N,)) of laws ``law`` (N,) at their times t (N,)."""
+        i = np.searchsorted(self._key, t + self._shift[law], side="right") - 1
+        i = np.clip(i, self.offsets[law], self.offsets[law + 1] - 2)
+        dt = t - self.t[i]
+        u = self.u[i]
+        return self.s[i] + self.sd[i] * dt + 0.5 * u * dt**2, self.sd[i] + u * dt, u
 
 
 def toppra_laws(runs, moves, robot):
@@ -179,53 +236,50 @@ def _joined_problem(runs, moves, *, with_bound):
     return Bands.joined(parts), np.array(offsets), (np.concatenate(bound) if with_bound else None)
 
 
-def rest_to_rest_laws(runs, moves, robot):
-    """The time-optimal laws of independent runs, each at rest at both ends, solved as one problem.
+def rest_to_rest_laws(stops, paths, moves):
+    """The time-optimal laws of independent paths, each at rest at both ends, solved as one problem.
 
-    The runs' grids are laid end to end (a unit gap between them) with
-    the path speed 0 at each run's ends, so one pair of reachability
+    The paths' grids are laid end to end (a unit gap between them) with
+    the path speed 0 at each path's ends, so one pair of reachability
     passes times them all (a program of exact stops: thousands of short
     runs).
 
     Parameters
     ----------
-    runs : list of RunPath
-        With paths (non-zero length).
+    stops : StopPaths
+        Motions from rest to rest (`trajcomp.timing.path.stop_paths`).
+    paths : ndarray of int, shape (R,)
+        Which of its paths (indices into ``stops.moving``).
     moves : Moves
-    robot : Robot
 
     Returns
     -------
-    list of ConstantAcceleration
+    ConstantAccelerations
+        Law r: path ``paths[r]``.
+
+    Raises
+    ------
+    TimingError
+        A path whose speed must be zero over a whole grid interval.
     """
-    if not runs:
-        return []
-    problems = [_problem(run, moves) for run in runs]
-    sizes = np.array([len(p[0]) for p in problems])
+    points, sizes, k = stops.points(paths), stops.sizes[paths], stops.motion[paths]
+    grid, dq, ddq = stops.grid[points], stops.dq[points], stops.ddq[points]
+    velocity = np.repeat(moves.velocity[k], sizes, axis=0)
+    tcp = np.repeat(tcp_limits(moves, k, stops.tcp_length[paths]), sizes)
+    x_max = np.minimum(squared_speed_bound(dq, stops.rate[points], velocity, tcp), _X_CAP)
     ends = np.cumsum(sizes)
-    starts = ends - sizes
-    lengths = np.array([p[0][-1] for p in problems])
-    shift = np.r_[0.0, np.cumsum(lengths + 1.0)[:-1]]
-    s = np.concatenate([p[0] for p in problems]) + np.repeat(shift, sizes)
-    dq, ddq = (np.concatenate([p[i] for p in problems]) for i in (1, 2))
-    acceleration = np.repeat([p[3] for p in problems], sizes, axis=0)[:-1]
-    x = squared_speeds(s, dq, ddq, acceleration, np.concatenate([p[4] for p in problems]), np.r_[starts, ends - 1])
-    laws = []
-    for run, problem, lo, hi in zip(runs, problems, starts, ends):
-        try:
-            laws.append(ConstantAcceleration.from_speeds(run.grid, np.sqrt(x[lo:hi])))
-        except ValueError:
-            i = int(np.argmin(x[lo : hi - 1] + x[lo + 1 : hi]))
-            raise _stuck(run, moves, run.grid, i, problem[1], problem[5]) from None
+    shift = np.r_[0.0, np.cumsum(stops.pieces.ends[paths] + 1.0)[:-1]]
+    acceleration = np.repeat(moves.acceleration[k], sizes, axis=0)[:-1]
+    x = squared_speeds(grid + np.repeat(shift, sizes), dq, ddq, acceleration, x_max, np.r_[ends - sizes, ends - 1],
+                       ramp=int(sizes.max()))
+    laws = ConstantAccelerations.from_speeds(grid, np.sqrt(x), sizes)
+    if laws.stuck.size:
+        i = int(laws.stuck[0])
+        r = int(np.searchsorted(ends, i, side="right"))
+        lo = ends[r] - sizes[r]
+        run = stops.runs[stops.moving[paths[r]]]
+        raise _stuck(run, moves, run.grid, i - lo, dq[lo : ends[r]], velocity[lo : ends[r]])
     return laws
-
-
-def _problem(run, moves):
-    """A run's TOPP-RA data: grid (G,), q' and q'' there (G, 6), acceleration limits (6,), x bound (G,),
-    joint velocity limits (G, 6)."""
-    grid, dq, ddq, acceleration = _path_problem(run, moves)
-    x_max, velocity = run.speed_bound(moves, dq=dq)
-    return grid, dq, ddq, acceleration, np.minimum(x_max, _X_CAP), velocity
 
 
 def _path_problem(run, moves):
