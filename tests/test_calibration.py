@@ -207,3 +207,17 @@ def test_real_ur10_at_23_orientations_in_the_tracker_frame(tmp_path, capsys):
     fit = {line.split()[0]: float(line.split()[2]) for line in out.splitlines()[2:7]}
     assert fit["composite"] < 0.4 and fit["dh"] < 0.45 and fit["none"] > 10.0
     assert "outliers" not in err and "other tools: yes" in err
+
+
+def test_cross_validation_on_two_processes_equals_one():
+    """The folds computed by two worker processes give the held-out statistics of one process."""
+    from trajcomp.calibration.orientations import spread_orientations
+
+    robot = load_robot("ur10")
+    plan = plan_grid(robot, (300, -100, 300), 400, 200, spread_orientations(default_orientation(robot), 5, np.radians(30)))
+    q = plan.joints[plan.reachable]
+    meas = Measurements(joints=q, position=plan.position[plan.reachable], lines=np.arange(len(q)) + 2, path="m.csv",
+                        measured=VirtualRobot.create(robot, "paper", seed=3).measure(q, np.random.default_rng(7)))
+    one, two = (calibrate(robot, meas, folds=3, workers=workers).report for workers in (1, 2))
+    assert one["residual"] == "joint" and one["cross_validation"]["composite"]["mean"] > 0.0
+    assert two["cross_validation"] == one["cross_validation"]

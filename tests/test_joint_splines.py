@@ -8,7 +8,7 @@ import pytest
 from trajcomp.model import joint_errors
 from trajcomp.calibration.calibrate import calibrate
 from trajcomp.compensation.targets import compensate
-from trajcomp.calibration.identify import identify, region_folds
+from trajcomp.calibration.identify import identify, linearise, region_folds
 from trajcomp.model.joint_errors import JointResidual, SplineBasis
 from trajcomp.arm.kinematics import fk
 from trajcomp.calibration.measurements import Measurements
@@ -223,3 +223,31 @@ def test_a_field_over_positions_goes_on_top_of_the_joint_residual_where_it_wins_
     truth = landed(fresh)
     assert np.linalg.norm(predicted - truth, axis=1).mean() < 0.7 * np.linalg.norm(without - truth, axis=1).mean()
     assert calibration_report(model, meas).doc["joint_errors"]["field_on_top"] == "knn"
+
+
+def test_a_refit_without_some_rows_lands_where_identify_lands_on_the_others():
+    """Cross-validation's refit (one linearised step from the fit of all rows, `Linearisation.fit_without`) is
+    the identification of the rows kept, spline terms, their penalty and the robust weights included."""
+    nominal = load_robot("ur10")
+    true = VirtualRobot.create(nominal, ErrorProfile("geometric", length_sigma=0.3, angle_sigma=np.radians(0.03)),
+                               seed=4).true_robot
+    q = joints_in_range(400, 2)
+    reached = q.copy()
+    reached[:, 1] += planted_error(q)
+    measured = fk(true, reached)[:, :3, 3] + np.random.default_rng(3).normal(0.0, 0.02, (400, 3))
+    basis = SplineBasis(q.min(axis=0), q.max(axis=0), np.radians([0, 4, 0, 0, 0, 0]), penalty=1e-4)
+    fit = identify(nominal, q, measured, joint_terms=True, splines=basis)
+    held = np.arange(0, 400, 4)
+    kept = np.setdiff1d(np.arange(400), held)
+    refit = linearise(nominal, q, measured, dict(zip(fit.names, fit.delta)), basis=basis,
+                      identifiability=fit.identifiability).fit_without(held)
+    again = identify(nominal, q[kept], measured[kept], joint_terms=True, splines=basis)
+    fresh = joints_in_range(300, 3)
+
+    def landed(f):
+        return fk(f.robot, f.joint_errors.reached(nominal, fresh))[:, :3, 3]
+
+    moved = np.linalg.norm(landed(again) - landed(fit), axis=1).mean()  # what holding the rows out changes
+    assert moved > 1e-3
+    assert np.linalg.norm(landed(refit) - landed(again), axis=1).max() < 0.02 * moved
+    assert refit.residuals.shape == (300, 3) and refit.names == again.names

@@ -41,6 +41,7 @@ from trajcomp.calibration.orientations import MIN_AXIS_OFFSET, MIN_SPREAD, axis_
 from trajcomp.arm.parameters import is_robot_parameter
 from trajcomp.calibration.plausibility import check_columns, check_identification, check_units
 from trajcomp.model.stats import ErrorStats, kfold_indices
+from trajcomp.support.parallel import map_blocks
 from trajcomp.arm.transforms import abc_to_matrix, invert, pose_to_matrix
 
 log = logging.getLogger(__name__)
@@ -305,7 +306,7 @@ def too_many_rows():
 
 def calibrate(robot, meas, *, robot_ref=None, method="composite", frame=None, grid_step=None,
               interpolation="auto", loss="huber", folds=5, seed=0, progress=None,
-              orientation_weight=ORIENTATION_WEIGHT):
+              orientation_weight=ORIENTATION_WEIGHT, workers=1):
     """Identify a compensation model from measurements.
 
     Parameters
@@ -339,6 +340,10 @@ def calibrate(robot, meas, *, robot_ref=None, method="composite", frame=None, gr
         Called with a text line as the folds run.
     orientation_weight : float
         mm per rad of orientation residual (6-DoF data).
+    workers : int
+        Processes computing the cross-validation's folds
+        (`trajcomp.support.parallel.map_blocks`; forked, on POSIX); the
+        model does not depend on it. Default 1: this process only.
 
     Returns
     -------
@@ -423,7 +428,7 @@ def calibrate(robot, meas, *, robot_ref=None, method="composite", frame=None, gr
         data = (robot, _rows(joints, keep), position[keep], measured[keep], _rows(rotation_base, keep),
                 options | {"R_tcp_target": None if dh is None else dh.R_tcp_target, "splines": parts.selection})
         fitted = (dh, model.residual if kind == JOINT_KIND else None) if method in ("dh", "composite") else None
-        held = fold_errors(*data, folds, seed, progress, fitted)
+        held = fold_errors(*data, folds, seed, progress, fitted, workers)
         report["cross_validation"] = {"folds": folds, "interpolation": held.pop("interpolation")} | {
             m: ErrorStats.from_errors(e).as_dict() for m, e in held.items()}
         report["landing"] = _landing(robot, dh, frame, data, held, folds, progress, meas.orientation)
@@ -432,7 +437,8 @@ def calibrate(robot, meas, *, robot_ref=None, method="composite", frame=None, gr
     return model
 
 
-def fold_errors(robot, joints, position, measured, rotation, options, folds, seed, progress=None, fitted=None):
+def fold_errors(robot, joints, position, measured, rotation, options, folds, seed, progress=None, fitted=None,
+                workers=1):
     """Held-out errors (N, 3) per mode of k-fold cross-validation, in row order, and the interpolator used.
 
     The folds fit in the base frame (the tracker registration of the full
@@ -444,23 +450,31 @@ def fold_errors(robot, joints, position, measured, rotation, options, folds, see
     field a joint residual takes on top. ``fitted`` ``(dh, residual)``, the
     full fit's `KinematicFit` and joint residual (or None), are refitted
     without each fold's rows by `_Refit`; without it the folds identify
-    from the nominal robot.
+    from the nominal robot. The folds are computed by up to ``workers``
+    processes (`trajcomp.support.parallel.map_blocks`); the errors do not
+    depend on it.
     """
     if len(position) < 2 * folds:
         raise CalibrationError(f"{len(position)} measurements are too few for {folds}-fold cross-validation")
     if options["kind"] in LATTICE_INTERPOLATORS:
         options = options | {"kind": "knn", "grid_step": None}
     refit = None if fitted is None else _Refit(robot, joints, measured, rotation, options, *fitted)
-    collected = {}
-    for k, (train, test) in enumerate(kfold_indices(len(position), folds, seed)):
-        if progress:
-            progress(f"cross-validation fold {k + 1}/{folds}")
+    splits = kfold_indices(len(position), folds, seed)
+
+    def fold(k):
+        train, test = splits[k]
         dh, residual = (None, None) if refit is None else refit(train, test)
         parts = _Parts(robot, _rows(joints, train), position[train], measured[train], _rows(rotation, train), dh=dh,
                        residual=residual, **options)
         model = parts.model(robot, robot.name, options["method"], np.eye(4), {}, (False, ""))
-        for mode, err in mode_errors(model, _rows(joints, test), position[test], measured[test]).items():
-            collected.setdefault(mode, np.full((len(position), 3), np.nan))[test] = err
+        return mode_errors(model, _rows(joints, test), position[test], measured[test])
+
+    collected = {}
+    for k, errors in enumerate(map_blocks(fold, folds, workers)):
+        if progress:
+            progress(f"cross-validation fold {k + 1}/{folds}")
+        for mode, err in errors.items():
+            collected.setdefault(mode, np.full((len(position), 3), np.nan))[splits[k][1]] = err
     field = (options.get("splines") or {}).get("field") if options["kind"] == JOINT_KIND else None
     return {"interpolation": options["kind"] + (f" with a {field} field on top" if field else ""), **collected}
 

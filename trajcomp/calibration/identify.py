@@ -535,7 +535,7 @@ class Linearisation:
     loss : str
         Robust loss (`LOSSES`) giving the default weights.
     identifiability : Identifiability, optional
-        The fit's, recorded in the refits (`fit_without`).
+        The fit's, recorded in the refits (needed by `fit_without`).
     rtol : float
         As `identify`'s: a refit does not step along directions the normal
         equations see below ``rtol`` times their best, and leaves them out
@@ -622,7 +622,7 @@ def linearise(start, q, measured, parameters, *, rotation=None, nominal=None, R_
     orientation_weight : float
         mm per rad of orientation residual.
     identifiability : Identifiability, optional
-        The fit's, recorded in refits.
+        The fit's, recorded in refits (needed by `Linearisation.fit_without`).
 
     Returns
     -------

@@ -15,6 +15,8 @@ from trajcomp.commands._args import (
     steps,
 )
 from trajcomp.commands._report import add_report_options, criteria_of, emit
+from trajcomp.errors import TrajcompError
+from trajcomp.support.parallel import usable_cores
 
 
 def add_parser(sub):
@@ -47,6 +49,9 @@ def add_parser(sub):
                         "1 mrad counts as 0.1 mm)")
     parser.add_argument("--folds", type=non_negative_int, default=5, help="k of the k-fold cross-validation (default 5; 0: none)")
     parser.add_argument("--seed", type=non_negative_int, default=0, help="seed of the fold split (default 0)")
+    parser.add_argument("--jobs", type=int, default=usable_cores(), metavar="N",
+                        help="processes computing the cross-validation's folds (default: the %(default)s cores this "
+                        "machine gives); the model does not depend on it")
     add_layout(parser)
     parser.add_argument("-o", "--output", required=True, help="model file to write (.yaml)")
     add_report_options(parser, verdict="accuracy")
@@ -103,6 +108,8 @@ def run(args):
     from trajcomp.report import calibration_report, file_entry, report_paths
     from trajcomp.support.atomic import refuse_inputs
 
+    if args.jobs < 1:
+        raise TrajcompError(f"--jobs: expected a whole number of at least 1, got {args.jobs}")
     robot = robot_of(args)
     if args.tool is not None:
         robot = robot.replace(T_flange_tool=args.tool)
@@ -113,7 +120,7 @@ def run(args):
         model = calibrate(
             robot, meas, robot_ref=args.robot, method=args.method, frame=args.frame, grid_step=args.grid_step,
             interpolation=args.interpolation, loss=args.loss, folds=args.folds, seed=args.seed, progress=progress,
-            orientation_weight=args.orientation_weight,
+            orientation_weight=args.orientation_weight, workers=args.jobs,
         )
     except CalibrationError as exc:  # what the data cannot give names the file ("2 measurements are too few...")
         if str(args.measurements) in str(exc):
