@@ -126,7 +126,7 @@ class _Parts:
     """
 
     def __init__(self, robot, joints, position, measured, rotation, *, method, grid_step, kind, loss,
-                 orientation_weight, R_tcp_target=None, dh=None, residual=None, splines=None):
+                 orientation_weight, R_tcp_target=None, dh=None, residual=None, splines=None, workers=1):
         self.dh = dh
         self.grid = None
         self.residual = None
@@ -142,7 +142,7 @@ class _Parts:
             self.left_out[self.dh.outliers] = True
             if method == "composite" and kind == JOINT_KIND:
                 self.residual, self.selection = (residual, splines) if residual is not None else _joint_residual(
-                    robot, self.dh, joints, position, measured, rotation, loss, orientation_weight)
+                    robot, self.dh, joints, position, measured, rotation, loss, orientation_weight, workers)
                 modelled = fk(self.residual.robot(self.dh.robot), self.residual.reached(robot, joints))[:, :3, 3]
                 self.left_out = np.zeros(len(position), dtype=bool)
                 self.left_out[outlier_rows(measured - modelled)] = True
@@ -190,7 +190,7 @@ def _field(position, values, left_out, kind, grid_step):
     return fit_field(position[~left_out], values[~left_out], interpolation=kind)
 
 
-def _joint_residual(nominal, dh, joints, position, measured, rotation, loss, orientation_weight):
+def _joint_residual(nominal, dh, joints, position, measured, rotation, loss, orientation_weight, workers=1):
     """Joint-error terms and a DH refinement on top of the kinematic fit (frames as that fit found them).
 
     The harmonic and gravity terms are identified with the DH refinement;
@@ -213,7 +213,8 @@ def _joint_residual(nominal, dh, joints, position, measured, rotation, loss, ori
                        orientation_weight=orientation_weight, R_tcp_target=dh.R_tcp_target)
     choice = select_splines(refined, dh.robot, nominal, joints, measured, rotation=rotation, position=position,
                             orientation_weight=orientation_weight, joints=spline_joints,
-                            field=None if shares_positions(position, joints) else _field_on_top, loss=loss)
+                            field=None if shares_positions(position, joints) else _field_on_top, loss=loss,
+                            workers=workers)
     refined, basis = choice.fit or refined, choice.basis
     record = {"regions": choice.regions, "candidates": choice.table, "field": FIELD_ON_TOP if choice.field else None,
               "step_deg": 0.0 if basis is None else float(np.degrees(basis.step.max())),
@@ -341,7 +342,8 @@ def calibrate(robot, meas, *, robot_ref=None, method="composite", frame=None, gr
     orientation_weight : float
         mm per rad of orientation residual (6-DoF data).
     workers : int
-        Processes computing the cross-validation's folds
+        Processes scoring the joint residual's candidate knot steps and
+        computing the cross-validation's folds
         (`trajcomp.support.parallel.map_blocks`; forked, on POSIX); the
         model does not depend on it. Default 1: this process only.
 
@@ -397,7 +399,7 @@ def calibrate(robot, meas, *, robot_ref=None, method="composite", frame=None, gr
         warnings.append(f"{int((counts - 1).sum())} rows repeat an earlier command (first at lines {lines}); "
                         "their measurements are averaged by the grid")
     options = dict(method=method, grid_step=grid_step, kind=kind, loss=loss, orientation_weight=orientation_weight)
-    parts = _Parts(robot, joints, position, measured, rotation_base, dh=dh, **options)
+    parts = _Parts(robot, joints, position, measured, rotation_base, dh=dh, workers=workers, **options)
     left_out = parts.left_out
     keep = ~left_out
     if left_out.any():

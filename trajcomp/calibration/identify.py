@@ -47,6 +47,7 @@ from trajcomp.arm.parameters import (
     scales,
 )
 from trajcomp.arm.transforms import invert, matrix_to_rotvec, mean_rotation, rotvec_to_matrix
+from trajcomp.support.parallel import map_blocks
 
 log = logging.getLogger(__name__)
 
@@ -744,6 +745,16 @@ class _Candidates:
         self.regions, self.position, self.field = regions, position, field
         self.table, self.best = [], None
 
+    def result(self):
+        """``(table, best)``: what `merge` takes (plain data, passed between processes)."""
+        return self.table, self.best
+
+    def merge(self, table, best):
+        """Take the table entries and the best of candidates scored after these (`result`)."""
+        self.table += table
+        if best is not None and (self.best is None or best[0] < self.best[0]):
+            self.best = best
+
     def linearise(self, problem, x, weights):
         """The `Linearisation` of a candidate's problem at x (P,), with the regions' normal equations."""
         return Linearisation(problem, x, weights, ridge=True, parts=self.regions)
@@ -776,7 +787,7 @@ class _Candidates:
 
 def select_splines(fit, start, nominal, q, measured, *, rotation=None, joints=(0, 1, 2, 3, 4), steps=(2.0, 4.0, 8.0),
                    penalties=(1e-5, 1e-4, 1e-3, 1e-2), folds=4, position=None,
-                   orientation_weight=ORIENTATION_WEIGHT, field=None, loss="huber"):
+                   orientation_weight=ORIENTATION_WEIGHT, field=None, loss="huber", workers=1):
     """Choose the joint model's spline terms (and a residual field on top) by held-out regions, and fit them.
 
     For each knot step and penalty, the spline terms and the parameters of
@@ -826,6 +837,9 @@ def select_splines(fit, start, nominal, q, measured, *, rotation=None, joints=(0
         training rows and evaluated at the held-out ones.
     loss : str
         Robust loss of the final fit (`identify`).
+    workers : int
+        Processes scoring the knot steps (`trajcomp.support.parallel.map_blocks`); the choice does not depend on
+        it.
 
     Returns
     -------
@@ -840,17 +854,24 @@ def select_splines(fit, start, nominal, q, measured, *, rotation=None, joints=(0
         basis = SplineBasis(lower, upper, spacing, penalties[0])
         return SplineChoice(_spline_fit(fit, start, nominal, q, measured, rotation, basis, orientation_weight, loss),
                             basis, [], words, field=field is not None)
-    candidates = _Candidates(regions, position, field)
-    plain = _Problem(start, nominal, q, measured, rotation, np.eye(4), fit.R_tcp_target, orientation_weight)
-    plain.setup(list(fit.names))
-    candidates.score({"step_deg": 0.0, "penalty": 0.0}, candidates.linearise(plain, fit.delta, fit.weights),
-                     np.zeros((len(plain.names),) * 2), None)
+    tried = [None]  # no splines, then each knot step with enough measurements per spline term
     for step in steps:
         spacing = np.zeros(6)
         spacing[list(joints)] = np.radians(step)
-        basis = SplineBasis(lower, upper, spacing, 1.0)
-        if len(q) < MEASUREMENTS_PER_SPLINE * len(basis.names()):
+        if len(q) < MEASUREMENTS_PER_SPLINE * len(SplineBasis(lower, upper, spacing).names()):
             continue  # too sparse for this many terms: the penalty alone would shape them
+        tried.append((step, SplineBasis(lower, upper, spacing, 1.0)))
+
+    def scored(k):
+        """``(table, best)`` of the candidates of ``tried[k]`` (its penalties)."""
+        candidates = _Candidates(regions, position, field)
+        if tried[k] is None:
+            plain = _Problem(start, nominal, q, measured, rotation, np.eye(4), fit.R_tcp_target, orientation_weight)
+            plain.setup(list(fit.names))
+            candidates.score({"step_deg": 0.0, "penalty": 0.0}, candidates.linearise(plain, fit.delta, fit.weights),
+                             np.zeros((len(plain.names),) * 2), None)
+            return candidates.result()
+        step, basis = tried[k]
         problem = _Problem(start, nominal, q, measured, rotation, np.eye(4), fit.R_tcp_target, orientation_weight, basis)
         problem.setup(list(fit.names) + basis.names())
         x = np.concatenate([fit.delta, np.zeros(len(problem.names) - len(fit.names))])
@@ -859,6 +880,11 @@ def select_splines(fit, start, nominal, q, measured, *, rotation=None, joints=(0
         for penalty in penalties:
             candidates.score({"step_deg": step, "penalty": penalty}, linear, rough * penalty,
                              dataclasses.replace(basis, penalty=penalty))
+        return candidates.result()
+
+    candidates = _Candidates(regions, position, field)
+    for table, best in map_blocks(scored, len(tried), workers):
+        candidates.merge(table, best)
     _, on_top, basis = candidates.best
     fitted = None if basis is None else _spline_fit(fit, start, nominal, q, measured, rotation, basis,
                                                     orientation_weight, loss)
