@@ -107,9 +107,11 @@ def run(args):
     from trajcomp.model.model_file import model_files, save_model
     from trajcomp.report import calibration_report, file_entry, report_paths
     from trajcomp.support.atomic import refuse_inputs
+    from trajcomp.support.memory import keep_freed_blocks
 
     if args.jobs < 1:
         raise TrajcompError(f"--jobs: expected a whole number of at least 1, got {args.jobs}")
+    keep_freed_blocks()  # the fits free and make arrays of a few MB thousands of times
     robot = robot_of(args)
     if args.tool is not None:
         robot = robot.replace(T_flange_tool=args.tool)
