@@ -86,7 +86,8 @@ def source_text(language, joint_field, line_field):
                 body.append(f"    MoveAbsJ j{k}, {field}, fine, tool0;")
             else:
                 conf = ",".join(map(str, abb_confdata(ROBOT, q[None])[0]))
-                decls.append(f"  CONST robtarget p{k} := [[{numbers(T[:3, 3])}],[{numbers(matrix_to_quat(T[:3, :3]), 9)}],"
+                quat = numbers(matrix_to_quat(T[:3, :3]), 9)
+                decls.append(f"  CONST robtarget p{k} := [[{numbers(T[:3, 3])}],[{quat}],"
                              f"[{conf}],[9E9,9E9,9E9,9E9,9E9,9E9]];")
                 body.append(f"    MoveL p{k}, {field}, fine, tool0;")
         return "\n".join(["MODULE src", *decls, "  PROC main()", *body, "  ENDPROC", "ENDMODULE"]) + "\n"

@@ -143,14 +143,16 @@ def register_format(name, extensions, reader, writer, *, source="built-in", bloc
     frameless : bool
         The language's poses are always in the robot's base frame (no work
         object, base or user frame).
-    speed_units : Mapping[str, tuple of str], optional
+    speed_units : Mapping[str, Mapping[str, float]], optional
         Per motion kind (``"joint"``, ``"linear"``, ``"circular"``), the
         speed units a program generated in the language states (`Motion`'s
         ``speed_unit``: ``"%"``, ``"rad/s"``, ``"mm/s"``, ``"s"``; ``"v_ori"``:
         an orientation speed beside the TCP speed), the one a converted
-        speed takes first: a program converted into the language gets its
-        speeds in them, never faster (`trajcomp.formats.speeds.convert_speeds`).
-        None: speeds are converted as they are, the writer's choice.
+        speed takes first, each with the smallest value the writer states
+        in it (a smaller speed would be written faster): a program converted
+        into the language gets its speeds in them, never faster
+        (`trajcomp.formats.speeds.convert_speeds`). None: speeds are
+        converted as they are, the writer's choice.
     """
     _FORMATS[name] = Format(name, tuple(e.lower() for e in extensions), reader, writer, source, blocks, vendor, tasks,
                             copies, speeds, timed_rows, configuration, frameless, speed_units)

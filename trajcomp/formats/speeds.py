@@ -83,17 +83,52 @@ class MotionGeometry:
             q_a, q_b = moves.q[k - 1], moves.q[k]
             known[index], dq[index] = True, q_b - q_a
             if moves.kind[k] == JOINT:
-                s = np.linspace(0.0, 1.0, SAMPLES)[:, None]
-                _, J = fk_and_jacobian(tool, q_a + s * (q_b - q_a))
-                rates = np.einsum("nij,j->ni", J, q_b - q_a)
-                length[index] = np.linalg.norm(rates[:, :3], axis=1).max()
-                turn[index] = np.linalg.norm(rates[:, 3:], axis=1).max()
+                length[index], turn[index] = _joint_path_rates(tool, q_a, q_b)
                 continue
             ends = [q_a, moves.via[k], q_b] if moves.kind[k] == CIRCULAR else [q_a, q_b]
             T, _ = fk_and_jacobian(tool, np.array(ends))
             length[index] = _arc_length(T[:, :3, 3])
             turn[index] = rotation_angle_between(T[0, :3, :3], T[-1, :3, :3])
         return cls(known, dq, length, turn)
+
+
+def _joint_path_rates(robot, q_a, q_b):
+    """Sampled peaks (`SAMPLES` points) of the TCP rate |dp/ds| (mm) and the orientation rate |dphi/ds| (rad)
+    along the joint line from q_a to q_b (6,)."""
+    s = np.linspace(0.0, 1.0, SAMPLES)[:, None]
+    _, J = fk_and_jacobian(robot, q_a + s * (q_b - q_a))
+    rates = np.einsum("nij,j->ni", J, q_b - q_a)
+    return np.linalg.norm(rates[:, :3], axis=1).max(), np.linalg.norm(rates[:, 3:], axis=1).max()
+
+
+def orientation_time(kind, q_a, q_b, orientation_speed, robot):
+    """The least time (s) a controller bounding the reorientation by ``orientation_speed`` (rad/s) takes.
+
+    The motion from q_a to q_b (6,) turns the tool by the angle between
+    its end orientations (a line or circle), or at the peak rate of its
+    joint line (a joint motion, raised by `RATE_MARGIN`); it cruises at the
+    rate that keeps that speed, between the ramps of `path_acceleration`:
+    the time a controller given this time (RAPID ``\\T``) needs to turn no
+    faster. The tool does not matter: a rotation's angle is the flange's.
+    """
+    q_a, q_b = np.asarray(q_a, dtype=float), np.asarray(q_b, dtype=float)
+    if not np.any(q_b - q_a):
+        return 0.0
+    if kind == JOINT:
+        turn = RATE_MARGIN * _joint_path_rates(robot, q_a, q_b)[1]
+    else:
+        T, _ = fk_and_jacobian(robot, np.array([q_a, q_b]), tcp=False)
+        turn = rotation_angle_between(T[0, :3, :3], T[1, :3, :3])
+    if not turn > 0:
+        return 0.0
+    return _trapezoid_time(orientation_speed / turn, path_acceleration(q_b - q_a, robot))
+
+
+def _trapezoid_time(rate, acceleration):
+    """Time (s) of the path parameter's trapezoid from 0 to 1 cruising at ``rate`` (1/s), ramps at ``acceleration``."""
+    if rate >= np.sqrt(acceleration):  # no cruise: accelerating then braking
+        return 2.0 / np.sqrt(acceleration)
+    return 1.0 / rate + rate / acceleration
 
 
 def _arc_length(points):
@@ -173,21 +208,19 @@ def path_acceleration(dq, robot):
 def field_of_rate(kind, rate, unit, geometry, index, robot):
     """The value in ``unit`` (%, rad/s, mm/s or s) at which motion ``index`` runs at cruise rate ``rate`` (1/s).
 
-    The inverse of `cruise_rate` for one unit; None where the unit cannot
-    state it (a percentage below 1 or above 100, a TCP speed of a motion
-    whose TCP does not move).
+    The inverse of `cruise_rate` for one unit (a percentage at most 100);
+    None where the unit cannot state it (a TCP speed of a motion whose TCP
+    does not move).
     """
     dq = np.abs(geometry.dq[index])
     if unit == "%":
-        percent = min(100.0 * rate * np.max(dq / robot.v_max), 100.0)
-        return percent if percent >= 1.0 else None
+        return min(100.0 * rate * np.max(dq / robot.v_max), 100.0)
     if unit == "rad/s":
         extent = dq.max() if kind == JOINT else geometry.turn[index]
     elif unit == "mm/s":
         extent = geometry.length[index]
     else:
-        a = path_acceleration(dq, robot)
-        return 2.0 / np.sqrt(a) if rate >= np.sqrt(a) else 1.0 / rate + rate / a
+        return _trapezoid_time(rate, path_acceleration(dq, robot))
     return rate * extent if extent > 0 else None
 
 
@@ -198,10 +231,12 @@ def convert_speeds(motions, units, robot=None, geometry=None, language=""):
     ----------
     motions : Sequence[Motion]
         A program's motions.
-    units : Mapping[str, tuple of str]
-        Per motion kind, the units the language states (its
-        ``speed_units``), the one to convert into first; ``"v_ori"`` among
-        them: an orientation speed beside a TCP speed (RAPID's speeddata).
+    units : Mapping[str, Mapping[str, float]]
+        Per motion kind, the units the language states and the smallest
+        value it writes in each (its ``speed_units``), the one to convert
+        into first; ``"v_ori"`` among them: an orientation speed beside a
+        TCP speed (RAPID's speeddata). A speed below a unit's smallest
+        value is stated in the next unit.
     robot : Robot, optional
         Its velocity limits convert a percentage to a leading-axis speed and back.
     geometry : MotionGeometry, optional
@@ -213,8 +248,8 @@ def convert_speeds(motions, units, robot=None, geometry=None, language=""):
     -------
     tuple of Motion
         Motions whose speed could not be carried over have the language's
-        slowest speed (`SLOWEST`, the first of its units there) and say why
-        in ``speed_why``.
+        slowest speed (`SLOWEST`, or its smallest value if larger, in the
+        first of its units there) and say why in ``speed_why``.
     """
     out = []
     for index, motion in enumerate(motions):
@@ -226,7 +261,8 @@ def convert_speeds(motions, units, robot=None, geometry=None, language=""):
         orientation = motion.orientation_speed if "v_ori" in stated else None
         if why:
             unit = next(u for u in stated if u in SLOWEST)
-            speed, why = SLOWEST[unit], f"{why}: written at {language}'s slowest speed, set it before running"
+            speed = max(SLOWEST[unit], stated[unit])
+            why = f"{why}: written at {language}'s slowest speed, set it before running"
             orientation = SLOWEST["rad/s"] if "v_ori" in stated else None
         out.append(dataclasses.replace(motion, speed=speed, speed_unit=unit, speed_why=why,
                                        orientation_speed=orientation))
@@ -243,25 +279,35 @@ def _converted(motion, index, stated, robot, geometry):
     if dropped and known:  # it matters only where it binds
         free = cruise_rate(motion.kind, speed, unit, None, geometry, index, robot)
         dropped = cruise_rate(motion.kind, speed, unit, motion.orientation_speed, geometry, index, robot) < free
+    default = next(iter(stated))
     if speed is None and not dropped:
-        return None, stated[0], ""  # the arm's limits: the language's own default
-    if unit in stated and not dropped:
+        return None, default, ""  # the arm's limits: the language's own default
+    if unit in stated and _statable(speed, unit, stated) and not dropped:
         return speed, unit, ""
     if robot is not None and motion.kind == JOINT and not dropped:
         if "%" in stated and unit == "rad/s":  # every joint at most v: p = v / max v_max
-            return min(100.0 * speed / np.max(robot.v_max), 100.0), "%", ""
+            percent = min(100.0 * speed / np.max(robot.v_max), 100.0)
+            if _statable(percent, "%", stated):
+                return percent, "%", ""
         if "rad/s" in stated and unit == "%":  # the leading axis at p of the slowest one's limit
-            return speed / 100.0 * np.min(robot.v_max), "rad/s", ""
+            axis = speed / 100.0 * np.min(robot.v_max)
+            if _statable(axis, "rad/s", stated):
+                return axis, "rad/s", ""
     shown = "the arm's limits" if speed is None else f"{speed:g} {unit}"
     if not known:
         what = "no robot given" if robot is None else "its start is unknown"
         return None, None, f"speed {shown} cannot be converted ({what})"
     if not np.any(geometry.dq[index]):  # the arm does not move: any speed is no faster
-        return None, stated[0], ""
+        return None, default, ""
     rate = cruise_rate(motion.kind, speed, unit, motion.orientation_speed, geometry, index, robot)
     for target_unit in stated:
         value = None if target_unit == "v_ori" else field_of_rate(motion.kind, rate, target_unit, geometry, index,
                                                                    robot)
-        if value is not None and np.isfinite(value):
+        if value is not None and np.isfinite(value) and _statable(value, target_unit, stated):
             return value, target_unit, ""
-    return None, None, f"speed {shown} cannot be stated in these units"
+    return None, None, f"speed {shown} cannot be stated in {', '.join(u for u in stated if u != 'v_ori')}"
+
+
+def _statable(value, unit, stated):
+    """A language writes ``value`` in ``unit`` no faster: a speed at least its smallest (a time is rounded up)."""
+    return unit == "s" or value >= stated[unit]

@@ -18,7 +18,9 @@ TCP keeps between the controller's own ramps; a time (RAPID ``\\T``, UR
 - any other motion (joint motions, motions with a stated time) gets its
   timed duration T (for a linear or circular one at least its TCP length
   over its cruise speed, so that a controller cruising at L/T keeps the
-  limits).
+  limits; for a RAPID motion at least the time its speed data's v_ori
+  allows the reorientation, `trajcomp.formats.speeds.orientation_time`:
+  ``\\T`` replaces the speed data).
 
 The timing decides what to write (`SpeedPlan`); each language writes it in
 its own fields, its format's ``speeds`` hook (`trajcomp.formats`): CSV a
@@ -39,6 +41,7 @@ import numpy as np
 
 from trajcomp.errors import TimingError
 from trajcomp.formats import find_format, formats, registered
+from trajcomp.formats.speeds import orientation_time
 from trajcomp.programs.items import JOINT
 from trajcomp.timing.moves import moves_from_program
 from trajcomp.timing.path import TOLERANCE
@@ -184,6 +187,12 @@ def _plan(program, result, robot):
         if path and result.tcp_length[k] / cruise[k] > duration:
             plan.times[k], plan.reasons[k] = result.tcp_length[k] / cruise[k], binding[k]
             plan.stated[k] = duration
+        if motion.orientation_speed is not None:  # RAPID's v_ori: a time written replaces the speed data
+            turning = orientation_time(motion.kind, result.q[k - 1], result.q[k], motion.orientation_speed, robot)
+            if turning > plan.times[k]:
+                plan.times[k], plan.stated[k] = turning, duration
+                plan.reasons[k] = (f"its orientation speed {np.degrees(motion.orientation_speed):g} deg/s (v_ori) "
+                                   "bounds the reorientation")
     plan.as_written = tuple(as_written)
     return plan
 

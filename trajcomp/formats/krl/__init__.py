@@ -58,6 +58,6 @@ register_format(
     tasks=True,
     copies=True,
     speeds=f"{__name__}.speeds:write_speeds",
-    speed_units={"joint": ("%",), "linear": ("mm/s",), "circular": ("mm/s",)},
+    speed_units={"joint": {"%": 1e-3}, "linear": {"mm/s": 1e-3}, "circular": {"mm/s": 1e-3}},
     configuration=f"{__name__}.configuration",
 )

@@ -223,7 +223,9 @@ class _Reader:
         for m in re.finditer(r"\b(" + "|".join(map(re.escape, names)) + r")\b", masked, re.I):
             line = lines.number(m.start())
             text = lines.line(line)
-            if not (_STARTS_MOTION.match(text) or _STARTS_DECL.match(text)):
+            assigned = _ASSIGN.match(text)
+            if not (_STARTS_MOTION.match(text) or _STARTS_DECL.match(text)
+                    or assigned and assigned.group(1).lower() != m.group(1).lower()):  # read, not changed
                 self.touched.setdefault(m.group(1).lower(), line)
 
     def flow(self, text, line, original):
@@ -292,9 +294,11 @@ class _Reader:
         if key in self.in_force:
             return self.in_force[key]
         elsewhere = self.task.assigned(key) if self.task is not None else ""
-        if key in self.touched or elsewhere or not value:
-            where = f"line {self.touched[key]}" if key in self.touched else elsewhere or f"declared at line {at}"
-            return None, f"{name}: VAR speeddata, set at run time ({where})"
+        if key in self.touched:
+            return None, (f"{name}: VAR speeddata the module changes (line {self.touched[key]}) and does not assign a "
+                          "literal in the code running straight to this motion: set at run time")
+        if elsewhere or not value:
+            return None, f"{name}: VAR speeddata, set at run time ({elsewhere or f'declared at line {at}'})"
         return self.constant(value, "speeddata", at, original, field, depth + 1)
 
     def number(self, text, line, original, field, limit=LENGTH_LIMIT):

@@ -1,0 +1,169 @@
+"""RAPID speed data as the controller reads them: v_ori bounds reorientation; a VAR speeddata assigned by literals.
+
+References: ABB's predefined speed data (v5 .. v7000, vmax: v_ori 500 deg/s,
+the second field of ``[v_tcp, v_ori, v_leax, v_reax]``), the time a
+reorientation needs at v_ori (angle / v_ori, the ramps on top), and a module
+written by RoboDK's own ABB IRC5 post (tests/data/robodk_posts, unmodified),
+whose ``VAR speeddata rdkSpeed`` its ``setSpeed`` reassigns between moves.
+"""
+
+import importlib.util
+import re
+import warnings
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from trajcomp import formats
+from trajcomp.arm.kinematics import fk
+from trajcomp.arm.robot import load_robot
+from trajcomp.arm.transforms import matrix_to_quat
+from trajcomp.cli import main
+from trajcomp.compensation.program import convert_program
+from trajcomp.formats.rapid.configuration import encode as abb_confdata
+
+POSTS = Path(__file__).parent / "data" / "robodk_posts"
+ROBOT = load_robot("abb_irb4600")
+Q = np.radians([[0.0, 0.0, 0.0, 0.0, 30.0, 0.0], [5.0, 5.0, 5.0, 0.0, 30.0, 0.0], [5.0, 5.0, 5.0, 0.0, 30.0, 90.0],
+                [10.0, 5.0, 0.0, 0.0, 30.0, 90.0]])
+
+
+def robtarget(q):
+    T = fk(ROBOT, q)
+    conf = ",".join(map(str, abb_confdata(ROBOT, q[None])[0]))
+    return (f"[[{','.join(f'{v:.6f}' for v in T[:3, 3])}],[{','.join(f'{v:.9f}' for v in matrix_to_quat(T[:3, :3]))}],"
+            f"[{conf}],[9E9,9E9,9E9,9E9,9E9,9E9]]")
+
+
+def module(body, decls=""):
+    """A module moving through `Q`: ``body`` the PROC's statements, formatted with the robtargets p1..p3 and the
+    joint target j0."""
+    points = "\n".join(f"  CONST robtarget p{k} := {robtarget(Q[k])};" for k in range(1, 4))
+    j0 = ",".join(f"{v:.6f}" for v in np.degrees(Q[0]))
+    return (f"MODULE speeds\n  CONST jointtarget j0 := [[{j0}],[9E9,9E9,9E9,9E9,9E9,9E9]];\n{points}\n{decls}\n"
+            f"  PROC main()\n{body}\n  ENDPROC\nENDMODULE\n")
+
+
+def read(tmp_path, text, name="speeds.mod"):
+    (tmp_path / name).write_text(text)
+    return formats.read(tmp_path / name)
+
+
+def test_v_ori_is_read_from_the_speed_data(tmp_path):
+    program = read(tmp_path, module("    MoveAbsJ j0, v100, fine, tool0;\n"
+                                    "    MoveL p1, [300,20,5000,1000], fine, tool0;\n"
+                                    "    MoveL p2, vmax\\V:=50, fine, tool0;\n    MoveL p3, v200\\T:=3, fine, tool0;"))
+    read_back = [(m.speed, m.speed_unit, m.orientation_speed and round(np.degrees(m.orientation_speed), 9))
+                 for m in program.motions]
+    # v100 and vmax: the predefined v_ori 500 deg/s (\V replaces v_tcp only); \T: the speed data are not used
+    assert read_back == [(100.0, "mm/s", 500.0), (300.0, "mm/s", 20.0), (50.0, "mm/s", 500.0), (3.0, "s", None)]
+
+
+def test_a_written_time_keeps_the_reorientation_within_v_ori(tmp_path):
+    """j0 -> jTurn turns J6 by 90 deg, the TCP in place: at v_ori 20 deg/s that takes at least 90 / 20 = 4.5 s,
+    far longer than the joint limits need (0.25 s at 360 deg/s); the \\T written, which replaces the speed
+    data, keeps it and the run says why."""
+    turned = ",".join(f"{v:.6f}" for v in np.degrees(Q[0]) + [0.0, 0.0, 0.0, 0.0, 0.0, 90.0])
+    text = module("    MoveAbsJ j0, v1000, fine, tool0;\n    MoveAbsJ jTurn, [100,20,5000,1000], fine, tool0;",
+                  f"  CONST jointtarget jTurn := [[{turned}],[9E9,9E9,9E9,9E9,9E9,9E9]];")
+    (tmp_path / "speeds.mod").write_text(text)
+    out = tmp_path / "out" / "speeds.mod"
+    out.parent.mkdir()
+    assert main(["retime", str(tmp_path / "speeds.mod"), "-o", str(out), "--robot", "abb_irb4600"]) == 0
+    written = re.search(r"MoveAbsJ jTurn, \[100,20,5000,1000\]\\T:=([\d.]+)", out.read_text())
+    assert written is not None and 90.0 / 20.0 <= float(written.group(1)) <= 1.1 * 90.0 / 20.0
+
+
+def test_a_converted_reorientation_keeps_v_ori(tmp_path):
+    """``MoveL p, [100,20,..]`` turning the tool 90 deg over 1 mm takes at least 90 / 20 s at its v_ori (longer
+    than J6 needs); converted into languages without an orientation speed, its TCP speed is lowered so that the
+    1 mm takes as long."""
+    q_turn = Q[1] + np.radians([0.0, 0.0, 0.0, 0.0, 0.0, 90.0])
+    T_a, T_b = fk(ROBOT, Q[1]), fk(ROBOT, q_turn)
+    travel = np.linalg.norm(T_b[:3, 3] - T_a[:3, 3])
+    assert travel < 1e-6  # J6 turns the flange in place: add 1 mm along the tool axis
+    shifted = T_b.copy()
+    shifted[:3, 3] += T_b[:3, 2]
+    quat = ",".join(f"{v:.9f}" for v in matrix_to_quat(shifted[:3, :3]))
+    conf = ",".join(map(str, abb_confdata(ROBOT, q_turn[None])[0]))
+    target = f"[[{','.join(f'{v:.6f}' for v in shifted[:3, 3])}],[{quat}],[{conf}],[9E9,9E9,9E9,9E9,9E9,9E9]]"
+    text = module(f"    MoveAbsJ j0, v100, fine, tool0;\n    MoveL p1, v100, fine, tool0;\n"
+                  f"    MoveL {target}, [100,20,5000,1000], fine, tool0;")
+    program = read(tmp_path, text)
+    for language, extension in (("krl", ".src"), ("fanuc_ls", ".ls"), ("urscript", ".script"), ("csv", ".csv")):
+        formats.write(tmp_path / f"out{extension}", convert_program(program, language, robot=ROBOT))
+        line = formats.read(tmp_path / f"out{extension}").motions[-1]
+        if language == "fanuc_ls":  # 0.22 mm/s is below FANUC's whole mm/sec: a time, its trapezoid's
+            assert line.speed_unit == "s" and 90.0 / 20.0 <= line.speed <= 1.1 * 90.0 / 20.0
+            continue
+        assert line.speed_unit == "mm/s" and 1.0 / line.speed >= 90.0 / 20.0, language  # 1 mm in >= 4.5 s
+        assert line.speed >= 0.99 * 20.0 / 90.0  # the v_ori bound, rounded down
+
+
+def test_a_var_speeddata_assigned_by_literals_is_known_where_the_code_runs_straight(tmp_path):
+    body = """    rdkSpeed := [100,500,5000,1000];
+    ConfL \\Off;
+    MoveAbsJ j0, rdkSpeed, fine, tool0;
+    MoveL p1, vFixed, fine, tool0;
+    IF TRUE THEN
+      rdkSpeed := [900,500,5000,1000];
+    ENDIF
+    MoveL p2, rdkSpeed, fine, tool0;
+    rdkSpeed := [50,20,5000,1000];
+    MoveL p3, rdkSpeed, fine, tool0;
+    Helper;
+    MoveL p1, rdkSpeed, fine, tool0;
+    rdkSpeed := vFixed;
+    MoveL p2, rdkSpeed, fine, tool0;
+    rdkSpeed.v_tcp := 30;
+    MoveL p3, rdkSpeed, fine, tool0;"""
+    decls = "  VAR speeddata rdkSpeed := [500,500,5000,1000];\n  VAR speeddata vFixed := [40,500,5000,1000];\n"
+    motions = read(tmp_path, module(body, decls)).motions
+    speeds = [(m.speed, m.orientation_speed and round(np.degrees(m.orientation_speed), 9)) for m in motions]
+    # vFixed: a VAR no statement changes, its declared value
+    assert speeds[:2] == [(100.0, 500.0), (40.0, 500.0)]
+    assert speeds[3] == (50.0, 20.0) and speeds[5] == (40.0, 500.0)
+    # after a branch and a routine call: the value the module's code left, set at run time; a member changed
+    for k, why in ((2, "module changes (line 10)"), (4, "module changes (line 10)"),
+                   (6, "changed at run time (line 24)")):
+        assert speeds[k] == (None, None) and why in motions[k].speed_why
+
+
+def test_a_var_speeddata_another_module_assigns_is_set_at_run_time(tmp_path):
+    decls = "  VAR speeddata vShared := [40,500,5000,1000];\n"
+    read(tmp_path, module("    MoveAbsJ j0, vShared, fine, tool0;", decls))
+    (tmp_path / "Other.mod").write_text("MODULE Other\n  PROC faster()\n    vShared := [2000,500,5000,1000];\n"
+                                        "  ENDPROC\nENDMODULE\n")
+    [motion] = formats.read(tmp_path / "speeds.mod").motions
+    assert motion.speed is None and "Other.mod:3" in motion.speed_why
+
+
+def test_the_speeds_of_a_module_robodk_writes_are_read(tmp_path):
+    pytest.importorskip("robodk")
+    from robodk.robomath import Mat
+
+    spec = importlib.util.spec_from_file_location("ABB_RAPID_IRC5", POSTS / "ABB_RAPID_IRC5.py")
+    post_module = importlib.util.module_from_spec(spec)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # the post's own 'from robodk import *' and string escapes
+        spec.loader.exec_module(post_module)
+    post = post_module.RobotPost("ABB_RAPID_IRC5", "ABB IRB 4600", 6)
+    post.ProgStart("weld")
+    post.setFrame(Mat(np.eye(4).tolist()), 1, "Frame 1")
+    post.setTool(Mat(np.eye(4).tolist()), 1, "Tool 1")
+    poses = fk(ROBOT, Q)
+    post.MoveJ(Mat(poses[0].tolist()), list(np.degrees(Q[0])), [0, 0, 0])
+    post.setSpeed(100)
+    post.MoveL(Mat(poses[1].tolist()), list(np.degrees(Q[1])), [0, 0, 0])
+    post.MoveL(Mat(poses[2].tolist()), list(np.degrees(Q[2])), [0, 0, 0])
+    post.setSpeed(250)
+    post.MoveL(Mat(poses[3].tolist()), list(np.degrees(Q[3])), [0, 0, 0])
+    post.ProgFinish("weld")
+    post.ProgSave(str(tmp_path), "weld", False, False)
+    text = (tmp_path / "weld.mod").read_text()
+    assert "VAR speeddata rdkSpeed := [250,500,5000,1000];" in text and "rdkSpeed := [100.00,500,5000,1000];" in text
+    motions = formats.read(tmp_path / "weld.mod").motions
+    # the MoveAbsJ runs before the routine assigns rdkSpeed: at the value a previous run left, set at run time
+    assert motions[0].speed is None and "rdkSpeed: VAR speeddata the module changes" in motions[0].speed_why
+    assert [(m.speed, m.speed_why) for m in motions[1:]] == [(100.0, ""), (100.0, ""), (250.0, "")]
