@@ -78,7 +78,7 @@ def add_parser(sub):
         "Speeds are written in the target language's units, never faster than the source runs them (give --robot "
         "to convert between joint and TCP speeds); a speed that cannot be carried over is written as the "
         "language's slowest, listed, and the exit code is 1.",
-        "trajcomp convert examples/programs/kuka/weld.src weld.csv --robot kuka_kr6_r900",
+        "trajcomp convert examples/programs/csv/weld.csv weld.src --robot kuka_kr6_r900",
         "trajcomp convert examples/programs/csv/weld.csv weld.script",
     )
     parser.add_argument("input", metavar="IN", help="program to read")
