@@ -27,12 +27,16 @@ from wherever the arm is, keeps its speed only where the unit is the same
 else it is written at the target language's slowest and listed.
 """
 
+import json
+from pathlib import Path
+
 import numpy as np
 import pytest
 
 from trajcomp import formats
 from trajcomp.arm.kinematics import fk, jacobian
 from trajcomp.arm.robot import load_robot
+from trajcomp.cli import main
 from trajcomp.arm.transforms import matrix_to_pose, matrix_to_quat, matrix_to_rotvec, rotation_angle_between
 from trajcomp.compensation.program import convert_program
 from trajcomp.formats.fanuc.configuration import encode as fanuc_config
@@ -166,6 +170,10 @@ def test_a_converted_motion_runs_no_faster_than_its_source(tmp_path, source, var
     formats.write(tmp_path / f"out{EXTENSION[target]}", converted)
     again = formats.read(tmp_path / f"out{EXTENSION[target]}")
     assert [m.kind for m in again.motions] == list(KINDS)
+    # every speed stated (KRL: a BAS(#VEL_PTP) before each PTP), but a KRL line at the arm's limits: no $VEL.CP,
+    # the one in force is no faster
+    assert not any(m.speed_why for m, stated in zip(again.motions, program.motions)
+                   if m.kind == JOINT or stated.speed is not None)
     listed = [bool(m.speed_why) for m in converted.motions]
     assert not any(listed[1:])  # every motion whose start is known is converted
     for k in range(1, 4):
@@ -201,3 +209,17 @@ def test_a_speed_set_at_run_time_is_written_at_the_slowest_and_listed(tmp_path):
         formats.write(tmp_path / f"out{EXTENSION[target]}", converted)
         line = formats.read(tmp_path / f"out{EXTENSION[target]}").motions[1]
         assert (line.speed, line.speed_unit) == (1.0, "mm/s")
+
+
+def test_compensate_to_another_language_lists_the_speed_it_could_not_carry_over(tmp_path, kuka_model, capsys):
+    """The example weld's first PTP, 50 % of the axis speeds from wherever the arm is, has no CSV speed (a TCP
+    speed) it is sure to be no faster than: written at 1 mm/s, the speeds criterion fails (exit 1) naming it."""
+    weld = Path(__file__).resolve().parents[1] / "examples" / "programs" / "kuka" / "weld.src"
+    out, report = tmp_path / "weld.csv", tmp_path / "weld.json"
+    assert main(["compensate", str(weld), "--model", str(kuka_model), "-o", str(out), "--to", "csv",
+                 "--report", str(report), "--json-only"]) == 1
+    doc = json.loads(report.read_text())
+    [speeds] = [c for c in doc["verdict"]["criteria"] if c["id"] == "speeds"]
+    assert speeds["status"] == "fail" and "speed 50 % cannot be converted (its start is unknown)" in speeds["detail"]
+    assert "speeds" in capsys.readouterr().err
+    assert formats.read(out).motions[0].speed == 1.0
