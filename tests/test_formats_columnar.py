@@ -13,7 +13,7 @@ from trajcomp.formats.fanuc import reader as fanuc_reader
 from trajcomp.formats.krl import reader as krl_reader
 from trajcomp.formats.rapid import reader as rapid_reader
 from trajcomp.formats.urscript import reader as urscript_reader
-from trajcomp.formats.text import format_number, written_numbers
+from trajcomp.formats.text import Edits, apply_edits, format_number, written_numbers
 
 DATA = Path(__file__).parent / "data"
 EXAMPLES = Path(__file__).parent.parent / "examples" / "programs"
@@ -103,3 +103,15 @@ def test_numbers_formatted_together_are_what_format_number_writes():
         if change and old_text.startswith("."):
             expected = expected.replace("0.", ".", 1) if expected.startswith(("0.", "-0.")) else expected
         assert text == expected
+
+
+def test_edits_as_columns_apply_as_the_tuples_do(monkeypatch):
+    rng = np.random.default_rng(3)
+    text = "".join(rng.choice(list("abc,.0123456789\n"), 5000).tolist())
+    cuts = np.sort(rng.choice(len(text), 800, replace=False)).reshape(-1, 2).tolist()
+    edits = [(start, end, "x" * int(rng.integers(0, 4))) for start, end in cuts] + [(0, 0, "inserted")]
+    monkeypatch.setattr(Edits, "EDITS_AT_ONCE", 16)  # pieces joined in many batches
+    parts = [Edits.of(edits[k::3]) for k in range(3)]  # batches of targets whose edits interleave
+    assert Edits.joined(parts).applied(text) == apply_edits(text, edits)
+    assert Edits.joined([Edits.of(edits[:150]), Edits.of(edits[150:])]).applied(text) == apply_edits(text, edits)
+    assert Edits.joined([]).applied(text) == text

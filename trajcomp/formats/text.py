@@ -440,8 +440,16 @@ def near_angle(angle, reference, period=360.0):
     return angle - period * np.round((np.asarray(angle) - reference) / period)
 
 
+TARGETS_AT_ONCE = 8192  # edited targets encoded and formatted together: bounds the objects a long program's write makes
+
+
 def target_edits(program, encode, min_places):
     """Text edits that write the edited targets' numbers back into the sources.
+
+    The targets are encoded and their numbers formatted `TARGETS_AT_ONCE`
+    at a time, each batch's edits kept as columns (`Edits`): a long
+    program's write holds a few bytes per changed number, not a tuple and
+    a dict per number.
 
     Parameters
     ----------
@@ -458,13 +466,20 @@ def target_edits(program, encode, min_places):
 
     Returns
     -------
-    list of list of (start, end, text)
+    list of Edits
         Edits per source; numbers equal at the written precision are left
         with their original text. The numbers are formatted together
         (`written_numbers`).
     """
-    edits = [[] for _ in program.sources]
     targets = [target for target in program.targets if target.edited]
+    batches = [_batch_edits(targets[lo:lo + TARGETS_AT_ONCE], encode, min_places, len(program.sources))
+               for lo in range(0, len(targets), TARGETS_AT_ONCE)]
+    return [Edits.joined([batch[k] for batch in batches]) for k in range(len(program.sources))]
+
+
+def _batch_edits(targets, encode, min_places, sources_count):
+    """`Edits` per source of some edited targets (`target_edits`)."""
+    edits = [[] for _ in range(sources_count)]
     spans_of = [_fields(target.spans) for target in targets]
     olds = [{role: _number_or_text(span[3]) for role, span in spans.items()} for spans in spans_of]
     numbers = []  # (source, start, end, old text, value, old value, fewest decimals) of every number to write
@@ -489,7 +504,67 @@ def target_edits(program, encode, min_places):
         for k in np.flatnonzero(changed).tolist():
             if texts[k] != old_texts[k]:
                 edits[sources[k]].append((starts[k], ends[k], texts[k]))
-    return edits
+    return [Edits.of(e) for e in edits]
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class Edits:
+    """Non-overlapping text edits as columns: what a long program's write holds instead of a tuple per edit.
+
+    Attributes
+    ----------
+    start, end : ndarray of int, shape (E,)
+        Offsets of the text each edit replaces (``start == end``: an
+        insertion), ascending as `apply_edits` orders them.
+    texts : str
+        The replacements one after the other: edit ``k`` writes
+        ``texts[cut[k]:cut[k + 1]]``.
+    cut : ndarray of int, shape (E + 1,)
+    """
+
+    start: np.ndarray
+    end: np.ndarray
+    texts: str
+    cut: np.ndarray
+
+    EDITS_AT_ONCE = 65536  # edits whose pieces are joined together (`applied`)
+
+    def __len__(self):
+        return len(self.start)
+
+    @classmethod
+    def of(cls, edits):
+        """The columns of ``(start, end, text)`` edits, in any order."""
+        edits = sorted(edits)
+        start, end = (np.array([e[k] for e in edits], dtype=np.int64) for k in (0, 1))
+        return cls(start, end, "".join(e[2] for e in edits),
+                   np.concatenate([[0], np.cumsum([len(e[2]) for e in edits], dtype=np.int64)]))
+
+    @classmethod
+    def joined(cls, parts):
+        """The edits of several `Edits` of one text, in order (their edits do not overlap)."""
+        start = np.concatenate([np.zeros(0, dtype=np.int64)] + [p.start for p in parts])
+        end = np.concatenate([np.zeros(0, dtype=np.int64)] + [p.end for p in parts])
+        shifts = np.cumsum([0] + [len(p.texts) for p in parts])
+        cut = np.concatenate([[0]] + [p.cut[1:] + shift for p, shift in zip(parts, shifts.tolist())])
+        order = np.lexsort((end, start))  # the parts' edits interleave where their targets do
+        texts = "".join(p.texts for p in parts)
+        if np.array_equal(order, np.arange(len(order))):
+            return cls(start, end, texts, cut)
+        return cls.of([(start[k], end[k], texts[cut[k]:cut[k + 1]]) for k in order.tolist()])
+
+    def applied(self, text):
+        """``text`` with the edits applied (`apply_edits`), its pieces joined `EDITS_AT_ONCE` edits at a time."""
+        out, position = [], 0
+        for lo in range(0, len(self), self.EDITS_AT_ONCE):
+            pieces, hi = [], lo + self.EDITS_AT_ONCE
+            for start, end, a, b in zip(self.start[lo:hi].tolist(), self.end[lo:hi].tolist(),
+                                        self.cut[lo:hi].tolist(), self.cut[lo + 1:hi + 1].tolist()):
+                pieces += (text[position:start], self.texts[a:b])
+                position = end
+            out.append("".join(pieces))
+        out.append(text[position:])
+        return "".join(out)
 
 
 def _fields(spans):
@@ -561,7 +636,7 @@ def _number_or_text(text):
 def patched(program, encode, min_places):
     """The texts of the program's sources with the edited targets rewritten (see `target_edits`)."""
     edits = target_edits(program, encode, min_places)
-    return [apply_edits(source.text, e) for source, e in zip(program.sources, edits)]
+    return [e.applied(source.text) for source, e in zip(program.sources, edits)]
 
 
 def where(target):
