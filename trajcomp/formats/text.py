@@ -20,7 +20,7 @@ import numpy as np
 
 from trajcomp.errors import ReadError, WriteError
 from trajcomp.formats.fixed_text import joined_rows
-from trajcomp.programs.items import CIRCULAR, Source, Span, SpanRow
+from trajcomp.programs.items import CIRCULAR, Source, Span, SpanColumns, SpanRow, replaced
 from trajcomp.arm.transforms import abc_to_matrix, matrix_to_abc
 from trajcomp.support.memory import collection_paused
 
@@ -322,8 +322,15 @@ def name_span(piece, at, source):
 
     Per-use copies of a point (`trajcomp.formats.uses`) rename it there.
     """
+    offsets = name_offsets(piece, at)
+    return None if offsets is None else Span(source, *offsets, piece[offsets[0] - at:offsets[1] - at])
+
+
+def name_offsets(piece, at):
+    """``(start, end)`` in the source of the point name a motion argument ``piece`` (at offset ``at``) starts
+    with, or None: `name_span` without its object (a reader that keeps its spans as `SpanColumns`)."""
     m = _LEADING_NAME.match(piece)
-    return None if m is None else Span(source, at + m.start(1), at + m.end(1), m.group(1))
+    return None if m is None else (at + m.start(1), at + m.end(1))
 
 
 _LEADING_NAME = re.compile(r"\s*([A-Za-z_$][\w$]*)")
@@ -826,23 +833,46 @@ def _edited(program, shifts, changed):
     """`edit_sources` of the edits ``shifts`` (one `_Shift` per source); ``changed``: the sources edited.
 
     A target stated in a source without edits (a KRL .dat when speed lines
-    go into the .src) keeps its spans and line as they are.
+    go into the .src) keeps its spans and line as they are. Spans kept as
+    `SpanColumns` move as columns, each table at once (no `Span` object made).
     """
     sources = tuple(s.source_like(source) for s, source in zip(shifts, program.sources))
     every_target = list(program.targets)
-    moving = [bool(t.spans) and next(iter(t.spans.values())).source in changed for t in every_target]
+    moving = [bool(t.spans) and _source_of(t.spans) in changed for t in every_target]
     targets = [t for t, move in zip(every_target, moving) if move]  # a target without spans keeps its line
     things = targets + list(program.items)  # statements and motions are lines of the first file
     spans = [getattr(thing, "spans", {}) for thing in things]
-    moved = iter(_moved_spans(shifts, [span for of in spans for span in of.values()]))
+    tables = {}  # id -> the SpanColumns of some things' spans, moved
+    for of in spans:
+        if isinstance(of, SpanRow) and id(of.columns) not in tables:
+            tables[id(of.columns)] = _moved_columns(shifts[of.columns.source], of.columns)
+    moved = iter(_moved_spans(shifts, [span for of in spans if not isinstance(of, SpanRow) for span in of.values()]))
     first_file = [0] * (len(things) - len(targets))
-    lines = _moved_lines(shifts, [next(iter(t.spans.values())).source for t in targets] + first_file,
+    lines = _moved_lines(shifts, [_source_of(t.spans) for t in targets] + first_file,
                          [thing.line for thing in things])
-    edited = iter([dataclasses.replace(thing, line=line, **({"spans": {role: next(moved) for role in of}} if of else {}))
-                   for thing, of, line in zip(things, spans, lines)])
+
+    def moved_spans(of):
+        if isinstance(of, SpanRow):
+            return {"spans": tables[id(of.columns)].row(of.k)}
+        return {"spans": {role: next(moved) for role in of}} if of else {}
+
+    edited = iter([replaced(thing, line=line, **moved_spans(of)) for thing, of, line in zip(things, spans, lines)])
     return program.replace(sources=sources, targets=tuple(next(edited) if move else t
                                                           for t, move in zip(every_target, moving)),
                            items=tuple(edited))
+
+
+def _source_of(spans):
+    """The source of a thing's spans (its first span's)."""
+    return spans.columns.source if isinstance(spans, SpanRow) else next(iter(spans.values())).source
+
+
+def _moved_columns(shift, columns):
+    """`SpanColumns` in the edited text of its source (`_Shift` ``shift``), as `_moved_spans` moves each span."""
+    given = columns.start >= 0
+    start = np.where(given, shift.starts(columns.start), -1)
+    end = np.where(given, np.maximum(shift.ends(columns.end), start), -1)
+    return SpanColumns(columns.source, shift.new, columns.roles, start, end)
 
 
 def _moved_spans(shifts, spans):

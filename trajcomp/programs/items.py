@@ -6,6 +6,7 @@ the motion kinds `JOINT`, `LINEAR`, `CIRCULAR`. How they make up a program
 is documented in `trajcomp.programs.program`, which holds `trajcomp.programs.program.Program`.
 """
 
+import array
 import dataclasses
 from collections.abc import Mapping
 
@@ -88,6 +89,35 @@ class SpanColumns:
         return SpanRow(self, k)
 
 
+class SpanTable:
+    """The spans of items recorded one item at a time as offsets (no object each), made `SpanColumns` at the end.
+
+    Parameters
+    ----------
+    roles : sequence of str
+        The roles an item's spans may have, in the order they list them.
+    """
+
+    def __init__(self, roles):
+        self.roles = tuple(roles)
+        self.column = {role: j for j, role in enumerate(self.roles)}
+        self.offsets = array.array("q")  # start, end of each role, item after item; -1 where none
+
+    def add(self, offsets):
+        """Record the spans ``{role: (start, end) or None}`` of the next item (None: no span)."""
+        row = [-1] * (2 * len(self.roles))
+        for role, where in offsets.items():
+            if where is not None:
+                j = 2 * self.column[role]
+                row[j:j + 2] = where
+        self.offsets.extend(row)
+
+    def columns(self, source, text):
+        """The `SpanColumns` of the items recorded, in ``text`` (the text of `Source` ``source``)."""
+        pairs = np.frombuffer(self.offsets, dtype=np.int64).reshape(-1, len(self.roles), 2)
+        return SpanColumns(source, text, self.roles, pairs[:, :, 0].copy(), pairs[:, :, 1].copy())
+
+
 class SpanRow(Mapping):
     """The spans of one item of `SpanColumns`: ``{role: Span}`` built on access."""
 
@@ -110,6 +140,9 @@ class SpanRow(Mapping):
 
     def __len__(self):
         return int((self.columns.start[self.k] >= 0).sum())
+
+    def __repr__(self):
+        return repr(dict(self))
 
     def fields(self):
         """``{role: (source, start, end, text)}``: the spans' fields, no `Span` object built."""

@@ -19,14 +19,14 @@ from trajcomp.formats.text import (
     finite,
     integer,
     mask,
-    name_span,
+    name_offsets,
     read_source,
     split_top,
     unresolved,
     whole_circle,
 )
 from trajcomp.programs.program import Program
-from trajcomp.programs.items import CIRCULAR, JOINT, LINEAR, Motion, Span, SpanColumns, Statement, Target, replaced
+from trajcomp.programs.items import CIRCULAR, JOINT, LINEAR, Motion, Span, SpanColumns, SpanTable, Statement, Target, replaced
 from trajcomp.arm.transforms import pose_to_matrix
 
 POSE = ("x", "y", "z", "a", "b", "c")
@@ -36,6 +36,7 @@ MIN_PLACES = dict.fromkeys(POSE[:3], 3) | dict.fromkeys(POSE[3:], 4) | dict.from
 LIMITS = dict.fromkeys(POSE[:3], LENGTH_LIMIT) | dict.fromkeys(POSE[3:], ANGLE_LIMIT) | dict.fromkeys(AXES, JOINT_LIMIT)
 POINT_TYPES = "E6POS|POS|FRAME|E6AXIS|AXIS"
 JOINT_TYPES = {"E6AXIS", "AXIS"}
+MOTION_SPANS = ("motion", "via_name", "target_name", "speed_with", "speed")  # a motion's spans, in this order
 KINDS = {"PTP": JOINT, "SPTP": JOINT, "LIN": LINEAR, "SLIN": LINEAR, "CIRC": CIRCULAR, "SCIRC": CIRCULAR}
 
 _DECL = re.compile(
@@ -243,6 +244,7 @@ class _Reader:
         self.assigned = {}  # NAME -> first line of the .src that assigns it
         self.shared = set()  # NAMEs of GLOBAL points: other programs may assign them
         self.companions = {}  # file -> (source index, Lines, masked text) of other data lists read
+        self.motion_spans = SpanTable(MOTION_SPANS)  # the spans of the motions, in order: all in the .src
 
     def declared_in(self, file, line_no):
         """Read the point another data list (``$config.dat``, a GLOBAL one) declares at ``file``:``line_no``.
@@ -484,17 +486,19 @@ class _Reader:
             if None in found:
                 reason = "position computed at run time: " + " ".join(parts[found.index(None)][0].split())
         roles = ("via_name", "target_name")[2 - wanted:]
-        names = {role: name_span(piece, at, index) for role, (piece, at), point in zip(roles, parts, found)
-                 if isinstance(point, _Named)}  # where a per-use copy's name is written (`trajcomp.formats.uses`)
+        spans = {"motion": (start + m.start(1), start + m.end(1))}  # offsets: the spans are columns (`_resolve`)
+        spans |= {role: name_offsets(piece, at) for role, (piece, at), point in zip(roles, parts, found)
+                  if isinstance(point, _Named)}  # where a per-use copy's name is written (`trajcomp.formats.uses`)
         reason = reason or self.tool_why or self.base_why
         group = JOINT if kind == JOINT else LINEAR
         speed, unit = (self.speed_ptp, "%") if kind == JOINT else (self.speed_cp, "mm/s")
         speed_why = self.speed_why[group]
-        spans = {"motion": Span(index, start + m.start(1), start + m.end(1), m.group(1))} | names
         if own_speed is not None:  # this motion's own, in its WITH clause: re-timing writes there
-            speed, speed_why, spans["speed_with"] = own_speed
+            speed, speed_why, with_span = own_speed
+            spans["speed_with"] = (with_span.start, with_span.end)
         elif self.speed_spans[group] is not None:  # the statement that set it: re-timing writes there
-            spans["speed"] = self.speed_spans[group]
+            spans["speed"] = (self.speed_spans[group].start, self.speed_spans[group].end)
+        self.motion_spans.add(spans)
         return Motion(
             kind=kind,
             target=found[-1],
@@ -507,7 +511,6 @@ class _Reader:
             line=line_no,
             text=original.strip(),
             reason=reason,
-            spans=spans,
             speed_why=speed_why,
         )
 
@@ -628,18 +631,21 @@ def _resolve(reader, path, dat_path):
         missing.append((ref.name, ref.line))
         return None, ""
 
+    motion_spans = reader.motion_spans.columns(0, reader.sources[0].text)  # the motions' rows, in order
+    motion_rows = iter(range(len(motion_spans)))
     for item in reader.items:
         if isinstance(item, Motion):
             (via, via_why), (target, why) = lookup(item.via), lookup(item.target)
             reason = via_why or why or item.reason
+            spans = motion_spans.row(next(motion_rows))
             if reason:
                 named = {w.upper() for w in _WORD.findall(mask(item.text, ";"))}
                 known = tuple(reader.points[w] for w in sorted(named) if w in reader.points)
                 home = isinstance(item.target, _Named) and bool(_HOME.match(item.target.name))
-                item = dataclasses.replace(item, target=None, via=None, reason=reason, axis_position=home,
+                item = dataclasses.replace(item, target=None, via=None, reason=reason, axis_position=home, spans=spans,
                                            refs=known + tuple(i for i in (via, target) if isinstance(i, int)))
             else:
-                item = whole_circle(replaced(item, target=target, via=via))
+                item = whole_circle(replaced(item, target=target, via=via, spans=spans))
         else:
             named = {w.upper() for w in _WORD.findall(mask(item.text, ";"))}
             refs = tuple(reader.points[w] for w in sorted(named) if w in reader.points)
