@@ -21,6 +21,7 @@ import numpy as np
 from trajcomp.errors import ReadError, WriteError
 from trajcomp.formats.fixed_text import joined_rows
 from trajcomp.programs.items import CIRCULAR, Source, Span, SpanColumns, SpanRow, replaced
+from trajcomp.programs.tables import TargetRows
 from trajcomp.arm.transforms import abc_to_matrix, matrix_to_abc
 from trajcomp.support.memory import collection_paused
 
@@ -478,9 +479,11 @@ def target_edits(program, encode, min_places):
         with their original text. The numbers are formatted together
         (`written_numbers`).
     """
-    targets = [target for target in program.targets if target.edited]
-    batches = [_batch_edits(targets[lo:lo + TARGETS_AT_ONCE], encode, min_places, len(program.sources))
-               for lo in range(0, len(targets), TARGETS_AT_ONCE)]
+    targets = program.targets
+    edited = (np.flatnonzero(targets.table.edited).tolist() if isinstance(targets, TargetRows)  # no object each
+              else [i for i, target in enumerate(targets) if target.edited])
+    batches = [_batch_edits([targets[i] for i in edited[lo:lo + TARGETS_AT_ONCE]], encode, min_places,
+                            len(program.sources)) for lo in range(0, len(edited), TARGETS_AT_ONCE)]
     return [Edits.joined([batch[k] for batch in batches]) for k in range(len(program.sources))]
 
 
@@ -837,6 +840,9 @@ def _edited(program, shifts, changed):
     `SpanColumns` move as columns, each table at once (no `Span` object made).
     """
     sources = tuple(s.source_like(source) for s, source in zip(shifts, program.sources))
+    if isinstance(program.targets, TargetRows):  # a table's targets move as columns
+        edited = _edited(program.replace(targets=()), shifts, changed)
+        return edited.replace(targets=_moved_rows(program.targets, shifts, changed))
     every_target = list(program.targets)
     moving = [bool(t.spans) and _source_of(t.spans) in changed for t in every_target]
     targets = [t for t, move in zip(every_target, moving) if move]  # a target without spans keeps its line
@@ -860,6 +866,15 @@ def _edited(program, shifts, changed):
     return program.replace(sources=sources, targets=tuple(next(edited) if move else t
                                                           for t, move in zip(every_target, moving)),
                            items=tuple(edited))
+
+
+def _moved_rows(targets, shifts, changed):
+    """`TargetRows` with their spans and lines in the edited texts (as they are if their source is not edited)."""
+    table = targets.table
+    if table.spans is None or table.spans.source not in changed:  # a target without spans keeps its line
+        return targets
+    shift = shifts[table.spans.source]
+    return TargetRows(dataclasses.replace(table, spans=_moved_columns(shift, table.spans), line=shift.lines(table.line)))
 
 
 def _source_of(spans):

@@ -367,7 +367,7 @@ class Program:
 
     def where(self, index):
         """Target ``index`` named for messages: label, file and line (``P1 (weld.dat:12)``)."""
-        if isinstance(self.targets, TargetRows):
+        if self._inline_rows():
             return self.labels([index])[0]
         target = self.targets[index]
         span = next(iter(target.spans.values()), None)
@@ -377,9 +377,13 @@ class Program:
             place = f"line {target.line}"
         return f"{target.name} ({place})" if target.name else place
 
+    def _inline_rows(self):
+        """Whether the targets are a table's rows without names or spans (a CSV's): labelled by their lines."""
+        return isinstance(self.targets, TargetRows) and self.targets.table.spans is None
+
     def labels(self, index):
         """`where` of many targets (N,): a sequence of str, each built on access (messages name a few)."""
-        if isinstance(self.targets, TargetRows):
+        if self._inline_rows():
             lines = self.target_table().line[np.asarray(index, dtype=int)]
             return LineLabels(self.sources[0].name, lines) if self.sources else [f"line {n}" for n in lines]
         index = np.asarray(index, dtype=int)

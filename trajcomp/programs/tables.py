@@ -13,7 +13,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from trajcomp.programs.items import Motion, Target
+from trajcomp.programs.items import Motion, SpanColumns, Target
 
 @dataclasses.dataclass(frozen=True, eq=False)
 class MotionTable:
@@ -105,6 +105,11 @@ class TargetTable:
     external : tuple, length N
         External axes (ndarray) or None.
     edited : ndarray of bool, shape (N,)
+    name : Sequence of str, length N, or None
+        Point names (None: every target is inline, ``""``).
+    spans : SpanColumns or None
+        Where each target's numbers stand in its source (row k: target k);
+        None: the targets have no spans (a CSV's rows).
     """
 
     pose: np.ndarray
@@ -116,6 +121,8 @@ class TargetTable:
     frame: np.ndarray
     external: tuple
     edited: np.ndarray
+    name: Sequence = None
+    spans: SpanColumns = None
 
     def __len__(self):
         return len(self.line)
@@ -157,11 +164,11 @@ class TargetTable:
     def target(self, i):
         """Target ``i`` as an object."""
         return Target(
-            name="", line=int(self.line[i]),
+            name="" if self.name is None else self.name[i], line=int(self.line[i]),
             pose=None if self.is_joint[i] else self.pose[i],
             joints=None if np.isnan(self.joints[i]).any() else self.joints[i],
             config=self.config[i], tool=self.tool[i], frame=self.frame[i], external=self.external[i],
-            edited=bool(self.edited[i]),
+            edited=bool(self.edited[i]), spans={} if self.spans is None else self.spans.row(i),
         )
 
     def with_rows(self, index, *, poses=None, joints=None, configs=None):
@@ -264,6 +271,27 @@ class ItemRows(_Rows):
 
     def _motion(self, k):
         return self.table.motion(k, self._text(int(self.table.line[k])))
+
+
+class TextSlices(Sequence):
+    """Pieces of a text given by their offsets (N,), each a str built on access (a long program's point names).
+
+    Parameters
+    ----------
+    text : str
+    start, end : ndarray of int, shape (N,)
+    """
+
+    def __init__(self, text, start, end):
+        self.text, self.start, self.end = text, start, end
+
+    def __len__(self):
+        return len(self.start)
+
+    def __getitem__(self, k):
+        if isinstance(k, slice):
+            return [self.text[a:b] for a, b in zip(self.start[k].tolist(), self.end[k].tolist())]
+        return self.text[self.start[k]:self.end[k]]
 
 
 class LineLabels(Sequence):

@@ -26,6 +26,7 @@ from trajcomp.formats.text import (
     whole_circle,
 )
 from trajcomp.programs.program import Program
+from trajcomp.programs.tables import TargetRows, TargetTable, TextSlices, repeated
 from trajcomp.programs.items import CIRCULAR, JOINT, LINEAR, Motion, Span, SpanColumns, SpanTable, Statement, Target, replaced
 from trajcomp.arm.transforms import pose_to_matrix
 
@@ -183,12 +184,14 @@ def _written_points(index, masked, lines):
 
     Returns
     -------
-    dict
-        ``{line number: Target}``, the targets' spans `SpanColumns` rows.
+    rows : dict
+        ``{line number: row of table}``.
+    table : TargetTable
+        The points as columns (no object each): names and spans (`SpanColumns`) in the data list's text.
     """
     found = list(_WRITTEN_POINT.finditer(masked))
     if not found:
-        return {}
+        return {}, None
     groups = [m.groups() for m in found]
     texts = np.array([g[1:] for g in groups], dtype=object)  # (N, 14): x..c, s, t, e1..e6; None where absent
     given = texts != None  # noqa: E711 (elementwise)
@@ -202,19 +205,22 @@ def _written_points(index, masked, lines):
     keep = np.flatnonzero(good)
     vector = pose[keep].copy()
     vector[:, 3:] = np.radians(vector[:, 3:])
-    matrices = pose_to_matrix(vector)
-    at = np.array([[m.start(k) for k in range(2, 10)] + [m.end(k) for k in range(2, 10)] for m in found])
-    columns = SpanColumns(index, lines.text, POSE + ("s", "t"), np.where(given[:, :8], at[:, :8], -1),
-                          at[:, 8:])
-    line = np.searchsorted(lines.starts, [m.start() for m in found], side="right").tolist()
-    out = {}
-    for row, k in enumerate(keep.tolist()):
-        count = int(given[k, 8:].sum())
-        out[line[k]] = Target(
-            name=groups[k][0], line=line[k], pose=matrices[row],
-            external=external[k, :count].copy() if count else None,
-            config=(int(status[k, 0]), int(status[k, 1])) if given[k, 6] else (), spans=columns.row(k))
-    return out
+    at = np.array([[m.start(k) for k in range(1, 10)] + [m.end(k) for k in range(1, 10)] for m in found])[keep]
+    given = given[keep]
+    columns = SpanColumns(index, lines.text, POSE + ("s", "t"), np.where(given[:, :8], at[:, 1:9], -1),
+                          np.where(given[:, :8], at[:, 10:], -1))
+    line = np.searchsorted(lines.starts, [found[k].start() for k in keep.tolist()], side="right")
+    counts = given[:, 8:].sum(axis=1).tolist()
+    configs = {}  # one tuple per distinct (S, T): a path's points mostly share theirs
+    n = len(keep)
+    none = repeated(None, n)
+    table = TargetTable(
+        pose_to_matrix(vector), np.zeros(n, dtype=bool), np.full((n, 6), np.nan), line,
+        tuple(configs.setdefault(st, st) if stated else () for st, stated in
+              zip(map(tuple, np.where(given[:, 6:8], status[keep], 0).astype(int).tolist()), given[:, 6].tolist())),
+        none, none, tuple(external[k, :count].copy() if count else None for k, count in zip(keep.tolist(), counts)),
+        np.zeros(n, dtype=bool), TextSlices(lines.text, at[:, 0], at[:, 9]), columns)
+    return dict(zip(line.tolist(), range(n))), table
 
 
 def _sibling_dat(path):
@@ -560,19 +566,19 @@ def read(path):
     src_index, src_lines, src_masked = reader.add_source(src)
     check_closed(src, src_masked, _BLOCK_OPENS, _BLOCK_CLOSES, {"DEF": "END", "DEFFCT": "ENDFCT"})
     reader.scan_assignments(src_masked, src_lines)
-    dat_path = _sibling_dat(path)
+    dat_path, table = _sibling_dat(path), None
     if dat_path is not None:
         dat_index, dat_lines, dat_masked = reader.add_source(read_source(dat_path))
         if not _DEFDAT.search(dat_masked):
             raise ReadError(f"{dat_path}: not a KRL data list: no DEFDAT line")
         if not _ENDDAT.search(dat_masked):
             raise ReadError(f"{dat_path}: no ENDDAT: the data list is cut off")
-        written = _written_points(dat_index, dat_masked, dat_lines)
+        written, table = _written_points(dat_index, dat_masked, dat_lines)
         for line_no, start, end in dat_lines:
             if line_no in written:
-                name = written[line_no].name.upper()
+                name = table.name[written[line_no]].upper()
                 reader.points[name] = len(reader.targets)
-                reader.targets.append(written[line_no])
+                reader.targets.append(written[line_no])  # a row of the table
                 if _GLOBAL_WORD.search(dat_masked, start, end):  # other programs see it, and may assign it
                     reader.shared.add(name)
             else:
@@ -580,9 +586,11 @@ def read(path):
     for line_no, start, end in src_lines:
         reader.statement(src_index, src_masked, line_no, start, end)
     items = _resolve(reader, path, dat_path)
-    return Program(
-        "krl", path.stem, items, tuple(reader.targets), reader.tools, reader.frames, tuple(reader.sources)
-    )
+    if table is not None and reader.targets == list(range(len(table))):  # every point written as KUKA writes them
+        targets = TargetRows(table)
+    else:
+        targets = tuple(table.target(t) if isinstance(t, int) else t for t in reader.targets)
+    return Program("krl", path.stem, items, targets, reader.tools, reader.frames, tuple(reader.sources))
 
 
 def _visible(file, match):
