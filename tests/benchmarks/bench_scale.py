@@ -1,7 +1,7 @@
 """Scale benchmark: end-to-end CLI throughput and peak memory on long CAM programs (not a timed test).
 
 Run:  python tests/benchmarks/bench_scale.py [N ...]     (default: 100000 300000 1000000)
-      python tests/benchmarks/bench_scale.py languages [N ...]     (default: 20000 100000)
+      python tests/benchmarks/bench_scale.py languages [LANGUAGE ...] [N ...]     (default: all, 20000 100000)
 
 For each N, a helix of N LIN waypoints blended with 1 mm zones (a CAM path;
 program CSV, mm and deg, 3 and 4 decimals) on the virtual UR10 is
@@ -164,13 +164,18 @@ def quietly(args):
         raise SystemExit(f"trajcomp {' '.join(args)} exited {code}:\n{err.getvalue()[-2000:]}")
 
 
-def language_bench(sizes):
-    """The languages' table (module docstring): floor, compensate, ratios, memory per waypoint."""
+def language_bench(sizes, languages=()):
+    """The languages' table (module docstring): floor, compensate, ratios, memory per waypoint.
+
+    ``languages``: the robot languages to run (each with CSV on its arm, the reference); all when empty.
+    """
     folder = Path(tempfile.mkdtemp(prefix="trajcomp-languages-"))
     print(f"{'waypoints':>10} {'language':>9} {'arm':>18} {'floor s':>8} {'compensate s':>13} {'x CSV':>6} "
           f"{'x floor':>8} {'peak MB':>8} {'KB/waypoint':>12}")
+    chosen = {robot: pairs for robot, pairs in LANGUAGES.items()
+              if not languages or any(language in languages for language, _ in pairs[1:])}
     arms = {}
-    for robot in LANGUAGES:
+    for robot in chosen:
         large = demo_cubes(load_robot(robot))[0]
         side = large.side - large.step  # one arm posture reaches all of it (see `make_model`)
         centre = np.add(large.corner, side / 2)
@@ -178,7 +183,7 @@ def language_bench(sizes):
             centre=centre, radius=0.16 * large.side, rise=0.2 * large.side)
     for n in sizes:
         csv_time = {}
-        for robot, language, extension in ((r, *pair) for r, pairs in LANGUAGES.items() for pair in pairs):
+        for robot, language, extension in ((r, *pair) for r, pairs in chosen.items() for pair in pairs):
             model, placement = arms[robot]
             paths, place = {}, folder / robot  # KRL: the file name is the program's name (a letter first, no '-')
             place.mkdir(exist_ok=True)
@@ -247,6 +252,7 @@ def main_bench(sizes):
 
 if __name__ == "__main__":
     if sys.argv[1:2] == ["languages"]:
-        language_bench([int(a) for a in sys.argv[2:]] or [20_000, 100_000])
+        named = [a for a in sys.argv[2:] if not a.isdigit()]
+        language_bench([int(a) for a in sys.argv[2:] if a.isdigit()] or [20_000, 100_000], named)
     else:
         main_bench([int(a) for a in sys.argv[1:]] or [100_000, 300_000, 1_000_000])
