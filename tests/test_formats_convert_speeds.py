@@ -41,6 +41,7 @@ from trajcomp.arm.transforms import matrix_to_pose, matrix_to_quat, matrix_to_ro
 from trajcomp.compensation.program import convert_program
 from trajcomp.formats.fanuc.configuration import encode as fanuc_config
 from trajcomp.formats.rapid.configuration import encode as abb_confdata
+from trajcomp.formats.speeds import arc_length
 from trajcomp.programs.items import JOINT
 
 ROBOT = load_robot("kuka_kr6_r900")
@@ -223,3 +224,13 @@ def test_compensate_to_another_language_lists_the_speed_it_could_not_carry_over(
     assert speeds["status"] == "fail" and "speed 50 % cannot be converted (its start is unknown)" in speeds["detail"]
     assert "speeds" in capsys.readouterr().err
     assert formats.read(out).motions[0].speed == 1.0
+
+
+@pytest.mark.parametrize("end,via", [(90, 45), (270, 135), (180, 90), (60, 10), (342, 180), (11.5, 5)])
+def test_a_circles_length_is_its_arc_through_the_via_point(end, via):
+    """r theta of a circle of 100 mm from 0 deg through ``via`` to ``end`` (the minor or the major arc)."""
+    def at(angle):
+        return np.array([100.0 * np.cos(np.radians(angle)), 100.0 * np.sin(np.radians(angle)), 5.0])
+
+    assert arc_length(np.array([at(0), at(via), at(end)])) == pytest.approx(100.0 * np.radians(end), rel=1e-12)
+    assert arc_length(np.array([at(0), at(end)])) == pytest.approx(np.linalg.norm(at(end) - at(0)))

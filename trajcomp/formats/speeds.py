@@ -87,7 +87,7 @@ class MotionGeometry:
                 continue
             ends = [q_a, moves.via[k], q_b] if moves.kind[k] == CIRCULAR else [q_a, q_b]
             T, _ = fk_and_jacobian(tool, np.array(ends))
-            length[index] = _arc_length(T[:, :3, 3])
+            length[index] = arc_length(T[:, :3, 3])
             turn[index] = rotation_angle_between(T[0, :3, :3], T[-1, :3, :3])
         return cls(known, dq, length, turn)
 
@@ -131,21 +131,17 @@ def _trapezoid_time(rate, acceleration):
     return 1.0 / rate + rate / acceleration
 
 
-def _arc_length(points):
+def arc_length(points):
     """Length (mm) of the line through 2 points (2, 3), or of the circle's arc from the first through the second
-    to the third (3, 3)."""
+    to the third (3, 3): the via point sees the chord at the angle pi - theta / 2 (theta the arc's central angle)."""
     if len(points) == 2:
         return float(np.linalg.norm(points[1] - points[0]))
-    a, b, c = points[1] - points[0], points[2] - points[1], points[2] - points[0]
-    cross = np.linalg.norm(np.cross(points[1] - points[0], points[2] - points[0]))
-    if cross < 1e-9 * max(np.linalg.norm(c) ** 2, 1e-12):  # collinear: a line
-        return float(np.linalg.norm(a) + np.linalg.norm(b))
-    radius = np.linalg.norm(a) * np.linalg.norm(b) * np.linalg.norm(c) / (2.0 * cross)
-    half = np.arcsin(np.clip(np.linalg.norm(c) / (2.0 * radius), 0.0, 1.0))
-    # the via point lies on the arc: the arc is the major one when the via is beyond the chord's far side
-    centre_side = np.dot(a, c) * np.dot(b, c) < 0 or np.linalg.norm(a) ** 2 + np.linalg.norm(b) ** 2 < np.dot(c, c)
-    angle = 2.0 * np.pi - 2.0 * half if centre_side else 2.0 * half
-    return float(radius * angle)
+    to_start, to_end = points[0] - points[1], points[2] - points[1]
+    at_via = np.arctan2(np.linalg.norm(np.cross(to_start, to_end)), np.dot(to_start, to_end))
+    if np.pi - at_via < 1e-9:  # the via point on the chord: a line
+        return float(np.linalg.norm(to_start) + np.linalg.norm(to_end))
+    radius = np.linalg.norm(points[2] - points[0]) / (2.0 * np.sin(at_via))
+    return float(radius * (2.0 * np.pi - 2.0 * at_via))
 
 
 def cruise_rate(kind, speed, unit, orientation_speed, geometry, index, robot):
