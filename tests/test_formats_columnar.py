@@ -13,7 +13,8 @@ from trajcomp.formats.fanuc import reader as fanuc_reader
 from trajcomp.formats.krl import reader as krl_reader
 from trajcomp.formats.rapid import reader as rapid_reader
 from trajcomp.formats.urscript import reader as urscript_reader
-from trajcomp.formats.text import Edits, apply_edits, format_number, written_numbers
+from trajcomp.formats.text import Edits, apply_edits, edit_sources, format_number, written_numbers
+from trajcomp.programs.tables import TargetRows
 
 DATA = Path(__file__).parent / "data"
 EXAMPLES = Path(__file__).parent.parent / "examples" / "programs"
@@ -115,3 +116,19 @@ def test_edits_as_columns_apply_as_the_tuples_do(monkeypatch):
     assert Edits.joined(parts).applied(text) == apply_edits(text, edits)
     assert Edits.joined([Edits.of(edits[:150]), Edits.of(edits[150:])]).applied(text) == apply_edits(text, edits)
     assert Edits.joined([]).applied(text) == text
+
+
+def test_edited_sources_move_spans_held_as_columns_as_they_move_span_objects(tmp_path, monkeypatch):
+    path = _krl(tmp_path, ["DECL E6POS XP1={X 500,Y 0,Z 600,A 0,B 90,C 0,S 2,T 35}",
+                           "DECL E6POS XP2={X 510.25,Y 1e1,Z 600,A -180,B 89.5,C 0.001,S 6,T 27}",
+                           "DECL E6POS XP3={X 1.5,Y -2,Z .25,A 0,B 90,C 0}"])
+    at_once, line_by_line = formats.read(path), _line_by_line(path, monkeypatch)
+    assert isinstance(at_once.targets, TargetRows) and not isinstance(line_by_line.targets, TargetRows)
+    src, dat = (source.text for source in at_once.sources)
+    edits = [[(src.index("  LIN XP2"), src.index("  LIN XP2"), "  $VEL.CP=0.2\n")],  # a line before a motion
+             [(dat.index("DECL E6POS XP2"), dat.index("DECL E6POS XP2"), ";moved\n"),  # before a point
+              (dat.index("1e1"), dat.index("1e1") + 3, "10.5")]]  # and a number of it rewritten
+    moved, expected = edit_sources(at_once, edits), edit_sources(line_by_line, edits)
+    assert _seen(moved) == _seen(expected)
+    assert [t.line for t in moved.targets] == [2, 4, 5] and moved.targets[1].spans["y"].text == "10.5"
+    assert moved.motions[1].line == 4 and moved.motions[1].spans["motion"].text == "LIN"
