@@ -1,6 +1,5 @@
 """``trajcomp formats``: list the robot program formats, built-in and plugins."""
 
-from trajcomp import formats
 from trajcomp.commands._args import command_parser
 
 
@@ -15,6 +14,8 @@ def add_parser(sub):
 
 
 def run(args):
+    from trajcomp import formats  # the registry, with its plugins: what the run lists, not what its --help needs
+
     for fmt in formats.formats():
         print(f"{fmt.name:10s} {' '.join(fmt.extensions):28s} {fmt.source}")
     for name, reason in formats.plugin_failures().items():
