@@ -109,7 +109,8 @@ def _cell(folder, robot, body, others=()):
           "  J4 =     0.000 deg   J5 =   -90.000 deg   J6 =      .000 deg \n\n"
         + "    [1,4] =   '' Uninitialized\n"
         + "    [1,5] =   'Open' \n  Group: 1   Config: N U T, 0, 0, 0\n  X:  ********   Y:     0.000   Z:     0.000\n"
-          "  W:     0.000   P:     0.000   R:     0.000\n" + TAIL)
+          "  W:     0.000   P:     0.000   R:     0.000\n"
+        + "    [2,1] =   ''   Group: 2\n  J1 =  -130.224 mm  \n\n" + TAIL)  # a servo gun's axis, as ub10200's
     for name, text in others:
         (folder / name).write_text(_program(name.split(".")[0], text))
     path = folder / "MAIN.LS"
@@ -160,6 +161,8 @@ def test_a_register_is_compensated_where_the_backup_holds_it_once_for_the_progra
     before = (folder / "POSREG.VA").read_text()
     program = formats.read(path)
     assert program.not_compensated() == ()
+    # group 2's register 1 (the gun) is the external axis of PR[1], carried unchanged; PR[2] has none
+    assert [program.targets[m.target].external for m in program.motions[1:3]] == [[-130.224], None]
     edited, report = compensate_program(program, _stand_in(robot), robot, tools={"1": np.eye(4)})
     assert any(w.startswith("position registers PR[1], PR[2], PR[3] are read from POSREG.VA") for w in report.warnings)
     (tmp_path / "out").mkdir()

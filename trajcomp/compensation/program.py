@@ -23,7 +23,7 @@ from trajcomp.arm.kinematics import fk
 from trajcomp.programs.frames import FrameTable, in_frames
 from trajcomp.compensation.options import MAX_CORRECTION, MAX_JOINT_CHANGE
 from trajcomp.compensation.posture import check_posture, planned_joints
-from trajcomp.programs.program import Program
+from trajcomp.programs.program import Program, place_text
 
 
 
@@ -108,8 +108,7 @@ class ProgramReport:
         if self.not_compensated:
             out.append(f"{self.motions_left} motions and {len(self.not_compensated) - self.motions_left} "
                        "points passed to routines NOT compensated:")
-            out += [f"  {line if isinstance(line, str) else f'line {line}'}: {text} ({reason})"
-                    for line, text, reason in self.not_compensated]
+            out += [f"  {place_text(place)}: {text} ({reason})" for place, text, reason in self.not_compensated]
         if self.unused:
             out.append(f"unused points left as written: {', '.join(self.unused)}")
         out += [f"warning: {w}" for w in self.warnings]
@@ -346,7 +345,7 @@ def _program_facts(program, joint_index, joint_mode):
     return {
         "unused": tuple(t.label for t in program.unused_targets()),
         "joint_targets": tuple(program.targets[i].label for i in joint_index)
-        + tuple(f"{program.motions[k].text} (line {program.motions[k].line})"
+        + tuple(f"{program.motions[k].text} ({place_text(program.place(program.motions[k]))})"
                 for k in np.flatnonzero(program.motion_table().axis_position)),
         "joint_mode": joint_mode,
         "warnings": _warnings(program),

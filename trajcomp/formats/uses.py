@@ -21,6 +21,7 @@ import re
 
 from trajcomp.formats.text import Lines, edit_sources
 from trajcomp.programs.items import Motion, Span
+from trajcomp.programs.program import place_text
 
 NAME_LENGTH = 24  # KUKA's limit on names; RAPID allows 32
 LINKED_JOINTS = "near"  # span roles of joints another variable holds (a URScript qnear list, `Waypoint_n_q`)
@@ -158,7 +159,8 @@ def _left_as_written(program, left):
                 keyed.append((k, i, key))
     reasons = {}
     for k, i, key in keyed:
-        others = "; ".join(f"with {other} at {_at(place)}" for other, place in first_use[i].items() if other != key)
+        others = "; ".join(f"with {other} at {place_text(place)}"
+                           for other, place in first_use[i].items() if other != key)
         reasons.setdefault(k, f"point {program.targets[i].label} is used here with tool/frame {key} and {others}: "
                               f"one set of numbers cannot be right for {'both' if len(first_use[i]) == 2 else 'all'}, "
                               f"and no copy is written: {left[i]}; "
@@ -172,11 +174,6 @@ def _left_as_written(program, left):
                                        refs=tuple(dict.fromkeys(item.refs + points)))
         items.append(item)
     return program.replace(items=tuple(items))
-
-
-def _at(place):
-    """``line 12`` or ``b.src:12`` (`Program.place`)."""
-    return place if isinstance(place, str) else f"line {place}"
 
 
 def _further_uses(program):

@@ -182,7 +182,8 @@ class Program:
 
     def place(self, item):
         """Where a motion or statement is written: its line (int), or ``"file:line"`` (str) in a program joined
-        from several files whose items lie in more than one (a task, `trajcomp.formats.task.merge`)."""
+        from several files whose items lie in more than one (a task, `trajcomp.formats.task.merge`); as text:
+        `place_text`."""
         return f"{self.sources[item.source].name}:{item.line}" if self._joined else item.line
 
     @functools.cached_property
@@ -422,3 +423,8 @@ class Program:
     def replace(self, **changes):
         """A copy with some attributes changed."""
         return dataclasses.replace(self, **changes)
+
+
+def place_text(place):
+    """A place `Program.place` gives, for messages: ``line 12``, or ``b.src:12`` as it is."""
+    return place if isinstance(place, str) else f"line {place}"

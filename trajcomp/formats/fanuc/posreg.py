@@ -192,10 +192,14 @@ def _target(source, index, lines, n, entry, entries):
         return finite(fields[role].text, source.name, lines.number(fields[role].start),
                       lines.line(lines.number(fields[role].start)), f"{label} {role.upper()}", limit)
 
-    external = [value(e, LENGTH_LIMIT) for e in sorted((r for r in fields if r.startswith("e")), key=lambda r: int(r[1:]))]
-    for (group, number), (_, other_start, other_end, other_status) in sorted(entries.items()):
-        if number == n and group > 1 and "uninitialized" not in other_status.lower():
-            external += [float(f.group(4)) for f in _FIELD.finditer(text, other_start, other_end) if "*" not in f.group(4)]
+    axes = sorted((role for role in fields if role.startswith("e")), key=lambda role: int(role[1:]))  # e1, e2 ...
+    external = [value(e, LENGTH_LIMIT) for e in axes]
+    for group in sorted({g for g, _ in entries if g > 1}):  # the axes of the other groups (a servo gun): carried
+        _, other_start, other_end, other_status = entries.get((group, n), (0, 0, 0, "uninitialized"))
+        if "uninitialized" not in other_status.lower():
+            external += [finite(f.group(4), source.name, lines.number(f.start(4)), lines.line(lines.number(f.start(4))),
+                                f"{label} GP{group}", LENGTH_LIMIT)
+                         for f in _FIELD.finditer(text, other_start, other_end) if "*" not in f.group(4)]
     where = {"name": label, "line": line, "external": np.array(external) if external else None}
     if "j1" in fields:
         missing = [j for j in JOINTS if j not in fields]

@@ -188,7 +188,8 @@ def _with_frames(motion, targets, state):
         frame = target.frame if target.frame is not None else state.frame
         why = ("" if target.is_joint else state.reason("tool", tool)) or state.reason("frame", frame)
         if not why and not target.is_joint and target.name.startswith("PR[") and None in (tool, frame):
-            unset = " and ".join(word for word, number in (("UTOOL_NUM", tool), ("UFRAME_NUM", frame)) if number is None)
+            unset = " and ".join(word for word, number in (("UTOOL_NUM", tool), ("UFRAME_NUM", frame))
+                                 if number is None)
             why = (f"{target.name} is a position in the tool and user frame active when the line runs: the program "
                    f"sets no {unset} before it")
         if why:
