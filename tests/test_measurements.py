@@ -186,17 +186,16 @@ def test_a_damaged_file_is_refused_at_its_first_bad_row_and_rows_are_bounded(tmp
 
 def test_calibrate_refuses_more_rows_than_it_fits_at_the_first_row_beyond(tmp_path, monkeypatch, capsys):
     import trajcomp.calibration.calibrate as calibration
-    import trajcomp.commands.calibrate as command
     from trajcomp.cli import main
 
-    monkeypatch.setattr(command, "MAX_ROWS", 5)  # the command's bound (100,000) read as it is when it runs
+    monkeypatch.setattr(calibration, "MAX_ROWS", 5)  # the bound (100,000), read by the command when it runs
     path = tmp_path / "meas.csv"
     path.write_text("# many\nj1,j2,j3,j4,j5,j6,mx,my,mz\n" + "0,-90,90,-90,-90,0,1,2,3\n" * 6 + "0,0,0,0,0,0,x,y,z\n")
     assert main(["calibrate", str(path), "--robot", "ur10", "-o", str(tmp_path / "m.yaml")]) == 2
     err = capsys.readouterr().err  # line 8 is the 6th data row: refused there, line 9 (not numbers) never read
-    assert f"{path}:8: more than 5 data rows; calibrate fits at most {calibration.MAX_ROWS}" in err
+    assert f"{path}:8: more than 5 data rows; calibrate fits at most 5" in err
     assert not (tmp_path / "m.yaml").exists()
-    monkeypatch.setattr(calibration, "MAX_ROWS", 5)  # the library refuses as well (Measurements built in memory)
+    # the library refuses as well (Measurements built in memory)
     path.with_name("seven.csv").write_text("j1,j2,j3,j4,j5,j6,mx,my,mz\n" + "0,-90,90,-90,-90,0,1,2,3\n" * 7)
     with pytest.raises(CalibrationError, match=r"7 measurements; calibrate fits at most 5"):
         calibration.calibrate(load_robot("ur10"), read_measurements(path.with_name("seven.csv")))
