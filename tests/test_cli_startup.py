@@ -43,13 +43,12 @@ def test_no_subcommands_help_imports_numpy_or_the_library_behind_it():
         assert f"usage: trajcomp {name}" in done.stdout
 
 
-
 def test_the_help_names_the_registrys_languages_and_imports_no_plugin(monkeypatch, tmp_path, capsys):
     """A language registered as a folder registers it is in the help texts at once; a plugin is not imported."""
     (tmp_path / "heavy_plugin.py").write_text("raise RuntimeError('a help text imported the plugin')\n")
     install_plugin(monkeypatch, tmp_path, "heavy", "heavy_plugin")  # also restores the registry afterwards
     formats.register_format("sixth", [".six", ".sx"], "sixth.reader:read", "sixth.writer:write", vendor="Maker",
-                            speeds="sixth.speeds:write_speeds")
+                            speeds="sixth.speeds:write_speeds", speed_fields="TIME=")
     shown = {}
     for name in ("compensate", "convert", "retime"):
         with pytest.raises(SystemExit):
@@ -61,5 +60,6 @@ def test_the_help_names_the_registrys_languages_and_imports_no_plugin(monkeypatc
     assert "--to FORMAT write the corrected program in this language instead (csv, fanuc_ls, krl, rapid, sixth, " \
         "urscript or a plugin's)" in shown["compensate"]
     assert "configuration data (in fanuc_ls, krl, rapid) are computed" in shown["convert"]  # sixth declares none
-    assert "(csv, fanuc_ls, krl, rapid, sixth, urscript, and plugins that declare them)" in shown["retime"]
+    assert ("(csv (the t column), fanuc_ls (msec, sec, mm/sec), krl ($VEL.CP, BAS(#VEL_PTP, %)), rapid (\\T, \\V of "
+            "the speeddata), sixth (TIME=), urscript (t=, v=), and plugins that declare them)") in shown["retime"]
     assert not formats._PLUGINS["loaded"] and "heavy_plugin" not in sys.modules

@@ -24,12 +24,14 @@ def _run(argv):
     return args.run(args)
 
 
-def test_formats_lists_builtins(capsys):
+def test_formats_lists_each_language_with_what_it_declares(capsys):
     assert _run(["formats"]) == 0
-    out = capsys.readouterr().out
-    for name in ("krl", "rapid", "fanuc_ls", "urscript", "csv"):
-        assert name in out
-    assert ".src" in out and "built-in" in out
+    header, *lines = capsys.readouterr().out.splitlines()
+    assert header.split() == ["name", "extensions", "maker", "re-timing", "writes", "configuration", "source"]
+    rows = {line.split()[0]: " ".join(line.split()) for line in lines}
+    assert rows["krl"] == ".src KUKA $VEL.CP, BAS(#VEL_PTP, %) yes built-in".join(["krl ", ""])
+    assert rows["csv"] == "csv .csv - the t column - built-in"
+    assert rows["urscript"] == "urscript .script .urscript Universal Robots t=, v= - built-in"
 
 
 def test_convert_rapid_to_fanuc_computes_config(tmp_path, makerless, capsys):

@@ -384,4 +384,4 @@ def _comment(text):
     return text.replace("(", "[").replace(")", "]").strip()
 
 
-register_format("gcode", (".nc", ".ngc", ".gcode"), read, write, speeds=write_speeds)
+register_format("gcode", (".nc", ".ngc", ".gcode"), read, write, speeds=write_speeds, speed_fields="F (G94 feed)")

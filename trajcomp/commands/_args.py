@@ -157,6 +157,14 @@ def language_names(declaring=None):
                      if declaring is None or getattr(fmt, declaring))
 
 
+def speed_field_names():
+    """The languages whose re-timing fields the registry declares, with them: ``"krl ($VEL.CP, ...), ..."``."""
+    from trajcomp import formats
+
+    return ", ".join(f"{fmt.name} ({fmt.speed_fields})" if fmt.speed_fields else fmt.name
+                     for fmt in formats.formats(plugins=False) if fmt.speeds)
+
+
 def info(message):
     """A progress or report line on stderr."""
     print(message, file=sys.stderr)

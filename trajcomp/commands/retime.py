@@ -5,7 +5,7 @@ The options become a `trajcomp.compensation.pipeline.RetimeJob`.
 
 import sys
 
-from trajcomp.commands._args import add_robot, command_parser, info, language_names, robot_of
+from trajcomp.commands._args import add_robot, command_parser, info, robot_of, speed_field_names
 from trajcomp.commands._report import add_report_options, criteria_of
 from trajcomp.commands.convert import add_frame_options, add_in_place_option, frame_options
 from trajcomp.timing.options import METHODS, TOLERANCE
@@ -21,7 +21,7 @@ def add_parser(sub):
         "nominal model in the posture the program declares), compute the time-optimal timing under the "
         "robot's joint velocity, acceleration and jerk limits without running faster than the program asks, "
         "check it by sampling at 1 kHz and write it into the program's speed and time fields, those its "
-        f"language declares ({language_names('speeds')}, and plugins that declare them); every other byte is kept. Exits 1 "
+        f"language declares ({speed_field_names()}, and plugins that declare them); every other byte is kept. Exits 1 "
         "(the program written) if a sample exceeds a limit by more than 1 %.",
         "trajcomp retime examples/programs/abb/Weld.mod -o Weld-timed.mod --robot abb_irb4600",
     )

@@ -65,6 +65,7 @@ class Format:
     configuration: object = None
     frameless: bool = False
     speed_units: object = None
+    speed_fields: str = None
 
     def _resolve(self, ref):
         if callable(ref):
@@ -94,7 +95,7 @@ _PLUGINS = {"loaded": False, "failed": {}}
 
 def register_format(name, extensions, reader, writer, *, source="built-in", blocks=False, vendor=None, tasks=False,
                     copies=False, speeds=None, timed_rows=False, configuration=None, frameless=False,
-                    speed_units=None):
+                    speed_units=None, speed_fields=None):
     """Register (or replace) a format.
 
     Parameters
@@ -153,9 +154,13 @@ def register_format(name, extensions, reader, writer, *, source="built-in", bloc
         into the language gets its speeds in them, never faster
         (`trajcomp.formats.speeds.convert_speeds`). None: speeds are
         converted as they are, the writer's choice.
+    speed_fields : str, optional
+        The fields ``speeds`` writes, as the language names them, for help
+        texts and ``trajcomp formats`` (``"$VEL.CP, BAS(#VEL_PTP, %)"``).
     """
     _FORMATS[name] = Format(name, tuple(e.lower() for e in extensions), reader, writer, source, blocks, vendor, tasks,
-                            copies, speeds, timed_rows, configuration, frameless, speed_units)
+                            copies, speeds, timed_rows, configuration, frameless, speed_units,
+                            speed_fields)
 
 
 def entry_points(group):

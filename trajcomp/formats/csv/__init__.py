@@ -26,6 +26,7 @@ register_format(
     blocks=True,
     timed_rows=True,
     speeds=f"{__name__}.speeds:write_speeds",
+    speed_fields="the t column",
     speed_units={"joint": {"mm/s": 1e-3}, "linear": {"mm/s": 1e-3}, "circular": {"mm/s": 1e-3}},
     frameless=True,
 )

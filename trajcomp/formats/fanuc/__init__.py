@@ -47,6 +47,7 @@ register_format(
     f"{__name__}.reader:write",
     vendor="FANUC",
     speeds=f"{__name__}.speeds:write_speeds",
+    speed_fields="msec, sec, mm/sec",
     # whole %, mm/sec and deg/sec (1 deg/s in rad/s); msec
     speed_units={"joint": {"%": 1.0, "s": 1e-3}, "linear": {"mm/s": 1.0, "s": 1e-3, "rad/s": 0.017453292519943295},
                  "circular": {"mm/s": 1.0, "s": 1e-3}},

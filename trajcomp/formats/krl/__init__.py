@@ -58,6 +58,7 @@ register_format(
     tasks=True,
     copies=True,
     speeds=f"{__name__}.speeds:write_speeds",
+    speed_fields="$VEL.CP, BAS(#VEL_PTP, %)",
     speed_units={"joint": {"%": 1e-3}, "linear": {"mm/s": 1e-3}, "circular": {"mm/s": 1e-3}},
     configuration=f"{__name__}.configuration",
 )

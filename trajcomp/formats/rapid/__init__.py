@@ -46,6 +46,7 @@ register_format(
     tasks=True,
     copies=True,
     speeds=f"{__name__}.speeds:write_speeds",
+    speed_fields="\\T, \\V of the speeddata",
     speed_units={"joint": {"s": 1e-3, "mm/s": 1e-3, "v_ori": 1e-3}, "linear": {"mm/s": 1e-3, "s": 1e-3, "v_ori": 1e-3},
                  "circular": {"mm/s": 1e-3, "s": 1e-3, "v_ori": 1e-3}},
     configuration=f"{__name__}.configuration",

@@ -50,6 +50,7 @@ register_format(
     f"{__name__}.writer:write",
     vendor="Universal Robots",
     speeds=f"{__name__}.speeds:write_speeds",
+    speed_fields="t=, v=",
     speed_units={"joint": {"rad/s": 1e-6, "s": 1e-4}, "linear": {"mm/s": 1e-3, "s": 1e-4}, "circular": {"mm/s": 1e-3}},
     frameless=True,
     copies=True,
