@@ -61,18 +61,21 @@ def test_v_ori_is_read_from_the_speed_data(tmp_path):
 
 
 def test_a_written_time_keeps_the_reorientation_within_v_ori(tmp_path):
-    """j0 -> jTurn turns J6 by 90 deg, the TCP in place: at v_ori 20 deg/s that takes at least 90 / 20 = 4.5 s,
-    far longer than the joint limits need (0.25 s at 360 deg/s); the \\T written, which replaces the speed
-    data, keeps it and the run says why."""
+    """j0 -> jTurn turns J6 by 90 deg, the TCP in place, and the line to pBack turns it back: at v_ori 20 deg/s
+    each takes at least 90 / 20 = 4.5 s, far longer than the joint limits need (0.25 s at 360 deg/s); the \\T
+    written, which replaces the speed data, keeps it and the run says why."""
     turned = ",".join(f"{v:.6f}" for v in np.degrees(Q[0]) + [0.0, 0.0, 0.0, 0.0, 0.0, 90.0])
-    text = module("    MoveAbsJ j0, v1000, fine, tool0;\n    MoveAbsJ jTurn, [100,20,5000,1000], fine, tool0;",
-                  f"  CONST jointtarget jTurn := [[{turned}],[9E9,9E9,9E9,9E9,9E9,9E9]];")
+    text = module("    MoveAbsJ j0, v1000, fine, tool0;\n    MoveAbsJ jTurn, [100,20,5000,1000], fine, tool0;\n"
+                  "    MoveL pBack, [100,20,5000,1000], fine, tool0;",
+                  f"  CONST jointtarget jTurn := [[{turned}],[9E9,9E9,9E9,9E9,9E9,9E9]];\n"
+                  f"  CONST robtarget pBack := {robtarget(Q[0])};")
     (tmp_path / "speeds.mod").write_text(text)
     out = tmp_path / "out" / "speeds.mod"
     out.parent.mkdir()
     assert main(["retime", str(tmp_path / "speeds.mod"), "-o", str(out), "--robot", "abb_irb4600"]) == 0
-    written = re.search(r"MoveAbsJ jTurn, \[100,20,5000,1000\]\\T:=([\d.]+)", out.read_text())
-    assert written is not None and 90.0 / 20.0 <= float(written.group(1)) <= 1.1 * 90.0 / 20.0
+    for motion in ("MoveAbsJ jTurn", "MoveL pBack"):  # the line back turns the tool only: its time is written
+        written = re.search(motion + r", \[100,20,5000,1000\]\\T:=([\d.]+)", out.read_text())
+        assert written is not None and 90.0 / 20.0 <= float(written.group(1)) <= 1.1 * 90.0 / 20.0
 
 
 def test_a_converted_reorientation_keeps_v_ori(tmp_path):

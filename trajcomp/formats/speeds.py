@@ -138,7 +138,7 @@ def arc_length(points):
         return float(np.linalg.norm(points[1] - points[0]))
     to_start, to_end = points[0] - points[1], points[2] - points[1]
     at_via = np.arctan2(np.linalg.norm(np.cross(to_start, to_end)), np.dot(to_start, to_end))
-    if np.pi - at_via < 1e-9:  # the via point on the chord: a line
+    if np.pi - at_via < 1e-9 or not at_via > 1e-9:  # the via point on the chord, or on an end: a line
         return float(np.linalg.norm(to_start) + np.linalg.norm(to_end))
     radius = np.linalg.norm(points[2] - points[0]) / (2.0 * np.sin(at_via))
     return float(radius * (2.0 * np.pi - 2.0 * at_via))

@@ -50,6 +50,9 @@ from trajcomp.timing.retime import retime
 # a cruise speed is kept this much below its bound: the fitted path's second derivative differs from the exact
 # line's (solved every 0.05 mm) by up to ~0.05 % of the acceleration at the slowest point
 CRUISE_MARGIN = 0.999
+# mm: a linear or circular motion whose TCP travels less only turns the tool (no TCP speed to cruise at): its time
+# is written, as a joint motion's (the written positions' resolution)
+MIN_TRAVEL = 1e-6
 
 
 def retime_program(program, robot, joints, *, method="auto", tools=None, frames=None, tolerance=TOLERANCE):
@@ -178,7 +181,7 @@ def _plan(program, result, robot):
         if motion.speed_why:
             as_written.append((k, motion.speed_why))
             continue
-        path = motion.kind != JOINT and result.tcp_length[k] > 0
+        path = motion.kind != JOINT and result.tcp_length[k] > MIN_TRAVEL
         if path and motion.speed is not None and motion.speed_unit == "mm/s":  # a stated process speed
             if cruise[k] < motion.speed:
                 plan.cruise[k], plan.reasons[k], plan.stated[k] = cruise[k], binding[k], motion.speed
