@@ -245,7 +245,7 @@ def _timing(section):
         ("not re-timed: speed set at run time (left as written)",
          _names([f"{m['waypoint']} ({m['why']})" for m in section["not_retimed"]["motions"]],
                 section["not_retimed"]["count"])),
-        ("speed lowered by a joint limit",
+        ("slower than timed: a speed lowered or a time raised where a limit binds",
          _names([m["detail"] for m in section["lowered"]["motions"]], section["lowered"]["count"])),
     ])
     rows = []

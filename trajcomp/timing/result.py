@@ -256,14 +256,16 @@ class TimingResult:
         if before is not None:
             change = 100.0 * (self.cycle_time - before) / before if before > 0 else 0.0
             cycle = f"cycle time before compensation {before:.3f} s, after {self.cycle_time:.3f} s ({change:+.2f} %)"
+        if self.lowered:  # the cycle is the timing's; these motions run longer than it
+            cycle += f" as timed; {len(self.lowered)} motion(s) written slower than timed (a limit binds, below)"
         out.append(cycle)
         if self.as_written:
             names = ", ".join(self.labels[k] for k, _ in self.as_written[:5])
             more = f" and {len(self.as_written) - 5} more" if len(self.as_written) > 5 else ""
             out.append(f"not re-timed, speed set at run time (left as written): {len(self.as_written)} motion(s): "
                        f"{names}{more}; first: {self.as_written[0][1]}")
-        out += [f"speed lowered by a joint limit: {text}" for _, text in self.lowered[:5]]
+        out += [f"slower than timed, a limit binds: {text}" for _, text in self.lowered[:5]]
         if len(self.lowered) > 5:
-            out.append(f"speed lowered by a joint limit: {len(self.lowered) - 5} more motion(s) (see the report)")
+            out.append(f"slower than timed, a limit binds: {len(self.lowered) - 5} more motion(s) (see the report)")
         out += [f"warning: {w}" for w in self.notices]
         return out
