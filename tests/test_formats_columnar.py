@@ -132,3 +132,4 @@ def test_edited_sources_move_spans_held_as_columns_as_they_move_span_objects(tmp
     assert _seen(moved) == _seen(expected)
     assert [t.line for t in moved.targets] == [2, 4, 5] and moved.targets[1].spans["y"].text == "10.5"
     assert moved.motions[1].line == 4 and moved.motions[1].spans["motion"].text == "LIN"
+

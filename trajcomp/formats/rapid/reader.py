@@ -18,7 +18,7 @@ from trajcomp.formats.text import (
     finite,
     integer,
     mask,
-    name_span,
+    name_offsets,
     read_source,
     spans,
     split_top,
@@ -26,7 +26,7 @@ from trajcomp.formats.text import (
     whole_circle,
 )
 from trajcomp.programs.program import Program
-from trajcomp.programs.items import CIRCULAR, JOINT, LINEAR, Motion, Span, SpanColumns, Statement, Target, replaced
+from trajcomp.programs.items import CIRCULAR, JOINT, LINEAR, Motion, SpanColumns, SpanTable, Statement, Target, replaced
 from trajcomp.arm.transforms import quat_to_matrix
 
 POSITION = ("x", "y", "z")
@@ -44,6 +44,7 @@ PREDEFINED = {"tool0": np.eye(4)}, {"wobj0": np.eye(4)}  # need no declaration
 _FAMILIES = {f"MOVE{k}{s}": k for k in ("J", "L", "C") for s in ("", "DO", "AO", "GO", "SYNC")}
 _FAMILIES |= {"MOVEABSJ": "J"} | {f"{p}{k}": k for p in ("TRIGG", "ARC", "CLAD") for k in ("J", "L", "C")}
 KINDS = {"J": JOINT, "L": LINEAR, "C": CIRCULAR}
+MOTION_SPANS = ("speed", "via_name", "target_name")  # a motion's spans, in this order
 
 _N = r"\s*(" + NUMBER + r")\s*"
 _POSE = r"\[\s*\[" + ",".join([_N] * 3) + r"\]\s*,\s*\[" + ",".join([_N] * 4) + r"\]\s*\]"
@@ -208,6 +209,7 @@ class _Reader:
         self.in_force = {}  # lower name of a VAR speeddata -> (value, why) a straight-line assignment gave it
         self.touched = {}  # lower name of a VAR speeddata -> first line of a statement that may change it
         self.task = None  # the other modules of the task (`DeclaredElsewhere`), which may assign a VAR too
+        self.motion_spans = SpanTable(MOTION_SPANS)  # the spans of the motions, in order
 
     def scan_data(self, masked):
         """Note the module's speeddata and num declarations (a motion may use one declared further down), and
@@ -428,6 +430,7 @@ class _Reader:
         family = _FAMILIES.get(keyword)
         text = " ".join(original.split())
         if family is None:
+            self.motion_spans.add({})
             return Motion(kind=LINEAR, line=line, text=text,
                           reason=f"{instruction}: instruction not read by trajcomp, left as written")
         kind = KINDS[family]
@@ -440,8 +443,9 @@ class _Reader:
             fail(self.source.name, line, original, f"{instruction} needs {count + 3} arguments")
         found = [self.position(p, s, keyword, line, original) for p, s in positional[:count]]
         roles = ("via_name", "target_name")[2 - count:]
-        names = {role: name_span(p, s, self.index) for role, (p, s), point in zip(roles, positional, found)
-                 if isinstance(point, _Named)}  # where a per-use copy's name is written (`trajcomp.formats.uses`)
+        self.motion_spans.add(  # where re-timing writes, the points' names (`trajcomp.formats.uses`): offsets
+            {"speed": _stripped_offsets(*positional[count])}
+            | {role: name_offsets(p, s) for role, (p, s), point in zip(roles, positional, found) if isinstance(point, _Named)})
         speed_text = _bare(positional[count][0])
         zones = [_bare(p) for p, _ in positional[count + 1:tool_at + 1] if _ZONE.match(_bare(p))]
         tool, tool_why = self.frame_name("tool", _bare(positional[tool_at][0]), line)
@@ -467,7 +471,6 @@ class _Reader:
             line=line,
             text=text,
             reason=reason or tool_why or frame_why,
-            spans={"speed": _stripped_span(*positional[count])} | names,  # where re-timing writes, the points' names
             speed_why=speed_why,
             orientation_speed=np.radians(orientation) if orientation else None,
         )
@@ -523,10 +526,10 @@ class _Reader:
         return self.number(m.group(2), line, original, "zone") or None
 
 
-def _stripped_span(piece, at):
-    """Span of an argument without its surrounding white space (the speed data and its \\V / \\T)."""
+def _stripped_offsets(piece, at):
+    """``(start, end)`` of an argument without its surrounding white space (the speed data and its \\V / \\T)."""
     start = at + len(piece) - len(piece.lstrip())
-    return Span(0, start, start + len(piece.strip()), piece.strip())
+    return start, start + len(piece.strip())
 
 
 def read(path):
@@ -635,11 +638,13 @@ def _resolve(reader, task, frames):
         return reader.frame_in(*found, name, group) if found else (name, "")
 
     items = []
+    motion_spans = reader.motion_spans.columns(reader.index, reader.source.text)  # the motions' rows, in order
+    motion_rows = iter(range(len(motion_spans)))
     for item in reader.items:
         if isinstance(item, Motion):
             (via, via_why), (target, why) = lookup(item.via), lookup(item.target)
             (tool, tool_why), (frame, frame_why) = elsewhere(item.tool, "tool"), elsewhere(item.frame, "wobj")
-            item = dataclasses.replace(item, tool=tool, frame=frame)
+            item = replaced(item, tool=tool, frame=frame, spans=motion_spans.row(next(motion_rows)))
             reason = via_why or why or item.reason or tool_why or frame_why
             if reason:
                 item = dataclasses.replace(item, target=None, via=None, reason=reason, refs=named(item.text)
