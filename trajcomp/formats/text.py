@@ -874,7 +874,8 @@ def _moved_rows(targets, shifts, changed):
     if table.spans is None or table.spans.source not in changed:  # a target without spans keeps its line
         return targets
     shift = shifts[table.spans.source]
-    return TargetRows(dataclasses.replace(table, spans=_moved_columns(shift, table.spans), line=shift.lines(table.line)))
+    moved = dataclasses.replace(table, spans=_moved_columns(shift, table.spans), line=shift.lines(table.line))
+    return TargetRows(moved)
 
 
 def _source_of(spans):

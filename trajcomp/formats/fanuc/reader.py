@@ -1,6 +1,7 @@
 """The FANUC LS reader and writer: /MN motion lines and /POS positions into a `Program` and back (see `trajcomp.formats.fanuc`)."""
 
 import dataclasses
+import itertools
 import math
 import re
 from pathlib import Path
@@ -31,7 +32,9 @@ from trajcomp.formats.text import (
 )
 from trajcomp.formats.fanuc.speeds import time_field
 from trajcomp.programs.program import Program
-from trajcomp.programs.items import CIRCULAR, JOINT, LINEAR, Motion, Span, SpanColumns, Statement, Target, replaced
+from trajcomp.programs.items import (
+    CIRCULAR, JOINT, LINEAR, Motion, Span, SpanColumns, SpanTable, Statement, Target, replaced,
+)
 from trajcomp.arm.transforms import matrix_to_pose, pose_to_matrix
 
 XYZWPR = ("x", "y", "z", "w", "p", "r")
@@ -157,6 +160,7 @@ def read(path):
         registers_source, registers, register_why, notes = posreg.resolve(path, masked, lines, targets, 1)
         sources += (registers_source,) if registers_source is not None else ()
     items, state = [], _State()
+    speeds = SpanTable(("speed",))  # the motions' speed fields as offsets (no Span object each)
     for number, start, end, content in instructions:
         original = source.text[start:end]
         if content is None:
@@ -170,11 +174,12 @@ def read(path):
             continue
         motion = _motion(m, points, unread, source.name, number, original, registers, register_why)
         speed = _SPEED_FIELD.search(masked, start, end)  # where re-timing writes the motion's speed
-        if speed is not None:
-            motion = replaced(motion, spans={"speed": Span(0, speed.start(), speed.end(), speed.group())})
+        speeds.add({"speed": None if speed is None else speed.span()})
         items.append(_with_frames(motion, targets, state))
+    speeds, rows = speeds.columns(0, source.text), itertools.count()  # the motions' rows, in order
+    items = tuple(replaced(item, spans=speeds.row(next(rows))) if isinstance(item, Motion) else item for item in items)
     tools, frames = {"0": np.eye(4)}, {"0": np.eye(4)}
-    return Program("fanuc_ls", name, tuple(items), tuple(targets), tools, frames, sources, notes=notes)
+    return Program("fanuc_ls", name, items, tuple(targets), tools, frames, sources, notes=notes)
 
 
 def _with_frames(motion, targets, state):

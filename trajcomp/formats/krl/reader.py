@@ -27,7 +27,9 @@ from trajcomp.formats.text import (
 )
 from trajcomp.programs.program import Program
 from trajcomp.programs.tables import TargetRows, TargetTable, TextSlices, repeated
-from trajcomp.programs.items import CIRCULAR, JOINT, LINEAR, Motion, Span, SpanColumns, SpanTable, Statement, Target, replaced
+from trajcomp.programs.items import (
+    CIRCULAR, JOINT, LINEAR, Motion, Span, SpanColumns, SpanTable, Statement, Target, replaced,
+)
 from trajcomp.arm.transforms import pose_to_matrix
 
 POSE = ("x", "y", "z", "a", "b", "c")

@@ -445,7 +445,8 @@ class _Reader:
         roles = ("via_name", "target_name")[2 - count:]
         self.motion_spans.add(  # where re-timing writes, the points' names (`trajcomp.formats.uses`): offsets
             {"speed": _stripped_offsets(*positional[count])}
-            | {role: name_offsets(p, s) for role, (p, s), point in zip(roles, positional, found) if isinstance(point, _Named)})
+            | {role: name_offsets(p, s) for role, (p, s), point in zip(roles, positional, found)
+               if isinstance(point, _Named)})
         speed_text = _bare(positional[count][0])
         zones = [_bare(p) for p, _ in positional[count + 1:tool_at + 1] if _ZONE.match(_bare(p))]
         tool, tool_why = self.frame_name("tool", _bare(positional[tool_at][0]), line)
