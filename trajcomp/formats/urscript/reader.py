@@ -1,6 +1,7 @@
 """The URScript reader: a script's motions, pose variables, frames and TCPs into a `Program` (see `trajcomp.formats.urscript`)."""
 
 import dataclasses
+import itertools
 import re
 from pathlib import Path
 
@@ -23,7 +24,7 @@ from trajcomp.formats.text import (
 )
 from trajcomp.formats.urscript.polyscope import notes as polyscope_notes
 from trajcomp.programs.program import Program
-from trajcomp.programs.items import CIRCULAR, JOINT, LINEAR, Motion, Span, Statement, Target
+from trajcomp.programs.items import CIRCULAR, JOINT, LINEAR, Motion, SpanTable, Statement, Target, replaced
 from trajcomp.arm.transforms import rotvec_to_matrix
 
 POSE = ("x", "y", "z", "rx", "ry", "rz")
@@ -108,6 +109,7 @@ class _Reader:
     def __init__(self, source, masked):
         self.source = source
         self.targets, self.items = [], []
+        self.motion_spans = SpanTable(("t", "v", "end"))  # each motion's re-timing fields, in order (offsets)
         self.values, self.numbers = {}, {}  # name -> _Value; name -> float
         self.frames, self.frame_names = {}, {}  # frame key -> T; id(_Value) -> frame key
         self.tools, self.tool, self.tool_why = {}, None, ""
@@ -262,6 +264,7 @@ class _Reader:
             return None
         text = original.strip()
         if function in NOT_READ:
+            self.motion_spans.add({})
             return Motion(kind=JOINT, line=line, text=text,
                           reason=f"{function}: streamed set point, not compensated by trajcomp")
         kind = KINDS[function]
@@ -279,6 +282,7 @@ class _Reader:
             time, time_why = self.speed(options["t"], line, original, "t")
             if time != 0.0:
                 speed, unit, speed_why = time, "s", time_why
+        self.motion_spans.add(_timing_offsets(function, args, count))
         frames = {frame for _, frame, _ in found}
         why = next((w for _, _, w in found if w), "") or self.tool_why
         if not why and len(frames) > 1:
@@ -297,7 +301,6 @@ class _Reader:
             reason=why,
             refs=tuple(dict.fromkeys([*(i for i, _, _ in found if isinstance(i, int)),
                                       *self.references(" ".join(a for a, _ in args[:count]))])) if why else (),
-            spans=_timing_spans(function, args, count),
             speed_why=speed_why,
         )
 
@@ -353,8 +356,9 @@ class _Reader:
 
 
 
-def _timing_spans(function, args, count):
-    """Where re-timing writes: the values of ``t`` and ``v`` (named or positional) and the call's end."""
+def _timing_offsets(function, args, count):
+    """Where re-timing writes, ``{role: (start, end)}``: the values of ``t`` and ``v`` (named or positional) and the
+    call's end."""
     spans = {}
     positional = iter(POSITIONAL[function])
     for text, at in args[count:]:
@@ -362,9 +366,9 @@ def _timing_spans(function, args, count):
         shift = at + (len(text) - len(value) if "=" in text else 0)
         start = shift + len(value) - len(value.lstrip())
         if key.strip() in ("t", "v"):
-            spans[key.strip()] = Span(0, start, start + len(value.strip()), value.strip())
+            spans[key.strip()] = (start, start + len(value.strip()))
     last, at = args[-1]
-    spans["end"] = Span(0, at + len(last.rstrip()), at + len(last.rstrip()), "")
+    spans["end"] = (at + len(last.rstrip()), at + len(last.rstrip()))
     return spans
 
 
@@ -401,7 +405,10 @@ def read(path):
             reader.assignment(assign, start, line, original)
         reader.items.append(Statement(line, original, refs=refs))
     _finish(reader)
-    return Program("urscript", Path(path).stem, tuple(reader.items), tuple(reader.targets), reader.tools,
+    motion_spans, rows = reader.motion_spans.columns(0, source.text), itertools.count()  # the motions' rows, in order
+    items = tuple(replaced(item, spans=motion_spans.row(next(rows))) if isinstance(item, Motion) else item
+                  for item in reader.items)
+    return Program("urscript", Path(path).stem, items, tuple(reader.targets), reader.tools,
                    reader.frames, (source,), notes=polyscope_notes(path))
 
 
