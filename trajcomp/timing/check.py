@@ -181,12 +181,14 @@ def rest_to_rest_checks(stops, paths, laws, moves, robot, *, rate=RATE):
         `Peaks.worst` of each.
     """
     step = 1.0 / rate
-    counts = np.ceil(laws.durations / step).astype(int) + 1  # `sample_times`: every 1/rate s from 0, and the end
+    alone = ~(laws.durations * rate < BLOCK)  # long (or beyond what the check covers: dense_check says so)
     out, worst = [None] * len(paths), np.zeros(len(paths))
-    for r in np.flatnonzero(counts > BLOCK):
+    for r in np.flatnonzero(alone):
         out[r] = dense_check(stops.runs[stops.moving[paths[r]]], laws.law(r), moves, robot, jerk=False, rate=rate)[0]
         worst[r] = out[r].worst
-    small = np.flatnonzero(counts <= BLOCK)
+    small = np.flatnonzero(~alone)
+    counts = np.zeros(len(paths), dtype=int)
+    counts[small] = np.ceil(laws.durations[small] / step).astype(int) + 1  # `sample_times`: every 1/rate s, the end
     motion = stops.motion[paths]
     not_measured = np.full(6, np.nan)
     for block in np.split(small, np.flatnonzero(np.diff(np.cumsum(counts[small]) // BLOCK)) + 1):
