@@ -38,11 +38,17 @@ Run:  python tests/benchmarks/bench_accuracy.py [virtual|sparse|tools|ur5|ur10|t
    error exceeds the tolerance passes.
 """
 
+import os
 import sys
 import time
 from pathlib import Path
 
-import numpy as np
+from trajcomp.support.threads import THREAD_VARIABLES
+
+for _name in THREAD_VARIABLES:  # one BLAS / OpenMP thread, as the CLI computes (set before numpy loads)
+    os.environ.setdefault(_name, "1")
+
+import numpy as np  # noqa: E402
 
 from trajcomp.calibration.calibrate import calibrate, commanded, mode_errors, selection_words, to_base
 from trajcomp.calibration.layout import Layout, load_layout
