@@ -8,7 +8,7 @@ The names below are imported from their module on first use, so that a
 compliance report does not load the calibration machinery and the reverse.
 """
 
-import importlib
+from trajcomp.support.lazy import lazy_names
 
 _MODULES = {
     "SCHEMA": "document",
@@ -25,8 +25,4 @@ _MODULES = {
 }
 __all__ = sorted(_MODULES)
 
-
-def __getattr__(name):
-    if name not in _MODULES:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    return getattr(importlib.import_module(f"{__name__}.{_MODULES[name]}"), name)
+__getattr__ = lazy_names(__name__, _MODULES)

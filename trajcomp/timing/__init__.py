@@ -21,9 +21,10 @@ command's ``--help`` can read `trajcomp.timing.options` without loading the
 timing (numpy, scipy, ruckig).
 """
 
-import importlib
 import sys
 import types
+
+from trajcomp.support.lazy import lazy_names
 
 _MODULES = {
     "METHODS": "options",
@@ -36,11 +37,7 @@ _MODULES = {
 }
 __all__ = sorted(_MODULES)
 
-
-def __getattr__(name):
-    if name not in _MODULES:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    return getattr(importlib.import_module(f"{__name__}.{_MODULES[name]}"), name)
+__getattr__ = lazy_names(__name__, _MODULES)
 
 
 class _Package(types.ModuleType):
