@@ -45,6 +45,14 @@ def test_a_wing_imports_only_the_wings_below_it(wing):
     assert not {name: sorted(wings) for name, wings in reached.items() if wings}
 
 
+def test_the_tests_mirror_the_wings():
+    """A test folder is named after the wing it tests (or the plugins); the project's own tests stay at the top."""
+    folders = {path.name for path in Path(__file__).parent.iterdir()
+               if path.is_dir() and path.name not in ("data", "benchmarks", "__pycache__")}
+    wings = {path.name for path in PACKAGE.iterdir() if (path / "__init__.py").exists()}
+    assert folders <= wings | {"plugins"} and {"arm", "model", "calibration", "formats", "timing"} <= folders
+
+
 def test_a_programs_route_to_the_written_file_never_enters_the_commands():
     """The API, the batch workers and the plugins run the library's pipeline; only the CLI imports commands."""
     importers = {str(path.relative_to(PACKAGE)) for path in PACKAGE.rglob("*.py")

@@ -64,9 +64,9 @@ from trajcomp.timing.path import run_path  # noqa: E402
 from trajcomp.timing.reachability import squared_speeds  # noqa: E402
 from trajcomp.arm.transforms import abc_to_matrix, matrix_to_abc  # noqa: E402
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-from test_timing_dense import REFINE, reference  # noqa: E402 (the suite's 16x-grid reference)
-from test_timing_reachability import SpeedBound  # noqa: E402 (0 <= x <= x_max as toppra takes it)
+sys.path[:0] = [str(Path(__file__).resolve().parents[2]), str(Path(__file__).resolve().parents[1])]  # root, tests
+from tests.timing.test_timing_dense import REFINE, reference  # noqa: E402 (the suite's 16x-grid reference)
+from tests.timing.test_timing_reachability import SpeedBound  # noqa: E402 (0 <= x <= x_max as toppra takes it)
 
 ROOT = Path(__file__).resolve().parents[2]
 EXAMPLES = {  # file, robot, calibration cube corner and side (README), grid step

@@ -186,7 +186,7 @@ def test_joints_outside_the_calibrated_range_follow_the_outside_policy(tilted):
     assert model.predict("composite", other_branch, targets[:, :3, 3])[1].all()
 
 
-UR10_IPA = Path(__file__).resolve().parents[2] / "shared" / "data" / "ur10-ipa" / "grid_A.csv"
+UR10_IPA = Path(__file__).resolve().parents[3] / "shared" / "data" / "ur10-ipa" / "grid_A.csv"
 
 
 @pytest.mark.skipif(not UR10_IPA.exists(), reason="shared UR10 data not present")
@@ -197,7 +197,7 @@ def test_real_ur10_at_23_orientations_in_the_tracker_frame(tmp_path, capsys):
     lines = UR10_IPA.read_text(encoding="utf-8").splitlines()
     subset = tmp_path / "grid_A.csv"
     subset.write_text("\n".join(lines[:1] + lines[1::6]) + "\n", encoding="utf-8")
-    layout = Path(__file__).resolve().parents[1] / "examples" / "columns" / "ur10-ipa.yaml"
+    layout = Path(__file__).resolve().parents[2] / "examples" / "columns" / "ur10-ipa.yaml"
     model = tmp_path / "ur10.yaml"
     assert main(["calibrate", str(subset), "--robot", "ur10", "--columns-file", str(layout),
                  "--tool", "0,0,109,90,0,0", "--folds", "0", "-o", str(model)]) == 0

@@ -138,8 +138,8 @@ def test_a_zero_quaternion_names_its_line(tmp_path):
         read_measurements(path, Layout(rotations={"orientation": "quaternion"}))
 
 
-DATA = Path(__file__).resolve().parents[2] / "shared" / "data"
-EXAMPLES = Path(__file__).resolve().parents[1] / "examples" / "columns"
+DATA = Path(__file__).resolve().parents[3] / "shared" / "data"
+EXAMPLES = Path(__file__).resolve().parents[2] / "examples" / "columns"
 
 
 @pytest.mark.parametrize("name, file, rows", [("ur10-ipa", "grid_A.csv", 5892), ("ur5-grid", "grid.csv", 1000)])

@@ -92,7 +92,7 @@ def test_a_single_5_mm_outlier_is_named_left_out_and_its_node_filled_from_the_mo
     assert shift < 0.01  # mm: the robust fit does not feel it
 
 
-EXAMPLES = Path(__file__).resolve().parents[1] / "examples" / "programs"
+EXAMPLES = Path(__file__).resolve().parents[2] / "examples" / "programs"
 
 
 @pytest.mark.parametrize("argv, named", [

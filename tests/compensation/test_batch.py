@@ -8,7 +8,7 @@ import pytest
 from trajcomp import formats
 from trajcomp.cli import main
 
-EXAMPLES = Path(__file__).resolve().parents[1] / "examples" / "programs" / "kuka"
+EXAMPLES = Path(__file__).resolve().parents[2] / "examples" / "programs" / "kuka"
 
 
 def _krl(folder, name, extra=""):

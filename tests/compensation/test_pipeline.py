@@ -17,7 +17,7 @@ import pytest
 import trajcomp
 from trajcomp.cli import main
 
-EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
+EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
 # language: (program, its arm, the README's calibration cube around it: corner mm, side mm)
 CASES = {
     "krl": (EXAMPLES / "programs" / "kuka" / "weld.src", "kuka_kr6_r900", "400,-50,650", "200"),

@@ -25,7 +25,7 @@ from trajcomp.compensation.posture import planned_joints
 from trajcomp.arm.robot import load_robot
 from trajcomp.arm.transforms import matrix_to_abc
 
-EXAMPLES = Path(__file__).resolve().parents[1] / "examples" / "programs"
+EXAMPLES = Path(__file__).resolve().parents[2] / "examples" / "programs"
 ROBOTS = {"krl": "kuka_kr6_r900", "rapid": "abb_irb4600", "fanuc_ls": "fanuc_lrmate200id"}
 
 

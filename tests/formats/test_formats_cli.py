@@ -11,8 +11,8 @@ from trajcomp.commands import convert as convert_command
 from trajcomp.commands import formats as formats_command
 from trajcomp.errors import TrajcompError
 
-DATA = Path(__file__).parent / "data" / "programs"
-EXAMPLES = Path(__file__).parent.parent / "examples" / "programs"
+DATA = Path(__file__).parents[1] / "data" / "programs"
+EXAMPLES = Path(__file__).parents[2] / "examples" / "programs"
 
 
 def _run(argv):

@@ -16,8 +16,8 @@ from trajcomp.formats.urscript import reader as urscript_reader
 from trajcomp.formats.text import Edits, apply_edits, edit_sources, format_number, written_numbers
 from trajcomp.programs.tables import TargetRows
 
-DATA = Path(__file__).parent / "data"
-EXAMPLES = Path(__file__).parent.parent / "examples" / "programs"
+DATA = Path(__file__).parents[1] / "data"
+EXAMPLES = Path(__file__).parents[2] / "examples" / "programs"
 AT_ONCE = {  # language -> (module, the function reading declarations at once)
     ".src": (krl_reader, "_written_points"),
     ".mod": (rapid_reader, "_written_points"),

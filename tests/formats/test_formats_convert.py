@@ -16,7 +16,7 @@ from trajcomp.programs.frames import FrameTable
 from trajcomp.arm.kinematics import fk
 from trajcomp.arm.transforms import invert, matrix_to_pose, pose_to_matrix
 
-DATA = Path(__file__).parent / "data" / "programs"
+DATA = Path(__file__).parents[1] / "data" / "programs"
 GOLDEN = {
     "csv": DATA / "csv" / "path.csv",
     "krl": DATA / "krl" / "weld.src",

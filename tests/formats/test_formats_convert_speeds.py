@@ -215,7 +215,7 @@ def test_a_speed_set_at_run_time_is_written_at_the_slowest_and_listed(tmp_path):
 def test_compensate_to_another_language_lists_the_speed_it_could_not_carry_over(tmp_path, kuka_model, capsys):
     """The example weld's first PTP, 50 % of the axis speeds from wherever the arm is, has no CSV speed (a TCP
     speed) it is sure to be no faster than: written at 1 mm/s, the speeds criterion fails (exit 1) naming it."""
-    weld = Path(__file__).resolve().parents[1] / "examples" / "programs" / "kuka" / "weld.src"
+    weld = Path(__file__).resolve().parents[2] / "examples" / "programs" / "kuka" / "weld.src"
     out, report = tmp_path / "weld.csv", tmp_path / "weld.json"
     assert main(["compensate", str(weld), "--model", str(kuka_model), "-o", str(out), "--to", "csv",
                  "--report", str(report), "--json-only"]) == 1

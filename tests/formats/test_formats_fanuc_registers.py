@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from test_programs_as_run import OFFSET, _stand_in
+from tests.programs.test_programs_as_run import OFFSET, _stand_in
 from trajcomp import formats
 from trajcomp.arm.kinematics import fk
 from trajcomp.arm.robot import load_robot
@@ -21,7 +21,7 @@ from trajcomp.errors import WriteError
 from trajcomp.formats.configuration import configuration_for
 from trajcomp.formats.task import groups
 
-BACKUP = Path(__file__).parent / "data" / "programs" / "real" / "fanuc" / "ub10200"
+BACKUP = Path(__file__).parents[1] / "data" / "programs" / "real" / "fanuc" / "ub10200"
 
 
 def _wpr_pose(x, y, z, w, p, r):

@@ -11,7 +11,7 @@ from trajcomp.errors import ReadError, WriteError
 from trajcomp.arm.robot import load_robot
 from trajcomp.arm.transforms import abc_to_matrix, rotvec_to_matrix
 
-DATA = Path(__file__).parent / "data" / "programs"
+DATA = Path(__file__).parents[1] / "data" / "programs"
 
 
 @pytest.fixture(scope="module")

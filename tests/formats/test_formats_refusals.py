@@ -10,7 +10,7 @@ from trajcomp import formats
 from trajcomp.errors import ReadError, WriteError
 from trajcomp.compensation.program import convert_program
 
-PATH = Path(__file__).parent / "data" / "programs" / "csv" / "path.csv"
+PATH = Path(__file__).parents[1] / "data" / "programs" / "csv" / "path.csv"
 
 
 @pytest.mark.parametrize("suffix", [".csv", ".src", ".mod", ".ls", ".script"])

@@ -17,7 +17,7 @@ from trajcomp import formats
 from trajcomp.support import atomic
 from trajcomp.errors import WriteError
 
-DATA = Path(__file__).parent / "data" / "programs"
+DATA = Path(__file__).parents[1] / "data" / "programs"
 PROGRAMS = sorted(
     p for p in DATA.rglob("*") if p.is_file() and p.suffix.lower() not in (".dat", ".txt", ".va")
 )

@@ -8,7 +8,7 @@ import pytest
 from trajcomp import formats
 from trajcomp.errors import ReadError
 
-EXAMPLES = Path(__file__).resolve().parents[1] / "examples" / "programs"
+EXAMPLES = Path(__file__).resolve().parents[2] / "examples" / "programs"
 CASES = {  # (example, lines kept from the end removed, the refusal: where and what)
     "krl without END": ("kuka/weld.src", 1, r"weld\.src:1: DEF has no END \(the text ends at line 10\)"),
     "rapid without ENDMODULE": ("abb/Weld.mod", 1, r"Weld\.mod:1: MODULE has no ENDMODULE \(the text ends at line 14\)"),

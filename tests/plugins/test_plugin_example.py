@@ -9,7 +9,7 @@ from conftest import install_plugin
 from trajcomp import formats
 from trajcomp.errors import ReadError
 
-PLUGIN = Path(__file__).resolve().parents[1] / "plugins" / "trajcomp-points"
+PLUGIN = Path(__file__).resolve().parents[2] / "plugins" / "trajcomp-points"
 
 
 @pytest.fixture

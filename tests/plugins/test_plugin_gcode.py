@@ -21,7 +21,7 @@ from trajcomp.cli import main
 from trajcomp.errors import ReadError, WriteError
 from trajcomp.arm.ik import ik
 
-PLUGIN = Path(__file__).resolve().parents[1] / "plugins" / "trajcomp-gcode"
+PLUGIN = Path(__file__).resolve().parents[2] / "plugins" / "trajcomp-gcode"
 LANDED = 0.05  # mm (the tilted last target of PROGRAM is farthest from the calibrated orientation)
 MISSED = 0.5  # mm
 SEED = np.radians([27.0, -185.0, 91.0, 4.0, -90.0, 27.0])  # where the arm starts: the calibrated posture
@@ -234,7 +234,7 @@ def test_feeds_the_arm_cannot_keep_are_lowered_in_the_f_words_and_restored_after
     """Asked for 3 m/s on its lines, the path is re-timed: read back as the controller reads its modal F, every
     line is cruised within the joint limits (IK every 1 ms, independent of the timing), never above the feed
     asked; the slow block after the fast ones keeps its own feed, and the block after that its modal one."""
-    from test_timing_readback import SLACK, line_demand
+    from tests.timing.test_timing_readback import SLACK, line_demand
 
     from trajcomp.arm.robot import load_robot
 

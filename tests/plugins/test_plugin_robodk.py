@@ -34,8 +34,8 @@ from trajcomp.model.model_file import load_model
 from trajcomp.formats.fanuc.configuration import encode as fanuc_config
 from trajcomp.formats.rapid.configuration import encode as abb_confdata
 
-PLUGIN = Path(__file__).resolve().parents[1] / "plugins" / "trajcomp-robodk"
-POSTS = Path(__file__).resolve().parent / "data" / "robodk_posts"
+PLUGIN = Path(__file__).resolve().parents[2] / "plugins" / "trajcomp-robodk"
+POSTS = Path(__file__).resolve().parents[1] / "data" / "robodk_posts"
 LANDED = 0.03  # mm
 MISSED = 0.5  # mm
 FRAME = (100.0, 50.0, 0.0, 15.0, 0.0, 0.0)  # the station's reference frame in the robot base: mm, deg

@@ -221,7 +221,7 @@ def test_a_point_used_with_two_work_objects_is_written_as_a_corrected_copy_per_u
                     "    MoveL p2,v100,fine,tool0\\WObj:=wB;\n  ENDPROC\nENDMODULE\n")
     program = formats.read(path)
     edited, report = compensate_program(program, _stand_in(robot), robot)
-    # the use in wB goes to a copy declared after p2 (tests/test_programs_tasks.py: the copies in detail)
+    # the use in wB goes to a copy declared after p2 (tests/programs/test_programs_tasks.py: the copies in detail)
     assert list(report.labels) == ["p1 (two.mod:4)", "p2 (two.mod:5)", "p2_2 (two.mod:6)"]
     assert report.motions_left == 0 and report.not_compensated == ()
     assert report.warnings[0] == ("point p2 is used with tool/frame ('tool0', 'wB') (line 10) besides its first use: "
@@ -280,6 +280,6 @@ def test_krl_points_of_config_dat_or_another_data_list_are_read_not_refused(tmp_
     with pytest.raises(ReadError, match=r"XNOWHERE \(line 5\); are they declared in weld\.dat\?"):
         formats.read(program_folder / "weld.src")
     (program_folder / "weld.src").write_text("DEF weld( )\nPTP XP1\nLIN XSHARED\nLIN XTABLE\nEND\n")
-    program = formats.read(program_folder / "weld.src")  # read where declared (tests/test_programs_tasks.py)
+    program = formats.read(program_folder / "weld.src")  # read where declared (tests/programs/test_programs_tasks.py)
     assert program.not_compensated() == ()
     assert [program.where(m.target) for m in program.motions[1:]] == ["XSHARED ($config.dat:2)", "XTABLE (table.dat:2)"]

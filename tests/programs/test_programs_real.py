@@ -6,7 +6,7 @@ correction on the built-in arm of its maker: every motion is either
 compensated or listed once, the written program reads back, and only a
 target that arm cannot reach (these are other arms: a controller of that
 arm would refuse them too) stops a run. Byte-exact read/write of every file
-is tests/test_formats_roundtrip.py.
+is tests/formats/test_formats_roundtrip.py.
 """
 
 import functools
@@ -21,7 +21,7 @@ from trajcomp.errors import IKError, ReadError
 from trajcomp.compensation.program import compensate_program
 from trajcomp.arm.robot import load_robot
 
-DATA = Path(__file__).parent / "data"
+DATA = Path(__file__).parents[1] / "data"
 REAL = sorted(p for p in (DATA / "programs" / "real").rglob("*")
               if p.is_file() and p.suffix.lower() not in (".dat", ".txt", ".va"))
 REFUSED = sorted(p for p in (DATA / "refused").rglob("*") if p.is_file())

@@ -15,7 +15,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from test_programs_as_run import OFFSET, _krl_point, _stand_in
+from tests.programs.test_programs_as_run import OFFSET, _krl_point, _stand_in
 from trajcomp import formats
 from trajcomp.cli import main
 from trajcomp.formats.configuration import configuration_for
@@ -335,7 +335,7 @@ def test_a_point_that_cannot_be_copied_lists_each_motion_with_its_tool_and_why(t
             "list another variable holds (pair.script line 3), which a copy would share; left as written")]
 
 
-REAL = Path(__file__).parent / "data" / "programs" / "real"
+REAL = Path(__file__).parents[1] / "data" / "programs" / "real"
 
 
 def test_real_backups_resolve_points_and_tools_across_their_files():
@@ -348,7 +348,7 @@ def test_real_backups_resolve_points_and_tools_across_their_files():
     np.testing.assert_allclose(program.tools["tool3"][:3, 3], [-41.8404, 134.725, 0.0])  # Tool_Create.mod:22
     # a module of the same backup naming points no module declares: the controller cannot load it either
     with pytest.raises(ReadError, match="Point_Assemble"):
-        formats.read(Path(__file__).parent / "data" / "refused" / "rapid" / "keen1949_Teachpoint.mod")
+        formats.read(Path(__file__).parents[1] / "data" / "refused" / "rapid" / "keen1949_Teachpoint.mod")
     reasons = [reason for _, _, reason in formats.read(REAL / "krl" / "bpf2pltzpk2" / "pickup.src").not_compensated()]
     assert reasons[0] == "BefPikPos is declared without a value (set at run time, varglobal.dat:166)"
     assert [reason for _, _, reason in formats.read(REAL / "krl" / "bpf2pltzpk2" / "gotoorigin.src").not_compensated()] \

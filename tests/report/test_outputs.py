@@ -9,7 +9,7 @@ import pytest
 
 from trajcomp.cli import main
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 KUKA = ROOT / "examples" / "programs" / "kuka"
 ROBOT = ROOT / "trajcomp" / "arm" / "robots" / "kuka_kr6_r900.yaml"
 

@@ -18,7 +18,7 @@ from trajcomp.model.model_file import load_model
 from trajcomp.report import Report, calibration_report, schema
 from trajcomp.report.calibration import iso9283, trends
 
-EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "programs" / "kuka" / "weld.src"
+EXAMPLE = Path(__file__).resolve().parents[2] / "examples" / "programs" / "kuka" / "weld.src"
 VALIDATOR = jsonschema.Draft202012Validator(schema())
 
 
@@ -108,7 +108,7 @@ def test_json_only_does_not_import_matplotlib(tmp_path, kuka_model):
               f"{str(tmp_path / 'w.src')!r}, '--report', {str(tmp_path / 'r')!r}, '--json-only']); "
               f"print(code, 'matplotlib' in sys.modules)")
     run = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, check=True,
-                         cwd=Path(__file__).resolve().parents[1])
+                         cwd=Path(__file__).resolve().parents[2])
     assert run.stdout.split() == ["0", "False"]
     assert (tmp_path / "r.json").exists() and not (tmp_path / "r.html").exists()
 

@@ -71,7 +71,7 @@ def test_a_compensate_run_leaves_nothing_out_of_the_collectors_scans(tmp_path, k
         frozen.append(gc.get_freeze_count())
 
     monkeypatch.setattr("trajcomp.compensation.pipeline.end_stage", end_stage)
-    kuka = Path(__file__).resolve().parents[1] / "examples" / "programs" / "kuka"
+    kuka = Path(__file__).resolve().parents[2] / "examples" / "programs" / "kuka"
     for name in ("weld.src", "weld.dat"):
         shutil.copy(kuka / name, tmp_path / name)
     assert main(["compensate", str(tmp_path / "weld.src"), "--model", str(kuka_model),

@@ -14,7 +14,7 @@ from trajcomp.errors import IKError
 from trajcomp.support.parallel import in_background, map_blocks, meanwhile, usable_cores
 from trajcomp.compensation.posture import planned_joints
 from trajcomp.arm.robot import load_robot
-from test_compensate import cell, targets_in_cube  # noqa: F401 (fixture)
+from tests.compensation.test_compensate import cell, targets_in_cube  # noqa: F401 (fixture)
 
 pytestmark = pytest.mark.skipif("fork" not in multiprocessing.get_all_start_methods(), reason="needs fork")
 

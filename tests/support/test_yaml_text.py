@@ -9,7 +9,7 @@ import trajcomp
 from trajcomp.support import yaml_text
 
 FILES = sorted((Path(trajcomp.__file__).parent / "arm" / "robots").glob("*.yaml")) + sorted(
-    (Path(__file__).resolve().parents[1] / "examples" / "columns").glob("*.yaml"))
+    (Path(__file__).resolve().parents[2] / "examples" / "columns").glob("*.yaml"))
 
 
 @pytest.mark.parametrize("path", FILES, ids=lambda p: p.name)

@@ -24,7 +24,7 @@ import pytest
 from trajcomp import formats
 from trajcomp.cli import main
 
-EXAMPLES = Path(__file__).resolve().parents[1] / "examples" / "programs"
+EXAMPLES = Path(__file__).resolve().parents[2] / "examples" / "programs"
 PROGRAMS = {  # language: (file, robot)
     "csv": ("csv/weld.csv", "ur10"),
     "krl": ("kuka/weld.src", "kuka_kr6_r900"),
@@ -223,7 +223,7 @@ def test_the_csv_settings_are_the_t_cells_written_and_made_on_demand(tmp_path, m
     from trajcomp.formats import text as text_module
     from trajcomp.formats.text import Texts
     from trajcomp.timing.writeback import apply_timing, retime_program
-    from tests.test_timing import helix, write_joint_program
+    from tests.timing.test_timing import helix, write_joint_program
 
     monkeypatch.setattr(text_module, "TEXT_BLOCK", 7)
     robot = load_robot("ur10")

@@ -36,7 +36,7 @@ from trajcomp.compensation.posture import planned_joints
 from trajcomp.programs.items import JOINT, LINEAR
 from trajcomp.timing import moves_from_program
 
-EXAMPLES = Path(__file__).resolve().parents[1] / "examples" / "programs"
+EXAMPLES = Path(__file__).resolve().parents[2] / "examples" / "programs"
 FAST = 3000.0  # mm/s asked of the lines
 PROGRAMS = {  # language: file, robot, the lines' speed made 3 m/s, the joint motions' programmed speed
     "krl": ("kuka/weld.src", "kuka_kr6_r900", ("$VEL.CP=0.020000", "$VEL.CP=3.000000"), {"%": 50.0}),

@@ -25,7 +25,7 @@ from trajcomp.cli import main
 from trajcomp.arm.ik import ik
 from trajcomp.arm.robot import load_robot
 
-EXAMPLES = Path(__file__).resolve().parents[1] / "examples" / "programs"
+EXAMPLES = Path(__file__).resolve().parents[2] / "examples" / "programs"
 RAPID_POINT = "[[{x},{y},{z}],[0,0,1,0],[0,0,0,0],[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]]"
 
 

@@ -4,7 +4,7 @@ Every face of trajcomp runs these jobs: ``trajcomp compensate`` (one file,
 or a batch on local processes or a Dask cluster), ``trajcomp retime``, the
 Python API (`trajcomp.Compensator.filter_program`) and the plugins. The
 same program and options give the same bytes and the same verdict through
-each of them (tests/test_pipeline.py).
+each of them (tests/compensation/test_pipeline.py).
 
 `CompensationJob` compensates one program file with a model;
 `RetimeJob` times one under an arm's limits without a model. Both are
