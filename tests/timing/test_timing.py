@@ -372,3 +372,20 @@ def test_every_method_keeps_the_limits_and_toppra_is_fastest():
     assert results["toppra"].cycle_time <= results["auto"].cycle_time * (1 + 1e-6)
     assert results["auto"].cycle_time <= results["ruckig"].cycle_time * (1 + 1e-6)
     assert [s.kind for s in results["auto"].segments] == ["ruckig", "toppra"]
+
+
+def test_a_task_s_timing_error_names_the_file_of_the_motion(tmp_path):
+    """In a task joined from several files, a line number alone would point into the wrong file."""
+    from trajcomp import formats
+    from trajcomp.compensation.pipeline import planned
+    from trajcomp.compensation.posture import planned_joints
+    from trajcomp.timing import moves_from_program
+
+    for name, speed, y in (("a", "0.2", 0), ("b", "0", 100)):
+        (tmp_path / f"{name}.src").write_text(f"DEF {name}()\n$VEL.CP={speed}\nPTP {{A1 0,A2 -90,A3 90,A4 0,A5 45,A6 0}}\n"
+                                              f"LIN {{X 600,Y {y},Z 600,A 0,B 90,C 0}}\nEND\n")
+    program = formats.read_task([tmp_path / "a.src", tmp_path / "b.src"])
+    robot = load_robot("kuka_kr6_r900")
+    plan = planned_joints(program, robot)
+    with pytest.raises(TimingError, match=r"^b\.src:4: motion to b\.src:4 asks speed 0 mm/s"):
+        moves_from_program(program, robot, planned(program, plan.index, plan.q))

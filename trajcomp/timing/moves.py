@@ -19,6 +19,7 @@ from trajcomp.errors import TimingError
 from trajcomp.programs.frames import FrameTable
 from trajcomp.programs.items import CIRCULAR, JOINT, LINEAR
 from trajcomp.programs.tables import _codes, rows_of
+from trajcomp.programs.program import place_text
 
 KINDS = (JOINT, LINEAR, CIRCULAR)
 
@@ -221,7 +222,7 @@ def moves_from_program(program, robot, joints, *, tools=None, frames=None):
         if missing.size:
             k = missing[0]
             raise TimingError(f"{program.where(int(index[k]))}: no joints known for this target "
-                              f"(line {table.line[motion[k]]})")
+                              f"({place_text(program.place(program.motions[int(motion[k])]))})")
     via_q = np.full((len(rows), 6), np.nan) if circular.size else np.broadcast_to(np.nan, (len(rows), 6))
     if circular.size:
         via_q[circular] = known[via[circular]]
@@ -246,7 +247,8 @@ def _speed_limits(table, rows, robot, program, labels):
     if bad.size:
         k = bad[0]
         raise TimingError(
-            f"line {table.line[rows[k]]}: motion to {labels[k]} asks speed {speed[k]:g} {unit[k]}: "
+            f"{place_text(program.place(program.motions[int(rows[k])]))}: motion to {labels[k]} asks speed "
+            f"{speed[k]:g} {unit[k]}: "
             "a positive speed is needed to time it"
         )
     m = len(rows)
