@@ -104,9 +104,9 @@ def test_a_built_in_language_is_one_folder_that_registers_its_own_modules(langua
 
     package = f"trajcomp.formats.{language}"
     (fmt,) = [f for f in formats.formats() if f.reader.startswith(package + ".")]
-    for ref in (fmt.reader, fmt.writer, fmt.speeds):
+    for face, ref in (("reader", fmt.reader), ("writer", fmt.writer), ("speeds", fmt.speeds)):
         module, function = ref.split(":")
-        assert module.rsplit(".", 1)[0] == package and callable(getattr(importlib.import_module(module), function))
+        assert module == f"{package}.{face}" and callable(getattr(importlib.import_module(module), function))
     if fmt.configuration is not None:
         data = fmt.configuration_data()
         assert data.__name__ == f"{package}.configuration"

@@ -44,7 +44,7 @@ from trajcomp.formats import register_format
 register_format(
     "fanuc_ls", [".ls"],
     f"{__name__}.reader:read",
-    f"{__name__}.reader:write",
+    f"{__name__}.writer:write",
     vendor="FANUC",
     speeds=f"{__name__}.speeds:write_speeds",
     speed_fields="msec, sec, mm/sec",

@@ -1,41 +1,31 @@
-"""The FANUC LS reader and writer: /MN motion lines and /POS positions into a `Program` and back (see `trajcomp.formats.fanuc`)."""
+"""The FANUC LS reader: /MN motion lines and /POS positions into a `Program` (see `trajcomp.formats.fanuc`)."""
 
 import dataclasses
 import itertools
-import math
 import re
 from pathlib import Path
 
 import numpy as np
 
-from trajcomp.errors import ReadError, WriteError
+from trajcomp.errors import ReadError
 from trajcomp.formats.text import (
     ANGLE_LIMIT,
     JOINT_LIMIT,
     LENGTH_LIMIT,
     NUMBER,
     Lines,
-    active_axes,
-    encode_targets,
-    encode_xyzabc,
     fail,
     finite,
     last_line,
-    format_number,
     mask,
-    numbered,
     read_source,
-    where,
     whole_circle,
-    write_single_file,
-    written_speed,
 )
-from trajcomp.formats.fanuc.speeds import time_field
 from trajcomp.programs.program import Program
 from trajcomp.programs.items import (
     CIRCULAR, JOINT, LINEAR, Motion, Span, SpanColumns, SpanTable, Statement, Target, replaced,
 )
-from trajcomp.arm.transforms import matrix_to_pose, pose_to_matrix
+from trajcomp.arm.transforms import pose_to_matrix
 
 XYZWPR = ("x", "y", "z", "w", "p", "r")
 ABC_ORDER = ("x", "y", "z", "r", "p", "w")  # A = R, B = P, C = W
@@ -377,130 +367,3 @@ def _positions(source, masked, lines, start, end):
         points[int(m.group(1))] = len(targets)
         targets.append(target)
     return targets, points, unread
-
-
-def _config_text(config):
-    return f"{config[0]} {config[1]} {config[2]}, {config[3]}, {config[4]}, {config[5]}"
-
-
-def _encode(targets, olds):
-    return encode_targets(targets, olds, lambda target: dict(zip(JOINTS, np.degrees(target.joints))), _cartesian)
-
-
-def _cartesian(targets, olds):
-    out = encode_xyzabc(np.array([target.pose for target in targets]), olds, ABC_ORDER)
-    for target, old, numbers in zip(targets, olds, out):
-        if target.config and "config" in old:
-            v = _CONFIG_VALUE.match(old["config"])
-            was = (v.group(1).upper(), v.group(2).upper(), v.group(3).upper(), *map(int, v.groups()[3:]))
-            if tuple(target.config) != was:
-                numbers["config"] = _config_text(target.config)
-    return out
-
-
-def write(program, path):
-    """``{path: bytes}``: patched in place if read from .LS, else a generated program."""
-    return write_single_file(program, path, "fanuc_ls", _encode, MIN_PLACES, _emit)
-
-
-ATTR = """/ATTR
-OWNER\t\t= MNEDITOR;
-COMMENT\t\t= "trajcomp";
-PROG_SIZE\t= 0;
-CREATE\t\t= DATE 00-01-01  TIME 00:00:00;
-MODIFIED\t= DATE 00-01-01  TIME 00:00:00;
-FILE_NAME\t= ;
-VERSION\t\t= 0;
-LINE_COUNT\t= {count};
-MEMORY_SIZE\t= 0;
-PROTECT\t\t= READ_WRITE;
-TCD:  STACK_SIZE\t= 0,
-      TASK_PRIORITY\t= 50,
-      TIME_SLICE\t= 0,
-      BUSY_LAMP_OFF\t= 0,
-      ABORT_REQUEST\t= 0,
-      PAUSE_REQUEST\t= 0;
-DEFAULT_GROUP\t= 1,*,*,*,*;
-CONTROL_CODE\t= 00000000 00000000;"""
-
-
-WRITTEN_UNITS = {"%": "%", "mm/s": "mm/sec", "rad/s": "deg/sec"}  # a generated program's speed units
-
-
-def _speed(motion):
-    """The speed of a generated motion: ``p%``, ``v mm/sec``, ``w deg/sec`` (whole numbers, rounded down), a time
-    (`time_field`, rounded up) or ``max_speed`` / ``100%`` (the arm's limits)."""
-    value, unit = written_speed(motion, "fanuc_ls")
-    if value is None:
-        return "100%" if motion.kind == JOINT else "max_speed"
-    if unit == "s":
-        return time_field(value)
-    whole = max(math.floor((np.degrees(value) if unit == "rad/s" else value) + 1e-9), 1)
-    return f"{whole}{WRITTEN_UNITS[unit]}"
-
-
-def _emit(program, name):
-    """A new .LS program; Cartesian targets need their CONFIG (see postprocess.convert)."""
-    used = program.usage()
-    tools = numbered([used[i][0] for i in sorted(used)])
-    frames = numbered([used[i][1] for i in sorted(used)])
-    axes = active_axes(program, 3, "FANUC .LS (group 1)")
-    mn, pos, numbers = [], [], {}
-    for table, numbering, label in ((program.tools, tools, "UTOOL"), (program.frames, frames, "UFRAME")):
-        for key, number in numbering.items():
-            if key is not None and number and key in table:
-                x, y, z, a, b, c = matrix_to_pose(table[key])
-                values = [x, y, z, *np.degrees([c, b, a])]
-                mn.append(f"  ! {label} {number} = " + ",".join(format_number(v, 3) for v in values) + " ;")
-    for motion in program.motions:
-        if motion.target is None:
-            mn.append(f"  ! not converted: {motion.text[:60]} ;")
-            continue
-        refs = []
-        for index in (motion.via, motion.target):
-            if index is None:
-                continue
-            if index not in numbers:
-                numbers[index] = len(numbers) + 1
-                tool, frame = used[index]
-                pos.append(_position(program.targets[index], numbers[index], tools[tool], frames[frame], axes))
-            refs.append(f"P[{numbers[index]}]")
-        zone = "FINE" if motion.zone is None else f"CNT{int(round(min(motion.zone, 100)))}"
-        keyword = {JOINT: "J", LINEAR: "L", CIRCULAR: "C"}[motion.kind]
-        if motion.kind == CIRCULAR:
-            mn.append(f"C {refs[0]}    \n    :  {refs[1]} {_speed(motion)} {zone}    ;")
-        else:
-            mn.append(f"{keyword} {refs[0]} {_speed(motion)} {zone}    ;")
-    numbered_mn = [f"{k:4d}:{line}" for k, line in enumerate(mn, start=1)]
-    text = [f"/PROG  {_program_name(name)}", ATTR.format(count=len(mn)), "/MN"] + numbered_mn
-    return "\n".join(text + ["/POS"] + pos + ["/END"]) + "\n"
-
-
-def _program_name(name):
-    return (re.sub(r"[^A-Z0-9_]", "_", name.upper()) or "PROG")[:36]
-
-
-def _position(target, number, tool, frame, axes):
-    head = f"P[{number}]{{\n   GP1:\n\tUF : {frame}, UT : {tool},"
-    if target.is_joint:
-        j = [format_number(v, 6) for v in np.degrees(target.joints)]
-        body = (f"\n\tJ1= {j[0]} deg,\tJ2= {j[1]} deg,\tJ3= {j[2]} deg,"
-                f"\n\tJ4= {j[3]} deg,\tJ5= {j[4]} deg,\tJ6= {j[5]} deg")
-        return head + body + _extended(target, axes) + "\n};"
-    if len(target.config) != 6:
-        raise WriteError(f"target {where(target)}: FANUC needs its CONFIG; convert with a robot")
-    x, y, z, a, b, c = matrix_to_pose(target.pose)
-    p = [format_number(v, 6) for v in (x, y, z)] + [format_number(v, 9) for v in np.degrees([c, b, a])]
-    return (head + f"\t\tCONFIG : '{_config_text(target.config)}',"
-            f"\n\tX = {p[0]}  mm,\tY = {p[1]}  mm,\tZ = {p[2]}  mm,"
-            f"\n\tW = {p[3]} deg,\tP = {p[4]} deg,\tR = {p[5]} deg" + _extended(target, axes) + "\n};")
-
-
-def _extended(target, axes):
-    """``,\\n\\tE1= ..`` of a target's external ``axes`` (indices) as extended axes of group 1.
-
-    Written in mm: a rotary extended axis needs its unit changed to deg.
-    """
-    values = [] if target.external is None else target.external
-    fields = [f"E{k + 1}= {format_number(values[k], 6)}  mm" for k in axes if k < len(values) and not np.isnan(values[k])]
-    return ",\n\t" + ",\t".join(fields) if fields else ""
