@@ -8,7 +8,7 @@ is documented in `trajcomp.programs.program`, which holds `trajcomp.programs.pro
 
 import array
 import dataclasses
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 
 import numpy as np
 
@@ -56,7 +56,7 @@ def replaced(item, **changes):
     return copy
 
 
-class SpanColumns:
+class SpanColumns(Sequence):
     """The spans of many items in one source, as columns: what a reader of long programs keeps.
 
     Each item's spans are a `SpanRow` (a Mapping like ``{role: Span}``)
@@ -87,6 +87,12 @@ class SpanColumns:
     def row(self, k):
         """The spans of item ``k``."""
         return SpanRow(self, k)
+
+    def __getitem__(self, k):
+        """`row` ``k``: the columns are a sequence of the items' spans (`trajcomp.programs.tables.MotionTable.spans`)."""
+        if not -len(self) <= k < len(self):
+            raise IndexError(k)
+        return SpanRow(self, k % len(self))
 
 
 class SpanTable:

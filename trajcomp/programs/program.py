@@ -37,7 +37,7 @@ import numpy as np
 
 from trajcomp.errors import TrajcompError
 from trajcomp.programs.items import CIRCULAR, JOINT, LINEAR, Motion, Source, Span, Statement, Target, replaced
-from trajcomp.programs.tables import ItemRows, LineLabels, MotionTable, TargetRows, TargetTable, _codes, _Rows
+from trajcomp.programs.tables import ItemRows, LineLabels, MotionTable, Rows, TargetRows, TargetTable, _codes
 
 # The program model as format plugins import it (README "Plugins", plugins/trajcomp-points): the item
 # classes are defined in trajcomp.programs.items and stay importable from here.
@@ -127,21 +127,21 @@ class Program:
     notes: tuple = ()
 
     @classmethod
-    def from_tables(cls, format, name, statements, motions, targets, text, sources=()):
-        """A program held as columns: for long programs (a CSV of a million rows).
+    def from_tables(cls, format, name, statements, motions, targets, sources=(), **fields):
+        """A program held as columns: for long programs (a CSV of a million rows, a CAM job in a robot language).
 
         Parameters
         ----------
         format, name : str
-        statements : sequence of Statement
-            Everything that is not a motion, with its line.
+        statements : Sequence of Statement
+            Everything that is not a motion, with its line (a `StatementTable` for many).
         motions : MotionTable
         targets : TargetTable
-        text : callable
-            ``text(line) -> str``: the instruction at a line (built on access).
         sources : tuple of Source
+        **fields
+            Other attributes (``tools``, ``frames``, ``notes`` ...).
         """
-        return cls(format, name, ItemRows(statements, motions, text), TargetRows(targets), sources=sources)
+        return cls(format, name, ItemRows(statements, motions), TargetRows(targets), sources=sources, **fields)
 
     @functools.cached_property
     def motions(self):
@@ -189,12 +189,15 @@ class Program:
     @functools.cached_property
     def _joined(self):
         """Items of this program lie in more than one of its files."""
-        return not isinstance(self.items, ItemRows) and any(item.source for item in self.items)
+        if isinstance(self.items, ItemRows):
+            return bool(self.items.table.source.any() or self.items.statements.source.any())
+        return any(item.source for item in self.items)
 
     def _referencing_items(self):
         """The items that name targets outside compensated motions (``refs``)."""
-        items = self.items.statements if isinstance(self.items, ItemRows) else self.items
-        return [item for item in items if item.refs]
+        if isinstance(self.items, ItemRows):
+            return self.items.naming()
+        return [item for item in self.items if item.refs]
 
     def referenced_targets(self):
         """Targets named outside the compensated motions, which no compensated motion uses.
@@ -388,7 +391,7 @@ class Program:
             lines = self.target_table().line[np.asarray(index, dtype=int)]
             return LineLabels(self.sources[0].name, lines) if self.sources else [f"line {n}" for n in lines]
         index = np.asarray(index, dtype=int)
-        return _Rows(len(index), lambda k: self.where(int(index[k])))
+        return Rows(len(index), lambda k: self.where(int(index[k])))
 
     def with_targets(self, index, *, poses=None, joints=None, configs=None):
         """A new program with some targets replaced and marked edited.

@@ -9,15 +9,20 @@ sequences that show a table as `Motion` / `Target` objects built on access
 """
 
 import dataclasses
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 
 import numpy as np
 
-from trajcomp.programs.items import Motion, SpanColumns, Target
+from trajcomp.programs.items import Motion, SpanColumns, Statement, Target
 
 @dataclasses.dataclass(frozen=True, eq=False)
 class MotionTable:
-    """The motions of a program as arrays over its M motions, in program order.
+    """The motions of a program as arrays over its M motions, in program order: every field of `Motion`.
+
+    A reader of long programs builds its motions as a table (`block` for
+    the rows it reads at once, `of` for the ones it reads one by one,
+    `merged` to put them in program order), never an object each; the
+    table shows them as `Motion` objects built on access (`motion`).
 
     Attributes
     ----------
@@ -34,6 +39,18 @@ class MotionTable:
         Names (None: the robot's tool / the base).
     line : ndarray of int, shape (M,)
     axis_position : ndarray of bool, shape (M,)
+    orientation_speed : ndarray, shape (M,)
+        Rad/s; NaN where none bounds the motion.
+    source : ndarray of int, shape (M,)
+        Index of the file each motion is written in.
+    text : Sequence of str, length M
+        The instructions as written (one line, stripped; built on access where the reader keeps offsets).
+    reason, speed_why : ndarray of object, shape (M,)
+        As `Motion`; ``""`` where none.
+    refs : Mapping[int, tuple of int]
+        ``{row: target indices}`` of the motions that name targets (`Motion.refs`); the others name none.
+    spans : Sequence of Mapping, length M, or None
+        Each motion's spans (`Motion.spans`, e.g. `SpanColumns`); None: no motion has any.
     """
 
     kind: np.ndarray
@@ -46,6 +63,22 @@ class MotionTable:
     frame: np.ndarray
     line: np.ndarray
     axis_position: np.ndarray
+    orientation_speed: np.ndarray = None
+    source: np.ndarray = None
+    text: Sequence = None
+    reason: np.ndarray = None
+    speed_why: np.ndarray = None
+    refs: Mapping = None
+    spans: Sequence = None
+
+    def __post_init__(self):
+        m = len(self.line)
+        defaults = {"orientation_speed": lambda: np.full(m, np.nan), "source": lambda: np.zeros(m, dtype=int),
+                    "text": lambda: repeated("", m), "reason": lambda: repeated("", m),
+                    "speed_why": lambda: repeated("", m), "refs": dict}
+        for name, default in defaults.items():
+            if getattr(self, name) is None:
+                object.__setattr__(self, name, default())
 
     def __len__(self):
         return len(self.line)
@@ -59,6 +92,7 @@ class MotionTable:
         def number(value):
             return np.nan if value is None else value
 
+        spans = tuple(m.spans for m in motions)
         return cls(
             kind=column([m.kind for m in motions], object),
             target=column([-1 if m.target is None else m.target for m in motions], int),
@@ -70,18 +104,111 @@ class MotionTable:
             frame=column([m.frame for m in motions], object),
             line=column([m.line for m in motions], int),
             axis_position=column([m.axis_position for m in motions], bool),
+            orientation_speed=column([number(m.orientation_speed) for m in motions], float),
+            source=column([m.source for m in motions], int),
+            text=tuple(m.text for m in motions),
+            reason=column([m.reason for m in motions], object),
+            speed_why=column([m.speed_why for m in motions], object),
+            refs={k: m.refs for k, m in enumerate(motions) if m.refs},
+            spans=spans if any(spans) else None,
         )
 
-    def motion(self, k, text=""):
-        """Motion ``k`` as an object (its spans and refs are not kept in the table)."""
+    @classmethod
+    def block(cls, kind, target, line, text, *, speed, speed_unit, zone, tool=None, frame=None, spans=None,
+              source=0, speed_why=""):
+        """The table of M motions a reader read at once: compensable motions of one tool and frame.
+
+        Parameters
+        ----------
+        kind : str or ndarray of object, shape (M,)
+        target : ndarray of int, shape (M,)
+            Target indices.
+        line : ndarray of int, shape (M,)
+        text : Sequence of str, length M
+        speed : ndarray, shape (M,)
+            NaN where the language default applies.
+        speed_unit : str or ndarray of object, shape (M,)
+        zone : ndarray, shape (M,)
+            Blend radius, mm; NaN for an exact stop.
+        tool, frame : str or None
+        spans : Sequence of Mapping, length M, optional
+        source : int
+        speed_why : str or ndarray of object, shape (M,)
+        """
+        m = len(line)
+
+        def column(value):
+            return repeated(value, m) if isinstance(value, str) or value is None else np.asarray(value, dtype=object)
+
+        return cls(
+            kind=column(kind), target=np.asarray(target, dtype=int), via=np.full(m, -1),
+            speed=np.asarray(speed, dtype=float), speed_unit=column(speed_unit), zone=np.asarray(zone, dtype=float),
+            tool=repeated(tool, m), frame=repeated(frame, m), line=np.asarray(line, dtype=int),
+            axis_position=np.zeros(m, dtype=bool), source=np.full(m, source), text=text,
+            speed_why=column(speed_why), spans=spans,
+        )
+
+    @classmethod
+    def merged(cls, tables):
+        """One table of the rows of several, in program order (by source, then line; stable).
+
+        Object columns that a table holds as a sequence built on access
+        (text, spans) stay so: each row is looked up in its table.
+        """
+        tables = [t for t in tables if len(t)] or tables[:1]
+        if len(tables) == 1:
+            return tables[0]
+        source = np.concatenate([t.source for t in tables])
+        line = np.concatenate([t.line for t in tables])
+        order = np.lexsort((line, source))
+        part = np.repeat(np.arange(len(tables)), [len(t) for t in tables])[order]
+        row = np.concatenate([np.arange(len(t)) for t in tables])[order]
+
+        def column(name):
+            return np.concatenate([getattr(t, name) for t in tables])[order]
+
+        def sequence(name):
+            return Picked([getattr(t, name) for t in tables], part, row)
+
+        new_row = np.empty(len(order), dtype=int)
+        new_row[order] = np.arange(len(order))
+        offsets = np.cumsum([0] + [len(t) for t in tables])
+        refs = {int(new_row[offsets[j] + k]): r for j, t in enumerate(tables) for k, r in t.refs.items()}
+        spans = None
+        if any(t.spans is not None for t in tables):
+            spans = Picked([t.spans if t.spans is not None else repeated({}, len(t)) for t in tables], part, row)
+        names = ("kind", "target", "via", "speed", "speed_unit", "zone", "tool", "frame", "axis_position",
+                 "orientation_speed", "reason", "speed_why")
+        return cls(line=line[order], source=source[order], text=sequence("text"), refs=refs, spans=spans,
+                   **{name: column(name) for name in names})
+
+    def with_rows(self, index, **columns):
+        """A copy with some columns changed at rows ``index`` (K,): ``target``, ``via``, ``reason`` ... (K,) each;
+        ``refs`` a sequence (K,) of tuples."""
+        index = np.asarray(index, dtype=int)
+        changes = {}
+        for name, values in columns.items():
+            if name == "refs":
+                changes[name] = {**self.refs, **{int(k): tuple(r) for k, r in zip(index.tolist(), values)}}
+                continue
+            column = getattr(self, name)
+            column = column.copy() if column.flags.writeable else np.array(column)
+            column[index] = values
+            changes[name] = column
+        return dataclasses.replace(self, **changes)
+
+    def motion(self, k):
+        """Motion ``k`` as an object."""
         def optional(value, kind):
             return None if (value < 0 if kind is int else np.isnan(value)) else kind(value)
 
         return Motion(
             kind=self.kind[k], target=optional(self.target[k], int), via=optional(self.via[k], int),
             speed=optional(self.speed[k], float), speed_unit=self.speed_unit[k], zone=optional(self.zone[k], float),
-            tool=self.tool[k], frame=self.frame[k], line=int(self.line[k]), text=text,
-            axis_position=bool(self.axis_position[k]),
+            tool=self.tool[k], frame=self.frame[k], line=int(self.line[k]), text=self.text[k],
+            reason=self.reason[k], refs=self.refs.get(k, ()), spans={} if self.spans is None else self.spans[k],
+            axis_position=bool(self.axis_position[k]), speed_why=self.speed_why[k], source=int(self.source[k]),
+            orientation_speed=optional(self.orientation_speed[k], float),
         )
 
 
@@ -222,7 +349,7 @@ def read_only(values):
     return view
 
 
-class _Rows(Sequence):
+class Rows(Sequence):
     """A sequence whose items are built on access from a table (``build(k)``)."""
 
     def __init__(self, size, build):
@@ -239,7 +366,7 @@ class _Rows(Sequence):
         return self._build(k % self._size)
 
 
-class TargetRows(_Rows):
+class TargetRows(Rows):
     """The targets of a table-backed program: a `TargetTable` seen as a sequence of `Target`."""
 
     def __init__(self, table):
@@ -247,30 +374,112 @@ class TargetRows(_Rows):
         self.table = table
 
 
-class ItemRows(_Rows):
-    """The items of a table-backed program: its statements, and the motions of a `MotionTable`, by line.
+class StatementTable(Sequence):
+    """Statements as columns, each a `Statement` built on access (a long program's declarations).
 
     Parameters
     ----------
-    statements : sequence of Statement
-    motions : MotionTable
-    text : callable
-        ``text(line) -> str``: the instruction written at a line.
+    line : ndarray of int, shape (S,)
+    text : Sequence of str, length S
+        As written (the whole line).
+    source : int or ndarray of int, shape (S,)
+    refs : Mapping[int, tuple of int], optional
+        ``{row: target indices}`` of the statements naming targets.
     """
 
-    def __init__(self, statements, motions, text):
-        lines = np.concatenate([[s.line for s in statements], motions.line]).astype(int)
-        self._order = np.argsort(lines, kind="stable")
-        self.statements, self.table, self._text = tuple(statements), motions, text
+    def __init__(self, line, text, source=0, refs=None):
+        self.line = np.asarray(line, dtype=int)
+        self.text, self.refs = text, refs or {}
+        self.source = np.broadcast_to(np.asarray(source, dtype=int), self.line.shape)
+
+    @classmethod
+    def of(cls, statements):
+        """The table of `Statement` objects (or a `StatementTable` itself)."""
+        if isinstance(statements, cls):
+            return statements
+        return cls([s.line for s in statements], tuple(s.text for s in statements),
+                   np.array([s.source for s in statements], dtype=int),
+                   {k: s.refs for k, s in enumerate(statements) if s.refs})
+
+    @classmethod
+    def merged(cls, parts):
+        """One table of several tables' or sequences' statements, in their order (the parts' order)."""
+        tables = [cls.of(part) for part in parts]
+        sizes = [len(t) for t in tables]
+        part, row = np.repeat(np.arange(len(tables)), sizes), np.concatenate([np.arange(n) for n in sizes])
+        offsets = np.cumsum([0] + sizes)
+        refs = {int(offsets[j] + k): r for j, t in enumerate(tables) for k, r in t.refs.items()}
+        return cls(np.concatenate([t.line for t in tables]), Picked([t.text for t in tables], part, row),
+                   np.concatenate([t.source for t in tables]), refs)
+
+    def __len__(self):
+        return len(self.line)
+
+    def __getitem__(self, k):
+        if isinstance(k, slice):
+            return tuple(self[j] for j in range(*k.indices(len(self))))
+        if not -len(self) <= k < len(self):
+            raise IndexError(k)
+        k %= len(self)
+        return Statement(int(self.line[k]), self.text[k], self.refs.get(k, ()), int(self.source[k]))
+
+    def naming(self):
+        """The statements that name targets (`Statement.refs`), in order."""
+        return tuple(self[k] for k in sorted(self.refs))
+
+
+class ItemRows(Rows):
+    """The items of a table-backed program: its statements and the motions of a `MotionTable`, in program order
+    (by file, then line).
+
+    Parameters
+    ----------
+    statements : Sequence of Statement
+        A `StatementTable` for many.
+    motions : MotionTable
+    """
+
+    def __init__(self, statements, motions):
+        statements = StatementTable.of(statements)
+        lines = np.concatenate([statements.line, motions.line]).astype(int)
+        sources = np.concatenate([statements.source, motions.source]).astype(int)
+        self._order = np.lexsort((lines, sources))
+        self.statements, self.table = statements, motions
         super().__init__(len(lines), self._item)
-        self.motions = _Rows(len(motions), self._motion)
+        self.motions = Rows(len(motions), motions.motion)
 
     def _item(self, k):
         j = self._order[k]
-        return self.statements[j] if j < len(self.statements) else self._motion(j - len(self.statements))
+        return self.statements[j] if j < len(self.statements) else self.table.motion(j - len(self.statements))
 
-    def _motion(self, k):
-        return self.table.motion(k, self._text(int(self.table.line[k])))
+    def naming(self):
+        """The items that name targets (`Statement.refs`, `Motion.refs`), in program order."""
+        position = np.empty(len(self._order), dtype=int)
+        position[self._order] = np.arange(len(self._order))
+        rows = position[np.array([*self.statements.refs, *(len(self.statements) + k for k in self.table.refs)],
+                                 dtype=int)]
+        return tuple(self[int(k)] for k in np.sort(rows))
+
+
+class Picked(Sequence):
+    """Items picked from several sequences: item k is ``sequences[part[k]][row[k]]`` (merged columns built on access).
+
+    Parameters
+    ----------
+    sequences : list of Sequence
+    part, row : ndarray of int, shape (N,)
+    """
+
+    def __init__(self, sequences, part, row):
+        self.sequences, self.part, self.row = sequences, part, row
+
+    def __len__(self):
+        return len(self.part)
+
+    def __getitem__(self, k):
+        if isinstance(k, slice):
+            return [self[j] for j in range(*k.indices(len(self)))]
+        return self.sequences[self.part[k]][self.row[k]]
 
 
 class TextSlices(Sequence):

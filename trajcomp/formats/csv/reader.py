@@ -21,7 +21,7 @@ from trajcomp.formats.text import ANGLE_LIMIT, JOINT_LIMIT, LENGTH_LIMIT, fail, 
 from trajcomp.support.parallel import map_blocks
 from trajcomp.programs.program import Program
 from trajcomp.programs.items import JOINT, LINEAR, Statement
-from trajcomp.programs.tables import MotionTable, TargetTable, repeated
+from trajcomp.programs.tables import MotionTable, TargetTable, Rows, repeated
 from trajcomp.arm.transforms import pose_to_matrix
 
 LIMITS = dict.fromkeys(POSE[:3], LENGTH_LIMIT) | dict.fromkeys(POSE[3:], ANGLE_LIMIT) | dict.fromkeys(JOINTS, JOINT_LIMIT)
@@ -54,7 +54,7 @@ def read(path, workers=1):
         kind=kind, target=np.arange(n), via=np.full(n, -1), speed=speed,
         speed_unit=repeated("mm/s", n), zone=np.where(zone == 0.0, np.nan, zone),
         tool=repeated(None, n), frame=repeated(None, n), line=rows,
-        axis_position=np.zeros(n, dtype=bool),
+        axis_position=np.zeros(n, dtype=bool), text=Rows(n, lambda k: text(int(rows[k]))),
     )
     if starts is None:
         lengths = np.fromiter(map(len, lines), dtype=int, count=len(lines))
@@ -67,7 +67,7 @@ def read(path, workers=1):
         return source.text[start : start + lengths[number - 1]].strip()
 
     return Program.from_tables("csv", source.name.rsplit(".", 1)[0], statements, motions,
-                               TargetTable.of_rows(pose, joints, rows), text, sources=(source,))
+                               TargetTable.of_rows(pose, joints, rows), sources=(source,))
 
 
 _ROW_START = np.zeros(256, dtype=bool)
