@@ -27,6 +27,7 @@ registration with d1), the frame moves and the arm stays at nominal
 """
 
 import dataclasses
+import functools
 import logging
 
 import numpy as np
@@ -158,11 +159,15 @@ class KinematicFit:
         = the robot's base.
     names : list of str
         Identified parameters (DH, tool, registration, target, joint terms).
-    delta, sigma : ndarray, shape (P,)
-        Change from the start and standard deviation, mm or rad (joint
-        terms: their coefficients). For ``base_*`` and ``target_*`` the
-        change is the pose (rotation vector) of the final frame in the
-        starting one.
+    delta : ndarray, shape (P,)
+        Change from the start, mm or rad (joint terms: their coefficients).
+        For ``base_*`` and ``target_*`` the change is the pose (rotation
+        vector) of the final frame in the starting one.
+    sigma : ndarray, shape (P,)
+        Standard deviation of ``delta``, same units (a property, computed
+        from ``normal`` and ``variance`` when first asked: it takes an
+        eigendecomposition of the normal equations, which a joint fit with
+        hundreds of spline terms makes dear and no caller of those needs).
     identifiability : Identifiability
     joint_errors : JointResidual
         The identified joint-error terms (empty without them).
@@ -180,12 +185,18 @@ class KinematicFit:
         Orientation of the measured frame in the TCP frame (identity without orientations).
     orientation_weight : float
         mm per rad of the orientation residuals.
+    normal : ndarray, shape (P, P)
+        Normal equations of the weighted rows, solver units (`scales`).
+    variance : float
+        Weighted residual variance per degree of freedom, mm^2.
+    rtol : float
+        As `identify`'s: the directions ``normal`` sees below it are left
+        out of ``sigma``.
     """
 
     robot: object
     names: list
     delta: np.ndarray
-    sigma: np.ndarray
     identifiability: Identifiability
     joint_errors: object
     residuals: np.ndarray
@@ -195,6 +206,15 @@ class KinematicFit:
     T_tracker_base: np.ndarray
     R_tcp_target: np.ndarray
     orientation_weight: float
+    normal: np.ndarray = dataclasses.field(repr=False)
+    variance: float
+    rtol: float
+
+    @functools.cached_property
+    def sigma(self):
+        """Standard deviations (P,) of ``delta``, mm or rad."""
+        return scales(self.names) * np.sqrt(np.clip(np.diag(_truncated_inverse(self.normal, self.rtol)), 0.0, None)
+                                            * self.variance)
 
 
 class _Jacobian:
@@ -223,6 +243,12 @@ class _Jacobian:
     def __init__(self, dense, theta, dense_index, spline_columns, spline_values, spline_joints, size):
         self.dense, self.theta, self.dense_index, self.size = dense, theta, dense_index, size
         self.spline_columns, self.spline_values, self.spline_joints = spline_columns, spline_values, spline_joints
+
+    def with_splines(self, problem):
+        """This Jacobian, of a problem without spline terms, for ``problem``: the same parameters with spline
+        terms appended (`_Problem.with_splines`), at the same point with those terms zero."""
+        return _Jacobian(self.dense, self.theta, self.dense_index, problem.spline_columns, problem.spline_values,
+                         problem.spline_joints, len(problem.names))
 
     def matrix(self):
         """Dense Jacobian (N * rows, P), for problems without spline terms."""
@@ -279,12 +305,15 @@ class _Problem:
         self.T_tracker_base, self.R_tcp_target, self.weight = T_tracker_base, R_tcp_target, weight
         self.basis = basis
 
-    def setup(self, names):
-        """Take the parameters ``names`` (the residual's columns), all starting at 0."""
+    def setup(self, names, features=None):
+        """Take the parameters ``names`` (the residual's columns), all starting at 0.
+
+        ``features`` (N, T) are those of their joint-error terms when at hand.
+        """
         self.names = list(names)
         index = {n: k for k, n in enumerate(self.names)}
         self.terms = [n for n in names if joint_errors.is_term(n) and not joint_errors.is_spline(n)]
-        self.features = joint_errors.features(self.nominal, self.q, self.terms)  # (N, T)
+        self.features = joint_errors.features(self.nominal, self.q, self.terms) if features is None else features
         self.term_index = np.array([index[n] for n in self.terms], dtype=int)
         self.term_joints = np.eye(6)[[joint_errors.term_joint(n) for n in self.terms]].reshape(-1, 6)  # (T, 6)
         self.spline_joints = np.array(sorted({joint_errors.term_joint(n) for n in names if joint_errors.is_spline(n)}),
@@ -308,6 +337,14 @@ class _Problem:
         if len(self.spline_joints):
             self.roughness = self.basis.roughness(self.names) * self.basis.penalty * len(self.q)
         self.x = np.zeros(len(names))
+
+    def with_splines(self, basis):
+        """This set-up problem (without spline terms) with the spline terms of ``basis`` appended to its
+        parameters, a new problem sharing its measurements and joint-error features."""
+        problem = _Problem(self.start, self.nominal, self.q, self.measured, self.rotation, self.T_tracker_base,
+                           self.R_tcp_target, self.weight, basis)
+        problem.setup(self.names + basis.names(), self.features)
+        return problem
 
     def state(self, x):
         """Robot, joint errors, registration and target rotation at parameter vector x."""
@@ -502,13 +539,13 @@ def _fit_result(problem, x, weights, normal, identifiability, rtol, rows=slice(N
     residual = problem.evaluate(x, jacobian=False)[0][rows]
     robot_fit, terms, T_tb, R_target = problem.state(x)
     variance = float(np.sum(weights[:, None] * residual**2) / max(residual.size - len(identifiability.kept), 1))
-    sigma = scales(problem.names) * np.sqrt(np.clip(np.diag(_truncated_inverse(normal, rtol)), 0.0, None) * variance)
     position = -residual[:, :3]
     rotation_residuals = None if problem.rotation is None else -residual[:, 3:] / problem.weight
     return KinematicFit(
-        robot=robot_fit, names=problem.names, delta=x, sigma=sigma, identifiability=identifiability,
+        robot=robot_fit, names=problem.names, delta=x, identifiability=identifiability,
         joint_errors=terms, residuals=position, rotation_residuals=rotation_residuals, weights=weights,
         outliers=outlier_rows(position), T_tracker_base=T_tb, R_tcp_target=R_target, orientation_weight=problem.weight,
+        normal=normal, variance=variance, rtol=rtol,
     )
 
 
@@ -549,14 +586,16 @@ class Linearisation:
         Row indices partitioning the rows (held-out regions): the normal
         equations of the whole are summed from theirs, which are kept in
         ``parts`` as ``(rows, Jacobian of the rows, normal equations)``.
+    evaluated : tuple, optional
+        ``problem.evaluate(x)`` (residual rows and `_Jacobian`) when at hand.
     """
 
     def __init__(self, problem, x, weights=None, loss="huber", identifiability=None, rtol=1e-3, ridge=False,
-                 parts=None):
+                 parts=None, evaluated=None):
         self.problem, self.x, self.identifiability = problem, np.asarray(x, dtype=float), identifiability
         self.rtol, self.ridge = rtol, ridge
         self.scale = scales(problem.names)
-        self.residual, self.jac = problem.evaluate(self.x)
+        self.residual, self.jac = problem.evaluate(self.x) if evaluated is None else evaluated
         self.weights = robust_weights(_row_norms(self.residual), loss) if weights is None else weights
         if parts is None:
             self.normal, self.gradient = self.jac.normal_equations(self.residual, self.weights, self.scale)
@@ -755,9 +794,10 @@ class _Candidates:
         if best is not None and (self.best is None or best[0] < self.best[0]):
             self.best = best
 
-    def linearise(self, problem, x, weights):
-        """The `Linearisation` of a candidate's problem at x (P,), with the regions' normal equations."""
-        return Linearisation(problem, x, weights, ridge=True, parts=self.regions)
+    def linearise(self, problem, x, weights, evaluated):
+        """The `Linearisation` of a candidate's problem at x (P,), evaluated there (``evaluated``: residual rows,
+        `_Jacobian`), with the regions' normal equations."""
+        return Linearisation(problem, x, weights, ridge=True, parts=self.regions, evaluated=evaluated)
 
     def score(self, entry, linear, roughness, payload):
         """Held-out mean errors of one candidate (without and with the field on top), added to the table.
@@ -862,20 +902,23 @@ def select_splines(fit, start, nominal, q, measured, *, rotation=None, joints=(0
             continue  # too sparse for this many terms: the penalty alone would shape them
         tried.append((step, SplineBasis(lower, upper, spacing, 1.0)))
 
+    # every candidate is linearised at fit: one evaluation of its residual and Jacobian, before the workers fork
+    plain = _Problem(start, nominal, q, measured, rotation, np.eye(4), fit.R_tcp_target, orientation_weight)
+    plain.setup(list(fit.names))
+    residual, jac = plain.evaluate(fit.delta)
+
     def scored(k):
         """``(table, best)`` of the candidates of ``tried[k]`` (its penalties)."""
         candidates = _Candidates(regions, position, field)
         if tried[k] is None:
-            plain = _Problem(start, nominal, q, measured, rotation, np.eye(4), fit.R_tcp_target, orientation_weight)
-            plain.setup(list(fit.names))
-            candidates.score({"step_deg": 0.0, "penalty": 0.0}, candidates.linearise(plain, fit.delta, fit.weights),
+            candidates.score({"step_deg": 0.0, "penalty": 0.0},
+                             candidates.linearise(plain, fit.delta, fit.weights, (residual, jac)),
                              np.zeros((len(plain.names),) * 2), None)
             return candidates.result()
         step, basis = tried[k]
-        problem = _Problem(start, nominal, q, measured, rotation, np.eye(4), fit.R_tcp_target, orientation_weight, basis)
-        problem.setup(list(fit.names) + basis.names())
+        problem = plain.with_splines(basis)
         x = np.concatenate([fit.delta, np.zeros(len(problem.names) - len(fit.names))])
-        linear = candidates.linearise(problem, x, fit.weights)
+        linear = candidates.linearise(problem, x, fit.weights, (residual, jac.with_splines(problem)))
         rough = basis.roughness(problem.names)
         for penalty in penalties:
             candidates.score({"step_deg": step, "penalty": penalty}, linear, rough * penalty,
