@@ -451,13 +451,15 @@ def near_angle(angle, reference, period=360.0):
 TARGETS_AT_ONCE = 8192  # edited targets encoded and formatted together: bounds the objects a long program's write makes
 
 
-def target_edits(program, encode, min_places):
+def target_edits(program, encode, min_places, columns=None):
     """Text edits that write the edited targets' numbers back into the sources.
 
     The targets are encoded and their numbers formatted `TARGETS_AT_ONCE`
     at a time, each batch's edits kept as columns (`Edits`): a long
     program's write holds a few bytes per changed number, not a tuple and
-    a dict per number.
+    a dict per number. Targets held as a table whose spans are columns
+    (`SpanColumns`, a long program's) are encoded by ``columns`` where the
+    language gives it: no object per target (`_column_edits`).
 
     Parameters
     ----------
@@ -471,6 +473,11 @@ def target_edits(program, encode, min_places):
         replaces the span's text as is.
     min_places : Mapping[str, int]
         Fewest decimals per role (at least 0.001 mm for positions).
+    columns : callable, optional
+        ``columns(table, rows, old) -> {role: ndarray (K,)}``: the numbers
+        of the edited rows (K,) of a `TargetTable` in the language, float
+        (NaN: left as written) or object (str written as is, None: left),
+        ``old`` being `OldNumbers` of those rows (see `_column_edits`).
 
     Returns
     -------
@@ -480,6 +487,8 @@ def target_edits(program, encode, min_places):
         (`written_numbers`).
     """
     targets = program.targets
+    if columns is not None and isinstance(targets, TargetRows) and isinstance(targets.table.spans, SpanColumns):
+        return _column_edits(targets.table, columns, min_places, len(program.sources))
     edited = (np.flatnonzero(targets.table.edited).tolist() if isinstance(targets, TargetRows)  # no object each
               else [i for i, target in enumerate(targets) if target.edited])
     batches = [_batch_edits([targets[i] for i in edited[lo:lo + TARGETS_AT_ONCE]], encode, min_places,
@@ -518,6 +527,73 @@ def _batch_edits(targets, encode, min_places, sources_count):
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
+class OldNumbers:
+    """The numbers some targets' spans hold in the file, by role (what `target_edits`' ``columns`` chooses near).
+
+    Attributes
+    ----------
+    value : dict of str to ndarray, shape (K,)
+        Each role's number; NaN where the target has no span of that role
+        or its text is no number (a bit string ``'B010'``, a name).
+    text : dict of str to ndarray of object, shape (K,)
+        Each role's text as written; None where the target has no span of that role.
+    """
+
+    value: dict
+    text: dict
+
+
+def _column_edits(table, encode, min_places, sources_count):
+    """`Edits` per source of a table's edited targets, encoded as columns (`target_edits` with ``columns``)."""
+    spans = table.spans
+    rows = np.flatnonzero(table.edited)
+    edits = [Edits.of([]) for _ in range(sources_count)]
+    parts = []
+    for lo in range(0, len(rows), TARGETS_AT_ONCE):
+        batch = rows[lo:lo + TARGETS_AT_ONCE]
+        starts, ends = spans.start[batch], spans.end[batch]
+        text, value = {}, {}
+        for role, j in spans.column.items():
+            present = starts[:, j] >= 0
+            written = np.full(len(batch), None, dtype=object)
+            written[present] = [spans.text[a:b] for a, b in zip(starts[present, j].tolist(), ends[present, j].tolist())]
+            text[role], value[role] = written, _column_values(written, present)
+        for role, new in encode(table, batch, OldNumbers(value, text)).items():
+            j = spans.column.get(role)
+            if j is None:
+                continue
+            new = np.asarray(new)
+            if new.dtype == object:
+                change = np.flatnonzero(np.not_equal(new, None) & (starts[:, j] >= 0) & (new != text[role]))
+                parts.append((starts[change, j], ends[change, j], new[change].tolist()))
+                continue
+            write = np.flatnonzero(~np.isnan(new) & (starts[:, j] >= 0))
+            if np.isinf(new[write]).any():
+                k = int(batch[write[np.isinf(new[write])][0]])
+                raise WriteError(f"target {where(table.target(k))}: {role} is not a finite number, nothing written")
+            old_texts = text[role][write].tolist()
+            places = np.maximum(column_decimals(old_texts), min_places.get(role, 0)) if len(write) else write
+            changed, texts = written_numbers(new[write], old_texts, value[role][write], places)
+            keep = [k for k in np.flatnonzero(changed).tolist() if texts[k] != old_texts[k]]
+            parts.append((starts[write[keep], j], ends[write[keep], j], [texts[k] for k in keep]))
+    if parts:
+        edits[spans.source] = Edits.of_columns(np.concatenate([p[0] for p in parts]),
+                                               np.concatenate([p[1] for p in parts]),
+                                               [t for p in parts for t in p[2]])
+    return edits
+
+
+def _column_values(texts, present):
+    """Numbers (K,) of span texts (K,) (NaN where absent or no number)."""
+    values = np.full(len(texts), np.nan)
+    try:
+        values[present] = np.array(texts[present].tolist(), dtype=float)
+    except ValueError:  # some text is no number: one at a time
+        values[present] = [v if isinstance(v, float) else np.nan for v in map(_number_or_text, texts[present])]
+    return values
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
 class Edits:
     """Non-overlapping text edits as columns: what a long program's write holds instead of a tuple per edit.
 
@@ -549,6 +625,14 @@ class Edits:
         start, end = (np.array([e[k] for e in edits], dtype=np.int64) for k in (0, 1))
         return cls(start, end, "".join(e[2] for e in edits),
                    np.concatenate([[0], np.cumsum([len(e[2]) for e in edits], dtype=np.int64)]))
+
+    @classmethod
+    def of_columns(cls, start, end, texts):
+        """The columns of edits given as columns (E,) each, in any order (``texts``: a list of str)."""
+        order = np.lexsort((end, start))
+        texts = [texts[k] for k in order.tolist()]
+        return cls(np.asarray(start, dtype=np.int64)[order], np.asarray(end, dtype=np.int64)[order], "".join(texts),
+                   np.concatenate([[0], np.cumsum([len(t) for t in texts], dtype=np.int64)]))
 
     @classmethod
     def joined(cls, parts):
@@ -643,9 +727,9 @@ def _number_or_text(text):
         return text
 
 
-def patched(program, encode, min_places):
+def patched(program, encode, min_places, columns=None):
     """The texts of the program's sources with the edited targets rewritten (see `target_edits`)."""
-    edits = target_edits(program, encode, min_places)
+    edits = target_edits(program, encode, min_places, columns)
     return [e.applied(source.text) for source, e in zip(program.sources, edits)]
 
 
@@ -730,16 +814,17 @@ def active_axes(program, capacity, language):
     return sorted(active)
 
 
-def write_single_file(program, path, format_name, encode, min_places, emit):
+def write_single_file(program, path, format_name, encode, min_places, emit, columns=None):
     """``{path: bytes}`` of a one-file language.
 
-    The program's source patched in place (see `patched`) when it was read
-    from ``format_name``; otherwise ``emit(program, path.stem)`` generated as
+    The program's source patched in place (see `patched`, ``encode`` and
+    ``columns`` as `target_edits` takes them) when it was read from
+    ``format_name``; otherwise ``emit(program, path.stem)`` generated as
     UTF-8 text.
     """
     path = Path(path)
     if program.format == format_name and program.sources:
-        texts = patched(program, encode, min_places)
+        texts = patched(program, encode, min_places, columns)
         return {path: encode_text(program.sources[0], texts[0])} | companion_outputs(program, texts, path)
     return {path: emit(program, path.stem).encode("utf-8")}
 

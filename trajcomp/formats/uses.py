@@ -178,17 +178,13 @@ def _left_as_written(program, left):
 
 def _further_uses(program):
     """``{(target, (tool, frame)): [(motion, role), ...]}`` of every use of a point with another tool or frame
-    than its first use (in program order, via point before target); ``role`` names the motion's name span."""
-    first, groups = {}, {}
-    for k, motion in enumerate(program.motions):
-        for role, i in (("via_name", motion.via), ("target_name", motion.target)):
-            if i is None:
-                continue
-            target = program.targets[i]
-            key = (motion.tool if target.tool is None else target.tool,
-                   motion.frame if target.frame is None else target.frame)
-            if first.setdefault(i, key) != key:
-                groups.setdefault((i, key), []).append((k, role))
+    than its first use (in program order, via point before target; `Program.target_uses`); ``role`` names the
+    motion's name span."""
+    uses, groups = program.target_uses(), {}
+    for j in uses["clash"].tolist():
+        key = (uses["tool"][j], uses["frame"][j])
+        role = "via_name" if uses["via"][j] else "target_name"
+        groups.setdefault((int(uses["index"][j]), key), []).append((int(uses["motion"][j]), role))
     return groups
 
 

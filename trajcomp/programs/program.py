@@ -268,24 +268,30 @@ class Program:
         start = uses["start"]
         return Usage(uses["index"][start], uses["tool"][start], uses["frame"][start])
 
-    @functools.cached_property
-    def _uses(self):
+    def target_uses(self):
         """Every use of a target by a motion: its tool and frame, the first use of the same target, the clashes.
 
         Returns
         -------
         dict
-            ``index``, ``line``, ``tool``, ``frame`` (U,) of each use (via
-            before target, program order); ``first`` (U,): the use that first
-            names the same target; ``start``: the first uses, by ascending
-            target; ``clash``: uses with another tool or frame than the
-            first, in program order.
+            ``index``, ``motion``, ``line``, ``tool``, ``frame`` (U,) of each
+            use (via before target, program order), ``via`` (U,): whether
+            it is a via point; ``first`` (U,): the use that first names the
+            same target; ``start``: the first uses, by ascending target;
+            ``clash``: uses with another tool or frame than the first, in
+            program order.
         """
+        return self._uses
+
+    @functools.cached_property
+    def _uses(self):
+        """`target_uses`, built once."""
         motions, targets = self.motion_table(), self.target_table()
         index = np.stack([motions.via, motions.target], axis=1).ravel()  # via before target, program order
         rows = np.repeat(np.arange(len(motions)), 2)
+        via = np.tile([True, False], len(motions))
         keep = index >= 0
-        index, rows = index[keep], rows[keep]
+        index, rows, via = index[keep], rows[keep], via[keep]
         own_tool, own_frame = targets.tool[index], targets.frame[index]
         tool = np.where(np.equal(own_tool, None), motions.tool[rows], own_tool)
         frame = np.where(np.equal(own_frame, None), motions.frame[rows], own_frame)
@@ -299,7 +305,7 @@ class Program:
         first_use = np.empty(len(order), dtype=int)
         first_use[order] = np.repeat(start, np.diff(np.append(np.flatnonzero(first), len(order))))
         clash = np.sort(np.flatnonzero(key != key[first_use]))
-        return {"index": index, "line": motions.line[rows], "tool": tool, "frame": frame,
+        return {"index": index, "motion": rows, "via": via, "line": motions.line[rows], "tool": tool, "frame": frame,
                 "first": first_use, "start": start, "clash": clash}
 
     def with_shared_targets_left(self):

@@ -1,5 +1,6 @@
 """The KRL writer: the edited points into the .src and .dat as read, or a program generated from another language (see `trajcomp.formats.krl`)."""
 
+import functools
 import re
 from pathlib import Path
 
@@ -18,6 +19,7 @@ from trajcomp.formats.text import (
     mask,
     numbered,
     patched,
+    turned_abc,
     written_speed,
 )
 from trajcomp.programs.items import CIRCULAR, JOINT, LINEAR
@@ -26,6 +28,7 @@ from trajcomp.arm.transforms import matrix_to_pose
 __all__ = ["read", "write"]
 
 
+@functools.lru_cache(maxsize=1024)  # a path's points mostly share their S and T, and how the file writes them
 def _status_text(value, old):
     if isinstance(old, str) and old.startswith("'B"):
         return f"'B{value:0{len(old) - 3}b}'"
@@ -42,6 +45,24 @@ def _cartesian(targets, olds):
         if target.config:
             numbers["s"] = _status_text(target.config[0], old.get("s"))
             numbers["t"] = _status_text(target.config[1], old.get("t"))
+    return out
+
+
+def _encode_columns(table, rows, old):
+    """The numbers of a `TargetTable`'s rows (K,) in KRL, as columns (`trajcomp.formats.text.target_edits`)."""
+    joint = table.is_joint[rows]
+    pose = table.pose[rows]
+    out = dict(zip(AXES, np.where(joint[:, None], np.degrees(table.joints[rows]), np.nan).T))
+    out |= dict(zip(POSE[:3], np.where(joint[:, None], np.nan, pose[:, :3, 3]).T))
+    cartesian = np.flatnonzero(~joint)
+    old_abc = np.stack([old.value[role] for role in POSE[3:]], axis=1)[cartesian]
+    turned, abc = turned_abc(pose[cartesian, :3, :3], old_abc)
+    angles = np.full((len(rows), 3), np.nan)
+    angles[cartesian[turned]] = abc
+    out |= dict(zip(POSE[3:], angles.T))
+    for k, role in enumerate(("s", "t")):
+        out[role] = np.array([_status_text(config[k], was) if config else None for config, was in
+                              zip((table.config[i] for i in rows.tolist()), old.text[role])], dtype=object)
     return out
 
 
@@ -67,7 +88,7 @@ def write(program, path):
         )
     dat = path.with_suffix(".dat" if path.suffix.islower() else ".DAT")
     if patch:
-        texts = patched(program, _encode, MIN_PLACES)
+        texts = patched(program, _encode, MIN_PLACES, _encode_columns)
         own = 2 if len(program.sources) > 1 and not program.sources[1].companion else 1  # the .src and its .dat
         if not same_name:
             texts[:own] = [_renamed(text, pattern, path.stem) for text, pattern in zip(texts[:own], (_DEF, _DEFDAT))]
