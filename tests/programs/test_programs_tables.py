@@ -72,3 +72,16 @@ def test_statement_tables_merge_in_the_parts_order():
     merged = StatementTable.merged([first, [Statement(7, "C", source=1)]])
     assert list(merged) == [Statement(1, "A"), Statement(3, "B", refs=(0,)), Statement(7, "C", source=1)]
     assert merged.naming() == (Statement(3, "B", refs=(0,)),)
+
+
+def test_span_offsets_of_a_merged_table_are_each_motions_span_of_the_role():
+    columns = SpanColumns(0, TEXT, ("motion", "speed"), np.array([[8, -1], [28, 14]]), np.array([[11, -1], [31, 16]]))
+    block = MotionTable.block(LINEAR, [0, 2], [2, 4], ["LIN P1", "LIN P3"], speed=[np.nan] * 2, speed_unit="mm/s",
+                              zone=[np.nan] * 2, spans=columns)
+    merged = MotionTable.merged([block, MotionTable.of(_motions()[:2])])  # lines 2, 2, 3, 4
+    source, start, end = merged.span_offsets("speed")
+    assert start.tolist() == [-1, 11, -1, 14] and end.tolist() == [-1, 14, -1, 16]
+    assert source.tolist() == [-1, 0, -1, 0]
+    assert merged.span_offsets("motion")[1].tolist() == [8, -1, -1, 28]
+    assert MotionTable.of(_motions()).span_offsets("motion")[1].tolist() == [-1] * 4
+

@@ -197,6 +197,36 @@ class MotionTable:
             changes[name] = column
         return dataclasses.replace(self, **changes)
 
+    def span_offsets(self, role):
+        """``(source, start, end)`` (M,) each of the motions' spans of ``role``; -1 where a motion has none.
+
+        Spans held as `SpanColumns` are read as columns, each part of a
+        merged table at once (no `Span` object built); other spans one by one.
+        """
+        out = np.full((3, len(self)), -1, dtype=np.int64)
+        if self.spans is None:
+            return tuple(out)
+        if isinstance(self.spans, Picked):  # a merged table's: each part's rows
+            row_of = self.spans.row
+            parts = [(spans, np.flatnonzero(self.spans.part == j)) for j, spans in enumerate(self.spans.sequences)]
+        else:
+            row_of = np.arange(len(self))
+            parts = [(self.spans, row_of)]
+        for spans, at in parts:
+            rows = row_of[at]
+            if isinstance(spans, SpanColumns):
+                j = spans.column.get(role)
+                if j is not None:
+                    given = spans.start[rows, j] >= 0
+                    at, rows = at[given], rows[given]
+                    out[0, at], out[1, at], out[2, at] = spans.source, spans.start[rows, j], spans.end[rows, j]
+                continue
+            for k, row in zip(at.tolist(), rows.tolist()):
+                span = spans[row].get(role)
+                if span is not None:
+                    out[:, k] = span.source, span.start, span.end
+        return tuple(out)
+
     def motion(self, k):
         """Motion ``k`` as an object."""
         def optional(value, kind):
