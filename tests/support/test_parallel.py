@@ -11,7 +11,7 @@ import trajcomp.compensation.posture as posture
 from trajcomp import formats
 from trajcomp.compensation.targets import compensate
 from trajcomp.errors import IKError
-from trajcomp.support.parallel import in_background, map_blocks, meanwhile, usable_cores
+from trajcomp.support.parallel import in_background, map_blocks, meanwhile, share_blocks, usable_cores
 from trajcomp.compensation.posture import planned_joints
 from trajcomp.arm.robot import load_robot
 from tests.compensation.test_compensate import cell, targets_in_cube  # noqa: F401 (fixture)
@@ -215,3 +215,54 @@ def test_workers_forked_from_an_application_compute_on_one_blas_thread_unless_th
         env.update(OPENBLAS_NUM_THREADS=user_setting)
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env, check=True)
     assert done.stdout.strip() == str([threads])
+
+
+def test_shared_blocks_come_back_in_order_computed_here_and_in_a_helper():
+    import time
+
+    data = np.random.default_rng(1).normal(size=(8, 3))
+    serial = share_blocks(lambda k: (k, data[k].sum(), os.getpid()), 8, 1)
+    assert [(k, total) for k, total, _ in serial] == [(k, data[k].sum()) for k in range(8)]
+    assert {pid for *_, pid in serial} == {os.getpid()}
+    shared = share_blocks(lambda k: (k, data[k].sum(), time.sleep(0.05) or os.getpid()), 8, 2)
+    assert [(k, total) for k, total, _ in shared] == [(k, data[k].sum()) for k in range(8)]
+    assert len({pid for *_, pid in shared}) == 2 and os.getpid() in {pid for *_, pid in shared}  # both took blocks
+    assert share_blocks(lambda k: os.getpid(), 1, 4) == [os.getpid()]  # one block: no helper started
+    assert share_blocks(lambda k: k, 0, 2) == []
+
+
+def test_shared_blocks_raise_the_first_failing_block_error_and_stop_taking_blocks(tmp_path):
+    def block(k):
+        tmp_path.joinpath(str(k)).touch()  # the blocks begun, in whichever process
+        if k in (3, 5):
+            raise IKError(f"block {k}: target unreachable")
+        return k
+
+    with pytest.raises(IKError, match="block 3: target unreachable"):
+        share_blocks(block, 40, 2)
+    assert len(list(tmp_path.iterdir())) < 10  # the processes stopped taking blocks after the failure
+
+
+def test_shared_blocks_go_on_here_while_a_helper_gets_no_cpu():
+    import signal
+    import threading
+    import time
+
+    parent = os.getpid()
+
+    def block(k):
+        if os.getpid() != parent:
+            os.kill(os.getpid(), signal.SIGSTOP)  # a helper the machine does not run (until resumed below)
+        time.sleep(0.01)
+        return k, os.getpid()
+
+    def resume():
+        for process in multiprocessing.active_children():
+            os.kill(process.pid, signal.SIGCONT)
+
+    timer = threading.Timer(1.0, resume)
+    timer.start()
+    results = share_blocks(block, 40, 2)
+    timer.join()
+    assert [k for k, _ in results] == list(range(40))
+    assert sum(pid == parent for _, pid in results) >= 39  # the helper's one block waited for it, no other

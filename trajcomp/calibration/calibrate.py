@@ -41,7 +41,7 @@ from trajcomp.calibration.orientations import MIN_AXIS_OFFSET, MIN_SPREAD, axis_
 from trajcomp.arm.parameters import is_robot_parameter
 from trajcomp.calibration.plausibility import check_columns, check_identification, check_units
 from trajcomp.model.stats import ErrorStats, kfold_indices
-from trajcomp.support.parallel import map_blocks
+from trajcomp.support.parallel import share_blocks
 from trajcomp.arm.transforms import abc_to_matrix, invert, pose_to_matrix
 
 log = logging.getLogger(__name__)
@@ -344,7 +344,7 @@ def calibrate(robot, meas, *, robot_ref=None, method="composite", frame=None, gr
     workers : int
         Processes scoring the joint residual's candidate knot steps and
         computing the cross-validation's folds
-        (`trajcomp.support.parallel.map_blocks`; forked, on POSIX); the
+        (`trajcomp.support.parallel.share_blocks`; forked, on POSIX); the
         model does not depend on it. Default 1: this process only.
 
     Returns
@@ -453,7 +453,7 @@ def fold_errors(robot, joints, position, measured, rotation, options, folds, see
     full fit's `KinematicFit` and joint residual (or None), are refitted
     without each fold's rows by `_Refit`; without it the folds identify
     from the nominal robot. The folds are computed by up to ``workers``
-    processes (`trajcomp.support.parallel.map_blocks`); the errors do not
+    processes (`trajcomp.support.parallel.share_blocks`); the errors do not
     depend on it.
     """
     if len(position) < 2 * folds:
@@ -472,7 +472,7 @@ def fold_errors(robot, joints, position, measured, rotation, options, folds, see
         return mode_errors(model, _rows(joints, test), position[test], measured[test])
 
     collected = {}
-    for k, errors in enumerate(map_blocks(fold, folds, workers)):
+    for k, errors in enumerate(share_blocks(fold, folds, workers)):
         if progress:
             progress(f"cross-validation fold {k + 1}/{folds}")
         for mode, err in errors.items():

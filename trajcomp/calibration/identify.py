@@ -48,7 +48,7 @@ from trajcomp.arm.parameters import (
     scales,
 )
 from trajcomp.arm.transforms import invert, matrix_to_rotvec, mean_rotation, rotvec_to_matrix
-from trajcomp.support.parallel import map_blocks
+from trajcomp.support.parallel import share_blocks
 
 log = logging.getLogger(__name__)
 
@@ -890,7 +890,7 @@ def select_splines(fit, start, nominal, q, measured, *, rotation=None, joints=(0
     loss : str
         Robust loss of the final fit (`identify`).
     workers : int
-        Processes scoring the knot steps (`trajcomp.support.parallel.map_blocks`); the choice does not depend on
+        Processes scoring the knot steps (`trajcomp.support.parallel.share_blocks`); the choice does not depend on
         it.
 
     Returns
@@ -938,7 +938,7 @@ def select_splines(fit, start, nominal, q, measured, *, rotation=None, joints=(0
         return candidates.result()
 
     candidates = _Candidates(regions, position, field)
-    for table, best in map_blocks(scored, len(tried), workers):
+    for table, best in share_blocks(scored, len(tried), workers):
         candidates.merge(table, best)
     _, on_top, basis = candidates.best
     fitted = None if basis is None else _spline_fit(fit, start, nominal, q, measured, rotation, basis,

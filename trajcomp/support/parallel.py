@@ -10,7 +10,9 @@ held at a time. Where ``fork`` is not available, or the caller is itself a
 worker of a pool (a batch's file worker, a Dask worker), the blocks run one
 after the other in this process: the results are the same either way.
 `meanwhile` gives this process work of its own while a pool's workers
-compute.
+compute. `share_blocks` is for a few costly blocks with small results (a
+cross-validation's folds): this process computes blocks too, beside fewer
+forked helpers, each process taking the next block no other has taken.
 """
 
 import contextlib
@@ -19,6 +21,7 @@ import multiprocessing
 import os
 import signal
 
+from trajcomp.errors import TrajcompError
 from trajcomp.support.threads import pin_loaded
 
 _TASK = None  # the function of the pool being started, inherited by its forked workers
@@ -78,6 +81,98 @@ def map_blocks(function, count, workers=1):
     finally:  # also when a block failed or the caller stopped: the few blocks under way end, then the workers
         pool.close()  # (Pool.terminate can hang on its task thread; at most workers * _LOOKAHEAD blocks wait)
         pool.join()
+
+
+def share_blocks(function, count, workers=1):
+    """``[function(k) for k in range(0, count)]``, computed by this process and up to ``workers - 1`` forked helpers.
+
+    Each process takes the next block no other has taken until none is
+    left, so a process the machine runs less computes fewer blocks: where
+    no core is idle (another run's process takes it) this process does
+    about what it would alone, and nothing waits for a helper beyond the
+    one block it is computing. A pool of ``workers`` processes
+    (`map_blocks`) would leave this process idle and fork one more
+    process, whose first writes to the memory it shares with this one
+    copy it (calibrating ur10-ipa: 22,000 page faults, 0.1 CPU s, per
+    forked process).
+
+    Parameters
+    ----------
+    function : callable
+        ``function(k) -> result`` of block k; it may read any data the caller
+        holds. Results and errors must be picklable when ``workers > 1``.
+    count : int
+        Number of blocks.
+    workers : int
+        Processes computing, this one included; 1 (or a single block)
+        computes here only.
+
+    Returns
+    -------
+    list
+        The results, in block order.
+
+    Raises
+    ------
+    Exception
+        What the first failing block (in block order) raised; the other
+        processes stop after their block under way.
+    """
+    helpers = min(workers, count) - 1
+    if helpers <= 0 or not _can_fork():
+        return [function(k) for k in range(count)]
+    context = multiprocessing.get_context("fork")
+    taken = context.Value("i", 0)  # the next block no process has taken
+
+    def blocks():
+        """``(k, result, error)`` of the blocks this process takes, until none is left or one failed."""
+        while True:
+            with taken.get_lock():
+                k = taken.value
+                taken.value += 1
+            if k >= count:
+                return
+            try:
+                block = k, function(k), None
+            except Exception as error:  # noqa: BLE001 (the caller raises it, in block order)
+                with taken.get_lock():
+                    taken.value = count  # no process takes another block
+                block = k, None, error
+            yield block
+
+    def helper(sending):
+        init_worker()
+        sending.send(list(blocks()))  # at the end: a result sent at once would wait for this process to read it
+
+    pipes, processes = [], []
+    try:
+        for _ in range(helpers):
+            receiving, sending = context.Pipe(duplex=False)
+            processes.append(context.Process(target=helper, args=(sending,), daemon=True))
+            processes[-1].start()
+            sending.close()  # the helper's end: closed here, so that a helper that dies shows as end of file
+            pipes.append(receiving)
+        done = list(blocks())
+        for receiving in pipes:
+            try:
+                done += receiving.recv()
+            except EOFError:  # the helper died (killed) before sending its blocks
+                pass
+    except BaseException:  # Ctrl-C or a failure here: the helpers end now
+        for process in processes:
+            process.terminate()
+        raise
+    finally:
+        for process in processes:
+            process.join()
+    done.sort(key=lambda block: block[0])
+    for _, _, error in done:
+        if error is not None:
+            raise error
+    if len(done) < count:
+        codes = sorted({process.exitcode for process in processes} - {0})
+        raise TrajcompError(f"a helper process ended (exit code {codes}) before sending the blocks it had taken")
+    return [result for _, result, _ in done]
 
 
 @contextlib.contextmanager
