@@ -11,6 +11,7 @@ import trajcomp.compensation.posture as posture
 from trajcomp import formats
 from trajcomp.compensation.targets import compensate
 from trajcomp.errors import IKError
+from trajcomp.support import parallel
 from trajcomp.support.parallel import in_background, map_blocks, meanwhile, share_blocks, usable_cores
 from trajcomp.compensation.posture import planned_joints
 from trajcomp.arm.robot import load_robot
@@ -217,8 +218,10 @@ def test_workers_forked_from_an_application_compute_on_one_blas_thread_unless_th
     assert done.stdout.strip() == str([threads])
 
 
-def test_shared_blocks_come_back_in_order_computed_here_and_in_a_helper():
+def test_shared_blocks_come_back_in_order_computed_here_and_in_a_helper(monkeypatch):
     import time
+
+    monkeypatch.setattr(parallel, "idle_cores", lambda: 1)  # whatever else runs on the machine now
 
     data = np.random.default_rng(1).normal(size=(8, 3))
     serial = share_blocks(lambda k: (k, data[k].sum(), os.getpid()), 8, 1)
@@ -231,7 +234,8 @@ def test_shared_blocks_come_back_in_order_computed_here_and_in_a_helper():
     assert share_blocks(lambda k: k, 0, 2) == []
 
 
-def test_shared_blocks_raise_the_first_failing_block_error_and_stop_taking_blocks(tmp_path):
+def test_shared_blocks_raise_the_first_failing_block_error_and_stop_taking_blocks(tmp_path, monkeypatch):
+    monkeypatch.setattr(parallel, "idle_cores", lambda: 1)
     def block(k):
         tmp_path.joinpath(str(k)).touch()  # the blocks begun, in whichever process
         if k in (3, 5):
@@ -243,10 +247,12 @@ def test_shared_blocks_raise_the_first_failing_block_error_and_stop_taking_block
     assert len(list(tmp_path.iterdir())) < 10  # the processes stopped taking blocks after the failure
 
 
-def test_shared_blocks_go_on_here_while_a_helper_gets_no_cpu():
+def test_shared_blocks_go_on_here_while_a_helper_gets_no_cpu(monkeypatch):
     import signal
     import threading
     import time
+
+    monkeypatch.setattr(parallel, "idle_cores", lambda: 1)
 
     parent = os.getpid()
 
@@ -266,3 +272,22 @@ def test_shared_blocks_go_on_here_while_a_helper_gets_no_cpu():
     timer.join()
     assert [k for k, _ in results] == list(range(40))
     assert sum(pid == parent for _, pid in results) >= 39  # the helper's one block waited for it, no other
+
+
+def test_shared_blocks_start_helpers_on_idle_cores_only(monkeypatch):
+    monkeypatch.setattr(parallel, "idle_cores", lambda: 0)
+    assert set(share_blocks(lambda k: os.getpid(), 6, 2)) == {os.getpid()}
+    monkeypatch.setattr(parallel, "idle_cores", lambda: 1)
+    assert len(set(share_blocks(lambda k: __import__("time").sleep(0.05) or os.getpid(), 6, 4))) == 2  # one helper
+
+
+def test_idle_cores_counts_the_runnable_processes(monkeypatch, tmp_path):
+    loadavg = tmp_path / "loadavg"
+    monkeypatch.setattr(parallel, "_LOADAVG", str(loadavg))
+    monkeypatch.setattr(parallel, "usable_cores", lambda: 4)
+    loadavg.write_text("0.50 0.40 0.30 3/200 999\n")  # this process and two others
+    assert parallel.idle_cores() == 1
+    loadavg.write_text("9.50 9.40 9.30 9/200 999\n")
+    assert parallel.idle_cores() == 0
+    monkeypatch.setattr(parallel, "_LOADAVG", str(tmp_path / "absent"))  # not Linux: every other core
+    assert parallel.idle_cores() == 3
