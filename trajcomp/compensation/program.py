@@ -337,7 +337,9 @@ def _described(program, index):
     config = program.target_table().config
     if not any(config):  # no target states any (a CSV program)
         return ("",) * len(index)
-    return tuple(describe(program.format, config[i]) for i in index.tolist())
+    configs = [config[i] for i in index.tolist()]
+    texts = {c: describe(program.format, c) for c in set(configs)}  # a path's targets mostly share theirs
+    return tuple(texts[c] for c in configs)
 
 
 def _program_facts(program, joint_index, joint_mode):

@@ -114,8 +114,8 @@ def run_time_speeds(program, result):
     slowest, `trajcomp.formats.speeds.convert_speeds`), whose timing is not
     written into it, lists them all (`TimingResult.as_written`).
     """
-    motions = program.motions
-    return tuple((k, motions[m].speed_why) for k, m in enumerate(result.motion.tolist()) if motions[m].speed_why)
+    why = program.motion_table().speed_why[result.motion]
+    return tuple((k, why[k]) for k in np.flatnonzero(why != "").tolist())
 
 
 def writable(program):
@@ -125,10 +125,12 @@ def writable(program):
 
 
 def _timed(result):
-    """Waypoints whose motion has a duration to write: (k, duration s)."""
-    untimed = set(result.untimed)
+    """Waypoints whose motion has a duration to write: their indices (T,) and durations (T,), s."""
     durations = result.durations
-    return [(k, durations[k]) for k in range(1, len(result.t)) if k not in untimed and durations[k] > 0]
+    timed = durations > 0
+    timed[:1] = False
+    timed[list(result.untimed)] = False
+    return np.flatnonzero(timed), durations[timed]
 
 
 @dataclasses.dataclass
@@ -170,34 +172,43 @@ class SpeedPlan:
 
 
 def _plan(program, result, robot):
-    """The `SpeedPlan` of a timing: run-time speeds kept, stated process speeds kept or lowered, times."""
-    timed = _timed(result)
-    motions = program.motions
-    cruise, binding = cruise_speeds(result, robot, program.motion_table().zone[result.motion])
-    plan = SpeedPlan({}, {}, (), {}, {})
-    as_written = []
-    for k, duration in timed:
-        motion = motions[result.motion[k]]
-        if motion.speed_why:
-            as_written.append((k, motion.speed_why))
-            continue
-        path = motion.kind != JOINT and result.tcp_length[k] > MIN_TRAVEL
-        if path and motion.speed is not None and motion.speed_unit == "mm/s":  # a stated process speed
-            if cruise[k] < motion.speed:
-                plan.cruise[k], plan.reasons[k], plan.stated[k] = cruise[k], binding[k], motion.speed
-            continue
-        plan.times[k] = duration
-        if path and result.tcp_length[k] / cruise[k] > duration:
-            plan.times[k], plan.reasons[k] = result.tcp_length[k] / cruise[k], binding[k]
-            plan.stated[k] = duration
-        if motion.orientation_speed is not None:  # RAPID's v_ori: a time written replaces the speed data
-            turning = orientation_time(motion.kind, result.q[k - 1], result.q[k], motion.orientation_speed, robot)
-            if turning > plan.times[k]:
-                plan.times[k], plan.stated[k] = turning, duration
-                plan.reasons[k] = (f"its orientation speed {np.degrees(motion.orientation_speed):g} deg/s (v_ori) "
-                                   "bounds the reorientation")
-    plan.as_written = tuple(as_written)
-    return plan
+    """The `SpeedPlan` of a timing: run-time speeds kept, stated process speeds kept or lowered, times.
+
+    Decided for every timed waypoint at once from the program's motion columns; the plan's
+    entries are in waypoint order.
+    """
+    k, duration = _timed(result)
+    table = program.motion_table()
+    cruise, binding = cruise_speeds(result, robot, table.zone[result.motion])
+    why = table.speed_why[result.motion[k]]
+    written = why != ""
+    as_written = tuple(zip(k[written].tolist(), why[written].tolist()))
+    k, duration = k[~written], duration[~written]
+    rows = result.motion[k]
+    length, speed, limit = result.tcp_length[k], table.speed[rows], cruise[k]
+    path = (table.kind[rows] != JOINT) & (length > MIN_TRAVEL)
+    process = path & ~np.isnan(speed) & (table.speed_unit[rows] == "mm/s")  # a stated process speed
+    lowered = process & (limit < speed)
+    times = np.where(process, np.nan, duration)
+    with np.errstate(divide="ignore"):
+        slower = ~process & path & (length / limit > duration)
+    times[slower] = length[slower] / limit[slower]
+    reasons = {w: binding[w] for w in k[lowered | slower].tolist()}
+    stated = dict(zip(k[lowered | slower].tolist(), np.where(lowered, speed, duration)[lowered | slower].tolist()))
+    bounded = np.flatnonzero(~process & ~np.isnan(table.orientation_speed[rows]))  # RAPID's v_ori: a time written
+    for j in bounded.tolist():  # replaces the speed data
+        w, motion = int(k[j]), int(rows[j])
+        ori = float(table.orientation_speed[motion])
+        turning = orientation_time(table.kind[motion], result.q[w - 1], result.q[w], ori, robot)
+        if turning > times[j]:
+            times[j], stated[w] = turning, float(duration[j])
+            reasons[w] = f"its orientation speed {np.degrees(ori):g} deg/s (v_ori) bounds the reorientation"
+    return SpeedPlan(
+        times=dict(zip(k[~process].tolist(), times[~process].tolist())),
+        cruise=dict(zip(k[lowered].tolist(), limit[lowered].tolist())),
+        as_written=as_written,
+        reasons=dict(sorted(reasons.items())), stated=dict(sorted(stated.items())),
+    )
 
 
 def cruise_speeds(result, robot, zone):
