@@ -16,6 +16,7 @@ CPU-bound process, < 6 s.
 """
 
 import argparse
+import os
 import resource
 import subprocess
 import sys
@@ -61,6 +62,7 @@ def main():
     if not DATA.exists():
         print(f"{DATA} not present, skipped")
         return
+    load = [os.getloadavg()[0]]
     with tempfile.TemporaryDirectory() as scratch:
         scratch = Path(scratch)
         trees = {"this tree": ROOT}
@@ -78,8 +80,10 @@ def main():
                     if busy is not None:
                         busy.kill()
                         busy.wait()
+    load.append(os.getloadavg()[0])
     print(f"\n== trajcomp calibrate, ur10-ipa 5,892 rows (CLI, wall s, median of {args.rounds} rounds taken in turns; "
-          "ratio to this tree; CPU s, user and system, workers included)")
+          f"ratio to this tree; CPU s, user and system, workers included); load average {load[0]:.1f} at the start, "
+          f"{load[1]:.1f} at the end, {os.cpu_count()} cores")
     print(f"{'tree':14s}" + "".join(f"{f'folds {f}' + (' + busy' if b else ''):>28s}" for f, b in CASES))
     for name in trees:
         cells = []

@@ -421,14 +421,15 @@ def identifiability(robot, q, *, rotation=False, frame="base", tool=True, joint_
     problem = _Problem(robot, robot, q, seen[:, :3, 3], seen[:, :3, :3] if rotation else None, np.eye(4), np.eye(3),
                        ORIENTATION_WEIGHT)
     names = candidate_parameters(robot, tool=tool, orientation=rotation, tracker=frame == "tracker")
-    return _identifiable(problem, names + (joint_errors.term_names() if joint_terms else []), rtol)
+    return _identifiable(problem, names + (joint_errors.term_names() if joint_terms else []), rtol)[0]
 
 
 def _identifiable(problem, names, rtol):
-    """`Identifiability` of candidate ``names`` in ``problem`` at its start."""
+    """`Identifiability` of candidate ``names`` in ``problem`` at its start, and the problem's residual rows and
+    `_Jacobian` there (``problem`` is left set up with ``names``)."""
     problem.setup(names)
-    _, jac = problem.evaluate(problem.x)
-    return analyse_identifiability(jac.matrix() * scales(names), names, rtol)
+    residual, jac = problem.evaluate(problem.x)
+    return analyse_identifiability(jac.matrix() * scales(names), names, rtol), (residual, jac)
 
 
 def identify(robot, q, measured, *, rotation=None, frame="base", tool=True, joint_terms=False, splines=None,
@@ -507,9 +508,7 @@ def identify(robot, q, measured, *, rotation=None, frame="base", tool=True, join
         names += joint_errors.term_names()
     problem = _Problem(robot, nominal, q, measured, rotation, T_tracker_base, R_tcp_target, orientation_weight,
                        splines)
-    ident = _identifiable(problem, names, rtol) if identifiability is None else identifiability
-    if splines is not None:
-        names += splines.names()
+    ident, start = (identifiability, None) if identifiability is not None else _identifiable(problem, names, rtol)
     kept = ident.kept
     rows = 3 if rotation is None else 6  # residuals per measurement
     if rows * len(q) < 2 * len(kept):
@@ -517,12 +516,14 @@ def identify(robot, q, measured, *, rotation=None, frame="base", tool=True, join
             f"{len(q)} measurements are too few to identify {len(kept)} parameters "
             f"(need at least {int(np.ceil(2 * len(kept) / rows))})"
         )
-    problem.setup(names)
-    if start_values:
-        problem.x = np.array([start_values.get(name, 0.0) for name in names])
+    if splines is not None or start_values or start is None:  # other parameters or another start than analysed
+        names += [] if splines is None else splines.names()
+        problem.setup(names)
+        problem.x = np.array([(start_values or {}).get(name, 0.0) for name in names])
+        start = None
     scale = scales(names)
-    x, weights, jac = _solve(problem, scale, loss, rtol)
-    normal, _ = jac.normal_equations(problem.evaluate(x, jacobian=False)[0], weights, scale)
+    x, weights, jac, residual = _solve(problem, scale, loss, rtol, start)
+    normal, _ = jac.normal_equations(residual, weights, scale)
     x = scale * _least_cost(normal + problem.roughness, x / scale, prior_weights(names), rtol)
     fit = _fit_result(problem, x, weights, normal, ident, rtol)
     log.info("identified %d parameters, fixed %d, rms %.4f mm", len(kept), len(ident.fixed),
@@ -713,17 +714,18 @@ def _truncated_solve(normal, vector, rtol):
     return vectors @ ((vectors.T @ vector) / eigenvalues)
 
 
-def _solve(problem, scale, loss, rtol):
-    """Iteratively re-weighted Gauss-Newton with step halving, from ``problem.x``.
+def _solve(problem, scale, loss, rtol, start=None):
+    """Iteratively re-weighted Gauss-Newton with step halving, from ``problem.x`` (``start``: the residual rows and
+    `_Jacobian` there, when at hand).
 
     Each step solves the normal equations of the scaled, weighted problem
     (P x P, cheap for any N), the spline terms' roughness penalty added, by
     `_truncated_solve`: no step along a direction the data do not
-    identify. Returns the parameters x (P,), the final weights (N,) and
-    the `_Jacobian` at x.
+    identify. Returns the parameters x (P,), the final weights (N,), the
+    `_Jacobian` and the residual rows at x.
     """
     x = problem.x
-    residual, jac = problem.evaluate(x)
+    residual, jac = problem.evaluate(x) if start is None else start
     for _ in range(MAX_ITERATIONS):
         weights = robust_weights(_row_norms(residual), loss)
         normal, gradient = jac.normal_equations(residual, weights, scale)
@@ -741,7 +743,7 @@ def _solve(problem, scale, loss, rtol):
         x, residual, jac = trial, trial_residual, trial_jac
         if np.max(np.abs(step), initial=0.0) < STEP_TOLERANCE or lowered < COST_TOLERANCE * cost:
             break
-    return x, robust_weights(_row_norms(residual), loss), jac
+    return x, robust_weights(_row_norms(residual), loss), jac, residual
 
 
 @dataclasses.dataclass(frozen=True)
