@@ -2,6 +2,7 @@
 the numbers of edited targets formatted together against `format_number`."""
 
 import math
+import re
 from pathlib import Path
 
 import numpy as np
@@ -40,11 +41,20 @@ def _seen(program):
     return targets, [repr(item) for item in program.items], sorted(program.tools), sorted(program.frames)
 
 
+_FANUC_WRITTEN = fanuc_reader._written_positions
+NONE_AT_ONCE = {  # what a language's reader at once gives when it reads nothing
+    krl_reader: lambda *args: ({}, None),
+    fanuc_reader: lambda masked, start, end: _FANUC_WRITTEN(masked, 0, 0),
+}
+
+
 def _line_by_line(path, monkeypatch):
-    """The program read with no declaration read at once."""
+    """The program read with no declaration (FANUC: nor motion line) read at once."""
     module, function = AT_ONCE[path.suffix.lower()]
     with monkeypatch.context() as patch:
-        patch.setattr(module, function, lambda *args: ({}, None) if module is krl_reader else {})
+        patch.setattr(module, function, NONE_AT_ONCE.get(module, lambda *args: {}))
+        if module is fanuc_reader:
+            patch.setattr(module, "_WRITTEN_MOTION", re.compile(r"(?!)"))  # matches nothing
         return formats.read(path)
 
 

@@ -22,9 +22,8 @@ from trajcomp.formats.text import (
     whole_circle,
 )
 from trajcomp.programs.program import Program
-from trajcomp.programs.items import (
-    CIRCULAR, JOINT, LINEAR, Motion, Span, SpanColumns, SpanTable, Statement, Target, replaced,
-)
+from trajcomp.programs.items import CIRCULAR, JOINT, LINEAR, Motion, Span, SpanColumns, Target, replaced
+from trajcomp.programs.tables import ItemRows, MotionTable, StatementTable, TargetRows, TargetTable, TextSlices
 from trajcomp.arm.transforms import pose_to_matrix
 
 XYZWPR = ("x", "y", "z", "w", "p", "r")
@@ -67,6 +66,15 @@ _WRITTEN_POSITION = re.compile(
     r"CONFIG\s*:\s*'([^']*)'\s*,\s*"
     + r"\s*,\s*".join(f"{c}\\s*=\\s*({NUMBER})\\s*{'mm' if c in 'XYZ' else 'deg'}" for c in "XYZWPR")
     + r"\s*\};", re.I)
+# The /MN motion lines a CAM post-processor (and `trajcomp convert`) writes, read together (`_written_motions`):
+#    12:L P[12] 50mm/sec CNT1    ;   (J or L, a position P[n], a speed in a unit, FINE or CNTn, not continued)
+_WRITTEN_MOTION = re.compile(
+    r"^[ \t]*\d+:[ \t]*([JL])[ \t]+P\[[ \t]*(\d{1,9})[ \t]*\][ \t]+((\d{1,9}(?:\.\d{0,9})?)[ \t]*"
+    r"(%|mm/sec|cm/min|inch/min|deg/sec|msec|sec))[ \t]+(?:FINE[ \t]+|CNT(\d{1,3})[ \t]*);[ \t]*\r?$"
+    r"(?!\n[^\S\r\n]*:)", re.M)
+_SECTION_LINE = re.compile(r"^[^\S\r\n]*/(PROG|ATTR|APPL|MN|POS|END)\b", re.M)  # `_SECTION` on a line of a text
+_LONE_CR = re.compile(r"\r(?!\n)")  # a line ending of its own (`Lines`), which `^` and `$` do not see
+_POS_HEAD = re.compile(r"P\[")  # where a /POS entry (`_POS`) may start
 _SCARA_CONFIG = re.compile(r"^\s*[LR]\s*,(?:\s*-?\d{1,3}\s*,?)*\s*$", re.I)
 _TOOL_WORDS = {"UTOOL_NUM": "tool", "WKZ_NUM": "tool", "UFRAME_NUM": "frame", "BENUTZER_NUM": "frame",
                "UTOOL": "tool", "WKZ": "tool", "UFRAME": "frame", "BENUTZER": "frame"}
@@ -96,6 +104,20 @@ class _State:
             self.set_at_run_time[what][m.group(2)] = (
                 f"{what} {m.group(2)} set at run time by {m.group(1).upper()}[{m.group(2)}]={m.group(3)} (line {line})")
 
+    def key(self):
+        """What the state holds, hashable: motions read with equal keys run with the same tool and frame."""
+        return (self.tool, self.frame, self.why["tool"], self.why["frame"],
+                *(tuple(sorted(self.set_at_run_time[what].items())) for what in ("tool", "frame")))
+
+    def copy(self):
+        """A copy that later updates leave as it is."""
+        return _State(self.tool, self.frame, dict(self.why), {what: dict(numbers) for what, numbers in
+                                                              self.set_at_run_time.items()})
+
+    def runtime(self):
+        """Whether a tool or user frame is set at run time (some motion's may then be unknown)."""
+        return any(self.why.values()) or any(self.set_at_run_time.values())
+
     def reason(self, what, number):
         """Why the tool or frame a motion uses is only known at run time ("" if it is not)."""
         if number is None:
@@ -105,6 +127,12 @@ class _State:
 
 def read(path):
     """Read a FANUC .LS program.
+
+    The /MN motion lines and /POS positions a CAM post-processor writes
+    (`_WRITTEN_MOTION`, `_WRITTEN_POSITION`) are read together as columns
+    (`Program.from_tables`: no object per motion or position); every other
+    /MN line is read one by one, in order, and the tool and user frame it
+    sets hold for the motions after it.
 
     Raises
     ------
@@ -120,56 +148,196 @@ def read(path):
     if not head.lstrip().upper().startswith("/PROG"):
         raise ReadError(f"{path}: not a FANUC .LS program: it does not start with /PROG")
     name = head.split()[1] if len(head.split()) > 1 else Path(path).stem
-    section, instructions, pos_start, pos_end = None, [], None, len(source.text)
-    for number, start, end in lines:
-        text = masked[start:end]
-        m = _SECTION.match(text.strip())
-        if m:
-            section = m.group(1)
-            if section == "POS":
-                pos_start = end
-            elif section == "END" and pos_start is not None:
-                pos_end = start
-            instructions.append((number, start, end, None))
-            continue
-        if section == "MN" and (c := _CONTINUED.match(text)) and instructions and instructions[-1][3] is not None:
-            prev = instructions[-1]
-            instructions[-1] = (prev[0], prev[1], end, prev[3] + " " + c.group(1))
-        elif section == "MN" and (n := _NUMBERED.match(text)):
-            instructions.append((number, start, end, n.group(2)))
-        else:
-            instructions.append((number, start, end, None))
-    if section != "END":
+    starts, ends = _line_offsets(lines)
+    count = len(starts)
+    by_line = _LONE_CR.sub("\n", masked) if "\r" in masked else masked  # `^` and `$` at every line's ends
+    headers = [(lines.number(m.start()), m.group(1)) for m in _SECTION_LINE.finditer(by_line)]
+    if not headers or headers[-1][1] != "END":
         last = last_line(lines)
         fail(source.name, last, lines.line(last), "no /END after it: the program is cut off")
-    targets, points, unread = _positions(source, masked, lines, pos_start, pos_end)
+    pos_start, pos_end = None, len(source.text)
+    in_mn = np.zeros(count + 1, dtype=bool)  # by line number (1-based): a line of the /MN section
+    for (number, what), (following, _) in zip(headers, headers[1:] + [(count + 1, None)]):
+        if what == "POS":
+            pos_start = int(ends[number - 1])
+        elif what == "END" and pos_start is not None:
+            pos_end = int(starts[number - 1])
+        in_mn[number + 1:following] = what == "MN"
+    table, points, unread = _positions(source, masked, lines, starts, pos_start, pos_end)
+    targets = TargetRows(table)
     from trajcomp.formats.fanuc import posreg  # it reads positions as this module does
 
     sources, registers, register_why, notes = (source,), {}, {}, ()
     if posreg.used_registers(masked):
+        targets = list(targets)  # the registers' targets join the positions (objects)
         registers_source, registers, register_why, notes = posreg.resolve(path, masked, lines, targets, 1)
         sources += (registers_source,) if registers_source is not None else ()
-    items, state = [], _State()
-    speeds = SpanTable(("speed",))  # the motions' speed fields as offsets (no Span object each)
-    for number, start, end, content in instructions:
-        original = source.text[start:end]
-        if content is None:
-            items.append(Statement(number, original))
-            continue
+    written = _written_motions(by_line, starts, ends, in_mn, points, unread)
+    covered = np.zeros(count + 1, dtype=bool)  # lines of a motion or an instruction: the others are statements
+    covered[written["line"]] = True
+    state, one_by_one, speed_at, kept, blocks = _State(), [], [], [], {}
+    done = 0  # the written motions before the instruction
+    for number, last, start, end, content in _instructions(masked, starts, ends, np.flatnonzero(in_mn & ~covered)):
+        covered[number:last + 1] = True
+        upto = int(np.searchsorted(written["line"], number))
+        blocks.setdefault(state.key(), (state.copy(), []))[1].append(np.arange(done, upto))
+        done = upto
         state.update(content, number)
         m = _MOTION.match(content)
         if not m:
-            refs = tuple(points[int(n)] for n in _POINT_REF.findall(content) if int(n) in points)
-            items.append(Statement(number, original, refs=refs))
+            kept.append((number, start, end, tuple(points[int(n)] for n in _POINT_REF.findall(content)
+                                                   if int(n) in points)))
             continue
-        motion = _motion(m, points, unread, source.name, number, original, registers, register_why)
+        motion = _motion(m, points, unread, source.name, number, source.text[start:end], registers, register_why)
         speed = _SPEED_FIELD.search(masked, start, end)  # where re-timing writes the motion's speed
-        speeds.add({"speed": None if speed is None else speed.span()})
-        items.append(_with_frames(motion, targets, state))
-    speeds, rows = speeds.columns(0, source.text), itertools.count()  # the motions' rows, in order
-    items = tuple(replaced(item, spans=speeds.row(next(rows))) if isinstance(item, Motion) else item for item in items)
+        speed_at.append((-1, -1) if speed is None else speed.span())
+        one_by_one.append(_with_frames(motion, targets, state))
+    blocks.setdefault(state.key(), (state.copy(), []))[1].append(np.arange(done, len(written["line"])))
+    parts = [(np.concatenate(rows), at) for at, rows in blocks.values()]
+    motions = MotionTable.merged([MotionTable.of(one_by_one)]
+                                 + [_motion_block(written, rows, at, table, source.text) for rows, at in parts])
+    speed_at = np.concatenate([np.array(speed_at, dtype=np.int64).reshape(-1, 2)]
+                              + [written["speed"][rows] for rows, _ in parts])
+    order = np.argsort(np.concatenate([[m.line for m in one_by_one]] + [written["line"][rows] for rows, _ in parts]),
+                       kind="stable")
+    motions = dataclasses.replace(motions, spans=SpanColumns(0, source.text, ("speed",), speed_at[order, :1],
+                                                             speed_at[order, 1:]))
+    statements = _statements(source.text, starts, ends, np.flatnonzero(~covered[1:]) + 1, kept)
     tools, frames = {"0": np.eye(4)}, {"0": np.eye(4)}
-    return Program("fanuc_ls", name, items, tuple(targets), tools, frames, sources, notes=notes)
+    if isinstance(targets, TargetRows):
+        return Program.from_tables("fanuc_ls", name, statements, motions, table, sources, tools=tools,
+                                   frames=frames, notes=notes)
+    return Program("fanuc_ls", name, ItemRows(statements, motions), tuple(targets), tools, frames, sources,
+                   notes=notes)
+
+
+def _line_offsets(lines):
+    """Starts and ends (ndarray of int, shape (L,)) of the lines `Lines` gives; an end excludes the line ending."""
+    text = lines.text
+    starts = np.array(lines.starts, dtype=np.int64)
+    ending = np.ones(len(starts), dtype=np.int64)
+    if "\r\n" in text:
+        ending[:-1] += np.array([text[k - 2:k] == "\r\n" for k in lines.starts[1:]], dtype=bool)
+    ends = np.append(starts[1:], len(text)) - ending
+    ends[-1] = len(text)
+    if len(starts) > 1 and starts[-1] == len(text):  # nothing after the last line ending
+        starts, ends = starts[:-1], ends[:-1]
+    return starts, ends
+
+
+def _instructions(masked, starts, ends, numbers):
+    """``(first line, last line, start, end, content)`` of the /MN instructions on lines ``numbers`` (ascending).
+
+    A line ``  12:L P[3] ...`` is an instruction, ``content`` the text after
+    its number; a line ``  :  P[4] ...`` continues the instruction on the
+    line before it. Other lines are none (statements).
+    """
+    out = []
+    for number in numbers.tolist():
+        start, end = int(starts[number - 1]), int(ends[number - 1])
+        text = masked[start:end]
+        if (c := _CONTINUED.match(text)) and out and out[-1][1] == number - 1:
+            first, _, begin, _, content = out[-1]
+            out[-1] = (first, number, begin, end, content + " " + c.group(1))
+        elif n := _NUMBERED.match(text):
+            out.append((number, number, start, end, n.group(2)))
+    return out
+
+
+def _statements(text, starts, ends, plain, kept):
+    """The statements: lines ``plain`` (their numbers, ascending) and the instructions ``kept``
+    (``(line, start, end, refs)``), as a `StatementTable` in line order."""
+    line = np.concatenate([plain, np.array([k[0] for k in kept], dtype=np.int64)])
+    start = np.concatenate([starts[plain - 1], np.array([k[1] for k in kept], dtype=np.int64)])
+    end = np.concatenate([ends[plain - 1], np.array([k[2] for k in kept], dtype=np.int64)])
+    order = np.argsort(line, kind="stable")
+    row = np.empty(len(order), dtype=np.int64)
+    row[order] = np.arange(len(order))
+    refs = {int(row[len(plain) + k]): named[3] for k, named in enumerate(kept) if named[3]}
+    return StatementTable(line[order], TextSlices(text, start[order], end[order]), 0, refs)
+
+
+MOTIONS_AT_ONCE = 8192  # matches turned into columns together: bounds the objects a long program's read holds
+
+
+def _written_motions(by_line, starts, ends, in_mn, points, unread):
+    """The /MN motion lines written as a CAM post-processor writes them (`_WRITTEN_MOTION`), read at once.
+
+    A line to a position the /POS section lacks or leaves untaught is left
+    out: the one-by-one read then names it.
+
+    Returns
+    -------
+    dict of ndarray
+        Over the K motions, in line order: ``line``, ``kind`` (object),
+        ``target`` (index), ``speed`` (the unit's number), ``unit``
+        (object), ``zone`` (mm, NaN: FINE or CNT0), ``speed`` (K, 2) the
+        offsets of the speed field; ``start``, ``end`` those of the line.
+    """
+    parts = []
+    found = _WRITTEN_MOTION.finditer(by_line)
+    while chunk := [(m.start(), *m.span(3), *m.groups()) for m in itertools.islice(found, MOTIONS_AT_ONCE)]:
+        columns = list(zip(*chunk))
+        parts.append((np.array(columns[:3], dtype=np.int64).T.reshape(-1, 3), np.array(columns[4], dtype=np.int64),
+                      np.array(columns[3:4] + columns[6:8] + [[z or "0" for z in columns[8]]], dtype=object).T))
+    at = np.concatenate([p[0] for p in parts] or [np.zeros((0, 3), dtype=np.int64)])
+    numbers = np.concatenate([p[1] for p in parts] or [np.zeros(0, dtype=np.int64)])
+    words = np.concatenate([p[2] for p in parts] or [np.zeros((0, 4), dtype=object)])  # kind, speed, unit, CNT
+    line = np.searchsorted(starts, at[:, 0], side="right")
+    known = np.array(sorted(points), dtype=np.int64)
+    slot = np.minimum(np.searchsorted(known, numbers), max(len(known) - 1, 0))
+    good = in_mn[line] & (known[slot] == numbers if len(known) else np.zeros(len(line), dtype=bool))
+    good &= ~np.isin(numbers, np.array(list(unread), dtype=np.int64))
+    keep = np.flatnonzero(good)
+    words = words[keep]
+    units = [SPEED_UNITS[u] for u in words[:, 2].tolist()]
+    zone = np.array(words[:, 3].tolist(), dtype=float)
+    index = np.array([points[n] for n in known.tolist()], dtype=np.int64)
+    return {"line": line[keep], "kind": np.array([KINDS[k] for k in words[:, 0].tolist()] or [], dtype=object),
+            "target": index[slot[keep]] if len(keep) else np.zeros(0, dtype=np.int64),
+            "speed": at[keep, 1:], "start": starts[line[keep] - 1], "end": ends[line[keep] - 1],
+            "value": np.array(words[:, 1].tolist(), dtype=float) * np.array([u[0] for u in units]).reshape(-1),
+            "unit": np.array([u[1] for u in units], dtype=object).reshape(-1),
+            "zone": np.where(zone == 0.0, np.nan, zone)}
+
+
+def _motion_block(written, rows, state, table, text):
+    """The `MotionTable` of the written motions ``rows`` (K,), read with the tool and frame ``state`` in force.
+
+    A motion whose position's tool or user frame is set at run time is not
+    compensated, as `_with_frames` decides for the motions read one by one.
+    """
+    target = written["target"][rows]
+    block = MotionTable.block(written["kind"][rows], target, written["line"][rows],
+                              _Squeezed(text, written["start"][rows], written["end"][rows]),
+                              speed=written["value"][rows], speed_unit=written["unit"][rows],
+                              zone=written["zone"][rows], tool=state.tool, frame=state.frame)
+    if not state.runtime():
+        return block
+    why = []
+    for tool, frame, joint in zip(table.tool[target].tolist(), table.frame[target].tolist(),
+                                  table.is_joint[target].tolist()):
+        tool, frame = (state.tool if tool is None else tool), (state.frame if frame is None else frame)
+        why.append(("" if joint else state.reason("tool", tool)) or state.reason("frame", frame))
+    index = [k for k, reason in enumerate(why) if reason]
+    return block.with_rows(index, target=-1, reason=[why[k] for k in index],
+                           refs=[(int(target[k]),) for k in index]) if index else block
+
+
+class _Squeezed(TextSlices):
+    """Lines of a text given by offsets (N,), each built on access with its white space runs made one space."""
+
+    def __getitem__(self, k):
+        pieces = super().__getitem__(k)
+        return [" ".join(p.split()) for p in pieces] if isinstance(k, slice) else " ".join(pieces.split())
+
+
+class _Named(TextSlices):
+    """Names ``P[n]`` of positions from where their numbers ``n`` are written (N,), each built on access."""
+
+    def __getitem__(self, k):
+        numbers = super().__getitem__(k)
+        return [f"P[{n}]" for n in numbers] if isinstance(k, slice) else f"P[{numbers}]"
 
 
 def _with_frames(motion, targets, state):
@@ -257,7 +425,10 @@ def _motion(m, points, unread, name, number, original, registers, register_why):
     return whole_circle(motion)
 
 
-def _written_positions(source, masked, lines, start, end):
+POSITIONS_AT_ONCE = 8192  # matches turned into columns together (`MOTIONS_AT_ONCE`)
+
+
+def _written_positions(masked, start, end):
     """The positions of the /POS section written as the pendant writes them (`_WRITTEN_POSITION`), read at once.
 
     A position whose numbers or configuration the one-by-one read would
@@ -266,104 +437,179 @@ def _written_positions(source, masked, lines, start, end):
     Returns
     -------
     dict
-        ``{offset of its P[: (end offset, Target)}``; the targets' spans are `SpanColumns` rows.
+        Over the G positions kept, in text order: ``at`` (G, 2) the offsets
+        of each entry, ``number`` (G, 2) those of its P number, ``uf``,
+        ``ut`` (object) its frame and tool numbers, ``config`` (tuple each),
+        ``xyzwpr`` (G, 6) its numbers (mm, deg), ``spans`` (G, 2, 7) the
+        offsets of X, Y, Z, W, P, R and CONFIG.
     """
-    found = list(_WRITTEN_POSITION.finditer(masked, start, end))
-    configs = [_CONFIG_VALUE.match(m.group(4)) for m in found]
-    numbers = np.array([m.groups()[4:] for m in found], dtype=float).reshape(-1, 6)  # x, y, z, w, p, r
-    limits = np.array([LENGTH_LIMIT] * 3 + [ANGLE_LIMIT] * 3)
-    good = (np.isfinite(numbers) & (np.abs(numbers) <= limits)).all(axis=1) & np.array([c is not None for c in configs],
-                                                                                       dtype=bool)
-    keep = np.flatnonzero(good)
-    vector = np.concatenate([numbers[keep, :3], np.radians(numbers[keep, 5:2:-1])], axis=1)  # A, B, C = R, P, W
-    poses = pose_to_matrix(vector.reshape(-1, 6))
-    at = np.array([[m.start(k) for k in (5, 6, 7, 8, 9, 10, 4)] + [m.end(k) for k in (5, 6, 7, 8, 9, 10, 4)]
-                   for m in found], dtype=int).reshape(-1, 14)
-    columns = SpanColumns(0, source.text, XYZWPR + ("config",), at[:, :7], at[:, 7:])
-    line = np.searchsorted(lines.starts, [m.start() for m in found], side="right").tolist()
-    out = {}
-    for row, k in enumerate(keep.tolist()):
-        m, v = found[k], configs[k]
-        config = (v.group(1).upper(), v.group(2).upper(), v.group(3).upper(), *map(int, v.groups()[3:]))
-        out[m.start()] = (m.end(), Target(name=f"P[{m.group(1)}]", line=line[k], tool=m.group(3), frame=m.group(2),
-                                          pose=poses[row], config=config, spans=columns.row(k)))
+    parts, shared = [], {}  # a path's positions mostly share their frame, tool and configuration
+    found = _WRITTEN_POSITION.finditer(masked, start, end)
+    while chunk := [(m.regs, m.groups()) for m in itertools.islice(found, POSITIONS_AT_ONCE)]:
+        regs = np.array([r for r, _ in chunk], dtype=np.int64)  # (g, 11, 2): the entry, then groups 1..10
+        words = [g for _, g in chunk]
+        configs = [_CONFIG_VALUE.match(g[3]) for g in words]
+        numbers = np.array([g[4:] for g in words], dtype=float).reshape(-1, 6)
+        limits = np.array([LENGTH_LIMIT] * 3 + [ANGLE_LIMIT] * 3)
+        good = (np.isfinite(numbers) & (np.abs(numbers) <= limits)).all(axis=1)
+        good &= np.array([c is not None for c in configs], dtype=bool)
+        keep = np.flatnonzero(good)
+        parts.append({
+            "at": regs[keep, 0], "number": regs[keep, 1], "xyzwpr": numbers[keep],
+            "uf": [shared.setdefault(words[k][1], words[k][1]) for k in keep.tolist()],
+            "ut": [shared.setdefault(words[k][2], words[k][2]) for k in keep.tolist()],
+            "config": [shared.setdefault(c := _config(configs[k]), c) for k in keep.tolist()],
+            "spans": regs[keep][:, [5, 6, 7, 8, 9, 10, 4]].transpose(0, 2, 1)})
+    empty = {"at": np.zeros((0, 2), dtype=np.int64), "number": np.zeros((0, 2), dtype=np.int64),
+             "xyzwpr": np.zeros((0, 6)), "uf": [], "ut": [], "config": [],
+             "spans": np.zeros((0, 2, 7), dtype=np.int64)}
+    return {key: (np.concatenate([p[key] for p in parts]) if isinstance(value, np.ndarray)
+                  else [v for p in parts for v in p[key]]) for key, value in empty.items()} if parts else empty
+
+
+def _config(value):
+    """``(flip, elbow, front, t1, t4, t6)`` of a `_CONFIG_VALUE` match."""
+    return (value.group(1).upper(), value.group(2).upper(), value.group(3).upper(), *map(int, value.groups()[3:]))
+
+
+def _positions(source, masked, lines, starts, start, end):
+    """Targets of the /POS section as a `TargetTable`, ``{P number: target index}`` and ``{P number: why}`` of
+    positions not read.
+
+    The positions written as the pendant writes them are read at once
+    (`_written_positions`), the others one by one (`_position`), in the
+    order of the section's entries (``P[n]{ .. };``).
+    """
+    points, unread, order, slow = {}, {}, [], []  # order: row of the written ones, or -1 - k of slow[k]
+    if start is not None:
+        written = _written_positions(masked, start, end)
+        at = dict(zip(written["at"][:, 0].tolist(), range(len(written["at"]))))
+        written_end, written_number = written["at"][:, 1].tolist(), written["number"][:, 0].tolist()
+        reached = start  # the entries are those `_POS.finditer` gives: where one ends the next is looked for
+        for head in (m.start() for m in _POS_HEAD.finditer(masked, start, end)):
+            if head < reached:
+                continue
+            if (k := at.get(head)) is not None:
+                points[int(masked[written_number[k]:written["number"][k, 1]])] = len(order)
+                order.append(k)
+                reached = written_end[k]
+            elif m := _POS.match(masked, head, end):
+                reached = m.end()
+                target = _position(source, masked, lines, m, unread)
+                if target is not None:
+                    points[int(m.group(1))] = len(order)
+                    order.append(-1 - len(slow))
+                    slow.append((target, m.span(1)))
+    else:
+        written = _written_positions(masked, 0, 0)
+    return _target_table(source.text, written, np.array(order, dtype=np.int64), slow, starts), points, unread
+
+
+def _target_table(text, written, order, slow, starts):
+    """The `TargetTable` of positions in ``order`` (N,): row k of ``written`` where >= 0, else ``slow[-1 - k]``
+    (``(Target, offsets of its P number)``)."""
+    n, rows = len(order), order[order >= 0]
+    fast = order >= 0
+    one_by_one = TargetTable.of([t for t, _ in slow])
+    roles = XYZWPR + ("config",) + (JOINTS if any(t.is_joint for t, _ in slow) else ())
+    span_at = np.full((n, 2, len(roles)), -1, dtype=np.int64)
+    span_at[fast, :, :7] = written["spans"][rows]
+    column = {role: j for j, role in enumerate(roles)}
+    for k, (target, _) in zip(np.flatnonzero(~fast).tolist(), slow):
+        for role, span in target.spans.items():
+            span_at[k, :, column[role]] = span.start, span.end
+    number_at = np.empty((n, 2), dtype=np.int64)
+    number_at[fast] = written["number"][rows]
+    number_at[~fast] = np.array([at for _, at in slow], dtype=np.int64).reshape(-1, 2)
+
+    def merged(fast_values, slow_values, dtype):
+        if not len(slow):
+            return np.asarray(fast_values, dtype=dtype)
+        out = np.empty((n,) + np.shape(slow_values)[1:], dtype=dtype)
+        out[fast], out[~fast] = fast_values, slow_values
+        return out
+
+    vector = written["xyzwpr"][rows]
+    vector = np.concatenate([vector[:, :3], np.radians(vector[:, 5:2:-1])], axis=1)  # A, B, C = R, P, W
+    pick = rows.tolist()
+    config = merged(_objects([written["config"][k] for k in pick]), _objects(one_by_one.config), object)
+    return TargetTable(
+        pose=merged(pose_to_matrix(vector.reshape(-1, 6)), one_by_one.pose, float),
+        is_joint=merged(np.zeros(len(rows), dtype=bool), one_by_one.is_joint, bool),
+        joints=merged(np.full((len(rows), 6), np.nan), one_by_one.joints, float),
+        line=merged(np.searchsorted(starts, written["at"][rows, 0], side="right"), one_by_one.line, np.int64),
+        config=tuple(config.tolist()),
+        tool=merged(_objects([written["ut"][k] for k in pick]), one_by_one.tool, object),
+        frame=merged(_objects([written["uf"][k] for k in pick]), one_by_one.frame, object),
+        external=tuple(merged(_objects([None] * len(rows)), _objects(one_by_one.external), object).tolist()),
+        edited=np.zeros(n, dtype=bool), name=_Named(text, number_at[:, 0], number_at[:, 1]),
+        spans=SpanColumns(0, text, roles, span_at[:, 0], span_at[:, 1]))
+
+
+def _objects(values):
+    """An object array (N,) of ``values`` (tuples and arrays stay elements)."""
+    out = np.empty(len(values), dtype=object)
+    out[:] = list(values) if len(values) else []
     return out
 
 
-def _positions(source, masked, lines, start, end):
-    """Targets of the /POS section, ``{P number: target index}`` and ``{P number: why}`` of positions not read.
+def _position(source, masked, lines, m, unread):
+    """The target of a /POS entry (`_POS` match ``m``) read one by one, or None (its why put in ``unread``)."""
+    body_start = m.start(2)
+    body = masked[body_start:m.end(2)]
+    groups = {int(g.group(1)): (body_start + g.start(2), g.group(2)) for g in _GROUP.finditer(body)}
+    if 1 not in groups:
+        return None
+    gp_start, gp = groups[1]
+    line = lines.number(m.start())
+    original = source.text[m.start():m.end()]
+    label = f"P[{m.group(1)}]"
+    if "*" in "".join(f.group(2) for f in _FIELD.finditer(gp)):
+        unread[int(m.group(1))] = (f"is not taught (its position is ********, line {line}): the controller faults "
+                                   "only if this line runs")
+        return None
+    fields, units = {}, {}
+    for f in _FIELD.finditer(gp):
+        fields[f.group(1).lower()] = Span(0, gp_start + f.start(2), gp_start + f.end(2), f.group(2))
+        units[f.group(1).lower()] = f.group(3).lower()
+    if "x" not in fields and "j1" not in fields and _OTHER_REPRESENTATION.search(gp):
+        unread[int(m.group(1))] = (f"is stated as RX, RY, RZ, RW, RP, RR (line {line}), a representation "
+                                   "trajcomp does not read: left as written")
+        return None
 
-    Not read: untaught positions (``********``) and positions in a
-    representation trajcomp does not read (``RX = .. mm, .. RR = .. deg``).
-    """
-    targets, points, unread = [], {}, {}
-    if start is None:
-        return targets, points, unread
-    written = _written_positions(source, masked, lines, start, end)
-    for m in _POS.finditer(masked, start, end):
-        if (position := written.get(m.start())) is not None and position[0] == m.end():  # read with the others
-            points[int(m.group(1))] = len(targets)
-            targets.append(position[1])
-            continue
-        body_start = m.start(2)
-        body = masked[body_start:m.end(2)]
-        groups = {int(g.group(1)): (body_start + g.start(2), g.group(2)) for g in _GROUP.finditer(body)}
-        if 1 not in groups:
-            continue
-        gp_start, gp = groups[1]
-        line = lines.number(m.start())
-        original = source.text[m.start():m.end()]
-        label = f"P[{m.group(1)}]"
-        if "*" in "".join(f.group(2) for f in _FIELD.finditer(gp)):
-            unread[int(m.group(1))] = (f"is not taught (its position is ********, line {line}): the controller faults "
-                                       "only if this line runs")
-            continue
-        fields, units = {}, {}
-        for f in _FIELD.finditer(gp):
-            fields[f.group(1).lower()] = Span(0, gp_start + f.start(2), gp_start + f.end(2), f.group(2))
-            units[f.group(1).lower()] = f.group(3).lower()
-        if "x" not in fields and "j1" not in fields and _OTHER_REPRESENTATION.search(gp):
-            unread[int(m.group(1))] = (f"is stated as RX, RY, RZ, RW, RP, RR (line {line}), a representation "
-                                       "trajcomp does not read: left as written")
-            continue
+    def value(role):
+        limit = (LENGTH_LIMIT if role in "xyz" or units[role] == "mm"  # a track's E1 in mm
+                 else ANGLE_LIMIT if role in "wpr" else JOINT_LIMIT)
+        return finite(fields[role].text, source.name, line, original, f"{label} {role.upper()}", limit)
 
-        def value(role):
-            limit = (LENGTH_LIMIT if role in "xyz" or units[role] == "mm"  # a track's E1 in mm
-                     else ANGLE_LIMIT if role in "wpr" else JOINT_LIMIT)
-            return finite(fields[role].text, source.name, line, original, f"{label} {role.upper()}", limit)
-
-        frames = {f.group(1).upper(): f.group(2) for f in _FRAME_NUMBER.finditer(gp)}
-        external = [value(e) for e in sorted(f for f in fields if f.startswith("e"))]
-        for k in sorted(g for g in groups if g > 1):
-            external += [finite(f.group(2), source.name, line, original, f"{label} GP{k} {f.group(1)}", LENGTH_LIMIT)
-                         for f in _FIELD.finditer(groups[k][1]) if "*" not in f.group(2)]
-        where = {"name": label, "line": line, "tool": frames.get("UT"), "frame": frames.get("UF"),
-                 "external": np.array(external) if external else None}
-        if "j1" in fields:
-            missing = [j for j in JOINTS if j not in fields]
-            if missing:
-                fail(source.name, line, original, f"{label} lacks {', '.join(j.upper() for j in missing)}")
-            joints = np.radians([value(j) for j in JOINTS])
-            target = Target(**where, joints=joints, spans={j: fields[j] for j in JOINTS})
-        else:
-            missing = [c for c in XYZWPR if c not in fields]
-            if missing:
-                fail(source.name, line, original, f"{label} lacks {', '.join(c.upper() for c in missing)}")
-            x, y, z, w, p, r = (value(c) for c in XYZWPR)
-            spans = {c: fields[c] for c in XYZWPR}
-            config = ()
-            c = _CONFIG.search(gp)
-            if c:
-                v = _CONFIG_VALUE.match(c.group(1))
-                if not v and _SCARA_CONFIG.match(c.group(1)):
-                    fail(source.name, line, original, f"{label}: CONFIG '{c.group(1)}' is a 4-axis arm's (SCARA, "
-                                                      "arm left or right): 4-axis arms are not supported")
-                if not v:
-                    fail(source.name, line, original, f"{label}: malformed CONFIG")
-                config = (v.group(1).upper(), v.group(2).upper(), v.group(3).upper(), *map(int, v.groups()[3:]))
-                spans["config"] = Span(0, gp_start + c.start(1), gp_start + c.end(1), c.group(1))
-            pose = pose_to_matrix([x, y, z, *np.radians([r, p, w])])
-            target = Target(**where, pose=pose, config=config, spans=spans)
-        points[int(m.group(1))] = len(targets)
-        targets.append(target)
-    return targets, points, unread
+    frames = {f.group(1).upper(): f.group(2) for f in _FRAME_NUMBER.finditer(gp)}
+    external = [value(e) for e in sorted(f for f in fields if f.startswith("e"))]
+    for k in sorted(g for g in groups if g > 1):
+        external += [finite(f.group(2), source.name, line, original, f"{label} GP{k} {f.group(1)}", LENGTH_LIMIT)
+                     for f in _FIELD.finditer(groups[k][1]) if "*" not in f.group(2)]
+    where = {"name": label, "line": line, "tool": frames.get("UT"), "frame": frames.get("UF"),
+             "external": np.array(external) if external else None}
+    if "j1" in fields:
+        missing = [j for j in JOINTS if j not in fields]
+        if missing:
+            fail(source.name, line, original, f"{label} lacks {', '.join(j.upper() for j in missing)}")
+        joints = np.radians([value(j) for j in JOINTS])
+        return Target(**where, joints=joints, spans={j: fields[j] for j in JOINTS})
+    missing = [c for c in XYZWPR if c not in fields]
+    if missing:
+        fail(source.name, line, original, f"{label} lacks {', '.join(c.upper() for c in missing)}")
+    x, y, z, w, p, r = (value(c) for c in XYZWPR)
+    spans = {c: fields[c] for c in XYZWPR}
+    config = ()
+    c = _CONFIG.search(gp)
+    if c:
+        v = _CONFIG_VALUE.match(c.group(1))
+        if not v and _SCARA_CONFIG.match(c.group(1)):
+            fail(source.name, line, original, f"{label}: CONFIG '{c.group(1)}' is a 4-axis arm's (SCARA, "
+                                              "arm left or right): 4-axis arms are not supported")
+        if not v:
+            fail(source.name, line, original, f"{label}: malformed CONFIG")
+        config = _config(v)
+        spans["config"] = Span(0, gp_start + c.start(1), gp_start + c.end(1), c.group(1))
+    pose = pose_to_matrix([x, y, z, *np.radians([r, p, w])])
+    return Target(**where, pose=pose, config=config, spans=spans)
