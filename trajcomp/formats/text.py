@@ -21,7 +21,7 @@ import numpy as np
 from trajcomp.errors import ReadError, WriteError
 from trajcomp.formats.fixed_text import joined_rows
 from trajcomp.programs.items import CIRCULAR, Source, Span, SpanColumns, SpanRow, replaced
-from trajcomp.programs.tables import TargetRows
+from trajcomp.programs.tables import ItemRows, StatementTable, TargetRows
 from trajcomp.arm.transforms import abc_to_matrix, matrix_to_abc
 from trajcomp.support.memory import collection_paused
 
@@ -928,6 +928,9 @@ def _edited(program, shifts, changed):
     if isinstance(program.targets, TargetRows):  # a table's targets move as columns
         edited = _edited(program.replace(targets=()), shifts, changed)
         return edited.replace(targets=_moved_rows(program.targets, shifts, changed))
+    if isinstance(program.items, ItemRows) and isinstance(program.items.table.spans, (SpanColumns, type(None))):
+        edited = _edited(program.replace(items=()), shifts, changed)  # a table's items move as columns
+        return edited.replace(items=_moved_items(program.items, shifts, changed))
     every_target = list(program.targets)
     moving = [bool(t.spans) and _source_of(t.spans) in changed for t in every_target]
     targets = [t for t, move in zip(every_target, moving) if move]  # a target without spans keeps its line
@@ -961,6 +964,22 @@ def _moved_rows(targets, shifts, changed):
     shift = shifts[table.spans.source]
     moved = dataclasses.replace(table, spans=_moved_columns(shift, table.spans), line=shift.lines(table.line))
     return TargetRows(moved)
+
+
+def _moved_items(items, shifts, changed):
+    """`ItemRows` whose motions' spans (`SpanColumns`) and statements' and motions' lines are in the edited texts.
+
+    Texts stay as they are (as `replaced` keeps an item's text).
+    """
+    statements, motions = items.statements, items.table
+    spans = motions.spans
+    if spans is not None and spans.source in changed:
+        spans = _moved_columns(shifts[spans.source], spans)
+    motions = dataclasses.replace(motions, spans=spans, line=np.array(_moved_lines(shifts, motions.source,
+                                                                                   motions.line), dtype=int))
+    statements = StatementTable(_moved_lines(shifts, statements.source, statements.line), statements.text,
+                                statements.source, statements.refs)
+    return ItemRows(statements, motions)
 
 
 def _source_of(spans):
