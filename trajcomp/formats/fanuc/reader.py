@@ -258,6 +258,7 @@ def _statements(text, starts, ends, plain, kept):
 
 
 MOTIONS_AT_ONCE = 8192  # matches turned into columns together: bounds the objects a long program's read holds
+WRITTEN_NUMBERS = 10**9  # position numbers of the motion lines read at once (9 digits, `_WRITTEN_MOTION`) are below
 
 
 def _written_motions(by_line, starts, ends, in_mn, points, unread):
@@ -284,10 +285,10 @@ def _written_motions(by_line, starts, ends, in_mn, points, unread):
     numbers = np.concatenate([p[1] for p in parts] or [np.zeros(0, dtype=np.int64)])
     words = np.concatenate([p[2] for p in parts] or [np.zeros((0, 4), dtype=object)])  # kind, speed, unit, CNT
     line = np.searchsorted(starts, at[:, 0], side="right")
-    known = np.array(sorted(points), dtype=np.int64)
+    known = np.array(sorted(n for n in points if n < WRITTEN_NUMBERS), dtype=np.int64)
     slot = np.minimum(np.searchsorted(known, numbers), max(len(known) - 1, 0))
     good = in_mn[line] & (known[slot] == numbers if len(known) else np.zeros(len(line), dtype=bool))
-    good &= ~np.isin(numbers, np.array(list(unread), dtype=np.int64))
+    good &= ~np.isin(numbers, np.array([n for n in unread if n < WRITTEN_NUMBERS], dtype=np.int64))
     keep = np.flatnonzero(good)
     words = words[keep]
     units = [SPEED_UNITS[u] for u in words[:, 2].tolist()]

@@ -1,35 +1,28 @@
 """The FANUC LS writer: the edited positions and CONFIG into the .LS as read, or a program generated from another
 language (see `trajcomp.formats.fanuc`)."""
 
+import functools
 import math
 import re
-from pathlib import Path
 
 import numpy as np
 
 from trajcomp.errors import WriteError
 
-from trajcomp.formats.fanuc.reader import _CONFIG_VALUE, ABC_ORDER, JOINTS, MIN_PLACES, XYZWPR
+from trajcomp.formats.fanuc.reader import _CONFIG_VALUE, ABC_ORDER, JOINTS, MIN_PLACES
 from trajcomp.formats.fanuc.speeds import time_field
 from trajcomp.formats.text import (
-    TARGETS_AT_ONCE,
-    Edits,
     active_axes,
-    column_decimals,
-    companion_outputs,
     encode_targets,
-    encode_text,
     encode_xyzabc,
     format_number,
     numbered,
     turned_abc,
     where,
     write_single_file,
-    written_numbers,
     written_speed,
 )
-from trajcomp.programs.items import CIRCULAR, JOINT, LINEAR, SpanColumns
-from trajcomp.programs.tables import TargetRows
+from trajcomp.programs.items import CIRCULAR, JOINT, LINEAR
 from trajcomp.arm.transforms import matrix_to_pose
 
 
@@ -52,104 +45,42 @@ def _cartesian(targets, olds):
     return out
 
 
-def write(program, path):
-    """``{path: bytes}``: patched in place if read from .LS, else a generated program.
-
-    The positions of a program read as a table (`trajcomp.programs.tables.TargetRows`, spans as
-    `SpanColumns`) are written from its columns (`_table_edits`), as `trajcomp.formats.text.target_edits`
-    writes targets one by one.
-    """
-    targets = program.targets
-    if (program.format == "fanuc_ls" and program.sources and isinstance(targets, TargetRows)
-            and isinstance(targets.table.spans, SpanColumns) and targets.table.spans.source == 0):
-        edits = _table_edits(targets.table, len(program.sources))
-        texts = [e.applied(source.text) for source, e in zip(program.sources, edits)]
-        return {Path(path): encode_text(program.sources[0], texts[0])} | companion_outputs(program, texts, path)
-    return write_single_file(program, path, "fanuc_ls", _encode, MIN_PLACES, _emit)
-
-
-def _table_edits(table, sources_count):
-    """`Edits` per source writing the edited positions of a `TargetTable` (spans in source 0), `TARGETS_AT_ONCE`
-    at a time: the numbers `_encode` gives, formatted together (`written_numbers`), no object per position.
-
-    Raises
-    ------
-    WriteError
-        A number to write that is not finite (the position named).
-    """
-    edited = np.flatnonzero(table.edited)
-    parts = [_edits_of_rows(table, edited[lo:lo + TARGETS_AT_ONCE]) for lo in range(0, len(edited), TARGETS_AT_ONCE)]
-    return [Edits.joined(parts)] + [Edits.of([]) for _ in range(sources_count - 1)]
-
-
-def _edits_of_rows(table, rows):
-    """The `Edits` of the edited positions ``rows`` (R,) of a table (`_table_edits`)."""
-    spans, text = table.spans, table.spans.text
-    roles = [role for role in XYZWPR + JOINTS if role in spans.column]
-    start = np.stack([spans.start[rows, spans.column[role]] for role in roles], axis=1)  # (R, roles)
-    end = np.stack([spans.end[rows, spans.column[role]] for role in roles], axis=1)
-    old = [[text[a:b] for a, b in zip(s, e)] for s, e in zip(start.tolist(), end.tolist())]
-    old_values = np.array([[_number(t) for t in row] for row in old], dtype=float).reshape(len(rows), len(roles))
-    values = np.full((len(rows), len(roles)), np.nan)
-    written = np.zeros((len(rows), len(roles)), dtype=bool)
+def _encode_columns(table, rows, old):
+    """The numbers of a `TargetTable`'s rows (K,) in FANUC LS, as columns (`trajcomp.formats.text.target_edits`):
+    what `_encode` gives each, a number that is not finite as ``inf`` (refused)."""
     joint = table.is_joint[rows]
-    role_at = {role: j for j, role in enumerate(roles)}
-    if joint.any():
-        at = [role_at[j] for j in JOINTS]
-        values[np.ix_(joint, at)] = np.degrees(table.joints[rows[joint]])
-        written[np.ix_(joint, at)] = True
-    cartesian = ~joint
-    if cartesian.any():
-        poses = table.pose[rows[cartesian]]
-        xyz, abc = [role_at[c] for c in ABC_ORDER[:3]], [role_at[c] for c in ABC_ORDER[3:]]
-        values[np.ix_(cartesian, xyz)] = poses[:, :3, 3]
-        written[np.ix_(cartesian, xyz)] = True
-        turned, angles = turned_abc(poses[:, :3, :3], old_values[np.ix_(cartesian, abc)])
-        turned_rows = np.flatnonzero(cartesian)[turned]
-        values[np.ix_(turned_rows, abc)] = angles
-        written[np.ix_(turned_rows, abc)] = True
-    written &= start >= 0
-    row, column = np.nonzero(written)
-    bad = ~np.isfinite(values[row, column])
-    if bad.any():
-        k = int(np.flatnonzero(bad)[0])
-        raise WriteError(f"target {where(table.target(int(rows[row[k]])))}: {roles[column[k]]} is not a finite "
-                         "number, nothing written")
-    old_texts = [old[r][c] for r, c in zip(row.tolist(), column.tolist())]
-    places = np.maximum(column_decimals(old_texts), np.array([MIN_PLACES.get(roles[c], 0) for c in range(len(roles))],
-                                                              dtype=int)[column])
-    changed, texts = written_numbers(values[row, column], old_texts, old_values[row, column], places)
-    edits = [(a, b, t) for a, b, t, o, change in zip(start[row, column].tolist(), end[row, column].tolist(), texts,
-                                                     old_texts, changed.tolist()) if change and t != o]
-    return Edits.of(edits + _config_edits(table, rows))
+    pose = table.pose[rows]
+
+    def refused(values, rows_of):  # NaN means "left as written" to target_edits: a NaN to write is refused
+        return np.where(rows_of[:, None] & ~np.isfinite(values), np.inf, values)
+
+    out = dict(zip(JOINTS, refused(np.where(joint[:, None], np.degrees(table.joints[rows]), np.nan), joint).T))
+    out |= dict(zip(ABC_ORDER[:3], refused(np.where(joint[:, None], np.nan, pose[:, :3, 3]), ~joint).T))
+    cartesian = np.flatnonzero(~joint)
+    old_abc = np.stack([old.value[role] for role in ABC_ORDER[3:]], axis=1)[cartesian]
+    turned, abc = turned_abc(pose[cartesian, :3, :3], old_abc)
+    angles = np.full((len(rows), 3), np.nan)
+    angles[cartesian[turned]] = abc
+    out |= dict(zip(ABC_ORDER[3:], refused(angles, np.isin(np.arange(len(rows)), cartesian[turned])).T))
+    if "config" in old.text:
+        out["config"] = np.array([_config_change(config, was) if config and not is_joint and was is not None
+                                  else None for config, was, is_joint in
+                                  zip((table.config[i] for i in rows.tolist()), old.text["config"], joint.tolist())],
+                                 dtype=object)
+    return out
 
 
-def _number(text):
-    """The number a span's text states (NaN where it is none)."""
-    try:
-        return float(text)
-    except ValueError:
-        return math.nan
+@functools.lru_cache(maxsize=1024)  # a path's positions mostly share their configuration and how it is written
+def _config_change(config, old):
+    """The CONFIG text to write for ``config`` over the file's ``old`` one; None where they state the same."""
+    v = _CONFIG_VALUE.match(old)
+    was = (v.group(1).upper(), v.group(2).upper(), v.group(3).upper(), *map(int, v.groups()[3:]))
+    return None if tuple(config) == was else _config_text(config)
 
 
-def _config_edits(table, rows):
-    """``(start, end, text)`` edits of the CONFIG strings of positions ``rows`` whose configuration changed."""
-    spans = table.spans
-    if "config" not in spans.column:
-        return []
-    column, read = spans.column["config"], {}
-    edits = []
-    for i, a, b in zip(rows.tolist(), spans.start[rows, column].tolist(), spans.end[rows, column].tolist()):
-        config = table.config[i]
-        if not config or a < 0:
-            continue
-        old = spans.text[a:b]
-        if old not in read:
-            v = _CONFIG_VALUE.match(old)
-            read[old] = (v.group(1).upper(), v.group(2).upper(), v.group(3).upper(), *map(int, v.groups()[3:]))
-        if tuple(config) != read[old]:
-            edits.append((a, b, _config_text(config)))
-    return edits
+def write(program, path):
+    """``{path: bytes}``: patched in place if read from .LS, else a generated program."""
+    return write_single_file(program, path, "fanuc_ls", _encode, MIN_PLACES, _emit, _encode_columns)
 
 
 ATTR = """/ATTR
