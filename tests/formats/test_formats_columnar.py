@@ -23,7 +23,7 @@ DATA = Path(__file__).parents[1] / "data"
 EXAMPLES = Path(__file__).parents[2] / "examples" / "programs"
 AT_ONCE = {  # language -> (module, the function reading declarations at once)
     ".src": (krl_reader, "_written_points"),
-    ".mod": (rapid_reader, "_written_points"),
+    ".mod": (rapid_reader, ("_WRITTEN_POINT", "_WRITTEN_MOTION")),  # the patterns of the lines read at once
     ".ls": (fanuc_reader, "_written_positions"),
     ".script": (urscript_reader, "_literal_poses"),
 }
@@ -52,7 +52,11 @@ def _line_by_line(path, monkeypatch):
     """The program read with no declaration (FANUC: nor motion line) read at once."""
     module, function = AT_ONCE[path.suffix.lower()]
     with monkeypatch.context() as patch:
-        patch.setattr(module, function, NONE_AT_ONCE.get(module, lambda *args: {}))
+        if isinstance(function, tuple):  # patterns: none matches
+            for name in function:
+                patch.setattr(module, name, re.compile(r"(?!)"))
+        else:
+            patch.setattr(module, function, NONE_AT_ONCE.get(module, lambda *args: {}))
         if module is fanuc_reader:
             patch.setattr(module, "_WRITTEN_MOTION", re.compile(r"(?!)"))  # matches nothing
         return formats.read(path)

@@ -1,5 +1,6 @@
 """The RAPID reader: a module's declarations and motion instructions into a `Program` (see `trajcomp.formats.rapid`)."""
 
+import array
 import dataclasses
 import re
 from pathlib import Path
@@ -27,6 +28,7 @@ from trajcomp.formats.text import (
 )
 from trajcomp.programs.program import Program
 from trajcomp.programs.items import CIRCULAR, JOINT, LINEAR, Motion, SpanColumns, SpanTable, Statement, Target, replaced
+from trajcomp.programs.tables import ItemRows, MotionTable, Picked, StatementTable, TargetTable, TextSlices, repeated
 from trajcomp.arm.transforms import quat_to_matrix
 
 POSITION = ("x", "y", "z")
@@ -99,8 +101,16 @@ _ZONE = re.compile(r"^(fine|z(\d+(?:\.\d*)?))$", re.I)
 # (`_written_points`); any other declaration goes statement by statement.
 _NUMBERS = [",".join([f"({NUMBER})"] * count) for count in (3, 4, 4, 6)]
 _WRITTEN_POINT = re.compile(
-    r"^[ \t]*(?:(?:LOCAL|TASK)[ \t]+)*(?:CONST|PERS|VAR)[ \t]+robtarget[ \t]+(\w+)[ \t]*:=[ \t]*\[\["
+    r"^[ \t]*((?:(?:LOCAL|TASK)[ \t]+)*)(CONST|PERS|VAR)[ \t]+robtarget[ \t]+(\w+)[ \t]*:=[ \t]*\[\["
     + r"\],\[".join(_NUMBERS) + r"\]\][ \t]*;()[ \t]*\r?$", re.I | re.M)
+# A MoveL or MoveJ to a named point on one line, as CAM post-processors and trajcomp's converter write it:
+# MoveL p1, v50, z1, tool0\WObj:=wobj1; (the speed data possibly with \V:= or \T:=) -- read at once (`_WrittenMotions`)
+_WRITTEN_MOTION = re.compile(
+    r"^[ \t]*(Move[LJ])[ \t]+([A-Za-z]\w*)[ \t]*,[ \t]*(\w+(?:[ \t]*\\[VT][ \t]*:=[ \t]*" + NUMBER + r")?)[ \t]*,"
+    r"[ \t]*(\w+)[ \t]*,[ \t]*(\w+)[ \t]*(?:\\[ \t]*WObj[ \t]*:=[ \t]*(\w+)[ \t]*)?;()[ \t]*\r?$", re.I | re.M)
+
+
+ROWS_AT_ONCE = 16384  # declarations whose texts become numbers together: bounds a long module's strings
 
 
 def pose(values):
@@ -111,55 +121,146 @@ def pose(values):
     return T
 
 
-def _written_points(source, masked):
+class _WrittenPoints:
     """The robtargets of a module declared on one line as RAPID tools write them (`_WRITTEN_POINT`), read at once.
 
     A declaration whose numbers the statement-by-statement read would
     refuse (out of range, not a rotation, a configuration that is not a
-    whole number) is left out: that read then names it.
+    whole number) is left out: that read then names it; so are the lines
+    ``excluded`` (numbers: part of a statement spread over several lines).
 
-    Returns
-    -------
-    dict
-        ``{line start offset: (name, statement end offset, Target)}``; the
-        targets' spans are `SpanColumns` rows.
+    Attributes
+    ----------
+    table : TargetTable or None
+        The N points as columns (no object each): names (`TextSlices`) and
+        spans (`SpanColumns`) in the module's text; None if there are none.
+    line, start, end : ndarray of int, shape (N,)
+        Line and offsets of each declaration (to its ``;``).
+    shared : ndarray of bool, shape (N,)
+        Whether other modules may assign the point (PERS or VAR, not LOCAL).
     """
-    found = list(_WRITTEN_POINT.finditer(masked))
-    if not found:
-        return {}
-    numbers = np.array([m.groups()[1:18] for m in found], dtype=float)  # (N, 17): x..q4, cf1..cfx, ea..ef
-    position, quat, config, external = numbers[:, :3], numbers[:, 3:7], numbers[:, 7:11], numbers[:, 11:]
-    good = (np.isfinite(numbers[:, :11]) & (np.abs(numbers[:, :11]) <= LENGTH_LIMIT)).all(axis=1)
-    good &= (np.isfinite(external) & (np.abs(external) <= 1e10)).all(axis=1)
-    norm = np.full(len(quat), np.inf)
-    norm[good] = np.linalg.norm(quat[good], axis=1)  # of numbers within range only (1e308 squared overflows)
-    good &= np.abs(norm - 1.0) <= QUAT_TOLERANCE - 1e-9  # at the bound: as the one read
-    good &= (config == np.trunc(config)).all(axis=1)
-    keep = np.flatnonzero(good)
-    T = np.tile(np.eye(4), (len(keep), 1, 1))
-    T[:, :3, :3] = quat_to_matrix(quat[keep])
-    T[:, :3, 3] = position[keep]
-    external = np.where(np.abs(external) >= UNUSED_AXIS, np.nan, external)
-    at = np.array([[m.start(k) for k in range(2, 13)] + [m.end(k) for k in range(2, 13)] for m in found])
-    columns = SpanColumns(0, source.text, POSITION + QUAT + CONF, at[:, :11], at[:, 11:])
-    lines = np.searchsorted(Lines(source.text).starts, [m.start() for m in found], side="right").tolist()
-    configs = config[keep].astype(int).tolist()  # of the rows kept only: a refused row's 1e308 has no int
-    out = {}
-    for row, k in enumerate(keep.tolist()):
-        m = found[k]
-        axes = None if np.isnan(external[k]).all() else external[k]
-        out[m.start()] = (m.group(1), m.end(19), Target(name=m.group(1), line=lines[k], pose=T[row],
-                                                        config=tuple(configs[row]), spans=columns.row(k),
-                                                        external=axes))
-    return out
+
+    def __init__(self, source, masked, lines, excluded=()):
+        self.table, self.line, self.start, self.end = None, *(np.zeros(0, dtype=np.int64) for _ in range(3))
+        self.shared = np.zeros(0, dtype=bool)
+        parts, rows, offsets = [], [], array.array("q")  # no match object kept
+        for m in _WRITTEN_POINT.finditer(masked):
+            if not excluded or lines.number(m.start()) not in excluded:
+                rows.append(m.groups()[:20])
+                offsets.extend((m.start(), m.start(3), m.start(4), m.end(21)))
+                if len(rows) == ROWS_AT_ONCE:
+                    parts.append(_point_columns(rows))
+                    rows = []
+        if rows:
+            parts.append(_point_columns(rows))
+        if not parts:
+            return
+        numbers, length, shared = (np.concatenate(column) for column in zip(*parts))
+        position, quat, config, external = numbers[:, :3], numbers[:, 3:7], numbers[:, 7:11], numbers[:, 11:]
+        good = (np.isfinite(numbers[:, :11]) & (np.abs(numbers[:, :11]) <= LENGTH_LIMIT)).all(axis=1)
+        good &= (np.isfinite(external) & (np.abs(external) <= 1e10)).all(axis=1)
+        norm = np.full(len(quat), np.inf)
+        norm[good] = np.linalg.norm(quat[good], axis=1)  # of numbers within range only (1e308 squared overflows)
+        good &= np.abs(norm - 1.0) <= QUAT_TOLERANCE - 1e-9  # at the bound: as the one read
+        good &= (config == np.trunc(config)).all(axis=1)
+        keep = np.flatnonzero(good)
+        n = len(keep)
+        T = np.tile(np.eye(4), (n, 1, 1))
+        T[:, :3, :3] = quat_to_matrix(quat[keep])
+        T[:, :3, 3] = position[keep]
+        external = np.where(np.abs(external[keep]) >= UNUSED_AXIS, np.nan, external[keep])
+        # offsets: the line's start and its name's from the match, the numbers' from their lengths (no blanks
+        # between them in `_WRITTEN_POINT`: a comma, or "],[" between x, y, z / q1..q4 / cf1..cfx)
+        at = np.frombuffer(offsets, dtype=np.int64).reshape(-1, 4)[keep]  # line start, name, x, after ';'
+        length = length[keep]
+        between = np.array([1, 1, 3, 1, 1, 1, 3, 1, 1, 1])  # characters between one number and the next
+        start = at[:, 2:3] + np.cumsum(np.c_[np.zeros(n, dtype=np.int64), length[:, 1:-1] + between], axis=1)
+        self.start, self.end, self.shared = at[:, 0], at[:, 3], shared[keep]
+        self.line = np.searchsorted(lines.starts, self.start, side="right")
+        unused = np.isnan(external).all(axis=1)
+        configs = {}  # one tuple per distinct confdata: a path's points mostly share theirs
+        none = repeated(None, n)
+        self.table = TargetTable(
+            T, np.zeros(n, dtype=bool), np.full((n, 6), np.nan), self.line,
+            tuple(configs.setdefault(c, c) for c in map(tuple, config[keep].astype(int).tolist())), none, none,
+            (None,) * n if unused.all() else tuple(None if u else e for u, e in zip(unused.tolist(), external)),
+            np.zeros(n, dtype=bool), TextSlices(source.text, at[:, 1], at[:, 1] + length[:, 0]),
+            SpanColumns(0, source.text, POSITION + QUAT + CONF, start, start + length[:, 1:]))
 
 
-def _statements(source, masked):
+def _point_columns(rows):
+    """Numbers (K, 17), lengths of the name and of x .. cfx (K, 12) and whether other modules may assign the
+    point (K,) of `_WRITTEN_POINT`'s groups 1 .. 20 (K rows of str)."""
+    texts = np.array(rows, dtype=str)  # LOCAL / TASK, storage, name, x..q4, cf1..cfx, ea..ef
+    shared = (np.strings.upper(texts[:, 1]) != "CONST") & (np.strings.find(np.strings.upper(texts[:, 0]), "LOCAL") < 0)
+    return texts[:, 3:].astype(float), np.strings.str_len(texts[:, 2:14]).astype(np.int64), shared
+
+
+class _WrittenMotions:
+    """The motions of a module written one a line as CAM tools write them (`_WRITTEN_MOTION`), as columns.
+
+    What a motion's instruction states besides its point (kind, speed,
+    zone, tool, work object) is read once per distinct text (``combo``)
+    and stretch of the program between other statements (`_Reader.run`),
+    by the statement-by-statement read itself; each motion's point is
+    resolved with the others (`_resolve`).
+
+    Attributes
+    ----------
+    line, start, end : ndarray of int, shape (M,)
+        Line and offsets of each instruction (to its ``;``).
+    name : ndarray of int, shape (M, 2)
+        Offsets of its point's name.
+    speed : ndarray of int, shape (M, 2)
+        Offsets of its speed data (with ``\\V`` / ``\\T``).
+    combo : ndarray of int, shape (M,)
+        Code of its instruction, speed, zone, tool and work object texts.
+    """
+
+    def __init__(self, masked, lines, excluded=()):
+        codes, rows = {}, array.array("q")
+        for m in _WRITTEN_MOTION.finditer(masked):
+            key = (m.group(1).upper(), m.group(3), m.group(4), m.group(5), m.group(6))
+            rows.extend((m.start(), m.end(7), *m.span(2), *m.span(3), codes.setdefault(key, len(codes))))
+        columns = np.frombuffer(rows, dtype=np.int64).reshape(-1, 7)
+        line = np.searchsorted(lines.starts, columns[:, 0], side="right")
+        keep = ~np.isin(line, list(excluded))
+        columns = columns[keep]
+        self.line, self.start, self.end = line[keep], columns[:, 0], columns[:, 1]
+        self.name, self.speed, self.combo = columns[:, 2:4], columns[:, 4:6], columns[:, 6]
+        self.proto = np.zeros(len(self.line), dtype=int)  # index into `_Reader.protos` (`_Reader.read_at_once`)
+        self.parameter = np.zeros(len(self.line), dtype=bool)  # the point is a routine parameter
+
+    def __len__(self):
+        return len(self.line)
+
+
+def _statements(source, masked, lines=None, skipped=None):
     """``(line, start, end)`` of each statement: declarations and motions up to their ``;``, a routine's head
-    up to the ``)`` of its parameters, else one line."""
-    lines = Lines(source.text)
+    up to the ``)`` of its parameters, else one line.
+
+    ``skipped``: bool (L + 1,) of the lines read at once (`_written_points`,
+    `_WrittenMotions`), left out; `_Spread` names one a statement begun
+    before it runs into.
+    """
+    lines = lines or Lines(source.text)
     out, pending = [], None
-    for number, start, end in lines:
+    if skipped is None:
+        numbered = iter(lines)
+    else:
+        numbers = np.flatnonzero(~skipped[1:]) + 1
+        starts = np.asarray(lines.starts)
+        numbered = zip(numbers.tolist(), starts[numbers - 1].tolist(),
+                       np.append(starts, len(source.text))[numbers].tolist())
+    previous = 0
+    for number, start, end in numbered:
+        if skipped is not None:
+            end = start + len(source.text[start:end].rstrip("\r\n"))
+            if number > previous + 1 and pending is not None:
+                raise _Spread(previous + 1)
+            previous = number
+            if start == end and number == len(lines.starts):
+                break
         if pending is not None:
             if pending[2] in masked[start:end]:
                 out.append((pending[0], pending[1], start + masked[start:end].index(pending[2]) + 1))
@@ -175,13 +276,26 @@ def _statements(source, masked):
         else:
             out.append((number, start, end))
     if pending is not None:
+        if skipped is not None and previous < len(lines.starts) and skipped[previous + 1:].any():
+            raise _Spread(previous + 1 + int(np.argmax(skipped[previous + 1:])))
         fail(source.name, pending[0], source.text[pending[1]:pending[1] + 80], f"statement without '{pending[2]}'")
     return out
+
+
+class _Spread(Exception):
+    """A statement spread over several lines runs into a line read at once (``args[0]``: its number)."""
 
 
 def _bare(argument):
     """An argument without its optional parts (``\\V:=...``, ``\\WObj:=...``, ``\\NoEOffs``)."""
     return argument.partition("\\")[0].strip()
+
+
+@dataclasses.dataclass(frozen=True)
+class _Run:
+    """Motions read at once (``rows`` of `_WrittenMotions`), in program order between the reader's items."""
+
+    rows: np.ndarray
 
 
 @dataclasses.dataclass(frozen=True)
@@ -209,7 +323,63 @@ class _Reader:
         self.in_force = {}  # lower name of a VAR speeddata -> (value, why) a straight-line assignment gave it
         self.touched = {}  # lower name of a VAR speeddata -> first line of a statement that may change it
         self.task = None  # the other modules of the task (`DeclaredElsewhere`), which may assign a VAR too
-        self.motion_spans = SpanTable(MOTION_SPANS)  # the spans of the motions, in order
+        self.motion_spans = SpanTable(MOTION_SPANS)  # the spans of the motions read one by one, in order
+        self.protos = []  # Motion of each distinct instruction of motions read at once (`read_at_once`)
+
+    def statement(self, masked, line, start, end):
+        """Read the statement at ``start:end`` (line ``line``): a declaration, a motion, an assignment ..."""
+        text, original = masked[start:end], self.source.text[start:end]
+        if m := _ROUTINE.match(text):
+            # parameters: separated by commas, an optional one introduced by '\' (alternatives by '|')
+            self.params = {_WORD.findall(p.split("{")[0])[-1].lower() for p in re.split(r"[,\\|]", m.group(1))
+                           if _WORD.findall(p.split("{")[0])}
+        if m := _DECL.match(text):
+            self.declaration(m, start, line, original)
+        elif m := _DECL_BARE.match(text):
+            for name in re.split(r"\s*,\s*", m.group(1)):
+                self.unset[name.lower()] = f"{name} is declared without a value (set at run time, line {line})"
+        elif _STARTS_MOTION.match(text) and (m := _INSTRUCTION.match(text)):
+            motion, offsets = self.motion(m.group(1), m.group(2), start + m.start(2), line, original)
+            self.motion_spans.add(offsets)
+            self.items.append(motion)
+            return
+        elif m := _ASSIGN.match(text):
+            self.assignment(m, line, original)
+        self.flow(text, line, original)
+        self.items.append(Statement(line, original))
+
+    def read_at_once(self, points, motions, is_motion, rows):
+        """Take lines read at once (in program order; ``rows`` of ``points`` or, where ``is_motion``, of
+        ``motions``): the points become targets; the motions a `_Run`, read with the state in force here.
+
+        Each distinct text of the motions' instructions (but their points) is
+        read once, by `motion` on its first line: what it states (speed,
+        zone, tool, work object, or why one is known at run time only) is
+        that of each motion writing it.
+        """
+        for row in rows[~is_motion].tolist():
+            key = points.table.name[row].lower()
+            self.points[key] = len(self.targets)
+            self.targets.append(row)  # a row of the table
+            if points.shared[row]:
+                self.shared.add(key)
+        run = rows[is_motion]
+        if not len(run):
+            return
+        codes, first = np.unique(motions.combo[run], return_index=True)
+        proto = np.empty(codes.max() + 1, dtype=int)
+        for code, row in sorted(zip(codes.tolist(), run[first].tolist()), key=lambda pair: pair[1]):
+            start, end = int(motions.start[row]), int(motions.end[row])
+            original = self.source.text[start:end]  # no comment or string inside: as masked
+            m = _INSTRUCTION.match(original)
+            motion, _ = self.motion(m.group(1), m.group(2), start + m.start(2), int(motions.line[row]), original)
+            proto[code] = len(self.protos)
+            self.protos.append(motion)
+        motions.proto[run] = proto[motions.combo[run]]
+        if self.params:
+            motions.parameter[run] = [self.source.text[a:b].lower() in self.params
+                                      for a, b in motions.name[run].tolist()]
+        self.items.append(_Run(run))
 
     def scan_data(self, masked):
         """Note the module's speeddata and num declarations (a motion may use one declared further down), and
@@ -426,13 +596,14 @@ class _Reader:
         return self.active[group].get(key, text), self.why.get(key, "")
 
     def motion(self, instruction, rest, start, line, original):
+        """The `Motion` of an instruction (its points: target indices or `_Named`) and its spans' offsets
+        ``{role: (start, end)}`` (`MOTION_SPANS`)."""
         keyword = instruction.upper()
         family = _FAMILIES.get(keyword)
         text = " ".join(original.split())
         if family is None:
-            self.motion_spans.add({})
             return Motion(kind=LINEAR, line=line, text=text,
-                          reason=f"{instruction}: instruction not read by trajcomp, left as written")
+                          reason=f"{instruction}: instruction not read by trajcomp, left as written"), {}
         kind = KINDS[family]
         pieces = split_top(rest, start)
         options = {k.lower(): (v or "").strip() for p, _ in pieces for k, v in _OPTION.findall(p)}
@@ -443,7 +614,7 @@ class _Reader:
             fail(self.source.name, line, original, f"{instruction} needs {count + 3} arguments")
         found = [self.position(p, s, keyword, line, original) for p, s in positional[:count]]
         roles = ("via_name", "target_name")[2 - count:]
-        self.motion_spans.add(  # where re-timing writes, the points' names (`trajcomp.formats.uses`): offsets
+        offsets = (  # where re-timing writes, the points' names (`trajcomp.formats.uses`)
             {"speed": _stripped_offsets(*positional[count])}
             | {role: name_offsets(p, s) for role, (p, s), point in zip(roles, positional, found)
                if isinstance(point, _Named)})
@@ -473,8 +644,8 @@ class _Reader:
             text=text,
             reason=reason or tool_why or frame_why,
             speed_why=speed_why,
-            orientation_speed=np.radians(orientation) if orientation else None,
-        )
+            orientation_speed=float(np.radians(orientation)) if orientation else None,
+        ), offsets
 
     def declared_in(self, file, line):
         """The declaration another module of the task makes at ``file``:``line`` (a point, a tool or a work
@@ -549,44 +720,56 @@ def read(path):
         raise ReadError(f"{path}: not a RAPID module: no MODULE line")
     check_closed(source, masked, _BLOCK_OPENS, _BLOCK_CLOSES,
                  {"MODULE": "ENDMODULE", "PROC": "ENDPROC", "FUNC": "ENDFUNC", "TRAP": "ENDTRAP"})
-    reader = _Reader(source)
     folder = Path(path).parent
     folders = [folder.parent / "PROGMOD", folder.parent / "SYSMOD"] if folder.name.upper() in ("PROGMOD", "SYSMOD") \
         else [folder]  # a backup's TASKn holds its modules in PROGMOD and SYSMOD
     modules = (".mod", ".modx", ".sys", ".prg")
-    reader.task = DeclaredElsewhere(Path(path), folders, modules, _TASK_POINT, "!", assignment=_ASSIGNED_POINT)
-    reader.scan_data(masked)
-    written = _written_points(source, masked)
-    for line, start, end in _statements(source, masked):
-        text, original = masked[start:end], source.text[start:end]
-        if (point := written.get(start)) is not None and point[1] == end:  # a robtarget read with the others
-            reader.point(point[0], point[2], original)
-            reader.items.append(Statement(line, original))
-            continue
-        if m := _ROUTINE.match(text):
-            # parameters: separated by commas, an optional one introduced by '\' (alternatives by '|')
-            reader.params = {_WORD.findall(p.split("{")[0])[-1].lower() for p in re.split(r"[,\\|]", m.group(1))
-                             if _WORD.findall(p.split("{")[0])}
-        if m := _DECL.match(text):
-            reader.declaration(m, start, line, original)
-        elif m := _DECL_BARE.match(text):
-            for name in re.split(r"\s*,\s*", m.group(1)):
-                reader.unset[name.lower()] = f"{name} is declared without a value (set at run time, line {line})"
-        elif _STARTS_MOTION.match(text) and (m := _INSTRUCTION.match(text)):
-            reader.items.append(reader.motion(m.group(1), m.group(2), start + m.start(2), line, original))
-            continue
-        elif m := _ASSIGN.match(text):
-            reader.assignment(m, line, original)
-        reader.flow(text, line, original)
-        reader.items.append(Statement(line, original))
-    items = _resolve(reader, reader.task, DeclaredElsewhere(Path(path), folders, modules, _TASK_FRAME, "!"))
+    lines, excluded = Lines(source.text), set()
+    while True:  # a statement spread over lines that look read-at-once takes them back (`_Spread`): rare
+        reader = _Reader(source)
+        reader.task = DeclaredElsewhere(Path(path), folders, modules, _TASK_POINT, "!", assignment=_ASSIGNED_POINT)
+        reader.scan_data(masked)
+        points, motions = _WrittenPoints(source, masked, lines, excluded), _WrittenMotions(masked, lines, excluded)
+        skipped = np.zeros(len(lines.starts) + 1, dtype=bool)
+        skipped[points.line] = True
+        skipped[motions.line] = True
+        try:
+            statements = _statements(source, masked, lines, skipped)
+            break
+        except _Spread as spread:
+            excluded.add(spread.args[0])
+    bulk = np.concatenate([points.line, motions.line])
+    order = np.argsort(bulk, kind="stable")
+    at_once, is_motion = bulk[order], order >= len(points.line)
+    row_of = np.where(is_motion, order - len(points.line), order)  # row of points / motions
+    next_bulk = 0
+    for line, start, end in statements + [(len(lines.starts) + 1, len(source.text), len(source.text))]:
+        stop = int(np.searchsorted(at_once, line))
+        if stop > next_bulk:  # the lines read at once before this statement: points, then runs of motions
+            reader.read_at_once(points, motions, is_motion[next_bulk:stop], row_of[next_bulk:stop])
+            next_bulk = stop
+        if start == len(source.text):
+            break
+        reader.statement(masked, line, start, end)
+    items = _resolve(reader, reader.task, DeclaredElsewhere(Path(path), folders, modules, _TASK_FRAME, "!"), motions)
+    table = points.table
     companions = tuple(source for _, source, _, _ in reader.companions.values())
-    return Program(
-        "rapid", module.group(1), items, tuple(reader.targets), reader.tools, reader.frames, (source, *companions)
-    )
-
-
-def _resolve(reader, task, frames):
+    sources = (source, *companions)
+    if table is None and not len(motions):  # nothing read at once: the program of objects
+        return Program("rapid", module.group(1), items[0], tuple(reader.targets), reader.tools, reader.frames,
+                       sources)
+    objects, bulk_motions = items
+    statement_table = StatementTable(points.line, TextSlices(source.text, points.start, points.end))
+    motion_table = MotionTable.merged([MotionTable.of([item for item in objects if isinstance(item, Motion)]),
+                                       bulk_motions])
+    statements = StatementTable.merged([[item for item in objects if isinstance(item, Statement)], statement_table])
+    targets = _targets(reader.targets, table)
+    if isinstance(targets, TargetTable):
+        return Program.from_tables("rapid", module.group(1), statements, motion_table, targets, sources,
+                                   tools=reader.tools, frames=reader.frames)
+    return Program("rapid", module.group(1), ItemRows(statements, motion_table), targets, reader.tools, reader.frames,
+                   sources)
+def _resolve(reader, task, frames, motions):
     """The items with named points resolved; points assigned at run time and routine arguments found.
 
     A point another module of the task declares (``task``, `DeclaredElsewhere`)
@@ -594,6 +777,13 @@ def _resolve(reader, task, frames):
     assigns it; so is one of the module's own PERS or VAR points that
     another module assigns. So are tools and work objects another module
     declares (``frames``).
+
+    Returns
+    -------
+    items : tuple of Motion and Statement
+        Those read one by one.
+    motions : MotionTable
+        Those read at once (``motions``, `_WrittenMotions`).
     """
     assigned = {}
     for item in reader.items:
@@ -641,7 +831,33 @@ def _resolve(reader, task, frames):
     items = []
     motion_spans = reader.motion_spans.columns(reader.index, reader.source.text)  # the motions' rows, in order
     motion_rows = iter(range(len(motion_spans)))
+    bulk_target = np.full(len(motions), -1)
+    bulk_reason = np.empty(len(motions), dtype=object)
+    refs, frames_of = {}, [None] * len(reader.protos)  # ((tool, why), (frame, why)) of each proto
+    text = reader.source.text
     for item in reader.items:
+        if isinstance(item, _Run):  # as a Motion below, without an object each
+            rows = item.rows
+            for row, proto, (a, b), parameter, line in zip(
+                    rows.tolist(), motions.proto[rows].tolist(), motions.name[rows].tolist(),
+                    motions.parameter[rows].tolist(), motions.line[rows].tolist()):
+                key = text[a:b].lower()
+                index = reader.points.get(key)
+                if parameter or index is None or key in assigned or key in reader.shared:
+                    index, why = lookup(_Named(text[a:b], line, parameter))
+                else:
+                    why = ""
+                if frames_of[proto] is None:
+                    frames_of[proto] = (elsewhere(reader.protos[proto].tool, "tool"),
+                                        elsewhere(reader.protos[proto].frame, "wobj"))
+                (_, tool_why), (_, frame_why) = frames_of[proto]
+                bulk_reason[row] = why or reader.protos[proto].reason or tool_why or frame_why
+                if bulk_reason[row]:
+                    refs[row] = named(text[motions.start[row]:motions.end[row]]) + (
+                        (index,) if isinstance(index, int) else ())
+                else:
+                    bulk_target[row] = -1 if index is None else index  # missing: refused below
+            continue
         if isinstance(item, Motion):
             (via, via_why), (target, why) = lookup(item.via), lookup(item.target)
             (tool, tool_why), (frame, frame_why) = elsewhere(item.tool, "tool"), elsewhere(item.frame, "wobj")
@@ -652,9 +868,86 @@ def _resolve(reader, task, frames):
                                            + tuple(i for i in (via, target) if isinstance(i, int)))
             else:
                 item = whole_circle(replaced(item, target=target, via=via))
-        elif not _DECL.match(mask(item.text, "!")) and (refs := named(item.text)):
-            item = dataclasses.replace(item, refs=refs)
+        elif not _DECL.match(mask(item.text, "!")) and (names := named(item.text)):
+            item = dataclasses.replace(item, refs=names)
         items.append(item)
     if missing:
         unresolved(reader.source.name, missing, "no module of its folder declares them either")
-    return tuple(items)
+    return tuple(items), _motion_table(reader, motions, bulk_target, bulk_reason, refs, frames_of)
+
+
+def _motion_table(reader, motions, target, reason, refs, frames_of):
+    """The `MotionTable` of the motions read at once, their points resolved (`_resolve`): ``target`` (M,), -1
+    where ``reason`` (M,) says why not; ``refs`` ``{row: target indices}``; ``frames_of`` the tool and work
+    object of each proto (`_Reader.read_at_once`)."""
+    protos = reader.protos
+
+    def column(values, dtype=object):
+        return np.array(values, dtype=dtype)[motions.proto] if protos else np.zeros(0, dtype=dtype)
+
+    def number(value):
+        return np.nan if value is None else value
+
+    m, text = len(motions), reader.source.text
+    given = np.zeros((m, 3), dtype=bool)
+    given[:, [0, 2]] = True
+    start = np.where(given, np.c_[motions.speed[:, 0], np.zeros(m, dtype=np.int64), motions.name[:, 0]], -1)
+    end = np.where(given, np.c_[motions.speed[:, 1], np.zeros(m, dtype=np.int64), motions.name[:, 1]], -1)
+    return MotionTable(
+        kind=column([p.kind for p in protos]), target=target, via=np.full(m, -1),
+        speed=column([number(p.speed) for p in protos], float), speed_unit=column([p.speed_unit for p in protos]),
+        zone=column([number(p.zone) for p in protos], float),
+        tool=column([None if f is None else f[0][0] for f in frames_of]),
+        frame=column([None if f is None else f[1][0] for f in frames_of]),
+        line=motions.line, axis_position=np.zeros(m, dtype=bool),
+        orientation_speed=column([number(p.orientation_speed) for p in protos], float),
+        source=np.full(m, reader.index), text=_Instructions(text, motions.start, motions.end),
+        reason=reason,
+        speed_why=column([p.speed_why for p in protos]), refs=refs,
+        spans=SpanColumns(reader.index, text, MOTION_SPANS, start, end))
+
+
+class _Instructions(TextSlices):
+    """The instructions of motions given by their offsets, each as `Motion.text` writes it (one line, single
+    blanks), built on access."""
+
+    def __getitem__(self, k):
+        if isinstance(k, slice):
+            return [" ".join(t.split()) for t in super().__getitem__(k)]
+        return " ".join(super().__getitem__(k).split())
+
+
+
+def _targets(targets, table):
+    """The program's targets: ``targets`` in order, each a row of ``table`` (int, a point read at once) or a
+    `Target`; as one `TargetTable` when all lie in the module (their spans in source 0), else a tuple of
+    `Target`."""
+    rows = np.array([t if isinstance(t, int) else -1 for t in targets], dtype=int)
+    if table is not None and np.array_equal(rows, np.arange(len(table))):  # all points read at once, in order
+        return table
+    objects = [t for t in targets if not isinstance(t, int)]
+    if table is None or any(t.spans and next(iter(t.spans.values())).source != 0 for t in objects):
+        return tuple(table.target(t) if isinstance(t, int) else t for t in targets)
+    extra = TargetTable.of(objects)  # the few targets read one by one (jointtargets, inline, spread)
+    pick = np.where(rows >= 0, rows, len(table) + np.cumsum(rows < 0) - 1)  # row of [table; extra] of each
+
+    def joined(name):
+        values = (getattr(table, name), getattr(extra, name))
+        return np.concatenate(values)[pick] if isinstance(values[0], np.ndarray) else \
+            tuple(values[0][k] if k < len(table) else values[1][k - len(table)] for k in pick.tolist())
+
+    roles = table.spans.roles + JOINTS
+    start, end = (np.full((len(targets), len(roles)), -1, dtype=np.int64) for _ in range(2))
+    at_once = np.flatnonzero(rows >= 0)
+    start[at_once, :len(table.spans.roles)] = table.spans.start[rows[at_once]]
+    end[at_once, :len(table.spans.roles)] = table.spans.end[rows[at_once]]
+    column = {role: j for j, role in enumerate(roles)}
+    for k, target in zip(np.flatnonzero(rows < 0).tolist(), objects):
+        for role, span in target.spans.items():
+            start[k, column[role]], end[k, column[role]] = span.start, span.end
+    part = (pick >= len(table)).astype(int)
+    return TargetTable(
+        **{name: joined(name) for name in ("pose", "is_joint", "joints", "line", "config", "tool", "frame",
+                                           "external", "edited")},
+        name=Picked([table.name, [t.name for t in objects]], part, np.where(part, pick - len(table), pick)),
+        spans=SpanColumns(0, table.spans.text, roles, start, end))

@@ -11,13 +11,15 @@ def write_speeds(program, result, robot, plan):
     program with its fields written and the setting written per waypoint.
     """
     edits, settings = [], {}
+    source, start, end = program.motion_table().span_offsets("speed")  # as columns: no object per motion
     for k in sorted({**plan.times, **plan.cruise}):
-        span = program.motions[result.motion[k]].spans["speed"]
-        speed_data = span.text.split("\\")[0].rstrip()  # v20 of v20\V:=15 or v20\T:=4
+        m = result.motion[k]
+        text = program.sources[source[m]].text[start[m]:end[m]]
+        speed_data = text.split("\\")[0].rstrip()  # v20 of v20\V:=15 or v20\T:=4
         if k in plan.cruise:
             written = f"{speed_data}\\V:={format_number(floor_places(plan.cruise[k], 3), 3)}"
         else:
             written = f"{speed_data}\\T:={format_number(ceil_places(plan.times[k], 3), 3)}"
-        edits.append((span.start, span.end, written))
+        edits.append((int(start[m]), int(end[m]), written))
         settings[k] = written
     return edit_sources(program, [edits]), settings

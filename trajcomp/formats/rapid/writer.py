@@ -51,9 +51,33 @@ def _cartesian(targets, olds):
     return out
 
 
+def _encode_columns(table, rows, old):
+    """The numbers of a `TargetTable`'s rows (K,) in RAPID, as columns (`trajcomp.formats.text.target_edits`):
+    `_encode` without an object per target."""
+    joint = table.is_joint[rows]
+    out = dict(zip(JOINTS, np.where(joint[:, None], np.degrees(table.joints[rows]), np.nan).T))
+    cartesian = np.flatnonzero(~joint)
+    poses = table.pose[rows[cartesian]]
+    position = np.full((len(rows), 3), np.nan)
+    position[cartesian] = poses[:, :3, 3]
+    out |= dict(zip(POSITION, position.T))
+    old_quat = np.stack([old.value[q] for q in QUAT], axis=1)[cartesian]
+    turned = ~same_rotation(poses[:, :3, :3], quat_to_matrix(old_quat))
+    quat = matrix_to_quat(poses[turned, :3, :3])
+    quats = np.full((len(rows), 4), np.nan)
+    quats[cartesian[turned]] = np.where(np.sum(quat * old_quat[turned], axis=1, keepdims=True) < 0, -quat, quat)
+    out |= dict(zip(QUAT, quats.T))
+    texts = {}  # the confdata texts of each distinct configuration: a path's points mostly share theirs
+    configs = [texts.setdefault(config, tuple(map(str, config))) if config and not is_joint else None
+               for config, is_joint in zip((table.config[i] for i in rows.tolist()), joint.tolist())]
+    for k, role in enumerate(CONF):
+        out[role] = np.array([c[k] if c is not None and k < len(c) else None for c in configs], dtype=object)
+    return out
+
+
 def write(program, path):
     """``{path: bytes}``: patched in place if read from RAPID, else a generated module."""
-    return write_single_file(program, path, "rapid", _encode, MIN_PLACES, _emit)
+    return write_single_file(program, path, "rapid", _encode, MIN_PLACES, _emit, _encode_columns)
 
 
 def _numbers(values, places):

@@ -1,0 +1,140 @@
+"""A RAPID module written as CAM tools write it, read at once (`_WRITTEN_POINT`, `_WRITTEN_MOTION`): the same
+program as the statement-by-statement read, the state in force at each line (tool, work object, speed data,
+routine parameters, points assigned at run time), without an object per line."""
+
+import re
+
+import numpy as np
+import pytest
+
+from trajcomp import formats
+from trajcomp.errors import ReadError
+from trajcomp.formats.rapid import reader as rapid_reader
+from trajcomp.programs.tables import ItemRows, TargetRows
+
+POINT = "  CONST robtarget p{0}:=[[{0}00,{0}0,500],[0,0,1,0],[0,0,0,1],[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]];"
+
+
+def _module(*body, points=4):
+    return "\n".join(["MODULE Cam", *(POINT.format(k) for k in range(1, points + 1)), *body, "ENDMODULE", ""])
+
+
+def _seen(program):
+    """Everything a read gives, comparable: targets bit for bit with their spans, items, tools and frames."""
+    targets = [(t.name, t.line, None if t.pose is None else t.pose.tobytes(), t.config, t.tool, t.frame,
+                dict(t.spans)) for t in program.targets]
+    return targets, [repr(item) for item in program.items], sorted(program.tools), sorted(program.frames)
+
+
+def _both(path, monkeypatch):
+    """The program read at once, and read statement by statement (neither pattern matching)."""
+    at_once = formats.read(path)
+    with monkeypatch.context() as patch:
+        for name in ("_WRITTEN_POINT", "_WRITTEN_MOTION"):
+            patch.setattr(rapid_reader, name, re.compile(r"(?!)"))
+        return at_once, formats.read(path)
+
+
+STATES = {
+    "tool and work object set between runs": _module(
+        "  PERS tooldata tGun:=[TRUE,[[0,0,100],[1,0,0,0]],[1,[0,0,1],[1,0,0,0],0,0,0]];",
+        "  PERS wobjdata wPart:=[FALSE,TRUE,\"\",[[10,20,30],[1,0,0,0]],[[0,0,0],[1,0,0,0]]];",
+        "  PROC main()",
+        "    MoveL p1, v50, z1, tGun\\WObj:=wPart;",
+        "    tGun.tframe := [[0,0,150],[1,0,0,0]];",
+        "    MoveL p2, v50, z1, tGun\\WObj:=wPart;",
+        "    MoveJ p3, vmax, fine, tool0;",
+        "  ENDPROC"),
+    "VAR speed data assigned in the code": _module(
+        "  VAR speeddata vCut:=[80,500,5000,1000];",
+        "  PROC main()",
+        "    MoveL p1, vCut, z1, tool0;",
+        "    vCut := [40,200,5000,1000];",
+        "    MoveL p2, vCut, z1, tool0;",
+        "    WaitTime 1;",
+        "    MoveL p3, vCut, z1, tool0;",
+        "    IF TRUE THEN",
+        "      MoveL p4, vCut\\V:=30, z5, tool0;",
+        "    ENDIF",
+        "  ENDPROC"),
+    "routine parameter, point assigned, expression": _module(
+        "  PROC go(robtarget p2)",
+        "    MoveL p2, v100, z1, tool0;",
+        "    MoveL p1, v100\\T:=2.5, z1, tool0;",
+        "  ENDPROC",
+        "  PROC main()",
+        "    p3.trans.x := 5;",
+        "    MoveL p3, v100, z1, tool0;",
+        "    MoveL Offs(p4,0,0,10), v100, z1, tool0;",
+        "    MoveL p4, v100, z1, tool9;",
+        "    go p2;",
+        "  ENDPROC"),
+    "a statement spread over lines that look read at once": _module(
+        "  PROC main()",
+        "    MoveL p1, v100,",
+        "    MoveL p2, v100, z1, tool0;",
+        "    MoveL p3, v100, z1, tool0;",
+        "  ENDPROC"),
+}
+
+
+@pytest.mark.parametrize("text", STATES.values(), ids=STATES)
+def test_a_module_read_at_once_is_the_one_read_statement_by_statement(tmp_path, monkeypatch, text):
+    path = tmp_path / "Cam.mod"
+    path.write_text(text)
+    at_once, one_by_one = _both(path, monkeypatch)
+    assert isinstance(at_once.items, ItemRows) and not isinstance(one_by_one.items, ItemRows)
+    assert _seen(at_once) == _seen(one_by_one)
+    assert at_once.not_compensated() == one_by_one.not_compensated()
+
+
+def test_the_state_in_force_at_each_line(tmp_path):
+    path = tmp_path / "Cam.mod"
+    path.write_text(STATES["VAR speed data assigned in the code"])
+    program = formats.read(path)
+    assert isinstance(program.targets, TargetRows)  # every point read at once
+    speeds = [(m.speed, m.speed_why[:26]) for m in program.motions]
+    # changed in the code: run time until assigned a literal, which holds while the code runs straight (WaitTime)
+    assert speeds == [(None, "vCut: VAR speeddata the mo"), (40.0, ""), (40.0, ""), (30.0, "")]
+    path.write_text(STATES["tool and work object set between runs"])
+    tools = [(m.tool, m.frame) for m in formats.read(path).motions]
+    assert tools == [("tGun", "wPart"), ("tGun line 10", "wPart"), ("tool0", "wobj0")]
+
+
+def test_targets_read_at_once_beside_targets_read_one_by_one(tmp_path, monkeypatch):
+    """A CAM post's home jointtarget and inline robtargets join the points read at once, in program order."""
+    path = tmp_path / "Cam.mod"
+    path.write_text(_module(
+        "  CONST jointtarget jHome:=[[0,0,0,0,30,0],[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]];",
+        "  PROC main()",
+        "    MoveAbsJ jHome, v500, fine, tool0;",
+        "    MoveL p1, v50, z1, tool0;",
+        "    MoveL [[5,6,7],[1,0,0,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]], v50, z1, tool0\\WObj:=wobj0;",
+        "    MoveL p2, v50, z1, tool0;",
+        "  ENDPROC"))
+    at_once, one_by_one = _both(path, monkeypatch)
+    assert isinstance(at_once.targets, TargetRows)
+    assert _seen(at_once) == _seen(one_by_one)
+    assert [t.name for t in at_once.targets] == ["p1", "p2", "p3", "p4", "jHome", ""]
+    np.testing.assert_allclose(np.degrees(at_once.targets[4].joints), [0, 0, 0, 0, 30, 0])
+    np.testing.assert_allclose(at_once.targets[5].pose[:3, 3], [5, 6, 7])
+
+
+def test_a_point_read_at_once_is_written_back_where_it_stands(tmp_path):
+    path = tmp_path / "Cam.mod"
+    path.write_text(STATES["tool and work object set between runs"])
+    program = formats.read(path)
+    moved = program.targets[1].pose.copy()
+    moved[:3, 3] += [0.5, -0.25, 1.0]
+    formats.write(tmp_path / "out.mod", program.with_targets([1], poses=[moved], configs=[(1, 0, -1, 1)]))
+    line = (tmp_path / "out.mod").read_text().splitlines()[2]
+    assert line == ("  CONST robtarget p2:=[[200.500,19.750,501.000],[0,0,1,0],[1,0,-1,1],"
+                    "[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]];")
+
+
+def test_an_undeclared_point_is_refused_naming_its_line(tmp_path):
+    path = tmp_path / "Cam.mod"
+    path.write_text(_module("  PROC main()", "    MoveL p1, v50, z1, tool0;", "    MoveL p9, v50, z1, tool0;",
+                            "  ENDPROC"))
+    with pytest.raises(ReadError, match=r"Cam\.mod: .* p9 \(line 8\)"):
+        formats.read(path)
