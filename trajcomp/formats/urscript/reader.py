@@ -1,7 +1,6 @@
 """The URScript reader: a script's motions, pose variables, frames and TCPs into a `Program` (see `trajcomp.formats.urscript`)."""
 
 import dataclasses
-import itertools
 import re
 from pathlib import Path
 
@@ -22,14 +21,18 @@ from trajcomp.formats.text import (
     split_top,
     unresolved,
 )
+from trajcomp.formats.urscript.lines import FUNCTIONS, cam_lines
 from trajcomp.formats.urscript.polyscope import notes as polyscope_notes
 from trajcomp.programs.program import Program
-from trajcomp.programs.items import CIRCULAR, JOINT, LINEAR, Motion, SpanTable, Statement, Target, replaced
+from trajcomp.programs.items import CIRCULAR, JOINT, LINEAR, Motion, SpanColumns, SpanTable, Statement, Target
+from trajcomp.programs.tables import MotionTable, StatementTable, TargetTable, repeated
 from trajcomp.arm.transforms import rotvec_to_matrix
 
 POSE = ("x", "y", "z", "rx", "ry", "rz")
 JOINTS = ("j1", "j2", "j3", "j4", "j5", "j6")
 NEAR = ("near1", "near2", "near3", "near4", "near5", "near6")
+ROLES = POSE + JOINTS + NEAR  # the roles of a target's spans
+TIMING = ("t", "v", "end")  # the roles of a motion's spans: where re-timing writes
 KINDS = {"movej": JOINT, "movel": LINEAR, "movep": LINEAR, "movec": CIRCULAR}
 NOT_READ = ("servoj", "servoc")  # motions with a target trajcomp does not compensate (streamed set points)
 DEFAULT_SPEED = {"movej": "1.05", "movel": "0.25", "movep": "0.25", "movec": "0.25"}  # v when not given: rad/s, m/s
@@ -53,6 +56,8 @@ _WORD = re.compile(r"[A-Za-z_]\w*")
 _NUMBERS_ONLY = re.compile(r"^\s*p\[[\s\d.eE+,-]*\]\s*$")
 _SIGNS = re.compile(r"(?m)^\s*def\s+\w+\s*\(|\b(?:movej|movel|movep|movec)\s*\(|\bp\[")
 _PARENTHESIS = re.compile(r"[()]")
+_KINDS = np.array([KINDS[f] for f in FUNCTIONS], dtype=object)  # the kind of each of `FUNCTIONS`
+_UNITS = np.array(["mm/s", "rad/s", "s"], dtype=object)  # of a TCP speed, a movej's speed, a time
 # every pose literal of the script, whose rotations are computed together (`_literal_poses`)
 _POSE_LITERAL = re.compile(r"\bp\[" + _SIX + r"\]")
 
@@ -67,18 +72,26 @@ def _closing(text, open_at):
     return -1
 
 
-def _literal_poses(masked):
-    """The poses of the script's pose literals, computed together: ``{offset of the literal's x: T (4, 4)}``, mm.
+def _literal_poses(masked, ranges):
+    """The poses of the pose literals in some parts of a script, computed together: ``{offset of the literal's x:
+    T (4, 4)}``, mm.
 
-    Literals with a number out of range are left out (their reading refuses them).
+    ``ranges``: ``(start, end)`` offsets of the parts. Literals with a number out of range are left out (their
+    reading refuses them).
     """
-    found = list(_POSE_LITERAL.finditer(masked))
+    found = [m for start, end in ranges for m in _POSE_LITERAL.finditer(masked, start, end)]
     values = np.array([m.groups() for m in found], dtype=float).reshape(-1, 6)
     keep = np.flatnonzero((np.isfinite(values) & (np.abs(values) <= LENGTH_LIMIT / 1000.0)).all(axis=1))
-    T = np.tile(np.eye(4), (len(keep), 1, 1))
-    T[:, :3, :3] = rotvec_to_matrix(values[keep, 3:])
-    T[:, :3, 3] = values[keep, :3] * 1000.0
+    T = poses(values[keep])
     return {found[k].start(1): T[row] for row, k in enumerate(keep.tolist())}
+
+
+def poses(values):
+    """T (N, 4, 4), mm, from x, y, z (m) and rotation vectors (rad), (N, 6)."""
+    T = np.tile(np.eye(4), (len(values), 1, 1))
+    T[:, :3, :3] = rotvec_to_matrix(values[:, 3:])
+    T[:, :3, 3] = values[:, :3] * 1000.0
+    return T
 
 
 def pose(values):
@@ -106,24 +119,148 @@ class _Value:
 
 
 class _Reader:
-    def __init__(self, source, masked):
-        self.source = source
-        self.targets, self.items = [], []
-        self.motion_spans = SpanTable(("t", "v", "end"))  # each motion's re-timing fields, in order (offsets)
+    """The reader's state while it reads a script's lines in order: the CAM-shaped motion lines (`CamLines`) in
+    blocks, every other line one by one."""
+
+    def __init__(self, source, masked, lines, cam):
+        self.source, self.masked, self.lines, self.cam = source, masked, lines, cam
+        self.targets, self.count, self.items = {}, 0, []  # target index -> Target read one by one; targets; items
+        self.blocks = []  # the motions of `CamLines` rows read as blocks, columns each (`cam_block`)
+        self.offsets = []  # (frame key, target index, why) of the points also used as frames (`_offsets_from_point`)
+        self.motion_spans = SpanTable(TIMING)  # each motion's re-timing fields, in order (offsets)
         self.values, self.numbers = {}, {}  # name -> _Value; name -> float
         self.frames, self.frame_names = {}, {}  # frame key -> T; id(_Value) -> frame key
         self.tools, self.tool, self.tool_why = {}, None, ""
         self.frame_uses, self.point_uses = {}, {}  # variable -> first line used as frame / as point
         self.direct = set()  # joint-list variables used as motion targets
-        self.poses = _literal_poses(masked)
+        total = len(lines.starts) - (lines.starts[-1] == len(lines.text))  # as `Lines` yields them
+        self.others = np.setdiff1d(np.arange(1, total + 1), cam.line)  # the lines read one by one
+        self.cam_poses = np.full((len(cam), 4, 4), np.nan)
+        self.cam_poses[~cam.is_joint] = poses(cam.values[~cam.is_joint])
+        self.poses = _literal_poses(masked, _parts(lines, self.others))
         self.params = {p.strip().split("=")[0].strip() for m in _DEF.finditer(masked)
                        for p in m.group(1).split(",") if p.strip()}
         self.set_at_run_time, self.assigned = {}, {}  # name -> line of a non-literal assignment; of every one
-        for line, start, end in Lines(masked):
+        for line in self.others.tolist():  # a CAM-shaped motion line assigns nothing
+            start, end = self.where(line)
             if m := _ASSIGN.match(masked[start:end]):
                 self.assigned.setdefault(m.group(1), []).append(line)
                 if not (_POSE.match(m.group(2)) or _LIST.match(m.group(2)) or re.fullmatch(NUMBER, m.group(2))):
                     self.set_at_run_time.setdefault(m.group(1), line)
+
+    def where(self, line):
+        """``(start, end)`` offsets of line ``line`` (1-based), its line ending left out."""
+        start = self.lines.starts[line - 1]
+        return start, start + len(self.lines.line(line))
+
+    def read_line(self, line):
+        """Read line ``line`` (1-based): a statement or a motion (`call`) into the items."""
+        start, end = self.where(line)
+        text, original = self.masked[start:end], self.source.text[start:end]
+        call = _CALL.search(text)
+        if call:
+            close = _closing(text, call.end() - 1)
+            if close < 0:
+                fail(self.source.name, line, original, "unbalanced parentheses")
+            args = split_top(text[call.end():close], start + call.end())
+            self.items.append(self.call(call.group(1), args, line, original) or Statement(line, original))
+            return
+        assign = _ASSIGN.match(text)
+        refs = self.references(assign.group(2) if assign else text)
+        if assign:
+            self.assignment(assign, start, line, original)
+        self.items.append(Statement(line, original, refs=refs))
+
+    def cam_rows(self, lo, hi):
+        """Read the CAM-shaped motion lines ``lo .. hi - 1`` (rows of `CamLines`), between which no other line is.
+
+        They take the TCP, frames and variables in force: a block of them
+        at once (`cam_block`), except after a TCP set at run time and at the
+        first use of each frame variable (read one by one: that read
+        registers the frame, or says why its motions are not compensated,
+        as it would for any line); a frame variable's further motions are
+        read in blocks when its first one was compensable, else one by one.
+        """
+        if lo == hi:
+            return
+        if self.tool_why:
+            for row in range(lo, hi):
+                self.cam_line(row)
+            return
+        frame = self.cam.frame[lo:hi]
+        framed = np.flatnonzero(np.not_equal(frame, None))
+        firsts = {}  # frame variable -> the first row using it
+        for k, name in zip(framed.tolist(), frame[framed].tolist()):
+            firsts.setdefault(name, k)
+        keys, done = {}, lo  # frame variable -> its frame key, or None where its motions are read one by one
+        for name, k in sorted(firsts.items(), key=lambda item: item[1]):
+            self.cam_run(done, lo + k, keys)
+            motion = self.cam_line(lo + k)
+            keys[name] = motion.frame if motion.target is not None else None
+            done = lo + k + 1
+        self.cam_run(done, hi, keys)
+
+    def cam_run(self, lo, hi, keys):
+        """Read CAM-shaped lines ``lo .. hi - 1`` whose frame variables are in ``keys``: those of a frame
+        variable mapped to None one by one, the others in blocks."""
+        frame = self.cam.frame[lo:hi]
+        alone = np.zeros(hi - lo, dtype=bool)
+        for name in [name for name, key in keys.items() if key is None]:
+            alone |= np.equal(frame, name)
+        done = lo
+        for k in (lo + np.flatnonzero(alone)).tolist():
+            self.cam_block(done, k, keys)
+            self.cam_line(k)
+            done = k + 1
+        self.cam_block(done, hi, keys)
+
+    def cam_line(self, row):
+        """Read CAM-shaped line ``row`` one by one; its motion."""
+        if not self.cam.is_joint[row]:
+            self.poses[int(self.cam.number_start[row, 0])] = self.cam_poses[row]
+        self.read_line(int(self.cam.line[row]))
+        return self.items[-1]
+
+    def cam_block(self, lo, hi, keys):
+        """Read CAM-shaped lines ``lo .. hi - 1`` together (the TCP and variables in force, frames ``keys``): each a
+        motion to a new target, the columns of `call` (`blocks`)."""
+        if lo == hi:
+            return
+        cam, n = self.cam, hi - lo
+        line, original = int(cam.line[lo]), self.lines.line(int(cam.line[lo]))  # for messages: none can fail
+        joint = cam.function[lo:hi] == FUNCTIONS.index("movej")
+        scale = np.where(joint, 1.0, 1000.0)
+        v, v_why = self.resolved(lo, hi, 0, lambda name: self.speed(name, line, original, "v"))
+        given = cam.option_start[lo:hi, 0] >= 0
+        v[~given] = np.where(joint, float(DEFAULT_SPEED["movej"]), float(DEFAULT_SPEED["movel"]))[~given]
+        t, t_why = self.resolved(lo, hi, 1, lambda name: self.speed(name, line, original, "t"))
+        timed = (cam.option_start[lo:hi, 1] >= 0) & ~(t == 0.0)  # t=0: no time; a t set at run time is one
+        blend, _ = self.resolved(lo, hi, 2, lambda name: (self.option(name, line, original), ""))
+        frame = np.full(n, None, dtype=object)
+        for name, key in keys.items():
+            frame[np.equal(cam.frame[lo:hi], name)] = key
+        self.blocks.append({
+            "rows": np.arange(lo, hi), "target": np.arange(self.count, self.count + n), "frame": frame,
+            "speed": np.where(timed, t, v * scale),
+            "speed_unit": _UNITS[np.where(timed, 2, joint.astype(int))],
+            "speed_why": np.where(timed, t_why, v_why),
+            "zone": np.where(np.isnan(blend) | (blend == 0.0), np.nan, blend * 1000.0),
+            "tool": repeated(self.tool, n),
+        })
+        self.count += n
+
+    def resolved(self, lo, hi, j, resolve):
+        """Option ``j`` (v, t, r) of CAM-shaped lines ``lo .. hi - 1``: ``(value (n,), why (n,) of object)``; a
+        variable's value from ``resolve(name) -> (value or None, why)`` (NaN where None)."""
+        value = self.cam.option[lo:hi, j].copy()
+        why = np.full(hi - lo, "", dtype=object)
+        names = self.cam.option_name[lo:hi, j]
+        for name in dict.fromkeys(names[np.not_equal(names, None)].tolist()):
+            number, reason = resolve(name)
+            rows = np.equal(names, name)
+            value[rows] = np.nan if number is None else number
+            why[rows] = reason
+        return value, why
 
     def fail(self, line, original, message):
         fail(self.source.name, line, original, message)
@@ -145,8 +282,9 @@ class _Reader:
         return None
 
     def add(self, target):
-        self.targets.append(target)
-        return len(self.targets) - 1
+        self.targets[self.count] = target
+        self.count += 1
+        return self.count - 1
 
     def use(self, value):
         """The target index of a variable's literal, made a target on first use."""
@@ -375,6 +513,10 @@ def _timing_offsets(function, args, count):
 def read(path):
     """Read a URScript program.
 
+    The motion lines a CAM post-processor writes (`trajcomp.formats.urscript.lines`) are read together, in
+    blocks that take the TCP, frames and variables in force at their lines; every other line is read one by one,
+    in order.
+
     Raises
     ------
     ReadError
@@ -387,29 +529,24 @@ def read(path):
     if not _SIGNS.search(masked):
         raise ReadError(f"{path}: not a URScript program: no def, move or pose literal")
     check_closed(source, masked, _BLOCK_OPENS, _BLOCK_CLOSES, dict.fromkeys(_BLOCKS, "END"))
-    reader = _Reader(source, masked)
-    for line, start, end in Lines(source.text):
-        text, original = masked[start:end], source.text[start:end]
-        call = _CALL.search(text)
-        if call:
-            close = _closing(text, call.end() - 1)
-            if close < 0:
-                fail(source.name, line, original, "unbalanced parentheses")
-            args = split_top(text[call.end():close], start + call.end())
-            motion = reader.call(call.group(1), args, line, original)
-            reader.items.append(motion or Statement(line, original))
-            continue
-        assign = _ASSIGN.match(text)
-        refs = reader.references(assign.group(2) if assign else text)
-        if assign:
-            reader.assignment(assign, start, line, original)
-        reader.items.append(Statement(line, original, refs=refs))
+    lines = Lines(source.text)
+    reader = _Reader(source, masked, lines, cam_lines(masked, np.array(lines.starts)))
+    done = 0  # CAM-shaped lines read
+    for line in reader.others.tolist():
+        upto = int(np.searchsorted(reader.cam.line, line))
+        reader.cam_rows(done, upto)
+        done = upto
+        reader.read_line(line)
+    reader.cam_rows(done, len(reader.cam))
     _finish(reader)
-    motion_spans, rows = reader.motion_spans.columns(0, source.text), itertools.count()  # the motions' rows, in order
-    items = tuple(replaced(item, spans=motion_spans.row(next(rows))) if isinstance(item, Motion) else item
-                  for item in reader.items)
-    return Program("urscript", Path(path).stem, items, tuple(reader.targets), reader.tools,
-                   reader.frames, (source,), notes=polyscope_notes(path))
+    return _program(reader, path)
+
+
+def _parts(lines, numbers):
+    """``[(start, end)]`` offsets of the runs of consecutive lines among ``numbers`` (ascending, 1-based)."""
+    runs = np.split(numbers, np.flatnonzero(np.diff(numbers) != 1) + 1) if len(numbers) else []
+    ends = lines.starts[1:] + [len(lines.text)]
+    return [(lines.starts[run[0] - 1], ends[run[-1] - 1]) for run in runs]
 
 
 def _finish(reader):
@@ -431,19 +568,28 @@ def _finish(reader):
 def _offsets_from_point(reader, name):
     """A point also used as the frame of ``pose_trans`` (``movel(pose_trans(pick_p, p[0,0,-0.1,0,0,0]))``
     then ``movel(pick_p)``: the approach idiom) stays a point; the motions to offsets from it are computed
-    at run time, built on it."""
+    at run time, built on it (`_offsets_made`)."""
     value = reader.values[name]
     key = reader.frame_names.pop(id(value), None)
     reader.frames.pop(key, None)
     index = reader.use(value)
-    why = f"an offset from the point {name} (pose_trans({name}, ...)), computed at run time"
-    for k, item in enumerate(reader.items):
-        if not isinstance(item, Motion):
-            continue
-        if key is not None and item.frame == key:
-            reader.items[k] = dataclasses.replace(item, target=None, via=None, frame=None, reason=why, refs=(index,))
-        elif item.reason and index not in item.refs and name in _WORD.findall(item.text):
-            reader.items[k] = dataclasses.replace(item, refs=item.refs + (index,))  # pose_add(pick_p, ...)
+    reader.offsets.append((name, key, index, f"an offset from the point {name} (pose_trans({name}, ...)), "
+                                             "computed at run time"))
+
+
+def _offsets_made(motions, offsets):
+    """The motions with those to offsets from points (`_offsets_from_point`) computed at run time, naming the
+    point, and the motions computed at run time that name such a point otherwise (``pose_add(pick_p, ...)``)
+    naming it too."""
+    for name, key, index, why in offsets:
+        offset = np.flatnonzero(motions.frame == key) if key is not None else np.zeros(0, dtype=int)
+        naming = [k for k in np.flatnonzero(motions.reason != "").tolist() if k not in set(offset.tolist())
+                  and index not in motions.refs.get(k, ()) and name in _WORD.findall(motions.text[k])]
+        motions = motions.with_rows(offset, target=np.full(len(offset), -1), via=np.full(len(offset), -1),
+                                    frame=np.full(len(offset), None), reason=np.full(len(offset), why, dtype=object),
+                                    refs=[(index,)] * len(offset))
+        motions = motions.with_rows(naming, refs=[motions.refs.get(k, ()) + (index,) for k in naming])
+    return motions
 
 
 def _pair_waypoints(reader):
@@ -457,3 +603,61 @@ def _pair_waypoints(reader):
             near = dict(zip(NEAR, (pair.target.spans[j] for j in JOINTS)))
             reader.targets[value.index] = dataclasses.replace(target, joints=pair.target.joints,
                                                               spans={**target.spans, **near})
+
+
+def _program(reader, path):
+    """The program of what ``reader`` read: its targets, motions and statements as columns
+    (`Program.from_tables`)."""
+    source, cam = reader.source, reader.cam
+    rows = _blocks_column(reader, "rows", int)
+    motions = [item for item in reader.items if isinstance(item, Motion)]
+    statements = [item for item in reader.items if not isinstance(item, Motion)]
+    blocks = MotionTable(
+        kind=_KINDS[cam.function[rows]], target=_blocks_column(reader, "target", int), via=np.full(len(rows), -1),
+        line=cam.line[rows], axis_position=np.zeros(len(rows), dtype=bool), text=cam.rows(rows).texts(source.text),
+        **{name: _blocks_column(reader, name, float) for name in ("speed", "zone")},
+        **{name: _blocks_column(reader, name, object) for name in ("speed_unit", "tool", "frame", "speed_why")})
+    table = MotionTable.merged([MotionTable.of(motions), blocks])
+    # the re-timing fields (t, v, the call's end) of every motion, in program order
+    offsets = np.frombuffer(reader.motion_spans.offsets, dtype=np.int64).reshape(-1, len(TIMING), 2)
+    start = np.concatenate([offsets[:, :, 0], np.c_[cam.option_start[rows][:, [1, 0]], cam.end[rows]]])
+    end = np.concatenate([offsets[:, :, 1], np.c_[cam.option_end[rows][:, [1, 0]], cam.end[rows]]])
+    order = np.argsort(np.concatenate([[m.line for m in motions], cam.line[rows]]), kind="stable")
+    table = dataclasses.replace(table, spans=SpanColumns(0, source.text, TIMING, start[order], end[order]))
+    return Program.from_tables("urscript", Path(path).stem, StatementTable.of(statements),
+                               _offsets_made(table, reader.offsets), _targets(reader, rows), sources=(source,),
+                               tools=reader.tools, frames=reader.frames, notes=polyscope_notes(path))
+
+
+def _blocks_column(reader, name, dtype):
+    """One column of the motions read in blocks (`_Reader.cam_block`), the blocks one after the other."""
+    return np.concatenate([np.zeros(0, dtype=dtype)] + [block[name] for block in reader.blocks])
+
+
+def _targets(reader, rows):
+    """The `TargetTable` of the targets read one by one and of the CAM-shaped lines ``rows`` read in blocks."""
+    cam, n = reader.cam, reader.count
+    pose, joints = np.full((n, 4, 4), np.nan), np.full((n, 6), np.nan)
+    is_joint, line = np.zeros(n, dtype=bool), np.zeros(n, dtype=int)
+    start, end = np.full((n, len(ROLES)), -1, dtype=np.int64), np.full((n, len(ROLES)), -1, dtype=np.int64)
+    name = np.full(n, "", dtype=object)
+    index = _blocks_column(reader, "target", int)
+    joint = cam.is_joint[rows]
+    pose[index] = reader.cam_poses[rows]
+    joints[index[joint]] = cam.values[rows[joint]]
+    is_joint[index], line[index] = joint, cam.line[rows]
+    for columns, at in ((slice(0, 6), ~joint), (slice(6, 12), joint)):
+        start[index[at], columns] = cam.number_start[rows[at]]
+        end[index[at], columns] = cam.number_end[rows[at]]
+    column = {role: j for j, role in enumerate(ROLES)}
+    for i, target in reader.targets.items():
+        name[i], line[i], is_joint[i] = target.name, target.line, target.is_joint
+        if target.pose is not None:
+            pose[i] = target.pose
+        if target.joints is not None:
+            joints[i] = target.joints
+        for role, span in target.spans.items():
+            start[i, column[role]], end[i, column[role]] = span.start, span.end
+    none = repeated(None, n)
+    return TargetTable(pose, is_joint, joints, line, ((),) * n, none, none, (None,) * n, np.zeros(n, dtype=bool),
+                       name, SpanColumns(0, reader.source.text, ROLES, start, end))
