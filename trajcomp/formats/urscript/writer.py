@@ -54,9 +54,25 @@ def _cartesian(targets, olds):
     return out
 
 
+def _encode_columns(table, rows, old):
+    """The numbers of a `TargetTable`'s rows (K,) in URScript, as columns (`trajcomp.formats.text.target_edits`):
+    what `_encode` gives each, NaN where it gives none."""
+    joint = table.is_joint[rows]
+    pose, joints = table.pose[rows], table.joints[rows]
+    out = dict(zip(JOINTS, np.where(joint[:, None], joints, np.nan).T))
+    out |= dict(zip(POSE[:3], np.where(joint[:, None], np.nan, pose[:, :3, 3] / 1000.0).T))
+    cartesian = np.flatnonzero(~joint)
+    old_vec = np.stack([old.value[role] for role in POSE[3:]], axis=1)[cartesian]
+    turned = ~same_rotation(pose[cartesian, :3, :3], rotvec_to_matrix(old_vec))
+    vectors = np.full((len(rows), 3), np.nan)
+    vectors[cartesian[turned]] = _rotvec_near(pose[cartesian[turned], :3, :3], old_vec[turned])
+    out |= dict(zip(POSE[3:], vectors.T))
+    return out | dict(zip(NEAR, np.where(joint[:, None], np.nan, joints).T))
+
+
 def write(program, path):
     """``{path: bytes}``: patched in place if read from URScript, else a generated script."""
-    return write_single_file(program, path, "urscript", _encode, MIN_PLACES, _emit)
+    return write_single_file(program, path, "urscript", _encode, MIN_PLACES, _emit, _encode_columns)
 
 
 def _list(values, places):
