@@ -27,18 +27,27 @@ def encode(robot, q):
 
 
 def windows(configs):
-    """Branch and joint windows of FANUC CONFIG rows: joints 1, 4, 6 in turn t, ((2t - 1) pi, (2t + 1) pi]."""
+    """Branch and joint windows of FANUC CONFIG rows: joints 1, 4, 6 in turn t, ((2t - 1) pi, (2t + 1) pi].
+
+    Computed once per distinct CONFIG (a path's positions mostly share theirs).
+    """
+    distinct = {}
+    row = np.fromiter((distinct.setdefault(tuple(config), len(distinct)) for config in configs), dtype=int,
+                      count=len(configs))
+    configs = list(distinct)
     letters = np.array([config[:3] for config in configs], dtype=object).reshape(-1, 3)
     turns = integer_fields(configs, 3, 6)
     lower, upper = joint_windows(turns, [0, 3, 5], lambda t: (2 * t - 1) * np.pi + EDGE,
                                  lambda t: (2 * t + 1) * np.pi)
-    return branch_index(letters[:, 2] == "B", letters[:, 1] == "U", letters[:, 0] == "N"), lower, upper
+    branch = branch_index(letters[:, 2] == "B", letters[:, 1] == "U", letters[:, 0] == "N")
+    return branch[row], lower[row], upper[row]
 
 
 def merge(old, new, branch_kept, joint_kept):
     """Flip, elbow, front from ``new`` if the branch changed; each turn digit of a joint out of its turn."""
     letters = old[:3] if branch_kept else new[:3]
-    turns = tuple(o if kept else n for o, n, kept in zip(old[3:6], new[3:6], joint_kept[[0, 3, 5]]))
+    kept = joint_kept.tolist()
+    turns = tuple(o if k else n for o, n, k in zip(old[3:6], new[3:6], (kept[0], kept[3], kept[5])))
     return (*letters, *turns, *old[6:])
 
 

@@ -439,37 +439,45 @@ def _written_positions(masked, start, end):
     -------
     dict
         Over the G positions kept, in text order: ``at`` (G, 2) the offsets
-        of each entry, ``number`` (G, 2) those of its P number, ``uf``,
+        of each entry, ``number`` (G, 2) those of its P number, ``p`` that
+        number (int, object array: any size), ``uf``,
         ``ut`` (object) its frame and tool numbers, ``config`` (tuple each),
         ``xyzwpr`` (G, 6) its numbers (mm, deg), ``spans`` (G, 2, 7) the
         offsets of X, Y, Z, W, P, R and CONFIG.
     """
-    parts, shared = [], {}  # a path's positions mostly share their frame, tool and configuration
+    parts, shared, configs = [], {}, {}  # a path's positions mostly share their frame, tool and configuration
     found = _WRITTEN_POSITION.finditer(masked, start, end)
     while chunk := [(m.regs, m.groups()) for m in itertools.islice(found, POSITIONS_AT_ONCE)]:
-        regs = np.array([r for r, _ in chunk], dtype=np.int64)  # (g, 11, 2): the entry, then groups 1..10
+        flat = itertools.chain.from_iterable(itertools.chain.from_iterable(r for r, _ in chunk))
+        regs = np.fromiter(flat, dtype=np.int64, count=22 * len(chunk)).reshape(-1, 11, 2)  # entry, groups 1..10
         words = [g for _, g in chunk]
-        configs = [_CONFIG_VALUE.match(g[3]) for g in words]
-        numbers = np.array([g[4:] for g in words], dtype=float).reshape(-1, 6)
+        numbers = np.fromiter(map(float, itertools.chain.from_iterable(g[4:] for g in words)), dtype=float,
+                              count=6 * len(chunk)).reshape(-1, 6)
+        config = [configs[g[3]] if g[3] in configs else configs.setdefault(g[3], _config(g[3])) for g in words]
         limits = np.array([LENGTH_LIMIT] * 3 + [ANGLE_LIMIT] * 3)
         good = (np.isfinite(numbers) & (np.abs(numbers) <= limits)).all(axis=1)
-        good &= np.array([c is not None for c in configs], dtype=bool)
+        good &= np.array([c is not None for c in config], dtype=bool)
         keep = np.flatnonzero(good)
         parts.append({
             "at": regs[keep, 0], "number": regs[keep, 1], "xyzwpr": numbers[keep],
+            "p": np.array([int(words[k][0]) for k in keep.tolist()], dtype=object),
             "uf": [shared.setdefault(words[k][1], words[k][1]) for k in keep.tolist()],
             "ut": [shared.setdefault(words[k][2], words[k][2]) for k in keep.tolist()],
-            "config": [shared.setdefault(c := _config(configs[k]), c) for k in keep.tolist()],
+            "config": [config[k] for k in keep.tolist()],
             "spans": regs[keep][:, [5, 6, 7, 8, 9, 10, 4]].transpose(0, 2, 1)})
     empty = {"at": np.zeros((0, 2), dtype=np.int64), "number": np.zeros((0, 2), dtype=np.int64),
+             "p": np.zeros(0, dtype=object),
              "xyzwpr": np.zeros((0, 6)), "uf": [], "ut": [], "config": [],
              "spans": np.zeros((0, 2, 7), dtype=np.int64)}
     return {key: (np.concatenate([p[key] for p in parts]) if isinstance(value, np.ndarray)
                   else [v for p in parts for v in p[key]]) for key, value in empty.items()} if parts else empty
 
 
-def _config(value):
-    """``(flip, elbow, front, t1, t4, t6)`` of a `_CONFIG_VALUE` match."""
+def _config(text):
+    """``(flip, elbow, front, t1, t4, t6)`` of a CONFIG string; None where it is not one (`_CONFIG_VALUE`)."""
+    value = _CONFIG_VALUE.match(text)
+    if value is None:
+        return None
     return (value.group(1).upper(), value.group(2).upper(), value.group(3).upper(), *map(int, value.groups()[3:]))
 
 
@@ -484,14 +492,18 @@ def _positions(source, masked, lines, starts, start, end):
     points, unread, order, slow = {}, {}, [], []  # order: row of the written ones, or -1 - k of slow[k]
     if start is not None:
         written = _written_positions(masked, start, end)
+        heads = np.fromiter((m.start() for m in _POS_HEAD.finditer(masked, start, end)), dtype=np.int64)
+        if np.array_equal(heads, written["at"][:, 0]):  # every entry is written as the pendant writes it
+            points = dict(zip(written["p"].tolist(), range(len(heads))))
+            return _target_table(source.text, written, np.arange(len(heads)), [], starts), points, unread
         at = dict(zip(written["at"][:, 0].tolist(), range(len(written["at"]))))
-        written_end, written_number = written["at"][:, 1].tolist(), written["number"][:, 0].tolist()
+        written_end, written_p = written["at"][:, 1].tolist(), written["p"].tolist()
         reached = start  # the entries are those `_POS.finditer` gives: where one ends the next is looked for
-        for head in (m.start() for m in _POS_HEAD.finditer(masked, start, end)):
+        for head in heads.tolist():
             if head < reached:
                 continue
             if (k := at.get(head)) is not None:
-                points[int(masked[written_number[k]:written["number"][k, 1]])] = len(order)
+                points[written_p[k]] = len(order)
                 order.append(k)
                 reached = written_end[k]
             elif m := _POS.match(masked, head, end):
@@ -610,7 +622,7 @@ def _position(source, masked, lines, m, unread):
                                               "arm left or right): 4-axis arms are not supported")
         if not v:
             fail(source.name, line, original, f"{label}: malformed CONFIG")
-        config = _config(v)
+        config = _config(c.group(1))
         spans["config"] = Span(0, gp_start + c.start(1), gp_start + c.end(1), c.group(1))
     pose = pose_to_matrix([x, y, z, *np.radians([r, p, w])])
     return Target(**where, pose=pose, config=config, spans=spans)

@@ -9,7 +9,7 @@ import numpy as np
 
 from trajcomp.errors import WriteError
 
-from trajcomp.formats.fanuc.reader import _CONFIG_VALUE, ABC_ORDER, JOINTS, MIN_PLACES
+from trajcomp.formats.fanuc.reader import ABC_ORDER, JOINTS, MIN_PLACES, _config
 from trajcomp.formats.fanuc.speeds import time_field
 from trajcomp.formats.text import (
     active_axes,
@@ -37,11 +37,8 @@ def _encode(targets, olds):
 def _cartesian(targets, olds):
     out = encode_xyzabc(np.array([target.pose for target in targets]), olds, ABC_ORDER)
     for target, old, numbers in zip(targets, olds, out):
-        if target.config and "config" in old:
-            v = _CONFIG_VALUE.match(old["config"])
-            was = (v.group(1).upper(), v.group(2).upper(), v.group(3).upper(), *map(int, v.groups()[3:]))
-            if tuple(target.config) != was:
-                numbers["config"] = _config_text(target.config)
+        if target.config and "config" in old and (text := _config_change(tuple(target.config), old["config"])):
+            numbers["config"] = text
     return out
 
 
@@ -73,9 +70,7 @@ def _encode_columns(table, rows, old):
 @functools.lru_cache(maxsize=1024)  # a path's positions mostly share their configuration and how it is written
 def _config_change(config, old):
     """The CONFIG text to write for ``config`` over the file's ``old`` one; None where they state the same."""
-    v = _CONFIG_VALUE.match(old)
-    was = (v.group(1).upper(), v.group(2).upper(), v.group(3).upper(), *map(int, v.groups()[3:]))
-    return None if tuple(config) == was else _config_text(config)
+    return None if tuple(config) == _config(old) else _config_text(config)
 
 
 def write(program, path):
