@@ -9,7 +9,7 @@ import pytest
 from trajcomp import formats
 from trajcomp.errors import ReadError, WriteError
 from trajcomp.formats.fanuc import reader, speeds, writer
-from trajcomp.formats.text import edit_sources, target_edits
+from trajcomp.formats.text import Lines, edit_sources, target_edits
 from trajcomp.programs.tables import ItemRows, TargetRows
 from trajcomp.arm.transforms import abc_to_matrix
 
@@ -161,3 +161,8 @@ def test_position_numbers_beyond_the_lines_read_at_once_read_line_by_line(tmp_pa
     program = formats.read(path)
     assert [m.target for m in program.motions] == [0, 1]
     assert _seen(program) == _seen(_line_by_line(path, monkeypatch))
+
+
+@pytest.mark.parametrize("text", ["a\nbb\n\nc", "a\nb\n", "", "\n", "a\r\nb\rc\n", "é\nx\n"])
+def test_line_starts_found_at_once_are_those_of_the_regular_expression(text):
+    assert Lines(text).starts == [0] + [m.end() for m in re.finditer(r"\r\n|\r|\n", text)]
