@@ -552,8 +552,9 @@ def _column_edits(table, encode, min_places, sources_count):
     spans = table.spans
     rows = np.flatnonzero(table.edited)
     edits = [Edits.of([]) for _ in range(sources_count)]
-    parts = []
+    batches = []  # each batch's edits joined (`Edits`): a long program's write holds no str per number
     for lo in range(0, len(rows), TARGETS_AT_ONCE):
+        parts = []
         batch = rows[lo:lo + TARGETS_AT_ONCE]
         starts, ends = spans.start[batch], spans.end[batch]
         text, value = {}, {}
@@ -580,10 +581,11 @@ def _column_edits(table, encode, min_places, sources_count):
             changed, texts = written_numbers(new[write], old_texts, value[role][write], places)
             keep = [k for k in np.flatnonzero(changed).tolist() if texts[k] != old_texts[k]]
             parts.append((starts[write[keep], j], ends[write[keep], j], [texts[k] for k in keep]))
-    if parts:
-        edits[spans.source] = Edits.of_columns(np.concatenate([p[0] for p in parts]),
-                                               np.concatenate([p[1] for p in parts]),
-                                               [t for p in parts for t in p[2]])
+        if parts:
+            batches.append(Edits.of_columns(np.concatenate([p[0] for p in parts]), np.concatenate([p[1] for p in parts]),
+                                            [t for p in parts for t in p[2]]))
+    if batches:
+        edits[spans.source] = Edits.joined(batches)
     return edits
 
 
@@ -617,7 +619,7 @@ class Edits:
     texts: str
     cut: np.ndarray
 
-    EDITS_AT_ONCE = 65536  # edits whose pieces are joined together (`applied`)
+    EDITS_AT_ONCE = 8192  # edits whose pieces are joined together (`applied`): a few MB of pieces at a time
 
     def __len__(self):
         return len(self.start)
