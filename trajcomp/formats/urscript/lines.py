@@ -96,9 +96,10 @@ class CamLines:
         """The lines ``keep`` (a boolean mask or indices)."""
         return CamLines(**{f.name: getattr(self, f.name)[keep] for f in dataclasses.fields(self)})
 
-    def texts(self, text):
-        """The instructions as written (`trajcomp.programs.items.Motion.text`), each a str built on access."""
-        return _Stripped(text, self.start, self.stop)
+    def texts(self, text, rows=slice(None)):
+        """The instructions of lines ``rows`` as written (`trajcomp.programs.items.Motion.text`), each a str built on
+        access."""
+        return _Stripped(text, self.start[rows], self.stop[rows])
 
 
 class _Stripped(TextSlices):

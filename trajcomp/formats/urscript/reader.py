@@ -614,7 +614,7 @@ def _program(reader, path):
     statements = [item for item in reader.items if not isinstance(item, Motion)]
     blocks = MotionTable(
         kind=_KINDS[cam.function[rows]], target=_blocks_column(reader, "target", int), via=np.full(len(rows), -1),
-        line=cam.line[rows], axis_position=np.zeros(len(rows), dtype=bool), text=cam.rows(rows).texts(source.text),
+        line=cam.line[rows], axis_position=np.zeros(len(rows), dtype=bool), text=cam.texts(source.text, rows),
         **{name: _blocks_column(reader, name, float) for name in ("speed", "zone")},
         **{name: _blocks_column(reader, name, object) for name in ("speed_unit", "tool", "frame", "speed_why")})
     table = MotionTable.merged([MotionTable.of(motions), blocks])
