@@ -639,7 +639,8 @@ def _targets(reader, rows):
     cam, n = reader.cam, reader.count
     pose, joints = np.full((n, 4, 4), np.nan), np.full((n, 6), np.nan)
     is_joint, line = np.zeros(n, dtype=bool), np.zeros(n, dtype=int)
-    start, end = np.full((n, len(ROLES)), -1, dtype=np.int64), np.full((n, len(ROLES)), -1, dtype=np.int64)
+    offset = np.int32 if len(reader.source.text) < 2**31 else np.int64  # 18 roles a target: half the bytes
+    start, end = np.full((n, len(ROLES)), -1, dtype=offset), np.full((n, len(ROLES)), -1, dtype=offset)
     name = np.full(n, "", dtype=object)
     index = _blocks_column(reader, "target", int)
     joint = cam.is_joint[rows]
