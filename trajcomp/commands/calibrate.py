@@ -50,8 +50,9 @@ def add_parser(sub):
     parser.add_argument("--folds", type=non_negative_int, default=5, help="k of the k-fold cross-validation (default 5; 0: none)")
     parser.add_argument("--seed", type=non_negative_int, default=0, help="seed of the fold split (default 0)")
     parser.add_argument("--jobs", type=int, default=usable_cores(), metavar="N",
-                        help="processes computing the cross-validation's folds (default: the %(default)s cores this "
-                        "machine gives); the model does not depend on it")
+                        help="at most this many processes compute the spline selection and the cross-validation's "
+                        "folds, helpers started on idle cores only (default: the %(default)s cores this machine "
+                        "gives); the model does not depend on it")
     add_layout(parser)
     parser.add_argument("-o", "--output", required=True, help="model file to write (.yaml)")
     add_report_options(parser, verdict="accuracy")
