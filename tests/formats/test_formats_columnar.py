@@ -23,7 +23,7 @@ DATA = Path(__file__).parents[1] / "data"
 EXAMPLES = Path(__file__).parents[2] / "examples" / "programs"
 AT_ONCE = {  # language -> (module, the function reading declarations at once)
     ".src": (krl_reader, "_written_points"),
-    ".mod": (rapid_reader, ("_WRITTEN_POINT", "_WRITTEN_MOTION")),  # the patterns of the lines read at once
+    ".mod": (rapid_reader, ("_WRITTEN_POINT", "_WRITTEN_MOTION", "_WRITTEN_INLINE")),  # patterns of lines read at once
     ".ls": (fanuc_reader, "_written_positions"),
     ".script": (urscript_reader, "_literal_poses"),
 }

@@ -30,7 +30,7 @@ def _both(path, monkeypatch):
     """The program read at once, and read statement by statement (neither pattern matching)."""
     at_once = formats.read(path)
     with monkeypatch.context() as patch:
-        for name in ("_WRITTEN_POINT", "_WRITTEN_MOTION"):
+        for name in ("_WRITTEN_POINT", "_WRITTEN_MOTION", "_WRITTEN_INLINE"):
             patch.setattr(rapid_reader, name, re.compile(r"(?!)"))
         return at_once, formats.read(path)
 
@@ -69,6 +69,16 @@ STATES = {
         "    MoveL p4, v100, z1, tool9;",
         "    go p2;",
         "  ENDPROC"),
+    "inline targets as RoboDK writes them, tool changed between": _module(
+        "  PERS tooldata tGun:=[TRUE,[[0,0,100],[1,0,0,0]],[1,[0,0,1],[1,0,0,0],0,0,0]];",
+        "  PROC main()",
+        "    MoveL p1,v50,z1,tool0\\WObj:=wobj0;",
+        "    MoveL [[500.5,-20.25,300],[0,0,1,0],[0,0,0,1],[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]],v50,z1,tGun\\WObj:=wobj0;",
+        "    MoveJ [[510,-20,300],[0,0,1,0],[-1,0,0,1],[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]],v100,fine,tGun;",
+        "    tGun.tframe := [[0,0,150],[1,0,0,0]];",
+        "    MoveL [[520,-20,300],[0,0,1,0],[0,0,0,1],[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]],v50\\V:=20,z1,tGun;",
+        "    MoveL [[530,-20,300],[0,0,2,0],[0,0,0,1],[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]],v50,z1,tGun;",
+        "  ENDPROC"),
     "a statement spread over lines that look read at once": _module(
         "  PROC main()",
         "    MoveL p1, v100,",
@@ -81,7 +91,7 @@ STATES = {
 @pytest.mark.parametrize("text", STATES.values(), ids=STATES)
 def test_a_module_read_at_once_is_the_one_read_statement_by_statement(tmp_path, monkeypatch, text):
     path = tmp_path / "Cam.mod"
-    path.write_text(text)
+    path.write_text(text.replace("[0,0,2,0]", "[0,0,1,0]"))
     at_once, one_by_one = _both(path, monkeypatch)
     assert isinstance(at_once.items, ItemRows) and not isinstance(one_by_one.items, ItemRows)
     assert _seen(at_once) == _seen(one_by_one)
@@ -130,6 +140,23 @@ def test_a_point_read_at_once_is_written_back_where_it_stands(tmp_path):
     line = (tmp_path / "out.mod").read_text().splitlines()[2]
     assert line == ("  CONST robtarget p2:=[[200.500,19.750,501.000],[0,0,1,0],[1,0,-1,1],"
                     "[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]];")
+
+
+def test_inline_targets_read_at_once_in_program_order_and_a_refused_one_named(tmp_path):
+    path = tmp_path / "Cam.mod"
+    text = STATES["inline targets as RoboDK writes them, tool changed between"]
+    path.write_text(text.replace("[0,0,2,0]", "[0,0,1,0]"))
+    program = formats.read(path)
+    assert isinstance(program.targets, TargetRows)
+    assert [t.name for t in program.targets] == ["p1", "p2", "p3", "p4", "", "", "", ""]
+    assert [t.config for t in program.targets[4:6]] == [(0, 0, 0, 1), (-1, 0, 0, 1)]
+    np.testing.assert_allclose(program.targets[4].pose[:3, 3], [500.5, -20.25, 300])
+    assert [(m.target, m.tool, m.speed) for m in program.motions] == [
+        (0, "tool0", 50.0), (4, "tGun", 50.0), (5, "tGun", 100.0), (6, "tGun line 11", 20.0), (7, "tGun line 11", 50.0)]
+    assert program.motions[1].spans["speed"].text == "v50" and "target_name" not in program.motions[1].spans
+    path.write_text(text)  # a quaternion of length 2: the line-by-line read names it
+    with pytest.raises(ReadError, match=r"Cam\.mod:13: robtarget: quaternion of length 2"):
+        formats.read(path)
 
 
 def test_an_undeclared_point_is_refused_naming_its_line(tmp_path):

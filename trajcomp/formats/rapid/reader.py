@@ -108,6 +108,12 @@ _WRITTEN_POINT = re.compile(
 _WRITTEN_MOTION = re.compile(
     r"^[ \t]*(Move[LJ])[ \t]+([A-Za-z]\w*)[ \t]*,[ \t]*(\w+(?:[ \t]*\\[VT][ \t]*:=[ \t]*" + NUMBER + r")?)[ \t]*,"
     r"[ \t]*(\w+)[ \t]*,[ \t]*(\w+)[ \t]*(?:\\[ \t]*WObj[ \t]*:=[ \t]*(\w+)[ \t]*)?;()[ \t]*\r?$", re.I | re.M)
+# ... and to an inline robtarget written without blanks, as RoboDK's ABB posts write them:
+# MoveL [[x,y,z],[q1,q2,q3,q4],[cf1,cf4,cf6,cfx],[ea,..,ef]],v50,z1,tool0\WObj:=wobj0;
+_WRITTEN_INLINE = re.compile(
+    r"^[ \t]*(Move[LJ])[ \t]+\[\[" + r"\],\[".join(_NUMBERS) + r"\]\][ \t]*,[ \t]*(\w+(?:[ \t]*\\[VT][ \t]*:=[ \t]*"
+    + NUMBER + r")?)[ \t]*,[ \t]*(\w+)[ \t]*,[ \t]*(\w+)[ \t]*(?:\\[ \t]*WObj[ \t]*:=[ \t]*(\w+)[ \t]*)?;()[ \t]*\r?$",
+    re.I | re.M)
 
 
 ROWS_AT_ONCE = 16384  # declarations whose texts become numbers together: bounds a long module's strings
@@ -156,36 +162,71 @@ class _WrittenPoints:
         if not parts:
             return
         numbers, length, shared = (np.concatenate(column) for column in zip(*parts))
-        position, quat, config, external = numbers[:, :3], numbers[:, 3:7], numbers[:, 7:11], numbers[:, 11:]
-        good = (np.isfinite(numbers[:, :11]) & (np.abs(numbers[:, :11]) <= LENGTH_LIMIT)).all(axis=1)
-        good &= (np.isfinite(external) & (np.abs(external) <= 1e10)).all(axis=1)
-        norm = np.full(len(quat), np.inf)
-        norm[good] = np.linalg.norm(quat[good], axis=1)  # of numbers within range only (1e308 squared overflows)
-        good &= np.abs(norm - 1.0) <= QUAT_TOLERANCE - 1e-9  # at the bound: as the one read
-        good &= (config == np.trunc(config)).all(axis=1)
-        keep = np.flatnonzero(good)
-        n = len(keep)
-        T = np.tile(np.eye(4), (n, 1, 1))
-        T[:, :3, :3] = quat_to_matrix(quat[keep])
-        T[:, :3, 3] = position[keep]
-        external = np.where(np.abs(external[keep]) >= UNUSED_AXIS, np.nan, external[keep])
-        # offsets: the line's start and its name's from the match, the numbers' from their lengths (no blanks
-        # between them in `_WRITTEN_POINT`: a comma, or "],[" between x, y, z / q1..q4 / cf1..cfx)
-        at = np.frombuffer(offsets, dtype=np.int64).reshape(-1, 4)[keep]  # line start, name, x, after ';'
-        length = length[keep]
-        between = np.array([1, 1, 3, 1, 1, 1, 3, 1, 1, 1])  # characters between one number and the next
-        start = at[:, 2:3] + np.cumsum(np.c_[np.zeros(n, dtype=np.int64), length[:, 1:-1] + between], axis=1)
-        self.start, self.end, self.shared = at[:, 0], at[:, 3], shared[keep]
-        self.line = np.searchsorted(lines.starts, self.start, side="right")
-        unused = np.isnan(external).all(axis=1)
-        configs = {}  # one tuple per distinct confdata: a path's points mostly share theirs
-        none = repeated(None, n)
-        self.table = TargetTable(
-            T, np.zeros(n, dtype=bool), np.full((n, 6), np.nan), self.line,
-            tuple(configs.setdefault(c, c) for c in map(tuple, config[keep].astype(int).tolist())), none, none,
-            (None,) * n if unused.all() else tuple(None if u else e for u, e in zip(unused.tolist(), external)),
-            np.zeros(n, dtype=bool), TextSlices(source.text, at[:, 1], at[:, 1] + length[:, 0]),
-            SpanColumns(0, source.text, POSITION + QUAT + CONF, start, start + length[:, 1:]))
+        at = np.frombuffer(offsets, dtype=np.int64).reshape(-1, 4)  # line start, name, x, after ';'
+        keep, self.table = _robtargets(source.text, lines, numbers, length, at[:, 1], at[:, 2])
+        self.start, self.end, self.shared = at[keep, 0], at[keep, 3], shared[keep]
+        self.line = self.table.line
+
+
+def _robtargets(text, lines, numbers, length, name_at, x_at):
+    """The robtargets of N texts ``[[x,y,z],[q1..q4],[cf1..cfx],[ea..ef]]`` written without blanks, read at once.
+
+    Parameters
+    ----------
+    text : str
+        The module's text.
+    lines : Lines
+        Its lines.
+    numbers : ndarray, shape (N, 17)
+        x .. q4, cf1 .. cfx, ea .. ef.
+    length : ndarray of int, shape (N, 12)
+        Characters of the name (0: an inline target) and of x .. cfx.
+    name_at, x_at : ndarray of int, shape (N,)
+        Offsets of the name and of x.
+
+    Returns
+    -------
+    keep : ndarray of int, shape (n,)
+        The rows the statement-by-statement read would not refuse (out of
+        range, not a rotation, a configuration that is not a whole number):
+        that read names the others.
+    table : TargetTable
+        Those n targets, no object each: names (`TextSlices`) and spans
+        (`SpanColumns`) in ``text``.
+    """
+    position, quat, config, external = numbers[:, :3], numbers[:, 3:7], numbers[:, 7:11], numbers[:, 11:]
+    good = (np.isfinite(numbers[:, :11]) & (np.abs(numbers[:, :11]) <= LENGTH_LIMIT)).all(axis=1)
+    good &= (np.isfinite(external) & (np.abs(external) <= 1e10)).all(axis=1)
+    norm = np.full(len(quat), np.inf)
+    norm[good] = np.linalg.norm(quat[good], axis=1)  # of numbers within range only (1e308 squared overflows)
+    good &= np.abs(norm - 1.0) <= QUAT_TOLERANCE - 1e-9  # at the bound: as the one read
+    good &= (config == np.trunc(config)).all(axis=1)
+    keep = np.flatnonzero(good)
+    n = len(keep)
+    T = np.tile(np.eye(4), (n, 1, 1))
+    T[:, :3, :3] = quat_to_matrix(quat[keep])
+    T[:, :3, 3] = position[keep]
+    external = np.where(np.abs(external[keep]) >= UNUSED_AXIS, np.nan, external[keep])
+    # the numbers' offsets from their lengths: a comma between two, "],[" between x, y, z / q1..q4 / cf1..cfx
+    length, name_at = length[keep], name_at[keep]
+    between = np.array([1, 1, 3, 1, 1, 1, 3, 1, 1, 1])
+    start = x_at[keep, None] + np.cumsum(np.c_[np.zeros(n, dtype=np.int64), length[:, 1:-1] + between], axis=1)
+    unused = np.isnan(external).all(axis=1)
+    configs = {}  # one tuple per distinct confdata: a path's points mostly share theirs
+    none = repeated(None, n)
+    return keep, TargetTable(
+        T, np.zeros(n, dtype=bool), np.full((n, 6), np.nan), np.searchsorted(lines.starts, x_at[keep], side="right"),
+        tuple(configs.setdefault(c, c) for c in map(tuple, config[keep].astype(int).tolist())), none, none,
+        (None,) * n if unused.all() else tuple(None if u else e for u, e in zip(unused.tolist(), external)),
+        np.zeros(n, dtype=bool), TextSlices(text, name_at, name_at + length[:, 0]),
+        SpanColumns(0, text, POSITION + QUAT + CONF, start, start + length[:, 1:]))
+
+
+def _inline_columns(rows):
+    """Numbers (K, 17) and lengths of x .. cfx, after a 0 for the name (K, 12), of `_WRITTEN_INLINE`'s groups
+    2 .. 18 (K rows of str)."""
+    texts = np.array(rows, dtype=str)
+    return texts.astype(float), np.c_[np.zeros(len(rows), dtype=np.int64), np.strings.str_len(texts[:, :11])]
 
 
 def _point_columns(rows):
@@ -197,11 +238,12 @@ def _point_columns(rows):
 
 
 class _WrittenMotions:
-    """The motions of a module written one a line as CAM tools write them (`_WRITTEN_MOTION`), as columns.
+    """The motions of a module written one a line as CAM tools write them (`_WRITTEN_MOTION`, `_WRITTEN_INLINE`),
+    as columns.
 
     What a motion's instruction states besides its point (kind, speed,
     zone, tool, work object) is read once per distinct text (``combo``)
-    and stretch of the program between other statements (`_Reader.run`),
+    and stretch of the program between other statements (`_Reader.read_at_once`),
     by the statement-by-statement read itself; each motion's point is
     resolved with the others (`_resolve`).
 
@@ -210,26 +252,54 @@ class _WrittenMotions:
     line, start, end : ndarray of int, shape (M,)
         Line and offsets of each instruction (to its ``;``).
     name : ndarray of int, shape (M, 2)
-        Offsets of its point's name.
+        Offsets of its point's name; -1 for an inline target.
+    inline : ndarray of int, shape (M,)
+        Row of `table` of its inline target; -1 for a name.
     speed : ndarray of int, shape (M, 2)
         Offsets of its speed data (with ``\\V`` / ``\\T``).
     combo : ndarray of int, shape (M,)
         Code of its instruction, speed, zone, tool and work object texts.
+    table : TargetTable or None
+        The inline targets (`_WRITTEN_INLINE`, `_robtargets`).
     """
 
-    def __init__(self, masked, lines, excluded=()):
+    def __init__(self, text, masked, lines, excluded=()):
         codes, rows = {}, array.array("q")
         for m in _WRITTEN_MOTION.finditer(masked):
             key = (m.group(1).upper(), m.group(3), m.group(4), m.group(5), m.group(6))
-            rows.extend((m.start(), m.end(7), *m.span(2), *m.span(3), codes.setdefault(key, len(codes))))
-        columns = np.frombuffer(rows, dtype=np.int64).reshape(-1, 7)
+            rows.extend((m.start(), m.end(7), *m.span(2), *m.span(3), codes.setdefault(key, len(codes)), -1))
+        parts, numbers, offsets = [], [], array.array("q")  # inline targets, their texts by chunks
+        for m in _WRITTEN_INLINE.finditer(masked):
+            key = (m.group(1).upper(), m.group(19), m.group(20), m.group(21), m.group(22))
+            rows.extend((m.start(), m.end(23), -1, -1, *m.span(19), codes.setdefault(key, len(codes)),
+                         len(offsets)))
+            offsets.append(m.start(2))
+            numbers.append(m.groups()[1:18])
+            if len(numbers) == ROWS_AT_ONCE:
+                parts.append(_inline_columns(numbers))
+                numbers = []
+        if numbers:
+            parts.append(_inline_columns(numbers))
+        columns = np.frombuffer(rows, dtype=np.int64).reshape(-1, 8)
+        self.table = None
+        if parts:
+            values, length = (np.concatenate(column) for column in zip(*parts))
+            x_at = np.frombuffer(offsets, dtype=np.int64)
+            keep, self.table = _robtargets(text, lines, values, length, x_at, x_at)
+            row = np.full(len(x_at), -1)
+            row[keep] = np.arange(len(keep))
+            inline = columns[:, 7] >= 0
+            columns[inline, 7] = row[columns[inline, 7]]
+            columns = columns[~inline | (columns[:, 7] >= 0)]  # a target refused: read one by one, which names it
+        columns = columns[np.argsort(columns[:, 0], kind="stable")]
         line = np.searchsorted(lines.starts, columns[:, 0], side="right")
         keep = ~np.isin(line, list(excluded))
         columns = columns[keep]
         self.line, self.start, self.end = line[keep], columns[:, 0], columns[:, 1]
-        self.name, self.speed, self.combo = columns[:, 2:4], columns[:, 4:6], columns[:, 6]
+        self.name, self.speed, self.combo, self.inline = columns[:, 2:4], columns[:, 4:6], columns[:, 6], columns[:, 7]
         self.proto = np.zeros(len(self.line), dtype=int)  # index into `_Reader.protos` (`_Reader.read_at_once`)
         self.parameter = np.zeros(len(self.line), dtype=bool)  # the point is a routine parameter
+        self.target = np.full(len(self.line), -1)  # the target index of an inline target (`_Reader.read_at_once`)
 
     def __len__(self):
         return len(self.line)
@@ -348,21 +418,27 @@ class _Reader:
         self.flow(text, line, original)
         self.items.append(Statement(line, original))
 
-    def read_at_once(self, points, motions, is_motion, rows):
+    def read_at_once(self, points, motions, is_motion, rows, first_inline):
         """Take lines read at once (in program order; ``rows`` of ``points`` or, where ``is_motion``, of
-        ``motions``): the points become targets; the motions a `_Run`, read with the state in force here.
+        ``motions``): the points and inline targets become targets (rows of the table of both, the inline
+        ones from row ``first_inline``); the motions a `_Run`, read with the state in force here.
 
         Each distinct text of the motions' instructions (but their points) is
         read once, by `motion` on its first line: what it states (speed,
         zone, tool, work object, or why one is known at run time only) is
         that of each motion writing it.
         """
-        for row in rows[~is_motion].tolist():
-            key = points.table.name[row].lower()
-            self.points[key] = len(self.targets)
-            self.targets.append(row)  # a row of the table
-            if points.shared[row]:
-                self.shared.add(key)
+        inline = np.flatnonzero(is_motion)[motions.inline[rows[is_motion]] >= 0]
+        if len(inline):  # inline targets between the points: one at a time, in program order
+            for motion, row in zip(is_motion.tolist(), rows.tolist()):
+                if not motion:
+                    self.point_at_once(points, row)
+                elif motions.inline[row] >= 0:
+                    motions.target[row] = len(self.targets)
+                    self.targets.append(first_inline + int(motions.inline[row]))
+        else:
+            for row in rows[~is_motion].tolist():
+                self.point_at_once(points, row)
         run = rows[is_motion]
         if not len(run):
             return
@@ -372,7 +448,9 @@ class _Reader:
             start, end = int(motions.start[row]), int(motions.end[row])
             original = self.source.text[start:end]  # no comment or string inside: as masked
             m = _INSTRUCTION.match(original)
+            count = len(self.targets)
             motion, _ = self.motion(m.group(1), m.group(2), start + m.start(2), int(motions.line[row]), original)
+            del self.targets[count:]  # an inline target read again: the motions' own are taken above
             proto[code] = len(self.protos)
             self.protos.append(motion)
         motions.proto[run] = proto[motions.combo[run]]
@@ -380,6 +458,14 @@ class _Reader:
             motions.parameter[run] = [self.source.text[a:b].lower() in self.params
                                       for a, b in motions.name[run].tolist()]
         self.items.append(_Run(run))
+
+    def point_at_once(self, points, row):
+        """Add point ``row`` of ``points`` (`_WrittenPoints`) as a target."""
+        key = points.table.name[row].lower()
+        self.points[key] = len(self.targets)
+        self.targets.append(row)  # a row of the table
+        if points.shared[row]:
+            self.shared.add(key)
 
     def scan_data(self, masked):
         """Note the module's speeddata and num declarations (a motion may use one declared further down), and
@@ -729,7 +815,8 @@ def read(path):
         reader = _Reader(source)
         reader.task = DeclaredElsewhere(Path(path), folders, modules, _TASK_POINT, "!", assignment=_ASSIGNED_POINT)
         reader.scan_data(masked)
-        points, motions = _WrittenPoints(source, masked, lines, excluded), _WrittenMotions(masked, lines, excluded)
+        points = _WrittenPoints(source, masked, lines, excluded)
+        motions = _WrittenMotions(source.text, masked, lines, excluded)
         skipped = np.zeros(len(lines.starts) + 1, dtype=bool)
         skipped[points.line] = True
         skipped[motions.line] = True
@@ -742,17 +829,18 @@ def read(path):
     order = np.argsort(bulk, kind="stable")
     at_once, is_motion = bulk[order], order >= len(points.line)
     row_of = np.where(is_motion, order - len(points.line), order)  # row of points / motions
+    table = _stacked(points.table, motions.table)  # the points then the inline targets read at once
+    first_inline = 0 if points.table is None else len(points.table)  # row of `table` of the first inline target
     next_bulk = 0
     for line, start, end in statements + [(len(lines.starts) + 1, len(source.text), len(source.text))]:
         stop = int(np.searchsorted(at_once, line))
         if stop > next_bulk:  # the lines read at once before this statement: points, then runs of motions
-            reader.read_at_once(points, motions, is_motion[next_bulk:stop], row_of[next_bulk:stop])
+            reader.read_at_once(points, motions, is_motion[next_bulk:stop], row_of[next_bulk:stop], first_inline)
             next_bulk = stop
         if start == len(source.text):
             break
         reader.statement(masked, line, start, end)
     items = _resolve(reader, reader.task, DeclaredElsewhere(Path(path), folders, modules, _TASK_FRAME, "!"), motions)
-    table = points.table
     companions = tuple(source for _, source, _, _ in reader.companions.values())
     sources = (source, *companions)
     if table is None and not len(motions):  # nothing read at once: the program of objects
@@ -842,8 +930,8 @@ def _resolve(reader, task, frames, motions):
                     rows.tolist(), motions.proto[rows].tolist(), motions.name[rows].tolist(),
                     motions.parameter[rows].tolist(), motions.line[rows].tolist()):
                 key = text[a:b].lower()
-                index = reader.points.get(key)
-                if parameter or index is None or key in assigned or key in reader.shared:
+                index = reader.points.get(key) if a >= 0 else int(motions.target[row])  # a name, or inline
+                if a >= 0 and (parameter or index is None or key in assigned or key in reader.shared):
                     index, why = lookup(_Named(text[a:b], line, parameter))
                 else:
                     why = ""
@@ -890,7 +978,7 @@ def _motion_table(reader, motions, target, reason, refs, frames_of):
 
     m, text = len(motions), reader.source.text
     given = np.zeros((m, 3), dtype=bool)
-    given[:, [0, 2]] = True
+    given[:, 0], given[:, 2] = True, motions.name[:, 0] >= 0  # the speed; a name (none for an inline target)
     start = np.where(given, np.c_[motions.speed[:, 0], np.zeros(m, dtype=np.int64), motions.name[:, 0]], -1)
     end = np.where(given, np.c_[motions.speed[:, 1], np.zeros(m, dtype=np.int64), motions.name[:, 1]], -1)
     return MotionTable(
@@ -951,3 +1039,21 @@ def _targets(targets, table):
                                            "external", "edited")},
         name=Picked([table.name, [t.name for t in objects]], part, np.where(part, pick - len(table), pick)),
         spans=SpanColumns(0, table.spans.text, roles, start, end))
+
+
+def _stacked(first, second):
+    """One `TargetTable` of the rows of two (either may be None) whose spans are columns of the same text and
+    roles (the points and the inline targets read at once)."""
+    if first is None or second is None:
+        return second if first is None else first
+
+    def joined(a, b):
+        return np.concatenate([a, b]) if isinstance(a, np.ndarray) else tuple(a) + tuple(b)
+
+    names = TextSlices(first.name.text, *(np.concatenate([getattr(first.name, k), getattr(second.name, k)])
+                                          for k in ("start", "end")))
+    spans = SpanColumns(0, first.spans.text, first.spans.roles, np.concatenate([first.spans.start, second.spans.start]),
+                        np.concatenate([first.spans.end, second.spans.end]))
+    return TargetTable(**{name: joined(getattr(first, name), getattr(second, name)) for name in
+                          ("pose", "is_joint", "joints", "line", "config", "tool", "frame", "external", "edited")},
+                       name=names, spans=spans)
