@@ -43,13 +43,13 @@ def _seen(program):
 
 _FANUC_WRITTEN = fanuc_reader._written_positions
 NONE_AT_ONCE = {  # what a language's reader at once gives when it reads nothing
-    krl_reader: lambda *args: ({}, None),
+    krl_reader: lambda *args: (np.zeros(0, dtype=int), None, np.zeros(0, dtype=bool)),
     fanuc_reader: lambda masked, start, end: _FANUC_WRITTEN(masked, 0, 0),
 }
 
 
 def _line_by_line(path, monkeypatch):
-    """The program read with no declaration (FANUC: nor motion line) read at once."""
+    """The program read with no declaration (FANUC, KRL: nor motion line) read at once."""
     module, function = AT_ONCE[path.suffix.lower()]
     with monkeypatch.context() as patch:
         if isinstance(function, tuple):  # patterns: none matches
@@ -57,7 +57,7 @@ def _line_by_line(path, monkeypatch):
                 patch.setattr(module, name, re.compile(r"(?!)"))
         else:
             patch.setattr(module, function, NONE_AT_ONCE.get(module, lambda *args: {}))
-        if module is fanuc_reader:
+        if module in (fanuc_reader, krl_reader):
             patch.setattr(module, "_WRITTEN_MOTION", re.compile(r"(?!)"))  # matches nothing
         return formats.read(path)
 

@@ -1,5 +1,6 @@
 """The KRL reader: .src statements and .dat declarations into a `Program` (see `trajcomp.formats.krl`)."""
 
+import array
 import dataclasses
 import re
 from pathlib import Path
@@ -26,7 +27,9 @@ from trajcomp.formats.text import (
     whole_circle,
 )
 from trajcomp.programs.program import Program
-from trajcomp.programs.tables import TargetRows, TargetTable, TextSlices, repeated
+from trajcomp.programs.tables import (
+    ItemRows, MotionTable, StatementTable, TargetRows, TargetTable, TextSlices, repeated,
+)
 from trajcomp.programs.items import (
     CIRCULAR, JOINT, LINEAR, Motion, Span, SpanColumns, SpanTable, Statement, Target, replaced,
 )
@@ -85,6 +88,11 @@ _WRITTEN_POINT = re.compile(
     r"^[ \t]*DECL[ \t]+(?:GLOBAL[ \t]+)?(?:E6POS|POS|FRAME)[ \t]+(\w+)[ \t]*=[ \t]*\{"
     + ",".join(f"{p.upper()}[ ]({NUMBER})" for p in POSE) + r"(?:,S[ ](\d+),T[ ](\d+))?"
     + _EXTERNAL_MEMBERS + r"\}[ \t]*\r?$", re.I | re.M)
+# A motion to a named point as CAM post-processors write it, one a line: LIN XP1 C_DIS, PTP P2 (no WITH, no _REL):
+# read at once (`_written_motions`); every other motion goes line by line.
+_WRITTEN_MOTION = re.compile(
+    r"^[ \t]*((S?PTP)|S?LIN)[ \t]+(?!(?:C_(?:PTP|DIS|VEL|ORI|SPL)|WITH)\b)([A-Za-z_][A-Za-z0-9_]*)"
+    r"(?:[ \t]+(C_(?:PTP|DIS|VEL|ORI|SPL)))?[ \t]*\r?$", re.I | re.M)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -174,6 +182,8 @@ def _written_points(index, masked, lines):
 
     A declaration whose numbers a line-by-line read would refuse (out of
     range, S or T beyond their bits) is left out: that read then names it.
+    The declarations are matched `AT_ONCE` at a time (a million points
+    never become a million match objects together).
 
     Parameters
     ----------
@@ -186,19 +196,17 @@ def _written_points(index, masked, lines):
 
     Returns
     -------
-    rows : dict
-        ``{line number: row of table}``.
-    table : TargetTable
+    line : ndarray of int, shape (N,)
+        The line of each point (ascending).
+    table : TargetTable or None
         The points as columns (no object each): names and spans (`SpanColumns`) in the data list's text.
+    shared : ndarray of bool, shape (N,)
+        The points declared GLOBAL.
     """
-    found = list(_WRITTEN_POINT.finditer(masked))
-    if not found:
-        return {}, None
-    groups = [m.groups() for m in found]
-    texts = np.array([g[1:] for g in groups], dtype=object)  # (N, 14): x..c, s, t, e1..e6; None where absent
-    given = texts != None  # noqa: E711 (elementwise)
-    numbers = np.full(texts.shape, np.nan)
-    numbers[given] = np.array(texts[given].tolist(), dtype=float)
+    blocks = [_written_block(chunk) for chunk in _chunks(_WRITTEN_POINT.finditer(masked))]
+    if not blocks:
+        return np.zeros(0, dtype=int), None, np.zeros(0, dtype=bool)
+    numbers, given, at, shared = (np.concatenate(parts) for parts in zip(*blocks))
     pose, status, external = numbers[:, :6], numbers[:, 6:8], numbers[:, 8:]
     limits = np.array([LIMITS[p] for p in POSE])
     good = np.isfinite(pose).all(axis=1) & (np.abs(pose) <= limits).all(axis=1)
@@ -207,22 +215,53 @@ def _written_points(index, masked, lines):
     keep = np.flatnonzero(good)
     vector = pose[keep].copy()
     vector[:, 3:] = np.radians(vector[:, 3:])
-    at = np.array([[m.start(k) for k in range(1, 10)] + [m.end(k) for k in range(1, 10)] for m in found])[keep]
-    given = given[keep]
-    columns = SpanColumns(index, lines.text, POSE + ("s", "t"), np.where(given[:, :8], at[:, 1:9], -1),
-                          np.where(given[:, :8], at[:, 10:], -1))
-    line = np.searchsorted(lines.starts, [found[k].start() for k in keep.tolist()], side="right")
+    at, given = at[keep], given[keep]
+    columns = SpanColumns(index, lines.text, POSE + ("s", "t"), np.where(given[:, :8], at[:, 2:10], -1),
+                          np.where(given[:, :8], at[:, 11:], -1))
+    line = np.searchsorted(lines.starts, at[:, 0], side="right")
     counts = given[:, 8:].sum(axis=1).tolist()
     configs = {}  # one tuple per distinct (S, T): a path's points mostly share theirs
     n = len(keep)
     none = repeated(None, n)
     table = TargetTable(
-        pose_to_matrix(vector), np.zeros(n, dtype=bool), np.full((n, 6), np.nan), line,
+        pose_to_matrix(vector), np.zeros(n, dtype=bool), np.broadcast_to(np.nan, (n, 6)), line,
         tuple(configs.setdefault(st, st) if stated else () for st, stated in
               zip(map(tuple, np.where(given[:, 6:8], status[keep], 0).astype(int).tolist()), given[:, 6].tolist())),
         none, none, tuple(external[k, :count].copy() if count else None for k, count in zip(keep.tolist(), counts)),
-        np.zeros(n, dtype=bool), TextSlices(lines.text, at[:, 0], at[:, 9]), columns)
-    return dict(zip(line.tolist(), range(n))), table
+        np.zeros(n, dtype=bool), TextSlices(lines.text, at[:, 1], at[:, 10]), columns)
+    return line, table, shared[keep]
+
+
+AT_ONCE = 65536  # declarations or motions matched and parsed together: bounds the match objects held
+
+
+def _chunks(matches):
+    """Lists of at most `AT_ONCE` matches of an iterator of them."""
+    chunk = []
+    for m in matches:
+        chunk.append(m)
+        if len(chunk) == AT_ONCE:
+            yield chunk
+            chunk = []
+    if chunk:
+        yield chunk
+
+
+def _written_block(found):
+    """Numbers (n, 14), given (n, 14), offsets (n, 19) and GLOBAL flags (n,) of some `_WRITTEN_POINT` matches.
+
+    The numbers are x..c, s, t, e1..e6 (NaN where absent); the offsets are
+    the declaration's start, then the starts of groups 1-9 (name, x..c, s,
+    t), then their ends.
+    """
+    texts = np.array([m.groups() for m in found], dtype=object)[:, 1:]  # None where absent
+    given = texts != None  # noqa: E711 (elementwise)
+    numbers = np.full(texts.shape, np.nan)
+    numbers[given] = np.array(texts[given].tolist(), dtype=float)
+    regs = np.array([m.regs[:10] for m in found], dtype=np.int64)  # (n, 10, 2): the match's and groups 1-9's
+    at = np.concatenate([regs[:, :, 0], regs[:, 1:, 1]], axis=1)
+    shared = np.array([_GLOBAL_WORD.search(m.string, m.start(), m.end()) is not None for m in found], dtype=bool)
+    return numbers, given, at, shared
 
 
 def _sibling_dat(path):
@@ -251,6 +290,7 @@ class _Reader:
         self.numbers = {}  # NAME -> (value, why it is only known at run time) of REAL / INT data declared with one
         self.assigned = {}  # NAME -> first line of the .src that assigns it
         self.shared = set()  # NAMEs of GLOBAL points: other programs may assign them
+        self.redeclared = False  # a point declared twice: the last declaration counts
         self.companions = {}  # file -> (source index, Lines, masked text) of other data lists read
         self.motion_spans = SpanTable(MOTION_SPANS)  # the spans of the motions, in order: all in the .src
 
@@ -311,6 +351,7 @@ class _Reader:
                 members = _members(m.group(3), body_start, index, name, line_no, original)
                 if _GLOBAL_WORD.search(text, 0, m.start(2)):
                     self.shared.add(point.upper())
+                self.redeclared |= point.upper() in self.points
                 self.points[point.upper()] = len(self.targets)
                 self.targets.append(_point(members, point, name, line_no, original, typ))
             return True
@@ -554,6 +595,12 @@ class _Reader:
 def read(path):
     """Read a KRL .src and its .dat (same name, beside it, if there is one).
 
+    The lines a CAM post-processor or KUKA's editor writes (points declared
+    one a line, `_WRITTEN_POINT`; motions to them, `_WRITTEN_MOTION`) are
+    read at once as columns; every other line one by one, in order, its
+    tool, base, speed and zone in force for the motions read at once after
+    it (`_Walk`).
+
     Raises
     ------
     ReadError
@@ -567,7 +614,9 @@ def read(path):
         raise ReadError(f"{path}: not a KRL program: no DEF line")
     src_index, src_lines, src_masked = reader.add_source(src)
     check_closed(src, src_masked, _BLOCK_OPENS, _BLOCK_CLOSES, {"DEF": "END", "DEFFCT": "ENDFCT"})
-    reader.scan_assignments(src_masked, src_lines)
+    written = _written_motions(src_masked, src_lines)
+    others = _other_lines(src_lines, written["line"])
+    reader.scan_assignments(src_masked, others)
     dat_path, table = _sibling_dat(path), None
     if dat_path is not None:
         dat_index, dat_lines, dat_masked = reader.add_source(read_source(dat_path))
@@ -575,24 +624,170 @@ def read(path):
             raise ReadError(f"{dat_path}: not a KRL data list: no DEFDAT line")
         if not _ENDDAT.search(dat_masked):
             raise ReadError(f"{dat_path}: no ENDDAT: the data list is cut off")
-        written, table = _written_points(dat_index, dat_masked, dat_lines)
-        for line_no, start, end in dat_lines:
-            if line_no in written:
-                name = table.name[written[line_no]].upper()
+        point_lines, table, shared = _written_points(dat_index, dat_masked, dat_lines)
+        names = table.name if table is not None else ()
+        rows = 0
+
+        def declare_rows(before):
+            """The table's points declared before line ``before``, in order."""
+            nonlocal rows
+            stop = int(np.searchsorted(point_lines, before))
+            for row, name, global_ in zip(range(rows, stop), names[rows:stop], shared[rows:stop].tolist()):
+                name = name.upper()
+                reader.redeclared |= name in reader.points
                 reader.points[name] = len(reader.targets)
-                reader.targets.append(written[line_no])  # a row of the table
-                if _GLOBAL_WORD.search(dat_masked, start, end):  # other programs see it, and may assign it
+                reader.targets.append(row)  # a row of the table
+                if global_:  # other programs see it, and may assign it
                     reader.shared.add(name)
-            else:
-                reader.declarations(dat_index, dat_masked, line_no, start, end)
-    for line_no, start, end in src_lines:
+            rows = stop
+
+        for line_no, start, end in _other_lines(dat_lines, point_lines):
+            declare_rows(line_no)
+            reader.declarations(dat_index, dat_masked, line_no, start, end)
+        declare_rows(len(dat_lines.starts) + 1)
+    walk = _Walk(reader, src_index, src_masked, written)
+    for line_no, start, end in others:
+        walk.motions_before(line_no)
         reader.statement(src_index, src_masked, line_no, start, end)
-    items = _resolve(reader, path, dat_path)
-    if table is not None and reader.targets == list(range(len(table))):  # every point written as KUKA writes them
+    walk.motions_before(len(src_lines.starts) + 1)
+    items, resolved = _resolve(reader, path, dat_path, walk)
+    if table is not None and len(reader.targets) == len(table):  # every point written as KUKA writes them
         targets = TargetRows(table)
     else:
         targets = tuple(table.target(t) if isinstance(t, int) else t for t in reader.targets)
-    return Program("krl", path.stem, items, targets, reader.tools, reader.frames, tuple(reader.sources))
+    if not len(walk.rows):  # none read at once
+        return Program("krl", path.stem, items, targets, reader.tools, reader.frames, tuple(reader.sources))
+    motions = MotionTable.merged([MotionTable.of([i for i in items if isinstance(i, Motion)]),
+                                  walk.table(resolved)])
+    statements = StatementTable.of([i for i in items if not isinstance(i, Motion)])
+    return Program("krl", path.stem, ItemRows(statements, motions), targets, reader.tools, reader.frames,
+                   tuple(reader.sources))
+
+
+def _written_motions(masked, lines):
+    """The motions of a .src written as `_WRITTEN_MOTION` (``LIN XP1 C_DIS``), as columns, matched `AT_ONCE` at a
+    time.
+
+    Returns
+    -------
+    dict of ndarray, each shape (N,)
+        ``line``; ``start``, ``end``: the line's text (its line ending
+        left out by `_Stripped`); ``keyword_start``, ``keyword_end``,
+        ``name_start``, ``name_end``; ``joint``: PTP / SPTP; ``approximated``:
+        an approximation (C_DIS ...) is written.
+    """
+    blocks = []
+    for found in _chunks(_WRITTEN_MOTION.finditer(masked)):
+        blocks.append(np.array([m.regs for m in found], dtype=np.int64).reshape(-1, 10))  # (start, end) of 0-4
+    at = np.concatenate(blocks) if blocks else np.zeros((0, 10), dtype=np.int64)
+    columns = dict(zip(("start", "end", "keyword_start", "keyword_end"), at[:, :4].T))
+    columns |= {"name_start": at[:, 6], "name_end": at[:, 7], "joint": at[:, 4] >= 0, "approximated": at[:, 8] >= 0,
+                "line": np.searchsorted(lines.starts, at[:, 0], side="right")}
+    return columns
+
+
+def _other_lines(lines, taken):
+    """``(number, start, end)`` of the lines of ``lines`` (`Lines`) not in ``taken`` (ascending line numbers), as
+    `Lines` iterates them."""
+    starts, text = lines.starts, lines.text
+    out = []
+    for number in np.setdiff1d(np.arange(1, len(starts) + 1), taken).tolist():
+        start = starts[number - 1]
+        stop = starts[number] if number < len(starts) else len(text)
+        line = text[start:stop].rstrip("\r\n")
+        if number == len(starts) and not line:
+            break
+        out.append((number, start, start + len(line)))
+    return out
+
+
+class _Walk:
+    """The motions read at once (`_written_motions`) given the reader's state in force at their lines.
+
+    The .src's other lines are read one by one in order; before each,
+    `motions_before` takes the motions read at once above it: with the
+    tool, base, speeds and zone then in force (a snapshot shared by the
+    rows between two other lines), or, where that state is known only at
+    run time (a tool or base set at run time, routine parameters) or the
+    point is not one the program has declared so far, through the
+    one-by-one read (`_Reader.statement`), which says why.
+    """
+
+    def __init__(self, reader, index, masked, written):
+        self.reader, self.index, self.masked, self.written = reader, index, masked, written
+        self.next = 0  # the first motion read at once not yet taken
+        # the rows kept as columns, the index of each one's point when read, its state (in `states`)
+        self.rows, self.point, self.snapshot = array.array("q"), array.array("q"), array.array("q")
+        self.states = []
+
+    def motions_before(self, line_no):
+        """Take the motions read at once above line ``line_no``."""
+        reader, written = self.reader, self.written
+        stop = int(np.searchsorted(written["line"], line_no))
+        if stop == self.next:
+            return
+        rows = range(self.next, stop)
+        self.next = stop
+        one_by_one = bool(reader.tool_why or reader.base_why or reader.params)
+        text = reader.sources[self.index].text
+        names = [text[a:b].upper() for a, b in zip(written["name_start"][rows.start:rows.stop].tolist(),
+                                                    written["name_end"][rows.start:rows.stop].tolist())]
+        state = len(self.states)
+        self.states.append((reader.tool, reader.base, reader.speed_ptp, reader.speed_cp, reader.zone,
+                            reader.speed_spans[JOINT], reader.speed_spans[LINEAR], reader.speed_why[JOINT],
+                            reader.speed_why[LINEAR]))
+        for row, name in zip(rows, names):
+            if one_by_one or name not in reader.points:
+                reader.statement(self.index, self.masked, int(written["line"][row]), int(written["start"][row]),
+                                 int(written["start"][row]) + len(text[written["start"][row]:written["end"][row]]
+                                                                  .rstrip("\r\n")))
+            else:
+                self.rows.append(row)
+                self.point.append(reader.points[name])
+                self.snapshot.append(state)
+
+    def table(self, resolved):
+        """The `MotionTable` of the rows kept as columns, their targets ``resolved`` (`_resolved_rows`)."""
+        written, text = self.written, self.reader.sources[self.index].text
+        rows, state = np.frombuffer(self.rows, dtype=np.int64), np.frombuffer(self.snapshot, dtype=np.int64)
+        tool, base, speed_ptp, speed_cp, zone, span_ptp, span_cp, why_ptp, why_cp = (
+            np.array(column + (None,), dtype=object)[:-1] for column in zip(*self.states))  # (S,) each
+
+        def number(values):
+            return np.array([np.nan if v is None else v for v in values], dtype=float)
+
+        def offsets(spans):
+            return np.array([(-1, -1) if s is None else (s.start, s.end) for s in spans], dtype=np.int64).reshape(-1, 2)
+
+        joint, approximated = written["joint"][rows], written["approximated"][rows]
+        span = np.where(joint[:, None], offsets(span_ptp)[state], offsets(span_cp)[state])
+        none = np.full(len(rows), -1)
+        start = np.stack([written["keyword_start"][rows], none, written["name_start"][rows], none, span[:, 0]], 1)
+        end = np.stack([written["keyword_end"][rows], none, written["name_end"][rows], none, span[:, 1]], 1)
+        target, reason, refs, home = resolved
+        table = MotionTable(
+            kind=np.array([LINEAR, JOINT], dtype=object)[joint.astype(int)], target=target, via=np.full(len(rows), -1),
+            speed=np.where(joint, number(speed_ptp)[state], number(speed_cp)[state]),
+            speed_unit=np.array(["mm/s", "%"], dtype=object)[joint.astype(int)],
+            zone=np.where(approximated, number(zone)[state], np.nan), tool=tool[state], frame=base[state],
+            line=written["line"][rows], axis_position=np.zeros(len(rows), dtype=bool),
+            text=_Stripped(text, written["start"][rows], written["end"][rows]),
+            speed_why=np.where(joint, why_ptp[state], why_cp[state]), spans=SpanColumns(self.index, text, MOTION_SPANS,
+                                                                                          start, end))
+        if len(reason):
+            table = table.with_rows(list(reason), target=-1, reason=list(reason.values()), refs=list(refs),
+                                    axis_position=home)
+        return table
+
+
+class _Stripped(TextSlices):
+    """Lines of a text given by their offsets (N,), each stripped on access (a motion's text as the one-by-one
+    read keeps it: `Motion.text`)."""
+
+    def __getitem__(self, k):
+        if isinstance(k, slice):
+            return [line.strip() for line in super().__getitem__(k)]
+        return super().__getitem__(k).strip()
 
 
 def _visible(file, match):
@@ -600,11 +795,21 @@ def _visible(file, match):
     return file.name.lower() == "$config.dat" or _GLOBAL_WORD.search(match.group(0)) is not None
 
 
-def _resolve(reader, path, dat_path):
+def _resolve(reader, path, dat_path, walk):
     """The items with named points resolved, points changed at run time found, and routine arguments noted.
 
     A point assigned anywhere in the code (``XP1 = ...``, ``XP1.Z = ...``)
     holds a run-time value, so none of its motions is compensated.
+
+    Returns
+    -------
+    items : tuple
+        The items read one by one.
+    resolved : tuple
+        The motions read at once (`_Walk`) resolved as the one-by-one
+        read resolves its own: target indices (N,), ``{row: reason}`` of
+        the rows whose point is changed at run time, their ``refs``
+        (tuples) and whether each is a home position (ndarray of bool).
     """
     assigned, items = {}, []
     # other data lists beside it, and $config.dat beside it or in a backup's R1/System (KRC/R1/Program/x.src)
@@ -667,4 +872,27 @@ def _resolve(reader, path, dat_path):
                 "nor $config.dat, declares them)" if dat_path is not None else
                 f"no {path.stem}.dat beside {path.name}, nor another data list declaring them")
         unresolved(path.name, missing, hint)
-    return tuple(items)
+    return tuple(items), _resolved_rows(reader, walk, assigned, elsewhere)
+
+
+def _resolved_rows(reader, walk, assigned, elsewhere):
+    """`_resolve`'s lookup of the motions read at once, all at once (their points are declared: `_Walk`)."""
+    text, written = reader.sources[walk.index].text, walk.written
+    rows = np.frombuffer(walk.rows, dtype=np.int64)
+    target = np.frombuffer(walk.point, dtype=np.int64).copy()
+    reason, refs, home = {}, [], []
+    if not (reader.redeclared or assigned or reader.shared):
+        return target, reason, refs, np.array(home, dtype=bool)
+    names = [text[a:b] for a, b in zip(written["name_start"][rows].tolist(), written["name_end"][rows].tolist())]
+    for k, name in enumerate(names):
+        key = name.upper()
+        target[k] = reader.points[key]  # a point declared again after the motion: the last declaration
+        if key in assigned:
+            where = f"line {assigned[key]}"
+        elif not (key in reader.shared and (where := elsewhere.assigned(key))):
+            continue
+        reason[k] = f"{name} is changed at run time ({where})"
+        named = {w.upper() for w in _WORD.findall(mask(text[written["start"][rows[k]]:written["end"][rows[k]]], ";"))}
+        refs.append(tuple(reader.points[w] for w in sorted(named) if w in reader.points))
+        home.append(bool(_HOME.match(name)))
+    return target, reason, refs, np.array(home, dtype=bool)

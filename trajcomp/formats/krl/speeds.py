@@ -7,7 +7,7 @@ import re
 import numpy as np
 
 from trajcomp.formats.text import NUMBER, edit_sources, floor_places, format_number
-from trajcomp.programs.items import JOINT
+from trajcomp.programs.items import JOINT, Span
 
 _INDENT = re.compile(r"[ \t]*")
 
@@ -27,12 +27,14 @@ def write_speeds(program, result, robot, plan):
     ``plan.cruise[k]`` (mm/s) are written for waypoint k, the end of motion ``result.motion[k]``; returns the
     program with its fields written and the setting written per waypoint.
     """
+    table = program.motion_table()
+    joint = table.kind == JOINT  # (M,)
     wanted = {}
     for k in sorted({**plan.times, **plan.cruise}):
         m = int(result.motion[k])
         if k in plan.cruise:
             wanted[m] = (k, format_number(floor_places(plan.cruise[k] / 1000.0, 6), 6))
-        elif program.motions[m].kind == JOINT:
+        elif joint[m]:
             percent = _ptp_percent(result.q[k] - result.q[k - 1], plan.times[k], robot)
             if percent is not None:
                 wanted[m] = (k, str(percent))
@@ -51,16 +53,22 @@ def write_speeds(program, result, robot, plan):
         end = len(text) if end < 0 else end
         return " ".join((text[start:span.start] + value + text[span.end:end]).split())
 
+    def span_of(offsets, m):
+        """The `Span` of motion ``m`` in ``offsets`` (`MotionTable.span_offsets`), or None."""
+        source, start, end = (int(column[m]) for column in offsets)
+        return None if start < 0 else Span(source, start, end, program.sources[source].text[start:end])
+
+    speed_with, speed, motion_at = (table.span_offsets(role) for role in ("speed_with", "speed", "motion"))
     running = {"ptp": None, "cp": None}  # the speed value in force as the program runs down
     governing = {"ptp": None, "cp": None}  # (source, offset) of the statement that set it
-    for m, motion in enumerate(program.motions):
-        group = "ptp" if motion.kind == JOINT else "cp"
+    for m in _changing(joint, speed_with[1] >= 0, speed[:2], np.isin(np.arange(len(table)), list(wanted))).tolist():
+        group = "ptp" if joint[m] else "cp"
         k, want = wanted.get(m, (None, None))
-        if "speed_with" in motion.spans:  # the motion's own speed, in its WITH clause: the modal one stays
+        if speed_with[1][m] >= 0:  # the motion's own speed, in its WITH clause: the modal one stays
             if want is not None:
-                settings[k] = edit(motion.spans["speed_with"], want)
+                settings[k] = edit(span_of(speed_with, m), want)
             continue
-        span = motion.spans.get("speed")
+        span = span_of(speed, m)
         key = None if span is None else (span.source, span.start)
         if key != governing[group]:  # a new statement sets this motion's speed
             governing[group] = key
@@ -73,7 +81,7 @@ def write_speeds(program, result, robot, plan):
             if want is not None:
                 settings.setdefault(k, _krl_statement(group, want))
             continue
-        at = motion.spans["motion"]
+        at = span_of(motion_at, m)
         source_text = program.sources[at.source].text
         line_start = folds[at.source].outside(source_text.rfind("\n", 0, at.start) + 1)
         indent = _INDENT.match(source_text, line_start).group()  # in place: a slice would copy the rest
@@ -82,6 +90,32 @@ def write_speeds(program, result, robot, plan):
         if want is not None:
             settings[k] = _krl_statement(group, want)
     return edit_sources(program, [sorted(set(e)) for e in edits]), settings
+
+
+def _changing(joint, own, speed, wanted):
+    """The motions (ascending) at which the speed write-back can do anything; the others keep their speed.
+
+    A motion whose speed is set by the same statement as the motion of its
+    group before it (``$VEL.CP`` for LIN and CIRC, ``BAS(#VEL_PTP)`` for
+    PTP), that wants no new speed, and whose group's motion before it
+    wanted none either runs at that statement's value, unchanged: nothing
+    is written for it.
+
+    Parameters
+    ----------
+    joint, own, wanted : ndarray of bool, shape (M,)
+        PTP motions; motions with their own speed (WITH); motions given a new speed.
+    speed : tuple of ndarray of int, shape (M,)
+        Source and start of each motion's speed statement (-1: none).
+    """
+    changing = own | wanted
+    for group in (joint & ~own, ~joint & ~own):
+        rows = np.flatnonzero(group)
+        key = np.stack([speed[0][rows], speed[1][rows]], axis=1)
+        new = np.ones(len(rows), dtype=bool)
+        new[1:] = (key[1:] != key[:-1]).any(axis=1) | wanted[rows[:-1]]
+        changing[rows[new]] = True
+    return np.flatnonzero(changing)
 
 
 def _same(a, b):
