@@ -203,33 +203,20 @@ def _written_points(index, masked, lines):
     shared : ndarray of bool, shape (N,)
         The points declared GLOBAL.
     """
-    blocks = [_written_block(chunk) for chunk in _chunks(_WRITTEN_POINT.finditer(masked))]
+    offset = np.int32 if len(masked) < 2 ** 31 else np.int64  # offsets into the text: half the bytes where they fit
+    configs = {}  # one tuple per distinct (S, T): a path's points mostly share theirs
+    blocks = [_written_block(chunk, offset, configs) for chunk in _chunks(_WRITTEN_POINT.finditer(masked))]
     if not blocks:
         return np.zeros(0, dtype=int), None, np.zeros(0, dtype=bool)
-    numbers, given, at, shared = (np.concatenate(parts) for parts in zip(*blocks))
-    pose, status, external = numbers[:, :6], numbers[:, 6:8], numbers[:, 8:]
-    limits = np.array([LIMITS[p] for p in POSE])
-    good = np.isfinite(pose).all(axis=1) & (np.abs(pose) <= limits).all(axis=1)
-    good &= ~given[:, 6] | ((status[:, 0] <= 0xFF) & (status[:, 1] <= 0x3F))
-    good &= (np.isfinite(external) & (np.abs(external) <= LENGTH_LIMIT) | ~given[:, 8:]).all(axis=1)
-    keep = np.flatnonzero(good)
-    vector = pose[keep].copy()
-    vector[:, 3:] = np.radians(vector[:, 3:])
-    at, given = at[keep], given[keep]
-    columns = SpanColumns(index, lines.text, POSE + ("s", "t"), np.where(given[:, :8], at[:, 2:10], -1),
-                          np.where(given[:, :8], at[:, 11:], -1))
-    line = np.searchsorted(lines.starts, at[:, 0], side="right")
-    counts = given[:, 8:].sum(axis=1).tolist()
-    configs = {}  # one tuple per distinct (S, T): a path's points mostly share theirs
-    n = len(keep)
+    pose, start, end, config, external, shared = (
+        np.concatenate(parts) if isinstance(parts[0], np.ndarray) else sum(parts, ()) for parts in zip(*blocks))
+    line = np.searchsorted(lines.starts, start[:, 0], side="right")
+    n = len(line)
     none = repeated(None, n)
-    table = TargetTable(
-        pose_to_matrix(vector), np.zeros(n, dtype=bool), np.broadcast_to(np.nan, (n, 6)), line,
-        tuple(configs.setdefault(st, st) if stated else () for st, stated in
-              zip(map(tuple, np.where(given[:, 6:8], status[keep], 0).astype(int).tolist()), given[:, 6].tolist())),
-        none, none, tuple(external[k, :count].copy() if count else None for k, count in zip(keep.tolist(), counts)),
-        np.zeros(n, dtype=bool), TextSlices(lines.text, at[:, 1], at[:, 10]), columns)
-    return line, table, shared[keep]
+    table = TargetTable(pose, np.zeros(n, dtype=bool), np.broadcast_to(np.nan, (n, 6)), line, config, none, none,
+                        external, np.zeros(n, dtype=bool), TextSlices(lines.text, start[:, 1], end[:, 1]),
+                        SpanColumns(index, lines.text, POSE + ("s", "t"), start[:, 2:], end[:, 2:]))
+    return line, table, shared
 
 
 AT_ONCE = 65536  # declarations or motions matched and parsed together: bounds the match objects held
@@ -247,21 +234,52 @@ def _chunks(matches):
         yield chunk
 
 
-def _written_block(found):
-    """Numbers (n, 14), given (n, 14), offsets (n, 19) and GLOBAL flags (n,) of some `_WRITTEN_POINT` matches.
+def _written_block(found, offset, configs):
+    """Some `_WRITTEN_POINT` matches as columns, less those a line-by-line read would refuse (`_written_points`).
 
-    The numbers are x..c, s, t, e1..e6 (NaN where absent); the offsets are
-    the declaration's start, then the starts of groups 1-9 (name, x..c, s,
-    t), then their ends.
+    Parameters
+    ----------
+    found : list of re.Match
+    offset : type
+        The integer type of offsets.
+    configs : dict
+        ``{(S, T): (S, T)}``: one tuple per distinct status and turn, shared by every block.
+
+    Returns
+    -------
+    pose : ndarray, shape (k, 4, 4)
+    start, end : ndarray of ``offset``, shape (k, 10)
+        The declaration's start (start only) and name, then x, y, z, a, b, c, s, t (-1 where not written).
+    config, external : tuple, length k
+        ``(S, T)`` or ``()``; E1..E6 as written (ndarray) or None.
+    shared : ndarray of bool, shape (k,)
+        Declared GLOBAL.
     """
-    texts = np.array([m.groups() for m in found], dtype=object)[:, 1:]  # None where absent
+    texts = np.array([m.groups() for m in found], dtype=object)[:, 1:]  # x..c, s, t, e1..e6; None where absent
     given = texts != None  # noqa: E711 (elementwise)
     numbers = np.full(texts.shape, np.nan)
     numbers[given] = np.array(texts[given].tolist(), dtype=float)
-    regs = np.array([m.regs[:10] for m in found], dtype=np.int64)  # (n, 10, 2): the match's and groups 1-9's
-    at = np.concatenate([regs[:, :, 0], regs[:, 1:, 1]], axis=1)
-    shared = np.array([_GLOBAL_WORD.search(m.string, m.start(), m.end()) is not None for m in found], dtype=bool)
-    return numbers, given, at, shared
+    pose, status, external = numbers[:, :6], numbers[:, 6:8], numbers[:, 8:]
+    limits = np.array([LIMITS[p] for p in POSE])
+    good = np.isfinite(pose).all(axis=1) & (np.abs(pose) <= limits).all(axis=1)
+    good &= ~given[:, 6] | ((status[:, 0] <= 0xFF) & (status[:, 1] <= 0x3F))
+    good &= (np.isfinite(external) & (np.abs(external) <= LENGTH_LIMIT) | ~given[:, 8:]).all(axis=1)
+    keep = np.flatnonzero(good)
+    vector = pose[keep]
+    vector[:, 3:] = np.radians(vector[:, 3:])
+    regs = np.array([found[k].regs[:10] for k in keep.tolist()], dtype=np.int64).reshape(-1, 10, 2)
+    written = np.ones((len(keep), 10), dtype=bool)
+    written[:, 2:] = given[keep, :8]
+    start = np.where(written, regs[:, :, 0], -1).astype(offset)
+    end = np.where(written, regs[:, :, 1], -1).astype(offset)
+    status_rows = np.where(given[keep, 6:8], status[keep], 0).astype(int).tolist()
+    config = tuple(configs.setdefault(tuple(st), tuple(st)) if has else ()
+                   for st, has in zip(status_rows, given[keep, 6].tolist()))
+    counts = given[keep, 8:].sum(axis=1).tolist()
+    external = tuple(external[k, :count].copy() if count else None for k, count in zip(keep.tolist(), counts))
+    shared = np.array([_GLOBAL_WORD.search(found[k].string, found[k].start(), found[k].end()) is not None
+                       for k in keep.tolist()], dtype=bool)
+    return pose_to_matrix(vector), start, end, config, external, shared
 
 
 def _sibling_dat(path):
