@@ -21,7 +21,7 @@ import numpy as np
 from trajcomp.errors import ReadError, WriteError
 from trajcomp.formats.fixed_text import joined_rows
 from trajcomp.programs.items import CIRCULAR, Source, Span, SpanColumns, SpanRow, replaced
-from trajcomp.programs.tables import ItemRows, StatementTable, TargetRows
+from trajcomp.programs.tables import ItemRows, Picked, StatementTable, TargetRows
 from trajcomp.arm.transforms import abc_to_matrix, matrix_to_abc
 from trajcomp.support.memory import collection_paused
 
@@ -934,7 +934,7 @@ def _edited(program, shifts, changed):
     if isinstance(program.targets, TargetRows):  # a table's targets move as columns
         edited = _edited(program.replace(targets=()), shifts, changed)
         return edited.replace(targets=_moved_rows(program.targets, shifts, changed))
-    if isinstance(program.items, ItemRows) and isinstance(program.items.table.spans, (SpanColumns, type(None))):
+    if isinstance(program.items, ItemRows) and isinstance(program.items.table.spans, (SpanColumns, Picked, type(None))):
         edited = _edited(program.replace(items=()), shifts, changed)  # a table's items move as columns
         return edited.replace(items=_moved_items(program.items, shifts, changed))
     every_target = list(program.targets)
@@ -979,13 +979,33 @@ def _moved_items(items, shifts, changed):
     """
     statements, motions = items.statements, items.table
     spans = motions.spans
-    if spans is not None and spans.source in changed:
+    if isinstance(spans, Picked):  # a merged table's: each part's spans moved
+        spans = Picked([_moved_span_maps(shifts, part) for part in spans.sequences], spans.part, spans.row)
+    elif spans is not None and spans.source in changed:
         spans = _moved_columns(shifts[spans.source], spans)
     motions = dataclasses.replace(motions, spans=spans, line=np.array(_moved_lines(shifts, motions.source,
                                                                                    motions.line), dtype=int))
     statements = StatementTable(_moved_lines(shifts, statements.source, statements.line), statements.text,
                                 statements.source, statements.refs)
     return ItemRows(statements, motions)
+
+
+def _moved_span_maps(shifts, maps):
+    """Items' spans (a sequence of Mapping: a part of a merged `MotionTable.spans`) in the edited texts, as
+    `_edited` moves them: `SpanColumns` as columns, other spans each."""
+    if isinstance(maps, SpanColumns):
+        return _moved_columns(shifts[maps.source], maps)
+    tables = {}  # id -> the SpanColumns of some items' spans, moved
+    moved = iter(_moved_spans(shifts, [span for of in maps if not isinstance(of, SpanRow) for span in of.values()]))
+    out = []
+    for of in maps:
+        if isinstance(of, SpanRow):
+            if id(of.columns) not in tables:
+                tables[id(of.columns)] = _moved_columns(shifts[of.columns.source], of.columns)
+            out.append(tables[id(of.columns)].row(of.k))
+        else:
+            out.append({role: next(moved) for role in of} if of else of)
+    return tuple(out)
 
 
 def _source_of(spans):
