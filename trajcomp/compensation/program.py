@@ -24,6 +24,7 @@ from trajcomp.programs.frames import FrameTable, in_frames
 from trajcomp.compensation.options import MAX_CORRECTION, MAX_JOINT_CHANGE
 from trajcomp.compensation.posture import check_posture, planned_joints
 from trajcomp.programs.program import Program, place_text
+from trajcomp.programs.items import replaced
 
 
 
@@ -440,10 +441,12 @@ def convert_program(program, to_format, *, robot=None, tools=None, frames=None):
     if language.speed_units is not None:
         motions = convert_speeds(motions, language.speed_units, robot,
                                  _geometry(program, robot, targets, tools, frames), language.name)
+    known = [i for i, target in enumerate(targets) if target.joints is not None and not target.is_joint] \
+        if robot is not None and needs_config else []
+    configs = dict(zip(known, configuration_for(to_format, robot, np.array([targets[i].joints for i in known]))
+                       if known else ()))  # every target's at once
     for i in range(len(targets)):
-        known = targets[i].joints is not None and not targets[i].is_joint and robot is not None and needs_config
-        config = configuration_for(to_format, robot, targets[i].joints[None])[0] if known else ()
-        targets[i] = dataclasses.replace(targets[i], config=config, spans={}, edited=False)
+        targets[i] = replaced(targets[i], config=configs.get(i, ()), spans={}, edited=False)
     return Program(
         format=to_format,
         name=program.name,

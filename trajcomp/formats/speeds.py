@@ -35,9 +35,9 @@ import dataclasses
 
 import numpy as np
 
-from trajcomp.arm.kinematics import fk_and_jacobian
+from trajcomp.arm.kinematics import fk, fk_and_jacobian
 from trajcomp.arm.transforms import rotation_angle_between
-from trajcomp.programs.items import CIRCULAR, JOINT
+from trajcomp.programs.items import JOINT, LINEAR
 
 SAMPLES = 65  # points of a joint motion's path where its TCP and orientation rates are evaluated
 # a joint motion's sampled peak |dp/ds| raised by this much where a TCP speed is read (its true peak lies between
@@ -74,19 +74,26 @@ class MotionGeometry:
     @classmethod
     def of(cls, program, robot, moves):
         """The geometry of ``program``'s motions from their `trajcomp.timing.moves.Moves` (timed waypoints)."""
-        m = len(program.motions)
+        m = len(program.motion_table())
         known = np.zeros(m, dtype=bool)
         dq, length, turn = np.full((m, 6), np.nan), np.full(m, np.nan), np.full(m, np.nan)
-        for k in np.flatnonzero(~moves.start).tolist():
+        steps = np.flatnonzero(~moves.start)
+        known[moves.motion[steps]], dq[moves.motion[steps]] = True, moves.q[steps] - moves.q[steps - 1]
+        lines = steps[moves.kind[steps] == LINEAR]
+        for tool_index in np.unique(moves.tool[lines]).tolist():  # the lines of each tool, at once
+            k = lines[moves.tool[lines] == tool_index]
+            tool = robot.replace(T_flange_tool=moves.tools[tool_index])
+            start, end = fk(tool, moves.q[k - 1]), fk(tool, moves.q[k])
+            length[moves.motion[k]] = np.linalg.norm(end[:, :3, 3] - start[:, :3, 3], axis=1)
+            turn[moves.motion[k]] = rotation_angle_between(start[:, :3, :3], end[:, :3, :3])
+        for k in steps[moves.kind[steps] != LINEAR].tolist():
             index = int(moves.motion[k])
             tool = robot.replace(T_flange_tool=moves.tools[moves.tool[k]])
             q_a, q_b = moves.q[k - 1], moves.q[k]
-            known[index], dq[index] = True, q_b - q_a
             if moves.kind[k] == JOINT:
                 length[index], turn[index] = _joint_path_rates(tool, q_a, q_b)
                 continue
-            ends = [q_a, moves.via[k], q_b] if moves.kind[k] == CIRCULAR else [q_a, q_b]
-            T, _ = fk_and_jacobian(tool, np.array(ends))
+            T, _ = fk_and_jacobian(tool, np.array([q_a, moves.via[k], q_b]))  # a circle
             length[index] = arc_length(T[:, :3, 3])
             turn[index] = rotation_angle_between(T[0, :3, :3], T[-1, :3, :3])
         return cls(known, dq, length, turn)
