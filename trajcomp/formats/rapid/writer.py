@@ -136,6 +136,8 @@ def _emit(program, name):
                 f"  PERS wobjdata {_identifier(frame, 'w', 'wobj0')} := [FALSE,TRUE,\"\","
                 f"{_pose_text(program.frames[frame])},[[0,0,0],[1,0,0,0]]];"
             )
+    used = program.cartesian_targets()
+    quaternion = dict(zip(used.index.tolist(), matrix_to_quat(used.T[:, :3, :3])))  # every target's at once
     for motion in program.motions:
         if motion.target is None:
             body.append(f"    ! not converted: {motion.text}")
@@ -154,7 +156,7 @@ def _emit(program, name):
                         raise WriteError(f"target {where(target)}: RAPID needs its confdata; convert with a robot")
                     decls.append(
                         f"  CONST robtarget {names[index]} := [[{_numbers(target.pose[:3, 3], 6)}],"
-                        f"[{_numbers(matrix_to_quat(target.pose[:3, :3]), 10)}],"
+                        f"[{_numbers(quaternion[index], 10)}],"
                         f"[{','.join(str(c) for c in target.config)}],[{_extax(target, axes)}]];"
                     )
             refs.append(names[index])
