@@ -123,7 +123,7 @@ def _emit(program, name):
     """A new RAPID module; Cartesian targets need their confdata (see postprocess.convert)."""
     module = _identifier(name, "M", "Module")
     axes = active_axes(program, 6, "RAPID")
-    decls, body, names = [], [], {}
+    decls, body, names, taken = [], [], {}, set()  # taken: the point names given so far
     for tool in dict.fromkeys(m.tool for m in program.motions):
         if tool is not None and tool in program.tools and _identifier(tool, "t", "tool0") != "tool0":
             decls.append(
@@ -148,7 +148,8 @@ def _emit(program, name):
                 continue
             target = program.targets[index]
             if index not in names:
-                names[index] = _point_name(target, set(names.values()), len(names) + 1)
+                names[index] = _point_name(target, taken, len(names) + 1)
+                taken.add(names[index])
                 if target.is_joint:
                     decls.append(f"  CONST jointtarget {names[index]} := [[{_numbers(np.degrees(target.joints), 9)}],[{_extax(target, axes)}]];")
                 else:
