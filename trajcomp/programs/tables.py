@@ -191,8 +191,7 @@ class MotionTable:
             if name == "refs":
                 changes[name] = {**self.refs, **{int(k): tuple(r) for k, r in zip(index.tolist(), values)}}
                 continue
-            column = getattr(self, name)
-            column = column.copy() if column.flags.writeable else np.array(column)
+            column = np.array(getattr(self, name))  # a copy, writeable even of a repeated (read-only) column
             column[index] = values
             changes[name] = column
         return dataclasses.replace(self, **changes)
