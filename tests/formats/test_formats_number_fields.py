@@ -1,0 +1,68 @@
+"""Numbers read from a text's characters at once (`trajcomp.formats.number_fields`) against Python's own reading."""
+
+import re
+
+import numpy as np
+import pytest
+
+from trajcomp.formats.number_fields import FIELDS_AT_ONCE, read_numbers, text_codes
+from trajcomp.formats.text import NUMBER
+
+
+def _python(field):
+    """What the one-by-one readers take: ``float`` of a field that matches NUMBER, else no number."""
+    return float(field) if re.fullmatch(NUMBER, field) else None
+
+
+def _check(fields, prefix=""):
+    text, start, end = prefix, [], []
+    for field in fields:
+        start.append(len(text))
+        text += field
+        end.append(len(text))
+        text += ";"
+    values, is_number = read_numbers(text_codes(text), start, end)
+    for field, value, number in zip(fields, values, is_number):
+        expected = _python(field)
+        assert number == (expected is not None), field
+        if expected is None:
+            assert np.isnan(value), field
+        else:  # the same float, sign of zero included
+            assert value == expected and np.signbit(value) == np.signbit(expected), field
+
+
+EDGES = ["0", "-0", "-0.000", "+0.5", ".5", "-.5", "5.", "-5.", "007.250", "123456789012345", "1234567890123456",
+         "0.000000000000001", "12345678.9012345", "-1234567890.12345678901", "9E+09", "9e9", "-1.5e-3", "1e",
+         "", "-", "+", ".", "-.", "1.2.3", "--1", "+-1", "1-", " 1", "1 ", "inf", "nan", "1_000", "0x10", "١٢",
+         "1" * 30, "0." + "1" * 30, "1,5"]
+
+
+def test_edge_fields_read_as_python_reads_them():
+    _check(EDGES)
+
+
+def test_non_ascii_text_offsets_are_str_offsets():
+    _check(EDGES, prefix="Grüße, Ωmega: ")
+
+
+def test_random_decimals_read_exactly_across_blocks():
+    rng = np.random.default_rng(7)
+    n = FIELDS_AT_ONCE + 5000  # more than one block
+    magnitude = 10.0 ** rng.integers(-4, 8, n)
+    numbers = rng.uniform(-1, 1, n) * magnitude
+    places = rng.integers(0, 12, n)
+    fields = [f"{v:.{p}f}" for v, p in zip(numbers, places)]
+    fields[::97] = [f"{v:+.3f}" for v in numbers[::97]]  # signed
+    fields[::101] = [f"{v:.6e}" for v in numbers[::101]]  # exponents: read by float
+    _check(fields)
+
+
+def test_empty():
+    values, is_number = read_numbers(text_codes(""), [], [])
+    assert values.shape == is_number.shape == (0,)
+
+
+@pytest.mark.parametrize("text", ["abc", "añb"])
+def test_codes_index_by_str_offset(text):
+    codes = text_codes(text)
+    assert [chr(c) for c in codes.tolist()] == list(text)

@@ -1,0 +1,131 @@
+"""Numbers written in a text, read from their characters at once: the bulk readers' parser.
+
+A CAM program states millions of numbers. Taking each as a Python str
+(a regular expression's groups) and converting it costs about 1 us a
+number; here the readers give the offsets of the fields and the digits
+are read with integer arithmetic on the text's character codes, a block
+of fields at a time (`_from_characters`). A number of at most 15 digits
+is read exactly as ``float`` reads it: its digits make a whole number
+below 2**53 and the power of ten between it and its value (places and
+exponent) is exact up to 10**22, so their product or quotient, correctly
+rounded, is the decimal correctly rounded. The other fields (more digits,
+a larger power) are read by ``float`` once per distinct text where they
+match `trajcomp.formats.text.NUMBER`; anything else is no number.
+"""
+
+import re
+
+import numpy as np
+
+from trajcomp.formats.text import NUMBER
+
+FIELDS_AT_ONCE = 65536  # fields laid out as a (fields, width) matrix together: bounds the matrices' memory
+_WIDEST = 24  # characters of the widest field read from its digits (more: read by `float`)
+_DIGITS = 15  # at most this many digits make a whole number below 2**53
+_EXACT_POWER = 22  # 10.0**k is exact for |k| <= 22
+_NUMBER = re.compile(NUMBER)
+_PLUS, _MINUS, _POINT, _ZERO, _NINE, _E, _LOWER_E = map(ord, "+-.09Ee")
+
+
+def text_codes(text):
+    """The character codes (L,) of a text, indexed by its str offsets: uint8 for ASCII text, else uint32.
+
+    Parameters
+    ----------
+    text : str
+        A program's text (`trajcomp.programs.items.Source.text`).
+
+    Returns
+    -------
+    ndarray, shape (L,)
+        ``codes[k] == ord(text[k])``.
+    """
+    if text.isascii():
+        return np.frombuffer(text.encode("ascii"), dtype=np.uint8)
+    return np.frombuffer(text.encode("utf-32-le"), dtype=np.uint32)
+
+
+def read_numbers(codes, start, end):
+    """Values of N numbers written at ``text[start:end]``, read at once.
+
+    Parameters
+    ----------
+    codes : ndarray, shape (L,)
+        The text's character codes (`text_codes`).
+    start, end : array_like of int, shape (N,)
+        Offsets of each field (``end`` excluded), as a regular expression gives them on the text.
+
+    Returns
+    -------
+    values : ndarray of float, shape (N,)
+        ``float(text[start:end])``; NaN where the field is no number.
+    is_number : ndarray of bool, shape (N,)
+        Whether the field is a number as `trajcomp.formats.text.NUMBER` states one (no blank, no ``inf``).
+    """
+    start, end = np.asarray(start, dtype=np.int64), np.asarray(end, dtype=np.int64)
+    values, read = np.full(len(start), np.nan), np.zeros(len(start), dtype=bool)
+    for first in range(0, len(start), FIELDS_AT_ONCE):
+        part = slice(first, first + FIELDS_AT_ONCE)
+        values[part], read[part] = _from_characters(codes, start[part], end[part])
+    is_number = read.copy()
+    other = np.flatnonzero(~read)
+    if len(other):
+        texts = [codes[a:b] for a, b in zip(start[other].tolist(), end[other].tolist())]
+        read = {}
+        for text in {t.tobytes() for t in texts}:
+            word = np.frombuffer(text, dtype=codes.dtype)
+            word = "".join(map(chr, word.tolist()))
+            read[text] = float(word) if _NUMBER.fullmatch(word) else None
+        found = [read[t.tobytes()] for t in texts]
+        is_number[other] = [value is not None for value in found]
+        values[other] = [np.nan if value is None else value for value in found]
+    return values, is_number
+
+
+def _from_characters(codes, start, end):
+    """Values (B,) of B fields read from their characters, and whether each was read so.
+
+    Read so: a number as `trajcomp.formats.text.NUMBER` states one (an
+    optional sign, digits with at most one point, an optional exponent
+    ``e[+-]digits``) of at most 15 digits before the exponent and at most
+    22 powers of ten between its digits and its value (``10**22`` is the
+    largest exact power); the others are left to ``float`` (`read_numbers`).
+    The characters are laid out one row per column of the fields (W, B)
+    and read a column at a time, left to right, as a whole number
+    ``mantissa``, the digits after the point ``places`` and the exponent.
+    """
+    width = end - start
+    widest = int(min(width.max(initial=0), _WIDEST))
+    column = np.arange(widest)[:, None]
+    inside = column < width
+    char = codes[np.minimum(start + column, len(codes) - 1)].astype(np.int64)
+    char[~inside] = 0
+    n = len(start)
+    mantissa, places, count, points, exponent, exponent_digits = (np.zeros(n, dtype=np.int64) for _ in range(6))
+    bad, in_exponent, after_e, exponent_negative = (np.zeros(n, dtype=bool) for _ in range(4))
+    for j in range(widest):
+        c = char[j]
+        digit = (c >= _ZERO) & (c <= _NINE)
+        point, e = c == _POINT, (c == _E) | (c == _LOWER_E)
+        sign = (c == _PLUS) | (c == _MINUS)
+        whole = digit & ~in_exponent
+        mantissa = np.where(whole, mantissa * 10 + c - _ZERO, mantissa)
+        places += whole & (points > 0)
+        count += whole
+        points += point
+        power = digit & in_exponent
+        exponent = np.where(power, exponent * 10 + c - _ZERO, exponent)
+        exponent_digits += power
+        exponent_negative |= after_e & (c == _MINUS)
+        bad |= inside[j] & ~(digit | point | e | sign)
+        bad |= (point & in_exponent) | (e & (in_exponent | (count == 0))) | (sign & ~after_e & (j > 0))
+        in_exponent |= e
+        after_e = e
+    shift = np.where(exponent_negative, -exponent, exponent) - places  # value = mantissa * 10**shift
+    read = ~bad & (points <= 1) & (count >= 1) & (count <= _DIGITS) & (width <= _WIDEST)
+    read &= ~in_exponent | ((exponent_digits >= 1) & (exponent_digits <= 3) & (np.abs(shift) <= _EXACT_POWER))
+    shift = np.where(read, shift, 0)
+    whole = mantissa.astype(float)
+    magnitude = np.where(shift >= 0, whole * 10.0 ** np.maximum(shift, 0), whole / 10.0 ** np.maximum(-shift, 0))
+    negative = char[0] == _MINUS if widest else np.zeros(n, dtype=bool)
+    return np.where(read, np.where(negative, -magnitude, magnitude), np.nan), read
