@@ -166,3 +166,84 @@ def test_position_numbers_beyond_the_lines_read_at_once_read_line_by_line(tmp_pa
 @pytest.mark.parametrize("text", ["a\nbb\n\nc", "a\nb\n", "", "\n", "a\r\nb\rc\n", "é\nx\n"])
 def test_line_starts_found_at_once_are_those_of_the_regular_expression(text):
     assert Lines(text).starts == [0] + [m.end() for m in re.finditer(r"\r\n|\r|\n", text)]
+
+
+def _counted(monkeypatch, name):
+    """Count what ``reader.<name>`` returns (the rows read at once) in a list, each call's count appended."""
+    counts, function = [], getattr(reader, name)
+
+    def counting(*args):
+        found = function(*args)
+        counts.append(len(found["p"] if "p" in found else found["line"]))
+        return found
+
+    monkeypatch.setattr(reader, name, counting)
+    return counts
+
+
+POSITION_VARIANTS = [  # (entry, read at once)
+    (_position(1, 1.0), True),
+    ("P[ 2 ]{GP1:UF:0,UT:1,CONFIG:'N U T, 0, 0, 0',X=1.5mm,Y=2mm,Z=3mm,W=4deg,P=5deg,R=6deg};\n", True),
+    ("P[3]{\r\n GP1 :\n uf : 0 , ut : 1 ,\f config : 'n u t , 0 , 0 , 0' ,\n x = 1.5e2 MM , y = -2E-1 mm ,"
+     " z = +.5 mm ,\n w = 180. DEG , p = -0 deg , r = 1e+1 deg\n};\n", True),
+    (_position(4, 4.0).replace("P[4]", 'P[4: "a, b]: c = {}"]'), True),
+    (_position(5, 5.0).replace("X = 5.000", "X =\u00a05.000"), False),  # a white space that is not ASCII
+    (_position(6, 6.0, frame="UF:0,UT:1").replace("CONFIG : ", "CONFIG:"), True),
+    (_position(7, 7.0).replace("UF : 0", "UF : 10"), True),
+    (_position(8, 8.0), True),
+    (_position(9, 9.0).replace("R = -.5 deg", "R = -.5 deg,\tE1= 5.0 mm"), False),
+    (_position(10, 10.0).replace("};", "};  junk  "), True),
+    (_position(11, 11.0).replace("X = 11.000", "X = ١١.000"), True),  # Arabic-Indic digits: float reads them
+    (_position(12, 12.0).replace("X = 12.000  mm", "X = 12.000  deg"), False),
+    (_position(13, 13.0).replace("UT : 1", "UT : 1" + " " * 70), False),  # a longer run of blanks than skipped
+    (_position(14, 14.0).replace("CONFIG", "KONFIG"), False),
+    ("P[15]{\n   GP1:\n\tUF : 0, UT : 1,\n\tJ1= 10.0 deg,\tJ2= 20.0 deg,\tJ3= 0 deg,\n"
+     "\tJ4= 0 deg,\tJ5= -90 deg,\tJ6= 0 deg\n};\n", False),
+    (_position(16, 16.0).replace("X = 16.000", "X = ********"), False),
+    (_position(17, 17.0).replace("\n};", "\n}\t;"), False),  # `_POS` ends an entry at "};": this one swallows
+    (_position(18, 18.0), False),  # the next one
+]
+MOTION_VARIANTS = [  # (line, read at once)
+    ("L P[1] 50mm/sec CNT1    ;", True), ("J P[2] 100% FINE ;", True),
+    ("L   P[ 3 ]\t\t50 mm/sec   CNT100\t;  ", True), ("L P[4] 50.5mm/sec CNT1 ;", True),
+    ("L P[5] 7.deg/sec FINE\t;", True), ("L P[6] 2sec CNT1 ;", True), ("L P[7] 25msec CNT0 ;", True),
+    ("L P[7] 12inch/min CNT1 ;", True), ("L P[7] 30cm/min CNT1 ;", True),
+    ("L P[8] 50mm/sec CNT 1 ;", False), ("L P[9] 50mm/sec FINE ACC100 ;", False), ("L P[10] 50mm/sec CNT1 ;", False),
+    ("   : ACC100 ;", None), ("  ! Grüße: L P[11] 50mm/sec CNT1 ;", None),
+    ("L P[11]" + " " * 70 + "50mm/sec CNT1 ;", False), ("L P[12] 50mm/sec CNT1 ;", True),
+    ("L P[13] 50mm/sec CNT1 ;", True), ("L P[14] 50mm/sec CNT1 ;", True), ("L P[15] 50mm/sec CNT1 ;", True),
+    ("l P[7] 50mm/sec CNT1 ;", False), ("L P[16] 50mm/sec CNT1 ;", False),
+]
+
+
+@pytest.mark.parametrize("ending", ["\n", "\r\n"])
+@pytest.mark.parametrize("block", [2, 4096])
+def test_written_variants_read_at_once_as_line_by_line(tmp_path, monkeypatch, ending, block):
+    """Blanks, case, exponents, comments, non-ASCII text, malformed and other entries and lines: those written as
+    a CAM post writes them are read at once, the others line by line, and the program is the line-by-line one,
+    whatever the block of lines or entries read together."""
+    path = _program(tmp_path, ["  ! Grüße, Ωmega ;"] + [line for line, _ in MOTION_VARIANTS],
+                    [entry for entry, _ in POSITION_VARIANTS], ending)
+    for name, size in (("POSITIONS_AT_ONCE", block), ("MOTIONS_AT_ONCE", block), ("HEADS_AT_ONCE", 3 * block)):
+        monkeypatch.setattr(reader, name, size)
+    expected = _line_by_line(path, monkeypatch)
+    positions_read, motions_read = _counted(monkeypatch, "_written_positions"), _counted(monkeypatch,
+                                                                                         "_written_motions")
+    at_once = formats.read(path)
+    assert _seen(at_once) == _seen(expected)
+    assert positions_read == [sum(fast for _, fast in POSITION_VARIANTS)]
+    assert motions_read == [sum(fast is True for _, fast in MOTION_VARIANTS)]
+
+
+@pytest.mark.parametrize("entry, message", [
+    (_position(2, 2.0, config="N U T, 0, 0"), r"cam.ls:13: P\[2\]: malformed CONFIG"),
+    (_position(2, 2.0).replace("Y = 20.500  mm", "Y = 2 0.5  mm"), r"cam.ls:13: P\[2\] lacks Y"),
+    (_position(2, 2.0).replace("W = 180.000", "W = 1e5"), r"cam.ls:13: P\[2\] W: '1e5' is out of range"),
+    (_position(2, 2.0).replace("Z = 300.000", "Z = -inf"), r"cam.ls:13: P\[2\] lacks Z")])
+def test_a_position_among_written_ones_is_refused_by_name(tmp_path, monkeypatch, entry, message):
+    path = _program(tmp_path, ["L P[1] 50mm/sec CNT1    ;"], [_position(1, 1.0), entry, _position(3, 3.0)])
+    with pytest.raises(ReadError, match=message) as refused:
+        formats.read(path)
+    with pytest.raises(ReadError) as line_by_line:
+        _line_by_line(path, monkeypatch)
+    assert str(line_by_line.value) == str(refused.value)

@@ -86,6 +86,8 @@ def _listing(folder):
 
 def used_registers(masked):
     """Register numbers the motion lines of a program's masked text name (sorted list of int)."""
+    if "R[" not in masked and "r[" not in masked:  # no register at all (a CAM path): the text is not scanned
+        return []
     return sorted({int(n) for n in _MOTION_REGISTER.findall(masked)})
 
 

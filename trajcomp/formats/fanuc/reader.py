@@ -8,6 +8,7 @@ from pathlib import Path
 import numpy as np
 
 from trajcomp.errors import ReadError
+from trajcomp.formats.number_fields import read_numbers, text_codes
 from trajcomp.formats.text import (
     ANGLE_LIMIT,
     JOINT_LIMIT,
@@ -58,23 +59,14 @@ _FRAME_NUMBER = re.compile(r"\b(UF|UT)\s*:\s*(\d+)", re.I)
 _CONFIG = re.compile(r"(?:CONFIG|KONFIG)\s*:\s*'([^']*)'", re.I)
 _CONFIG_VALUE = re.compile(r"^\s*([NF])\s*([UD])\s*([TB])\s*,\s*(-?\d{1,3})\s*,\s*(-?\d{1,3})\s*,\s*(-?\d{1,3})\s*$", re.I)
 _OTHER_REPRESENTATION = re.compile(r"\bR[XYZWPR]\s*=", re.I)
-# A Cartesian position of group 1 alone as the teach pendant and CAM post-processors write it (any white space):
-# P[1]{ GP1: UF : 0, UT : 1, CONFIG : 'N U T, 0, 0, 0', X = .. mm, Y = .. mm, Z = .. mm, W = .. deg, P = .. deg,
-# R = .. deg }; -- read a whole /POS section of them at once (`_written_positions`); any other goes one by one.
-_WRITTEN_POSITION = re.compile(
-    r"P\[\s*(\d+)\s*(?::\s*\"[^\"]*\")?\s*\]\s*\{\s*GP1\s*:\s*UF\s*:\s*(\d+)\s*,\s*UT\s*:\s*(\d+)\s*,\s*"
-    r"CONFIG\s*:\s*'([^']*)'\s*,\s*"
-    + r"\s*,\s*".join(f"{c}\\s*=\\s*({NUMBER})\\s*{'mm' if c in 'XYZ' else 'deg'}" for c in "XYZWPR")
-    + r"\s*\};", re.I)
 # The /MN motion lines a CAM post-processor (and `trajcomp convert`) writes, read together (`_written_motions`):
 #    12:L P[12] 50mm/sec CNT1    ;   (J or L, a position P[n], a speed in a unit, FINE or CNTn, not continued)
 _WRITTEN_MOTION = re.compile(
     r"^[ \t]*\d+:[ \t]*([JL])[ \t]+P\[[ \t]*(\d{1,9})[ \t]*\][ \t]+((\d{1,9}(?:\.\d{0,9})?)[ \t]*"
     r"(%|mm/sec|cm/min|inch/min|deg/sec|msec|sec))[ \t]+(?:FINE[ \t]+|CNT(\d{1,3})[ \t]*);[ \t]*\r?$"
     r"(?!\n[^\S\r\n]*:)", re.M)
-_SECTION_LINE = re.compile(r"^[^\S\r\n]*/(PROG|ATTR|APPL|MN|POS|END)\b", re.M)  # `_SECTION` on a line of a text
+_SECTION_WORD = re.compile(r"/(PROG|ATTR|APPL|MN|POS|END)\b")  # `_SECTION` where white space alone precedes it
 _LONE_CR = re.compile(r"\r(?!\n)")  # a line ending of its own (`Lines`), which `^` and `$` do not see
-_POS_HEAD = re.compile(r"P\[")  # where a /POS entry (`_POS`) may start
 _SCARA_CONFIG = re.compile(r"^\s*[LR]\s*,(?:\s*-?\d{1,3}\s*,?)*\s*$", re.I)
 _TOOL_WORDS = {"UTOOL_NUM": "tool", "WKZ_NUM": "tool", "UFRAME_NUM": "frame", "BENUTZER_NUM": "frame",
                "UTOOL": "tool", "WKZ": "tool", "UFRAME": "frame", "BENUTZER": "frame"}
@@ -129,7 +121,7 @@ def read(path):
     """Read a FANUC .LS program.
 
     The /MN motion lines and /POS positions a CAM post-processor writes
-    (`_WRITTEN_MOTION`, `_WRITTEN_POSITION`) are read together as columns
+    (`_WRITTEN_MOTION`, `_LAYOUT`) are read together as columns
     (`Program.from_tables`: no object per motion or position); every other
     /MN line is read one by one, in order, and the tool and user frame it
     sets hold for the motions after it.
@@ -151,7 +143,8 @@ def read(path):
     starts, ends = _line_offsets(lines)
     count = len(starts)
     by_line = _LONE_CR.sub("\n", masked) if "\r" in masked else masked  # `^` and `$` at every line's ends
-    headers = [(lines.number(m.start()), m.group(1)) for m in _SECTION_LINE.finditer(by_line)]
+    headers = [(number, m.group(1)) for m in _SECTION_WORD.finditer(by_line)  # at a line's start (`_SECTION`)
+               if not by_line[lines.starts[(number := lines.number(m.start())) - 1]:m.start()].strip()]
     if not headers or headers[-1][1] != "END":
         last = last_line(lines)
         fail(source.name, last, lines.line(last), "no /END after it: the program is cut off")
@@ -254,52 +247,127 @@ def _statements(text, starts, ends, plain, kept):
     row = np.empty(len(order), dtype=np.int64)
     row[order] = np.arange(len(order))
     refs = {int(row[len(plain) + k]): named[3] for k, named in enumerate(kept) if named[3]}
-    return StatementTable(line[order], TextSlices(text, start[order], end[order]), 0, refs)
+    offset = _offset_type(text)
+    return StatementTable(line[order], TextSlices(text, start[order].astype(offset), end[order].astype(offset)), 0,
+                          refs)
 
 
-MOTIONS_AT_ONCE = 8192  # matches turned into columns together: bounds the objects a long program's read holds
+MOTIONS_AT_ONCE = 16384  # motion lines whose fields are found together: bounds the offset arrays of a long program
 WRITTEN_NUMBERS = 10**9  # position numbers of the motion lines read at once (9 digits, `_WRITTEN_MOTION`) are below
+_BLANK, _DIGIT, _SPEED_DIGIT = " \t", "0123456789", "0123456789."
 
 
 def _written_motions(by_line, starts, ends, in_mn, points, unread):
     """The /MN motion lines written as a CAM post-processor writes them (`_WRITTEN_MOTION`), read at once.
 
-    A line to a position the /POS section lacks or leaves untaught is left
-    out: the one-by-one read then names it.
+    The pattern only finds the lines; their fields are located from the
+    characters' classes (`_line_fields`) and their numbers read at once
+    (`trajcomp.formats.number_fields`). A line to a position the /POS
+    section lacks or leaves untaught is left out: the one-by-one read then
+    names it.
 
     Returns
     -------
     dict of ndarray
         Over the K motions, in line order: ``line``, ``kind`` (object),
-        ``target`` (index), ``speed`` (the unit's number), ``unit``
-        (object), ``zone`` (mm, NaN: FINE or CNT0), ``speed`` (K, 2) the
-        offsets of the speed field; ``start``, ``end`` those of the line.
+        ``target`` (index), ``value`` (the speed, mm/s, rad/s, % or s),
+        ``unit`` (object), ``zone`` (mm, NaN: FINE or CNT0), ``speed``
+        (K, 2) the offsets of the speed field; ``start``, ``end`` those of
+        the line.
     """
+    mn = np.flatnonzero(in_mn)
+    begin = int(starts[mn[0] - 1]) if len(mn) else 0
+    stop = (int(starts[mn[-1]]) if mn[-1] < len(starts) else len(by_line)) if len(mn) else 0
+    found = (m.start() for m in _WRITTEN_MOTION.finditer(by_line, begin, stop))
     parts = []
-    found = _WRITTEN_MOTION.finditer(by_line)
-    while chunk := [(m.start(), *m.span(3), *m.groups()) for m in itertools.islice(found, MOTIONS_AT_ONCE)]:
-        columns = list(zip(*chunk))
-        parts.append((np.array(columns[:3], dtype=np.int64).T.reshape(-1, 3), np.array(columns[4], dtype=np.int64),
-                      np.array(columns[3:4] + columns[6:8] + [[z or "0" for z in columns[8]]], dtype=object).T))
-    at = np.concatenate([p[0] for p in parts] or [np.zeros((0, 3), dtype=np.int64)])
-    numbers = np.concatenate([p[1] for p in parts] or [np.zeros(0, dtype=np.int64)])
-    words = np.concatenate([p[2] for p in parts] or [np.zeros((0, 4), dtype=object)])  # kind, speed, unit, CNT
-    line = np.searchsorted(starts, at[:, 0], side="right")
+    while at := list(itertools.islice(found, MOTIONS_AT_ONCE)):
+        line = np.searchsorted(starts, at, side="right")
+        parts.append((line, *_line_fields(by_line, np.array(at, dtype=np.int64), int(ends[line[-1] - 1]))))
+    line, read, numbers, speed_at, is_joint, value, scale, unit, zone = (
+        np.concatenate(column) for column in zip(*parts)) if parts else (
+        np.zeros(0, dtype=np.int64), np.zeros(0, dtype=bool), np.zeros(0, dtype=np.int64),
+        np.zeros((0, 2), dtype=np.int64), np.zeros(0, dtype=bool), np.zeros(0), np.zeros(0), np.zeros(0, dtype=object), np.zeros(0))
     known = np.array(sorted(n for n in points if n < WRITTEN_NUMBERS), dtype=np.int64)
     slot = np.minimum(np.searchsorted(known, numbers), max(len(known) - 1, 0))
-    good = in_mn[line] & (known[slot] == numbers if len(known) else np.zeros(len(line), dtype=bool))
+    good = read & in_mn[line] & (known[slot] == numbers if len(known) else np.zeros(len(line), dtype=bool))
     good &= ~np.isin(numbers, np.array([n for n in unread if n < WRITTEN_NUMBERS], dtype=np.int64))
     keep = np.flatnonzero(good)
-    words = words[keep]
-    units = [SPEED_UNITS[u] for u in words[:, 2].tolist()]
-    zone = np.array(words[:, 3].tolist(), dtype=float)
     index = np.array([points[n] for n in known.tolist()], dtype=np.int64)
-    return {"line": line[keep], "kind": np.array([KINDS[k] for k in words[:, 0].tolist()] or [], dtype=object),
+    return {"line": line[keep], "kind": np.array([LINEAR, JOINT], dtype=object)[is_joint[keep].astype(np.int64)],
             "target": index[slot[keep]] if len(keep) else np.zeros(0, dtype=np.int64),
-            "speed": at[keep, 1:], "start": starts[line[keep] - 1], "end": ends[line[keep] - 1],
-            "value": np.array(words[:, 1].tolist(), dtype=float) * np.array([u[0] for u in units]).reshape(-1),
-            "unit": np.array([u[1] for u in units], dtype=object).reshape(-1),
-            "zone": np.where(zone == 0.0, np.nan, zone)}
+            "speed": speed_at[keep], "start": starts[line[keep] - 1], "end": ends[line[keep] - 1],
+            "value": value[keep] * scale[keep], "unit": unit[keep],
+            "zone": np.where(zone[keep] == 0.0, np.nan, zone[keep])}
+
+
+def _line_fields(by_line, at, stop):
+    """The fields of K motion lines starting at offsets ``at`` (K,) that `_WRITTEN_MOTION` matches, ``stop`` the
+    end of the last.
+
+    The pattern fixes what each field is made of: a field starts past the
+    blanks after the one before it and ends at the first character not of
+    its kind (`_skip`). A line whose blanks run longer than `_MOST_SKIPPED`
+    is not read.
+
+    Returns
+    -------
+    tuple of ndarray (K,)
+        Whether the line is read; the position number; the offsets (K, 2)
+        of the speed field (number and unit); whether the motion is J; the
+        speed's number; its unit's scale and unit (`SPEED_UNITS`); the CNT
+        number (0 for FINE).
+    """
+    codes = text_codes(by_line[at[0]:stop])
+    start = at - at[0]
+    kind, read = _skip(codes, _following(codes, ":", start) + 1, _BLANK)
+    number, past = _skip(codes, _following(codes, "[", start) + 1, _BLANK)
+    number_end = _skip(codes, number, _DIGIT)[0]
+    speed, past_speed = _skip(codes, _following(codes, "]", number_end) + 1, _BLANK)
+    speed_end = _skip(codes, speed, _SPEED_DIGIT)[0]
+    unit, past_unit = _skip(codes, speed_end, _BLANK)
+    unit_end = _skip(codes, unit, _BLANK, over=False)[0]
+    zone, past_zone = _skip(codes, unit_end, _BLANK)
+    zone += 3  # the digits after CNT (none after FINE)
+    read &= past & past_speed & past_unit & past_zone
+    numbers = [read_numbers(codes, a, b)[0] for a, b in ((number, number_end), (speed, speed_end),
+                                                           (zone, _skip(codes, zone, _DIGIT)[0]))]
+    scale, names = np.ones(len(at)), np.empty(len(at), dtype=object)
+    for spelling, (factor, name) in SPEED_UNITS.items():
+        spelt = ((unit_end - unit) == len(spelling)) & (codes[unit] == ord(spelling[0]))  # one unit to each
+        scale[spelt], names[spelt] = factor, name
+    return (read, numbers[0].astype(np.int64), np.stack([speed, unit_end], axis=1) + at[0], codes[kind] == ord("J"),
+            numbers[1], scale, names, np.nan_to_num(numbers[2]))
+
+
+def _following(codes, character, at):
+    """The offset of the first ``character`` at or after each of ``at`` (K,) that has one after it."""
+    found = np.flatnonzero(codes == ord(character))
+    return found[np.searchsorted(found, at)]
+
+
+def _among(codes, characters):
+    """Whether each character code (L,) is one of ``characters`` (ASCII), as a boolean array (L,)."""
+    table = np.zeros(256, dtype=bool)
+    table[[ord(c) for c in characters]] = True
+    return table[codes if codes.dtype == np.uint8 else np.minimum(codes, 255)]  # 255 (ÿ) is in no set
+
+
+_MOST_SKIPPED = 64  # characters `_skip` passes at most (a field of a long run of blanks is read one by one)
+
+
+def _skip(codes, at, characters, step=1, over=True):
+    """The offsets (K,) reached from ``at`` (K,) moving by ``step`` past the characters among ``characters``
+    (``over``; else past those not among them), and whether each stopped within `_MOST_SKIPPED` moves.
+
+    The caller knows a character that stops each: no move leaves the text.
+    """
+    at = at.copy()
+    for _ in range(_MOST_SKIPPED):
+        moving = _among(codes[at], characters) == over
+        if not moving.any():
+            return at, np.ones(len(at), dtype=bool)
+        at += step * moving
+    return at, _among(codes[at], characters) != over
 
 
 def _motion_block(written, rows, state, table, text):
@@ -426,51 +494,162 @@ def _motion(m, points, unread, name, number, original, registers, register_why):
     return whole_circle(motion)
 
 
-POSITIONS_AT_ONCE = 8192  # matches turned into columns together (`MOTIONS_AT_ONCE`)
+POSITIONS_AT_ONCE = 8192  # /POS entries whose fields are found together (`MOTIONS_AT_ONCE`)
+_SPACE = " \t\n\r\f\v"  # white space a field may have around it (`\s` has more: such an entry goes one by one)
+_DELIMITERS = "[]{}:,'=;\""
+# A Cartesian position of group 1 as the teach pendant and CAM post-processors write it, by its delimiters, each
+# with what stands before it: None (not looked at), "" (white space or nothing), `_NEXT_TO` (nothing), a keyword
+# (upper case, any case in the file) or a field (lower case), white space around: P[1]{ GP1: UF : 0, UT : 1,
+# CONFIG : 'N U T, 0, 0, 0', X = .. mm, Y = .. mm, Z = .. mm, W = .. deg, P = .. deg, R = .. deg }; -- as
+# `_POS` ends an entry at the first "};" (`_written_positions`)
+_NEXT_TO = "next to"
+_LAYOUT = ((("[", None), ("]", "number"), ("{", ""), (":", "GP1"), (":", "UF"), (",", "uf"), (":", "UT"),
+            (",", "ut"), (":", "CONFIG"), ("'", ""), (",", None), (",", None), (",", None), ("'", "config"),
+            (",", ""))
+           + tuple(pair for c in XYZWPR for pair in (("=", c.upper()), ("," if c != "r" else "}", c)))
+           + ((";", _NEXT_TO),))
+_COMMENTED = _LAYOUT[:1] + ((":", "number"), ('"', ""), ('"', None), ("]", "")) + _LAYOUT[2:]  # P[1: "..."]
+_FIELDS = ("number", "uf", "ut") + XYZWPR + ("config",)  # the fields a layout gives, in this order
+_UNITS = dict.fromkeys(XYZWPR[:3], "mm") | dict.fromkeys(XYZWPR[3:], "deg")
+_WIDEST_WORD = 32  # characters of the widest frame, tool or CONFIG text read at once
 
 
 def _written_positions(masked, start, end):
-    """The positions of the /POS section written as the pendant writes them (`_WRITTEN_POSITION`), read at once.
+    """The positions of the /POS section written as the pendant writes them (`_LAYOUT`), read at once.
 
-    A position whose numbers or configuration the one-by-one read would
-    refuse is left out: that read then names it.
+    An entry is found by its delimiters (any white space around them,
+    keywords in any case, a comment ``P[n: "..."]`` allowed), one block of
+    entries at a time (`_entry_fields`). A position whose numbers or
+    configuration the one-by-one read would refuse, or written otherwise,
+    is left out: that read then names it.
 
     Returns
     -------
     dict
         Over the G positions kept, in text order: ``at`` (G, 2) the offsets
         of each entry, ``number`` (G, 2) those of its P number, ``p`` that
-        number (int, object array: any size), ``uf``,
-        ``ut`` (object) its frame and tool numbers, ``config`` (tuple each),
-        ``xyzwpr`` (G, 6) its numbers (mm, deg), ``spans`` (G, 2, 7) the
-        offsets of X, Y, Z, W, P, R and CONFIG.
+        number (int), ``uf``, ``ut`` (object: str) its frame and tool
+        numbers, ``config`` (object: tuple), ``xyzwpr`` (G, 6) its numbers
+        (mm, deg), ``spans`` (G, 2, 7) the offsets of X, Y, Z, W, P, R and
+        CONFIG.
     """
-    parts, shared, configs = [], {}, {}  # a path's positions mostly share their frame, tool and configuration
-    found = _WRITTEN_POSITION.finditer(masked, start, end)
-    while chunk := [(m.regs, m.groups()) for m in itertools.islice(found, POSITIONS_AT_ONCE)]:
-        flat = itertools.chain.from_iterable(itertools.chain.from_iterable(r for r, _ in chunk))
-        regs = np.fromiter(flat, dtype=np.int64, count=22 * len(chunk)).reshape(-1, 11, 2)  # entry, groups 1..10
-        words = [g for _, g in chunk]
-        numbers = np.fromiter(map(float, itertools.chain.from_iterable(g[4:] for g in words)), dtype=float,
-                              count=6 * len(chunk)).reshape(-1, 6)
-        config = [configs[g[3]] if g[3] in configs else configs.setdefault(g[3], _config(g[3])) for g in words]
-        limits = np.array([LENGTH_LIMIT] * 3 + [ANGLE_LIMIT] * 3)
-        good = (np.isfinite(numbers) & (np.abs(numbers) <= limits)).all(axis=1)
-        good &= np.array([c is not None for c in config], dtype=bool)
-        keep = np.flatnonzero(good)
-        parts.append({
-            "at": regs[keep, 0], "number": regs[keep, 1], "xyzwpr": numbers[keep],
-            "p": np.array([int(words[k][0]) for k in keep.tolist()], dtype=object),
-            "uf": [shared.setdefault(words[k][1], words[k][1]) for k in keep.tolist()],
-            "ut": [shared.setdefault(words[k][2], words[k][2]) for k in keep.tolist()],
-            "config": [config[k] for k in keep.tolist()],
-            "spans": regs[keep][:, [5, 6, 7, 8, 9, 10, 4]].transpose(0, 2, 1)})
+    heads = _entry_heads(masked, start, end)
+    parts = [_entry_fields(masked, heads[k:k + POSITIONS_AT_ONCE], int(heads[k + POSITIONS_AT_ONCE])
+                           if k + POSITIONS_AT_ONCE < len(heads) else end)
+             for k in range(0, len(heads), POSITIONS_AT_ONCE)]
     empty = {"at": np.zeros((0, 2), dtype=np.int64), "number": np.zeros((0, 2), dtype=np.int64),
-             "p": np.zeros(0, dtype=object),
-             "xyzwpr": np.zeros((0, 6)), "uf": [], "ut": [], "config": [],
-             "spans": np.zeros((0, 2, 7), dtype=np.int64)}
-    return {key: (np.concatenate([p[key] for p in parts]) if isinstance(value, np.ndarray)
-                  else [v for p in parts for v in p[key]]) for key, value in empty.items()} if parts else empty
+             "p": np.zeros(0, dtype=np.int64), "xyzwpr": np.zeros((0, 6)), "uf": _objects([]), "ut": _objects([]),
+             "config": _objects([]), "spans": np.zeros((0, 2, 7), dtype=np.int64)}
+    return {key: np.concatenate([p[key] for p in parts]) for key in empty} if parts else empty
+
+
+HEADS_AT_ONCE = 1 << 22  # characters of a /POS section looked at together for the starts of its entries
+
+
+def _entry_heads(masked, start, end):
+    """The offsets (ascending) in ``masked[start:end]`` where a /POS entry (`_POS`) may start: each ``P[``."""
+    parts = [np.zeros(0, dtype=np.int64)]
+    for lo in range(start, end, HEADS_AT_ONCE):
+        codes = text_codes(masked[lo:min(lo + HEADS_AT_ONCE + 1, end)])  # one more: a P[ across the block's end
+        parts.append(np.flatnonzero((codes[:-1] == ord("P")) & (codes[1:] == ord("["))) + lo)
+    return np.concatenate(parts)
+
+
+def _entry_fields(masked, heads, stop):
+    """`_written_positions` of the entries starting at ``heads`` (B,), the last ending by ``stop``."""
+    codes = text_codes(masked[heads[0]:stop])
+    head = heads - heads[0]
+    delimiter = np.flatnonzero(_among(codes, _DELIMITERS))
+    first = np.searchsorted(delimiter, head)
+    count = np.diff(np.append(first, len(delimiter)))
+    found = []
+    for layout in (_LAYOUT, _COMMENTED):
+        rows = np.flatnonzero(count == len(layout))
+        at = delimiter[first[rows, None] + np.arange(len(layout))]
+        found.append(_layout_fields(codes, at, layout) + (rows,))
+    good, fields, ends, rows = (np.concatenate(column) for column in zip(*found))
+    order = np.argsort(rows[good], kind="stable")
+    fields, ends, rows = fields[good][order], ends[good][order], rows[good][order]  # (G, fields, 2), text order
+    xyzwpr = np.stack([read_numbers(codes, *fields[:, 3 + k].T)[0] for k in range(6)], axis=1)
+    words = [_distinct_words(codes, *fields[:, k].T, check) for k, check in ((1, str), (2, str), (9, _config))]
+    good = (np.abs(xyzwpr) <= np.array([LENGTH_LIMIT] * 3 + [ANGLE_LIMIT] * 3)).all(axis=1)  # NaN: no number
+    for _, read in words:
+        good &= read
+    words = [values for values, _ in words]
+    keep = np.flatnonzero(good)
+    fields = fields[keep] + heads[0]
+    return {"at": np.stack([heads[rows[keep]], ends[keep] + heads[0]], axis=1), "number": fields[:, 0],
+            "p": read_numbers(codes, *(fields[:, 0] - heads[0]).T)[0].astype(np.int64), "xyzwpr": xyzwpr[keep],
+            "uf": words[0][keep], "ut": words[1][keep], "config": words[2][keep],
+            "spans": fields[:, 3:].transpose(0, 2, 1)}
+
+
+def _layout_fields(codes, at, layout):
+    """Whether the E entries whose delimiters are at ``at`` (E, D) are written as ``layout`` states (E,), the offsets
+    (E, 10, 2) of their `_FIELDS` and the end of each (E,).
+
+    A word is found past the white space after the delimiter before it and
+    before its own (`_skip`).
+    """
+    good = (codes[at] == np.array([ord(c) for c, _ in layout])).all(axis=1)
+    fields = np.zeros((len(at), len(_FIELDS), 2), dtype=np.int64)
+    for j, (_, before) in enumerate(layout[1:], start=1):
+        if before is None:
+            continue
+        if before is _NEXT_TO:
+            good &= at[:, j] == at[:, j - 1] + 1
+            continue
+        start, past = _skip(codes, at[:, j - 1] + 1, _SPACE)
+        end, before_end = _skip(codes, at[:, j] - 1, _SPACE, step=-1)
+        end += 1  # the word before the delimiter is text[start:end], if any
+        good &= past & before_end
+        if before == "config":  # as written between the quotes
+            opening = max(k for k in range(j) if layout[k][0] == "'")
+            fields[:, _FIELDS.index(before)] = np.stack([at[:, opening] + 1, at[:, j]], axis=1)
+        elif before in _UNITS:  # a number and its unit
+            unit = _UNITS[before]
+            good &= (end - start > len(unit)) & _spelt(codes, end - len(unit), unit)
+            number_end, past = _skip(codes, np.maximum(end - len(unit) - 1, 0), _SPACE, step=-1)
+            number_end = np.maximum(number_end + 1, start)
+            good &= past
+            fields[:, _FIELDS.index(before)] = np.stack([start, number_end], axis=1)
+        elif before in _FIELDS:  # a whole number
+            good &= (start < at[:, j]) & (_skip(codes, start, _DIGIT)[0] >= end) & (end - start <= 15)
+            fields[:, _FIELDS.index(before)] = np.stack([start, end], axis=1)
+        else:
+            good &= start == at[:, j] if before == "" else (end - start == len(before)) & _spelt(codes, start,
+                                                                                                  before)
+    return good, fields, at[:, -1] + 1
+
+
+def _spelt(codes, start, word):
+    """Whether ``word`` (upper case) is written at each of ``start`` (N,), in any case."""
+    spelt = np.ones(len(start), dtype=bool)
+    for k, c in enumerate(word):
+        spelt &= (codes[start + k] == ord(c)) | (codes[start + k] == ord(c.lower()))
+    return spelt
+
+
+def _distinct_words(codes, start, end, value):
+    """``value(text)`` of each of N pieces ``text[start:end]``, taken once per distinct text.
+
+    Returns
+    -------
+    values : ndarray of object, shape (N,)
+    read : ndarray of bool, shape (N,)
+        Whether the value is not None and the piece is at most `_WIDEST_WORD` characters (others go one by one).
+    """
+    column = np.arange(_WIDEST_WORD)
+    inside = column < (end - start)[:, None]
+    matrix = np.zeros((len(start), _WIDEST_WORD + 1), dtype=np.uint32)
+    matrix[:, 0] = end - start
+    matrix[:, 1:] = np.where(inside, codes[np.minimum(start[:, None] + column, len(codes) - 1)], 0)
+    rows = matrix.view(np.dtype((np.void, matrix.itemsize * matrix.shape[1]))).reshape(-1)
+    _, first, inverse = np.unique(rows, return_index=True, return_inverse=True)
+    values = _objects([value("".join(map(chr, codes[start[k]:end[k]].tolist()))) for k in first.tolist()])
+    read = np.array([v is not None for v in values], dtype=bool) & (matrix[first, 0] <= _WIDEST_WORD)
+    inverse = inverse.reshape(-1)
+    return values[inverse], read[inverse]
 
 
 def _config(text):
@@ -492,7 +671,7 @@ def _positions(source, masked, lines, starts, start, end):
     points, unread, order, slow = {}, {}, [], []  # order: row of the written ones, or -1 - k of slow[k]
     if start is not None:
         written = _written_positions(masked, start, end)
-        heads = np.fromiter((m.start() for m in _POS_HEAD.finditer(masked, start, end)), dtype=np.int64)
+        heads = _entry_heads(masked, start, end)
         if np.array_equal(heads, written["at"][:, 0]):  # every entry is written as the pendant writes it
             points = dict(zip(written["p"].tolist(), range(len(heads))))
             return _target_table(source.text, written, np.arange(len(heads)), [], starts), points, unread
@@ -525,13 +704,14 @@ def _target_table(text, written, order, slow, starts):
     fast = order >= 0
     one_by_one = TargetTable.of([t for t, _ in slow])
     roles = XYZWPR + ("config",) + (JOINTS if any(t.is_joint for t, _ in slow) else ())
-    span_at = np.full((n, 2, len(roles)), -1, dtype=np.int64)
+    offset = _offset_type(text)
+    span_at = np.full((n, 2, len(roles)), -1, dtype=offset)
     span_at[fast, :, :7] = written["spans"][rows]
     column = {role: j for j, role in enumerate(roles)}
     for k, (target, _) in zip(np.flatnonzero(~fast).tolist(), slow):
         for role, span in target.spans.items():
             span_at[k, :, column[role]] = span.start, span.end
-    number_at = np.empty((n, 2), dtype=np.int64)
+    number_at = np.empty((n, 2), dtype=offset)
     number_at[fast] = written["number"][rows]
     number_at[~fast] = np.array([at for _, at in slow], dtype=np.int64).reshape(-1, 2)
 
@@ -544,19 +724,24 @@ def _target_table(text, written, order, slow, starts):
 
     vector = written["xyzwpr"][rows]
     vector = np.concatenate([vector[:, :3], np.radians(vector[:, 5:2:-1])], axis=1)  # A, B, C = R, P, W
-    pick = rows.tolist()
-    config = merged(_objects([written["config"][k] for k in pick]), _objects(one_by_one.config), object)
+    config = merged(written["config"][rows], _objects(one_by_one.config), object)
     return TargetTable(
         pose=merged(pose_to_matrix(vector.reshape(-1, 6)), one_by_one.pose, float),
         is_joint=merged(np.zeros(len(rows), dtype=bool), one_by_one.is_joint, bool),
-        joints=merged(np.full((len(rows), 6), np.nan), one_by_one.joints, float),
+        joints=merged(np.full((len(rows), 6), np.nan), one_by_one.joints, float) if len(slow)
+        else np.broadcast_to(np.nan, (n, 6)),  # every row Cartesian: one NaN row shared
         line=merged(np.searchsorted(starts, written["at"][rows, 0], side="right"), one_by_one.line, np.int64),
         config=tuple(config.tolist()),
-        tool=merged(_objects([written["ut"][k] for k in pick]), one_by_one.tool, object),
-        frame=merged(_objects([written["uf"][k] for k in pick]), one_by_one.frame, object),
+        tool=merged(written["ut"][rows], one_by_one.tool, object),
+        frame=merged(written["uf"][rows], one_by_one.frame, object),
         external=tuple(merged(_objects([None] * len(rows)), _objects(one_by_one.external), object).tolist()),
         edited=np.zeros(n, dtype=bool), name=_Named(text, number_at[:, 0], number_at[:, 1]),
         spans=SpanColumns(0, text, roles, span_at[:, 0], span_at[:, 1]))
+
+
+def _offset_type(text):
+    """The integer type of offsets into ``text``: int32 where they fit (half the bytes of a long program's)."""
+    return np.int32 if len(text) < 2**31 else np.int64
 
 
 def _objects(values):

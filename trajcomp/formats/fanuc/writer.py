@@ -60,10 +60,26 @@ def _encode_columns(table, rows, old):
     angles[cartesian[turned]] = abc
     out |= dict(zip(ABC_ORDER[3:], refused(angles, np.isin(np.arange(len(rows)), cartesian[turned])).T))
     if "config" in old.text:
-        out["config"] = np.array([_config_change(config, was) if config and not is_joint and was is not None
-                                  else None for config, was, is_joint in
-                                  zip((table.config[i] for i in rows.tolist()), old.text["config"], joint.tolist())],
-                                 dtype=object)
+        out["config"] = _config_changes(table.config, rows, old.text["config"], joint)
+    return out
+
+
+def _config_changes(configs, rows, olds, joint):
+    """The CONFIG texts (object array (K,)) to write for the rows (K,) of a table's ``configs``, over the file's
+    ``olds`` (K,): None where the row states none, is a joint position, or states the file's (`_config_change`).
+
+    A path's positions share a few configurations: each distinct text is
+    read once and the rows compared at once.
+    """
+    wanted = np.empty(len(rows), dtype=object)
+    wanted[:] = [configs[i] for i in rows.tolist()]
+    read = {text: _config(text) for text in set(olds.tolist()) - {None}}  # the file's, each distinct once
+    stated = np.empty(len(rows), dtype=object)
+    stated[:] = [read.get(text) if text is not None else None for text in olds.tolist()]
+    out = np.full(len(rows), None, dtype=object)
+    for k in np.flatnonzero(~joint & np.not_equal(olds, None) & (wanted != stated)).tolist():
+        if wanted[k] and tuple(wanted[k]) != stated[k]:
+            out[k] = _config_text(wanted[k])
     return out
 
 
