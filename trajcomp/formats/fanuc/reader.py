@@ -1,6 +1,7 @@
 """The FANUC LS reader: /MN motion lines and /POS positions into a `Program` (see `trajcomp.formats.fanuc`)."""
 
 import dataclasses
+import functools
 import itertools
 import re
 from pathlib import Path
@@ -240,16 +241,14 @@ def _instructions(masked, starts, ends, numbers):
 def _statements(text, starts, ends, plain, kept):
     """The statements: lines ``plain`` (their numbers, ascending) and the instructions ``kept``
     (``(line, start, end, refs)``), as a `StatementTable` in line order."""
-    line = np.concatenate([plain, np.array([k[0] for k in kept], dtype=np.int64)])
-    start = np.concatenate([starts[plain - 1], np.array([k[1] for k in kept], dtype=np.int64)])
-    end = np.concatenate([ends[plain - 1], np.array([k[2] for k in kept], dtype=np.int64)])
-    order = np.argsort(line, kind="stable")
-    row = np.empty(len(order), dtype=np.int64)
-    row[order] = np.arange(len(order))
-    refs = {int(row[len(plain) + k]): named[3] for k, named in enumerate(kept) if named[3]}
     offset = _offset_type(text)
-    return StatementTable(line[order], TextSlices(text, start[order].astype(offset), end[order].astype(offset)), 0,
-                          refs)
+    kept_line, kept_start, kept_end = (np.array([k[j] for k in kept], dtype=np.int64) for j in range(3))
+    at = np.searchsorted(plain, kept_line)  # both ascending, no line in both: merged in line order
+    line = np.insert(plain, at, kept_line)
+    start, end = (np.insert(offsets[plain - 1].astype(offset), at, more) for offsets, more in
+                  ((starts, kept_start), (ends, kept_end)))
+    refs = {int(at[k]) + k: named[3] for k, named in enumerate(kept) if named[3]}
+    return StatementTable(line, TextSlices(text, start, end), 0, refs)
 
 
 MOTIONS_AT_ONCE = 16384  # motion lines whose fields are found together: bounds the offset arrays of a long program
@@ -347,9 +346,15 @@ def _following(codes, character, at):
 
 def _among(codes, characters):
     """Whether each character code (L,) is one of ``characters`` (ASCII), as a boolean array (L,)."""
+    return _table(characters)[codes if codes.dtype == np.uint8 else np.minimum(codes, 255)]  # 255 (ÿ): in no set
+
+
+@functools.lru_cache(maxsize=None)
+def _table(characters):
+    """A look-up table (256,) of the character codes among ``characters``."""
     table = np.zeros(256, dtype=bool)
     table[[ord(c) for c in characters]] = True
-    return table[codes if codes.dtype == np.uint8 else np.minimum(codes, 255)]  # 255 (ÿ) is in no set
+    return table
 
 
 _MOST_SKIPPED = 64  # characters `_skip` passes at most (a field of a long run of blanks is read one by one)
@@ -639,11 +644,11 @@ def _distinct_words(codes, start, end, value):
     read : ndarray of bool, shape (N,)
         Whether the value is not None and the piece is at most `_WIDEST_WORD` characters (others go one by one).
     """
-    column = np.arange(_WIDEST_WORD)
-    inside = column < (end - start)[:, None]
-    matrix = np.zeros((len(start), _WIDEST_WORD + 1), dtype=np.uint32)
-    matrix[:, 0] = end - start
-    matrix[:, 1:] = np.where(inside, codes[np.minimum(start[:, None] + column, len(codes) - 1)], 0)
+    length = np.minimum(end - start, _WIDEST_WORD + 1)
+    column = np.arange(int(length.max(initial=0)))
+    matrix = np.zeros((len(start), len(column) + 1), dtype=codes.dtype)  # a row: the length, the characters
+    matrix[:, 0] = length
+    matrix[:, 1:] = np.where(column < length[:, None], codes[np.minimum(start[:, None] + column, len(codes) - 1)], 0)
     rows = matrix.view(np.dtype((np.void, matrix.itemsize * matrix.shape[1]))).reshape(-1)
     _, first, inverse = np.unique(rows, return_index=True, return_inverse=True)
     values = _objects([value("".join(map(chr, codes[start[k]:end[k]].tolist()))) for k in first.tolist()])
