@@ -3,6 +3,8 @@
 import numpy as np
 import pytest
 
+from trajcomp.arm.ik import configuration_of
+from trajcomp.formats.configuration import flags
 from trajcomp.formats.fanuc.configuration import encode as fanuc_config
 from trajcomp.formats.krl.configuration import encode as kuka_status_turn
 from trajcomp.formats.rapid.configuration import encode as abb_confdata
@@ -39,3 +41,27 @@ def test_fanuc_config(robots):
         ("F", "U", "T", 1, 0, -1),
         ("N", "U", "T", -1, 1, 2),
     ]
+
+
+@pytest.mark.parametrize("encode", [kuka_status_turn, abb_confdata, fanuc_config])
+def test_a_path_of_repeated_postures_shares_its_data(robots, encode):
+    """A long path encodes as each target alone would, with one tuple per distinct datum (memory, merges)."""
+    robot = robots[{kuka_status_turn: "kuka_kr6_r900", abb_confdata: "abb_irb4600",
+                    fanuc_config: "fanuc_lrmate200id"}[encode]]
+    rng = np.random.default_rng(3)
+    postures = rng.uniform(robot.q_min, robot.q_max, (5, 6))
+    q = postures[rng.integers(0, 5, 200)]
+    data = encode(robot, q)
+    assert data == [encode(robot, row[None])[0] for row in q]
+    assert len({id(d) for d in data}) == len(set(data)) <= 5
+
+
+def test_flags_are_the_configuration_of_the_joints(robots):
+    for robot in robots.values():
+        q = np.random.default_rng(5).uniform(robot.q_min, robot.q_max, (300, 6))
+        behind, up, negative = flags(robot, q)
+        configs = configuration_of(robot, q)
+        assert behind.tolist() == [c.shoulder == "back" for c in configs]
+        assert up.tolist() == [c.elbow == "up" for c in configs]
+        assert negative.tolist() == [c.wrist == "negative" for c in configs]
+        assert 0 < behind.sum() + up.sum() + negative.sum() < 900  # both values of the flags occur

@@ -16,14 +16,16 @@ ABB confdata: `trajcomp.formats.rapid.configuration`; FANUC CONFIG:
 - ``BINDING_KINDS`` (optional): the motion kinds the controller reads the
   data for (default: every kind).
 
-All of them follow from the branch of the arm (`trajcomp.arm.ik.configuration_of`:
+All of them follow from the branch of the arm (`trajcomp.arm.ik.branch_index`:
 shoulder front/back of axis 1, elbow up/down, wrist sign) and the joint
-angles (`flags`).
+angles (`flags`). A path's targets mostly share their data: the data are
+made into tuples (`distinct_tuples`) and read back into windows
+(`declared_windows`) once per distinct value.
 """
 
 import numpy as np
 
-from trajcomp.arm.ik import configuration_of
+from trajcomp.arm import ik
 from trajcomp.formats import registered
 
 # A joint this close to the boundary of its code satisfies both codes (RobotStudio writes J4 = J6 = 0 as
@@ -33,11 +35,28 @@ BOUNDARY_TOLERANCE = np.radians(0.5)  # rad
 
 def flags(robot, q):
     """Boolean arrays (N,) wrist centre behind axis 1, elbow up and wrist negative of joint vectors q (N, 6), rad."""
-    configs = configuration_of(robot, q)
-    behind = np.array([c.shoulder == "back" for c in configs])
-    up = np.array([c.elbow == "up" for c in configs])
-    negative = np.array([c.wrist == "negative" for c in configs])
-    return behind, up, negative
+    index = ik.branch_index(robot, q)  # `trajcomp.arm.ik_types.Configuration.index`: 4 * back + 2 * down + negative
+    return (index & 4) > 0, (index & 2) == 0, (index & 1) > 0
+
+
+def distinct_tuples(rows, as_tuple=tuple):
+    """Rows (N, K) of integers as N tuples, one tuple object per distinct row (``as_tuple(row)``, row a list of int).
+
+    Parameters
+    ----------
+    rows : ndarray of int, shape (N, K)
+    as_tuple : callable
+        Makes the tuple of a distinct row (a list of K int).
+
+    Returns
+    -------
+    list of tuple, length N
+    """
+    if not len(rows):
+        return []
+    distinct, row = np.unique(rows, axis=0, return_inverse=True)
+    made = [as_tuple(values) for values in distinct.tolist()]
+    return [made[k] for k in row.reshape(-1).tolist()]
 
 
 def configuration_for(format_name, robot, q):
@@ -113,9 +132,14 @@ def written_configuration(format_name, robot, declared, q, tolerance=BOUNDARY_TO
     branch, lower, upper = declared_windows(format_name, declared)
     branch_kept = branch == declared_windows(format_name, computed)[0]
     joint_kept = _satisfied(robot, q, lower, upper, tolerance)
-    merge = _language(format_name).merge
-    return [merge(tuple(old), tuple(new), kept, joints) if old else tuple(new)
-            for old, new, kept, joints in zip(declared, computed, branch_kept.tolist(), joint_kept)]
+    merge, merged, written = _language(format_name).merge, {}, []  # a merge per distinct case: a path shares them
+    joint_bits = (joint_kept @ (1 << np.arange(6))).tolist()
+    for old, new, kept, joints in zip(declared, computed, branch_kept.tolist(), joint_bits):
+        key = (tuple(old), tuple(new), kept, joints) if old else None  # joints: a bit per joint kept
+        if key is not None and key not in merged:
+            merged[key] = merge(*key[:3], (joints >> np.arange(6)) & 1 > 0)
+        written.append(tuple(new) if key is None else merged[key])
+    return written
 
 
 def _satisfied(robot, joints, lower, upper, tolerance):
@@ -169,14 +193,15 @@ def declared_windows(format_name, configs):
     lower, upper : ndarray, shape (N, 6)
         Window of each joint, rad (``-inf`` / ``inf`` where free).
     """
-    n = len(configs)
-    branch = np.full(n, -1)
-    lower, upper = np.full((n, 6), -np.inf), np.full((n, 6), np.inf)
+    distinct = {(): 0}
+    row = np.fromiter((distinct.setdefault(tuple(config or ()), len(distinct)) for config in configs), dtype=np.int64,
+                      count=len(configs))
+    branch = np.full(len(distinct), -1)
+    lower, upper = np.full((len(distinct), 6), -np.inf), np.full((len(distinct), 6), np.inf)
     language = _language(format_name)
-    stated = [k for k, config in enumerate(configs) if config]
-    if language is not None and stated:
-        branch[stated], lower[stated], upper[stated] = language.windows([configs[k] for k in stated])
-    return branch, lower, upper
+    if language is not None and len(distinct) > 1:
+        branch[1:], lower[1:], upper[1:] = language.windows(list(distinct)[1:])
+    return branch[row], lower[row], upper[row]
 
 
 def describe(format_name, config):

@@ -8,7 +8,7 @@ and 6.
 
 import numpy as np
 
-from trajcomp.formats.configuration import EDGE, branch_index, flags, integer_fields, joint_windows
+from trajcomp.formats.configuration import EDGE, branch_index, distinct_tuples, flags, integer_fields, joint_windows
 
 
 def encode(robot, q):
@@ -20,27 +20,18 @@ def encode(robot, q):
     q = np.atleast_2d(q)
     behind, up, negative = flags(robot, q)
     turns = np.floor((q[:, [0, 3, 5]] + np.pi) / (2 * np.pi) - 1e-12).astype(int)
-    return [
-        ("N" if wrist_negative else "F", "U" if elbow_up else "D", "B" if back else "T", *map(int, turn))
-        for wrist_negative, elbow_up, back, turn in zip(negative, up, behind, turns)
-    ]
+    return distinct_tuples(np.c_[negative, up, behind, turns], lambda row: (
+        "N" if row[0] else "F", "U" if row[1] else "D", "B" if row[2] else "T", *row[3:]))
 
 
 def windows(configs):
-    """Branch and joint windows of FANUC CONFIG rows: joints 1, 4, 6 in turn t, ((2t - 1) pi, (2t + 1) pi].
-
-    Computed once per distinct CONFIG (a path's positions mostly share theirs).
-    """
-    distinct = {}
-    row = np.fromiter((distinct.setdefault(tuple(config), len(distinct)) for config in configs), dtype=int,
-                      count=len(configs))
-    configs = list(distinct)
+    """Branch and joint windows of FANUC CONFIG rows: joints 1, 4, 6 in turn t, ((2t - 1) pi, (2t + 1) pi]."""
     letters = np.array([config[:3] for config in configs], dtype=object).reshape(-1, 3)
     turns = integer_fields(configs, 3, 6)
     lower, upper = joint_windows(turns, [0, 3, 5], lambda t: (2 * t - 1) * np.pi + EDGE,
                                  lambda t: (2 * t + 1) * np.pi)
     branch = branch_index(letters[:, 2] == "B", letters[:, 1] == "U", letters[:, 0] == "N")
-    return branch[row], lower[row], upper[row]
+    return branch, lower, upper
 
 
 def merge(old, new, branch_kept, joint_kept):

@@ -9,7 +9,7 @@ CIRC moves on in the posture the arm is in (`BINDING_KINDS`).
 
 import numpy as np
 
-from trajcomp.formats.configuration import EDGE, branch_index, flags, integer_fields
+from trajcomp.formats.configuration import EDGE, branch_index, distinct_tuples, flags, integer_fields
 from trajcomp.programs.items import JOINT
 
 BINDING_KINDS = frozenset({JOINT})
@@ -21,7 +21,7 @@ def encode(robot, q):
     behind, up, negative = flags(robot, q)
     status = behind * 1 + (up != behind) * 2 + negative * 4
     turn = (q < -1e-9) @ (1 << np.arange(6))  # a joint written as 0 is not negative
-    return [(int(s), int(t)) for s, t in zip(status, turn)]
+    return distinct_tuples(np.c_[status, turn])
 
 
 def windows(configs):

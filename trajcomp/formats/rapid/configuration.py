@@ -8,7 +8,7 @@ complement of KUKA's Status bit 1.
 
 import numpy as np
 
-from trajcomp.formats.configuration import EDGE, branch_index, flags, integer_fields, joint_windows
+from trajcomp.formats.configuration import EDGE, branch_index, distinct_tuples, flags, integer_fields, joint_windows
 
 
 def encode(robot, q):
@@ -17,7 +17,7 @@ def encode(robot, q):
     behind, up, negative = flags(robot, q)
     quadrant = np.floor(q[:, [0, 3, 5]] / (np.pi / 2) + 1e-9).astype(int)
     cfx = behind * 4 + (up == behind) * 2 + negative * 1
-    return [(*map(int, quad), int(x)) for quad, x in zip(quadrant, cfx)]
+    return distinct_tuples(np.c_[quadrant, cfx])
 
 
 def windows(configs):
