@@ -112,7 +112,7 @@ def test_numbers_formatted_together_are_what_format_number_writes():
     old_texts = np.where(rng.random(len(values)) < 0.2, ".5", "1.0").tolist()
     old_values = np.array([float(t) for t in old_texts])
     old_values[::7] = values[::7]  # some numbers stay the same
-    changed, texts = written_numbers(values, old_texts, old_values, places)
+    changed, texts = written_numbers(values, np.char.startswith(old_texts, "."), old_values, places)
     for value, old_text, old_value, p, change, text in zip(values.tolist(), old_texts, old_values.tolist(),
                                                            places.tolist(), changed.tolist(), texts):
         expected = format_number(value, p)

@@ -5,8 +5,8 @@ import re
 import numpy as np
 import pytest
 
-from trajcomp.formats.number_fields import FIELDS_AT_ONCE, read_numbers, text_codes
-from trajcomp.formats.text import NUMBER
+from trajcomp.formats.number_fields import (FIELDS_AT_ONCE, NUMBER, WrittenNumbers, decimals, is_bare, read_numbers,
+                                            text_codes)
 
 
 def _python(field):
@@ -22,9 +22,13 @@ def _check(fields, prefix=""):
         end.append(len(text))
         text += ";"
     values, is_number = read_numbers(text_codes(text), start, end)
-    for field, value, number in zip(fields, values, is_number):
+    written = WrittenNumbers.of(text_codes(text), start, end)
+    assert np.array_equal(written.values, values, equal_nan=True)
+    for field, value, number, places, bare in zip(fields, values, is_number, written.places, written.bare):
         expected = _python(field)
         assert number == (expected is not None), field
+        if number:  # how it is written, for a writer formatting a new number like it
+            assert places == decimals(field) and bare == is_bare(field), field
         if expected is None:
             assert np.isnan(value), field
         else:  # the same float, sign of zero included
@@ -66,3 +70,11 @@ def test_empty():
 def test_codes_index_by_str_offset(text):
     codes = text_codes(text)
     assert [chr(c) for c in codes.tolist()] == list(text)
+
+
+def test_numbers_placed_among_fields_without_one():
+    text = "1.50;-.25"
+    found = WrittenNumbers.of(text_codes(text), [0, 5], [4, 9]).at(np.array([1, 3]), 4)
+    assert np.array_equal(found.values, [np.nan, 1.5, np.nan, -0.25], equal_nan=True)
+    assert found.places.tolist() == [0, 2, 0, 2] and found.bare.tolist() == [False, False, False, True]
+    assert found.is_number.tolist() == [False, True, False, True]

@@ -10,21 +10,32 @@ below 2**53 and the power of ten between it and its value (places and
 exponent) is exact up to 10**22, so their product or quotient, correctly
 rounded, is the decimal correctly rounded. The other fields (more digits,
 a larger power) are read by ``float`` once per distinct text where they
-match `trajcomp.formats.text.NUMBER`; anything else is no number.
+match `NUMBER`; anything else is no number.
 """
 
+import dataclasses
 import re
 
 import numpy as np
 
-from trajcomp.formats.text import NUMBER
-
-FIELDS_AT_ONCE = 65536  # fields laid out as a (fields, width) matrix together: bounds the matrices' memory
+NUMBER = r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?"  # a number as the robot languages write one
+FIELDS_AT_ONCE = 65536  # fields laid out as a (width, fields) matrix together: bounds the matrices' memory
 _WIDEST = 24  # characters of the widest field read from its digits (more: read by `float`)
 _DIGITS = 15  # at most this many digits make a whole number below 2**53
 _EXACT_POWER = 22  # 10.0**k is exact for |k| <= 22
 _NUMBER = re.compile(NUMBER)
 _PLUS, _MINUS, _POINT, _ZERO, _NINE, _E, _LOWER_E = map(ord, "+-.09Ee")
+
+
+def decimals(text):
+    """Number of digits after the decimal point in a number's text."""
+    mantissa = re.split(r"[eE]", text)[0]
+    return len(mantissa.split(".")[1]) if "." in mantissa else 0
+
+
+def is_bare(text):
+    """Whether a number's text starts with its point, after a sign (``.5``, ``-.5``): a file that writes no 0."""
+    return text.startswith((".", "-.", "+."))
 
 
 def text_codes(text):
@@ -45,8 +56,58 @@ def text_codes(text):
     return np.frombuffer(text.encode("utf-32-le"), dtype=np.uint32)
 
 
+@dataclasses.dataclass(frozen=True)
+class WrittenNumbers:
+    """N fields of a text read as numbers, and how each is written (what a writer formats new numbers like).
+
+    Attributes
+    ----------
+    values : ndarray of float, shape (N,)
+        ``float(field)``; NaN where the field is no number.
+    is_number : ndarray of bool, shape (N,)
+        Whether the field is a number as `NUMBER` states one (no blank, no ``inf``).
+    places : ndarray of int, shape (N,)
+        Digits after its point, before an exponent (`decimals`).
+    bare : ndarray of bool, shape (N,)
+        Whether the field starts with its point (`is_bare`).
+    """
+
+    values: np.ndarray
+    is_number: np.ndarray
+    places: np.ndarray
+    bare: np.ndarray
+
+    @classmethod
+    def of(cls, codes, start, end):
+        """The fields ``text[start:end]`` (N,) of a text's character codes (`text_codes`), read at once."""
+        start, end = np.asarray(start, dtype=np.int64), np.asarray(end, dtype=np.int64)
+        blocks = [_from_characters(codes, start[k:k + FIELDS_AT_ONCE], end[k:k + FIELDS_AT_ONCE])
+                  for k in range(0, len(start), FIELDS_AT_ONCE)]
+        values, read, places, bare = (np.concatenate(column) for column in zip(*blocks)) if blocks else (
+            np.zeros(0), np.zeros(0, dtype=bool), np.zeros(0, dtype=np.int64), np.zeros(0, dtype=bool))
+        is_number = read.copy()
+        other = np.flatnonzero(~read)
+        if len(other):  # by float, once per distinct text
+            texts = ["".join(map(chr, codes[a:b].tolist())) for a, b in zip(start[other].tolist(), end[other].tolist())]
+            number = {text: float(text) if _NUMBER.fullmatch(text) else None for text in set(texts)}
+            is_number[other] = [number[text] is not None for text in texts]
+            values[other] = [np.nan if number[text] is None else number[text] for text in texts]
+            places[other] = [decimals(text) for text in texts]
+            bare[other] = [is_bare(text) for text in texts]
+        return cls(values, is_number, places, bare)
+
+    def at(self, rows, n):
+        """These M numbers as rows (M,) of N fields, the others no number (NaN, no places, not bare)."""
+        out = WrittenNumbers(np.full(n, np.nan), np.zeros(n, dtype=bool), np.zeros(n, dtype=np.int64),
+                             np.zeros(n, dtype=bool))
+        for column, values in zip((out.values, out.is_number, out.places, out.bare),
+                                  (self.values, self.is_number, self.places, self.bare)):
+            column[rows] = values
+        return out
+
+
 def read_numbers(codes, start, end):
-    """Values of N numbers written at ``text[start:end]``, read at once.
+    """Values of N numbers written at ``text[start:end]``, read at once (`WrittenNumbers`).
 
     Parameters
     ----------
@@ -60,32 +121,17 @@ def read_numbers(codes, start, end):
     values : ndarray of float, shape (N,)
         ``float(text[start:end])``; NaN where the field is no number.
     is_number : ndarray of bool, shape (N,)
-        Whether the field is a number as `trajcomp.formats.text.NUMBER` states one (no blank, no ``inf``).
+        Whether the field is a number as `NUMBER` states one (no blank, no ``inf``).
     """
-    start, end = np.asarray(start, dtype=np.int64), np.asarray(end, dtype=np.int64)
-    values, read = np.full(len(start), np.nan), np.zeros(len(start), dtype=bool)
-    for first in range(0, len(start), FIELDS_AT_ONCE):
-        part = slice(first, first + FIELDS_AT_ONCE)
-        values[part], read[part] = _from_characters(codes, start[part], end[part])
-    is_number = read.copy()
-    other = np.flatnonzero(~read)
-    if len(other):
-        texts = [codes[a:b] for a, b in zip(start[other].tolist(), end[other].tolist())]
-        read = {}
-        for text in {t.tobytes() for t in texts}:
-            word = np.frombuffer(text, dtype=codes.dtype)
-            word = "".join(map(chr, word.tolist()))
-            read[text] = float(word) if _NUMBER.fullmatch(word) else None
-        found = [read[t.tobytes()] for t in texts]
-        is_number[other] = [value is not None for value in found]
-        values[other] = [np.nan if value is None else value for value in found]
-    return values, is_number
+    numbers = WrittenNumbers.of(codes, start, end)
+    return numbers.values, numbers.is_number
 
 
 def _from_characters(codes, start, end):
-    """Values (B,) of B fields read from their characters, and whether each was read so.
+    """Values (B,) of B fields read from their characters, whether each was read so, its places and whether it
+    starts with its point (`WrittenNumbers`).
 
-    Read so: a number as `trajcomp.formats.text.NUMBER` states one (an
+    Read so: a number as `NUMBER` states one (an
     optional sign, digits with at most one point, an optional exponent
     ``e[+-]digits``) of at most 15 digits before the exponent and at most
     22 powers of ten between its digits and its value (``10**22`` is the
@@ -127,5 +173,6 @@ def _from_characters(codes, start, end):
     shift = np.where(read, shift, 0)
     whole = mantissa.astype(float)
     magnitude = np.where(shift >= 0, whole * 10.0 ** np.maximum(shift, 0), whole / 10.0 ** np.maximum(-shift, 0))
-    negative = char[0] == _MINUS if widest else np.zeros(n, dtype=bool)
-    return np.where(read, np.where(negative, -magnitude, magnitude), np.nan), read
+    first, second = (char[k] if k < widest else np.zeros(n, dtype=np.int64) for k in (0, 1))
+    bare = np.where((first == _PLUS) | (first == _MINUS), second, first) == _POINT
+    return np.where(read, np.where(first == _MINUS, -magnitude, magnitude), np.nan), read, places, bare

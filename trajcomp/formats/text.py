@@ -13,19 +13,19 @@ import functools
 import math
 import os
 import re
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 
 import numpy as np
 
 from trajcomp.errors import ReadError, WriteError
 from trajcomp.formats.fixed_text import joined_rows
+from trajcomp.formats.number_fields import NUMBER, WrittenNumbers, decimals, is_bare, read_numbers, text_codes
 from trajcomp.programs.items import CIRCULAR, Source, Span, SpanColumns, SpanRow, replaced
 from trajcomp.programs.tables import ItemRows, Picked, StatementTable, TargetRows
 from trajcomp.arm.transforms import abc_to_matrix, matrix_to_abc
 from trajcomp.support.memory import collection_paused
 
-NUMBER = r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?"
 # Magnitudes no robot program states: beyond them a number is a typo or damage, not a position.
 LENGTH_LIMIT = 1e6  # mm (a kilometre)
 ANGLE_LIMIT = 1e4  # deg
@@ -346,12 +346,6 @@ def values(spans_, roles):
     return [float(spans_[role].text) for role in roles]
 
 
-def decimals(text):
-    """Number of digits after the decimal point in a number's text."""
-    mantissa = re.split(r"[eE]", text)[0]
-    return len(mantissa.split(".")[1]) if "." in mantissa else 0
-
-
 def ceil_places(value, places):
     """``value`` rounded up at ``places`` decimals (a time written never shorter than timed)."""
     return math.ceil(value * 10**places - 1e-9) / 10**places
@@ -522,29 +516,77 @@ def _batch_edits(targets, encode, min_places, sources_count):
                                    min_places.get(role, 0)))
     if numbers:
         sources, starts, ends, old_texts, values, old_values, places = zip(*numbers)
-        changed, texts = written_numbers(np.array(values), old_texts, np.array(old_values),
-                                         np.maximum(column_decimals(old_texts), places))
+        changed, texts = written_numbers(np.array(values), np.array([is_bare(t) for t in old_texts], dtype=bool),
+                                         np.array(old_values), np.maximum(column_decimals(old_texts), places))
         for k in np.flatnonzero(changed).tolist():
             if texts[k] != old_texts[k]:
                 edits[sources[k]].append((starts[k], ends[k], texts[k]))
     return [Edits.of(e) for e in edits]
 
 
-@dataclasses.dataclass(frozen=True, eq=False)
 class OldNumbers:
     """The numbers some targets' spans hold in the file, by role (what `target_edits`' ``columns`` chooses near).
 
+    Each role's columns are made when first asked for: most roles are
+    only written over, and a number needs no str of its own.
+
     Attributes
     ----------
-    value : dict of str to ndarray, shape (K,)
+    value : Mapping of str to ndarray, shape (K,)
         Each role's number; NaN where the target has no span of that role
         or its text is no number (a bit string ``'B010'``, a name).
-    text : dict of str to ndarray of object, shape (K,)
+    text : Mapping of str to ndarray of object, shape (K,)
         Each role's text as written; None where the target has no span of that role.
+    written : Mapping of str to WrittenNumbers
+        How each role's numbers are written (places, a bare point); NaN
+        and no places where the target has no span of that role.
     """
 
-    value: dict
-    text: dict
+    def __init__(self, text, start, end, columns):
+        """The numbers of spans ``text[start:end]`` (K, R) of the roles ``columns`` ({role: column}; -1: none)."""
+        self._text, self._start, self._end, self._columns = text, start, end, columns
+        present = start >= 0
+        self._region = int(start[present].min()) if present.any() else 0  # the part of the text the spans are in
+        self._codes = None
+        self.text = _ByRole(columns, self._texts)
+        self.written = _ByRole(columns, self._written)
+        self.value = _ByRole(columns, lambda role: self.written[role].values)
+
+    def _texts(self, role):
+        j = self._columns[role]
+        present = self._start[:, j] >= 0
+        texts = np.full(len(present), None, dtype=object)
+        texts[present] = [self._text[a:b] for a, b in zip(self._start[present, j].tolist(),
+                                                          self._end[present, j].tolist())]
+        return texts
+
+    def _written(self, role):
+        if self._codes is None:
+            self._codes = text_codes(self._text[self._region:int(self._end.max(initial=0))])
+        j = self._columns[role]
+        present = np.flatnonzero(self._start[:, j] >= 0)
+        return WrittenNumbers.of(self._codes, self._start[present, j] - self._region,
+                                 self._end[present, j] - self._region).at(present, len(self._start))
+
+
+class _ByRole(Mapping):
+    """``{role: make(role)}`` over the roles of a span table, each made when first asked for."""
+
+    def __init__(self, roles, make):
+        self._roles, self._make, self._made = roles, make, {}
+
+    def __getitem__(self, role):
+        if role not in self._made:
+            if role not in self._roles:
+                raise KeyError(role)
+            self._made[role] = self._make(role)
+        return self._made[role]
+
+    def __iter__(self):
+        return iter(self._roles)
+
+    def __len__(self):
+        return len(self._roles)
 
 
 def _column_edits(table, encode, min_places, sources_count):
@@ -557,46 +599,31 @@ def _column_edits(table, encode, min_places, sources_count):
         parts = []
         batch = rows[lo:lo + TARGETS_AT_ONCE]
         starts, ends = spans.start[batch], spans.end[batch]
-        text, value = {}, {}
-        for role, j in spans.column.items():
-            present = starts[:, j] >= 0
-            written = np.full(len(batch), None, dtype=object)
-            written[present] = [spans.text[a:b] for a, b in zip(starts[present, j].tolist(), ends[present, j].tolist())]
-            text[role], value[role] = written, _column_values(written, present)
-        for role, new in encode(table, batch, OldNumbers(value, text)).items():
+        old = OldNumbers(spans.text, starts, ends, spans.column)
+        for role, new in encode(table, batch, old).items():
             j = spans.column.get(role)
             if j is None:
                 continue
             new = np.asarray(new)
             if new.dtype == object:
-                change = np.flatnonzero(np.not_equal(new, None) & (starts[:, j] >= 0) & (new != text[role]))
+                change = np.flatnonzero(np.not_equal(new, None) & (starts[:, j] >= 0) & (new != old.text[role]))
                 parts.append((starts[change, j], ends[change, j], new[change].tolist()))
                 continue
             write = np.flatnonzero(~np.isnan(new) & (starts[:, j] >= 0))
             if np.isinf(new[write]).any():
                 k = int(batch[write[np.isinf(new[write])][0]])
                 raise WriteError(f"target {where(table.target(k))}: {role} is not a finite number, nothing written")
-            old_texts = text[role][write].tolist()
-            places = np.maximum(column_decimals(old_texts), min_places.get(role, 0)) if len(write) else write
-            changed, texts = written_numbers(new[write], old_texts, value[role][write], places)
-            keep = [k for k in np.flatnonzero(changed).tolist() if texts[k] != old_texts[k]]
-            parts.append((starts[write[keep], j], ends[write[keep], j], [texts[k] for k in keep]))
+            written = old.written[role]
+            changed, texts = written_numbers(new[write], written.bare[write], written.values[write],
+                                             np.maximum(written.places[write], min_places.get(role, 0)))
+            keep = np.flatnonzero(changed)  # a number read back other than the old one is written otherwise
+            parts.append((starts[write[keep], j], ends[write[keep], j], [texts[k] for k in keep.tolist()]))
         if parts:
             batches.append(Edits.of_columns(np.concatenate([p[0] for p in parts]), np.concatenate([p[1] for p in parts]),
                                             [t for p in parts for t in p[2]]))
     if batches:
         edits[spans.source] = Edits.joined(batches)
     return edits
-
-
-def _column_values(texts, present):
-    """Numbers (K,) of span texts (K,) (NaN where absent or no number)."""
-    values = np.full(len(texts), np.nan)
-    try:
-        values[present] = np.array(texts[present].tolist(), dtype=float)
-    except ValueError:  # some text is no number: one at a time
-        values[present] = [v if isinstance(v, float) else np.nan for v in map(_number_or_text, texts[present])]
-    return values
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -684,15 +711,15 @@ def column_decimals(texts):
     return places
 
 
-def written_numbers(values, old_texts, old_values, places):
+def written_numbers(values, bare, old_values, places):
     """How a file writes new numbers over old ones, all at once: what `format_number` writes each.
 
     Parameters
     ----------
     values : ndarray, shape (N,)
         The new numbers (finite).
-    old_texts : sequence of str, length N
-        The texts they replace.
+    bare : ndarray of bool, shape (N,)
+        Whether the old text writes a bare point (`trajcomp.formats.number_fields.is_bare`).
     old_values : ndarray, shape (N,)
         The old numbers (NaN where the old text is none).
     places : ndarray of int, shape (N,)
@@ -707,18 +734,21 @@ def written_numbers(values, old_texts, old_values, places):
         ``"%.<places>f"`` of each value, never ``-0``; ``.5`` without its
         0 where the old text wrote a bare point.
     """
-    texts = np.empty(len(values), dtype=object)
+    texts, read_back = np.empty(len(values), dtype=object), np.empty(len(values))
     for p in np.unique(places).tolist():
         pick = np.flatnonzero(places == p)
-        texts[pick] = joined_rows([(values[pick], p)]).split("\n")
+        block = joined_rows([(values[pick], p)])
+        codes = text_codes(block)
+        ends = np.append(np.flatnonzero(codes == 10), len(codes))
+        read_back[pick] = read_numbers(codes, np.append(0, ends[:-1] + 1), ends)[0]
+        texts[pick] = block.split("\n")
     for k in np.flatnonzero(np.signbit(values) & (values > -(10.0 ** -places))).tolist():  # what may write -0
         if float(texts[k]) == 0.0:
             texts[k] = texts[k][1:]
     texts = texts.tolist()
-    changed = np.array(texts, dtype=float) != old_values
-    for k in np.flatnonzero(changed).tolist():
-        if old_texts[k][:1] == "." or old_texts[k][:2] in ("-.", "+."):  # the file writes .5, not 0.5
-            texts[k] = BARE_ZERO.sub(r"\1.", texts[k], count=1)
+    changed = read_back != old_values
+    for k in np.flatnonzero(changed & bare).tolist():  # the file writes .5, not 0.5
+        texts[k] = BARE_ZERO.sub(r"\1.", texts[k], count=1)
     return changed, texts
 
 
