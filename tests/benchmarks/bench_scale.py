@@ -2,6 +2,7 @@
 
 Run:  python tests/benchmarks/bench_scale.py [N ...]     (default: 100000 300000 1000000)
       python tests/benchmarks/bench_scale.py languages [LANGUAGE ...] [N ...]     (default: all, 20000 100000)
+      ... --runs K     (runs of each timing, the median reported; default 3)
 
 For each N, a helix of N LIN waypoints blended with 1 mm zones (a CAM path;
 program CSV, mm and deg, 3 and 4 decimals) on the virtual UR10 is
@@ -251,6 +252,10 @@ def main_bench(sizes):
 
 
 if __name__ == "__main__":
+    if "--runs" in sys.argv:
+        at = sys.argv.index("--runs")
+        RUNS = int(sys.argv[at + 1])
+        del sys.argv[at:at + 2]
     if sys.argv[1:2] == ["languages"]:
         named = [a for a in sys.argv[2:] if not a.isdigit()]
         language_bench([int(a) for a in sys.argv[2:] if a.isdigit()] or [20_000, 100_000], named)
