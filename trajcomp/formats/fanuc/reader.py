@@ -194,8 +194,9 @@ def read(path):
                               + [written["speed"][rows] for rows, _ in parts])
     order = np.argsort(np.concatenate([[m.line for m in one_by_one]] + [written["line"][rows] for rows, _ in parts]),
                        kind="stable")
-    motions = dataclasses.replace(motions, spans=SpanColumns(0, source.text, ("speed",), speed_at[order, :1],
-                                                             speed_at[order, 1:]))
+    speed_at = speed_at[order].astype(_offset_type(source.text))
+    motions = dataclasses.replace(motions, spans=SpanColumns(0, source.text, ("speed",), speed_at[:, :1],
+                                                             speed_at[:, 1:]))
     statements = _statements(source.text, starts, ends, np.flatnonzero(~covered[1:]) + 1, kept)
     tools, frames = {"0": np.eye(4)}, {"0": np.eye(4)}
     if isinstance(targets, TargetRows):
@@ -294,7 +295,8 @@ def _written_motions(by_line, starts, ends, in_mn, points, unread):
     index = np.array([points[n] for n in known.tolist()], dtype=np.int64)
     return {"line": line[keep], "kind": np.array([LINEAR, JOINT], dtype=object)[is_joint[keep].astype(np.int64)],
             "target": index[slot[keep]] if len(keep) else np.zeros(0, dtype=np.int64),
-            "speed": speed_at[keep], "start": starts[line[keep] - 1], "end": ends[line[keep] - 1],
+            "speed": speed_at[keep], "start": starts[line[keep] - 1].astype(_offset_type(by_line)),
+            "end": ends[line[keep] - 1].astype(_offset_type(by_line)),
             "value": value[keep] * scale[keep], "unit": unit[keep],
             "zone": np.where(zone[keep] == 0.0, np.nan, zone[keep])}
 
