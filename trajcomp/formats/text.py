@@ -543,30 +543,34 @@ class OldNumbers:
     """
 
     def __init__(self, text, start, end, columns):
-        """The numbers of spans ``text[start:end]`` (K, R) of the roles ``columns`` ({role: column}; -1: none)."""
-        self._text, self._start, self._end, self._columns = text, start, end, columns
+        """The numbers of spans ``text[start:end]`` (K, R) of the roles ``columns`` ({role: column}; -1: none).
+
+        The makers hold the spans, not this object: no reference cycle, so a
+        batch's columns are freed as soon as the batch is done, also while
+        the cyclic collector is paused (`trajcomp.support.memory.collection_paused`).
+        """
         present = start >= 0
-        self._region = int(start[present].min()) if present.any() else 0  # the part of the text the spans are in
-        self._codes = None
-        self.text = _ByRole(columns, self._texts)
-        self.written = _ByRole(columns, self._written)
-        self.value = _ByRole(columns, lambda role: self.written[role].values)
+        region = int(start[present].min()) if present.any() else 0  # the part of the text the spans are in
+        codes = []  # that part's character codes, made when a number is first asked for
 
-    def _texts(self, role):
-        j = self._columns[role]
-        present = self._start[:, j] >= 0
-        texts = np.full(len(present), None, dtype=object)
-        texts[present] = [self._text[a:b] for a, b in zip(self._start[present, j].tolist(),
-                                                          self._end[present, j].tolist())]
-        return texts
+        def texts(role):
+            j = columns[role]
+            present = start[:, j] >= 0
+            out = np.full(len(present), None, dtype=object)
+            out[present] = [text[a:b] for a, b in zip(start[present, j].tolist(), end[present, j].tolist())]
+            return out
 
-    def _written(self, role):
-        if self._codes is None:
-            self._codes = text_codes(self._text[self._region:int(self._end.max(initial=0))])
-        j = self._columns[role]
-        present = np.flatnonzero(self._start[:, j] >= 0)
-        return WrittenNumbers.of(self._codes, self._start[present, j] - self._region,
-                                 self._end[present, j] - self._region).at(present, len(self._start))
+        def numbers(role):
+            if not codes:
+                codes.append(text_codes(text[region:int(end.max(initial=0))]))
+            j = columns[role]
+            present = np.flatnonzero(start[:, j] >= 0)
+            return WrittenNumbers.of(codes[0], start[present, j] - region, end[present, j] - region).at(present,
+                                                                                                         len(start))
+
+        self.text = _ByRole(columns, texts)
+        self.written = written = _ByRole(columns, numbers)
+        self.value = _ByRole(columns, lambda role: written[role].values)
 
 
 class _ByRole(Mapping):
