@@ -49,6 +49,15 @@ OPTIONS = "def opts():\n" + "".join(f"  {line}\n" for line in [
     f"movel( {_p(13)} ,v=.1,r=1e-3)", f"movel({_p(15)}, t=-0.0)", "movel(p[ .5, -.1, +.3, 0, 3.14, 0 ], v=5E-2)",
     f"movel  ({_p(17)}, v=0.1)  # a comment \"quoted\"", f"movel({_p(18)}, v=0.1)\f", f"movel({_p(19)}, v=0.1, q=3)",
     f"movel({_p(20)}, v=0.1, r=0.001, t=1, a=2, a=3)", f"\tmovel({_p(21)},v=0.05,r=0.001)\t"]) + "end\n"
+VARIANTS = "\r\n".join(  # what a line's layout must get right: numbers beside names, exponents, blanks, widths
+    ["def variants():", "  # réglage: outil n°2 — épaisseur", "  p2e5 = p[0.1, 0.2, 0.3, 0, 3.1, 0]", "",
+     "  movel(p[1E-1, 2.5e-1, +.3, -0., 3.14, 6e-0], v=1e-1, r=2E-3)  # ü",
+     "  movel(p[0.1, 0.2, 0.3, 0, 3.1, 0], v=1-2)", "  movel(p[0.1, 0.2, 0.3, 0, 3.1, 0], v=e5)",
+     "  movel(p[123456789012345678e-18, 0.2, 0.3, 0, 3.1, 0], v=0.1)", f"  movel({_p(3)}, v=spd2, r=0.1e1)",
+     "  spd2 = 0.2", f"  movej({_q(2)}, 1.4, 1.05, 0, 0)", "  movel(p[0.1,0.2,0.3,0,3.1,0],v=.1)",
+     "  movel(p[0.10000000000000000001, 0.2, 0.3, 0, 3.1, 0], v=0.1)", "  movel(p[0.1, 0.2, 0.3, 0, 3.1, 0], v2, 0.3)",
+     " " * 80 + f"movel({_p(4)}, v=0.1)",
+     f"  movel({_p(5)}, v=0.1) # é", f"  movel({_p(6)}, v=0.1)", f"  movel({_p(6)}, v=0.1)", "end", ""])
 FRAMES = "\n".join(  # frames and speeds known at run time, a point also used as a frame, a TCP set at run time
     ["def appr():", "  pick_p = p[0.5, 0.1, 0.3, 0, 3.14, 0]", "  global v = p[0.5, 0.2, 0.3, 0, 3.14, 0]",
      "  jv = [0.1,0.2,0.3,0.4,0.5,0.6]", "  spd = 0.2", "  spd2 = 0.1", "  spd2 = 0.3", "  rr = 0.004",
@@ -66,7 +75,7 @@ FRAMES = "\n".join(  # frames and speeds known at run time, a point also used as
 SHAPES = {
     "cam.script": CAM, "crlf.script": CAM.replace("\n", "\r\n"), "cr.script": CAM.replace("\n", "\r"),
     "no_end_of_line.script": CAM.rstrip("\n"), "robodk.script": ROBODK, "options.script": OPTIONS,
-    "frames.script": FRAMES,
+    "frames.script": FRAMES, "variants.script": VARIANTS,
     "refused_pose.script": CAM.replace("end\n", "  movel(p[1e9, 0, 0, 0, 0, 0], v=0.1)\nend\n"),
     "refused_speed.script": CAM.replace("end\n", "  movel(p[0.1, 0, 0, 0, 0, 0], v=1e999, r=1e999)\nend\n"),
     "refused_time.script": CAM.replace("end\n", "  movej([0.1, 0, 0, 0, 0, 0], t=1e400)\nend\n"),
@@ -113,7 +122,8 @@ def test_a_script_reads_the_same_in_blocks_and_line_by_line(path, tmp_path, monk
 
 
 @pytest.mark.parametrize("name, blocks", [("cam.script", 8), ("crlf.script", 8), ("cr.script", 0),
-                                          ("robodk.script", 9), ("options.script", 19), ("frames.script", 11)])
+                                          ("robodk.script", 9), ("options.script", 19), ("frames.script", 11),
+                                          ("variants.script", 12)])
 def test_the_lines_a_cam_post_processor_writes_are_read_in_blocks(name, blocks, tmp_path, monkeypatch):
     read_in_blocks = []
     program = reader._program

@@ -144,7 +144,7 @@ def fail(source_name, line, text, message):
     raise ReadError(f"{source_name}:{line}: {message}: {text.strip()[:200]!r}")
 
 
-def check_closed(source, masked, opener, closer, closing):
+def check_closed(source, masked, opener, closer, closing, parts=None):
     """Refuse a text whose last block is never closed: a file cut off in transfer.
 
     Every controller refuses such a file (a syntax error on loading, or
@@ -162,6 +162,10 @@ def check_closed(source, masked, opener, closer, closing):
         block, group 1 their keyword (``DEF``, ``PROC``; ``END``, ``ENDPROC``).
     closing : Mapping[str, str]
         The closing keyword of each opening keyword (upper case).
+    parts : list of (int, int), optional
+        ``(start, end)`` offsets of whole lines of ``masked`` where a block
+        may open or close, the others known to do neither (a reader's
+        motion lines: not scanned); default the whole text.
 
     Raises
     ------
@@ -169,8 +173,10 @@ def check_closed(source, masked, opener, closer, closing):
         A block open at the end of the text, naming its line and the
         keyword that should close it.
     """
-    marks = sorted([(m.start(), m.group(1).upper(), True) for m in opener.finditer(masked)]
-                   + [(m.start(), m.group(1).upper(), False) for m in closer.finditer(masked)])
+    parts = [(0, len(masked))] if parts is None else parts
+    marks = sorted([(m.start(), m.group(1).upper(), opens) for start, end in parts
+                    for pattern, opens in ((opener, True), (closer, False))
+                    for m in pattern.finditer(masked, start, end)])
     open_blocks = []
     for at, keyword, opens in marks:
         if opens:

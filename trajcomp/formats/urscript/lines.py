@@ -6,19 +6,21 @@ p[...]),accel_mss,speed_ms,t=0,r=0.001)`` and ``movej([q1, ..., q6],
 ...)``. A line of this shape alone on its line (a ``movel``, ``movej`` or
 ``movep`` to a pose literal, a joint list literal or ``pose_trans`` of a
 variable and a pose literal, whose options ``a``, ``v``, ``t``, ``r`` are
-numbers or variable names, named or positional) is found by one regular
-expression over the masked script; its numbers are parsed and checked as
-arrays. A line whose numbers the line-by-line read would refuse (out of
-range, not finite) or whose options name one twice is left to that read,
-which names it (`trajcomp.formats.urscript.reader`).
+numbers or variable names, named or positional) is read with the others
+of its layout (its text with each number written ``0``: a CAM post
+writes a few), which one regular expression checks once; its numbers are
+read from their characters and checked as arrays. A line whose numbers
+the line-by-line read would refuse (out of range, not finite) or whose
+options name one twice is left to that read, which names it
+(`trajcomp.formats.urscript.reader`).
 """
 
 import dataclasses
-import itertools
 import re
 
 import numpy as np
 
+from trajcomp.formats.number_fields import read_numbers, text_codes
 from trajcomp.formats.text import JOINT_LIMIT, LENGTH_LIMIT, NUMBER
 from trajcomp.programs.tables import TextSlices
 
@@ -42,7 +44,12 @@ _GROUPS = 22 + 6 * SLOTS
 _NUMBERS = np.arange(8, 19, 2)  # columns (0-based groups) of the six numbers
 _SLOT = 22 + 6 * np.arange(SLOTS)  # first column of each option
 _LAST = np.concatenate([[19, 20], _SLOT + 3, _SLOT + 4])  # what may end the call's last argument
-LINES_AT_ONCE = 16384  # matches turned into arrays together: bounds the objects a long script's read makes
+LINES_AT_ONCE = 16384  # lines read together: bounds the arrays a long script's read makes
+_NUMBER_CHARACTERS = "0123456789.eE+-"  # what a number is written with (`NUMBER`)
+_NUMBER_FIRST = "0123456789.+-"  # what a number starts with
+_WORD = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789_"  # a name's characters (`_NAME`)
+_MOST_INDENT = 16  # blanks of an indent passed at once (a longer one: one by one)
+_WIDEST_LAYOUT = 512  # characters of the longest line layout read in blocks (a longer line: one by one)
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -124,32 +131,169 @@ def cam_lines(masked, line_starts):
     -------
     CamLines
     """
-    found = _CAM_LINE.finditer(masked)
-    parts = []
-    while chunk := list(itertools.islice(found, LINES_AT_ONCE)):
-        parts.append(_columns(chunk, line_starts))
-    if not parts:
-        return _columns([], line_starts)
+    starts = np.asarray(line_starts, dtype=np.int64)
+    starts = starts[starts < len(masked)]
+    ends = np.append(starts[1:], len(masked))
+    parts = [_block(masked, starts[k:k + LINES_AT_ONCE], ends[k:k + LINES_AT_ONCE], k + 1)
+             for k in range(0, len(starts), LINES_AT_ONCE)]
+    parts = [part for part in parts if len(part)] or [_NONE]
     return CamLines(**{f.name: np.concatenate([getattr(p, f.name) for p in parts])
                        for f in dataclasses.fields(CamLines)})
 
 
-def _columns(matches, line_starts):
-    """`CamLines` of some matches of `_CAM_LINE`, the ones a line-by-line read would refuse left out."""
+def _among(codes, characters):
+    """Whether each character code (L,) is one of ``characters`` (ASCII), as a boolean array (L,)."""
+    table = np.zeros(256, dtype=bool)
+    table[[ord(c) for c in characters]] = True
+    return table[codes if codes.dtype == np.uint8 else np.minimum(codes, 255)]  # 255 (ÿ) is in no set
+
+
+def _block(masked, starts, ends, first_line):
+    """`CamLines` of the K lines ``first_line ..`` at offsets ``starts`` .. ``ends`` (K,) of a masked script.
+
+    A number is a run of `_NUMBER_CHARACTERS` that starts with a digit, a
+    sign or a point after a character that is no word character (a digit
+    in a name is none). A line's layout is its text with each number
+    written ``0``. Where `_CAM_LINE` matches a layout, its number groups
+    are exactly the layout's numbers (each follows ``[``, ``,``, ``=`` or a
+    blank and is followed by none of `_NUMBER_CHARACTERS`), so a line of
+    that layout matches it too when each of its numbers is one as `NUMBER`
+    states it: the layout's groups (`_layout_fields`, once per distinct
+    layout) give the line's fields, moved by the widths of the numbers
+    before them, and its numbers are read at once from their characters
+    (`trajcomp.formats.number_fields.read_numbers`).
+    """
+    begin = int(starts[0])
+    codes = text_codes(masked[begin:int(ends[-1])])
+    start, end = starts - begin, ends - begin
+    after_break = np.where(start > 0, codes[np.maximum(start - 1, 0)] == ord("\n"),
+                           begin == 0 or masked[begin - 1] == "\n")  # where `^` matches in `_CAM_LINE`
+    word = start.copy()  # the first character past each line's indent
+    for _ in range(_MOST_INDENT):
+        blank = _among(codes[np.minimum(word, len(codes) - 1)], " \t") & (word < end)
+        if not blank.any():
+            break
+        word += blank
+    else:  # a longer indent, one by one
+        for k in np.flatnonzero(_among(codes[np.minimum(word, len(codes) - 1)], " \t") & (word < end)).tolist():
+            rest = masked[begin + word[k]:begin + end[k]]
+            word[k] += len(rest) - len(rest.lstrip(" \t"))
+    moving = after_break & (word + len("move") < end)
+    for k, c in enumerate("move"):
+        moving &= codes[np.minimum(word + k, len(codes) - 1)] == ord(c)
+    digit = codes - ord("0") < 10  # unsigned: the characters below 0 wrap above 9
+    number_character = digit | (codes == ord(".")) | (codes == ord("e")) | (codes == ord("E")) | (
+        codes == ord("+")) | (codes == ord("-"))
+    change = np.flatnonzero(number_character[1:] != number_character[:-1]) + 1
+    edges = np.concatenate([[0], change, [len(codes)]])
+    edges = edges[(0 if len(codes) and number_character[0] else 1):]  # the runs' starts and ends, alternating
+    run_start, run_end = edges[0:-1:2], edges[1::2]
+    is_number = _among(codes[run_start], _NUMBER_FIRST) & ~(
+        _among(codes[np.maximum(run_start - 1, 0)], _WORD) & (run_start > 0))
+    number_start, number_end = run_start[is_number], run_end[is_number]
+    kept = ~number_character  # a number's first character stands for it, written 0; other runs stay whole
+    kept[run_start] = True
+    other = np.flatnonzero(~is_number & (run_end - run_start > 1))
+    width = run_end[other] - run_start[other]
+    kept[np.repeat(run_start[other] - np.cumsum(width) + width, width) + np.arange(width.sum())] = True
+    layout_codes = codes.copy()
+    layout_codes[number_start] = ord("0")
+    layout_codes = layout_codes[kept]
+    layout_at = np.concatenate([[0], np.cumsum(kept, dtype=np.int64)])  # offset in the layouts of each offset
+    layout_length = layout_at[end] - layout_at[start]
+    rows = np.flatnonzero(moving & (layout_length <= _WIDEST_LAYOUT))
+    if not len(rows):
+        return _NONE
+    layout_start, layout_length = layout_at[start[rows]], layout_length[rows]
+    widest = int(layout_length.max())
+    matrix = np.zeros((len(rows), widest + 1), dtype=np.uint32)
+    matrix[:, 0] = layout_length
+    column = np.arange(widest)
+    matrix[:, 1:] = np.where(column < layout_length[:, None],
+                             layout_codes[np.minimum(layout_start[:, None] + column, len(layout_codes) - 1)], 0)
+    _, first, layout = np.unique(matrix.view(np.dtype((np.void, 4 * (widest + 1)))).reshape(-1),
+                                 return_index=True, return_inverse=True)
+    layout = layout.reshape(-1)
+    texts = ["".join(map(chr, layout_codes[layout_start[k]:layout_start[k] + layout_length[k]].tolist()))
+             for k in first.tolist()]
+    matched = [(k, m) for k, m in enumerate(map(_CAM_LINE.match, texts)) if m]
+    if not matched:
+        return _NONE
+    fields, layout_good = _layout_fields([m for _, m in matched])
+    parts = []
+    for row, (k, _) in enumerate(matched):
+        lines = rows[layout == k]
+        parts.append(_lines_of_layout(codes, fields.rows([row]), texts[k], start[lines],
+                                      np.searchsorted(number_start, start[lines]), number_start, number_end,
+                                      begin, first_line + lines) if layout_good[row] else _NONE)
+    found = CamLines(**{f.name: np.concatenate([getattr(p, f.name) for p in parts])
+                        for f in dataclasses.fields(CamLines)})
+    return found.rows(np.argsort(found.line, kind="stable"))
+
+
+def _lines_of_layout(codes, layout, text, start, first_number, number_start, number_end, begin, line):
+    """`CamLines` of the n lines at block offsets ``start`` (n,) of one layout ``text`` whose fields are ``layout``
+    (one row, offsets in ``text``), their numbers from ``first_number`` (n,) on; those whose numbers a
+    line-by-line read would refuse left out."""
+    zeros = np.array([at for at, c in enumerate(text) if c == "0" and (at == 0 or (
+        text[at - 1] not in _NUMBER_CHARACTERS and text[at - 1] not in _WORD))], dtype=np.int64)  # its numbers
+    numbers = first_number[:, None] + np.arange(len(zeros))  # (n, numbers of the layout)
+    values, read = _column_numbers(codes, number_start[numbers], number_end[numbers])
+    widths = number_end[numbers] - number_start[numbers] - 1
+    shift = np.concatenate([np.zeros((len(start), 1), dtype=np.int64), np.cumsum(widths, axis=1)], axis=1)
+
+    def offsets(at):
+        """Offsets in the script (n, m) of the lines' layout offsets ``at`` (m,); -1 stays -1."""
+        moved = begin + start[:, None] + at + shift[:, np.searchsorted(zeros, at)]
+        return np.where(at >= 0, moved, -1)
+
+    position = values[:, np.searchsorted(zeros, layout.number_start[0])]
+    limit = np.radians(JOINT_LIMIT) if layout.is_joint[0] else LENGTH_LIMIT / 1000.0
+    good = read.all(axis=1) & (np.isfinite(position) & (np.abs(position) <= limit)).all(axis=1)
+    option = np.repeat(layout.option, len(start), axis=0)
+    literal = np.flatnonzero(~np.isnan(layout.option[0]))
+    option[:, literal] = values[:, np.searchsorted(zeros, layout.option_start[0, literal])]
+    good &= np.isfinite(option[:, literal]).all(axis=1)
+    n = len(start)
+    found = CamLines(
+        line=line, function=np.repeat(layout.function, n), is_joint=np.repeat(layout.is_joint, n), values=position,
+        number_start=offsets(layout.number_start[0]), number_end=offsets(layout.number_end[0]),
+        frame=np.repeat(layout.frame, n), option=option, option_name=np.repeat(layout.option_name, n, axis=0),
+        option_start=offsets(layout.option_start[0]), option_end=offsets(layout.option_end[0]),
+        end=offsets(layout.end)[:, 0], start=offsets(layout.start)[:, 0], stop=offsets(layout.stop)[:, 0])
+    return found.rows(good)
+
+
+def _column_numbers(codes, start, end):
+    """Values and whether each is a number (`read_numbers`) of fields ``start`` .. ``end`` (n, m), each column's
+    fields written as its first read once (a CAM post repeats its orientation and options line after line)."""
+    values, read = np.empty(start.shape), np.empty(start.shape, dtype=bool)
+    width = end - start
+    for j in range(start.shape[1]):
+        same = width[:, j] == width[0, j]
+        for k in range(int(width[0, j])):
+            same &= codes[start[:, j] + k] == codes[start[0, j] + k]
+        rows = np.flatnonzero(~same)
+        value, number = read_numbers(codes, np.append(start[0, j], start[rows, j]), np.append(end[0, j], end[rows, j]))
+        values[:, j], read[:, j] = value[0], number[0]
+        values[rows, j], read[rows, j] = value[1:], number[1:]
+    return values, read
+
+
+def _layout_fields(matches):
+    """The fields of B layouts `_CAM_LINE` matches (`_block`), as `CamLines` (offsets in each layout, numbers 0,
+    ``option`` 0 where a literal gives it), and whether lines of each are read so (B,): not where they give an
+    option twice (the line-by-line read's rules decide) or a joint list to ``pose_trans``."""
     b = len(matches)
     groups = np.array([m.groups("") for m in matches], dtype=object).reshape(b, _GROUPS)
-    start = np.fromiter((m.start() for m in matches), dtype=np.int64, count=b)
     stop = np.fromiter((m.end() for m in matches), dtype=np.int64, count=b)
     length = np.fromiter(map(len, groups.ravel().tolist()), dtype=np.int64, count=groups.size).reshape(b, _GROUPS)
-    group_end = start[:, None] + np.cumsum(length, axis=1)
+    group_end = np.cumsum(length, axis=1)
     group_start = group_end - length
     function = np.select([groups[:, 1] == name for name in FUNCTIONS], range(len(FUNCTIONS)), 0)
     is_joint = length[:, 6] == 0
     framed = length[:, 4] > 0
-    values = np.array(groups[:, _NUMBERS].ravel().tolist(), dtype=float).reshape(b, 6)
-    limit = np.where(is_joint, np.radians(JOINT_LIMIT), LENGTH_LIMIT / 1000.0)
-    good = (np.isfinite(values) & (np.abs(values) <= limit[:, None])).all(axis=1) & ~(framed & is_joint)
-
+    good = ~(framed & is_joint)
     given = length[:, _SLOT + 3] + length[:, _SLOT + 4] > 0  # (B, SLOTS)
     named = length[:, _SLOT + 1] > 0
     positional = np.cumsum(given & ~named, axis=1) - 1
@@ -157,7 +301,7 @@ def _columns(matches, line_starts):
                     POSITIONAL[function[:, None], np.clip(positional, 0, SLOTS - 1)])
     code[~given] = -1
     for c in range(len(OPTIONS)):
-        good &= (code == c).sum(axis=1) <= 1  # an option given twice: the line-by-line read's rules decide
+        good &= (code == c).sum(axis=1) <= 1
     rows = np.arange(b)
     option = np.full((b, 3), np.nan)
     option_name = np.full((b, 3), None, dtype=object)
@@ -166,18 +310,25 @@ def _columns(matches, line_starts):
         has = (code == c).any(axis=1)
         slot = _SLOT[np.argmax(code == c, axis=1)]
         literal = has & (length[rows, slot + 3] > 0)
-        number = np.array(groups[rows[literal], slot[literal] + 3].tolist(), dtype=float)
-        option[literal, j] = number
-        good[literal] &= np.isfinite(number)
+        option[literal, j] = 0.0
         by_name = has & ~literal
         option_name[by_name, j] = groups[rows[by_name], slot[by_name] + 4]
         value = np.where(literal, slot + 3, slot + 4)
         option_start[has, j] = group_start[rows, value][has]
         option_end[has, j] = group_end[rows, value][has]
     end = np.where(length[:, _LAST] > 0, group_end[:, _LAST], -1).max(axis=1)
-    columns = CamLines(
-        line=np.searchsorted(line_starts, start, side="right"), function=function, is_joint=is_joint, values=values,
+    fields = CamLines(
+        line=np.zeros(b, dtype=np.int64), function=function, is_joint=is_joint, values=np.zeros((b, 6)),
         number_start=group_start[:, _NUMBERS], number_end=group_end[:, _NUMBERS],
         frame=np.where(framed, groups[:, 4], None), option=option, option_name=option_name,
         option_start=option_start, option_end=option_end, end=end, start=group_start[:, 1], stop=stop)
-    return columns.rows(good)
+    return fields, good
+
+
+_NONE = CamLines(  # no line
+    line=np.zeros(0, dtype=np.int64), function=np.zeros(0, dtype=np.int64), is_joint=np.zeros(0, dtype=bool),
+    values=np.zeros((0, 6)), number_start=np.zeros((0, 6), dtype=np.int64),
+    number_end=np.zeros((0, 6), dtype=np.int64), frame=np.zeros(0, dtype=object), option=np.zeros((0, 3)),
+    option_name=np.zeros((0, 3), dtype=object), option_start=np.zeros((0, 3), dtype=np.int64),
+    option_end=np.zeros((0, 3), dtype=np.int64), end=np.zeros(0, dtype=np.int64), start=np.zeros(0, dtype=np.int64),
+    stop=np.zeros(0, dtype=np.int64))

@@ -137,9 +137,10 @@ class _Reader:
         self.others = np.setdiff1d(np.arange(1, total + 1), cam.line)  # the lines read one by one
         self.cam_poses = np.full((len(cam), 4, 4), np.nan)
         self.cam_poses[~cam.is_joint] = poses(cam.values[~cam.is_joint])
-        self.poses = _literal_poses(masked, _parts(lines, self.others))
-        self.params = {p.strip().split("=")[0].strip() for m in _DEF.finditer(masked)
-                       for p in m.group(1).split(",") if p.strip()}
+        self.parts = _parts(lines, self.others)  # the offsets of the runs of lines read one by one
+        self.poses = _literal_poses(masked, self.parts)
+        self.params = {p.strip().split("=")[0].strip() for start, end in self.parts
+                       for m in _DEF.finditer(masked, start, end) for p in m.group(1).split(",") if p.strip()}
         self.set_at_run_time, self.assigned = {}, {}  # name -> line of a non-literal assignment; of every one
         for line in self.others.tolist():  # a CAM-shaped motion line assigns nothing
             start, end = self.where(line)
@@ -528,9 +529,9 @@ def read(path):
     masked = mask(source.text, "#")
     if not _SIGNS.search(masked):
         raise ReadError(f"{path}: not a URScript program: no def, move or pose literal")
-    check_closed(source, masked, _BLOCK_OPENS, _BLOCK_CLOSES, dict.fromkeys(_BLOCKS, "END"))
     lines = Lines(source.text)
     reader = _Reader(source, masked, lines, cam_lines(masked, np.array(lines.starts)))
+    check_closed(source, masked, _BLOCK_OPENS, _BLOCK_CLOSES, dict.fromkeys(_BLOCKS, "END"), reader.parts)
     done = 0  # CAM-shaped lines read
     for line in reader.others.tolist():
         upto = int(np.searchsorted(reader.cam.line, line))
