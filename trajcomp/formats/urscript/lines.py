@@ -199,12 +199,13 @@ def _block(masked, starts, ends, first_line):
     layout_codes = codes.copy()
     layout_codes[number_start] = ord("0")
     layout_codes = layout_codes[kept]
-    layout_at = np.concatenate([[0], np.cumsum(kept, dtype=np.int64)])  # offset in the layouts of each offset
-    layout_length = layout_at[end] - layout_at[start]
+    hidden = np.concatenate([[0], np.cumsum(number_end - number_start - 1)])  # characters left out before each end
+    layout_start = start - hidden[np.searchsorted(number_end, start, side="right")]  # offsets in the layouts
+    layout_length = end - hidden[np.searchsorted(number_end, end, side="right")] - layout_start
     rows = np.flatnonzero(moving & (layout_length <= _WIDEST_LAYOUT))
     if not len(rows):
         return _NONE
-    layout_start, layout_length = layout_at[start[rows]], layout_length[rows]
+    layout_start, layout_length = layout_start[rows], layout_length[rows]
     widest = int(layout_length.max())
     matrix = np.zeros((len(rows), widest + 1), dtype=np.uint32)
     matrix[:, 0] = layout_length
@@ -226,6 +227,8 @@ def _block(masked, starts, ends, first_line):
         parts.append(_lines_of_layout(codes, fields.rows([row]), texts[k], start[lines],
                                       np.searchsorted(number_start, start[lines]), number_start, number_end,
                                       begin, first_line + lines) if layout_good[row] else _NONE)
+    if len(parts) == 1:
+        return parts[0]
     found = CamLines(**{f.name: np.concatenate([getattr(p, f.name) for p in parts])
                         for f in dataclasses.fields(CamLines)})
     return found.rows(np.argsort(found.line, kind="stable"))
@@ -261,7 +264,7 @@ def _lines_of_layout(codes, layout, text, start, first_number, number_start, num
         frame=np.repeat(layout.frame, n), option=option, option_name=np.repeat(layout.option_name, n, axis=0),
         option_start=offsets(layout.option_start[0]), option_end=offsets(layout.option_end[0]),
         end=offsets(layout.end)[:, 0], start=offsets(layout.start)[:, 0], stop=offsets(layout.stop)[:, 0])
-    return found.rows(good)
+    return found if good.all() else found.rows(good)
 
 
 def _column_numbers(codes, start, end):

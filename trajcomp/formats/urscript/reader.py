@@ -134,7 +134,9 @@ class _Reader:
         self.frame_uses, self.point_uses = {}, {}  # variable -> first line used as frame / as point
         self.direct = set()  # joint-list variables used as motion targets
         total = len(lines.starts) - (lines.starts[-1] == len(lines.text))  # as `Lines` yields them
-        self.others = np.setdiff1d(np.arange(1, total + 1), cam.line)  # the lines read one by one
+        one_by_one = np.ones(total + 1, dtype=bool)
+        one_by_one[0] = one_by_one[cam.line] = False
+        self.others = np.flatnonzero(one_by_one)  # the lines read one by one
         self.cam_poses = np.full((len(cam), 4, 4), np.nan)
         self.cam_poses[~cam.is_joint] = poses(cam.values[~cam.is_joint])
         self.parts = _parts(lines, self.others)  # the offsets of the runs of lines read one by one
