@@ -1,8 +1,10 @@
 """The format registry: lookup, lazy built-ins, entry-point plugins."""
 
+import re
 import sys
 from importlib.metadata import EntryPoint
 
+import numpy as np
 import pytest
 
 from trajcomp import formats
@@ -94,6 +96,29 @@ def test_mask_blanks_comments_and_string_contents_keeping_offsets():
     text = 'LIN P1 ; go "fast"\r\nMSG="a;b" ; c\nX="ab\ncd'
     assert mask(text, ";") == 'LIN P1 ' + " " * 11 + '\r\nMSG="   " ' + " " * 3 + '\nX="  \n  '
     assert mask("a // b\n// c", "//") == "a     \n    "
+
+
+def _masked_by_pattern(text, comment, quote):
+    """The reference: one pattern of a string (to its closing quote or the end) or a comment, left to right."""
+    def blanked(m):
+        if m.group(1) is None:
+            return " " * len(m.group(0))
+        return quote + re.sub(r"[^\r\n]", " ", m.group(1)) + m.group(0)[1 + len(m.group(1)):]
+
+    q, c = re.escape(quote), re.escape(comment)
+    return re.sub(f"{q}([^{q}]*)(?:{q}|\\Z)|{c}[^\r\n]*", blanked, text)
+
+
+@pytest.mark.parametrize("comment", [";", "!", "//"])
+def test_mask_of_random_texts_is_the_patterns(comment):
+    from trajcomp.formats.text import mask
+
+    rng = np.random.default_rng(11)
+    alphabet = ['"', "'", ";", "!", "/", "\n", "\r", "\r\n", "a", " ", "é", "Ω"]
+    for _ in range(400):
+        text = "".join(rng.choice(alphabet, size=int(rng.integers(0, 40))).tolist())
+        for quote in ('"', "'"):
+            assert mask(text, comment, quote) == _masked_by_pattern(text, comment, quote), (text, quote)
 
 
 @pytest.mark.parametrize("language", formats.BUILT_IN)

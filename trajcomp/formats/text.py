@@ -9,7 +9,6 @@ the numbers of edited targets, formatted like the file wrote them.
 
 import bisect
 import dataclasses
-import functools
 import math
 import os
 import re
@@ -64,25 +63,35 @@ def mask(text, comment, quote='"'):
 
     The result has the same length and line breaks, so offsets and line
     numbers found in it hold for ``text``. Scanned left to right: a comment
-    mark inside a string and a quote inside a comment are plain text.
+    mark inside a string and a quote inside a comment are plain text. The
+    marks are looked for with ``str.find`` (each mark's next one found once
+    for the stretch up to it), not a pattern tried at every character: a
+    long program with few comments is scanned at memory speed.
     """
-    return _masked_parts(comment, quote).sub(_blanked, text)
+    if quote not in text and comment not in text:  # a statement's line, mostly
+        return text
+    end = len(text)
+    found = {}  # mark -> its first offset at or after where the scan stands (end: none)
 
+    def next_at(mark, start):
+        at = found.get(mark, -1)
+        if at < start:
+            at = text.find(mark, start)
+            found[mark] = at = end if at < 0 else at
+        return at
 
-@functools.lru_cache(maxsize=None)
-def _masked_parts(comment, quote):
-    """The pattern of a string (group 1: its contents, to the closing quote or the end) or a comment."""
-    q, c = re.escape(quote), re.escape(comment)
-    return re.compile(f"{q}([^{q}]*)(?:{q}|\\Z)|{c}[^\r\n]*")
-
-
-def _blanked(match):
-    """A string with its contents blanked (quotes and line breaks kept), or a comment blanked."""
-    if match.group(1) is None:
-        return " " * len(match.group(0))
-    start, end = match.span(1)
-    return match.group(0)[: start - match.start()] + _NOT_LINE_BREAK.sub(" ", match.group(1)) + \
-        match.group(0)[end - match.start():]
+    pieces, position = [], 0
+    while (start := min(next_at(quote, position), next_at(comment, position))) < end:
+        pieces.append(text[position:start])
+        if next_at(quote, position) == start:  # a string: its contents to the closing quote (or the end) blanked
+            close = next_at(quote, start + 1)
+            pieces += (quote, _NOT_LINE_BREAK.sub(" ", text[start + 1:close]), text[close:close + 1])
+            position = close + 1
+        else:  # a comment, to its line's end
+            position = min(next_at("\r", start), next_at("\n", start))
+            pieces.append(" " * (position - start))
+    pieces.append(text[position:])
+    return "".join(pieces)
 
 
 _NOT_LINE_BREAK = re.compile(r"[^\r\n]")
