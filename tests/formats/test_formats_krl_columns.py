@@ -10,7 +10,8 @@ import pytest
 from trajcomp import formats
 from trajcomp.errors import ReadError
 from trajcomp.formats.krl import reader as krl_reader
-from trajcomp.formats.text import edit_sources
+from trajcomp.formats.number_fields import text_codes
+from trajcomp.formats.text import Lines, edit_sources, mask
 from trajcomp.programs.tables import ItemRows
 
 DAT = ("DEFDAT p\n" + "".join(f"DECL E6POS XP{k}={{X {500 + k},Y {k},Z 600,A 0,B 90,C 0,S 2,T 35}}\n"
@@ -48,6 +49,8 @@ def _one_by_one(path, monkeypatch):
     """The program read with no motion read at once."""
     with monkeypatch.context() as patch:
         patch.setattr(krl_reader, "_WRITTEN_MOTION", re.compile("(?!)"))
+        patch.setattr(krl_reader, "_motion_layout", lambda codes, starts, ends: (np.zeros(0, dtype=np.int64),
+                                                                                 np.zeros((0, 10), dtype=np.int64)))
         return formats.read(path)
 
 
@@ -105,3 +108,78 @@ def test_a_point_declared_again_after_its_motion_is_the_last_declaration_as_read
     at_once, one_by_one = formats.read(path), _one_by_one(path, monkeypatch)
     assert [repr(item) for item in at_once.items] == [repr(item) for item in one_by_one.items]
     assert at_once.motions[0].target == 6 and at_once.targets[6].pose[0, 3] == 1.0
+
+
+POINT_VARIANTS = [  # (a line of a data list, whether `_written_layout` finds its fields from their characters)
+    ("DECL E6POS XP1={X 1.5,Y -2,Z 3.25,A 0.0,B 90.0,C -0.5,S 2,T 35}", 1),
+    ("decl e6pos xp2={x .5,y -.5,z +3,a 1.,b 1e2,c -2.5E-1,s 6,t 0}", 1),
+    ("DECL GLOBAL POS XP3={X 1,Y 2,Z 3,A 4,B 5,C 6}", 1),
+    ("DECL FRAME XP4={X 1,Y 2,Z 3,A 4,B 5,C 6,E1 7.5}", 1),
+    ("DECL E6POS XP5={X 1,Y 2,Z 3,A 4,B 5,C 6,S 6,T 27,E1 0.0,E2 1,E3 2,E4 3,E5 4,E6 5}", 1),
+    ("DECL E6POS GLOBAL={X 1,Y 2,Z 3,A 4,B 5,C 6,S 2,T 35}", 1),  # a point named GLOBAL: shared, as the pattern says
+    ("DECL E6POS XP6={X 1.23456789012345678,Y 2,Z 3,A 1e400,B 5,C 6}", 1),  # read by float; an infinite A: left out
+    ("DECL E6POS XP7={X 1e9,Y 2,Z 3,A 4,B 5,C 6,S 256,T 35}", 1),  # out of range, S beyond its bits: left out
+    ("  DECL E6POS XP8={X 1,Y 2,Z 3,A 4,B 5,C 6}", 0),  # indented: the pattern
+    ("DECL\tE6POS XP9 = {X 1,Y 2,Z 3,A 4,B 5,C 6}  ", 0),
+    ("DECL E6POS XPé={X 1,Y 2,Z 3,A 4,B 5,C 6}", 0),  # a name beyond ASCII
+    ("DECL E6POS XP10={X 1..2,Y 2,Z 3,A 4,B 5,C 6}", 1),  # no number (`_field_numbers`): neither reads it
+    ("DECL E6POS XP11={X 1,Y 2,Z 3,A 4,B 5,C 6,S +2,T 35}", 1),
+    ("DECL E6POS XP12={X 1,Y 2,Z 3,A 4,B 5,C 6,E2 1}", 0),
+    ("DECL E6POS XP13={X 1,Y 2,Z 3,A 4,B 5,C 6}{", 0),
+    ("DECL E6POS XP14={X 1,Y 2,Z 3,A 4,B 5,C 6} ; a comment after it", 0),  # blanks after the brace: the pattern
+    ("DECL E6POS XP15={X 1,Y 2,Z ,A 4,B 5,C 6}", 0),
+    ("DECL E6AXIS XA1={A1 0,A2 -90,A3 90,A4 0,A5 0,A6 0}", 0),
+    ("DECL FDAT F1={TOOL_NO 1,BASE_NO 0}", 0),
+]
+MOTION_VARIANTS = [  # (a .src line, whether `_motion_layout` reads it from its characters)
+    ("  LIN XP1 C_DIS", True), ("PTP XP2", True), ("\tsptp xp3 c_ptp", True), ("  SLIN _P4 C_VEL", True),
+    ("  LIN WITHIN", True), ("  LIN C_DISX", True), ("  LIN XP5  C_DIS", False), ("  LIN XP6 C_DIS  ", False),
+    ("  LIN WITH", False), ("  LIN C_DIS", False), ("  LIN XPé", False), ("  LIN XP7 WITH $VEL.CP=0.1", False),
+    ("  LIN_REL XP8", False), ("  CIRC XP1, XP2", False), ("  LIN 1XP", False), ("  LIN " + "X" * 70, False),
+]
+
+
+def _at_once_and_by_pattern(function, layout, nothing, *args):
+    """``function(*args)`` as written, and with ``layout`` reading nothing (every line through the pattern)."""
+    at_once = function(*args)
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setattr(krl_reader, layout, lambda codes, starts, ends: nothing)
+        return at_once, function(*args)
+
+
+@pytest.mark.parametrize("ending", ["\n", "\r\n"])
+def test_points_read_from_their_characters_are_those_the_pattern_reads(ending):
+    text = "; Größe, Maße: a comment beyond ASCII before the points\nDEFDAT p\n" + "".join(
+        line + ending for line, _ in POINT_VARIANTS) + "ENDDAT"
+    masked, lines = mask(text, ";"), Lines(text)
+    nothing = (np.zeros(0, dtype=np.int64), np.zeros((0, 16), dtype=np.int64), np.zeros((0, 16), dtype=np.int64),
+               np.zeros(0, dtype=bool))
+    codes = text_codes(masked)
+    starts, ends = krl_reader._line_bounds(codes)
+    assert len(krl_reader._written_layout(codes, starts, ends)[0]) == sum(n for _, n in POINT_VARIANTS)
+    at_once, by_pattern = _at_once_and_by_pattern(krl_reader._written_points, "_written_layout", nothing, 0, masked,
+                                                  lines)
+    (line, table, shared), (line_p, table_p, shared_p) = at_once, by_pattern
+    assert line.tolist() == line_p.tolist() and shared.tolist() == shared_p.tolist()
+    assert table.pose.tobytes() == table_p.pose.tobytes() and list(table.name) == list(table_p.name)
+    assert table.config == table_p.config
+    assert [None if e is None else e.tolist() for e in table.external] == [
+        None if e is None else e.tolist() for e in table_p.external]
+    assert table.spans.start.tolist() == table_p.spans.start.tolist()
+    assert table.spans.end.tolist() == table_p.spans.end.tolist()
+    assert len(line) == 10 and shared.sum() == 2  # XP6, XP7 left out (their line's read names them)
+
+
+@pytest.mark.parametrize("ending", ["\n", "\r\n"])
+def test_motions_read_from_their_characters_are_those_the_pattern_reads(ending):
+    text = "DEF p( )\n" + "".join(line + ending for line, _ in MOTION_VARIANTS) + "END"
+    masked = mask(text, ";")
+    codes = text_codes(masked)
+    starts, ends = krl_reader._line_bounds(codes)
+    at = krl_reader._motion_layout(codes, starts, ends)[0]
+    assert (at - 1).tolist() == [k for k, (_, read) in enumerate(MOTION_VARIANTS) if read]
+    nothing = (np.zeros(0, dtype=np.int64), np.zeros((0, 10), dtype=np.int64))
+    at_once, by_pattern = _at_once_and_by_pattern(krl_reader._written_motions, "_motion_layout", nothing, masked,
+                                                  Lines(text))
+    assert {k: v.tolist() for k, v in at_once.items()} == {k: v.tolist() for k, v in by_pattern.items()}
+    assert len(at_once["line"]) == 9

@@ -2,12 +2,14 @@
 
 import array
 import dataclasses
+import itertools
 import re
 from pathlib import Path
 
 import numpy as np
 
 from trajcomp.errors import ReadError
+from trajcomp.formats.number_fields import read_numbers, text_codes
 from trajcomp.formats.text import (
     ANGLE_LIMIT,
     JOINT_LIMIT,
@@ -180,10 +182,12 @@ def _frame(members, source_name, line, text):
 def _written_points(index, masked, lines):
     """The Cartesian points of a data list declared as KUKA writes them (`_WRITTEN_POINT`), read at once.
 
-    A declaration whose numbers a line-by-line read would refuse (out of
-    range, S or T beyond their bits) is left out: that read then names it.
-    The declarations are matched `AT_ONCE` at a time (a million points
-    never become a million match objects together).
+    The lines written exactly as `_written_layout` knows them are found
+    from their characters, `AT_ONCE` lines at a time; the other lines are
+    matched by `_WRITTEN_POINT` one by one. The numbers are read from the
+    characters (`trajcomp.formats.number_fields`). A declaration whose
+    numbers a line-by-line read would refuse (out of range, S or T beyond
+    their bits) is left out: that read then names it.
 
     Parameters
     ----------
@@ -204,12 +208,34 @@ def _written_points(index, masked, lines):
         The points declared GLOBAL.
     """
     offset = np.int32 if len(masked) < 2 ** 31 else np.int64  # offsets into the text: half the bytes where they fit
+    codes = text_codes(masked)
+    starts, ends = _line_bounds(codes)
     configs = {}  # one tuple per distinct (S, T): a path's points mostly share theirs
-    blocks = [_written_block(chunk, offset, configs) for chunk in _chunks(_WRITTEN_POINT.finditer(masked))]
-    if not blocks:
-        return np.zeros(0, dtype=int), None, np.zeros(0, dtype=bool)
+    blocks, taken = [], np.zeros(len(starts), dtype=bool)
+    for lo in range(0, len(starts), AT_ONCE):
+        at, start, end, shared = _written_layout(codes, starts[lo:lo + AT_ONCE], ends[lo:lo + AT_ONCE])
+        numbers, read = _field_numbers(codes, start, end)
+        taken[lo + at[read]] = True
+        blocks.append(_written_block(start[read], end[read], numbers[read], shared[read], offset, configs))
+    others, matched = np.flatnonzero(~taken), False
+    for lo in range(0, len(others), AT_ONCE):
+        found = [m for k in others[lo:lo + AT_ONCE].tolist()
+                 if (m := _WRITTEN_POINT.match(masked, int(starts[k]), int(ends[k])))]
+        if not found:
+            continue
+        matched = True
+        regs = np.array([m.regs for m in found], dtype=np.int64)  # absent groups: (-1, -1)
+        shared = np.array([_GLOBAL_WORD.search(masked, m.start(), m.end()) is not None for m in found], dtype=bool)
+        numbers = _field_numbers(codes, regs[:, :, 0], regs[:, :, 1])[0]
+        blocks.append(_written_block(regs[:, :, 0], regs[:, :, 1], numbers, shared, offset, configs))
     pose, start, end, config, external, shared = (
         np.concatenate(parts) if isinstance(parts[0], np.ndarray) else sum(parts, ()) for parts in zip(*blocks))
+    if not len(start):
+        return np.zeros(0, dtype=int), None, np.zeros(0, dtype=bool)
+    if matched:  # the lines matched one by one among the others: in line order
+        order = np.argsort(start[:, 0], kind="stable")
+        pose, start, end, shared = pose[order], start[order], end[order], shared[order]
+        config, external = (tuple(column[k] for k in order.tolist()) for column in (config, external))
     line = np.searchsorted(lines.starts, start[:, 0], side="right")
     n = len(line)
     none = repeated(None, n)
@@ -219,27 +245,175 @@ def _written_points(index, masked, lines):
     return line, table, shared
 
 
-AT_ONCE = 65536  # declarations or motions matched and parsed together: bounds the match objects held
+AT_ONCE = 65536  # lines or motions whose fields are found and read together: bounds the arrays held
+# the declaration starts read at once (upper case): one space after each word, GLOBAL or not
+_HEADS = tuple(f"DECL {scope}{typ} " for scope in ("", "GLOBAL ") for typ in ("E6POS", "POS", "FRAME"))
+_LONGEST_NAME = 64  # characters of a point name read at once (a longer one: `_WRITTEN_POINT`)
+_LONGEST_WHOLE = 24  # digits of an S or T read at once
 
 
-def _chunks(matches):
-    """Lists of at most `AT_ONCE` matches of an iterator of them."""
-    chunk = []
-    for m in matches:
-        chunk.append(m)
-        if len(chunk) == AT_ONCE:
-            yield chunk
-            chunk = []
-    if chunk:
-        yield chunk
+def _member_layouts():
+    """``{count: [members]}``: the members a point declaration writes, in order, by their count: X..C, S and T if
+    any, then E1..Ek, as `_WRITTEN_POINT` states them; each member's field index (`_written_layout`)."""
+    layouts = {}
+    for status in ((), ("S", "T")):
+        for count in range(7):
+            members = [(p.upper(), 2 + k) for k, p in enumerate(POSE)] + [(s, 8 + k) for k, s in enumerate(status)]
+            members += [(f"E{k + 1}", 10 + k) for k in range(count)]
+            layouts.setdefault(len(members), []).append(members)
+    return layouts
 
 
-def _written_block(found, offset, configs):
-    """Some `_WRITTEN_POINT` matches as columns, less those a line-by-line read would refuse (`_written_points`).
+_LAYOUTS = _member_layouts()
+
+
+def _character_table(characters):
+    """Whether each code (256,) is one of ``characters`` (ASCII; `_spelt` makes a code beyond ASCII 127)."""
+    table = np.zeros(256, dtype=bool)
+    table[np.frombuffer(characters.encode("ascii"), dtype=np.uint8)] = True
+    return table
+
+
+_WORD_CHARACTER = _character_table("ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789_")
+_DIGIT = _character_table("0123456789")
+_UPPER = np.arange(256, dtype=np.uint8)  # an ASCII text's codes in upper case (its bytes: uint8)
+_UPPER[ord("a"):ord("z") + 1] -= 32
+_UPPER[128:] = 127
+
+
+def _spelt(codes, at, width):
+    """The upper-case ASCII codes (K, width) of the ``width`` characters from offsets ``at`` (K,) (127 beyond ASCII;
+    the text's last character repeated beyond its end)."""
+    spelt = codes.take(at[:, None] + np.arange(width), mode="clip")
+    return _UPPER[spelt if codes.dtype == np.uint8 else np.minimum(spelt, 127)]
+
+
+def _spells(codes, at, word):
+    """Whether the text spells ``word`` (upper case ASCII) from each offset ``at`` (K,), in any case."""
+    return (_spelt(codes, at, len(word)) == np.frombuffer(word.encode("ascii"), dtype=np.uint8)).all(axis=1)
+
+
+def _made_of(codes, start, end, table, longest):
+    """Whether each field ``[start, end)`` (K,) is 1 to ``longest`` characters all in ``table`` (`_character_table`)."""
+    width = end - start
+    window = int(min(width.max(initial=0), longest))
+    inside = np.arange(window) < width[:, None]
+    return (width >= 1) & (width <= longest) & (table[_spelt(codes, start, window)] | ~inside).all(axis=1)
+
+
+def _written_layout(codes, starts, ends):
+    """The point declarations among lines written exactly ``DECL E6POS XP1={X 1.5,Y 2,Z 3,A 0,B 90,C 0,S 2,T 35}``.
+
+    One space after each word and member name and none elsewhere (no
+    blank at the line's start), E6POS, POS or FRAME, GLOBAL or not, any
+    case, S and T and E1..Ek as `_WRITTEN_POINT` has them, a line ending
+    ``\\n`` or ``\\r\\n``: a subset of what `_WRITTEN_POINT` matches, found
+    from the characters' codes. The fields' contents are not checked here
+    (`_field_numbers`).
 
     Parameters
     ----------
-    found : list of re.Match
+    codes : ndarray, shape (L,)
+        The masked text's character codes (`text_codes`).
+    starts, ends : ndarray of int, shape (B,)
+        Offsets of the lines' starts and of their ``\\n`` (or the text's end).
+
+    Returns
+    -------
+    at : ndarray of int, shape (K,)
+        The lines declaring a point so (indices into ``starts``).
+    start, end : ndarray of int, shape (K, 16)
+        Offsets of `_WRITTEN_POINT`'s groups: the declaration (its line,
+        ``\\r`` included), the name, X..C, S, T, E1..E6 (-1 where not written).
+    shared : ndarray of bool, shape (K,)
+        Declared GLOBAL (`_GLOBAL_WORD` in the declaration: the word or a point named so).
+    """
+    none = np.zeros(0, dtype=np.int64)
+    if not len(starts) or not len(codes):
+        return none, none.reshape(0, 16), none.reshape(0, 16), np.zeros(0, dtype=bool)
+    carriage = (ends > starts) & (codes[np.maximum(ends - 1, 0)] == ord("\r"))
+    close = ends - carriage - 1  # the "}" closing the declaration
+    candidate = np.flatnonzero((close > starts) & (codes[np.maximum(close, 0)] == ord("}")))
+    start_at, close = starts[candidate], close[candidate]
+    head_end, shared = np.full(len(candidate), -1), np.zeros(len(candidate), dtype=bool)
+    for head in _HEADS:
+        spelt = _spells(codes, start_at, head)
+        head_end[spelt] = start_at[spelt] + len(head)
+        shared[spelt] = "GLOBAL" in head
+    base, top = int(starts[0]), int(ends[-1])
+    block = codes[base:top]
+    opens = np.flatnonzero(block == ord("{")) + base
+    commas = np.flatnonzero(block == ord(",")) + base
+    first = np.searchsorted(opens, start_at)
+    brace = opens[np.minimum(first, len(opens) - 1)] if len(opens) else np.full(len(candidate), -1)
+    second = opens[np.minimum(first + 1, len(opens) - 1)] if len(opens) else brace
+    good = (head_end >= 0) & (first < len(opens)) & (brace < close) & ((first + 1 >= len(opens)) | (second > close))
+    name_end = np.where(good, brace - 1, head_end)
+    good &= (codes[np.maximum(name_end, 0)] == ord("=")) & _made_of(codes, head_end, name_end, _WORD_CHARACTER,
+                                                                     _LONGEST_NAME)
+    shared |= (name_end - head_end == 6) & _spells(codes, head_end, "GLOBAL")
+    start, end = np.full((len(candidate), 16), -1), np.full((len(candidate), 16), -1)
+    start[:, 0], end[:, 0] = start_at, ends[candidate]
+    start[:, 1], end[:, 1] = head_end, name_end
+    count = np.searchsorted(commas, close) - np.searchsorted(commas, brace) + 1  # members
+    written = np.zeros(len(candidate), dtype=bool)
+    for members, layouts in _LAYOUTS.items():
+        rows = np.flatnonzero(good & (count == members))
+        if not len(rows):
+            continue
+        separators = np.concatenate([brace[rows, None], commas[np.searchsorted(commas, brace[rows])[:, None]
+                                                               + np.arange(members - 1)]], axis=1)
+        member_end = np.concatenate([separators[:, 1:], close[rows, None]], axis=1)
+        for layout in layouts:
+            spelt = np.ones(len(rows), dtype=bool)
+            field_start = np.empty((len(rows), members), dtype=np.int64)
+            for k, (member, _) in enumerate(layout):
+                spelt &= _spells(codes, separators[:, k] + 1, member + " ")
+                field_start[:, k] = separators[:, k] + 2 + len(member)
+            spelt &= (member_end > field_start).all(axis=1)
+            fields = [field for _, field in layout]
+            start[rows[spelt][:, None], fields] = field_start[spelt]
+            end[rows[spelt][:, None], fields] = member_end[spelt]
+            written[rows[spelt]] = True
+    return candidate[written], start[written], end[written], shared[written]
+
+
+def _field_numbers(codes, start, end):
+    """The numbers of point declarations' fields X..C, S, T, E1..E6, read at once.
+
+    Parameters
+    ----------
+    codes : ndarray, shape (L,)
+    start, end : ndarray of int, shape (K, 16)
+        The fields' offsets (`_written_layout`).
+
+    Returns
+    -------
+    numbers : ndarray, shape (K, 14)
+        X..C, S, T, E1..E6; NaN where not written.
+    read : ndarray of bool, shape (K,)
+        Whether each written field is a number as `_WRITTEN_POINT` states it (S and T digits only).
+    """
+    given = start[:, 2:] >= 0
+    numbers = np.full(given.shape, np.nan)
+    read = np.ones(given.shape, dtype=bool)
+    numbers[given], read[given] = read_numbers(codes, start[:, 2:][given], end[:, 2:][given])
+    status = given[:, 6:8]
+    read[:, 6:8][status] &= _made_of(codes, start[:, 8:10][status], end[:, 8:10][status], _DIGIT, _LONGEST_WHOLE)
+    return numbers, read.all(axis=1)
+
+
+def _written_block(start, end, numbers, shared, offset, configs):
+    """Some point declarations as columns, less those a line-by-line read would refuse (`_written_points`).
+
+    Parameters
+    ----------
+    start, end : ndarray of int, shape (K, 16)
+        Offsets of the declarations' fields (`_written_layout`).
+    numbers : ndarray, shape (K, 14)
+        Their numbers (`_field_numbers`).
+    shared : ndarray of bool, shape (K,)
+        Declared GLOBAL.
     offset : type
         The integer type of offsets.
     configs : dict
@@ -255,10 +429,7 @@ def _written_block(found, offset, configs):
     shared : ndarray of bool, shape (k,)
         Declared GLOBAL.
     """
-    texts = np.array([m.groups() for m in found], dtype=object)[:, 1:]  # x..c, s, t, e1..e6; None where absent
-    given = texts != None  # noqa: E711 (elementwise)
-    numbers = np.full(texts.shape, np.nan)
-    numbers[given] = np.array(texts[given].tolist(), dtype=float)
+    given = start[:, 2:] >= 0  # x..c, s, t, e1..e6
     pose, status, external = numbers[:, :6], numbers[:, 6:8], numbers[:, 8:]
     limits = np.array([LIMITS[p] for p in POSE])
     good = np.isfinite(pose).all(axis=1) & (np.abs(pose) <= limits).all(axis=1)
@@ -267,19 +438,13 @@ def _written_block(found, offset, configs):
     keep = np.flatnonzero(good)
     vector = pose[keep]
     vector[:, 3:] = np.radians(vector[:, 3:])
-    regs = np.array([found[k].regs[:10] for k in keep.tolist()], dtype=np.int64).reshape(-1, 10, 2)
-    written = np.ones((len(keep), 10), dtype=bool)
-    written[:, 2:] = given[keep, :8]
-    start = np.where(written, regs[:, :, 0], -1).astype(offset)
-    end = np.where(written, regs[:, :, 1], -1).astype(offset)
     status_rows = np.where(given[keep, 6:8], status[keep], 0).astype(int).tolist()
     config = tuple(configs.setdefault(tuple(st), tuple(st)) if has else ()
                    for st, has in zip(status_rows, given[keep, 6].tolist()))
     counts = given[keep, 8:].sum(axis=1).tolist()
     external = tuple(external[k, :count].copy() if count else None for k, count in zip(keep.tolist(), counts))
-    shared = np.array([_GLOBAL_WORD.search(found[k].string, found[k].start(), found[k].end()) is not None
-                       for k in keep.tolist()], dtype=bool)
-    return pose_to_matrix(vector), start, end, config, external, shared
+    return (pose_to_matrix(vector), start[keep, :10].astype(offset), end[keep, :10].astype(offset), config, external,
+            shared[keep])
 
 
 def _sibling_dat(path):
@@ -627,10 +792,10 @@ def read(path):
     """
     path = Path(path)
     reader = _Reader()
-    src = read_source(path)
-    if not _DEF.search(mask(src.text, ";")):
+    src_index, src_lines, src_masked = reader.add_source(read_source(path))
+    if not _DEF.search(src_masked):
         raise ReadError(f"{path}: not a KRL program: no DEF line")
-    src_index, src_lines, src_masked = reader.add_source(src)
+    src = reader.sources[src_index]
     check_closed(src, src_masked, _BLOCK_OPENS, _BLOCK_CLOSES, {"DEF": "END", "DEFFCT": "ENDFCT"})
     written = _written_motions(src_masked, src_lines)
     others = _other_lines(src_lines, written["line"])
@@ -650,13 +815,12 @@ def read(path):
             """The table's points declared before line ``before``, in order."""
             nonlocal rows
             stop = int(np.searchsorted(point_lines, before))
-            for row, name, global_ in zip(range(rows, stop), names[rows:stop], shared[rows:stop].tolist()):
-                name = name.upper()
-                reader.redeclared |= name in reader.points
-                reader.points[name] = len(reader.targets)
-                reader.targets.append(row)  # a row of the table
-                if global_:  # other programs see it, and may assign it
-                    reader.shared.add(name)
+            declared = [name.upper() for name in names[rows:stop]]
+            known = len(reader.points)
+            reader.points.update(zip(declared, range(len(reader.targets), len(reader.targets) + len(declared))))
+            reader.redeclared |= len(reader.points) < known + len(declared)  # a name declared before
+            reader.targets.extend(range(rows, stop))  # rows of the table
+            reader.shared.update(itertools.compress(declared, shared[rows:stop].tolist()))  # others may assign them
             rows = stop
 
         for line_no, start, end in _other_lines(dat_lines, point_lines):
@@ -683,8 +847,11 @@ def read(path):
 
 
 def _written_motions(masked, lines):
-    """The motions of a .src written as `_WRITTEN_MOTION` (``LIN XP1 C_DIS``), as columns, matched `AT_ONCE` at a
-    time.
+    """The motions of a .src written as `_WRITTEN_MOTION` (``LIN XP1 C_DIS``), as columns.
+
+    The lines written exactly as `_motion_layout` knows them are found from
+    their characters, `AT_ONCE` lines at a time; the other lines are matched
+    by `_WRITTEN_MOTION` one by one.
 
     Returns
     -------
@@ -694,22 +861,111 @@ def _written_motions(masked, lines):
         ``name_start``, ``name_end``; ``joint``: PTP / SPTP; ``approximated``:
         an approximation (C_DIS ...) is written.
     """
-    blocks = []
-    for found in _chunks(_WRITTEN_MOTION.finditer(masked)):
+    codes = text_codes(masked)
+    starts, ends = _line_bounds(codes)
+    blocks, taken = [], np.zeros(len(starts), dtype=bool)
+    for lo in range(0, len(starts), AT_ONCE):
+        at, groups = _motion_layout(codes, starts[lo:lo + AT_ONCE], ends[lo:lo + AT_ONCE])
+        taken[lo + at] = True
+        blocks.append(groups)
+    others = np.flatnonzero(~taken)
+    for lo in range(0, len(others), AT_ONCE):
+        found = [m for k in others[lo:lo + AT_ONCE].tolist()
+                 if (m := _WRITTEN_MOTION.match(masked, int(starts[k]), int(ends[k])))]
         blocks.append(np.array([m.regs for m in found], dtype=np.int64).reshape(-1, 10))  # (start, end) of 0-4
-    at = np.concatenate(blocks) if blocks else np.zeros((0, 10), dtype=np.int64)
+    at = np.concatenate(blocks)
+    if len(others):  # the lines matched one by one among the others: in line order
+        at = at[np.argsort(at[:, 0], kind="stable")]
     columns = dict(zip(("start", "end", "keyword_start", "keyword_end"), at[:, :4].T))
     columns |= {"name_start": at[:, 6], "name_end": at[:, 7], "joint": at[:, 4] >= 0, "approximated": at[:, 8] >= 0,
                 "line": np.searchsorted(lines.starts, at[:, 0], side="right")}
     return columns
 
 
+_KEYWORDS = ("LIN", "PTP", "SLIN", "SPTP")  # `_WRITTEN_MOTION`'s motions
+_APPROXIMATIONS = ("C_PTP", "C_DIS", "C_VEL", "C_ORI", "C_SPL")
+_LONGEST_MOTION = 64  # characters of a motion line read at once (a longer one: `_WRITTEN_MOTION`)
+_BLANK = _character_table(" \t")
+_NAME_START = _character_table("ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz_")
+
+
+def _line_bounds(codes):
+    """Offsets (L+1,) of the lines' starts (the text's start and each ``\\n``'s next) and of their ``\\n`` (the
+    text's end for the last): where a `re.M` pattern's ``^`` and ``$`` match."""
+    newline = np.flatnonzero(codes == ord("\n"))
+    return np.concatenate([[0], newline + 1]), np.append(newline, len(codes))
+
+
+def _motion_layout(codes, starts, ends):
+    """The motion lines written exactly ``LIN XP1`` or ``PTP XP1 C_PTP``, found from the characters' codes.
+
+    Blanks (spaces, tabs) before the keyword, one space between the words
+    and none after, any case, a line ending ``\\n`` or ``\\r\\n``: a subset
+    of what `_WRITTEN_MOTION` matches.
+
+    Parameters
+    ----------
+    codes : ndarray, shape (L,)
+        The masked text's character codes (`text_codes`).
+    starts, ends : ndarray of int, shape (B,)
+        Offsets of the lines' starts and of their ``\\n`` (or the text's end).
+
+    Returns
+    -------
+    at : ndarray of int, shape (K,)
+        The lines written so (indices into ``starts``).
+    groups : ndarray of int, shape (K, 10)
+        `_WRITTEN_MOTION`'s groups 0-4 as ``Match.regs`` gives them (start, end; -1 where not written): the line
+        (``\\r`` included), the keyword, the keyword if PTP or SPTP, the point's name, the approximation.
+    """
+    carriage = (ends > starts) & (codes[np.maximum(ends - 1, 0)] == ord("\r")) if len(codes) else ends > ends
+    length = ends - carriage - starts
+    candidate = np.flatnonzero((length >= 5) & (length <= _LONGEST_MOTION))
+    width = int(length[candidate].max(initial=0)) + 1  # a character past the longest line: the name's end
+    column = np.arange(width)
+    spelt = _spelt(codes, starts[candidate], width)
+    spelt[column >= length[candidate, None]] = 0  # past the line: no character
+    keyword_start = np.argmin(_BLANK[spelt], axis=1)  # the first character not blank
+    keyword_end = np.full(len(candidate), -1)
+    for keyword in _KEYWORDS:
+        spells = (np.take_along_axis(spelt, np.minimum(keyword_start[:, None] + np.arange(len(keyword) + 1),
+                                                       width - 1), axis=1)
+                  == np.frombuffer(f"{keyword} ".encode("ascii"), dtype=np.uint8)).all(axis=1)
+        keyword_end[spells] = keyword_start[spells] + len(keyword)
+    name_start = np.minimum(keyword_end + 1, width - 1)
+    name_end = np.where(~_WORD_CHARACTER[spelt] & (column > name_start[:, None]), column, width).min(axis=1)
+    good = (keyword_end >= 0) & _NAME_START[np.take_along_axis(spelt, name_start[:, None], axis=1)[:, 0]]
+    name_length = name_end - name_start
+    for word in ("WITH",) + _APPROXIMATIONS:  # not a name (`_WRITTEN_MOTION`'s look-ahead)
+        good &= (name_length != len(word)) | ~_spells(codes, starts[candidate] + name_start, word)
+    approximation_start = name_end + 1
+    approximated = np.zeros(len(candidate), dtype=bool)
+    for word in _APPROXIMATIONS:
+        approximated |= _spells(codes, starts[candidate] + name_end, " " + word)
+    line_end = length[candidate]
+    good &= (name_end == line_end) | (approximated & (approximation_start + 5 == line_end))
+    approximated &= name_end < line_end
+    at = candidate[good]
+    offset = starts[at, None]
+    good_keyword_start, good_keyword_end = keyword_start[good] + starts[at], keyword_end[good] + starts[at]
+    joint = np.take_along_axis(spelt[good], keyword_end[good, None] - 1, axis=1)[:, 0] == ord("P")  # PTP or SPTP
+    groups = np.stack([starts[at], ends[at], good_keyword_start, good_keyword_end,
+                       np.where(joint, good_keyword_start, -1), np.where(joint, good_keyword_end, -1),
+                       name_start[good] + offset[:, 0], name_end[good] + offset[:, 0],
+                       np.where(approximated[good], approximation_start[good] + offset[:, 0], -1),
+                       np.where(approximated[good], approximation_start[good] + 5 + offset[:, 0], -1)], axis=1)
+    return at, groups.reshape(-1, 10)
+
+
 def _other_lines(lines, taken):
     """``(number, start, end)`` of the lines of ``lines`` (`Lines`) not in ``taken`` (ascending line numbers), as
     `Lines` iterates them."""
     starts, text = lines.starts, lines.text
+    other = np.ones(len(starts) + 1, dtype=bool)
+    other[0] = False
+    other[taken] = False
     out = []
-    for number in np.setdiff1d(np.arange(1, len(starts) + 1), taken).tolist():
+    for number in np.flatnonzero(other).tolist():
         start = starts[number - 1]
         stop = starts[number] if number < len(starts) else len(text)
         line = text[start:stop].rstrip("\r\n")
@@ -754,15 +1010,16 @@ class _Walk:
         self.states.append((reader.tool, reader.base, reader.speed_ptp, reader.speed_cp, reader.zone,
                             reader.speed_spans[JOINT], reader.speed_spans[LINEAR], reader.speed_why[JOINT],
                             reader.speed_why[LINEAR]))
-        for row, name in zip(rows, names):
-            if one_by_one or name not in reader.points:
-                reader.statement(self.index, self.masked, int(written["line"][row]), int(written["start"][row]),
-                                 int(written["start"][row]) + len(text[written["start"][row]:written["end"][row]]
-                                                                  .rstrip("\r\n")))
-            else:
-                self.rows.append(row)
-                self.point.append(reader.points[name])
-                self.snapshot.append(state)
+        point = np.array([-1] * len(names) if one_by_one else [reader.points.get(name, -1) for name in names],
+                         dtype=np.int64)
+        known = point >= 0
+        self.rows.frombytes(np.arange(rows.start, rows.stop, dtype=np.int64)[known].tobytes())
+        self.point.frombytes(point[known].tobytes())
+        self.snapshot.frombytes(np.full(np.count_nonzero(known), state, dtype=np.int64).tobytes())
+        for row in (rows.start + np.flatnonzero(~known)).tolist():  # the motion lines read one by one say why
+            reader.statement(self.index, self.masked, int(written["line"][row]), int(written["start"][row]),
+                             int(written["start"][row]) + len(text[written["start"][row]:written["end"][row]]
+                                                              .rstrip("\r\n")))
 
     def table(self, resolved):
         """The `MotionTable` of the rows kept as columns, their targets ``resolved`` (`_resolved_rows`)."""
