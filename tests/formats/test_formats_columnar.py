@@ -1,6 +1,7 @@
 """The robot languages' declarations read at once (KRL, RAPID, FANUC LS, URScript) against the line-by-line read, and
 the numbers of edited targets formatted together against `format_number`."""
 
+import dataclasses
 import math
 import re
 from pathlib import Path
@@ -15,8 +16,12 @@ from trajcomp.formats.krl import reader as krl_reader
 from trajcomp.formats.krl import writer as krl_writer
 from trajcomp.formats.rapid import reader as rapid_reader
 from trajcomp.formats.urscript import reader as urscript_reader
-from trajcomp.formats.text import Edits, apply_edits, edit_sources, format_number, target_edits, written_numbers
-from trajcomp.programs.tables import TargetRows
+from trajcomp.formats import text as text_module
+from trajcomp.formats.text import (
+    Edits, apply_edits, edit_sources, format_number, patched, target_edits, written_numbers,
+)
+from trajcomp.programs.items import SpanColumns
+from trajcomp.programs.tables import TargetRows, TextSlices
 from trajcomp.arm.transforms import abc_to_matrix
 
 DATA = Path(__file__).parents[1] / "data"
@@ -195,3 +200,65 @@ def test_a_table_target_not_finite_is_refused_by_name(tmp_path):
     with pytest.raises(WriteError, match=r"XP2 \(line 3\): x is not a finite number"):
         target_edits(program.with_targets([1], poses=T), krl_writer._encode, krl_writer.MIN_PLACES,
                      krl_writer._encode_columns)
+
+
+def _helix_krl(tmp_path, n, encoding="utf-8"):
+    """A KRL program of n motions to points declared one a line, as a CAM post-processor writes it."""
+    angle = np.linspace(0.0, 2.0 * np.pi, n)
+    points = "".join(f"DECL E6POS XP{k + 1}={{X {500 + 80 * np.cos(a):.3f},Y {80 * np.sin(a):.3f},Z {600 + k:.3f},"
+                     f"A 0.0,B 90.0,C 0.0,S 2,T 35}}\n" for k, a in enumerate(angle))
+    (tmp_path / "p.src").write_bytes(("DEF p( )\n" + "".join(f"  LIN XP{k + 1} C_DIS\n" for k in range(n))
+                                      + "END\n").encode(encoding))
+    mark = "\ufeff" if encoding == "utf-8" else ""  # a BOM: written once, first
+    (tmp_path / "p.dat").write_bytes(f"{mark}DEFDAT p ; hélix\n{points}ENDDAT\n".encode(encoding))
+    return tmp_path / "p.src"
+
+
+def _permuted(table, order):
+    """A `TargetTable` with its rows in another order (spans and all)."""
+    def rows(value):
+        if isinstance(value, np.ndarray):
+            return value[order]
+        if isinstance(value, tuple):
+            return tuple(value[k] for k in order.tolist())
+        if isinstance(value, SpanColumns):
+            return SpanColumns(value.source, value.text, value.roles, value.start[order], value.end[order])
+        return TextSlices(value.text, value.start[order], value.end[order])
+
+    return dataclasses.replace(table, **{f.name: rows(getattr(table, f.name)) for f in dataclasses.fields(table)})
+
+
+@pytest.mark.parametrize("encoding", ["utf-8", "latin-1"])
+def test_a_table_written_as_its_edits_are_made_is_the_text_with_every_edit_applied(tmp_path, monkeypatch, encoding):
+    moved = _moved(formats.read(_helix_krl(tmp_path, 60, encoding)), np.random.default_rng(5))
+    mark = "\ufeff" if encoding == "utf-8" else ""
+    src, dat = (source.text for source in moved.sources)
+    renames = [[(src.index("p( )"), src.index("p( )") + 1, "q")],  # before every edit of the .src
+               [(dat.index("DEFDAT p") + 7, dat.index("DEFDAT p") + 8, "q"),  # before every point, among them
+                (dat.index("XP31="), dat.index("XP31=") + 4, "YP31"), (dat.index("ENDDAT"), dat.index("ENDDAT"), ";")]]
+    expected = [apply_edits(text, [(int(a), int(b), e.texts[c:d]) for a, b, c, d in
+                                   zip(e.start, e.end, e.cut[:-1], e.cut[1:])] + extra).encode(source.encoding)
+                for text, e, extra, source in zip((src, dat), target_edits(moved, *COLUMN_ENCODERS[".src"][::2],
+                                                                           krl_writer._encode_columns),
+                                                  renames, moved.sources)]
+    monkeypatch.setattr(text_module, "TARGETS_AT_ONCE", 7)  # edits made in many batches,
+    monkeypatch.setattr(Edits, "EDITS_AT_ONCE", 5)  # joined a few at a time,
+    monkeypatch.setattr(text_module, "TEXT_PIECE", 100)  # the text after the last one encoded in pieces
+    monkeypatch.setattr(text_module, "target_edits", None)  # never made all at once
+    written = patched(moved, krl_writer._encode, krl_writer.MIN_PLACES, krl_writer._encode_columns, renames)
+    assert [b"".join(w) for w in written] == expected == [b"".join(w) for w in written]  # made again when iterated
+    assert expected[1].startswith(f"{mark}DEFDAT q ; hélix".encode(encoding)) and b"YP31=" in expected[1]
+
+
+def test_a_table_whose_points_are_not_in_text_order_is_edited_at_once_before_it_is_written(tmp_path, monkeypatch):
+    moved = _moved(formats.read(_helix_krl(tmp_path, 40)), np.random.default_rng(6))
+    table = moved.targets.table
+    monkeypatch.setattr(text_module, "TARGETS_AT_ONCE", 8)
+    assert text_module._batches_in_order(table)
+    shuffled = _permuted(table, np.random.default_rng(1).permutation(len(table)))
+    assert not text_module._batches_in_order(shuffled)
+    encoders = krl_writer._encode, krl_writer.MIN_PLACES, krl_writer._encode_columns
+    expected = [e.applied(s.text).encode(s.encoding) for e, s in zip(target_edits(moved, *encoders), moved.sources)]
+    written = patched(moved.replace(targets=TargetRows(shuffled)), *encoders)
+    assert [b"".join(w) for w in written] == expected
+    assert expected[1] != moved.sources[1].text.encode(moved.sources[1].encoding)

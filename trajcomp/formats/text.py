@@ -8,6 +8,7 @@ the numbers of edited targets, formatted like the file wrote them.
 """
 
 import bisect
+import codecs
 import dataclasses
 import math
 import os
@@ -610,10 +611,18 @@ class _ByRole(Mapping):
 
 def _column_edits(table, encode, min_places, sources_count):
     """`Edits` per source of a table's edited targets, encoded as columns (`target_edits` with ``columns``)."""
+    edits = [Edits.of([]) for _ in range(sources_count)]
+    batches = list(_column_batches(table, encode, min_places))  # each batch's edits joined: no str per number
+    if batches:
+        edits[table.spans.source] = Edits.joined(batches)
+    return edits
+
+
+def _column_batches(table, encode, min_places):
+    """The `Edits` of a table's edited targets, `TARGETS_AT_ONCE` targets a batch, each made when the iteration
+    reaches it (`_column_edits`)."""
     spans = table.spans
     rows = np.flatnonzero(table.edited)
-    edits = [Edits.of([]) for _ in range(sources_count)]
-    batches = []  # each batch's edits joined (`Edits`): a long program's write holds no str per number
     for lo in range(0, len(rows), TARGETS_AT_ONCE):
         parts = []
         batch = rows[lo:lo + TARGETS_AT_ONCE]
@@ -638,11 +647,22 @@ def _column_edits(table, encode, min_places, sources_count):
             keep = np.flatnonzero(changed)  # a number read back other than the old one is written otherwise
             parts.append((starts[write[keep], j], ends[write[keep], j], [texts[k] for k in keep.tolist()]))
         if parts:
-            batches.append(Edits.of_columns(np.concatenate([p[0] for p in parts]), np.concatenate([p[1] for p in parts]),
-                                            [t for p in parts for t in p[2]]))
-    if batches:
-        edits[spans.source] = Edits.joined(batches)
-    return edits
+            yield Edits.of_columns(np.concatenate([p[0] for p in parts]), np.concatenate([p[1] for p in parts]),
+                                   [t for p in parts for t in p[2]])
+
+
+def _batches_in_order(table):
+    """Whether the spans of a table's edited targets, taken `TARGETS_AT_ONCE` targets a batch, lie batch after
+    batch in their text (`_column_batches` then gives its edits in text order: they can be written as made)."""
+    spans, rows, end = table.spans, np.flatnonzero(table.edited), -1
+    for lo in range(0, len(rows), TARGETS_AT_ONCE):
+        batch = rows[lo:lo + TARGETS_AT_ONCE]
+        given = spans.start[batch] >= 0
+        if given.any():
+            if spans.start[batch][given].min() < end:
+                return False
+            end = spans.end[batch][given].max()
+    return True
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -700,17 +720,19 @@ class Edits:
         return cls.of([(start[k], end[k], texts[cut[k]:cut[k + 1]]) for k in order.tolist()])
 
     def applied(self, text):
-        """``text`` with the edits applied (`apply_edits`), its pieces joined `EDITS_AT_ONCE` edits at a time."""
-        out, position = [], 0
+        """``text`` with the edits applied (`apply_edits`)."""
+        return "".join([*self.blocks(text), text[self.end[-1] if len(self) else 0:]])
+
+    def blocks(self, text, position=0):
+        """``text[position:self.end[-1]]`` with the edits applied, in blocks (str) of `EDITS_AT_ONCE` edits
+        (a few MB of pieces joined at a time); ``position``: where the text is taken from (no edit before it)."""
         for lo in range(0, len(self), self.EDITS_AT_ONCE):
             pieces, hi = [], lo + self.EDITS_AT_ONCE
             for start, end, a, b in zip(self.start[lo:hi].tolist(), self.end[lo:hi].tolist(),
                                         self.cut[lo:hi].tolist(), self.cut[lo + 1:hi + 1].tolist()):
                 pieces += (text[position:start], self.texts[a:b])
                 position = end
-            out.append("".join(pieces))
-        out.append(text[position:])
-        return "".join(out)
+            yield "".join(pieces)
 
 
 def _fields(spans):
@@ -782,10 +804,94 @@ def _number_or_text(text):
         return text
 
 
-def patched(program, encode, min_places, columns=None):
-    """The texts of the program's sources with the edited targets rewritten (see `target_edits`)."""
-    edits = target_edits(program, encode, min_places, columns)
-    return [e.applied(source.text) for source, e in zip(program.sources, edits)]
+def patched(program, encode, min_places, columns=None, extra=None):
+    """The program's sources with the edited targets rewritten (see `target_edits`), each a `Patched`: the bytes
+    to write, made while they are written.
+
+    The targets of a table whose spans are columns, encoded by ``columns``,
+    are encoded a batch at a time as their source is written, when the
+    batches lie one after the other in its text (a long program's
+    declarations, one a line, in order): the write holds neither the
+    output nor all its edits (1,000,000 KRL points: 220 MB of edits).
+
+    Parameters
+    ----------
+    program, encode, min_places, columns
+        As `target_edits`.
+    extra : sequence of list of (start, end, text), optional
+        More edits per source (a KRL program's new name), none overlapping a target's numbers.
+
+    Returns
+    -------
+    list of Patched
+    """
+    extra = extra or [[] for _ in program.sources]
+    targets = program.targets
+    table = targets.table if isinstance(targets, TargetRows) else None
+    streamed = None  # the source whose edits are made while it is written
+    if (columns is not None and table is not None and isinstance(table.spans, SpanColumns)
+            and not program.sources[table.spans.source].companion and _batches_in_order(table)):
+        streamed, edits = table.spans.source, [Edits.of([]) for _ in program.sources]
+    else:
+        edits = target_edits(program, encode, min_places, columns)
+    out = []
+    for k, source in enumerate(program.sources):
+        if k == streamed:
+            out.append(Patched(source, lambda k=k: _placed(_column_batches(table, columns, min_places), extra[k])))
+        else:
+            out.append(Patched(source, lambda k=k: _placed([edits[k]], extra[k]), bool(len(edits[k]) or extra[k])))
+    return out
+
+
+def _placed(batches, extra):
+    """`Edits` in text order, batch after batch, with a few ``extra`` edits ``[(start, end, text)]`` put in place:
+    as a batch of their own between two, or joined into the batch among whose edits they fall."""
+    extra = sorted(extra)
+    for edits in batches:
+        if len(edits) and extra:
+            before = [e for e in extra if e[1] <= edits.start[0]]
+            inside = [e for e in extra[len(before):] if e[0] < edits.end[-1]]
+            extra = extra[len(before) + len(inside):]
+            if before:
+                yield Edits.of(before)
+            if inside:
+                edits = Edits.joined([edits, Edits.of(inside)])
+        yield edits
+    if extra:
+        yield Edits.of(extra)
+
+
+TEXT_PIECE = 2**20  # characters of a text's unedited end encoded at a time
+
+
+class Patched:
+    """The bytes of a source's text with edits applied: an iterable of pieces, each made when the iteration reaches
+    it (`trajcomp.support.atomic.write_files_atomic` writes them as they come; the whole output is never held).
+
+    Parameters
+    ----------
+    source : Source
+        The text and its encoding.
+    batches : callable
+        ``batches() -> iterable of Edits``: the edits, in text order batch after batch.
+    changed : bool
+        Whether any edit is written (a source whose edits are made while it is written counts as changed).
+    """
+
+    def __init__(self, source, batches, changed=True):
+        self.source, self.batches, self.changed = source, batches, changed
+
+    def __iter__(self):
+        encoder = codecs.getincrementalencoder(self.source.encoding)()
+        text, position = self.source.text, 0
+        yield encode_text(self.source, "", encoder)  # the encoding's mark (a UTF-8 BOM), if it has one
+        for edits in self.batches():
+            for block in edits.blocks(text, position):
+                yield encode_text(self.source, block, encoder)
+            if len(edits):
+                position = int(edits.end[-1])
+        for start in range(position, len(text), TEXT_PIECE):
+            yield encode_text(self.source, text[start:start + TEXT_PIECE], encoder)
 
 
 def where(target):
@@ -870,7 +976,7 @@ def active_axes(program, capacity, language):
 
 
 def write_single_file(program, path, format_name, encode, min_places, emit, columns=None):
-    """``{path: bytes}`` of a one-file language.
+    """``{path: bytes or Patched}`` of a one-file language.
 
     The program's source patched in place (see `patched`, ``encode`` and
     ``columns`` as `target_edits` takes them) when it was read from
@@ -879,13 +985,13 @@ def write_single_file(program, path, format_name, encode, min_places, emit, colu
     """
     path = Path(path)
     if program.format == format_name and program.sources:
-        texts = patched(program, encode, min_places, columns)
-        return {path: encode_text(program.sources[0], texts[0])} | companion_outputs(program, texts, path)
+        written = patched(program, encode, min_places, columns)
+        return {path: written[0]} | companion_outputs(program, written, path)
     return {path: emit(program, path.stem).encode("utf-8")}
 
 
-def companion_outputs(program, texts, path, own=1):
-    """``{file: bytes}`` of a program's sources beyond the ``own`` first ones (those written as ``path``).
+def companion_outputs(program, written, path, own=1):
+    """``{file: Patched}`` of a program's sources beyond the ``own`` first ones (those written as ``path``).
 
     Each lies where it lay relative to the program's first file (another
     module of its task beside it, ``../System/$config.dat`` of a KUKA
@@ -896,17 +1002,17 @@ def companion_outputs(program, texts, path, own=1):
     Parameters
     ----------
     program : Program
-    texts : sequence of str
-        The text of every source as written (`patched`).
+    written : sequence of Patched
+        Every source as written (`patched`).
     path : Path
         Where the program's first file is written.
     own : int
         How many first sources the language's writer places itself.
     """
     home = Path(program.sources[0].path).parent
-    return {Path(path).parent / os.path.relpath(source.path, home): encode_text(source, text)
-            for source, text in zip(program.sources[own:], texts[own:])
-            if not (source.companion and text == source.text)}
+    return {Path(path).parent / os.path.relpath(source.path, home): patch
+            for source, patch in zip(program.sources[own:], written[own:])
+            if not (source.companion and not patch.changed)}
 
 
 def apply_edits(text, edits):
@@ -920,8 +1026,9 @@ def apply_edits(text, edits):
     return "".join(out)
 
 
-def encode_text(source, text):
-    """Bytes of ``text`` in the source's encoding.
+def encode_text(source, text, encoder=None):
+    """Bytes of ``text`` in the source's encoding (``encoder``: an incremental encoder of it, for a text encoded in
+    pieces).
 
     Raises
     ------
@@ -929,9 +1036,10 @@ def encode_text(source, text):
         A character the encoding cannot hold (only possible in new text).
     """
     try:
-        return text.encode(source.encoding)
+        return text.encode(source.encoding) if encoder is None else encoder.encode(text)
     except UnicodeEncodeError as exc:
-        raise WriteError(f"{source.name}: {text[exc.start:exc.end]!r} cannot be written in {source.encoding}") from exc
+        raise WriteError(f"{source.name}: {exc.object[exc.start:exc.end]!r} cannot be written in "
+                         f"{source.encoding}") from exc
 
 
 def numbered(names):

@@ -12,7 +12,6 @@ from trajcomp.formats.text import (
     active_axes,
     companion_outputs,
     encode_targets,
-    encode_text,
     encode_xyzabc,
     floor_places,
     format_number,
@@ -88,23 +87,31 @@ def write(program, path):
         )
     dat = path.with_suffix(".dat" if path.suffix.islower() else ".DAT")
     if patch:
-        texts = patched(program, _encode, MIN_PLACES, _encode_columns)
         own = 2 if len(program.sources) > 1 and not program.sources[1].companion else 1  # the .src and its .dat
-        if not same_name:
-            texts[:own] = [_renamed(text, pattern, path.stem) for text, pattern in zip(texts[:own], (_DEF, _DEFDAT))]
-        outs = [path, dat][:own]
-        return {out: encode_text(source, text) for out, source, text in zip(outs, program.sources, texts)} | \
-            companion_outputs(program, texts, path, own)
+        renames = [[] if same_name else _renamed(source.text, pattern, path.stem)
+                   for source, pattern in zip(program.sources[:own], (_DEF, _DEFDAT))]
+        written = patched(program, _encode, MIN_PLACES, _encode_columns, renames + [[]] * (len(program.sources) - own))
+        return dict(zip([path, dat][:own], written)) | companion_outputs(program, written, path, own)
     src_text, dat_text = _emit(program, path.stem)
     return {path: src_text.encode("latin-1"), dat: dat_text.encode("latin-1")}
 
 
 def _renamed(text, pattern, name):
-    """``text`` with the name of its first DEF (or DEFDAT) replaced by ``name`` if it differs (KRL ignores case)."""
-    m = pattern.search(mask(text, ";"))
+    """The edit ``[(start, end, name)]`` that gives the first DEF (or DEFDAT) of ``text`` the name ``name`` if it
+    has another (KRL ignores case), else ``[]``.
+
+    Searched in the masked text's first 64 KB, then in longer beginnings
+    (masking a beginning masks it as the whole text does): the DEF line
+    opens the file, and a long data list is never masked whole.
+    """
+    size = 65536
+    while (m := pattern.search(mask(text[:size], ";"))) is None or m.end() >= size:  # a name cut at the end: longer
+        if size >= len(text):
+            break
+        size *= 4
     if m is None or m.group(1).lower() == name.lower():
-        return text
-    return text[: m.start(1)] + name + text[m.end(1):]
+        return []
+    return [(m.start(1), m.end(1), name)]
 
 
 def _aggregate(target, axes):
