@@ -165,3 +165,47 @@ def test_an_undeclared_point_is_refused_naming_its_line(tmp_path):
                             "  ENDPROC"))
     with pytest.raises(ReadError, match=r"Cam\.mod: .* p9 \(line 8\)"):
         formats.read(path)
+
+
+_RUN = ("  PROC main()", "    MoveL p1, v50, z1, tool0;", "    MoveJ p2,v100,fine,tool0;",
+        "    MoveL p3, v50, z1, tool0;", "    MoveL p4, v50\\V:=12.5, z1, tool0\\WObj:=wobj0;  ! after the ';'",
+        "  ENDPROC")
+_REST = "[0,0,1,0],[0,0,0,1],[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]];"  # a point's value after its position
+VARIANTS = {  # each written as CAM tools may write it: the numbers read from the characters as float reads them
+    "CRLF line endings": _module(*_RUN).replace("\n", "\r\n"),
+    "exponents, signs, bare points": _module(*_RUN).replace("[[300,30,500]", "[[3E2,+.3e2,-5.e-1]").replace(
+        "[[400,40,500]", "[[400.,-0.0,1.5000000000000002]"),
+    "blanks inside a value and around :=": _module(*_RUN).replace("p2:=[[200,", "p2 := [[ 200,").replace(
+        "[[300,30,500],[0,0,1,0]", "[[300,30,500],[0, 0, 1, 0]"),
+    "non-ASCII comment before the points": _module(*_RUN).replace("MODULE Cam\n",
+                                                                  "MODULE Cam\n  ! Bahn für Düse Ø6\n"),
+    "mixed lines: a value over two lines, LOCAL, PERS": _module(*_RUN).replace(
+        "  CONST robtarget p2:=[[200,20,500],", "  LOCAL PERS robtarget p2:=[[200,20,500],\n").replace(
+        "  CONST robtarget p3", "  PERS robtarget p3"),
+    "more digits than a double holds, a configuration written 1.0": _module(*_RUN).replace(
+        "[[100,10,500]", "[[100.1234567890123456789,10,500]").replace(
+        "[[400,40,500],[0,0,1,0],[0,0,0,1]", "[[400,40,500],[0,0,1,0],[0,0,0,1.0]"),
+}
+
+
+@pytest.mark.parametrize("text", VARIANTS.values(), ids=VARIANTS)
+def test_a_variant_read_at_once_is_the_one_read_statement_by_statement(tmp_path, monkeypatch, text):
+    path = tmp_path / "Cam.mod"
+    path.write_bytes(text.encode("utf-8"))
+    at_once, one_by_one = _both(path, monkeypatch)
+    assert isinstance(at_once.items, ItemRows)
+    assert _seen(at_once) == _seen(one_by_one)
+    assert at_once.not_compensated() == one_by_one.not_compensated()
+
+
+@pytest.mark.parametrize("value, message", [
+    ("[[1E400,10,500]," + _REST, r"Cam\.mod:3: p2 x: '1E400' is out of range"),
+    ("[[100,10,500],[0,0,1,0],[0,0,0.5,1],[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]];", r"Cam\.mod:3: p2 confdata cf6: "),
+    ("[[100,10,500],[0,0,1,0],[0,0,0,1],[9E+09,9E+09,1e11,9E+09,9E+09,9E+09]];", r"Cam\.mod:3: p2 extax ec: '1e11' "),
+    ("[[100,10,5x0]," + _REST, r"Cam\.mod:3: malformed robtarget: 'CONST robtarget p2:=\[\[100,10,5x0\]"),
+])
+def test_a_point_the_read_at_once_cannot_take_is_refused_naming_its_field(tmp_path, value, message):
+    path = tmp_path / "Cam.mod"
+    path.write_text(_module(*_RUN).replace("[[200,20,500]," + _REST, value))
+    with pytest.raises(ReadError, match=message):
+        formats.read(path)

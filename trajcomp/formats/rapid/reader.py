@@ -3,11 +3,14 @@
 import array
 import dataclasses
 import re
+from itertools import chain
 from pathlib import Path
 
 import numpy as np
 
 from trajcomp.errors import ReadError
+from trajcomp.formats.configuration import distinct_tuples
+from trajcomp.formats.number_fields import read_numbers, text_codes
 from trajcomp.formats.text import (
     JOINT_LIMIT,
     LENGTH_LIMIT,
@@ -87,7 +90,7 @@ _NUMBER = re.compile(NUMBER)
 _WORD = re.compile(r"[A-Za-z]\w*")
 _OPTION = re.compile(r"\\(\w+)(?:\s*:=\s*([^\\]+))?")
 _SPEED = re.compile(r"^v(\d+(?:\.\d*)?)$", re.I)
-_DATA_DECL = re.compile(r"^[ \t]*(?:(?:LOCAL|TASK)\s+)*(CONST|PERS|VAR)\s+(speeddata|num)\s+(\w+)\s*(?::=\s*([^;]*?))?\s*;",
+_DATA_DECL = re.compile(r"[ \t]*(?:(?:LOCAL|TASK)\s+)*(CONST|PERS|VAR)\s+(speeddata|num)\s+(\w+)\s*(?::=\s*([^;]*?))?\s*;",
                         re.I | re.M)
 _SPEEDDATA = re.compile(r"^\[\s*(" + NUMBER + r")\s*,\s*(" + NUMBER + r")\s*,[^\]]*\]$")  # [v_tcp, v_ori, ..]
 VMAX = 5000.0  # mm/s, v_tcp of the predefined speeddata vmax
@@ -98,25 +101,26 @@ _STRAIGHT = {"confj", "confl", "tpwrite", "tperase", "waittime", "setdo", "setao
 _ZONE = re.compile(r"^(fine|z(\d+(?:\.\d*)?))$", re.I)
 # A robtarget declared on one line as RobotStudio and CAM post-processors write it, no blanks in its value:
 # CONST robtarget p1:=[[x,y,z],[q1,q2,q3,q4],[cf1,cf4,cf6,cfx],[ea,..,ef]]; -- read a whole module of them at once
-# (`_written_points`); any other declaration goes statement by statement.
-_NUMBERS = [",".join([f"({NUMBER})"] * count) for count in (3, 4, 4, 6)]
-_WRITTEN_POINT = re.compile(
-    r"^[ \t]*((?:(?:LOCAL|TASK)[ \t]+)*)(CONST|PERS|VAR)[ \t]+robtarget[ \t]+(\w+)[ \t]*:=[ \t]*\[\["
-    + r"\],\[".join(_NUMBERS) + r"\]\][ \t]*;()[ \t]*\r?$", re.I | re.M)
+# (`_WrittenPoints`): the lines found by the pattern, the value's layout checked and its numbers read from the
+# text's characters (`_value_fields`); any other declaration goes statement by statement.
+_ROBTARGET_VALUE = r"\[\[" + r"\],\[".join([r"[^]\r\n;]*"] * 4) + r"\]\]"  # 4 bracketed lists, numbers checked after
+_ROBTARGET_LAYOUT = "[[,,],[,,,],[,,,],[,,,,,]]"  # its delimiters: x, y, z / q1..q4 / cf1..cfx / ea..ef between them
+_WRITTEN_POINT = re.compile(  # groups: LOCAL / TASK, storage, name, value, the end of its ';'
+    r"[ \t]*((?:(?:LOCAL|TASK)[ \t]+)*)(CONST|PERS|VAR)[ \t]+robtarget[ \t]+(\w+)[ \t]*:=[ \t]*("
+    + _ROBTARGET_VALUE + r")[ \t]*;()[ \t]*\r?$", re.I | re.M)
 # A MoveL or MoveJ to a named point on one line, as CAM post-processors and trajcomp's converter write it:
 # MoveL p1, v50, z1, tool0\WObj:=wobj1; (the speed data possibly with \V:= or \T:=) -- read at once (`_WrittenMotions`)
-_WRITTEN_MOTION = re.compile(
-    r"^[ \t]*(Move[LJ])[ \t]+([A-Za-z]\w*)[ \t]*,[ \t]*(\w+(?:[ \t]*\\[VT][ \t]*:=[ \t]*" + NUMBER + r")?)[ \t]*,"
-    r"[ \t]*(\w+)[ \t]*,[ \t]*(\w+)[ \t]*(?:\\[ \t]*WObj[ \t]*:=[ \t]*(\w+)[ \t]*)?;()[ \t]*\r?$", re.I | re.M)
+_MOTION_REST = (r"[ \t]*,[ \t]*(\w+(?:[ \t]*\\[VT][ \t]*:=[ \t]*" + NUMBER + r")?)[ \t]*,[ \t]*\w+[ \t]*,[ \t]*\w+"
+                r"[ \t]*(?:\\[ \t]*WObj[ \t]*:=[ \t]*\w+[ \t]*)?;()[ \t]*\r?$")  # speed, zone, tool, work object
+_WRITTEN_MOTION = re.compile(r"[ \t]*(Move[LJ])[ \t]+([A-Za-z]\w*)" + _MOTION_REST, re.I | re.M)  # groups:
+# instruction, point, speed data, the end of its ';'
 # ... and to an inline robtarget written without blanks, as RoboDK's ABB posts write them:
 # MoveL [[x,y,z],[q1,q2,q3,q4],[cf1,cf4,cf6,cfx],[ea,..,ef]],v50,z1,tool0\WObj:=wobj0;
-_WRITTEN_INLINE = re.compile(
-    r"^[ \t]*(Move[LJ])[ \t]+\[\[" + r"\],\[".join(_NUMBERS) + r"\]\][ \t]*,[ \t]*(\w+(?:[ \t]*\\[VT][ \t]*:=[ \t]*"
-    + NUMBER + r")?)[ \t]*,[ \t]*(\w+)[ \t]*,[ \t]*(\w+)[ \t]*(?:\\[ \t]*WObj[ \t]*:=[ \t]*(\w+)[ \t]*)?;()[ \t]*\r?$",
-    re.I | re.M)
+_WRITTEN_INLINE = re.compile(r"[ \t]*(Move[LJ])[ \t]+(" + _ROBTARGET_VALUE + ")" + _MOTION_REST, re.I | re.M)
+WRITTEN_FORMS = ("_WRITTEN_POINT", "_WRITTEN_MOTION", "_WRITTEN_INLINE")  # the lines read at once (`_written_lines`)
 
 
-ROWS_AT_ONCE = 16384  # declarations whose texts become numbers together: bounds a long module's strings
+ROWS_AT_ONCE = 16384  # values whose delimiters are found together (`_value_fields`): bounds the arrays
 
 
 def pose(values):
@@ -146,29 +150,115 @@ class _WrittenPoints:
         Whether other modules may assign the point (PERS or VAR, not LOCAL).
     """
 
-    def __init__(self, source, masked, lines, excluded=()):
+    def __init__(self, source, masked, lines, codes, found):
         self.table, self.line, self.start, self.end = None, *(np.zeros(0, dtype=np.int64) for _ in range(3))
-        self.shared = np.zeros(0, dtype=bool)
-        parts, rows, offsets = [], [], array.array("q")  # no match object kept
-        for m in _WRITTEN_POINT.finditer(masked):
-            if not excluded or lines.number(m.start()) not in excluded:
-                rows.append(m.groups()[:20])
-                offsets.extend((m.start(), m.start(3), m.start(4), m.end(21)))
-                if len(rows) == ROWS_AT_ONCE:
-                    parts.append(_point_columns(rows))
-                    rows = []
-        if rows:
-            parts.append(_point_columns(rows))
-        if not parts:
+        self.shared = np.zeros(0, dtype=bool)  # found (N, 6, 2): the line, LOCAL / TASK, storage, name, value, ';'
+        numbers, field_start, field_end, laid_out = _value_fields(codes, found[:, 4, 0], found[:, 4, 1],
+                                                                  _ROBTARGET_LAYOUT) if len(found) else [[]] * 4
+        if not np.any(laid_out):
             return
-        numbers, length, shared = (np.concatenate(column) for column in zip(*parts))
-        at = np.frombuffer(offsets, dtype=np.int64).reshape(-1, 4)  # line start, name, x, after ';'
-        keep, self.table = _robtargets(source.text, lines, numbers, length, at[:, 1], at[:, 2])
-        self.start, self.end, self.shared = at[keep, 0], at[keep, 3], shared[keep]
+        found, numbers, field_start, field_end = (a[laid_out] for a in (found, numbers, field_start, field_end))
+        local = np.zeros(len(found), dtype=bool)  # a storage prefix (LOCAL, TASK) is rare: read one by one
+        for k in np.flatnonzero(found[:, 1, 1] > found[:, 1, 0]).tolist():
+            local[k] = "LOCAL" in masked[found[k, 1, 0]:found[k, 1, 1]].upper()
+        shared = (np.bitwise_or(codes[found[:, 2, 0]], 0x20) != ord("c")) & ~local  # PERS or VAR, not LOCAL
+        keep, self.table = _robtargets(source.text, lines, numbers, found[:, 3], field_start, field_end)
+        self.start, self.end, self.shared = found[keep, 0, 0], found[keep, 5, 1], shared[keep]
         self.line = self.table.line
 
 
-def _robtargets(text, lines, numbers, length, name_at, x_at):
+def _written_lines(masked, codes, lines, excluded):
+    """The lines of each of the `WRITTEN_FORMS` (`_line_matches`).
+
+    Parameters
+    ----------
+    masked : str
+        The module's text, comments and strings blanked.
+    codes : ndarray, shape (L,)
+        Its character codes (`trajcomp.formats.number_fields.text_codes`).
+    lines : Lines
+    excluded : set of int
+        Lines left to the statement-by-statement read (`_Spread`).
+
+    Returns
+    -------
+    list of ndarray, shape (N_k, groups_k + 1, 2)
+        Per form, the offsets ``(start, end)`` of each line's match (from
+        the line's start) and of each of its groups, ascending.
+    """
+    out = []
+    for form in (globals()[name] for name in WRITTEN_FORMS):
+        found = _line_matches(form, masked)
+        offsets = array.array("q", chain.from_iterable(chain.from_iterable(m.regs for m in found)))
+        found = np.frombuffer(offsets, dtype=np.int64).reshape(-1, form.groups + 1, 2).copy()
+        found[:, 0, 0] += codes[found[:, 0, 0]] == ord("\n")  # the line starts after the break
+        if excluded:
+            found = found[~np.isin(np.searchsorted(lines.starts, found[:, 0, 0], side="right"), list(excluded))]
+        out.append(found)
+    return out
+
+
+def _line_matches(pattern, text):
+    """The matches of ``pattern`` at the start of each line of ``text`` (as ``^`` with ``re.M`` before it), in
+    order: those after the first line begin at the line break before theirs.
+
+    The text is searched for line breaks: a pattern anchored by ``^`` is
+    tried at every character, which costs a long module seconds.
+    """
+    first = pattern.match(text)
+    return chain([first] if first else [], re.compile("\n" + pattern.pattern, pattern.flags).finditer(text))
+
+
+def _value_fields(codes, start, end, layout):
+    """Offsets of the numbers of N values ``text[start:end]`` laid out as ``layout`` (``"[[,,],[,,,]]"``: their
+    delimiters, a number between ``[`` or ``,`` and ``,`` or ``]``, nothing between the others), found at once.
+
+    Parameters
+    ----------
+    codes : ndarray, shape (L,)
+        The text's character codes (`trajcomp.formats.number_fields.text_codes`).
+    start, end : ndarray of int, shape (N,)
+        Offsets of each value, ascending.
+    layout : str
+        Every delimiter (``[``, ``,``, ``]``) of a value, in order.
+
+    Returns
+    -------
+    numbers : ndarray, shape (N, F)
+        The F numbers of each value, read from their characters
+        (`trajcomp.formats.number_fields.read_numbers`, a column at a time).
+    field_start, field_end : ndarray of int, shape (N, F)
+        Offsets of each value's numbers' texts.
+    laid_out : ndarray of bool, shape (N,)
+        Whether the value has exactly these delimiters and every number is
+        one (`read_numbers`) where read at once; a value that is not is read
+        statement by statement, which names what is wrong.
+    """
+    delimiters = np.array([ord(c) for c in layout])
+    gaps = np.arange(len(layout) - 1)
+    numbered = np.isin(delimiters[:-1], [ord("["), ord(",")]) & np.isin(delimiters[1:], [ord(","), ord("]")])
+    fields, empty = gaps[numbered], gaps[~numbered]
+    n = len(start)
+    field_start, field_end = (np.zeros((n, len(fields)), dtype=np.int64) for _ in range(2))
+    laid_out = np.zeros(n, dtype=bool)
+    for lo in range(0, n, ROWS_AT_ONCE):
+        rows = slice(lo, lo + ROWS_AT_ONCE)
+        first_at = int(start[rows][0])
+        region = codes[first_at:int(end[rows].max())]
+        at = np.flatnonzero((region == ord(",")) | (region == ord("[")) | (region == ord("]"))) + first_at
+        first = np.searchsorted(at, start[rows])
+        good = np.searchsorted(at, end[rows]) - first == len(layout)
+        found = at[np.minimum(first[:, None] + np.arange(len(layout)), len(at) - 1)]  # (rows, delimiters)
+        good &= (codes[found] == delimiters).all(axis=1) & (found[:, empty + 1] == found[:, empty] + 1).all(axis=1)
+        field_start[rows], field_end[rows], laid_out[rows] = found[:, fields] + 1, found[:, fields + 1], good
+    numbers = np.full((n, len(fields)), np.nan)
+    values, is_number = read_numbers(codes, field_start[laid_out].T.ravel(), field_end[laid_out].T.ravel())
+    numbers[laid_out] = values.reshape(len(fields), -1).T  # read a column at a time: fields of one width together
+    laid_out[laid_out] = is_number.reshape(len(fields), -1).all(axis=0)
+    return numbers, field_start, field_end, laid_out
+
+
+def _robtargets(text, lines, numbers, name, field_start, field_end):
     """The robtargets of N texts ``[[x,y,z],[q1..q4],[cf1..cfx],[ea..ef]]`` written without blanks, read at once.
 
     Parameters
@@ -179,10 +269,10 @@ def _robtargets(text, lines, numbers, length, name_at, x_at):
         Its lines.
     numbers : ndarray, shape (N, 17)
         x .. q4, cf1 .. cfx, ea .. ef.
-    length : ndarray of int, shape (N, 12)
-        Characters of the name (0: an inline target) and of x .. cfx.
-    name_at, x_at : ndarray of int, shape (N,)
-        Offsets of the name and of x.
+    name : ndarray of int, shape (N, 2)
+        Offsets of each name (empty for an inline target).
+    field_start, field_end : ndarray of int, shape (N, 17)
+        Offsets of the numbers' texts (`_value_fields`).
 
     Returns
     -------
@@ -207,34 +297,15 @@ def _robtargets(text, lines, numbers, length, name_at, x_at):
     T[:, :3, :3] = quat_to_matrix(quat[keep])
     T[:, :3, 3] = position[keep]
     external = np.where(np.abs(external[keep]) >= UNUSED_AXIS, np.nan, external[keep])
-    # the numbers' offsets from their lengths: a comma between two, "],[" between x, y, z / q1..q4 / cf1..cfx
-    length, name_at = length[keep], name_at[keep]
-    between = np.array([1, 1, 3, 1, 1, 1, 3, 1, 1, 1])
-    start = x_at[keep, None] + np.cumsum(np.c_[np.zeros(n, dtype=np.int64), length[:, 1:-1] + between], axis=1)
+    start, end, name = field_start[keep, :11], field_end[keep, :11], name[keep]  # x .. cfx
     unused = np.isnan(external).all(axis=1)
-    configs = {}  # one tuple per distinct confdata: a path's points mostly share theirs
     none = repeated(None, n)
     return keep, TargetTable(
-        T, np.zeros(n, dtype=bool), np.full((n, 6), np.nan), np.searchsorted(lines.starts, x_at[keep], side="right"),
-        tuple(configs.setdefault(c, c) for c in map(tuple, config[keep].astype(int).tolist())), none, none,
+        T, np.zeros(n, dtype=bool), np.full((n, 6), np.nan), np.searchsorted(lines.starts, start[:, 0], side="right"),
+        tuple(distinct_tuples(config[keep].astype(int))), none, none,
         (None,) * n if unused.all() else tuple(None if u else e for u, e in zip(unused.tolist(), external)),
-        np.zeros(n, dtype=bool), TextSlices(text, name_at, name_at + length[:, 0]),
-        SpanColumns(0, text, POSITION + QUAT + CONF, start, start + length[:, 1:]))
-
-
-def _inline_columns(rows):
-    """Numbers (K, 17) and lengths of x .. cfx, after a 0 for the name (K, 12), of `_WRITTEN_INLINE`'s groups
-    2 .. 18 (K rows of str)."""
-    texts = np.array(rows, dtype=str)
-    return texts.astype(float), np.c_[np.zeros(len(rows), dtype=np.int64), np.strings.str_len(texts[:, :11])]
-
-
-def _point_columns(rows):
-    """Numbers (K, 17), lengths of the name and of x .. cfx (K, 12) and whether other modules may assign the
-    point (K,) of `_WRITTEN_POINT`'s groups 1 .. 20 (K rows of str)."""
-    texts = np.array(rows, dtype=str)  # LOCAL / TASK, storage, name, x..q4, cf1..cfx, ea..ef
-    shared = (np.strings.upper(texts[:, 1]) != "CONST") & (np.strings.find(np.strings.upper(texts[:, 0]), "LOCAL") < 0)
-    return texts[:, 3:].astype(float), np.strings.str_len(texts[:, 2:14]).astype(np.int64), shared
+        np.zeros(n, dtype=bool), TextSlices(text, name[:, 0], name[:, 1]),
+        SpanColumns(0, text, POSITION + QUAT + CONF, start, end))
 
 
 class _WrittenMotions:
@@ -263,39 +334,34 @@ class _WrittenMotions:
         The inline targets (`_WRITTEN_INLINE`, `_robtargets`).
     """
 
-    def __init__(self, text, masked, lines, excluded=()):
-        codes, rows = {}, array.array("q")
-        for m in _WRITTEN_MOTION.finditer(masked):
-            key = (m.group(1).upper(), m.group(3), m.group(4), m.group(5), m.group(6))
-            rows.extend((m.start(), m.end(7), *m.span(2), *m.span(3), codes.setdefault(key, len(codes)), -1))
-        parts, numbers, offsets = [], [], array.array("q")  # inline targets, their texts by chunks
-        for m in _WRITTEN_INLINE.finditer(masked):
-            key = (m.group(1).upper(), m.group(19), m.group(20), m.group(21), m.group(22))
-            rows.extend((m.start(), m.end(23), -1, -1, *m.span(19), codes.setdefault(key, len(codes)),
-                         len(offsets)))
-            offsets.append(m.start(2))
-            numbers.append(m.groups()[1:18])
-            if len(numbers) == ROWS_AT_ONCE:
-                parts.append(_inline_columns(numbers))
-                numbers = []
-        if numbers:
-            parts.append(_inline_columns(numbers))
-        columns = np.frombuffer(rows, dtype=np.int64).reshape(-1, 8)
+    def __init__(self, text, masked, lines, codes, named, inline):
+        combos = {}  # code of each distinct instruction, speed, zone, tool and work object text
+
+        def combo(found, target):  # the text of each motion but its point (``target``: the group of its point)
+            return [combos.setdefault(masked[i:j] + masked[k:end], len(combos))
+                    for i, j, k, end in found[:, [1, 1, target, 4], [0, 1, 1, 1]].tolist()]
+
         self.table = None
-        if parts:
-            values, length = (np.concatenate(column) for column in zip(*parts))
-            x_at = np.frombuffer(offsets, dtype=np.int64)
-            keep, self.table = _robtargets(text, lines, values, length, x_at, x_at)
-            row = np.full(len(x_at), -1)
-            row[keep] = np.arange(len(keep))
-            inline = columns[:, 7] >= 0
-            columns[inline, 7] = row[columns[inline, 7]]
-            columns = columns[~inline | (columns[:, 7] >= 0)]  # a target refused: read one by one, which names it
+        if len(inline):
+            numbers, field_start, field_end, laid_out = _value_fields(codes, inline[:, 2, 0], inline[:, 2, 1],
+                                                                      _ROBTARGET_LAYOUT)
+            inline, numbers, field_start, field_end = (a[laid_out] for a in (inline, numbers, field_start, field_end))
+        if len(inline):
+            keep, self.table = _robtargets(text, lines, numbers, np.repeat(field_start[:, :1], 2, axis=1), field_start,
+                                           field_end)
+            inline = inline[keep]  # a target refused: read one by one, which names it
+        # line start, end (its ';'), name, speed, combo, row of `table` of an inline target (-1: a name)
+        columns = [np.zeros((0, 8), dtype=np.int64)]
+        if len(named):
+            columns.append(np.c_[named[:, 0, 0], named[:, 4, 1], named[:, 2], named[:, 3], combo(named, 2),
+                                 np.full(len(named), -1)])
+        if len(inline):
+            columns.append(np.c_[inline[:, 0, 0], inline[:, 4, 1], np.full((len(inline), 2), -1), inline[:, 3],
+                                 combo(inline, 2), np.arange(len(inline))])
+        columns = np.concatenate(columns)
         columns = columns[np.argsort(columns[:, 0], kind="stable")]
-        line = np.searchsorted(lines.starts, columns[:, 0], side="right")
-        keep = ~np.isin(line, list(excluded))
-        columns = columns[keep]
-        self.line, self.start, self.end = line[keep], columns[:, 0], columns[:, 1]
+        self.line = np.searchsorted(lines.starts, columns[:, 0], side="right")
+        self.start, self.end = columns[:, 0], columns[:, 1]
         self.name, self.speed, self.combo, self.inline = columns[:, 2:4], columns[:, 4:6], columns[:, 6], columns[:, 7]
         self.proto = np.zeros(len(self.line), dtype=int)  # index into `_Reader.protos` (`_Reader.read_at_once`)
         self.parameter = np.zeros(len(self.line), dtype=bool)  # the point is a routine parameter
@@ -437,8 +503,7 @@ class _Reader:
                     motions.target[row] = len(self.targets)
                     self.targets.append(first_inline + int(motions.inline[row]))
         else:
-            for row in rows[~is_motion].tolist():
-                self.point_at_once(points, row)
+            self.points_at_once(points, rows[~is_motion])
         run = rows[is_motion]
         if not len(run):
             return
@@ -461,23 +526,31 @@ class _Reader:
 
     def point_at_once(self, points, row):
         """Add point ``row`` of ``points`` (`_WrittenPoints`) as a target."""
-        key = points.table.name[row].lower()
-        self.points[key] = len(self.targets)
-        self.targets.append(row)  # a row of the table
-        if points.shared[row]:
-            self.shared.add(key)
+        self.points_at_once(points, np.array([row]))
 
-    def scan_data(self, masked):
+    def points_at_once(self, points, rows):
+        """Add points ``rows`` (K,) of ``points`` (`_WrittenPoints`) as targets, in order (a name declared twice:
+        the last)."""
+        if not len(rows):
+            return
+        keys = _lowered(self.source.text, points.table.name.start[rows], points.table.name.end[rows])
+        first = len(self.targets)
+        self.points.update(zip(keys, range(first, first + len(keys))))
+        self.targets.extend(rows.tolist())  # rows of the table
+        self.shared.update(key for key, shared in zip(keys, points.shared[rows].tolist()) if shared)
+
+    def scan_data(self, masked, lines):
         """Note the module's speeddata and num declarations (a motion may use one declared further down), and
-        where a statement other than its declaration and motions may change a VAR speeddata."""
-        lines = Lines(masked)
-        for m in _DATA_DECL.finditer(masked):
+        where a statement other than its declaration and motions may change a VAR speeddata (``lines``: the
+        module's `Lines`)."""
+        for m in _line_matches(_DATA_DECL, masked):
             key = m.group(3).lower()
             entry = (m.group(1).upper(), m.group(2).lower(), (m.group(4) or "").strip(), lines.number(m.start(1)))
             self.data[key] = entry if key not in self.data else None
         names = [key for key, entry in self.data.items() if entry is not None and entry[:2] == ("VAR", "speeddata")]
         if not names:
             return
+        lines = Lines(masked)  # the lines' masked texts
         for m in re.finditer(r"\b(" + "|".join(map(re.escape, names)) + r")\b", masked, re.I):
             line = lines.number(m.start())
             text = lines.line(line)
@@ -810,13 +883,14 @@ def read(path):
     folders = [folder.parent / "PROGMOD", folder.parent / "SYSMOD"] if folder.name.upper() in ("PROGMOD", "SYSMOD") \
         else [folder]  # a backup's TASKn holds its modules in PROGMOD and SYSMOD
     modules = (".mod", ".modx", ".sys", ".prg")
-    lines, excluded = Lines(source.text), set()
+    lines, excluded, codes = Lines(source.text), set(), text_codes(masked)
     while True:  # a statement spread over lines that look read-at-once takes them back (`_Spread`): rare
         reader = _Reader(source)
         reader.task = DeclaredElsewhere(Path(path), folders, modules, _TASK_POINT, "!", assignment=_ASSIGNED_POINT)
-        reader.scan_data(masked)
-        points = _WrittenPoints(source, masked, lines, excluded)
-        motions = _WrittenMotions(source.text, masked, lines, excluded)
+        reader.scan_data(masked, lines)
+        found_points, named, inline = _written_lines(masked, codes, lines, excluded)
+        points = _WrittenPoints(source, masked, lines, codes, found_points)
+        motions = _WrittenMotions(source.text, masked, lines, codes, named, inline)
         skipped = np.zeros(len(lines.starts) + 1, dtype=bool)
         skipped[points.line] = True
         skipped[motions.line] = True
@@ -925,26 +999,8 @@ def _resolve(reader, task, frames, motions):
     text = reader.source.text
     for item in reader.items:
         if isinstance(item, _Run):  # as a Motion below, without an object each
-            rows = item.rows
-            for row, proto, (a, b), parameter, line in zip(
-                    rows.tolist(), motions.proto[rows].tolist(), motions.name[rows].tolist(),
-                    motions.parameter[rows].tolist(), motions.line[rows].tolist()):
-                key = text[a:b].lower()
-                index = reader.points.get(key) if a >= 0 else int(motions.target[row])  # a name, or inline
-                if a >= 0 and (parameter or index is None or key in assigned or key in reader.shared):
-                    index, why = lookup(_Named(text[a:b], line, parameter))
-                else:
-                    why = ""
-                if frames_of[proto] is None:
-                    frames_of[proto] = (elsewhere(reader.protos[proto].tool, "tool"),
-                                        elsewhere(reader.protos[proto].frame, "wobj"))
-                (_, tool_why), (_, frame_why) = frames_of[proto]
-                bulk_reason[row] = why or reader.protos[proto].reason or tool_why or frame_why
-                if bulk_reason[row]:
-                    refs[row] = named(text[motions.start[row]:motions.end[row]]) + (
-                        (index,) if isinstance(index, int) else ())
-                else:
-                    bulk_target[row] = -1 if index is None else index  # missing: refused below
+            _resolve_run(item.rows, motions, reader, lookup, elsewhere, named, frames_of, assigned, bulk_target,
+                         bulk_reason, refs)
             continue
         if isinstance(item, Motion):
             (via, via_why), (target, why) = lookup(item.via), lookup(item.target)
@@ -962,6 +1018,58 @@ def _resolve(reader, task, frames, motions):
     if missing:
         unresolved(reader.source.name, missing, "no module of its folder declares them either")
     return tuple(items), _motion_table(reader, motions, bulk_target, bulk_reason, refs, frames_of)
+
+
+def _resolve_run(rows, motions, reader, lookup, elsewhere, named, frames_of, assigned, target, reason, refs):
+    """Resolve the points of motions ``rows`` (K,) of ``motions`` read at once (`_resolve`), in program order.
+
+    A point the module declares, that no statement assigns and other
+    modules may not, is taken at once; the others (routine parameters,
+    points assigned at run time or declared elsewhere) by ``lookup`` one by
+    one, as is each instruction text's (proto's) tool and work object by
+    ``elsewhere`` on its first motion. Fills ``target`` (-1 where
+    ``reason`` says why not), ``reason`` and ``refs`` at ``rows``, and
+    ``frames_of`` at the motions' protos.
+    """
+    text = reader.source.text
+    proto = motions.proto[rows]
+    start, end = motions.name[rows].T
+    point = start >= 0  # a name; else an inline target, its target index already known
+    keys = _lowered(text, start[point], end[point])
+    index = motions.target[rows].copy()
+    index[point] = [reader.points.get(key, -1) for key in keys]
+    one_by_one = np.zeros(len(rows), dtype=bool)
+    one_by_one[point] = motions.parameter[rows[point]] | (index[point] < 0) | np.array(
+        [key in assigned or key in reader.shared for key in keys], dtype=bool)
+    first_of_proto = np.zeros(len(rows), dtype=bool)
+    first_of_proto[np.unique(proto, return_index=True)[1]] = True
+    why = np.full(len(rows), "", dtype=object)
+    for k in np.flatnonzero(one_by_one | first_of_proto).tolist():  # in program order: the other modules read so
+        if one_by_one[k]:
+            found, why[k] = lookup(_Named(text[start[k]:end[k]], int(motions.line[rows[k]]),
+                                          bool(motions.parameter[rows[k]])))
+            index[k] = -1 if found is None else found
+        if frames_of[proto[k]] is None:
+            frames_of[proto[k]] = (elsewhere(reader.protos[proto[k]].tool, "tool"),
+                                   elsewhere(reader.protos[proto[k]].frame, "wobj"))
+    protos, of_row = np.unique(proto, return_inverse=True)
+    of_proto = np.array([reader.protos[p].reason or frames_of[p][0][1] or frames_of[p][1][1]
+                         for p in protos.tolist()], dtype=object)
+    reason[rows] = np.where(why != "", why, of_proto[of_row])
+    listed = np.flatnonzero(reason[rows] != "")
+    for k in listed.tolist():
+        row = int(rows[k])
+        refs[row] = named(text[motions.start[row]:motions.end[row]]) + ((int(index[k]),) if index[k] >= 0 else ())
+    taken = np.ones(len(rows), dtype=bool)
+    taken[listed] = False
+    target[rows[taken]] = index[taken]
+
+
+def _lowered(text, start, end):
+    """The pieces ``text[start:end]`` (K,) in lower case: list of str (names: no line break)."""
+    if not len(start):
+        return []
+    return "\n".join([text[a:b] for a, b in zip(start.tolist(), end.tolist())]).lower().split("\n")
 
 
 def _motion_table(reader, motions, target, reason, refs, frames_of):

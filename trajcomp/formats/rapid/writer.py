@@ -67,11 +67,13 @@ def _encode_columns(table, rows, old):
     quats = np.full((len(rows), 4), np.nan)
     quats[cartesian[turned]] = np.where(np.sum(quat * old_quat[turned], axis=1, keepdims=True) < 0, -quat, quat)
     out |= dict(zip(QUAT, quats.T))
-    texts = {}  # the confdata texts of each distinct configuration: a path's points mostly share theirs
-    configs = [texts.setdefault(config, tuple(map(str, config))) if config and not is_joint else None
-               for config, is_joint in zip((table.config[i] for i in rows.tolist()), joint.tolist())]
+    distinct = {}  # code of each distinct configuration: a path's points mostly share theirs
+    code = np.array([distinct.setdefault(config, len(distinct)) for config in map(table.config.__getitem__,
+                                                                                      rows.tolist())], dtype=int)
+    code[joint] = len(distinct)  # a joint target writes no confdata: the row of None below
     for k, role in enumerate(CONF):
-        out[role] = np.array([c[k] if c is not None and k < len(c) else None for c in configs], dtype=object)
+        texts = [str(c[k]) if c and k < len(c) else None for c in distinct] + [None]
+        out[role] = np.array(texts, dtype=object)[code]
     return out
 
 
