@@ -702,9 +702,10 @@ class Edits:
     def of_columns(cls, start, end, texts):
         """The columns of edits given as columns (E,) each, in any order (``texts``: a list of str)."""
         order = np.lexsort((end, start))
-        texts = [texts[k] for k in order.tolist()]
+        texts = np.array(texts, dtype=object)[order].tolist()  # picked in order without a Python step each
+        lengths = np.fromiter(map(len, texts), dtype=np.int64, count=len(texts))
         return cls(np.asarray(start, dtype=np.int64)[order], np.asarray(end, dtype=np.int64)[order], "".join(texts),
-                   np.concatenate([[0], np.cumsum([len(t) for t in texts], dtype=np.int64)]))
+                   np.concatenate([[0], np.cumsum(lengths)]))
 
     @classmethod
     def joined(cls, parts):
