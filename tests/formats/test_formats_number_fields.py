@@ -61,6 +61,12 @@ def test_random_decimals_read_exactly_across_blocks():
     _check(fields)
 
 
+@pytest.mark.parametrize("field", ["9E+09", "0.0000000000", "-1", "1 ", "1e400", ""])
+def test_a_repeated_field_reads_as_each_alone(field):
+    """A block of one text repeated (a path's unused external axes) is read once: the same values."""
+    _check([field] * (FIELDS_AT_ONCE + 3) + ["2.5", field])
+
+
 def test_empty():
     values, is_number = read_numbers(text_codes(""), [], [])
     assert values.shape == is_number.shape == (0,)

@@ -138,7 +138,8 @@ def _from_characters(codes, start, end):
     largest exact power); the others are left to ``float`` (`read_numbers`).
     The characters are laid out one row per column of the fields (W, B)
     and read a column at a time, left to right, as a whole number
-    ``mantissa``, the digits after the point ``places`` and the exponent.
+    ``mantissa``, the digits after the point ``places`` and the exponent;
+    B fields that repeat one text are read once.
     """
     width = end - start
     widest = int(min(width.max(initial=0), _WIDEST))
@@ -147,6 +148,8 @@ def _from_characters(codes, start, end):
     char = codes[np.minimum(start + column, len(codes) - 1)].astype(np.int64)
     char[~inside] = 0
     n = len(start)
+    if n > 1 and (width == width[0]).all() and (char == char[:, :1]).all():  # one text (an unused axis' 9E+09)
+        return tuple(np.repeat(column, n) for column in _from_characters(codes, start[:1], end[:1]))
     mantissa, places, count, points, exponent, exponent_digits = (np.zeros(n, dtype=np.int64) for _ in range(6))
     bad, in_exponent, after_e, exponent_negative = (np.zeros(n, dtype=bool) for _ in range(4))
     for j in range(widest):
