@@ -543,6 +543,9 @@ class _Reader:
         """Note the module's speeddata and num declarations (a motion may use one declared further down), and
         where a statement other than its declaration and motions may change a VAR speeddata (``lines``: the
         module's `Lines`)."""
+        lower = masked.lower()  # a CAM module declares none: its lines are not tried (a case-blind search is slower)
+        if "speeddata" not in lower and "num" not in lower:
+            return
         for m in _line_matches(_DATA_DECL, masked):
             key = m.group(3).lower()
             entry = (m.group(1).upper(), m.group(2).lower(), (m.group(4) or "").strip(), lines.number(m.start(1)))
