@@ -3,7 +3,7 @@
 import array
 import dataclasses
 import re
-from itertools import chain
+from itertools import chain, repeat
 from pathlib import Path
 
 import numpy as np
@@ -1040,10 +1040,11 @@ def _resolve_run(rows, motions, reader, lookup, elsewhere, named, frames_of, ass
     point = start >= 0  # a name; else an inline target, its target index already known
     keys = _lowered(text, start[point], end[point])
     index = motions.target[rows].copy()
-    index[point] = [reader.points.get(key, -1) for key in keys]
+    index[point] = list(map(reader.points.get, keys, repeat(-1)))
     one_by_one = np.zeros(len(rows), dtype=bool)
-    one_by_one[point] = motions.parameter[rows[point]] | (index[point] < 0) | np.array(
-        [key in assigned or key in reader.shared for key in keys], dtype=bool)
+    one_by_one[point] = motions.parameter[rows[point]] | (index[point] < 0)
+    if assigned or reader.shared:  # a point that may change at run time
+        one_by_one[point] |= np.array([key in assigned or key in reader.shared for key in keys], dtype=bool)
     first_of_proto = np.zeros(len(rows), dtype=bool)
     first_of_proto[np.unique(proto, return_index=True)[1]] = True
     why = np.full(len(rows), "", dtype=object)
@@ -1121,9 +1122,9 @@ def _targets(targets, table):
     """The program's targets: ``targets`` in order, each a row of ``table`` (int, a point read at once) or a
     `Target`; as one `TargetTable` when all lie in the module (their spans in source 0), else a tuple of
     `Target`."""
+    if table is not None and set(map(type, targets)) == {int} and np.array_equal(targets, np.arange(len(table))):
+        return table  # all points read at once, in order
     rows = np.array([t if isinstance(t, int) else -1 for t in targets], dtype=int)
-    if table is not None and np.array_equal(rows, np.arange(len(table))):  # all points read at once, in order
-        return table
     objects = [t for t in targets if not isinstance(t, int)]
     if table is None or any(t.spans and next(iter(t.spans.values())).source != 0 for t in objects):
         return tuple(table.target(t) if isinstance(t, int) else t for t in targets)
