@@ -416,7 +416,7 @@ class Program:
         index = np.asarray(index, dtype=int)
         if isinstance(self.targets, TargetRows):
             table = self.targets.table.with_rows(index, poses=poses, joints=joints, configs=configs)
-            return dataclasses.replace(self, targets=TargetRows(table))
+            return self._kept_uses(dataclasses.replace(self, targets=TargetRows(table)))
         targets = list(self.targets)
         for k, i in enumerate(index):
             change = {"edited": True}
@@ -427,7 +427,15 @@ class Program:
             if configs is not None:
                 change["config"] = tuple(configs[k])
             targets[i] = replaced(targets[i], **change)
-        return dataclasses.replace(self, targets=tuple(targets))
+        return self._kept_uses(dataclasses.replace(self, targets=tuple(targets)))
+
+    def _kept_uses(self, other):
+        """``other``, this program with other target numbers, given what this one built of its items and of its
+        targets' tools and frames (`target_uses`, `usage_table`): the same, not built again (a long program's
+        uses are some 60 bytes each)."""
+        other.__dict__.update({name: self.__dict__[name] for name in ("motions", "_motion_table", "_joined", "_uses", "_usage")
+                               if name in self.__dict__})
+        return other
 
     def replace(self, **changes):
         """A copy with some attributes changed."""

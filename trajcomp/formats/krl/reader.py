@@ -207,7 +207,7 @@ def _written_points(index, masked, lines):
     shared : ndarray of bool, shape (N,)
         The points declared GLOBAL.
     """
-    offset = np.int32 if len(masked) < 2 ** 31 else np.int64  # offsets into the text: half the bytes where they fit
+    offset = _offset_type(masked)
     codes = text_codes(masked)
     starts, ends = _line_bounds(codes)
     configs = {}  # one tuple per distinct (S, T): a path's points mostly share theirs
@@ -250,6 +250,11 @@ AT_ONCE = 65536  # lines or motions whose fields are found and read together: bo
 _HEADS = tuple(f"DECL {scope}{typ} " for scope in ("", "GLOBAL ") for typ in ("E6POS", "POS", "FRAME"))
 _LONGEST_NAME = 64  # characters of a point name read at once (a longer one: `_WRITTEN_POINT`)
 _LONGEST_WHOLE = 24  # digits of an S or T read at once
+
+
+def _offset_type(text):
+    """The integer type of offsets into ``text`` a table keeps: half the bytes of int64 where they fit."""
+    return np.int32 if len(text) < 2 ** 31 else np.int64
 
 
 def _member_layouts():
@@ -1040,15 +1045,16 @@ class _Walk:
         start = np.stack([written["keyword_start"][rows], none, written["name_start"][rows], none, span[:, 0]], 1)
         end = np.stack([written["keyword_end"][rows], none, written["name_end"][rows], none, span[:, 1]], 1)
         target, reason, refs, home = resolved
+        offset = _offset_type(text)  # the spans and the line as int32 where they fit: 48 bytes a motion less
         table = MotionTable(
             kind=np.array([LINEAR, JOINT], dtype=object)[joint.astype(int)], target=target, via=np.full(len(rows), -1),
             speed=np.where(joint, number(speed_ptp)[state], number(speed_cp)[state]),
             speed_unit=np.array(["mm/s", "%"], dtype=object)[joint.astype(int)],
             zone=np.where(approximated, number(zone)[state], np.nan), tool=tool[state], frame=base[state],
             line=written["line"][rows], axis_position=np.zeros(len(rows), dtype=bool),
-            text=_Stripped(text, written["start"][rows], written["end"][rows]),
-            speed_why=np.where(joint, why_ptp[state], why_cp[state]), spans=SpanColumns(self.index, text, MOTION_SPANS,
-                                                                                          start, end))
+            text=_Stripped(text, written["start"][rows].astype(offset), written["end"][rows].astype(offset)),
+            speed_why=np.where(joint, why_ptp[state], why_cp[state]),
+            spans=SpanColumns(self.index, text, MOTION_SPANS, start.astype(offset), end.astype(offset)))
         if len(reason):
             table = table.with_rows(list(reason), target=-1, reason=list(reason.values()), refs=list(refs),
                                     axis_position=home)
