@@ -67,6 +67,21 @@ def test_a_table_backed_program_reads_as_the_program_of_objects():
     assert table.not_compensated() == objects.not_compensated()
 
 
+def test_a_program_with_other_target_numbers_keeps_the_uses_it_built_and_builds_the_same_ones():
+    targets = tuple(Target(name, line=0, pose=np.eye(4)) for name in ("P1", "P2", "P3"))
+    for program in (Program("krl", "p", _motions(), targets),
+                    Program.from_tables("krl", "p", (), MotionTable.of(_motions()), TargetTable.of(targets))):
+        uses, usage = program.target_uses(), program.usage_table()
+        moved = program.with_targets([0, 1], poses=np.stack([np.eye(4)] * 2) + 1.0)
+        assert moved.target_uses() is uses and moved.usage_table() is usage  # kept, not built again
+        fresh = moved.replace()  # the same program without what this one kept: built from its own items
+        assert fresh.target_uses() is not uses
+        for name, built in fresh.target_uses().items():
+            np.testing.assert_array_equal(built, uses[name])
+        assert fresh.usage_table().index.tolist() == usage.index.tolist() == [0, 1]
+        assert np.array_equal(moved.target_table().pose[0], np.eye(4) + 1.0)
+
+
 def test_statement_tables_merge_in_the_parts_order():
     first = StatementTable([1, 3], ["A", "B"], refs={1: (0,)})
     merged = StatementTable.merged([first, [Statement(7, "C", source=1)]])
