@@ -163,7 +163,8 @@ def test_position_numbers_beyond_the_lines_read_at_once_read_line_by_line(tmp_pa
     assert _seen(program) == _seen(_line_by_line(path, monkeypatch))
 
 
-@pytest.mark.parametrize("text", ["a\nbb\n\nc", "a\nb\n", "", "\n", "a\r\nb\rc\n", "é\nx\n"])
+@pytest.mark.parametrize("text", ["a\nbb\n\nc", "a\nb\n", "", "\n", "a\r\nb\rc\n", "é\nx\n", "x\r\r\n\ny\r",
+                                  "\r", "\n\r\n", "é\r\nx\r"])
 def test_line_starts_found_at_once_are_those_of_the_regular_expression(text):
     assert Lines(text).starts == [0] + [m.end() for m in re.finditer(r"\r\n|\r|\n", text)]
 

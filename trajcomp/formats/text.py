@@ -103,8 +103,10 @@ class Lines:
 
     def __init__(self, text):
         self.text = text
-        if "\r" not in text and text.isascii():  # each line ending one byte "\n": a long program's found at once
-            ends = np.flatnonzero(np.frombuffer(text.encode("ascii"), dtype=np.uint8) == ord("\n")) + 1
+        if text.isascii():  # a long program's line endings found at once: "\r\n", a "\r" alone, "\n"
+            codes = text_codes(text)
+            line_feed = codes == ord("\n")
+            ends = np.flatnonzero(line_feed | ((codes == ord("\r")) & ~np.append(line_feed[1:], False))) + 1
             self.starts = [0] + ends.tolist()
         else:
             self.starts = [0] + [m.end() for m in re.finditer(r"\r\n|\r|\n", text)]
