@@ -295,7 +295,12 @@ def _spelt(codes, at, width):
 
 def _spells(codes, at, word):
     """Whether the text spells ``word`` (upper case ASCII) from each offset ``at`` (K,), in any case."""
-    return (_spelt(codes, at, len(word)) == np.frombuffer(word.encode("ascii"), dtype=np.uint8)).all(axis=1)
+    return _starts_with(_spelt(codes, at, len(word)), word)
+
+
+def _starts_with(spelt, word):
+    """Whether each row of characters (..., W) `_spelt` gives starts with ``word`` (upper case ASCII, at most W)."""
+    return (spelt[..., :len(word)] == np.frombuffer(word.encode("ascii"), dtype=np.uint8)).all(axis=-1)
 
 
 def _made_of(codes, start, end, table, longest):
@@ -341,8 +346,9 @@ def _written_layout(codes, starts, ends):
     candidate = np.flatnonzero((close > starts) & (codes[np.maximum(close, 0)] == ord("}")))
     start_at, close = starts[candidate], close[candidate]
     head_end, shared = np.full(len(candidate), -1), np.zeros(len(candidate), dtype=bool)
+    heads = _spelt(codes, start_at, max(map(len, _HEADS)))
     for head in _HEADS:
-        spelt = _spells(codes, start_at, head)
+        spelt = _starts_with(heads, head)
         head_end[spelt] = start_at[spelt] + len(head)
         shared[spelt] = "GLOBAL" in head
     base, top = int(starts[0]), int(ends[-1])
@@ -369,11 +375,12 @@ def _written_layout(codes, starts, ends):
         separators = np.concatenate([brace[rows, None], commas[np.searchsorted(commas, brace[rows])[:, None]
                                                                + np.arange(members - 1)]], axis=1)
         member_end = np.concatenate([separators[:, 1:], close[rows, None]], axis=1)
+        names = _spelt(codes, (separators + 1).ravel(), 3).reshape(len(rows), members, 3)  # "X ", "E1 "
         for layout in layouts:
             spelt = np.ones(len(rows), dtype=bool)
             field_start = np.empty((len(rows), members), dtype=np.int64)
             for k, (member, _) in enumerate(layout):
-                spelt &= _spells(codes, separators[:, k] + 1, member + " ")
+                spelt &= _starts_with(names[:, k], member + " ")
                 field_start[:, k] = separators[:, k] + 2 + len(member)
             spelt &= (member_end > field_start).all(axis=1)
             fields = [field for _, field in layout]
@@ -443,11 +450,15 @@ def _written_block(start, end, numbers, shared, offset, configs):
     keep = np.flatnonzero(good)
     vector = pose[keep]
     vector[:, 3:] = np.radians(vector[:, 3:])
-    status_rows = np.where(given[keep, 6:8], status[keep], 0).astype(int).tolist()
-    config = tuple(configs.setdefault(tuple(st), tuple(st)) if has else ()
-                   for st, has in zip(status_rows, given[keep, 6].tolist()))
+    key = np.where(given[keep, 6], status[keep, 0] * 64 + status[keep, 1], -1).astype(np.int64)  # S, T: 8, 6 bits
+    distinct, which = np.unique(key, return_inverse=True)
+    words = np.empty(len(distinct), dtype=object)
+    for k, word in enumerate(distinct.tolist()):
+        words[k] = configs.setdefault(divmod(word, 64), divmod(word, 64)) if word >= 0 else ()
+    config = tuple(words[which.ravel()].tolist())
     counts = given[keep, 8:].sum(axis=1).tolist()
-    external = tuple(external[k, :count].copy() if count else None for k, count in zip(keep.tolist(), counts))
+    external = (tuple(external[k, :count].copy() if count else None for k, count in zip(keep.tolist(), counts))
+                if any(counts) else (None,) * len(keep))
     return (pose_to_matrix(vector), start[keep, :10].astype(offset), end[keep, :10].astype(offset), config, external,
             shared[keep])
 
