@@ -812,8 +812,12 @@ def read(path):
     if not _DEF.search(src_masked):
         raise ReadError(f"{path}: not a KRL program: no DEF line")
     src = reader.sources[src_index]
-    check_closed(src, src_masked, _BLOCK_OPENS, _BLOCK_CLOSES, {"DEF": "END", "DEFFCT": "ENDFCT"})
     written = _written_motions(src_masked, src_lines)
+    # the motion lines read at once open and close no block: the runs of other lines between them
+    part_start, part_end = np.append(0, written["end"]), np.append(written["start"], len(src_masked))
+    between = np.flatnonzero(part_end - part_start > 1)  # more than the line ending between two motion lines
+    check_closed(src, src_masked, _BLOCK_OPENS, _BLOCK_CLOSES, {"DEF": "END", "DEFFCT": "ENDFCT"},
+                 list(zip(part_start[between].tolist(), part_end[between].tolist())))
     others = _other_lines(src_lines, written["line"])
     reader.scan_assignments(src_masked, others)
     dat_path, table = _sibling_dat(path), None
