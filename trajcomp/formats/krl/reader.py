@@ -825,7 +825,8 @@ def read(path):
         dat_index, dat_lines, dat_masked = reader.add_source(read_source(dat_path))
         if not _DEFDAT.search(dat_masked):
             raise ReadError(f"{dat_path}: not a KRL data list: no DEFDAT line")
-        if not _ENDDAT.search(dat_masked):
+        tail = max(0, len(dat_masked) - 65536)  # ENDDAT closes a data list: looked for near its end first
+        if not (_ENDDAT.search(dat_masked, tail) or _ENDDAT.search(dat_masked)):
             raise ReadError(f"{dat_path}: no ENDDAT: the data list is cut off")
         point_lines, table, shared = _written_points(dat_index, dat_masked, dat_lines)
         names = table.name if table is not None else ()
