@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from trajcomp.arm.ik import configuration_of
-from trajcomp.formats.configuration import flags
+from trajcomp.formats.configuration import distinct_tuples, flags
 from trajcomp.formats.fanuc.configuration import encode as fanuc_config
 from trajcomp.formats.krl.configuration import encode as kuka_status_turn
 from trajcomp.formats.rapid.configuration import encode as abb_confdata
@@ -65,3 +65,12 @@ def test_flags_are_the_configuration_of_the_joints(robots):
         assert up.tolist() == [c.elbow == "up" for c in configs]
         assert negative.tolist() == [c.wrist == "negative" for c in configs]
         assert 0 < behind.sum() + up.sum() + negative.sum() < 900  # both values of the flags occur
+
+
+@pytest.mark.parametrize("high", [3, 2**40])  # rows as one number in mixed radices, or (too wide) sorted as rows
+def test_distinct_tuples_are_the_rows(high):
+    rows = np.random.default_rng(8).integers(-high, high + 1, (500, 4))
+    rows[::3] = rows[0]
+    made = distinct_tuples(rows, lambda row: ("x", *row))
+    assert made == [("x", *row) for row in rows.tolist()]
+    assert len({id(t) for t in made}) == len({tuple(row) for row in rows.tolist()})

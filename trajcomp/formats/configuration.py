@@ -54,7 +54,14 @@ def distinct_tuples(rows, as_tuple=tuple):
     """
     if not len(rows):
         return []
-    distinct, row = np.unique(rows, axis=0, return_inverse=True)
+    low = rows.min(axis=0)
+    radix = rows.max(axis=0) - low + 1  # each row as one whole number in these radices: a 1-D unique, no row sort
+    if np.prod(radix.astype(float)) < 2.0**62:
+        place = np.cumprod(np.r_[1, radix])[:-1]
+        distinct, row = np.unique((rows - low) @ place, return_inverse=True)
+        distinct = low + distinct[:, None] // place % radix
+    else:
+        distinct, row = np.unique(rows, axis=0, return_inverse=True)
     made = [as_tuple(values) for values in distinct.tolist()]
     return [made[k] for k in row.reshape(-1).tolist()]
 
