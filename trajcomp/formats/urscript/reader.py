@@ -640,7 +640,9 @@ def _blocks_column(reader, name, dtype):
 def _targets(reader, rows):
     """The `TargetTable` of the targets read one by one and of the CAM-shaped lines ``rows`` read in blocks."""
     cam, n = reader.cam, reader.count
-    pose, joints = np.full((n, 4, 4), np.nan), np.full((n, 6), np.nan)
+    any_joints = cam.is_joint[rows].any() or any(t.joints is not None for t in reader.targets.values())
+    pose = np.full((n, 4, 4), np.nan)
+    joints = np.full((n, 6), np.nan) if any_joints else np.broadcast_to(np.nan, (n, 6))  # none: one NaN row shared
     is_joint, line = np.zeros(n, dtype=bool), np.zeros(n, dtype=int)
     offset = np.int32 if len(reader.source.text) < 2**31 else np.int64  # 18 roles a target: half the bytes
     start, end = np.full((n, len(ROLES)), -1, dtype=offset), np.full((n, len(ROLES)), -1, dtype=offset)
@@ -648,7 +650,8 @@ def _targets(reader, rows):
     index = _blocks_column(reader, "target", int)
     joint = cam.is_joint[rows]
     pose[index] = reader.cam_poses[rows]
-    joints[index[joint]] = cam.values[rows[joint]]
+    if any_joints:
+        joints[index[joint]] = cam.values[rows[joint]]
     is_joint[index], line[index] = joint, cam.line[rows]
     for columns, at in ((slice(0, 6), ~joint), (slice(6, 12), joint)):
         start[index[at], columns] = cam.number_start[rows[at]]
