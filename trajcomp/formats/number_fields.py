@@ -56,6 +56,11 @@ def text_codes(text):
     return np.frombuffer(text.encode("utf-32-le"), dtype=np.uint32)
 
 
+def offset_type(text):
+    """The integer type of offsets into ``text`` a table keeps: int32 where they fit (half the bytes of int64)."""
+    return np.int32 if len(text) < 2**31 else np.int64
+
+
 @dataclasses.dataclass(frozen=True)
 class WrittenNumbers:
     """N fields of a text read as numbers, and how each is written (what a writer formats new numbers like).

@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 
 from trajcomp.errors import ReadError
-from trajcomp.formats.number_fields import read_numbers, text_codes
+from trajcomp.formats.number_fields import offset_type, read_numbers, text_codes
 from trajcomp.formats.text import (
     ANGLE_LIMIT,
     JOINT_LIMIT,
@@ -194,7 +194,7 @@ def read(path):
                               + [written["speed"][rows] for rows, _ in parts])
     order = np.argsort(np.concatenate([[m.line for m in one_by_one]] + [written["line"][rows] for rows, _ in parts]),
                        kind="stable")
-    speed_at = speed_at[order].astype(_offset_type(source.text))
+    speed_at = speed_at[order].astype(offset_type(source.text))
     motions = dataclasses.replace(motions, spans=SpanColumns(0, source.text, ("speed",), speed_at[:, :1],
                                                              speed_at[:, 1:]))
     statements = _statements(source.text, starts, ends, np.flatnonzero(~covered[1:]) + 1, kept)
@@ -242,7 +242,7 @@ def _instructions(masked, starts, ends, numbers):
 def _statements(text, starts, ends, plain, kept):
     """The statements: lines ``plain`` (their numbers, ascending) and the instructions ``kept``
     (``(line, start, end, refs)``), as a `StatementTable` in line order."""
-    offset = _offset_type(text)
+    offset = offset_type(text)
     kept_line, kept_start, kept_end = (np.array([k[j] for k in kept], dtype=np.int64) for j in range(3))
     at = np.searchsorted(plain, kept_line)  # both ascending, no line in both: merged in line order
     line = np.insert(plain, at, kept_line)
@@ -295,8 +295,8 @@ def _written_motions(by_line, starts, ends, in_mn, points, unread):
     index = np.array([points[n] for n in known.tolist()], dtype=np.int64)
     return {"line": line[keep], "kind": np.array([LINEAR, JOINT], dtype=object)[is_joint[keep].astype(np.int64)],
             "target": index[slot[keep]] if len(keep) else np.zeros(0, dtype=np.int64),
-            "speed": speed_at[keep], "start": starts[line[keep] - 1].astype(_offset_type(by_line)),
-            "end": ends[line[keep] - 1].astype(_offset_type(by_line)),
+            "speed": speed_at[keep], "start": starts[line[keep] - 1].astype(offset_type(by_line)),
+            "end": ends[line[keep] - 1].astype(offset_type(by_line)),
             "value": value[keep] * scale[keep], "unit": unit[keep],
             "zone": np.where(zone[keep] == 0.0, np.nan, zone[keep])}
 
@@ -711,7 +711,7 @@ def _target_table(text, written, order, slow, starts):
     fast = order >= 0
     one_by_one = TargetTable.of([t for t, _ in slow])
     roles = XYZWPR + ("config",) + (JOINTS if any(t.is_joint for t, _ in slow) else ())
-    offset = _offset_type(text)
+    offset = offset_type(text)
     span_at = np.full((n, 2, len(roles)), -1, dtype=offset)
     span_at[fast, :, :7] = written["spans"][rows]
     column = {role: j for j, role in enumerate(roles)}
@@ -744,11 +744,6 @@ def _target_table(text, written, order, slow, starts):
         external=tuple(merged(_objects([None] * len(rows)), _objects(one_by_one.external), object).tolist()),
         edited=np.zeros(n, dtype=bool), name=_Named(text, number_at[:, 0], number_at[:, 1]),
         spans=SpanColumns(0, text, roles, span_at[:, 0], span_at[:, 1]))
-
-
-def _offset_type(text):
-    """The integer type of offsets into ``text``: int32 where they fit (half the bytes of a long program's)."""
-    return np.int32 if len(text) < 2**31 else np.int64
 
 
 def _objects(values):

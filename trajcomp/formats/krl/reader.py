@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 
 from trajcomp.errors import ReadError
-from trajcomp.formats.number_fields import read_numbers, text_codes
+from trajcomp.formats.number_fields import offset_type, read_numbers, text_codes
 from trajcomp.formats.text import (
     ANGLE_LIMIT,
     JOINT_LIMIT,
@@ -207,7 +207,7 @@ def _written_points(index, masked, lines):
     shared : ndarray of bool, shape (N,)
         The points declared GLOBAL.
     """
-    offset = _offset_type(masked)
+    offset = offset_type(masked)
     codes = text_codes(masked)
     starts, ends = _line_bounds(codes)
     configs = {}  # one tuple per distinct (S, T): a path's points mostly share theirs
@@ -250,11 +250,6 @@ AT_ONCE = 65536  # lines or motions whose fields are found and read together: bo
 _HEADS = tuple(f"DECL {scope}{typ} " for scope in ("", "GLOBAL ") for typ in ("E6POS", "POS", "FRAME"))
 _LONGEST_NAME = 64  # characters of a point name read at once (a longer one: `_WRITTEN_POINT`)
 _LONGEST_WHOLE = 24  # digits of an S or T read at once
-
-
-def _offset_type(text):
-    """The integer type of offsets into ``text`` a table keeps: half the bytes of int64 where they fit."""
-    return np.int32 if len(text) < 2 ** 31 else np.int64
 
 
 def _member_layouts():
@@ -1061,7 +1056,7 @@ class _Walk:
         start = np.stack([written["keyword_start"][rows], none, written["name_start"][rows], none, span[:, 0]], 1)
         end = np.stack([written["keyword_end"][rows], none, written["name_end"][rows], none, span[:, 1]], 1)
         target, reason, refs, home = resolved
-        offset = _offset_type(text)  # the spans and the line as int32 where they fit: 48 bytes a motion less
+        offset = offset_type(text)  # the spans and the line as int32 where they fit: 48 bytes a motion less
         table = MotionTable(
             kind=np.array([LINEAR, JOINT], dtype=object)[joint.astype(int)], target=target, via=np.full(len(rows), -1),
             speed=np.where(joint, number(speed_ptp)[state], number(speed_cp)[state]),
