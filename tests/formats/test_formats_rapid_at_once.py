@@ -209,3 +209,11 @@ def test_a_point_the_read_at_once_cannot_take_is_refused_naming_its_field(tmp_pa
     path.write_text(_module(*_RUN).replace("[[200,20,500]," + _REST, value))
     with pytest.raises(ReadError, match=message):
         formats.read(path)
+
+
+@pytest.mark.parametrize("at", [0, 3, 5, 9, 12])
+def test_data_words_across_the_pieces_looked_in_are_found(at):
+    for word in ("SpeedData", "NUM"):
+        text = "x" * (16 - at) + word + "y" * 20
+        assert rapid_reader._declares_data(text, piece=16)
+    assert not rapid_reader._declares_data("x" * 100 + "speed data nu m", piece=16)

@@ -10,7 +10,7 @@ import numpy as np
 
 from trajcomp.errors import ReadError
 from trajcomp.formats.configuration import distinct_tuples
-from trajcomp.formats.number_fields import read_numbers, text_codes
+from trajcomp.formats.number_fields import offset_type, read_numbers, text_codes
 from trajcomp.formats.text import (
     JOINT_LIMIT,
     LENGTH_LIMIT,
@@ -239,7 +239,7 @@ def _value_fields(codes, start, end, layout):
     numbered = np.isin(delimiters[:-1], [ord("["), ord(",")]) & np.isin(delimiters[1:], [ord(","), ord("]")])
     fields, empty = gaps[numbered], gaps[~numbered]
     n = len(start)
-    field_start, field_end = (np.zeros((n, len(fields)), dtype=np.int64) for _ in range(2))
+    field_start, field_end = (np.zeros((n, len(fields)), dtype=offset_type(codes)) for _ in range(2))
     laid_out = np.zeros(n, dtype=bool)
     for lo in range(0, n, ROWS_AT_ONCE):
         rows = slice(lo, lo + ROWS_AT_ONCE)
@@ -252,9 +252,10 @@ def _value_fields(codes, start, end, layout):
         good &= (codes[found] == delimiters).all(axis=1) & (found[:, empty + 1] == found[:, empty] + 1).all(axis=1)
         field_start[rows], field_end[rows], laid_out[rows] = found[:, fields] + 1, found[:, fields + 1], good
     numbers = np.full((n, len(fields)), np.nan)
-    values, is_number = read_numbers(codes, field_start[laid_out].T.ravel(), field_end[laid_out].T.ravel())
-    numbers[laid_out] = values.reshape(len(fields), -1).T  # read a column at a time: fields of one width together
-    laid_out[laid_out] = is_number.reshape(len(fields), -1).all(axis=0)
+    rows = np.flatnonzero(laid_out)
+    for j in range(len(fields)):  # a column at a time: fields of one width together, a column's transients only
+        numbers[rows, j], is_number = read_numbers(codes, field_start[rows, j], field_end[rows, j])
+        laid_out[rows[~is_number]] = False
     return numbers, field_start, field_end, laid_out
 
 
@@ -297,15 +298,28 @@ def _robtargets(text, lines, numbers, name, field_start, field_end):
     T[:, :3, :3] = quat_to_matrix(quat[keep])
     T[:, :3, 3] = position[keep]
     external = np.where(np.abs(external[keep]) >= UNUSED_AXIS, np.nan, external[keep])
-    start, end, name = field_start[keep, :11], field_end[keep, :11], name[keep]  # x .. cfx
+    offset = offset_type(text)  # the spans as int32 where they fit: 88 bytes a point less
+    start, end, name = field_start[keep, :11].astype(offset), field_end[keep, :11].astype(offset), name[keep]  # x..cfx
     unused = np.isnan(external).all(axis=1)
     none = repeated(None, n)
     return keep, TargetTable(
-        T, np.zeros(n, dtype=bool), np.full((n, 6), np.nan), np.searchsorted(lines.starts, start[:, 0], side="right"),
+        T, np.zeros(n, dtype=bool), np.broadcast_to(np.nan, (n, 6)),  # no joints: one NaN row shared
+        np.searchsorted(lines.starts, start[:, 0], side="right"),
         tuple(distinct_tuples(config[keep].astype(int))), none, none,
         (None,) * n if unused.all() else tuple(None if u else e for u, e in zip(unused.tolist(), external)),
         np.zeros(n, dtype=bool), TextSlices(text, name[:, 0], name[:, 1]),
         SpanColumns(0, text, POSITION + QUAT + CONF, start, end))
+
+
+def _declares_data(masked, piece=1 << 20):
+    """Whether a module's masked text holds the word speeddata or num in any case (`_Reader.scan_data`).
+
+    Looked for in lower-case copies of pieces of ``piece`` characters (a
+    case-blind pattern search is ten times slower; a copy of the whole
+    text would add its size to the read's peak).
+    """
+    return any("speeddata" in part or "num" in part
+               for part in (masked[max(k - 8, 0):k + piece].lower() for k in range(0, len(masked), piece)))
 
 
 class _WrittenMotions:
@@ -543,8 +557,7 @@ class _Reader:
         """Note the module's speeddata and num declarations (a motion may use one declared further down), and
         where a statement other than its declaration and motions may change a VAR speeddata (``lines``: the
         module's `Lines`)."""
-        lower = masked.lower()  # a CAM module declares none: its lines are not tried (a case-blind search is slower)
-        if "speeddata" not in lower and "num" not in lower:
+        if not _declares_data(masked):  # a CAM module declares none: its lines are not tried
             return
         for m in _line_matches(_DATA_DECL, masked):
             key = m.group(3).lower()
