@@ -101,13 +101,16 @@ _NOT_LINE_BREAK = re.compile(r"[^\r\n]")
 class Lines:
     """Line numbers (1-based) of offsets in a text, and its lines without line endings."""
 
+    PIECE = 1 << 22  # characters looked at together for line endings
     def __init__(self, text):
         self.text = text
         if text.isascii():  # a long program's line endings found at once: "\r\n", a "\r" alone, "\n"
-            codes = text_codes(text)
-            line_feed = codes == ord("\n")
-            ends = np.flatnonzero(line_feed | ((codes == ord("\r")) & ~np.append(line_feed[1:], False))) + 1
-            self.starts = [0] + ends.tolist()
+            self.starts = [0]
+            for at in range(0, len(text), self.PIECE):  # a piece at a time: a few MB of codes, not the text's size
+                codes = text_codes(text[at:at + self.PIECE + 1])  # and the next character: "\r" ends a line alone
+                line_feed = codes == ord("\n")
+                ends = line_feed | ((codes == ord("\r")) & ~np.append(line_feed[1:], False))
+                self.starts += (np.flatnonzero(ends[:self.PIECE]) + at + 1).tolist()
         else:
             self.starts = [0] + [m.end() for m in re.finditer(r"\r\n|\r|\n", text)]
 
