@@ -198,6 +198,17 @@ def _written_lines(masked, codes, lines, excluded):
     return out
 
 
+def _check_blocks(source, masked, read_at_once):
+    """`check_closed` of a module's MODULE, PROC, FUNC and TRAP blocks, over the runs of lines between those read
+    at once (``read_at_once``: (N, 2) offsets of their matches, `_written_lines`), which open and close none."""
+    spans = read_at_once[np.argsort(read_at_once[:, 0], kind="stable")]
+    part_start, part_end = np.append(0, spans[:, 1]), np.append(spans[:, 0], len(masked))
+    between = np.flatnonzero(part_end - part_start > 1)  # more than the line break between two lines read at once
+    check_closed(source, masked, _BLOCK_OPENS, _BLOCK_CLOSES,
+                 {"MODULE": "ENDMODULE", "PROC": "ENDPROC", "FUNC": "ENDFUNC", "TRAP": "ENDTRAP"},
+                 list(zip(part_start[between].tolist(), part_end[between].tolist())))
+
+
 def _line_matches(pattern, text):
     """The matches of ``pattern`` at the start of each line of ``text`` (as ``^`` with ``re.M`` before it), in
     order: those after the first line begin at the line break before theirs.
@@ -893,8 +904,6 @@ def read(path):
     module = _MODULE.search(masked)
     if not module:
         raise ReadError(f"{path}: not a RAPID module: no MODULE line")
-    check_closed(source, masked, _BLOCK_OPENS, _BLOCK_CLOSES,
-                 {"MODULE": "ENDMODULE", "PROC": "ENDPROC", "FUNC": "ENDFUNC", "TRAP": "ENDTRAP"})
     folder = Path(path).parent
     folders = [folder.parent / "PROGMOD", folder.parent / "SYSMOD"] if folder.name.upper() in ("PROGMOD", "SYSMOD") \
         else [folder]  # a backup's TASKn holds its modules in PROGMOD and SYSMOD
@@ -903,8 +912,10 @@ def read(path):
     while True:  # a statement spread over lines that look read-at-once takes them back (`_Spread`): rare
         reader = _Reader(source)
         reader.task = DeclaredElsewhere(Path(path), folders, modules, _TASK_POINT, "!", assignment=_ASSIGNED_POINT)
-        reader.scan_data(masked, lines)
         found_points, named, inline = _written_lines(masked, codes, lines, excluded)
+        if not excluded:  # first: the module's blocks closed, checked where they may open or close
+            _check_blocks(source, masked, np.concatenate([found[:, 0] for found in (found_points, named, inline)]))
+        reader.scan_data(masked, lines)
         points = _WrittenPoints(source, masked, lines, codes, found_points)
         motions = _WrittenMotions(source.text, masked, lines, codes, named, inline)
         skipped = np.zeros(len(lines.starts) + 1, dtype=bool)
