@@ -159,6 +159,26 @@ def fail(source_name, line, text, message):
     raise ReadError(f"{source_name}:{line}: {message}: {text.strip()[:200]!r}")
 
 
+def runs_between(start, end, length):
+    """``(start, end)`` offsets of the runs of text between N lines read at once, the parts `check_closed` scans.
+
+    Parameters
+    ----------
+    start, end : ndarray of int, shape (N,)
+        Offsets of the lines read at once (each to its line break), ascending.
+    length : int
+        Length of the text.
+
+    Returns
+    -------
+    list of (int, int)
+        The runs longer than the line break between two such lines.
+    """
+    part_start, part_end = np.append(0, end), np.append(start, length)
+    between = np.flatnonzero(part_end - part_start > 1)
+    return list(zip(part_start[between].tolist(), part_end[between].tolist()))
+
+
 def check_closed(source, masked, opener, closer, closing, parts=None):
     """Refuse a text whose last block is never closed: a file cut off in transfer.
 

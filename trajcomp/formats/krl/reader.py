@@ -24,6 +24,7 @@ from trajcomp.formats.text import (
     mask,
     name_offsets,
     read_source,
+    runs_between,
     split_top,
     unresolved,
     whole_circle,
@@ -809,10 +810,8 @@ def read(path):
     src = reader.sources[src_index]
     written = _written_motions(src_masked, src_lines)
     # the motion lines read at once open and close no block: the runs of other lines between them
-    part_start, part_end = np.append(0, written["end"]), np.append(written["start"], len(src_masked))
-    between = np.flatnonzero(part_end - part_start > 1)  # more than the line ending between two motion lines
     check_closed(src, src_masked, _BLOCK_OPENS, _BLOCK_CLOSES, {"DEF": "END", "DEFFCT": "ENDFCT"},
-                 list(zip(part_start[between].tolist(), part_end[between].tolist())))
+                 runs_between(written["start"], written["end"], len(src_masked)))
     others = _other_lines(src_lines, written["line"])
     reader.scan_assignments(src_masked, others)
     dat_path, table = _sibling_dat(path), None

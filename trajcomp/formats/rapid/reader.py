@@ -24,6 +24,7 @@ from trajcomp.formats.text import (
     mask,
     name_offsets,
     read_source,
+    runs_between,
     spans,
     split_top,
     unresolved,
@@ -201,12 +202,10 @@ def _written_lines(masked, codes, lines, excluded):
 def _check_blocks(source, masked, read_at_once):
     """`check_closed` of a module's MODULE, PROC, FUNC and TRAP blocks, over the runs of lines between those read
     at once (``read_at_once``: (N, 2) offsets of their matches, `_written_lines`), which open and close none."""
-    spans = read_at_once[np.argsort(read_at_once[:, 0], kind="stable")]
-    part_start, part_end = np.append(0, spans[:, 1]), np.append(spans[:, 0], len(masked))
-    between = np.flatnonzero(part_end - part_start > 1)  # more than the line break between two lines read at once
+    lines_read = read_at_once[np.argsort(read_at_once[:, 0], kind="stable")]
     check_closed(source, masked, _BLOCK_OPENS, _BLOCK_CLOSES,
                  {"MODULE": "ENDMODULE", "PROC": "ENDPROC", "FUNC": "ENDFUNC", "TRAP": "ENDTRAP"},
-                 list(zip(part_start[between].tolist(), part_end[between].tolist())))
+                 runs_between(lines_read[:, 0], lines_read[:, 1], len(masked)))
 
 
 def _line_matches(pattern, text):
