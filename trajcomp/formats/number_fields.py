@@ -88,8 +88,8 @@ class WrittenNumbers:
         start, end = np.asarray(start, dtype=np.int64), np.asarray(end, dtype=np.int64)
         blocks = [_from_characters(codes, start[k:k + FIELDS_AT_ONCE], end[k:k + FIELDS_AT_ONCE])
                   for k in range(0, len(start), FIELDS_AT_ONCE)]
-        values, read, places, bare = (np.concatenate(column) for column in zip(*blocks)) if blocks else (
-            np.zeros(0), np.zeros(0, dtype=bool), np.zeros(0, dtype=np.int64), np.zeros(0, dtype=bool))
+        values, read, places, bare = (np.concatenate(column) for column in zip(*blocks)) if blocks else \
+            dataclasses.astuple(cls.none(0))
         is_number = read.copy()
         other = np.flatnonzero(~read)
         if len(other):  # by float, once per distinct text
@@ -101,10 +101,14 @@ class WrittenNumbers:
             bare[other] = [is_bare(text) for text in texts]
         return cls(values, is_number, places, bare)
 
+    @classmethod
+    def none(cls, n):
+        """N fields that are no number (NaN, no places, not bare)."""
+        return cls(np.full(n, np.nan), np.zeros(n, dtype=bool), np.zeros(n, dtype=np.int64), np.zeros(n, dtype=bool))
+
     def at(self, rows, n):
-        """These M numbers as rows (M,) of N fields, the others no number (NaN, no places, not bare)."""
-        out = WrittenNumbers(np.full(n, np.nan), np.zeros(n, dtype=bool), np.zeros(n, dtype=np.int64),
-                             np.zeros(n, dtype=bool))
+        """These M numbers as rows (M,) of N fields, the others no number (`none`)."""
+        out = WrittenNumbers.none(n)
         for column, values in zip((out.values, out.is_number, out.places, out.bare),
                                   (self.values, self.is_number, self.places, self.bare)):
             column[rows] = values
