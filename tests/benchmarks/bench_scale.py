@@ -28,7 +28,10 @@ read and written again by `trajcomp.formats`, no compensation, a fresh
 process; for CSV also pandas' read_csv + to_csv where pandas is
 installed), `trajcomp compensate` (re-timed, every core), its ratio to the
 CSV path on the same arm and to the floor, and its peak memory above that
-of a 100-waypoint program of the same language, per waypoint.
+of a 100-waypoint program of the same language, per waypoint. Each language
+also in the other forms CAM post-processors write it (`cam_forms.FORMS`, a
+row ``LANGUAGE:FORM`` each, e.g. ``krl:inline``): ``languages krl`` runs
+every KRL form, ``languages krl:inline`` that one.
 Targets (issue 25): every language within 2x the CSV path, <= 2 KB per
 waypoint above start-up; CSV within 8x the pandas floor.
 """
@@ -44,6 +47,7 @@ from pathlib import Path
 
 import numpy as np
 
+from cam_forms import FORMS
 from trajcomp.cli import main
 from trajcomp.compensation.targets import compensate
 from trajcomp.demo import demo_cubes
@@ -171,10 +175,11 @@ def language_bench(sizes, languages=()):
     ``languages``: the robot languages to run (each with CSV on its arm, the reference); all when empty.
     """
     folder = Path(tempfile.mkdtemp(prefix="trajcomp-languages-"))
-    print(f"{'waypoints':>10} {'language':>9} {'arm':>18} {'floor s':>8} {'compensate s':>13} {'x CSV':>6} "
+    print(f"{'waypoints':>10} {'language':>15} {'arm':>18} {'floor s':>8} {'compensate s':>13} {'x CSV':>6} "
           f"{'x floor':>8} {'peak MB':>8} {'KB/waypoint':>12}")
+    wanted = {name.split(":")[0] for name in languages}
     chosen = {robot: pairs for robot, pairs in LANGUAGES.items()
-              if not languages or any(language in languages for language, _ in pairs[1:])}
+              if not languages or any(language in wanted for language, _ in pairs[1:])}
     arms = {}
     for robot in chosen:
         large = demo_cubes(load_robot(robot))[0]
@@ -194,22 +199,35 @@ def language_bench(sizes, languages=()):
                 paths[size] = source if language == "csv" else place / f"helix_{size}{extension}"
                 if language != "csv":
                     quietly(["convert", str(source), str(paths[size]), "--robot", robot])
-            program, out = paths[n], place / f"out{extension}"
-            floor = float(np.median([run_python(["-c", "from trajcomp import formats; import sys; "
-                                                 "formats.write(sys.argv[2], formats.read(sys.argv[1]))",
-                                                 str(program), str(out)])[0] for _ in range(RUNS)]))
-            args = ["compensate", str(program), "--model", str(model), "-o", str(out)]
-            wall = float(np.median([run_cli(args)[0] for _ in range(RUNS)]))
-            if language == "csv":
-                csv_time[robot] = wall
-            peak = run_cli(args, sample=True)[1]
-            start = run_cli(["compensate", str(paths[100]), "--model", str(model), "-o", str(out)], sample=True)[1]
-            print(f"{n:>10,} {language:>9} {robot:>18} {floor:>8.2f} {wall:>13.2f} {wall / csv_time[robot]:>6.2f} "
-                  f"{wall / floor:>8.2f} {peak:>8,.0f} {(peak - start) * 1024 / n:>12.2f}", flush=True)
+            forms = [(language, lambda path, _: path)] + [(f"{language}:{name}", make)
+                                                          for name, make in FORMS.get(language, {}).items()]
+            for label, make in forms:
+                if label == "csv" or not languages or {label, label.split(":")[0]} & set(languages):
+                    written = {size: make(paths[size], place) for size in paths}
+                    _language_row(n, label, robot, written, model, place / f"out{extension}", csv_time)
             if language == "csv" and robot == "ur10":
-                _pandas_floor(program, out, wall)
+                _pandas_floor(paths[n], place / f"out{extension}", csv_time[robot])
     print("targets: every language <= 2x CSV (same arm); <= 2 KB per waypoint above start-up; "
           "CSV <= 8x the pandas floor")
+
+
+def _language_row(n, label, robot, paths, model, out, csv_time):
+    """Time one program of ``n`` waypoints (``paths[n]``; ``paths[100]`` the start-up's) and print its row.
+
+    The CSV row on an arm sets ``csv_time[robot]``, the reference of the arm's other rows.
+    """
+    program = paths[n]
+    floor = float(np.median([run_python(["-c", "from trajcomp import formats; import sys; "
+                                         "formats.write(sys.argv[2], formats.read(sys.argv[1]))",
+                                         str(program), str(out)])[0] for _ in range(RUNS)]))
+    args = ["compensate", str(program), "--model", str(model), "-o", str(out)]
+    wall = float(np.median([run_cli(args)[0] for _ in range(RUNS)]))
+    if label == "csv":
+        csv_time[robot] = wall
+    peak = run_cli(args, sample=True)[1]
+    start = run_cli(["compensate", str(paths[100]), "--model", str(model), "-o", str(out)], sample=True)[1]
+    print(f"{n:>10,} {label:>15} {robot:>18} {floor:>8.2f} {wall:>13.2f} {wall / csv_time[robot]:>6.2f} "
+          f"{wall / floor:>8.2f} {peak:>8,.0f} {(peak - start) * 1024 / n:>12.2f}", flush=True)
 
 
 def _pandas_floor(program, out, wall):
