@@ -188,3 +188,44 @@ def _from_characters(codes, start, end):
     first, second = (char[k] if k < widest else np.zeros(n, dtype=np.int64) for k in (0, 1))
     bare = np.where((first == _PLUS) | (first == _MINUS), second, first) == _POINT
     return np.where(read, np.where(first == _MINUS, -magnitude, magnitude), np.nan), read, places, bare
+
+
+# The characters around the numbers: how the bulk readers find the lines and fields they read at once.
+
+def character_table(characters):
+    """Whether each code (256,) is one of ``characters`` (ASCII; `spelt` makes a code beyond ASCII 127)."""
+    table = np.zeros(256, dtype=bool)
+    table[np.frombuffer(characters.encode("ascii"), dtype=np.uint8)] = True
+    return table
+
+
+WORD_CHARACTER = character_table("ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789_")
+DIGIT = character_table("0123456789")
+BLANK = character_table(" \t")
+_UPPER = np.arange(256, dtype=np.uint8)  # an ASCII text's codes in upper case (its bytes: uint8)
+_UPPER[ord("a"):ord("z") + 1] -= 32
+_UPPER[128:] = 127
+
+
+def spelt(codes, at, width):
+    """The upper-case ASCII codes (K, width) of the ``width`` characters from offsets ``at`` (K,) (127 beyond ASCII;
+    the text's last character repeated beyond its end)."""
+    spelt_codes = codes.take(at[:, None] + np.arange(width), mode="clip")
+    return _UPPER[spelt_codes if codes.dtype == np.uint8 else np.minimum(spelt_codes, 127)]
+
+
+def spells(codes, at, word):
+    """Whether the text spells ``word`` (upper case ASCII) from each offset ``at`` (K,), in any case."""
+    return starts_with(spelt(codes, at, len(word)), word)
+
+
+def starts_with(spelt_codes, word):
+    """Whether each row of characters (..., W) `spelt` gives starts with ``word`` (upper case ASCII, at most W)."""
+    return (spelt_codes[..., :len(word)] == np.frombuffer(word.encode("ascii"), dtype=np.uint8)).all(axis=-1)
+
+
+def line_bounds(codes):
+    """Offsets (L+1,) of the lines' starts (the text's start and each ``\\n``'s next) and of their ``\\n`` (the
+    text's end for the last): where a `re.M` pattern's ``^`` and ``$`` match."""
+    newline = np.flatnonzero(codes == ord("\n"))
+    return np.concatenate([[0], newline + 1]), np.append(newline, len(codes))

@@ -9,7 +9,10 @@ from pathlib import Path
 import numpy as np
 
 from trajcomp.errors import ReadError
+from trajcomp.formats.number_fields import BLANK as _BLANK, DIGIT as _DIGIT, WORD_CHARACTER as _WORD_CHARACTER
+from trajcomp.formats.number_fields import character_table as _character_table, line_bounds as _line_bounds
 from trajcomp.formats.number_fields import offset_type, read_numbers, text_codes
+from trajcomp.formats.number_fields import spells as _spells, spelt as _spelt, starts_with as _starts_with
 from trajcomp.formats.text import (
     ANGLE_LIMIT,
     JOINT_LIMIT,
@@ -266,37 +269,6 @@ def _member_layouts():
 
 
 _LAYOUTS = _member_layouts()
-
-
-def _character_table(characters):
-    """Whether each code (256,) is one of ``characters`` (ASCII; `_spelt` makes a code beyond ASCII 127)."""
-    table = np.zeros(256, dtype=bool)
-    table[np.frombuffer(characters.encode("ascii"), dtype=np.uint8)] = True
-    return table
-
-
-_WORD_CHARACTER = _character_table("ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789_")
-_DIGIT = _character_table("0123456789")
-_UPPER = np.arange(256, dtype=np.uint8)  # an ASCII text's codes in upper case (its bytes: uint8)
-_UPPER[ord("a"):ord("z") + 1] -= 32
-_UPPER[128:] = 127
-
-
-def _spelt(codes, at, width):
-    """The upper-case ASCII codes (K, width) of the ``width`` characters from offsets ``at`` (K,) (127 beyond ASCII;
-    the text's last character repeated beyond its end)."""
-    spelt = codes.take(at[:, None] + np.arange(width), mode="clip")
-    return _UPPER[spelt if codes.dtype == np.uint8 else np.minimum(spelt, 127)]
-
-
-def _spells(codes, at, word):
-    """Whether the text spells ``word`` (upper case ASCII) from each offset ``at`` (K,), in any case."""
-    return _starts_with(_spelt(codes, at, len(word)), word)
-
-
-def _starts_with(spelt, word):
-    """Whether each row of characters (..., W) `_spelt` gives starts with ``word`` (upper case ASCII, at most W)."""
-    return (spelt[..., :len(word)] == np.frombuffer(word.encode("ascii"), dtype=np.uint8)).all(axis=-1)
 
 
 def _made_of(codes, start, end, table, longest):
@@ -900,15 +872,7 @@ def _written_motions(masked, lines):
 _KEYWORDS = ("LIN", "PTP", "SLIN", "SPTP")  # `_WRITTEN_MOTION`'s motions
 _APPROXIMATIONS = ("C_PTP", "C_DIS", "C_VEL", "C_ORI", "C_SPL")
 _LONGEST_MOTION = 64  # characters of a motion line read at once (a longer one: `_WRITTEN_MOTION`)
-_BLANK = _character_table(" \t")
 _NAME_START = _character_table("ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz_")
-
-
-def _line_bounds(codes):
-    """Offsets (L+1,) of the lines' starts (the text's start and each ``\\n``'s next) and of their ``\\n`` (the
-    text's end for the last): where a `re.M` pattern's ``^`` and ``$`` match."""
-    newline = np.flatnonzero(codes == ord("\n"))
-    return np.concatenate([[0], newline + 1]), np.append(newline, len(codes))
 
 
 def _motion_layout(codes, starts, ends):
