@@ -343,6 +343,57 @@ class TargetTable:
         return dataclasses.replace(self, **changes)
 
 
+def joined_targets(targets, table, roles):
+    """One `TargetTable` of a program's targets: rows of a table read at once and a few `Target` read one by one.
+
+    Parameters
+    ----------
+    targets : sequence of int or Target, length N
+        In program order: a row of ``table`` (int) or a `Target` (an axis
+        position, a point written otherwise) whose spans lie in the table's source.
+    table : TargetTable
+        Its spans as `SpanColumns`.
+    roles : sequence of str
+        The roles of the objects' spans that the table's columns lack (joint values).
+
+    Returns
+    -------
+    TargetTable or None
+        ``table`` itself when ``targets`` are its rows in order; None when a
+        target's spans lie in another source (the caller keeps the objects).
+    """
+    rows = np.array([t if isinstance(t, int) else -1 for t in targets], dtype=int)
+    if every_row(rows, len(table)):
+        return table
+    objects = [t for t in targets if not isinstance(t, int)]
+    if any(t.spans and next(iter(t.spans.values())).source != table.spans.source for t in objects):
+        return None
+    extra = TargetTable.of(objects)
+    pick = np.where(rows >= 0, rows, len(table) + np.cumsum(rows < 0) - 1)  # row of [table; extra] of each
+
+    def joined(name):
+        values = (getattr(table, name), getattr(extra, name))
+        return np.concatenate(values)[pick] if isinstance(values[0], np.ndarray) else \
+            tuple(values[0][k] if k < len(table) else values[1][k - len(table)] for k in pick.tolist())
+
+    all_roles = table.spans.roles + tuple(roles)
+    start, end = (np.full((len(targets), len(all_roles)), -1, dtype=np.int64) for _ in range(2))
+    at_once = np.flatnonzero(rows >= 0)
+    start[at_once, :len(table.spans.roles)] = table.spans.start[rows[at_once]]
+    end[at_once, :len(table.spans.roles)] = table.spans.end[rows[at_once]]
+    column = {role: j for j, role in enumerate(all_roles)}
+    for k, target in zip(np.flatnonzero(rows < 0).tolist(), objects):
+        for role, span in target.spans.items():
+            start[k, column[role]], end[k, column[role]] = span.start, span.end
+    part = (pick >= len(table)).astype(int)
+    names = repeated("", len(table)) if table.name is None else table.name
+    return TargetTable(
+        **{name: joined(name) for name in ("pose", "is_joint", "joints", "line", "config", "tool", "frame",
+                                           "external", "edited")},
+        name=Picked([names, [t.name for t in objects]], part, np.where(part, pick - len(table), pick)),
+        spans=SpanColumns(table.spans.source, table.spans.text, all_roles, start, end))
+
+
 def _replaced(values, index, rows):
     """``values`` (N, ...) with rows ``index`` set to ``rows``: a copy, or ``rows`` itself as a read-only view when
     they replace every row in order (a long program fully compensated: no second copy)."""
