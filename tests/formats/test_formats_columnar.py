@@ -47,6 +47,8 @@ def _seen(program):
 
 
 _FANUC_WRITTEN = fanuc_reader._written_positions
+NO_INLINE = (np.zeros(0, dtype=np.int64), np.zeros((0, 10), dtype=np.int64), np.zeros((0, 16), dtype=np.int64),
+             np.zeros((0, 16), dtype=np.int64))  # what KRL's `_inline_layout` gives when it finds no line
 NONE_AT_ONCE = {  # what a language's reader at once gives when it reads nothing
     krl_reader: lambda *args: (np.zeros(0, dtype=int), None, np.zeros(0, dtype=bool)),
     fanuc_reader: lambda masked, start, end: _FANUC_WRITTEN(masked, 0, 0),
@@ -67,6 +69,8 @@ def _line_by_line(path, monkeypatch):
         if module is krl_reader:  # nor any motion line read from its characters
             patch.setattr(module, "_motion_layout", lambda codes, starts, ends: (np.zeros(0, dtype=np.int64),
                                                                                  np.zeros((0, 10), dtype=np.int64)))
+            patch.setattr(module, "_INLINE_MOTION", re.compile(r"(?!)"))  # nor any inline motion
+            patch.setattr(module, "_inline_layout", lambda codes, starts, ends: NO_INLINE)
         return formats.read(path)
 
 

@@ -12,7 +12,8 @@ from trajcomp.errors import ReadError
 from trajcomp.formats.krl import reader as krl_reader
 from trajcomp.formats.number_fields import text_codes
 from trajcomp.formats.text import Lines, edit_sources, mask
-from trajcomp.programs.tables import ItemRows
+from trajcomp.programs.tables import ItemRows, TargetRows
+from tests.formats.test_formats_columnar import NO_INLINE, _seen
 
 DAT = ("DEFDAT p\n" + "".join(f"DECL E6POS XP{k}={{X {500 + k},Y {k},Z 600,A 0,B 90,C 0,S 2,T 35}}\n"
                               for k in range(1, 7))
@@ -51,6 +52,8 @@ def _one_by_one(path, monkeypatch):
         patch.setattr(krl_reader, "_WRITTEN_MOTION", re.compile("(?!)"))
         patch.setattr(krl_reader, "_motion_layout", lambda codes, starts, ends: (np.zeros(0, dtype=np.int64),
                                                                                  np.zeros((0, 10), dtype=np.int64)))
+        patch.setattr(krl_reader, "_INLINE_MOTION", re.compile("(?!)"))
+        patch.setattr(krl_reader, "_inline_layout", lambda codes, starts, ends: NO_INLINE)
         return formats.read(path)
 
 
@@ -179,7 +182,133 @@ def test_motions_read_from_their_characters_are_those_the_pattern_reads(ending):
     at = krl_reader._motion_layout(codes, starts, ends)[0]
     assert (at - 1).tolist() == [k for k, (_, read) in enumerate(MOTION_VARIANTS) if read]
     nothing = (np.zeros(0, dtype=np.int64), np.zeros((0, 10), dtype=np.int64))
-    at_once, by_pattern = _at_once_and_by_pattern(krl_reader._written_motions, "_motion_layout", nothing, masked,
+    at_once, by_pattern = _at_once_and_by_pattern(krl_reader._written_motions, "_motion_layout", nothing, 0, masked,
                                                   Lines(text))
-    assert {k: v.tolist() for k, v in at_once.items()} == {k: v.tolist() for k, v in by_pattern.items()}
-    assert len(at_once["line"]) == 9
+    assert {k: v.tolist() for k, v in at_once[0].items()} == {k: v.tolist() for k, v in by_pattern[0].items()}
+    assert len(at_once[0]["line"]) == 9 and at_once[1] is None
+
+
+INLINE_VARIANTS = [  # (a .src line, whether `_inline_layout` finds it from its characters, whether it is read at once)
+    ("  LIN {X 1.5,Y -2,Z 3.25,A 0.0,B 90.0,C -0.5} C_DIS", True, True),
+    ("lin {x .5,y -.5,z +3,a 1.,b 1e2,c -2.5E-1}", True, True),  # any case, exponents
+    ("\tPTP {X 1,Y 2,Z 3,A 4,B 5,C 6,S 2,T 35} C_PTP", True, True),
+    ("  SLIN {X 1,Y 2,Z 3,A 4,B 5,C 6,E1 7.5} c_vel", True, True),
+    ("  SPTP {X 1,Y 2,Z 3,A 4,B 5,C 6,S 'B110',T 27,E1 0.0,E2 1,E3 2,E4 3,E5 4,E6 5} C_DIS", True, False),  # bits
+    ("  SPTP {X 1,Y 2,Z 3,A 4,B 5,C 6,S 6,T 27,E1 0.0,E2 1,E3 2,E4 3,E5 4,E6 5} C_DIS", True, True),
+    ("  LIN {X 1e9,Y 2,Z 3,A 4,B 5,C 6} C_DIS", True, False),  # out of range: its line's read names it
+    ("  LIN {X 1,Y 2,Z 3,A 4,B 5,C 6,S 256,T 35}", True, False),  # S beyond its bits
+    ("  LIN {X 1..2,Y 2,Z 3,A 4,B 5,C 6}", True, False),  # no number
+    ("  LIN  {X 1,Y 2,Z 3,A 4,B 5,C 6}", False, True),  # two blanks: the pattern
+    ("  LIN {X 1,Y 2,Z 3,A 4,B 5,C 6}\tC_DIS ", False, True),
+    ("  LIN {X 1,Y 2,Z 3,A 4,B 5,C 6} C_DIS ; Größe, Maße", False, True),  # a comment: blanks after the motion
+    ("                    LIN {X 1,Y 2,Z 3,A 4,B 5,C 6}", False, True),  # indented beyond `_LONGEST_INDENT`
+    ("  LIN {X 1, Y 2,Z 3,A 4,B 5,C 6}", False, False),  # a blank in the members: one by one
+    ("  LIN {X 1,Y 2,Z 3,A 4,B 5}", False, False),  # no C: the arm's own, at run time
+    ("  LIN {X 1,Y 2,Z 3,A 4,B 5,C 6}C_DIS", False, False),
+    ("  LIN {POS: X 1,Y 2,Z 3,A 4,B 5,C 6}", False, False),
+    ("  PTP {AXIS: A1 0,A2 -90,A3 90,A4 0,A5 0,A6 0} C_PTP", False, False),
+    ("  LIN_REL {X 1,Y 2,Z 3,A 4,B 5,C 6}", False, False),
+    ("  CIRC {X 1,Y 2,Z 3,A 4,B 5,C 6},{X 1,Y 2,Z 3,A 4,B 5,C 6}", False, False),
+    ("  LIN {X 1,Y 2,Z 3,A 4,B 5,C 6} WITH $VEL.CP=0.1", False, False),
+    ("  LIN {X 1,Y 2,Z 3,A 4,B 5,C 6,E2 1}", False, False),
+]
+
+
+@pytest.mark.parametrize("ending", ["\n", "\r\n"])
+def test_inline_motions_read_from_their_characters_are_those_the_pattern_reads(ending):
+    text = "DEF p( ) ; Größe\n" + "".join(line + ending for line, _, _ in INLINE_VARIANTS) + "END"
+    masked = mask(text, ";")
+    codes = text_codes(masked)
+    starts, ends = krl_reader._line_bounds(codes)
+    assert (krl_reader._inline_layout(codes, starts, ends)[0] - 1).tolist() == [
+        k for k, (_, found, _) in enumerate(INLINE_VARIANTS) if found]
+    (columns, table), (columns_p, table_p) = _at_once_and_by_pattern(
+        krl_reader._written_motions, "_inline_layout", NO_INLINE, 0, masked, Lines(text))
+    assert {k: v.tolist() for k, v in columns.items()} == {k: v.tolist() for k, v in columns_p.items()}
+    assert (columns["line"] - 2).tolist() == [k for k, (_, _, read) in enumerate(INLINE_VARIANTS) if read]
+    assert columns["inline"].tolist() == list(range(len(table))) and table.name is None
+    assert table.pose.tobytes() == table_p.pose.tobytes() and table.config == table_p.config
+    assert table.spans.start.tolist() == table_p.spans.start.tolist()
+    assert table.spans.end.tolist() == table_p.spans.end.tolist()
+    assert [None if e is None else e.tolist() for e in table.external] == [
+        None if e is None else e.tolist() for e in table_p.external]
+    assert table.pose[1, :3, 3].tolist() == [0.5, -0.5, 3.0] and table.config[2] == (2, 35)
+    assert table.external[3].tolist() == [7.5] and columns["joint"][:4].tolist() == [False, False, True, False]
+
+
+INLINE_SRC = """&ACCESS RVP
+DEF p( ) ; Größe: a comment beyond ASCII
+;FOLD INI
+BAS (#INITMOV,0 )
+;ENDFOLD (INI)
+PTP $AXIS_ACT ; skip BCO quickly
+$BASE = {FRAME: X 10.000,Y 0.000,Z 0.000,A 0.000,B 0.000,C 0.000}
+$TOOL = {FRAME: X 0.000,Y 0.000,Z 100.000,A 0.000,B 0.000,C 0.000}
+$VEL.CP = 0.05000
+$APO.CDIS = 1.000
+PTP {AXIS: A1 0,A2 -90,A3 90,A4 0,A5 0,A6 0} C_PTP
+LIN {X 446.000,Y 70.000,Z 635.000,A 0.000,B 90.000,C 0.000} C_DIS
+lin {x 446.5,y 70.5,z 6.35e2,a 0,b 90,c 0} c_dis
+
+  LIN {X 447.000,Y 71.000,Z 635.000,A 0.000,B 90.000,C 0.000,E1 5.00000} C_DIS ; ß
+LIN {X 447.500,Y 71.000,Z 635.000,A 0.000,B 90.000,C 0.000,S 2,T 35}
+LIN XP1 C_DIS
+$VEL.CP = 0.10000
+LIN  {X 448.000,Y 71.000,Z 635.000,A 0.000,B 90.000,C 0.000}
+$TOOL = TOOL_DATA[N]
+LIN {X 449.000,Y 71.000,Z 635.000,A 0.000,B 90.000,C 0.000} C_DIS
+END
+"""
+
+
+@pytest.mark.parametrize("ending", ["\n", "\r\n"])
+@pytest.mark.parametrize("dat", [None, "DEFDAT p\nDECL E6POS XP1={X 450,Y 70,Z 635,A 0,B 90,C 0,S 2,T 35}\nENDDAT\n"])
+def test_inline_motions_read_at_once_are_the_program_read_one_by_one(tmp_path, monkeypatch, ending, dat):
+    src = INLINE_SRC if dat else INLINE_SRC.replace("LIN XP1 C_DIS\n", "")
+    (tmp_path / "p.src").write_bytes(src.replace("\n", ending).encode("latin-1"))
+    if dat:
+        (tmp_path / "p.dat").write_bytes(dat.replace("\n", ending).encode("latin-1"))
+    path = tmp_path / "p.src"
+    at_once, one_by_one = formats.read(path), _one_by_one(path, monkeypatch)
+    assert isinstance(at_once.items, ItemRows) and _seen(at_once) == _seen(one_by_one)
+    assert isinstance(at_once.targets, TargetRows) == (dat is None)  # the axis position joins the inline points
+    assert at_once.not_compensated() == one_by_one.not_compensated()
+    table = at_once.motion_table()
+    assert table.speed.tolist()[2:4] == [50.0, 50.0] and table.zone[2] == 1.0 and table.tool[2] == "TOOL line 8"
+    assert f"TOOL_DATA[N] set at run time (line {19 + bool(dat)})" in table.reason[-1]
+    first = 1 + bool(dat)  # the .dat's point, the axis position, then the inline points
+    assert at_once.targets[first + 2].external.tolist() == [5.0] and at_once.targets[first + 3].config == (2, 35)
+
+
+def test_inline_motions_of_a_program_held_as_columns_are_written_as_the_objects_are(tmp_path, monkeypatch):
+    src = "".join(f"  LIN {{X {400 + k * 0.5:.3f},Y {k * 0.25:.3f},Z 635.000,A 0.000,B 90.000,C 0.000}} C_DIS\n"
+                  for k in range(50))
+    (tmp_path / "p.src").write_text(f"DEF p( )\n  $VEL.CP = 0.05000\n{src}  LIN {{X 1,Y 2,Z 3,A 0,B 90,C 0}}\n"
+                                    "  PTP {A1 0,A2 -90,A3 90,A4 0,A5 0,A6 0}\nEND\n")
+    path = tmp_path / "p.src"
+    at_once, one_by_one = formats.read(path), _one_by_one(path, monkeypatch)
+    assert isinstance(at_once.targets, TargetRows) and not isinstance(one_by_one.targets, TargetRows)
+    index = np.arange(0, 51, 2)
+    poses = np.array([target.pose for target in one_by_one.targets[:51]])[index]
+    poses[:, :3, 3] += [0.123456, -0.0004, 1e-7]
+    poses[1, :3, :3] = poses[1, :3, :3] @ [[0, -1, 0], [1, 0, 0], [0, 0, 1]]  # C turned by 90 degrees
+    written = []
+    for program in (at_once, one_by_one):
+        (tmp_path / "out").mkdir(exist_ok=True)
+        formats.write(tmp_path / "out" / "q.src", program.with_targets(index, poses=poses))
+        written.append((tmp_path / "out" / "q.src").read_bytes())
+    assert written[0] == written[1] and b"DEF q( )" in written[0]
+    lines = written[0].splitlines()  # the file's 3 decimals kept; a turned orientation: 4 at least
+    assert lines[2] == b"  LIN {X 400.123,Y 0.000,Z 635.000,A 0.000,B 90.000,C 0.000} C_DIS"
+    assert lines[4] == b"  LIN {X 401.123,Y 0.500,Z 635.000,A 90.0000,B 0.0000,C 90.0000} C_DIS"
+
+
+def test_an_inline_point_out_of_range_is_refused_naming_its_line_as_one_by_one(tmp_path, monkeypatch):
+    (tmp_path / "p.src").write_text("DEF p( )\n  LIN {X 1,Y 2,Z 3,A 0,B 90,C 0}\n"
+                                    "  LIN {X 1,Y 2e9,Z 3,A 0,B 90,C 0}\nEND\n")
+    path = tmp_path / "p.src"
+    with pytest.raises(ReadError, match=re.escape("p.src:3")) as refused:
+        formats.read(path)
+    with pytest.raises(ReadError) as refused_one_by_one:
+        _one_by_one(path, monkeypatch)
+    assert str(refused.value) == str(refused_one_by_one.value) and "Y" in str(refused.value)

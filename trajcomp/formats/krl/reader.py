@@ -34,7 +34,8 @@ from trajcomp.formats.text import (
 )
 from trajcomp.programs.program import Program
 from trajcomp.programs.tables import (
-    ItemRows, MotionTable, StatementTable, TargetRows, TargetTable, TextSlices, repeated,
+    ItemRows, MotionTable, StatementTable, TargetRows, TargetTable, TextSlices, every_row, joined_targets,
+    repeated,
 )
 from trajcomp.programs.items import (
     CIRCULAR, JOINT, LINEAR, Motion, Span, SpanColumns, SpanTable, Statement, Target, replaced,
@@ -99,6 +100,15 @@ _WRITTEN_POINT = re.compile(
 _WRITTEN_MOTION = re.compile(
     r"^[ \t]*((S?PTP)|S?LIN)[ \t]+(?!(?:C_(?:PTP|DIS|VEL|ORI|SPL)|WITH)\b)([A-Za-z_][A-Za-z0-9_]*)"
     r"(?:[ \t]+(C_(?:PTP|DIS|VEL|ORI|SPL)))?[ \t]*\r?$", re.I | re.M)
+# A motion to a Cartesian point written inline, one a line, as RoboDK's and SprutCAM's KUKA posts write them:
+# LIN {X 446.0,Y 70.0,Z 635.0,A 0.0,B 90.0,C 0.0} C_DIS (PTP, SLIN, SPTP too; the members as `_WRITTEN_POINT` has
+# them, no WITH, no _REL): read at once (`_written_motions`); every other inline motion goes line by line. Groups:
+# the line, the keyword, the keyword if PTP or SPTP, an empty name, X..C, S, T, E1..E6, the approximation.
+_INLINE_MOTION = re.compile(
+    r"^[ \t]*((S?PTP)|S?LIN)[ \t]+\{()" + ",".join(f"{p.upper()}[ ]({NUMBER})" for p in POSE)
+    + r"(?:,S[ ](\d+),T[ ](\d+))?" + _EXTERNAL_MEMBERS + r"\}(?:[ \t]+(C_(?:PTP|DIS|VEL|ORI|SPL)))?[ \t]*\r?$",
+    re.I | re.M)
+_INLINE_POINT = [0] + list(range(3, 18))  # the groups of `_INLINE_MOTION` that `_WRITTEN_POINT` has, in its order
 
 
 @dataclasses.dataclass(frozen=True)
@@ -319,14 +329,8 @@ def _written_layout(codes, starts, ends):
         spelt = _starts_with(heads, head)
         head_end[spelt] = start_at[spelt] + len(head)
         shared[spelt] = "GLOBAL" in head
-    base, top = int(starts[0]), int(ends[-1])
-    block = codes[base:top]
-    opens = np.flatnonzero(block == ord("{")) + base
-    commas = np.flatnonzero(block == ord(",")) + base
-    first = np.searchsorted(opens, start_at)
-    brace = opens[np.minimum(first, len(opens) - 1)] if len(opens) else np.full(len(candidate), -1)
-    second = opens[np.minimum(first + 1, len(opens) - 1)] if len(opens) else brace
-    good = (head_end >= 0) & (first < len(opens)) & (brace < close) & ((first + 1 >= len(opens)) | (second > close))
+    brace, alone, commas = _braces(codes, starts, ends, start_at, close)
+    good = (head_end >= 0) & alone
     name_end = np.where(good, brace - 1, head_end)
     good &= (codes[np.maximum(name_end, 0)] == ord("=")) & _made_of(codes, head_end, name_end, _WORD_CHARACTER,
                                                                      _LONGEST_NAME)
@@ -334,8 +338,65 @@ def _written_layout(codes, starts, ends):
     start, end = np.full((len(candidate), 16), -1), np.full((len(candidate), 16), -1)
     start[:, 0], end[:, 0] = start_at, ends[candidate]
     start[:, 1], end[:, 1] = head_end, name_end
+    written = _member_fields(codes, commas, brace, close, good, start, end)
+    return candidate[written], start[written], end[written], shared[written]
+
+
+def _braces(codes, starts, ends, line_start, close):
+    """The first ``{`` of lines, whether it is their only one before their aggregate's close, and the commas.
+
+    Parameters
+    ----------
+    codes : ndarray, shape (L,)
+    starts, ends : ndarray of int, shape (B,)
+        The lines looked at (`_line_bounds`).
+    line_start, close : ndarray of int, shape (K,)
+        The starts of some of them and the offset of the ``}`` that closes each one's aggregate.
+
+    Returns
+    -------
+    brace : ndarray of int, shape (K,)
+        The first ``{`` from each line's start.
+    alone : ndarray of bool, shape (K,)
+        Whether it lies before ``close`` and no other ``{`` lies between them.
+    commas : ndarray of int, shape (C,)
+        The offsets of the commas of the B lines.
+    """
+    base, top = int(starts[0]), int(ends[-1])
+    block = codes[base:top]
+    opens = np.flatnonzero(block == ord("{")) + base
+    commas = np.flatnonzero(block == ord(",")) + base
+    first = np.searchsorted(opens, line_start)
+    brace = opens[np.minimum(first, len(opens) - 1)] if len(opens) else np.full(len(line_start), -1)
+    second = opens[np.minimum(first + 1, len(opens) - 1)] if len(opens) else brace
+    return brace, (first < len(opens)) & (brace < close) & ((first + 1 >= len(opens)) | (second > close)), commas
+
+
+def _member_fields(codes, commas, brace, close, good, start, end):
+    """The members of aggregates ``{X 1.5,Y 2,Z 3,A 0,B 90,C 0,S 2,T 35,E1 0}`` as a point declaration or an
+    inline point writes them (`_LAYOUTS`: each member's name and one space, no other blank), found from the
+    characters' codes.
+
+    Parameters
+    ----------
+    codes : ndarray, shape (L,)
+        The masked text's character codes (`text_codes`).
+    commas : ndarray of int, shape (C,)
+        The offsets of the commas of the lines looked at (ascending).
+    brace, close : ndarray of int, shape (K,)
+        The offsets of each aggregate's ``{`` and ``}``.
+    good : ndarray of bool, shape (K,)
+        The aggregates to look at (the others are not written so).
+    start, end : ndarray of int, shape (K, 16)
+        Filled in place: the offsets of the fields X..C, S, T, E1..E6 (columns 2-15) of the aggregates written so.
+
+    Returns
+    -------
+    ndarray of bool, shape (K,)
+        The aggregates written so.
+    """
     count = np.searchsorted(commas, close) - np.searchsorted(commas, brace) + 1  # members
-    written = np.zeros(len(candidate), dtype=bool)
+    written = np.zeros(len(brace), dtype=bool)
     for members, layouts in _LAYOUTS.items():
         rows = np.flatnonzero(good & (count == members))
         if not len(rows):
@@ -355,7 +416,7 @@ def _written_layout(codes, starts, ends):
             start[rows[spelt][:, None], fields] = field_start[spelt]
             end[rows[spelt][:, None], fields] = member_end[spelt]
             written[rows[spelt]] = True
-    return candidate[written], start[written], end[written], shared[written]
+    return written
 
 
 def _field_numbers(codes, start, end):
@@ -763,8 +824,8 @@ def read(path):
     """Read a KRL .src and its .dat (same name, beside it, if there is one).
 
     The lines a CAM post-processor or KUKA's editor writes (points declared
-    one a line, `_WRITTEN_POINT`; motions to them, `_WRITTEN_MOTION`) are
-    read at once as columns; every other line one by one, in order, its
+    one a line, `_WRITTEN_POINT`; motions to them, `_WRITTEN_MOTION`; motions
+    to points written inline, `_INLINE_MOTION`) are read at once as columns; every other line one by one, in order, its
     tool, base, speed and zone in force for the motions read at once after
     it (`_Walk`).
 
@@ -780,7 +841,7 @@ def read(path):
     if not _DEF.search(src_masked):
         raise ReadError(f"{path}: not a KRL program: no DEF line")
     src = reader.sources[src_index]
-    written = _written_motions(src_masked, src_lines)
+    written, inline = _written_motions(src_index, src_masked, src_lines)
     # the motion lines read at once open and close no block: the runs of other lines between them
     check_closed(src, src_masked, _BLOCK_OPENS, _BLOCK_CLOSES, {"DEF": "END", "DEFFCT": "ENDFCT"},
                  runs_between(written["start"], written["end"], len(src_masked)))
@@ -814,16 +875,13 @@ def read(path):
             declare_rows(line_no)
             reader.declarations(dat_index, dat_masked, line_no, start, end)
         declare_rows(len(dat_lines.starts) + 1)
-    walk = _Walk(reader, src_index, src_masked, written)
+    walk = _Walk(reader, src_index, src_masked, written, 0 if table is None else len(table))
     for line_no, start, end in others:
         walk.motions_before(line_no)
         reader.statement(src_index, src_masked, line_no, start, end)
     walk.motions_before(len(src_lines.starts) + 1)
     items, resolved = _resolve(reader, path, dat_path, walk)
-    if table is not None and len(reader.targets) == len(table):  # every point written as KUKA writes them
-        targets = TargetRows(table)
-    else:
-        targets = tuple(table.target(t) if isinstance(t, int) else t for t in reader.targets)
+    targets = _targets(reader.targets, table, inline)
     if not len(walk.rows):  # none read at once
         return Program("krl", path.stem, items, targets, reader.tools, reader.frames, tuple(reader.sources))
     motions = MotionTable.merged([MotionTable.of([i for i in items if isinstance(i, Motion)]),
@@ -833,40 +891,126 @@ def read(path):
                    tuple(reader.sources))
 
 
-def _written_motions(masked, lines):
-    """The motions of a .src written as `_WRITTEN_MOTION` (``LIN XP1 C_DIS``), as columns.
+def _written_motions(index, masked, lines):
+    """The motions of a .src written as `_WRITTEN_MOTION` (``LIN XP1 C_DIS``) or `_INLINE_MOTION` (``LIN {X ..}
+    C_DIS``), as columns, and the inline points of the latter.
 
     The lines written exactly as `_motion_layout` knows them are found from
     their characters, `AT_ONCE` lines at a time; the other lines are matched
-    by `_WRITTEN_MOTION` one by one.
+    by `_WRITTEN_MOTION`, then `_INLINE_MOTION`, one by one. An inline
+    point's numbers are read from the characters (`_field_numbers`); a
+    point a line-by-line read would refuse (out of range, S or T beyond
+    their bits) leaves its motion to that read, which names it.
+
+    Parameters
+    ----------
+    index : int
+        The .src's source index.
+    masked : str
+        Its text, comments and strings blanked (`trajcomp.formats.text.mask`).
+    lines : Lines
+        Its lines.
 
     Returns
     -------
-    dict of ndarray, each shape (N,)
+    columns : dict of ndarray, each shape (N,)
         ``line``; ``start``, ``end``: the line's text (its line ending
         left out by `_Stripped`); ``keyword_start``, ``keyword_end``,
-        ``name_start``, ``name_end``; ``joint``: PTP / SPTP; ``approximated``:
-        an approximation (C_DIS ...) is written.
+        ``name_start``, ``name_end`` (-1 for an inline point); ``joint``:
+        PTP / SPTP; ``approximated``: an approximation (C_DIS ...) is
+        written; ``inline``: the row of ``inline`` of its point, -1 for a name.
+    inline : TargetTable or None
+        The inline points (their lines ascending), spans in the .src; None if there is none.
     """
     codes = text_codes(masked)
     starts, ends = _line_bounds(codes)
     blocks, taken = [], np.zeros(len(starts), dtype=bool)
+    points = _InlinePoints(codes, offset_type(masked))
     for lo in range(0, len(starts), AT_ONCE):
         at, groups = _motion_layout(codes, starts[lo:lo + AT_ONCE], ends[lo:lo + AT_ONCE])
         taken[lo + at] = True
-        blocks.append(groups)
+        blocks.append(np.c_[groups, np.full(len(groups), -1)])  # to a name: no inline row
+        at, groups, start, end = _inline_layout(codes, starts[lo:lo + AT_ONCE], ends[lo:lo + AT_ONCE])
+        taken[lo + at] = True
+        blocks.append(points.motions(groups, start, end))
     others = np.flatnonzero(~taken)
     for lo in range(0, len(others), AT_ONCE):
-        found = [m for k in others[lo:lo + AT_ONCE].tolist()
-                 if (m := _WRITTEN_MOTION.match(masked, int(starts[k]), int(ends[k])))]
-        blocks.append(np.array([m.regs for m in found], dtype=np.int64).reshape(-1, 10))  # (start, end) of 0-4
+        found, inline = [], []
+        for k in others[lo:lo + AT_ONCE].tolist():
+            if m := _WRITTEN_MOTION.match(masked, int(starts[k]), int(ends[k])):
+                found.append(m)
+            elif m := _INLINE_MOTION.match(masked, int(starts[k]), int(ends[k])):
+                inline.append(m)
+        named = np.array([m.regs for m in found], dtype=np.int64).reshape(-1, 10)  # (start, end) of groups 0-4
+        blocks.append(np.c_[named, np.full(len(named), -1)])
+        regs = np.array([m.regs for m in inline], dtype=np.int64).reshape(-1, 19, 2)  # absent groups: (-1, -1)
+        groups = regs[:, [0, 1, 2, 3, 18]].reshape(-1, 10)
+        groups[:, 6:8] = -1  # no name
+        blocks.append(points.motions(groups, regs[:, _INLINE_POINT, 0], regs[:, _INLINE_POINT, 1]))
     at = np.concatenate(blocks)
     if len(others):  # the lines matched one by one among the others: in line order
         at = at[np.argsort(at[:, 0], kind="stable")]
     columns = dict(zip(("start", "end", "keyword_start", "keyword_end"), at[:, :4].T))
     columns |= {"name_start": at[:, 6], "name_end": at[:, 7], "joint": at[:, 4] >= 0, "approximated": at[:, 8] >= 0,
                 "line": np.searchsorted(lines.starts, at[:, 0], side="right")}
-    return columns
+    inline = at[:, 10] >= 0
+    order = at[inline, 10]  # the points' rows in line order (those found by the pattern come after the others)
+    at[inline, 10] = np.arange(len(order))
+    columns["inline"] = at[:, 10]
+    return columns, points.table(index, lines, order)
+
+
+class _InlinePoints:
+    """The inline points of motions read at once (`_written_motions`), block after block, as one `TargetTable`.
+
+    Parameters
+    ----------
+    codes : ndarray, shape (L,)
+        The masked .src's character codes (`text_codes`).
+    offset : type
+        The integer type of its offsets.
+    """
+
+    def __init__(self, codes, offset):
+        self.codes, self.offset = codes, offset
+        self.blocks, self.count = [], 0
+        self.configs = {}  # one tuple per distinct (S, T), shared by every block
+
+    def motions(self, groups, start, end):
+        """The motion rows (k, 11) of K motions found (`_inline_layout`), their points read and kept.
+
+        ``groups`` (K, 10) as `_motion_layout`'s; ``start``, ``end`` (K, 16)
+        their points' fields as `_written_layout`'s. A point whose numbers a
+        line-by-line read would refuse (`_written_block`) leaves its motion
+        out: that read names it. The rows: the groups, then the row of the
+        motion's point in `table`.
+        """
+        numbers, read = _field_numbers(self.codes, start, end)
+        block = _written_block(start[read], end[read], numbers[read], np.zeros(np.count_nonzero(read), dtype=bool),
+                               self.offset, self.configs)
+        groups = groups[read][np.isin(start[read, 0], block[1][:, 0])]  # the motions of the points kept
+        rows = np.c_[groups, self.count + np.arange(len(groups))]
+        self.count += len(groups)
+        self.blocks.append(block)
+        return rows
+
+    def table(self, index, lines, order):
+        """The points as a `TargetTable`, rows ``order`` (N,) of those read (their spans in source ``index``, of
+        `Lines` ``lines``); None if there is none."""
+        if not self.count:
+            return None
+        pose, start, end, config, external, _ = (
+            np.concatenate(parts) if isinstance(parts[0], np.ndarray) else sum(parts, ())
+            for parts in zip(*self.blocks))
+        if not every_row(order, len(order)):
+            pose, start, end = pose[order], start[order], end[order]
+            config, external = (tuple(column[k] for k in order.tolist()) for column in (config, external))
+        n = len(start)
+        none = repeated(None, n)
+        return TargetTable(pose, np.zeros(n, dtype=bool), np.broadcast_to(np.nan, (n, 6)),
+                           np.searchsorted(lines.starts, start[:, 0], side="right"), config, none, none, external,
+                           np.zeros(n, dtype=bool), None,
+                           SpanColumns(index, lines.text, POSE + ("s", "t"), start[:, 2:], end[:, 2:]))
 
 
 _KEYWORDS = ("LIN", "PTP", "SLIN", "SPTP")  # `_WRITTEN_MOTION`'s motions
@@ -936,6 +1080,69 @@ def _motion_layout(codes, starts, ends):
     return at, groups.reshape(-1, 10)
 
 
+_LONGEST_INDENT = 16  # blanks before an inline motion's keyword read at once (more: `_INLINE_MOTION`)
+
+
+def _inline_layout(codes, starts, ends):
+    """The inline motion lines written exactly ``LIN {X 1.5,Y 2,Z 3,A 0,B 90,C 0}`` or ``PTP {X ..,S 2,T 35} C_PTP``,
+    found from the characters' codes.
+
+    Blanks (spaces, tabs) before the keyword, one space after it and
+    before the approximation, the members as `_member_fields` knows them,
+    nothing after, any case, a line ending ``\\n`` or ``\\r\\n``: a subset
+    of what `_INLINE_MOTION` matches. The fields' contents are not checked
+    here (`_field_numbers`).
+
+    Parameters
+    ----------
+    codes : ndarray, shape (L,)
+        The masked text's character codes (`text_codes`).
+    starts, ends : ndarray of int, shape (B,)
+        Offsets of the lines' starts and of their ``\\n`` (or the text's end).
+
+    Returns
+    -------
+    at : ndarray of int, shape (K,)
+        The lines written so (indices into ``starts``).
+    groups : ndarray of int, shape (K, 10)
+        As `_motion_layout`'s (the name: -1).
+    start, end : ndarray of int, shape (K, 16)
+        Offsets of the point's fields as `_written_layout`'s: the line, an
+        empty name after the ``{``, X..C, S, T, E1..E6 (-1 where not written).
+    """
+    none = np.zeros(0, dtype=np.int64)
+    if not len(starts) or not len(codes):
+        return none, none.reshape(0, 10), none.reshape(0, 16), none.reshape(0, 16)
+    carriage = (ends > starts) & (codes[np.maximum(ends - 1, 0)] == ord("\r"))
+    line_end = ends - carriage
+    approximated = np.zeros(len(starts), dtype=bool)
+    for word in _APPROXIMATIONS:
+        approximated |= (line_end - starts > 7) & _spells(codes, np.maximum(line_end - 6, 0), " " + word)
+    close = np.where(approximated, line_end - 7, line_end - 1)  # the "}" closing the point
+    candidate = np.flatnonzero((close > starts) & (codes[np.maximum(close, 0)] == ord("}")))
+    start_at, close, approximated = starts[candidate], close[candidate], approximated[candidate]
+    width = _LONGEST_INDENT + max(map(len, _KEYWORDS)) + 2
+    spelt = _spelt(codes, start_at, width)
+    keyword_start = np.minimum(np.argmin(_BLANK[spelt], axis=1), _LONGEST_INDENT)  # the first character not blank
+    keyword_end = np.full(len(candidate), -1)
+    for keyword in _KEYWORDS:
+        spells = _starts_with(np.take_along_axis(spelt, keyword_start[:, None] + np.arange(len(keyword) + 2), axis=1),
+                              keyword + " {")
+        keyword_end[spells] = keyword_start[spells] + len(keyword)
+    keyword_start, keyword_end = keyword_start + start_at, np.where(keyword_end >= 0, keyword_end + start_at, -1)
+    brace, alone, commas = _braces(codes, starts, ends, start_at, close)
+    good = (keyword_end >= 0) & alone & (brace == keyword_end + 1)
+    start, end = np.full((len(candidate), 16), -1), np.full((len(candidate), 16), -1)
+    start[:, 0], end[:, 0] = start_at, ends[candidate]
+    start[:, 1] = end[:, 1] = brace + 1
+    written = _member_fields(codes, commas, brace, close, good, start, end)
+    joint = codes[np.maximum(keyword_end - 1, 0)] | 32 == ord("p")  # PTP or SPTP
+    groups = np.stack([start_at, ends[candidate], keyword_start, keyword_end, np.where(joint, keyword_start, -1),
+                       np.where(joint, keyword_end, -1), np.full(len(candidate), -1), np.full(len(candidate), -1),
+                       np.where(approximated, close + 2, -1), np.where(approximated, close + 7, -1)], axis=1)
+    return candidate[written], groups[written], start[written], end[written]
+
+
 def _other_lines(lines, taken):
     """``(number, start, end)`` of the lines of ``lines`` (`Lines`) not in ``taken`` (ascending line numbers), as
     `Lines` iterates them."""
@@ -966,8 +1173,9 @@ class _Walk:
     one-by-one read (`_Reader.statement`), which says why.
     """
 
-    def __init__(self, reader, index, masked, written):
+    def __init__(self, reader, index, masked, written, first_inline):
         self.reader, self.index, self.masked, self.written = reader, index, masked, written
+        self.first_inline = first_inline  # the target index (`_targets`) of row 0 of the inline points
         self.next = 0  # the first motion read at once not yet taken
         # the rows kept as columns, the index of each one's point when read, its state (in `states`)
         self.rows, self.point, self.snapshot = array.array("q"), array.array("q"), array.array("q")
@@ -983,14 +1191,20 @@ class _Walk:
         self.next = stop
         one_by_one = bool(reader.tool_why or reader.base_why or reader.params)
         text = reader.sources[self.index].text
-        names = [text[a:b].upper() for a, b in zip(written["name_start"][rows.start:rows.stop].tolist(),
-                                                    written["name_end"][rows.start:rows.stop].tolist())]
+        inline = written["inline"][rows.start:rows.stop]
+        named = np.flatnonzero(inline < 0)
         state = len(self.states)
         self.states.append((reader.tool, reader.base, reader.speed_ptp, reader.speed_cp, reader.zone,
                             reader.speed_spans[JOINT], reader.speed_spans[LINEAR], reader.speed_why[JOINT],
                             reader.speed_why[LINEAR]))
-        point = np.array([-1] * len(names) if one_by_one else [reader.points.get(name, -1) for name in names],
-                         dtype=np.int64)
+        point = np.full(len(rows), -1, dtype=np.int64)
+        if not one_by_one:
+            point[named] = [reader.points.get(text[a:b].upper(), -1) for a, b in
+                            zip(written["name_start"][rows.start + named].tolist(),
+                                written["name_end"][rows.start + named].tolist())]
+            points = self.first_inline + inline[inline >= 0]  # the inline points: targets in program order
+            point[inline >= 0] = len(reader.targets) + np.arange(len(points))
+            reader.targets.extend(points.tolist())
         known = point >= 0
         self.rows.frombytes(np.arange(rows.start, rows.stop, dtype=np.int64)[known].tobytes())
         self.point.frombytes(point[known].tobytes())
@@ -1043,6 +1257,19 @@ class _Stripped(TextSlices):
         if isinstance(k, slice):
             return [line.strip() for line in super().__getitem__(k)]
         return super().__getitem__(k).strip()
+
+
+def _targets(targets, table, inline):
+    """The program's targets: ``targets`` in order, each a row of the .dat's ``table`` (int below its length),
+    of the .src's ``inline`` points (int from it) or a `Target`; as `TargetRows` of one table when only one
+    holds rows and the objects lie in its file (`joined_targets`: a program written as a CAM post-processor
+    writes it, no object each), else a tuple of `Target`."""
+    tables = [t for t in (table, inline) if t is not None]
+    if len(tables) == 1 and (joined := joined_targets(targets, tables[0], AXES)) is not None:
+        return TargetRows(joined)  # the rows of each table are taken once each, in order
+    first_inline = 0 if table is None else len(table)
+    return tuple(t if not isinstance(t, int) else table.target(t) if t < first_inline else
+                 inline.target(t - first_inline) for t in targets)
 
 
 def _visible(file, match):
@@ -1138,8 +1365,10 @@ def _resolved_rows(reader, walk, assigned, elsewhere):
     reason, refs, home = {}, [], []
     if not (reader.redeclared or assigned or reader.shared):
         return target, reason, refs, np.array(home, dtype=bool)
-    names = [text[a:b] for a, b in zip(written["name_start"][rows].tolist(), written["name_end"][rows].tolist())]
-    for k, name in enumerate(names):
+    named = np.flatnonzero(written["inline"][rows] < 0)  # an inline point is no name: nothing assigns it
+    names = [text[a:b] for a, b in zip(written["name_start"][rows[named]].tolist(),
+                                       written["name_end"][rows[named]].tolist())]
+    for k, name in zip(named.tolist(), names):
         key = name.upper()
         target[k] = reader.points[key]  # a point declared again after the motion: the last declaration
         if key in assigned:
