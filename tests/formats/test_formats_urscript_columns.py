@@ -72,8 +72,20 @@ FRAMES = "\n".join(  # frames and speeds known at run time, a point also used as
     + ["  set_tcp(get_tcp_offset())"] + [f"  movel({_p(k)}, v=0.1, r=0.001)" for k in range(2)]
     + ["  set_tcp(p[0,0,0.1,0,0,0])", f"  movel({_p(1)}, v=0.1)", "  later = 0.3", "  def sub(speed):"]
     + [f"    movel({_p(k)}, v=speed, r=later)" for k in range(2)] + ["  end", "end", ""])
+PRINT = "\n".join(  # statements between the motions (RoboDK's 3D-printing post): which are read at once
+    ["def print3d():", "  global speed_ms = 0.050", "  DO_SPRAY = 5", "  pick = p[0.5, 0.1, 0.3, 0, 3.14, 0]",
+     "  # Main program: réglage n°2 — épaisseur", "", f"  movel({_p(0)},accel_mss,speed_ms,0,0)"]
+    + [line for k in range(1, 4) for line in ("  set_standard_digital_out(5, 0.083)", "\t",
+                                                f"  movel({_p(k)},accel_mss,speed_ms,0,blend_radius_m)")]
+    + ["  sleep(1e-3)  # ü", "  set_standard_digital_out(DO_SPRAY, True)", f"  movel({_p(4)}, v=speed_ms)",
+       "  textmsg(pick)", "  popup(\"(a)[b]=c:\", \"Message\", False)", "  Sleep (0.5)", "  sync()",
+       f"  movel({_p(5)}, v=speed_ms)", "  set_analog_out(0, floor(2.5))", "  f(a == b)", "  g(x) :",
+       "  h(1, [2])", "  spd = get_speed()", "  halt()", f"  movel({_p(6)}, v=spd)", "  set_tcp(get_tcp_offset())",
+       "  sync()", f"  movel({_p(7)}, v=0.1)", "  MOVEL(p[0.1, 0.2, 0.3, 0, 3.1, 0])", "  if True:", "    sync()",
+       "  end", "end", "", "print3d()", ""])
 SHAPES = {
-    "cam.script": CAM, "crlf.script": CAM.replace("\n", "\r\n"), "cr.script": CAM.replace("\n", "\r"),
+    "cam.script": CAM, "print.script": PRINT, "print_crlf.script": PRINT.replace("\n", "\r\n"),
+    "refused_print.script": PRINT.replace("  sync()\n  movel(", "  sync()\n  movel(p[0.1, 0, 0, 0, 0, 1e999], v=0.1)\n  movel("), "crlf.script": CAM.replace("\n", "\r\n"), "cr.script": CAM.replace("\n", "\r"),
     "no_end_of_line.script": CAM.rstrip("\n"), "robodk.script": ROBODK, "options.script": OPTIONS,
     "frames.script": FRAMES, "variants.script": VARIANTS,
     "refused_pose.script": CAM.replace("end\n", "  movel(p[1e9, 0, 0, 0, 0, 0], v=0.1)\nend\n"),
@@ -133,11 +145,30 @@ def test_the_lines_a_cam_post_processor_writes_are_read_in_blocks(name, blocks, 
     assert read_in_blocks == [blocks]
 
 
+@pytest.mark.parametrize("name", ["print.script", "print_crlf.script"])
+def test_plain_statements_between_the_motions_are_read_at_once(name, tmp_path, monkeypatch):
+    """Blank and comment lines and calls of other functions with plain arguments that name no variable of the
+    script; not a call naming one (it may name a target), nor one with a call, a list, an ``=`` or a ``:``, nor
+    a motion function's."""
+    at_once = []
+    program = reader._program
+    monkeypatch.setattr(reader, "_program", lambda state, path: at_once.append(state.plain) or program(state, path))
+    read = formats.read(_written(tmp_path, name))
+    lines = PRINT.split("\n")
+    plain = {k for k, line in enumerate(lines[:-1], start=1) if line.strip() in (
+        "", "print3d()", "set_standard_digital_out(5, 0.083)", "sleep(1e-3)  # ü", "popup(\"(a)[b]=c:\", \"Message\", False)",
+        "Sleep (0.5)", "sync()", "halt()", "# Main program: réglage n°2 — épaisseur")}
+    assert at_once[0].line.tolist() == sorted(plain)
+    texts = {s.line: s.text for s in read.items if not hasattr(s, "kind")}
+    assert [texts[k] for k in sorted(plain)] == [lines[k - 1] for k in sorted(plain)]  # as written, no line ending
+    assert [s.refs for s in read.items if getattr(s, "text", "") == "  textmsg(pick)"] != [()]  # it names a target
+
+
 def test_cam_lines_are_columns_of_their_numbers_and_offsets():
     text = ("def a():\n  movel(p[0.5, -.1, 3e-1, 0, 3.14, 0], a=1.2, v=0.25, r=0)  # x\n"
             "  movej([1, 2, 3, 4, 5, 6], 1.4, speed)\n  x = 1\n"
             "  movel(pose_trans(base, p[1, 2, 3, 4, 5, 6]))\n  movel(p[1, 2, 3, 4, 5, 6], v=1, v=2)\nend\n")
-    found = cam.cam_lines(mask(text, "#"), np.array(Lines(text).starts))
+    found, plain = cam.cam_lines(mask(text, "#"), np.array(Lines(text).starts))
     assert found.line.tolist() == [2, 3, 5]  # line 6 names v twice: read line by line
     assert found.function.tolist() == [0, 1, 0] and found.is_joint.tolist() == [False, True, False]
     assert np.array_equal(found.values, [[0.5, -0.1, 0.3, 0, 3.14, 0], [1, 2, 3, 4, 5, 6], [1, 2, 3, 4, 5, 6]])

@@ -13,6 +13,12 @@ read from their characters and checked as arrays. A line whose numbers
 the line-by-line read would refuse (out of range, not finite) or whose
 options name one twice is left to that read, which names it
 (`trajcomp.formats.urscript.reader`).
+
+The statements a post writes between them are found the same way
+(`PlainLines`): a blank or comment line, or a call of a function that is
+no motion nor ``set_tcp`` whose arguments hold no call, list, assignment
+or colon (``set_standard_digital_out(5, 0.083)``, ``sleep(0.5)``): a
+statement that changes nothing the reader carries.
 """
 
 import dataclasses
@@ -25,6 +31,7 @@ from trajcomp.formats.text import JOINT_LIMIT, LENGTH_LIMIT, NUMBER
 from trajcomp.programs.tables import TextSlices
 
 FUNCTIONS = ("movel", "movej", "movep")
+CALLS = ("movej", "movel", "movep", "movec", "set_tcp", "servoj", "servoc")  # the calls the reader reads
 OPTIONS = ("a", "v", "t", "r")
 # the option each positional argument is, per function (URScript's signatures; -1: none, ignored)
 POSITIONAL = np.array([[0, 1, 2, 3], [0, 1, 2, 3], [0, 1, 3, -1]])
@@ -40,6 +47,7 @@ _CAM_LINE = re.compile(
     rf"(?:(pose_trans[ \t]*\([ \t]*)({_NAME})([ \t]*,[ \t]*))?(p?)(\[[ \t]*)"
     + r"([ \t]*,[ \t]*)".join([f"({NUMBER})"] * 6)
     + r"([ \t]*\])(?(4)([ \t]*\)))([ \t]*)" + _OPTION * SLOTS + r"\)[ \t]*(?=[\r\n]|\Z)")
+_PLAIN = re.compile(rf"[ \t]*(?:({_NAME})[ \t]*\([^()\[\]=:\r\n]*\)[ \t]*)?(\r\n|\r|\n|)")  # `PlainLines`, fullmatch
 _GROUPS = 22 + 6 * SLOTS
 _NUMBERS = np.arange(8, 19, 2)  # columns (0-based groups) of the six numbers
 _SLOT = 22 + 6 * np.arange(SLOTS)  # first column of each option
@@ -47,6 +55,7 @@ _LAST = np.concatenate([[19, 20], _SLOT + 3, _SLOT + 4])  # what may end the cal
 LINES_AT_ONCE = 16384  # lines read together: bounds the arrays a long script's read makes
 _NUMBER_CHARACTERS = "0123456789.eE+-"  # what a number is written with (`NUMBER`)
 _NUMBER_FIRST = "0123456789.+-"  # what a number starts with
+_NAME_FIRST = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz_"  # what a name starts with (`_NAME`)
 _WORD = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789_"  # a name's characters (`_NAME`)
 _MOST_INDENT = 16  # blanks of an indent passed at once (a longer one: one by one)
 _WIDEST_LAYOUT = 512  # characters of the longest line layout read in blocks (a longer line: one by one)
@@ -117,8 +126,40 @@ class _Stripped(TextSlices):
         return [t.rstrip() for t in found] if isinstance(k, slice) else found.rstrip()
 
 
+@dataclasses.dataclass(frozen=True, eq=False)
+class PlainLines:
+    """The statements of a script (P,) that change nothing its reader carries: blank and comment lines and calls of
+    other functions than `CALLS` with plain arguments (the module's docstring), in line order.
+
+    Attributes
+    ----------
+    line : ndarray of int, shape (P,)
+    start, stop : ndarray of int, shape (P,)
+        Offsets of each line and of its end (its line ending left out).
+    layout : ndarray of int, shape (P,)
+        Index in ``layouts``.
+    layouts : tuple of str
+        The distinct layouts of the lines (each number written ``0``): the names they hold.
+    """
+
+    line: np.ndarray
+    start: np.ndarray
+    stop: np.ndarray
+    layout: np.ndarray
+    layouts: tuple
+
+    def __len__(self):
+        return len(self.line)
+
+    def rows(self, keep):
+        """The lines ``keep`` (a boolean mask or indices)."""
+        return dataclasses.replace(self, line=self.line[keep], start=self.start[keep], stop=self.stop[keep],
+                                   layout=self.layout[keep])
+
+
 def cam_lines(masked, line_starts):
-    """The CAM-shaped motion lines of a masked script whose numbers are within range, read together.
+    """The CAM-shaped motion lines of a masked script whose numbers are within range, and its plain statements, read
+    together.
 
     Parameters
     ----------
@@ -130,15 +171,23 @@ def cam_lines(masked, line_starts):
     Returns
     -------
     CamLines
+    PlainLines
     """
     starts = np.asarray(line_starts, dtype=np.int64)
     starts = starts[starts < len(masked)]
     ends = np.append(starts[1:], len(masked))
-    parts = [_block(masked, starts[k:k + LINES_AT_ONCE], ends[k:k + LINES_AT_ONCE], k + 1)
-             for k in range(0, len(starts), LINES_AT_ONCE)]
-    parts = [part for part in parts if len(part)] or [_NONE]
-    return CamLines(**{f.name: np.concatenate([getattr(p, f.name) for p in parts])
-                       for f in dataclasses.fields(CamLines)})
+    blocks = [_block(masked, starts[k:k + LINES_AT_ONCE], ends[k:k + LINES_AT_ONCE], k + 1)
+              for k in range(0, len(starts), LINES_AT_ONCE)]
+    parts = [part for part, _ in blocks if len(part)] or [_NONE]
+    found = CamLines(**{f.name: np.concatenate([getattr(p, f.name) for p in parts])
+                        for f in dataclasses.fields(CamLines)})
+    plains = [plain for _, plain in blocks] or [_NO_PLAIN]
+    first_layout = np.cumsum([0] + [len(plain.layouts) for plain in plains])
+    return found, PlainLines(
+        line=np.concatenate([plain.line for plain in plains]), start=np.concatenate([plain.start for plain in plains]),
+        stop=np.concatenate([plain.stop for plain in plains]),
+        layout=np.concatenate([plain.layout + first for plain, first in zip(plains, first_layout.tolist())]),
+        layouts=tuple(text for plain in plains for text in plain.layouts))
 
 
 def _among(codes, characters):
@@ -149,7 +198,8 @@ def _among(codes, characters):
 
 
 def _block(masked, starts, ends, first_line):
-    """`CamLines` of the K lines ``first_line ..`` at offsets ``starts`` .. ``ends`` (K,) of a masked script.
+    """`CamLines` and `PlainLines` of the K lines ``first_line ..`` at offsets ``starts`` .. ``ends`` (K,) of a masked
+    script.
 
     A number is a run of `_NUMBER_CHARACTERS` that starts with a digit, a
     sign or a point after a character that is no word character (a digit
@@ -161,7 +211,8 @@ def _block(masked, starts, ends, first_line):
     states it: the layout's groups (`_layout_fields`, once per distinct
     layout) give the line's fields, moved by the widths of the numbers
     before them, and its numbers are read at once from their characters
-    (`trajcomp.formats.number_fields.read_numbers`).
+    (`trajcomp.formats.number_fields.read_numbers`). A line whose layout
+    `_PLAIN` matches, naming none of `CALLS`, is a plain statement.
     """
     begin = int(starts[0])
     codes = text_codes(masked[begin:int(ends[-1])])
@@ -178,9 +229,8 @@ def _block(masked, starts, ends, first_line):
         for k in np.flatnonzero(_among(codes[np.minimum(word, len(codes) - 1)], " \t") & (word < end)).tolist():
             rest = masked[begin + word[k]:begin + end[k]]
             word[k] += len(rest) - len(rest.lstrip(" \t"))
-    moving = after_break & (word + len("move") < end)
-    for k, c in enumerate("move"):
-        moving &= codes[np.minimum(word + k, len(codes) - 1)] == ord(c)
+    first = codes[np.minimum(word, len(codes) - 1)]
+    candidate = after_break & ((word == end) | _among(first, "\r\n" + _NAME_FIRST))  # a motion or a plain statement
     digit = codes - ord("0") < 10  # unsigned: the characters below 0 wrap above 9
     number_character = digit | (codes == ord(".")) | (codes == ord("e")) | (codes == ord("E")) | (
         codes == ord("+")) | (codes == ord("-"))
@@ -202,9 +252,9 @@ def _block(masked, starts, ends, first_line):
     hidden = np.concatenate([[0], np.cumsum(number_end - number_start - 1)])  # characters left out before each end
     layout_start = start - hidden[np.searchsorted(number_end, start, side="right")]  # offsets in the layouts
     layout_length = end - hidden[np.searchsorted(number_end, end, side="right")] - layout_start
-    rows = np.flatnonzero(moving & (layout_length <= _WIDEST_LAYOUT))
+    rows = np.flatnonzero(candidate & (layout_length <= _WIDEST_LAYOUT))
     if not len(rows):
-        return _NONE
+        return _NONE, _NO_PLAIN
     layout_start, layout_length = layout_start[rows], layout_length[rows]
     widest = int(layout_length.max())
     matrix = np.zeros((len(rows), widest + 1), dtype=np.uint32)
@@ -217,9 +267,10 @@ def _block(masked, starts, ends, first_line):
     layout = layout.reshape(-1)
     texts = ["".join(map(chr, layout_codes[layout_start[k]:layout_start[k] + layout_length[k]].tolist()))
              for k in first.tolist()]
+    plain = _plain_lines(texts, layout, rows, begin + start, begin + end, first_line)
     matched = [(k, m) for k, m in enumerate(map(_CAM_LINE.match, texts)) if m]
     if not matched:
-        return _NONE
+        return _NONE, plain
     fields, layout_good = _layout_fields([m for _, m in matched])
     parts = []
     for row, (k, _) in enumerate(matched):
@@ -228,10 +279,25 @@ def _block(masked, starts, ends, first_line):
                                       np.searchsorted(number_start, start[lines]), number_start, number_end,
                                       begin, first_line + lines) if layout_good[row] else _NONE)
     if len(parts) == 1:
-        return parts[0]
+        return parts[0], plain
     found = CamLines(**{f.name: np.concatenate([getattr(p, f.name) for p in parts])
                         for f in dataclasses.fields(CamLines)})
-    return found.rows(np.argsort(found.line, kind="stable"))
+    return found.rows(np.argsort(found.line, kind="stable")), plain
+
+
+def _plain_lines(texts, layout, rows, start, end, first_line):
+    """`PlainLines` of the lines ``rows`` of a block whose layouts (``texts`` [``layout``]) `_PLAIN` matches without
+    naming one of `CALLS`; ``start``, ``end``: offsets of the block's lines and of the next (K,)."""
+    matches = [_PLAIN.fullmatch(text) for text in texts]
+    plain = [k for k, m in enumerate(matches) if m and m.group(1) not in CALLS]
+    ending = np.array([len(matches[k].group(2)) for k in plain], dtype=np.int64)
+    code = np.full(len(texts), -1)
+    code[plain] = np.arange(len(plain))
+    which = code[layout]
+    kept = which >= 0
+    lines = rows[kept]
+    return PlainLines(line=first_line + lines, start=start[lines], stop=end[lines] - ending[which[kept]],
+                      layout=which[kept], layouts=tuple(texts[k] for k in plain))
 
 
 def _lines_of_layout(codes, layout, text, start, first_number, number_start, number_end, begin, line):
@@ -328,6 +394,8 @@ def _layout_fields(matches):
     return fields, good
 
 
+_NO_PLAIN = PlainLines(line=np.zeros(0, dtype=np.int64), start=np.zeros(0, dtype=np.int64),
+                       stop=np.zeros(0, dtype=np.int64), layout=np.zeros(0, dtype=np.int64), layouts=())
 _NONE = CamLines(  # no line
     line=np.zeros(0, dtype=np.int64), function=np.zeros(0, dtype=np.int64), is_joint=np.zeros(0, dtype=bool),
     values=np.zeros((0, 6)), number_start=np.zeros((0, 6), dtype=np.int64),

@@ -21,11 +21,11 @@ from trajcomp.formats.text import (
     split_top,
     unresolved,
 )
-from trajcomp.formats.urscript.lines import FUNCTIONS, cam_lines
+from trajcomp.formats.urscript.lines import CALLS, FUNCTIONS, cam_lines
 from trajcomp.formats.urscript.polyscope import notes as polyscope_notes
 from trajcomp.programs.program import Program
 from trajcomp.programs.items import CIRCULAR, JOINT, LINEAR, Motion, SpanColumns, SpanTable, Statement, Target
-from trajcomp.programs.tables import MotionTable, StatementTable, TargetTable, repeated
+from trajcomp.programs.tables import MotionTable, StatementTable, TargetTable, TextSlices, repeated
 from trajcomp.arm.transforms import rotvec_to_matrix
 
 POSE = ("x", "y", "z", "rx", "ry", "rz")
@@ -48,7 +48,7 @@ _DEF = re.compile(r"^\s*def\s+\w+\s*\((.*?)\)\s*:", re.M)
 _BLOCKS = ("DEF", "SEC", "THREAD", "IF", "WHILE", "FOR")  # statements whose body ends with ``end``
 _BLOCK_OPENS = re.compile(r"^[ \t]*(def|sec|thread|if|while|for)\b[^\n]*:\s*$", re.M)
 _BLOCK_CLOSES = re.compile(r"^[ \t]*(end)\s*$", re.M)
-_CALL = re.compile(r"\b(movej|movel|movep|movec|set_tcp|servoj|servoc)\s*\(")
+_CALL = re.compile(rf"\b({'|'.join(CALLS)})\s*\(")
 _IK = re.compile(r"^\s*get_inverse_kin\s*\((.*)\)\s*$", re.S)
 _POSE_TRANS = re.compile(r"^\s*pose_trans\s*\((.*)\)\s*$", re.S)
 _NAME = re.compile(r"^\s*([A-Za-z_]\w*)\s*$")
@@ -120,9 +120,9 @@ class _Value:
 
 class _Reader:
     """The reader's state while it reads a script's lines in order: the CAM-shaped motion lines (`CamLines`) in
-    blocks, every other line one by one."""
+    blocks, the plain statements (`PlainLines`) at once, every other line one by one."""
 
-    def __init__(self, source, masked, lines, cam):
+    def __init__(self, source, masked, lines, cam, plain):
         self.source, self.masked, self.lines, self.cam = source, masked, lines, cam
         self.targets, self.count, self.items = {}, 0, []  # target index -> Target read one by one; targets; items
         self.blocks = []  # the motions of `CamLines` rows read as blocks, columns each (`cam_block`)
@@ -135,7 +135,19 @@ class _Reader:
         self.direct = set()  # joint-list variables used as motion targets
         total = len(lines.starts) - (lines.starts[-1] == len(lines.text))  # as `Lines` yields them
         one_by_one = np.ones(total + 1, dtype=bool)
-        one_by_one[0] = one_by_one[cam.line] = False
+        one_by_one[0] = one_by_one[cam.line] = one_by_one[plain.line] = False
+        self.set_at_run_time, self.assigned = {}, {}  # name -> line of a non-literal assignment; of every one
+        for line in np.flatnonzero(one_by_one).tolist():  # a CAM-shaped motion line or plain statement assigns nothing
+            start, end = self.where(line)
+            if m := _ASSIGN.match(masked[start:end]):
+                self.assigned.setdefault(m.group(1), []).append(line)
+                if not (_POSE.match(m.group(2)) or _LIST.match(m.group(2)) or re.fullmatch(NUMBER, m.group(2))):
+                    self.set_at_run_time.setdefault(m.group(1), line)
+        # a plain statement naming an assigned variable is read one by one: it may name a target (`references`)
+        naming = np.array([not self.assigned.keys().isdisjoint(_WORD.findall(text)) for text in plain.layouts],
+                          dtype=bool)[plain.layout]
+        one_by_one[plain.line[naming]] = True
+        self.plain = plain.rows(~naming)
         self.others = np.flatnonzero(one_by_one)  # the lines read one by one
         self.cam_poses = np.full((len(cam), 4, 4), np.nan)
         self.cam_poses[~cam.is_joint] = poses(cam.values[~cam.is_joint])
@@ -143,13 +155,6 @@ class _Reader:
         self.poses = _literal_poses(masked, self.parts)
         self.params = {p.strip().split("=")[0].strip() for start, end in self.parts
                        for m in _DEF.finditer(masked, start, end) for p in m.group(1).split(",") if p.strip()}
-        self.set_at_run_time, self.assigned = {}, {}  # name -> line of a non-literal assignment; of every one
-        for line in self.others.tolist():  # a CAM-shaped motion line assigns nothing
-            start, end = self.where(line)
-            if m := _ASSIGN.match(masked[start:end]):
-                self.assigned.setdefault(m.group(1), []).append(line)
-                if not (_POSE.match(m.group(2)) or _LIST.match(m.group(2)) or re.fullmatch(NUMBER, m.group(2))):
-                    self.set_at_run_time.setdefault(m.group(1), line)
 
     def where(self, line):
         """``(start, end)`` offsets of line ``line`` (1-based), its line ending left out."""
@@ -175,7 +180,8 @@ class _Reader:
         self.items.append(Statement(line, original, refs=refs))
 
     def cam_rows(self, lo, hi):
-        """Read the CAM-shaped motion lines ``lo .. hi - 1`` (rows of `CamLines`), between which no other line is.
+        """Read the CAM-shaped motion lines ``lo .. hi - 1`` (rows of `CamLines`), between which no line is read one
+        by one.
 
         They take the TCP, frames and variables in force: a block of them
         at once (`cam_block`), except after a TCP set at run time and at the
@@ -517,8 +523,8 @@ def read(path):
     """Read a URScript program.
 
     The motion lines a CAM post-processor writes (`trajcomp.formats.urscript.lines`) are read together, in
-    blocks that take the TCP, frames and variables in force at their lines; every other line is read one by one,
-    in order.
+    blocks that take the TCP, frames and variables in force at their lines, and the plain statements between them
+    at once; every other line is read one by one, in order.
 
     Raises
     ------
@@ -532,7 +538,7 @@ def read(path):
     if not _SIGNS.search(masked):
         raise ReadError(f"{path}: not a URScript program: no def, move or pose literal")
     lines = Lines(source.text)
-    reader = _Reader(source, masked, lines, cam_lines(masked, np.array(lines.starts)))
+    reader = _Reader(source, masked, lines, *cam_lines(masked, np.array(lines.starts)))
     check_closed(source, masked, _BLOCK_OPENS, _BLOCK_CLOSES, dict.fromkeys(_BLOCKS, "END"), reader.parts)
     done = 0  # CAM-shaped lines read
     for line in reader.others.tolist():
@@ -627,7 +633,10 @@ def _program(reader, path):
     end = np.concatenate([offsets[:, :, 1], np.c_[cam.option_end[rows][:, [1, 0]], cam.end[rows]]])
     order = np.argsort(np.concatenate([[m.line for m in motions], cam.line[rows]]), kind="stable")
     table = dataclasses.replace(table, spans=SpanColumns(0, source.text, TIMING, start[order], end[order]))
-    return Program.from_tables("urscript", Path(path).stem, StatementTable.of(statements),
+    plain = reader.plain
+    statements = StatementTable.merged([statements, StatementTable(plain.line, TextSlices(source.text, plain.start,
+                                                                                        plain.stop))])
+    return Program.from_tables("urscript", Path(path).stem, statements,
                                _offsets_made(table, reader.offsets), _targets(reader, rows), sources=(source,),
                                tools=reader.tools, frames=reader.frames, notes=polyscope_notes(path))
 
