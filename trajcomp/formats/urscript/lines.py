@@ -26,7 +26,7 @@ import re
 
 import numpy as np
 
-from trajcomp.formats.number_fields import read_numbers, text_codes
+from trajcomp.formats.number_fields import BLANK, WORD_CHARACTER, character_table, read_numbers, text_codes
 from trajcomp.formats.text import JOINT_LIMIT, LENGTH_LIMIT, NUMBER
 from trajcomp.programs.tables import TextSlices
 
@@ -54,8 +54,9 @@ _SLOT = 22 + 6 * np.arange(SLOTS)  # first column of each option
 _LAST = np.concatenate([[19, 20], _SLOT + 3, _SLOT + 4])  # what may end the call's last argument
 LINES_AT_ONCE = 16384  # lines read together: bounds the arrays a long script's read makes
 _NUMBER_CHARACTERS = "0123456789.eE+-"  # what a number is written with (`NUMBER`)
-_NUMBER_FIRST = "0123456789.+-"  # what a number starts with
-_NAME_FIRST = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz_"  # what a name starts with (`_NAME`)
+_NUMBER_FIRST = character_table("0123456789.+-")  # what a number starts with
+_LINE_START = character_table("\r\nABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz_")  # past the indent of a
+# line `_PLAIN` or `_CAM_LINE` may match: its end or a name's first character
 _WORD = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789_"  # a name's characters (`_NAME`)
 _MOST_INDENT = 16  # blanks of an indent passed at once (a longer one: one by one)
 _WIDEST_LAYOUT = 512  # characters of the longest line layout read in blocks (a longer line: one by one)
@@ -190,11 +191,9 @@ def cam_lines(masked, line_starts):
         layouts=tuple(text for plain in plains for text in plain.layouts))
 
 
-def _among(codes, characters):
-    """Whether each character code (L,) is one of ``characters`` (ASCII), as a boolean array (L,)."""
-    table = np.zeros(256, dtype=bool)
-    table[[ord(c) for c in characters]] = True
-    return table[codes if codes.dtype == np.uint8 else np.minimum(codes, 255)]  # 255 (ÿ) is in no set
+def _among(codes, table):
+    """Whether each character code (L,) is one of a `character_table`'s, as a boolean array (L,)."""
+    return table[codes if codes.dtype == np.uint8 else np.minimum(codes, 127)]  # 127 (DEL) is in no table
 
 
 def _block(masked, starts, ends, first_line):
@@ -221,16 +220,16 @@ def _block(masked, starts, ends, first_line):
                            begin == 0 or masked[begin - 1] == "\n")  # where `^` matches in `_CAM_LINE`
     word = start.copy()  # the first character past each line's indent
     for _ in range(_MOST_INDENT):
-        blank = _among(codes[np.minimum(word, len(codes) - 1)], " \t") & (word < end)
+        blank = _among(codes[np.minimum(word, len(codes) - 1)], BLANK) & (word < end)
         if not blank.any():
             break
         word += blank
     else:  # a longer indent, one by one
-        for k in np.flatnonzero(_among(codes[np.minimum(word, len(codes) - 1)], " \t") & (word < end)).tolist():
+        for k in np.flatnonzero(_among(codes[np.minimum(word, len(codes) - 1)], BLANK) & (word < end)).tolist():
             rest = masked[begin + word[k]:begin + end[k]]
             word[k] += len(rest) - len(rest.lstrip(" \t"))
     first = codes[np.minimum(word, len(codes) - 1)]
-    candidate = after_break & ((word == end) | _among(first, "\r\n" + _NAME_FIRST))  # a motion or a plain statement
+    candidate = after_break & ((word == end) | _among(first, _LINE_START))  # a motion or a plain statement
     digit = codes - ord("0") < 10  # unsigned: the characters below 0 wrap above 9
     number_character = digit | (codes == ord(".")) | (codes == ord("e")) | (codes == ord("E")) | (
         codes == ord("+")) | (codes == ord("-"))
@@ -239,7 +238,7 @@ def _block(masked, starts, ends, first_line):
     edges = edges[(0 if len(codes) and number_character[0] else 1):]  # the runs' starts and ends, alternating
     run_start, run_end = edges[0:-1:2], edges[1::2]
     is_number = _among(codes[run_start], _NUMBER_FIRST) & ~(
-        _among(codes[np.maximum(run_start - 1, 0)], _WORD) & (run_start > 0))
+        _among(codes[np.maximum(run_start - 1, 0)], WORD_CHARACTER) & (run_start > 0))
     number_start, number_end = run_start[is_number], run_end[is_number]
     kept = ~number_character  # a number's first character stands for it, written 0; other runs stay whole
     kept[run_start] = True
