@@ -7,6 +7,7 @@ from pathlib import Path
 import numpy as np
 
 from trajcomp.errors import ReadError
+from trajcomp.formats.number_fields import offset_type
 from trajcomp.formats.text import (
     JOINT_LIMIT,
     LENGTH_LIMIT,
@@ -633,9 +634,9 @@ def _program(reader, path):
     end = np.concatenate([offsets[:, :, 1], np.c_[cam.option_end[rows][:, [1, 0]], cam.end[rows]]])
     order = np.argsort(np.concatenate([[m.line for m in motions], cam.line[rows]]), kind="stable")
     table = dataclasses.replace(table, spans=SpanColumns(0, source.text, TIMING, start[order], end[order]))
-    plain = reader.plain
-    statements = StatementTable.merged([statements, StatementTable(plain.line, TextSlices(source.text, plain.start,
-                                                                                        plain.stop))])
+    plain, offset = reader.plain, offset_type(source.text)
+    statements = StatementTable.merged([statements, StatementTable(plain.line, TextSlices(
+        source.text, plain.start.astype(offset), plain.stop.astype(offset)))])
     return Program.from_tables("urscript", Path(path).stem, statements,
                                _offsets_made(table, reader.offsets), _targets(reader, rows), sources=(source,),
                                tools=reader.tools, frames=reader.frames, notes=polyscope_notes(path))
@@ -653,7 +654,7 @@ def _targets(reader, rows):
     pose = np.full((n, 4, 4), np.nan)
     joints = np.full((n, 6), np.nan) if any_joints else np.broadcast_to(np.nan, (n, 6))  # none: one NaN row shared
     is_joint, line = np.zeros(n, dtype=bool), np.zeros(n, dtype=int)
-    offset = np.int32 if len(reader.source.text) < 2**31 else np.int64  # 18 roles a target: half the bytes
+    offset = offset_type(reader.source.text)  # 18 roles a target: half the bytes
     start, end = np.full((n, len(ROLES)), -1, dtype=offset), np.full((n, len(ROLES)), -1, dtype=offset)
     name = np.full(n, "", dtype=object)
     index = _blocks_column(reader, "target", int)
