@@ -126,6 +126,29 @@ def krl_robodk_e1(path, folder):
     return _robodk(path, folder, "robodk_e1", 0.0)
 
 
+@form("krl", "e6pos")
+def krl_e6pos(path, folder):
+    """The .src with each motion's point inline as typed aggregates with a blank after each comma and E1..E6
+    stated, as generators built on Python or Grasshopper write them (``"LIN {E6POS: X " + str(x) + ", Y " ...
+    ", A 0, B 90, C 0, E1 0, E2 0, E3 0, E4 0, E5 0, E6 0} C_DIS"``: numbers as ``str(float)``), no .dat."""
+    path = Path(path)
+    points = {name: [float(v) for v in values] for name, *values in re.findall(
+        r"^DECL E6POS (\w+)=\{X ([^,]+),Y ([^,]+),Z ([^,]+),A ([^,]+),B ([^,]+),C ([^,}]+)",
+        path.with_suffix(".dat").read_text(), re.M)}
+    name = f"{path.stem}_e6pos"
+
+    def inline(match):
+        x, y, z, a, b, c = points[match.group(2)]
+        return (f"{match.group(1)}{{E6POS: X {x}, Y {y}, Z {z}, A {a:g}, B {b:g}, C {c:g}, "
+                "E1 0, E2 0, E3 0, E4 0, E5 0, E6 0}")
+
+    text = re.sub(r"^DEF \w+\(", f"DEF {name}(", path.read_text(), count=1, flags=re.M)
+    text = re.sub(r"^(\s*(?:LIN|PTP) )(\w+)", inline, text, flags=re.M)
+    out = Path(folder) / f"{name}.src"
+    out.write_text(text)
+    return out
+
+
 # URScript
 #
 # RoboDK's Universal Robots post (Universal_Robots.py): the program in ``def Prog():`` .. ``end``, motion
