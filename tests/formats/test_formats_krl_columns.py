@@ -202,10 +202,17 @@ INLINE_VARIANTS = [  # (a .src line, whether `_inline_layout` finds it from its 
     ("  LIN {X 1,Y 2,Z 3,A 4,B 5,C 6}\tC_DIS ", False, True),
     ("  LIN {X 1,Y 2,Z 3,A 4,B 5,C 6} C_DIS ; Größe, Maße", False, True),  # a comment: blanks after the motion
     ("                    LIN {X 1,Y 2,Z 3,A 4,B 5,C 6}", False, True),  # indented beyond `_LONGEST_INDENT`
-    ("  LIN {X 1, Y 2,Z 3,A 4,B 5,C 6}", False, False),  # a blank in the members: one by one
+    ("  LIN {X 1, Y 2,Z 3,A 4,B 5,C 6}", False, True),  # blanks after some commas: the pattern
+    ("  LIN {X 1, Y 2, Z 3, A 4, B 5, C 6}", True, True),
+    ("  LIN {E6POS: X 1.5, Y 2, Z 3, A 4, B 5, C 6, E1 0, E2 0, E3 0, E4 0, E5 0, E6 0} C_DIS", True, True),
+    ("  LIN {POS:X 1.5, Y 2, Z 3, A 4, B 5, C 6,S 2, T 35}", False, True),  # the separators mixed: the pattern
+    ("  LIN {FRAME:  X 1.5,Y 2,Z 3,A 4,B 5,C 6}", False, False),
+    ("  LIN {X 1,  Y 2,Z 3,A 4,B 5,C 6}", False, False),  # two blanks: one by one
+    ("  LIN {X 1 ,Y 2,Z 3,A 4,B 5,C 6}", True, False),  # the field "1 ": no number
     ("  LIN {X 1,Y 2,Z 3,A 4,B 5}", False, False),  # no C: the arm's own, at run time
     ("  LIN {X 1,Y 2,Z 3,A 4,B 5,C 6}C_DIS", False, False),
-    ("  LIN {POS: X 1,Y 2,Z 3,A 4,B 5,C 6}", False, False),
+    ("  LIN {POS: X 1,Y 2,Z 3,A 4,B 5,C 6}", True, True),
+    ("  LIN {E6AXIS: X 1,Y 2,Z 3,A 4,B 5,C 6}", False, False),
     ("  PTP {AXIS: A1 0,A2 -90,A3 90,A4 0,A5 0,A6 0} C_PTP", False, False),
     ("  LIN_REL {X 1,Y 2,Z 3,A 4,B 5,C 6}", False, False),
     ("  CIRC {X 1,Y 2,Z 3,A 4,B 5,C 6},{X 1,Y 2,Z 3,A 4,B 5,C 6}", False, False),
@@ -249,6 +256,7 @@ $APO.CDIS = 1.000
 PTP {AXIS: A1 0,A2 -90,A3 90,A4 0,A5 0,A6 0} C_PTP
 LIN {X 446.000,Y 70.000,Z 635.000,A 0.000,B 90.000,C 0.000} C_DIS
 lin {x 446.5,y 70.5,z 6.35e2,a 0,b 90,c 0} c_dis
+LIN {E6POS: X 446.7, Y 70.5, Z 635.0, A 0, B 90, C 0, E1 0, E2 0, E3 0, E4 0, E5 0, E6 0} C_DIS
 
   LIN {X 447.000,Y 71.000,Z 635.000,A 0.000,B 90.000,C 0.000,E1 5.00000} C_DIS ; ß
 LIN {X 447.500,Y 71.000,Z 635.000,A 0.000,B 90.000,C 0.000,S 2,T 35}
@@ -275,9 +283,10 @@ def test_inline_motions_read_at_once_are_the_program_read_one_by_one(tmp_path, m
     assert at_once.not_compensated() == one_by_one.not_compensated()
     table = at_once.motion_table()
     assert table.speed.tolist()[2:4] == [50.0, 50.0] and table.zone[2] == 1.0 and table.tool[2] == "TOOL line 8"
-    assert f"TOOL_DATA[N] set at run time (line {19 + bool(dat)})" in table.reason[-1]
+    assert f"TOOL_DATA[N] set at run time (line {20 + bool(dat)})" in table.reason[-1]
     first = 1 + bool(dat)  # the .dat's point, the axis position, then the inline points
-    assert at_once.targets[first + 2].external.tolist() == [5.0] and at_once.targets[first + 3].config == (2, 35)
+    assert at_once.targets[first + 2].external.tolist() == [0.0] * 6 and at_once.targets[first + 2].pose[0, 3] == 446.7
+    assert at_once.targets[first + 3].external.tolist() == [5.0] and at_once.targets[first + 4].config == (2, 35)
 
 
 def test_inline_motions_of_a_program_held_as_columns_are_written_as_the_objects_are(tmp_path, monkeypatch):

@@ -90,7 +90,14 @@ _PROGRAM_NAME = re.compile(r"^[A-Za-z_][A-Za-z0-9_]{0,23}$")  # KRL names: 24 ch
 # A Cartesian point declared as KUKA's editors and CAM post-processors write it, one a line:
 # DECL E6POS XP1={X 1.0,Y 2.0,Z 3.0,A 0.0,B 90.0,C 0.0,S 2,T 35,E1 0.0,..,E6 0.0} (S, T and E1..E6 optional):
 # read a whole data list of them at once (`_written_points`); any other declaration goes line by line.
-_EXTERNAL_MEMBERS = "".join(f"(?:,E{k}[ ]({NUMBER})" for k in range(1, 7)) + ")?" * 6
+
+
+def _externals(separator):
+    """The pattern of a point's E1..Ek (k = 0..6) after its other members, ``separator`` (a pattern) before each."""
+    return "".join(f"(?:{separator}E{k}[ ]({NUMBER})" for k in range(1, 7)) + ")?" * 6
+
+
+_EXTERNAL_MEMBERS = _externals(",")
 _WRITTEN_POINT = re.compile(
     r"^[ \t]*DECL[ \t]+(?:GLOBAL[ \t]+)?(?:E6POS|POS|FRAME)[ \t]+(\w+)[ \t]*=[ \t]*\{"
     + ",".join(f"{p.upper()}[ ]({NUMBER})" for p in POSE) + r"(?:,S[ ](\d+),T[ ](\d+))?"
@@ -100,14 +107,16 @@ _WRITTEN_POINT = re.compile(
 _WRITTEN_MOTION = re.compile(
     r"^[ \t]*((S?PTP)|S?LIN)[ \t]+(?!(?:C_(?:PTP|DIS|VEL|ORI|SPL)|WITH)\b)([A-Za-z_][A-Za-z0-9_]*)"
     r"(?:[ \t]+(C_(?:PTP|DIS|VEL|ORI|SPL)))?[ \t]*\r?$", re.I | re.M)
-# A motion to a Cartesian point written inline, one a line, as RoboDK's and SprutCAM's KUKA posts write them:
-# LIN {X 446.0,Y 70.0,Z 635.0,A 0.0,B 90.0,C 0.0} C_DIS (PTP, SLIN, SPTP too; the members as `_WRITTEN_POINT` has
-# them, no WITH, no _REL): read at once (`_written_motions`); every other inline motion goes line by line. Groups:
+# A motion to a Cartesian point written inline, one a line, as RoboDK's and SprutCAM's KUKA posts write them,
+# LIN {X 446.0,Y 70.0,Z 635.0,A 0.0,B 90.0,C 0.0} C_DIS, or with its type and a blank after each comma as other
+# generators do, LIN {E6POS: X 446.0, Y 70.0, ..} C_DIS (PTP, SLIN, SPTP too; the members in `_WRITTEN_POINT`'s
+# order, no WITH, no _REL): read at once (`_written_motions`); every other inline motion goes line by line. Groups:
 # the line, the keyword, the keyword if PTP or SPTP, an empty name, X..C, S, T, E1..E6, the approximation.
+_SEPARATOR = ",[ ]?"
 _INLINE_MOTION = re.compile(
-    r"^[ \t]*((S?PTP)|S?LIN)[ \t]+\{()" + ",".join(f"{p.upper()}[ ]({NUMBER})" for p in POSE)
-    + r"(?:,S[ ](\d+),T[ ](\d+))?" + _EXTERNAL_MEMBERS + r"\}(?:[ \t]+(C_(?:PTP|DIS|VEL|ORI|SPL)))?[ \t]*\r?$",
-    re.I | re.M)
+    r"^[ \t]*((S?PTP)|S?LIN)[ \t]+\{(?:(?:E6POS|POS|FRAME):[ ]?)?()"
+    + _SEPARATOR.join(f"{p.upper()}[ ]({NUMBER})" for p in POSE) + rf"(?:{_SEPARATOR}S[ ](\d+){_SEPARATOR}T[ ](\d+))?"
+    + _externals(_SEPARATOR) + r"\}(?:[ \t]+(C_(?:PTP|DIS|VEL|ORI|SPL)))?[ \t]*\r?$", re.I | re.M)
 _INLINE_POINT = [0] + list(range(3, 18))  # the groups of `_INLINE_MOTION` that `_WRITTEN_POINT` has, in its order
 
 
@@ -338,7 +347,7 @@ def _written_layout(codes, starts, ends):
     start, end = np.full((len(candidate), 16), -1), np.full((len(candidate), 16), -1)
     start[:, 0], end[:, 0] = start_at, ends[candidate]
     start[:, 1], end[:, 1] = head_end, name_end
-    written = _member_fields(codes, commas, brace, close, good, start, end)
+    written = _member_fields(codes, commas, brace + 1, close, good, start, end)
     return candidate[written], start[written], end[written], shared[written]
 
 
@@ -372,10 +381,10 @@ def _braces(codes, starts, ends, line_start, close):
     return brace, (first < len(opens)) & (brace < close) & ((first + 1 >= len(opens)) | (second > close)), commas
 
 
-def _member_fields(codes, commas, brace, close, good, start, end):
+def _member_fields(codes, commas, first, close, good, start, end, gap=0):
     """The members of aggregates ``{X 1.5,Y 2,Z 3,A 0,B 90,C 0,S 2,T 35,E1 0}`` as a point declaration or an
-    inline point writes them (`_LAYOUTS`: each member's name and one space, no other blank), found from the
-    characters' codes.
+    inline point writes them (`_LAYOUTS`: each member's name and one space, ``gap`` blanks after each comma, no
+    other blank), found from the characters' codes.
 
     Parameters
     ----------
@@ -383,34 +392,36 @@ def _member_fields(codes, commas, brace, close, good, start, end):
         The masked text's character codes (`text_codes`).
     commas : ndarray of int, shape (C,)
         The offsets of the commas of the lines looked at (ascending).
-    brace, close : ndarray of int, shape (K,)
-        The offsets of each aggregate's ``{`` and ``}``.
+    first, close : ndarray of int, shape (K,)
+        The offsets of each aggregate's first member name and of its ``}``.
     good : ndarray of bool, shape (K,)
         The aggregates to look at (the others are not written so).
     start, end : ndarray of int, shape (K, 16)
         Filled in place: the offsets of the fields X..C, S, T, E1..E6 (columns 2-15) of the aggregates written so.
+    gap : int
+        The blanks after each comma.
 
     Returns
     -------
     ndarray of bool, shape (K,)
         The aggregates written so.
     """
-    count = np.searchsorted(commas, close) - np.searchsorted(commas, brace) + 1  # members
-    written = np.zeros(len(brace), dtype=bool)
+    count = np.searchsorted(commas, close) - np.searchsorted(commas, first) + 1  # members
+    written = np.zeros(len(first), dtype=bool)
     for members, layouts in _LAYOUTS.items():
         rows = np.flatnonzero(good & (count == members))
         if not len(rows):
             continue
-        separators = np.concatenate([brace[rows, None], commas[np.searchsorted(commas, brace[rows])[:, None]
-                                                               + np.arange(members - 1)]], axis=1)
-        member_end = np.concatenate([separators[:, 1:], close[rows, None]], axis=1)
-        names = _spelt(codes, (separators + 1).ravel(), 3).reshape(len(rows), members, 3)  # "X ", "E1 "
+        comma = commas[np.searchsorted(commas, first[rows])[:, None] + np.arange(members - 1)]
+        name_at = np.concatenate([first[rows, None], comma + 1 + gap], axis=1)
+        member_end = np.concatenate([comma, close[rows, None]], axis=1)
+        names = _spelt(codes, name_at.ravel(), 3).reshape(len(rows), members, 3)  # "X ", "E1 "
         for layout in layouts:
             spelt = np.ones(len(rows), dtype=bool)
             field_start = np.empty((len(rows), members), dtype=np.int64)
             for k, (member, _) in enumerate(layout):
                 spelt &= _starts_with(names[:, k], member + " ")
-                field_start[:, k] = separators[:, k] + 2 + len(member)
+                field_start[:, k] = name_at[:, k] + 1 + len(member)
             spelt &= (member_end > field_start).all(axis=1)
             fields = [field for _, field in layout]
             start[rows[spelt][:, None], fields] = field_start[spelt]
@@ -1081,6 +1092,7 @@ def _motion_layout(codes, starts, ends):
 
 
 _LONGEST_INDENT = 16  # blanks before an inline motion's keyword read at once (more: `_INLINE_MOTION`)
+_INLINE_TYPES = ("E6POS:", "POS:", "FRAME:")  # the types an inline point may state (`_INLINE_MOTION`)
 
 
 def _inline_layout(codes, starts, ends):
@@ -1088,8 +1100,9 @@ def _inline_layout(codes, starts, ends):
     found from the characters' codes.
 
     Blanks (spaces, tabs) before the keyword, one space after it and
-    before the approximation, the members as `_member_fields` knows them,
-    nothing after, any case, a line ending ``\\n`` or ``\\r\\n``: a subset
+    before the approximation, the point's type (`_INLINE_TYPES`) and one
+    space or none, the members as `_member_fields` knows them (one space
+    after each comma or none), nothing after, any case, a line ending ``\\n`` or ``\\r\\n``: a subset
     of what `_INLINE_MOTION` matches. The fields' contents are not checked
     here (`_field_numbers`).
 
@@ -1108,7 +1121,7 @@ def _inline_layout(codes, starts, ends):
         As `_motion_layout`'s (the name: -1).
     start, end : ndarray of int, shape (K, 16)
         Offsets of the point's fields as `_written_layout`'s: the line, an
-        empty name after the ``{``, X..C, S, T, E1..E6 (-1 where not written).
+        empty name before the first member, X..C, S, T, E1..E6 (-1 where not written).
     """
     none = np.zeros(0, dtype=np.int64)
     if not len(starts) or not len(codes):
@@ -1134,8 +1147,13 @@ def _inline_layout(codes, starts, ends):
     good = (keyword_end >= 0) & alone & (brace == keyword_end + 1)
     start, end = np.full((len(candidate), 16), -1), np.full((len(candidate), 16), -1)
     start[:, 0], end[:, 0] = start_at, ends[candidate]
-    start[:, 1] = end[:, 1] = brace + 1
-    written = _member_fields(codes, commas, brace, close, good, start, end)
+    first = brace + 1  # the first member's name: after the point's type if written (`E6POS: `)
+    for typ in _INLINE_TYPES:
+        typed = _spells(codes, first, typ) & (first == brace + 1)
+        first[typed] += len(typ) + (codes[np.minimum(brace[typed] + len(typ) + 1, len(codes) - 1)] == ord(" "))
+    start[:, 1] = end[:, 1] = first  # an empty name, where `_INLINE_MOTION` has it
+    written = _member_fields(codes, commas, first, close, good, start, end)
+    written |= _member_fields(codes, commas, first, close, good & ~written, start, end, gap=1)  # ", Y 2"
     joint = codes[np.maximum(keyword_end - 1, 0)] | 32 == ord("p")  # PTP or SPTP
     groups = np.stack([start_at, ends[candidate], keyword_start, keyword_end, np.where(joint, keyword_start, -1),
                        np.where(joint, keyword_end, -1), np.full(len(candidate), -1), np.full(len(candidate), -1),
