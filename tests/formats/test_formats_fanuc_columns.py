@@ -211,11 +211,14 @@ MOTION_VARIANTS = [  # (line, read at once)
     ("L   P[ 3 ]\t\t50 mm/sec   CNT100\t;  ", True), ("L P[4] 50.5mm/sec CNT1 ;", True),
     ("L P[5] 7.deg/sec FINE\t;", True), ("L P[6] 2sec CNT1 ;", True), ("L P[7] 25msec CNT0 ;", True),
     ("L P[7] 12inch/min CNT1 ;", True), ("L P[7] 30cm/min CNT1 ;", True),
-    ("L P[8] 50mm/sec CNT 1 ;", False), ("L P[9] 50mm/sec FINE ACC100 ;", False), ("L P[10] 50mm/sec CNT1 ;", False),
+    ("L P[8] 50mm/sec CNT 1 ;", False), ("L P[9] 50mm/sec FINE ACC100 ;", False), ("L P[10] 50mm/sec CNT1", False),
     ("   : ACC100 ;", None), ("  ! Grüße: L P[11] 50mm/sec CNT1 ;", None),
     ("L P[11]" + " " * 70 + "50mm/sec CNT1 ;", False), ("L P[12] 50mm/sec CNT1 ;", True),
     ("L P[13] 50mm/sec CNT1 ;", True), ("L P[14] 50mm/sec CNT1 ;", True), ("L P[15] 50mm/sec CNT1 ;", True),
     ("l P[7] 50mm/sec CNT1 ;", False), ("L P[16] 50mm/sec CNT1 ;", False),
+    ("   :L P[12] 50mm/sec CNT1 ;", True), ("  :J P[13] 10% FINE ;", True),  # no line number (MakeTP reads it)
+    ("WAIT R[1]>0", None), ("   :L P[14] 50mm/sec CNT1 ;", False),  # continues the instruction before it
+    ("C P[15]", None), ("       P[16] 50mm/sec CNT1 ;", None),  # so does a line with no ":" (RoboDK's posts)
 ]
 
 
@@ -250,3 +253,21 @@ def test_a_position_among_written_ones_is_refused_by_name(tmp_path, monkeypatch,
     with pytest.raises(ReadError) as line_by_line:
         _line_by_line(path, monkeypatch)
     assert str(line_by_line.value) == str(refused.value)
+
+
+def test_instructions_without_line_numbers_are_read_as_instructions(tmp_path, monkeypatch):
+    """As the Grasshopper plug-in Robots writes a program (``:L P[1] ..  ;``, no numbers; MakeTP numbers them): each
+    line ended by its ``;`` is an instruction of its own (a comment too), only a line after one not ended continues
+    it, with or without its ``:`` (RoboDK's posts write a circular motion's second point without). Read once, these
+    motions were none, the program was written unchanged and passed; RoboDK's circular motion was refused."""
+    text = ("/PROG  ROB\n/ATTR\nCOMMENT = \"Fanuc LS code\" ;\n/MN\n: UTOOL_NUM=1 ;\n: ! Tool 1 TCP Configuration ;\n"
+            ":L P[1] 50mm/sec CNT1  ;\n:C P[2]  \n  :  P[3] 50mm/sec FINE  ;\n:J P[1] 10% FINE  ;\n"
+            "   5:C P[2] \n       P[3] 50mm/sec CNT1 ;\n/POS\n"
+            + "".join(_position(n, 100.0 + n) for n in (1, 2, 3)) + "/END\n")
+    path = tmp_path / "rob.ls"
+    path.write_text(text)
+    program = formats.read(path)
+    assert [(m.line, m.kind, m.via, m.target, m.tool) for m in program.motions] == [
+        (7, "linear", None, 0, "1"), (8, "circular", 1, 2, "1"), (10, "joint", None, 0, "1"),
+        (11, "circular", 1, 2, "1")]
+    assert _seen(program) == _seen(_line_by_line(path, monkeypatch))

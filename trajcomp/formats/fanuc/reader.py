@@ -41,6 +41,7 @@ _UNIT = r"%|mm/se[ck]|cm/min|inch/min|deg/se[ck]|mse[ck]|se[ck]"
 _SECTION = re.compile(r"^/(PROG|ATTR|APPL|MN|POS|END)\b")
 _NUMBERED = re.compile(r"^\s*(\d+):(.*)$")
 _CONTINUED = re.compile(r"^\s*:(.*)$")
+_CLOSED = re.compile(r"(?:^|;)\s*$")  # an instruction ended by its ";", or a comment (masked): none continues it
 _INDEX = r"((?:A?R\[[^\]]*\]|[^\]:\[])+?)"  # P[3], or P[R[3]] / P[R[3:idx]]: an index a register holds
 _MOTION = re.compile(r"^\s*([JLC])\s+(P|PR)\[\s*" + _INDEX + r"\s*(?::[^\]]*)?\](.*)$", re.I)
 _POINT = re.compile(r"^\s*P\[\s*" + _INDEX + r"\s*(?::[^\]]*)?\](.*)$", re.I)
@@ -61,11 +62,11 @@ _CONFIG = re.compile(r"(?:CONFIG|KONFIG)\s*:\s*'([^']*)'", re.I)
 _CONFIG_VALUE = re.compile(r"^\s*([NF])\s*([UD])\s*([TB])\s*,\s*(-?\d{1,3})\s*,\s*(-?\d{1,3})\s*,\s*(-?\d{1,3})\s*$", re.I)
 _OTHER_REPRESENTATION = re.compile(r"\bR[XYZWPR]\s*=", re.I)
 # The /MN motion lines a CAM post-processor (and `trajcomp convert`) writes, read together (`_written_motions`):
-#    12:L P[12] 50mm/sec CNT1    ;   (J or L, a position P[n], a speed in a unit, FINE or CNTn, not continued)
+#    12:L P[12] 50mm/sec CNT1    ;   (J or L, a position P[n], a speed in a unit, FINE or CNTn; its number may
+#                                       be left out, as MakeTP allows: `_instructions`)
 _WRITTEN_MOTION = re.compile(
-    r"^[ \t]*\d+:[ \t]*([JL])[ \t]+P\[[ \t]*(\d{1,9})[ \t]*\][ \t]+((\d{1,9}(?:\.\d{0,9})?)[ \t]*"
-    r"(%|mm/sec|cm/min|inch/min|deg/sec|msec|sec))[ \t]+(?:FINE[ \t]+|CNT(\d{1,3})[ \t]*);[ \t]*\r?$"
-    r"(?!\n[^\S\r\n]*:)", re.M)
+    r"^[ \t]*\d*:[ \t]*([JL])[ \t]+P\[[ \t]*(\d{1,9})[ \t]*\][ \t]+((\d{1,9}(?:\.\d{0,9})?)[ \t]*"
+    r"(%|mm/sec|cm/min|inch/min|deg/sec|msec|sec))[ \t]+(?:FINE[ \t]+|CNT(\d{1,3})[ \t]*);[ \t]*\r?$", re.M)
 _SECTION_WORD = re.compile(r"/(PROG|ATTR|APPL|MN|POS|END)\b")  # `_SECTION` where white space alone precedes it
 _LONE_CR = re.compile(r"\r(?!\n)")  # a line ending of its own (`Lines`), which `^` and `$` do not see
 _SCARA_CONFIG = re.compile(r"^\s*[LR]\s*,(?:\s*-?\d{1,3}\s*,?)*\s*$", re.I)
@@ -224,18 +225,25 @@ def _instructions(masked, starts, ends, numbers):
     """``(first line, last line, start, end, content)`` of the /MN instructions on lines ``numbers`` (ascending).
 
     A line ``  12:L P[3] ...`` is an instruction, ``content`` the text after
-    its number; a line ``  :  P[4] ...`` continues the instruction on the
-    line before it. Other lines are none (statements).
+    its number. An instruction not ended by its ``;`` (``   3:C P[3]``)
+    goes on over the lines after it that have no number, ``  :  P[4] ..``
+    or ``       P[4] ..`` (RoboDK's posts write it so), up to one that ends
+    it; after an instruction ended, a line ``:L P[3] .. ;`` is an
+    instruction of its own, unnumbered (MakeTP numbers it; the Grasshopper
+    plug-in Robots writes every instruction so). Other lines are none
+    (statements).
     """
     out = []
     for number in numbers.tolist():
         start, end = int(starts[number - 1]), int(ends[number - 1])
         text = masked[start:end]
-        if (c := _CONTINUED.match(text)) and out and out[-1][1] == number - 1:
+        head = _NUMBERED.match(text)
+        if not head and out and out[-1][1] == number - 1 and not _CLOSED.search(out[-1][4]):
             first, _, begin, _, content = out[-1]
-            out[-1] = (first, number, begin, end, content + " " + c.group(1))
-        elif n := _NUMBERED.match(text):
-            out.append((number, number, start, end, n.group(2)))
+            c = _CONTINUED.match(text)
+            out[-1] = (first, number, begin, end, content + " " + (c.group(1) if c else text))
+        elif head := head or _CONTINUED.match(text):
+            out.append((number, number, start, end, head.group(head.lastindex)))
     return out
 
 
@@ -283,13 +291,18 @@ def _written_motions(by_line, starts, ends, in_mn, points, unread):
     while at := list(itertools.islice(found, MOTIONS_AT_ONCE)):
         line = np.searchsorted(starts, at, side="right")
         parts.append((line, *_line_fields(by_line, np.array(at, dtype=np.int64), int(ends[line[-1] - 1]))))
-    line, read, numbers, speed_at, is_joint, value, scale, unit, zone = (
+    line, read, numbers, speed_at, is_joint, value, scale, unit, zone, unnumbered = (
         np.concatenate(column) for column in zip(*parts)) if parts else (
         np.zeros(0, dtype=np.int64), np.zeros(0, dtype=bool), np.zeros(0, dtype=np.int64),
-        np.zeros((0, 2), dtype=np.int64), np.zeros(0, dtype=bool), np.zeros(0), np.zeros(0), np.zeros(0, dtype=object), np.zeros(0))
+        np.zeros((0, 2), dtype=np.int64), np.zeros(0, dtype=bool), np.zeros(0), np.zeros(0), np.zeros(0, dtype=object),
+        np.zeros(0), np.zeros(0, dtype=bool))
+    continued = unnumbered & ~np.isin(line - 1, line)  # ":L P[3] ..;" after a line not read at once may continue
+    for k in np.flatnonzero(continued).tolist():  # it (`_instructions`): only one after a ";" is surely not
+        continued[k] = not by_line[int(starts[line[k] - 2]):int(ends[line[k] - 2])].rstrip().endswith(";")
     known = np.array(sorted(n for n in points if n < WRITTEN_NUMBERS), dtype=np.int64)
     slot = np.minimum(np.searchsorted(known, numbers), max(len(known) - 1, 0))
-    good = read & in_mn[line] & (known[slot] == numbers if len(known) else np.zeros(len(line), dtype=bool))
+    good = read & ~continued & in_mn[line] & (known[slot] == numbers if len(known)
+                                               else np.zeros(len(line), dtype=bool))
     good &= ~np.isin(numbers, np.array([n for n in unread if n < WRITTEN_NUMBERS], dtype=np.int64))
     keep = np.flatnonzero(good)
     index = np.array([points[n] for n in known.tolist()], dtype=np.int64)
@@ -316,10 +329,11 @@ def _line_fields(by_line, at, stop):
         Whether the line is read; the position number; the offsets (K, 2)
         of the speed field (number and unit); whether the motion is J; the
         speed's number; its unit's scale and unit (`SPEED_UNITS`); the CNT
-        number (0 for FINE).
+        number (0 for FINE); whether the line has no number (``:L P[3] ..``).
     """
     codes = text_codes(by_line[at[0]:stop])
     start = at - at[0]
+    unnumbered = codes[_skip(codes, start, _BLANK)[0]] == ord(":")
     kind, read = _skip(codes, _following(codes, ":", start) + 1, _BLANK)
     number, past = _skip(codes, _following(codes, "[", start) + 1, _BLANK)
     number_end = _skip(codes, number, _DIGIT)[0]
@@ -337,7 +351,7 @@ def _line_fields(by_line, at, stop):
         spelt = ((unit_end - unit) == len(spelling)) & (codes[unit] == ord(spelling[0]))  # one unit to each
         scale[spelt], names[spelt] = factor, name
     return (read, numbers[0].astype(np.int64), np.stack([speed, unit_end], axis=1) + at[0], codes[kind] == ord("J"),
-            numbers[1], scale, names, np.nan_to_num(numbers[2]))
+            numbers[1], scale, names, np.nan_to_num(numbers[2]), unnumbered)
 
 
 def _following(codes, character, at):
