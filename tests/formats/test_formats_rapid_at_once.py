@@ -1,4 +1,4 @@
-"""A RAPID module written as CAM tools write it, read at once (`_WRITTEN_POINT`, `_WRITTEN_MOTION`): the same
+"""A RAPID module written as CAM tools write it, read at once (`_laid_out_lines`, `WRITTEN_FORMS`): the same
 program as the statement-by-statement read, the state in force at each line (tool, work object, speed data,
 routine parameters, points assigned at run time), without an object per line."""
 
@@ -9,7 +9,9 @@ import pytest
 
 from trajcomp import formats
 from trajcomp.errors import ReadError
+from trajcomp.formats.number_fields import line_bounds, text_codes
 from trajcomp.formats.rapid import reader as rapid_reader
+from trajcomp.formats.text import mask
 from trajcomp.programs.tables import ItemRows, TargetRows
 
 POINT = "  CONST robtarget p{0}:=[[{0}00,{0}0,500],[0,0,1,0],[0,0,0,1],[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]];"
@@ -27,12 +29,20 @@ def _seen(program):
 
 
 def _both(path, monkeypatch):
-    """The program read at once, and read statement by statement (neither pattern matching)."""
+    """The program read at once, and read statement by statement (no line found from its characters, no pattern
+    matching)."""
     at_once = formats.read(path)
     with monkeypatch.context() as patch:
-        for name in ("_WRITTEN_POINT", "_WRITTEN_MOTION", "_WRITTEN_INLINE"):
-            patch.setattr(rapid_reader, name, re.compile(r"(?!)"))
+        _nothing_at_once(patch)
         return at_once, formats.read(path)
+
+
+def _nothing_at_once(patch):
+    """Patch the reader so that it reads no line at once."""
+    for name in rapid_reader.WRITTEN_FORMS:
+        patch.setattr(rapid_reader, name, re.compile(r"(?!)"))
+    patch.setattr(rapid_reader, "_laid_out_lines", lambda codes, starts, ends: [
+        (np.zeros(0, dtype=np.int64), np.zeros((0, 1, 2), dtype=np.int64))] * len(rapid_reader.WRITTEN_FORMS))
 
 
 STATES = {
@@ -217,3 +227,98 @@ def test_data_words_across_the_pieces_looked_in_are_found(at):
         text = "x" * (16 - at) + word + "y" * 20
         assert rapid_reader._declares_data(text, piece=16)
     assert not rapid_reader._declares_data("x" * 100 + "speed data nu m", piece=16)
+
+
+def _robodk(*motions, speed="    rdkSpeed := [50.00,500,5000,1000];"):
+    """A module as RoboDK's ABB_RAPID_IRC5 post writes it (tests/benchmarks/cam_forms.py, ``rapid:robodk``)."""
+    return "\n".join([
+        "%%%", "  VERSION:1", "  LANGUAGE:ENGLISH", "%%%", "", "MODULE MOD_Cam", "",
+        "    LOCAL PERS tooldata rdkTool := [TRUE,[[0,0,0],[1,0,0,0]],[2,[0,0,15],[1,0,0,0],0,0,0.005]];",
+        '    LOCAL PERS wobjdata rdkWObj := [FALSE, TRUE, "", [[0,0,0],[1,0,0,0]],[[0,0,0],[1,0,0,0]]];',
+        "    VAR speeddata rdkSpeed := [250,500,5000,1000]; ! set default speed", "",
+        "    PROC Cam()", "        ConfJ \\On;", "        ConfL \\Off;",
+        "        rdkTool.tframe := [[0.000, 0.000, 50.000],[1.00000000, 0.00000000, 0.00000000, 0.00000000]];",
+        speed, *motions, "    ENDPROC", "", "ENDMODULE", ""])
+
+
+_ROBODK_MOVE = ("        MoveL [[{0}.125, -20.250, 300.000],[0.00000000, 0.00000000, 1.00000000, 0.00000000],[0,0,0,1],"
+                "[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]],rdkSpeed,z1,rdkTool,\\WObj:=rdkWObj;")
+_ROBODK = [_ROBODK_MOVE.format(500 + k) for k in range(4)]
+ROBODK_VARIANTS = {  # RoboDK's inline robtargets: a blank after each comma of the pose, the tool then ",\WObj"
+    "as written": _robodk(*_ROBODK),
+    "CRLF, lower case, a tab, blanks before ';'": _robodk(
+        *_ROBODK[:2], _ROBODK[2].replace("MoveL", "movel\t").replace(";", "  ;"), *_ROBODK[3:]).replace("\n", "\r\n"),
+    "the speed data set between motions, a WaitTime": _robodk(
+        *_ROBODK[:2], "        rdkSpeed := [45.00,500,5000,1000];", _ROBODK[2], "        WaitTime 0.5;", _ROBODK[3]),
+    "a speed data changed at run time": _robodk(*_ROBODK[:2], "        rdkSpeed.v_tcp := nFeed;", *_ROBODK[2:]),
+    "non-ASCII comment, exponents, two blanks": _robodk(
+        "        ! Fräsbahn Ø6 – Schlichten", _ROBODK[0].replace("500.125", "5.00125E2"),
+        _ROBODK[1].replace(", -20.250", ",  -20.250"), *_ROBODK[2:]),
+    "mixed: a named point, a MoveJ, a value over two lines": _robodk(
+        *_ROBODK[:2], "        MoveJ [[505,-20,300],[0,0,1,0],[0,0,0,1],[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]],",
+        "            rdkSpeed,fine,rdkTool,\\WObj:=rdkWObj;", *_ROBODK[2:]),
+}
+
+
+@pytest.mark.parametrize("text", ROBODK_VARIANTS.values(), ids=ROBODK_VARIANTS)
+def test_robodk_variants_read_at_once_are_the_ones_read_statement_by_statement(tmp_path, monkeypatch, text):
+    path = tmp_path / "Cam.mod"
+    path.write_bytes(text.encode("utf-8"))
+    at_once, one_by_one = _both(path, monkeypatch)
+    assert isinstance(at_once.items, ItemRows) and isinstance(at_once.targets, TargetRows)
+    assert _seen(at_once) == _seen(one_by_one)
+    assert at_once.not_compensated() == one_by_one.not_compensated()
+
+
+def test_robodk_speeds_tools_and_numbers_read_at_once(tmp_path):
+    path = tmp_path / "Cam.mod"
+    path.write_text(ROBODK_VARIANTS["the speed data set between motions, a WaitTime"])
+    program = formats.read(path)
+    assert [(m.speed, m.tool, m.frame) for m in program.motions] == [
+        (50.0, "rdkTool line 15", "rdkWObj"), (50.0, "rdkTool line 15", "rdkWObj"),
+        (45.0, "rdkTool line 15", "rdkWObj"), (45.0, "rdkTool line 15", "rdkWObj")]
+    np.testing.assert_array_equal([t.pose[:3, 3] for t in program.targets],
+                                  [[500.125, -20.25, 300.0], [501.125, -20.25, 300.0], [502.125, -20.25, 300.0],
+                                   [503.125, -20.25, 300.0]])
+    assert program.targets[0].spans["y"].text == "-20.250"  # the blank after the comma is not the number's
+    path.write_text(ROBODK_VARIANTS["a speed data changed at run time"])
+    assert [m.speed for m in formats.read(path).motions] == [50.0, 50.0, None, None]
+
+
+def test_robodk_out_of_range_number_is_refused_naming_its_field(tmp_path):
+    path = tmp_path / "Cam.mod"
+    path.write_text(_robodk(*_ROBODK[:2], _ROBODK[2].replace("-20.250", "1E400"), *_ROBODK[3:]))
+    with pytest.raises(ReadError, match=r"Cam\.mod:19: robtarget y: '1E400' is out of range"):
+        formats.read(path)
+
+
+@pytest.mark.parametrize("text", [*ROBODK_VARIANTS.values(), *VARIANTS.values(), *STATES.values()])
+def test_lines_found_from_their_characters_are_those_the_patterns_match(text):
+    """`_laid_out_lines` finds a subset of each pattern's lines, with the same groups; here all of them but those
+    the patterns match with a \\V or \\T, a LOCAL or blanks before the ``;`` of a declaration."""
+    masked = mask(text, "!")
+    codes = text_codes(masked)
+    starts, ends = line_bounds(codes)
+    found = rapid_reader._laid_out_lines(codes, starts, ends)
+    for name, (lines, groups) in zip(rapid_reader.WRITTEN_FORMS, found):
+        pattern = getattr(rapid_reader, name)
+        matched = {k: m.regs for k in range(len(starts)) if (m := pattern.match(masked, starts[k], ends[k]))}
+        assert {k: tuple(map(tuple, g)) for k, g in zip(lines.tolist(), groups.tolist())}.items() <= matched.items()
+        left = [masked[starts[k]:ends[k]] for k in set(matched) - set(lines.tolist())]
+        assert all(re.search(r"\\[VT]|LOCAL|\] ;", line) for line in left), left
+
+
+def test_a_robodk_module_is_written_as_through_the_objects(tmp_path, monkeypatch):
+    path = tmp_path / "Cam.mod"
+    path.write_text(ROBODK_VARIANTS["mixed: a named point, a MoveJ, a value over two lines"])
+    at_once, one_by_one = _both(path, monkeypatch)
+    written = []
+    for program, name in ((at_once, "at_once.mod"), (one_by_one, "one_by_one.mod")):
+        poses = np.array([t.pose for t in program.targets])
+        poses[:, :3, 3] += [0.25, -0.125, 1.0]
+        formats.write(tmp_path / name, program.with_targets(list(range(len(poses))), poses=list(poses),
+                                                            configs=[(0, -1, 0, 1)] * len(poses)))
+        written.append((tmp_path / name).read_text())
+    assert written[0] == written[1]
+    assert ("MoveL [[500.375, -20.375, 301.000],[0.00000000, 0.00000000, 1.00000000, 0.00000000],[0,-1,0,1],"
+            in written[0])

@@ -1,6 +1,5 @@
 """The RAPID reader: a module's declarations and motion instructions into a `Program` (see `trajcomp.formats.rapid`)."""
 
-import array
 import dataclasses
 import re
 from itertools import chain, repeat
@@ -10,7 +9,9 @@ import numpy as np
 
 from trajcomp.errors import ReadError
 from trajcomp.formats.configuration import distinct_tuples
-from trajcomp.formats.number_fields import offset_type, read_numbers, text_codes
+from trajcomp.formats.number_fields import (
+    BLANK, WORD_CHARACTER, line_bounds, offset_type, read_numbers, spelt, starts_with, text_codes,
+)
 from trajcomp.formats.text import (
     JOINT_LIMIT,
     LENGTH_LIMIT,
@@ -112,7 +113,7 @@ _WRITTEN_POINT = re.compile(  # groups: LOCAL / TASK, storage, name, value, the 
 # A MoveL or MoveJ to a named point on one line, as CAM post-processors and trajcomp's converter write it:
 # MoveL p1, v50, z1, tool0\WObj:=wobj1; (the speed data possibly with \V:= or \T:=) -- read at once (`_WrittenMotions`)
 _MOTION_REST = (r"[ \t]*,[ \t]*(\w+(?:[ \t]*\\[VT][ \t]*:=[ \t]*" + NUMBER + r")?)[ \t]*,[ \t]*\w+[ \t]*,[ \t]*\w+"
-                r"[ \t]*(?:\\[ \t]*WObj[ \t]*:=[ \t]*\w+[ \t]*)?;()[ \t]*\r?$")  # speed, zone, tool, work object
+                r"[ \t]*(?:(?:,[ \t]*)?\\[ \t]*WObj[ \t]*:=[ \t]*\w+[ \t]*)?;()[ \t]*\r?$")  # speed, zone, tool, wobj
 _WRITTEN_MOTION = re.compile(r"[ \t]*(Move[LJ])[ \t]+([A-Za-z]\w*)" + _MOTION_REST, re.I | re.M)  # groups:
 # instruction, point, speed data, the end of its ';'
 # ... and to an inline robtarget written without blanks, as RoboDK's ABB posts write them:
@@ -169,7 +170,8 @@ class _WrittenPoints:
 
 
 def _written_lines(masked, codes, lines, excluded):
-    """The lines of each of the `WRITTEN_FORMS` (`_line_matches`).
+    """The lines of each of the `WRITTEN_FORMS`: those laid out as `_laid_out_lines` knows them found from their
+    characters, the others matched by the form's pattern one by one.
 
     Parameters
     ----------
@@ -185,27 +187,202 @@ def _written_lines(masked, codes, lines, excluded):
     -------
     list of ndarray, shape (N_k, groups_k + 1, 2)
         Per form, the offsets ``(start, end)`` of each line's match (from
-        the line's start) and of each of its groups, ascending.
+        the line's start) and of each of its groups, as ``Match.regs``
+        gives them, ascending.
     """
+    forms = [globals()[name] for name in WRITTEN_FORMS]
+    starts, ends = line_bounds(codes)
+    found = [[] for _ in forms]
+    taken = np.zeros(len(starts), dtype=bool)
+    for lo in range(0, len(starts), LINES_AT_ONCE):
+        for k, (at, groups) in enumerate(_laid_out_lines(codes, starts[lo:lo + LINES_AT_ONCE],
+                                                         ends[lo:lo + LINES_AT_ONCE])):
+            taken[lo + at] = True
+            found[k].append(groups)
+    others = np.flatnonzero(~taken).tolist()
+    for k, form in enumerate(forms):
+        matched = [m.regs for line in others if (m := form.match(masked, int(starts[line]), int(ends[line])))]
+        found[k].append(np.array(matched, dtype=np.int64).reshape(-1, form.groups + 1, 2))
     out = []
-    for form in (globals()[name] for name in WRITTEN_FORMS):
-        found = _line_matches(form, masked)
-        offsets = array.array("q", chain.from_iterable(chain.from_iterable(m.regs for m in found)))
-        found = np.frombuffer(offsets, dtype=np.int64).reshape(-1, form.groups + 1, 2).copy()
-        found[:, 0, 0] += codes[found[:, 0, 0]] == ord("\n")  # the line starts after the break
+    for blocks in found:
+        rows = np.concatenate([block for block in blocks if len(block)] or blocks[-1:])
+        rows = rows[np.argsort(rows[:, 0, 0], kind="stable")] if len(others) else rows
         if excluded:
-            found = found[~np.isin(np.searchsorted(lines.starts, found[:, 0, 0], side="right"), list(excluded))]
-        out.append(found)
+            rows = rows[~np.isin(np.searchsorted(lines.starts, rows[:, 0, 0], side="right"), list(excluded))]
+        out.append(rows)
     return out
 
 
-def _check_blocks(source, masked, read_at_once):
-    """`check_closed` of a module's MODULE, PROC, FUNC and TRAP blocks, over the runs of lines between those read
-    at once (``read_at_once``: (N, 2) offsets of their matches, `_written_lines`), which open and close none."""
+LINES_AT_ONCE = 65536  # lines parsed together (`_laid_out_lines`): bounds the arrays held
+
+
+class _Cursor:
+    """Offsets into a text, one in each of K lines, moved over its characters at once: `_laid_out_lines`' parser.
+
+    Parameters
+    ----------
+    codes : ndarray, shape (L,)
+        The text's character codes (`text_codes`).
+    line_end : ndarray of int, shape (K,)
+        Offset of each line's end (its line ending excluded): no character is read there or after.
+    """
+
+    def __init__(self, codes, line_end):
+        self.codes, self.line_end = codes, line_end
+
+    def of(self, rows):
+        """The cursor of lines ``rows`` (K',) of these."""
+        return _Cursor(self.codes, self.line_end[rows])
+
+    def _code(self, at):
+        code = self.codes[np.minimum(at, len(self.codes) - 1)]
+        return np.where(at < self.line_end, np.minimum(code, 127), 0)  # 0: past the line's end, 127: not ASCII
+
+    def char(self, at, character):
+        """Whether each line has ``character`` at ``at`` (K,)."""
+        return self._code(at) == ord(character)
+
+    def letter(self, at):
+        """Whether each line has an ASCII letter at ``at`` (K,)."""
+        code = self._code(at) | 0x20
+        return (code >= ord("a")) & (code <= ord("z"))
+
+    def skip(self, at, table):
+        """The first offset at or after ``at`` (K,) whose character is not in ``table`` (`character_table`); the
+        characters are looked at a column at a time, over the lines still in a run."""
+        at = np.array(at, dtype=np.int64)
+        moving = np.flatnonzero(at < self.line_end)
+        while len(moving):
+            code = self.codes[at[moving]]
+            moving = moving[table[np.minimum(code, 127)]]
+            at[moving] += 1
+            moving = moving[at[moving] < self.line_end[moving]]
+        return at
+
+    def blanks(self, at):
+        """The first offset at or after ``at`` (K,) not blank."""
+        return self.skip(at, BLANK)
+
+    def word(self, at):
+        """The end of the word (ASCII ``\\w+``) at ``at`` (K,): ``at`` itself where none starts."""
+        return self.skip(at, WORD_CHARACTER)
+
+    def keyword(self, at, words):
+        """The end of the one of ``words`` (upper case ASCII, whole words, any case) at ``at`` (K,); -1 where none."""
+        end, word_end = np.full(len(at), -1), self.word(at)
+        for word in words:
+            whole = (word_end == at + len(word)) & starts_with(spelt(self.codes, at, len(word)), word)
+            end[whole] = at[whole] + len(word)
+        return end
+
+
+def _laid_out_lines(codes, starts, ends):
+    """The lines of the `WRITTEN_FORMS` written as CAM tools write them, found from the characters' codes.
+
+    A subset of what each pattern matches (the others are matched by it):
+    a declaration ``CONST robtarget p1 := [[..],[..],[..],[..]];`` (CONST,
+    PERS or VAR, no LOCAL or TASK, ``;`` right after the value and ending
+    the line), a ``MoveL`` or ``MoveJ`` to a name or to an inline
+    robtarget, then its speed data (no ``\\V`` or ``\\T``), zone, tool and
+    optional work object (``tool0\\WObj:=wobj1`` or ``tool0,\\WObj:=wobj1``),
+    any case, any blanks where the pattern has them, ASCII names, a line
+    ending ``\\n`` or ``\\r\\n``. The robtargets' contents are not checked
+    here (`_value_fields`).
+
+    Parameters
+    ----------
+    codes : ndarray, shape (L,)
+        The masked text's character codes (`text_codes`).
+    starts, ends : ndarray of int, shape (B,)
+        Offsets of the lines' starts and of their ``\\n`` (or the text's end), ascending.
+
+    Returns
+    -------
+    list of (ndarray, ndarray)
+        Per form: the lines written so (K,) (indices into ``starts``) and
+        their matches' offsets (K, groups + 1, 2) as ``Match.regs`` gives them.
+    """
+    if not len(starts) or not len(codes):
+        return [(np.zeros(0, dtype=np.int64), np.zeros((0, globals()[name].groups + 1, 2), dtype=np.int64))
+                for name in WRITTEN_FORMS]
+    carriage = (ends > starts) & (codes[np.maximum(ends - 1, 0)] == ord("\r"))
+    line_end = ends - carriage  # the line's characters end: its "\r\n" or "\n" excluded
+    closes = np.flatnonzero(codes[int(starts[0]):int(ends[-1])] == ord("]")) + int(starts[0])
+
+    def value_end(at):  # after the 5th "]" from ``at``: a robtarget's "]]" if it holds no other "]"; -1 if none
+        k = np.searchsorted(closes, at) + 4
+        found = k < len(closes)
+        return np.where(found, closes[np.where(found, k, 0)] + 1, -1) if len(closes) else np.full(len(at), -1)
+
+    lines = _Cursor(codes, line_end)
+    first = lines.blanks(starts)
+    # CONST robtarget p1 := [[..]];
+    storage = lines.keyword(first, ("CONST", "PERS", "VAR"))
+    rows = np.flatnonzero(storage >= 0)
+    text, first_at, storage_end = lines.of(rows), first[rows], storage[rows]
+    type_at = text.blanks(storage_end)
+    type_end = text.keyword(type_at, ("ROBTARGET",))
+    name_at = text.blanks(type_end)
+    name_end = text.word(name_at)
+    assign = text.blanks(name_end)
+    value_at = text.blanks(assign + 2)
+    point = (type_at > storage_end) & (type_end >= 0) & (name_at > type_end) & (name_end > name_at)
+    point &= text.char(assign, ":") & text.char(assign + 1, "=")
+    point &= text.char(value_at, "[") & text.char(value_at + 1, "[")
+    value_stop = np.where(point, value_end(value_at), -1)
+    point &= (value_stop > 0) & (value_stop + 1 == text.line_end) & text.char(value_stop, ";")
+    taken = np.flatnonzero(point)
+    points = np.stack([np.c_[starts[rows], ends[rows]], np.c_[first_at, first_at], np.c_[first_at, storage_end],
+                       np.c_[name_at, name_end], np.c_[value_at, value_stop], np.c_[value_stop + 1, value_stop + 1]],
+                      axis=1)[taken]
+    point_rows = rows[taken]
+    # MoveL p1, v50, z1, tool0\WObj:=wobj1;  MoveL [[..]],v50,z1,tool0,\WObj:=wobj1;
+    move = lines.keyword(first, ("MOVEL", "MOVEJ"))
+    rows = np.flatnonzero(move >= 0)
+    text, first_at, move_end = lines.of(rows), first[rows], move[rows]
+    target_at = text.blanks(move_end)
+    named = (target_at > move_end) & text.letter(target_at)
+    inline = (target_at > move_end) & text.char(target_at, "[") & text.char(target_at + 1, "[")
+    target_end = np.where(named, text.word(target_at), np.where(inline, value_end(target_at), -1))
+    comma = text.blanks(target_end)
+    speed_at = text.blanks(comma + 1)
+    speed_end = text.word(speed_at)
+    motion = (named | inline) & (target_end > 0) & text.char(comma, ",") & (speed_end > speed_at)
+    word_end = speed_end
+    for _ in ("zone", "tool"):
+        comma = text.blanks(word_end)
+        word_at = text.blanks(comma + 1)
+        word_end = text.word(word_at)
+        motion &= text.char(comma, ",") & (word_end > word_at)
+    after = text.blanks(word_end)
+    option = np.where(text.char(after, ","), text.blanks(after + 1), after)
+    wobj_at = text.blanks(option + 1)
+    assign = text.blanks(wobj_at + 4)
+    frame_at = text.blanks(assign + 2)
+    frame_end = text.word(frame_at)
+    with_frame = text.char(option, "\\") & (text.keyword(wobj_at, ("WOBJ",)) >= 0) & text.char(assign, ":")
+    with_frame &= text.char(assign + 1, "=") & (frame_end > frame_at)
+    semicolon = np.where(with_frame, text.blanks(frame_end), after)
+    motion &= text.char(semicolon, ";") & (text.blanks(semicolon + 1) == text.line_end)
+    motions = np.stack([np.c_[starts[rows], ends[rows]], np.c_[first_at, move_end], np.c_[target_at, target_end],
+                        np.c_[speed_at, speed_end], np.c_[semicolon + 1, semicolon + 1]], axis=1)
+    by_name, inline = np.flatnonzero(motion & named), np.flatnonzero(motion & inline)
+    return [(point_rows, points), (rows[by_name], motions[by_name]), (rows[inline], motions[inline])]
+
+
+def _runs_between(masked, found):
+    """The runs of text between the lines read at once (``found``: `_written_lines`' matches of each form), which
+    open and close no block and change no data (`runs_between`)."""
+    read_at_once = np.concatenate([matches[:, 0] for matches in found])
     lines_read = read_at_once[np.argsort(read_at_once[:, 0], kind="stable")]
+    return runs_between(lines_read[:, 0], lines_read[:, 1], len(masked))
+
+
+def _check_blocks(source, masked, runs):
+    """`check_closed` of a module's MODULE, PROC, FUNC and TRAP blocks, over the ``runs`` of lines between those
+    read at once (`_runs_between`)."""
     check_closed(source, masked, _BLOCK_OPENS, _BLOCK_CLOSES,
-                 {"MODULE": "ENDMODULE", "PROC": "ENDPROC", "FUNC": "ENDFUNC", "TRAP": "ENDTRAP"},
-                 runs_between(lines_read[:, 0], lines_read[:, 1], len(masked)))
+                 {"MODULE": "ENDMODULE", "PROC": "ENDPROC", "FUNC": "ENDFUNC", "TRAP": "ENDTRAP"}, runs)
 
 
 def _line_matches(pattern, text):
@@ -221,7 +398,8 @@ def _line_matches(pattern, text):
 
 def _value_fields(codes, start, end, layout):
     """Offsets of the numbers of N values ``text[start:end]`` laid out as ``layout`` (``"[[,,],[,,,]]"``: their
-    delimiters, a number between ``[`` or ``,`` and ``,`` or ``]``, nothing between the others), found at once.
+    delimiters, a number between ``[`` or ``,`` and ``,`` or ``]``, blanks around it or not, nothing between the
+    others), found at once.
 
     Parameters
     ----------
@@ -260,13 +438,24 @@ def _value_fields(codes, start, end, layout):
         good = np.searchsorted(at, end[rows]) - first == len(layout)
         found = at[np.minimum(first[:, None] + np.arange(len(layout)), len(at) - 1)]  # (rows, delimiters)
         good &= (codes[found] == delimiters).all(axis=1) & (found[:, empty + 1] == found[:, empty] + 1).all(axis=1)
-        field_start[rows], field_end[rows], laid_out[rows] = found[:, fields] + 1, found[:, fields + 1], good
+        field_start[rows], field_end[rows] = _unpadded(codes, found[:, fields] + 1, found[:, fields + 1])
+        laid_out[rows] = good
     numbers = np.full((n, len(fields)), np.nan)
     rows = np.flatnonzero(laid_out)
     for j in range(len(fields)):  # a column at a time: fields of one width together, a column's transients only
         numbers[rows, j], is_number = read_numbers(codes, field_start[rows, j], field_end[rows, j])
         laid_out[rows[~is_number]] = False
     return numbers, field_start, field_end, laid_out
+
+
+def _unpadded(codes, start, end):
+    """Offsets ``start, end`` (N, F) of fields less the blanks around their texts (RoboDK writes ``[x, y, z]``)."""
+    shape = start.shape
+    end = end.ravel().astype(np.int64)
+    start = _Cursor(codes, end).blanks(start.ravel())
+    while len(back := np.flatnonzero((end > start) & BLANK[np.minimum(codes[np.maximum(end - 1, 0)], 127)])):
+        end[back] -= 1
+    return start.reshape(shape), end.reshape(shape)
 
 
 def _robtargets(text, lines, numbers, name, field_start, field_end):
@@ -563,10 +752,11 @@ class _Reader:
         self.targets.extend(rows.tolist())  # rows of the table
         self.shared.update(key for key, shared in zip(keys, points.shared[rows].tolist()) if shared)
 
-    def scan_data(self, masked, lines):
+    def scan_data(self, masked, lines, runs):
         """Note the module's speeddata and num declarations (a motion may use one declared further down), and
         where a statement other than its declaration and motions may change a VAR speeddata (``lines``: the
-        module's `Lines`)."""
+        module's `Lines`; ``runs``: the offsets of the text between the lines read at once, `_runs_between`,
+        which only declare points or use a speeddata)."""
         if not _declares_data(masked):  # a CAM module declares none: its lines are not tried
             return
         for m in _line_matches(_DATA_DECL, masked):
@@ -576,10 +766,11 @@ class _Reader:
         names = [key for key, entry in self.data.items() if entry is not None and entry[:2] == ("VAR", "speeddata")]
         if not names:
             return
-        lines = Lines(masked)  # the lines' masked texts
-        for m in re.finditer(r"\b(" + "|".join(map(re.escape, names)) + r")\b", masked, re.I):
+        used = re.compile(r"\b(" + "|".join(map(re.escape, names)) + r")\b", re.I)
+        for m in (m for start, end in runs for m in used.finditer(masked, start, end)):
             line = lines.number(m.start())
-            text = lines.line(line)
+            text = masked[lines.starts[line - 1]:lines.starts[line] if line < len(lines.starts) else len(masked)]
+            text = text.rstrip("\r\n")  # the line's masked text
             assigned = _ASSIGN.match(text)
             if not (_STARTS_MOTION.match(text) or _STARTS_DECL.match(text)
                     or assigned and assigned.group(1).lower() != m.group(1).lower()):  # read, not changed
@@ -912,9 +1103,10 @@ def read(path):
         reader = _Reader(source)
         reader.task = DeclaredElsewhere(Path(path), folders, modules, _TASK_POINT, "!", assignment=_ASSIGNED_POINT)
         found_points, named, inline = _written_lines(masked, codes, lines, excluded)
+        runs = _runs_between(masked, (found_points, named, inline))
         if not excluded:  # first: the module's blocks closed, checked where they may open or close
-            _check_blocks(source, masked, np.concatenate([found[:, 0] for found in (found_points, named, inline)]))
-        reader.scan_data(masked, lines)
+            _check_blocks(source, masked, runs)
+        reader.scan_data(masked, lines, runs)
         points = _WrittenPoints(source, masked, lines, codes, found_points)
         motions = _WrittenMotions(source.text, masked, lines, codes, named, inline)
         skipped = np.zeros(len(lines.starts) + 1, dtype=bool)
