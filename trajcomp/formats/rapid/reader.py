@@ -267,11 +267,14 @@ class _Cursor:
         """The end of the word (ASCII ``\\w+``) at ``at`` (K,): ``at`` itself where none starts."""
         return self.skip(at, WORD_CHARACTER)
 
-    def keyword(self, at, words):
-        """The end of the one of ``words`` (upper case ASCII, whole words, any case) at ``at`` (K,); -1 where none."""
-        end, word_end = np.full(len(at), -1), self.word(at)
+    def keyword(self, at, words, word_end=None):
+        """The end of the one of ``words`` (upper case ASCII, whole words, any case) at ``at`` (K,); -1 where none.
+        ``word_end``: `word` of ``at`` if known."""
+        end = np.full(len(at), -1)
+        length = (self.word(at) if word_end is None else word_end) - at
         for word in words:
-            whole = (word_end == at + len(word)) & starts_with(spelt(self.codes, at, len(word)), word)
+            rows = np.flatnonzero(length == len(word))
+            whole = rows[starts_with(spelt(self.codes, at[rows], len(word)), word)]
             end[whole] = at[whole] + len(word)
         return end
 
@@ -316,8 +319,9 @@ def _laid_out_lines(codes, starts, ends):
 
     lines = _Cursor(codes, line_end)
     first = lines.blanks(starts)
+    first_word = lines.word(first)
     # CONST robtarget p1 := [[..]];
-    storage = lines.keyword(first, ("CONST", "PERS", "VAR"))
+    storage = lines.keyword(first, ("CONST", "PERS", "VAR"), first_word)
     rows = np.flatnonzero(storage >= 0)
     text, first_at, storage_end = lines.of(rows), first[rows], storage[rows]
     type_at = text.blanks(storage_end)
@@ -337,7 +341,7 @@ def _laid_out_lines(codes, starts, ends):
                       axis=1)[taken]
     point_rows = rows[taken]
     # MoveL p1, v50, z1, tool0\WObj:=wobj1;  MoveL [[..]],v50,z1,tool0,\WObj:=wobj1;
-    move = lines.keyword(first, ("MOVEL", "MOVEJ"))
+    move = lines.keyword(first, ("MOVEL", "MOVEJ"), first_word)
     rows = np.flatnonzero(move >= 0)
     text, first_at, move_end = lines.of(rows), first[rows], move[rows]
     target_at = text.blanks(move_end)
