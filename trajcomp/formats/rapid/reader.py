@@ -159,7 +159,8 @@ class _WrittenPoints:
                                                                   _ROBTARGET_LAYOUT) if len(found) else [[]] * 4
         if not np.any(laid_out):
             return
-        found, numbers, field_start, field_end = (a[laid_out] for a in (found, numbers, field_start, field_end))
+        if not laid_out.all():
+            found, numbers, field_start, field_end = (a[laid_out] for a in (found, numbers, field_start, field_end))
         local = np.zeros(len(found), dtype=bool)  # a storage prefix (LOCAL, TASK) is rare: read one by one
         for k in np.flatnonzero(found[:, 1, 1] > found[:, 1, 0]).tolist():
             local[k] = "LOCAL" in masked[found[k, 1, 0]:found[k, 1, 1]].upper()
@@ -389,15 +390,17 @@ def _check_blocks(source, masked, runs):
                  {"MODULE": "ENDMODULE", "PROC": "ENDPROC", "FUNC": "ENDFUNC", "TRAP": "ENDTRAP"}, runs)
 
 
-def _line_matches(pattern, text):
-    """The matches of ``pattern`` at the start of each line of ``text`` (as ``^`` with ``re.M`` before it), in
-    order: those after the first line begin at the line break before theirs.
+def _line_matches(pattern, text, start=0, end=None):
+    """The matches of ``pattern`` at the start of each line of ``text[start:end]`` (as ``^`` with ``re.M`` before
+    it; ``start`` a line's start or the line break before one), in order: those after its first line begin at the
+    line break before theirs.
 
     The text is searched for line breaks: a pattern anchored by ``^`` is
     tried at every character, which costs a long module seconds.
     """
-    first = pattern.match(text)
-    return chain([first] if first else [], re.compile("\n" + pattern.pattern, pattern.flags).finditer(text))
+    end = len(text) if end is None else end
+    first = pattern.match(text, start, end)
+    return chain([first] if first else [], re.compile("\n" + pattern.pattern, pattern.flags).finditer(text, start, end))
 
 
 def _value_fields(codes, start, end, layout):
@@ -562,7 +565,9 @@ class _WrittenMotions:
         if len(inline):
             numbers, field_start, field_end, laid_out = _value_fields(codes, inline[:, 2, 0], inline[:, 2, 1],
                                                                       _ROBTARGET_LAYOUT)
-            inline, numbers, field_start, field_end = (a[laid_out] for a in (inline, numbers, field_start, field_end))
+            if not laid_out.all():
+                inline, numbers, field_start, field_end = (a[laid_out] for a in (inline, numbers, field_start,
+                                                                                    field_end))
         if len(inline):
             keep, self.table = _robtargets(text, lines, numbers, np.repeat(field_start[:, :1], 2, axis=1), field_start,
                                            field_end)
@@ -711,16 +716,13 @@ class _Reader:
         zone, tool, work object, or why one is known at run time only) is
         that of each motion writing it.
         """
-        inline = np.flatnonzero(is_motion)[motions.inline[rows[is_motion]] >= 0]
-        if len(inline):  # inline targets between the points: one at a time, in program order
-            for motion, row in zip(is_motion.tolist(), rows.tolist()):
-                if not motion:
-                    self.point_at_once(points, row)
-                elif motions.inline[row] >= 0:
-                    motions.target[row] = len(self.targets)
-                    self.targets.append(first_inline + int(motions.inline[row]))
-        else:
-            self.points_at_once(points, rows[~is_motion])
+        for part in np.split(rows, np.flatnonzero(np.diff(is_motion)) + 1) if len(rows) else ():
+            if not is_motion[np.searchsorted(rows, part[0])]:  # runs of points, of motions, in program order
+                self.points_at_once(points, part)
+                continue
+            inline = part[motions.inline[part] >= 0]  # their inline targets, in order
+            motions.target[inline] = len(self.targets) + np.arange(len(inline))
+            self.targets.extend((first_inline + motions.inline[inline]).tolist())
         run = rows[is_motion]
         if not len(run):
             return
@@ -741,10 +743,6 @@ class _Reader:
                                       for a, b in motions.name[run].tolist()]
         self.items.append(_Run(run))
 
-    def point_at_once(self, points, row):
-        """Add point ``row`` of ``points`` (`_WrittenPoints`) as a target."""
-        self.points_at_once(points, np.array([row]))
-
     def points_at_once(self, points, rows):
         """Add points ``rows`` (K,) of ``points`` (`_WrittenPoints`) as targets, in order (a name declared twice:
         the last)."""
@@ -763,7 +761,7 @@ class _Reader:
         which only declare points or use a speeddata)."""
         if not _declares_data(masked):  # a CAM module declares none: its lines are not tried
             return
-        for m in _line_matches(_DATA_DECL, masked):
+        for m in (m for start, end in runs for m in _line_matches(_DATA_DECL, masked, start, end)):
             key = m.group(3).lower()
             entry = (m.group(1).upper(), m.group(2).lower(), (m.group(4) or "").strip(), lines.number(m.start(1)))
             self.data[key] = entry if key not in self.data else None
