@@ -189,9 +189,9 @@ def _written_lines(masked, codes, lines, excluded):
     list of ndarray, shape (N_k, groups_k + 1, 2)
         Per form, the offsets ``(start, end)`` of each line's match (from
         the line's start) and of each of its groups, as ``Match.regs``
-        gives them, ascending.
+        gives them (`offset_type`: int32 where they fit), ascending.
     """
-    forms = [globals()[name] for name in WRITTEN_FORMS]
+    forms, offset = [globals()[name] for name in WRITTEN_FORMS], offset_type(masked)
     starts, ends = line_bounds(codes)
     found = [[] for _ in forms]
     taken = np.zeros(len(starts), dtype=bool)
@@ -199,15 +199,15 @@ def _written_lines(masked, codes, lines, excluded):
         for k, (at, groups) in enumerate(_laid_out_lines(codes, starts[lo:lo + LINES_AT_ONCE],
                                                          ends[lo:lo + LINES_AT_ONCE])):
             taken[lo + at] = True
-            found[k].append(groups)
+            found[k].append(groups.astype(offset))
     others = np.flatnonzero(~taken).tolist()
     for k, form in enumerate(forms):
         matched = [m.regs for line in others if (m := form.match(masked, int(starts[line]), int(ends[line])))]
-        found[k].append(np.array(matched, dtype=np.int64).reshape(-1, form.groups + 1, 2))
+        found[k].append(np.array(matched, dtype=offset).reshape(-1, form.groups + 1, 2))
     out = []
     for blocks in found:
         rows = np.concatenate([block for block in blocks if len(block)] or blocks[-1:])
-        rows = rows[np.argsort(rows[:, 0, 0], kind="stable")] if len(others) else rows
+        rows = rows[np.argsort(rows[:, 0, 0], kind="stable")] if len(blocks[-1]) else rows  # matched among them
         if excluded:
             rows = rows[~np.isin(np.searchsorted(lines.starts, rows[:, 0, 0], side="right"), list(excluded))]
         out.append(rows)
@@ -500,19 +500,22 @@ def _robtargets(text, lines, numbers, name, field_start, field_end):
     good &= (config == np.trunc(config)).all(axis=1)
     keep = np.flatnonzero(good)
     n = len(keep)
+    rows = slice(None) if n == len(good) else keep  # every row kept: views of the columns, not copies
     T = np.tile(np.eye(4), (n, 1, 1))
-    T[:, :3, :3] = quat_to_matrix(quat[keep])
-    T[:, :3, 3] = position[keep]
-    external = np.where(np.abs(external[keep]) >= UNUSED_AXIS, np.nan, external[keep])
+    T[:, :3, :3] = quat_to_matrix(quat[rows])
+    T[:, :3, 3] = position[rows]
+    unused_axis = np.abs(external[rows]) >= UNUSED_AXIS
+    unused = unused_axis.all(axis=1)
     offset = offset_type(text)  # the spans as int32 where they fit: 88 bytes a point less
-    start, end, name = field_start[keep, :11].astype(offset), field_end[keep, :11].astype(offset), name[keep]  # x..cfx
-    unused = np.isnan(external).all(axis=1)
+    start, end = (np.ascontiguousarray(field[rows, :11], dtype=offset) for field in (field_start, field_end))  # x..cfx
+    name = name[rows]
     none = repeated(None, n)
     return keep, TargetTable(
         T, np.zeros(n, dtype=bool), np.broadcast_to(np.nan, (n, 6)),  # no joints: one NaN row shared
         np.searchsorted(lines.starts, start[:, 0], side="right"),
-        tuple(distinct_tuples(config[keep].astype(int))), none, none,
-        (None,) * n if unused.all() else tuple(None if u else e for u, e in zip(unused.tolist(), external)),
+        tuple(distinct_tuples(config[rows].astype(int))), none, none,
+        (None,) * n if unused.all() else tuple(None if u else e for u, e in zip(
+            unused.tolist(), np.where(unused_axis, np.nan, external[rows]))),
         np.zeros(n, dtype=bool), TextSlices(text, name[:, 0], name[:, 1]),
         SpanColumns(0, text, POSITION + QUAT + CONF, start, end))
 
