@@ -35,7 +35,7 @@ from trajcomp.formats.text import (
 from trajcomp.programs.program import Program
 from trajcomp.programs.tables import (
     ItemRows, MotionTable, StatementTable, TargetRows, TargetTable, TextSlices, every_row, joined_targets,
-    repeated,
+    read_only, repeated,
 )
 from trajcomp.programs.items import (
     CIRCULAR, JOINT, LINEAR, Motion, Span, SpanColumns, SpanTable, Statement, Target, replaced,
@@ -496,11 +496,31 @@ def _written_block(start, end, numbers, shared, offset, configs):
     for k, word in enumerate(distinct.tolist()):
         words[k] = configs.setdefault(divmod(word, 64), divmod(word, 64)) if word >= 0 else ()
     config = tuple(words[which.ravel()].tolist())
-    counts = given[keep, 8:].sum(axis=1).tolist()
-    external = (tuple(external[k, :count].copy() if count else None for k, count in zip(keep.tolist(), counts))
-                if any(counts) else (None,) * len(keep))
+    counts = given[keep, 8:].sum(axis=1)
+    external = _shared_rows(external[keep], counts) if counts.any() else (None,) * len(keep)
     return (pose_to_matrix(vector), start[keep, :10].astype(offset), end[keep, :10].astype(offset), config, external,
             shared[keep])
+
+
+def _shared_rows(values, counts):
+    """Each row's first ``counts`` values as an array, one read-only array per distinct row (a path's points
+    mostly share their external axes: E1..E6 of a track that does not move), None where the count is 0.
+
+    Parameters
+    ----------
+    values : ndarray, shape (K, 6)
+    counts : ndarray of int, shape (K,)
+
+    Returns
+    -------
+    tuple, length K
+    """
+    bits = np.where(np.arange(values.shape[1]) < counts[:, None], values, 0.0).view(np.int64)  # -0.0 kept apart
+    distinct, which = np.unique(np.c_[counts, bits], axis=0, return_inverse=True)
+    arrays = np.empty(len(distinct), dtype=object)
+    for k, row in enumerate(distinct):
+        arrays[k] = read_only(row[1:1 + row[0]].view(np.float64)) if row[0] else None
+    return tuple(arrays[which.ravel()].tolist())
 
 
 def _sibling_dat(path):
