@@ -168,7 +168,7 @@ def test_position_numbers_beyond_the_lines_read_at_once_read_line_by_line(tmp_pa
 @pytest.mark.parametrize("piece", [1, 2, 3, Lines.PIECE])  # a "\r\n" across pieces looked at together
 def test_line_starts_found_at_once_are_those_of_the_regular_expression(text, piece, monkeypatch):
     monkeypatch.setattr(Lines, "PIECE", piece)
-    assert Lines(text).starts == [0] + [m.end() for m in re.finditer(r"\r\n|\r|\n", text)]
+    assert list(Lines(text).starts) == [0] + [m.end() for m in re.finditer(r"\r\n|\r|\n", text)]
 
 
 def _counted(monkeypatch, name):

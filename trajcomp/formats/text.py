@@ -7,6 +7,7 @@ the span of every number a compensation may change. Writers replace only
 the numbers of edited targets, formatted like the file wrote them.
 """
 
+import array
 import bisect
 import codecs
 import dataclasses
@@ -99,20 +100,25 @@ _NOT_LINE_BREAK = re.compile(r"[^\r\n]")
 
 
 class Lines:
-    """Line numbers (1-based) of offsets in a text, and its lines without line endings."""
+    """Line numbers (1-based) of offsets in a text, and its lines without line endings.
+
+    ``starts``: the lines' start offsets, an ``array.array`` of int64 (8 bytes a
+    line, not a Python int each; `numpy.asarray` views it).
+    """
 
     PIECE = 1 << 22  # characters looked at together for line endings
+
     def __init__(self, text):
         self.text = text
+        self.starts = array.array("q", [0])
         if text.isascii():  # a long program's line endings found at once: "\r\n", a "\r" alone, "\n"
-            self.starts = [0]
             for at in range(0, len(text), self.PIECE):  # a piece at a time: a few MB of codes, not the text's size
                 codes = text_codes(text[at:at + self.PIECE + 1])  # and the next character: "\r" ends a line alone
                 line_feed = codes == ord("\n")
                 ends = line_feed | ((codes == ord("\r")) & ~np.append(line_feed[1:], False))
-                self.starts += (np.flatnonzero(ends[:self.PIECE]) + at + 1).tolist()
+                self.starts.frombytes((np.flatnonzero(ends[:self.PIECE]) + at + 1).astype(np.int64).tobytes())
         else:
-            self.starts = [0] + [m.end() for m in re.finditer(r"\r\n|\r|\n", text)]
+            self.starts.extend(m.end() for m in re.finditer(r"\r\n|\r|\n", text))
 
     def number(self, offset):
         """Line number of a character offset."""

@@ -555,8 +555,8 @@ def read(path):
 def _parts(lines, numbers):
     """``[(start, end)]`` offsets of the runs of consecutive lines among ``numbers`` (ascending, 1-based)."""
     runs = np.split(numbers, np.flatnonzero(np.diff(numbers) != 1) + 1) if len(numbers) else []
-    ends = lines.starts[1:] + [len(lines.text)]
-    return [(lines.starts[run[0] - 1], ends[run[-1] - 1]) for run in runs]
+    ends = np.append(lines.starts[1:], len(lines.text))
+    return [(lines.starts[run[0] - 1], int(ends[run[-1] - 1])) for run in runs]
 
 
 def _finish(reader):
