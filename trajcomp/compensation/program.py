@@ -241,7 +241,8 @@ def _configs(program, robot, index, q):
     its language does not bind (a KUKA point only LIN or CIRC motions use)
     keeps them all.
     """
-    declared = [program.target_table().config[i] for i in index.tolist()]
+    config = program.target_table().config
+    declared = [config[i] for i in index.tolist()]
     binds = np.flatnonzero(binding(program)[index])
     written = written_configuration(program.format, robot, [declared[k] for k in binds.tolist()], q[binds])
     if written is None:

@@ -19,8 +19,9 @@ ABB confdata: `trajcomp.formats.rapid.configuration`; FANUC CONFIG:
 All of them follow from the branch of the arm (`trajcomp.arm.ik.branch_index`:
 shoulder front/back of axis 1, elbow up/down, wrist sign) and the joint
 angles (`flags`). A path's targets mostly share their data: the data are
-made into tuples (`distinct_tuples`) and read back into windows
-(`declared_windows`) once per distinct value.
+made into tuples (`distinct_tuples`), read back into windows
+(`declared_windows`) and merged (`written_configuration`) once per distinct
+value (`distinct_configs`).
 """
 
 import numpy as np
@@ -136,17 +137,19 @@ def written_configuration(format_name, robot, declared, q, tolerance=BOUNDARY_TO
     if computed is None:
         return None
     q = np.atleast_2d(q)
-    branch, lower, upper = declared_windows(format_name, declared)
-    branch_kept = branch == declared_windows(format_name, computed)[0]
-    joint_kept = _satisfied(robot, q, lower, upper, tolerance)
-    merge, merged, written = _language(format_name).merge, {}, []  # a merge per distinct case: a path shares them
-    joint_bits = (joint_kept @ (1 << np.arange(6))).tolist()
-    for old, new, kept, joints in zip(declared, computed, branch_kept.tolist(), joint_bits):
-        key = (tuple(old), tuple(new), kept, joints) if old else None  # joints: a bit per joint kept
-        if key is not None and key not in merged:
-            merged[key] = merge(*key[:3], (joints >> np.arange(6)) & 1 > 0)
-        written.append(tuple(new) if key is None else merged[key])
-    return written
+    old, old_row = distinct_configs(declared)
+    new, new_row = distinct_configs(computed)
+    old_branch, lower, upper = _windows(format_name, old)
+    branch_kept = old_branch[old_row] == _windows(format_name, new)[0][new_row]
+    joint_kept = _satisfied(robot, q, lower[old_row], upper[old_row], tolerance)
+    # a merge per distinct case (old data, new data, branch kept, a bit per joint kept): a path shares them
+    case = ((old_row * len(new) + new_row) * 2 + branch_kept) * 64 + joint_kept @ (1 << np.arange(6))
+    _, first, row = np.unique(case, return_index=True, return_inverse=True)
+    merge, merged = _language(format_name).merge, np.empty(len(first), dtype=object)
+    for k, at in enumerate(first.tolist()):
+        was, data = old[old_row[at]], new[new_row[at]]
+        merged[k] = merge(was, data, bool(branch_kept[at]), joint_kept[at]) if was else data
+    return merged[row.reshape(-1)].tolist()
 
 
 def _satisfied(robot, joints, lower, upper, tolerance):
@@ -200,15 +203,46 @@ def declared_windows(format_name, configs):
     lower, upper : ndarray, shape (N, 6)
         Window of each joint, rad (``-inf`` / ``inf`` where free).
     """
+    distinct, row = distinct_configs(configs)
+    branch, lower, upper = _windows(format_name, distinct)
+    return branch[row], lower[row], upper[row]
+
+
+def distinct_configs(configs):
+    """The distinct configuration data among ``configs`` and where each one is: ``(values, row)``.
+
+    A path's targets mostly share one tuple object each (`distinct_tuples`):
+    they are told apart by identity first, then by value.
+
+    Parameters
+    ----------
+    configs : sequence of tuple, length N
+        Configuration data (``()`` or None where a target has none).
+
+    Returns
+    -------
+    values : list of tuple
+        Each distinct value once, ``()`` first.
+    row : ndarray of int, shape (N,)
+        Index of each one's value in ``values``.
+    """
+    identity = np.fromiter(map(id, configs), dtype=np.int64, count=len(configs))  # all alive in configs: distinct
+    _, first, row = np.unique(identity, return_index=True, return_inverse=True)
     distinct = {(): 0}
-    row = np.fromiter((distinct.setdefault(tuple(config or ()), len(distinct)) for config in configs), dtype=np.int64,
-                      count=len(configs))
+    value = np.fromiter((distinct.setdefault(tuple(configs[k] or ()), len(distinct)) for k in first.tolist()),
+                        dtype=np.int64, count=len(first))
+    return list(distinct), value[row.reshape(-1)]
+
+
+def _windows(format_name, distinct):
+    """`declared_windows` of distinct configuration data, ``distinct[0]`` being ``()``: branch (M,), lower and
+    upper (M, 6)."""
     branch = np.full(len(distinct), -1)
     lower, upper = np.full((len(distinct), 6), -np.inf), np.full((len(distinct), 6), np.inf)
     language = _language(format_name)
     if language is not None and len(distinct) > 1:
-        branch[1:], lower[1:], upper[1:] = language.windows(list(distinct)[1:])
-    return branch[row], lower[row], upper[row]
+        branch[1:], lower[1:], upper[1:] = language.windows(distinct[1:])
+    return branch, lower, upper
 
 
 def describe(format_name, config):
