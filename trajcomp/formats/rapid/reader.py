@@ -584,7 +584,7 @@ class _WrittenMotions:
             columns.append(np.c_[inline[:, 0, 0], inline[:, 4, 1], np.full((len(inline), 2), -1), inline[:, 3],
                                  combo(inline, 2), np.arange(len(inline))])
         columns = np.concatenate(columns)
-        columns = columns[np.argsort(columns[:, 0], kind="stable")]
+        columns = columns[np.argsort(columns[:, 0], kind="stable")].astype(offset_type(text))  # int32 under 2 GB
         self.line = np.searchsorted(lines.starts, columns[:, 0], side="right")
         self.start, self.end = columns[:, 0], columns[:, 1]
         self.name, self.speed, self.combo, self.inline = columns[:, 2:4], columns[:, 4:6], columns[:, 6], columns[:, 7]
@@ -1311,8 +1311,9 @@ def _motion_table(reader, motions, target, reason, refs, frames_of):
     m, text = len(motions), reader.source.text
     given = np.zeros((m, 3), dtype=bool)
     given[:, 0], given[:, 2] = True, motions.name[:, 0] >= 0  # the speed; a name (none for an inline target)
-    start = np.where(given, np.c_[motions.speed[:, 0], np.zeros(m, dtype=np.int64), motions.name[:, 0]], -1)
-    end = np.where(given, np.c_[motions.speed[:, 1], np.zeros(m, dtype=np.int64), motions.name[:, 1]], -1)
+    offset = offset_type(text)  # the spans as int32 where they fit
+    start = np.where(given, np.c_[motions.speed[:, 0], np.zeros(m, dtype=offset), motions.name[:, 0]], -1).astype(offset)
+    end = np.where(given, np.c_[motions.speed[:, 1], np.zeros(m, dtype=offset), motions.name[:, 1]], -1).astype(offset)
     return MotionTable(
         kind=column([p.kind for p in protos]), target=target, via=np.full(m, -1),
         speed=column([number(p.speed) for p in protos], float), speed_unit=column([p.speed_unit for p in protos]),
