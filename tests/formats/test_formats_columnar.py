@@ -137,11 +137,16 @@ def test_numbers_formatted_together_are_what_format_number_writes():
         assert text == expected
 
 
-def test_edits_as_columns_apply_as_the_tuples_do(monkeypatch):
+@pytest.mark.parametrize("characters, replacement", [("abc,.0123456789\n", "x"), ("abc,.0123456789\n", "é"),
+                                                     ("abç,.01234€\r\n", "x")])
+def test_edits_as_columns_apply_as_the_tuples_do(monkeypatch, characters, replacement):
+    """ASCII text and replacements are gathered from their codes, others joined piece by piece: both as
+    `apply_edits` applies the tuples."""
     rng = np.random.default_rng(3)
-    text = "".join(rng.choice(list("abc,.0123456789\n"), 5000).tolist())
+    text = "".join(rng.choice(list(characters), 5000).tolist())
     cuts = np.sort(rng.choice(len(text), 800, replace=False)).reshape(-1, 2).tolist()
-    edits = [(start, end, "x" * int(rng.integers(0, 4))) for start, end in cuts] + [(0, 0, "inserted")]
+    edits = [(start, end, replacement * int(rng.integers(0, 4))) for start, end in cuts] + [(0, 0, "inserted")]
+    edits += [(end, end, "+") for _, end in cuts[::5]]  # insertions right after an edit
     monkeypatch.setattr(Edits, "EDITS_AT_ONCE", 16)  # pieces joined in many batches
     parts = [Edits.of(edits[k::3]) for k in range(3)]  # batches of targets whose edits interleave
     assert Edits.joined(parts).applied(text) == apply_edits(text, edits)

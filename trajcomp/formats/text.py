@@ -759,12 +759,30 @@ class Edits:
         """``text[position:self.end[-1]]`` with the edits applied, in blocks (str) of `EDITS_AT_ONCE` edits
         (a few MB of pieces joined at a time); ``position``: where the text is taken from (no edit before it)."""
         for lo in range(0, len(self), self.EDITS_AT_ONCE):
-            pieces, hi = [], lo + self.EDITS_AT_ONCE
-            for start, end, a, b in zip(self.start[lo:hi].tolist(), self.end[lo:hi].tolist(),
-                                        self.cut[lo:hi].tolist(), self.cut[lo + 1:hi + 1].tolist()):
-                pieces += (text[position:start], self.texts[a:b])
-                position = end
-            yield "".join(pieces)
+            hi = min(lo + self.EDITS_AT_ONCE, len(self))
+            yield self._block(text, position, lo, hi)
+            position = int(self.end[hi - 1])
+
+    def _block(self, text, position, lo, hi):
+        """``text[position:self.end[hi - 1]]`` with edits ``lo..hi - 1`` applied.
+
+        ASCII text and replacements are gathered from their codes at once
+        (an index per character: no Python step per edit); others are
+        joined piece by piece.
+        """
+        start, end, cut = self.start[lo:hi], self.end[lo:hi], self.cut[lo:hi + 1]
+        kept_from = np.r_[position, end[:-1]]  # each piece of text kept runs from the last edit's end to the edit
+        source, replacements = text[position:int(end[-1])], self.texts[int(cut[0]):int(cut[-1])]
+        if not (source.isascii() and replacements.isascii()):
+            return "".join([piece for a, b, c, d in zip(kept_from.tolist(), start.tolist(), cut[:-1].tolist(),
+                                                          cut[1:].tolist())
+                            for piece in (text[a:b], self.texts[c:d])])
+        codes = np.frombuffer((source + replacements).encode("ascii"), dtype=np.uint8)
+        piece_start, piece_length = np.empty((2, 2 * (hi - lo)), dtype=np.int64)  # kept, replacement, kept, ...
+        piece_start[0::2], piece_length[0::2] = kept_from - position, start - kept_from
+        piece_start[1::2], piece_length[1::2] = len(source) + cut[:-1] - cut[0], np.diff(cut)
+        shift = piece_start - (np.cumsum(piece_length) - piece_length)  # from a piece's place out to its codes
+        return codes[np.repeat(shift, piece_length) + np.arange(int(piece_length.sum()))].tobytes().decode("ascii")
 
 
 def _fields(spans):
