@@ -274,6 +274,29 @@ def test_set_tcp_from_a_variable(tmp_path):
     assert program.unused_targets() == () and len(program.targets) == 1
 
 
+def test_a_speed_variable_set_again_where_the_feed_changes_is_read_where_it_runs(tmp_path):
+    """As RoboDK's UR post writes a feed change (``speed_ms = 0.020`` between motions of its main program): each
+    motion runs at the literal last assigned above it, a motion in a loop too; where the value depends on the calls
+    (a routine called from elsewhere, a thread) or an assignment runs conditionally, it is known at run time."""
+    def speeds(lines):
+        path = tmp_path / "feed.script"
+        path.write_text("\n".join(lines) + "\n")
+        return [(m.line, m.speed) for m in formats.read(path).motions]
+
+    pose = "p[0.5, 0.1, 0.5, 0, 3.14, 0]"
+    assert speeds(["def Prog():", "  global speed_ms = 0.050", "  def Spray(on):", f"    movel({pose}, v=speed_ms)",
+                   "  end", f"  movel({pose}, a=1.2, v=speed_ms)", "  speed_ms = 0.020",
+                   f"  movel({pose}, 1.2, speed_ms, 0, 0)", "  while True:", f"    movel({pose}, v=speed_ms)", "  end",
+                   "end", "Prog()"]) == [(4, None), (6, 50.0), (8, 20.0), (10, 20.0)]
+    assert speeds(["v_cut = 0.1", "def sub():", f"  movel({pose}, v=v_cut)", "end", f"movel({pose}, v=v_cut)",
+                   "v_cut = 0.2", "while True:", f"  movel({pose}, v=v_cut)", "end", "thread beside():",
+                   f"  movel({pose}, v=v_cut)", "end", "if 1 > 2:", "  v_other = 0.3", "end", "v_other = 0.4",
+                   f"movel({pose}, v=v_other)"]) == [(3, None), (5, 100.0), (8, 200.0), (11, None), (17, None)]
+    # the same script wrapped in a routine called twice: the routine's first motion runs at 0.1, then 0.2
+    assert speeds(["def twice():", "  movel(p[0.5, 0.1, 0.5, 0, 3.14, 0], v=v_cut)", "  v_cut = 0.2", "end",
+                   "v_cut = 0.1", "twice()", "twice()"])[0] == (2, None)
+
+
 def test_urscript_qnear_out_of_range_is_refused(tmp_path):
     path = _script(tmp_path, ["movej(get_inverse_kin(p[0.4, 0.1, 0.3, 0, 3.14, 0], qnear=[0, -1.5, 1e999, 0, 0, 0]))"])
     with pytest.raises(ReadError, match=r"s\.script:2: qnear 3: '1e999' is out of range"):

@@ -182,7 +182,8 @@ UR_LINE = "  movel(p[-0.6880000000, -0.1639410000, 0.5471000000, 2.221441469079,
 
 @pytest.mark.parametrize("assignment,why", [
     ("  vslow = read_input_float_register(0)\n", "vslow is set at run time (line 2)"),
-    ("  vslow = 0.02\n  vslow = 0.05\n", "vslow is assigned more than once (lines 2, 3)"),
+    ("  vslow = 0.02\n  if get_standard_digital_in(0):\n    vslow = 0.05\n  end\n",
+     "vslow is assigned more than once (lines 2, 4)"),
 ])
 def test_urscript_speed_variable_set_at_run_time_is_left_as_written_and_listed(tmp_path, assignment, why):
     """``v=vslow`` read from a register: was given ``t=0.3994``."""
@@ -194,10 +195,13 @@ def test_urscript_speed_variable_set_at_run_time_is_left_as_written_and_listed(t
     assert [w[: len(why)] for w in not_retimed(report).values()] == [why]
 
 
-def test_urscript_global_assigned_once_to_a_literal_is_resolved(tmp_path):
+@pytest.mark.parametrize("before, inside", [("global vslow = 0.02\n", ""),
+                                            ("", "  vslow = 0.05\n  sleep(0.5)\n  vslow = 0.02\n")])
+def test_urscript_global_assigned_once_to_a_literal_is_resolved(tmp_path, before, inside):
+    """Assigned once, or again in the same program before the motion (a feed change): the literal in force there."""
     path = tmp_path / "weld.script"
-    path.write_text("global vslow = 0.02\n" + UR_HEADER + UR_LINE.format(v="vslow") + "end\nweld()\n")
-    assert formats.read(path).motions[1].speed == 20.0
+    path.write_text(before + UR_HEADER + inside + UR_LINE.format(v="vslow") + "end\nweld()\n")
+    assert formats.read(path).motions[-1].speed == 20.0
     text, report = retime(tmp_path, path, "ur10")
     assert text == path.read_text()  # 20 mm/s kept
 

@@ -1,6 +1,8 @@
 """The URScript reader: a script's motions, pose variables, frames and TCPs into a `Program` (see `trajcomp.formats.urscript`)."""
 
+import bisect
 import dataclasses
+import functools
 import re
 from pathlib import Path
 
@@ -109,6 +111,59 @@ class _Named:
 
     name: str
     line: int
+
+
+class _Blocks:
+    """The blocks of a script (``def``, ``sec``, ``thread``, ``if``, ``while``, ``for`` .. ``end``): in which a line runs.
+
+    Parameters
+    ----------
+    masked : str
+        The script, comments and strings blanked.
+    lines : Lines
+    parts : list of (int, int)
+        Offsets of the runs of lines read one by one (every block's first
+        and last line is one of them).
+    """
+
+    def __init__(self, masked, lines, parts):
+        found = sorted((m.start(), m.group(1)) for start, end in parts for pattern in (_BLOCK_OPENS, _BLOCK_CLOSES)
+                       for m in pattern.finditer(masked, start, end))
+        spans, open_blocks = [], []  # (first line, last line, word, depth); the blocks open at a line
+        for offset, word in found:
+            line = lines.number(offset)
+            if word != "end":
+                open_blocks.append((line, word, len(open_blocks)))
+            elif open_blocks:  # `check_closed` has checked that every block is closed
+                first, opened, depth = open_blocks.pop()
+                spans.append((first, line, opened, depth))
+        first, last, word, depth = zip(*spans) if spans else ((), (), (), ())
+        self.first, self.last, self.depth = (np.array(column, dtype=np.int64) for column in (first, last, depth))
+        self.word = np.array(word, dtype=object)
+
+    def _around(self, line):
+        """The blocks line ``line`` is in (its first and last lines are in theirs), outermost first (indices)."""
+        inside = np.flatnonzero((self.first < line) & (line < self.last))
+        return inside[np.argsort(self.depth[inside])]
+
+    def in_order(self, line):
+        """Whether line ``line`` runs once each time its program does, in text order: outside any block, or in the
+        body of an outermost ``def`` and no block within it."""
+        around = self._around(line)
+        return len(around) == 0 or (len(around) == 1 and self.word[around[0]] == "def")
+
+    def program(self, line):
+        """The first line of the outermost ``def`` line ``line`` is in: the program or routine it runs in (0: the
+        script's top level)."""
+        around = self._around(line)
+        return int(self.first[around[0]]) if len(around) and self.word[around[0]] == "def" else 0
+
+    def in_routine(self, line):
+        """Whether line ``line`` is in a ``sec`` or ``thread``, or in a ``def`` within another block: run when
+        called or beside the program, not where it stands."""
+        around = self._around(line)
+        word = self.word[around]
+        return bool(np.isin(word, ("sec", "thread")).any() or (word[1:] == "def").any())
 
 
 @dataclasses.dataclass(eq=False)
@@ -465,12 +520,33 @@ class _Reader:
         name = m.group(1)
         if why := self.runtime(name):
             return None, why
-        if name in self.numbers and len(self.assigned[name]) == 1:
+        if name in self.numbers and (len(self.assigned[name]) == 1 or self.in_order(name, line)):
             return self.numbers[name], ""
         if name in self.assigned:
             lines = ", ".join(map(str, self.assigned[name][:3]))
             return None, f"{name} is assigned more than once (lines {lines}): its value is known at run time"
         return None, f"{name} is not assigned in the script: its value is set at run time"
+
+    @functools.cached_property
+    def blocks_of_lines(self):
+        """The script's blocks (`_Blocks`), found when first needed: a variable assigned several times."""
+        return _Blocks(self.masked, self.lines, self.parts)
+
+    def in_order(self, name, line):
+        """Whether number variable ``name`` holds at line ``line`` the literal last assigned above it.
+
+        So when every assignment of it runs once, in text order (outside any
+        block or in an outermost ``def``'s body, as RoboDK's posts set
+        ``speed_ms`` where the feed changes), and ``line`` runs in the same
+        program as the last one above it (the top level or the same
+        outermost ``def``), not in a routine called from elsewhere
+        (`_Blocks`). Otherwise its value depends on the calls and loops:
+        known at run time.
+        """
+        blocks, assigned = self.blocks_of_lines, self.assigned[name]
+        above = assigned[bisect.bisect_left(assigned, line) - 1]  # `numbers` holds it: one is above
+        return (all(blocks.in_order(at) for at in assigned) and blocks.program(above) == blocks.program(line)
+                and not blocks.in_routine(line))
 
     def option(self, text, line, original):
         """A number given as a literal or a variable holding one; None otherwise."""
