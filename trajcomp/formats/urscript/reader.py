@@ -545,8 +545,14 @@ class _Reader:
         """
         blocks, assigned = self.blocks_of_lines, self.assigned[name]
         above = assigned[bisect.bisect_left(assigned, line) - 1]  # `numbers` holds it: one is above
-        return (all(blocks.in_order(at) for at in assigned) and blocks.program(above) == blocks.program(line)
+        return (name in self.assigned_in_order and blocks.program(above) == blocks.program(line)
                 and not blocks.in_routine(line))
+
+    @functools.cached_property
+    def assigned_in_order(self):
+        """The variables assigned more than once, every time where it runs once, in text order (`_Blocks.in_order`)."""
+        blocks = self.blocks_of_lines
+        return {name for name, lines in self.assigned.items() if len(lines) > 1 and all(map(blocks.in_order, lines))}
 
     def option(self, text, line, original):
         """A number given as a literal or a variable holding one; None otherwise."""
