@@ -175,7 +175,7 @@ def language_bench(sizes, languages=()):
     ``languages``: the robot languages to run (each with CSV on its arm, the reference); all when empty.
     """
     folder = Path(tempfile.mkdtemp(prefix="trajcomp-languages-"))
-    print(f"{'waypoints':>10} {'language':>15} {'arm':>18} {'floor s':>8} {'compensate s':>13} {'x CSV':>6} "
+    print(f"{'waypoints':>10} {'language':>22} {'arm':>18} {'floor s':>8} {'compensate s':>13} {'x CSV':>6} "
           f"{'x floor':>8} {'peak MB':>8} {'KB/waypoint':>12}")
     wanted = {name.split(":")[0] for name in languages}
     chosen = {robot: pairs for robot, pairs in LANGUAGES.items()
@@ -226,7 +226,7 @@ def _language_row(n, label, robot, paths, model, out, csv_time):
         csv_time[robot] = wall
     peak = run_cli(args, sample=True)[1]
     start = run_cli(["compensate", str(paths[100]), "--model", str(model), "-o", str(out)], sample=True)[1]
-    print(f"{n:>10,} {label:>15} {robot:>18} {floor:>8.2f} {wall:>13.2f} {wall / csv_time[robot]:>6.2f} "
+    print(f"{n:>10,} {label:>22} {robot:>18} {floor:>8.2f} {wall:>13.2f} {wall / csv_time[robot]:>6.2f} "
           f"{wall / floor:>8.2f} {peak:>8,.0f} {(peak - start) * 1024 / n:>12.2f}", flush=True)
 
 
@@ -235,12 +235,12 @@ def _pandas_floor(program, out, wall):
     try:
         import pandas  # noqa: F401 (only whether it is installed)
     except ImportError:
-        print(f"{'':>10} {'pandas':>9} not installed: no pandas floor")
+        print(f"{'':>10} {'pandas':>22} not installed: no pandas floor")
         return
     floor = float(np.median([run_python(["-c", "import pandas, sys; pandas.read_csv(sys.argv[1]).to_csv("
                                          "sys.argv[2], index=False)", str(program), str(out)])[0]
                              for _ in range(RUNS)]))
-    print(f"{'':>10} {'pandas':>9} {'(CSV floor)':>18} {floor:>8.2f} {'':>13} {'':>6} {wall / floor:>8.2f}")
+    print(f"{'':>10} {'pandas':>22} {'(CSV floor)':>18} {floor:>8.2f} {'':>13} {'':>6} {wall / floor:>8.2f}")
 
 
 def main_bench(sizes):
