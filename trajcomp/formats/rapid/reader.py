@@ -508,7 +508,7 @@ def _robtargets(text, lines, numbers, name, field_start, field_end):
     unused = unused_axis.all(axis=1)
     offset = offset_type(text)  # the spans as int32 where they fit: 88 bytes a point less
     start, end = (np.ascontiguousarray(field[rows, :11], dtype=offset) for field in (field_start, field_end))  # x..cfx
-    name = name[rows]
+    name = np.ascontiguousarray(name[rows])  # not a view holding every group of the lines read (48 bytes a point)
     none = repeated(None, n)
     return keep, TargetTable(
         T, np.zeros(n, dtype=bool), np.broadcast_to(np.nan, (n, 6)),  # no joints: one NaN row shared
