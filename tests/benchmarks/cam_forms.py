@@ -323,6 +323,9 @@ def fanuc_robots(path, folder):
     text = [f"/PROG {name}", "/ATTR", 'COMMENT = "Fanuc LS code" ;', "/MN"] + mn
     out = Path(folder) / f"{name.lower()}.ls"
     out.write_text("\n".join(text + ["/POS"] + pos + ["/END", ""]) + "\n")
+    return out
+
+
 # ABB RAPID
 
 _RAPID_POINT = re.compile(r"^\s*CONST robtarget (\w+) := \[\[([^]]*)\],\[([^]]*)\],\[([^]]*)\],\[([^]]*)\]\];$", re.M)
