@@ -33,7 +33,15 @@ from trajcomp.formats.text import (
 )
 from trajcomp.programs.program import Program
 from trajcomp.programs.items import CIRCULAR, JOINT, LINEAR, Motion, SpanColumns, SpanTable, Statement, Target, replaced
-from trajcomp.programs.tables import ItemRows, MotionTable, Picked, StatementTable, TargetTable, TextSlices, repeated
+from trajcomp.programs.tables import (
+    ItemRows,
+    MotionTable,
+    StatementTable,
+    TargetTable,
+    TextSlices,
+    joined_targets,
+    repeated,
+)
 from trajcomp.arm.transforms import quat_to_matrix
 
 POSITION = ("x", "y", "z")
@@ -1219,7 +1227,6 @@ def _resolve(reader, task, frames, motions):
     bulk_target = np.full(len(motions), -1)
     bulk_reason = np.empty(len(motions), dtype=object)
     refs, frames_of = {}, [None] * len(reader.protos)  # ((tool, why), (frame, why)) of each proto
-    text = reader.source.text
     for item in reader.items:
         if isinstance(item, _Run):  # as a Motion below, without an object each
             _resolve_run(item.rows, motions, reader, lookup, elsewhere, named, frames_of, assigned, bulk_target,
@@ -1341,37 +1348,9 @@ class _Instructions(TextSlices):
 
 def _targets(targets, table):
     """The program's targets: ``targets`` in order, each a row of ``table`` (int, a point read at once) or a
-    `Target`; as one `TargetTable` when all lie in the module (their spans in source 0), else a tuple of
-    `Target`."""
-    if table is not None and set(map(type, targets)) == {int} and np.array_equal(targets, np.arange(len(table))):
-        return table  # all points read at once, in order
-    rows = np.array([t if isinstance(t, int) else -1 for t in targets], dtype=int)
-    objects = [t for t in targets if not isinstance(t, int)]
-    if table is None or any(t.spans and next(iter(t.spans.values())).source != 0 for t in objects):
-        return tuple(table.target(t) if isinstance(t, int) else t for t in targets)
-    extra = TargetTable.of(objects)  # the few targets read one by one (jointtargets, inline, spread)
-    pick = np.where(rows >= 0, rows, len(table) + np.cumsum(rows < 0) - 1)  # row of [table; extra] of each
-
-    def joined(name):
-        values = (getattr(table, name), getattr(extra, name))
-        return np.concatenate(values)[pick] if isinstance(values[0], np.ndarray) else \
-            tuple(values[0][k] if k < len(table) else values[1][k - len(table)] for k in pick.tolist())
-
-    roles = table.spans.roles + JOINTS
-    start, end = (np.full((len(targets), len(roles)), -1, dtype=np.int64) for _ in range(2))
-    at_once = np.flatnonzero(rows >= 0)
-    start[at_once, :len(table.spans.roles)] = table.spans.start[rows[at_once]]
-    end[at_once, :len(table.spans.roles)] = table.spans.end[rows[at_once]]
-    column = {role: j for j, role in enumerate(roles)}
-    for k, target in zip(np.flatnonzero(rows < 0).tolist(), objects):
-        for role, span in target.spans.items():
-            start[k, column[role]], end[k, column[role]] = span.start, span.end
-    part = (pick >= len(table)).astype(int)
-    return TargetTable(
-        **{name: joined(name) for name in ("pose", "is_joint", "joints", "line", "config", "tool", "frame",
-                                           "external", "edited")},
-        name=Picked([table.name, [t.name for t in objects]], part, np.where(part, pick - len(table), pick)),
-        spans=SpanColumns(0, table.spans.text, roles, start, end))
+    `Target`; as one `TargetTable` when all lie in the module (`joined_targets`), else a tuple of `Target`."""
+    joined = joined_targets(targets, table, JOINTS) if table is not None else None
+    return joined if joined is not None else tuple(table.target(t) if isinstance(t, int) else t for t in targets)
 
 
 def _stacked(first, second):
