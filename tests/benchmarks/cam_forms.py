@@ -275,8 +275,8 @@ def fanuc_robodk(path, folder):
     pos = []
     for p, frame, tool, config, x, y, z, w, pitch, r in positions:
         pos += [f"P[{p}]{{", "   GP1:", f"    UF : {frame}, UT : {tool},        CONFIG : '{config}',",
-                f"\tX =%10.3f  mm,\tY =%10.3f  mm,\tZ =%10.3f  mm," % (x, y, z),
-                f"\tW =%10.3f deg,\tP =%10.3f deg,\tR =%10.3f deg" % (w, pitch, r), "};"]
+                "\tX =%10.3f  mm,\tY =%10.3f  mm,\tZ =%10.3f  mm," % (x, y, z),
+                "\tW =%10.3f deg,\tP =%10.3f deg,\tR =%10.3f deg" % (w, pitch, r), "};"]
     name = f"{name}_RD"
     text = [f"/PROG  {name}"] + _fanuc_attr("RoboDK sequence", "tabs", "1,*,*,*,*,*,*") + ["/MN"] + mn
     out = Path(folder) / f"{name.lower()}.ls"
