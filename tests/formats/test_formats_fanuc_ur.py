@@ -292,6 +292,9 @@ def test_a_speed_variable_set_again_where_the_feed_changes_is_read_where_it_runs
                    "v_cut = 0.2", "while True:", f"  movel({pose}, v=v_cut)", "end", "thread beside():",
                    f"  movel({pose}, v=v_cut)", "end", "if 1 > 2:", "  v_other = 0.3", "end", "v_other = 0.4",
                    f"movel({pose}, v=v_other)"]) == [(3, None), (5, 100.0), (8, 200.0), (11, None), (17, None)]
+    # a routine that sets it again, called between the assignment above a motion and the motion
+    assert speeds(["def slow():", "  v_cut = 0.05", "end", "v_cut = 0.1", "slow()", f"movel({pose}, v=v_cut)"]) == [
+        (6, None)]
     # the same script wrapped in a routine called twice: the routine's first motion runs at 0.1, then 0.2
     assert speeds(["def twice():", "  movel(p[0.5, 0.1, 0.5, 0, 3.14, 0], v=v_cut)", "  v_cut = 0.2", "end",
                    "v_cut = 0.1", "twice()", "twice()"])[0] == (2, None)

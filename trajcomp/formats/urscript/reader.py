@@ -535,9 +535,10 @@ class _Reader:
     def in_order(self, name, line):
         """Whether number variable ``name`` holds at line ``line`` the literal last assigned above it.
 
-        So when every assignment of it runs once, in text order (outside any
-        block or in an outermost ``def``'s body, as RoboDK's posts set
-        ``speed_ms`` where the feed changes), and ``line`` runs in the same
+        So when every assignment of it runs once, in text order, in one
+        program (outside any block, or in the body of one outermost ``def``,
+        as RoboDK's posts set ``speed_ms`` where the feed changes:
+        `assigned_in_order`), and ``line`` runs in the same
         program as the last one above it (the top level or the same
         outermost ``def``), not in a routine called from elsewhere
         (`_Blocks`). Otherwise its value depends on the calls and loops:
@@ -550,9 +551,11 @@ class _Reader:
 
     @functools.cached_property
     def assigned_in_order(self):
-        """The variables assigned more than once, every time where it runs once, in text order (`_Blocks.in_order`)."""
+        """The variables assigned more than once, all in one program and each where it runs once, in text order
+        (`_Blocks.in_order`): no call of another routine can change them between two of their assignments."""
         blocks = self.blocks_of_lines
-        return {name for name, lines in self.assigned.items() if len(lines) > 1 and all(map(blocks.in_order, lines))}
+        return {name for name, lines in self.assigned.items() if len(lines) > 1 and all(map(blocks.in_order, lines))
+                and len(set(map(blocks.program, lines))) == 1}
 
     def option(self, text, line, original):
         """A number given as a literal or a variable holding one; None otherwise."""
