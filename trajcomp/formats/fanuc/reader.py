@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 
 from trajcomp.errors import ReadError
-from trajcomp.formats.number_fields import offset_type, read_numbers, text_codes
+from trajcomp.formats.number_fields import character_table, offset_type, read_numbers, text_codes
 from trajcomp.formats.text import (
     ANGLE_LIMIT,
     JOINT_LIMIT,
@@ -365,12 +365,7 @@ def _among(codes, characters):
     return _table(characters)[codes if codes.dtype == np.uint8 else np.minimum(codes, 255)]  # 255 (ÿ): in no set
 
 
-@functools.lru_cache(maxsize=None)
-def _table(characters):
-    """A look-up table (256,) of the character codes among ``characters``."""
-    table = np.zeros(256, dtype=bool)
-    table[[ord(c) for c in characters]] = True
-    return table
+_table = functools.lru_cache(maxsize=None)(character_table)  # a character set's look-up table (256,), made once
 
 
 _MOST_SKIPPED = 64  # characters `_skip` passes at most (a field of a long run of blanks is read one by one)
