@@ -22,6 +22,7 @@ from trajcomp.model.model_file import save_model
 from trajcomp.calibration.measurement_plan import default_orientation, plan_grid
 from trajcomp.arm.robot import load_robot
 from trajcomp.calibration.simulate import VirtualRobot
+from trajcomp.arm.parameters import pose_jacobian
 from trajcomp.arm.transforms import abc_to_matrix, matrix_to_abc, pose_to_matrix, rotvec_to_matrix
 
 TOLERANCE = 0.1
@@ -80,13 +81,70 @@ def test_the_held_out_errors_use_the_compensation_interpolator(cell):
     assert model.report["cross_validation"]["interpolation"] == "knn"  # the k-fold leaves holes in the lattice
     # held out, idw8 composite and grid: same order of magnitude as the knn folds, not the fit's zeros
     assert 0.01 < data.held_out["composite"]["p95"] < 0.2 and data.held_out["grid"]["p95"] > 0.1
-    # lookup: the largest held-out error of the 8 held-out points nearest each node, computed here by brute force
-    points = np.random.default_rng(3).uniform(0.0, 100.0, (40, 3))
-    errors = np.random.default_rng(4).uniform(0.0, 1.0, 40)
-    origin, step, near = landing.near_lookup(points, {"m": errors})
-    node = origin + step * np.array([3, 7, 5])
-    nearest = np.argsort(np.linalg.norm(points - node, axis=1))[:landing.NEAREST]
-    assert near["m"][3, 7, 5] == errors[nearest].max()
+    assert "outer layers" in data.method  # and how the errors grow beyond the measured volume
+
+
+def test_the_quantile_of_a_gaussian_error_norm_matches_sampling():
+    rng = np.random.default_rng(5)
+    mean = rng.normal(0.0, 0.02, (6, 3)) * np.array([[0], [1], [1], [0], [3], [1]])
+    factor = rng.normal(0.0, 0.03, (6, 3, 3)) * np.array([1, 1, 0.1, 0.2, 1, 3])[:, None, None]
+    covariance = factor @ factor.transpose(0, 2, 1)
+    covariance[0] = np.eye(3) * 0.01**2  # isotropic without mean: the chi-square is exact
+    samples = mean[:, None, :] + np.einsum("nij,nkj->nki", np.linalg.cholesky(covariance + 1e-12 * np.eye(3)),
+                                           rng.normal(size=(6, 200_000, 3)))
+    sampled = np.quantile(np.linalg.norm(samples, axis=2), 0.95, axis=1)
+    np.testing.assert_allclose(landing.quantile_of_norm(mean, covariance), sampled, rtol=0.04)
+    np.testing.assert_allclose(landing.quantile_of_norm(mean[:1] * 0, covariance[:1]), sampled[:1], rtol=0.005)
+
+
+def test_the_held_out_rms_grows_as_fitted_with_the_distance_and_outside():
+    rng = np.random.default_rng(6)
+    distance = rng.uniform(0.0, 80.0, 4000)
+    beyond = np.where(rng.uniform(size=4000) < 0.3, rng.uniform(10.0, 200.0, 4000), 0.0)
+    rms = 0.02 + 0.0005 * distance + beyond * (0.0002 + 1e-6 * beyond)
+    errors = np.linalg.norm(rng.normal(size=(4000, 3)), axis=1) / np.sqrt(3.0) * rms  # RMS of |error| = rms
+    intercept, start, slope, outside, curve = landing.fit_growth(distance, beyond, errors, spacing=1e6)
+    grown = intercept + slope * (np.array([10.0, 70.0]) - start)
+    np.testing.assert_allclose(grown, 0.02 + 0.0005 * np.array([10.0, 70.0]), rtol=0.1)
+    at = np.array([50.0, 150.0])
+    np.testing.assert_allclose(outside * at + curve * at**2, at * (0.0002 + 1e-6 * at), rtol=0.25)
+    # an error of the interior's size every spacing outside, at the least
+    assert landing.fit_growth(distance, beyond, errors, spacing=10.0)[3] >= intercept / 10.0
+
+
+def test_the_coverage_distance_is_each_joint_gap_times_its_lever():
+    robot = load_robot("ur10")
+    rng = np.random.default_rng(7)
+    measured = rng.uniform(-1.0, 1.0, (30, 6))
+    q = rng.uniform(-1.2, 1.2, (5, 6))
+    gaps = np.abs(q[:, None, :] - measured[None]).min(axis=1)  # brute force: nearest measured value per joint
+    step = 1e-6
+    lever = np.empty((5, 6))
+    for joint in range(6):  # |d TCP / d q_j| by central differences of the forward kinematics
+        moved = np.array(q)
+        moved[:, joint] += step
+        back = np.array(q)
+        back[:, joint] -= step
+        lever[:, joint] = np.linalg.norm(fk(robot, moved)[:, :3, 3] - fk(robot, back)[:, :3, 3], axis=1) / (2 * step)
+    np.testing.assert_allclose(landing.coverage_distance(robot, measured, q), np.linalg.norm(gaps * lever, axis=1),
+                               rtol=1e-5)
+    assert np.all(landing.coverage_distance(robot, measured, measured) == 0.0)
+
+
+def test_gauge_directions_are_what_no_configuration_sees():
+    robot = load_robot("ur10")
+    names = ["d1", "a2", "d2", "d3", "base_z"]
+    gauge = landing.gauge_directions(robot, names)
+    by_name = dict(zip(names, gauge))  # each parameter's share in each unobservable combination
+    assert gauge.shape[1] == 2  # d1 against the registration's height, and d2, d3 along parallel axes 2 and 3
+    assert np.abs(by_name["a2"]).max() < 1e-6  # a2 lengthens the upper arm: always seen
+    np.testing.assert_allclose(np.abs(gauge.T @ gauge), np.eye(2), atol=1e-9)
+    unit = dict(zip(names, np.eye(len(names))))
+    for a, b in (("d1", "base_z"), ("d2", "d3")):  # each known combination lies in the span found
+        assert max(np.linalg.norm(gauge.T @ (unit[a] + sign * unit[b])) / np.sqrt(2) for sign in (1, -1)) > 1 - 1e-9
+    q = np.random.default_rng(8).uniform(-3.0, 3.0, (50, 6))
+    moved = pose_jacobian(robot, q, names)[1][:, :3, :] @ gauge
+    assert np.abs(moved).max() < 1e-6
 
 
 def _program(path, robot, targets):

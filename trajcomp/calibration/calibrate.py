@@ -25,12 +25,14 @@ import dataclasses
 import logging
 
 import numpy as np
+from scipy.spatial import cKDTree
 
 from trajcomp.calibration.options import INTERPOLATIONS, LOSSES, METHODS, ORIENTATION_WEIGHT
 from trajcomp.errors import CalibrationError
 from trajcomp.model import landing
 from trajcomp.model.grid import METHODS as LATTICE_INTERPOLATORS, TOLERANCE, detect_lattice, fit_field
-from trajcomp.calibration.identify import best_fit_transform, identify, linearise, outlier_rows, select_splines
+from trajcomp.calibration.identify import (best_fit_transform, identify, linearise, outlier_rows, region_folds,
+                                           select_splines)
 from trajcomp.arm.ik import batch_seed, branch_index, ik
 from trajcomp.model.joint_errors import KIND as JOINT_KIND
 from trajcomp.model.joint_errors import JointResidual, is_term
@@ -47,6 +49,9 @@ from trajcomp.arm.transforms import abc_to_matrix, invert, pose_to_matrix
 log = logging.getLogger(__name__)
 
 MAX_ROWS = 100_000  # measurements one calibration fits: 12 min and 1.3 GB (2-core machine shared by 6 runs)
+LAYER_PLANES = 20  # positions with at most this many distinct coordinates along an axis are node planes along it
+OUTER_SHARE = 0.1  # the outer layer of scattered positions: this share of the rows on each side of an axis
+OUTER_LAYERS = 2  # outer layers held out on each side of each axis, one and two at a time
 FIELD_ON_TOP = "knn"  # the residual field a joint residual may take on top: scattered, so held-out rows leave no hole
 
 
@@ -433,14 +438,15 @@ def calibrate(robot, meas, *, robot_ref=None, method="composite", frame=None, gr
         held = fold_errors(*data, folds, seed, progress, fitted, workers)
         report["cross_validation"] = {"folds": folds, "interpolation": held.pop("interpolation")} | {
             m: ErrorStats.from_errors(e).as_dict() for m, e in held.items()}
-        report["landing"] = _landing(robot, dh, frame, data, held, folds, progress, meas.orientation)
+        report["landing"] = _landing(robot, dh, frame, data, held, fitted, (folds, seed), progress, meas.orientation,
+                                     workers)
     for message in warnings:
         log.warning(message)
     return model
 
 
 def fold_errors(robot, joints, position, measured, rotation, options, folds, seed, progress=None, fitted=None,
-                workers=1):
+                workers=1, splits=None):
     """Held-out errors (N, 3) per mode of k-fold cross-validation, in row order, and the interpolator used.
 
     The folds fit in the base frame (the tracker registration of the full
@@ -454,14 +460,17 @@ def fold_errors(robot, joints, position, measured, rotation, options, folds, see
     without each fold's rows by `_Refit`; without it the folds identify
     from the nominal robot. The folds are computed by up to ``workers``
     processes (`trajcomp.support.parallel.share_blocks`); the errors do not
-    depend on it.
+    depend on it. ``splits`` (a list of ``(train, test)`` row indices)
+    replace the shuffled k-fold ones (``folds`` and ``seed`` then unused
+    but for the message), e.g. held-out regions.
     """
     if len(position) < 2 * folds:
         raise CalibrationError(f"{len(position)} measurements are too few for {folds}-fold cross-validation")
     if options["kind"] in LATTICE_INTERPOLATORS:
         options = options | {"kind": "knn", "grid_step": None}
     refit = None if fitted is None else _Refit(robot, joints, measured, rotation, options, *fitted)
-    splits = kfold_indices(len(position), folds, seed)
+    splits = kfold_indices(len(position), folds, seed) if splits is None else splits
+    folds = len(splits)
 
     def fold(k):
         train, test = splits[k]
@@ -542,11 +551,18 @@ def plane_errors(robot, joints, position, measured, rotation, options, progress=
     For each axis and each parity, every other node plane along the axis is
     left out; the model refitted on the others (a lattice twice as coarse
     along that axis) is evaluated at the planes left out inside its box.
-    Each row keeps its largest held-out error over the axes; rows never
-    held out (the corners of the lattice) are NaN.
+    Each row keeps its largest held-out error over the axes, and its
+    distances from the rows of the fit that predicted it; rows never held
+    out (the corners of the lattice) are NaN.
+
+    Returns
+    -------
+    held : dict of str to ndarray, shape (N, 3)
+    distance : dict of str to ndarray, shape (N,)
+        `split_distances` of the rows.
     """
     _, index = detect_lattice(position)
-    held = {}
+    held, distance = {}, {}
     options = options | {"grid_step": None}
     for axis in range(3):
         for parity in (0, 1):
@@ -563,30 +579,111 @@ def plane_errors(robot, joints, position, measured, rotation, options, progress=
             except CalibrationError:  # too few planes left to fit: this axis gives no held-out errors
                 continue
             model = parts.model(robot, robot.name, options["method"], np.eye(4), {}, (False, ""))
+            away = split_distances(robot, joints, position, [(np.flatnonzero(train), np.flatnonzero(test))])
             for mode, err in mode_errors(model, _rows(joints, test), position[test], measured[test]).items():
                 errors = held.setdefault(mode, np.full((len(position), 3), np.nan))
                 larger = ~(np.linalg.norm(errors[test], axis=1) >= np.linalg.norm(err, axis=1))  # NaN: not yet held out
                 errors[np.flatnonzero(test)[larger]] = err[larger]
-    return held
+                if mode == options["method"]:
+                    for key, values in away.items():
+                        distance.setdefault(key, np.full(len(position), np.nan))[np.flatnonzero(test)[larger]] = (
+                            values[test][larger])
+    return held, distance
 
 
-def _landing(robot, dh, frame, data, held, folds, progress, orientation):
+def split_distances(robot, joints, position, splits):
+    """How far each held-out row lies from the training rows of its split, mm (N,), NaN for rows never held out.
+
+    Returns
+    -------
+    dict of str to ndarray, shape (N,)
+        ``positions``: from the nearest training position; ``joints``: from
+        what the training rows measured, joint by joint
+        (`trajcomp.model.landing.coverage_distance`; absent without joints);
+        ``beyond``: outside the box of the training positions.
+    """
+    out = {key: np.full(len(position), np.nan) for key in ("positions", "beyond", *(("joints",) if joints is not None
+                                                                                    else ()))}
+    for train, test in splits:
+        out["positions"][test] = cKDTree(position[train]).query(position[test])[0]
+        out["beyond"][test] = landing.outside_box(position[test], position[train])
+        if joints is not None:
+            out["joints"][test] = landing.coverage_distance(robot, joints[train], joints[test])
+    return out
+
+
+def outer_layers(position):
+    """Splits ``(train, test)`` that hold out the outer layers of the measured positions on each side of each axis.
+
+    A layer is a node plane of a lattice, or `OUTER_SHARE` of the rows of
+    scattered positions; one and two layers are held out on each side (the
+    errors at one and two layers beyond the rest), where at least three
+    would be left (an axis with fewer holds out fewer or none).
+    """
+    splits = []
+    every = np.arange(len(position))
+    for axis in range(3):
+        planes = np.unique(np.round(position[:, axis], 3))
+        for side in (-1.0, 1.0):
+            along = side * position[:, axis]
+            for layers in range(1, OUTER_LAYERS + 1):
+                if len(planes) <= LAYER_PLANES:
+                    if len(planes) - layers < 3:
+                        break
+                    test = every[along <= np.sort(side * planes)[layers - 1] + 1e-3]
+                else:
+                    test = every[along <= np.quantile(along, OUTER_SHARE * layers)]
+                splits.append((np.setdiff1d(every, test), test))
+    return splits
+
+
+def _landing(robot, dh, frame, data, held, fitted, split, progress, orientation, workers):
     """The plain-data `trajcomp.model.landing.LandingData` of a calibration (its report's ``landing``), or None
     when no held-out errors could be computed.
 
     ``data`` are the rows the statistics use ``(robot, joints, position,
-    measured, rotation, options)``; ``held`` their k-fold errors (N, 3) per mode.
+    measured, rotation, options)``, ``held`` their k-fold errors (N, 3) per
+    mode, ``fitted`` the full fit's kinematic model and joint residual for
+    `fold_errors`, ``split`` the k-fold's ``(folds, seed)``. The held-out
+    errors and their distances from the rows that predicted them come from
+    the k-fold (a lattice field: node planes held out with its own
+    interpolator, `plane_errors`) and from the outer layers of the
+    measured positions held out in turn (`outer_layers`: how the errors
+    grow beyond the measured volume).
     """
     _, joints, position, measured, rotation, options = data
     if options["kind"] in LATTICE_INTERPOLATORS:
-        held = plane_errors(*data, progress)
+        held, distances = plane_errors(*data, progress)
         method = (f"{options['kind']} on the lattice with every other node plane along each axis held out "
                   "(cells twice as long along that axis)")
+        splits = outer_layers(position)
+        words = "one and two outer layers of the measured positions on each side"
     else:
-        method = f"{folds}-fold cross-validation, residual {options['kind']}"
+        distances = split_distances(robot, joints, position, kfold_indices(len(position), *split))
+        method = f"{split[0]}-fold cross-validation, residual {options['kind']}"
+        slabs, words = region_folds(position, split[0])
+        every = np.arange(len(position))
+        splits = [(np.setdiff1d(every, test), test) for test in slabs] + outer_layers(position)
+        words += ", and one and two outer layers of the measured positions on each side"
     if not held:  # no plane could be held out (outliers left too few): no landing data, as with --folds 0
         return None
-    rows = np.isfinite(next(iter(held.values()))).all(axis=1)
+    sets = [(distances, held)]
+    if splits:
+        regions = fold_errors(*data, len(splits), 0, progress, fitted, workers, splits=splits)
+        regions.pop("interpolation")
+        sets.append((split_distances(robot, joints, position, splits), regions))
+        method += f"; {words} held out in turn"
+    # a field over positions errs by how far a target lies from the measured positions; every other mode by how far
+    # its joints lie from the measured ones
+    fields = {"grid"} | ({"composite"} if options["kind"] != JOINT_KIND else set())
+    by_joints = set() if joints is None else set(held) - fields
+    combined = {}
+    for mode in held:
+        metric = "joints" if mode in by_joints else "positions"
+        d, g, e = (np.concatenate(part) for part in zip(*[(where[metric], where["beyond"], errors[mode])
+                                                          for where, errors in sets]))
+        finite = np.isfinite(d) & np.isfinite(e).all(axis=1)
+        combined[mode] = (d[finite], g[finite], e[finite])
     parameters = ([], np.zeros(0), np.zeros((0, 0)), np.zeros(0))
     if dh is not None:
         parameters = landing.posterior(
@@ -595,6 +692,4 @@ def _landing(robot, dh, frame, data, held, folds, progress, orientation):
             hidden=sum(is_robot_parameter(n) for n in dh.identifiability.fixed))
     rotations = fk(robot, joints)[:, :3, :3] if joints is not None else (
         abc_to_matrix(orientation) if orientation is not None else None)
-    built = landing.build({mode: e[rows] for mode, e in held.items()}, position[rows], method, parameters,
-                          rotations)
-    return built.to_dict()
+    return landing.build(combined, method, parameters, rotations, position, joints, by_joints).to_dict()

@@ -241,8 +241,9 @@ def _compensate_rows(model, mode, nominal, arm, field, outside, label, tool, tar
             break
     posture = model.unmeasured_posture(q)
     other_tool = tool is not None and not same_tool(tool, model.nominal.T_flange_tool) and not model.places_other_tools
-    estimate = landing.estimate(model, mode, q, targets, tool, posture, other_tool)
-    return CompensationResult(command, q, command[:, :3, 3] - goal, flagged | arm.outside_rows(q), residual,
+    outside_rows = flagged | arm.outside_rows(q)
+    estimate = landing.estimate(model, mode, q, targets, tool, posture, other_tool, outside_rows)
+    return CompensationResult(command, q, command[:, :3, 3] - goal, outside_rows, residual,
                               near_face=inside & ~field.contains(command[:, :3, 3]) if field is not None else None,
                               other_tool=np.full(len(q), other_tool), held_out=estimate.held_out,
                               unseen=estimate.unseen, orientation_beyond=estimate.orientation,

@@ -38,24 +38,36 @@ targets or more (``tests/benchmarks/bench_accuracy.py tilt`` measures it).
 """
 
 import dataclasses
+import functools
 
 import numpy as np
+from scipy.optimize import nnls
+from scipy.spatial import cKDTree
+from scipy.stats import chi2
 
 from trajcomp.errors import ModelError
 from trajcomp.arm.ik import ik
 from trajcomp.arm.ik_closed_form import ik_family
+from trajcomp.arm.kinematics import jacobian
 from trajcomp.model.joint_errors import KIND as JOINT_KIND
-from trajcomp.arm.parameters import ANGLE_LEVER, candidate_parameters, is_angle, is_robot_parameter, pose_jacobian
+from trajcomp.arm.parameters import (ANGLE_LEVER, TOOL_NAMES, candidate_parameters, is_angle, is_robot_parameter,
+                                     pose_jacobian)
 from trajcomp.model.stats import ErrorStats
 from trajcomp.arm.transforms import abc_to_matrix, matrix_to_abc, mean_rotation, rotation_angle_between
 
-NEAREST = 20  # held-out points whose largest error bounds the error near a target (about 1.5 cells of a lattice)
-LOOKUP = 11  # nodes per axis of the lookup lattice of the held-out errors
-COVERAGE = 2.0  # standard deviations (of the RMS norm) the unseen part adds: >= 95 % of a 3-D Gaussian |error|
+QUANTILE = 0.95  # the landing estimate is this quantile of a target's predicted landing error
+GROWTH_KEYS = ("rms_mm", "from_mm", "slope", "outside_slope", "outside_curve_per_mm")  # `fit_growth`'s figures, as the model file names them
+GROWTH_BINS = 8  # bins of the distance from the measured positions over which the held-out RMS is fitted
+POSITION_DIGITS = 1  # measured positions are stored rounded to 0.1 mm (and once each)
+SAME_PLACE = 5.0  # mm: measured positions closer than this are one place (several orientations at one node)
+JOINT_DIGITS = 3  # measured configurations are stored rounded to 0.001 deg (and once each)
 ORIENTATION_MARGIN = 1.0  # deg beyond the measured orientations' largest deviation still counted as measured
 PRIOR_FLOOR = (1e-3, 1e-6)  # mm, rad: smallest prior of a length and an angle parameter
 NUISANCE_PRIOR = (1e3, 1.0)  # mm, rad: registration and measured-frame parameters, practically free
 EXTRA = ("theta6",)  # the zero of joint 6: unseen by a point on its axis, it moves a sideways tool
+GAUGE_SAMPLES = 64  # configurations across the joint ranges that find the unobservable combinations
+GAUGE_TOLERANCE = 1e-9  # singular value, relative to the largest, below which a combination is unobservable
+GAUGE_PIN = 1e12  # precision (in prior units) that pins an unobservable combination
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -68,12 +80,20 @@ class LandingData:
         Per mode, `ErrorStats` dict of its held-out errors (same interpolator).
     method : str
         How the errors were held out, in words.
-    origin, step : ndarray, shape (3,)
-        Lookup lattice of the errors near a point, mm (step 0 on an axis
-        the measurements do not extend along).
-    near : dict of str to ndarray, shape (nx, ny, nz)
-        Per mode, the largest held-out |error| of the `NEAREST` held-out
-        points nearest each lookup node, mm.
+    positions : ndarray, shape (K, 3)
+        The measured positions (each once, to 0.1 mm), mm.
+    configurations : ndarray, shape (L, 6)
+        The measured configurations (each once, to 0.001 deg), rad; none
+        for a model measured without joints.
+    growth : dict of str to tuple of float
+        Per mode, ``(rms, d0, slope, outside_slope, outside_curve)`` of
+        `fit_growth`: the RMS held-out |error| of a target at distance ``d``
+        from what was measured (`coverage_distance`) and ``g`` outside the
+        box of the measured positions is ``rms + slope max(d - d0, 0) +
+        outside_slope g + outside_curve g^2`` (mm).
+    by_joints : list of str
+        The modes whose distance ``d`` is `coverage_distance` (a joint-angle
+        residual); the others' is from the nearest measured position.
     names : list of str
         Parameters of the posterior (robot, then registration and
         measured-frame parameters).
@@ -91,9 +111,10 @@ class LandingData:
 
     held_out: dict
     method: str
-    origin: np.ndarray
-    step: np.ndarray
-    near: dict
+    positions: np.ndarray
+    configurations: np.ndarray
+    growth: dict
+    by_joints: list
     names: list
     shift: np.ndarray
     covariance: np.ndarray
@@ -107,8 +128,10 @@ class LandingData:
         return {
             "held_out": self.held_out,
             "method": self.method,
-            "lookup": {"origin": self.origin.tolist(), "step": self.step.tolist(), "nearest": NEAREST,
-                       "near_mm": {mode: np.round(v, 5).tolist() for mode, v in self.near.items()}},
+            "growth": {mode: dict(zip(GROWTH_KEYS, map(float, values))) for mode, values in self.growth.items()},
+            "positions_mm": np.round(self.positions, POSITION_DIGITS).tolist(),
+            "configurations_deg": np.round(np.degrees(self.configurations), JOINT_DIGITS).tolist(),
+            "by_joints": list(self.by_joints),
             "parameters": {"names": list(self.names), "shift": (self.shift * scale).tolist(),
                            "identified": (self.identified * scale).tolist(),
                            "covariance": (self.covariance * np.outer(scale, scale)).tolist()},
@@ -120,14 +143,15 @@ class LandingData:
     def from_dict(cls, data):
         """Read `to_dict` back; ModelError on a malformed entry."""
         try:
-            lookup, parameters = data["lookup"], data["parameters"]
+            parameters = data["parameters"]
             names = list(parameters["names"])
             scale = _user_scale(names)
-            near = {mode: np.array(v, dtype=float) for mode, v in lookup["near_mm"].items()}
+            growth = {mode: tuple(float(g[key]) for key in GROWTH_KEYS) for mode, g in data["growth"].items()}
             return cls(
                 held_out=dict(data["held_out"]), method=str(data["method"]),
-                origin=np.array(lookup["origin"], dtype=float).reshape(3),
-                step=np.array(lookup["step"], dtype=float).reshape(3), near=near, names=names,
+                positions=np.array(data["positions_mm"], dtype=float).reshape(-1, 3),
+                configurations=np.radians(np.array(data["configurations_deg"], dtype=float).reshape(-1, 6)),
+                growth=growth, by_joints=[str(m) for m in data["by_joints"]], names=names,
                 shift=np.array(parameters["shift"], dtype=float).reshape(len(names)) / scale,
                 identified=np.array(parameters["identified"], dtype=float).reshape(len(names)) / scale,
                 covariance=np.array(parameters["covariance"], dtype=float).reshape(len(names), len(names))
@@ -135,16 +159,53 @@ class LandingData:
                 reference=abc_to_matrix(np.radians(np.array(data["orientation"]["reference_abc_deg"], dtype=float))),
                 spread=float(np.radians(data["orientation"]["spread_deg"])),
             )
-        except (KeyError, TypeError, ValueError) as exc:
+        except (KeyError, TypeError, ValueError, AttributeError) as exc:
             raise ModelError(f"report.landing: malformed entry: {exc!r}") from None
 
-    def near_errors(self, mode, points):
-        """Held-out |error| near points (N, 3) mm in ``mode`` (N,): the lookup node nearest each point."""
-        values = self.near[mode]
-        shape = np.array(values.shape)
-        step = np.where(self.step > 0, self.step, 1.0)
-        node = np.clip(np.rint((points - self.origin) / step), 0, shape - 1).astype(int)
-        return values[node[:, 0], node[:, 1], node[:, 2]]
+    def distance(self, mode, robot, q, points):
+        """Distance (N,) mm of targets at configurations q (N, 6) rad and positions (N, 3) mm from what was measured.
+
+        `coverage_distance` for the modes ``by_joints``, else from the nearest measured position.
+        """
+        if mode in self.by_joints:
+            return coverage_distance(robot, self.configurations, q)
+        return self._positions.query(points)[0]
+
+    @functools.cached_property
+    def _positions(self):
+        return cKDTree(self.positions)
+
+    def near_rms(self, mode, robot, q, points):
+        """RMS held-out |error| (N,) mm in ``mode`` of targets at configurations q (N, 6) rad and positions (N, 3) mm.
+
+        It grows with their distance from the measured configurations and
+        outside the box of the measured positions (`fit_growth`).
+        """
+        rms, start, slope, outside_slope, outside_curve = self.growth[mode]
+        beyond = outside_box(points, self.positions)
+        return rms + slope * np.maximum(self.distance(mode, robot, q, points) - start, 0.0) + beyond * (
+            outside_slope + outside_curve * beyond)
+
+
+def coverage_distance(robot, measured, q):
+    """How far configurations q (N, 6) rad lie from the measured ones (M, 6), as a TCP motion, mm (N,).
+
+    Joint by joint: the angle from each joint's value to the nearest value
+    that joint was measured at, times how far it moves the TCP there (the
+    norm of that joint's column of the position Jacobian), summed in
+    quadrature. An arm's unmodelled errors are mostly errors of each
+    joint's angle (gears, compliance, a joint-angle model's curves): they
+    are known where each joint was measured, whatever the others did.
+    """
+    q = np.atleast_2d(q)
+    gaps = np.empty_like(q)
+    for joint in range(q.shape[1]):
+        values = np.unique(measured[:, joint])
+        place = np.clip(np.searchsorted(values, q[:, joint]), 1, max(len(values) - 1, 1))
+        gaps[:, joint] = np.minimum(np.abs(q[:, joint] - values[place - 1]), np.abs(q[:, joint] - values[np.minimum(
+            place, len(values) - 1)]))
+    lever = np.linalg.norm(jacobian(robot, q)[:, :3, :], axis=1)
+    return np.linalg.norm(gaps * lever, axis=1)
 
 
 def _user_scale(names):
@@ -152,48 +213,73 @@ def _user_scale(names):
     return np.array([np.degrees(1.0) if is_angle(name) else 1.0 for name in names])
 
 
-def near_lookup(points, errors):
-    """Lookup lattice of the largest held-out error near each of its nodes.
+def outside_box(points, positions):
+    """Distance (N,) mm of points (N, 3) outside the axis-aligned box of positions (M, 3) (0 inside)."""
+    lower, upper = positions.min(axis=0), positions.max(axis=0)
+    return np.linalg.norm(np.maximum(np.maximum(lower - points, points - upper), 0.0), axis=1)
+
+
+def measured_spacing(positions):
+    """Median distance (mm) from a measured position to the nearest other place measured (`SAME_PLACE` apart or more)."""
+    if len(positions) < 2:
+        return SAME_PLACE
+    near = cKDTree(positions).query(positions, k=min(len(positions), 64))[0]
+    far = np.where(near > SAME_PLACE, near, np.inf).min(axis=1)
+    return float(np.median(far[np.isfinite(far)])) if np.isfinite(far).any() else SAME_PLACE
+
+
+def fit_growth(distance, beyond, errors, spacing, bins=GROWTH_BINS):
+    """How the RMS of held-out errors grows with the distance from the rows they were predicted from.
+
+    The rows held out inside the measured volume (``beyond`` 0) are binned
+    by distance (equal counts), and the bins' RMS |error| fitted by ``rms +
+    slope (d - d0)`` (non-negative, weighted by the rows in each bin; ``d0``
+    the nearest bin's distance: rows all at one distance give no slope).
+    The rows held out beyond the rest (outer layers) give how much more an
+    error grows outside the measured volume: binned by their distance
+    ``g`` outside the box of the rows that predicted them, their RMS beyond
+    what the interior growth predicts is fitted by ``outside_slope g +
+    outside_curve g^2`` (non-negative). Outside, an error of the interior's
+    size may arise every half ``spacing``, which no measurement resolves
+    (a variation over two spacings is the finest the measurements see):
+    ``outside_slope`` is at least the interior RMS per half spacing.
 
     Parameters
     ----------
-    points : ndarray, shape (M, 3)
-        Positions of the held-out points, mm.
-    errors : dict of str to ndarray, shape (M,)
-        Their held-out |error| per mode, mm.
+    distance : ndarray, shape (M,)
+        Each held-out row's distance from the nearest row of the fit that predicted it, mm.
+    beyond : ndarray, shape (M,)
+        Its distance outside the box of those rows, mm.
+    errors : ndarray, shape (M,)
+        Its held-out |error|, mm.
+    spacing : float
+        Median distance between neighbouring measured positions, mm.
+    bins : int
 
     Returns
     -------
-    origin, step : ndarray, shape (3,)
-    near : dict of str to ndarray, shape (nx, ny, nz)
+    tuple of float
+        ``(rms, d0, slope, outside_slope, outside_curve)``: mm, mm, mm per
+        mm, mm per mm, mm per mm^2.
     """
-    lower, upper = points.min(axis=0), points.max(axis=0)
-    flat = upper - lower < 1e-6
-    count = np.where(flat, 1, LOOKUP)
-    step = np.where(flat, 0.0, (upper - lower) / np.maximum(count - 1, 1))
-    axes = [lower[a] + step[a] * np.arange(count[a]) for a in range(3)]
-    nodes = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, 3)
-    k = min(NEAREST, len(points))
-    nearest = np.empty((len(nodes), k), dtype=int)
-    for start in range(0, len(nodes), 64):  # (64, M) distances at a time
-        nearest[start:start + 64] = np.argpartition(_distances(nodes[start:start + 64], points), k - 1, axis=1)[:, :k]
-    near = {mode: e[nearest].max(axis=1).reshape(*count) for mode, e in errors.items()}
-    return lower, step, near
-
-
-def _distances(nodes, points):
-    """Euclidean distances (K, M) mm from nodes (K, 3) to points (M, 3).
-
-    Summed one axis at a time: the same sums in the same order as
-    ``np.linalg.norm(nodes[:, None] - points[None], axis=2)`` (so the same
-    values, ties included), without its (K, M, 3) array and its reduction
-    along the short last axis (6 times faster).
-    """
-    squared = np.zeros((len(nodes), len(points)))
-    for axis in range(3):
-        along = nodes[:, axis, None] - points[None, :, axis]
-        squared += along * along
-    return np.sqrt(squared)
+    inside = beyond <= 0.0
+    order = np.flatnonzero(inside)[np.argsort(distance[inside], kind="stable")]
+    groups = [g for g in np.array_split(order, min(bins, len(order))) if len(g)]
+    d = np.array([distance[g].mean() for g in groups])
+    rms = np.array([np.sqrt(np.mean(errors[g] ** 2)) for g in groups])
+    weight = np.sqrt([len(g) for g in groups])
+    (intercept, slope), _ = nnls(np.column_stack([np.ones_like(d), d - d[0]]) * weight[:, None], rms * weight)
+    outside_slope = outside_curve = 0.0
+    if (~inside).any():
+        rows = np.flatnonzero(~inside)[np.argsort(beyond[~inside], kind="stable")]
+        groups = [g for g in np.array_split(rows, min(bins, len(rows))) if len(g)]
+        g = np.array([beyond[k].mean() for k in groups])
+        interior = [np.sqrt(np.mean((intercept + slope * np.maximum(distance[k] - d[0], 0.0)) ** 2)) for k in groups]
+        excess = np.array([np.sqrt(np.mean(errors[k] ** 2)) for k in groups]) - interior
+        weight = np.sqrt([len(k) for k in groups])
+        (outside_slope, outside_curve), _ = nnls(np.column_stack([g, g**2]) * weight[:, None], excess * weight)
+    outside_slope = max(outside_slope, intercept / spacing)
+    return float(intercept), float(d[0]), float(slope), float(outside_slope), float(outside_curve)
 
 
 def posterior(robot, identified, joints, rotation, *, frame, residuals, R_tcp_target, fitted, hidden=0):
@@ -201,7 +287,12 @@ def posterior(robot, identified, joints, rotation, *, frame, residuals, R_tcp_ta
 
     The posterior rests on the measured positions only (orientations
     measured by a 6-DoF tracker would narrow it further: it errs on the
-    safe side there).
+    safe side there). Its prior is the size of the identified arm deltas
+    (the DH ones: the TCP is the probe, whose nominal may be centimetres
+    off, not the arm), and combinations of parameters that no
+    configuration of the arm can tell apart from the registration and
+    each other (`gauge_directions`: the base frame's own definition) are
+    pinned, so they add nothing to any prediction.
 
     Parameters
     ----------
@@ -226,7 +317,8 @@ def posterior(robot, identified, joints, rotation, *, frame, residuals, R_tcp_ta
         identify on their own: a fit that moves only along the identified
         combinations (the minimum-norm solution) spreads the error over all
         of them, so their RMS understates the size of one parameter's error
-        by ``sqrt(P / (P - hidden))``, which the prior puts back. Lengths and
+        by ``sqrt(P / (P - hidden))``, which the prior puts back (the gauge
+        combinations, which no data identify, do not count). Lengths and
         angles then bound each other through `ANGLE_LEVER` (an angle error
         at least the length error over 1 m, and the reverse).
 
@@ -242,10 +334,12 @@ def posterior(robot, identified, joints, rotation, *, frame, residuals, R_tcp_ta
     names = names[:names.index("tool_x")] + list(EXTRA) + names[names.index("tool_x"):]
     robot_part = np.array([is_robot_parameter(n) for n in names])
     angle = np.array([is_angle(n) for n in names])
-    lengths = [abs(v) for n, v in fitted.items() if is_robot_parameter(n) and not is_angle(n)]
-    angles = [abs(v) for n, v in fitted.items() if is_robot_parameter(n) and is_angle(n)]
+    gauge = gauge_directions(identified, names, R_tcp_target)
+    arm = {n: v for n, v in fitted.items() if is_robot_parameter(n) and n not in TOOL_NAMES}
+    lengths = [abs(v) for n, v in arm.items() if not is_angle(n)]
+    angles = [abs(v) for n, v in arm.items() if is_angle(n)]
     seen = len(lengths) + len(angles)
-    spread = np.sqrt(seen / max(seen - hidden, 1))
+    spread = np.sqrt(seen / max(seen - max(hidden - gauge.shape[1], 0), 1))
     length, turn = spread * _rms(lengths, PRIOR_FLOOR[0]), spread * _rms(angles, PRIOR_FLOOR[1])
     length, turn = max(length, turn * ANGLE_LEVER), max(turn, length / ANGLE_LEVER)
     prior = np.where(angle, turn, length)
@@ -253,11 +347,32 @@ def posterior(robot, identified, joints, rotation, *, frame, residuals, R_tcp_ta
     jac = pose_jacobian(identified, joints, names, R_tcp_target)[1][:, :3, :].reshape(-1, len(names))
     residual = residuals.reshape(-1)
     noise = max(float(np.sqrt(np.mean(residual**2))), 1e-4)
-    information = jac.T @ jac / noise**2 + np.diag(1.0 / prior**2)
+    pinned = gauge / prior[:, None]  # in units of the prior: a gauge direction is pinned by its own scale
+    information = jac.T @ jac / noise**2 + np.diag(1.0 / prior**2) + GAUGE_PIN * (pinned @ pinned.T)
     covariance = np.linalg.inv(information)
     deltas = np.array([fitted.get(n, 0.0) if is_robot_parameter(n) else 0.0 for n in names])
     shift = covariance @ (jac.T @ residual / noise**2 - np.where(robot_part, deltas, 0.0) / prior**2)
     return names, shift, (covariance + covariance.T) / 2.0, deltas
+
+
+def gauge_directions(robot, names, R_tcp_target=None, samples=GAUGE_SAMPLES):
+    """Parameter combinations (P, K) that no configuration of the arm can observe, as unit columns.
+
+    The null space of the position Jacobian over ``samples`` configurations
+    drawn across the joint ranges (seeded, the same every call): moving
+    along one changes no measured position anywhere in the workspace (a
+    joint zero against the registration's turn, the lengths of parallel
+    axes along their common normal, ...). Such a combination defines the
+    frames rather than the arm, so it is no error of any prediction.
+    """
+    rng = np.random.default_rng(0)
+    low, high = np.maximum(robot.q_min, -np.pi), np.minimum(robot.q_max, np.pi)
+    q = low + (high - low) * rng.uniform(size=(samples, 6))
+    scale = np.array([ANGLE_LEVER if is_angle(n) else 1.0 for n in names])
+    jac = pose_jacobian(robot, q, names, R_tcp_target)[1][:, :3, :].reshape(-1, len(names)) / scale
+    _, singular, vt = np.linalg.svd(jac, full_matrices=False)
+    null = vt[singular < GAUGE_TOLERANCE * singular[0]].T / scale[:, None]
+    return null / np.linalg.norm(null, axis=0)
 
 
 def _rms(values, floor):
@@ -271,15 +386,15 @@ def orientation_reference(rotations):
     return reference, float(rotation_angle_between(rotations, reference[None]).max())
 
 
-def build(held, points, method, parameters, rotations):
+def build(held, method, parameters, rotations, positions, joints, by_joints=frozenset()):
     """`LandingData` from held-out errors, the posterior and the measured orientations.
 
     Parameters
     ----------
-    held : dict of str to ndarray, shape (M, 3)
-        Held-out errors per mode at ``points``, mm.
-    points : ndarray, shape (M, 3)
-        Commanded positions of the held-out rows, mm.
+    held : dict of str to tuple of ndarray
+        Per mode, ``(distance (M,), beyond (M,), errors (M, 3))``: held-out
+        errors (mm), each one's distance from the rows of the fit that
+        predicted it and outside their box (mm).
     method : str
         How they were held out, in words.
     parameters : tuple
@@ -287,12 +402,24 @@ def build(held, points, method, parameters, rotations):
     rotations : ndarray, shape (N, 3, 3), or None
         Commanded TCP orientations of the measurements (None: unknown, any
         orientation counts as measured).
+    positions : ndarray, shape (N, 3)
+        Commanded positions of the measurements, mm.
+    joints : ndarray, shape (N, 6), or None
+        Their commanded joints, rad (None: not known).
+    by_joints : set of str
+        The modes whose distances are `coverage_distance` (a joint-angle
+        residual); the others' are between positions.
     """
-    origin, step, near = near_lookup(points, {mode: np.linalg.norm(e, axis=1) for mode, e in held.items()})
     names, shift, covariance, deltas = parameters
     reference, spread = (np.eye(3), np.pi) if rotations is None else orientation_reference(rotations)
-    stats = {mode: ErrorStats.from_errors(e).as_dict() for mode, e in held.items()}
-    return LandingData(stats, method, origin, step, near, list(names), shift, covariance, deltas, reference, spread)
+    stats = {mode: ErrorStats.from_errors(e).as_dict() for mode, (_, _, e) in held.items()}
+    unique = np.unique(np.round(positions, POSITION_DIGITS), axis=0)
+    spacing = measured_spacing(unique)
+    growth = {mode: fit_growth(d, g, np.linalg.norm(e, axis=1), spacing) for mode, (d, g, e) in held.items()}
+    configurations = np.zeros((0, 6)) if joints is None else np.radians(
+        np.unique(np.round(np.degrees(joints), JOINT_DIGITS), axis=0))
+    return LandingData(stats, method, unique, configurations, growth, sorted(by_joints), list(names), shift,
+                       covariance, deltas, reference, spread)
 
 
 def of_model(model):
@@ -307,8 +434,12 @@ class Estimate:
 
     Attributes
     ----------
-    held_out, unseen : ndarray, shape (N,)
-        The two parts (see the module docstring), mm; NaN without held-out errors.
+    held_out : ndarray, shape (N,)
+        The stated quantile of the held-out part alone (see the module
+        docstring), mm; NaN without held-out errors.
+    unseen : ndarray, shape (N,)
+        What the unseen part adds to it, mm: the stated quantile of the
+        whole predicted error minus ``held_out``.
     orientation : ndarray, shape (N,)
         Angle of the target orientation from the mean measured one beyond
         the measured spread, deg (0 within it).
@@ -320,12 +451,12 @@ class Estimate:
 
     @property
     def total(self):
-        """The landing estimate (N,), mm: held-out plus unseen."""
+        """The landing estimate (N,), mm: the stated quantile of the landing error."""
         return self.held_out + self.unseen
 
 
-def estimate(model, mode, q, T_target, tool=None, postures=None, other_tool=False):
-    """Landing estimate of compensated targets.
+def estimate(model, mode, q, T_target, tool=None, postures=None, other_tool=False, outside=None):
+    """Landing estimates of compensated targets: the `QUANTILE` of each one's predicted landing error.
 
     Parameters
     ----------
@@ -343,9 +474,12 @@ def estimate(model, mode, q, T_target, tool=None, postures=None, other_tool=Fals
     other_tool : bool
         ``tool`` is not the measured TCP. With a model that cannot place
         other tools, the measured TCP's offset error stays with the
-        measured tool, unknown for the program's: the estimate adds the
-        identified offset and `COVERAGE` times the posterior RMS of the
-        offset.
+        measured tool, unknown for the program's: the prediction adds the
+        identified offset and the posterior variance of the offset.
+    outside : ndarray of bool, shape (N,), optional
+        Targets where the mode's error field or joint residual does not
+        apply (outside its grid or joint range): the kinematic model alone
+        serves them.
 
     Returns
     -------
@@ -356,6 +490,7 @@ def estimate(model, mode, q, T_target, tool=None, postures=None, other_tool=Fals
     if data is None:
         nan = np.full(n, np.nan)
         return Estimate(nan, nan.copy(), np.zeros(n))
+    outside = np.zeros(n, bool) if outside is None else np.asarray(outside, bool)
     position = T_target[:, :3, 3]
     angle = rotation_angle_between(T_target[:, :3, :3], data.reference[None])
     beyond = np.degrees(np.maximum(angle - data.spread, 0.0))
@@ -365,24 +500,56 @@ def estimate(model, mode, q, T_target, tool=None, postures=None, other_tool=Fals
     identified = model.identified if model.dh_names else model.nominal.as_standard()
     at_target = identified if tool is None else identified.replace(T_flange_tool=tool)
     jac = pose_jacobian(at_target, q, names)[1][:, :3, :]
-    by_position = mode in ("none", "linear", "grid") or (mode == "composite" and model.error_field(mode) is not None)
-    if by_position and data.spread < np.radians(ORIENTATION_MARGIN):
-        jac = jac - _reference_jacobian(model, identified, data, T_target, q, names, postures)
+    field = mode in ("grid", "composite") and model.error_field(mode) is not None
+    if (field or mode in ("none", "linear")) and data.spread < np.radians(ORIENTATION_MARGIN):
+        # the field (or the raw errors it stands for) absorbed the error the measured configuration sees there
+        absorbed = _reference_jacobian(model, identified, data, T_target, q, names, postures)
+        jac = jac - np.where(outside[:, None, None] & field, 0.0, absorbed)
     if mode in ("none", "linear", "grid"):
         mean = (data.identified + data.shift)[robot_rows]
     elif mode == "composite" and getattr(model.residual, "kind", None) == JOINT_KIND:
         mean = np.zeros(len(names))
     else:
         mean = data.shift[robot_rows]
-    unseen = np.linalg.norm(jac @ mean, axis=1) + COVERAGE * np.sqrt(
-        np.maximum(np.einsum("nip,pq,niq->n", jac, covariance, jac), 0.0))
+    near = data.near_rms(mode, model.nominal, q, position)
+    if (field or mode == "composite") and outside.any():
+        far_mode = "dh" if "dh" in data.growth else "none"
+        near = np.where(outside, data.near_rms(far_mode, model.nominal, q, position), near)
+    spread = near[:, None, None] ** 2 / 3.0 * np.eye(3) + np.einsum("nip,pq,njq->nij", jac, covariance, jac)
     if other_tool and not model.places_other_tools and "tool_x" in names:
-        offset = [names.index(name) for name in ("tool_x", "tool_y", "tool_z")]
-        unseen = unseen + np.linalg.norm(data.identified[robot_rows][offset]) + COVERAGE * np.sqrt(
-            np.trace(covariance[np.ix_(offset, offset)]))
+        offset = [names.index(name) for name in TOOL_NAMES]
+        unknown = np.sum(data.identified[robot_rows][offset] ** 2) + np.trace(covariance[np.ix_(offset, offset)])
+        spread = spread + unknown / 3.0 * np.eye(3)
+    total = quantile_of_norm(jac @ mean, spread)
+    held_out = quantile_of_norm(np.zeros((n, 3)), near[:, None, None] ** 2 / 3.0 * np.eye(3))
     if not names:  # no kinematic model: nothing tells how another orientation or tool lands
-        unseen = np.where((beyond > 0) | other_tool, np.nan, unseen)
-    return Estimate(data.near_errors(mode, position), unseen, beyond)
+        total = np.where((beyond > 0) | other_tool, np.nan, total)
+    return Estimate(held_out, np.maximum(total - held_out, 0.0), beyond)
+
+
+def quantile_of_norm(mean, covariance, level=None):
+    """The ``level`` quantile (N,) of |e| for Gaussian errors e ~ N(mean, covariance), mm.
+
+    |e|^2 is a quadratic form in Gaussians; it is matched by its first two
+    moments to a scaled chi-square (Patnaik's approximation: exact for an
+    isotropic error without mean, within a few per cent at the upper
+    quantiles otherwise).
+
+    Parameters
+    ----------
+    mean : ndarray, shape (N, 3)
+    covariance : ndarray, shape (N, 3, 3)
+    level : float, optional
+        Default `QUANTILE`.
+    """
+    level = QUANTILE if level is None else level
+    trace = np.trace(covariance, axis1=1, axis2=2)
+    first = trace + np.einsum("ni,ni->n", mean, mean)
+    second = 2.0 * np.einsum("nij,nji->n", covariance, covariance) + 4.0 * np.einsum("ni,nij,nj->n", mean, covariance,
+                                                                                        mean)
+    scale = np.where(first > 0, second / np.maximum(2.0 * first, 1e-300), 0.0)
+    freedom = np.where(second > 0, 2.0 * first**2 / np.maximum(second, 1e-300), 1.0)
+    return np.sqrt(scale * chi2.ppf(level, np.maximum(freedom, 1e-6)))
 
 
 def _reference_jacobian(model, identified, data, T_target, q, names, postures):
