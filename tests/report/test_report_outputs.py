@@ -179,9 +179,11 @@ def test_calibration_report_with_repeats_is_valid_and_embeds_its_figures(kuka_mo
 
 def test_calibrate_report_without_a_grid_says_so(tmp_path, kuka_model):
     meas = Path(kuka_model).parent / "meas.csv"
+    # --folds 0: no held-out evidence, so the verdict is not evaluated and the run fails (a pass would claim it)
     assert main(["calibrate", str(meas), "--robot", "kuka_kr6_r900", "--method", "dh", "--folds", "0",
-                 "-o", str(tmp_path / "dh.yaml"), "--report", str(tmp_path / "cal"), "--json-only"]) == 0
+                 "-o", str(tmp_path / "dh.yaml"), "--report", str(tmp_path / "cal"), "--json-only"]) == 1
     doc = _valid(json.loads((tmp_path / "cal.json").read_text()))
+    assert doc["verdict"]["result"] == "not evaluated"
     assert doc["validity"]["grids"] == {"grid": None, "residual": None}
     assert any(m.startswith("no grid") for m in doc["missing"])
 

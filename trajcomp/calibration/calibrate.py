@@ -689,7 +689,8 @@ def _landing(robot, dh, frame, data, held, fitted, split, progress, orientation,
         parameters = landing.posterior(
             robot, dh.robot, joints, rotation, frame=frame, residuals=measured - fk(dh.robot, joints)[:, :3, 3],
             R_tcp_target=dh.R_tcp_target, fitted=dict(zip(dh.names, dh.delta)),
-            hidden=sum(is_robot_parameter(n) for n in dh.identifiability.fixed))
+            hidden=sum(is_robot_parameter(n) for n in dh.identifiability.fixed),
+            located=locates_flange(orientation_spread(fk(robot, joints)[:, :3, :3])))
     rotations = fk(robot, joints)[:, :3, :3] if joints is not None else (
         abc_to_matrix(orientation) if orientation is not None else None)
     return landing.build(combined, method, parameters, rotations, position, joints, by_joints).to_dict()

@@ -282,7 +282,8 @@ def fit_growth(distance, beyond, errors, spacing, bins=GROWTH_BINS):
     return float(intercept), float(d[0]), float(slope), float(outside_slope), float(outside_curve)
 
 
-def posterior(robot, identified, joints, rotation, *, frame, residuals, R_tcp_target, fitted, hidden=0):
+def posterior(robot, identified, joints, rotation, *, frame, residuals, R_tcp_target, fitted, hidden=0,
+              located=True):
     """Posterior mean shift, covariance and identified values of the arm's parameters (linear Gaussian).
 
     The posterior rests on the measured positions only (orientations
@@ -321,6 +322,12 @@ def posterior(robot, identified, joints, rotation, *, frame, residuals, R_tcp_ta
         combinations, which no data identify, do not count). Lengths and
         angles then bound each other through `ANGLE_LEVER` (an angle error
         at least the length error over 1 m, and the reverse).
+    located : bool
+        The measurements turn the tool enough to locate the flange
+        (`trajcomp.calibration.orientations.locates_flange`). Where they do
+        not, the TCP's offset is seen only through the small turns of the
+        wrist that keep one orientation, where any unmodelled error of the
+        wrist pulls it: its variance is kept at least at the prior's.
 
     Returns
     -------
@@ -352,6 +359,9 @@ def posterior(robot, identified, joints, rotation, *, frame, residuals, R_tcp_ta
     covariance = np.linalg.inv(information)
     deltas = np.array([fitted.get(n, 0.0) if is_robot_parameter(n) else 0.0 for n in names])
     shift = covariance @ (jac.T @ residual / noise**2 - np.where(robot_part, deltas, 0.0) / prior**2)
+    if not located:
+        tool = np.isin(names, TOOL_NAMES)
+        covariance[tool, tool] += np.maximum(prior[tool] ** 2 - np.diag(covariance)[tool], 0.0)
     return names, shift, (covariance + covariance.T) / 2.0, deltas
 
 

@@ -54,7 +54,10 @@ def target_checks(report, measures, criteria, has_grid, mode, model=None):
     c = criteria
     statements = {
         "residual": f"estimated landing error of every target within {c.tolerance:g} mm",
-        "outside_grid": "every target inside the measured grid (and the joint range of a joint residual)",
+        "outside_grid": ("every target inside the measured grid (and the joint range of a joint residual), or its "
+                         f"estimated landing error within {c.tolerance:g} mm" if has_grid else
+                         f"every target inside the measured volume, or its estimated landing error within "
+                         f"{c.tolerance:g} mm"),
         "orientation": (f"every target's orientation within the measured ones (+{landing.ORIENTATION_MARGIN:g} deg), "
                         f"or its estimated landing error within {c.tolerance:g} mm"),
         "tool": (f"every target on the measured TCP, or the model places other tools, or its estimated landing "
@@ -69,13 +72,11 @@ def target_checks(report, measures, criteria, has_grid, mode, model=None):
         return [not_evaluated(key, text, "no compensated target") for key, text in statements.items()], {}
     v = measures.values
     n = len(labels)
-    masks = {"outside_grid": np.asarray(report.outside_grid, dtype=bool),
-             "configuration": measures.changed,
+    masks = {"configuration": measures.changed,
              "joint_limits": v["limit_distance_deg"] < c.limit_margin,
              "singularity": ((v["shoulder_mm"] < c.shoulder_margin) | (v["elbow_deg"] < c.singularity_margin)
                              | (v["wrist_deg"] < c.singularity_margin))}
     details = {
-        "outside_grid": f"{int(masks['outside_grid'].sum())} of {n} targets outside",
         "configuration": f"{int(masks['configuration'].sum())} targets changed branch or turned a joint by half a turn",
         "joint_limits": f"smallest distance {v['limit_distance_deg'].min():.2f} deg",
         "singularity": (f"smallest: shoulder {v['shoulder_mm'].min():.1f} mm, elbow {v['elbow_deg'].min():.2f} deg, "
@@ -85,31 +86,43 @@ def target_checks(report, measures, criteria, has_grid, mode, model=None):
     if model is None:
         skipped = dict.fromkeys(("residual", "outside_grid", "orientation", "tool", "posture"), AS_WRITTEN)
     else:
-        found = _landing_checks(report, v, c.tolerance, model)
+        found = _landing_checks(report, v, c.tolerance, model, has_grid)
         for key, (mask, detail) in found.items():
             if mask is None:
                 skipped[key] = detail
             else:
                 masks[key], details[key] = mask, detail
-        if not has_grid:
-            skipped["outside_grid"] = f"mode {mode} uses no grid: every target gets the same kind of correction"
     masks = {key: mask for key, mask in masks.items() if key not in skipped}
     checks = [not_evaluated(key, text, skipped[key]) if key in skipped
               else check(key, text, masks[key], labels, details[key]) for key, text in statements.items()]
     return checks, masks
 
 
-def _landing_checks(report, v, tolerance, model):
-    """``{criterion: (failing mask or None, detail)}`` of the landing and coverage criteria (None: not evaluated)."""
+def _landing_checks(report, v, tolerance, model, has_grid):
+    """``{criterion: (failing mask or None, detail)}`` of the landing and coverage criteria (None: not evaluated).
+
+    A target outside the measured grid (a mode without one: outside the box
+    of the measured positions) fails unless its estimate, which grows with
+    the distance beyond what was measured (`trajcomp.model.landing`), is
+    within the tolerance.
+    """
     data = report.landing
     unknown = np.ones(len(report.labels), bool)  # a target passes only with an estimate within the tolerance
+    outside = np.asarray(report.outside_grid, dtype=bool)
+    measured = landing.of_model(model)
+    if not has_grid and measured is not None:
+        outside = outside | (landing.outside_box(np.asarray(report.T_target)[:, :3, 3], measured.positions) > 0)
+    where = "grid" if has_grid else "measured volume"
     if data is None:
         return {"residual": (unknown, "no landing estimate: the run was compensated without the model's statistics"),
+                "outside_grid": (outside, f"{int(outside.sum())} of {len(outside)} targets outside the {where}"),
                 **dict.fromkeys(("orientation", "tool", "posture"),
                                 (None, "the run has no landing estimate (compensated without the model's statistics)"))}
     estimate, convergence = v["landing_estimate_mm"], v["convergence_mm"]
     within = estimate <= tolerance  # False where there is no estimate
-    out = {}
+    out = {"outside_grid": (outside & ~within, f"{int(outside.sum())} of {len(outside)} targets outside the {where}, "
+                                               f"{int((outside & ~within).sum())} of them with an estimate above the "
+                                               "tolerance")}
     if np.isnan(v["held_out_mm"]).all():
         out["residual"] = (unknown, "no landing estimate: the model has no held-out errors (calibrated with --folds 0 "
                                     "or by an older trajcomp), so no target is known to land within the tolerance; "
@@ -278,8 +291,8 @@ def compliance_report(report, robot, *, criteria=None, model=None, model_info=No
         missing.append(f"{AS_WRITTEN}, so there are no corrections, landing estimates or grid: those fields of "
                        "the summary and the targets are null")
     if model is not None and not has_grid:
-        missing.append(f"no grid: mode {mode} of this model uses no residual grid, so there is no grid box "
-                       "and no outside-grid check")
+        missing.append(f"no grid: mode {mode} of this model uses no residual grid, so there is no grid box; the "
+                       "outside check is against the box of the measured positions")
     long_times = timing is not None and len(timing.t) > ROWS  # its time stamps go to the sidecar
     section = None if timing is None else timing_section(timing, cycle_time_before, times=not long_times)
     if section is None:

@@ -11,6 +11,7 @@ import io
 
 from trajcomp.report import sections
 from trajcomp.report.markup import esc
+from trajcomp.report.verdict import FAIL, PASS
 
 STYLE = """
 :root { --ink: #1d2733; --muted: #5d6b7a; --line: #d5dbe2; --pass: #1e7d45; --fail: #b42318; --na: #8a6d00;
@@ -91,7 +92,7 @@ def banner(verdict, what):
             else f"all {evaluated} evaluated criteria pass"
             + (f": {verdict['criteria'][0]['statement']} ({verdict['criteria'][0]['detail']})"
                if len(verdict["criteria"]) == 1 else ""))
-    return (f'<div class="banner {result}"><div class="word">{result.upper()}</div>'
+    return (f'<div class="banner {result if result in (PASS, FAIL) else "none"}"><div class="word">{result.upper()}</div>'
             f"<div>{esc(what)}<br>{esc(text)}</div></div>")
 
 

@@ -97,9 +97,15 @@ def not_evaluated(id, statement, reason):
 
 
 def verdict(checks):
-    """The verdict dict of a report: ``{"result": "pass" | "fail", "criteria": [...]}``."""
-    failed = any(c.status == FAIL for c in checks)
-    return {"result": FAIL if failed else PASS, "criteria": [c.as_dict() for c in checks]}
+    """The verdict dict of a report: ``{"result": "pass" | "fail" | "not evaluated", "criteria": [...]}``.
+
+    A verdict passes only on evidence: with no criterion failed and none
+    evaluated either, it is not evaluated (and the run fails, as a pass
+    would claim what nothing checked).
+    """
+    statuses = {c.status for c in checks}
+    result = FAIL if FAIL in statuses else PASS if PASS in statuses else NOT_EVALUATED
+    return {"result": result, "criteria": [c.as_dict() for c in checks]}
 
 
 def accuracy_check(stats, mode, tolerance, source, missing=None):
