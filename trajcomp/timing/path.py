@@ -6,16 +6,19 @@ motion from rest to rest. Its samples come from `trajcomp.timing.samples`
 
 1. Parameter: s = joint-space arc length (rad) of the samples; duplicated
    and zero-length waypoints collapse onto one sample.
-2. Fit: the cubic spline through the samples, unless their noise (IK
-   solutions of rounded numbers) or a blended corner makes it need more
-   than `SMOOTHING_GAIN` times the acceleration of a thinned one, which
-   makes TOPP-RA crawl. The thinned spline is a least-squares cubic
-   B-spline with knots on every `KNOT_STRIDE` samples, refined where it
-   leaves the tolerance (and samples the finest knots still miss weighted
-   more): within `TOLERANCE` mm of every sample's TCP and
-   ``TOLERANCE * ROTATION_PER_MM`` rad of its orientation (linearized with
-   the Jacobian) and of each joint, or within the programmed zone radius
-   near a blended corner. The tolerance keeps the compensated positions.
+2. Fit: the cubic spline through the samples. The samples are the
+   programmed geometry, blends included, so a single motion and a run
+   with a sampled blend are interpolated. Otherwise (corners kept, or
+   blends that stay within the tolerance of their corner: a CAM path's
+   dense points) the samples' noise (IK solutions of rounded numbers) may
+   make the interpolating spline need more than `SMOOTHING_GAIN` times the
+   acceleration of a thinned one, which makes TOPP-RA crawl: the thinned
+   spline is then taken, a least-squares cubic B-spline with knots on
+   every `KNOT_STRIDE` samples, refined where it leaves the tolerance (and
+   samples the finest knots still miss weighted more): within `TOLERANCE`
+   mm of every sample's TCP and ``TOLERANCE * ROTATION_PER_MM`` rad of its
+   orientation (linearized with the Jacobian) and of each joint. The
+   tolerance keeps the compensated positions.
 3. `JointPath` wraps the spline for TOPP-RA; grid points are every sample,
    subdivided to at least `MIN_GRID` intervals (`STOP_GRID` for a single
    motion from rest to rest: it accelerates, cruises and brakes), and
@@ -183,7 +186,7 @@ class RunPath:
         |dp/ds| on the grid: mm of TCP travel per rad of path, each motion with its tool.
     deviation : float
         Largest TCP deviation (mm, linearized) of the path from a sample
-        outside blended corners.
+        (the programmed geometry).
     """
 
     path: JointPath
@@ -291,7 +294,7 @@ def run_path(moves, robot, first, last, tolerance=TOLERANCE, *, part=None):
         From `trajcomp.timing.samples.run_samples`.
     """
     a, b = part or (first, last)
-    q, owner, s, waypoint_rows, known = _collapsed(moves, robot, first, last)
+    q, owner, s, waypoint_rows, known, curved = _collapsed(moves, robot, first, last)
     s_waypoints = s[waypoint_rows]
     s_a, s_b = s_waypoints[a - first], s_waypoints[b - first]
     if s_b <= s_a:
@@ -304,8 +307,8 @@ def run_path(moves, robot, first, last, tolerance=TOLERANCE, *, part=None):
     jac = tcp_jacobians(robot, moves, motion, q, known)
     travel = _travel(q, jac)
     tcp_lengths = np.diff(travel[waypoint_rows], prepend=0.0)
-    tol = _tolerances(moves, first, last, travel, owner, waypoint_rows, tcp_lengths, tolerance)
-    spline, deviation = _fit(s, q, jac, tol, np.min(moves.acceleration[first + 1 : last + 1], axis=0))
+    acceleration = np.min(moves.acceleration[first + 1 : last + 1], axis=0)
+    spline, deviation = _fit(s, q, jac, np.full(len(s), tolerance), acceleration, smooth=last > first + 1 and not curved)
     inside = (grid >= s_a) & (grid <= s_b)
     grid = grid[inside]
     rate = _grid_rates(robot, moves, k[inside], spline(grid), spline(grid, 1), at_sample[inside], (q, motion, jac))
@@ -371,7 +374,7 @@ def stop_paths(moves, robot, first, last, tolerance=TOLERANCE):
     -------
     StopPaths
     """
-    q, owner, s, waypoint_rows, known = _collapsed(moves, robot, first, last)
+    q, owner, s, waypoint_rows, known, _ = _collapsed(moves, robot, first, last)
     k = np.arange(first + 1, last + 1)
     lo, hi = waypoint_rows[:-1], waypoint_rows[1:]
     moving = np.flatnonzero(hi > lo)
@@ -424,9 +427,10 @@ def _collapsed(moves, robot, first, last):
     Returns
     -------
     q (n, 6), owner (n,), s (n,) joint arc length (rad), waypoint_rows (W,) the sample of each waypoint,
-    known : (rows (r,), flange (r, 4, 4), flange Jacobians (r, 6, 6)) of samples that are waypoints.
+    known : (rows (r,), flange (r, 4, 4), flange Jacobians (r, 6, 6)) of samples that are waypoints,
+    curved : bool (`trajcomp.timing.samples.run_samples`).
     """
-    q, owner, (waypoint, flange, flange_jac) = run_samples(moves, robot, first, last)
+    q, owner, (waypoint, flange, flange_jac), curved = run_samples(moves, robot, first, last)
     keep = np.ones(len(q), dtype=bool)
     keep[1:] = np.linalg.norm(np.diff(q, axis=0), axis=1) > _DUPLICATE
     kept = np.cumsum(keep) - 1
@@ -434,7 +438,7 @@ def _collapsed(moves, robot, first, last):
     q, owner, waypoint = q[keep], owner[keep], waypoint[keep]
     s = np.r_[0.0, np.cumsum(np.linalg.norm(np.diff(q, axis=0), axis=1))]
     at = np.flatnonzero(waypoint >= 0)
-    return q, owner, s, waypoint_rows, (at, flange[waypoint[at]], flange_jac[waypoint[at]])
+    return q, owner, s, waypoint_rows, (at, flange[waypoint[at]], flange_jac[waypoint[at]]), curved
 
 
 def _no_path(a, b):
@@ -613,34 +617,15 @@ def tcp_jacobians(robot, moves, owner, q, known=None):
     return jac
 
 
-def _tolerances(moves, first, last, travel, owner, waypoint_rows, tcp_lengths, tolerance):
-    """Allowed TCP deviation (n,) of the path from each sample, mm: ``tolerance``, or more in blended corners.
-
-    A corner at waypoint k with zone r (not a stop) may be cut: samples
-    within r_eff = min(r, half of each neighbouring motion) of it, along the
-    path, get ``r_eff - distance``.
-    """
-    tol = np.full(len(travel), tolerance)
-    corners = np.arange(first + 1, last)
-    if not corners.size or not np.any(moves.zone[corners] > 0):
-        return tol
-    radius = np.zeros(last - first + 1)
-    inner = corners - first
-    radius[inner] = np.minimum(moves.zone[corners], 0.5 * np.minimum(tcp_lengths[inner], tcp_lengths[inner + 1]))
-    corner_travel = travel[waypoint_rows]
-    local = owner - first
-    for corner in (np.clip(local - 1, 0, None), local):
-        tol = np.maximum(tol, radius[corner] - np.abs(travel - corner_travel[corner]))
-    return tol
-
-
-def _fit(s, q, jac, tol, acceleration):
+def _fit(s, q, jac, tol, acceleration, *, smooth=True):
     """Cubic B-spline q(s) of samples (s (n,), q (n, 6)) within tolerances tol (n,) mm: (BSpline, deviation mm).
 
-    The samples are interpolated unless a thinned spline within the
-    tolerances needs less than 1 / SMOOTHING_GAIN of the acceleration at
-    the same path speed (noise, or a blended corner): a clean path is
-    taken exactly.
+    The samples are interpolated unless ``smooth`` and a thinned spline
+    within the tolerances needs less than 1 / SMOOTHING_GAIN of the
+    acceleration at the same path speed (noise: waypoints rounded as a
+    program writes them, at corners the path keeps): a clean path is taken
+    exactly. A single motion, or a run whose corners are blended, is
+    interpolated (its samples are the programmed geometry).
     """
     from scipy.interpolate import make_interp_spline  # here: a run that does not re-time never needs scipy
 
@@ -648,8 +633,10 @@ def _fit(s, q, jac, tol, acceleration):
     if n < 4:  # a line or a single corner
         return _through_samples(s, q, np.array([n])).ppoly(0), 0.0
     exact = make_interp_spline(s, q, k=3)
+    if not smooth:
+        return exact, 0.0
     demand = _demand(exact, s, acceleration)
-    if n >= 4 * KNOT_STRIDE and np.all(tol <= tol.min()):  # no corner to cut: is the exact path noisy?
+    if n >= 4 * KNOT_STRIDE:  # is the exact path noisy?
         coarse = np.r_[np.arange(0, n - 1, KNOT_STRIDE // 2), n - 1]
         if demand <= SMOOTHING_GAIN * _demand(make_interp_spline(s[coarse], q[coarse], k=3), s, acceleration):
             return exact, 0.0  # as smooth as a spline through every eighth sample: clean
@@ -773,7 +760,7 @@ def _thinned(s, q, jac, tol):
         position, rotation, joint = _deviation(spline, s, q, jac)
         bad = (position > tol) | (np.maximum(rotation, joint) > tol * ROTATION_PER_MM)
         if not bad.any():
-            return spline, float(np.max(np.where(tol <= tol.min(), position, 0.0)))
+            return spline, float(np.max(position))
         cell = np.searchsorted(knots, np.flatnonzero(bad), side="right") - 1
         cell = np.unique(np.clip(cell, 0, len(knots) - 2))
         wide = cell[knots[cell + 1] - knots[cell] >= 2 * _NARROWEST]
