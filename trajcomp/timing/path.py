@@ -149,13 +149,6 @@ class CubicPieces:
         return PPoly.construct_fast(self._by_power[:, lo:hi], self._breaks[lo + r : hi + r + 1])
 
     @classmethod
-    def of_spline(cls, spline, length):
-        """The pieces (one path) of a cubic BSpline on [0, length]: its polynomial on each knot interval."""
-        knots = np.unique(spline.t[(spline.t >= 0.0) & (spline.t < length)])
-        c = np.stack([spline(knots, nu) / factor for nu, factor in ((3, 6.0), (2, 2.0), (1, 1.0), (0, 1.0))], axis=1)
-        return cls(knots, c, np.array([len(knots)]), np.array([length]))
-
-    @classmethod
     def joined(cls, parts, paths):
         """Pieces of several `CubicPieces` in one, path ``paths[j][r]`` of the result being path r of ``parts[j]``."""
         label = np.concatenate([np.repeat(p, np.diff(part.offsets)) for part, p in zip(parts, paths)])
@@ -362,13 +355,13 @@ class StopPaths:
         return np.arange(sizes.sum()) + np.repeat(offsets[paths] - (np.cumsum(sizes) - sizes), sizes)
 
 
-def stop_paths(moves, robot, first, last, tolerance=TOLERANCE):
+def stop_paths(moves, robot, first, last):
     """The paths of motions first + 1 .. last, each from rest to rest (every waypoint an exact stop), built together.
 
-    One sampling, one Jacobian batch, one grid construction and one fit
-    of the motions of fewer than four samples (`_through_samples`) for all
-    the motions; a longer one is fitted on its own samples (`_fit`). Each
-    path is the one `run_path` gives that motion alone.
+    One sampling, one Jacobian batch, one grid construction and one
+    interpolation of every motion's samples (`_through_samples`, one
+    banded system for all): a single motion's samples are its programmed
+    geometry, interpolated as `run_path` does for that motion alone.
 
     Returns
     -------
@@ -393,20 +386,7 @@ def stop_paths(moves, robot, first, last, tolerance=TOLERANCE):
     jac = tcp_jacobians(robot, moves, owner, q, known)
     steps = np.linalg.norm(np.einsum("nij,nj->ni", jac[1:, :3], np.diff(q, axis=0)), axis=1)
     lengths = np.add.reduceat(steps, lo)  # TCP length of each path (its samples follow each other), mm
-    deviation = np.zeros(len(k))
-    few = counts < 4
-    parts, paths, splines = [], [], {}
-    if few.any():
-        parts.append(_through_samples(local[few[path_of_row]], q[rows[few[path_of_row]]], counts[few]))
-        paths.append(np.flatnonzero(few))
-    begins = np.cumsum(counts) - counts
-    for r in np.flatnonzero(~few).tolist():  # a longer motion: fitted alone, noise and all (`_fit`)
-        mine = slice(begins[r], begins[r] + counts[r])
-        splines[r], deviation[r] = _fit(local[mine], q[rows[mine]], jac[rows[mine]], np.full(counts[r], tolerance),
-                                        moves.acceleration[k[r]])
-        parts.append(CubicPieces.of_spline(splines[r], local[mine][-1]))
-        paths.append([r])
-    pieces = CubicPieces.joined(parts, paths) if len(parts) > 1 else parts[0]
+    pieces = _through_samples(local, q[rows], counts)
     path_of_point = np.repeat(np.arange(len(k)), sizes)
     q_grid, dq, ddq = pieces.derivatives(path_of_point, grid)
     at_sample = np.full(len(grid), -1)  # the sample each grid point is, -1 between samples
@@ -414,10 +394,9 @@ def stop_paths(moves, robot, first, last, tolerance=TOLERANCE):
     rates = _grid_rates(robot, moves, k[path_of_point], q_grid, dq, at_sample, (q, owner, jac))
     offsets = np.r_[0, np.cumsum(sizes)]
     for r, i in enumerate(moving.tolist()):
-        spline = splines[r] if r in splines else pieces.ppoly(r)
         o, p = offsets[r], offsets[r + 1]
-        runs[i] = RunPath(JointPath(spline), np.array([0.0, pieces.ends[r]]), grid[o:p], k[r] - 1, k[r],
-                          np.array([0.0, lengths[r]]), rates[o:p], float(deviation[r]))
+        runs[i] = RunPath(JointPath(pieces.ppoly(r)), np.array([0.0, pieces.ends[r]]), grid[o:p], k[r] - 1, k[r],
+                          np.array([0.0, lengths[r]]), rates[o:p], 0.0)
     return StopPaths(runs, moving, pieces, k, lengths, sizes, grid, dq, ddq, rates)
 
 
@@ -647,7 +626,8 @@ def _fit(s, q, jac, tol, acceleration, *, smooth=True):
 
 
 def _through_samples(s, q, counts):
-    """The cubic splines of paths of fewer than 4 samples each (a line, or a single corner), laid end to end.
+    """The cubic splines through the samples of paths laid end to end: `_not_a_knot` (scipy's
+    ``make_interp_spline``), a path of fewer than 4 samples as a line or a single corner.
 
     A path of 2 samples is their joint line; one of 3 interpolates the
     polyline of its samples at the samples and at every third of the path
@@ -660,7 +640,7 @@ def _through_samples(s, q, counts):
     q : ndarray, shape (n, 6)
         Joints of the samples, rad.
     counts : ndarray of int, shape (R,)
-        Samples of each path (2 or 3).
+        Samples of each path (at least 2).
 
     Returns
     -------
@@ -675,10 +655,11 @@ def _through_samples(s, q, counts):
         c[:, 2], c[:, 3] = (q[b] - q[a]) / s[b, None], q[a]
         parts.append(CubicPieces(np.zeros(len(a)), c, np.ones(len(a), dtype=int), s[b]))
         paths.append(np.flatnonzero(line))
-    if not line.all():
-        rows = ~np.repeat(line, counts)
-        parts.append(_through_corners(s[rows], q[rows], counts[~line]))
-        paths.append(np.flatnonzero(~line))
+    for group, through in ((counts == 3, _through_corners), (counts >= 4, _not_a_knot)):
+        if group.any():
+            rows = np.repeat(group, counts)
+            parts.append(through(s[rows], q[rows], counts[group]))
+            paths.append(np.flatnonzero(group))
     return CubicPieces.joined(parts, paths) if len(parts) > 1 else parts[0]
 
 
