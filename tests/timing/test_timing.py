@@ -9,12 +9,14 @@ trapezoid and jerk-limited profiles.
 """
 
 import csv
+import dataclasses
 import importlib
 
 import numpy as np
 import pytest
 import ruckig
 
+from tests.timing.test_timing_dense import random_lines
 from trajcomp.cli import main
 from trajcomp.errors import TimingError
 from trajcomp.arm.ik import Configuration, configuration_of, ik
@@ -361,6 +363,22 @@ def test_programmed_joint_speed_and_time_are_honoured():
     assert np.abs(qd[:, 0]).max() <= 0.5 * UR10.v_max[0] * 1.001
     timed = Moves(**{**moves.__dict__, "min_duration": np.array([0.0, 3.0])})
     assert retime(timed, UR10).cycle_time == pytest.approx(3.0, rel=1e-6)
+
+
+@pytest.mark.parametrize("stop", [True, False])
+def test_a_programmed_time_is_taken_at_least_in_a_blended_run_and_between_stops(stop):
+    """Random lines with a joint motion among them, each motion with a time (RAPID \\T, FANUC sec): each takes it
+    at least, to 1e-5 (a joint motion in a blended run took 0.269 s for \\T:=8; a line's TCP length summed from
+    linearized steps made \\T:=8 7.976 s)."""
+    rng = np.random.default_rng(4)
+    q = random_lines(7, 2)
+    kind = np.array([LINEAR] * 7, dtype=object)
+    kind[3] = JOINT
+    times = np.r_[0.0, rng.choice([0.5, 1.0, 2.0, 8.0], 6)]
+    moves = dataclasses.replace(Moves.from_joints(q, UR10, kind=kind, stop=stop, zone=0.0 if stop else 5.0),
+                                min_duration=times)
+    result = retime(moves, UR10)
+    assert np.all(result.durations[1:] >= times[1:] * (1.0 - 1e-5)) and result.within_limits
 
 
 def test_every_method_keeps_the_limits_and_toppra_is_fastest():

@@ -203,13 +203,16 @@ class RunPath:
         inner = np.searchsorted(self.s_waypoints, s, side=side)
         return self.first + np.clip(inner, 1, len(self.s_waypoints) - 1)
 
-    def speed_bound(self, moves, velocity_scale=1.0, speed_scale=1.0, dq=None):
+    def speed_bound(self, moves, velocity_scale=1.0, speed_scale=1.0, dq=None, *, times=True):
         """Largest squared path speed x = sd^2 (G,) on the grid, and the joint velocity limits (G, 6) used.
 
         A grid point obeys the joint velocity limits and the programmed TCP
         speed (or, for a linear / circular motion with a programmed time,
-        its TCP length over that time) of the motions it belongs to (both,
-        at a waypoint). ``dq`` (G, 6): q' on the grid, when already evaluated.
+        its TCP length over that time; for a joint motion with one, its
+        path length over that time: `time_limits`) of the motions it
+        belongs to (both, at a waypoint). ``dq`` (G, 6): q' on the grid,
+        when already evaluated; ``times=False``: without `time_limits` (a
+        ruckig law takes the programmed time as its minimum duration).
         """
         grid = self.grid
         dq = self.path(grid, 1) if dq is None else dq
@@ -218,8 +221,12 @@ class RunPath:
             velocity = np.broadcast_to(moves.velocity[0] * velocity_scale, (len(grid), 6))
         else:
             velocity = np.min(moves.velocity[near], axis=0) * velocity_scale
-        tcp = tcp_limits(moves, np.arange(self.first + 1, self.last + 1), self.tcp_lengths[1:])
-        return squared_speed_bound(dq, self.grid_rate, velocity, np.min(tcp[near - self.first - 1], axis=0) * speed_scale), velocity
+        k, motion = np.arange(self.first + 1, self.last + 1), near - self.first - 1
+        tcp = tcp_limits(moves, k, self.tcp_lengths[1:])
+        x = squared_speed_bound(dq, self.grid_rate, velocity, np.min(tcp[motion], axis=0) * speed_scale)
+        if times:
+            x = np.minimum(x, np.min(time_limits(moves, k, np.diff(self.s_waypoints))[motion], axis=0) ** 2)
+        return x, velocity
 
     def refined(self, moves, robot, s):
         """This run with grid points added at path positions s (n,) inside it (their TCP rates computed).
@@ -248,6 +255,15 @@ def tcp_limits(moves, k, lengths):
     timed = (moves.min_duration[k] > 0) & (moves.kind[k] != JOINT)
     tcp[timed] = np.minimum(tcp[timed], lengths[timed] / moves.min_duration[k[timed]])
     return tcp
+
+
+def time_limits(moves, k, spans):
+    """Path speed limit (n,) of motions k (n,) whose path spans ``spans`` (n,) rad: for a joint motion with a
+    programmed time, its span over that time (it takes that time at least, as the controller runs it); 1/s
+    (``inf``: none). A linear or circular motion's time bounds its TCP speed (`tcp_limits`)."""
+    timed = (moves.min_duration[k] > 0) & (moves.kind[k] == JOINT)
+    with np.errstate(divide="ignore"):
+        return np.where(timed, spans / np.where(timed, moves.min_duration[k], 1.0), np.inf)
 
 
 def squared_speed_bound(dq, rate, velocity, tcp):
@@ -297,8 +313,8 @@ def run_path(moves, robot, first, last, tolerance=TOLERANCE, *, part=None):
     at_sample = np.full(len(grid), -1)
     at_sample[np.searchsorted(grid, s)] = np.arange(len(s))
     motion = np.maximum(owner, first + 1)  # of each sample, for its tool (the first sample: the first motion)
-    jac = tcp_jacobians(robot, moves, motion, q, known)
-    travel = _travel(q, jac)
+    jac, positions = tcp_jacobians(robot, moves, motion, q, known)
+    travel = _travel(positions)
     tcp_lengths = np.diff(travel[waypoint_rows], prepend=0.0)
     acceleration = np.min(moves.acceleration[first + 1 : last + 1], axis=0)
     spline, deviation = _fit(s, q, jac, np.full(len(s), tolerance), acceleration, smooth=last > first + 1 and not curved)
@@ -383,9 +399,9 @@ def stop_paths(moves, robot, first, last):
     local = s[rows] - s[lo][path_of_row]  # each path's positions from 0
     grid, sizes, at = _grids(local, counts, STOP_GRID)
     owner = np.maximum(owner, first + 1)  # the first sample: the first motion's tool
-    jac = tcp_jacobians(robot, moves, owner, q, known)
-    steps = np.linalg.norm(np.einsum("nij,nj->ni", jac[1:, :3], np.diff(q, axis=0)), axis=1)
-    lengths = np.add.reduceat(steps, lo)  # TCP length of each path (its samples follow each other), mm
+    jac, positions = tcp_jacobians(robot, moves, owner, q, known)
+    travel = _travel(positions)
+    lengths = travel[hi] - travel[lo]  # TCP length of each path, mm
     pieces = _through_samples(local, q[rows], counts)
     path_of_point = np.repeat(np.arange(len(k)), sizes)
     q_grid, dq, ddq = pieces.derivatives(path_of_point, grid)
@@ -492,10 +508,10 @@ def tcp_speeds(robot, moves, owner, q, qd):
     return in_blocks(speeds, np.asarray(owner), np.asarray(q, dtype=float), np.asarray(qd, dtype=float))[0]
 
 
-def _travel(q, jac):
-    """TCP arc length (n,) from the first sample, mm, of samples q (n, 6) with TCP Jacobians jac (n, 6, 6)."""
-    steps = np.linalg.norm(np.einsum("nij,nj->ni", jac[1:, :3], np.diff(q, axis=0)), axis=1)
-    return np.r_[0.0, np.cumsum(steps)]
+def _travel(positions):
+    """TCP path length (n,) from the first sample, mm, of samples at TCP positions (n, 3): the sum of their
+    chords (a line's length exactly; a programmed time over it is the speed the controller reads)."""
+    return np.r_[0.0, np.cumsum(np.linalg.norm(np.diff(positions, axis=0), axis=1))]
 
 
 def _grid(s, intervals=MIN_GRID):
@@ -574,26 +590,28 @@ def _grids(s, counts, intervals):
 
 
 def tcp_jacobians(robot, moves, owner, q, known=None):
-    """TCP Jacobians (n, 6, 6) of configurations q (n, 6), each with the tool of its motion ``owner`` (n,).
+    """TCP Jacobians (n, 6, 6) and positions (n, 3) of configurations q (n, 6), each with the tool of its motion
+    ``owner`` (n,).
 
     ``known``: ``(rows, flange (r, 4, 4), flange Jacobians (r, 6, 6))`` of
     rows whose flange kinematics were computed before (the waypoints).
     """
-    jac, rotation = np.empty((len(q), 6, 6)), np.empty((len(q), 3, 3))
+    jac, frame = np.empty((len(q), 6, 6)), np.empty((len(q), 3, 4))
     todo = np.ones(len(q), dtype=bool)
     if known is not None:
         rows, flange, flange_jac = known
-        jac[rows], rotation[rows], todo[rows] = flange_jac, flange[:, :3, :3], False
+        jac[rows], frame[rows], todo[rows] = flange_jac, flange[:, :3], False
     rows = np.flatnonzero(todo)
     if rows.size:
         flange, jac[rows] = fk_and_jacobian(robot, q[rows], tcp=False)
-        rotation[rows] = flange[:, :3, :3]
+        frame[rows] = flange[:, :3]
+    rotation = frame[:, :, :3]
     offset = np.einsum("nij,nj->ni", rotation, moves.tools[moves.tool[owner], :3, 3])  # flange to TCP, base frame
     w, r = jac[:, 3:], offset[:, :, None]  # each column's angular part w (n, 3, 6): v += w x offset
     jac[:, 0] += w[:, 1] * r[:, 2] - w[:, 2] * r[:, 1]
     jac[:, 1] += w[:, 2] * r[:, 0] - w[:, 0] * r[:, 2]
     jac[:, 2] += w[:, 0] * r[:, 1] - w[:, 1] * r[:, 0]
-    return jac
+    return jac, frame[:, :, 3] + offset
 
 
 def _fit(s, q, jac, tol, acceleration, *, smooth=True):
