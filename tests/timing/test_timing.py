@@ -127,9 +127,9 @@ def test_sharp_blended_corners_meet_the_limits_in_the_dense_check(tmp_path):
 
 
 def test_an_overshoot_refines_the_grid_where_it_happens_not_the_whole_run(tmp_path, monkeypatch):
-    """11 lines with 1 mm zones whose first timing overshoots the acceleration limits in the blends by 15 %
-    (2x when the fit cut the corners): the grid is refined there (no uniform slow-down, 11.4 s); without
-    refinement (the last resort) the whole timing runs uniformly slower by what the overshoot needs (12.3 s).
+    """11 lines with 1 mm zones whose first timing overshoots the acceleration limits in the blends by 2 %
+    (2x when the fit cut the corners): the grid is refined there (no uniform slow-down, 11.44 s); without
+    refinement (the last resort) the whole timing runs uniformly slower by what the overshoot needs (11.54 s).
     Both written within the limits."""
     rows = ["x,y,z,a,b,c,motion,speed,zone", "672.486,76.581,409.615,90,0,180,PTP,,1"] + [
         f"{x},{y},{z},90,0,180,LIN,250,1" for x, y, z in [
@@ -148,8 +148,8 @@ def test_an_overshoot_refines_the_grid_where_it_happens_not_the_whole_run(tmp_pa
         assert main(["retime", str(tmp_path / "blends.csv"), "-o", str(tmp_path / "out.csv"), "--robot", "ur10"]) == 0
         with (tmp_path / "out.csv").open() as f:
             cycle[refinements] = float(list(csv.DictReader(f))[-1]["t"])
-    assert len(stretched) == 1 and 1.05 < stretched[0] < 1.1  # sqrt of the 15 % acceleration overshoot, once
-    assert cycle[0] > 1.05 * cycle[default]
+    assert len(stretched) == 1 and 1.005 < stretched[0] < 1.02  # sqrt of the 2 % acceleration overshoot, once
+    assert cycle[0] > 1.005 * cycle[default]
 
 
 def test_a_stretched_law_runs_the_same_path_slower():

@@ -20,7 +20,7 @@ R = R_in R_corner^T R_out between two linear / circular motions, q =
 q_in + q_out - q_corner where one is a joint motion. The blend meets the
 lines with the same direction, curvature and curvature rate (C3), stays
 within r of the corner, and is sampled `BLEND_SAMPLES` times on each side
-of its middle (the corner's sample: the waypoint's place on the path). A
+of its middle (up to twice that, the sharper the corner) (the corner's sample: the waypoint's place on the path). A
 blend that stays within `BLEND_DEFLECTION` of its corner (the dense points
 of a CAM path) is not sampled: the corner is, and the path's fit within
 the tolerance of the samples stands for it.
@@ -49,7 +49,8 @@ STEP_DEG = 2.0  # deg, largest orientation or joint step between path samples
 JUMP_DEG = 5.0  # deg, a larger joint step between neighbouring samples is bisected
 MIN_INTERVALS = 4  # sample intervals of a linear / circular motion at least (its joint path is curved) ...
 MIN_INTERVAL_MM = 0.25  # ... as long as they are no shorter than this
-BLEND_SAMPLES = 32  # sample intervals on each half of a blended corner (the spline's q'' within 0.2 % there)
+BLEND_SAMPLES = 32  # sample intervals on each half of a blended corner turning by 60 deg or less, up to twice that
+# for a reversal (the spline's q'' within 0.2 % there)
 BLEND_DEFLECTION = TOLERANCE  # mm: a blend that stays this close to its corner is left to the fit (the corner sampled)
 AMBIGUOUS_DEG = 120.0  # deg: a linear motion turning a joint by more is followed to learn which way it turns
 _MIDDLE = 2.0 * (0.5 - (2.5 / 16 - 3 / 32 + 1 / 64))  # |p(1/2) - corner| / (r |e_out - e_in|): 2 (1/2 - Omega(1/2))
@@ -186,7 +187,7 @@ class _Geometry:
         with np.errstate(divide="ignore", invalid="ignore"):
             self.blend_end[:-1] = np.where(blended, radius / self.length[:-1], 0.0)
             self.blend_start[1:] = np.where(blended, radius / self.length[1:], 0.0)
-        self.blend_samples[:-1] = np.where(blended, BLEND_SAMPLES, 0)
+        self.blend_samples[:-1] = np.where(blended, np.ceil(BLEND_SAMPLES * np.clip(turn, 1.0, 2.0)), 0)
 
     def _same_configuration(self, moves, first, last):
         """Refuse a linear or circular motion whose target is declared in another configuration than its start."""
