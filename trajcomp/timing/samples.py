@@ -19,11 +19,12 @@ integral Omega(u) = 2.5 u^4 - 3 u^5 + u^6, the incoming motion is at
 R = R_in R_corner^T R_out between two linear / circular motions, q =
 q_in + q_out - q_corner where one is a joint motion. The blend meets the
 lines with the same direction, curvature and curvature rate (C3), stays
-within r of the corner, and is sampled `BLEND_SAMPLES` times on each side
-of its middle (up to twice that, the sharper the corner) (the corner's sample: the waypoint's place on the path). A
-blend that stays within `BLEND_DEFLECTION` of its corner (the dense points
-of a CAM path) is not sampled: the corner is, and the path's fit within
-the tolerance of the samples stands for it.
+within r of the corner, and is sampled `BLEND_SAMPLES` times (up to twice
+that, the sharper the corner) on each side of its middle, the corner's
+sample: the waypoint's place on the path. A blend that stays within
+`BLEND_DEFLECTION` of its corner (the dense points of a CAM path) is not
+sampled: the corner is, and the path's fit within the tolerance of the
+samples stands for it.
 Where neighbouring samples differ by more than `JUMP_DEG` in a joint the
 interval is bisected (a fast wrist swing near a singularity is sampled
 finely); a jump that survives down to 1e-6 of a motion is a pass through
@@ -53,7 +54,7 @@ BLEND_SAMPLES = 32  # sample intervals on each half of a blended corner turning 
 # for a reversal (the spline's q'' within 0.2 % there)
 BLEND_DEFLECTION = TOLERANCE  # mm: a blend that stays this close to its corner is left to the fit (the corner sampled)
 AMBIGUOUS_DEG = 120.0  # deg: a linear motion turning a joint by more is followed to learn which way it turns
-_MIDDLE = 2.0 * (0.5 - (2.5 / 16 - 3 / 32 + 1 / 64))  # |p(1/2) - corner| / (r |e_out - e_in|): 2 (1/2 - Omega(1/2))
+_MIDDLE = 2.0 * (2.5 / 16 - 3 / 32 + 1 / 64)  # |p(1/2) - corner| / (r |e_out - e_in|): 2 Omega(1/2) (lines)
 _SMALLEST_FRACTION = 1e-6  # of a motion: bisection stops here (singular)
 
 
