@@ -4,8 +4,8 @@ A LIN moves the TCP on the straight line between its end poses, the
 orientation turning uniformly about one axis; a CIRC on the circle through
 start, via and end point (orientation as for a LIN); both are solved with
 the nominal model (the written poses are nominal-model commands), every
-`STEP_MM` mm and `STEP_DEG` deg, at least `MIN_INTERVALS` times. A PTP is
-the straight line in joint space.
+`STEP_MM` mm and `STEP_DEG` deg, at least `MIN_INTERVALS` times from rest
+to rest. A PTP is the straight line in joint space.
 
 A corner the arm passes without stopping (zone z > 0) is blended over
 r = min(z, half of each neighbouring motion's TCP length) on both sides,
@@ -48,8 +48,8 @@ from trajcomp.arm.transforms import matrix_to_rotvec, rotvec_to_matrix
 STEP_MM = 5.0  # mm, largest TCP step between path samples of a LIN / CIRC
 STEP_DEG = 2.0  # deg, largest orientation or joint step between path samples
 JUMP_DEG = 5.0  # deg, a larger joint step between neighbouring samples is bisected
-MIN_INTERVALS = 4  # sample intervals of a linear / circular motion at least (its joint path is curved) ...
-MIN_INTERVAL_MM = 0.25  # ... as long as they are no shorter than this
+MIN_INTERVALS = 4  # sample intervals of a linear / circular motion from rest to rest at least (curved in joints)
+MIN_INTERVAL_MM = 0.25  # as long as they are no shorter than this
 BLEND_SAMPLES = 32  # sample intervals on each half of a blended corner turning by 60 deg or less, up to twice that
 # for a reversal (the spline's q'' within 0.2 % there)
 BLEND_DEFLECTION = TOLERANCE  # mm: a blend that stays this close to its corner is left to the fit (the corner sampled)
@@ -251,7 +251,8 @@ class _Geometry:
         """Number of sample intervals (M,) of each motion."""
         step = np.radians(STEP_DEG)
         joint_steps = np.max(np.abs(self.q_b - self.q_a), axis=1) / step
-        fewest = np.minimum(MIN_INTERVALS, np.ceil(self.length / MIN_INTERVAL_MM))
+        alone = self.moves.stop[self.k - 1] & self.moves.stop[self.k]  # in a run the spline spans its neighbours
+        fewest = np.where(alone, np.minimum(MIN_INTERVALS, np.ceil(self.length / MIN_INTERVAL_MM)), 1.0)
         cartesian = np.maximum(np.maximum(self.length / STEP_MM, self.angle / step), fewest)
         return np.ceil(np.maximum(np.where(self.joint, 0.0, cartesian), np.maximum(joint_steps, 1.0))).astype(int)
 
