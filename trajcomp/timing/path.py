@@ -621,8 +621,9 @@ def _fit(s, q, jac, tol, acceleration, *, smooth=True):
     within the tolerances needs less than 1 / SMOOTHING_GAIN of the
     acceleration at the same path speed (noise: waypoints rounded as a
     program writes them, at corners the path keeps): a clean path is taken
-    exactly. A single motion, or a run whose corners are blended, is
-    interpolated (its samples are the programmed geometry).
+    exactly. A single motion, or a run with a sampled blend
+    (`trajcomp.timing.samples.run_samples`' ``curved``), is interpolated:
+    its samples are the programmed geometry.
     """
     from scipy.interpolate import make_interp_spline  # here: a run that does not re-time never needs scipy
 
