@@ -2,7 +2,8 @@
 
 Run as ``python tests/benchmarks/bench_timing.py`` (``--quick``: the
 random programs up to 300 waypoints, no 100,000-point runs; ``speed``:
-table 3 alone, at full size). Threads are pinned to one.
+table 3 alone, at full size; ``controller``: table 5 alone). Threads are
+pinned to one.
 
 1. Limits and optimality (targets of issue 20), for random blended
    programs of 30-2000 LIN waypoints on the UR10 (within 150 mm of its
@@ -27,9 +28,20 @@ table 3 alone, at full size). Threads are pinned to one.
 3. Re-timing time (best of three, and its CPU time): 1,000 and 10,000 helix waypoints; a
    100,000-point smooth Lissajous CAM path (0.1 mm zones, 1,000 mm/s:
    long acceleration ramps; target < 3 s); 10,000 exact stops (target
-   < 10 s); the 100,000-point helix; and the reachability passes against
+   < 10 s) on a helix (5 mm) and of 1-60 mm (a random walk); the
+   100,000-point helix; and the reachability passes against
    toppra's seidel solver on the same grid (target: never slower).
 4. Cycle time of each example program before and after compensation.
+5. Limits on the controller's path (``controller``: table 5 alone): 12
+   random blended programs of 30 LIN waypoints (as table 1), a 200 mm LIN
+   whose wrist passes 0.1 deg from its singularity, and 30 exact stops of
+   1-60 mm, each checked by the tests' independent reference
+   (`tests.timing.controller_path`: the programmed lines and blends from
+   the waypoints' poses, the timed TCP placed on them, IK every 1 ms,
+   finite differences): joint velocity and acceleration and TCP speed over
+   their limits (target 1.005), the largest deviation of the timed path
+   from the programmed one and outside the zones (target 0.005 mm), and
+   the cycle time over TOPP-RA's on 16 times the grid (target 1.03).
 """
 
 import os
@@ -65,6 +77,8 @@ from trajcomp.timing.reachability import squared_speeds  # noqa: E402
 from trajcomp.arm.transforms import abc_to_matrix, matrix_to_abc  # noqa: E402
 
 sys.path[:0] = [str(Path(__file__).resolve().parents[2]), str(Path(__file__).resolve().parents[1])]  # root, tests
+from tests.timing.controller_path import controller_check  # noqa: E402 (the independent 1 kHz reference)
+from tests.timing.test_timing_controller_path import near_wrist_singularity  # noqa: E402
 from tests.timing.test_timing_dense import REFINE, reference  # noqa: E402 (the suite's 16x-grid reference)
 from tests.timing.test_timing_reachability import SpeedBound  # noqa: E402 (0 <= x <= x_max as toppra takes it)
 
@@ -199,12 +213,60 @@ def main(quick=False):
     print()
     speed_table(q, quick)
 
+    print()
+    met.append(controller_table())
+
     print("\n4. cycle time before and after compensation (auto: TOPP-RA runs, ruckig point-to-point)")
     print(f"  {'program':10s} {'before s':>9s} {'after s':>9s} {'change':>8s}")
     for name, (before, after, within) in cycles.items():
         print(f"  {name:10s} {before:>9.3f} {after:>9.3f} {100 * (after - before) / before:>+7.2f}%"
               + ("" if within else "  (limits exceeded)"))
     return 0
+
+
+def stop_walk(n, shortest, longest, seed=34, robot=UR10):
+    """Joints (n, 6) of a random walk of the TCP within 150 mm of the robot's home pose, steps of
+    ``shortest``-``longest`` mm in random directions (one orientation): a program of exact stops."""
+    rng = np.random.default_rng(seed)
+    steps = rng.normal(size=(n - 1, 3))
+    steps *= (rng.uniform(shortest, longest, n - 1) / np.linalg.norm(steps, axis=1))[:, None]
+    p = np.zeros((n, 3))
+    for i, step in enumerate(steps, start=1):  # reflected where it would leave the box
+        p[i] = p[i - 1] + np.where(np.abs(p[i - 1] + step) > 150.0, -step, step)
+    T = np.tile(fk(robot, robot.home), (n, 1, 1))
+    T[:, :3, 3] += p
+    return ik(robot, T, seed=robot.home).raise_on_failure().q
+
+
+def controller_table():
+    """Table 5: the limits on the controller's path (the tests' independent reference); whether all rows meet
+    the targets."""
+    print("5. limits on the controller's path: IK every 1 ms on the programmed lines and blends (target 1.005), "
+          "deviation from it (target 0.005 mm outside zones), cycle time over TOPP-RA on 16x the grid (1.03)")
+    print(f"{'path':34s} {'v/lim':>7s} {'a/lim':>7s} {'tcp/pr':>7s} {'dev mm':>8s} {'outside':>8s} {'ratio':>7s}")
+    rng = np.random.default_rng(34)
+    cases = []
+    for _ in range(12):
+        speed, zone = float(rng.choice([200.0, 500.0, 1000.0])), float(rng.choice([0.5, 2.0, 5.0]))
+        cases.append((f"random 30, {speed:.0f} mm/s, {zone:g} mm zones",
+                      Moves.from_joints(random_lines(30, int(rng.integers(1 << 30))), UR10, tcp_speed=speed,
+                                        zone=zone)))
+    cases.append(("LIN 0.1 deg from the wrist singularity",
+                  Moves.from_joints(near_wrist_singularity(0.1), UR10, tcp_speed=250.0, stop=True)))
+    cases.append(("30 exact stops of 1-60 mm", Moves.from_joints(stop_walk(31, 1.0, 60.0), UR10, tcp_speed=1000.0,
+                                                                  stop=True)))
+    met = True
+    for name, moves in cases:
+        result = retime(moves, UR10)
+        checked = controller_check(moves, result, UR10)
+        ratio = result.cycle_time / reference(moves, result, UR10)[0]
+        ok = (max(checked.worst, checked.speed_ratio) <= 1.005 and checked.deviation_outside_zones <= 0.005
+              and ratio <= 1.03)
+        met &= ok
+        print(f"{name:34s} {checked.velocity_ratio:>7.3f} {checked.acceleration_ratio.max():>7.3f} "
+              f"{checked.speed_ratio:>7.3f} {checked.deviation:>8.4f} {checked.deviation_outside_zones:>8.4f} "
+              f"{ratio:>7.3f}  {'ok' if ok else 'MISSED'}")
+    return met
 
 
 def speed_table(q, quick):
@@ -217,6 +279,8 @@ def speed_table(q, quick):
         runs += [("Lissajous, 100,000 points", Moves.from_joints(lissajous(100_000), UR10, tcp_speed=1000.0,
                                                                    zone=0.1), 3.0),
                  ("10,000 exact stops", Moves.from_joints(stops, UR10, tcp_speed=250.0, stop=True), 10.0),
+                 ("10,000 exact stops, 1-60 mm", Moves.from_joints(stop_walk(10_000, 1.0, 60.0), UR10,
+                                                                    tcp_speed=250.0, stop=True), 10.0),
                  ("helix, 100,000 waypoints", Moves.from_joints(helix(100_000)[0], UR10, tcp_speed=250.0, zone=0.5),
                   None)]
     for name, moves, target in runs:
@@ -257,4 +321,6 @@ if __name__ == "__main__":
     if "speed" in sys.argv[1:]:  # table 3 alone, full size
         speed_table(helix(10000)[0], quick=False)
         sys.exit(0)
+    if "controller" in sys.argv[1:]:  # table 5 alone
+        sys.exit(0 if controller_table() else 1)
     sys.exit(main(quick="--quick" in sys.argv[1:]))

@@ -9,12 +9,14 @@ trapezoid and jerk-limited profiles.
 """
 
 import csv
+import dataclasses
 import importlib
 
 import numpy as np
 import pytest
 import ruckig
 
+from tests.timing.test_timing_dense import random_lines
 from trajcomp.cli import main
 from trajcomp.errors import TimingError
 from trajcomp.arm.ik import Configuration, configuration_of, ik
@@ -125,9 +127,10 @@ def test_sharp_blended_corners_meet_the_limits_in_the_dense_check(tmp_path):
 
 
 def test_an_overshoot_refines_the_grid_where_it_happens_not_the_whole_run(tmp_path, monkeypatch):
-    """11 lines with 1 mm zones whose first timing overshoots the acceleration limits in the blends by 2x:
-    the grid is refined there (no uniform slow-down, 11.4 s); without refinement (the last resort) the
-    whole timing runs uniformly slower by what the overshoot needs (16.9 s). Both written within the limits."""
+    """11 lines with 1 mm zones whose first timing overshoots the acceleration limits in the blends by 2 %
+    (2x when the fit cut the corners): the grid is refined there (no uniform slow-down, 11.44 s); without
+    refinement (the last resort) the whole timing runs uniformly slower by what the overshoot needs (11.54 s).
+    Both written within the limits."""
     rows = ["x,y,z,a,b,c,motion,speed,zone", "672.486,76.581,409.615,90,0,180,PTP,,1"] + [
         f"{x},{y},{z},90,0,180,LIN,250,1" for x, y, z in [
             (629.405, 129.418, 669.576), (444.207, 77.914, 669.952), (552.827, 152.554, 444.478),
@@ -145,8 +148,8 @@ def test_an_overshoot_refines_the_grid_where_it_happens_not_the_whole_run(tmp_pa
         assert main(["retime", str(tmp_path / "blends.csv"), "-o", str(tmp_path / "out.csv"), "--robot", "ur10"]) == 0
         with (tmp_path / "out.csv").open() as f:
             cycle[refinements] = float(list(csv.DictReader(f))[-1]["t"])
-    assert len(stretched) == 1 and 1.2 < stretched[0] < 1.5  # sqrt of the 2x acceleration overshoot, once
-    assert cycle[0] > 1.4 * cycle[default]
+    assert len(stretched) == 1 and 1.005 < stretched[0] < 1.02  # sqrt of the 2 % acceleration overshoot, once
+    assert cycle[0] > 1.005 * cycle[default]
 
 
 def test_a_stretched_law_runs_the_same_path_slower():
@@ -360,6 +363,22 @@ def test_programmed_joint_speed_and_time_are_honoured():
     assert np.abs(qd[:, 0]).max() <= 0.5 * UR10.v_max[0] * 1.001
     timed = Moves(**{**moves.__dict__, "min_duration": np.array([0.0, 3.0])})
     assert retime(timed, UR10).cycle_time == pytest.approx(3.0, rel=1e-6)
+
+
+@pytest.mark.parametrize("stop", [True, False])
+def test_a_programmed_time_is_taken_at_least_in_a_blended_run_and_between_stops(stop):
+    """Random lines with a joint motion among them, each motion with a time (RAPID \\T, FANUC sec): each takes it
+    at least, to 1e-5 (a joint motion in a blended run took 0.269 s for \\T:=8; a line's TCP length summed from
+    linearized steps made \\T:=8 7.976 s)."""
+    rng = np.random.default_rng(4)
+    q = random_lines(7, 2)
+    kind = np.array([LINEAR] * 7, dtype=object)
+    kind[3] = JOINT
+    times = np.r_[0.0, rng.choice([0.5, 1.0, 2.0, 8.0], 6)]
+    moves = dataclasses.replace(Moves.from_joints(q, UR10, kind=kind, stop=stop, zone=0.0 if stop else 5.0),
+                                min_duration=times)
+    result = retime(moves, UR10)
+    assert np.all(result.durations[1:] >= times[1:] * (1.0 - 1e-5)) and result.within_limits
 
 
 def test_every_method_keeps_the_limits_and_toppra_is_fastest():

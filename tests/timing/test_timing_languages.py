@@ -12,7 +12,9 @@ takes 80 / 20 = 4 s plus its acceleration ramps, the blended pair 100 / 20
 written fields are parsed here from the text, per language.
 """
 
+import csv
 import difflib
+import io
 import json
 import re
 import shutil
@@ -21,6 +23,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from tests.timing.controller_path import ProgrammedPath
 from trajcomp import formats
 from trajcomp.cli import main
 
@@ -61,6 +64,21 @@ def durations(text):
     return np.diff(t)[:3]
 
 
+def blended_lengths(text):
+    """The TCP path lengths (mm) of the second and third lines of a written CSV weld: the controller's path
+    (`tests.timing.controller_path`) from the second line's start to the middle of the blend at its end, and
+    on to the third line's end: the times at the waypoints are those of their places on that path."""
+    rows = list(csv.DictReader(io.StringIO(text)))[1:4]
+    poses = np.tile(np.eye(4), (3, 1, 1))
+    poses[:, :3, 3] = [[float(row[c]) for c in "xyz"] for row in rows]
+    zone = float(rows[1]["zone"] or 0.0)
+    path = ProgrammedPath(poses, np.array([0.0, zone, 0.0]))
+    sigma = np.linspace(0.0, path.total, 200_001)
+    travelled = np.r_[0.0, np.cumsum(np.linalg.norm(np.diff(path.poses(sigma)[:, :3, 3], axis=0), axis=1))]
+    middle = np.interp(path.length[0], sigma, travelled)  # the blend's middle: sigma at the corner's line distance
+    return middle, travelled[-1] - middle
+
+
 def line_speeds(language, text):
     """The TCP speeds (mm/s) the controller runs the program's linear motions at, read from its fields."""
     if language == "krl":  # the $VEL.CP in force at each LIN
@@ -97,8 +115,10 @@ def test_an_example_program_retimes_and_only_its_speed_fields_change(tmp_path, l
 def test_the_csv_times_match_the_path_and_its_speed(tmp_path):
     _, after, _ = retimed(tmp_path, "csv")
     first, second, third = durations(after)
+    into, out_of = blended_lengths(after)
     assert 80.0 / 20.0 <= first <= 80.0 / 20.0 + RAMPS
-    assert second >= 60.0 / 20.0 and third >= 40.0 / 20.0  # never faster than programmed
+    assert 59.0 < into < 60.0 and 39.0 < out_of < 40.0  # the 5 mm blend cuts the corner
+    assert second >= into / 20.0 and third >= out_of / 20.0  # never faster than programmed
     assert second + third <= 100.0 / 20.0 + RAMPS
 
 
@@ -152,8 +172,9 @@ def test_every_example_converted_to_another_language_retimes_there(tmp_path, mak
     text = output.read_text()
     if language == "csv":
         first, second, third = durations(text)
+        into, out_of = blended_lengths(text)
         assert 80.0 / 20.0 <= first <= 80.0 / 20.0 + RAMPS
-        assert second >= 60.0 / 20.0 and third >= 40.0 / 20.0 and second + third <= 100.0 / 20.0 + RAMPS
+        assert second >= into / 20.0 and third >= out_of / 20.0 and second + third <= 100.0 / 20.0 + RAMPS
     else:  # the weld speed kept as converted
         assert line_speeds(language, text) == [20.0, 20.0, 20.0]
 

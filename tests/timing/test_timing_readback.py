@@ -75,6 +75,24 @@ def line_demand(robot, start, end, speed):
     return np.gradient(solved.q, dt, axis=0), (solved.q[2:] - 2.0 * solved.q[1:-1] + solved.q[:-2]) / dt**2
 
 
+def outside_zones(moves, tool, k):
+    """The poses (4, 4) where linear motion k leaves the blend at its start and enters the one at its end:
+    a corner passed without stopping is blended over min(zone, half of each neighbouring motion's TCP chord),
+    and the controller plans a blend's accelerations itself (only the line is run at the cruise speed)."""
+    ends = fk(tool, moves.q[max(k - 2, 0) : k + 2])
+    i = k - max(k - 2, 0)  # ends[i - 1], ends[i]: motion k's start and end
+    chords = np.linalg.norm(np.diff(ends[:, :3, 3], axis=0), axis=1)
+    cut = []
+    for corner, neighbour in ((k - 1, i - 2), (k, i)):
+        blended = 0 < corner < len(moves.q) - 1 and not moves.stop[corner] and moves.zone[corner] > 0
+        cut.append(min(moves.zone[corner], 0.5 * chords[i - 1], 0.5 * chords[neighbour]) if blended else 0.0)
+    start, end = ends[i - 1].copy(), ends[i].copy()
+    direction = (end[:3, 3] - start[:3, 3]) / chords[i - 1]
+    start[:3, 3] += cut[0] * direction
+    end[:3, 3] -= cut[1] * direction
+    return start, end
+
+
 def joint_line(robot, q_a, q_b, duration=None, percent=100.0):
     """A synchronized joint motion from q_a to q_b (6,) the controller's way: path s in [0, 1] accelerating at
     the first joint's acceleration limit, cruising at the speed that takes ``duration`` s (or, None, at
@@ -110,7 +128,8 @@ def test_the_written_fields_run_the_controllers_way_never_faster_than_programmed
         tool = robot.replace(T_flange_tool=moves.tools[moves.tool[k]])
         if moves.kind[k] == LINEAR:
             assert motion.speed_unit == "mm/s" and motion.speed <= FAST  # a cruise speed, never above 3 m/s
-            velocity, acceleration = line_demand(tool, fk(tool, moves.q[k - 1]), fk(tool, moves.q[k]), motion.speed)
+            start, end = outside_zones(moves, tool, k)
+            velocity, acceleration = line_demand(tool, start, end, motion.speed)
             assert np.max(np.abs(velocity) / robot.v_max) <= SLACK
             assert np.max(np.abs(acceleration) / robot.a_max) <= SLACK
             checked.add("cruise")

@@ -6,16 +6,19 @@ motion from rest to rest. Its samples come from `trajcomp.timing.samples`
 
 1. Parameter: s = joint-space arc length (rad) of the samples; duplicated
    and zero-length waypoints collapse onto one sample.
-2. Fit: the cubic spline through the samples, unless their noise (IK
-   solutions of rounded numbers) or a blended corner makes it need more
-   than `SMOOTHING_GAIN` times the acceleration of a thinned one, which
-   makes TOPP-RA crawl. The thinned spline is a least-squares cubic
-   B-spline with knots on every `KNOT_STRIDE` samples, refined where it
-   leaves the tolerance (and samples the finest knots still miss weighted
-   more): within `TOLERANCE` mm of every sample's TCP and
-   ``TOLERANCE * ROTATION_PER_MM`` rad of its orientation (linearized with
-   the Jacobian) and of each joint, or within the programmed zone radius
-   near a blended corner. The tolerance keeps the compensated positions.
+2. Fit: the cubic spline through the samples. The samples are the
+   programmed geometry, blends included, so a single motion and a run
+   with a sampled blend are interpolated. Otherwise (corners kept, or
+   blends that stay within the tolerance of their corner: a CAM path's
+   dense points) the samples' noise (IK solutions of rounded numbers) may
+   make the interpolating spline need more than `SMOOTHING_GAIN` times the
+   acceleration of a thinned one, which makes TOPP-RA crawl: the thinned
+   spline is then taken, a least-squares cubic B-spline with knots on
+   every `KNOT_STRIDE` samples, refined where it leaves the tolerance (and
+   samples the finest knots still miss weighted more): within `TOLERANCE`
+   mm of every sample's TCP and ``TOLERANCE * ROTATION_PER_MM`` rad of its
+   orientation (linearized with the Jacobian) and of each joint. The
+   tolerance keeps the compensated positions.
 3. `JointPath` wraps the spline for TOPP-RA; grid points are every sample,
    subdivided to at least `MIN_GRID` intervals (`STOP_GRID` for a single
    motion from rest to rest: it accelerates, cruises and brakes), and
@@ -146,13 +149,6 @@ class CubicPieces:
         return PPoly.construct_fast(self._by_power[:, lo:hi], self._breaks[lo + r : hi + r + 1])
 
     @classmethod
-    def of_spline(cls, spline, length):
-        """The pieces (one path) of a cubic BSpline on [0, length]: its polynomial on each knot interval."""
-        knots = np.unique(spline.t[(spline.t >= 0.0) & (spline.t < length)])
-        c = np.stack([spline(knots, nu) / factor for nu, factor in ((3, 6.0), (2, 2.0), (1, 1.0), (0, 1.0))], axis=1)
-        return cls(knots, c, np.array([len(knots)]), np.array([length]))
-
-    @classmethod
     def joined(cls, parts, paths):
         """Pieces of several `CubicPieces` in one, path ``paths[j][r]`` of the result being path r of ``parts[j]``."""
         label = np.concatenate([np.repeat(p, np.diff(part.offsets)) for part, p in zip(parts, paths)])
@@ -183,7 +179,7 @@ class RunPath:
         |dp/ds| on the grid: mm of TCP travel per rad of path, each motion with its tool.
     deviation : float
         Largest TCP deviation (mm, linearized) of the path from a sample
-        outside blended corners.
+        (the programmed geometry).
     """
 
     path: JointPath
@@ -207,13 +203,16 @@ class RunPath:
         inner = np.searchsorted(self.s_waypoints, s, side=side)
         return self.first + np.clip(inner, 1, len(self.s_waypoints) - 1)
 
-    def speed_bound(self, moves, velocity_scale=1.0, speed_scale=1.0, dq=None):
+    def speed_bound(self, moves, velocity_scale=1.0, speed_scale=1.0, dq=None, *, times=True):
         """Largest squared path speed x = sd^2 (G,) on the grid, and the joint velocity limits (G, 6) used.
 
         A grid point obeys the joint velocity limits and the programmed TCP
         speed (or, for a linear / circular motion with a programmed time,
-        its TCP length over that time) of the motions it belongs to (both,
-        at a waypoint). ``dq`` (G, 6): q' on the grid, when already evaluated.
+        its TCP length over that time; for a joint motion with one, its
+        path length over that time: `time_limits`) of the motions it
+        belongs to (both, at a waypoint). ``dq`` (G, 6): q' on the grid,
+        when already evaluated; ``times=False``: without `time_limits` (a
+        ruckig law takes the programmed time as its minimum duration).
         """
         grid = self.grid
         dq = self.path(grid, 1) if dq is None else dq
@@ -222,8 +221,12 @@ class RunPath:
             velocity = np.broadcast_to(moves.velocity[0] * velocity_scale, (len(grid), 6))
         else:
             velocity = np.min(moves.velocity[near], axis=0) * velocity_scale
-        tcp = tcp_limits(moves, np.arange(self.first + 1, self.last + 1), self.tcp_lengths[1:])
-        return squared_speed_bound(dq, self.grid_rate, velocity, np.min(tcp[near - self.first - 1], axis=0) * speed_scale), velocity
+        k, motion = np.arange(self.first + 1, self.last + 1), near - self.first - 1
+        tcp = tcp_limits(moves, k, self.tcp_lengths[1:])
+        x = squared_speed_bound(dq, self.grid_rate, velocity, np.min(tcp[motion], axis=0) * speed_scale)
+        if times:
+            x = np.minimum(x, np.min(time_limits(moves, k, np.diff(self.s_waypoints))[motion], axis=0) ** 2)
+        return x, velocity
 
     def refined(self, moves, robot, s):
         """This run with grid points added at path positions s (n,) inside it (their TCP rates computed).
@@ -252,6 +255,15 @@ def tcp_limits(moves, k, lengths):
     timed = (moves.min_duration[k] > 0) & (moves.kind[k] != JOINT)
     tcp[timed] = np.minimum(tcp[timed], lengths[timed] / moves.min_duration[k[timed]])
     return tcp
+
+
+def time_limits(moves, k, spans):
+    """Path speed limit (n,) of motions k (n,) whose path spans ``spans`` (n,) rad: for a joint motion with a
+    programmed time, its span over that time (it takes that time at least, as the controller runs it); 1/s
+    (``inf``: none). A linear or circular motion's time bounds its TCP speed (`tcp_limits`)."""
+    timed = (moves.min_duration[k] > 0) & (moves.kind[k] == JOINT)
+    with np.errstate(divide="ignore"):
+        return np.where(timed, spans / np.where(timed, moves.min_duration[k], 1.0), np.inf)
 
 
 def squared_speed_bound(dq, rate, velocity, tcp):
@@ -291,7 +303,7 @@ def run_path(moves, robot, first, last, tolerance=TOLERANCE, *, part=None):
         From `trajcomp.timing.samples.run_samples`.
     """
     a, b = part or (first, last)
-    q, owner, s, waypoint_rows, known = _collapsed(moves, robot, first, last)
+    q, owner, s, waypoint_rows, known, curved = _collapsed(moves, robot, first, last)
     s_waypoints = s[waypoint_rows]
     s_a, s_b = s_waypoints[a - first], s_waypoints[b - first]
     if s_b <= s_a:
@@ -301,11 +313,11 @@ def run_path(moves, robot, first, last, tolerance=TOLERANCE, *, part=None):
     at_sample = np.full(len(grid), -1)
     at_sample[np.searchsorted(grid, s)] = np.arange(len(s))
     motion = np.maximum(owner, first + 1)  # of each sample, for its tool (the first sample: the first motion)
-    jac = tcp_jacobians(robot, moves, motion, q, known)
-    travel = _travel(q, jac)
+    jac, positions = tcp_jacobians(robot, moves, motion, q, known)
+    travel = _travel(positions)
     tcp_lengths = np.diff(travel[waypoint_rows], prepend=0.0)
-    tol = _tolerances(moves, first, last, travel, owner, waypoint_rows, tcp_lengths, tolerance)
-    spline, deviation = _fit(s, q, jac, tol, np.min(moves.acceleration[first + 1 : last + 1], axis=0))
+    acceleration = np.min(moves.acceleration[first + 1 : last + 1], axis=0)
+    spline, deviation = _fit(s, q, jac, np.full(len(s), tolerance), acceleration, smooth=last > first + 1 and not curved)
     inside = (grid >= s_a) & (grid <= s_b)
     grid = grid[inside]
     rate = _grid_rates(robot, moves, k[inside], spline(grid), spline(grid, 1), at_sample[inside], (q, motion, jac))
@@ -359,19 +371,19 @@ class StopPaths:
         return np.arange(sizes.sum()) + np.repeat(offsets[paths] - (np.cumsum(sizes) - sizes), sizes)
 
 
-def stop_paths(moves, robot, first, last, tolerance=TOLERANCE):
+def stop_paths(moves, robot, first, last):
     """The paths of motions first + 1 .. last, each from rest to rest (every waypoint an exact stop), built together.
 
-    One sampling, one Jacobian batch, one grid construction and one fit
-    of the motions of fewer than four samples (`_through_samples`) for all
-    the motions; a longer one is fitted on its own samples (`_fit`). Each
-    path is the one `run_path` gives that motion alone.
+    One sampling, one Jacobian batch, one grid construction and one
+    interpolation of every motion's samples (`_through_samples`, one
+    banded system for all): a single motion's samples are its programmed
+    geometry, interpolated as `run_path` does for that motion alone.
 
     Returns
     -------
     StopPaths
     """
-    q, owner, s, waypoint_rows, known = _collapsed(moves, robot, first, last)
+    q, owner, s, waypoint_rows, known, _ = _collapsed(moves, robot, first, last)
     k = np.arange(first + 1, last + 1)
     lo, hi = waypoint_rows[:-1], waypoint_rows[1:]
     moving = np.flatnonzero(hi > lo)
@@ -387,23 +399,10 @@ def stop_paths(moves, robot, first, last, tolerance=TOLERANCE):
     local = s[rows] - s[lo][path_of_row]  # each path's positions from 0
     grid, sizes, at = _grids(local, counts, STOP_GRID)
     owner = np.maximum(owner, first + 1)  # the first sample: the first motion's tool
-    jac = tcp_jacobians(robot, moves, owner, q, known)
-    steps = np.linalg.norm(np.einsum("nij,nj->ni", jac[1:, :3], np.diff(q, axis=0)), axis=1)
-    lengths = np.add.reduceat(steps, lo)  # TCP length of each path (its samples follow each other), mm
-    deviation = np.zeros(len(k))
-    few = counts < 4
-    parts, paths, splines = [], [], {}
-    if few.any():
-        parts.append(_through_samples(local[few[path_of_row]], q[rows[few[path_of_row]]], counts[few]))
-        paths.append(np.flatnonzero(few))
-    begins = np.cumsum(counts) - counts
-    for r in np.flatnonzero(~few).tolist():  # a longer motion: fitted alone, noise and all (`_fit`)
-        mine = slice(begins[r], begins[r] + counts[r])
-        splines[r], deviation[r] = _fit(local[mine], q[rows[mine]], jac[rows[mine]], np.full(counts[r], tolerance),
-                                        moves.acceleration[k[r]])
-        parts.append(CubicPieces.of_spline(splines[r], local[mine][-1]))
-        paths.append([r])
-    pieces = CubicPieces.joined(parts, paths) if len(parts) > 1 else parts[0]
+    jac, positions = tcp_jacobians(robot, moves, owner, q, known)
+    travel = _travel(positions)
+    lengths = travel[hi] - travel[lo]  # TCP length of each path, mm
+    pieces = _through_samples(local, q[rows], counts)
     path_of_point = np.repeat(np.arange(len(k)), sizes)
     q_grid, dq, ddq = pieces.derivatives(path_of_point, grid)
     at_sample = np.full(len(grid), -1)  # the sample each grid point is, -1 between samples
@@ -411,10 +410,9 @@ def stop_paths(moves, robot, first, last, tolerance=TOLERANCE):
     rates = _grid_rates(robot, moves, k[path_of_point], q_grid, dq, at_sample, (q, owner, jac))
     offsets = np.r_[0, np.cumsum(sizes)]
     for r, i in enumerate(moving.tolist()):
-        spline = splines[r] if r in splines else pieces.ppoly(r)
         o, p = offsets[r], offsets[r + 1]
-        runs[i] = RunPath(JointPath(spline), np.array([0.0, pieces.ends[r]]), grid[o:p], k[r] - 1, k[r],
-                          np.array([0.0, lengths[r]]), rates[o:p], float(deviation[r]))
+        runs[i] = RunPath(JointPath(pieces.ppoly(r)), np.array([0.0, pieces.ends[r]]), grid[o:p], k[r] - 1, k[r],
+                          np.array([0.0, lengths[r]]), rates[o:p], 0.0)
     return StopPaths(runs, moving, pieces, k, lengths, sizes, grid, dq, ddq, rates)
 
 
@@ -424,9 +422,10 @@ def _collapsed(moves, robot, first, last):
     Returns
     -------
     q (n, 6), owner (n,), s (n,) joint arc length (rad), waypoint_rows (W,) the sample of each waypoint,
-    known : (rows (r,), flange (r, 4, 4), flange Jacobians (r, 6, 6)) of samples that are waypoints.
+    known : (rows (r,), flange (r, 4, 4), flange Jacobians (r, 6, 6)) of samples that are waypoints,
+    curved : bool (`trajcomp.timing.samples.run_samples`).
     """
-    q, owner, (waypoint, flange, flange_jac) = run_samples(moves, robot, first, last)
+    q, owner, (waypoint, flange, flange_jac), curved = run_samples(moves, robot, first, last)
     keep = np.ones(len(q), dtype=bool)
     keep[1:] = np.linalg.norm(np.diff(q, axis=0), axis=1) > _DUPLICATE
     kept = np.cumsum(keep) - 1
@@ -434,7 +433,7 @@ def _collapsed(moves, robot, first, last):
     q, owner, waypoint = q[keep], owner[keep], waypoint[keep]
     s = np.r_[0.0, np.cumsum(np.linalg.norm(np.diff(q, axis=0), axis=1))]
     at = np.flatnonzero(waypoint >= 0)
-    return q, owner, s, waypoint_rows, (at, flange[waypoint[at]], flange_jac[waypoint[at]])
+    return q, owner, s, waypoint_rows, (at, flange[waypoint[at]], flange_jac[waypoint[at]]), curved
 
 
 def _no_path(a, b):
@@ -509,10 +508,10 @@ def tcp_speeds(robot, moves, owner, q, qd):
     return in_blocks(speeds, np.asarray(owner), np.asarray(q, dtype=float), np.asarray(qd, dtype=float))[0]
 
 
-def _travel(q, jac):
-    """TCP arc length (n,) from the first sample, mm, of samples q (n, 6) with TCP Jacobians jac (n, 6, 6)."""
-    steps = np.linalg.norm(np.einsum("nij,nj->ni", jac[1:, :3], np.diff(q, axis=0)), axis=1)
-    return np.r_[0.0, np.cumsum(steps)]
+def _travel(positions):
+    """TCP path length (n,) from the first sample, mm, of samples at TCP positions (n, 3): the sum of their
+    chords (a line's length exactly; a programmed time over it is the speed the controller reads)."""
+    return np.r_[0.0, np.cumsum(np.linalg.norm(np.diff(positions, axis=0), axis=1))]
 
 
 def _grid(s, intervals=MIN_GRID):
@@ -591,56 +590,40 @@ def _grids(s, counts, intervals):
 
 
 def tcp_jacobians(robot, moves, owner, q, known=None):
-    """TCP Jacobians (n, 6, 6) of configurations q (n, 6), each with the tool of its motion ``owner`` (n,).
+    """TCP Jacobians (n, 6, 6) and positions (n, 3) of configurations q (n, 6), each with the tool of its motion
+    ``owner`` (n,).
 
     ``known``: ``(rows, flange (r, 4, 4), flange Jacobians (r, 6, 6))`` of
     rows whose flange kinematics were computed before (the waypoints).
     """
-    jac, rotation = np.empty((len(q), 6, 6)), np.empty((len(q), 3, 3))
+    jac, frame = np.empty((len(q), 6, 6)), np.empty((len(q), 3, 4))
     todo = np.ones(len(q), dtype=bool)
     if known is not None:
         rows, flange, flange_jac = known
-        jac[rows], rotation[rows], todo[rows] = flange_jac, flange[:, :3, :3], False
+        jac[rows], frame[rows], todo[rows] = flange_jac, flange[:, :3], False
     rows = np.flatnonzero(todo)
     if rows.size:
         flange, jac[rows] = fk_and_jacobian(robot, q[rows], tcp=False)
-        rotation[rows] = flange[:, :3, :3]
+        frame[rows] = flange[:, :3]
+    rotation = frame[:, :, :3]
     offset = np.einsum("nij,nj->ni", rotation, moves.tools[moves.tool[owner], :3, 3])  # flange to TCP, base frame
     w, r = jac[:, 3:], offset[:, :, None]  # each column's angular part w (n, 3, 6): v += w x offset
     jac[:, 0] += w[:, 1] * r[:, 2] - w[:, 2] * r[:, 1]
     jac[:, 1] += w[:, 2] * r[:, 0] - w[:, 0] * r[:, 2]
     jac[:, 2] += w[:, 0] * r[:, 1] - w[:, 1] * r[:, 0]
-    return jac
+    return jac, frame[:, :, 3] + offset
 
 
-def _tolerances(moves, first, last, travel, owner, waypoint_rows, tcp_lengths, tolerance):
-    """Allowed TCP deviation (n,) of the path from each sample, mm: ``tolerance``, or more in blended corners.
-
-    A corner at waypoint k with zone r (not a stop) may be cut: samples
-    within r_eff = min(r, half of each neighbouring motion) of it, along the
-    path, get ``r_eff - distance``.
-    """
-    tol = np.full(len(travel), tolerance)
-    corners = np.arange(first + 1, last)
-    if not corners.size or not np.any(moves.zone[corners] > 0):
-        return tol
-    radius = np.zeros(last - first + 1)
-    inner = corners - first
-    radius[inner] = np.minimum(moves.zone[corners], 0.5 * np.minimum(tcp_lengths[inner], tcp_lengths[inner + 1]))
-    corner_travel = travel[waypoint_rows]
-    local = owner - first
-    for corner in (np.clip(local - 1, 0, None), local):
-        tol = np.maximum(tol, radius[corner] - np.abs(travel - corner_travel[corner]))
-    return tol
-
-
-def _fit(s, q, jac, tol, acceleration):
+def _fit(s, q, jac, tol, acceleration, *, smooth=True):
     """Cubic B-spline q(s) of samples (s (n,), q (n, 6)) within tolerances tol (n,) mm: (BSpline, deviation mm).
 
-    The samples are interpolated unless a thinned spline within the
-    tolerances needs less than 1 / SMOOTHING_GAIN of the acceleration at
-    the same path speed (noise, or a blended corner): a clean path is
-    taken exactly.
+    The samples are interpolated unless ``smooth`` and a thinned spline
+    within the tolerances needs less than 1 / SMOOTHING_GAIN of the
+    acceleration at the same path speed (noise: waypoints rounded as a
+    program writes them, at corners the path keeps): a clean path is taken
+    exactly. A single motion, or a run with a sampled blend
+    (`trajcomp.timing.samples.run_samples`' ``curved``), is interpolated:
+    its samples are the programmed geometry.
     """
     from scipy.interpolate import make_interp_spline  # here: a run that does not re-time never needs scipy
 
@@ -648,8 +631,10 @@ def _fit(s, q, jac, tol, acceleration):
     if n < 4:  # a line or a single corner
         return _through_samples(s, q, np.array([n])).ppoly(0), 0.0
     exact = make_interp_spline(s, q, k=3)
+    if not smooth:
+        return exact, 0.0
     demand = _demand(exact, s, acceleration)
-    if n >= 4 * KNOT_STRIDE and np.all(tol <= tol.min()):  # no corner to cut: is the exact path noisy?
+    if n >= 4 * KNOT_STRIDE:  # is the exact path noisy?
         coarse = np.r_[np.arange(0, n - 1, KNOT_STRIDE // 2), n - 1]
         if demand <= SMOOTHING_GAIN * _demand(make_interp_spline(s[coarse], q[coarse], k=3), s, acceleration):
             return exact, 0.0  # as smooth as a spline through every eighth sample: clean
@@ -660,7 +645,8 @@ def _fit(s, q, jac, tol, acceleration):
 
 
 def _through_samples(s, q, counts):
-    """The cubic splines of paths of fewer than 4 samples each (a line, or a single corner), laid end to end.
+    """The cubic splines through the samples of paths laid end to end: `_not_a_knot` (scipy's
+    ``make_interp_spline``), a path of fewer than 4 samples as a line or a single corner.
 
     A path of 2 samples is their joint line; one of 3 interpolates the
     polyline of its samples at the samples and at every third of the path
@@ -673,7 +659,7 @@ def _through_samples(s, q, counts):
     q : ndarray, shape (n, 6)
         Joints of the samples, rad.
     counts : ndarray of int, shape (R,)
-        Samples of each path (2 or 3).
+        Samples of each path (at least 2).
 
     Returns
     -------
@@ -688,10 +674,11 @@ def _through_samples(s, q, counts):
         c[:, 2], c[:, 3] = (q[b] - q[a]) / s[b, None], q[a]
         parts.append(CubicPieces(np.zeros(len(a)), c, np.ones(len(a), dtype=int), s[b]))
         paths.append(np.flatnonzero(line))
-    if not line.all():
-        rows = ~np.repeat(line, counts)
-        parts.append(_through_corners(s[rows], q[rows], counts[~line]))
-        paths.append(np.flatnonzero(~line))
+    for group, through in ((counts == 3, _through_corners), (counts >= 4, _not_a_knot)):
+        if group.any():
+            rows = np.repeat(group, counts)
+            parts.append(through(s[rows], q[rows], counts[group]))
+            paths.append(np.flatnonzero(group))
     return CubicPieces.joined(parts, paths) if len(parts) > 1 else parts[0]
 
 
@@ -773,7 +760,7 @@ def _thinned(s, q, jac, tol):
         position, rotation, joint = _deviation(spline, s, q, jac)
         bad = (position > tol) | (np.maximum(rotation, joint) > tol * ROTATION_PER_MM)
         if not bad.any():
-            return spline, float(np.max(np.where(tol <= tol.min(), position, 0.0)))
+            return spline, float(np.max(position))
         cell = np.searchsorted(knots, np.flatnonzero(bad), side="right") - 1
         cell = np.unique(np.clip(cell, 0, len(knots) - 2))
         wide = cell[knots[cell + 1] - knots[cell] >= 2 * _NARROWEST]

@@ -96,7 +96,7 @@ def retime(moves, robot, *, method="auto", tolerance=TOLERANCE):
             reached.q[rows] = block
         timeline.arrived = reached.q
         if last - first == len(batch):  # exact stops after every motion: timed together
-            _time_stops(timeline, batch, stop_paths(reached, robot, first, last, tolerance), moves, robot)
+            _time_stops(timeline, batch, stop_paths(reached, robot, first, last), moves, robot)
             continue
         runs = run_windows(reached, robot, first, last, tolerance, WINDOW if kind == "toppra" else None)
         timeline.add(kind, first, last, *_timed(kind, runs, moves, robot))

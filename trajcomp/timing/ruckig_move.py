@@ -83,7 +83,7 @@ def ruckig_law(run, moves, robot, velocity_scale=1.0, acceleration_scale=1.0, sp
     """
     dq, ddq = np.abs(run.path(run.grid, 1)), np.abs(run.path(run.grid, 2))
     dddq = np.abs(run.path.spline(run.grid, 3))
-    x_max, _ = run.speed_bound(moves, velocity_scale, speed_scale)
+    x_max, _ = run.speed_bound(moves, velocity_scale, speed_scale, times=False)
     motions = slice(run.first + 1, run.last + 1)
     acceleration = np.min(moves.acceleration[motions], axis=0) * acceleration_scale
     jerk = robot.j_max

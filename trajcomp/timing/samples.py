@@ -4,7 +4,27 @@ A LIN moves the TCP on the straight line between its end poses, the
 orientation turning uniformly about one axis; a CIRC on the circle through
 start, via and end point (orientation as for a LIN); both are solved with
 the nominal model (the written poses are nominal-model commands), every
-`STEP_MM` mm and `STEP_DEG` deg. A PTP is the straight line in joint space.
+`STEP_MM` mm and `STEP_DEG` deg, at least `MIN_INTERVALS` times from rest
+to rest. A PTP is the straight line in joint space.
+
+A corner the arm passes without stopping (zone z > 0) is blended over
+r = min(z, half of each neighbouring motion's TCP length) on both sides,
+as the controllers approximate a corner: the two motions superposed, the
+incoming one slowing to the corner while the outgoing one starts. With
+the blend parameter u in [0, 1] (linear in the path from the point r
+before the corner to the point r after it) and the quintic step's
+integral Omega(u) = 2.5 u^4 - 3 u^5 + u^6, the incoming motion is at
+2 r (u - Omega(u)) past its entry point and the outgoing one at
+2 r Omega(u) past the corner: p = p_in + p_out - p_corner and
+R = R_in R_corner^T R_out between two linear / circular motions, q =
+q_in + q_out - q_corner where one is a joint motion. The blend meets the
+lines with the same direction, curvature and curvature rate (C3), stays
+within r of the corner, and is sampled `BLEND_SAMPLES` times (up to twice
+that, the sharper the corner) on each side of its middle, the corner's
+sample: the waypoint's place on the path. A blend that stays within
+`BLEND_DEFLECTION` of its corner (the dense points of a CAM path) is not
+sampled: the corner is, and the path's fit within the tolerance of the
+samples stands for it.
 Where neighbouring samples differ by more than `JUMP_DEG` in a joint the
 interval is bisected (a fast wrist swing near a singularity is sampled
 finely); a jump that survives down to 1e-6 of a motion is a pass through
@@ -22,12 +42,19 @@ from trajcomp.errors import TimingError
 from trajcomp.arm.ik import Configuration, branch_index, ik, ik_all, ik_family
 from trajcomp.arm.kinematics import fk, fk_and_jacobian
 from trajcomp.programs.items import CIRCULAR, JOINT
+from trajcomp.timing.options import TOLERANCE
 from trajcomp.arm.transforms import matrix_to_rotvec, rotvec_to_matrix
 
 STEP_MM = 5.0  # mm, largest TCP step between path samples of a LIN / CIRC
 STEP_DEG = 2.0  # deg, largest orientation or joint step between path samples
 JUMP_DEG = 5.0  # deg, a larger joint step between neighbouring samples is bisected
+MIN_INTERVALS = 4  # sample intervals of a linear / circular motion from rest to rest at least (curved in joints)
+MIN_INTERVAL_MM = 0.25  # as long as they are no shorter than this
+BLEND_SAMPLES = 32  # sample intervals on each half of a blended corner turning by 60 deg or less, up to twice that
+# for a reversal (the spline's q'' within 0.2 % there)
+BLEND_DEFLECTION = TOLERANCE  # mm: a blend that stays this close to its corner is left to the fit (the corner sampled)
 AMBIGUOUS_DEG = 120.0  # deg: a linear motion turning a joint by more is followed to learn which way it turns
+_MIDDLE = 2.0 * (2.5 / 16 - 3 / 32 + 1 / 64)  # |p(1/2) - corner| / (r |e_out - e_in|): 2 Omega(1/2) (lines)
 _SMALLEST_FRACTION = 1e-6  # of a motion: bisection stops here (singular)
 
 
@@ -46,6 +73,12 @@ def run_samples(moves, robot, first, last):
         sample between waypoints), and the flange poses and flange
         Jacobians of the W = last - first + 1 waypoints (computed once here,
         reused by `trajcomp.timing.path`).
+    curved : bool
+        A blended corner is sampled (the path must pass through the
+        samples). Otherwise every blend stays within `BLEND_DEFLECTION` of
+        its corner: the corner is the sample, and a path within the
+        tolerance of the samples is within it of the programmed geometry
+        (a blend of the dense points of a CAM path, rounded as written).
 
     Raises
     ------
@@ -53,15 +86,51 @@ def run_samples(moves, robot, first, last):
         A motion leaves the workspace or the joint limits between its
         waypoints, a circle is degenerate, or a LIN passes a singularity.
     """
+    repeats = np.r_[False, np.all(moves.q[first + 1 : last + 1] == moves.q[first:last], axis=1)]  # (W,)
+    if repeats.any() and not np.all(moves.stop[first + 1 : last]):  # a blend goes on across a repeated waypoint
+        return _with_repeats(moves, robot, first, last, repeats)
+    return _samples(moves, robot, first, last)
+
+
+def _with_repeats(moves, robot, first, last, repeats):
+    """`run_samples` of a run some of whose waypoints repeat the one before (motions that do not move).
+
+    The run is sampled without them (a corner is blended between the
+    motions that move, its zone the last repeat's, a stop if any of them
+    is one); each repeat then gets a copy of the sample its waypoint is,
+    after it.
+    """
+    head = np.cumsum(~repeats) - 1  # (W,) the kept waypoint each one is or repeats, in the kept numbering
+    kept = first + np.flatnonzero(~repeats)
+    group_start = np.flatnonzero(~repeats)
+    group_end = np.r_[group_start[1:], len(repeats)] - 1
+    taken = {f.name: getattr(moves, f.name)[kept] for f in dataclasses.fields(moves)
+             if f.name not in ("tools", "labels")}
+    taken["stop"] = np.logical_or.reduceat(np.asarray(moves.stop[first : last + 1]), group_start)
+    taken["zone"] = moves.zone[first + group_end]
+    compact = dataclasses.replace(moves, labels=[moves.labels[k] for k in kept.tolist()], **taken)
+    q, owner, (waypoint, flange, flange_jac), curved = _samples(compact, robot, 0, len(kept) - 1)
+    last_row = np.r_[0, np.flatnonzero(np.diff(owner)) + 1, len(owner)][1:] - 1  # of each kept waypoint
+    last_row[0] = 0
+    rows = np.r_[np.arange(len(q)), last_row[head[repeats]]]
+    order = np.argsort(rows, kind="stable")
+    owner_out = np.r_[kept[owner], first + np.flatnonzero(repeats)][order]
+    at = np.where(waypoint >= 0, kept[np.maximum(waypoint, 0)] - first, -1)
+    repeated_at = np.where(at[last_row[head[repeats]]] >= 0, np.flatnonzero(repeats), -1)
+    return q[rows[order]], owner_out, (np.r_[at, repeated_at][order], flange[head], flange_jac[head]), curved
+
+
+def _samples(moves, robot, first, last):
+    """`run_samples` of a run without repeated waypoints (or of stops)."""
     geometry = _Geometry(moves, robot, first, last)
-    counts = geometry.sample_counts()
-    local = np.repeat(np.arange(len(counts)), counts)
-    step = np.arange(len(local)) - np.repeat(np.cumsum(counts) - counts, counts) + 1  # 1 .. n within a motion
-    local, fraction = np.r_[0, local], np.r_[0.0, step / np.repeat(counts, counts)]  # first: motion 0 at 0
+    local, fraction = geometry.sample_fractions()
+    local, fraction = np.r_[0, local], np.r_[0.0, fraction]  # first: motion 0 at 0
     q = geometry.solve(local, fraction, seed=None)
     local, fraction, q = geometry.bisect_jumps(local, fraction, q)
-    waypoint = np.where(fraction == 1.0, local + 1, np.where(np.arange(len(q)) == 0, 0, -1))
-    return q, first + np.where(fraction > 0, local + 1, local), (waypoint, geometry.flange, geometry.flange_jac)
+    at_waypoint = (fraction == 1.0) & (geometry.blend_end[local] == 0.0)  # a blended corner's is not on the path
+    waypoint = np.where(at_waypoint, local + 1, np.where(np.arange(len(q)) == 0, 0, -1))
+    return (q, first + np.where(fraction > 0, local + 1, local), (waypoint, geometry.flange, geometry.flange_jac),
+            bool(np.any(geometry.blend_samples > 0)))
 
 
 class _Geometry:
@@ -94,6 +163,32 @@ class _Geometry:
         self.branch = np.full(len(self.k), -1)  # configuration (branch index) of each linear / circular motion
         if self.closed_form:
             self._same_configuration(moves, first, last)
+        self._set_blends(moves)
+
+    def _set_blends(self, moves):
+        """Blend radius (mm) of each inner corner and the share of each motion it takes at its start and end."""
+        self.radius_at = np.zeros(len(self.k) + 1)  # of the corner at the end of motion i - 1 (0: none)
+        self.blend_start, self.blend_end = np.zeros((2, len(self.k)))  # fraction of motion i in a blend
+        self.blend_samples = np.zeros(len(self.k), dtype=int)  # sample intervals of half the blend at motion i's end
+        corner = self.k[:-1]  # waypoint between motions i and i + 1
+        if not corner.size:
+            return
+        blended = (~moves.stop[corner] & (moves.zone[corner] > 0.0) & (moves.tool[corner] == moves.tool[corner + 1])
+                   & (self.length[:-1] > 0.0) & (self.length[1:] > 0.0))
+        if not blended.any():
+            return
+        radius = np.minimum(moves.zone[corner], 0.5 * np.minimum(self.length[:-1], self.length[1:]))
+        with np.errstate(divide="ignore", invalid="ignore"):
+            direction = (self.p_b - self.p_a) / self.length[:, None]
+        turn = np.nan_to_num(np.linalg.norm(direction[1:] - direction[:-1], axis=1), nan=2.0)
+        deflection = np.where(self.joint[:-1] | self.joint[1:], np.inf, _MIDDLE * radius * turn)  # middle to corner
+        blended &= deflection >= BLEND_DEFLECTION
+        radius = np.where(blended, radius, 0.0)
+        self.radius_at[1:-1] = radius
+        with np.errstate(divide="ignore", invalid="ignore"):
+            self.blend_end[:-1] = np.where(blended, radius / self.length[:-1], 0.0)
+            self.blend_start[1:] = np.where(blended, radius / self.length[1:], 0.0)
+        self.blend_samples[:-1] = np.where(blended, np.ceil(BLEND_SAMPLES * np.clip(turn, 1.0, 2.0)), 0)
 
     def _same_configuration(self, moves, first, last):
         """Refuse a linear or circular motion whose target is declared in another configuration than its start."""
@@ -130,11 +225,35 @@ class _Geometry:
         self.circle[i], self.centre[i], self.radius[i], self.e1[i], self.e2[i] = True, centre, radius, e1, e2
         self.length[i] = radius * self.sweep[i]
 
+    def sample_fractions(self):
+        """The samples of every motion after its start: motion (n,) and fraction of its way (n,), in path order.
+
+        A motion's part outside blends gets `sample_counts` intervals (in
+        proportion to its share), each half-blend `BLEND_SAMPLES`; every
+        motion's last sample is its end (fraction 1).
+        """
+        start, end = self.blend_start, self.blend_end
+        line = 1.0 - start - end
+        counts = np.stack([np.where(start > 0, np.r_[0, self.blend_samples[:-1]], 0),
+                           np.where(line > 0, np.ceil(self.sample_counts() * line - 1e-9), 0).astype(int),
+                           np.where(end > 0, self.blend_samples, 0)], axis=1)  # (M, 3): start blend, line, end blend
+        lo = np.stack([np.zeros_like(start), start, 1.0 - end], axis=1)
+        width = np.stack([start, line, end], axis=1)
+        n = counts.ravel()
+        step = np.arange(n.sum()) - np.repeat(np.cumsum(n) - n, n) + 1  # 1 .. n within a piece
+        fraction = np.repeat(lo.ravel(), n) + step * np.repeat((width.ravel() / np.maximum(n, 1)), n)
+        local = np.repeat(np.repeat(np.arange(len(start)), 3), n)
+        ends = np.cumsum(counts.sum(axis=1)) - 1
+        fraction[ends] = 1.0
+        return local, fraction
+
     def sample_counts(self):
         """Number of sample intervals (M,) of each motion."""
         step = np.radians(STEP_DEG)
         joint_steps = np.max(np.abs(self.q_b - self.q_a), axis=1) / step
-        cartesian = np.maximum(self.length / STEP_MM, self.angle / step)
+        alone = self.moves.stop[self.k - 1] & self.moves.stop[self.k]  # in a run the spline spans its neighbours
+        fewest = np.where(alone, np.minimum(MIN_INTERVALS, np.ceil(self.length / MIN_INTERVAL_MM)), 1.0)
+        cartesian = np.maximum(np.maximum(self.length / STEP_MM, self.angle / step), fewest)
         return np.ceil(np.maximum(np.where(self.joint, 0.0, cartesian), np.maximum(joint_steps, 1.0))).astype(int)
 
     def poses(self, local, fraction):
@@ -153,10 +272,58 @@ class _Geometry:
         return T
 
     def solve(self, local, fraction, seed):
-        """Joints (n, 6) at fractions of motions: ends as given, joint motions on their line, others by IK.
+        """Joints (n, 6) at fractions of motions on the path: `plain` outside blends, blended inside.
 
         ``seed`` (n, 6): the IK seeds; None to use the joint line.
         """
+        before = fraction < self.blend_start[local]
+        after = fraction > 1.0 - self.blend_end[local]
+        blend = np.flatnonzero(before | after)
+        if not blend.size:
+            return self.plain(local, fraction, seed)
+        q = np.empty((len(local), 6))
+        plain = np.flatnonzero(~(before | after))
+        q[plain] = self.plain(local[plain], fraction[plain], None if seed is None else seed[plain])
+        incoming = local[blend] - before[blend]  # motion i into the corner, i + 1 out of it
+        r = self.radius_at[incoming + 1]
+        distance = np.where(before[blend], r + fraction[blend] * self.length[local[blend]],
+                            (fraction[blend] - 1.0) * self.length[local[blend]] + r)  # from the entry point, 0 .. 2 r
+        u = np.clip(distance / (2.0 * r), 0.0, 1.0)
+        omega = u**4 * (2.5 - 3.0 * u + u * u)
+        f_in = 1.0 - (r - 2.0 * r * (u - omega)) / self.length[incoming]
+        f_out = 2.0 * r * omega / self.length[incoming + 1]
+        q[blend] = self._blended(incoming, f_in, f_out, None if seed is None else seed[blend], local[blend],
+                                 fraction[blend])
+        return q
+
+    def _blended(self, incoming, f_in, f_out, seed, local, fraction):
+        """Joints (n, 6) of blend points: motions ``incoming`` (n,) at f_in and the next at f_out, superposed."""
+        corner = self.q_b[incoming]
+        q = (self.q_a[incoming] + f_in[:, None] * (corner - self.q_a[incoming])  # the joint lines superposed
+             + f_out[:, None] * (self.q_b[incoming + 1] - corner))
+        joint = np.flatnonzero(self.joint[incoming] | self.joint[incoming + 1])
+        if joint.size:
+            i = incoming[joint]
+            seeds = None if seed is None else seed[joint]
+            q[joint] = self.plain(i, f_in[joint], seeds) + self.plain(i + 1, f_out[joint], seeds) - corner[joint]
+        cartesian = np.flatnonzero(~self.joint[incoming] & ~self.joint[incoming + 1])
+        if not cartesian.size:
+            return q
+        i = incoming[cartesian]
+        T_in, T_out = self.poses(i, f_in[cartesian]), self.poses(i + 1, f_out[cartesian])
+        T = np.tile(np.eye(4), (len(i), 1, 1))
+        T[:, :3, 3] = T_in[:, :3, 3] + T_out[:, :3, 3] - self.p_b[i]
+        T[:, :3, :3] = T_in[:, :3, :3] @ np.swapaxes(self.R_b[i], 1, 2) @ T_out[:, :3, :3]
+        seeds = q[cartesian] if seed is None else seed[cartesian]
+        for tool, group in tool_groups(self.moves, self.k[i]):
+            part = cartesian[group]
+            q[part] = self._continuous(self.robot.replace(T_flange_tool=tool), T[group], seeds[group], local[part],
+                                       fraction[part])
+        return q
+
+    def plain(self, local, fraction, seed):
+        """Joints (n, 6) at fractions of motions without blends: ends as given, joint motions on their line,
+        others by IK. ``seed`` (n, 6): the IK seeds; None to use the joint line."""
         line = self.q_a[local] + fraction[:, None] * (self.q_b[local] - self.q_a[local])
         q = line.copy()
         solve = ~self.joint[local] & (fraction > 0) & (fraction < 1)

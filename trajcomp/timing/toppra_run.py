@@ -22,7 +22,7 @@ import dataclasses
 import numpy as np
 
 from trajcomp.errors import TimingError
-from trajcomp.timing.path import squared_speed_bound, tcp_limits
+from trajcomp.timing.path import squared_speed_bound, tcp_limits, time_limits
 from trajcomp.timing.reachability import Bands, backward, forward, squared_speeds
 
 _X_CAP = 1e12  # (rad/s)^2 ceiling of the squared path speed where no limit binds
@@ -266,7 +266,8 @@ def rest_to_rest_laws(stops, paths, moves):
     grid, dq, ddq = stops.grid[points], stops.dq[points], stops.ddq[points]
     velocity = np.repeat(moves.velocity[k], sizes, axis=0)
     tcp = np.repeat(tcp_limits(moves, k, stops.tcp_length[paths]), sizes)
-    x_max = np.minimum(squared_speed_bound(dq, stops.rate[points], velocity, tcp), _X_CAP)
+    timed = np.repeat(time_limits(moves, k, stops.pieces.ends[paths]) ** 2, sizes)
+    x_max = np.minimum(np.minimum(squared_speed_bound(dq, stops.rate[points], velocity, tcp), timed), _X_CAP)
     ends = np.cumsum(sizes)
     shift = np.r_[0.0, np.cumsum(stops.pieces.ends[paths] + 1.0)[:-1]]
     acceleration = np.repeat(moves.acceleration[k], sizes, axis=0)[:-1]
