@@ -270,6 +270,12 @@ class Motion:
     source : int
         Index into `Program.sources` of the file the motion is written in:
         0 but in a program joined from several files (`trajcomp.formats.task`).
+    start_why : str
+        Why the position the motion starts from is not unique (it can be
+        reached after a call, a loop's back jump, a branch or a jump from
+        elsewhere: `trajcomp.programs.flow`), ``""`` when it is the motion
+        before it: such a motion is not timed, its fields are left as
+        written and listed (`trajcomp.timing.moves`).
     """
 
     kind: str
@@ -289,6 +295,7 @@ class Motion:
     speed_why: str = ""
     source: int = 0
     orientation_speed: float = None
+    start_why: str = ""
 
 
 @dataclasses.dataclass(frozen=True)

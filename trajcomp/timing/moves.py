@@ -184,7 +184,8 @@ def moves_from_program(program, robot, joints, *, tools=None, frames=None):
     """The `Moves` of a program whose targets' joints are known (columnar: no loop over its motions).
 
     Motions to positions computed at run time are not waypoints: the
-    waypoint after one begins a new timed stretch.
+    waypoint after one begins a new timed stretch; so does a motion whose
+    start is not unique (`trajcomp.programs.items.Motion.start_why`).
 
     Parameters
     ----------
@@ -211,6 +212,7 @@ def moves_from_program(program, robot, joints, *, tools=None, frames=None):
     rows = np.flatnonzero(table.target >= 0)
     runtime_before = np.cumsum(table.target < 0)[rows]
     start = np.r_[True, runtime_before[1:] != runtime_before[:-1]][: len(rows)]
+    start |= table.start_why[rows] != ""  # reached from more than one place (`trajcomp.programs.flow`)
     known = np.asarray(joints, dtype=float)
     if targets.is_joint.any():  # joint targets use their own joints
         known = np.where(targets.is_joint[:, None], targets.joints, known)
