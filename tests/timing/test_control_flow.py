@@ -189,3 +189,256 @@ def test_krl_converted_runs_no_faster_than_any_path(tmp_path, target, makerless)
         cp = slowest(allowed[key], "cp")
         if converted.speed_unit == "mm/s" and converted.speed is not None:
             assert cp is not None and converted.speed <= 1000.0 * cp + 1e-6, (key, converted.speed, cp)
+
+
+RAPID_POINTS = {"P1": (1135, 0, 1415), "P2": (1195, 0, 1335), "P3": (1195, 80, 1335), "P4": (1135, 80, 1300),
+                "P5": (1160, 40, 1380), "P6": (1300, 250, 1000), "P7": (1220, 40, 1300), "P8": (1100, 40, 1300)}
+RAPID_MODULE = ("MODULE Cell\n" + "".join(
+    f"  CONST robtarget {name}:=[[{x},{y},{z}],[0,0,1,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]];\n"
+    for name, (x, y, z) in RAPID_POINTS.items()) + """  VAR num n := 0;
+  PROC main()
+    MoveJ P1, v1000, fine, tool0;
+    MoveL P2, v1000, z10, tool0;
+    go_far;
+    MoveJ P5, v100, fine, tool0;
+    VelSet 100, 20;
+    MoveJ P4, v1000, fine, tool0;
+    MoveL P2, v1000\\V:=800, z10, tool0;
+    MoveL P3, v1000\\T:=0.2, fine, tool0;
+    VelSet 50, 5000;
+    AccSet 50, 50;
+    WHILE n < 3 DO
+      MoveL P7, v500, z10, tool0;
+      MoveL P8, v500, z10, tool0;
+      Incr n;
+    ENDWHILE
+    IF n = 3 THEN
+      VelSet 100, 5000;
+    ELSE
+      VelSet 10, 5000;
+    ENDIF
+    MoveL P1, v1000, z10, tool0;
+    WaitTime 0.5;
+    MoveL P3, v1000, z10, tool0;
+    WaitDI di1, 1;
+    MoveJ P4, v1000, fine, tool0;
+    Elsewhere;
+    MoveJ P5, v1000, fine, tool0;
+  ENDPROC
+  PROC go_far()
+    MoveJ P6, v1000, fine, tool0;
+  ENDPROC
+ENDMODULE
+""")
+
+
+def rapid_ops(text):
+    """The controller's reading of a RAPID module: each motion keyed by its order in the file, with its TCP
+    speed (mm/s), time (\\T) and point; VelSet as settings."""
+    ops, count = [], 0
+    for line in text.splitlines():
+        line = line.split("!")[0].strip()
+        word = line.split(" ")[0].rstrip(";").upper() if line else ""
+        if m := re.match(r"PROC\s+(\w+)", line, re.I):
+            ops.append(Op("routine", m.group(1)))
+        elif word in ("ENDPROC", "ENDIF", "ELSE", "ENDWHILE"):
+            ops.append(Op({"ENDPROC": "end", "ENDIF": "endif", "ELSE": "else", "ENDWHILE": "endloop"}[word]))
+        elif word == "IF":
+            ops.append(Op("if"))
+        elif word == "WHILE":
+            ops.append(Op("loop"))
+        elif word.startswith("WAIT"):
+            ops.append(Op("wait"))
+        elif m := re.match(r"VelSet\s+([\d.]+)\s*,\s*([\d.]+)", line, re.I):
+            ops.append(Op("set", "velset", (float(m.group(1)), float(m.group(2)))))
+        elif m := re.match(r"Move[LJ]\s+(\w+)\s*,\s*v(\d+)((?:\\\w+:=[\d.]+)*)\s*,\s*(\w+)", line, re.I):
+            options = dict(re.findall(r"\\(\w+):=([\d.]+)", m.group(3)))
+            ops.append(Op("motion", f"m{count}", (m.group(1), float(m.group(2)), options.get("V"), options.get("T"),
+                                                   m.group(4).lower() != "fine")))
+            count += 1
+        elif re.match(r"\w+;$", line) and word not in ("ENDMODULE",):
+            ops.append(Op("call", line.rstrip(";")))
+    return ops
+
+
+def rapid_least_times(text):
+    """``{(motion key, path): least time}``: the least time the controller takes for each motion visit (its
+    distance from where the path's motion before it ends over its speed under the VelSet in force; no time
+    where the path starts there), and ``{motion key: (point, v, V, T, zone)}``."""
+    ops = rapid_ops(text)
+    fields = {op.name: op.value for op in ops if op.kind == "motion"}
+    out = {}
+    for (key, path), visit in visits(ops, "main", {"velset": (100.0, 5000.0)}).items():
+        override, top = visit.setting("velset")
+        point, v, own_v, t, _ = fields[key]
+        speed = min((float(own_v) if own_v else v) * override / 100.0, top)
+        least = None if not visit.before else np.linalg.norm(
+            np.subtract(RAPID_POINTS[point], RAPID_POINTS[fields[visit.before][0]])) / speed
+        if t is not None:
+            least = max(least or 0.0, float(t) * 100.0 / override)
+        out[(key, path)] = (least, speed, visit)
+    return out, fields
+
+
+def assert_rapid_no_faster(source_text, written_text):
+    """Every motion of the written module takes, on every path, no less time than the source on that path."""
+    before, source = rapid_least_times(source_text)
+    after, written = rapid_least_times(written_text)
+    assert before.keys() == after.keys()
+    checked = 0
+    for (key, path), (_, speed, visit) in after.items():
+        least, allowed, _ = before[(key, path)]
+        point, v, own_v, t, _ = written[key]
+        if written[key] == source[key]:  # left as written
+            continue
+        if t is not None:  # a time: the controller takes it, whatever the VelSet (its max does not hold a \T)
+            assert least is not None, (key, path, "a time written for a motion whose start is not unique")
+            assert float(t) >= least * (1 - 1e-6), (key, path, float(t), least)
+            checked += 1
+        else:
+            assert speed <= allowed + 1e-9, (key, path, speed, allowed)
+    return checked
+
+
+@pytest.fixture
+def rapid_source(tmp_path):
+    folder = tmp_path / "in"
+    folder.mkdir()
+    (folder / "Cell.mod").write_text(RAPID_MODULE)
+    return folder / "Cell.mod"
+
+
+def test_rapid_reader_follows_calls_loops_branches_velset_and_waits(rapid_source):
+    program = formats.read(rapid_source)
+    table = program.motion_table()
+    lines = {int(line): k for k, line in enumerate(table.line)}
+    text = RAPID_MODULE.splitlines()
+    at = {f"{n}": lines[i + 1] for n, i in enumerate(i for i, line in enumerate(text) if "Move" in line)}
+    assert "line 41" in table.start_why[at["2"]]  # after go_far: it starts at go_far's P6, not at P2
+    assert table.speed[at["3"]] == 20.0 and table.speed[at["4"]] == 20.0  # VelSet 100, 20 caps v1000 and \V:=800
+    assert "VelSet" in table.speed_why[at["5"]]  # \T:=0.2 held to 20 mm/s too: left as written
+    assert table.speed[at["6"]] == 250.0 and table.start_why[at["6"]]  # VelSet 50: v500 at half; after P4 or P8
+    assert table.speed[at["8"]] == 100.0  # IF: VelSet 100 or 10: the slowest, 10 % of v1000
+    assert np.isnan(table.zone[at["8"]]) and np.isnan(table.zone[at["9"]])  # WaitTime, WaitDI after them
+    assert "Elsewhere" in table.start_why[at["11"]] and "Elsewhere" in table.speed_why[at["11"]]
+
+
+def test_rapid_retimed_runs_no_faster_on_any_path(rapid_source, tmp_path, capsys):
+    out = tmp_path / "out" / "Cell.mod"
+    out.parent.mkdir()
+    assert main(["retime", str(rapid_source), "-o", str(out), "--robot", "abb_irb4600"]) in (0, 1)
+    assert assert_rapid_no_faster(RAPID_MODULE, out.read_text()) >= 3  # times written, each checked
+    captured = capsys.readouterr()
+    assert "start not unique" in captured.out + captured.err
+
+
+FANUC_POINTS = {1: (385, 0, 595, "N U T"), 2: (385, 0, 515, "N U T"), 3: (445, 0, 515, "F U T"),
+                4: (445, 40, 515, "N U T"), 5: (400, -60, 560, "N U T"), 6: (300, 200, 600, "N U T")}
+FANUC_MN = """   1:  UFRAME_NUM=0 ;
+   2:  UTOOL_NUM=0 ;
+   3:J P[1] 50% FINE    ;
+   4:L P[2] 200mm/sec CNT50    ;
+   5:  CALL GRIP    ;
+   6:L P[3] 200mm/sec FINE    ;
+   7:  LBL[1] ;
+   8:J P[4] 30% CNT100    ;
+   9:J P[5] 30% FINE    ;
+  10:  IF R[1]=1,JMP LBL[2] ;
+  11:J P[6] 100% FINE    ;
+  12:  JMP LBL[1] ;
+  13:  LBL[2] ;
+  14:L P[2] 100mm/sec CNT100    ;
+  15:  WAIT   2.00(sec) ;
+  16:J P[4] 40% FINE    ;
+  17:J P[5] 40% CNT100    ;
+  18:  WAIT DI[1]=ON ;
+  19:J P[6] 40% FINE    ;
+  20:  FOR R[2]=1 TO 3 ;
+  21:J P[1] 50% CNT50    ;
+  22:J P[5] 50% CNT50    ;
+  23:  ENDFOR ;
+  24:J P[4] 50% FINE    ;
+"""
+FANUC_PROGRAM = ("/PROG  CELL\n/ATTR\nOWNER\t\t= MNEDITOR;\nDEFAULT_GROUP\t= 1,*,*,*,*;\n/MN\n" + FANUC_MN + "/POS\n"
+                 + "".join(f"P[{n}]{{\n   GP1:\n\tUF : 0, UT : 0,\t\tCONFIG : '{c}, 0, 0, 0',\n"
+                           f"\tX = {x:.6f}  mm,\tY = {y:.6f}  mm,\tZ = {z:.6f}  mm,\n"
+                           "\tW = 180.000000000 deg,\tP = 0.000000000 deg,\tR = 0.000000000 deg\n};\n"
+                           for n, (x, y, z, c) in FANUC_POINTS.items()) + "/END\n")
+
+
+def fanuc_ops(text):
+    """The controller's reading of a FANUC LS /MN: each motion keyed by its order, with (kind, point, value,
+    unit, CNT)."""
+    ops, count = [], 0
+    body = text.split("/MN")[1].split("/POS")[0]
+    for line in body.splitlines():
+        line = line.split(":", 1)[1].strip().rstrip(";").strip() if ":" in line else ""
+        if m := re.match(r"([JL])\s+P\[(\d+)\]\s+([\d.]+)(%|mm/sec|msec|sec)\s+(FINE|CNT\d+)", line):
+            ops.append(Op("motion", f"m{count}", (m.group(1), int(m.group(2)), float(m.group(3)), m.group(4),
+                                                   m.group(5) != "FINE")))
+            count += 1
+        elif m := re.match(r"LBL\[(\d+)\]$", line):
+            ops.append(Op("label", m.group(1)))
+        elif m := re.match(r"(IF .*,\s*)?JMP LBL\[(\d+)\]$", line):
+            ops.append(Op("jump", m.group(2), bool(m.group(1))))
+        elif line.startswith("WAIT"):
+            ops.append(Op("wait"))
+        elif line.startswith("FOR "):
+            ops.append(Op("loop"))
+        elif line == "ENDFOR":
+            ops.append(Op("endloop"))
+        elif m := re.match(r"CALL (\w+)$", line):
+            ops.append(Op("call", m.group(1)))
+    return ops
+
+
+def fanuc_check(source_text, written_text, joints, robot):
+    """Every motion of the written LS takes, on every path, no less time than the controller's least for the
+    source on that path: a J at p % moves each joint at most p % of its speed limit, an L at most its mm/sec
+    (the distance over it); a time written where the start is not unique is a failure. Returns the times checked."""
+    before, after = visits(fanuc_ops(source_text), None, {}), visits(fanuc_ops(written_text), None, {})
+    fields = {op.name: op.value for op in fanuc_ops(source_text) if op.kind == "motion"}
+    written = {op.name: op.value for op in fanuc_ops(written_text) if op.kind == "motion"}
+    assert before.keys() == after.keys()
+    checked = 0
+    for (key, path), visit in after.items():
+        kind, point, value, unit, _ = written[key]
+        if written[key] == fields[key]:
+            continue  # left as written
+        assert unit in ("msec", "sec", "mm/sec"), (key, unit)
+        _, _, programmed, programmed_unit, _ = fields[key]
+        if unit == "mm/sec":
+            assert programmed_unit == "mm/sec" and value <= programmed, (key, value, programmed)
+            continue
+        assert visit.before, (key, path, "a time written where the motion's start is not unique")
+        start = fields[visit.before][1]
+        if programmed_unit == "%":
+            least = np.max(np.abs(joints[point] - joints[start]) / (programmed / 100.0 * robot.v_max))
+        else:
+            least = np.linalg.norm(np.subtract(FANUC_POINTS[point][:3], FANUC_POINTS[start][:3])) / programmed
+        assert value / (1000.0 if unit == "msec" else 1.0) >= least * (1 - 1e-6), (key, path, value, least)
+        checked += 1
+    return checked
+
+
+def test_fanuc_retimed_runs_no_faster_on_any_path_and_a_call_between_configurations_is_run(tmp_path, capsys):
+    from trajcomp.arm.robot import load_robot
+    from trajcomp.compensation.pipeline import planned
+    from trajcomp.compensation.posture import planned_joints
+
+    source = tmp_path / "CELL.LS"
+    source.write_text(FANUC_PROGRAM)
+    program = formats.read(source)
+    table = program.motion_table()
+    assert np.isnan(table.zone[6]) and np.isnan(table.zone[8])  # CNT100 then WAIT: it stops there
+    assert "GRIP" in table.start_why[2]  # L P[3] (F) after CALL GRIP from P[2] (N): not timed, not refused
+    robot = load_robot("fanuc_lrmate200id")
+    plan = planned_joints(program, robot)
+    q = planned(program, plan.index, plan.q)
+    joints = {int(program.targets[i].name.strip("P[]")): q[i] for i in range(len(program.targets))}
+    out = tmp_path / "out" / "CELL.LS"
+    out.parent.mkdir()
+    assert main(["retime", str(source), "-o", str(out), "--robot", "fanuc_lrmate200id"]) in (0, 1)
+    assert fanuc_check(FANUC_PROGRAM, out.read_text(), joints, robot) >= 4
+    captured = capsys.readouterr()
+    assert "after a call to GRIP" in captured.out + captured.err

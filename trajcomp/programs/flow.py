@@ -39,6 +39,9 @@ import dataclasses
 
 import numpy as np
 
+from trajcomp.programs.items import Statement
+from trajcomp.programs.tables import ItemRows
+
 FLOW = frozenset({"routine", "end", "call", "if", "elif", "else", "endif", "loop", "endloop", "exit", "label", "jump",
                   "return", "wait"})
 START = "the program's start"
@@ -140,7 +143,7 @@ class _Graph:
                 bodies.append(body)
             else:
                 (stack[-1] if stack else top).append(i)
-        bodies += stack  # a routine without its end: to the end of the file
+        bodies = sorted(bodies + stack)  # in file order; a routine without its end runs to the end of the file
         self.bodies = [top] + bodies if top else bodies
         self.succ = {}
         for body in self.bodies:
@@ -320,6 +323,10 @@ def start_reasons(reached, table):
             out[m] = f"its start is not known: {unknown[0]}"
         elif START in before and len(before) == 1:
             continue  # the program's first motion: not timed anyway
+        elif len(before) == 1:
+            (b,) = before
+            out[m] = (f"it starts where the motion at line {int(table.line[b])} ends, not the one before it in the "
+                      "file (a call, a loop, a branch or a jump)")
         else:
             lines = sorted(int(table.line[b]) for b in before if isinstance(b, int))
             where = ", ".join(f"line {line}" for line in lines)
@@ -354,3 +361,18 @@ def followed(table, reached, speeds=None):
     if speeds is not None:
         columns |= speeds(table, reached)
     return table.with_rows(rows, **columns)
+
+
+def program_followed(program, steps, initial, speeds=None, *, settings=False):
+    """``program`` with its motion table as its controller runs it (`followed`), or itself where the steps run
+    in file order (`needed`; ``settings``: the speed settings must be followed even so, the language reads
+    them only here)."""
+    if not (needed(steps) or settings and any(step.kind == "set" for step in steps)):
+        return program
+    table = program.motion_table()
+    table = followed(table, follow(steps, table, initial), speeds)
+    if isinstance(program.items, ItemRows):
+        return program.replace(items=ItemRows(program.items.statements, table))
+    motions = iter(range(len(table)))  # a program of objects stays one
+    return program.replace(items=tuple(item if isinstance(item, Statement) else table.motion(next(motions))
+                                       for item in program.items))

@@ -969,16 +969,16 @@ def read(path):
     walk.motions_before(len(src_lines.starts) + 1)
     items, resolved = _resolve(reader, path, dat_path, walk)
     targets = _targets(reader.targets, table, inline)
-    motions = MotionTable.of([i for i in items if isinstance(i, Motion)])
-    if len(walk.rows):
-        motions = MotionTable.merged([motions, walk.table(resolved)])
-    if flow.needed(reader.steps):  # calls, branches, loops, jumps or waits: speeds and starts as it runs
-        motions = flow.followed(motions, flow.follow(reader.steps, motions, reader.initial), _flow_speeds)
-    elif not len(walk.rows):  # none read at once, in file order
-        return Program("krl", path.stem, items, targets, reader.tools, reader.frames, tuple(reader.sources))
-    statements = StatementTable.of([i for i in items if not isinstance(i, Motion)])
-    return Program("krl", path.stem, ItemRows(statements, motions), targets, reader.tools, reader.frames,
-                   tuple(reader.sources))
+    if not len(walk.rows):  # none read at once
+        program = Program("krl", path.stem, items, targets, reader.tools, reader.frames, tuple(reader.sources))
+    else:
+        motions = MotionTable.merged([MotionTable.of([i for i in items if isinstance(i, Motion)]),
+                                      walk.table(resolved)])
+        statements = StatementTable.of([i for i in items if not isinstance(i, Motion)])
+        program = Program("krl", path.stem, ItemRows(statements, motions), targets, reader.tools, reader.frames,
+                          tuple(reader.sources))
+    # calls, branches, loops, jumps or waits: speeds and starts as the program runs
+    return flow.program_followed(program, reader.steps, reader.initial, _flow_speeds)
 
 
 def in_force(settings):
