@@ -36,23 +36,24 @@ class Visit:
 
 
 def _structure(ops):
-    """Matching partners (if -> else/endif, else -> endif, loop <-> endloop), labels, routines' entries."""
+    """Matching partners (if -> else/endif, else -> endif, loop <-> endloop, routine -> end), labels, routines'
+    entries."""
     partner, stack, labels, routines = {}, [], {}, {}
     for i, op in enumerate(ops):
-        if op.kind in ("if", "loop"):
+        if op.kind in ("if", "loop", "routine"):
             stack.append(i)
+            if op.kind == "routine":
+                routines[op.name.lower()] = i
         elif op.kind == "else":
             partner[stack[-1]] = i
             stack[-1] = i
-        elif op.kind in ("endif", "endloop"):
+        elif op.kind in ("endif", "endloop", "end") and stack:
             opened = stack.pop()
             partner[opened] = i
             if op.kind == "endloop":
                 partner[i] = opened
         elif op.kind == "label":
             labels[op.name.lower()] = i
-        elif op.kind == "routine":
-            routines[op.name.lower()] = i
     return partner, labels, routines
 
 
@@ -130,7 +131,9 @@ def visits(ops, entry, initial):
         elif op.kind in ("end", "return"):
             if calls:
                 go(calls[-1], calls=calls[:-1])
-        else:  # label, routine header reached in sequence, endif
+        elif op.kind == "routine":  # a routine defined inside another, reached in sequence: over it
+            go(partner.get(pc, len(ops)) + 1)
+        else:  # label, endif
             go(pc + 1)
     return out
 

@@ -442,3 +442,98 @@ def test_fanuc_retimed_runs_no_faster_on_any_path_and_a_call_between_configurati
     assert fanuc_check(FANUC_PROGRAM, out.read_text(), joints, robot) >= 4
     captured = capsys.readouterr()
     assert "after a call to GRIP" in captured.out + captured.err
+
+
+UR_SCRIPT = """def cell():
+  def go_far():
+    movej([0.8, -1.2, 1.4, -1.8, -1.57, 0.0], a=1.4, v=1.0)
+  end
+  def gripper():
+    set_digital_out(0, True)
+  end
+  movej([0.0, -1.57, 1.57, -1.57, -1.57, 0.0], a=1.4, v=1.05)
+  movej([0.1, -1.5, 1.5, -1.6, -1.57, 0.1], a=1.4, v=0.2)
+  go_far()
+  movej([0.0, -1.57, 1.57, -1.57, -1.57, 0.0], a=1.4, v=0.2)
+  gripper()
+  movej([0.2, -1.4, 1.4, -1.6, -1.57, 0.0], a=0.5, v=3.14)
+  movel([0.25, -1.4, 1.4, -1.6, -1.57, 0.0], a=0.2, v=0.25, r=0.02)
+  sleep(1.0)
+  movel([0.25, -1.3, 1.3, -1.6, -1.57, 0.0], a=1.2, v=0.25)
+  movej([0.4, -1.3, 1.3, -1.6, -1.57, 0.3], a=4.19, v=3.14)
+  i = 0
+  while i < 3:
+    movej([0.3, -1.4, 1.4, -1.6, -1.57, 0.0], a=1.4, v=0.5, r=0.05)
+    movej([0.2, -1.5, 1.5, -1.6, -1.57, 0.0], a=1.4, v=0.5, r=0.05)
+    i = i + 1
+  end
+  if get_digital_in(1):
+    movej([0.0, -1.57, 1.57, -1.57, -1.57, 0.0], a=1.4, v=1.05)
+  else:
+    movej([0.1, -1.57, 1.57, -1.57, -1.57, 0.0], a=1.4, v=0.3)
+  end
+  movej([0.2, -1.4, 1.4, -1.6, -1.57, 0.0], a=1.4, v=1.05)
+end
+"""
+
+
+def ur_ops(text):
+    """The controller's reading of a script: each motion keyed by its order, with (function, joints, a, v, t)."""
+    ops, count, opened = [], 0, []
+    for line in text.splitlines():
+        line = line.split("#")[0].strip()
+        if m := re.match(r"def (\w+)\(", line):
+            ops.append(Op("routine", m.group(1)))
+            opened.append("end")
+        elif re.match(r"(if|while) .*:$", line):
+            ops.append(Op("if" if line.startswith("if") else "loop"))
+            opened.append("endif" if line.startswith("if") else "endloop")
+        elif line == "else:":
+            ops.append(Op("else"))
+        elif line == "end":
+            ops.append(Op(opened.pop()))
+        elif line.startswith("sleep("):
+            ops.append(Op("wait"))
+        elif m := re.match(r"(movej|movel)\(\[([^\]]*)\]((?:, \w=[\d.]+)*)\)$", line):
+            options = dict(re.findall(r"(\w)=([\d.]+)", m.group(3)))
+            ops.append(Op("motion", f"m{count}", (m.group(1), tuple(float(x) for x in m.group(2).split(",")),
+                                                   float(options["a"]), float(options["v"]),
+                                                   float(options["t"]) if "t" in options else None)))
+            count += 1
+        elif m := re.match(r"(\w+)\(\)$", line):
+            ops.append(Op("call", m.group(1)))
+    return ops
+
+
+def ur_least_time(distance, a, v):
+    """The time a movej takes over ``distance`` (rad, the leading axis) at acceleration ``a`` and speed ``v``."""
+    return distance / v + v / a if distance >= v * v / a else 2.0 * np.sqrt(distance / a)
+
+
+def test_urscript_retimed_runs_no_faster_on_any_path_under_its_a_and_v(tmp_path, capsys):
+    source = tmp_path / "cell.script"
+    source.write_text(UR_SCRIPT)
+    table = formats.read(source).motion_table()
+    assert "first motion" in table.start_why[1]  # after go_far's motion in the file, but the script's first
+    assert "line 3" in table.start_why[3]  # after go_far(): it starts at go_far's motion
+    assert np.isnan(table.zone[5]) and table.acceleration[4] == 0.5  # sleep after the blended movel; a=0.5 read
+    out = tmp_path / "out" / "cell.script"
+    out.parent.mkdir()
+    assert main(["retime", str(source), "-o", str(out), "--robot", "ur10"]) in (0, 1)
+    ops = ur_ops(UR_SCRIPT)
+    fields = {op.name: op.value for op in ops if op.kind == "motion"}
+    written = {op.name: op.value for op in ur_ops(out.read_text()) if op.kind == "motion"}
+    visited = visits(ur_ops(out.read_text()), "cell", {})
+    assert visited.keys() == visits(ops, "cell", {}).keys()
+    checked = 0
+    for (key, path), visit in visited.items():
+        function, q, a, v, t = written[key]
+        if written[key] == fields[key]:
+            continue  # left as written
+        assert t is not None and function == "movej", (key, written[key])
+        assert visit.before, (key, path, "a time written where the motion's start is not unique")
+        distance = np.max(np.abs(np.subtract(q, fields[visit.before][1])))
+        least = ur_least_time(distance, a, v)
+        assert t >= least * (1 - 1e-4), (key, path, t, least)  # t is written to 4 decimals, rounded up
+        checked += 1
+    assert checked >= 3

@@ -321,8 +321,9 @@ def start_reasons(reached, table):
         unknown = sorted(b for b in before if isinstance(b, str) and b != START)
         if unknown:
             out[m] = f"its start is not known: {unknown[0]}"
-        elif START in before and len(before) == 1:
-            continue  # the program's first motion: not timed anyway
+        elif before == {START}:
+            if m:  # the program's first motion, after another one in the file (a routine's, defined above it)
+                out[m] = "it is the program's first motion: where the arm is before it is not known"
         elif len(before) == 1:
             (b,) = before
             out[m] = (f"it starts where the motion at line {int(table.line[b])} ends, not the one before it in the "

@@ -41,6 +41,8 @@ class MotionTable:
     axis_position : ndarray of bool, shape (M,)
     orientation_speed : ndarray, shape (M,)
         Rad/s; NaN where none bounds the motion.
+    acceleration : ndarray, shape (M,)
+        As `Motion.acceleration`; NaN where none is stated.
     source : ndarray of int, shape (M,)
         Index of the file each motion is written in.
     text : Sequence of str, length M
@@ -70,13 +72,15 @@ class MotionTable:
     speed_why: np.ndarray = None
     refs: Mapping = None
     start_why: np.ndarray = None
+    acceleration: np.ndarray = None
     spans: Sequence = None
 
     def __post_init__(self):
         m = len(self.line)
         defaults = {"orientation_speed": lambda: np.full(m, np.nan), "source": lambda: np.zeros(m, dtype=int),
                     "text": lambda: repeated("", m), "reason": lambda: repeated("", m),
-                    "speed_why": lambda: repeated("", m), "refs": dict, "start_why": lambda: repeated("", m)}
+                    "speed_why": lambda: repeated("", m), "refs": dict, "start_why": lambda: repeated("", m),
+                    "acceleration": lambda: np.broadcast_to(np.nan, (m,))}
         for name, default in defaults.items():
             if getattr(self, name) is None:
                 object.__setattr__(self, name, default())
@@ -111,6 +115,7 @@ class MotionTable:
             reason=column([m.reason for m in motions], object),
             speed_why=column([m.speed_why for m in motions], object),
             start_why=column([m.start_why for m in motions], object),
+            acceleration=column([number(m.acceleration) for m in motions], float),
             refs={k: m.refs for k, m in enumerate(motions) if m.refs},
             spans=spans if any(spans) else None,
         )
@@ -180,7 +185,7 @@ class MotionTable:
         if any(t.spans is not None for t in tables):
             spans = Picked([t.spans if t.spans is not None else repeated({}, len(t)) for t in tables], part, row)
         names = ("kind", "target", "via", "speed", "speed_unit", "zone", "tool", "frame", "axis_position",
-                 "orientation_speed", "reason", "speed_why", "start_why")
+                 "orientation_speed", "reason", "speed_why", "start_why", "acceleration")
         return cls(line=line[order], source=source[order], text=sequence("text"), refs=refs, spans=spans,
                    **{name: column(name) for name in names})
 
@@ -246,6 +251,7 @@ class MotionTable:
             reason=self.reason[k], refs=self.refs.get(k, ()), spans={} if self.spans is None else self.spans[k],
             axis_position=bool(self.axis_position[k]), speed_why=self.speed_why[k], source=int(self.source[k]),
             orientation_speed=optional(self.orientation_speed[k], float), start_why=self.start_why[k],
+            acceleration=optional(self.acceleration[k], float),
         )
 
 

@@ -51,7 +51,9 @@ class Moves:
         Programmed time of motion k, s (FANUC ``sec``); 0 where none.
     velocity, acceleration : ndarray, shape (M, 6)
         Joint velocity (rad/s) and acceleration (rad/s^2) limits of motion k:
-        the robot's, lowered by a programmed joint speed (% or rad/s).
+        the robot's, lowered by a programmed joint speed (% or rad/s) and a
+        joint motion's programmed acceleration (UR movej ``a=``, the leading
+        axis's: every axis's bound).
     tools : ndarray, shape (T, 4, 4)
         The distinct T_flange_tool the motions use, mm.
     tool : ndarray of int, shape (M,)
@@ -261,9 +263,15 @@ def _speed_limits(table, rows, robot, program, labels):
         velocity = velocity.copy()
         velocity[percent] = robot.v_max * np.minimum(speed[percent, None], 100.0) / 100.0
         velocity[absolute] = np.minimum(robot.v_max, speed[absolute, None])
+    stated = table.acceleration[rows]
+    accelerating = (kind == JOINT) & (stated > 0)
+    acceleration = np.broadcast_to(robot.a_max, (m, 6))
+    if accelerating.any():
+        acceleration = acceleration.copy()
+        acceleration[accelerating] = np.minimum(robot.a_max, stated[accelerating, None])
     return {
         "tcp_speed": np.where(given & (unit == "mm/s"), speed, np.inf),
         "min_duration": np.where(given & (unit == "s"), speed, 0.0),
         "velocity": velocity,
-        "acceleration": np.broadcast_to(robot.a_max, (m, 6)),
+        "acceleration": acceleration,
     }
