@@ -537,3 +537,50 @@ def test_urscript_retimed_runs_no_faster_on_any_path_under_its_a_and_v(tmp_path,
         assert t >= least * (1 - 1e-4), (key, path, t, least)  # t is written to 4 decimals, rounded up
         checked += 1
     assert checked >= 3
+
+
+def test_krl_spline_block_runs_at_its_with_speed_and_gets_no_statement_inside(tmp_path):
+    folder = tmp_path / "in"
+    folder.mkdir()
+    (folder / "spl.src").write_text("DEF spl( )\n  $VEL.CP=3.0\n  PTP HOME\n  LIN P1\n"
+                                    "  SPLINE WITH $VEL.CP=0.02\n    SLIN P2\n    SLIN P3\n    SLIN P4 WITH $VEL.CP=2.5\n"
+                                    "  ENDSPLINE\n  LIN P5\nEND\n")
+    (folder / "spl.dat").write_text(KRL_DAT.replace("DEFDAT main", "DEFDAT spl"))
+    table = formats.read(folder / "spl.src").motion_table()
+    assert table.speed.tolist()[1:] == [3000.0, 20.0, 20.0, 2500.0, 3000.0]  # the block's WITH, SLIN P4's own
+    out = tmp_path / "out" / "spl.src"
+    out.parent.mkdir()
+    assert main(["retime", str(folder / "spl.src"), "-o", str(out), "--robot", "kuka_kr6_r900"]) in (0, 1)
+    text = out.read_text()
+    block = text[text.index("SPLINE"):text.index("ENDSPLINE")]
+    assert "$VEL.CP=" not in block.replace("WITH $VEL.CP=", "")  # nothing inserted inside the block
+    speeds = [float(v) for v in re.findall(r"WITH \$VEL\.CP=([\d.]+)", text)]
+    assert speeds[0] <= 0.02 and speeds[1] <= 2.5  # the block's and SLIN P4's, never faster
+    written = formats.read(out).motion_table()
+    assert all(written.speed[k] <= table.speed[k] + 1e-9 for k in range(1, len(written)))
+
+
+@pytest.mark.parametrize("target", [".src", ".ls", ".script", ".csv"])
+def test_rapid_converted_runs_no_faster_than_any_path(rapid_source, tmp_path, target, makerless):
+    """The converted program runs its motions in file order: one whose start the module's flow makes not unique
+    is written at the target's slowest and listed; a line whose start is unique runs no faster than the slowest
+    speed (VelSet included) any path gives it."""
+    least, fields = rapid_least_times(RAPID_MODULE)
+    keys = sorted(fields, key=lambda key: int(key[1:]))
+    order = {key: k for k, key in enumerate(keys)}
+    seen = {}
+    for (key, _), (_, speed, visit) in least.items():
+        seen.setdefault(key, []).append((speed, visit.before))
+    out = tmp_path / f"out{target}"
+    assert main(["convert", str(rapid_source), str(out), "--robot", makerless("abb_irb4600")]) in (0, 1)
+    written = formats.read(out).motions
+    assert len(written) == len(keys)
+    for key, motion in zip(keys, written):
+        befores = {before for _, before in seen.get(key, [])}
+        unique = befores == {keys[order[key] - 1]} if order[key] else False
+        slowest_speed = min(speed for speed, _ in seen.get(key, [(np.inf, None)]))
+        if not unique and order[key]:
+            assert motion.speed is not None and motion.speed <= {"%": 1.0, "mm/s": 1.0, "rad/s": np.radians(1.0),
+                                                                 "s": np.inf}[motion.speed_unit], (key, motion)
+        elif motion.kind != JOINT and motion.speed_unit == "mm/s" and motion.speed is not None:
+            assert motion.speed <= slowest_speed + 1e-6, (key, motion.speed, slowest_speed)

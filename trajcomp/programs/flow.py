@@ -81,23 +81,33 @@ class Unknown:
 
 @dataclasses.dataclass(frozen=True)
 class Reached:
-    """What can be in force when each of M motions starts.
+    """What can be in force when each of M motions starts, per run of R motions no step separates.
+
+    The motions of a run start with the same settings; each but the first
+    starts where the motion before it ends.
 
     Attributes
     ----------
-    settings : list of dict, length M
-        Per motion, ``{group: frozenset of values}``: every value (or
-        `Unknown`) its group can have when the motion starts.
-    before : list of frozenset, length M
-        Per motion, the motions (indices) that can run just before it, or
-        why none is known (str: `START`, a call).
+    first : ndarray of int, shape (R,)
+        The first motion of each run, ascending (the first is 0).
+    settings : list of dict, length R
+        Per run, ``{group: frozenset of values}``: every value (or
+        `Unknown`) its group can have when its motions start.
+    before : list of frozenset, length R
+        Per run, the motions (indices) that can run just before its first,
+        or why none is known (str: `START`, a call).
     waits : ndarray of bool, shape (M,)
         A wait can follow the motion before the next motion starts.
     """
 
+    first: np.ndarray
     settings: list
     before: list
     waits: np.ndarray
+
+    def rows(self, r):
+        """The motions of run ``r``: a slice."""
+        return slice(int(self.first[r]), int(self.first[r + 1]) if r + 1 < len(self.first) else len(self.waits))
 
 
 def needed(steps):
@@ -248,8 +258,8 @@ def follow(steps, table, initial):
         if nodes[first].kind != "routine" or first not in callers or body is graph.bodies[0]:
             state_in[first] = start
             work.append(first)
-    settings = [None] * len(table)
-    before = [None] * len(table)
+    runs = {n: r for r, n in enumerate(n for n, node in enumerate(nodes) if node.kind == "motions")}
+    settings, before = [None] * len(runs), [None] * len(runs)
     waits = np.zeros(len(table), dtype=bool)
 
     def join(a, b):
@@ -267,11 +277,8 @@ def follow(steps, table, initial):
         node, (values, last) = nodes[n], state_in[n]
         kind = node.kind
         if kind == "motions":
-            first, final = node.value
-            for m in range(first, final + 1):
-                settings[m] = dict(zip(groups, values))
-                before[m] = last if m == first else frozenset([m - 1])
-            last = frozenset([final])
+            settings[runs[n]], before[runs[n]] = dict(zip(groups, values)), last
+            last = frozenset([node.value[1]])
         elif kind == "set":
             values = tuple(frozenset([node.value]) if g == node.name else v for g, v in zip(groups, values))
         elif kind == "wait":
@@ -293,11 +300,12 @@ def follow(steps, table, initial):
             continue
         for s in succ.get(n, ()):
             send(s, (values, last))
-    for m in range(len(table)):  # a motion no path reaches (dead code): as if run in file order
-        if settings[m] is None:
-            settings[m] = dict(zip(groups, start[0]))
-            before[m] = frozenset([m - 1]) if m else start[1]
-    return Reached(settings, before, waits)
+    first = np.array([nodes[n].value[0] for n in runs], dtype=int)
+    for r, m in enumerate(first.tolist()):  # a run no path reaches (dead code): as if run in file order
+        if settings[r] is None:
+            settings[r] = dict(zip(groups, start[0]))
+            before[r] = frozenset([m - 1]) if m else start[1]
+    return Reached(first, settings, before, waits)
 
 
 def send_after(call, state, succ, send):
@@ -315,7 +323,7 @@ def start_reasons(reached, table):
     table : MotionTable
     """
     out = np.full(len(table), "", dtype=object)
-    for m, before in enumerate(reached.before):
+    for m, before in zip(reached.first.tolist(), reached.before):
         if before == {m - 1}:
             continue
         unknown = sorted(b for b in before if isinstance(b, str) and b != START)
@@ -348,7 +356,8 @@ def followed(table, reached, speeds=None):
     speeds : callable, optional
         ``speeds(table, reached) -> {column: values (M,)}``: the language's
         speed columns (``speed``, ``speed_unit``, ``speed_why`` ...) from
-        the settings reaching each motion.
+        the settings reaching each motion; ``spans``: ``(rows (K,), their
+        spans (K,))`` of the motions whose spans change.
 
     Returns
     -------
@@ -359,9 +368,12 @@ def followed(table, reached, speeds=None):
     zone = np.array(table.zone, dtype=float)
     zone[reached.waits] = np.nan
     columns["zone"] = zone
+    spans = None
     if speeds is not None:
         columns |= speeds(table, reached)
-    return table.with_rows(rows, **columns)
+        spans = columns.pop("spans", None)
+    table = table.with_rows(rows, **columns)
+    return table if spans is None else table.with_rows(spans[0], spans=spans[1])
 
 
 def program_followed(program, steps, initial, speeds=None, *, settings=False):

@@ -73,6 +73,8 @@ _FLOW_WORDS = {"IF": "if", "ELSE": "else", "ENDIF": "endif", "SWITCH": "if", "CA
                "ENDSWITCH": "endif", "FOR": "loop", "ENDFOR": "endloop", "WHILE": "loop", "ENDWHILE": "endloop",
                "LOOP": "loop", "ENDLOOP": "endloop", "REPEAT": "loop", "UNTIL": "endloop", "EXIT": "exit",
                "RETURN": "return", "END": "end", "ENDFCT": "end", "WAIT": "wait", "HALT": "wait", "GOTO": "jump"}
+_SPLINE = re.compile(r"^\s*(?:PTP_)?SPLINE\b(?:.*?\bWITH\b(.*))?$", re.I)  # a spline block: its WITH holds for it
+_END_SPLINE = re.compile(r"^\s*ENDSPLINE\b", re.I)
 _FIRST_WORD = re.compile(r"^\s*([A-Za-z_$][\w$]*)\s*(\(|:\s*$)?")
 _JUMP_TO = re.compile(r"^\s*GOTO\s+(\w+)", re.I)
 _NUMBER_DECL = re.compile(r"^\s*(?:DECL\s+)?((?:(?:GLOBAL|CONST)\s+)*)(?:REAL|INT)\s+(\w+)\s*=\s*(" + NUMBER + r")\s*$", re.I)
@@ -563,6 +565,7 @@ class _Reader:
         self.axes = [self.initial["ptp1"]] * 6
         self.steps = []  # what the .src does besides moving, in order (`trajcomp.programs.flow`)
         self.siblings = set()  # upper names of the other .src files beside it: routines the read does not include
+        self.outside_spline = None  # the TCP speed setting in force before the spline block being read
         self.numbers = {}  # NAME -> (value, why it is only known at run time) of REAL / INT data declared with one
         self.assigned = {}  # NAME -> first line of the .src that assigns it
         self.shared = set()  # NAMEs of GLOBAL points: other programs may assign them
@@ -750,6 +753,14 @@ class _Reader:
                            original, f"BAS(#{what})")
         elif m := _ACT.match(text):
             self.activate(m.group(1).upper(), m.group(2).upper(), index, line_no, original)
+        elif m := _SPLINE.match(text):
+            own = m.group(1) and self.with_speed(m.group(1), start + m.start(1), index, line_no, original, LINEAR)
+            if own:  # SPLINE WITH $VEL.CP = v: the block's motions run at v, the speed before it after ENDSPLINE
+                self.outside_spline = (self.speed_cp, self.speed_why[LINEAR], self.speed_spans[LINEAR])
+                self.give(LINEAR, *own, line_no, index)
+        elif _END_SPLINE.match(text) and self.outside_spline is not None:
+            self.give(LINEAR, *self.outside_spline, line_no, index)
+            self.outside_spline = None
         elif m := _VEL_CP.match(text):
             self.set_speed(LINEAR, m, 1, index, start, line_no, original, "$VEL.CP")
         elif m := _VEL_AXIS.match(text):
@@ -1004,18 +1015,25 @@ def in_force(settings):
 def _flow_speeds(table, reached):
     """The speed columns of a KRL program's motions from the settings that can reach each
     (`trajcomp.programs.flow.followed`): PTP the slowest of its axes', LIN and CIRC the TCP's; a spline
-    motion's own WITH speed stays."""
+    motion's own WITH speed stays. The spans of the motions whose setting moved to another statement change."""
     own = table.span_offsets("speed_with")[1] >= 0
+    joint = table.kind == JOINT
     speed, why = np.array(table.speed, dtype=float), np.array(table.speed_why, dtype=object)
-    spans = [dict(row) for row in table.spans] if table.spans is not None else [{} for _ in range(len(table))]
-    for k in np.flatnonzero(~own).tolist():
-        groups = AXIS_GROUPS if table.kind[k] == JOINT else ("cp",)
-        value, why[k], span = in_force([s for group in groups for s in reached.settings[k][group]])
-        speed[k] = np.nan if value is None else value
-        spans[k].pop("speed", None)
-        if span is not None:
-            spans[k]["speed"] = span
-    return {"speed": speed, "speed_why": why, "spans": tuple(spans)}
+    span = np.full(len(table), None, dtype=object)
+    for r, settings in enumerate(reached.settings):
+        rows = np.arange(len(table))[reached.rows(r)]
+        for groups, members in ((AXIS_GROUPS, joint[rows]), (("cp",), ~joint[rows])):
+            at = rows[members & ~own[rows]]
+            if len(at):
+                value, why[at], span[at] = in_force([s for group in groups for s in settings[group]])
+                speed[at] = np.nan if value is None else value
+    _, start, end = table.span_offsets("speed")
+    new = np.array([(-1, -1) if s is None else (s.start, s.end) for s in span.tolist()], dtype=np.int64).reshape(-1, 2)
+    moved = np.flatnonzero(~own & ((new[:, 0] != start) | (new[:, 1] != end)))
+    spans = [{**{role: value for role, value in table.spans[k].items() if role != "speed"},
+              **({} if span[k] is None else {"speed": span[k]})} for k in moved.tolist()]
+    columns = {"speed": speed, "speed_why": why}
+    return columns | ({"spans": (moved, spans)} if len(moved) else {})
 
 
 def _written_motions(index, masked, lines):

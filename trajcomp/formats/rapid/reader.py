@@ -1184,25 +1184,23 @@ def _flow_speeds(table, reached):
     speed = np.array(table.speed, dtype=float)
     orientation = np.array(table.orientation_speed, dtype=float)
     why = np.array(table.speed_why, dtype=object)
-    for k, settings in enumerate(reached.settings):
+    for r, settings in enumerate(reached.settings):
+        rows = np.arange(len(table))[reached.rows(r)]
+        rows = rows[why[rows] == ""]  # a speed data set at run time: left as written anyway
         velsets = settings["velset"]
-        if why[k]:  # its speed data is set at run time: left as written anyway
-            continue
         unknown = [v.why if isinstance(v, Unknown) else v[2] for v in velsets if isinstance(v, Unknown) or v[2]]
         if unknown:
-            why[k] = why[k] or f"VelSet: {unknown[0]}"
+            why[rows] = f"VelSet: {unknown[0]}"
             continue
         override, top = min(v[0] for v in velsets) / 100.0, min(v[1] for v in velsets)
-        if table.speed_unit[k] == "s" and top < VMAX:  # the time held to a TCP speed: no one field states both
-            why[k] = f"\\T under VelSet's max {top:g} mm/s, which holds it too: left as written"
-            continue
-        if table.speed_unit[k] == "s":
-            speed[k] = speed[k] / override
-            continue
-        tcp = VMAX if np.isnan(speed[k]) else speed[k]
-        if override < 1.0 or top < tcp:
-            speed[k] = min(tcp * override, top)
-        orientation[k] = orientation[k] * override
+        timed = table.speed_unit[rows] == "s"
+        if top < VMAX:  # a time held to a TCP speed: no one field states both
+            why[rows[timed]] = f"\\T under VelSet's max {top:g} mm/s, which holds it too: left as written"
+        speed[rows[timed]] /= override
+        paced = rows[~timed]
+        tcp = np.where(np.isnan(speed[paced]), VMAX, speed[paced])
+        speed[paced] = np.where((override < 1.0) | (top < tcp), np.minimum(tcp * override, top), speed[paced])
+        orientation[paced] *= override
     return {"speed": speed, "orientation_speed": orientation, "speed_why": why}
 
 

@@ -656,7 +656,7 @@ def read(path):
     reader.cam_rows(done, len(reader.cam))
     _finish(reader)
     # def calls, if, while, sleep: starts and stops as the script runs
-    return flow.program_followed(_program(reader, path), _flow_steps(masked, lines), {})
+    return flow.program_followed(_program(reader, path), _flow_steps(reader), {})
 
 
 # the lines that change the order a script runs in (`trajcomp.programs.flow.Step`): blocks, their ends, waits
@@ -668,15 +668,24 @@ _FLOW_KINDS = {"def": "routine", "thread": "routine", "sec": "routine", "if": "i
                "while": "loop", "for": "loop", "break": "exit", "return": "return", "halt": "return"}
 
 
-def _flow_steps(masked, lines):
+def _flow_steps(reader):
     """The `trajcomp.programs.flow.Step` s of a script: ``def`` (``thread``, ``sec``) and their calls, ``if`` ..
     ``elif`` .. ``else``, ``while``, ``break``, ``return``, ``halt``; ``sleep``, ``sync``, ``stopj`` and ``stopl``
-    stop the arm (a wait)."""
-    found = [(m.start(), next(g for g in m.group(1, 3, 4, 5, 6) if g), m.group(2)) for m in _FLOW_LINE.finditer(masked)]
+    stop the arm (a wait). Looked for in the lines read one by one and the plain statements (a CAM motion line is
+    none)."""
+    masked, lines, plain = reader.masked, reader.lines, reader.plain
+    calling = [j for j, layout in enumerate(plain.layouts) if re.match(r"\s*\w+\s*\(", layout)]
+    rows = np.flatnonzero(np.isin(plain.layout, calling)).tolist()
+    offsets = [start for start, _ in reader.parts] + [int(plain.start[k]) for k in rows]
+    texts = [masked[start:end] for start, end in reader.parts] + [masked[plain.start[k]:plain.stop[k]] for k in rows]
+    found = [(at + m.start(), next(g for g in m.group(1, 3, 4, 5, 6) if g), m.group(2))
+             for at, text in zip(offsets, texts) for m in _FLOW_LINE.finditer(text)]
     names = {name for _, word, name in found if word == "def" and name}
     if names:
         calls = re.compile(r"^[ \t]*(" + "|".join(map(re.escape, sorted(names))) + r")[ \t]*\(", re.M)
-        found = sorted(found + [(m.start(), "call", m.group(1)) for m in calls.finditer(masked)])
+        found += [(at + m.start(), "call", m.group(1)) for at, text in zip(offsets, texts)
+                  for m in calls.finditer(text)]
+    found.sort()
     steps, opened = [], []
     for offset, word, name in found:
         line = lines.number(offset)
