@@ -261,10 +261,18 @@ def rapid_ops(text):
     return ops
 
 
-def rapid_least_times(text):
+def rapid_points(text):
+    """``{name: (x, y, z)}`` of a module's robtargets, mm."""
+    return {name: tuple(float(v) for v in xyz.split(",")) for name, xyz in
+            re.findall(r"robtarget\s+(\w+)\s*:=\s*\[\[([^\]]*)\]", text)}
+
+
+def rapid_least_times(text, points=None):
     """``{(motion key, path): least time}``: the least time the controller takes for each motion visit (its
-    distance from where the path's motion before it ends over its speed under the VelSet in force; no time
-    where the path starts there), and ``{motion key: (point, v, V, T, zone)}``."""
+    distance from where the path's motion before it ends, between ``points`` (the module's own by default), over
+    its speed under the VelSet in force; no time where the path starts there), and ``{motion key: (point, v, V, T,
+    zone)}``."""
+    points = points or rapid_points(text)
     ops = rapid_ops(text)
     fields = {op.name: op.value for op in ops if op.kind == "motion"}
     out = {}
@@ -273,7 +281,7 @@ def rapid_least_times(text):
         point, v, own_v, t, _ = fields[key]
         speed = min((float(own_v) if own_v else v) * override / 100.0, top)
         least = None if not visit.before else np.linalg.norm(
-            np.subtract(RAPID_POINTS[point], RAPID_POINTS[fields[visit.before][0]])) / speed
+            np.subtract(points[point], points[fields[visit.before][0]])) / speed
         if t is not None:
             least = max(least or 0.0, float(t) * 100.0 / override)
         out[(key, path)] = (least, speed, visit)
@@ -281,8 +289,9 @@ def rapid_least_times(text):
 
 
 def assert_rapid_no_faster(source_text, written_text):
-    """Every motion of the written module takes, on every path, no less time than the source on that path."""
-    before, source = rapid_least_times(source_text)
+    """Every motion of the written module takes, on every path, no less time than the source's speeds allow on that
+    path over the written points (compensated ones move a little)."""
+    before, source = rapid_least_times(source_text, rapid_points(written_text))
     after, written = rapid_least_times(written_text)
     assert before.keys() == after.keys()
     checked = 0
@@ -323,13 +332,32 @@ def test_rapid_reader_follows_calls_loops_branches_velset_and_waits(rapid_source
     assert "Elsewhere" in table.start_why[at["11"]] and "Elsewhere" in table.speed_why[at["11"]]
 
 
-def test_rapid_retimed_runs_no_faster_on_any_path(rapid_source, tmp_path, capsys):
+@pytest.fixture(scope="module")
+def abb_model(tmp_path_factory):
+    """A model of the virtual IRB 4600 around the module's points."""
+    folder = tmp_path_factory.mktemp("abb")
+    plan, meas, model = folder / "plan.csv", folder / "meas.csv", folder / "abb.yaml"
+    assert main(["plan", "--robot", "abb_irb4600", "--cube", "1050,-50,950", "--side", "400", "--step", "100",
+                 "-o", str(plan)]) == 0
+    assert main(["simulate", str(plan), "--robot", "abb_irb4600", "--seed", "1", "-o", str(meas)]) == 0
+    assert main(["calibrate", str(meas), "--robot", "abb_irb4600", "--grid-step", "100", "--folds", "3",
+                 "-o", str(model)]) == 0
+    return model
+
+
+def test_rapid_retimed_and_compensated_run_no_faster_on_any_path(rapid_source, tmp_path, capsys, abb_model):
     out = tmp_path / "out" / "Cell.mod"
     out.parent.mkdir()
     assert main(["retime", str(rapid_source), "-o", str(out), "--robot", "abb_irb4600"]) in (0, 1)
     assert assert_rapid_no_faster(RAPID_MODULE, out.read_text()) >= 3  # times written, each checked
     captured = capsys.readouterr()
     assert "start not unique" in captured.out + captured.err
+    comp = tmp_path / "comp" / "Cell.mod"
+    comp.parent.mkdir()
+    assert main(["compensate", str(rapid_source), "--model", str(abb_model), "--retime", "auto",
+                 "-o", str(comp)]) in (0, 1)
+    assert rapid_points(comp.read_text()) != rapid_points(RAPID_MODULE)  # compensated
+    assert assert_rapid_no_faster(RAPID_MODULE, comp.read_text()) >= 3
 
 
 FANUC_POINTS = {1: (385, 0, 595, "N U T"), 2: (385, 0, 515, "N U T"), 3: (445, 0, 515, "F U T"),
@@ -421,10 +449,19 @@ def fanuc_check(source_text, written_text, joints, robot):
     return checked
 
 
-def test_fanuc_retimed_runs_no_faster_on_any_path_and_a_call_between_configurations_is_run(tmp_path, capsys):
-    from trajcomp.arm.robot import load_robot
+def fanuc_joints(program, robot):
+    """``{position number: joints (6,)}`` of an LS program's positions in their declared configuration."""
     from trajcomp.compensation.pipeline import planned
     from trajcomp.compensation.posture import planned_joints
+
+    plan = planned_joints(program, robot)
+    q = planned(program, plan.index, plan.q)
+    return {int(program.targets[i].name.strip("P[]")): q[i] for i in range(len(program.targets))}
+
+
+def test_fanuc_retimed_and_compensated_run_no_faster_on_any_path_and_a_call_between_configurations_is_run(
+        tmp_path, capsys, tmp_path_factory):
+    from trajcomp.arm.robot import load_robot
 
     source = tmp_path / "CELL.LS"
     source.write_text(FANUC_PROGRAM)
@@ -433,15 +470,24 @@ def test_fanuc_retimed_runs_no_faster_on_any_path_and_a_call_between_configurati
     assert np.isnan(table.zone[6]) and np.isnan(table.zone[8])  # CNT100 then WAIT: it stops there
     assert "GRIP" in table.start_why[2]  # L P[3] (F) after CALL GRIP from P[2] (N): not timed, not refused
     robot = load_robot("fanuc_lrmate200id")
-    plan = planned_joints(program, robot)
-    q = planned(program, plan.index, plan.q)
-    joints = {int(program.targets[i].name.strip("P[]")): q[i] for i in range(len(program.targets))}
     out = tmp_path / "out" / "CELL.LS"
     out.parent.mkdir()
     assert main(["retime", str(source), "-o", str(out), "--robot", "fanuc_lrmate200id"]) in (0, 1)
-    assert fanuc_check(FANUC_PROGRAM, out.read_text(), joints, robot) >= 4
+    assert fanuc_check(FANUC_PROGRAM, out.read_text(), fanuc_joints(program, robot), robot) >= 4
     captured = capsys.readouterr()
     assert "after a call to GRIP" in captured.out + captured.err
+    folder = tmp_path_factory.mktemp("fanuc")
+    plan, meas, model = folder / "plan.csv", folder / "meas.csv", folder / "fanuc.yaml"
+    assert main(["plan", "--robot", "fanuc_lrmate200id", "--cube", "300,-100,480", "--side", "200", "--step", "50",
+                 "-o", str(plan)]) == 0
+    assert main(["simulate", str(plan), "--robot", "fanuc_lrmate200id", "--seed", "1", "-o", str(meas)]) == 0
+    assert main(["calibrate", str(meas), "--robot", "fanuc_lrmate200id", "--grid-step", "50", "--folds", "3",
+                 "-o", str(model)]) == 0
+    comp = tmp_path / "comp" / "CELL.LS"
+    comp.parent.mkdir()
+    assert main(["compensate", str(source), "--model", str(model), "--retime", "auto", "-o", str(comp)]) in (0, 1)
+    compensated = formats.read(comp)
+    assert fanuc_check(FANUC_PROGRAM, comp.read_text(), fanuc_joints(compensated, robot), robot) >= 4
 
 
 UR_SCRIPT = """def cell():
