@@ -30,6 +30,7 @@ import pytest
 from trajcomp import formats
 from trajcomp.cli import main
 from trajcomp.programs.items import JOINT
+from tests.conftest import calibrated_model
 from tests.timing.controller_paths import Op, by_motion, slowest, visits
 
 KRL_SRC = """DEF main( )
@@ -335,14 +336,7 @@ def test_rapid_reader_follows_calls_loops_branches_velset_and_waits(rapid_source
 @pytest.fixture(scope="module")
 def abb_model(tmp_path_factory):
     """A model of the virtual IRB 4600 around the module's points."""
-    folder = tmp_path_factory.mktemp("abb")
-    plan, meas, model = folder / "plan.csv", folder / "meas.csv", folder / "abb.yaml"
-    assert main(["plan", "--robot", "abb_irb4600", "--cube", "1050,-50,950", "--side", "400", "--step", "100",
-                 "-o", str(plan)]) == 0
-    assert main(["simulate", str(plan), "--robot", "abb_irb4600", "--seed", "1", "-o", str(meas)]) == 0
-    assert main(["calibrate", str(meas), "--robot", "abb_irb4600", "--grid-step", "100", "--folds", "3",
-                 "-o", str(model)]) == 0
-    return model
+    return calibrated_model(tmp_path_factory.mktemp("abb"), "abb_irb4600", "1050,-50,950", 400, 100)
 
 
 def test_rapid_retimed_and_compensated_run_no_faster_on_any_path(rapid_source, tmp_path, capsys, abb_model):
@@ -476,13 +470,7 @@ def test_fanuc_retimed_and_compensated_run_no_faster_on_any_path_and_a_call_betw
     assert fanuc_check(FANUC_PROGRAM, out.read_text(), fanuc_joints(program, robot), robot) >= 4
     captured = capsys.readouterr()
     assert "after a call to GRIP" in captured.out + captured.err
-    folder = tmp_path_factory.mktemp("fanuc")
-    plan, meas, model = folder / "plan.csv", folder / "meas.csv", folder / "fanuc.yaml"
-    assert main(["plan", "--robot", "fanuc_lrmate200id", "--cube", "300,-100,480", "--side", "200", "--step", "50",
-                 "-o", str(plan)]) == 0
-    assert main(["simulate", str(plan), "--robot", "fanuc_lrmate200id", "--seed", "1", "-o", str(meas)]) == 0
-    assert main(["calibrate", str(meas), "--robot", "fanuc_lrmate200id", "--grid-step", "50", "--folds", "3",
-                 "-o", str(model)]) == 0
+    model = calibrated_model(tmp_path_factory.mktemp("fanuc"), "fanuc_lrmate200id", "300,-100,480", 200, 50)
     comp = tmp_path / "comp" / "CELL.LS"
     comp.parent.mkdir()
     assert main(["compensate", str(source), "--model", str(model), "--retime", "auto", "-o", str(comp)]) in (0, 1)
@@ -606,27 +594,58 @@ def test_krl_spline_block_runs_at_its_with_speed_and_gets_no_statement_inside(tm
     assert all(written.speed[k] <= table.speed[k] + 1e-9 for k in range(1, len(written)))
 
 
+def assert_converted_no_faster(source, ops, entry, initial, line_speed, target, robot, tmp_path):
+    """Convert ``source`` into ``target`` and check it: the converted program runs its motions in file order, so
+    one whose start the source's flow makes not unique gets no time (a time depends on where the motion starts:
+    its speed is carried in a unit that does not, or written at the target's slowest and listed); a line runs no
+    faster than the slowest TCP speed any path gives it (``line_speed(fields, visit)``, mm/s, None for other
+    motions)."""
+    fields = {op.name: op.value for op in ops if op.kind == "motion"}
+    keys = sorted(fields, key=lambda key: int(key[1:]))
+    seen = {}
+    for (key, _), visit in visits(ops, entry, initial).items():
+        seen.setdefault(key, []).append(visit)
+    out = tmp_path / f"out{target}"
+    assert main(["convert", str(source), str(out), "--robot", robot]) in (0, 1)
+    converted = formats.read(out)
+    assert len(converted.motions) == len(keys)
+    times = 0
+    for k, (key, motion) in enumerate(zip(keys, converted.motions)):
+        if k and {visit.before for visit in seen.get(key, [])} != {keys[k - 1]}:
+            assert motion.speed_unit != "s", (key, motion)
+        times += motion.speed_unit == "s"
+        if motion.kind != JOINT and motion.speed_unit == "mm/s" and motion.speed is not None:
+            allowed = min(line_speed(fields[key], visit) for visit in seen[key])
+            assert motion.speed <= allowed + 1e-6, (key, motion.speed, allowed)
+    return times
+
+
+def rapid_line_speed(fields, visit):
+    """A RAPID line's TCP speed on a visit: its speed data's (or \\V) under the VelSet in force, mm/s."""
+    override, top = visit.setting("velset")
+    _, v, own_v, _, _ = fields
+    return min((float(own_v) if own_v else v) * override / 100.0, top)
+
+
 @pytest.mark.parametrize("target", [".src", ".ls", ".script", ".csv"])
 def test_rapid_converted_runs_no_faster_than_any_path(rapid_source, tmp_path, target, makerless):
-    """The converted program runs its motions in file order: one whose start the module's flow makes not unique
-    is written at the target's slowest and listed; a line whose start is unique runs no faster than the slowest
-    speed (VelSet included) any path gives it."""
-    least, fields = rapid_least_times(RAPID_MODULE)
-    keys = sorted(fields, key=lambda key: int(key[1:]))
-    order = {key: k for k, key in enumerate(keys)}
-    seen = {}
-    for (key, _), (_, speed, visit) in least.items():
-        seen.setdefault(key, []).append((speed, visit.before))
-    out = tmp_path / f"out{target}"
-    assert main(["convert", str(rapid_source), str(out), "--robot", makerless("abb_irb4600")]) in (0, 1)
-    written = formats.read(out).motions
-    assert len(written) == len(keys)
-    for key, motion in zip(keys, written):
-        befores = {before for _, before in seen.get(key, [])}
-        unique = befores == {keys[order[key] - 1]} if order[key] else False
-        slowest_speed = min(speed for speed, _ in seen.get(key, [(np.inf, None)]))
-        if not unique and order[key]:
-            assert motion.speed is not None and motion.speed <= {"%": 1.0, "mm/s": 1.0, "rad/s": np.radians(1.0),
-                                                                 "s": np.inf}[motion.speed_unit], (key, motion)
-        elif motion.kind != JOINT and motion.speed_unit == "mm/s" and motion.speed is not None:
-            assert motion.speed <= slowest_speed + 1e-6, (key, motion.speed, slowest_speed)
+    assert_converted_no_faster(rapid_source, rapid_ops(RAPID_MODULE), "main", {"velset": (100.0, 5000.0)},
+                               rapid_line_speed, target, makerless("abb_irb4600"), tmp_path)
+
+
+@pytest.mark.parametrize("target", [".src", ".mod", ".script", ".csv"])
+def test_fanuc_converted_runs_no_faster_than_any_path(tmp_path, target, makerless):
+    source = tmp_path / "CELL.LS"
+    source.write_text(FANUC_PROGRAM)
+    assert_converted_no_faster(source, fanuc_ops(FANUC_PROGRAM), None, {},
+                               lambda fields, visit: fields[2] if fields[3] == "mm/sec" else None, target,
+                               makerless("fanuc_lrmate200id"), tmp_path)
+
+
+@pytest.mark.parametrize("target", [".src", ".mod", ".ls", ".csv"])
+def test_urscript_converted_runs_no_faster_than_any_path(tmp_path, target, makerless):
+    source = tmp_path / "cell.script"
+    source.write_text(UR_SCRIPT)
+    assert_converted_no_faster(source, ur_ops(UR_SCRIPT), "cell", {},
+                               lambda fields, visit: 1000.0 * fields[3] if fields[0] == "movel" else None, target,
+                               makerless("ur10"), tmp_path)
