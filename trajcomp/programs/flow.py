@@ -161,10 +161,9 @@ class _Graph:
 
     def _link(self, body):
         """Successors of the nodes of one body (a list of node indices, a routine's from its entry to its end)."""
-        nodes, position = self.nodes, {n: p for p, n in enumerate(body)}
+        nodes = self.nodes
         kinds = [nodes[n].kind for n in body]
-        partner, markers, loops, labels = {}, {}, [], {}
-        opened = []
+        partner, markers, labels, opened = {}, {}, {}, []
         for p, kind in enumerate(kinds):
             if kind in ("if", "loop"):
                 opened.append(p)
@@ -189,8 +188,8 @@ class _Graph:
                 return partner[owner[q]] if owner[q] in partner else last
             return min(q, last) if q <= last else None
 
-        loop_of = {}
-        stack = []
+        header = {end: p for p, end in partner.items() if kinds[p] == "loop"}  # endloop -> its loop
+        loop_of, stack = {}, []  # exit -> its loop
         for p, kind in enumerate(kinds):
             if kind == "loop":
                 stack.append(p)
@@ -210,8 +209,7 @@ class _Graph:
             elif kind == "loop":
                 out = [nxt, after(partner[p]) if partner[p] < last else None]
             elif kind == "endloop":
-                header = next((q for q, r in partner.items() if r == p and kinds[q] == "loop"), None)
-                out = [header] if header is not None else [nxt]
+                out = [header[p]] if p in header else [nxt]
             elif kind == "exit":
                 out = [after(partner[loop_of[p]])] if p in loop_of and partner[loop_of[p]] < last else [nxt]
             elif kind == "jump":
@@ -288,7 +286,7 @@ def follow(steps, table, initial):
             if routine is not None:
                 send(routine[0], (values, last))
                 if routine[1] in state_in:  # what the routine ends with, so far
-                    send_after(n, state_in[routine[1]], succ, send)
+                    _send_after(n, state_in[routine[1]], succ, send)
                 continue
             if node.value:
                 why = Unknown(f"after a call to {node.name} (line {node.line}): {node.value}")
@@ -296,7 +294,7 @@ def follow(steps, table, initial):
         elif kind == "end":
             entry = next((e for e, end in graph.routines.values() if end == n), None)
             for caller in callers.get(entry, ()):
-                send_after(caller, (values, last), succ, send)
+                _send_after(caller, (values, last), succ, send)
             continue
         for s in succ.get(n, ()):
             send(s, (values, last))
@@ -308,7 +306,7 @@ def follow(steps, table, initial):
     return Reached(first, settings, before, waits)
 
 
-def send_after(call, state, succ, send):
+def _send_after(call, state, succ, send):
     """A routine's end ``state`` flows on after its ``call`` node."""
     for s in succ.get(call, ()):
         send(s, state)
