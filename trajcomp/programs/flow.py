@@ -328,8 +328,9 @@ def start_reasons(reached, table):
         if unknown:
             out[m] = f"its start is not known: {unknown[0]}"
         elif before == {START}:
-            if m:  # the program's first motion, after another one in the file (a routine's, defined above it)
-                out[m] = "it is the program's first motion: where the arm is before it is not known"
+            if m:  # a first motion after another one in the file (a routine's, defined above it)
+                out[m] = ("where the arm is before it is not known: the first motion of the program, or of a routine "
+                          "this file does not call")
         elif len(before) == 1:
             (b,) = before
             out[m] = (f"it starts where the motion at line {int(table.line[b])} ends, not the one before it in the "

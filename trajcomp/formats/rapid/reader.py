@@ -746,7 +746,7 @@ class _Reader:
         if m := _ROUTINE_NAME.match(text):
             self.steps.append(Step("routine", m.group(1), line=line, source=self.index))
             return
-        if m := _LABEL.match(text):
+        if (m := _LABEL.match(text)) and m.group(1).lower() not in _FLOW_WORDS:  # not DEFAULT:
             self.steps.append(Step("label", m.group(1), line=line, source=self.index))
             return
         if m := _VELSET.match(text):
