@@ -594,12 +594,12 @@ def test_krl_spline_block_runs_at_its_with_speed_and_gets_no_statement_inside(tm
     assert all(written.speed[k] <= table.speed[k] + 1e-9 for k in range(1, len(written)))
 
 
-def assert_converted_no_faster(source, ops, entry, initial, line_speed, target, robot, tmp_path):
+def assert_converted_no_faster(source, ops, entry, initial, line_speed, target, robot, tmp_path, least_time=None):
     """Convert ``source`` into ``target`` and check it: the converted program runs its motions in file order, so
     one whose start the source's flow makes not unique gets no time (a time depends on where the motion starts:
     its speed is carried in a unit that does not, or written at the target's slowest and listed); a line runs no
     faster than the slowest TCP speed any path gives it (``line_speed(fields, visit)``, mm/s, None for other
-    motions)."""
+    motions); a time is no shorter than ``least_time(fields, start fields)`` (s) where given."""
     fields = {op.name: op.value for op in ops if op.kind == "motion"}
     keys = sorted(fields, key=lambda key: int(key[1:]))
     seen = {}
@@ -614,6 +614,9 @@ def assert_converted_no_faster(source, ops, entry, initial, line_speed, target, 
         if k and {visit.before for visit in seen.get(key, [])} != {keys[k - 1]}:
             assert motion.speed_unit != "s", (key, motion)
         times += motion.speed_unit == "s"
+        if motion.speed_unit == "s" and least_time is not None:
+            least = max(least_time(fields[key], fields[visit.before]) for visit in seen[key])
+            assert motion.speed >= least * (1 - 1e-6), (key, motion.speed, least)
         if motion.kind != JOINT and motion.speed_unit == "mm/s" and motion.speed is not None:
             allowed = min(line_speed(fields[key], visit) for visit in seen[key])
             assert motion.speed <= allowed + 1e-6, (key, motion.speed, allowed)
@@ -644,8 +647,15 @@ def test_fanuc_converted_runs_no_faster_than_any_path(tmp_path, target, makerles
 
 @pytest.mark.parametrize("target", [".src", ".mod", ".ls", ".csv"])
 def test_urscript_converted_runs_no_faster_than_any_path(tmp_path, target, makerless):
+    """Also under its a=: a movej converted to a time takes no less than its a and v allow."""
     source = tmp_path / "cell.script"
     source.write_text(UR_SCRIPT)
-    assert_converted_no_faster(source, ur_ops(UR_SCRIPT), "cell", {},
-                               lambda fields, visit: 1000.0 * fields[3] if fields[0] == "movel" else None, target,
-                               makerless("ur10"), tmp_path)
+
+    def least_time(fields, start):
+        function, q, a, v, _ = fields
+        return ur_least_time(np.max(np.abs(np.subtract(q, start[1]))), a, v) if function == "movej" else 0.0
+
+    times = assert_converted_no_faster(source, ur_ops(UR_SCRIPT), "cell", {},
+                                       lambda fields, visit: 1000.0 * fields[3] if fields[0] == "movel" else None,
+                                       target, makerless("ur10"), tmp_path, least_time)
+    assert times or target != ".mod"  # RAPID \T checked (FANUC and KRL take %, CSV no field)
