@@ -577,7 +577,8 @@ def test_krl_spline_block_runs_at_its_with_speed_and_gets_no_statement_inside(tm
     folder = tmp_path / "in"
     folder.mkdir()
     (folder / "spl.src").write_text("DEF spl( )\n  $VEL.CP=3.0\n  PTP HOME\n  LIN P1\n"
-                                    "  SPLINE WITH $VEL.CP=0.02\n    SLIN P2\n    SLIN P3\n    SLIN P4 WITH $VEL.CP=2.5\n"
+                                    "  SPLINE WITH $VEL.CP=0.02\n    SLIN P2\n    SLIN P3\n"
+                                    "    SLIN P4 WITH $VEL.CP=2.5\n"
                                     "  ENDSPLINE\n  LIN P5\nEND\n")
     (folder / "spl.dat").write_text(KRL_DAT.replace("DEFDAT main", "DEFDAT spl"))
     table = formats.read(folder / "spl.src").motion_table()

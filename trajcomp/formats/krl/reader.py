@@ -561,7 +561,8 @@ class _Reader:
         none_set = "no {} before it in this program: the speed in force is set at run time"
         self.speed_why = {JOINT: none_set.format("BAS(#VEL_PTP)"), LINEAR: none_set.format("$VEL.CP")}
         # (value, why, span) of each speed setting in force: the TCP's (mm/s), each axis's (%): `give`
-        self.initial = {"cp": (None, self.speed_why[LINEAR], None)} | dict.fromkeys(AXIS_GROUPS, (None, self.speed_why[JOINT], None))
+        self.initial = {"cp": (None, self.speed_why[LINEAR], None)}
+        self.initial |= dict.fromkeys(AXIS_GROUPS, (None, self.speed_why[JOINT], None))
         self.axes = [self.initial["ptp1"]] * 6
         self.steps = []  # what the .src does besides moving, in order (`trajcomp.programs.flow`)
         self.siblings = set()  # upper names of the other .src files beside it: routines the read does not include
