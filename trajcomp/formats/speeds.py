@@ -151,8 +151,14 @@ def arc_length(points):
     return float(radius * (2.0 * np.pi - 2.0 * at_via))
 
 
-def cruise_rate(kind, speed, unit, orientation_speed, geometry, index, robot):
+def cruise_rate(kind, speed, unit, orientation_speed, geometry, index, robot, acceleration=None):
     """The cruise rate c (1/s) at which motion ``index`` runs under its speed field (see the module).
+
+    A programmed ``acceleration`` below the arm's (UR ``a=``) makes the
+    motion take longer than its cruise rate's trapezoid at the arm's
+    ramps: c is then the rate whose trapezoid at the arm's ramps takes
+    that longer time, so that a field stating c in any unit is no faster
+    in its cruise nor in its time.
 
     Parameters
     ----------
@@ -189,12 +195,22 @@ def cruise_rate(kind, speed, unit, orientation_speed, geometry, index, robot):
     elif speed is not None and unit == "mm/s":
         rates.append(_per(speed, margin * geometry.length[index]))
     elif speed is not None and unit == "s":
-        a = path_acceleration(dq, robot)
-        root = (a * speed) ** 2 - 4.0 * a
-        rates.append(np.sqrt(a) if root <= 0 else 0.5 * (a * speed - np.sqrt(root)))
+        rates.append(_rate_of_time(speed, path_acceleration(dq, robot)))
     if orientation_speed is not None:
         rates.append(_per(orientation_speed, margin * geometry.turn[index]))
-    return float(min(rates))
+    rate = float(min(rates))
+    extent = dq.max() if kind == JOINT else geometry.length[index]
+    ramps = path_acceleration(dq, robot)
+    if acceleration is not None and extent > 0 and acceleration / extent < ramps:
+        rate = _rate_of_time(_trapezoid_time(rate, acceleration / extent), ramps)
+    return rate
+
+
+def _rate_of_time(duration, acceleration):
+    """The cruise rate (1/s) of the path parameter's trapezoid from 0 to 1 that takes ``duration`` s with ramps at
+    ``acceleration`` (1/s^2); the ramps alone where no cruise is that slow."""
+    root = (acceleration * duration) ** 2 - 4.0 * acceleration
+    return np.sqrt(acceleration) if root <= 0 else 0.5 * (acceleration * duration - np.sqrt(root))
 
 
 def _per(speed, extent):
@@ -279,9 +295,11 @@ def _converted(motion, index, stated, robot, geometry):
     speed, unit = motion.speed, motion.speed_unit
     known = robot is not None and geometry is not None and geometry.known[index]
     dropped = motion.orientation_speed is not None and "v_ori" not in stated  # a bound the target cannot state
+    dropped |= motion.acceleration is not None  # a programmed acceleration: no language states it beside a speed
     if dropped and known:  # it matters only where it binds
         free = cruise_rate(motion.kind, speed, unit, None, geometry, index, robot)
-        dropped = cruise_rate(motion.kind, speed, unit, motion.orientation_speed, geometry, index, robot) < free
+        dropped = cruise_rate(motion.kind, speed, unit, motion.orientation_speed, geometry, index, robot,
+                              motion.acceleration) < free
     default = next(iter(stated))
     if speed is None and not dropped:
         return None, default, ""  # the arm's limits: the language's own default
@@ -302,7 +320,7 @@ def _converted(motion, index, stated, robot, geometry):
         return None, None, f"speed {shown} cannot be converted ({what})"
     if not np.any(geometry.dq[index]):  # the arm does not move: any speed is no faster
         return None, default, ""
-    rate = cruise_rate(motion.kind, speed, unit, motion.orientation_speed, geometry, index, robot)
+    rate = cruise_rate(motion.kind, speed, unit, motion.orientation_speed, geometry, index, robot, motion.acceleration)
     for target_unit in stated:
         value = None if target_unit == "v_ori" else field_of_rate(motion.kind, rate, target_unit, geometry, index,
                                                                    robot)

@@ -270,6 +270,17 @@ class Motion:
     source : int
         Index into `Program.sources` of the file the motion is written in:
         0 but in a program joined from several files (`trajcomp.formats.task`).
+    acceleration : float or None
+        The acceleration the program states for the motion, a limit beside
+        the arm's: of the leading axis (rad/s^2) for a joint motion, of the
+        TCP (mm/s^2) for a linear or circular one (UR ``a=``); None where
+        the controller's own applies.
+    start_why : str
+        Why the position the motion starts from is not unique (it can be
+        reached after a call, a loop's back jump, a branch or a jump from
+        elsewhere: `trajcomp.programs.flow`), ``""`` when it is the motion
+        before it: such a motion is not timed, its fields are left as
+        written and listed (`trajcomp.timing.moves`).
     """
 
     kind: str
@@ -289,6 +300,8 @@ class Motion:
     speed_why: str = ""
     source: int = 0
     orientation_speed: float = None
+    start_why: str = ""
+    acceleration: float = None
 
 
 @dataclasses.dataclass(frozen=True)

@@ -41,11 +41,13 @@ class MotionTable:
     axis_position : ndarray of bool, shape (M,)
     orientation_speed : ndarray, shape (M,)
         Rad/s; NaN where none bounds the motion.
+    acceleration : ndarray, shape (M,)
+        As `Motion.acceleration`; NaN where none is stated.
     source : ndarray of int, shape (M,)
         Index of the file each motion is written in.
     text : Sequence of str, length M
         The instructions as written (one line, stripped; built on access where the reader keeps offsets).
-    reason, speed_why : ndarray of object, shape (M,)
+    reason, speed_why, start_why : ndarray of object, shape (M,)
         As `Motion`; ``""`` where none.
     refs : Mapping[int, tuple of int]
         ``{row: target indices}`` of the motions that name targets (`Motion.refs`); the others name none.
@@ -69,13 +71,16 @@ class MotionTable:
     reason: np.ndarray = None
     speed_why: np.ndarray = None
     refs: Mapping = None
+    start_why: np.ndarray = None
+    acceleration: np.ndarray = None
     spans: Sequence = None
 
     def __post_init__(self):
         m = len(self.line)
         defaults = {"orientation_speed": lambda: np.full(m, np.nan), "source": lambda: np.zeros(m, dtype=int),
                     "text": lambda: repeated("", m), "reason": lambda: repeated("", m),
-                    "speed_why": lambda: repeated("", m), "refs": dict}
+                    "speed_why": lambda: repeated("", m), "refs": dict, "start_why": lambda: repeated("", m),
+                    "acceleration": lambda: np.broadcast_to(np.nan, (m,))}
         for name, default in defaults.items():
             if getattr(self, name) is None:
                 object.__setattr__(self, name, default())
@@ -109,6 +114,8 @@ class MotionTable:
             text=tuple(m.text for m in motions),
             reason=column([m.reason for m in motions], object),
             speed_why=column([m.speed_why for m in motions], object),
+            start_why=column([m.start_why for m in motions], object),
+            acceleration=column([number(m.acceleration) for m in motions], float),
             refs={k: m.refs for k, m in enumerate(motions) if m.refs},
             spans=spans if any(spans) else None,
         )
@@ -178,18 +185,24 @@ class MotionTable:
         if any(t.spans is not None for t in tables):
             spans = Picked([t.spans if t.spans is not None else repeated({}, len(t)) for t in tables], part, row)
         names = ("kind", "target", "via", "speed", "speed_unit", "zone", "tool", "frame", "axis_position",
-                 "orientation_speed", "reason", "speed_why")
+                 "orientation_speed", "reason", "speed_why", "start_why", "acceleration")
         return cls(line=line[order], source=source[order], text=sequence("text"), refs=refs, spans=spans,
                    **{name: column(name) for name in names})
 
     def with_rows(self, index, **columns):
         """A copy with some columns changed at rows ``index`` (K,): ``target``, ``via``, ``reason`` ... (K,) each;
-        ``refs`` a sequence (K,) of tuples."""
+        ``refs`` a sequence (K,) of tuples, ``spans`` one (K,) of Mappings."""
         index = np.asarray(index, dtype=int)
         changes = {}
         for name, values in columns.items():
             if name == "refs":
                 changes[name] = {**self.refs, **{int(k): tuple(r) for k, r in zip(index.tolist(), values)}}
+                continue
+            if name == "spans":  # each row's spans a Mapping
+                spans = list(self.spans) if self.spans is not None else [{}] * len(self)
+                for k, row in zip(index.tolist(), values):
+                    spans[k] = row
+                changes[name] = tuple(spans)
                 continue
             column = np.array(getattr(self, name))  # a copy, writeable even of a repeated (read-only) column
             column[index] = values
@@ -237,7 +250,8 @@ class MotionTable:
             tool=self.tool[k], frame=self.frame[k], line=int(self.line[k]), text=self.text[k],
             reason=self.reason[k], refs=self.refs.get(k, ()), spans={} if self.spans is None else self.spans[k],
             axis_position=bool(self.axis_position[k]), speed_why=self.speed_why[k], source=int(self.source[k]),
-            orientation_speed=optional(self.orientation_speed[k], float),
+            orientation_speed=optional(self.orientation_speed[k], float), start_why=self.start_why[k],
+            acceleration=optional(self.acceleration[k], float),
         )
 
 

@@ -191,7 +191,8 @@ def timing_section(timing, before=None, times=True):
         "segment_count": len(timing.segments),
         "segments_by_kind": by_kind,
         "segments": segments,
-        "not_retimed": {"count": len(as_written), "reason": "speed set at run time: the field is left as written",
+        "not_retimed": {"count": len(as_written),
+                        "reason": "speed set at run time or start not unique: the field is left as written",
                         "motions": [{"waypoint": str(timing.labels[k]), "why": why} for k, why in as_written[:ROWS]]},
         "lowered": {"count": len(lowered),
                     "motions": [{"waypoint": str(timing.labels[k]), "detail": text} for k, text in lowered[:ROWS]]},
@@ -237,7 +238,8 @@ def speeds_check(section):
     if not kept["count"]:
         return Check("speeds", statement, PASS, "every speed stated or provably constant")
     return Check("speeds", statement, FAIL,
-                 f"{kept['count']} motion(s) not re-timed, speed set at run time (left as written): "
+                 f"{kept['count']} motion(s) not re-timed, speed set at run time or start not unique (left as "
+                 "written): "
                  f"{kept['motions'][0]['why']}", targets=tuple(m["waypoint"] for m in kept["motions"][:LISTED]),
                  failing=kept["count"])
 

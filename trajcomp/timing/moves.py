@@ -51,7 +51,9 @@ class Moves:
         Programmed time of motion k, s (FANUC ``sec``); 0 where none.
     velocity, acceleration : ndarray, shape (M, 6)
         Joint velocity (rad/s) and acceleration (rad/s^2) limits of motion k:
-        the robot's, lowered by a programmed joint speed (% or rad/s).
+        the robot's, lowered by a programmed joint speed (% or rad/s) and a
+        joint motion's programmed acceleration (UR movej ``a=``, the leading
+        axis's: every axis's bound).
     tools : ndarray, shape (T, 4, 4)
         The distinct T_flange_tool the motions use, mm.
     tool : ndarray of int, shape (M,)
@@ -184,7 +186,8 @@ def moves_from_program(program, robot, joints, *, tools=None, frames=None):
     """The `Moves` of a program whose targets' joints are known (columnar: no loop over its motions).
 
     Motions to positions computed at run time are not waypoints: the
-    waypoint after one begins a new timed stretch.
+    waypoint after one begins a new timed stretch; so does a motion whose
+    start is not unique (`trajcomp.programs.items.Motion.start_why`).
 
     Parameters
     ----------
@@ -211,6 +214,7 @@ def moves_from_program(program, robot, joints, *, tools=None, frames=None):
     rows = np.flatnonzero(table.target >= 0)
     runtime_before = np.cumsum(table.target < 0)[rows]
     start = np.r_[True, runtime_before[1:] != runtime_before[:-1]][: len(rows)]
+    start |= table.start_why[rows] != ""  # reached from more than one place (`trajcomp.programs.flow`)
     known = np.asarray(joints, dtype=float)
     if targets.is_joint.any():  # joint targets use their own joints
         known = np.where(targets.is_joint[:, None], targets.joints, known)
@@ -259,9 +263,15 @@ def _speed_limits(table, rows, robot, program, labels):
         velocity = velocity.copy()
         velocity[percent] = robot.v_max * np.minimum(speed[percent, None], 100.0) / 100.0
         velocity[absolute] = np.minimum(robot.v_max, speed[absolute, None])
+    stated = table.acceleration[rows]
+    accelerating = (kind == JOINT) & (stated > 0)
+    acceleration = np.broadcast_to(robot.a_max, (m, 6))
+    if accelerating.any():
+        acceleration = acceleration.copy()
+        acceleration[accelerating] = np.minimum(robot.a_max, stated[accelerating, None])
     return {
         "tcp_speed": np.where(given & (unit == "mm/s"), speed, np.inf),
         "min_duration": np.where(given & (unit == "s"), speed, 0.0),
         "velocity": velocity,
-        "acceleration": np.broadcast_to(robot.a_max, (m, 6)),
+        "acceleration": acceleration,
     }

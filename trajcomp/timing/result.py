@@ -109,8 +109,9 @@ class TimingResult:
         (a joint turn a linear motion cannot honour).
     as_written : tuple of (int, str)
         Waypoints whose motion's speed the program sets at run time (a
-        variable, a register), and why: timed at the arm's limits, but their
-        fields are left as written (set by `trajcomp.timing.apply_timing`).
+        variable, a register), timed at the arm's limits, or whose start is
+        not unique (not timed), and why: their fields are left as written
+        (set by `trajcomp.timing.apply_timing`).
     lowered : tuple of (int, str)
         Waypoints whose stated speed a joint limit forced lower (or whose
         time it forced longer), with what was written and why.
@@ -262,7 +263,8 @@ class TimingResult:
         if self.as_written:
             names = ", ".join(self.labels[k] for k, _ in self.as_written[:5])
             more = f" and {len(self.as_written) - 5} more" if len(self.as_written) > 5 else ""
-            out.append(f"not re-timed, speed set at run time (left as written): {len(self.as_written)} motion(s): "
+            out.append(f"not re-timed, speed set at run time or start not unique (left as written): "
+                       f"{len(self.as_written)} motion(s): "
                        f"{names}{more}; first: {self.as_written[0][1]}")
         out += [f"slower than timed, a limit binds: {text}" for _, text in self.lowered[:5]]
         if len(self.lowered) > 5:

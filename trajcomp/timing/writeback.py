@@ -14,7 +14,9 @@ TCP keeps between the controller's own ramps; a time (RAPID ``\\T``, UR
 - a motion whose speed the program sets at run time (a variable, register,
   PERS speeddata: `trajcomp.programs.items.Motion.speed_why`) keeps its field
   as written and is listed (`TimingResult.as_written`): never replaced by a
-  speed the tool cannot compare with it;
+  speed the tool cannot compare with it; so does a motion whose start is
+  not unique (after a call, a loop's back jump, a branch:
+  `trajcomp.programs.items.Motion.start_why`), which is not timed;
 - any other motion (joint motions, motions with a stated time) gets its
   timed duration T (for a linear or circular one at least its TCP length
   over its cruise speed, so that a controller cruising at L/T keeps the
@@ -182,7 +184,10 @@ def _plan(program, result, robot):
     cruise, binding = cruise_speeds(result, robot, table.zone[result.motion])
     why = table.speed_why[result.motion[k]]
     written = why != ""
-    as_written = tuple(zip(k[written].tolist(), why[written].tolist()))
+    untimed = np.array(result.untimed, dtype=int)
+    start_why = table.start_why[result.motion[untimed]]
+    as_written = tuple(sorted([*zip(k[written].tolist(), why[written].tolist()),
+                               *((w, s) for w, s in zip(untimed.tolist(), start_why.tolist()) if s)]))
     k, duration = k[~written], duration[~written]
     rows = result.motion[k]
     length, speed, limit = result.tcp_length[k], table.speed[rows], cruise[k]

@@ -23,6 +23,8 @@ from trajcomp.formats.text import (
     read_source,
     whole_circle,
 )
+from trajcomp.programs import flow
+from trajcomp.programs.flow import Step
 from trajcomp.programs.program import Program
 from trajcomp.programs.items import CIRCULAR, JOINT, LINEAR, Motion, Span, SpanColumns, Target, replaced
 from trajcomp.programs.tables import ItemRows, MotionTable, StatementTable, TargetRows, TargetTable, TextSlices
@@ -70,6 +72,13 @@ _WRITTEN_MOTION = re.compile(
 _SECTION_WORD = re.compile(r"/(PROG|ATTR|APPL|MN|POS|END)\b")  # `_SECTION` where white space alone precedes it
 _LONE_CR = re.compile(r"\r(?!\n)")  # a line ending of its own (`Lines`), which `^` and `$` do not see
 _SCARA_CONFIG = re.compile(r"^\s*[LR]\s*,(?:\s*-?\d{1,3}\s*,?)*\s*$", re.I)
+# the instructions that change the order a program runs in (`trajcomp.programs.flow.Step`)
+_CALL = re.compile(r"\bCALL\s+(\w+)", re.I)
+_JUMP = re.compile(r"\bJMP\s+LBL\s*\[\s*(\w+)", re.I)
+_LABEL = re.compile(r"^\s*LBL\s*\[\s*(\w+)", re.I)
+_CONDITION = re.compile(r"^\s*(IF|SELECT|=|ELSE\s*,)", re.I)  # IF .., JMP / CALL; SELECT .. =n, JMP ..; ELSE, JMP
+_BLOCK_WORDS = {"ELSE": "else", "ENDIF": "endif", "ENDFOR": "endloop", "END": "return", "ABORT": "return"}
+_WAIT = re.compile(r"^\s*(WAIT|PAUSE)\b", re.I)
 _TOOL_WORDS = {"UTOOL_NUM": "tool", "WKZ_NUM": "tool", "UFRAME_NUM": "frame", "BENUTZER_NUM": "frame",
                "UTOOL": "tool", "WKZ": "tool", "UFRAME": "frame", "BENUTZER": "frame"}
 
@@ -170,7 +179,7 @@ def read(path):
     written = _written_motions(by_line, starts, ends, in_mn, points, unread)
     covered = np.zeros(count + 1, dtype=bool)  # lines of a motion or an instruction: the others are statements
     covered[written["line"]] = True
-    state, one_by_one, speed_at, kept, blocks = _State(), [], [], [], {}
+    state, one_by_one, speed_at, kept, blocks, steps = _State(), [], [], [], {}, []
     done = 0  # the written motions before the instruction
     for number, last, start, end, content in _instructions(masked, starts, ends, np.flatnonzero(in_mn & ~covered)):
         covered[number:last + 1] = True
@@ -180,6 +189,7 @@ def read(path):
         state.update(content, number)
         m = _MOTION.match(content)
         if not m:
+            steps += _flow_steps(content, number)
             kept.append((number, start, end, tuple(points[int(n)] for n in _POINT_REF.findall(content)
                                                    if int(n) in points)))
             continue
@@ -201,10 +211,35 @@ def read(path):
     statements = _statements(source.text, starts, ends, np.flatnonzero(~covered[1:]) + 1, kept)
     tools, frames = {"0": np.eye(4)}, {"0": np.eye(4)}
     if isinstance(targets, TargetRows):
-        return Program.from_tables("fanuc_ls", name, statements, motions, table, sources, tools=tools,
-                                   frames=frames, notes=notes)
-    return Program("fanuc_ls", name, ItemRows(statements, motions), tuple(targets), tools, frames, sources,
-                   notes=notes)
+        program = Program.from_tables("fanuc_ls", name, statements, motions, table, sources, tools=tools,
+                                      frames=frames, notes=notes)
+    else:
+        program = Program("fanuc_ls", name, ItemRows(statements, motions), tuple(targets), tools, frames, sources,
+                          notes=notes)
+    return flow.program_followed(program, steps, {})  # CALL, JMP LBL, IF, SELECT, FOR, WAIT: starts and stops
+
+
+def _flow_steps(content, line):
+    """The `trajcomp.programs.flow.Step` s of one /MN instruction that is not a motion (none for most)."""
+    text = content.strip().rstrip(";").strip()
+    word = text.split("(")[0].split()[0].upper() if text else ""
+    if _WAIT.match(text):
+        return [Step("wait", line=line)]
+    if m := _LABEL.match(text):
+        return [Step("label", m.group(1), line=line)]
+    if word == "FOR":
+        return [Step("loop", line=line)]
+    if word == "IF" and re.search(r"\bTHEN\s*$", text, re.I):
+        return [Step("if", line=line)]
+    if word in _BLOCK_WORDS and text.upper() == word:
+        return [Step(_BLOCK_WORDS[word], line=line)]
+    conditional = bool(_CONDITION.match(text))
+    if m := _JUMP.search(text):
+        return [Step("jump", m.group(1), conditional, line)]
+    if (conditional or word == "CALL") and (m := _CALL.search(text)):
+        call = Step("call", m.group(1), f"program {m.group(1).upper()}, which may move the arm", line)
+        return [Step("if", line=line), call, Step("endif", line=line)] if conditional else [call]
+    return []
 
 
 def _line_offsets(lines):

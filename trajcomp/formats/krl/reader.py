@@ -32,6 +32,8 @@ from trajcomp.formats.text import (
     unresolved,
     whole_circle,
 )
+from trajcomp.programs import flow
+from trajcomp.programs.flow import Step, Unknown
 from trajcomp.programs.program import Program
 from trajcomp.programs.tables import (
     ItemRows, MotionTable, StatementTable, TargetRows, TargetTable, TextSlices, every_row, joined_targets,
@@ -63,6 +65,18 @@ _DATA_REF = re.compile(r"^(TOOL_DATA|BASE_DATA)\s*\[\s*(\d+)\s*\]$", re.I)
 _BAS = re.compile(r"^\s*BAS\s*\(\s*#(TOOL|BASE|VEL_PTP|VEL_CP|PTP_PARAMS|CP_PARAMS)\s*,\s*(.*?)\s*\)\s*$", re.I)
 _ACT = re.compile(r"^\s*(FDAT|PDAT|LDAT)_ACT\s*=\s*(\w+)\s*$", re.I)
 _VEL_CP = re.compile(r"^\s*\$VEL\.CP\s*=\s*(.*?)\s*$", re.I)
+_VEL = re.compile(r"^\s*\$VEL\s*=\s*\{(.*)\}\s*$", re.I)  # $VEL={CP 0.2,ORI1 200,ORI2 200}
+_VEL_AXIS = re.compile(r"^\s*\$VEL_AXIS\s*\[\s*([1-6])\s*\]\s*=\s*(.*?)\s*$", re.I)
+AXIS_GROUPS = tuple(f"ptp{n}" for n in range(1, 7))  # the flow's speed groups of a PTP: each axis's % (`_Reader.give`)
+# the statements that change the order a program runs in (`trajcomp.programs.flow.Step`): keyword -> step kind
+_FLOW_WORDS = {"IF": "if", "ELSE": "else", "ENDIF": "endif", "SWITCH": "if", "CASE": "elif", "DEFAULT": "elif",
+               "ENDSWITCH": "endif", "FOR": "loop", "ENDFOR": "endloop", "WHILE": "loop", "ENDWHILE": "endloop",
+               "LOOP": "loop", "ENDLOOP": "endloop", "REPEAT": "loop", "UNTIL": "endloop", "EXIT": "exit",
+               "RETURN": "return", "END": "end", "ENDFCT": "end", "WAIT": "wait", "HALT": "wait", "GOTO": "jump"}
+_SPLINE = re.compile(r"^\s*(?:PTP_)?SPLINE\b(?:.*?\bWITH\b(.*))?$", re.I)  # a spline block: its WITH holds for it
+_END_SPLINE = re.compile(r"^\s*ENDSPLINE\b", re.I)
+_FIRST_WORD = re.compile(r"^\s*([A-Za-z_$][\w$]*)\s*(\(|:\s*$)?")
+_JUMP_TO = re.compile(r"^\s*GOTO\s+(\w+)", re.I)
 _NUMBER_DECL = re.compile(r"^\s*(?:DECL\s+)?((?:(?:GLOBAL|CONST)\s+)*)(?:REAL|INT)\s+(\w+)\s*=\s*(" + NUMBER + r")\s*$", re.I)
 # a speed in a spline motion's WITH clause: $VEL = SVEL_CP(v, ..), $VEL.CP = v, $VEL_AXIS[n] = SVEL_JOINT(%)
 _WITH_SPEED = re.compile(r"\$VEL(?:\.CP|_AXIS\s*\[\s*\d+\s*\])?\s*=", re.I)
@@ -546,6 +560,13 @@ class _Reader:
         self.speed_spans = {JOINT: None, LINEAR: None}  # the number of the statement that set each speed
         none_set = "no {} before it in this program: the speed in force is set at run time"
         self.speed_why = {JOINT: none_set.format("BAS(#VEL_PTP)"), LINEAR: none_set.format("$VEL.CP")}
+        # (value, why, span) of each speed setting in force: the TCP's (mm/s), each axis's (%): `give`
+        self.initial = {"cp": (None, self.speed_why[LINEAR], None)}
+        self.initial |= dict.fromkeys(AXIS_GROUPS, (None, self.speed_why[JOINT], None))
+        self.axes = [self.initial["ptp1"]] * 6
+        self.steps = []  # what the .src does besides moving, in order (`trajcomp.programs.flow`)
+        self.siblings = set()  # upper names of the other .src files beside it: routines the read does not include
+        self.outside_spline = None  # the TCP speed setting in force before the spline block being read
         self.numbers = {}  # NAME -> (value, why it is only known at run time) of REAL / INT data declared with one
         self.assigned = {}  # NAME -> first line of the .src that assigns it
         self.shared = set()  # NAMEs of GLOBAL points: other programs may assign them
@@ -649,15 +670,49 @@ class _Reader:
         original = self.sources[index].text[start:end]
         if m := _DEF_LINE.match(text):
             self.params = {p.split(":")[0].strip().upper() for p in m.group(1).split(",") if p.strip()}
+            self.steps.append(Step("routine", _DEF.match(text).group(1), line=line_no, source=index))
         m = _MOTION.match(text)  # first: most lines of a long program are motions, and no declaration is one
         if m:
             self.items.append(self.motion(m, index, start, line_no, original))
             return
+        self.flow_step(text, index, line_no)
         if self.declarations(index, masked, line_no, start, end):
             self.items.append(Statement(line_no, original))
             return
         self.state(text, index, start, name, line_no, original)
         self.items.append(Statement(line_no, original))
+
+    def flow_step(self, text, index, line_no):
+        """Note a statement that changes the order the program runs in (`trajcomp.programs.flow.Step`)."""
+        m = _FIRST_WORD.match(text)
+        if m is None:
+            return
+        word = m.group(1).upper()
+        kind = _FLOW_WORDS.get(word)
+        if kind == "jump":
+            target = _JUMP_TO.match(text)
+            self.steps.append(Step("jump", target.group(1) if target else "", False, line_no, index))
+        elif kind is not None:
+            self.steps.append(Step(kind, line=line_no, source=index))
+        elif m.group(2) == "(":  # a routine: this file's is followed, another .src's is not known
+            why = f"a routine of {word.lower()}.src, which may move the arm and set speeds" \
+                if word in self.siblings else None
+            self.steps.append(Step("call", m.group(1), why, line_no, index))
+        elif m.group(2):
+            self.steps.append(Step("label", m.group(1), line=line_no, source=index))
+
+    def give(self, group, value, why, span, line_no, index, axis=None):
+        """Put a speed setting in force: JOINT ``value`` % of axis ``axis`` (1..6; None: all), LINEAR ``value`` mm/s;
+        ``why`` it is known at run time only, ``span`` the number that states it (re-timing writes there)."""
+        setting = (value, why, span)
+        if group == LINEAR:
+            self.speed_cp, self.speed_why[LINEAR], self.speed_spans[LINEAR] = setting
+            self.steps.append(Step("set", "cp", setting, line_no, index))
+            return
+        for n in range(6) if axis is None else [axis - 1]:
+            self.axes[n] = setting
+            self.steps.append(Step("set", AXIS_GROUPS[n], setting, line_no, index))
+        self.speed_ptp, self.speed_why[JOINT], self.speed_spans[JOINT] = in_force(self.axes)
 
     def select(self, which, value, why=""):
         """Make tool or base ``value`` active (``why``: it is only known at run time)."""
@@ -698,21 +753,36 @@ class _Reader:
             self.set_speed(JOINT if what in ("VEL_PTP", "PTP_PARAMS") else LINEAR, m, 2, index, start, line_no,
                            original, f"BAS(#{what})")
         elif m := _ACT.match(text):
-            self.activate(m.group(1).upper(), m.group(2).upper(), name, line_no, original)
+            self.activate(m.group(1).upper(), m.group(2).upper(), index, line_no, original)
+        elif m := _SPLINE.match(text):
+            own = m.group(1) and self.with_speed(m.group(1), start + m.start(1), index, line_no, original, LINEAR)
+            if own:  # SPLINE WITH $VEL.CP = v: the block's motions run at v, the speed before it after ENDSPLINE
+                self.outside_spline = (self.speed_cp, self.speed_why[LINEAR], self.speed_spans[LINEAR])
+                self.give(LINEAR, *own, line_no, index)
+        elif _END_SPLINE.match(text) and self.outside_spline is not None:
+            self.give(LINEAR, *self.outside_spline, line_no, index)
+            self.outside_spline = None
         elif m := _VEL_CP.match(text):
             self.set_speed(LINEAR, m, 1, index, start, line_no, original, "$VEL.CP")
+        elif m := _VEL_AXIS.match(text):
+            self.set_speed(JOINT, m, 2, index, start, line_no, original, f"$VEL_AXIS[{m.group(1)}]", int(m.group(1)))
+        elif m := _VEL.match(text):
+            members = _members(m.group(1), start + m.start(1), index, name, line_no, original, False)
+            if "cp" in members:
+                span = members["cp"]
+                value, why = self.number_value(span.text, index, line_no, original, "$VEL.CP")
+                self.give(LINEAR, None if value is None else value * 1000.0, why, span, line_no, index)
         elif m := _APO.match(text):
             self.zone = finite(m.group(1), name, line_no, original, "$APO.CDIS")
 
-    def set_speed(self, group, m, at, index, start, line_no, original, field):
-        """A statement sets the speed of the motions of ``group`` (JOINT: %, LINEAR: m/s) to match ``m``'s group ``at``."""
+    def set_speed(self, group, m, at, index, start, line_no, original, field, axis=None):
+        """A statement sets the speed of the motions of ``group`` (JOINT: % of axis ``axis`` or all, LINEAR: m/s)
+        to match ``m``'s group ``at``."""
         value, why = self.number_value(m.group(at), index, line_no, original, field)
-        if group == JOINT:
-            self.speed_ptp = value
-        else:
-            self.speed_cp = None if value is None else value * 1000.0
-        self.speed_spans[group] = Span(index, start + m.start(at), start + m.end(at), m.group(at))
-        self.speed_why[group] = why
+        if group == LINEAR and value is not None:
+            value = value * 1000.0
+        span = Span(index, start + m.start(at), start + m.end(at), m.group(at))
+        self.give(group, value, why, span, line_no, index, axis)
 
     def with_speed(self, clause, at, index, line_no, original, kind):
         """``(speed, why, span)`` a spline motion's WITH clause sets for it alone; None if it sets none.
@@ -740,8 +810,9 @@ class _Reader:
             return (None if value is None else value * scale), why, span
         return None
 
-    def activate(self, kind, data_name, name, line_no, original):
+    def activate(self, kind, data_name, index, line_no, original):
         """FDAT_ACT / PDAT_ACT / LDAT_ACT: tool, base, speed and zone of the next motion."""
+        name = self.sources[index].name
         data = self.data.get(data_name)
         if kind == "FDAT":
             if data is None:
@@ -755,12 +826,8 @@ class _Reader:
         elif data is not None:
             if "vel" in data:
                 vel = finite(data["vel"].text, name, line_no, original, "VEL")
-                if kind == "PDAT":
-                    self.speed_ptp = vel
-                else:
-                    self.speed_cp = vel * 1000.0
-                self.speed_spans[JOINT if kind == "PDAT" else LINEAR] = None
-                self.speed_why[JOINT if kind == "PDAT" else LINEAR] = ""
+                joint = kind == "PDAT"
+                self.give(JOINT if joint else LINEAR, vel if joint else vel * 1000.0, "", None, line_no, index)
             if "apo_dist" in data:
                 self.zone = finite(data["apo_dist"].text, name, line_no, original, "APO_DIST")
 
@@ -906,6 +973,7 @@ def read(path):
             declare_rows(line_no)
             reader.declarations(dat_index, dat_masked, line_no, start, end)
         declare_rows(len(dat_lines.starts) + 1)
+    reader.siblings = {p.stem.upper() for p in path.parent.iterdir() if p.suffix.lower() == ".src" and p != path}
     walk = _Walk(reader, src_index, src_masked, written, 0 if table is None else len(table))
     for line_no, start, end in others:
         walk.motions_before(line_no)
@@ -914,12 +982,59 @@ def read(path):
     items, resolved = _resolve(reader, path, dat_path, walk)
     targets = _targets(reader.targets, table, inline)
     if not len(walk.rows):  # none read at once
-        return Program("krl", path.stem, items, targets, reader.tools, reader.frames, tuple(reader.sources))
-    motions = MotionTable.merged([MotionTable.of([i for i in items if isinstance(i, Motion)]),
-                                  walk.table(resolved)])
-    statements = StatementTable.of([i for i in items if not isinstance(i, Motion)])
-    return Program("krl", path.stem, ItemRows(statements, motions), targets, reader.tools, reader.frames,
-                   tuple(reader.sources))
+        program = Program("krl", path.stem, items, targets, reader.tools, reader.frames, tuple(reader.sources))
+    else:
+        motions = MotionTable.merged([MotionTable.of([i for i in items if isinstance(i, Motion)]),
+                                      walk.table(resolved)])
+        statements = StatementTable.of([i for i in items if not isinstance(i, Motion)])
+        program = Program("krl", path.stem, ItemRows(statements, motions), targets, reader.tools, reader.frames,
+                          tuple(reader.sources))
+    # calls, branches, loops, jumps or waits: speeds and starts as the program runs
+    return flow.program_followed(program, reader.steps, reader.initial, _flow_speeds)
+
+
+def in_force(settings):
+    """``(value, why, span)`` a motion runs with under every speed setting of ``settings`` that can reach it.
+
+    Each setting is ``(value, why, span)`` (`_Reader.give`) or a
+    `trajcomp.programs.flow.Unknown`. One setting reaching it (in every
+    group) is that one; several are their slowest, written nowhere (no
+    span); one known at run time only makes the motion's speed so, with why.
+    """
+    settings = set(settings)
+    for setting in settings:
+        if isinstance(setting, Unknown):
+            return None, setting.why, None
+    for value, why, _ in settings:
+        if value is None:
+            return None, why, None
+    if len(settings) == 1:
+        return next(iter(settings))
+    return min(value for value, _, _ in settings), "", None
+
+
+def _flow_speeds(table, reached):
+    """The speed columns of a KRL program's motions from the settings that can reach each
+    (`trajcomp.programs.flow.followed`): PTP the slowest of its axes', LIN and CIRC the TCP's; a spline
+    motion's own WITH speed stays. The spans of the motions whose setting moved to another statement change."""
+    own = table.span_offsets("speed_with")[1] >= 0
+    joint = table.kind == JOINT
+    speed, why = np.array(table.speed, dtype=float), np.array(table.speed_why, dtype=object)
+    span = np.full(len(table), None, dtype=object)
+    for r, settings in enumerate(reached.settings):
+        rows = np.arange(len(table))[reached.rows(r)]
+        for groups, members in ((AXIS_GROUPS, joint[rows]), (("cp",), ~joint[rows])):
+            at = rows[members & ~own[rows]]
+            if len(at):
+                value, why[at], span[at] = in_force([s for group in groups for s in settings[group]])
+                speed[at] = np.nan if value is None else value
+    _, start, end = table.span_offsets("speed")
+    new = np.array([(-1, -1) if s is None else (s.start, s.end) for s in span.tolist()], dtype=np.int64).reshape(-1, 2)
+    moved = np.flatnonzero(~own & ((new[:, 0] != start) | (new[:, 1] != end)))
+    spans = [{**{role: value for role, value in table.spans[k].items() if role != "speed"},
+              **({} if span[k] is None else {"speed": span[k]})} for k in moved.tolist()]
+    columns = {"speed": speed, "speed_why": why}
+    return columns | ({"spans": (moved, spans)} if len(moved) else {})
 
 
 def _written_motions(index, masked, lines):

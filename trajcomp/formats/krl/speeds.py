@@ -45,9 +45,13 @@ def write_speeds(program, result, robot, plan):
     settings = {}
 
     def edit(span, value):
-        """Write ``value`` over ``span`` (and in its fold's header); the statement as it now reads."""
-        edits[span.source].append((span.start, span.end, value))
-        edits[span.source].extend(folds[span.source].header_edits(span, value))
+        """Write ``value`` over ``span`` (and in its fold's header); the statement as it now reads. A span edited
+        for an earlier motion (one statement serving motions the program runs apart: a loop, a spline block
+        between) keeps the slowest value."""
+        key = (span.source, span.start, span.end)
+        if key in edited and not _slower(value, edited[key]):
+            value = edited[key]
+        edited[key] = value
         text = program.sources[span.source].text
         start, end = text.rfind("\n", 0, span.start) + 1, text.find("\n", span.end)
         end = len(text) if end < 0 else end
@@ -59,6 +63,8 @@ def write_speeds(program, result, robot, plan):
         return None if start < 0 else Span(source, start, end, program.sources[source].text[start:end])
 
     speed_with, speed, motion_at = (table.span_offsets(role) for role in ("speed_with", "speed", "motion"))
+    inserted = {}  # (source, offset, group) -> (the line inserted there, its value)
+    edited = {}  # (source, start, end) of a span edited -> the value written there
     running = {"ptp": None, "cp": None}  # the speed value in force as the program runs down
     governing = {"ptp": None, "cp": None}  # (source, offset) of the statement that set it
     for m in _changing(joint, speed_with[1] >= 0, speed[:2], np.isin(np.arange(len(table)), list(wanted))).tolist():
@@ -85,10 +91,19 @@ def write_speeds(program, result, robot, plan):
         source_text = program.sources[at.source].text
         line_start = folds[at.source].outside(source_text.rfind("\n", 0, at.start) + 1)
         indent = _INDENT.match(source_text, line_start).group()  # in place: a slice would copy the rest
-        edits[at.source].append((line_start, line_start, f"{indent}{_krl_statement(group, need)}{newline}"))
+        key = (at.source, line_start, group)
+        if key in inserted and _slower(inserted[key][1], need):  # a spline block's motions: before it, the slowest
+            need = inserted[key][1]
+        inserted[key] = (f"{indent}{_krl_statement(group, '{}')}{newline}", need)
         running[group] = need
         if want is not None:
             settings[k] = _krl_statement(group, want)
+    for (source, start, end), value in edited.items():
+        span = Span(source, start, end, program.sources[source].text[start:end])
+        edits[source].append((start, end, value))
+        edits[source].extend(folds[source].header_edits(span, value))
+    for (source, offset, _), (line, value) in inserted.items():
+        edits[source].append((offset, offset, line.format(value)))
     return edit_sources(program, [sorted(set(e)) for e in edits]), settings
 
 
@@ -118,6 +133,14 @@ def _changing(joint, own, speed, wanted):
     return np.flatnonzero(changing)
 
 
+def _slower(a, b):
+    """KRL speed value ``a`` is a number below ``b`` (a name is never known slower)."""
+    try:
+        return float(a) < float(b)
+    except ValueError:
+        return False
+
+
 def _same(a, b):
     """Two KRL speed values are the same: equal numbers, or the same text (a name)."""
     try:
@@ -131,6 +154,7 @@ def _krl_statement(group, value):
 
 
 _FOLD = re.compile(r"^[ \t]*;[ \t]*(END)?FOLD\b", re.I | re.M)
+_SPLINE_BLOCK = re.compile(r"^[ \t]*(?:PTP_)?SPLINE\b.*?^[ \t]*ENDSPLINE\b", re.I | re.M | re.S)
 # the speed an inline form's header (and its parameter fold) shows: Vel=0.2 m/s, %P .. 5:0.2, Kuka.VelocityPath=0.2
 _HEADER_SPEED = re.compile(r"(?:\bVel\s*=\s*|\bKuka\.Velocity\w*\s*=\s*|%P\b[^\r\n]*?,\s*5\s*:\s*)(" + NUMBER + ")", re.I)
 
@@ -150,6 +174,8 @@ class _Folds:
                 if inline:
                     self.folds.append((begin, m.end()))
         self.folds.sort()
+        # the spline blocks (SPLINE .. ENDSPLINE): a statement inserted for a motion in one goes before it
+        self.splines = [(m.start(), m.end()) for m in _SPLINE_BLOCK.finditer(text)]
 
     def enclosing(self, offset):
         """``(start, end)`` of the inline form's fold around ``offset``, or None (inline forms do not nest)."""
@@ -157,9 +183,12 @@ class _Folds:
         return self.folds[at] if at >= 0 and offset < self.folds[at][1] else None
 
     def outside(self, offset):
-        """Where a line inserted at line start ``offset`` goes: before the inline form's fold around it."""
+        """Where a line inserted at line start ``offset`` goes: before the inline form's fold or the spline block
+        around it (KRL allows no statement inside a spline block)."""
         fold = self.enclosing(offset)
-        return offset if fold is None else fold[0]
+        offset = offset if fold is None else fold[0]
+        block = bisect.bisect_right(self.splines, (offset, math.inf)) - 1
+        return self.splines[block][0] if block >= 0 and offset < self.splines[block][1] else offset
 
     def header_edits(self, span, value):
         """Edits (start, end, text) that make the fold around ``span`` show speed ``value`` where it showed the old one."""

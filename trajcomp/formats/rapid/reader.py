@@ -31,6 +31,8 @@ from trajcomp.formats.text import (
     unresolved,
     whole_circle,
 )
+from trajcomp.programs import flow
+from trajcomp.programs.flow import Step, Unknown
 from trajcomp.programs.program import Program
 from trajcomp.programs.items import CIRCULAR, JOINT, LINEAR, Motion, SpanColumns, SpanTable, Statement, Target, replaced
 from trajcomp.programs.tables import (
@@ -109,6 +111,25 @@ PREDEFINED_V_ORI = 500.0  # deg/s, v_ori of every predefined speeddata (v5 .. v7
 _STRAIGHT = {"confj", "confl", "tpwrite", "tperase", "waittime", "setdo", "setao", "setgo", "set", "reset", "pulsedo",
              "singarea", "pathresol", "accset"}
 _ZONE = re.compile(r"^(fine|z(\d+(?:\.\d*)?))$", re.I)
+# the statements that change the order a module runs in (`trajcomp.programs.flow.Step`): first word -> step kind
+_FLOW_WORDS = {"if": "if", "elseif": "elif", "else": "else", "endif": "endif", "test": "if", "case": "elif",
+               "default": "elif", "endtest": "endif", "for": "loop", "endfor": "endloop", "while": "loop",
+               "endwhile": "endloop", "goto": "jump", "return": "return", "exit": "return", "stop": "wait",
+               "endproc": "end", "endfunc": "end", "endtrap": "end"}
+_WAITS = re.compile(r"^\s*(Wait\w*|Stop|StopMove|Break)\b", re.I)  # the arm stops there: WaitTime, WaitDI, ...
+_VELSET = re.compile(r"^\s*VelSet\s+([^,;]+),\s*([^,;]+);", re.I)
+_LABEL = re.compile(r"^\s*([A-Za-z]\w*)\s*:\s*$")
+_ROUTINE_NAME = re.compile(r"^\s*(?:LOCAL\s+)?(?:PROC|FUNC\s+\w+|TRAP)\s+(\w+)", re.I)
+_NOT_CALLS = {"module", "endmodule", "local", "task", "error", "backward", "undo", "record", "endrecord", "alias"}
+# instructions that neither move the arm nor change its speed: a call of any other name not declared in the module
+# may (a routine of another module of the task)
+_BUILT_IN = _STRAIGHT | {"accset", "velset", "tpreadfk", "tpreadnum", "tpshow", "errwrite", "incr", "decr", "add",
+                         "clear", "setdo", "setao", "setgo", "open", "close", "write", "writestr", "rewind",
+                         "iwatch", "isleep", "idelete", "isignaldi", "isignaldo", "itimer", "connect", "triggio",
+                         "triggequip", "triggint", "gripload", "load", "unload", "eraseModule".lower(), "raise",
+                         "retry", "trynext", "skipwarn", "waittime", "waitdi", "waitdo", "waituntil", "waitai",
+                         "waitao", "waitgi", "waitgo", "waitrob", "waitsynctask", "stopmove", "startmove",
+                         "storepath", "restopath", "clearpath", "confj", "confl", "singarea", "pathresol"}
 # A robtarget declared on one line as RobotStudio and CAM post-processors write it, no blanks in its value:
 # CONST robtarget p1:=[[x,y,z],[q1,q2,q3,q4],[cf1,cf4,cf6,cfx],[ea,..,ef]]; -- read a whole module of them at once
 # (`_WrittenPoints`): the lines found by the pattern, the value's layout checked and its numbers read from the
@@ -694,6 +715,7 @@ class _Reader:
         self.task = None  # the other modules of the task (`DeclaredElsewhere`), which may assign a VAR too
         self.motion_spans = SpanTable(MOTION_SPANS)  # the spans of the motions read one by one, in order
         self.protos = []  # Motion of each distinct instruction of motions read at once (`read_at_once`)
+        self.steps = []  # what the module does besides moving, in order (`trajcomp.programs.flow`)
 
     def statement(self, masked, line, start, end):
         """Read the statement at ``start:end`` (line ``line``): a declaration, a motion, an assignment ..."""
@@ -714,8 +736,49 @@ class _Reader:
             return
         elif m := _ASSIGN.match(text):
             self.assignment(m, line, original)
+        else:
+            self.flow_step(text, line, original)
         self.flow(text, line, original)
         self.items.append(Statement(line, original))
+
+    def flow_step(self, text, line, original):
+        """Note a statement that changes the order the module runs in or its speed (`trajcomp.programs.flow.Step`)."""
+        if m := _ROUTINE_NAME.match(text):
+            self.steps.append(Step("routine", m.group(1), line=line, source=self.index))
+            return
+        if (m := _LABEL.match(text)) and m.group(1).lower() not in _FLOW_WORDS:  # not DEFAULT:
+            self.steps.append(Step("label", m.group(1), line=line, source=self.index))
+            return
+        if m := _VELSET.match(text):
+            override, why = self.constant(m.group(1).strip(), "num", line, original, "VelSet override")
+            top, top_why = self.constant(m.group(2).strip(), "num", line, original, "VelSet max")
+            self.steps.append(Step("set", "velset", (override, top, why or top_why), line, self.index))
+            return
+        if _WAITS.match(text):
+            self.steps.append(Step("wait", line=line, source=self.index))
+            return
+        word = _WORD.match(text.strip())
+        if text.strip().startswith("%"):  # a late-bound call: %"name"%;
+            self.steps.append(Step("call", "%", "a routine named at run time", line, self.index))
+            return
+        if word is None:
+            return
+        kind = _FLOW_WORDS.get(word.group().lower())
+        if kind == "if" and word.group().lower() == "if" and not re.search(r"\bTHEN\s*$", text, re.I):
+            self.steps.append(Step("if", line=line, source=self.index))  # IF cond instruction; on one line
+            inner = re.match(r"^\s*IF\s+.*?\s([A-Za-z]\w*\b[^;]*;)\s*$", text, re.I | re.S)
+            if inner:
+                self.flow_step(inner.group(1), line, original)
+            self.steps.append(Step("endif", line=line, source=self.index))
+        elif kind == "jump":
+            target = re.match(r"^\s*GOTO\s+(\w+)", text, re.I)
+            self.steps.append(Step("jump", target.group(1) if target else "", False, line, self.index))
+        elif kind is not None:
+            self.steps.append(Step(kind, line=line, source=self.index))
+        elif (word.group().lower() not in _BUILT_IN and word.group().lower() not in _NOT_CALLS
+              and not _STARTS_DECL.match(text) and re.match(r"^\s*[A-Za-z]\w*\s*(;|\s|\\)", text)):
+            self.steps.append(Step("call", word.group(), "a routine of another module of the task, which may move "
+                                                         "the arm and set speeds", line, self.index))
 
     def read_at_once(self, points, motions, is_motion, rows, first_inline):
         """Take lines read at once (in program order; ``rows`` of ``points`` or, where ``is_motion``, of
@@ -1094,7 +1157,8 @@ def _stripped_offsets(piece, at):
 
 
 def read(path):
-    """Read a RAPID module.
+    """Read a RAPID module, its motions as the controller runs them (`trajcomp.programs.flow`: PROC calls, IF,
+    TEST, WHILE, FOR, GOTO, waits; VelSet's override and max on every motion they can reach, `_flow_speeds`).
 
     Raises
     ------
@@ -1102,6 +1166,46 @@ def read(path):
         Malformed text, numbers out of range, a quaternion that is not a
         rotation, or motions to points the module does not declare.
     """
+    program, steps = _read(path)
+    return flow.program_followed(program, steps, {"velset": (100.0, VMAX, "")}, _flow_speeds, settings=True)
+
+
+def _flow_speeds(table, reached):
+    """A RAPID module's speed columns under the VelSet that can reach each motion (`trajcomp.programs.flow`).
+
+    VelSet override, max runs a motion's TCP and orientation speeds at
+    override % and its TCP speed at most max mm/s, and a ``\\T`` at
+    100 / override times as long; a ``\\T`` held to a max below vmax is
+    left as written (its time and a TCP speed bound it, which no one
+    field of the timing states). Several VelSets
+    reaching a motion: the lowest override and max; one set at run time:
+    the motion's speed is so (left as written).
+    """
+    speed = np.array(table.speed, dtype=float)
+    orientation = np.array(table.orientation_speed, dtype=float)
+    why = np.array(table.speed_why, dtype=object)
+    for r, settings in enumerate(reached.settings):
+        rows = np.arange(len(table))[reached.rows(r)]
+        rows = rows[why[rows] == ""]  # a speed data set at run time: left as written anyway
+        velsets = settings["velset"]
+        unknown = [v.why if isinstance(v, Unknown) else v[2] for v in velsets if isinstance(v, Unknown) or v[2]]
+        if unknown:
+            why[rows] = f"VelSet: {unknown[0]}"
+            continue
+        override, top = min(v[0] for v in velsets) / 100.0, min(v[1] for v in velsets)
+        timed = table.speed_unit[rows] == "s"
+        if top < VMAX:  # a time held to a TCP speed: no one field states both
+            why[rows[timed]] = f"\\T under VelSet's max {top:g} mm/s, which holds it too: left as written"
+        speed[rows[timed]] /= override
+        paced = rows[~timed]
+        tcp = np.where(np.isnan(speed[paced]), VMAX, speed[paced])
+        speed[paced] = np.where((override < 1.0) | (top < tcp), np.minimum(tcp * override, top), speed[paced])
+        orientation[paced] *= override
+    return {"speed": speed, "orientation_speed": orientation, "speed_why": why}
+
+
+def _read(path):
+    """The module (`read`) in file order, and its flow steps."""
     source = read_source(path)
     masked = mask(source.text, "!")
     module = _MODULE.search(masked)
@@ -1150,7 +1254,7 @@ def read(path):
     sources = (source, *companions)
     if table is None and not len(motions):  # nothing read at once: the program of objects
         return Program("rapid", module.group(1), items[0], tuple(reader.targets), reader.tools, reader.frames,
-                       sources)
+                       sources), reader.steps
     objects, bulk_motions = items
     statement_table = StatementTable(points.line, TextSlices(source.text, points.start, points.end))
     motion_table = MotionTable.merged([MotionTable.of([item for item in objects if isinstance(item, Motion)]),
@@ -1159,9 +1263,9 @@ def read(path):
     targets = _targets(reader.targets, table)
     if isinstance(targets, TargetTable):
         return Program.from_tables("rapid", module.group(1), statements, motion_table, targets, sources,
-                                   tools=reader.tools, frames=reader.frames)
+                                   tools=reader.tools, frames=reader.frames), reader.steps
     return Program("rapid", module.group(1), ItemRows(statements, motion_table), targets, reader.tools, reader.frames,
-                   sources)
+                   sources), reader.steps
 def _resolve(reader, task, frames, motions):
     """The items with named points resolved; points assigned at run time and routine arguments found.
 

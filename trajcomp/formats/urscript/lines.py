@@ -79,12 +79,12 @@ class CamLines:
         Their offsets in the script.
     frame : ndarray of object, shape (B,)
         The variable of ``pose_trans(frame, p[...])``, None where the pose is a bare literal.
-    option : ndarray of float, shape (B, 3)
-        The literal value of v, t and r; NaN where not given or given by a variable.
-    option_name : ndarray of object, shape (B, 3)
-        The variable giving v, t and r; None where none does.
-    option_start, option_end : ndarray of int, shape (B, 3)
-        Offsets of v's, t's and r's values; -1 where not given.
+    option : ndarray of float, shape (B, 4)
+        The literal value of v, t, r and a; NaN where not given or given by a variable.
+    option_name : ndarray of object, shape (B, 4)
+        The variable giving v, t, r and a; None where none does.
+    option_start, option_end : ndarray of int, shape (B, 4)
+        Offsets of v's, t's, r's and a's values; -1 where not given.
     end : ndarray of int, shape (B,)
         Offset of the end of the call's last argument (where re-timing inserts ``, t=...``).
     start, stop : ndarray of int, shape (B,)
@@ -371,10 +371,10 @@ def _layout_fields(matches):
     for c in range(len(OPTIONS)):
         good &= (code == c).sum(axis=1) <= 1
     rows = np.arange(b)
-    option = np.full((b, 3), np.nan)
-    option_name = np.full((b, 3), None, dtype=object)
-    option_start, option_end = np.full((b, 3), -1, dtype=np.int64), np.full((b, 3), -1, dtype=np.int64)
-    for j, c in enumerate((1, 2, 3)):  # v, t, r
+    option = np.full((b, 4), np.nan)
+    option_name = np.full((b, 4), None, dtype=object)
+    option_start, option_end = np.full((b, 4), -1, dtype=np.int64), np.full((b, 4), -1, dtype=np.int64)
+    for j, c in enumerate((1, 2, 3, 0)):  # v, t, r, a
         has = (code == c).any(axis=1)
         slot = _SLOT[np.argmax(code == c, axis=1)]
         literal = has & (length[rows, slot + 3] > 0)
@@ -398,7 +398,7 @@ _NO_PLAIN = PlainLines(line=np.zeros(0, dtype=np.int64), start=np.zeros(0, dtype
 _NONE = CamLines(  # no line
     line=np.zeros(0, dtype=np.int64), function=np.zeros(0, dtype=np.int64), is_joint=np.zeros(0, dtype=bool),
     values=np.zeros((0, 6)), number_start=np.zeros((0, 6), dtype=np.int64),
-    number_end=np.zeros((0, 6), dtype=np.int64), frame=np.zeros(0, dtype=object), option=np.zeros((0, 3)),
-    option_name=np.zeros((0, 3), dtype=object), option_start=np.zeros((0, 3), dtype=np.int64),
-    option_end=np.zeros((0, 3), dtype=np.int64), end=np.zeros(0, dtype=np.int64), start=np.zeros(0, dtype=np.int64),
+    number_end=np.zeros((0, 6), dtype=np.int64), frame=np.zeros(0, dtype=object), option=np.zeros((0, 4)),
+    option_name=np.zeros((0, 4), dtype=object), option_start=np.zeros((0, 4), dtype=np.int64),
+    option_end=np.zeros((0, 4), dtype=np.int64), end=np.zeros(0, dtype=np.int64), start=np.zeros(0, dtype=np.int64),
     stop=np.zeros(0, dtype=np.int64))

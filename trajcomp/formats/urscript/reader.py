@@ -26,6 +26,8 @@ from trajcomp.formats.text import (
 )
 from trajcomp.formats.urscript.lines import CALLS, FUNCTIONS, cam_lines
 from trajcomp.formats.urscript.polyscope import notes as polyscope_notes
+from trajcomp.programs import flow
+from trajcomp.programs.flow import Step
 from trajcomp.programs.program import Program
 from trajcomp.programs.items import CIRCULAR, JOINT, LINEAR, Motion, SpanColumns, SpanTable, Statement, Target
 from trajcomp.programs.tables import MotionTable, StatementTable, TargetTable, TextSlices, repeated
@@ -301,6 +303,8 @@ class _Reader:
         t, t_why = self.resolved(lo, hi, 1, lambda name: self.speed(name, line, original, "t"))
         timed = (cam.option_start[lo:hi, 1] >= 0) & ~(t == 0.0)  # t=0: no time; a t set at run time is one
         blend, _ = self.resolved(lo, hi, 2, lambda name: (self.option(name, line, original), ""))
+        a, a_why = self.resolved(lo, hi, 3, lambda name: self.acceleration(name, line, original))
+        a[timed], a_why[timed] = np.nan, ""  # t= overrides a
         frame = np.full(n, None, dtype=object)
         for name, key in keys.items():
             frame[np.equal(cam.frame[lo:hi], name)] = key
@@ -308,7 +312,8 @@ class _Reader:
             "rows": np.arange(lo, hi), "target": np.arange(self.count, self.count + n), "frame": frame,
             "speed": np.where(timed, t, v * scale),
             "speed_unit": _UNITS[np.where(timed, 2, joint.astype(int))],
-            "speed_why": np.where(timed, t_why, v_why),
+            "speed_why": np.where(timed, t_why, np.where(v_why == "", a_why, v_why)),
+            "acceleration": a * scale,
             "zone": np.where(np.isnan(blend) | (blend == 0.0), np.nan, blend * 1000.0),
             "tool": repeated(self.tool, n),
         })
@@ -481,10 +486,15 @@ class _Reader:
         speed, speed_why = self.speed(options.get("v", DEFAULT_SPEED[function]), line, original, "v")
         speed = None if speed is None else speed * (1.0 if function == "movej" else 1000.0)
         unit = "rad/s" if function == "movej" else "mm/s"
+        acceleration, acceleration_why = self.acceleration(options.get("a"), line, original)
         if "t" in options:  # t= the motion's time: v and a are ignored (t=0: no time)
             time, time_why = self.speed(options["t"], line, original, "t")
             if time != 0.0:
                 speed, unit, speed_why = time, "s", time_why
+                acceleration, acceleration_why = None, ""
+        speed_why = speed_why or acceleration_why
+        if acceleration is not None:
+            acceleration *= 1.0 if function == "movej" else 1000.0
         self.motion_spans.add(_timing_offsets(function, args, count))
         frames = {frame for _, frame, _ in found}
         why = next((w for _, _, w in found if w), "") or self.tool_why
@@ -505,7 +515,18 @@ class _Reader:
             refs=tuple(dict.fromkeys([*(i for i, _, _ in found if isinstance(i, int)),
                                       *self.references(" ".join(a for a, _ in args[:count]))])) if why else (),
             speed_why=speed_why,
+            acceleration=acceleration,
         )
+
+    def acceleration(self, text, line, original):
+        """``(value, why)`` of an ``a=`` argument as `speed` reads it; None without one, or one no bound (``1e999``:
+        the arm's own limit)."""
+        if text is None:
+            return None, ""
+        try:
+            return self.speed(text, line, original, "a")
+        except ReadError:
+            return None, ""
 
     def speed(self, text, line, original, field):
         """``(value, why)`` of a ``v=`` or ``t=`` argument: a literal or a variable the script assigns once, a literal.
@@ -634,7 +655,48 @@ def read(path):
         reader.read_line(line)
     reader.cam_rows(done, len(reader.cam))
     _finish(reader)
-    return _program(reader, path)
+    # def calls, if, while, sleep: starts and stops as the script runs
+    return flow.program_followed(_program(reader, path), _flow_steps(reader), {})
+
+
+# the lines that change the order a script runs in (`trajcomp.programs.flow.Step`): blocks, their ends, waits
+_FLOW_LINE = re.compile(r"^[ \t]*(?:(def|thread|sec|if|elif|while|for)\b(?:[ \t]+(\w+))?[^\n]*:[ \t]*\r?$"
+                        r"|(else)[ \t]*:[ \t]*\r?$|(end|break|halt)[ \t]*\r?$|(return)\b"
+                        r"|(sleep|sync|stopj|stopl)[ \t]*\()", re.M)
+_OPENED = {"def": "end", "thread": "end", "sec": "end", "if": "endif", "while": "endloop", "for": "endloop"}
+_FLOW_KINDS = {"def": "routine", "thread": "routine", "sec": "routine", "if": "if", "elif": "elif", "else": "else",
+               "while": "loop", "for": "loop", "break": "exit", "return": "return", "halt": "return"}
+
+
+def _flow_steps(reader):
+    """The `trajcomp.programs.flow.Step` s of a script: ``def`` (``thread``, ``sec``) and their calls, ``if`` ..
+    ``elif`` .. ``else``, ``while``, ``break``, ``return``, ``halt``; ``sleep``, ``sync``, ``stopj`` and ``stopl``
+    stop the arm (a wait). Looked for in the lines read one by one and the plain statements (a CAM motion line is
+    none)."""
+    masked, lines, plain = reader.masked, reader.lines, reader.plain
+    calling = [j for j, layout in enumerate(plain.layouts) if re.match(r"\s*\w+\s*\(", layout)]
+    rows = np.flatnonzero(np.isin(plain.layout, calling)).tolist()
+    offsets = [start for start, _ in reader.parts] + [int(plain.start[k]) for k in rows]
+    texts = [masked[start:end] for start, end in reader.parts] + [masked[plain.start[k]:plain.stop[k]] for k in rows]
+    found = [(at + m.start(), next(g for g in m.group(1, 3, 4, 5, 6) if g), m.group(2))
+             for at, text in zip(offsets, texts) for m in _FLOW_LINE.finditer(text)]
+    names = {name for _, word, name in found if word == "def" and name}
+    if names:
+        calls = re.compile(r"^[ \t]*(" + "|".join(map(re.escape, sorted(names))) + r")[ \t]*\(", re.M)
+        found += [(at + m.start(), "call", m.group(1)) for at, text in zip(offsets, texts)
+                  for m in calls.finditer(text)]
+    found.sort()
+    steps, opened = [], []
+    for offset, word, name in found:
+        line = lines.number(offset)
+        if word == "end":
+            steps.append(Step(opened.pop() if opened else "end", line=line))
+            continue
+        if word in _OPENED:
+            opened.append(_OPENED[word])
+        kind = _FLOW_KINDS.get(word, "wait" if word != "call" else "call")
+        steps.append(Step(kind, name or "", line=line))
+    return steps
 
 
 def _parts(lines, numbers):
@@ -710,7 +772,7 @@ def _program(reader, path):
     blocks = MotionTable(
         kind=_KINDS[cam.function[rows]], target=_blocks_column(reader, "target", int), via=np.full(len(rows), -1),
         line=cam.line[rows], axis_position=np.zeros(len(rows), dtype=bool), text=cam.texts(source.text, rows),
-        **{name: _blocks_column(reader, name, float) for name in ("speed", "zone")},
+        **{name: _blocks_column(reader, name, float) for name in ("speed", "zone", "acceleration")},
         **{name: _blocks_column(reader, name, object) for name in ("speed_unit", "tool", "frame", "speed_why")})
     table = MotionTable.merged([MotionTable.of(motions), blocks])
     # the re-timing fields (t, v, the call's end) of every motion, in program order
