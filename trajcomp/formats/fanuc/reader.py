@@ -201,10 +201,29 @@ def read(path):
     statements = _statements(source.text, starts, ends, np.flatnonzero(~covered[1:]) + 1, kept)
     tools, frames = {"0": np.eye(4)}, {"0": np.eye(4)}
     if isinstance(targets, TargetRows):
-        return Program.from_tables("fanuc_ls", name, statements, motions, table, sources, tools=tools,
-                                   frames=frames, notes=notes)
-    return Program("fanuc_ls", name, ItemRows(statements, motions), tuple(targets), tools, frames, sources,
-                   notes=notes)
+        program = Program.from_tables("fanuc_ls", name, statements, motions, table, sources, tools=tools,
+                                      frames=frames, notes=notes)
+    else:
+        program = Program("fanuc_ls", name, ItemRows(statements, motions), tuple(targets), tools, frames, sources,
+                          notes=notes)
+    return _with_controller_frames(program, path)
+
+
+def _with_controller_frames(program, path):
+    """The program with the user frames and tools its motions use and it does not define read from its
+    controller's SYSFRAME.VA (`trajcomp.formats.fanuc.sysframe`), and the report's notes on them."""
+    from trajcomp.formats.fanuc import sysframe
+
+    if sysframe.find(path) is None:  # no backup beside the program: nothing to look at
+        return program
+    uses = program.target_uses()
+    wanted = {what: {n for n in set(uses[what].tolist()) if n is not None and n.isdigit() and n not in defined}
+              for what, defined in (("tool", program.tools), ("frame", program.frames))}
+    found, notes = sysframe.tables(path, wanted)
+    if not notes:
+        return program
+    return program.replace(tools={**program.tools, **found["tool"]}, frames={**program.frames, **found["frame"]},
+                           notes=program.notes + notes)
 
 
 def _line_offsets(lines):
