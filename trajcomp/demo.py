@@ -153,15 +153,20 @@ def demo_cubes(robot):
     )
 
 
-def run_cube(virtual, cube, *, validation=40, seed=0):
-    """Calibrate on one cube's grid and validate compensation at random targets."""
+def run_cube(virtual, cube, *, validation=40, seed=0, robot_ref=None):
+    """Calibrate on one cube's grid and validate compensation at random targets.
+
+    ``robot_ref``: how the model names its robot (a built-in name or a robot YAML file's path, as the user gave
+    it; default the robot's name).
+    """
     robot = virtual.nominal
     rng = np.random.default_rng([seed, len(cube.name)])
     plan = plan_grid(robot, cube.corner, cube.side, cube.step, one_posture=False)
     q = plan.joints[plan.reachable]
     meas = Measurements(joints=q, position=plan.position[plan.reachable], measured=virtual.measure(q, rng),
                         lines=np.arange(len(q)) + 1, path=f"<virtual {cube.name} cube>")
-    model = calibrate(robot, meas, robot_ref=robot.name, method="composite", grid_step=cube.step, folds=5)
+    model = calibrate(robot, meas, robot_ref=robot_ref or robot.name, method="composite", grid_step=cube.step,
+                      folds=5)
     targets = np.tile(np.eye(4), (validation, 1, 1))
     targets[:, :3, :3] = abc_to_matrix(default_orientation(robot))
     targets[:, :3, 3] = np.asarray(cube.corner) + rng.uniform(0.0, cube.side, (validation, 3))
@@ -238,8 +243,11 @@ def run_program(virtual, result, folder):
     return {label: ErrorStats.from_errors(p - targets[:, :3, 3]) for label, p in landed.items()}
 
 
-def run_demo(robot, profile="paper", seed=1, progress=None):
+def run_demo(robot, profile="paper", seed=1, progress=None, robot_ref=None):
     """Both cubes of the paper's protocol (`demo_cubes`) on a virtual copy of ``robot``.
+
+    ``robot_ref``: how the models name the robot (`run_cube`): a robot YAML file's path, so that
+    ``compensate --robot FILE.yaml --model ..`` finds the same arm.
 
     Returns
     -------
@@ -252,5 +260,5 @@ def run_demo(robot, profile="paper", seed=1, progress=None):
     for cube in demo_cubes(robot):
         if progress:
             progress(f"{cube}: plan, measure, calibrate, validate")
-        results.append(run_cube(virtual, cube, seed=seed))
+        results.append(run_cube(virtual, cube, seed=seed, robot_ref=robot_ref))
     return virtual, results
