@@ -341,7 +341,7 @@ def read_task(paths, format=None):
     ----------
     paths : sequence of str or Path
         Program files of one language (a RAPID task's modules, KUKA
-        programs using one ``$config.dat``); the first names the program.
+        programs using one ``$config.dat``); the first that has motions names the program.
     format : str, optional
         Registry name; default from the extensions.
 
