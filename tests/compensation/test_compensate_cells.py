@@ -40,3 +40,43 @@ def test_a_task_s_messages_name_the_module_that_moves_the_arm_not_a_data_module_
     robot = load_robot("abb_irb4600")
     with pytest.raises(IKError, match=r"^ZMain: 1 targets cannot be reached .* \(p10 \(ZMain\.mod:2\)"):
         compensate_program(program, _stand_in(robot), robot)
+
+
+@pytest.fixture(scope="module")
+def fanuc_model(tmp_path_factory):
+    """A composite model of the virtual LR Mate 200iD (a 200 mm cube at 50 mm steps)."""
+    folder = tmp_path_factory.mktemp("fanuc")
+    plan, meas, model = folder / "plan.csv", folder / "meas.csv", folder / "fanuc.yaml"
+    assert main(["plan", "--robot", "fanuc_lrmate200id", "--cube", "300,-100,300", "--side", "200", "--step", "50",
+                 "-o", str(plan)]) == 0
+    assert main(["simulate", str(plan), "--robot", "fanuc_lrmate200id", "--seed", "1", "-o", str(meas)]) == 0
+    assert main(["calibrate", str(meas), "--robot", "fanuc_lrmate200id", "--grid-step", "50", "--folds", "3",
+                 "-o", str(model)]) == 0
+    return model
+
+
+FANUC_POSITION = ("P[{n}]{{\n   GP1:\n\tUF : 0, UT : 0,\t\tCONFIG : 'N U T, 0, 0, 0',\n"
+                  "\tX =   {x:.3f}  mm,\tY =     0.000  mm,\tZ =   380.000  mm,\n"
+                  "\tW =   180.000 deg,\tP =     0.000 deg,\tR =     0.000 deg\n}};\n")
+
+
+def test_fanuc_register_motion_before_any_utool_num_is_said_so_not_computed_at_run_time(tmp_path, fanuc_model,
+                                                                                        capsys):
+    """``L PR[1]`` with no UTOOL_NUM / UFRAME_NUM before it: the register's value is known (POSREG.VA) but not
+    the tool and frame it is in. The run's message gives that reason, not "positions computed at run time"."""
+    (tmp_path / "POSREG.VA").write_text(
+        "[*POSREG*]$POSREG  Storage: SHADOW  Access: RW  : ARRAY[1,100] OF Position Reg\n"
+        "    [1,1] =   'APPROACH'   Group: 1   Config: N U T, 0, 0, 0\n"
+        "  X:   380.000   Y:    20.000   Z:   400.000\n  W:   180.000   P:     0.000   R:     0.000\n\n")
+    (tmp_path / "PICK.LS").write_text(
+        "/PROG  PICK\n/ATTR\nOWNER\t\t= MNEDITOR;\n/MN\n   1:J P[1] 100% FINE    ;\n"
+        "   2:L PR[1:APPROACH] 200mm/sec FINE    ;\n   3:L P[2] 100mm/sec FINE    ;\n/POS\n"
+        + FANUC_POSITION.format(n=1, x=350) + FANUC_POSITION.format(n=2, x=400) + "/END\n")
+    out = tmp_path / "out"
+    out.mkdir()
+    assert main(["compensate", str(tmp_path / "PICK.LS"), "--model", str(fanuc_model), "-o", str(out / "PICK.LS"),
+                 "--retime", "none"]) == 1
+    err = capsys.readouterr().err
+    assert "positions computed at run time" not in err
+    assert ("1 of 3 motions were not compensated (the first, line 6: PR[1] is a position in the tool and user frame "
+            "active when the line runs: the program sets no UTOOL_NUM and UFRAME_NUM before it") in err

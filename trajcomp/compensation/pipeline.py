@@ -31,6 +31,7 @@ from trajcomp.compensation.targets import program_corrector
 from trajcomp.errors import TimingError, TrajcompError
 from trajcomp.model.compensation_model import CompensationModel
 from trajcomp.model.model_file import load_model, model_files
+from trajcomp.programs.program import place_text
 from trajcomp.report import Criteria, compliance_report, file_entry, model_entry, report_paths, summary_lines
 from trajcomp.support.atomic import refuse_inputs
 from trajcomp.support.memory import end_stage, kept_apart, release
@@ -189,8 +190,9 @@ class CompensationJob:
             message = f"the program is written but fails its verdict ({', '.join(failed)}); see the report"
             if report.not_compensated:
                 passed = len(report.not_compensated) - report.motions_left
+                place, _, why = report.not_compensated[0]  # its own reason: run time, a frame unknown, a copy ..
                 message += (f"; {report.motions_left} of {len(program.motions)} motions were not compensated "
-                            "(positions computed at run time)"
+                            f"(the first, {place_text(place)}: {why}; the report lists each)"
                             + (f", {passed} points passed to routines left as written" if passed else ""))
         if timed is not None and not timed.within_limits:
             status, message = batch.FAIL, "; ".join(filter(None, [message, LIMIT_MESSAGE]))
