@@ -256,7 +256,7 @@ class RetimeJob:
                                       self.frames)
         protect = inputs[len(sources):] if self.in_place else inputs
         written = formats.write(output, timed, protect=protect)
-        report = as_written_report(program, plan)
+        report = as_written_report(program, plan, self.robot)
         compliance = compliance_report(
             report, self.robot, criteria=self.criteria, command="retime", timing=timing,
             files=[file_entry("program", p) for p in sources] + [file_entry("output", p) for p in written],

@@ -257,10 +257,23 @@ def _fail_unreachable(program, robot, index, q, source):
         f"{program.where(index[k])}: {_declaration(program.targets[index[k]], source[k])}" for k in failed[:5]
     )
     more = f" and {failed.size - 5} more" if failed.size > 5 else ""
-    raise IKError(
-        f"{program.name}: {failed.size} targets cannot be reached by robot {robot.name} in the posture "
-        f"the program declares ({shown}{more}); the program was not changed"
-    )
+    raise _unreachable(program, robot, f"{failed.size} targets ({shown}{more})",
+                       f"{program.name}: {failed.size} targets cannot be reached by robot {robot.name} in the posture "
+                       f"the program declares ({shown}{more}); the program was not changed")
+
+
+def _unreachable(program, robot, which, message):
+    """The IKError of targets ``which`` (a text) the arm cannot reach: ``message``, unless the program moves
+    external axes the robot's description has no track for: then that is the reason given."""
+    moving = program.moving_external_axes()
+    if not moving or (robot.track is not None and robot.track.index(program.format) is not None):
+        return IKError(message)
+    where = ("describes no track" if robot.track is None else
+             f"has a track, but names no field of {program.format} programs that holds its position (track.fields)")
+    return IKError(f"{program.name}: {which} are out of the reach of robot {robot.name} from a fixed base, and the "
+                   f"program moves external axes {', '.join(moving)}: a robot on a track, whose description {where}. "
+                   "Describe the track in the robot's YAML (track: direction, limits, fields; see docs/tracks.md) "
+                   "and give it with --robot; the program was not changed")
 
 
 def _declaration(target, source):
@@ -329,10 +342,10 @@ def _chain(program, robot, index, q, branches, source, workers=1):
                     chained = _chained(robot, *branches(block), anchor)
                 reached = np.all(np.isfinite(chained), axis=1)
                 if not reached.all():
-                    raise IKError(
-                        f"{program.name}: {program.where(index[block[np.argmin(reached)]])}: robot {robot.name} "
-                        "cannot reach the target inside its joint limits; the program was not changed"
-                    )
+                    where = program.where(index[block[np.argmin(reached)]])
+                    raise _unreachable(program, robot, f"targets from {where} on",
+                                       f"{program.name}: {where}: robot {robot.name} cannot reach the target inside "
+                                       "its joint limits; the program was not changed")
                 q[block] = chained
                 source[block] = "previous"
                 if from_home:

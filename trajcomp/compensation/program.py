@@ -205,7 +205,7 @@ def compensate_program(program, correct, robot, *, tools=None, frames=None, join
         predicted_residual=np.zeros(len(rows)) if result is None else result.residual,
         not_compensated=_not_compensated(program, cartesian),
         motions_left=sum(not m.axis_position for m in program.runtime_motions()),
-        **_program_facts(program, joint_index, joint_targets),
+        **_program_facts(program, robot, joint_index, joint_targets),
         landing=None if result is None else landing_of(result),
     )
     if result is not None:
@@ -298,7 +298,7 @@ def landing_of(result):
             "other_tool": result.other_tool}
 
 
-def as_written_report(program, plan):
+def as_written_report(program, plan, robot=None):
     """The `ProgramReport` of a program run as written (no correction), e.g. for re-timing alone.
 
     Parameters
@@ -306,6 +306,8 @@ def as_written_report(program, plan):
     program : Program
     plan : trajcomp.compensation.posture.PlannedJoints
         Its Cartesian targets in their declared postures (`planned_joints`).
+    robot : Robot, optional
+        The arm it runs on (its track, if any, is not an external axis to warn of).
     """
     n = len(plan.index)
     joint_index, _ = program.joint_targets()
@@ -322,7 +324,7 @@ def as_written_report(program, plan):
         posture_source=plan.source,
         outside_grid=np.zeros(n, dtype=bool),
         predicted_residual=np.zeros(n),
-        **_program_facts(program, joint_index, "keep"),
+        **_program_facts(program, robot, joint_index, "keep"),
     )
 
 
@@ -344,7 +346,7 @@ def _described(program, index):
     return tuple(texts[c] for c in configs)
 
 
-def _program_facts(program, joint_index, joint_mode):
+def _program_facts(program, robot, joint_index, joint_mode):
     """The report fields that describe the program itself: unused points, joint targets, warnings."""
     return {
         "unused": tuple(t.label for t in program.unused_targets()),
@@ -352,14 +354,17 @@ def _program_facts(program, joint_index, joint_mode):
         + tuple(f"{program.motions[k].text} ({place_text(program.place(program.motions[k]))})"
                 for k in np.flatnonzero(program.motion_table().axis_position)),
         "joint_mode": joint_mode,
-        "warnings": _warnings(program),
+        "warnings": _warnings(program, robot),
     }
 
 
-def _warnings(program):
+def _warnings(program, robot):
     """What the user must know about a compensated program: its notes (copies of a point per use), external axes
-    that move."""
+    that move other than the robot's track (whose carriage places each target's arm base)."""
     moving = program.moving_external_axes()
+    axis = None if robot is None or robot.track is None else robot.track.index(program.format)
+    if axis is not None:
+        moving = tuple(name for name in moving if name != f"E{axis + 1}")
     if not moving:
         return program.notes
     return program.notes + (f"the program moves external axes {', '.join(moving)} (a track or positioner): the compensation "

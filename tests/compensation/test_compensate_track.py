@@ -1,0 +1,259 @@
+"""Robots on a linear track (issue 35, section 1): the arm part compensated in the carriage frame.
+
+A virtual arm of each maker stands on a track (a KUKA KL unit driven by
+E1, a FANUC rail by E1, an ABB IRBT track by eax_a). It is calibrated at
+one carriage position (a grid in its base frame); a hand-written program in
+the maker's language states world targets at carriage positions metres
+apart. Compensated, each target's written command, run by the virtual arm
+from the carriage where the target's track value puts it, lands within
+0.02 mm of the world target; the track values are written as they stand.
+A program on a track whose robot description has none is refused saying so.
+"""
+
+import re
+from importlib import resources
+
+import numpy as np
+import pytest
+from scipy.spatial.transform import Rotation
+
+from trajcomp import formats
+from trajcomp.arm.ik import ik
+from trajcomp.arm.kinematics import fk
+from trajcomp.arm.robot import load_robot, robot_from_yaml
+from trajcomp.arm.transforms import matrix_to_abc
+from trajcomp.calibration.calibrate import calibrate
+from trajcomp.calibration.measurement_plan import plan_grid
+from trajcomp.calibration.measurements import Measurements
+from trajcomp.calibration.simulate import VirtualRobot
+from trajcomp.compensation.program import compensate_program
+from trajcomp.compensation.targets import program_corrector
+from trajcomp.errors import IKError, RobotError, TrajcompError
+from trajcomp.formats.configuration import configuration_for
+
+DIRECTION = np.array([1.0, 0.02, 0.0]) / np.linalg.norm([1.0, 0.02, 0.0])  # a track not quite along world x
+CARRIAGE = [0.0, 1850.0, 4200.0]  # mm of track position: metres apart
+TRACK = """
+track:
+  direction: [1.0, 0.02, 0.0]
+  limits: {position_min: -100, position_max: 5800, velocity: 2000, acceleration: 2500}
+  fields: {krl: E1, fanuc_ls: E1, rapid: eax_a}
+"""
+# each arm's calibrated cube (corner, side, step: mm) and the arm posture its targets are solved in
+CELLS = {"kuka_kr6_r900": ((400.0, -50.0, 650.0), 200.0, 50.0),
+         "fanuc_lrmate200id": ((300.0, -100.0, 300.0), 200.0, 50.0),
+         "abb_irb4600": ((1000.0, -200.0, 700.0), 400.0, 100.0)}
+
+
+def on_track(name, track=TRACK):
+    """Built-in robot ``name`` on the track `TRACK` (its YAML with a ``track`` mapping)."""
+    text = resources.files("trajcomp.arm.robots").joinpath(f"{name}.yaml").read_text(encoding="utf-8")
+    return robot_from_yaml(text + track, f"{name} on a track")
+
+
+_CELL = {}
+
+
+def cell(name):
+    """(robot on the track, virtual arm, program corrector) of arm ``name``, calibrated once per test run."""
+    if name not in _CELL:
+        robot = on_track(name)
+        corner, side, step = CELLS[name]
+        virtual = VirtualRobot.create(robot, "paper", seed=4)
+        plan = plan_grid(robot, corner, side, step, orientation=matrix_to_abc(orientation(robot)))
+        q = plan.joints[plan.reachable]
+        meas = Measurements(joints=q, position=plan.position[plan.reachable],
+                            measured=virtual.measure(q, np.random.default_rng(5)), lines=np.arange(len(q)) + 2,
+                            path="grid.csv")
+        model = calibrate(robot, meas, method="composite", grid_step=step, folds=0)
+        _CELL[name] = (robot, virtual, program_corrector(model))
+    return _CELL[name]
+
+
+def orientation(robot):
+    """The targets' and the grid's tool orientation (3, 3): the home one tilted (no KUKA B = 90 deg gimbal lock)."""
+    tilt = Rotation.from_euler("xyz", [6.0, -9.0, 0.0], degrees=True).as_matrix()
+    return fk(robot, robot.home[None])[0, :3, :3] @ tilt
+
+
+def world_targets(robot, name):
+    """World poses (3, 4, 4) inside the arm's calibrated cube, one at each carriage position, and their joints."""
+    corner, side, _ = CELLS[name]
+    rng = np.random.default_rng(7)
+    local = np.tile(np.eye(4), (len(CARRIAGE), 1, 1))
+    local[:, :3, :3] = orientation(robot)
+    local[:, :3, 3] = np.asarray(corner) + rng.uniform(0.2 * side, 0.8 * side, (len(CARRIAGE), 3))
+    q = ik(robot, local, seed=np.tile(robot.home, (len(CARRIAGE), 1))).raise_on_failure("targets").q
+    world = robot.track.placements(robot.T_world_base, np.array(CARRIAGE)) @ local
+    return world, q
+
+
+def landing(robot, virtual, world_command, carriage):
+    """World positions (N, 3) the virtual arm reaches for world commands (N, 4, 4) at track positions (N,)."""
+    placements = robot.track.placements(robot.T_world_base, np.asarray(carriage))
+    local = np.linalg.inv(placements) @ world_command
+    q = ik(robot, local, seed=np.tile(robot.home, (len(local), 1))).raise_on_failure("commands").q
+    return (placements @ virtual.reached_poses(q))[:, :3, 3]
+
+
+# ------------------------------------------------------------------ the three languages
+
+
+def _krl(folder, world, q, robot):
+    status = configuration_for("krl", robot, q)
+    points = []
+    for k, (T, (s, t)) in enumerate(zip(world, status)):
+        a, b, c = Rotation.from_matrix(T[:3, :3]).as_euler("ZYX", degrees=True)
+        points.append(f"DECL E6POS XP{k + 1}={{X {T[0, 3]:.4f},Y {T[1, 3]:.4f},Z {T[2, 3]:.4f},A {a:.5f},B {b:.5f},"
+                      f"C {c:.5f},S {s},T {t},E1 {CARRIAGE[k]:.1f},E2 0.0,E3 0.0,E4 0.0,E5 0.0,E6 0.0}}")
+    (folder / "rail.dat").write_text("DEFDAT  RAIL\n" + "\n".join(points) + "\nENDDAT\n")
+    (folder / "rail.src").write_text("DEF rail( )\n$BASE=$NULLFRAME\n$VEL.CP=0.2\nBAS(#VEL_PTP,20)\nPTP XP1\n"
+                                     "LIN XP2 C_DIS\nLIN XP3\nEND\n")
+    return folder / "rail.src"
+
+
+def _read_krl(path):
+    """World poses (N, 4, 4) and E1 (N,) of the points a KRL .dat declares."""
+    poses, carriage = [], []
+    for m in re.finditer(r"X ([-\d.]+),Y ([-\d.]+),Z ([-\d.]+),A ([-\d.]+),B ([-\d.]+),C ([-\d.]+),S \d+,T \d+,"
+                         r"E1 ([-\d.]+)", path.with_suffix(".dat").read_text()):
+        v = [float(x) for x in m.groups()]
+        T = np.eye(4)
+        T[:3, :3], T[:3, 3] = Rotation.from_euler("ZYX", v[3:6], degrees=True).as_matrix(), v[:3]
+        poses.append(T)
+        carriage.append(v[6])
+    return np.array(poses), np.array(carriage)
+
+
+def _fanuc(folder, world, q, robot):
+    configs = configuration_for("fanuc_ls", robot, q)
+    positions = ""
+    for k, (T, config) in enumerate(zip(world, configs)):
+        w, p, r = Rotation.from_matrix(T[:3, :3]).as_euler("xyz", degrees=True)
+        flip, up, top, *turns = config
+        positions += (f"P[{k + 1}]{{\n   GP1:\n\tUF : 0, UT : 0,\t\tCONFIG : '{flip} {up} {top}, "
+                      f"{', '.join(map(str, turns))}',\n\tX = {T[0, 3]:10.3f}  mm,\tY = {T[1, 3]:10.3f}  mm,\t"
+                      f"Z = {T[2, 3]:10.3f}  mm,\n\tW = {w:10.3f} deg,\tP = {p:10.3f} deg,\tR = {r:10.3f} deg,\n"
+                      f"\tE1 = {CARRIAGE[k]:10.3f}  mm\n}};\n")
+    (folder / "RAIL.LS").write_text(
+        "/PROG  RAIL\n/ATTR\nOWNER\t\t= MNEDITOR;\nDEFAULT_GROUP\t= 1,*,*,*,*;\n/MN\n   1:  UFRAME_NUM=0 ;\n"
+        "   2:  UTOOL_NUM=0 ;\n   3:J P[1] 20% FINE    ;\n   4:L P[2] 200mm/sec CNT50    ;\n"
+        f"   5:L P[3] 200mm/sec FINE    ;\n/POS\n{positions}/END\n")
+    return folder / "RAIL.LS"
+
+
+def _read_fanuc(path):
+    poses, carriage = [], []
+    for m in re.finditer(r"X =\s*([-\d.]+)\s*mm,\s*Y =\s*([-\d.]+)\s*mm,\s*Z =\s*([-\d.]+)\s*mm,\s*W =\s*([-\d.]+)\s*deg,"
+                         r"\s*P =\s*([-\d.]+)\s*deg,\s*R =\s*([-\d.]+)\s*deg,\s*E1 =\s*([-\d.]+)", path.read_text()):
+        v = [float(x) for x in m.groups()]
+        T = np.eye(4)
+        T[:3, :3], T[:3, 3] = Rotation.from_euler("xyz", v[3:6], degrees=True).as_matrix(), v[:3]
+        poses.append(T)
+        carriage.append(v[6])
+    return np.array(poses), np.array(carriage)
+
+
+def _rapid(folder, world, q, robot):
+    configs = configuration_for("rapid", robot, q)
+    lines = []
+    for k, (T, config) in enumerate(zip(world, configs)):
+        x, y, z, w = Rotation.from_matrix(T[:3, :3]).as_quat()
+        lines.append(f"  CONST robtarget pRail{k + 1}:=[[{T[0, 3]:.3f},{T[1, 3]:.3f},{T[2, 3]:.3f}],"
+                     f"[{w:.9f},{x:.9f},{y:.9f},{z:.9f}],[{','.join(map(str, config))}],"
+                     f"[{CARRIAGE[k]:.2f},9E9,9E9,9E9,9E9,9E9]];")
+    (folder / "Rail.mod").write_text(
+        "MODULE Rail\n" + "\n".join(lines) + "\n  PROC main()\n    MoveJ pRail1,v1000,fine,tool0\\WObj:=wobj0;\n"
+        "    MoveL pRail2,v200,z10,tool0\\WObj:=wobj0;\n    MoveL pRail3,v200,fine,tool0\\WObj:=wobj0;\n"
+        "  ENDPROC\nENDMODULE\n")
+    return folder / "Rail.mod"
+
+
+def _read_rapid(path):
+    poses, carriage = [], []
+    for m in re.finditer(r"\[\[([-\d.]+),([-\d.]+),([-\d.]+)\],\[([-\d.]+),([-\d.]+),([-\d.]+),([-\d.]+)\],"
+                         r"\[[-\d,]+\],\[([-\d.]+),", path.read_text()):
+        v = [float(x) for x in m.groups()]
+        T = np.eye(4)
+        T[:3, :3], T[:3, 3] = Rotation.from_quat([v[4], v[5], v[6], v[3]]).as_matrix(), v[:3]
+        poses.append(T)
+        carriage.append(v[7])
+    return np.array(poses), np.array(carriage)
+
+
+LANGUAGES = {"kuka_kr6_r900": (_krl, _read_krl), "fanuc_lrmate200id": (_fanuc, _read_fanuc),
+             "abb_irb4600": (_rapid, _read_rapid)}
+
+
+@pytest.mark.parametrize("name", sorted(LANGUAGES))
+def test_a_program_on_a_track_lands_within_0_02_mm_of_its_world_targets(tmp_path, name):
+    robot, virtual, correct = cell(name)
+    write, read = LANGUAGES[name]
+    world, q = world_targets(robot, name)
+    path = write(tmp_path, world, q, robot)
+    program = formats.read(path)
+    before = landing(robot, virtual, *read(path))
+    edited, report = compensate_program(program, correct, robot)
+    assert not [w for w in report.warnings if "external axes" in w]  # the track is the arm's, not a warning
+    out = tmp_path / "out"
+    out.mkdir()
+    formats.write(out / path.name, edited)
+    commands, carriage = read(out / path.name)
+    np.testing.assert_array_equal(carriage, CARRIAGE)  # the track positions as written
+    after = landing(robot, virtual, commands, carriage)
+    error_before = np.linalg.norm(before - world[:, :3, 3], axis=1)
+    error_after = np.linalg.norm(after - world[:, :3, 3], axis=1)
+    assert error_before.min() > 0.3  # the virtual arm misses by tenths of a mm uncompensated
+    assert error_after.max() < 0.02, error_after
+
+
+def test_the_arm_part_is_compensated_in_the_carriage_frame(tmp_path):
+    """The poses handed to the correction are the world targets seen from each target's carriage."""
+    robot, _, correct = cell("kuka_kr6_r900")
+    world, q = world_targets(robot, "kuka_kr6_r900")
+    program = formats.read(_krl(tmp_path, world, q, robot))
+    seen = {}
+
+    def recording(T, tools, seeds, names):
+        seen["T"] = T.copy()
+        return correct(T, tools, seeds, names)
+
+    compensate_program(program, recording, robot)
+    expected = fk(robot, q)  # the arm's own pose, whatever the carriage
+    np.testing.assert_allclose(seen["T"][:, :3, 3], expected[:, :3, 3], atol=2e-3)
+
+
+def test_a_program_on_a_track_whose_robot_has_none_is_refused_for_that_reason(tmp_path):
+    robot = on_track("kuka_kr6_r900")
+    world, q = world_targets(robot, "kuka_kr6_r900")
+    program = formats.read(_krl(tmp_path, world, q, robot))
+    fixed = load_robot("kuka_kr6_r900")
+    with pytest.raises(IKError, match=r"out of the reach of robot kuka_kr6_r900 from a fixed base, and the program "
+                                      r"moves external axes E1: a robot on a track, whose description describes no "
+                                      r"track\. Describe the track"):
+        compensate_program(program, cell("kuka_kr6_r900")[2], fixed)
+    no_field = on_track("kuka_kr6_r900", TRACK.replace("krl: E1, ", ""))
+    with pytest.raises(IKError, match="names no field of krl programs"):
+        compensate_program(program, cell("kuka_kr6_r900")[2], no_field)
+
+
+def test_a_target_without_its_track_position_is_named(tmp_path):
+    robot = on_track("kuka_kr6_r900")
+    world, q = world_targets(robot, "kuka_kr6_r900")
+    path = _krl(tmp_path, world, q, robot)
+    dat = path.with_suffix(".dat")
+    dat.write_text(re.sub(r",E1 [-\d.]+,E2 0.0,E3 0.0,E4 0.0,E5 0.0,E6 0.0", "", dat.read_text(), count=1))
+    with pytest.raises(TrajcompError, match=r"XP1 \(rail\.dat:2\) states no E1: its track position"):
+        compensate_program(formats.read(path), cell("kuka_kr6_r900")[2], robot)
+
+
+@pytest.mark.parametrize("track, message", [
+    (TRACK.replace("[1.0, 0.02, 0.0]", "[0, 0, 0]"), "track.direction: the zero vector"),
+    (TRACK.replace("position_min: -100", "position_min: 6000"), "position_min 6000 mm is not below"),
+    (TRACK.replace("rapid: eax_a", "rapid: A1"), "track.fields.rapid: expected E1..E6 or eax_a..eax_f"),
+    (TRACK.replace("velocity: 2000", "velocity: -1"), "track.limits.velocity: expected a positive number"),
+    ("\ntrack: [1, 0, 0]\n", "field track: expected a mapping"),
+])
+def test_a_track_description_is_checked_field_by_field(track, message):
+    with pytest.raises(RobotError, match=re.escape(message)):
+        on_track("kuka_kr6_r900", track)
