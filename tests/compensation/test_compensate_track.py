@@ -257,3 +257,30 @@ def test_a_target_without_its_track_position_is_named(tmp_path):
 def test_a_track_description_is_checked_field_by_field(track, message):
     with pytest.raises(RobotError, match=re.escape(message)):
         on_track("kuka_kr6_r900", track)
+
+
+def test_compensate_on_a_track_through_the_cli_leaves_speeds_as_written_and_says_why(tmp_path, monkeypatch, capsys):
+    """The re-timing times the arm in its carriage and not the track's travel: a program that moves the track
+    keeps every speed as written (never faster), and the run says so; ``retime`` alone refuses it."""
+    from trajcomp.cli import main
+
+    monkeypatch.chdir(tmp_path)
+    text = resources.files("trajcomp.arm.robots").joinpath("kuka_kr6_r900.yaml").read_text(encoding="utf-8")
+    (tmp_path / "kr6_rail.yaml").write_text(text.replace("name: kuka_kr6_r900", "name: kr6_rail") + TRACK)
+    robot = load_robot("kr6_rail.yaml")
+    angles = np.degrees(matrix_to_abc(orientation(robot)))
+    assert main(["plan", "--robot", "kr6_rail.yaml", "--cube", "400,-50,650", "--side", "200", "--step", "50",
+                 "--orientation=" + ",".join(f"{v:.6f}" for v in angles), "-o", "plan.csv"]) == 0
+    assert main(["simulate", "plan.csv", "--robot", "kr6_rail.yaml", "--seed", "1", "-o", "meas.csv"]) == 0
+    assert main(["calibrate", "meas.csv", "--robot", "kr6_rail.yaml", "--grid-step", "50", "--folds", "3",
+                 "-o", "model.yaml"]) == 0
+    world, q = world_targets(robot, "kuka_kr6_r900")
+    src = _krl(tmp_path, world, q, robot)
+    before = src.read_text()
+    capsys.readouterr()
+    code = main(["compensate", "rail.src", "--model", "model.yaml", "-o", "out.src"])
+    err = capsys.readouterr().err
+    assert code in (0, 1) and "not re-timed: the program moves the robot's track (E1)" in err
+    assert "$VEL.CP=0.2" in (tmp_path / "out.src").read_text() and src.read_text() == before
+    assert main(["retime", "rail.src", "--robot", "kr6_rail.yaml", "-o", "timed.src"]) == 2
+    assert "moves the robot's track (E1)" in capsys.readouterr().err and not (tmp_path / "timed.src").exists()
