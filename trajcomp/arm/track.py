@@ -20,7 +20,12 @@ under ``track`` (user units: mm, mm/s, mm/s^2)::
 
 At track position ``e`` the arm's base, the carriage frame, is
 ``T_world_base(e) = Trans(scale * e * direction) @ T_world_base(0)``: a pure
-translation of the base placed by ``world`` (and ``origin``). A target
+translation of the base placed by ``world`` (and ``origin``). That is the
+track as the controller knows it; a calibration may identify the real one
+(`trajcomp.calibration.track`: ``actual_direction``, ``actual_scale``):
+targets are then placed on the real carriage, and each command is
+written so that the controller, with its own track, sends the arm to
+it (`trajcomp.programs.frames.FrameTable.command_offsets`). A target
 stated in the world (KUKA E6POS with E1, FANUC /POS with E1, ABB robtarget
 with eax_a) is reached by the arm from its base at the target's own track
 position: the arm part is solved and compensated in that carriage frame,
@@ -56,7 +61,11 @@ class Track:
     written : dict of str to str
         ``{language: field}`` as the YAML names them (for messages).
     scale : float
-        World mm moved per mm of track position (1 nominally).
+        World mm moved per mm of track position, as the controller has it (1 nominally).
+    actual_direction : ndarray, shape (3,), or None
+        The real axis a calibration identified (None: ``direction``).
+    actual_scale : float or None
+        The real world mm per mm of track position a calibration identified (None: ``scale``).
     """
 
     direction: np.ndarray
@@ -67,19 +76,30 @@ class Track:
     fields: dict
     written: dict
     scale: float = 1.0
+    actual_direction: np.ndarray = None
+    actual_scale: float = None
 
     def index(self, language):
         """The external axis index of ``language``'s targets that holds the track position, or None."""
         return self.fields.get(language)
 
-    def shift(self, values):
-        """World translations (N, 3), mm, of the base at track positions ``values`` (N,) from its place at 0."""
-        return self.scale * np.asarray(values, dtype=float)[:, None] * self.direction
+    @property
+    def identified(self):
+        """Whether a calibration identified the real track (it may differ from the controller's)."""
+        return self.actual_direction is not None
 
-    def placements(self, T_world_base, values):
-        """``T_world_base(e)`` (N, 4, 4) at track positions ``values`` (N,), mm: the carriage frames."""
+    def shift(self, values, actual=True):
+        """World translations (N, 3), mm, of the base at track positions ``values`` (N,) from its place at 0:
+        on the real track (``actual``, as identified; the controller's when none is), else the controller's."""
+        direction, scale = self.direction, self.scale
+        if actual and self.identified:
+            direction, scale = self.actual_direction, self.actual_scale
+        return scale * np.asarray(values, dtype=float)[:, None] * direction
+
+    def placements(self, T_world_base, values, actual=True):
+        """``T_world_base(e)`` (N, 4, 4) at track positions ``values`` (N,), mm: the carriage frames (`shift`)."""
         out = np.broadcast_to(T_world_base, (len(values), 4, 4)).copy()
-        out[:, :3, 3] += self.shift(values)
+        out[:, :3, 3] += self.shift(values, actual)
         return out
 
     def replace(self, **changes):

@@ -96,17 +96,31 @@ class FrameTable:
         return values
 
     def carriage_offsets(self, index):
-        """``T_base(e)_base(0)`` (N, 4, 4): the arm base at track position 0 seen from the carriage at each target's
-        track position (a translation; identity on a fixed base)."""
+        """``T_base(e)_base(0)`` (N, 4, 4): the arm base at track position 0 seen from the real carriage at each
+        target's track position (a translation; identity on a fixed base)."""
         values = self.track_positions(index)
         out = np.tile(np.eye(4), (len(values), 1, 1))
         if self.track is not None:
             out[:, :3, 3] = -self.shift_in_base(values)
         return out
 
-    def shift_in_base(self, values):
-        """The carriage's translations (N, 3), mm, at track positions ``values`` (N,), in the base frame at 0."""
-        return self.track.shift(values) @ self.T_base_world[:3, :3].T
+    def command_offsets(self, index):
+        """``T_real(e)_controller(e)`` (N, 4, 4): the carriage as the controller knows it, seen from the real one
+        at each target's track position (identity unless a calibration identified a track that differs).
+
+        A command ``T`` in the real carriage is written ``command_offsets @ T`` in it: the controller, placing the
+        arm with its own track, then sends the arm to ``T`` on the real one.
+        """
+        out = np.tile(np.eye(4), (len(index), 1, 1))
+        if self.track is not None and self.track.identified:
+            values = self.track_positions(index)
+            out[:, :3, 3] = self.shift_in_base(values, actual=False) - self.shift_in_base(values)
+        return out
+
+    def shift_in_base(self, values, actual=True):
+        """The carriage's translations (N, 3), mm, at track positions ``values`` (N,), in the base frame at 0 (on
+        the real track, or the controller's: `trajcomp.arm.track.Track.shift`)."""
+        return self.track.shift(values, actual) @ self.T_base_world[:3, :3].T
 
 
 def in_frames(T_base_frame, T_base_pose):
