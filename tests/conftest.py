@@ -22,17 +22,26 @@ def install_plugin(monkeypatch, folder, name, module):
     monkeypatch.setattr(formats, "_PLUGINS", {"loaded": False, "failed": {}})
 
 
+def calibrated_model(folder, robot, cube):
+    """The model file of a composite calibration of virtual ``robot`` on a 200 mm cube at corner ``cube`` ("x,y,z",
+    mm) in 50 mm steps, through the CLI as the README runs it."""
+    plan, meas, model = folder / "plan.csv", folder / "meas.csv", folder / "model.yaml"
+    assert main(["plan", "--robot", robot, "--cube", cube, "--side", "200", "--step", "50", "-o", str(plan)]) == 0
+    assert main(["simulate", str(plan), "--robot", robot, "--seed", "1", "-o", str(meas)]) == 0
+    assert main(["calibrate", str(meas), "--robot", robot, "--grid-step", "50", "--folds", "3", "-o", str(model)]) == 0
+    return model
+
+
 @pytest.fixture(scope="session")
 def kuka_model(tmp_path_factory):
     """A composite model of the virtual KR6 around the example weld path (README commands)."""
-    folder = tmp_path_factory.mktemp("kuka")
-    plan, meas, model = folder / "plan.csv", folder / "meas.csv", folder / "kuka.yaml"
-    assert main(["plan", "--robot", "kuka_kr6_r900", "--cube", "400,-50,650", "--side", "200", "--step", "50",
-                 "-o", str(plan)]) == 0
-    assert main(["simulate", str(plan), "--robot", "kuka_kr6_r900", "--seed", "1", "-o", str(meas)]) == 0
-    assert main(["calibrate", str(meas), "--robot", "kuka_kr6_r900", "--grid-step", "50", "--folds", "3",
-                 "-o", str(model)]) == 0
-    return model
+    return calibrated_model(tmp_path_factory.mktemp("kuka"), "kuka_kr6_r900", "400,-50,650")
+
+
+@pytest.fixture(scope="session")
+def fanuc_model(tmp_path_factory):
+    """A composite model of the virtual LR Mate 200iD (a 200 mm cube at 50 mm steps)."""
+    return calibrated_model(tmp_path_factory.mktemp("fanuc"), "fanuc_lrmate200id", "300,-100,300")
 
 
 @pytest.fixture

@@ -42,19 +42,6 @@ def test_a_task_s_messages_name_the_module_that_moves_the_arm_not_a_data_module_
         compensate_program(program, _stand_in(robot), robot)
 
 
-@pytest.fixture(scope="module")
-def fanuc_model(tmp_path_factory):
-    """A composite model of the virtual LR Mate 200iD (a 200 mm cube at 50 mm steps)."""
-    folder = tmp_path_factory.mktemp("fanuc")
-    plan, meas, model = folder / "plan.csv", folder / "meas.csv", folder / "fanuc.yaml"
-    assert main(["plan", "--robot", "fanuc_lrmate200id", "--cube", "300,-100,300", "--side", "200", "--step", "50",
-                 "-o", str(plan)]) == 0
-    assert main(["simulate", str(plan), "--robot", "fanuc_lrmate200id", "--seed", "1", "-o", str(meas)]) == 0
-    assert main(["calibrate", str(meas), "--robot", "fanuc_lrmate200id", "--grid-step", "50", "--folds", "3",
-                 "-o", str(model)]) == 0
-    return model
-
-
 FANUC_POSITION = ("P[{n}]{{\n   GP1:\n\tUF : 0, UT : 0,\t\tCONFIG : 'N U T, 0, 0, 0',\n"
                   "\tX =   {x:.3f}  mm,\tY =     0.000  mm,\tZ =   380.000  mm,\n"
                   "\tW =   180.000 deg,\tP =     0.000 deg,\tR =     0.000 deg\n}};\n")

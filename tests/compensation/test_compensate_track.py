@@ -112,17 +112,24 @@ def _krl(folder, world, q, robot):
     return folder / "rail.src"
 
 
-def _read_krl(path):
-    """World poses (N, 4, 4) and E1 (N,) of the points a KRL .dat declares."""
+def _read_poses(text, pattern, rotation):
+    """World poses (N, 4, 4) and track positions (N,) of the points of a program's ``text``: ``pattern`` matches
+    x, y, z, the three (or four) numbers ``rotation(numbers) -> Rotation`` reads, then the track position."""
     poses, carriage = [], []
-    for m in re.finditer(r"X ([-\d.]+),Y ([-\d.]+),Z ([-\d.]+),A ([-\d.]+),B ([-\d.]+),C ([-\d.]+),S \d+,T \d+,"
-                         r"E1 ([-\d.]+)", path.with_suffix(".dat").read_text()):
+    for m in re.finditer(pattern, text):
         v = [float(x) for x in m.groups()]
         T = np.eye(4)
-        T[:3, :3], T[:3, 3] = Rotation.from_euler("ZYX", v[3:6], degrees=True).as_matrix(), v[:3]
+        T[:3, :3], T[:3, 3] = rotation(v[3:-1]).as_matrix(), v[:3]
         poses.append(T)
-        carriage.append(v[6])
+        carriage.append(v[-1])
     return np.array(poses), np.array(carriage)
+
+
+def _read_krl(path):
+    """World poses (N, 4, 4) and E1 (N,) of the points a KRL .dat declares."""
+    return _read_poses(path.with_suffix(".dat").read_text(),
+                       r"X ([-\d.]+),Y ([-\d.]+),Z ([-\d.]+),A ([-\d.]+),B ([-\d.]+),C ([-\d.]+),S \d+,T \d+,E1 ([-\d.]+)",
+                       lambda abc: Rotation.from_euler("ZYX", abc, degrees=True))
 
 
 def _fanuc(folder, world, q, robot):
@@ -143,15 +150,10 @@ def _fanuc(folder, world, q, robot):
 
 
 def _read_fanuc(path):
-    poses, carriage = [], []
-    for m in re.finditer(r"X =\s*([-\d.]+)\s*mm,\s*Y =\s*([-\d.]+)\s*mm,\s*Z =\s*([-\d.]+)\s*mm,\s*W =\s*([-\d.]+)\s*deg,"
-                         r"\s*P =\s*([-\d.]+)\s*deg,\s*R =\s*([-\d.]+)\s*deg,\s*E1 =\s*([-\d.]+)", path.read_text()):
-        v = [float(x) for x in m.groups()]
-        T = np.eye(4)
-        T[:3, :3], T[:3, 3] = Rotation.from_euler("xyz", v[3:6], degrees=True).as_matrix(), v[:3]
-        poses.append(T)
-        carriage.append(v[6])
-    return np.array(poses), np.array(carriage)
+    """World poses (N, 4, 4) and E1 (N,) of the positions of a FANUC .LS."""
+    return _read_poses(path.read_text(), r"X =\s*([-\d.]+)\s*mm,\s*Y =\s*([-\d.]+)\s*mm,\s*Z =\s*([-\d.]+)\s*mm,"
+                       r"\s*W =\s*([-\d.]+)\s*deg,\s*P =\s*([-\d.]+)\s*deg,\s*R =\s*([-\d.]+)\s*deg,\s*E1 =\s*([-\d.]+)",
+                       lambda wpr: Rotation.from_euler("xyz", wpr, degrees=True))
 
 
 def _rapid(folder, world, q, robot):
@@ -170,15 +172,9 @@ def _rapid(folder, world, q, robot):
 
 
 def _read_rapid(path):
-    poses, carriage = [], []
-    for m in re.finditer(r"\[\[([-\d.]+),([-\d.]+),([-\d.]+)\],\[([-\d.]+),([-\d.]+),([-\d.]+),([-\d.]+)\],"
-                         r"\[[-\d,]+\],\[([-\d.]+),", path.read_text()):
-        v = [float(x) for x in m.groups()]
-        T = np.eye(4)
-        T[:3, :3], T[:3, 3] = Rotation.from_quat([v[4], v[5], v[6], v[3]]).as_matrix(), v[:3]
-        poses.append(T)
-        carriage.append(v[7])
-    return np.array(poses), np.array(carriage)
+    """World poses (N, 4, 4) and eax_a (N,) of the robtargets of a RAPID module."""
+    return _read_poses(path.read_text(), r"\[\[([-\d.]+),([-\d.]+),([-\d.]+)\],\[([-\d.]+),([-\d.]+),([-\d.]+),"
+                       r"([-\d.]+)\],\[[-\d,]+\],\[([-\d.]+),", lambda q: Rotation.from_quat([*q[1:], q[0]]))
 
 
 LANGUAGES = {"kuka_kr6_r900": (_krl, _read_krl), "fanuc_lrmate200id": (_fanuc, _read_fanuc),
