@@ -19,7 +19,7 @@ from trajcomp.calibration.calibrate import calibrate
 from trajcomp.compensation.targets import compensate, program_corrector
 from trajcomp.errors import TrajcompError
 from trajcomp.arm.ik import batch_seed, ik
-from trajcomp.arm.kinematics import fk, link_frames
+from trajcomp.arm.kinematics import shoulder_and_reach
 from trajcomp.calibration.measurements import Measurements, read_measurements
 from trajcomp.compensation.program import compensate_program
 from trajcomp.calibration.measurement_plan import default_orientation, plan_grid
@@ -96,18 +96,6 @@ def with_interpolation(model, interpolation):
     """The model with both grids evaluated by another interpolator."""
     swap = lambda field: None if field is None else dataclasses.replace(field, method=interpolation)  # noqa: E731
     return dataclasses.replace(model, grid=swap(model.grid), residual=swap(model.residual))
-
-
-def shoulder_and_reach(robot, samples=4096):
-    """Origin of the joint-2 axis (3,) mm and the farthest TCP distance from it, mm.
-
-    The reach is the maximum over ``samples`` seeded random configurations
-    within the joint limits (each joint's range clipped to one turn).
-    """
-    rng = np.random.default_rng(0)
-    q = rng.uniform(np.maximum(robot.q_min, -np.pi), np.minimum(robot.q_max, np.pi), (samples, 6))
-    shoulder = link_frames(robot, np.zeros(6))[0, 1, :3, 3]
-    return shoulder, float(np.linalg.norm(fk(robot, q)[:, :3, 3] - shoulder, axis=1).max())
 
 
 def demo_cubes(robot):

@@ -224,13 +224,20 @@ def test_a_program_on_a_track_whose_robot_has_none_is_refused_for_that_reason(tm
     world, q = world_targets(robot, "kuka_kr6_r900")
     program = formats.read(_krl(tmp_path, world, q, robot))
     fixed = load_robot("kuka_kr6_r900")
-    with pytest.raises(IKError, match=r"out of the reach of robot kuka_kr6_r900 from a fixed base, and the program "
-                                      r"moves external axes E1: a robot on a track, whose description describes no "
-                                      r"track\. Describe the track"):
+    with pytest.raises(IKError, match=r"^rail: the program moves external axis E1 over 4200 mm and its targets move "
+                                      r"with it, out of the reach of robot kuka_kr6_r900 from a fixed base: a robot "
+                                      r"on a track, and the robot's description describes no track\. Describe the "
+                                      r"track .* cannot reach"):
         compensate_program(program, cell("kuka_kr6_r900")[2], fixed)
     no_field = on_track("kuka_kr6_r900", TRACK.replace("krl: E1, ", ""))
-    with pytest.raises(IKError, match="names no field of krl programs"):
+    with pytest.raises(IKError, match="has a track but names no field of krl programs for it"):
         compensate_program(program, cell("kuka_kr6_r900")[2], no_field)
+    # an axis that moves a few mm with targets out of reach (a servo gun on an arm taught elsewhere): the posture
+    dat = tmp_path / "rail.dat"
+    dat.write_text(dat.read_text().replace("E1 1850.0", "E1 20.0").replace("E1 4200.0", "E1 40.0"))
+    with pytest.raises(IKError, match=r"^rail: .*cannot reach") as refused:
+        compensate_program(formats.read(tmp_path / "rail.src"), cell("kuka_kr6_r900")[2], fixed)
+    assert "track" not in str(refused.value)
 
 
 def test_a_target_without_its_track_position_is_named(tmp_path):
@@ -338,3 +345,19 @@ def test_a_track_calibration_recovers_its_direction_and_scale_and_compensation_t
         errors[label] = np.linalg.norm(landed - world[:, :3, 3], axis=1)
     assert errors["nominal"].max() > 2.0  # 0.1 deg and 0.05 % of 4.2 m
     assert errors["identified"].max() < 0.02, errors
+
+
+def test_a_real_backup_on_a_track_is_recognised_and_compensated_once_its_track_is_described():
+    """tests/data/programs/real/rapid/1_T_ROB2.mod (a COMPAS RRC backup: eax_a moves 682-3651 mm with the targets,
+    SOURCES.txt). On the IRB 4600 as built in, the refusal names the track; described along x, it is compensated."""
+    from tests.programs.test_programs_real import DATA, _unchanged
+
+    program = formats.read(DATA / "programs" / "real" / "rapid" / "1_T_ROB2.mod")
+    stated = {str(n): np.eye(4) for n in range(1, 33)}  # the controller's tool and frame tables: not in the files
+    with pytest.raises(IKError, match=r"^1_T_ROB2: the program moves external axis E1 over 2969 mm and its targets "
+                                      r"move with it, .* describes no track"):
+        compensate_program(program, _unchanged, load_robot("abb_irb4600"), tools=stated, frames=stated)
+    track = TRACK.replace("[1.0, 0.02, 0.0]", "[1, 0, 0]").replace("position_max: 5800", "position_max: 19000")
+    edited, report = compensate_program(program, _unchanged, on_track("abb_irb4600", track), tools=stated,
+                                        frames=stated)
+    assert len(report.labels) == 10 and not report.warnings

@@ -107,6 +107,39 @@ class Track:
         return dataclasses.replace(self, **changes)
 
 
+MIN_TRAVEL = 500.0  # mm: an axis that moves less (a servo gun's stroke) is no track that places targets out of reach
+
+
+def carried_by_a_track(positions, values, reach):
+    """Whether targets out of an arm's reach move with an external axis as they would on a track under it.
+
+    A track moves the base one world millimetre per millimetre of its
+    position along one straight axis: the targets' positions, fitted
+    against the axis values, then have a slope of length 1 (within 10 %),
+    the axis travels at least `MIN_TRAVEL`, and taking the fitted travel
+    off brings the targets out of reach within it. A servo gun, a
+    positioner or an arm taught elsewhere does not do that.
+
+    Parameters
+    ----------
+    positions : ndarray, shape (N, 3)
+        The targets' TCP positions from the arm's shoulder (its reach's centre), mm.
+    values : ndarray, shape (N,)
+        The external axis' value at each target.
+    reach : float
+        The arm's reach from its shoulder, mm.
+    """
+    values = np.asarray(values, dtype=float)
+    if len(values) < 2 or np.ptp(values) < MIN_TRAVEL:
+        return False
+    (slope, _), *_ = np.linalg.lstsq(np.c_[values, np.ones(len(values))], positions, rcond=None)
+    if not 0.9 < np.linalg.norm(slope) < 1.1:
+        return False
+    far = np.linalg.norm(positions, axis=1) > reach
+    carried = np.linalg.norm(positions - values[:, None] * slope, axis=1) <= reach
+    return bool(far.any() and carried[far].all())
+
+
 def track_from_doc(doc, label):
     """The `Track` of a robot document's ``track`` mapping, or None without one.
 
