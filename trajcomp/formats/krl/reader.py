@@ -9,6 +9,7 @@ from pathlib import Path
 import numpy as np
 
 from trajcomp.errors import ReadError
+from trajcomp.formats.krl import config_dat
 from trajcomp.formats.number_fields import BLANK as _BLANK, DIGIT as _DIGIT, WORD_CHARACTER as _WORD_CHARACTER
 from trajcomp.formats.number_fields import character_table as _character_table, line_bounds as _line_bounds
 from trajcomp.formats.number_fields import offset_type, read_numbers, text_codes
@@ -930,8 +931,6 @@ def _controller_tables(reader, path, walk):
     """Read into ``reader``'s tools and bases those its motions select by number (``TOOL_DATA[2]``,
     ``BAS(#BASE, 8)``) and the program does not define, from its controller's ``$config.dat``
     (`trajcomp.formats.krl.config_dat`); the report's notes on them (tuple of str)."""
-    from trajcomp.formats.krl import config_dat  # it reads aggregates as this module does
-
     used = {"TOOL": {state[0] for state in walk.states}, "BASE": {state[1] for state in walk.states}}
     for item in reader.items:
         if isinstance(item, Motion):
@@ -1362,10 +1361,8 @@ def _resolve(reader, path, dat_path, walk):
     """
     assigned, items = {}, []
     # other data lists beside it, and $config.dat beside it or in a backup's R1/System (KRC/R1/Program/x.src)
-    from trajcomp.formats.krl import config_dat
-
     config = config_dat.find(path)
-    folders = [path.parent] + ([config.parent] if config is not None else [])
+    folders = [path.parent] + ([config.parent] if config is not None and config.parent != path.parent.resolve() else [])
     elsewhere = DeclaredElsewhere(dat_path or path, folders, (".dat",), _GLOBAL_POINT, ";", assignment=_ASSIGN,
                                   code=(".src", ".sub"), visible=_visible)
     for item in reader.items:
