@@ -325,7 +325,7 @@ def test_a_track_calibration_recovers_its_direction_and_scale_and_compensation_t
     assert fit.track.direction is robot.track.direction  # the controller's track, as it has it
     assert fit.residual_rms < 0.03 and np.linalg.norm(fit.offset) < 0.02
     np.testing.assert_array_equal(fit.positions, [0, 1400, 2800, 4200, 5600])
-    assert fit.outside([-50.0, 3000.0, 5700.0]).tolist() == [True, False, True]
+    assert fit.track.beyond_measured([-50.0, 3000.0, 5700.0]).tolist() == [True, False, True]
     # the program: world targets where the real track puts the arm
     world, q_targets = world_targets(robot, "kuka_kr6_r900")
     world = true.placements(robot.T_world_base, np.array(CARRIAGE)) @ np.linalg.inv(
@@ -361,3 +361,55 @@ def test_a_real_backup_on_a_track_is_recognised_and_compensated_once_its_track_i
     edited, report = compensate_program(program, _unchanged, on_track("abb_irb4600", track), tools=stated,
                                         frames=stated)
     assert len(report.labels) == 10 and not report.warnings
+
+
+def test_calibrate_with_a_track_column_identifies_the_track_and_compensate_uses_it(tmp_path, monkeypatch, capsys):
+    """A measurement file with a ``track`` column: the rows at track position 0 (the grid) calibrate the arm, all
+    rows identify the track; the model file keeps the identified track and ``compensate`` places the carriage
+    with it, warning of targets beyond the measured travel."""
+    from trajcomp.cli import main
+    from trajcomp.model.model_file import load_model
+
+    monkeypatch.chdir(tmp_path)
+    text = resources.files("trajcomp.arm.robots").joinpath("kuka_kr6_r900.yaml").read_text(encoding="utf-8")
+    (tmp_path / "kr6_rail.yaml").write_text(text.replace("name: kuka_kr6_r900", "name: kr6_rail") + TRACK)
+    robot = load_robot("kr6_rail.yaml")
+    turn = Rotation.from_euler("z", 0.1, degrees=True).as_matrix()
+    true = robot.track.replace(actual_direction=turn @ robot.track.direction, actual_scale=1.0005)
+    virtual = VirtualRobot.create(robot, "paper", seed=4)
+    rng = np.random.default_rng(3)
+    corner, side, _ = CELLS["kuka_kr6_r900"]
+    plan = plan_grid(robot, corner, side, 50.0, orientation=matrix_to_abc(orientation(robot)))
+    grid = plan.joints[plan.reachable]
+    poses = grid[rng.choice(len(grid), 8, replace=False)]
+    joints = np.concatenate([grid, np.tile(poses, (4, 1))])
+    positions = np.concatenate([np.zeros(len(grid)), np.repeat([1500.0, 3000.0, 4500.0, 5000.0], len(poses))])
+    measured = (true.placements(robot.T_world_base, positions) @ virtual.reached_poses(joints))[:, :3, 3]
+    measured += rng.normal(0.0, 0.01, measured.shape)
+    rows = [",".join(f"{v:.6f}" for v in (*np.degrees(q), *m, e)) for q, m, e in zip(joints, measured, positions)]
+    (tmp_path / "meas.csv").write_text("j1,j2,j3,j4,j5,j6,mx,my,mz,track\n" + "\n".join(rows) + "\n")
+    assert main(["calibrate", "meas.csv", "--robot", "kr6_rail.yaml", "--grid-step", "50", "--folds", "0",
+                 "-o", "model.yaml"]) == 0
+    assert "track: direction" in capsys.readouterr().err
+    identified = load_model("model.yaml").nominal.track
+    assert np.degrees(np.arccos(identified.actual_direction @ true.actual_direction)) < 0.002
+    assert abs(identified.actual_scale - 1.0005) < 1e-5 and identified.direction @ robot.track.direction > 1 - 1e-12
+    np.testing.assert_array_equal(identified.measured_positions, [0, 1500, 3000, 4500, 5000])
+    # a program at 0, 1850 and 4200 mm, its world targets where the real track puts the arm
+    world, q = world_targets(robot, "kuka_kr6_r900")
+    world = true.placements(robot.T_world_base, np.array(CARRIAGE)) @ np.linalg.inv(
+        robot.track.placements(robot.T_world_base, np.array(CARRIAGE))) @ world
+    _krl(tmp_path, world, q, robot)
+    assert main(["compensate", "rail.src", "--model", "model.yaml", "-o", "out.src", "--retime", "none"]) in (0, 1)
+    commands, carriage = _read_krl(tmp_path / "out.src")
+    arm_q = ik(robot, np.linalg.inv(robot.track.placements(robot.T_world_base, carriage)) @ commands,
+               seed=np.tile(robot.home, (len(commands), 1))).raise_on_failure("commands").q
+    landed = (true.placements(robot.T_world_base, carriage) @ virtual.reached_poses(arm_q))[:, :3, 3]
+    assert np.linalg.norm(landed - world[:, :3, 3], axis=1).max() < 0.02
+    # a target beyond the measured travel is named
+    dat = tmp_path / "rail.dat"
+    dat.write_text(dat.read_text().replace("E1 4200.0", "E1 5200.0"))
+    capsys.readouterr()
+    main(["compensate", "rail.src", "--model", "model.yaml", "-o", "out2.src", "--retime", "none"])
+    assert ("1 targets stand at track positions beyond the travel the track's calibration measured (0..5000 mm)"
+            in capsys.readouterr().err)

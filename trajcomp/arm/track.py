@@ -66,6 +66,8 @@ class Track:
         The real axis a calibration identified (None: ``direction``).
     actual_scale : float or None
         The real world mm per mm of track position a calibration identified (None: ``scale``).
+    measured_positions : ndarray, shape (P,), or None
+        The track positions that calibration measured, mm, ascending.
     """
 
     direction: np.ndarray
@@ -78,6 +80,7 @@ class Track:
     scale: float = 1.0
     actual_direction: np.ndarray = None
     actual_scale: float = None
+    measured_positions: np.ndarray = None
 
     def index(self, language):
         """The external axis index of ``language``'s targets that holds the track position, or None."""
@@ -101,6 +104,14 @@ class Track:
         out = np.broadcast_to(T_world_base, (len(values), 4, 4)).copy()
         out[:, :3, 3] += self.shift(values, actual)
         return out
+
+    def beyond_measured(self, values):
+        """Boolean mask (N,) of track positions ``values`` (N,) outside the travel a calibration measured (none
+        without one)."""
+        values = np.asarray(values, dtype=float)
+        if self.measured_positions is None:
+            return np.zeros(len(values), dtype=bool)
+        return (values < self.measured_positions[0]) | (values > self.measured_positions[-1])
 
     def replace(self, **changes):
         """A copy with some attributes changed (an identified direction or scale)."""

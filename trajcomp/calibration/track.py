@@ -13,7 +13,11 @@ residuals ``measured - T_world_base(0) @ predicted`` against ``e`` gives
 ``scale * direction`` (its slope) and ``offset``; what is left is the
 track's straightness and the noise (`TrackFit.residual_rms`). The fit
 names the track positions it measured: a target beyond them is a
-forecast outside the measured travel (`TrackFit.outside`).
+forecast outside the measured travel (`trajcomp.arm.track.Track.beyond_measured`).
+
+A measurement file states the track position of each row in its
+``track`` column (`with_identified_track`): the rows at track position 0
+calibrate the arm, every row identifies the track.
 """
 
 import dataclasses
@@ -52,10 +56,12 @@ class TrackFit:
     direction_change_deg: float
     scale_change: float
 
-    def outside(self, values, margin=0.0):
-        """Boolean mask (N,) of track positions ``values`` (N,), mm, beyond the measured travel (by ``margin`` mm)."""
-        values = np.asarray(values, dtype=float)
-        return (values < self.positions[0] - margin) | (values > self.positions[-1] + margin)
+    def summary(self):
+        """The fit as plain data for the model's report (mm, deg)."""
+        return {"direction": self.track.actual_direction.tolist(), "scale": self.track.actual_scale,
+                "direction_change_deg": self.direction_change_deg, "scale_change": self.scale_change,
+                "offset_mm": self.offset.tolist(), "residual_rms_mm": self.residual_rms,
+                "positions_mm": self.positions.tolist()}
 
 
 def identify_track(track, T_world_base, positions, predicted, measured):
@@ -100,5 +106,50 @@ def identify_track(track, T_world_base, positions, predicted, measured):
     direction = slope / scale
     left = residual - design @ np.array([slope, offset])
     turn = np.degrees(np.arccos(np.clip(direction @ track.direction, -1.0, 1.0)))
-    return TrackFit(track.replace(actual_direction=direction, actual_scale=scale), offset, distinct,
+    identified = track.replace(actual_direction=direction, actual_scale=scale, measured_positions=distinct)
+    return TrackFit(identified, offset, distinct,
                     float(np.sqrt(np.mean(np.sum(left ** 2, axis=1)))), float(turn), scale / track.scale - 1.0)
+
+
+def arm_rows(meas, robot):
+    """The rows of a measurement file that calibrate the arm: all, or those at track position 0 on a track.
+
+    Raises
+    ------
+    CalibrationError
+        A ``track`` column for a robot that describes no track, or no row at track position 0.
+    """
+    if meas.track is None:
+        return np.ones(len(meas), dtype=bool)
+    if robot.track is None:
+        raise CalibrationError(f"{meas.path}: a track column, but robot {robot.name} describes no track (track: in its "
+                               "YAML, docs/tracks.md)")
+    rows = meas.track == 0
+    if not rows.any():
+        raise CalibrationError(f"{meas.path}: no row at track position 0: the arm is calibrated in its base frame at "
+                               "track position 0 (measure its grid there), the other positions identify the track")
+    return rows
+
+
+def with_identified_track(model, meas):
+    """The model with its robot's track identified from every row of ``meas`` (`identify_track`), and the fit.
+
+    The measured positions are taken to the arm's base frame at track
+    position 0 with the model's registration (a tracker frame), then to
+    the world; the model predicts each row's commanded joints (its own
+    method's arm and residual).
+    """
+    from trajcomp.arm.kinematics import fk
+    from trajcomp.calibration.calibrate import to_base
+
+    robot = model.nominal
+    joints = meas.joints
+    if joints is None:
+        raise CalibrationError(f"{meas.path}: the track fit needs each row's commanded joints j1..j6")
+    position = fk(robot, joints)[:, :3, 3] if meas.position is None else meas.position
+    predicted, _ = model.predict(model.method, joints, position)
+    base = to_base(model.T_tracker_base, meas.measured)
+    measured = base @ robot.T_world_base[:3, :3].T + robot.T_world_base[:3, 3]
+    fit = identify_track(robot.track, robot.T_world_base, meas.track, predicted, measured)
+    report = {**model.report, "track": fit.summary()}
+    return dataclasses.replace(model, nominal=robot.replace(track=fit.track), report=report), fit

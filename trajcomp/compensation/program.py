@@ -214,7 +214,24 @@ def compensate_program(program, correct, robot, *, tools=None, frames=None, join
     changed = _configuration_changes(report)
     if changed:
         report = dataclasses.replace(report, warnings=report.warnings + (changed,))
+    if beyond := _beyond_the_measured_travel(table, robot, cartesian, labels):
+        report = dataclasses.replace(report, warnings=report.warnings + (beyond,))
     return edited, report
+
+
+def _beyond_the_measured_travel(table, robot, index, labels):
+    """A warning naming the targets ``index`` (N,) at track positions beyond those the track's calibration
+    measured ("" if none, or no track was calibrated): there the carriage is placed by the fitted line alone."""
+    track = robot.track
+    if track is None or track.measured_positions is None or not len(index):
+        return ""
+    beyond = np.flatnonzero(track.beyond_measured(table.track_positions(index)))
+    if not beyond.size:
+        return ""
+    more = f" and {beyond.size - 10} more" if beyond.size > 10 else ""
+    return (f"{beyond.size} targets stand at track positions beyond the travel the track's calibration measured "
+            f"({track.measured_positions[0]:g}..{track.measured_positions[-1]:g} mm), where the carriage is placed by "
+            f"the fitted line alone: {', '.join(labels[k] for k in beyond[:10])}{more}")
 
 
 def _compensation_warnings(result, labels):
