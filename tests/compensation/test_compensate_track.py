@@ -12,6 +12,7 @@ A program on a track whose robot description has none is refused saying so.
 
 import re
 from importlib import resources
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -413,3 +414,25 @@ def test_calibrate_with_a_track_column_identifies_the_track_and_compensate_uses_
     main(["compensate", "rail.src", "--model", "model.yaml", "-o", "out2.src", "--retime", "none"])
     assert ("1 targets stand at track positions beyond the travel the track's calibration measured (0..5000 mm)"
             in capsys.readouterr().err)
+
+
+CORPUS = Path(__file__).parents[1] / "data" / "programs"  # hand-written track programs: ../data/programs/TRACKS.txt
+
+
+@pytest.mark.parametrize("name, path", [("kuka_kr6_r900", "krl/KL_RAIL.src"),
+                                        ("fanuc_lrmate200id", "fanuc/RAILSEAM.LS"),
+                                        ("abb_irb4600", "rapid/IRBT_SEAM.mod")])
+def test_the_corpus_track_programs_land_within_0_02_mm(tmp_path, name, path):
+    robot, virtual, correct = cell(name)
+    read = LANGUAGES[name][1]
+    program = formats.read(CORPUS / path)
+    world, carriage = read(CORPUS / path)
+    assert np.ptp(carriage) > 4000  # the track travels metres with the targets
+    edited, report = compensate_program(program, correct, robot, tools={"1": np.eye(4)})
+    assert len(report.labels) == 8 and not report.not_compensated
+    out = tmp_path / Path(path).name
+    formats.write(out, edited)
+    commands, written = read(out)
+    np.testing.assert_array_equal(written, carriage)
+    landed = landing(robot, virtual, commands, written)
+    assert np.linalg.norm(landed - world[:, :3, 3], axis=1).max() < 0.02
