@@ -129,7 +129,8 @@ def _read_poses(text, pattern, rotation):
 def _read_krl(path):
     """World poses (N, 4, 4) and E1 (N,) of the points a KRL .dat declares."""
     return _read_poses(path.with_suffix(".dat").read_text(),
-                       r"X ([-\d.]+),Y ([-\d.]+),Z ([-\d.]+),A ([-\d.]+),B ([-\d.]+),C ([-\d.]+),S \d+,T \d+,E1 ([-\d.]+)",
+                       r"X ([-\d.]+),Y ([-\d.]+),Z ([-\d.]+),A ([-\d.]+),B ([-\d.]+),C ([-\d.]+),"
+                       r"S \d+,T \d+,E1 ([-\d.]+)",
                        lambda abc: Rotation.from_euler("ZYX", abc, degrees=True))
 
 
@@ -153,7 +154,8 @@ def _fanuc(folder, world, q, robot):
 def _read_fanuc(path):
     """World poses (N, 4, 4) and E1 (N,) of the positions of a FANUC .LS."""
     return _read_poses(path.read_text(), r"X =\s*([-\d.]+)\s*mm,\s*Y =\s*([-\d.]+)\s*mm,\s*Z =\s*([-\d.]+)\s*mm,"
-                       r"\s*W =\s*([-\d.]+)\s*deg,\s*P =\s*([-\d.]+)\s*deg,\s*R =\s*([-\d.]+)\s*deg,\s*E1 =\s*([-\d.]+)",
+                       r"\s*W =\s*([-\d.]+)\s*deg,\s*P =\s*([-\d.]+)\s*deg,\s*R =\s*([-\d.]+)\s*deg,"
+                       r"\s*E1 =\s*([-\d.]+)",
                        lambda wpr: Rotation.from_euler("xyz", wpr, degrees=True))
 
 

@@ -122,7 +122,8 @@ def run(args):
     meas = read_measurements(args.measurements, layout_of(args), max_rows=MAX_ROWS, why=too_many_rows())
     try:
         model = calibrate(
-            robot, meas.subset(arm_rows(meas, robot)), robot_ref=args.robot, method=args.method, frame=args.frame, grid_step=args.grid_step,
+            robot, meas.subset(arm_rows(meas, robot)), robot_ref=args.robot, method=args.method, frame=args.frame,
+            grid_step=args.grid_step,
             interpolation=args.interpolation, loss=args.loss, folds=args.folds, seed=args.seed, progress=progress,
             orientation_weight=args.orientation_weight, workers=args.jobs,
         )
