@@ -24,8 +24,8 @@ def install_plugin(monkeypatch, folder, name, module):
 
 def calibrated_model(folder, robot, corner, side, step):
     """A composite model of the virtual ``robot`` (seed 1) calibrated on the cube at ``corner`` ("x,y,z", mm) of
-    ``side`` and ``step`` mm (README commands): its path in ``folder``."""
-    plan, meas, model = folder / "plan.csv", folder / "meas.csv", folder / f"{robot}.yaml"
+    ``side`` and ``step`` mm through the CLI, as the README runs it: the model file ``model.yaml`` in ``folder``."""
+    plan, meas, model = folder / "plan.csv", folder / "meas.csv", folder / "model.yaml"
     assert main(["plan", "--robot", robot, "--cube", corner, "--side", str(side), "--step", str(step),
                  "-o", str(plan)]) == 0
     assert main(["simulate", str(plan), "--robot", robot, "--seed", "1", "-o", str(meas)]) == 0
@@ -38,6 +38,12 @@ def calibrated_model(folder, robot, corner, side, step):
 def kuka_model(tmp_path_factory):
     """A composite model of the virtual KR6 around the example weld path (README commands)."""
     return calibrated_model(tmp_path_factory.mktemp("kuka"), "kuka_kr6_r900", "400,-50,650", 200, 50)
+
+
+@pytest.fixture(scope="session")
+def fanuc_model(tmp_path_factory):
+    """A composite model of the virtual LR Mate 200iD (a 200 mm cube at 50 mm steps)."""
+    return calibrated_model(tmp_path_factory.mktemp("fanuc"), "fanuc_lrmate200id", "300,-100,300", 200, 50)
 
 
 @pytest.fixture

@@ -19,7 +19,7 @@ from trajcomp.calibration.calibrate import calibrate
 from trajcomp.compensation.targets import compensate, program_corrector
 from trajcomp.errors import TrajcompError
 from trajcomp.arm.ik import batch_seed, ik
-from trajcomp.arm.kinematics import fk, link_frames
+from trajcomp.arm.kinematics import shoulder_and_reach
 from trajcomp.calibration.measurements import Measurements, read_measurements
 from trajcomp.compensation.program import compensate_program
 from trajcomp.calibration.measurement_plan import default_orientation, plan_grid
@@ -98,18 +98,6 @@ def with_interpolation(model, interpolation):
     return dataclasses.replace(model, grid=swap(model.grid), residual=swap(model.residual))
 
 
-def shoulder_and_reach(robot, samples=4096):
-    """Origin of the joint-2 axis (3,) mm and the farthest TCP distance from it, mm.
-
-    The reach is the maximum over ``samples`` seeded random configurations
-    within the joint limits (each joint's range clipped to one turn).
-    """
-    rng = np.random.default_rng(0)
-    q = rng.uniform(np.maximum(robot.q_min, -np.pi), np.minimum(robot.q_max, np.pi), (samples, 6))
-    shoulder = link_frames(robot, np.zeros(6))[0, 1, :3, 3]
-    return shoulder, float(np.linalg.norm(fk(robot, q)[:, :3, 3] - shoulder, axis=1).max())
-
-
 def demo_cubes(robot):
     """The paper's two cubes, scaled to the arm's reach and placed where it reaches every vertex.
 
@@ -153,15 +141,20 @@ def demo_cubes(robot):
     )
 
 
-def run_cube(virtual, cube, *, validation=40, seed=0):
-    """Calibrate on one cube's grid and validate compensation at random targets."""
+def run_cube(virtual, cube, *, validation=40, seed=0, robot_ref=None):
+    """Calibrate on one cube's grid and validate compensation at random targets.
+
+    ``robot_ref``: how the model names its robot (a built-in name or a robot YAML file's path, as the user gave
+    it; default the robot's name).
+    """
     robot = virtual.nominal
     rng = np.random.default_rng([seed, len(cube.name)])
     plan = plan_grid(robot, cube.corner, cube.side, cube.step, one_posture=False)
     q = plan.joints[plan.reachable]
     meas = Measurements(joints=q, position=plan.position[plan.reachable], measured=virtual.measure(q, rng),
                         lines=np.arange(len(q)) + 1, path=f"<virtual {cube.name} cube>")
-    model = calibrate(robot, meas, robot_ref=robot.name, method="composite", grid_step=cube.step, folds=5)
+    model = calibrate(robot, meas, robot_ref=robot_ref or robot.name, method="composite", grid_step=cube.step,
+                      folds=5)
     targets = np.tile(np.eye(4), (validation, 1, 1))
     targets[:, :3, :3] = abc_to_matrix(default_orientation(robot))
     targets[:, :3, 3] = np.asarray(cube.corner) + rng.uniform(0.0, cube.side, (validation, 3))
@@ -238,8 +231,11 @@ def run_program(virtual, result, folder):
     return {label: ErrorStats.from_errors(p - targets[:, :3, 3]) for label, p in landed.items()}
 
 
-def run_demo(robot, profile="paper", seed=1, progress=None):
+def run_demo(robot, profile="paper", seed=1, progress=None, robot_ref=None):
     """Both cubes of the paper's protocol (`demo_cubes`) on a virtual copy of ``robot``.
+
+    ``robot_ref``: how the models name the robot (`run_cube`): a robot YAML file's path, so that
+    ``compensate --robot FILE.yaml --model ..`` finds the same arm.
 
     Returns
     -------
@@ -252,5 +248,5 @@ def run_demo(robot, profile="paper", seed=1, progress=None):
     for cube in demo_cubes(robot):
         if progress:
             progress(f"{cube}: plan, measure, calibrate, validate")
-        results.append(run_cube(virtual, cube, seed=seed))
+        results.append(run_cube(virtual, cube, seed=seed, robot_ref=robot_ref))
     return virtual, results

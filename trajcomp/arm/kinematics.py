@@ -242,3 +242,15 @@ def _poses(columns):
     poses[:, :3, :] = columns.transpose(2, 1, 0)
     poses[:, 3, 3] = 1.0
     return poses
+
+
+def shoulder_and_reach(robot, samples=4096):
+    """Origin of the joint-2 axis (3,) mm and the farthest TCP distance from it, mm.
+
+    The reach is the maximum over ``samples`` seeded random configurations
+    within the joint limits (each joint's range clipped to one turn).
+    """
+    rng = np.random.default_rng(0)
+    q = rng.uniform(np.maximum(robot.q_min, -np.pi), np.minimum(robot.q_max, np.pi), (samples, 6))
+    shoulder = link_frames(robot, np.zeros(6))[0, 1, :3, 3]
+    return shoulder, float(np.linalg.norm(fk(robot, q)[:, :3, 3] - shoulder, axis=1).max())

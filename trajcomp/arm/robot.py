@@ -24,7 +24,12 @@ A robot YAML file (see ``trajcomp/arm/robots/*.yaml``) holds, in user units
     when none is given, and the default planning orientation.
 ``base``, ``flange``, ``tool``, ``world`` (optional pose ``[x, y, z, a, b, c]``)
     DH frame 0 in the base frame, the manufacturer's flange frame in DH
-    frame 6, the TCP in the flange frame and the base in the world frame.
+    frame 6, the TCP in the flange frame and the base in the world frame
+    (on a track: at track position 0).
+``track`` (optional)
+    A linear track carrying the arm (`trajcomp.arm.track`): its direction
+    in the world, limits and the program field of each language that
+    holds its position.
 """
 
 import dataclasses
@@ -37,6 +42,7 @@ import yaml
 
 from trajcomp.support import yaml_text
 from trajcomp.errors import RobotError
+from trajcomp.arm.track import Track, track_from_doc
 from trajcomp.arm.transforms import pose_to_matrix
 
 _ROBOT_PACKAGE = "trajcomp.arm.robots"
@@ -71,11 +77,14 @@ class Robot:
     home : ndarray, shape (6,)
         Typical working configuration, rad.
     T_base_link0, T_link6_flange, T_flange_tool, T_world_base : ndarray, shape (4, 4)
+        ``T_world_base``: on a track, at track position 0.
     source : str
         The data sheet or file the description comes from.
     vendor : str
         The maker (``KUKA``, ``ABB``, ``FANUC``, ``Universal Robots``), or
         ``""`` when the description does not say.
+    track : Track or None
+        The linear track carrying the arm (`trajcomp.arm.track.Track`); None: a fixed base.
     """
 
     name: str
@@ -98,6 +107,7 @@ class Robot:
     source: str = ""
     beta: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(6))
     vendor: str = ""
+    track: Track = None
 
     def dh_angles(self, q):
         """DH joint angles theta (N, 6), rad, of joint angles q (N, 6), rad."""
@@ -220,6 +230,13 @@ def robot_from_yaml(text, label="<robot>"):
             f"is not below position_max {q_max[i] / deg:g} deg"
         )
     jerk = limits.get("jerk")
+    track, origin = track_from_doc(doc, label)
+    T_world_base = fields.frame("world")
+    if origin is not None:
+        if doc.get("world") is not None and np.any(T_world_base[:3, 3]) and not np.allclose(T_world_base[:3, 3], origin):
+            raise RobotError(f"{label}: field track.origin: {origin.tolist()} mm differs from the position of world "
+                             f"{T_world_base[:3, 3].tolist()} mm: give the base's place at track position 0 once")
+        T_world_base[:3, 3] = origin
     return Robot(
         name=fields.text("name"),
         convention=convention,
@@ -241,9 +258,10 @@ def robot_from_yaml(text, label="<robot>"):
         T_base_link0=fields.frame("base"),
         T_link6_flange=fields.frame("flange"),
         T_flange_tool=fields.frame("tool"),
-        T_world_base=fields.frame("world"),
+        T_world_base=T_world_base,
         source=str(doc.get("source", "")),
         vendor=str(doc.get("vendor") or ""),
+        track=track,
     )
 
 

@@ -47,13 +47,15 @@ QUATERNION = ("qw", "qx", "qy", "qz")
 MEASURED = ("mx", "my", "mz")
 MEASURED_ORIENTATION = ("mrx", "mry", "mrz")
 MEASURED_QUATERNION = ("mqw", "mqx", "mqy", "mqz")
-FIELDS = JOINTS + POSITION + ORIENTATION + QUATERNION + MEASURED + MEASURED_ORIENTATION + MEASURED_QUATERNION
+TRACK = ("track",)  # the track position of a robot on a track (mm), optional
+FIELDS = JOINTS + POSITION + ORIENTATION + QUATERNION + MEASURED + MEASURED_ORIENTATION + MEASURED_QUATERNION + TRACK
 GROUPS = {
     "joints": JOINTS,
     "position": POSITION,
     "orientation": ORIENTATION,
     "measured": MEASURED,
     "measured_orientation": MEASURED_ORIENTATION,
+    "track": TRACK,
 }
 ROTATION_GROUPS = {
     "orientation": (ORIENTATION, QUATERNION),

@@ -2,7 +2,8 @@
 
 Columns: ``j1..j6`` commanded joints (deg), ``x,y,z[,a,b,c]`` commanded TCP
 pose (mm, deg), ``mx,my,mz`` measured TCP position (mm), optional
-``mrx,mry,mrz`` measured orientation (deg). Files in another layout (other
+``mrx,mry,mrz`` measured orientation (deg), optional ``track`` the track
+position of a robot on a track (mm). Files in another layout (other
 column names, delimiter, decimal comma, units, rotation conventions) are read
 through an explicit `trajcomp.calibration.layout.Layout`, never by guessing.
 """
@@ -26,6 +27,7 @@ from trajcomp.calibration.layout import (
     ORIENTATION,
     POSITION,
     QUATERNION,
+    TRACK,
     Layout,
     parse_mapping,
     rotation_to_abc,
@@ -63,6 +65,8 @@ class Measurements:
     frame : str or None
         Frame of the measured columns when the file's layout states it
         (``base`` or ``tracker``).
+    track : ndarray, shape (N,), or None
+        Track position of each row (a robot on a track), mm.
     """
 
     joints: np.ndarray = None
@@ -73,6 +77,7 @@ class Measurements:
     lines: np.ndarray = None
     path: str = "<memory>"
     frame: str = None
+    track: np.ndarray = None
 
     def __len__(self):
         return len(self.lines)
@@ -307,6 +312,7 @@ def read_measurements(path, layout=None, max_rows=MAX_ROWS, why="split the file"
         lines=lines,
         path=path,
         frame=layout.frame,
+        track=None if (track := group(TRACK, layout.scale("track"))) is None else track[:, 0],
     )
 
 

@@ -104,6 +104,7 @@ def run(args):
     from trajcomp.arm.transforms import matrix_to_pose
     from trajcomp.calibration.calibrate import MAX_ROWS, calibrate, too_many_rows
     from trajcomp.calibration.measurements import read_measurements
+    from trajcomp.calibration.track import arm_rows, with_identified_track
     from trajcomp.errors import CalibrationError
     from trajcomp.model.model_file import model_files, save_model
     from trajcomp.report import calibration_report, file_entry, report_paths
@@ -121,7 +122,8 @@ def run(args):
     meas = read_measurements(args.measurements, layout_of(args), max_rows=MAX_ROWS, why=too_many_rows())
     try:
         model = calibrate(
-            robot, meas, robot_ref=args.robot, method=args.method, frame=args.frame, grid_step=args.grid_step,
+            robot, meas.subset(arm_rows(meas, robot)), robot_ref=args.robot, method=args.method, frame=args.frame,
+            grid_step=args.grid_step,
             interpolation=args.interpolation, loss=args.loss, folds=args.folds, seed=args.seed, progress=progress,
             orientation_weight=args.orientation_weight, workers=args.jobs,
         )
@@ -129,6 +131,12 @@ def run(args):
         if str(args.measurements) in str(exc):
             raise
         raise CalibrationError(f"{args.measurements}: {exc}") from None
+    if meas.track is not None:  # a robot on a track: every row places the track
+        model, fit = with_identified_track(model, meas)
+        info(f"track: direction {np.round(fit.track.actual_direction, 6).tolist()} "
+             f"({fit.direction_change_deg:.4f} deg from the description), scale {fit.track.actual_scale:.6f}, "
+             f"{fit.residual_rms:.4f} mm RMS about the line, measured at {len(fit.positions)} positions "
+             f"{fit.positions[0]:g}..{fit.positions[-1]:g} mm")
     save_model(args.output, model)
     report = model.report
     for line in describe(model):

@@ -74,7 +74,7 @@ def add_parser(sub):
         "Read a robot program and write it in the language of OUT's extension. Languages: "
         f"{languages()}. Poses are kept to 1e-6 mm; configuration data (in "
         f"{language_names('configuration')}) are computed with the robot's kinematics, so give --robot when "
-        "the target language needs them. Motions whose position is computed at run time are written as comments. "
+        "the target language needs them. Motions whose position is computed at run time are written as comments (exit 1 if every motion is). "
         "Speeds are written in the target language's units, never faster than the source runs them (give --robot "
         "to convert between joint and TCP speeds); a speed that cannot be carried over is written as the "
         "language's slowest, listed, and the exit code is 1.",
@@ -99,21 +99,30 @@ LISTED = 20  # motions named on stderr
 def run(args):
     from trajcomp.arm.robot import load_robot
     from trajcomp.compensation.program import convert_program
+    from trajcomp.programs.program import place_text
 
     tools, frames = frame_options(args)
     robot = load_robot(args.robot) if args.robot else None
-    program = formats.read(args.input, args.from_format)
     to_format = formats.find_format(args.output, args.to_format)
+    # into its own language every number is kept as written: a point used with two tools needs no copy per use
+    same = to_format.name == formats.find_format(args.input, args.from_format).name
+    program = formats.read(args.input, args.from_format, copies=not same)
     if robot is not None:
         formats.check_robot_language(args.output, to_format, robot, "the arm --robot names")
     to_format = to_format.name
     converted = convert_program(program, to_format, robot=robot, tools=tools, frames=frames)
     written = formats.write(args.output, converted, to_format, protect=protected_inputs(args, args.input, program))
+    if converted is program:  # its own language: every field kept as written
+        print(f"wrote {', '.join(str(p) for p in written)}: {len(program.motions)} motions, as written")
+        return 0
     skipped = len(program.runtime_motions())
     print(f"wrote {', '.join(str(p) for p in written)}: {len(converted.motions) - skipped} motions"
           + (f", {skipped} computed at run time written as comments" if skipped else ""))
-    if converted is program:  # its own language: every field kept as written
-        return 0
+    if skipped and skipped == len(converted.motions):  # a file of comments: nothing the arm could run
+        first = program.runtime_motions()[0]
+        print(f"trajcomp: every motion of {args.input} is computed at run time, so {written[0]} holds comments "
+              f"only, no motion (the first, {place_text(program.place(first))}: {first.reason})", file=sys.stderr)
+        return 1
     unknown = [m for m in converted.motions if m.speed_why and m.target is not None]  # written at the slowest
     for motion in unknown[:LISTED]:
         print(f"trajcomp: warning: line {motion.line} ({motion.text}): {motion.speed_why}", file=sys.stderr)

@@ -32,7 +32,7 @@ def run(args):
     robot = load_robot(args.robot)
     out = Path(args.output_dir)
     out.mkdir(parents=True, exist_ok=True)
-    virtual, results = run_demo(robot, args.profile, args.seed, progress=info)
+    virtual, results = run_demo(robot, args.profile, args.seed, progress=info, robot_ref=args.robot)
     print(f"virtual {robot.name}, profile {args.profile}, seed {args.seed}: compensation validated at 40 random targets per cube")
     for result in results:
         print(f"  {result.cube}")

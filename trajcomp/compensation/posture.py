@@ -37,6 +37,8 @@ from trajcomp.formats.configuration import BOUNDARY_TOLERANCE, binding, declared
 from trajcomp.errors import IKError
 from trajcomp.programs.frames import FrameTable, tool_groups
 from trajcomp.arm.ik import ik_all, turn_towards
+from trajcomp.arm.kinematics import shoulder_and_reach
+from trajcomp.arm.track import carried_by_a_track
 from trajcomp.support.parallel import map_blocks
 
 TURN = 2.0 * np.pi
@@ -141,8 +143,13 @@ def planned_joints(program, robot, *, tools=None, frames=None, workers=1):
     q[rows] = _in_blocks(lambda rows, hint: _nearest(robot, *branches(rows), hint), workers, rows, hint[rows])
     q[by_config] = _in_blocks(lambda rows, *window: _in_windows(robot, *branches(rows), *window), workers,
                               by_config, branch[declared], lower[declared], upper[declared])
-    _fail_unreachable(program, robot, index, q, source)
-    _chain(program, robot, index, q, branches, source, workers)
+    try:
+        _fail_unreachable(program, robot, index, q, source)
+        _chain(program, robot, index, q, branches, source, workers)
+    except IKError as error:  # a robot on a track its description lacks: that is the reason to give first
+        if reason := _off_the_track(program, robot, index, T_base_tcp):
+            raise IKError(f"{reason}. {error}") from None
+        raise
     return PlannedJoints(index, q, tuple(source), T_base_frame, T_flange_tool, T_base_tcp)
 
 
@@ -261,6 +268,29 @@ def _fail_unreachable(program, robot, index, q, source):
         f"{program.name}: {failed.size} targets cannot be reached by robot {robot.name} in the posture "
         f"the program declares ({shown}{more}); the program was not changed"
     )
+
+
+def _off_the_track(program, robot, index, T_base_tcp):
+    """Why targets ``index`` (N,) at ``T_base_tcp`` (N, 4, 4) the arm cannot reach are unreachable when an external
+    axis of the program carries the arm (`trajcomp.arm.track.carried_by_a_track`) and the robot's description has
+    no track for it; "" otherwise."""
+    if robot.track is not None and robot.track.index(program.format) is not None:
+        return ""
+    external = program.target_table().external
+    shoulder, reach = shoulder_and_reach(robot)
+    for axis in program.moving_external_axes():
+        k = int(axis[1:]) - 1
+        values = np.array([np.nan if external[i] is None or len(external[i]) <= k else external[i][k]
+                           for i in index.tolist()], dtype=float)
+        stated = np.isfinite(values)
+        if carried_by_a_track(T_base_tcp[stated, :3, 3] - shoulder, values[stated], reach):
+            where = ("describes no track" if robot.track is None else
+                     f"has a track but names no field of {program.format} programs for it (track.fields)")
+            return (f"{program.name}: the program moves external axis {axis} over {np.ptp(values[stated]):.0f} mm "
+                    f"and its targets move with it, out of the reach of robot {robot.name} from a fixed base: a robot "
+                    f"on a track, and the robot's description {where}. Describe the track in the robot's YAML (track: "
+                    "direction, limits, fields; docs/tracks.md) and give it with --robot")
+    return ""
 
 
 def _declaration(target, source):

@@ -186,7 +186,8 @@ def compensate_program(program, correct, robot, *, tools=None, frames=None, join
         _check_correction(result.correction, labels, max_correction)
         check_posture(q_planned, result.q, labels, max_joint_change)
         q, T_command, n = result.q, result.T_command, len(cartesian)
-        edited = edited.with_targets(cartesian, poses=in_frames(T_base_frame, T_command[:n]), joints=q[:n],
+        written = table.command_offsets(cartesian) @ T_command[:n]  # on a track: for the controller's carriage
+        edited = edited.with_targets(cartesian, poses=in_frames(T_base_frame, written), joints=q[:n],
                                      configs=_configs(program, robot, cartesian, q[:n]))
         if n < len(rows):
             edited = edited.with_targets(joint_index, joints=q[n:])
@@ -205,7 +206,7 @@ def compensate_program(program, correct, robot, *, tools=None, frames=None, join
         predicted_residual=np.zeros(len(rows)) if result is None else result.residual,
         not_compensated=_not_compensated(program, cartesian),
         motions_left=sum(not m.axis_position for m in program.runtime_motions()),
-        **_program_facts(program, joint_index, joint_targets),
+        **_program_facts(program, robot, joint_index, joint_targets),
         landing=None if result is None else landing_of(result),
     )
     if result is not None:
@@ -213,7 +214,24 @@ def compensate_program(program, correct, robot, *, tools=None, frames=None, join
     changed = _configuration_changes(report)
     if changed:
         report = dataclasses.replace(report, warnings=report.warnings + (changed,))
+    if beyond := _beyond_the_measured_travel(table, robot, cartesian, labels):
+        report = dataclasses.replace(report, warnings=report.warnings + (beyond,))
     return edited, report
+
+
+def _beyond_the_measured_travel(table, robot, index, labels):
+    """A warning naming the targets ``index`` (N,) at track positions beyond those the track's calibration
+    measured ("" if none, or no track was calibrated): there the carriage is placed by the fitted line alone."""
+    track = robot.track
+    if track is None or track.measured_positions is None or not len(index):
+        return ""
+    beyond = np.flatnonzero(track.beyond_measured(table.track_positions(index)))
+    if not beyond.size:
+        return ""
+    more = f" and {beyond.size - 10} more" if beyond.size > 10 else ""
+    return (f"{beyond.size} targets stand at track positions beyond the travel the track's calibration measured "
+            f"({track.measured_positions[0]:g}..{track.measured_positions[-1]:g} mm), where the carriage is placed by "
+            f"the fitted line alone: {', '.join(labels[k] for k in beyond[:10])}{more}")
 
 
 def _compensation_warnings(result, labels):
@@ -298,7 +316,7 @@ def landing_of(result):
             "other_tool": result.other_tool}
 
 
-def as_written_report(program, plan):
+def as_written_report(program, plan, robot=None):
     """The `ProgramReport` of a program run as written (no correction), e.g. for re-timing alone.
 
     Parameters
@@ -306,6 +324,8 @@ def as_written_report(program, plan):
     program : Program
     plan : trajcomp.compensation.posture.PlannedJoints
         Its Cartesian targets in their declared postures (`planned_joints`).
+    robot : Robot, optional
+        The arm it runs on (its track, if any, is not an external axis to warn of).
     """
     n = len(plan.index)
     joint_index, _ = program.joint_targets()
@@ -322,7 +342,7 @@ def as_written_report(program, plan):
         posture_source=plan.source,
         outside_grid=np.zeros(n, dtype=bool),
         predicted_residual=np.zeros(n),
-        **_program_facts(program, joint_index, "keep"),
+        **_program_facts(program, robot, joint_index, "keep"),
     )
 
 
@@ -344,7 +364,7 @@ def _described(program, index):
     return tuple(texts[c] for c in configs)
 
 
-def _program_facts(program, joint_index, joint_mode):
+def _program_facts(program, robot, joint_index, joint_mode):
     """The report fields that describe the program itself: unused points, joint targets, warnings."""
     return {
         "unused": tuple(t.label for t in program.unused_targets()),
@@ -352,14 +372,17 @@ def _program_facts(program, joint_index, joint_mode):
         + tuple(f"{program.motions[k].text} ({place_text(program.place(program.motions[k]))})"
                 for k in np.flatnonzero(program.motion_table().axis_position)),
         "joint_mode": joint_mode,
-        "warnings": _warnings(program),
+        "warnings": _warnings(program, robot),
     }
 
 
-def _warnings(program):
+def _warnings(program, robot):
     """What the user must know about a compensated program: its notes (copies of a point per use), external axes
-    that move."""
+    that move other than the robot's track (whose carriage places each target's arm base)."""
     moving = program.moving_external_axes()
+    axis = None if robot is None or robot.track is None else robot.track.index(program.format)
+    if axis is not None:
+        moving = tuple(name for name in moving if name != f"E{axis + 1}")
     if not moving:
         return program.notes
     return program.notes + (f"the program moves external axes {', '.join(moving)} (a track or positioner): the compensation "

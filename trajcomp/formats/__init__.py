@@ -286,7 +286,7 @@ def output_format(output, program, to=None):
     return own
 
 
-def read(path, format=None, *, workers=1):
+def read(path, format=None, *, workers=1, copies=True):
     """Read a robot program.
 
     Parameters
@@ -296,13 +296,18 @@ def read(path, format=None, *, workers=1):
         Registry name; default from the extension.
     workers : int
         Processes sharing the work of a format that reads blocks of rows (CSV).
+    copies : bool
+        False: the program as its files state it, a point used with several
+        tools or frames kept as one: for a program written back with its
+        points' numbers as they are (a same-language `convert`), which need
+        no copy per use.
 
     Returns
     -------
     Program
         A point used with several tools or frames is written as a copy per
         use where the language declares points by name (`uses_resolved`);
-        otherwise its motions are left as written.
+        otherwise (or without ``copies``) its motions are left as written.
 
     Raises
     ------
@@ -315,7 +320,8 @@ def read(path, format=None, *, workers=1):
         raise ReadError(f"{path}: no such file")
     recover(path.parent)  # a set of files a killed run left half-renamed is completed first
     with collection_paused():  # a program is made of many objects without cycles (`trajcomp.support.memory`)
-        return uses_resolved(fmt.read(path, workers), fmt)
+        program = fmt.read(path, workers)
+        return uses_resolved(program, fmt) if copies else program.with_shared_targets_left()
 
 
 def uses_resolved(program, fmt):
@@ -335,7 +341,7 @@ def read_task(paths, format=None):
     ----------
     paths : sequence of str or Path
         Program files of one language (a RAPID task's modules, KUKA
-        programs using one ``$config.dat``); the first names the program.
+        programs using one ``$config.dat``); the first that has motions names the program.
     format : str, optional
         Registry name; default from the extensions.
 

@@ -45,7 +45,7 @@ def merge(programs):
     Returns
     -------
     Program
-        Named after the first (a point the files use with several tools or
+        Named after the first that has motions, else the first (a point the files use with several tools or
         frames is resolved by `trajcomp.formats.read_task`); each item names
         the file it is written in (`Motion.source`), so that its place is
         ``file:line`` (`Program.place`).
@@ -70,8 +70,10 @@ def merge(programs):
                  for kind, table in (("tools", tools), ("frames", frames))}
         items += [_moved_item(item, index, moved, names) for item in program.items]
     first = programs[0]
+    # named after the first file that moves the arm (messages name the program): not a module of data before it
+    name = next((program.name for program in programs if len(program.motion_table())), first.name)
     notes = tuple(note for program in programs for note in program.notes)
-    return Program(first.format, first.name, tuple(items), tuple(targets), tools, frames, tuple(sources), notes=notes)
+    return Program(first.format, name, tuple(items), tuple(targets), tools, frames, tuple(sources), notes=notes)
 
 
 def _joined(target, moved, targets, places):

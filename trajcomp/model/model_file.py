@@ -116,6 +116,7 @@ def save_model(path, model):
             "ref": model.robot_ref,
             "dh_fingerprint": _robot_fingerprint(model.nominal),
             "tool": _pose_user(model.nominal.T_flange_tool),
+            "track": _track_user(model.nominal.track),
         },
         "method": model.method,
         "tracker_to_base": _pose_user(model.T_tracker_base),
@@ -266,7 +267,8 @@ def load_model(path, robot=None):
         nominal = _nominal_robot(info["ref"], path)
         if _robot_fingerprint(nominal) != info["dh_fingerprint"]:
             raise ModelError(f"{path}: the nominal DH table of robot {yaml_text.shown(info['ref'])} differs from the one calibrated")
-        nominal = nominal.replace(T_flange_tool=_pose_internal(info["tool"], f"{path}: field robot.tool"))
+        nominal = nominal.replace(T_flange_tool=_pose_internal(info["tool"], f"{path}: field robot.tool"),
+                                  track=_track_internal(info.get("track"), nominal, path))
         arrays = _read_sidecar(path, doc.get("sidecar"), doc.get("sidecar_sha256"), doc.get("calibration_id"))
         fields = {}
         for key in ("grid", "residual", "residual_field", "linear"):
@@ -315,6 +317,30 @@ def load_model(path, robot=None):
     except (KeyError, TypeError, ValueError, AttributeError) as exc:
         raise ModelError(f"{path}: malformed model field: {yaml_text.shown(exc)}") from exc
     return model
+
+
+def _track_user(track):
+    """The identified track of a model's robot as the file states it (None: no track, or none identified)."""
+    if track is None or not track.identified:
+        return None
+    return {"direction": [float(v) for v in track.actual_direction], "scale": float(track.actual_scale),
+            "measured_positions": [float(v) for v in track.measured_positions]}
+
+
+def _track_internal(entry, nominal, path):
+    """The nominal robot's track with the identified one a model file states (``robot.track``), or as it is."""
+    if entry is None:
+        return nominal.track
+    if nominal.track is None:
+        raise ModelError(f"{path}: field robot.track: the model identified a track, but robot "
+                         f"{yaml_text.shown(nominal.name)} describes none")
+    direction = _finite(entry["direction"], f"{path}: field robot.track.direction", 3)
+    scale = float(_finite([entry["scale"]], f"{path}: field robot.track.scale", 1)[0])
+    positions = _finite(entry["measured_positions"], f"{path}: field robot.track.measured_positions")
+    if not 0.5 < scale < 2.0 or not 0.5 < np.linalg.norm(direction) < 1.5:
+        raise ModelError(f"{path}: field robot.track: scale {scale:g} or direction {direction.tolist()} is no track's")
+    return nominal.track.replace(actual_direction=direction / np.linalg.norm(direction), actual_scale=scale,
+                                 measured_positions=np.sort(positions))
 
 
 def _finite(values, where, count=None):

@@ -1,7 +1,10 @@
 """Tools and user frames of a program: names to values, and targets in the robot base frame.
 
 Frame values are T_world_frame and tool values T_flange_tool (mm); the base
-is placed in the world by the robot's ``T_world_base``. A frame or tool the
+is placed in the world by the robot's ``T_world_base``, and on a track
+(`trajcomp.arm.track`) each target's base is the carriage frame at the
+track position the target states: the arm part of a target is in that
+frame. A frame or tool the
 program uses must be defined in the program or supplied by the caller; a
 missing one is an error, never a guess. Frame ``None`` is the base, tool
 ``None`` the robot description's tool.
@@ -32,6 +35,7 @@ class FrameTable:
         self.frames = {**(frames or {}), **program.frames}
         self.T_base_world = invert(robot.T_world_base) if robot is not None else np.eye(4)
         self.default_tool = robot.T_flange_tool if robot is not None else np.eye(4)
+        self.track = robot.track if robot is not None else None
 
     def tool(self, name):
         """T_flange_tool (4, 4) of a tool name (None: the robot's tool)."""
@@ -62,7 +66,61 @@ class FrameTable:
         T_base_frame = _values(used.frame[row], self.frame)
         T_flange_tool = _values(used.tool[row], self.tool)
         poses = rows_of(self.program.target_table().pose, index)
+        if self.track is not None:  # each target's arm base: the carriage where its track position puts it
+            T_base_frame = self.carriage_offsets(index) @ T_base_frame
         return T_base_frame, T_flange_tool, poses if _is_base(T_base_frame) else T_base_frame @ poses
+
+    def track_positions(self, index):
+        """The track positions (N,), mm, targets ``index`` (N,) state in the field the robot's track names for the
+        program's language; zeros on a fixed base or for a language the track names no field of.
+
+        Raises
+        ------
+        TrajcompError
+            A target that states no value in that field.
+        """
+        index = np.asarray(index, dtype=int)
+        axis = None if self.track is None else self.track.index(self.program.format)
+        if axis is None:
+            return np.zeros(len(index))
+        external = self.program.target_table().external
+        values = np.array([np.nan if external[i] is None or len(external[i]) <= axis else external[i][axis]
+                           for i in index.tolist()], dtype=float).reshape(-1)
+        missing = np.flatnonzero(~np.isfinite(values))
+        if missing.size:
+            field = self.track.written[self.program.format]
+            raise TrajcompError(
+                f"{self.program.name}: {self.program.where(int(index[missing[0]]))} states no {field}: its track "
+                f"position, hence the arm's base, is unknown ({missing.size} target(s) so); state {field} in every "
+                "Cartesian target of a robot on a track")
+        return values
+
+    def carriage_offsets(self, index):
+        """``T_base(e)_base(0)`` (N, 4, 4): the arm base at track position 0 seen from the real carriage at each
+        target's track position (a translation; identity on a fixed base)."""
+        values = self.track_positions(index)
+        out = np.tile(np.eye(4), (len(values), 1, 1))
+        if self.track is not None:
+            out[:, :3, 3] = -self.shift_in_base(values)
+        return out
+
+    def command_offsets(self, index):
+        """``T_real(e)_controller(e)`` (N, 4, 4): the carriage as the controller knows it, seen from the real one
+        at each target's track position (identity unless a calibration identified a track that differs).
+
+        A command ``T`` in the real carriage is written ``command_offsets @ T`` in it: the controller, placing the
+        arm with its own track, then sends the arm to ``T`` on the real one.
+        """
+        out = np.tile(np.eye(4), (len(index), 1, 1))
+        if self.track is not None and self.track.identified:
+            values = self.track_positions(index)
+            out[:, :3, 3] = self.shift_in_base(values, actual=False) - self.shift_in_base(values)
+        return out
+
+    def shift_in_base(self, values, actual=True):
+        """The carriage's translations (N, 3), mm, at track positions ``values`` (N,), in the base frame at 0 (on
+        the real track, or the controller's: `trajcomp.arm.track.Track.shift`)."""
+        return self.track.shift(values, actual) @ self.T_base_world[:3, :3].T
 
 
 def in_frames(T_base_frame, T_base_pose):

@@ -15,7 +15,10 @@ Read:
   (joint representation). W, P, R: R = Rz(R) Ry(P) Rx(W), the matrix of
   A, B, C = R, P, W. UF 0 and UT 0 are the world frame and the faceplate.
   E1.. of group 1, then the axes of groups 2.. (servo gun, positioner) are
-  the target's external axes, carried unchanged.
+  the target's external axes, carried unchanged. A UF or UT number the
+  program uses is the controller's user frame or tool, read from the
+  backup's SYSFRAME.VA beside it or in the folder above
+  (`trajcomp.formats.fanuc.sysframe`).
 Position registers: a motion to ``PR[n]`` goes to the value the backup's
 POSREG.VA lists (beside the program or in the folder above it,
 `trajcomp.formats.fanuc.posreg`), in the active UTOOL_NUM and UFRAME_NUM;

@@ -61,18 +61,21 @@ _TP_LINE = re.compile(r"^\s*\d+:\s*|\s*;\s*$")  # a listing's line number and th
 _FIELD = re.compile(r"(?:\b([XYZWPR])\s*:|\b(J\d+)\s*=|\bEXT(\d+)\s*:)\s*(" + NUMBER + r"|\*+)")
 
 
-def find(program_path):
-    """The POSREG.VA of a program's controller: beside it, else in the folder above (its backup), or None.
+def find(program_path, file_name=FILE_NAME):
+    """A listing of a program's controller (POSREG.VA; SYSFRAME.VA ..): beside it, else in the folder above (its
+    backup), or None.
 
     Parameters
     ----------
     program_path : Path
         The .LS program.
+    file_name : str
+        The listing's name, lower case (any case in the folder).
     """
     folder = Path(program_path).resolve().parent
     for place in (folder, folder.parent):
         for name in _listing(place):
-            if name.lower() == FILE_NAME:
+            if name.lower() == file_name:
                 return place / name
     return None
 

@@ -216,7 +216,8 @@ def read(path):
     else:
         program = Program("fanuc_ls", name, ItemRows(statements, motions), tuple(targets), tools, frames, sources,
                           notes=notes)
-    return flow.program_followed(program, steps, {})  # CALL, JMP LBL, IF, SELECT, FOR, WAIT: starts and stops
+    # CALL, JMP LBL, IF, SELECT, FOR, WAIT: starts and stops
+    return flow.program_followed(_with_controller_frames(program, path), steps, {})
 
 
 def _flow_steps(content, line):
@@ -240,6 +241,23 @@ def _flow_steps(content, line):
         call = Step("call", m.group(1), f"program {m.group(1).upper()}, which may move the arm", line)
         return [Step("if", line=line), call, Step("endif", line=line)] if conditional else [call]
     return []
+
+
+def _with_controller_frames(program, path):
+    """The program with the user frames and tools its motions use and it does not define read from its
+    controller's SYSFRAME.VA (`trajcomp.formats.fanuc.sysframe`), and the report's notes on them."""
+    from trajcomp.formats.fanuc import sysframe
+
+    if sysframe.find(path) is None:  # no backup beside the program: nothing to look at
+        return program
+    uses = program.target_uses()
+    wanted = {what: {n for n in set(uses[what].tolist()) if n is not None and n.isdigit() and n not in defined}
+              for what, defined in (("tool", program.tools), ("frame", program.frames))}
+    found, notes = sysframe.tables(path, wanted)
+    if not notes:
+        return program
+    return program.replace(tools={**program.tools, **found["tool"]}, frames={**program.frames, **found["frame"]},
+                           notes=program.notes + notes)
 
 
 def _line_offsets(lines):

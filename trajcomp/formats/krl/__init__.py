@@ -2,7 +2,7 @@
 
 Read:
 - points declared in the .dat or .src: ``DECL E6POS XP1={X ..,Y ..,Z ..,A ..,B
-  ..,C ..,S ..,T ..,E1 ..}``, POS and FRAME (Cartesian), E6AXIS and AXIS
+  ..,C ..,S ..,T ..,E1 ..}`` (GLOBAL, CONST or both), POS and FRAME (Cartesian), E6AXIS and AXIS
   (joint targets); A, B, C are intrinsic Z-Y'-X'' angles in degrees; the
   external axes E1..E6 are carried unchanged (`Target.external`);
 - PTP / LIN / CIRC (and SPTP / SLIN / SCIRC) to a point name or an inline
@@ -14,7 +14,9 @@ Read:
 - tool and base: ``$TOOL = TOOL_DATA[n]``, ``$BASE = BASE_DATA[n]``,
   ``BAS(#TOOL, n)``, ``BAS(#BASE, n)``, FDAT TOOL_NO / BASE_NO, inline
   ``$TOOL = {X ..}`` and ``TOOL_DATA[n] = {X ..}`` definitions (tool and
-  base 0 are the flange and the world); speeds ``$VEL.CP`` (m/s),
+  base 0 are the flange and the world; a number the program selects and
+  does not define is the controller's, read from its ``$config.dat``:
+  `trajcomp.formats.krl.config_dat`); speeds ``$VEL.CP`` (m/s),
   ``BAS(#VEL_PTP, %)``, ``BAS(#VEL_CP, m/s)``, the inline forms'
   ``BAS(#PTP_PARAMS, %)`` and ``BAS(#CP_PARAMS, m/s)`` (after their PDAT /
   LDAT, whose VEL they replace), a spline motion's own ``WITH $VEL =

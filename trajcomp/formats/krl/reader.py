@@ -9,6 +9,7 @@ from pathlib import Path
 import numpy as np
 
 from trajcomp.errors import ReadError
+from trajcomp.formats.krl import config_dat
 from trajcomp.formats.number_fields import BLANK as _BLANK, DIGIT as _DIGIT, WORD_CHARACTER as _WORD_CHARACTER
 from trajcomp.formats.number_fields import character_table as _character_table, line_bounds as _line_bounds
 from trajcomp.formats.number_fields import offset_type, read_numbers, text_codes
@@ -54,10 +55,11 @@ JOINT_TYPES = {"E6AXIS", "AXIS"}
 MOTION_SPANS = ("motion", "via_name", "target_name", "speed_with", "speed")  # a motion's spans, in this order
 KINDS = {"PTP": JOINT, "SPTP": JOINT, "LIN": LINEAR, "SLIN": LINEAR, "CIRC": CIRCULAR, "SCIRC": CIRCULAR}
 
+_QUALIFIERS = r"(?:(?:GLOBAL|CONST)\s+)*"  # DECL GLOBAL CONST E6POS ..: a data list's constant is a point too
 _DECL = re.compile(
-    r"^\s*(?:DECL\s+)?(?:GLOBAL\s+)?(" + POINT_TYPES + r"|FDAT|PDAT|LDAT)\s+(\w+)\s*=\s*\{(.*)\}\s*$", re.I
+    r"^\s*(?:DECL\s+)?" + _QUALIFIERS + r"(" + POINT_TYPES + r"|FDAT|PDAT|LDAT)\s+(\w+)\s*=\s*\{(.*)\}\s*$", re.I
 )
-_DECL_START = re.compile(r"^\s*(?:DECL\s+)?(?:GLOBAL\s+)?(?:" + POINT_TYPES + r")\s+\w+\s*=", re.I)
+_DECL_START = re.compile(r"^\s*(?:DECL\s+)?" + _QUALIFIERS + r"(?:" + POINT_TYPES + r")\s+\w+\s*=", re.I)
 _DECL_BARE = re.compile(r"^\s*(?:DECL\s+)?(?:GLOBAL\s+)?(?:" + POINT_TYPES + r")\s+(\w+(?:\s*,\s*\w+)*)\s*$", re.I)
 _DATA = re.compile(r"^\s*(TOOL_DATA|BASE_DATA)\s*\[\s*(\d+)\s*\]\s*=\s*(.*?)\s*$", re.I)
 _SYSVAR = re.compile(r"^\s*\$(TOOL|BASE)\s*=\s*(.*?)\s*$", re.I)
@@ -91,7 +93,7 @@ _ASSIGN = re.compile(r"^\s*([A-Za-z_]\w*)\s*(?:\.\w+|\[[^\]]*\])*\s*=(?!=)")
 _WITH_TOOL = re.compile(r"\$TOOL\s*=\s*STOOL2\s*\(\s*(\w+)\s*\)", re.I)
 _WITH_BASE = re.compile(r"\$BASE\s*=\s*SBASE\s*\(\s*(\w+)\s*\.\s*BASE_NO\s*\)", re.I)
 # a point another data list declares, with a value or without (`DeclaredElsewhere`)
-_GLOBAL_POINT = re.compile(r"^[ \t]*(?:DECL\s+)?(?:GLOBAL\s+)?(?:" + POINT_TYPES + r")\s+(\w+)\s*(?:=|$)", re.I | re.M)
+_GLOBAL_POINT = re.compile(r"^[ \t]*(?:DECL\s+)?" + _QUALIFIERS + r"(?:" + POINT_TYPES + r")\s+(\w+)\s*(?:=|$)", re.I | re.M)
 _GLOBAL_WORD = re.compile(r"\bGLOBAL\b", re.I)
 _HOME = re.compile(r"^(XHOME\d*|\$AXIS_ACT)$", re.I)  # axis positions stated outside the program: kept
 _DEF = re.compile(r"^\s*(?:GLOBAL\s+)?DEF(?:FCT\s+\w+)?\s+(\w+)\s*\(", re.I | re.M)
@@ -113,7 +115,7 @@ def _externals(separator):
 
 _EXTERNAL_MEMBERS = _externals(",")
 _WRITTEN_POINT = re.compile(
-    r"^[ \t]*DECL[ \t]+(?:GLOBAL[ \t]+)?(?:E6POS|POS|FRAME)[ \t]+(\w+)[ \t]*=[ \t]*\{"
+    r"^[ \t]*DECL[ \t]+(?:(?:GLOBAL|CONST)[ \t]+)*(?:E6POS|POS|FRAME)[ \t]+(\w+)[ \t]*=[ \t]*\{"
     + ",".join(f"{p.upper()}[ ]({NUMBER})" for p in POSE) + r"(?:,S[ ](\d+),T[ ](\d+))?"
     + _EXTERNAL_MEMBERS + r"\}[ \t]*\r?$", re.I | re.M)
 # A motion to a named point as CAM post-processors write it, one a line: LIN XP1 C_DIS, PTP P2 (no WITH, no _REL):
@@ -284,7 +286,8 @@ def _written_points(index, masked, lines):
 
 AT_ONCE = 65536  # lines or motions whose fields are found and read together: bounds the arrays held
 # the declaration starts read at once (upper case): one space after each word, GLOBAL or not
-_HEADS = tuple(f"DECL {scope}{typ} " for scope in ("", "GLOBAL ") for typ in ("E6POS", "POS", "FRAME"))
+_HEADS = tuple(f"DECL {scope}{typ} " for scope in ("", "GLOBAL ", "CONST ", "GLOBAL CONST ")
+               for typ in ("E6POS", "POS", "FRAME"))
 _LONGEST_NAME = 64  # characters of a point name read at once (a longer one: `_WRITTEN_POINT`)
 _LONGEST_WHOLE = 24  # digits of an S or T read at once
 
@@ -981,14 +984,16 @@ def read(path):
     walk.motions_before(len(src_lines.starts) + 1)
     items, resolved = _resolve(reader, path, dat_path, walk)
     targets = _targets(reader.targets, table, inline)
+    notes = _controller_tables(reader, path, walk)
     if not len(walk.rows):  # none read at once
-        program = Program("krl", path.stem, items, targets, reader.tools, reader.frames, tuple(reader.sources))
+        program = Program("krl", path.stem, items, targets, reader.tools, reader.frames, tuple(reader.sources),
+                          notes=notes)
     else:
         motions = MotionTable.merged([MotionTable.of([i for i in items if isinstance(i, Motion)]),
                                       walk.table(resolved)])
         statements = StatementTable.of([i for i in items if not isinstance(i, Motion)])
         program = Program("krl", path.stem, ItemRows(statements, motions), targets, reader.tools, reader.frames,
-                          tuple(reader.sources))
+                          tuple(reader.sources), notes=notes)
     # calls, branches, loops, jumps or waits: speeds and starts as the program runs
     return flow.program_followed(program, reader.steps, reader.initial, _flow_speeds)
 
@@ -1035,6 +1040,29 @@ def _flow_speeds(table, reached):
               **({} if span[k] is None else {"speed": span[k]})} for k in moved.tolist()]
     columns = {"speed": speed, "speed_why": why}
     return columns | ({"spans": (moved, spans)} if len(moved) else {})
+
+
+def _controller_tables(reader, path, walk):
+    """Read into ``reader``'s tools and bases those its motions select by number (``TOOL_DATA[2]``,
+    ``BAS(#BASE, 8)``) and the program does not define, from its controller's ``$config.dat``
+    (`trajcomp.formats.krl.config_dat`); the report's notes on them (tuple of str)."""
+    used = {"TOOL": {state[0] for state in walk.states}, "BASE": {state[1] for state in walk.states}}
+    for item in reader.items:
+        if isinstance(item, Motion):
+            used["TOOL"].add(item.tool)
+            used["BASE"].add(item.frame)
+    defined = {"TOOL": reader.tools, "BASE": reader.frames}
+    wanted = {which: {n for n in numbers if n is not None and n.isdigit() and n not in defined[which]}
+              for which, numbers in used.items()}
+
+    def frame(aggregate, line, original):
+        members = _members(aggregate[1:-1], 0, None, config_dat.FILE_NAME, line, original)
+        return _frame(members, config_dat.FILE_NAME, line, original)
+
+    found, notes = config_dat.tables(path, wanted, frame)
+    reader.tools.update(found["TOOL"])
+    reader.frames.update(found["BASE"])
+    return notes
 
 
 def _written_motions(index, masked, lines):
@@ -1448,7 +1476,8 @@ def _resolve(reader, path, dat_path, walk):
     """
     assigned, items = {}, []
     # other data lists beside it, and $config.dat beside it or in a backup's R1/System (KRC/R1/Program/x.src)
-    folders = [path.parent, path.parent.parent / "System", path.parent.parent.parent / "System"]
+    config = config_dat.find(path)
+    folders = [path.parent] + ([config.parent] if config is not None and config.parent != path.parent.resolve() else [])
     elsewhere = DeclaredElsewhere(dat_path or path, folders, (".dat",), _GLOBAL_POINT, ";", assignment=_ASSIGN,
                                   code=(".src", ".sub"), visible=_visible)
     for item in reader.items:

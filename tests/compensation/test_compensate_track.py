@@ -1,0 +1,440 @@
+"""Robots on a linear track (issue 35, section 1): the arm part compensated in the carriage frame.
+
+A virtual arm of each maker stands on a track (a KUKA KL unit driven by
+E1, a FANUC rail by E1, an ABB IRBT track by eax_a). It is calibrated at
+one carriage position (a grid in its base frame); a hand-written program in
+the maker's language states world targets at carriage positions metres
+apart. Compensated, each target's written command, run by the virtual arm
+from the carriage where the target's track value puts it, lands within
+0.02 mm of the world target; the track values are written as they stand.
+A program on a track whose robot description has none is refused saying so.
+"""
+
+import re
+from importlib import resources
+from pathlib import Path
+
+import numpy as np
+import pytest
+from scipy.spatial.transform import Rotation
+
+from trajcomp import formats
+from trajcomp.arm.ik import ik
+from trajcomp.arm.kinematics import fk
+from trajcomp.arm.robot import load_robot, robot_from_yaml
+from trajcomp.arm.transforms import matrix_to_abc
+from trajcomp.calibration.calibrate import calibrate
+from trajcomp.calibration.measurement_plan import plan_grid
+from trajcomp.calibration.measurements import Measurements
+from trajcomp.calibration.simulate import VirtualRobot
+from trajcomp.compensation.program import compensate_program
+from trajcomp.compensation.targets import program_corrector
+from trajcomp.errors import IKError, RobotError, TrajcompError
+from trajcomp.formats.configuration import configuration_for
+
+DIRECTION = np.array([1.0, 0.02, 0.0]) / np.linalg.norm([1.0, 0.02, 0.0])  # a track not quite along world x
+CARRIAGE = [0.0, 1850.0, 4200.0]  # mm of track position: metres apart
+TRACK = """
+track:
+  direction: [1.0, 0.02, 0.0]
+  limits: {position_min: -100, position_max: 5800, velocity: 2000, acceleration: 2500}
+  fields: {krl: E1, fanuc_ls: E1, rapid: eax_a}
+"""
+# each arm's calibrated cube (corner, side, step: mm) and the arm posture its targets are solved in
+CELLS = {"kuka_kr6_r900": ((400.0, -50.0, 650.0), 200.0, 50.0),
+         "fanuc_lrmate200id": ((300.0, -100.0, 300.0), 200.0, 50.0),
+         "abb_irb4600": ((1000.0, -200.0, 700.0), 400.0, 100.0)}
+
+
+def on_track(name, track=TRACK):
+    """Built-in robot ``name`` on the track `TRACK` (its YAML with a ``track`` mapping)."""
+    text = resources.files("trajcomp.arm.robots").joinpath(f"{name}.yaml").read_text(encoding="utf-8")
+    return robot_from_yaml(text + track, f"{name} on a track")
+
+
+_CELL = {}
+
+
+def cell(name):
+    """(robot on the track, virtual arm, program corrector) of arm ``name``, calibrated once per test run."""
+    if name not in _CELL:
+        robot = on_track(name)
+        corner, side, step = CELLS[name]
+        virtual = VirtualRobot.create(robot, "paper", seed=4)
+        plan = plan_grid(robot, corner, side, step, orientation=matrix_to_abc(orientation(robot)))
+        q = plan.joints[plan.reachable]
+        meas = Measurements(joints=q, position=plan.position[plan.reachable],
+                            measured=virtual.measure(q, np.random.default_rng(5)), lines=np.arange(len(q)) + 2,
+                            path="grid.csv")
+        model = calibrate(robot, meas, method="composite", grid_step=step, folds=0)
+        _CELL[name] = (robot, virtual, program_corrector(model))
+    return _CELL[name]
+
+
+def orientation(robot):
+    """The targets' and the grid's tool orientation (3, 3): the home one tilted (no KUKA B = 90 deg gimbal lock)."""
+    tilt = Rotation.from_euler("xyz", [6.0, -9.0, 0.0], degrees=True).as_matrix()
+    return fk(robot, robot.home[None])[0, :3, :3] @ tilt
+
+
+def world_targets(robot, name):
+    """World poses (3, 4, 4) inside the arm's calibrated cube, one at each carriage position, and their joints."""
+    corner, side, _ = CELLS[name]
+    rng = np.random.default_rng(7)
+    local = np.tile(np.eye(4), (len(CARRIAGE), 1, 1))
+    local[:, :3, :3] = orientation(robot)
+    local[:, :3, 3] = np.asarray(corner) + rng.uniform(0.2 * side, 0.8 * side, (len(CARRIAGE), 3))
+    q = ik(robot, local, seed=np.tile(robot.home, (len(CARRIAGE), 1))).raise_on_failure("targets").q
+    world = robot.track.placements(robot.T_world_base, np.array(CARRIAGE)) @ local
+    return world, q
+
+
+def landing(robot, virtual, world_command, carriage):
+    """World positions (N, 3) the virtual arm reaches for world commands (N, 4, 4) at track positions (N,)."""
+    placements = robot.track.placements(robot.T_world_base, np.asarray(carriage))
+    local = np.linalg.inv(placements) @ world_command
+    q = ik(robot, local, seed=np.tile(robot.home, (len(local), 1))).raise_on_failure("commands").q
+    return (placements @ virtual.reached_poses(q))[:, :3, 3]
+
+
+# ------------------------------------------------------------------ the three languages
+
+
+def _krl(folder, world, q, robot):
+    status = configuration_for("krl", robot, q)
+    points = []
+    for k, (T, (s, t)) in enumerate(zip(world, status)):
+        a, b, c = Rotation.from_matrix(T[:3, :3]).as_euler("ZYX", degrees=True)
+        points.append(f"DECL E6POS XP{k + 1}={{X {T[0, 3]:.4f},Y {T[1, 3]:.4f},Z {T[2, 3]:.4f},A {a:.5f},B {b:.5f},"
+                      f"C {c:.5f},S {s},T {t},E1 {CARRIAGE[k]:.1f},E2 0.0,E3 0.0,E4 0.0,E5 0.0,E6 0.0}}")
+    (folder / "rail.dat").write_text("DEFDAT  RAIL\n" + "\n".join(points) + "\nENDDAT\n")
+    (folder / "rail.src").write_text("DEF rail( )\n$BASE=$NULLFRAME\n$VEL.CP=0.2\nBAS(#VEL_PTP,20)\nPTP XP1\n"
+                                     "LIN XP2 C_DIS\nLIN XP3\nEND\n")
+    return folder / "rail.src"
+
+
+def _read_poses(text, pattern, rotation):
+    """World poses (N, 4, 4) and track positions (N,) of the points of a program's ``text``: ``pattern`` matches
+    x, y, z, the three (or four) numbers ``rotation(numbers) -> Rotation`` reads, then the track position."""
+    poses, carriage = [], []
+    for m in re.finditer(pattern, text):
+        v = [float(x) for x in m.groups()]
+        T = np.eye(4)
+        T[:3, :3], T[:3, 3] = rotation(v[3:-1]).as_matrix(), v[:3]
+        poses.append(T)
+        carriage.append(v[-1])
+    return np.array(poses), np.array(carriage)
+
+
+def _read_krl(path):
+    """World poses (N, 4, 4) and E1 (N,) of the points a KRL .dat declares."""
+    return _read_poses(path.with_suffix(".dat").read_text(),
+                       r"X ([-\d.]+),Y ([-\d.]+),Z ([-\d.]+),A ([-\d.]+),B ([-\d.]+),C ([-\d.]+),"
+                       r"S \d+,T \d+,E1 ([-\d.]+)",
+                       lambda abc: Rotation.from_euler("ZYX", abc, degrees=True))
+
+
+def _fanuc(folder, world, q, robot):
+    configs = configuration_for("fanuc_ls", robot, q)
+    positions = ""
+    for k, (T, config) in enumerate(zip(world, configs)):
+        w, p, r = Rotation.from_matrix(T[:3, :3]).as_euler("xyz", degrees=True)
+        flip, up, top, *turns = config
+        positions += (f"P[{k + 1}]{{\n   GP1:\n\tUF : 0, UT : 0,\t\tCONFIG : '{flip} {up} {top}, "
+                      f"{', '.join(map(str, turns))}',\n\tX = {T[0, 3]:10.3f}  mm,\tY = {T[1, 3]:10.3f}  mm,\t"
+                      f"Z = {T[2, 3]:10.3f}  mm,\n\tW = {w:10.3f} deg,\tP = {p:10.3f} deg,\tR = {r:10.3f} deg,\n"
+                      f"\tE1 = {CARRIAGE[k]:10.3f}  mm\n}};\n")
+    (folder / "RAIL.LS").write_text(
+        "/PROG  RAIL\n/ATTR\nOWNER\t\t= MNEDITOR;\nDEFAULT_GROUP\t= 1,*,*,*,*;\n/MN\n   1:  UFRAME_NUM=0 ;\n"
+        "   2:  UTOOL_NUM=0 ;\n   3:J P[1] 20% FINE    ;\n   4:L P[2] 200mm/sec CNT50    ;\n"
+        f"   5:L P[3] 200mm/sec FINE    ;\n/POS\n{positions}/END\n")
+    return folder / "RAIL.LS"
+
+
+def _read_fanuc(path):
+    """World poses (N, 4, 4) and E1 (N,) of the positions of a FANUC .LS."""
+    return _read_poses(path.read_text(), r"X =\s*([-\d.]+)\s*mm,\s*Y =\s*([-\d.]+)\s*mm,\s*Z =\s*([-\d.]+)\s*mm,"
+                       r"\s*W =\s*([-\d.]+)\s*deg,\s*P =\s*([-\d.]+)\s*deg,\s*R =\s*([-\d.]+)\s*deg,"
+                       r"\s*E1 =\s*([-\d.]+)",
+                       lambda wpr: Rotation.from_euler("xyz", wpr, degrees=True))
+
+
+def _rapid(folder, world, q, robot):
+    configs = configuration_for("rapid", robot, q)
+    lines = []
+    for k, (T, config) in enumerate(zip(world, configs)):
+        x, y, z, w = Rotation.from_matrix(T[:3, :3]).as_quat()
+        lines.append(f"  CONST robtarget pRail{k + 1}:=[[{T[0, 3]:.3f},{T[1, 3]:.3f},{T[2, 3]:.3f}],"
+                     f"[{w:.9f},{x:.9f},{y:.9f},{z:.9f}],[{','.join(map(str, config))}],"
+                     f"[{CARRIAGE[k]:.2f},9E9,9E9,9E9,9E9,9E9]];")
+    (folder / "Rail.mod").write_text(
+        "MODULE Rail\n" + "\n".join(lines) + "\n  PROC main()\n    MoveJ pRail1,v1000,fine,tool0\\WObj:=wobj0;\n"
+        "    MoveL pRail2,v200,z10,tool0\\WObj:=wobj0;\n    MoveL pRail3,v200,fine,tool0\\WObj:=wobj0;\n"
+        "  ENDPROC\nENDMODULE\n")
+    return folder / "Rail.mod"
+
+
+def _read_rapid(path):
+    """World poses (N, 4, 4) and eax_a (N,) of the robtargets of a RAPID module."""
+    return _read_poses(path.read_text(), r"\[\[([-\d.]+),([-\d.]+),([-\d.]+)\],\[([-\d.]+),([-\d.]+),([-\d.]+),"
+                       r"([-\d.]+)\],\[[-\d,]+\],\[([-\d.]+),", lambda q: Rotation.from_quat([*q[1:], q[0]]))
+
+
+LANGUAGES = {"kuka_kr6_r900": (_krl, _read_krl), "fanuc_lrmate200id": (_fanuc, _read_fanuc),
+             "abb_irb4600": (_rapid, _read_rapid)}
+
+
+@pytest.mark.parametrize("name", sorted(LANGUAGES))
+def test_a_program_on_a_track_lands_within_0_02_mm_of_its_world_targets(tmp_path, name):
+    robot, virtual, correct = cell(name)
+    write, read = LANGUAGES[name]
+    world, q = world_targets(robot, name)
+    path = write(tmp_path, world, q, robot)
+    program = formats.read(path)
+    before = landing(robot, virtual, *read(path))
+    edited, report = compensate_program(program, correct, robot)
+    assert not [w for w in report.warnings if "external axes" in w]  # the track is the arm's, not a warning
+    out = tmp_path / "out"
+    out.mkdir()
+    formats.write(out / path.name, edited)
+    commands, carriage = read(out / path.name)
+    np.testing.assert_array_equal(carriage, CARRIAGE)  # the track positions as written
+    after = landing(robot, virtual, commands, carriage)
+    error_before = np.linalg.norm(before - world[:, :3, 3], axis=1)
+    error_after = np.linalg.norm(after - world[:, :3, 3], axis=1)
+    assert error_before.min() > 0.3  # the virtual arm misses by tenths of a mm uncompensated
+    assert error_after.max() < 0.02, error_after
+
+
+def test_the_arm_part_is_compensated_in_the_carriage_frame(tmp_path):
+    """The poses handed to the correction are the world targets seen from each target's carriage."""
+    robot, _, correct = cell("kuka_kr6_r900")
+    world, q = world_targets(robot, "kuka_kr6_r900")
+    program = formats.read(_krl(tmp_path, world, q, robot))
+    seen = {}
+
+    def recording(T, tools, seeds, names):
+        seen["T"] = T.copy()
+        return correct(T, tools, seeds, names)
+
+    compensate_program(program, recording, robot)
+    expected = fk(robot, q)  # the arm's own pose, whatever the carriage
+    np.testing.assert_allclose(seen["T"][:, :3, 3], expected[:, :3, 3], atol=2e-3)
+
+
+def test_a_program_on_a_track_whose_robot_has_none_is_refused_for_that_reason(tmp_path):
+    robot = on_track("kuka_kr6_r900")
+    world, q = world_targets(robot, "kuka_kr6_r900")
+    program = formats.read(_krl(tmp_path, world, q, robot))
+    fixed = load_robot("kuka_kr6_r900")
+    with pytest.raises(IKError, match=r"^rail: the program moves external axis E1 over 4200 mm and its targets move "
+                                      r"with it, out of the reach of robot kuka_kr6_r900 from a fixed base: a robot "
+                                      r"on a track, and the robot's description describes no track\. Describe the "
+                                      r"track .* cannot reach"):
+        compensate_program(program, cell("kuka_kr6_r900")[2], fixed)
+    no_field = on_track("kuka_kr6_r900", TRACK.replace("krl: E1, ", ""))
+    with pytest.raises(IKError, match="has a track but names no field of krl programs for it"):
+        compensate_program(program, cell("kuka_kr6_r900")[2], no_field)
+    # an axis that moves a few mm with targets out of reach (a servo gun on an arm taught elsewhere): the posture
+    dat = tmp_path / "rail.dat"
+    dat.write_text(dat.read_text().replace("E1 1850.0", "E1 20.0").replace("E1 4200.0", "E1 40.0"))
+    with pytest.raises(IKError, match=r"^rail: .*cannot reach") as refused:
+        compensate_program(formats.read(tmp_path / "rail.src"), cell("kuka_kr6_r900")[2], fixed)
+    assert "track" not in str(refused.value)
+
+
+def test_a_target_without_its_track_position_is_named(tmp_path):
+    robot = on_track("kuka_kr6_r900")
+    world, q = world_targets(robot, "kuka_kr6_r900")
+    path = _krl(tmp_path, world, q, robot)
+    dat = path.with_suffix(".dat")
+    dat.write_text(re.sub(r",E1 [-\d.]+,E2 0.0,E3 0.0,E4 0.0,E5 0.0,E6 0.0", "", dat.read_text(), count=1))
+    with pytest.raises(TrajcompError, match=r"XP1 \(rail\.dat:2\) states no E1: its track position"):
+        compensate_program(formats.read(path), cell("kuka_kr6_r900")[2], robot)
+
+
+@pytest.mark.parametrize("track, message", [
+    (TRACK.replace("[1.0, 0.02, 0.0]", "[0, 0, 0]"), "track.direction: the zero vector"),
+    (TRACK.replace("position_min: -100", "position_min: 6000"), "position_min 6000 mm is not below"),
+    (TRACK.replace("rapid: eax_a", "rapid: A1"), "track.fields.rapid: expected E1..E6 or eax_a..eax_f"),
+    (TRACK.replace("velocity: 2000", "velocity: -1"), "track.limits.velocity: expected a positive number"),
+    ("\ntrack: [1, 0, 0]\n", "field track: expected a mapping"),
+])
+def test_a_track_description_is_checked_field_by_field(track, message):
+    with pytest.raises(RobotError, match=re.escape(message)):
+        on_track("kuka_kr6_r900", track)
+
+
+def test_compensate_on_a_track_through_the_cli_leaves_speeds_as_written_and_says_why(tmp_path, monkeypatch, capsys):
+    """The re-timing times the arm in its carriage and not the track's travel: a program that moves the track
+    keeps every speed as written (never faster), and the run says so; ``retime`` alone refuses it."""
+    from trajcomp.cli import main
+
+    monkeypatch.chdir(tmp_path)
+    text = resources.files("trajcomp.arm.robots").joinpath("kuka_kr6_r900.yaml").read_text(encoding="utf-8")
+    (tmp_path / "kr6_rail.yaml").write_text(text.replace("name: kuka_kr6_r900", "name: kr6_rail") + TRACK)
+    robot = load_robot("kr6_rail.yaml")
+    angles = np.degrees(matrix_to_abc(orientation(robot)))
+    assert main(["plan", "--robot", "kr6_rail.yaml", "--cube", "400,-50,650", "--side", "200", "--step", "50",
+                 "--orientation=" + ",".join(f"{v:.6f}" for v in angles), "-o", "plan.csv"]) == 0
+    assert main(["simulate", "plan.csv", "--robot", "kr6_rail.yaml", "--seed", "1", "-o", "meas.csv"]) == 0
+    assert main(["calibrate", "meas.csv", "--robot", "kr6_rail.yaml", "--grid-step", "50", "--folds", "3",
+                 "-o", "model.yaml"]) == 0
+    world, q = world_targets(robot, "kuka_kr6_r900")
+    src = _krl(tmp_path, world, q, robot)
+    before = src.read_text()
+    capsys.readouterr()
+    code = main(["compensate", "rail.src", "--model", "model.yaml", "-o", "out.src"])
+    err = capsys.readouterr().err
+    assert code in (0, 1) and "not re-timed: the program moves the robot's track (E1)" in err
+    assert "$VEL.CP=0.2" in (tmp_path / "out.src").read_text() and src.read_text() == before
+    assert main(["retime", "rail.src", "--robot", "kr6_rail.yaml", "-o", "timed.src"]) == 2
+    assert "moves the robot's track (E1)" in capsys.readouterr().err and not (tmp_path / "timed.src").exists()
+
+
+# ------------------------------------------------------------------ calibration with a track
+
+
+def test_a_track_calibration_recovers_its_direction_and_scale_and_compensation_then_lands(tmp_path):
+    """The real track runs 0.1 deg off its nominal direction and 0.05 % long. Measured at five carriage positions
+    (eight arm poses each, 0.01 mm tracker noise), the fit recovers both; compensated with the identified track, a
+    program lands within 0.02 mm at 4.2 m of travel, where the nominal track misses by millimetres."""
+    from trajcomp.calibration.track import identify_track
+
+    robot, virtual, correct = cell("kuka_kr6_r900")
+    turn = Rotation.from_euler("z", 0.1, degrees=True).as_matrix()
+    true = robot.track.replace(actual_direction=turn @ robot.track.direction, actual_scale=1.0005)
+    corner, side, _ = CELLS["kuka_kr6_r900"]
+    rng = np.random.default_rng(11)
+    local = np.tile(np.eye(4), (8, 1, 1))
+    local[:, :3, :3] = orientation(robot)
+    local[:, :3, 3] = np.asarray(corner) + rng.uniform(0.1 * side, 0.9 * side, (8, 3))
+    q = ik(robot, local, seed=np.tile(robot.home, (8, 1))).raise_on_failure("poses").q
+    positions = np.repeat([0.0, 1400.0, 2800.0, 4200.0, 5600.0], len(q))
+    joints = np.tile(q, (5, 1))
+    measured = (true.placements(robot.T_world_base, positions) @ virtual.reached_poses(joints))[:, :3, 3]
+    measured += rng.normal(0.0, 0.01, measured.shape)
+    plan = plan_grid(robot, corner, side, 50.0, orientation=matrix_to_abc(orientation(robot)))
+    grid_q = plan.joints[plan.reachable]
+    meas = Measurements(joints=grid_q, position=plan.position[plan.reachable],
+                        measured=virtual.measure(grid_q, np.random.default_rng(5)), lines=np.arange(len(grid_q)) + 2,
+                        path="grid.csv")
+    model = calibrate(robot, meas, method="composite", grid_step=50.0, folds=0)
+    predicted, _ = model.predict("composite", joints, fk(robot, joints)[:, :3, 3])
+    fit = identify_track(robot.track, robot.T_world_base, positions, predicted, measured)
+    assert abs(fit.direction_change_deg - 0.1) < 0.002
+    assert np.degrees(np.arccos(fit.track.actual_direction @ true.actual_direction)) < 0.002
+    assert abs(fit.track.actual_scale - 1.0005) < 5e-6 and abs(fit.scale_change - 0.0005) < 5e-6
+    assert fit.track.direction is robot.track.direction  # the controller's track, as it has it
+    assert fit.residual_rms < 0.03 and np.linalg.norm(fit.offset) < 0.02
+    np.testing.assert_array_equal(fit.positions, [0, 1400, 2800, 4200, 5600])
+    assert fit.track.beyond_measured([-50.0, 3000.0, 5700.0]).tolist() == [True, False, True]
+    # the program: world targets where the real track puts the arm
+    world, q_targets = world_targets(robot, "kuka_kr6_r900")
+    world = true.placements(robot.T_world_base, np.array(CARRIAGE)) @ np.linalg.inv(
+        robot.track.placements(robot.T_world_base, np.array(CARRIAGE))) @ world
+    path = _krl(tmp_path, world, q_targets, robot)
+    errors = {}
+    for label, used in (("nominal", robot), ("identified", robot.replace(track=fit.track))):
+        edited, _ = compensate_program(formats.read(path), correct, used)
+        out = tmp_path / label
+        out.mkdir()
+        formats.write(out / path.name, edited)
+        commands, carriage = _read_krl(out / path.name)
+        # the controller places the arm with its own (nominal) track; the arm stands on the real one
+        arm_q = ik(robot, np.linalg.inv(robot.track.placements(robot.T_world_base, carriage)) @ commands,
+                   seed=np.tile(robot.home, (len(commands), 1))).raise_on_failure("commands").q
+        landed = (true.placements(robot.T_world_base, carriage) @ virtual.reached_poses(arm_q))[:, :3, 3]
+        errors[label] = np.linalg.norm(landed - world[:, :3, 3], axis=1)
+    assert errors["nominal"].max() > 2.0  # 0.1 deg and 0.05 % of 4.2 m
+    assert errors["identified"].max() < 0.02, errors
+
+
+def test_a_real_backup_on_a_track_is_recognised_and_compensated_once_its_track_is_described():
+    """tests/data/programs/real/rapid/1_T_ROB2.mod (a COMPAS RRC backup: eax_a moves 682-3651 mm with the targets,
+    SOURCES.txt). On the IRB 4600 as built in, the refusal names the track; described along x, it is compensated."""
+    from tests.programs.test_programs_real import DATA, _unchanged
+
+    program = formats.read(DATA / "programs" / "real" / "rapid" / "1_T_ROB2.mod")
+    stated = {str(n): np.eye(4) for n in range(1, 33)}  # the controller's tool and frame tables: not in the files
+    with pytest.raises(IKError, match=r"^1_T_ROB2: the program moves external axis E1 over 2969 mm and its targets "
+                                      r"move with it, .* describes no track"):
+        compensate_program(program, _unchanged, load_robot("abb_irb4600"), tools=stated, frames=stated)
+    track = TRACK.replace("[1.0, 0.02, 0.0]", "[1, 0, 0]").replace("position_max: 5800", "position_max: 19000")
+    edited, report = compensate_program(program, _unchanged, on_track("abb_irb4600", track), tools=stated,
+                                        frames=stated)
+    assert len(report.labels) == 10 and not report.warnings
+
+
+def test_calibrate_with_a_track_column_identifies_the_track_and_compensate_uses_it(tmp_path, monkeypatch, capsys):
+    """A measurement file with a ``track`` column: the rows at track position 0 (the grid) calibrate the arm, all
+    rows identify the track; the model file keeps the identified track and ``compensate`` places the carriage
+    with it, warning of targets beyond the measured travel."""
+    from trajcomp.cli import main
+    from trajcomp.model.model_file import load_model
+
+    monkeypatch.chdir(tmp_path)
+    text = resources.files("trajcomp.arm.robots").joinpath("kuka_kr6_r900.yaml").read_text(encoding="utf-8")
+    (tmp_path / "kr6_rail.yaml").write_text(text.replace("name: kuka_kr6_r900", "name: kr6_rail") + TRACK)
+    robot = load_robot("kr6_rail.yaml")
+    turn = Rotation.from_euler("z", 0.1, degrees=True).as_matrix()
+    true = robot.track.replace(actual_direction=turn @ robot.track.direction, actual_scale=1.0005)
+    virtual = VirtualRobot.create(robot, "paper", seed=4)
+    rng = np.random.default_rng(3)
+    corner, side, _ = CELLS["kuka_kr6_r900"]
+    plan = plan_grid(robot, corner, side, 50.0, orientation=matrix_to_abc(orientation(robot)))
+    grid = plan.joints[plan.reachable]
+    poses = grid[rng.choice(len(grid), 8, replace=False)]
+    joints = np.concatenate([grid, np.tile(poses, (4, 1))])
+    positions = np.concatenate([np.zeros(len(grid)), np.repeat([1500.0, 3000.0, 4500.0, 5000.0], len(poses))])
+    measured = (true.placements(robot.T_world_base, positions) @ virtual.reached_poses(joints))[:, :3, 3]
+    measured += rng.normal(0.0, 0.01, measured.shape)
+    rows = [",".join(f"{v:.6f}" for v in (*np.degrees(q), *m, e)) for q, m, e in zip(joints, measured, positions)]
+    (tmp_path / "meas.csv").write_text("j1,j2,j3,j4,j5,j6,mx,my,mz,track\n" + "\n".join(rows) + "\n")
+    assert main(["calibrate", "meas.csv", "--robot", "kr6_rail.yaml", "--grid-step", "50", "--folds", "0",
+                 "-o", "model.yaml"]) == 0
+    assert "track: direction" in capsys.readouterr().err
+    identified = load_model("model.yaml").nominal.track
+    assert np.degrees(np.arccos(identified.actual_direction @ true.actual_direction)) < 0.002
+    assert abs(identified.actual_scale - 1.0005) < 1e-5 and identified.direction @ robot.track.direction > 1 - 1e-12
+    np.testing.assert_array_equal(identified.measured_positions, [0, 1500, 3000, 4500, 5000])
+    # a program at 0, 1850 and 4200 mm, its world targets where the real track puts the arm
+    world, q = world_targets(robot, "kuka_kr6_r900")
+    world = true.placements(robot.T_world_base, np.array(CARRIAGE)) @ np.linalg.inv(
+        robot.track.placements(robot.T_world_base, np.array(CARRIAGE))) @ world
+    _krl(tmp_path, world, q, robot)
+    assert main(["compensate", "rail.src", "--model", "model.yaml", "-o", "out.src", "--retime", "none"]) in (0, 1)
+    commands, carriage = _read_krl(tmp_path / "out.src")
+    arm_q = ik(robot, np.linalg.inv(robot.track.placements(robot.T_world_base, carriage)) @ commands,
+               seed=np.tile(robot.home, (len(commands), 1))).raise_on_failure("commands").q
+    landed = (true.placements(robot.T_world_base, carriage) @ virtual.reached_poses(arm_q))[:, :3, 3]
+    assert np.linalg.norm(landed - world[:, :3, 3], axis=1).max() < 0.02
+    # a target beyond the measured travel is named
+    dat = tmp_path / "rail.dat"
+    dat.write_text(dat.read_text().replace("E1 4200.0", "E1 5200.0"))
+    capsys.readouterr()
+    main(["compensate", "rail.src", "--model", "model.yaml", "-o", "out2.src", "--retime", "none"])
+    assert ("1 targets stand at track positions beyond the travel the track's calibration measured (0..5000 mm)"
+            in capsys.readouterr().err)
+
+
+CORPUS = Path(__file__).parents[1] / "data" / "programs"  # hand-written track programs: ../data/programs/TRACKS.txt
+
+
+@pytest.mark.parametrize("name, path", [("kuka_kr6_r900", "krl/KL_RAIL.src"),
+                                        ("fanuc_lrmate200id", "fanuc/RAILSEAM.LS"),
+                                        ("abb_irb4600", "rapid/IRBT_SEAM.mod")])
+def test_the_corpus_track_programs_land_within_0_02_mm(tmp_path, name, path):
+    robot, virtual, correct = cell(name)
+    read = LANGUAGES[name][1]
+    program = formats.read(CORPUS / path)
+    world, carriage = read(CORPUS / path)
+    assert np.ptp(carriage) > 4000  # the track travels metres with the targets
+    edited, report = compensate_program(program, correct, robot, tools={"1": np.eye(4)})
+    assert len(report.labels) == 8 and not report.not_compensated
+    out = tmp_path / Path(path).name
+    formats.write(out, edited)
+    commands, written = read(out)
+    np.testing.assert_array_equal(written, carriage)
+    landed = landing(robot, virtual, commands, written)
+    assert np.linalg.norm(landed - world[:, :3, 3], axis=1).max() < 0.02
