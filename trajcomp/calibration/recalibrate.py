@@ -1,0 +1,559 @@
+"""Light re-calibration: carry a model into a later measuring campaign from a few rows measured there.
+
+Between campaigns a cell changes in a few known ways: the tracker is placed
+anew, the probe is remounted, the hall is warmer or colder, a joint's zero
+is re-referenced. Those are few parameters, which some thirty measurements
+identify; what the full calibration identified from thousands (the DH
+table's other deltas, the joint-angle error curves, the residual field on
+top) stays as it was. `update` re-identifies, in one robust Gauss-Newton
+fit of the model's composite prediction to the new rows:
+
+``registration``  the base pose in the tracker frame, ``base_x`` ...
+                  ``base_rz`` (tracker-frame data only);
+``tool``          the TCP position in the flange frame, ``tool_x..z``, and
+                  for 6-DoF data the measured frame's orientation
+                  ``target_rx..rz`` (a remounted probe);
+``zeros``         the joint zero offsets ``theta1`` ... ``theta6`` but those
+                  another updated frame absorbs exactly: ``theta1`` turns the
+                  arm about base z as the registration does, ``theta6`` turns
+                  the TCP about the flange axis as a remounted tool does;
+``scale``         a thermal scale of the arm's link lengths: every ``a`` and
+                  ``d`` of links 1-5 times ``1 + scale`` (link 6 ends in the
+                  tool, whose length the ``tool`` group takes), in ppm.
+
+An update the rows cannot support is refused (`UpdateRefused`): fewer
+residuals than twice the parameters, or a parameter the rows' Jacobian does
+not identify on its own (`trajcomp.calibration.identify.analyse_identifiability`).
+
+The result (`Update`) says what changed, by how much and with what standard
+deviation, the registered residual before (the registration alone) and after
+the update, both on the rows themselves and left out one row at a time, and
+the model carrying the update, whose ``report["update"]`` records it
+(`Update.record`): the updated parameters' names, values and covariance,
+and the position uncertainty the update adds to a target (`added_sigma`).
+`verdict` says from the same rows whether the model is still valid, needs
+this update, or needs a full calibration.
+"""
+
+import dataclasses
+
+import numpy as np
+
+from trajcomp.arm.kinematics import fk
+from trajcomp.arm.parameters import BASE_NAMES, TARGET_NAMES, TOOL_NAMES, is_angle, is_robot_parameter, pose_jacobian
+from trajcomp.arm.transforms import invert, matrix_to_rotvec, mean_rotation, rotvec_to_matrix
+from trajcomp.calibration.identify import analyse_identifiability, best_fit_transform, robust_weights
+from trajcomp.calibration.options import ORIENTATION_WEIGHT
+from trajcomp.errors import CalibrationError
+
+GROUPS = ("registration", "tool", "zeros", "scale")
+SCALE = "scale"  # the thermal scale's name: a fraction of each length (ppm in what is shown and stored)
+SCALED_LINKS = 5  # a and d of links 1..5 scale; link 6 ends in the tool
+PPM = 1e-6
+ITERATIONS = 30
+STEP_TOLERANCE = 1e-9  # scaled units (mm, or rad at 1 m): converged when no parameter moves more
+LEVER = 1000.0  # mm: an angle (or the scale) is scaled as its effect at this lever arm, as in `identify`
+RTOL = 1e-3  # identifiability threshold of `analyse_identifiability`, as `identify`'s
+STILL_VALID = 1.5  # the registered residual may exceed the model's own held-out mean error by this factor
+LIGHT_ENOUGH = 1.5  # after the update, the residual may exceed it by this factor for a light update to do
+
+
+class UpdateRefused(CalibrationError):
+    """The rows cannot support the update asked for (too few, or a parameter they do not see)."""
+
+
+def parameter_names(groups, *, tracker, oriented):
+    """The parameters of the update groups ``groups`` (subset of `GROUPS`), in their order.
+
+    ``tracker``: the rows are in the tracker frame (registration possible);
+    ``oriented``: they measure orientations (the target's orientation is
+    updated with the tool).
+    """
+    unknown = sorted(set(groups) - set(GROUPS))
+    if unknown:
+        raise CalibrationError(f"unknown update group(s) {', '.join(unknown)} (of {', '.join(GROUPS)})")
+    names = []
+    if "registration" in groups and tracker:
+        names += BASE_NAMES
+    if "tool" in groups:
+        names += TOOL_NAMES + (TARGET_NAMES if oriented else ())
+    if "zeros" in groups:
+        first = 2 if "registration" in groups and tracker else 1
+        last = 5 if "tool" in groups else 6
+        names += [f"theta{j}" for j in range(first, last + 1)]
+    if "scale" in groups:
+        names.append(SCALE)
+    return names
+
+
+def _units(names):
+    """Display unit of each parameter: deg, ppm or mm."""
+    return ["deg" if is_angle(n) else "ppm" if n == SCALE else "mm" for n in names]
+
+
+def _to_display(names):
+    """Factor (P,) from internal units (mm, rad, fraction) to display units (mm, deg, ppm)."""
+    return np.array([np.degrees(1.0) if is_angle(n) else 1.0 / PPM if n == SCALE else 1.0 for n in names])
+
+
+def _solver_scale(names):
+    """Factor (P,) from solver units (mm of effect at `LEVER`) to internal units."""
+    return np.array([1.0 / LEVER if is_angle(n) or n == SCALE else 1.0 for n in names])
+
+
+def scaled_robot(robot, scale):
+    """``robot`` (standard DH) with the ``a`` and ``d`` of links 1..`SCALED_LINKS` times ``1 + scale``."""
+    std = robot.as_standard()
+    factor = np.where(np.arange(6) < SCALED_LINKS, 1.0 + scale, 1.0)
+    return std.replace(a=std.a * factor, d=std.d * factor)
+
+
+def updated_model(model, names, x, T_tracker_base, R_tcp_target):
+    """``model`` with the update parameters ``names`` at x (P,) (internal units) applied.
+
+    The tool and zero offsets add to the model's DH deltas; the scale
+    multiplies the identified lengths; the registration and the target
+    orientation replace the model's (``T_tracker_base``, ``R_tcp_target``:
+    the update's starting frames, which x moves).
+    """
+    values = dict(zip(names, x))
+    dh_names, delta, sigma = list(model.dh_names), model.dh_delta.astype(float).copy(), model.dh_sigma.copy()
+    robot_names = [n for n in names if n != SCALE and is_robot_parameter(n)]
+    for n in robot_names:
+        if n not in dh_names:
+            dh_names.append(n)
+            delta, sigma = np.append(delta, 0.0), np.append(sigma, 0.0)
+        delta[dh_names.index(n)] += values[n]
+    scale = values.get(SCALE, 0.0)
+    if scale:
+        nominal = model.nominal.as_standard()
+        identified = model.identified.as_standard()
+        for kind in ("a", "d"):
+            for j in range(SCALED_LINKS):
+                length = getattr(identified, kind)[j]
+                if f"{kind}{j + 1}" not in dh_names and length != 0.0:
+                    dh_names.append(f"{kind}{j + 1}")
+                    delta, sigma = np.append(delta, getattr(identified, kind)[j] - getattr(nominal, kind)[j]), \
+                        np.append(sigma, 0.0)
+                if length != 0.0:
+                    delta[dh_names.index(f"{kind}{j + 1}")] += scale * length
+    step = np.eye(4)
+    if any(n in values for n in BASE_NAMES):
+        step[:3, :3] = rotvec_to_matrix([values.get(n, 0.0) for n in BASE_NAMES[3:]])
+        step[:3, 3] = [values.get(n, 0.0) for n in BASE_NAMES[:3]]
+    R_target = R_tcp_target
+    if any(n in values for n in TARGET_NAMES):
+        R_target = R_tcp_target @ rotvec_to_matrix([values.get(n, 0.0) for n in TARGET_NAMES])
+    return dataclasses.replace(model, dh_names=dh_names, dh_delta=delta, dh_sigma=sigma,
+                               T_tracker_base=T_tracker_base @ step, R_tcp_target=R_target)
+
+
+class _Rows:
+    """The update's least-squares problem: a model's composite prediction against the new rows."""
+
+    def __init__(self, model, joints, position, measured, rotation, weight):
+        self.model, self.joints, self.position = model, joints, position
+        self.measured, self.rotation, self.weight = measured, rotation, weight
+        self.field = _field(model, position)
+
+    def residual(self, candidate, names, jacobian=True):
+        """Residual rows (N, 3 or 6), mm (orientation: rad times the weight), and their Jacobian (N, rows, P)
+        in internal units, of the updated model ``candidate``."""
+        arm = candidate.arm("composite", outside="clamp")
+        q = arm.reached_joints(self.joints)
+        geometric = [n for n in names if n != SCALE]
+        scale_names = [f"{k}{j + 1}" for j in range(SCALED_LINKS) for k in ("a", "d")]
+        T_tcp, jac = pose_jacobian(arm.robot, q, geometric + scale_names, candidate.R_tcp_target)
+        T_base_tracker = invert(candidate.T_tracker_base)
+        measured = self.measured @ T_base_tracker[:3, :3].T + T_base_tracker[:3, 3]
+        rows = [T_tcp[:, :3, 3] + self.field - measured]
+        if self.rotation is not None:
+            seen = T_base_tracker[:3, :3] @ self.rotation
+            rows.append(self.weight * matrix_to_rotvec(T_tcp[:, :3, :3] @ candidate.R_tcp_target
+                                                       @ np.swapaxes(seen, 1, 2)))
+        residual = np.concatenate(rows, axis=1)
+        if not jacobian:
+            return residual, None
+        std = arm.robot.as_standard()
+        lengths = np.array([getattr(std, k)[j] for j in range(SCALED_LINKS) for k in ("a", "d")])
+        columns = [jac[:, :, [geometric.index(n)]] if n != SCALE else
+                   (jac[:, :, len(geometric):] @ lengths)[:, :, None] for n in names]
+        jac = np.concatenate(columns, axis=2)[:, :residual.shape[1]]
+        jac[:, 3:] *= self.weight
+        return residual, jac
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class Fit:
+    """One least-squares fit of update parameters to the rows.
+
+    Attributes
+    ----------
+    names : list of str
+    delta : ndarray, shape (P,)
+        Values, internal units (mm, rad, fraction), from the model's (the registration: from a best fit).
+    covariance : ndarray, shape (P, P)
+        Their covariance, internal units.
+    model : CompensationModel
+        The model with them applied.
+    residual : ndarray, shape (N, 3)
+        Measured minus predicted position, mm, base frame.
+    left_out : ndarray, shape (N,)
+        |residual| of each row when it is left out of the fit (leverage), mm.
+    condition : float
+        Condition number of the scaled Jacobian.
+    """
+
+    names: list
+    delta: np.ndarray
+    covariance: np.ndarray
+    model: object
+    residual: np.ndarray
+    left_out: np.ndarray
+    condition: float
+
+    @property
+    def sigma(self):
+        """Standard deviations (P,), internal units."""
+        return np.sqrt(np.diag(self.covariance))
+
+
+def fit(model, joints, position, measured, rotation=None, names=BASE_NAMES, *, tracker=True, loss="huber",
+        orientation_weight=ORIENTATION_WEIGHT):
+    """Fit the update parameters ``names`` of ``model`` to rows measured in a new campaign.
+
+    Parameters
+    ----------
+    model : CompensationModel
+        With a composite mode.
+    joints : ndarray, shape (N, 6)
+        Commanded joints, rad.
+    position : ndarray, shape (N, 3)
+        Commanded TCP positions, mm, base frame.
+    measured : ndarray, shape (N, 3)
+        Measured positions, mm, tracker frame (``tracker``) or base frame.
+    rotation : ndarray, shape (N, 3, 3), optional
+        Measured orientations, same frame.
+    names : sequence of str
+        `parameter_names`.
+    tracker : bool
+        The rows are in a new tracker placement: the registration starts
+        from a rigid best fit of the model's prediction, else from the
+        model's (identity for base-frame models).
+    loss : str
+        Robust loss (`trajcomp.calibration.identify.robust_weights`).
+    orientation_weight : float
+        mm per rad of orientation residual.
+
+    Raises
+    ------
+    UpdateRefused
+        Too few residuals for the parameters, or parameters the rows do not identify.
+    """
+    names = list(names)
+    model.check_mode("composite")
+    T_start = model.T_tracker_base
+    if tracker:
+        predicted = model.predict("composite", joints, position, outside="clamp")[0]
+        T_start = best_fit_transform(predicted, measured)
+    R_start = model.R_tcp_target
+    if rotation is not None and any(n in TARGET_NAMES for n in names):
+        reached = model.arm("composite", outside="clamp").fk(joints)[:, :3, :3]
+        R_start = mean_rotation(np.swapaxes(reached, 1, 2) @ (invert(T_start)[:3, :3] @ rotation))
+    rows = _Rows(model, joints, position, measured, rotation, orientation_weight)
+    if not names:  # base-frame rows against the model as it is
+        residual = rows.residual(model, names, jacobian=False)[0]
+        return Fit([], np.zeros(0), np.zeros((0, 0)), model, -residual[:, :3], np.linalg.norm(residual[:, :3], axis=1),
+                   1.0)
+    per_row = 3 if rotation is None else 6
+    if per_row * len(joints) < 2 * len(names):
+        raise UpdateRefused(f"{len(joints)} rows give {per_row * len(joints)} residuals: too few to update "
+                            f"{len(names)} parameters ({', '.join(names)}); at least "
+                            f"{int(np.ceil(2 * len(names) / per_row))} rows are needed")
+    solver = _solver_scale(names)
+    x = np.zeros(len(names))
+    current = updated_model(model, names, x, T_start, R_start)
+    residual, jac = rows.residual(current, names)
+    ident = analyse_identifiability(jac.reshape(-1, len(names)) * solver, names, RTOL)
+    if ident.fixed:
+        raise UpdateRefused(f"these {len(joints)} rows cannot identify the update's {', '.join(names)} (condition "
+                            f"{ident.condition:.3g}): they do not tell apart "
+                            + "; ".join(_unseen(jac.reshape(-1, len(names)) * solver, names))
+                            + ". Measure rows that turn the tool and move the joints more (trajcomp plan --update), "
+                            "or leave a group out (--only)")
+    for _ in range(ITERATIONS):
+        weights = robust_weights(np.linalg.norm(residual, axis=1), loss)
+        a = jac.reshape(-1, len(names)) * solver
+        w = np.repeat(weights, residual.shape[1])
+        step = -np.linalg.solve(a.T @ (w[:, None] * a), a.T @ (w * residual.ravel()))
+        x = x + step * solver
+        current = updated_model(model, names, x, T_start, R_start)
+        residual, jac = rows.residual(current, names)
+        if np.max(np.abs(step)) < STEP_TOLERANCE:
+            break
+    weights = robust_weights(np.linalg.norm(residual, axis=1), loss)
+    a = jac.reshape(-1, len(names)) * solver
+    w = np.repeat(weights, residual.shape[1])
+    inverse = np.linalg.inv(a.T @ (w[:, None] * a))
+    variance = float(np.sum(w * residual.ravel() ** 2) / max(residual.size - len(names), 1))
+    covariance = variance * inverse * np.outer(solver, solver)
+    # left out one row at a time: r_i / (1 - H_ii), H_ii the row's (rows x rows) block of the weighted hat matrix
+    blocks = np.einsum("nrp,pq,nsq->nrs", jac * solver, inverse, jac * solver) * weights[:, None, None]
+    left_out = np.linalg.solve(np.eye(residual.shape[1]) - blocks, residual[..., None])[:, :3, 0]
+    return Fit(names, x, covariance, current, -residual[:, :3], np.linalg.norm(left_out, axis=1), ident.condition)
+
+
+def _unseen(jac, names):
+    """The combinations of parameters a scaled Jacobian (M, P) does not see (`RTOL`), each in words."""
+    _, values, vectors = np.linalg.svd(jac, full_matrices=False)
+    combinations = []
+    for vector in vectors[values < RTOL * values[0]]:
+        big = np.flatnonzero(np.abs(vector) > 0.2 * np.abs(vector).max())
+        combinations.append(" with ".join(names[k] for k in big[np.argsort(-np.abs(vector[big]))]))
+    return combinations
+
+
+def added_sigma(update_fit, joints):
+    """Position standard deviation (N,) mm the update's arm parameters add at commanded joints (N, 6) rad.
+
+    Only the parameters of the arm (tool, zeros, scale) move a program's
+    targets; the registration and the target orientation are frames of the
+    measurement. Computed with their covariance (`Fit.covariance`) and the
+    derivative of the TCP position at those joints.
+    """
+    arm = [k for k, n in enumerate(update_fit.names) if not n.startswith(("base_", "target_"))]
+    if not arm:
+        return np.zeros(len(joints))
+    names = [update_fit.names[k] for k in arm]
+    rows = _Rows(update_fit.model, joints, fk(update_fit.model.nominal, joints)[:, :3, 3], np.zeros((len(joints), 3)),
+                 None, 1.0)
+    jac = rows.residual(update_fit.model, names)[1][:, :3]
+    covariance = update_fit.covariance[np.ix_(arm, arm)]
+    return np.sqrt(np.einsum("nip,pq,niq->n", jac, covariance, jac) / 3.0)
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class Update:
+    """A light re-calibration (`update`): the registration alone and the update, on the same rows.
+
+    Attributes
+    ----------
+    registered : Fit
+        The registration alone (the model as it was).
+    updated : Fit
+        The update.
+    expected_mm : float or None
+        The model's own mean |error| (`expected_error`), what the rows are judged against.
+    joints : ndarray, shape (N, 6)
+        The rows' commanded joints, rad.
+    """
+
+    registered: Fit
+    updated: Fit
+    expected_mm: float
+    joints: np.ndarray
+
+    @property
+    def gain_mm(self):
+        """How much the update lowers the rows' mean |residual|, each row left out of the fits, mm."""
+        return float(self.registered.left_out.mean() - self.updated.left_out.mean())
+
+    @property
+    def cost_mm(self):
+        """The mean position uncertainty the update adds at the rows (`added_sigma`, per axis, times sqrt 3), mm."""
+        return float(np.sqrt(3.0) * added_sigma(self.updated, self.joints).mean())
+
+    @property
+    def supported(self):
+        """True when the rows show the drift: the update lowers their residual, each row left out of the fits,
+        by more than the position uncertainty it adds (`gain_mm` > `cost_mm`).
+
+        Otherwise what the update would fit in the rows is noise, or not
+        drift of its parameters (rows outside the calibrated joint range,
+        errors of another kind), and the model keeps the registration alone:
+        an update never trades the model's errors for its own, and is never
+        worse than ``validate --register`` on the rows it has.
+        """
+        return self.gain_mm > self.cost_mm
+
+    @property
+    def model(self):
+        """The updated model (the registered one unless `supported`), its ``report["update"]`` = `record`."""
+        report = dict(self.registered.model.report)
+        report["update"] = self.record()
+        return dataclasses.replace((self.updated if self.supported else self.registered).model, report=report)
+
+    @property
+    def outside(self):
+        """How many rows lie outside the joint range the model's joint errors were calibrated on."""
+        return int(np.sum(self.registered.model.arm("composite").outside_rows(self.joints)))
+
+    def changes(self):
+        """``[(name, value, sigma, unit)]`` of the update, display units (mm, deg, ppm)."""
+        fit_ = self.updated
+        shown = _to_display(fit_.names)
+        return list(zip(fit_.names, fit_.delta * shown, fit_.sigma * shown, _units(fit_.names)))
+
+    def verdict(self):
+        """``(word, why)``: ``valid``, ``recalibrate`` (this light update) or ``recalibrate fully``.
+
+        From the rows left out one at a time: the registration alone within
+        `STILL_VALID` times the model's expected error: still valid; the
+        update within `LIGHT_ENOUGH` times it: a light re-calibration does;
+        else the drift is more than these parameters hold.
+        """
+        before, after = self.registered.left_out.mean(), self.updated.left_out.mean()
+        expected = self.expected_mm
+        if expected is None:
+            expected = self.updated.left_out.mean()
+        figures = (f"registered residual {before:.4f} mm, after the update {after:.4f} mm (each row left out of the "
+                   f"fit), model's own error {expected:.4f} mm")
+        if self.outside:
+            figures += (f"; {self.outside} of the {len(self.joints)} rows lie outside the joint range the model was "
+                        "calibrated on")
+        if before <= STILL_VALID * expected:
+            return "valid", f"model still valid: {figures}"
+        if self.supported and after <= LIGHT_ENOUGH * expected:
+            return "recalibrate", f"re-calibrate (trajcomp recalibrate: the drift is of the updated parameters): {figures}"
+        return "recalibrate fully", (f"re-calibrate fully (trajcomp calibrate: the update leaves more than "
+                                     f"{LIGHT_ENOUGH:g}x the model's error): {figures}")
+
+    def record(self):
+        """The plain-data record stored as ``report["update"]`` of the updated model.
+
+        Keys: ``rows``; ``names``, ``units`` (mm, deg or ppm per name),
+        ``values`` and ``sigma`` (display units) of every updated parameter;
+        ``covariance`` (P x P, the same units: entry i, j in unit i times
+        unit j); ``arm`` (the names among them that move a program's targets:
+        tool, zeros, scale); ``added_sigma_mm`` (the position standard
+        deviation per axis those add at the rows: ``mean`` and ``max``);
+        ``registered_mm`` and ``updated_mm`` (the mean |residual| of the rows,
+        ``fit`` and ``left_out`` one at a time); ``applied`` (False: the
+        rows did not show the drift, the model keeps the registration
+        alone, `supported`) and the ``gain_mm`` it was judged by;
+        ``outside_rows``; ``verdict`` and ``verdict_reason``.
+        """
+        fit_ = self.updated
+        shown = _to_display(fit_.names)
+        added = added_sigma(fit_, self.joints)
+        word, why = self.verdict()
+        return {
+            "rows": len(self.joints),
+            "names": list(fit_.names),
+            "units": _units(fit_.names),
+            "values": (fit_.delta * shown).tolist(),
+            "sigma": (fit_.sigma * shown).tolist(),
+            "covariance": (fit_.covariance * np.outer(shown, shown)).tolist(),
+            "arm": [n for n in fit_.names if not n.startswith(("base_", "target_"))],
+            "added_sigma_mm": {"mean": float(added.mean()), "max": float(added.max())},
+            "condition": fit_.condition,
+            "registered_mm": {"fit": float(np.linalg.norm(self.registered.residual, axis=1).mean()),
+                              "left_out": float(self.registered.left_out.mean())},
+            "updated_mm": {"fit": float(np.linalg.norm(fit_.residual, axis=1).mean()),
+                           "left_out": float(fit_.left_out.mean())},
+            "applied": self.supported,
+            "gain_mm": self.gain_mm,
+            "outside_rows": self.outside,
+            "verdict": word,
+            "verdict_reason": why,
+        }
+
+
+def expected_error(model):
+    """The model's mean |error| in mode composite: held out (its cross-validation), else of its fit, mm; or None."""
+    for section in ("cross_validation", "fit"):
+        stats = model.report.get(section, {}).get("composite")
+        if isinstance(stats, dict):
+            return float(stats["mean"])
+    return None
+
+
+def update(model, joints, position, measured, rotation=None, groups=GROUPS, *, tracker=True, loss="huber",
+           orientation_weight=ORIENTATION_WEIGHT):
+    """Re-identify the parameters of ``groups`` that drift between campaigns from rows of a new one.
+
+    Parameters as `fit`; ``groups`` a subset of `GROUPS`.
+
+    Returns
+    -------
+    Update
+    """
+    common = dict(tracker=tracker, loss=loss, orientation_weight=orientation_weight)
+    names = parameter_names(groups, tracker=tracker, oriented=rotation is not None)
+    updated = fit(model, joints, position, measured, rotation, names, **common)
+    registered = fit(model, joints, position, measured, rotation, BASE_NAMES if tracker else (), **common)
+    return Update(registered, updated, expected_error(model), joints)
+
+
+def choose_rows(model, joints, count=30, groups=GROUPS, *, tracker=True, oriented=True,
+                orientation_weight=ORIENTATION_WEIGHT):
+    """The ``count`` candidate configurations that best observe the update's parameters (D-optimal, greedy).
+
+    Starting from the `parameter_names` count configurations chosen by a
+    pivoted QR of the scaled Jacobian of the candidates, each further one is
+    the candidate that raises ``log det(J^T J)`` of the chosen ones most
+    (`Fit`'s problem, linearised at the model as it is): the measurements
+    whose parameter covariance has the least volume.
+
+    Parameters
+    ----------
+    model : CompensationModel
+    joints : ndarray, shape (C, 6)
+        Candidate commanded joints, rad (C >= count).
+    count : int
+    groups, tracker, oriented, orientation_weight
+        As `update` (``oriented``: orientations will be measured).
+
+    Returns
+    -------
+    ndarray of int, shape (count,)
+        Indices of the chosen candidates, in the order chosen.
+
+    Raises
+    ------
+    UpdateRefused
+        The chosen configurations do not identify the update's parameters (nor could any others of the candidates).
+    """
+    from scipy.linalg import qr  # here: compensating never needs it
+
+    names = parameter_names(groups, tracker=tracker, oriented=oriented)
+    if count > len(joints):
+        raise CalibrationError(f"{len(joints)} candidate configurations: fewer than the {count} to choose")
+    jac = design(model, joints, names, oriented, orientation_weight)
+    blocks = jac.shape[1]
+    _, _, order = qr(jac.reshape(-1, len(names)).T, mode="economic", pivoting=True)
+    chosen = list(dict.fromkeys(order[: len(names)] // blocks))[:count]
+    information = sum(jac[k].T @ jac[k] for k in chosen) + 1e-9 * np.eye(len(names))
+    while len(chosen) < count:
+        inverse = np.linalg.inv(information)
+        # det(M + J_c^T J_c) = det(M) det(I + J_c M^-1 J_c^T): the gain of each candidate c
+        gain = np.linalg.slogdet(np.eye(blocks) + np.einsum("crp,pq,csq->crs", jac, inverse, jac))[1]
+        gain[chosen] = -np.inf
+        best = int(np.argmax(gain))
+        chosen.append(best)
+        information += jac[best].T @ jac[best]
+    picked = jac[chosen].reshape(-1, len(names))
+    if analyse_identifiability(picked, names, RTOL).fixed:
+        raise UpdateRefused(f"no {count} of these {len(joints)} candidate configurations identify the update's "
+                            f"{', '.join(names)}: they do not tell apart " + "; ".join(_unseen(picked, names))
+                            + ". Give candidates that turn the tool and move the joints more, or leave a group out "
+                            "(--only)")
+    return np.array(chosen)
+
+
+def design(model, joints, names, oriented, orientation_weight=ORIENTATION_WEIGHT):
+    """The update's scaled Jacobian (C, rows, P) at commanded joints (C, 6) rad: what rows there would observe.
+
+    Rows 3 (positions) or 6 (``oriented``: orientations too, times the
+    weight) per configuration; columns the parameters ``names`` in solver
+    units (mm, or the effect at `LEVER` mm of an angle or of the scale).
+    """
+    rows = _Rows(model, joints, fk(model.nominal, joints)[:, :3, 3], np.zeros((len(joints), 3)),
+                 np.tile(np.eye(3), (len(joints), 1, 1)) if oriented else None, orientation_weight)
+    return rows.residual(model, names)[1] * _solver_scale(names)  # it does not depend on the measured values
+
+
+def _field(model, position):
+    """The composite's field on top at commanded positions (N, 3), mm, or 0.0 without one."""
+    field = model.error_field("composite")
+    return 0.0 if field is None else field.evaluate(position, outside="clamp")
