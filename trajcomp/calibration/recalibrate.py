@@ -42,7 +42,7 @@ import numpy as np
 from trajcomp.arm.kinematics import fk
 from trajcomp.arm.parameters import BASE_NAMES, TARGET_NAMES, TOOL_NAMES, is_angle, is_robot_parameter, pose_jacobian
 from trajcomp.arm.transforms import invert, matrix_to_rotvec, mean_rotation, rotvec_to_matrix
-from trajcomp.calibration.identify import analyse_identifiability, best_fit_transform, robust_weights
+from trajcomp.calibration.identify import analyse_identifiability, best_fit_transform, region_folds, robust_weights
 from trajcomp.calibration.options import ORIENTATION_WEIGHT
 from trajcomp.errors import CalibrationError
 
@@ -55,6 +55,8 @@ STEP_TOLERANCE = 1e-9  # scaled units (mm, or rad at 1 m): converged when no par
 LEVER = 1000.0  # mm: an angle (or the scale) is scaled as its effect at this lever arm, as in `identify`
 RTOL = 1e-3  # identifiability threshold of `analyse_identifiability`, as `identify`'s
 STILL_VALID = 1.5  # the registered residual may exceed the model's own held-out mean error by this factor
+REGIONS = 3  # slabs of the update's rows, each predicted from the others (`held_out_errors`)
+EVIDENCE = 2.0  # standard errors by which a larger fit must lower the rows' left-out residual to be taken
 LIGHT_ENOUGH = 1.5  # after the update, the residual may exceed it by this factor for a light update to do
 
 
@@ -198,8 +200,10 @@ class Fit:
         The model with them applied.
     residual : ndarray, shape (N, 3)
         Measured minus predicted position, mm, base frame.
-    left_out : ndarray, shape (N,)
-        |residual| of each row when it is left out of the fit (leverage), mm.
+    held_out : ndarray, shape (N,), or None
+        |residual| of each row, mm, predicted by the fit of the rows of the
+        other regions (`held_out_errors`); None until computed, or when the
+        other regions' rows do not identify the parameters.
     condition : float
         Condition number of the scaled Jacobian.
     """
@@ -209,8 +213,8 @@ class Fit:
     covariance: np.ndarray
     model: object
     residual: np.ndarray
-    left_out: np.ndarray
     condition: float
+    held_out: np.ndarray = None
 
     @property
     def sigma(self):
@@ -235,7 +239,7 @@ def fit(model, joints, position, measured, rotation=None, names=BASE_NAMES, *, t
     rotation : ndarray, shape (N, 3, 3), optional
         Measured orientations, same frame.
     names : sequence of str
-        `parameter_names`.
+        `parameter_names` (none: the model as it is, with its own registration).
     tracker : bool
         The rows are in a new tracker placement: the registration starts
         from a rigid best fit of the model's prediction, else from the
@@ -252,6 +256,10 @@ def fit(model, joints, position, measured, rotation=None, names=BASE_NAMES, *, t
     """
     names = list(names)
     model.check_mode("composite")
+    if not names:  # the model as it is, its own registration
+        residual = _Rows(model, joints, position, measured, rotation, orientation_weight).residual(
+            model, names, jacobian=False)[0]
+        return Fit([], np.zeros(0), np.zeros((0, 0)), model, -residual[:, :3], 1.0)
     T_start = model.T_tracker_base
     if tracker:
         predicted = model.predict("composite", joints, position, outside="clamp")[0]
@@ -261,10 +269,6 @@ def fit(model, joints, position, measured, rotation=None, names=BASE_NAMES, *, t
         reached = model.arm("composite", outside="clamp").fk(joints)[:, :3, :3]
         R_start = mean_rotation(np.swapaxes(reached, 1, 2) @ (invert(T_start)[:3, :3] @ rotation))
     rows = _Rows(model, joints, position, measured, rotation, orientation_weight)
-    if not names:  # base-frame rows against the model as it is
-        residual = rows.residual(model, names, jacobian=False)[0]
-        return Fit([], np.zeros(0), np.zeros((0, 0)), model, -residual[:, :3], np.linalg.norm(residual[:, :3], axis=1),
-                   1.0)
     per_row = 3 if rotation is None else 6
     if per_row * len(joints) < 2 * len(names):
         raise UpdateRefused(f"{len(joints)} rows give {per_row * len(joints)} residuals: too few to update "
@@ -297,10 +301,7 @@ def fit(model, joints, position, measured, rotation=None, names=BASE_NAMES, *, t
     inverse = np.linalg.inv(a.T @ (w[:, None] * a))
     variance = float(np.sum(w * residual.ravel() ** 2) / max(residual.size - len(names), 1))
     covariance = variance * inverse * np.outer(solver, solver)
-    # left out one row at a time: r_i / (1 - H_ii), H_ii the row's (rows x rows) block of the weighted hat matrix
-    blocks = np.einsum("nrp,pq,nsq->nrs", jac * solver, inverse, jac * solver) * weights[:, None, None]
-    left_out = np.linalg.solve(np.eye(residual.shape[1]) - blocks, residual[..., None])[:, :3, 0]
-    return Fit(names, x, covariance, current, -residual[:, :3], np.linalg.norm(left_out, axis=1), ident.condition)
+    return Fit(names, x, covariance, current, -residual[:, :3], ident.condition)
 
 
 def _unseen(jac, names):
@@ -332,14 +333,53 @@ def added_sigma(update_fit, joints):
     return np.sqrt(np.einsum("nip,pq,niq->n", jac, covariance, jac) / 3.0)
 
 
+def held_out_errors(model, joints, position, measured, rotation, names, regions=REGIONS, **options):
+    """|residual| (N,) mm of each row predicted by the fit of ``names`` to the rows of the other regions.
+
+    The rows are cut into ``regions`` slabs of their commanded positions
+    (`trajcomp.calibration.identify.region_folds`), as the accuracy of a
+    model is judged: an update that follows the model's own errors at the
+    rows, not drift, fails to predict another region. None when the rows of
+    the other regions do not identify the parameters.
+    """
+    errors = np.zeros(len(joints))
+    for rows in region_folds(position, regions)[0]:
+        train = np.setdiff1d(np.arange(len(joints)), rows)
+        pick = (joints[train], position[train], measured[train], None if rotation is None else rotation[train])
+        try:
+            fitted = fit(model, *pick, names, **options)
+        except UpdateRefused:
+            return None
+        seen = fit(fitted.model, joints[rows], position[rows], measured[rows], None, (), **options)
+        errors[rows] = np.linalg.norm(seen.residual, axis=1)
+    return errors
+
+
+def better(fit_a, fit_b):
+    """True when ``fit_a`` predicts the rows of each region from the others significantly better than ``fit_b``.
+
+    A paired test of the held-out |residual| of each row
+    (`Fit.held_out`): the mean improvement exceeds `EVIDENCE` standard
+    errors. The held-out residual carries what the fit's own uncertainty
+    costs; the test keeps the noise of a few rows from choosing the larger
+    fit. False when ``fit_a`` has no held-out residual.
+    """
+    if fit_a.held_out is None:
+        return False
+    gain = fit_b.held_out - fit_a.held_out
+    return bool(gain.mean() > EVIDENCE * gain.std(ddof=1) / np.sqrt(len(gain)))
+
+
 @dataclasses.dataclass(frozen=True, eq=False)
 class Update:
-    """A light re-calibration (`update`): the registration alone and the update, on the same rows.
+    """A light re-calibration (`update`): the model as it is, registered anew, and updated, on the same rows.
 
     Attributes
     ----------
+    as_is : Fit
+        The model as it was, its own registration (no parameter).
     registered : Fit
-        The registration alone (the model as it was).
+        The registration alone (base-frame rows: the model as it was).
     updated : Fit
         The update.
     expected_mm : float or None
@@ -348,45 +388,43 @@ class Update:
         The rows' commanded joints, rad.
     """
 
+    as_is: Fit
     registered: Fit
     updated: Fit
     expected_mm: float
     joints: np.ndarray
 
     @property
-    def gain_mm(self):
-        """How much the update lowers the rows' mean |residual|, each row left out of the fits, mm."""
-        return float(self.registered.left_out.mean() - self.updated.left_out.mean())
+    def kept(self):
+        """The fit the updated model takes: the smallest the rows do not significantly improve on (`better`).
 
-    @property
-    def cost_mm(self):
-        """The mean position uncertainty the update adds at the rows (`added_sigma`, per axis, times sqrt 3), mm."""
-        return float(np.sqrt(3.0) * added_sigma(self.updated, self.joints).mean())
-
-    @property
-    def supported(self):
-        """True when the rows show the drift: the update lowers their residual, each row left out of the fits,
-        by more than the position uncertainty it adds (`gain_mm` > `cost_mm`).
-
-        Otherwise what the update would fit in the rows is noise, or not
-        drift of its parameters (rows outside the calibrated joint range,
-        errors of another kind), and the model keeps the registration alone:
-        an update never trades the model's errors for its own, and is never
-        worse than ``validate --register`` on the rows it has.
+        The registration replaces the model's only when it predicts the
+        rows better (the tracker moved), the update the registration only
+        when it predicts them better again: the rows show the drift. So an
+        update never follows noise, keeps a model measured the same day as
+        it is, and is never worse than ``validate --register`` on the rows
+        it has.
         """
-        return self.gain_mm > self.cost_mm
+        kept = self.registered if better(self.registered, self.as_is) else self.as_is
+        return self.updated if better(self.updated, kept) else kept
+
+    @property
+    def applied(self):
+        """What the updated model took: ``update``, ``registration`` or ``none`` (the model as it was)."""
+        kept = self.kept
+        return "update" if kept is self.updated else "registration" if kept is self.registered else "none"
 
     @property
     def model(self):
-        """The updated model (the registered one unless `supported`), its ``report["update"]`` = `record`."""
-        report = dict(self.registered.model.report)
+        """The updated model (the `kept` fit's), its ``report["update"]`` = `record`."""
+        report = dict(self.as_is.model.report)
         report["update"] = self.record()
-        return dataclasses.replace((self.updated if self.supported else self.registered).model, report=report)
+        return dataclasses.replace(self.kept.model, report=report)
 
     @property
     def outside(self):
         """How many rows lie outside the joint range the model's joint errors were calibrated on."""
-        return int(np.sum(self.registered.model.arm("composite").outside_rows(self.joints)))
+        return int(np.sum(self.as_is.model.arm("composite").outside_rows(self.joints)))
 
     def changes(self):
         """``[(name, value, sigma, unit)]`` of the update, display units (mm, deg, ppm)."""
@@ -397,23 +435,26 @@ class Update:
     def verdict(self):
         """``(word, why)``: ``valid``, ``recalibrate`` (this light update) or ``recalibrate fully``.
 
-        From the rows left out one at a time: the registration alone within
-        `STILL_VALID` times the model's expected error: still valid; the
-        update within `LIGHT_ENOUGH` times it: a light re-calibration does;
-        else the drift is more than these parameters hold.
+        From the rows predicted by region (`Fit.held_out`): the model (registered anew
+        where that predicts them better) within `STILL_VALID` times the
+        model's expected error: still valid; else the update, where the rows
+        show it, within `LIGHT_ENOUGH` times it: a light re-calibration
+        does; else the drift is more than these parameters hold.
         """
-        before, after = self.registered.left_out.mean(), self.updated.left_out.mean()
-        expected = self.expected_mm
-        if expected is None:
-            expected = self.updated.left_out.mean()
-        figures = (f"registered residual {before:.4f} mm, after the update {after:.4f} mm (each row left out of the "
-                   f"fit), model's own error {expected:.4f} mm")
+        stale = self.registered if better(self.registered, self.as_is) else self.as_is
+        before = stale.held_out.mean()
+        after = np.inf if self.updated.held_out is None else self.updated.held_out.mean()
+        expected = after if self.expected_mm is None else self.expected_mm
+        figures = (f"residual {before:.4f} mm as the model is{' (registered anew)' if stale is self.registered else ''}"
+                   f", {after:.4f} mm after the update (each region of the rows predicted from the others), "
+                   "model's own error "
+                   f"{expected:.4f} mm")
         if self.outside:
             figures += (f"; {self.outside} of the {len(self.joints)} rows lie outside the joint range the model was "
                         "calibrated on")
         if before <= STILL_VALID * expected:
             return "valid", f"model still valid: {figures}"
-        if self.supported and after <= LIGHT_ENOUGH * expected:
+        if self.applied == "update" and after <= LIGHT_ENOUGH * expected:
             return "recalibrate", f"re-calibrate (trajcomp recalibrate: the drift is of the updated parameters): {figures}"
         return "recalibrate fully", (f"re-calibrate fully (trajcomp calibrate: the update leaves more than "
                                      f"{LIGHT_ENOUGH:g}x the model's error): {figures}")
@@ -422,21 +463,29 @@ class Update:
         """The plain-data record stored as ``report["update"]`` of the updated model.
 
         Keys: ``rows``; ``names``, ``units`` (mm, deg or ppm per name),
-        ``values`` and ``sigma`` (display units) of every updated parameter;
-        ``covariance`` (P x P, the same units: entry i, j in unit i times
-        unit j); ``arm`` (the names among them that move a program's targets:
-        tool, zeros, scale); ``added_sigma_mm`` (the position standard
-        deviation per axis those add at the rows: ``mean`` and ``max``);
-        ``registered_mm`` and ``updated_mm`` (the mean |residual| of the rows,
-        ``fit`` and ``left_out`` one at a time); ``applied`` (False: the
-        rows did not show the drift, the model keeps the registration
-        alone, `supported`) and the ``gain_mm`` it was judged by;
+        ``values`` and ``sigma`` (display units) of every parameter the
+        update fitted (``base_*``: the registration's change from a rigid
+        best fit of the model's prediction; ``target_*``: the measured
+        frame's turn from the model's); ``covariance`` (P x P, the same
+        units: entry i, j in unit i times unit j); ``arm`` (the names among
+        them that move a program's targets: tool, zeros, scale);
+        ``added_sigma_mm`` (the position standard deviation per axis those
+        add at the rows: ``mean`` and ``max``); ``applied`` (``update``,
+        ``registration`` or ``none``: what the model took, `kept`; the
+        values and covariance are the model's only with ``update``);
+        ``as_is_mm``, ``registered_mm`` and ``updated_mm`` (the rows' mean
+        |residual|: ``fit``, and ``held_out`` by region, `held_out_errors`);
         ``outside_rows``; ``verdict`` and ``verdict_reason``.
         """
         fit_ = self.updated
         shown = _to_display(fit_.names)
         added = added_sigma(fit_, self.joints)
         word, why = self.verdict()
+
+        def residual(fitted):
+            return {"fit": float(np.linalg.norm(fitted.residual, axis=1).mean()),
+                    "held_out": None if fitted.held_out is None else float(fitted.held_out.mean())}
+
         return {
             "rows": len(self.joints),
             "names": list(fit_.names),
@@ -447,12 +496,10 @@ class Update:
             "arm": [n for n in fit_.names if not n.startswith(("base_", "target_"))],
             "added_sigma_mm": {"mean": float(added.mean()), "max": float(added.max())},
             "condition": fit_.condition,
-            "registered_mm": {"fit": float(np.linalg.norm(self.registered.residual, axis=1).mean()),
-                              "left_out": float(self.registered.left_out.mean())},
-            "updated_mm": {"fit": float(np.linalg.norm(fit_.residual, axis=1).mean()),
-                           "left_out": float(fit_.left_out.mean())},
-            "applied": self.supported,
-            "gain_mm": self.gain_mm,
+            "as_is_mm": residual(self.as_is),
+            "registered_mm": residual(self.registered),
+            "updated_mm": residual(fit_),
+            "applied": self.applied,
             "outside_rows": self.outside,
             "verdict": word,
             "verdict_reason": why,
@@ -479,10 +526,12 @@ def update(model, joints, position, measured, rotation=None, groups=GROUPS, *, t
     Update
     """
     common = dict(tracker=tracker, loss=loss, orientation_weight=orientation_weight)
-    names = parameter_names(groups, tracker=tracker, oriented=rotation is not None)
-    updated = fit(model, joints, position, measured, rotation, names, **common)
-    registered = fit(model, joints, position, measured, rotation, BASE_NAMES if tracker else (), **common)
-    return Update(registered, updated, expected_error(model), joints)
+    rows = (model, joints, position, measured, rotation)
+    levels = [(), BASE_NAMES if tracker else (), parameter_names(groups, tracker=tracker, oriented=rotation is not None)]
+    fits = [fit(*rows, names, **common) for names in levels[::-1]][::-1]  # the update first: it needs the most rows
+    fits = [dataclasses.replace(fitted, held_out=held_out_errors(*rows, names, **common))
+            for fitted, names in zip(fits, levels)]
+    return Update(*fits, expected_error(model), joints)
 
 
 def choose_rows(model, joints, count=30, groups=GROUPS, *, tracker=True, oriented=True,

@@ -77,6 +77,11 @@ def groups_of(text):
     return groups
 
 
+def held(value):
+    """A held-out mean, or why there is none."""
+    return "not identified by a part of the rows" if value is None else f"{value:.4f}"
+
+
 def run(args):
     from trajcomp.model.model_file import model_files, save_model
     from trajcomp.support.atomic import refuse_inputs
@@ -88,15 +93,17 @@ def run(args):
           "deviation):")
     for name, value, sigma, unit in result.changes():
         print(f"  {name:10s} {value:+12.4f} +- {sigma:8.4f} {unit}")
-    print(f"registered residual, mean |error| mm: before {record['registered_mm']['fit']:.4f} "
-          f"(each row left out {record['registered_mm']['left_out']:.4f}), after {record['updated_mm']['fit']:.4f} "
-          f"(left out {record['updated_mm']['left_out']:.4f})")
+    print("the rows' mean |residual| mm (in brackets: each region of the rows predicted from the others): "
+          + ", ".join(f"{label} {record[key]['fit']:.4f} ({held(record[key]['held_out'])})" for label, key in
+                      (("as the model is", "as_is_mm"), ("registered anew", "registered_mm"),
+                       ("updated", "updated_mm")) if key != "registered_mm" or "base_x" in record["names"]))
     print(f"position uncertainty the update adds: {record['added_sigma_mm']['mean']:.4f} mm per axis on average at "
           f"these rows (max {record['added_sigma_mm']['max']:.4f})")
-    if not record["applied"]:
-        print(f"the rows do not show the drift: the update lowers their residual (each row left out) by "
-              f"{record['gain_mm']:.4f} mm, not more than the uncertainty it adds; the model written is the model as "
-              "it was" + (", registered on the rows" if "base_x" in record["names"] else ""))
+    print({"update": "the rows show the drift: the model written takes the update",
+           "registration": "the rows do not show the drift (the update does not predict each region of them "
+                           "from the others significantly better): the model written is the model as it was, registered anew",
+           "none": "the rows show neither drift nor a moved tracker: the model written is the model as it was"}[
+              record["applied"]])
     print(record["verdict_reason"])
     save_model(args.output, result.model)
     info(f"wrote {args.output}")
