@@ -25,6 +25,13 @@ DRIFT = {"theta2": np.radians(0.015), "theta3": np.radians(-0.01), "theta4": np.
 SCALE = 60e-6  # 2.6 K warmer, aluminium links
 
 
+def scaled(robot, scale):
+    """``robot`` (standard DH) with the a and d of links 1-5 times 1 + scale (the update's thermal scale)."""
+    std = robot.as_standard()
+    factor = np.where(np.arange(6) < 5, 1.0 + scale, 1.0)
+    return std.replace(a=std.a * factor, d=std.d * factor)
+
+
 def _measure(virtual, q, rng, T_tracker_base):
     """6-DoF tracker rows of commanded joints q, tracker frame."""
     poses = T_tracker_base @ virtual.measure_poses(q, rng)
@@ -43,7 +50,7 @@ def cell():
     q = plan.joints[plan.reachable]
     model = calibrate(robot, _measure(virtual, q, np.random.default_rng(1), TRACKER), folds=0)
     true = apply_deltas(virtual.true_robot, list(DRIFT), list(DRIFT.values()))
-    drifted = dataclasses.replace(virtual, true_robot=recalibrate.scaled_robot(true, SCALE))
+    drifted = dataclasses.replace(virtual, true_robot=scaled(true, SCALE))
     return model, drifted, q
 
 

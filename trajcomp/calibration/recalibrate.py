@@ -26,13 +26,15 @@ residuals than twice the parameters, or a parameter the rows' Jacobian does
 not identify on its own (`trajcomp.calibration.identify.analyse_identifiability`).
 
 The result (`Update`) says what changed, by how much and with what standard
-deviation, the registered residual before (the registration alone) and after
-the update, both on the rows themselves and left out one row at a time, and
-the model carrying the update, whose ``report["update"]`` records it
-(`Update.record`): the updated parameters' names, values and covariance,
-and the position uncertainty the update adds to a target (`added_sigma`).
-`verdict` says from the same rows whether the model is still valid, needs
-this update, or needs a full calibration.
+deviation, and the rows' residual as the model is, registered anew and
+updated, on the rows themselves and with each region of them predicted from
+the others (`held_out_errors`); the updated model takes the smallest of
+these fits that the rows do not show to be worse (`Update.kept`), and its
+``report["update"]`` records the update (`Update.record`): the parameters'
+names, values and covariance, and the position uncertainty the update adds
+to a target (`added_sigma`). `Update.verdict` says from the same rows
+whether the model is still valid, needs this update, or needs a full
+calibration.
 """
 
 import dataclasses
@@ -54,9 +56,9 @@ ITERATIONS = 30
 STEP_TOLERANCE = 1e-9  # scaled units (mm, or rad at 1 m): converged when no parameter moves more
 LEVER = 1000.0  # mm: an angle (or the scale) is scaled as its effect at this lever arm, as in `identify`
 RTOL = 1e-3  # identifiability threshold of `analyse_identifiability`, as `identify`'s
-STILL_VALID = 1.5  # the registered residual may exceed the model's own held-out mean error by this factor
+STILL_VALID = 1.5  # the rows' held-out residual may exceed the model's own mean error by this factor
 REGIONS = 3  # slabs of the update's rows, each predicted from the others (`held_out_errors`)
-EVIDENCE = 2.0  # standard errors by which a larger fit must lower the rows' left-out residual to be taken
+EVIDENCE = 2.0  # standard errors by which a larger fit must lower the rows' held-out residual to be taken
 LIGHT_ENOUGH = 1.5  # after the update, the residual may exceed it by this factor for a light update to do
 
 
@@ -103,13 +105,6 @@ def _solver_scale(names):
     return np.array([1.0 / LEVER if is_angle(n) or n == SCALE else 1.0 for n in names])
 
 
-def scaled_robot(robot, scale):
-    """``robot`` (standard DH) with the ``a`` and ``d`` of links 1..`SCALED_LINKS` times ``1 + scale``."""
-    std = robot.as_standard()
-    factor = np.where(np.arange(6) < SCALED_LINKS, 1.0 + scale, 1.0)
-    return std.replace(a=std.a * factor, d=std.d * factor)
-
-
 def updated_model(model, names, x, T_tracker_base, R_tcp_target):
     """``model`` with the update parameters ``names`` at x (P,) (internal units) applied.
 
@@ -154,8 +149,7 @@ class _Rows:
     """The update's least-squares problem: a model's composite prediction against the new rows."""
 
     def __init__(self, model, joints, position, measured, rotation, weight):
-        self.model, self.joints, self.position = model, joints, position
-        self.measured, self.rotation, self.weight = measured, rotation, weight
+        self.joints, self.measured, self.rotation, self.weight = joints, measured, rotation, weight
         self.field = _field(model, position)
 
     def residual(self, candidate, names, jacobian=True):

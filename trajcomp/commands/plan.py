@@ -2,7 +2,7 @@
 
 import argparse
 
-from trajcomp.commands._args import add_robot, command_parser, info, numbers, positive_number, robot_of
+from trajcomp.commands._args import add_robot, command_parser, info, numbers, positive_int, positive_number, robot_of
 from trajcomp.errors import ToleranceError
 
 
@@ -60,17 +60,6 @@ def add_parser(sub):
     parser.add_argument("--tilt", type=positive_number, default=30.0, help="tilt of the spread orientations, deg (default 30)")
     parser.add_argument("-o", "--output", required=True, help="plan CSV to write")
     parser.set_defaults(run=run)
-
-
-def positive_int(text):
-    """An argparse type: a whole number >= 1."""
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
-    if value < 1:
-        raise argparse.ArgumentTypeError(f"expected a number >= 1, got {text!r}")
-    return value
 
 
 def run(args):
