@@ -145,6 +145,9 @@ def test_an_update_the_rows_cannot_support_is_refused_with_exit_2(cell, tmp_path
     assert "cannot identify" in error and "rows.csv" in error
     assert "base_z with tool_z" in error
     assert not (tmp_path / "new.yaml").exists()
+    assert main(["check", str(model_path), str(tmp_path / "rows.csv"), "--frame", "tracker"]) == 1  # drifted
+    shown = capsys.readouterr().out
+    assert "no light update from these rows" in shown and "re-calibrate fully" in shown
     few = dataclasses.replace(rows.subset(np.arange(4)))
     write_measurements(tmp_path / "few.csv", few)
     assert main(["recalibrate", str(model_path), str(tmp_path / "few.csv"), "--frame", "tracker",

@@ -438,11 +438,11 @@ class Update:
         stale = self.registered if better(self.registered, self.as_is) else self.as_is
         before = stale.held_out.mean()
         after = np.inf if self.updated.held_out is None else self.updated.held_out.mean()
-        expected = after if self.expected_mm is None else self.expected_mm
+        expected = before if self.expected_mm is None else self.expected_mm
+        shown = "not identified by a part of the rows" if self.updated.held_out is None else f"{after:.4f} mm"
         figures = (f"residual {before:.4f} mm as the model is{' (registered anew)' if stale is self.registered else ''}"
-                   f", {after:.4f} mm after the update (each region of the rows predicted from the others), "
-                   "model's own error "
-                   f"{expected:.4f} mm")
+                   f", {shown} after the update (each region of the rows predicted from the others), model's own "
+                   f"error {expected:.4f} mm")
         if self.outside:
             figures += (f"; {self.outside} of the {len(self.joints)} rows lie outside the joint range the model was "
                         "calibrated on")

@@ -12,7 +12,8 @@ def add_parser(sub):
         "re-calibration (trajcomp recalibrate) or a full one (trajcomp calibrate): the rows' residual after "
         "registering the tracker on them, each row left out of the registration, against the model's own "
         "held-out error, and the residual the light update would leave. Exit 0: still valid; 1: re-calibrate "
-        "(the verdict says how).",
+        "(the verdict says how). Rows that cannot identify the light update are judged on the registration alone, "
+        "and the output says what they cannot update.",
         "trajcomp check model.yaml validation.csv --json check.json",
     )
     add_rows_arguments(parser)
@@ -23,18 +24,26 @@ def add_parser(sub):
 def run(args):
     import json
 
-    from trajcomp.commands.recalibrate import update_of
+    from trajcomp.calibration.recalibrate import UpdateRefused
+    from trajcomp.commands.recalibrate import groups_of, update_of
     from trajcomp.errors import ToleranceError
     from trajcomp.model.model_file import model_files
     from trajcomp.support.atomic import refuse_inputs, write_atomic
 
     if args.json:
         refuse_inputs([args.json], [*model_files(args.model), args.rows, args.columns_file])
-    result = update_of(args)
+    groups = groups_of(args.only)
+    try:
+        result = update_of(args, groups)
+    except UpdateRefused as exc:  # the verdict still stands on the registration: say what the rows cannot update
+        if groups == ("registration",):
+            raise
+        print(f"no light update from these rows: {exc}")
+        result = update_of(args, ("registration",))
     word, why = result.verdict()
     print(why)
     if args.json:
         write_atomic(args.json, json.dumps({"verdict": word, "reason": why, "update": result.record()}, indent=1))
     if word != "valid":
-        raise ToleranceError(f"{args.model}: {why}")
+        raise ToleranceError(f"{args.model}: {word.replace('recalibrate', 're-calibrate')}")
     return 0

@@ -19,8 +19,6 @@ def add_parser(sub):
         "trajcomp recalibrate model.yaml validation.csv -o model-updated.yaml",
     )
     add_rows_arguments(parser)
-    parser.add_argument("--only", metavar="GROUP[,GROUP]",
-                        help="update these groups only (default all): " + GROUP_WORDS)
     parser.add_argument("-o", "--output", required=True, help="updated model file to write (.yaml)")
     parser.set_defaults(run=run)
 
@@ -32,6 +30,8 @@ def add_rows_arguments(parser):
     add_layout(parser)
     parser.add_argument("--frame", choices=("base", "tracker"),
                         help="frame of the measured columns (default: as the layout file says, else base)")
+    parser.add_argument("--only", metavar="GROUP[,GROUP]",
+                        help="update these groups only (default all): " + GROUP_WORDS)
 
 
 def update_of(args, groups=None):
