@@ -2,9 +2,10 @@
 
 Columns: ``j1..j6`` commanded joints (deg), ``x,y,z[,a,b,c]`` commanded TCP
 pose (mm, deg), ``mx,my,mz`` measured TCP position (mm), optional
-``mrx,mry,mrz`` measured orientation (deg). Files in another layout (other
-column names, delimiter, decimal comma, units, rotation conventions) are read
-through an explicit `trajcomp.calibration.layout.Layout`, never by guessing.
+``mrx,mry,mrz`` measured orientation (deg) and ``temperature`` (deg C).
+Files in another layout (other column names, delimiter, decimal comma,
+units, rotation conventions) are read through an explicit
+`trajcomp.calibration.layout.Layout`, never by guessing.
 """
 
 import csv
@@ -26,6 +27,7 @@ from trajcomp.calibration.layout import (
     ORIENTATION,
     POSITION,
     QUATERNION,
+    TEMPERATURE,
     Layout,
     parse_mapping,
     rotation_to_abc,
@@ -56,6 +58,8 @@ class Measurements:
         Measured TCP position, mm.
     measured_orientation : ndarray, shape (N, 3), or None
         Measured orientation A, B, C, rad (of the measured frame).
+    temperature : ndarray, shape (N,), or None
+        The hall's temperature at each row, deg C (optional column).
     lines : ndarray, shape (N,)
         Line number of each row in its file (for messages).
     path : str
@@ -70,6 +74,7 @@ class Measurements:
     orientation: np.ndarray = None
     measured: np.ndarray = None
     measured_orientation: np.ndarray = None
+    temperature: np.ndarray = None
     lines: np.ndarray = None
     path: str = "<memory>"
     frame: str = None
@@ -304,6 +309,7 @@ def read_measurements(path, layout=None, max_rows=MAX_ROWS, why="split the file"
         orientation=rotation("orientation", ORIENTATION, QUATERNION),
         measured=group(MEASURED, layout.scale("measured")),
         measured_orientation=rotation("measured_orientation", MEASURED_ORIENTATION, MEASURED_QUATERNION),
+        temperature=values.get("temperature"),
         lines=lines,
         path=path,
         frame=layout.frame,
@@ -328,6 +334,7 @@ def format_measurements(meas, comments=(), extra=None):
         (ORIENTATION, meas.orientation, 180.0 / math.pi),
         (MEASURED, meas.measured, 1.0),
         (MEASURED_ORIENTATION, meas.measured_orientation, 180.0 / math.pi),
+        (TEMPERATURE, None if meas.temperature is None else meas.temperature[:, None], 1.0),
     ):
         if array is not None:
             columns.append((names, array * scale))

@@ -59,6 +59,7 @@ RTOL = 1e-3  # identifiability threshold of `analyse_identifiability`, as `ident
 STILL_VALID = 1.5  # the rows' held-out residual may exceed the model's own mean error by this factor
 REGIONS = 3  # slabs of the update's rows, each predicted from the others (`held_out_errors`)
 EVIDENCE = 2.0  # standard errors by which a larger fit must lower the rows' held-out residual to be taken
+MIN_TEMPERATURE_CHANGE = 0.2  # K: a smaller change of the hall's temperature gives no scale per kelvin
 LIGHT_ENOUGH = 1.5  # after the update, the residual may exceed it by this factor for a light update to do
 
 
@@ -380,6 +381,10 @@ class Update:
         The model's own mean |error| (`expected_error`), what the rows are judged against.
     joints : ndarray, shape (N, 6)
         The rows' commanded joints, rad.
+    temperature : dict or None
+        ``{"model", "rows", "change"}``: the mean temperature of the model's
+        measurements and of the rows, deg C, where both files have the
+        column (`temperature_change`).
     """
 
     as_is: Fit
@@ -387,6 +392,7 @@ class Update:
     updated: Fit
     expected_mm: float
     joints: np.ndarray
+    temperature: dict = None
 
     @property
     def kept(self):
@@ -419,6 +425,15 @@ class Update:
     def outside(self):
         """How many rows lie outside the joint range the model's joint errors were calibrated on."""
         return int(np.sum(self.as_is.model.arm("composite").outside_rows(self.joints)))
+
+    def scale_per_kelvin(self):
+        """The updated scale per kelvin of temperature change, ppm/K (None without both temperatures or the scale,
+        or for a change under `MIN_TEMPERATURE_CHANGE`): beside the links' expansion coefficient (aluminium about
+        23 ppm/K), it says how much of the scale the hall's temperature explains."""
+        if self.temperature is None or SCALE not in self.updated.names or \
+                abs(self.temperature["change"]) < MIN_TEMPERATURE_CHANGE:
+            return None
+        return float(self.updated.delta[self.updated.names.index(SCALE)] / PPM / self.temperature["change"])
 
     def changes(self):
         """``[(name, value, sigma, unit)]`` of the update, display units (mm, deg, ppm)."""
@@ -469,7 +484,9 @@ class Update:
         values and covariance are the model's only with ``update``);
         ``as_is_mm``, ``registered_mm`` and ``updated_mm`` (the rows' mean
         |residual|: ``fit``, and ``held_out`` by region, `held_out_errors`);
-        ``outside_rows``; ``verdict`` and ``verdict_reason``.
+        ``outside_rows``; ``temperature_c`` (`temperature`) and
+        ``scale_ppm_per_k`` (`scale_per_kelvin`), or None; ``verdict`` and
+        ``verdict_reason``.
         """
         fit_ = self.updated
         shown = _to_display(fit_.names)
@@ -495,6 +512,8 @@ class Update:
             "updated_mm": residual(fit_),
             "applied": self.applied,
             "outside_rows": self.outside,
+            "temperature_c": self.temperature,
+            "scale_ppm_per_k": self.scale_per_kelvin(),
             "verdict": word,
             "verdict_reason": why,
         }
@@ -509,11 +528,22 @@ def expected_error(model):
     return None
 
 
+def temperature_change(model, temperature):
+    """``{"model", "rows", "change"}`` deg C: the mean temperature the model was measured at (its report's) and
+    that of the rows (N,), or None when either is unknown."""
+    recorded = model.report.get("measurements", {}).get("temperature_c")
+    if temperature is None or not isinstance(recorded, dict) or "mean" not in recorded:
+        return None
+    rows = float(np.mean(temperature))
+    return {"model": float(recorded["mean"]), "rows": rows, "change": rows - float(recorded["mean"])}
+
+
 def update(model, joints, position, measured, rotation=None, groups=GROUPS, *, tracker=True, loss="huber",
-           orientation_weight=ORIENTATION_WEIGHT):
+           orientation_weight=ORIENTATION_WEIGHT, temperature=None):
     """Re-identify the parameters of ``groups`` that drift between campaigns from rows of a new one.
 
-    Parameters as `fit`; ``groups`` a subset of `GROUPS`.
+    Parameters as `fit`; ``groups`` a subset of `GROUPS`; ``temperature``
+    (N,) deg C, the rows' temperature column when the file has one.
 
     Returns
     -------
@@ -525,7 +555,7 @@ def update(model, joints, position, measured, rotation=None, groups=GROUPS, *, t
     fits = [fit(*rows, names, **common) for names in levels[::-1]][::-1]  # the update first: it needs the most rows
     fits = [dataclasses.replace(fitted, held_out=held_out_errors(*rows, names, **common))
             for fitted, names in zip(fits, levels)]
-    return Update(*fits, expected_error(model), joints)
+    return Update(*fits, expected_error(model), joints, temperature_change(model, temperature))
 
 
 def choose_rows(model, joints, count=30, groups=GROUPS, *, tracker=True, oriented=True,

@@ -56,7 +56,8 @@ def update_of(args, groups=None):
                                f"{', '.join(model.modes)})")
     rotation = None if meas.measured_orientation is None else abc_to_matrix(meas.measured_orientation)
     try:
-        result = update(model, joints, position, meas.measured, rotation, groups or GROUPS, tracker=frame == "tracker")
+        result = update(model, joints, position, meas.measured, rotation, groups or GROUPS, tracker=frame == "tracker",
+                        temperature=meas.temperature)
     except CalibrationError as exc:
         raise type(exc)(f"{args.rows}: {exc}") from None
     check_data(model, meas, result.registered.model.T_tracker_base, frame)
@@ -97,6 +98,12 @@ def run(args):
           + ", ".join(f"{label} {record[key]['fit']:.4f} ({held(record[key]['held_out'])})" for label, key in
                       (("as the model is", "as_is_mm"), ("registered anew", "registered_mm"),
                        ("updated", "updated_mm")) if key != "registered_mm" or "base_x" in record["names"]))
+    if record["temperature_c"]:
+        change = record["temperature_c"]
+        print(f"temperature: {change['rows']:.2f} deg C at the rows, {change['model']:.2f} at the model's measurements "
+              f"({change['change']:+.2f} K)" + ("" if record["scale_ppm_per_k"] is None else
+                                                f": the scale is {record['scale_ppm_per_k']:+.1f} ppm/K (aluminium "
+                                                "expands about 23 ppm/K)"))
     print(f"position uncertainty the update adds: {record['added_sigma_mm']['mean']:.4f} mm per axis on average at "
           f"these rows (max {record['added_sigma_mm']['max']:.4f})")
     print({"update": "the rows show the drift: the model written takes the update",
