@@ -81,6 +81,12 @@ def test_the_update_recovers_the_drift_of_joint_zeros_scale_tool_and_tracker(cel
     assert sigma["scale"] < 10.0
     updated = result.model
     assert updated.report["update"]["applied"] == "update"
+    warm = dataclasses.replace(model, report={**model.report, "measurements": {
+        **model.report["measurements"], "temperature_c": {"min": 22.9, "mean": 23.0, "max": 23.1}}})
+    warmer = recalibrate.update(warm, rows.joints, rows.position, rows.measured,
+                                abc_to_matrix(rows.measured_orientation), temperature=np.full(30, 25.6)).record()
+    assert warmer["temperature_c"]["change"] == pytest.approx(2.6)
+    assert warmer["scale_ppm_per_k"] == pytest.approx(change["scale"] / 2.6)
     moved = MOVED @ np.linalg.inv(TRACKER) @ model.T_tracker_base  # the model's registration, tracker moved
     np.testing.assert_allclose(updated.T_tracker_base[:3, 3], moved[:3, 3], atol=0.05)
     np.testing.assert_allclose(updated.T_tracker_base[:3, :3], moved[:3, :3], atol=5e-5)
