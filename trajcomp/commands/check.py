@@ -9,9 +9,9 @@ def add_parser(sub):
     parser = command_parser(
         sub, "check",
         "Say from some 30 rows measured in a later campaign whether the model is still valid, needs a light "
-        "re-calibration (trajcomp recalibrate) or a full one (trajcomp calibrate): the rows' residual after "
-        "registering the tracker on them, each row left out of the registration, against the model's own "
-        "held-out error, and the residual the light update would leave. Exit 0: still valid; 1: re-calibrate "
+        "re-calibration (trajcomp recalibrate) or a full one (trajcomp calibrate): the rows' residual as the "
+        "model is (registered anew where the tracker moved), each region of the rows predicted from the others, "
+        "against the model's own error, and the residual the light update would leave. Exit 0: still valid; 1: re-calibrate "
         "(the verdict says how). Rows that cannot identify the light update are judged on the registration alone, "
         "and the output says what they cannot update.",
         "trajcomp check model.yaml validation.csv --json check.json",

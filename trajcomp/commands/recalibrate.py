@@ -12,7 +12,7 @@ def add_parser(sub):
         "Light re-calibration: from some 30 rows measured in a later campaign (trajcomp plan --update chooses "
         "them), re-identify what drifts between campaigns: " + GROUP_WORDS + ", keeping the model's joint-error "
         "curves and residual field. Prints what changed, by how much and with what standard deviation, the "
-        "registered residual before and after (each row also left out of the fit) and the verdict of "
+        "rows' residual before and after (each region of them also predicted from the others) and the verdict of "
         "`trajcomp check`; writes the updated model, its report's update section recording the updated "
         "parameters' covariance. An update the rows cannot identify is refused (exit 2).",
         "trajcomp plan --update model.yaml --candidates plan.csv --count 30 -o update-plan.csv",
@@ -108,7 +108,8 @@ def run(args):
           f"these rows (max {record['added_sigma_mm']['max']:.4f})")
     print({"update": "the rows show the drift: the model written takes the update",
            "registration": "the rows do not show the drift (the update does not predict each region of them "
-                           "from the others significantly better): the model written is the model as it was, registered anew",
+                           "from the others significantly better): the model written is the model as it was, "
+                           "registered anew",
            "none": "the rows show neither drift nor a moved tracker: the model written is the model as it was"}[
               record["applied"]])
     print(record["verdict_reason"])
