@@ -9,8 +9,9 @@ months later, each with the tracker placed anew) is cut into five slabs of
 its commanded positions (`trajcomp.calibration.identify.region_folds`); for
 each slab, 30 rows of the other four are measured for the update, and the
 slab is predicted: held out by region, never interleaved. The 30 rows are
-chosen as ``plan --update`` chooses them (D-optimal among the other slabs'
-configurations) or at random. Per campaign: composite mean |error| of the
+chosen as ``plan --update`` chooses them among the other slabs'
+configurations (representative where they identify the update, else
+D-optimal) or at random. Per campaign: composite mean |error| of the
 held-out slabs with the registration alone (``validate --register``) and
 with ``recalibrate``, the verdict of ``check``, the parameters updated.
 Targets: composite mean <= 0.15 mm on each campaign, never worse than the
@@ -71,7 +72,7 @@ def update_rows(model, joints, train, how, rng, groups):
     """The rows of ``train`` measured for the update: as ``plan --update`` chooses them, or at random."""
     if how == "random":
         return rng.choice(train, ROWS, replace=False)
-    return train[recalibrate.choose_rows(model, joints[train], ROWS, groups, oriented=True)]
+    return train[recalibrate.choose_rows(model, joints[train], ROWS, groups, oriented=True)[0]]
 
 
 def carried(model, meas, how, groups):
@@ -133,7 +134,7 @@ def same_day_table(robot, meas_a):
     before, after, applied = [], [], 0
     for slab in regions:
         others = np.setdiff1d(np.arange(len(test)), slab)
-        rows = others[recalibrate.choose_rows(model, joints[others], ROWS, oriented=True)]
+        rows = others[recalibrate.choose_rows(model, joints[others], ROWS, oriented=True)[0]]
         result = recalibrate.update(model, joints[rows], position[rows], held.measured[rows], rotation[rows])
         applied += result.applied == "update"
         before.append(composite_error(model, joints[slab], position[slab], held.measured[slab]))

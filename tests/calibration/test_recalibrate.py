@@ -62,7 +62,7 @@ def _one_orientation(robot):
 
 def _rows(cell, count=30, seed=5):
     model, drifted, q = cell
-    pick = recalibrate.choose_rows(model, q, count)
+    pick = recalibrate.choose_rows(model, q, count)[0]
     return _measure(drifted, q[pick], np.random.default_rng(seed), MOVED)
 
 
@@ -103,7 +103,7 @@ def test_the_update_recovers_the_drift_of_joint_zeros_scale_tool_and_tracker(cel
 def test_the_same_day_update_changes_nothing(cell):
     model, drifted, q = cell
     same_day = dataclasses.replace(drifted, true_robot=VirtualRobot.create(model.nominal, "paper", seed=3).true_robot)
-    pick = recalibrate.choose_rows(model, q, 30)
+    pick = recalibrate.choose_rows(model, q, 30)[0]
     rows = _measure(same_day, q[pick], np.random.default_rng(5), TRACKER)
     result = recalibrate.update(model, rows.joints, rows.position, rows.measured, abc_to_matrix(rows.measured_orientation))
     change = {n: v for n, v, _, _ in result.changes()}
@@ -161,23 +161,33 @@ def test_an_update_the_rows_cannot_support_is_refused_with_exit_2(cell, tmp_path
     assert "too few" in capsys.readouterr().err
 
 
-def test_plan_update_chooses_rows_that_observe_the_drift_better_than_random_ones(cell, tmp_path, capsys):
+def test_plan_update_chooses_representative_rows_that_identify_the_update(cell, tmp_path, capsys):
     model, _, q = cell
     model_path, candidates = tmp_path / "model.yaml", tmp_path / "candidates.csv"
     save_model(model_path, model)
     write_measurements(candidates, Measurements(joints=q, lines=np.arange(len(q)) + 2))
     out = tmp_path / "update-plan.csv"
     assert main(["plan", "--update", str(model_path), "--candidates", str(candidates), "--poses", "-o", str(out)]) == 0
+    assert "(representative)" in capsys.readouterr().err
     chosen = read_measurements(out).joints
     assert len(chosen) == 30 and all(np.isclose(q, row).all(axis=1).any() for row in chosen)
+    position = fk(model.nominal, q)[:, :3, 3]
+
+    def coverage(joints):  # mean distance of a candidate to the nearest chosen row, mm
+        seen = fk(model.nominal, joints)[:, :3, 3]
+        return np.linalg.norm(position[:, None] - seen[None], axis=2).min(axis=1).mean()
+
+    rng = np.random.default_rng(0)
+    assert coverage(chosen) < min(coverage(q[rng.choice(len(q), 30, replace=False)]) for _ in range(5))
     names = recalibrate.parameter_names(recalibrate.GROUPS, tracker=True, oriented=True)
+    jac = recalibrate.design(model, q, names, oriented=True)
 
-    def volume(joints):  # log det of the update's information: the D-optimality criterion
-        jac = recalibrate.design(model, joints, names, oriented=True).reshape(-1, len(names))
-        return np.linalg.slogdet(jac.T @ jac)[1]
+    def volume(rows):  # log det of the update's information: the D-optimality criterion
+        picked = jac[rows].reshape(-1, len(names))
+        return np.linalg.slogdet(picked.T @ picked)[1]
 
-    random = [volume(q[np.random.default_rng(seed).choice(len(q), 30, replace=False)]) for seed in range(5)]
-    assert volume(chosen) > max(random)
+    optimal = volume(recalibrate._d_optimal(jac, 30))
+    assert optimal > max(volume(rng.choice(len(q), 30, replace=False)) for _ in range(5))
     one_orientation = tmp_path / "one.csv"
     q = _one_orientation(model.nominal)
     write_measurements(one_orientation, Measurements(joints=q, lines=np.arange(len(q)) + 2))

@@ -38,9 +38,10 @@ def add_parser(sub):
     parser.add_argument("--side", type=positive_number, help="edge length, mm (a grid: required)")
     parser.add_argument("--step", type=positive_number, help="grid step, mm (a grid: required)")
     parser.add_argument("--update", metavar="MODEL",
-                        help="instead of a grid, choose from --candidates the --count configurations that best observe "
-                        "what `trajcomp recalibrate` updates (D-optimal: the least volume of the update's parameter "
-                        "covariance), for a later campaign of this model")
+                        help="instead of a grid, choose from --candidates the --count configurations to measure for "
+                        "`trajcomp recalibrate` in a later campaign of this model: representative of the candidates "
+                        "(nearest the centres of clusters of their positions) where they identify the update, else "
+                        "D-optimal (the least volume of the update's parameter covariance)")
     parser.add_argument("--candidates", metavar="CSV",
                         help="with --update: configurations the arm may take in the cell (a plan or measurement CSV "
                         "with commanded joints or poses, e.g. the first campaign's plan)")
@@ -94,16 +95,16 @@ def run_update(args):
     if joints is None:
         raise CalibrationError(f"{args.candidates}: candidates need commanded joints j1..j6 or full poses x..c")
     groups = groups_of(args.only) or GROUPS
-    chosen = choose_rows(model, joints, args.count, groups, tracker=args.frame == "tracker", oriented=args.poses)
+    chosen, how = choose_rows(model, joints, args.count, groups, tracker=args.frame == "tracker", oriented=args.poses)
     names = parameter_names(groups, tracker=args.frame == "tracker", oriented=args.poses)
     outside = int(model.arm("composite").outside_rows(joints[chosen]).sum())
     comments = [f"trajcomp plan --update {args.update}: {len(chosen)} of {len(joints)} candidates of "
-                f"{args.candidates}, chosen to observe {', '.join(names)}"]
+                f"{args.candidates} ({how}), observing {', '.join(names)}"]
     picked = candidates.subset(chosen)
     write_measurements(args.output, Measurements(joints=joints[chosen], position=picked.position,
                                                  orientation=picked.orientation, lines=picked.lines),
                        comments=comments)
-    info(f"{args.output}: {len(chosen)} of {len(joints)} candidate configurations, chosen to observe "
+    info(f"{args.output}: {len(chosen)} of {len(joints)} candidate configurations ({how}), observing "
          f"{', '.join(names)}" + (f"; {outside} lie outside the joint range the model was calibrated on"
                                   if outside else ""))
     return 0
