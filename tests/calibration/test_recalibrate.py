@@ -81,6 +81,11 @@ def test_the_update_recovers_the_drift_of_joint_zeros_scale_tool_and_tracker(cel
     assert sigma["scale"] < 10.0
     updated = result.model
     assert updated.report["update"]["applied"] == "update"
+    record = updated.report["update"]  # the added uncertainty, from the model file alone, for the landing estimate
+    added = recalibrate.update_sigma(updated, rows.joints)
+    assert added.mean() == pytest.approx(record["added_sigma_mm"]["mean"], rel=1e-9)
+    assert 0.0 < added.max() < 0.05
+    assert not recalibrate.update_sigma(model, rows.joints).any()
     warm = dataclasses.replace(model, report={**model.report, "measurements": {
         **model.report["measurements"], "temperature_c": {"min": 22.9, "mean": 23.0, "max": 23.1}}})
     warmer = recalibrate.update(warm, rows.joints, rows.position, rows.measured,
@@ -125,7 +130,10 @@ def test_the_cli_writes_the_updated_model_with_its_covariance_and_check_says_rec
     assert main(["recalibrate", str(model_path), str(rows_path), "--frame", "tracker", "-o", str(out)]) == 0
     shown = capsys.readouterr().out
     assert "theta3" in shown and "ppm" in shown and "re-calibrate" in shown
-    record = load_model(out).report["update"]
+    updated = load_model(out)
+    record = updated.report["update"]
+    rows = read_measurements(rows_path)
+    assert recalibrate.update_sigma(updated, rows.joints).mean() == pytest.approx(record["added_sigma_mm"]["mean"])
     names = record["names"]
     assert len(record["covariance"]) == len(names) and record["units"][names.index("scale")] == "ppm"
     assert record["units"][names.index("theta2")] == "deg"

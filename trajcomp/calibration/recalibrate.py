@@ -310,21 +310,42 @@ def _unseen(jac, names):
 
 
 def added_sigma(update_fit, joints):
-    """Position standard deviation (N,) mm the update's arm parameters add at commanded joints (N, 6) rad.
+    """Position standard deviation (N,) mm per axis the update's arm parameters add at commanded joints (N, 6) rad.
 
     Only the parameters of the arm (tool, zeros, scale) move a program's
     targets; the registration and the target orientation are frames of the
     measurement. Computed with their covariance (`Fit.covariance`) and the
-    derivative of the TCP position at those joints.
+    derivative of the TCP position at those joints: ``sqrt(trace(J C J^T) / 3)``.
     """
     arm = [k for k, n in enumerate(update_fit.names) if not n.startswith(("base_", "target_"))]
-    if not arm:
+    return _position_sigma(update_fit.model, joints, [update_fit.names[k] for k in arm],
+                           update_fit.covariance[np.ix_(arm, arm)])
+
+
+def update_sigma(model, joints):
+    """Position standard deviation (N,) mm per axis a model's last update adds at commanded joints (N, 6) rad.
+
+    From the model file alone: its ``report["update"]`` (`Update.record`),
+    the ``arm`` block of the covariance converted from display units. Zero
+    for a model the rows did not update (``applied`` other than ``update``)
+    or one never updated. What the landing estimate adds, in quadrature, to
+    a target's expected error.
+    """
+    record = model.report.get("update")
+    if not isinstance(record, dict) or record.get("applied") != "update" or not record.get("arm"):
+        return np.zeros(len(np.atleast_2d(joints)))
+    pick = [record["names"].index(n) for n in record["arm"]]
+    shown = _to_display(record["arm"])
+    covariance = np.asarray(record["covariance"], dtype=float)[np.ix_(pick, pick)] / np.outer(shown, shown)
+    return _position_sigma(model, np.atleast_2d(joints), list(record["arm"]), covariance)
+
+
+def _position_sigma(model, joints, names, covariance):
+    """``sqrt(trace(J C J^T) / 3)`` (N,) mm: parameters ``names`` of covariance C (P, P), internal units, at joints."""
+    if not names:
         return np.zeros(len(joints))
-    names = [update_fit.names[k] for k in arm]
-    rows = _Rows(update_fit.model, joints, fk(update_fit.model.nominal, joints)[:, :3, 3], np.zeros((len(joints), 3)),
-                 None, 1.0)
-    jac = rows.residual(update_fit.model, names)[1][:, :3]
-    covariance = update_fit.covariance[np.ix_(arm, arm)]
+    rows = _Rows(model, joints, fk(model.nominal, joints)[:, :3, 3], np.zeros((len(joints), 3)), None, 1.0)
+    jac = rows.residual(model, names)[1][:, :3]
     return np.sqrt(np.einsum("nip,pq,niq->n", jac, covariance, jac) / 3.0)
 
 
