@@ -358,8 +358,12 @@ def held_out_errors(model, joints, position, measured, rotation, names, regions=
     rows, not drift, fails to predict another region. None when the rows of
     the other regions do not identify the parameters.
     """
+    if not names:  # nothing is fitted: each row's residual as the model is
+        return np.linalg.norm(fit(model, joints, position, measured, None, (), **options).residual, axis=1)
     errors = np.zeros(len(joints))
     for rows in region_folds(position, regions)[0]:
+        if not len(rows):  # fewer rows than regions
+            continue
         train = np.setdiff1d(np.arange(len(joints)), rows)
         pick = (joints[train], position[train], measured[train], None if rotation is None else rotation[train])
         try:
@@ -378,9 +382,9 @@ def better(fit_a, fit_b):
     (`Fit.held_out`): the mean improvement exceeds `EVIDENCE` standard
     errors. The held-out residual carries what the fit's own uncertainty
     costs; the test keeps the noise of a few rows from choosing the larger
-    fit. False when ``fit_a`` has no held-out residual.
+    fit. False when ``fit_a`` has no held-out residual, or of one row.
     """
-    if fit_a.held_out is None:
+    if fit_a.held_out is None or len(fit_a.held_out) < 2:
         return False
     gain = fit_b.held_out - fit_a.held_out
     return bool(gain.mean() > EVIDENCE * gain.std(ddof=1) / np.sqrt(len(gain)))

@@ -36,8 +36,10 @@ def add_rows_arguments(parser):
 
 def update_of(args, groups=None):
     """The `trajcomp.calibration.recalibrate.Update` of the command line's model and rows."""
+    import numpy as np
+
     from trajcomp.arm.transforms import abc_to_matrix
-    from trajcomp.calibration.calibrate import commanded
+    from trajcomp.calibration.calibrate import commanded, register
     from trajcomp.calibration.measurements import read_measurements
     from trajcomp.calibration.recalibrate import GROUPS, update
     from trajcomp.commands.validate import check_data
@@ -54,14 +56,14 @@ def update_of(args, groups=None):
     if "composite" not in model.modes:
         raise CalibrationError(f"{args.model}: an update needs a model with mode composite (this one has "
                                f"{', '.join(model.modes)})")
-    rotation = None if meas.measured_orientation is None else abc_to_matrix(meas.measured_orientation)
-    try:
-        result = update(model, joints, position, meas.measured, rotation, groups or GROUPS, tracker=frame == "tracker",
-                        temperature=meas.temperature)
+    tracker = frame == "tracker"
+    try:  # implausible rows (wrong units, another robot) are refused before any fit
+        check_data(model, meas, register(model, joints, position, meas.measured) if tracker else np.eye(4), frame)
+        rotation = None if meas.measured_orientation is None else abc_to_matrix(meas.measured_orientation)
+        return update(model, joints, position, meas.measured, rotation, groups or GROUPS, tracker=tracker,
+                      temperature=meas.temperature)
     except CalibrationError as exc:
-        raise type(exc)(f"{args.rows}: {exc}") from None
-    check_data(model, meas, result.registered.model.T_tracker_base, frame)
-    return result
+        raise exc if str(args.rows) in str(exc) else type(exc)(f"{args.rows}: {exc}") from None
 
 
 def groups_of(text):
