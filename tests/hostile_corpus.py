@@ -68,7 +68,6 @@ COMMANDS = {  # {base}: the valid set, {file}: the hostile file, {out}: an empty
         ("validate", "{file}", "{base}/meas.csv"),
         ("predict", "{file}", "{base}/plan.csv", "-o", "{out}/predicted.csv"),
         ("compensate", "{base}/program.csv", "--model", "{file}", "-o", "{out}/program.csv"),
-        ("check", "{file}", "{base}/meas.csv"),
         ("recalibrate", "{file}", "{base}/meas.csv", "-o", "{out}/model.yaml"),
     ),
     "measurements": (
@@ -76,7 +75,6 @@ COMMANDS = {  # {base}: the valid set, {file}: the hostile file, {out}: an empty
         ("validate", "{base}/model.yaml", "{file}"),
         ("predict", "{base}/model.yaml", "{file}", "-o", "{out}/predicted.csv"),
         ("simulate", "{file}", "--robot", "ur10", "-o", "{out}/meas.csv"),
-        ("check", "{base}/model.yaml", "{file}"),
         ("recalibrate", "{base}/model.yaml", "{file}", "-o", "{out}/model.yaml"),
     ),
     "layout": (
