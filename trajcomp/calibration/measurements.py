@@ -58,8 +58,6 @@ class Measurements:
         Measured TCP position, mm.
     measured_orientation : ndarray, shape (N, 3), or None
         Measured orientation A, B, C, rad (of the measured frame).
-    temperature : ndarray, shape (N,), or None
-        The hall's temperature at each row, deg C (optional column).
     lines : ndarray, shape (N,)
         Line number of each row in its file (for messages).
     path : str
@@ -67,6 +65,8 @@ class Measurements:
     frame : str or None
         Frame of the measured columns when the file's layout states it
         (``base`` or ``tracker``).
+    temperature : ndarray, shape (N,), or None
+        The hall's temperature at each row, deg C (optional column).
     """
 
     joints: np.ndarray = None
@@ -74,10 +74,10 @@ class Measurements:
     orientation: np.ndarray = None
     measured: np.ndarray = None
     measured_orientation: np.ndarray = None
-    temperature: np.ndarray = None
     lines: np.ndarray = None
     path: str = "<memory>"
     frame: str = None
+    temperature: np.ndarray = None
 
     def __len__(self):
         return len(self.lines)
