@@ -30,7 +30,8 @@ def add_parser(sub):
         "(each node at every orientation in turn) and says from how many orientations on the "
         "identification has all the parameters it can have. Unreachable targets (out of reach, or "
         "reached only in another posture) are listed on stderr and as comments in the file, and make the "
-        "exit code 1.",
+        "exit code 1. With --update MODEL --candidates CSV: the rows to measure in a later campaign for "
+        "`trajcomp recalibrate` instead.",
         "trajcomp plan --robot ur10 --cube 300,-100,300 --side 400 --step 100 --orientations 5 -o plan.csv",
     )
     add_robot(parser, required=False)
