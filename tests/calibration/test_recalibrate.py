@@ -1,6 +1,7 @@
 """Light re-calibration: a virtual arm whose joint zeros, link lengths, TCP and tracker pose drift by known amounts."""
 
 import dataclasses
+import json
 
 import numpy as np
 import pytest
@@ -139,8 +140,11 @@ def test_the_cli_writes_the_updated_model_with_its_covariance_and_check_says_rec
     assert record["units"][names.index("theta2")] == "deg"
     k = names.index("theta2")
     assert record["sigma"][k] == pytest.approx(np.sqrt(record["covariance"][k][k]))
-    assert main(["check", str(model_path), str(rows_path), "--frame", "tracker"]) == 1
+    verdict = tmp_path / "check.json"
+    assert main(["check", str(model_path), str(rows_path), "--frame", "tracker", "--json", str(verdict)]) == 1
     assert "re-calibrate" in capsys.readouterr().out
+    written = json.loads(verdict.read_text())
+    assert written["verdict"] == "recalibrate" and written["update"]["applied"] == "update"
     assert main(["check", str(out), str(rows_path), "--frame", "tracker"]) == 0
     assert "model still valid" in capsys.readouterr().out
 
