@@ -68,12 +68,14 @@ COMMANDS = {  # {base}: the valid set, {file}: the hostile file, {out}: an empty
         ("validate", "{file}", "{base}/meas.csv"),
         ("predict", "{file}", "{base}/plan.csv", "-o", "{out}/predicted.csv"),
         ("compensate", "{base}/program.csv", "--model", "{file}", "-o", "{out}/program.csv"),
+        ("recalibrate", "{file}", "{base}/meas.csv", "-o", "{out}/model.yaml"),
     ),
     "measurements": (
         ("calibrate", "{file}", "--robot", "ur10", "--folds", "2", "-o", "{out}/model.yaml"),
         ("validate", "{base}/model.yaml", "{file}"),
         ("predict", "{base}/model.yaml", "{file}", "-o", "{out}/predicted.csv"),
         ("simulate", "{file}", "--robot", "ur10", "-o", "{out}/meas.csv"),
+        ("recalibrate", "{base}/model.yaml", "{file}", "-o", "{out}/model.yaml"),
     ),
     "layout": (
         ("calibrate", "{base}/meas.csv", "--robot", "ur10", "--folds", "2", "--columns-file", "{file}",

@@ -37,6 +37,16 @@ def test_write_then_read_round_trip(tmp_path):
         np.testing.assert_allclose(getattr(back, field), getattr(meas, field), atol=1e-6)
 
 
+def test_a_temperature_column_is_read_by_its_mapping_and_written_back(tmp_path):
+    path = write(tmp_path, "j1,j2,j3,j4,j5,j6,mx,my,mz,air\n0,0,0,0,0,0,1,2,3,21.5\n0,0,0,0,0,0,1,2,3,22.25\n")
+    assert read_measurements(path).temperature is None  # not a standard column name: never guessed
+    meas = read_measurements(path, parse_mapping("temperature=air"))
+    np.testing.assert_allclose(meas.temperature, [21.5, 22.25])
+    write_measurements(tmp_path / "back.csv", meas)
+    np.testing.assert_allclose(read_measurements(tmp_path / "back.csv").temperature, [21.5, 22.25])
+    np.testing.assert_allclose(meas.subset([1]).temperature, [22.25])
+
+
 def test_column_mapping_with_sums(tmp_path):
     path = write(tmp_path, "x_t,y_t,z_t,x_dif,y_dif,z_dif\n100,200,300,0.5,-0.25,1\n")
     meas = read_measurements(path, parse_mapping("x=x_t,y=y_t,z=z_t,mx=x_t+x_dif,my=y_t+y_dif,mz=z_t-z_dif"))

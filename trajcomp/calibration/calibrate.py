@@ -81,6 +81,11 @@ def to_base(T_tracker_base, measured):
     return measured @ T_base_tracker[:3, :3].T + T_base_tracker[:3, 3]
 
 
+def temperature_range(temperature):
+    """``{"min", "mean", "max"}`` of a temperature column (N,), deg C, as a report records it."""
+    return {key: round(float(f(temperature)), 3) for key, f in (("min", np.min), ("mean", np.mean), ("max", np.max))}
+
+
 def register(model, joints, position, measured):
     """Base pose (4, 4) in a new tracker placement, from reference rows measured there.
 
@@ -414,7 +419,8 @@ def calibrate(robot, meas, *, robot_ref=None, method="composite", frame=None, gr
                         f"model: lines {lines[:20]}" + (" ..." if len(lines) > 20 else ""))
     report = {
         "measurements": {"file": meas.path, "rows": len(meas), "used": int(keep.sum()), "frame": frame,
-                         "orientation_spread_deg": [round(float(v), 3) for v in spread]},
+                         "orientation_spread_deg": [round(float(v), 3) for v in spread]}
+        | ({} if meas.temperature is None else {"temperature_c": temperature_range(meas.temperature)}),
         "residual": kind,
         "residual_field": None if parts.residual_field is None else parts.residual_field.kind,
         "warnings": warnings,

@@ -12,6 +12,7 @@ or as a YAML mapping file (``--columns-file layout.yaml``)::
     columns:                   # field: column name, or a sum/difference of columns
       j1: joint_1
       mx: x_t + x_dif
+      temperature: air_temp    # optional: the hall's temperature at each row, deg C
     units:                     # unit of the values in the file, per field group
       joints: deg              # deg | rad
       position: mm             # x, y, z: mm | cm | m | um | in
@@ -48,7 +49,9 @@ MEASURED = ("mx", "my", "mz")
 MEASURED_ORIENTATION = ("mrx", "mry", "mrz")
 MEASURED_QUATERNION = ("mqw", "mqx", "mqy", "mqz")
 TRACK = ("track",)  # the track position of a robot on a track (mm), optional
-FIELDS = JOINTS + POSITION + ORIENTATION + QUATERNION + MEASURED + MEASURED_ORIENTATION + MEASURED_QUATERNION + TRACK
+TEMPERATURE = ("temperature",)  # deg C, optional: recorded by calibrate, compared by recalibrate
+FIELDS = (JOINTS + POSITION + ORIENTATION + QUATERNION + MEASURED + MEASURED_ORIENTATION + MEASURED_QUATERNION
+          + TRACK + TEMPERATURE)
 GROUPS = {
     "joints": JOINTS,
     "position": POSITION,

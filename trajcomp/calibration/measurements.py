@@ -3,9 +3,10 @@
 Columns: ``j1..j6`` commanded joints (deg), ``x,y,z[,a,b,c]`` commanded TCP
 pose (mm, deg), ``mx,my,mz`` measured TCP position (mm), optional
 ``mrx,mry,mrz`` measured orientation (deg), optional ``track`` the track
-position of a robot on a track (mm). Files in another layout (other
-column names, delimiter, decimal comma, units, rotation conventions) are read
-through an explicit `trajcomp.calibration.layout.Layout`, never by guessing.
+position of a robot on a track (mm) and ``temperature`` (deg C). Files in another
+layout (other column names, delimiter, decimal comma, units, rotation
+conventions) are read through an explicit `trajcomp.calibration.layout.Layout`,
+never by guessing.
 """
 
 import csv
@@ -28,6 +29,7 @@ from trajcomp.calibration.layout import (
     POSITION,
     QUATERNION,
     TRACK,
+    TEMPERATURE,
     Layout,
     parse_mapping,
     rotation_to_abc,
@@ -67,6 +69,8 @@ class Measurements:
         (``base`` or ``tracker``).
     track : ndarray, shape (N,), or None
         Track position of each row (a robot on a track), mm.
+    temperature : ndarray, shape (N,), or None
+        The hall's temperature at each row, deg C (optional column).
     """
 
     joints: np.ndarray = None
@@ -78,6 +82,7 @@ class Measurements:
     path: str = "<memory>"
     frame: str = None
     track: np.ndarray = None
+    temperature: np.ndarray = None
 
     def __len__(self):
         return len(self.lines)
@@ -309,6 +314,7 @@ def read_measurements(path, layout=None, max_rows=MAX_ROWS, why="split the file"
         orientation=rotation("orientation", ORIENTATION, QUATERNION),
         measured=group(MEASURED, layout.scale("measured")),
         measured_orientation=rotation("measured_orientation", MEASURED_ORIENTATION, MEASURED_QUATERNION),
+        temperature=values.get("temperature"),
         lines=lines,
         path=path,
         frame=layout.frame,
@@ -334,6 +340,7 @@ def format_measurements(meas, comments=(), extra=None):
         (ORIENTATION, meas.orientation, 180.0 / math.pi),
         (MEASURED, meas.measured, 1.0),
         (MEASURED_ORIENTATION, meas.measured_orientation, 180.0 / math.pi),
+        (TEMPERATURE, None if meas.temperature is None else meas.temperature[:, None], 1.0),
     ):
         if array is not None:
             columns.append((names, array * scale))

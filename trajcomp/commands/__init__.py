@@ -12,6 +12,8 @@ COMMANDS = {
     "calibrate": "identify a compensation model",
     "predict": "predict reached TCP positions",
     "validate": "check a model against measurements",
+    "check": "say whether a model still holds in a later campaign",
+    "recalibrate": "update a model from a few rows of a later campaign",
     "demo": "run the paper's protocol on the virtual robot",
     "compensate": "correct a program with a model",
     "formats": "list the robot program formats",

@@ -41,6 +41,14 @@ def non_negative_int(text):
     return value
 
 
+def positive_int(text):
+    """An argparse type: an integer >= 1 (counts)."""
+    value = non_negative_int(text)
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"expected a number >= 1, got {text!r}")
+    return value
+
+
 def positive_number(text):
     """An argparse type: a finite number > 0 (steps, lengths, weights)."""
     try:

@@ -2,7 +2,7 @@
 
 import argparse
 
-from trajcomp.commands._args import add_robot, command_parser, info, numbers, positive_number, robot_of
+from trajcomp.commands._args import add_robot, command_parser, info, numbers, positive_int, positive_number, robot_of
 from trajcomp.errors import ToleranceError
 
 
@@ -30,13 +30,30 @@ def add_parser(sub):
         "(each node at every orientation in turn) and says from how many orientations on the "
         "identification has all the parameters it can have. Unreachable targets (out of reach, or "
         "reached only in another posture) are listed on stderr and as comments in the file, and make the "
-        "exit code 1.",
+        "exit code 1. With --update MODEL --candidates CSV: the rows to measure in a later campaign for "
+        "`trajcomp recalibrate` instead.",
         "trajcomp plan --robot ur10 --cube 300,-100,300 --side 400 --step 100 --orientations 5 -o plan.csv",
     )
-    add_robot(parser)
-    parser.add_argument("--cube", type=numbers(3), required=True, metavar="X,Y,Z", help="lowest corner, mm")
-    parser.add_argument("--side", type=positive_number, required=True, help="edge length, mm")
-    parser.add_argument("--step", type=positive_number, required=True, help="grid step, mm")
+    add_robot(parser, required=False)
+    parser.add_argument("--cube", type=numbers(3), metavar="X,Y,Z", help="lowest corner, mm (a grid: required)")
+    parser.add_argument("--side", type=positive_number, help="edge length, mm (a grid: required)")
+    parser.add_argument("--step", type=positive_number, help="grid step, mm (a grid: required)")
+    parser.add_argument("--update", metavar="MODEL",
+                        help="instead of a grid, choose from --candidates the --count configurations to measure for "
+                        "`trajcomp recalibrate` in a later campaign of this model: representative of the candidates "
+                        "(nearest the centres of clusters of their positions) where they identify the update, else "
+                        "D-optimal (the least volume of the update's parameter covariance)")
+    parser.add_argument("--candidates", metavar="CSV",
+                        help="with --update: configurations the arm may take in the cell (a plan or measurement CSV "
+                        "with commanded joints or poses, e.g. the first campaign's plan)")
+    parser.add_argument("--count", type=positive_int, default=30, help="with --update: configurations to choose "
+                        "(default 30)")
+    parser.add_argument("--only", metavar="GROUP[,GROUP]", help="with --update: the groups to update, as "
+                        "`trajcomp recalibrate --only` (default all)")
+    parser.add_argument("--frame", choices=("base", "tracker"), default="tracker",
+                        help="with --update: the frame the campaign will measure in (default tracker: placed anew)")
+    parser.add_argument("--poses", action="store_true",
+                        help="with --update: the tracker will measure orientations too (6-DoF)")
     parser.add_argument("--orientation", type=numbers(3), metavar="A,B,C",
                         help="TCP orientation, deg (default: that of the robot's home configuration)")
     parser.add_argument("--orientations", type=orientation_list, default=1, metavar="N|A,B,C;A,B,C;...",
@@ -48,6 +65,53 @@ def add_parser(sub):
 
 
 def run(args):
+    from trajcomp.errors import TrajcompError
+
+    if args.update:
+        if not args.candidates:
+            raise TrajcompError("--update needs --candidates: the configurations the arm may take in the cell")
+        return run_update(args)
+    missing = [f"--{name}" for name in ("robot", "cube", "side", "step") if getattr(args, name) is None]
+    if missing:
+        raise TrajcompError(f"a grid plan needs {', '.join(missing)}")
+    return run_grid(args)
+
+
+def run_update(args):
+    """``plan --update``: the candidates that best observe the update (`trajcomp.calibration.recalibrate.choose_rows`)."""
+    from trajcomp.calibration.calibrate import commanded
+    from trajcomp.calibration.measurements import Measurements, read_measurements, write_measurements
+    from trajcomp.calibration.recalibrate import GROUPS, choose_rows, parameter_names
+    from trajcomp.commands.recalibrate import groups_of
+    from trajcomp.errors import CalibrationError
+    from trajcomp.model.model_file import load_model, model_files
+    from trajcomp.support.atomic import refuse_inputs
+
+    refuse_inputs([args.output], [*model_files(args.update), args.candidates])
+    model = load_model(args.update)
+    if "composite" not in model.modes:
+        raise CalibrationError(f"{args.update}: an update needs a model with mode composite")
+    candidates = read_measurements(args.candidates)
+    joints, _ = commanded(model.nominal, candidates)
+    if joints is None:
+        raise CalibrationError(f"{args.candidates}: candidates need commanded joints j1..j6 or full poses x..c")
+    groups = groups_of(args.only) or GROUPS
+    chosen, how = choose_rows(model, joints, args.count, groups, tracker=args.frame == "tracker", oriented=args.poses)
+    names = parameter_names(groups, tracker=args.frame == "tracker", oriented=args.poses)
+    outside = int(model.arm("composite").outside_rows(joints[chosen]).sum())
+    comments = [f"trajcomp plan --update {args.update}: {len(chosen)} of {len(joints)} candidates of "
+                f"{args.candidates} ({how}), observing {', '.join(names)}"]
+    picked = candidates.subset(chosen)
+    write_measurements(args.output, Measurements(joints=joints[chosen], position=picked.position,
+                                                 orientation=picked.orientation, lines=picked.lines),
+                       comments=comments)
+    info(f"{args.output}: {len(chosen)} of {len(joints)} candidate configurations ({how}), observing "
+         f"{', '.join(names)}" + (f"; {outside} lie outside the joint range the model was calibrated on"
+                                  if outside else ""))
+    return 0
+
+
+def run_grid(args):
     import numpy as np
 
     from trajcomp.arm.ik import Configuration
