@@ -52,6 +52,7 @@ from trajcomp.arm.transforms import abc_to_matrix, pose_to_matrix, rotvec_to_mat
 from trajcomp.calibration.calibrate import calibrate, commanded, mode_errors, to_base  # noqa: E402
 from trajcomp.calibration.layout import Layout, load_layout  # noqa: E402
 from trajcomp.calibration.measurement_plan import default_orientation, plan_grid  # noqa: E402
+from trajcomp.calibration.orientations import spread_orientations  # noqa: E402
 from trajcomp.calibration.measurements import Measurements, read_measurements  # noqa: E402
 from trajcomp.calibration.simulate import VirtualRobot  # noqa: E402
 from trajcomp.compensation.targets import compensate  # noqa: E402
@@ -189,12 +190,16 @@ HEADER = (f"{'class':26s}{'true mean':>9s}{'max':>8s}{'estimate':>10s}{'covered'
           f"{'wPASS':>7s}{'wFAIL':>7s}")
 
 
-def virtual_table(seeds=(21, 22, 23), profiles=("paper", "harsh")):
-    """Coverage and sharpness per class on foreign virtual UR10 arms calibrated as the README does."""
+def virtual_table(seeds=(21, 22, 23), profiles=("paper", "harsh"), orientations=1):
+    """Coverage and sharpness per class on foreign virtual UR10 arms calibrated as the README does.
+
+    ``orientations``: how many the plan spreads (`trajcomp plan --orientations`, 30 deg tilts).
+    """
     robot = load_robot("ur10")
-    plan = plan_grid(robot, CORNER, SIDE, STEP)
+    plan = plan_grid(robot, CORNER, SIDE, STEP, spread_orientations(default_orientation(robot), orientations,
+                                                                     np.radians(30.0)))
     q_plan = plan.joints[plan.reachable]
-    posture = int(branch_index(robot, q_plan[:1])[0])
+    posture = int(np.bincount(branch_index(robot, q_plan)).argmax())
     missed = 0
     for profile in profiles:
         for seed in seeds:
@@ -204,7 +209,7 @@ def virtual_table(seeds=(21, 22, 23), profiles=("paper", "harsh")):
                                 measured=arm.measure(q_plan, rng), lines=np.arange(len(q_plan)) + 2,
                                 path="<foreign arm>")
             model = calibrate(robot, meas)
-            print(f"\n== foreign UR10, profile {profile}, seed {seed}: {len(q_plan)} points, one orientation, "
+            print(f"\n== foreign UR10, profile {profile}, seed {seed}: {len(q_plan)} points, {orientations} orientation(s), "
                   f"mode {model.method}; tolerance {TOLERANCE:g} mm, programs of {PROGRAM}")
             print(HEADER)
             for name, (targets, tool, seed_q) in _classes(robot, rng, posture).items():

@@ -359,3 +359,30 @@ def test_the_chain_check_answers_as_the_nearest_solution_does():
     expected = np.all(np.abs(nearest - proposal[1:]) < 1e-9, axis=1)
     assert 0.3 < expected.mean() < 0.9  # both answers are asked for
     np.testing.assert_array_equal(posture._nearest_is_proposed(robot, q_all, valid, branch, proposal), expected)
+
+
+def test_a_program_whose_joints_were_solved_for_another_arm_is_refused_naming_both(tmp_path, capsys):
+    """A UR10 program (its targets with the joints its generator solved) compensated with a UR5's model."""
+    from conftest import calibrated_model
+
+    model = calibrated_model(tmp_path, "ur5", "250,-100,250", 200, 100)
+    ur5, ur10 = load_robot("ur5"), load_robot("ur10")
+    rng = np.random.default_rng(4)
+    targets = np.tile(fk(ur5, ur5.home), (6, 1, 1))
+    targets[:, :3, 3] = np.array([270.0, -80.0, 270.0]) + rng.uniform(0.0, 160.0, (6, 3))
+    header = "x,y,z,a,b,c,j1,j2,j3,j4,j5,j6,motion"
+    for robot, code in ((ur10, 2), (ur5, None)):
+        q = ik(robot, targets, seed=robot.home).q
+        np.testing.assert_allclose(fk(robot, q)[:, :3, 3], targets[:, :3, 3], atol=1e-6)
+        rows = [",".join(f"{v:.6f}" for v in (*T[:3, 3], *np.degrees(matrix_to_abc(T[:3, :3])), *np.degrees(j)))
+                + ",PTP" for T, j in zip(targets, q)]
+        program = tmp_path / f"{robot.name}.csv"
+        program.write_text("\n".join([header, *rows]) + "\n")
+        out = tmp_path / f"{robot.name}-out.csv"
+        result = main(["compensate", str(program), "--model", str(model), "-o", str(out), "--retime", "none"])
+        message = capsys.readouterr().err
+        if code == 2:  # refused, nothing written, both arms named
+            assert result == 2 and not out.exists()
+            assert "robot ur5's TCP" in message and "fit robot ur10" in message and "ur10.csv:2" in message
+        else:  # the same targets with the UR5's own joints: compensated
+            assert result in (0, 1) and out.exists()

@@ -37,7 +37,8 @@ from trajcomp.formats.configuration import BOUNDARY_TOLERANCE, binding, declared
 from trajcomp.errors import IKError
 from trajcomp.programs.frames import FrameTable, tool_groups
 from trajcomp.arm.ik import ik_all, turn_towards
-from trajcomp.arm.kinematics import shoulder_and_reach
+from trajcomp.arm.kinematics import fk, shoulder_and_reach
+from trajcomp.arm.robot import builtin_robot_names, load_robot
 from trajcomp.arm.track import carried_by_a_track
 from trajcomp.support.parallel import map_blocks
 
@@ -45,6 +46,7 @@ TURN = 2.0 * np.pi
 _WINDOW_TOL = 1e-9  # rad, slack of the joint limits
 _TURNS = np.arange(-3, 4)  # whole turns tried when placing a joint in its window
 METRES_BOX = 10.0  # mm: targets all this close to the base origin are positions in metres
+OTHER_ARM = 5.0  # mm: declared joints this far from their targets (median) were solved for another arm
 BLOCK = 16_384  # undeclared targets whose eight branches are held at once: bounded memory at millions of targets
 
 
@@ -131,6 +133,7 @@ def planned_joints(program, robot, *, tools=None, frames=None, workers=1):
     hint = table.joints[index]
     has_hint = np.all(np.isfinite(hint), axis=1)
     _fail_outside_limits(program, robot, index[has_hint], hint[has_hint])
+    _fail_other_arm(program, robot, index[has_hint], hint[has_hint], T_flange_tool[has_hint], T_base_tcp[has_hint])
     binds = binding(program)[index]
     stated = np.array([bool(table.config[i]) for i in index.tolist()], dtype=bool)
     configured = np.flatnonzero(~has_hint & stated & binds)
@@ -244,6 +247,36 @@ def _fail_outside_limits(program, robot, index, joints):
             f"{program.name}: {outside.size} targets declare joints outside the limits of robot {robot.name} "
             f"({shown}); wrong robot, or joints in the wrong unit? The program was not changed"
         )
+
+
+def _fail_other_arm(program, robot, index, joints, T_flange_tool, T_base_tcp):
+    """IKError for a program whose declared joints (M, 6), rad, do not reach its own targets on ``robot``.
+
+    A program carries the joints its generator solved for its targets on
+    the arm it was written for: where they put ``robot``'s TCP (with the
+    targets' tools, ``T_flange_tool`` (M, 4, 4)) more than `OTHER_ARM` mm
+    from the targets ``T_base_tcp`` (M, 4, 4) for most of them, the program
+    was written for another arm (a model of another robot of the same
+    maker). The message names the built-in robots whose kinematics the
+    joints do fit.
+    """
+    miss = np.median(_declared_miss(robot, joints, T_flange_tool, T_base_tcp)) if len(joints) else 0.0
+    if miss <= OTHER_ARM:
+        return
+    fitting = [name for name in builtin_robot_names() if name != robot.name
+               and (other := load_robot(name)).vendor == robot.vendor
+               and np.median(_declared_miss(other, joints, T_flange_tool, T_base_tcp)) <= OTHER_ARM]
+    fits = f"they fit robot {' or '.join(fitting)}" if fitting else "they fit no built-in robot"
+    raise IKError(
+        f"{program.name}: the joints it declares for its targets put robot {robot.name}'s TCP {miss:.1f} mm from "
+        f"them (median of {len(joints)}, {program.where(index[0])} first): the program was written for another arm "
+        f"({fits}); give the robot (or a model of the robot) it runs on. The program was not changed")
+
+
+def _declared_miss(robot, joints, T_flange_tool, T_base_tcp):
+    """Distance (M,) mm from the targets to where declared joints (M, 6) put ``robot``'s TCP on their tools."""
+    reached = fk(robot, joints, tcp=False) @ T_flange_tool
+    return np.linalg.norm(reached[:, :3, 3] - T_base_tcp[:, :3, 3], axis=1)
 
 
 def _fail_in_metres(program, T_base_tcp):
