@@ -1,12 +1,13 @@
 """The landing estimate as a forecast: coverage and sharpness per class of target, on arms the calibration never saw.
 
-Run:  python tests/benchmarks/bench_verdict.py [virtual] [ur10]   (default: both)
+Run:  python tests/benchmarks/bench_verdict.py [virtual] [ur10] [--orientations N]   (default: both, 1)
 
 ``virtual``: UR10 arms whose errors the project's simulator does not draw
 (`ForeignArm`: the paper and harsh profiles' errors plus a Hayati tilt of
 every link and third-order gear errors, seeds 21-23), calibrated as the
 README's flow does (one orientation, the cube corner 300, -100, 300, side
-400, step 100, composite, 5 folds: `calibrate`'s defaults). Per class of
+400, step 100, composite, 5 folds: `calibrate`'s defaults; ``--orientations
+5``: the plan spread over five orientations, 30 deg apart). Per class of
 target, 80 targets in 16 programs of 5, compensated in the default mode:
 
 - ``inside``: random positions in the measured cube, the measured orientation;
@@ -263,5 +264,11 @@ def ur10_table():
 TABLES = {"virtual": virtual_table, "ur10": ur10_table}
 
 if __name__ == "__main__":
-    for table in sys.argv[1:] or TABLES:
-        TABLES[table]()
+    arguments = sys.argv[1:]
+    spread = 1
+    if "--orientations" in arguments:  # the plan of the virtual arms spread over this many orientations
+        at = arguments.index("--orientations")
+        spread = int(arguments[at + 1])
+        del arguments[at:at + 2]
+    for table in arguments or TABLES:
+        TABLES[table](**({"orientations": spread} if table == "virtual" else {}))

@@ -100,6 +100,9 @@ EXAMPLES = Path(__file__).resolve().parents[2] / "examples" / "programs"
      "a Universal Robots program (urscript) cannot run on robot kuka_kr6_r900 (KUKA), the arm of the model"),
     (["compensate", "csv/weld.csv", "--model", "{model}", "--robot", "ur10", "-o", "{out}.csv"],
      "--robot ur10: the model {model} is for robot kuka_kr6_r900"),
+    (["compensate", "csv/weld.csv", "--model", "{model}", "-o", "{out}.csv"],  # its joints are a UR10's
+     "put robot kuka_kr6_r900's TCP"),
+    (["compensate", "csv/weld.csv", "--model", "{model}", "-o", "{out}.csv"], "they fit robot ur10"),
     (["retime", "kuka/weld.src", "--robot", "ur10", "-o", "{out}.src"],
      "a KUKA program (krl) cannot run on robot ur10 (Universal Robots), the arm --robot names"),
     (["convert", "csv/weld.csv", "{out}.ls", "--robot", "abb_irb4600"],

@@ -61,9 +61,15 @@ def test_in_place_replaces_the_program_it_reads(cell, capsys, monkeypatch):
     assert "wrote weld.src, weld.dat" in capsys.readouterr().err
 
 
+def _kuka_csv():
+    """The cell's weld.src as a CSV program (its targets with the KR6's joints), as text."""
+    main(["convert", "weld.src", "kuka-weld.csv", "--robot", "kuka_kr6_r900"])  # exit 1: a speed left to set
+    return Path("kuka-weld.csv").read_text()
+
+
 def test_a_file_name_with_glob_characters_is_that_file(cell, capsys, monkeypatch):
     monkeypatch.chdir(cell)
-    program = (ROOT / "examples" / "programs" / "csv" / "weld.csv").read_text()
+    program = _kuka_csv()
     Path("p[1].csv").write_text(program)
     Path("p1.csv").write_text(program)
     code = main(["compensate", "p[1].csv", "--model", "model.yaml", "-o", "p[1]-comp.csv"])
@@ -80,7 +86,8 @@ def test_a_report_that_cannot_be_written_after_the_program_is_exit_1_naming_the_
     assert Path("out.src").exists()
     Path("batch/reports").mkdir(parents=True)
     Path("batch/reports/weld.src.json").mkdir()  # a folder where the report goes: it cannot be written
-    assert main(["compensate", "weld.src", str(KUKA.parent / "csv" / "weld.csv"), "--model",
+    Path("weld.csv").write_text(_kuka_csv())
+    assert main(["compensate", "weld.src", "weld.csv", "--model",
                  "model.yaml", "-o", "batch", "--jobs", "1", "--report", "batch/reports", "--json-only", "--retime", "none"]) == 1
     files = {Path(f["input"]).name: f for f in json.loads(Path("batch/summary.json").read_text())["files"]}
     assert files["weld.src"]["status"] == "fail" and files["weld.src"]["outputs"] == ["batch/weld.src", "batch/weld.dat"]

@@ -690,7 +690,7 @@ def _landing(robot, dh, frame, data, held, fitted, split, progress, orientation,
                                                           for where, errors in sets]))
         finite = np.isfinite(d) & np.isfinite(e).all(axis=1)
         combined[mode] = (d[finite], g[finite], e[finite])
-    parameters = ([], np.zeros(0), np.zeros((0, 0)), np.zeros(0))
+    parameters = ([], np.zeros(0), np.zeros((0, 0)), np.zeros(0), 0.0)
     if dh is not None:
         parameters = landing.posterior(
             robot, dh.robot, joints, rotation, frame=frame, residuals=measured - fk(dh.robot, joints)[:, :3, 3],

@@ -256,16 +256,14 @@ def _fail_other_arm(program, robot, index, joints, T_flange_tool, T_base_tcp):
     the arm it was written for: where they put ``robot``'s TCP (with the
     targets' tools, ``T_flange_tool`` (M, 4, 4)) more than `OTHER_ARM` mm
     from the targets ``T_base_tcp`` (M, 4, 4) for most of them, the program
-    was written for another arm (a model of another robot of the same
-    maker). The message names the built-in robots whose kinematics the
-    joints do fit.
+    was written for another arm (a model of another robot). The message
+    names the built-in robots whose kinematics the joints do fit.
     """
     miss = np.median(_declared_miss(robot, joints, T_flange_tool, T_base_tcp)) if len(joints) else 0.0
     if miss <= OTHER_ARM:
         return
     fitting = [name for name in builtin_robot_names() if name != robot.name
-               and (other := load_robot(name)).vendor == robot.vendor
-               and np.median(_declared_miss(other, joints, T_flange_tool, T_base_tcp)) <= OTHER_ARM]
+               and np.median(_declared_miss(load_robot(name), joints, T_flange_tool, T_base_tcp)) <= OTHER_ARM]
     fits = f"they fit robot {' or '.join(fitting)}" if fitting else "they fit no built-in robot"
     raise IKError(
         f"{program.name}: the joints it declares for its targets put robot {robot.name}'s TCP {miss:.1f} mm from "
