@@ -10,14 +10,13 @@ cluster), and turns every error of one file into that file's result.
 import dataclasses
 import glob
 import json
-from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
 from trajcomp import __version__, formats
 from trajcomp.support import crash
 from trajcomp.support.atomic import write_atomic
 from trajcomp.errors import TrajcompError
-from trajcomp.support.parallel import init_worker
+from trajcomp.support.parallel import WorkerLost, Workers, can_fork
 
 PASS, FAIL, ERROR, CRASH = "pass", "fail", "error", "crash"
 EXIT_CODES = {PASS: 0, FAIL: 1, ERROR: 2, CRASH: crash.EXIT_CODE}  # a crash is a bug: neither success nor bad input
@@ -154,6 +153,12 @@ def run_batch(job, inputs, outputs, *, jobs=1, scheduler=None, done=None):
     done : callable, optional
         ``done(result)`` as each file finishes (e.g. a progress bar's update).
 
+    A local pool's worker that dies (the OOM killer) fails its file
+    (``error``) and is replaced; one stopped by SIGINT, SIGTERM or SIGHUP
+    stops the batch as that signal would (`trajcomp.support.parallel.Workers`),
+    as do those signals sent to this process: the files under way unwind
+    (nothing half-written) and no summary is written.
+
     Returns
     -------
     list of FileResult
@@ -161,14 +166,20 @@ def run_batch(job, inputs, outputs, *, jobs=1, scheduler=None, done=None):
     done = done or (lambda result: None)
     if scheduler is not None:
         return _on_dask(job, inputs, outputs, jobs, scheduler, done)
-    if jobs <= 1 or len(inputs) <= 1:
+    if jobs <= 1 or len(inputs) <= 1 or not can_fork():
         results = (run_one(job, i, o) for i, o in zip(inputs, outputs))
         return [_reported(result, done) for result in results]
-    pool = ProcessPoolExecutor(max_workers=jobs, initializer=init_worker)
-    try:
-        return [_reported(result, done) for result in pool.map(run_one, [job] * len(inputs), inputs, outputs)]
-    finally:  # interrupted: the files not started are dropped, the running ones finish (each written whole)
-        pool.shutdown(cancel_futures=True)
+    results = []
+    with Workers(lambda k: run_one(job, inputs[k], outputs[k]), min(jobs, len(inputs)), replace=True) as pool:
+        for k in range(len(inputs)):
+            pool.submit(k)
+        for k in range(len(inputs)):
+            try:
+                result = pool.result(k)
+            except WorkerLost as lost:  # killed (the OOM killer): this file failed, the others go on
+                result = FileResult(named(inputs[k]), status=ERROR, message=f"{lost}; it was not compensated")
+            results.append(_reported(result, done))
+    return results
 
 
 def _reported(result, done):

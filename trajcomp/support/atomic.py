@@ -33,13 +33,13 @@ import errno
 import json
 import os
 import shutil
-import signal
 import stat
 import tempfile
 import time
 from pathlib import Path
 
 from trajcomp.errors import WriteError
+from trajcomp.support import signals
 
 try:
     import fcntl
@@ -365,21 +365,6 @@ def _backup(path, backup):
     return backup
 
 
-@contextlib.contextmanager
-def _signals_held():
-    """SIGINT and SIGTERM held back during the block, delivered after it (where signal masks exist)."""
-    held = {signal.SIGINT, signal.SIGTERM}
-    try:
-        before = signal.pthread_sigmask(signal.SIG_BLOCK, held)
-    except (AttributeError, OSError):
-        yield
-        return
-    try:
-        yield
-    finally:
-        signal.pthread_sigmask(signal.SIG_SETMASK, before)
-
-
 def _sync_folders(paths):
     """Flush the folders of ``paths`` to disk (their renames and new names); where a folder cannot be, skip."""
     for folder in _folders(paths):
@@ -424,7 +409,7 @@ def _commit(staged):
                 backups[path] = _backup(path, f"{staged[path]}.bak")
         if len(staged) > 1:
             journal = _write_journal(staged, backups)
-        with _signals_held():  # Ctrl-C or SIGTERM arrives after the last rename, not between two
+        with signals.held():  # Ctrl-C, SIGTERM or SIGHUP arrives after the last rename, not between two
             for path, tmp in staged.items():
                 os.replace(tmp, path)
                 done.append(path)
