@@ -91,31 +91,40 @@ def is_pattern(text):
     return glob.has_magic(text) and not Path(text).exists()
 
 
-def output_paths(inputs, out_dir):
-    """``out_dir / relative`` of every input (Path list).
+def output_paths(inputs, out_dir, suffix=None):
+    """``out_dir / relative`` of every input (Path list), its extension replaced by ``suffix`` when given.
+
+    Every per-program output (the program, its report under a report
+    folder) lies at that relative path, so that the input folders are
+    mirrored and two programs of the same name in two folders stay apart.
 
     Parameters
     ----------
     inputs : sequence of (Path, PurePath)
         As `expand_inputs` gives them.
     out_dir : str or Path
+    suffix : str, optional
+        The extension of another language written (``--to``).
 
     Raises
     ------
     TrajcompError
-        Two inputs written to the same file (their outputs would collide),
-        or ``out_dir`` is a file.
+        Two inputs written to the same file (their outputs would collide,
+        also when only their extensions tell them apart), or ``out_dir`` is
+        a file.
     """
     out_dir = Path(out_dir)
     if out_dir.exists() and not out_dir.is_dir():
         raise TrajcompError(f"{out_dir}: with several programs, -o names a folder, and this is a file")
-    seen = {}
+    seen, outputs = {}, []
     for path, relative in inputs:
+        relative = relative.with_suffix(suffix) if suffix else relative
         key = relative.as_posix().lower()  # KRL and Windows controllers do not tell case apart
         if key in seen:
             raise TrajcompError(f"{seen[key]} and {path} would both be written to {out_dir / relative}")
         seen[key] = path
-    return [out_dir / relative for _, relative in inputs]
+        outputs.append(out_dir / relative)
+    return outputs
 
 
 def run_one(job, path, output):

@@ -124,8 +124,8 @@ class CompensationJob:
         share points (`trajcomp.formats.task.groups`), compensated as one
         program written beside the first output as they lie beside the
         first file. The report goes to ``report`` or, with
-        ``report_folder``, to ``report / <output name>`` (``.html`` and
-        ``.json``). No output may be an input (the program's files unless
+        ``report_folder``, to ``report / <output's path under
+        output_root>`` (``.html`` and ``.json``), its folder made. No output may be an input (the program's files unless
         ``in_place``, the model's); a report that cannot be written once
         the program is makes the file fail (exit 1) with the files written
         listed, not an input error.
@@ -135,7 +135,7 @@ class CompensationJob:
             path, output = task[0], output[0]
         if self.retime not in RETIME_CHOICES:
             raise TrajcompError(f"retime: expected one of {', '.join(RETIME_CHOICES)}, got {self.retime!r}")
-        target = _report_target(self.report, self.report_folder, output)
+        target = _report_target(self.report, self.report_folder, output, self.output_root)
         with Stages(STAGES, desc=Path(path).name, enabled=self.show_stages) as stages, kept_apart():
             model = loaded_model(self.model)
             whose = "the arm of the model" + (f" {self.source}" if self.source else "")
@@ -390,11 +390,14 @@ def _file_model_info(path, mode):
     return model_entry(path, _model_file(path), mode)
 
 
-def _report_target(report, folder, output):
-    """Where a job's report goes: ``report``, or ``report / <output name>`` for a batch's folder; None for none."""
+def _report_target(report, folder, output, root=None):
+    """Where a job's report goes: ``report``; for a batch's folder, ``report / <output's path under root>``
+    (the input folders mirrored, as the programs are), or ``report / <output name>`` without a root; None for none."""
     if not report:
         return None
-    return Path(report) / Path(output).name if folder else Path(report)
+    if not folder:
+        return Path(report)
+    return Path(report) / (Path(output).relative_to(root) if root is not None else Path(output).name)
 
 
 def _write_report(compliance, target, json_only, protect, written):
