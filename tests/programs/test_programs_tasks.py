@@ -423,3 +423,30 @@ def test_a_task_of_several_files_names_the_file_of_each_motion_it_lists(tmp_path
     (document,) = [json.loads(p.read_text()) for p in (tmp_path / "reports").rglob("*.json")]
     assert [(m.get("file"), m["line"], m["text"]) for m in document["not_compensated"]] == [
         ("seam.src", 4, "LIN {Z 400}"), ("weld.src", 4, "LIN {Z 500}")]
+
+
+def test_a_task_whose_motions_lie_in_its_second_module_gets_its_speeds_written_there(tmp_path):
+    """BData.mod (a tooldata only) sorts before ZMain.mod (the motions): the speed write-back once edited
+    the first module's text at the second's positions (IndexError, exit 3)."""
+    robot = load_robot("abb_irb4600")
+    folder = tmp_path / "task"
+    folder.mkdir()
+    (folder / "BData.mod").write_text("MODULE BData\n  PERS tooldata tGun:=[TRUE,[[0,0,150],[1,0,0,0]],"
+                                      "[2,[0,0,50],[1,0,0,0],0,0,0]];\nENDMODULE\n")
+    (folder / "ZMain.mod").write_text(
+        f"MODULE ZMain\n  CONST robtarget p10:={_robtarget(robot, [0, 10, 15, 0, 50, 0])};\n"
+        f"  CONST robtarget p20:={_robtarget(robot, [20, 10, 15, 0, 50, 0])};\n"
+        "  PROC main()\n    MoveJ p10,v1000,z10,tGun;\n    MoveJ p20,v1000,z10,tGun;\n  ENDPROC\nENDMODULE\n")
+    plan, meas, model = tmp_path / "plan.csv", tmp_path / "meas.csv", tmp_path / "abb.yaml"
+    assert main(["plan", "--robot", "abb_irb4600", "--cube", "1000,-300,700", "--side", "240", "--step", "120",
+                 "-o", str(plan)]) == 0
+    assert main(["simulate", str(plan), "--robot", "abb_irb4600", "--seed", "1", "-o", str(meas)]) == 0
+    assert main(["calibrate", str(meas), "--robot", "abb_irb4600", "--grid-step", "120", "--folds", "0",
+                 "-o", str(model)]) == 0
+    out = tmp_path / "out"
+    assert main(["compensate", str(folder), "--model", str(model), "-o", str(out), "--jobs", "1"]) in (0, 1)
+    (entry,) = json.loads((out / "summary.json").read_text())["files"]
+    assert entry["status"] in ("pass", "fail"), entry["message"]
+    written = (out / "ZMain.mod").read_text()
+    assert re.search(r"MoveJ p20,v1000\\T:=[0-9.]+,z10,tGun;", written), written
+    assert "\\T" not in (folder / "BData.mod").read_text()
