@@ -58,6 +58,7 @@ COMMANDS = {  # name: (arguments, how long it runs about (s), what a finished ru
 
 
 def main(moments=100, seed=0):
+    signal.signal(signal.SIGINT, signal.default_int_handler)  # not ignored by the runs (a shell's background job)
     rng = random.Random(seed)
     table = collections.defaultdict(lambda: [0, 0, 0, 0, 0.0])
     broken = []

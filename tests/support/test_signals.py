@@ -18,7 +18,7 @@ import pytest
 from tests.signal_runs import STOPPING, long_program, run_stopped
 from trajcomp.compensation.batch import ERROR, FileResult, run_batch
 from trajcomp.support.parallel import WorkerLost, in_background, map_blocks, share_blocks
-from trajcomp.support.signals import Interrupted, raised
+from trajcomp.support.signals import Interrupted, held, raised
 
 pytestmark = pytest.mark.skipif(not sys.platform.startswith("linux"), reason="process groups, /proc and fork")
 SLACK = 4.0  # s from the signal to the end allowed here, on a loaded CI machine (the benchmark holds 2 s)
@@ -165,7 +165,7 @@ def test_a_stopping_signal_while_matplotlib_loads_is_taken_after_it(tmp_path):
     """Raised into the initialisation of one of its C extensions, it aborted the interpreter (exit 134)."""
     script = (
         "import os, signal, sys, threading\n"
-        "from trajcomp.support.signals import Interrupted, raised\n"
+        "from trajcomp.support.signals import Interrupted, held, raised\n"
         "from trajcomp.report.plots import pyplot\n"
         "threading.Timer(float(sys.argv[1]), lambda: os.kill(os.getpid(), signal.SIGTERM)).start()\n"
         "with raised():\n"
@@ -178,3 +178,34 @@ def test_a_stopping_signal_while_matplotlib_loads_is_taken_after_it(tmp_path):
         done = subprocess.run([sys.executable, "-c", script, str(delay)], capture_output=True, text=True, timeout=60,
                               env=dict(os.environ, PYTHONPATH=os.getcwd()))
         assert done.returncode == 143 and "Fatal" not in done.stderr and "Traceback" not in done.stderr, done.stderr
+
+
+def test_a_signal_held_while_another_thread_runs_is_raised_after_the_block():
+    """The kernel gives a process's signal to a thread not blocking it: the hold must not depend on the mask."""
+    import threading
+
+    other = threading.Event()
+    thread = threading.Thread(target=other.wait)
+    thread.start()
+    reached = []
+    try:
+        with raised(), pytest.raises(Interrupted) as stop:
+            with held():
+                os.kill(os.getpid(), signal.SIGTERM)
+                time.sleep(0.3)  # the handler runs here, in the main thread
+                reached.append(True)
+    finally:
+        other.set()
+        thread.join()
+    assert reached and stop.value.signum == signal.SIGTERM
+
+
+def test_a_signal_the_process_ignores_stays_ignored():
+    """``nohup trajcomp ...`` ignores SIGHUP; a shell's background job, SIGINT."""
+    previous = signal.signal(signal.SIGHUP, signal.SIG_IGN)
+    try:
+        with raised():
+            os.kill(os.getpid(), signal.SIGHUP)
+            time.sleep(0.2)
+    finally:
+        signal.signal(signal.SIGHUP, previous)

@@ -164,6 +164,7 @@ def write_files_atomic(files, *, protect=(), advice="write to another file"):
         with _locked_folders(files):
             for folder in _folders(files):
                 recover(folder, names=[p.name for p in files if _folder(p) == folder])
+            signals.check()  # a stop whose exception was lost on the way commits nothing
             _commit(staged)
     except BaseException:
         for tmp in staged.values():

@@ -31,7 +31,8 @@ import time
 from multiprocessing import connection
 
 from trajcomp.errors import TrajcompError
-from trajcomp.support.signals import STOPPING, Interrupted, die_by, held, raise_in_this_process, signal_of
+from trajcomp.support.signals import (STOPPING, Interrupted, check, die_by, held, raise_in_this_process,
+                                      release_inherited, signal_of)
 from trajcomp.support.threads import pin_loaded
 
 _LOOKAHEAD = 2  # blocks a worker may compute ahead of the consumer, each
@@ -175,7 +176,7 @@ def share_blocks(function, count, workers=1):
     def helper(sending, parent):
         init_worker(parent)
         try:
-            signal.pthread_sigmask(signal.SIG_UNBLOCK, STOPPING)
+            release_inherited()
             sending.send(list(blocks()))  # at the end: a result sent at once would wait for this process to read it
         except KeyboardInterrupt as stop:  # SIGINT, SIGTERM, SIGHUP: die by it, for this process to see
             die_by(signal_of(stop))
@@ -306,6 +307,7 @@ class Workers:
 
     def submit(self, k):
         """Hand block ``k`` to an idle worker, or queue it for the next one."""
+        check()
         with self._lock:
             self._queue.append(k)
             self._dispatch()
@@ -315,6 +317,7 @@ class Workers:
         with self._lock:
             while k not in self._results and self._stopped is None:
                 self._lock.wait(0.25)  # a signal to this process is handled between the waits
+                check()
             if k not in self._results:
                 raise self._stopped
             succeeded, value = self._results.pop(k)
@@ -437,7 +440,7 @@ def _serve(function, connection, parent):
     file; ``parent`` is the pid of the process that forked it, read before the fork (`init_worker`)."""
     init_worker(parent)
     try:
-        signal.pthread_sigmask(signal.SIG_UNBLOCK, STOPPING)
+        release_inherited()
         while True:
             try:
                 k = connection.recv()

@@ -19,6 +19,7 @@ import threading
 
 STOPPING = tuple(getattr(signal, name) for name in ("SIGINT", "SIGTERM", "SIGHUP") if hasattr(signal, name))
 _STOPPED = []  # the signal that stopped this process's run, once raised (a second one is not raised again)
+_HELD = [0]  # how deep within `held` this process is, then the signal that came meanwhile, if one did
 
 
 class Interrupted(KeyboardInterrupt):
@@ -48,24 +49,45 @@ def signal_of(interruption):
 
 
 def _raise(signum, frame):
-    """The handler: raise `Interrupted` the first time; later signals find the run already unwinding."""
-    if not _STOPPED:
-        _STOPPED.append(signum)
-        raise Interrupted(signum)
+    """The handler: raise `Interrupted` the first time, unless held (then at the end of `held`); later signals
+    find the run already unwinding."""
+    if _STOPPED:
+        return
+    if _HELD[0]:
+        _HELD[1:] = _HELD[1:] or [signum]
+        return
+    _STOPPED.append(signum)
+    raise Interrupted(signum)
+
+
+def check():
+    """Raise `Interrupted` if a stopping signal came and its exception was lost on the way.
+
+    The handler runs wherever the main thread is; where it is running an
+    at-fork callback, a destructor or a weak reference's callback, Python
+    prints the exception and goes on. The places that start work or
+    write call this, so that such a run stops there.
+    """
+    if _STOPPED and not _HELD[0]:
+        raise Interrupted(_STOPPED[0])
 
 
 @contextlib.contextmanager
 def raised():
     """Within the block, each of `STOPPING` raises `Interrupted` in the main thread (the handlers restored after).
 
-    Elsewhere than in the main thread, where no handler can be set, the block
-    runs as it is.
+    A signal this process ignores (``nohup`` ignores SIGHUP, a shell's
+    background job SIGINT) stays ignored. Elsewhere than in the main thread,
+    where no handler can be set, the block runs as it is.
     """
     if threading.current_thread() is not threading.main_thread():
         yield
         return
-    previous = {signum: signal.signal(signum, _raise) for signum in STOPPING}
     _STOPPED.clear()
+    previous = {signum: signal.getsignal(signum) for signum in STOPPING}
+    for signum, handler in previous.items():
+        if handler is not signal.SIG_IGN:
+            signal.signal(signum, _raise)
     try:
         yield
     finally:
@@ -75,29 +97,55 @@ def raised():
 
 
 def raise_in_this_process():
-    """Have each of `STOPPING` raise `Interrupted` from now on (a worker process's start)."""
+    """Have each of `STOPPING` this process does not ignore raise `Interrupted` from now on (a worker's start)."""
     _STOPPED.clear()
     for signum in STOPPING:
-        signal.signal(signum, _raise)
+        if signal.getsignal(signum) is not signal.SIG_IGN:
+            signal.signal(signum, _raise)
 
 
 @contextlib.contextmanager
 def held():
-    """`STOPPING` held back during the block and delivered after it (where signal masks exist).
+    """`STOPPING` held back during the block and raised after it.
 
     For a block that must not be cut: the renames of a set of files, or the
     import of a C extension (an exception raised into one's initialisation
-    aborts the interpreter, exit 134).
+    aborts the interpreter, exit 134). Held twice: by the signal mask of
+    this thread (where signal masks exist), and by `_raise`, which the
+    interpreter runs in the main thread even when another thread took the
+    signal. A process forked within the block inherits it held, until
+    `release_inherited`.
     """
+    _HELD[0] += 1
     try:
         before = signal.pthread_sigmask(signal.SIG_BLOCK, STOPPING)
     except (AttributeError, OSError):
-        yield
-        return
+        before = None
     try:
         yield
     finally:
-        signal.pthread_sigmask(signal.SIG_SETMASK, before)
+        if before is not None:
+            signal.pthread_sigmask(signal.SIG_SETMASK, before)  # a signal that waited in the mask is handled here
+        _HELD[0] -= 1
+        _raise_held()
+
+
+def release_inherited():
+    """In a process forked within `held`: hold no more, raising `Interrupted` for a signal that came meanwhile."""
+    _HELD[0] = 0
+    try:
+        signal.pthread_sigmask(signal.SIG_UNBLOCK, STOPPING)
+    except (AttributeError, OSError):
+        pass
+    _raise_held()
+
+
+def _raise_held():
+    if not _HELD[0] and _HELD[1:]:
+        signum = _HELD.pop()
+        if not _STOPPED:
+            _STOPPED.append(signum)
+            raise Interrupted(signum)
 
 
 def die_by(signum):
