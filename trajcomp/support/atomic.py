@@ -30,6 +30,7 @@ writing that file.
 
 import contextlib
 import errno
+import hashlib
 import json
 import os
 import shutil
@@ -156,16 +157,16 @@ def write_files_atomic(files, *, protect=(), advice="write to another file"):
     """
     files = {Path(path): data for path, data in files.items()}
     refuse_inputs(files, protect, advice)
-    staged, holds = {}, []
+    staged, holds, digests = {}, [], {}
     try:
         for path, data in files.items():
-            staged[path], hold = _stage(path, data)
+            staged[path], hold, digests[path] = _stage(path, data)
             holds.append(hold)
         with _locked_folders(files):
             for folder in _folders(files):
                 recover(folder, names=[p.name for p in files if _folder(p) == folder])
             signals.check()  # a stop whose exception was lost on the way commits nothing
-            _commit(staged)
+            _commit(staged, digests)
     except BaseException:
         for tmp in staged.values():
             Path(tmp).unlink(missing_ok=True)
@@ -208,7 +209,7 @@ def recover(folder, names=()):
     with _locked_folders([folder / "lock"]):
         for journal in journals:
             if journal.suffix == ".json":
-                _roll_forward(journal)
+                _roll_forward(journal, names)
             else:  # a journal being written when its run was killed: the commit never started
                 journal.unlink(missing_ok=True)
         for name in names:
@@ -217,24 +218,58 @@ def recover(folder, names=()):
                     stray.unlink(missing_ok=True)
 
 
-def _roll_forward(journal):
+def _roll_forward(journal, names=()):
+    """Do the renames a journal names that are still to do, then remove it and its backups.
+
+    Its paths are taken relative to its folder. A file whose new version
+    (its temporary) is gone and which is not that version (its SHA-256
+    differs: the folder was copied without the temporaries, or a file was
+    replaced since) leaves the set torn: refused, unless every file of the
+    set is among ``names``, which the run is writing anew.
+
+    Raises
+    ------
+    WriteError
+        The journal cannot be read, a rename fails, or the set is torn.
+    """
     try:
         entries = json.loads(journal.read_text(encoding="utf-8"))
+        here = journal.parent
+        renames = [(here / tmp, here / target, *digest) for tmp, target, *digest in entries["renames"]]
+        backups = [here / backup for backup in entries["backups"]]
     except FileNotFoundError:  # another run rolled it forward meanwhile
         return
-    except (OSError, ValueError) as exc:
+    except (OSError, ValueError, TypeError, KeyError) as exc:
         raise WriteError(f"{journal}: an interrupted commit's journal cannot be read: {exc}") from exc
+    torn = [target for tmp, target, *digest in renames if not tmp.exists() and digest and _sha256(target) != digest[0]]
+    if torn and not {target.name for _, target, *_ in renames} <= set(names):
+        raise WriteError(
+            f"{journal}: a set of files a run was stopped while committing is torn: {', '.join(map(str, torn))} "
+            "is not the file that run wrote, and its new version is gone (the folder copied or moved without "
+            "it?); write the set again, or restore it, then remove the journal")
     try:
-        for tmp, target in entries["renames"]:
-            if os.path.exists(tmp):
+        for tmp, target, *_ in renames:
+            if tmp.exists():
                 os.replace(tmp, target)
-        _sync_folders(target for _, target in entries["renames"])
-        for backup in entries["backups"]:
-            Path(backup).unlink(missing_ok=True)
+        _sync_folders(target for _, target, *_ in renames)
+        for backup in backups:
+            backup.unlink(missing_ok=True)
         journal.unlink()
     except OSError as exc:
         raise WriteError(f"{journal}: cannot complete an interrupted commit: {exc}") from exc
     _sync_folders([journal])
+
+
+def _sha256(path):
+    """The SHA-256 (hex) of a file's content, or None when it cannot be read."""
+    digest = hashlib.sha256()
+    try:
+        with open(path, "rb") as handle:
+            for block in iter(lambda: handle.read(1 << 20), b""):
+                digest.update(block)
+    except OSError:
+        return None
+    return digest.hexdigest()
 
 
 def _glob_escape(name):
@@ -312,8 +347,8 @@ def _lock(fd, path):
 def _stage(path, data):
     """A temporary file beside ``path`` holding ``data``, flushed to disk, with ``path``'s mode.
 
-    Returns its name and an open descriptor holding it locked (close it once
-    the temporary is renamed or removed).
+    Returns its name, an open descriptor holding it locked (close it once
+    the temporary is renamed or removed) and the SHA-256 of ``data`` (hex).
     """
     folder = _folder(path)
     if not folder.is_dir():
@@ -331,8 +366,11 @@ def _stage(path, data):
         Path(tmp).unlink(missing_ok=True)
         raise WriteError(f"{path}: cannot write: {exc}") from exc
     try:
+        digest = hashlib.sha256()
         with os.fdopen(fd, "wb") as handle:
-            handle.writelines([data] if isinstance(data, (bytes, bytearray, memoryview)) else data)
+            for piece in [data] if isinstance(data, (bytes, bytearray, memoryview)) else data:
+                digest.update(piece)
+                handle.write(piece)
             handle.flush()
             os.fsync(handle.fileno())
         os.chmod(tmp, _mode_for(path))
@@ -344,7 +382,7 @@ def _stage(path, data):
         os.close(hold)
         Path(tmp).unlink(missing_ok=True)
         raise
-    return tmp, hold
+    return tmp, hold, digest.hexdigest()
 
 
 def _mode_for(path):
@@ -381,11 +419,19 @@ def _sync_folders(paths):
             os.close(fd)
 
 
-def _write_journal(staged, backups):
-    """Write the journal of a commit beside its first file, whole (temporary, fsync, rename); its path."""
+def _write_journal(staged, backups, digests):
+    """Write the journal of a commit beside its first file, whole (temporary, fsync, rename); its path.
+
+    It names each rename (temporary, file, the new content's SHA-256) and
+    each backup by its path relative to the journal's folder, so that the
+    folder moved or copied with its journal still rolls forward its own
+    files, and a file that is not the new one is told apart (`_roll_forward`).
+    """
     first = next(iter(staged))
-    entries = {"renames": [[os.path.abspath(tmp), os.path.abspath(path)] for path, tmp in staged.items()],
-               "backups": [os.path.abspath(b) for b in backups.values()]}
+    here = os.path.abspath(_folder(first))
+    entries = {"renames": [[os.path.relpath(tmp, here), os.path.relpath(path, here), digests[path]]
+                           for path, tmp in staged.items()],
+               "backups": [os.path.relpath(b, here) for b in backups.values()]}
     fd, tmp = tempfile.mkstemp(prefix=JOURNAL_PREFIX, suffix=".json.tmp", dir=_folder(first))
     journal = Path(tmp[: -len(".tmp")])
     try:
@@ -401,15 +447,16 @@ def _write_journal(staged, backups):
     return journal
 
 
-def _commit(staged):
-    """Rename staged temporaries into place (through a journal for several); on failure put every replaced file back."""
+def _commit(staged, digests):
+    """Rename staged temporaries into place (through a journal for several, naming their ``digests``); on failure
+    put every replaced file back."""
     backups, done, journal, path = {}, [], None, None
     try:
         for path in staged:
             if path.exists():
                 backups[path] = _backup(path, f"{staged[path]}.bak")
         if len(staged) > 1:
-            journal = _write_journal(staged, backups)
+            journal = _write_journal(staged, backups, digests)
         with signals.held():  # Ctrl-C, SIGTERM or SIGHUP arrives after the last rename, not between two
             for path, tmp in staged.items():
                 os.replace(tmp, path)
