@@ -32,7 +32,7 @@ from trajcomp.errors import TimingError, TrajcompError
 from trajcomp.model.compensation_model import CompensationModel
 from trajcomp.model.model_file import load_model, model_files
 from trajcomp.report import Criteria, compliance_report, file_entry, model_entry, report_paths, summary_lines
-from trajcomp.support.atomic import refuse_inputs
+from trajcomp.support.atomic import FileSet, refuse_inputs
 from trajcomp.support.memory import end_stage, kept_apart, release
 from trajcomp.support.parallel import in_background, meanwhile
 from trajcomp.support.progress import Stages
@@ -167,18 +167,20 @@ class CompensationJob:
                 timing = timing_lines(timed, before)
             _next(stages)
             protect = inputs[len(sources):] if self.in_place else inputs
-            written = formats.write(output, corrected, out_format.name, protect=protect, workers=self.workers,
-                                    root=self.output_root)
-            _next(stages)
-            mode = self.mode or model.method
-            compliance = compliance_report(
-                report, model.nominal, criteria=self.criteria, model=model,
-                model_info=_model_info(self.model, mode, self.source), mode=mode,
-                files=[file_entry("program", p) for p in sources] + [file_entry("output", p) for p in written],
-                options=self.options(), timing=timed, cycle_time_before=before if timed is not None else None,
-                workers=self.workers,
-            )
-            reports, unwritten = _write_report(compliance, target, self.json_only, [*inputs, *written], written)
+            with FileSet() as outputs:  # the program and its report land together, or neither
+                written = formats.write(output, corrected, out_format.name, protect=protect, workers=self.workers,
+                                        root=self.output_root, into=outputs)
+                _next(stages)
+                mode = self.mode or model.method
+                compliance = compliance_report(
+                    report, model.nominal, criteria=self.criteria, model=model,
+                    model_info=_model_info(self.model, mode, self.source), mode=mode,
+                    files=[file_entry("program", p) for p in sources] + _output_entries(written, outputs),
+                    options=self.options(), timing=timed, cycle_time_before=before if timed is not None else None,
+                    workers=self.workers,
+                )
+                reports, unwritten = _write_report(compliance, target, self.json_only, [*inputs, *written], written,
+                                                   outputs)
             _next(stages)
         lines = [*summary_lines(compliance.doc), *(f"warning: {w}" for w in report.warnings), *timing,
                  f"wrote {', '.join(map(str, written + reports))}"]
@@ -253,15 +255,16 @@ class RetimeJob:
         timed, timing = timed_program(program, self.robot, joints, self.method, self.path_tolerance, self.tools,
                                       self.frames)
         protect = inputs[len(sources):] if self.in_place else inputs
-        written = formats.write(output, timed, protect=protect)
-        report = as_written_report(program, plan)
-        compliance = compliance_report(
-            report, self.robot, criteria=self.criteria, command="retime", timing=timing,
-            files=[file_entry("program", p) for p in sources] + [file_entry("output", p) for p in written],
-            options={"method": self.method, "path_tolerance_mm": self.path_tolerance},
-        )
-        reports, unwritten = _write_report(compliance, self.report and Path(self.report), self.json_only,
-                                           [*inputs, *written], written)
+        with FileSet() as outputs:  # the program and its report land together, or neither
+            written = formats.write(output, timed, protect=protect, into=outputs)
+            report = as_written_report(program, plan)
+            compliance = compliance_report(
+                report, self.robot, criteria=self.criteria, command="retime", timing=timing,
+                files=[file_entry("program", p) for p in sources] + _output_entries(written, outputs),
+                options={"method": self.method, "path_tolerance_mm": self.path_tolerance},
+            )
+            reports, unwritten = _write_report(compliance, self.report and Path(self.report), self.json_only,
+                                               [*inputs, *written], written, outputs)
         lines = [*timing_lines(timing), f"wrote {', '.join(map(str, written))}", *summary_lines(compliance.doc)]
         if reports:
             lines.append(f"report: {', '.join(map(str, reports))}")
@@ -400,13 +403,18 @@ def _report_target(report, folder, output, root=None):
     return Path(report) / (Path(output).relative_to(root) if root is not None else Path(output).name)
 
 
-def _write_report(compliance, target, json_only, protect, written):
-    """Write the report to ``target`` (when given): ``(report files, "")``, or ``([], why)`` when it cannot be
-    written once the program is (``written``)."""
+def _output_entries(written, outputs):
+    """The report's entries of the program files ``written`` (staged in the `FileSet` ``outputs``)."""
+    return [file_entry("output", p, staged=outputs.digest(p)) for p in written]
+
+
+def _write_report(compliance, target, json_only, protect, written, outputs):
+    """Stage the report to ``target`` (when given) into the `FileSet` ``outputs`` beside the program
+    (``written``): ``(report files, "")``, or ``([], why)`` when it cannot be written (the program is, alone)."""
     if not target:
         return [], ""
     try:
-        return compliance.write(target, json_only=json_only, protect=protect), ""
+        return compliance.write(target, json_only=json_only, protect=protect, into=outputs), ""
     except TrajcompError as exc:
         return [], f"the program is written ({', '.join(map(str, written))}) but not its report: {exc}"
 

@@ -155,25 +155,82 @@ def write_files_atomic(files, *, protect=(), advice="write to another file"):
         A folder does not exist, a file cannot be written or is an input;
         nothing on disk has changed.
     """
-    files = {Path(path): data for path, data in files.items()}
-    refuse_inputs(files, protect, advice)
-    staged, holds, digests = {}, [], {}
-    try:
-        for path, data in files.items():
-            staged[path], hold, digests[path] = _stage(path, data)
-            holds.append(hold)
-        with _locked_folders(files):
-            for folder in _folders(files):
-                recover(folder, names=[p.name for p in files if _folder(p) == folder])
-            signals.check()  # a stop whose exception was lost on the way commits nothing
-            _commit(staged, digests)
-    except BaseException:
-        for tmp in staged.values():
+    with FileSet() as outputs:
+        outputs.stage(files, protect=protect, advice=advice)
+
+
+class FileSet:
+    """Files staged one group after another and committed as one set at the end of the block, all or none.
+
+    For outputs that must not be told apart by a kill or a concurrent run,
+    and whose later files depend on the earlier ones: a program and its
+    report, which names the program's SHA-256 (`digest`). Each `stage`
+    writes its files to temporaries (`write_files_atomic`); leaving the
+    block normally renames every staged file into place in one commit;
+    leaving it by an exception removes them, nothing on disk changed.
+    """
+
+    def __init__(self):
+        self._staged, self._digests, self._holds = {}, {}, []
+
+    def stage(self, files, *, protect=(), advice="write to another file"):
+        """Write ``files`` to temporaries, to be committed with the set; all of them or, on an error, none.
+
+        Parameters as `write_files_atomic`'s.
+
+        Raises
+        ------
+        WriteError
+            A folder does not exist, a file cannot be written, is an input,
+            or is staged already; the set's other files stay staged.
+        """
+        files = {Path(path): data for path, data in files.items()}
+        refuse_inputs(files, protect, advice)
+        for path in files:
+            if path in self._staged:
+                raise WriteError(f"{path}: written twice in one set of outputs; {advice}")
+            if path.is_dir():  # found now, not when the set's renames fail
+                raise WriteError(f"{path}: is a folder; {advice}")
+        staged = {}
+        try:
+            for path, data in files.items():
+                staged[path], hold, self._digests[path] = _stage(path, data)
+                self._holds.append(hold)
+        except BaseException:
+            for tmp in staged.values():
+                Path(tmp).unlink(missing_ok=True)
+            raise
+        self._staged.update(staged)
+        return list(files)
+
+    def digest(self, path):
+        """``(SHA-256 hex, bytes)`` of a staged file's content."""
+        return self._digests[Path(path)], os.stat(self._staged[Path(path)]).st_size
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, kind, error, trace):
+        try:
+            if error is None and self._staged:
+                with _locked_folders(self._staged):
+                    for folder in _folders(self._staged):
+                        recover(folder, names=[p.name for p in self._staged if _folder(p) == folder])
+                    signals.check()  # a stop whose exception was lost on the way commits nothing
+                    _commit(self._staged, self._digests)
+        except BaseException:
+            self._remove()
+            raise
+        finally:
+            if error is not None:
+                self._remove()
+            for hold in self._holds:
+                os.close(hold)
+        return False
+
+    def _remove(self):
+        for tmp in self._staged.values():
             Path(tmp).unlink(missing_ok=True)
-        raise
-    finally:
-        for hold in holds:
-            os.close(hold)
 
 
 def recover(folder, names=()):
