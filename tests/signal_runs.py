@@ -63,8 +63,8 @@ class Outcome:
         if self.code in (0, 1):  # it finished before the signal came
             if not finished(self.files):
                 found.append(f"finished with {self.code} but wrote {self.files}")
-        elif self.code == -signum and not self.files:
-            pass  # killed by it before setting its handlers (the interpreter's start): the shell reports 128 + n too
+        elif self.code == -signum and (not self.files or finished(self.files)):
+            pass  # killed by it before its handlers were set or after they were put back: the shell reports 128 + n
         elif self.code != STOPPING[signum]:
             found.append(f"exit {self.code}, not {STOPPING[signum]}: {self.stderr[-300:]}")
         elif not stopped(self.files):

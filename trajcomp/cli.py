@@ -25,7 +25,7 @@ import traceback
 from trajcomp import __version__
 from trajcomp.support.crash import bug_message, save_traceback
 from trajcomp.support.crash import EXIT_CODE as CRASHED
-from trajcomp.support.signals import Interrupted, raised
+from trajcomp.support.signals import Interrupted, raised, stopped
 from trajcomp.support.threads import THREAD_VARIABLES
 from trajcomp.commands import COMMANDS
 from trajcomp.errors import ToleranceError, TrajcompError
@@ -89,11 +89,7 @@ def _run(argv):
         print(f"trajcomp: error: {exc}", file=sys.stderr)
         return 2
     except Interrupted as stop:
-        if stop.signum != signal.SIGINT:
-            print(f"trajcomp: terminated ({stop.name}): what was not finished was not written", file=sys.stderr)
-            return stop.exit_code
-        print("trajcomp: interrupted: what was not finished was not written", file=sys.stderr)
-        return INTERRUPTED
+        return _stopped(stop)
     except KeyboardInterrupt:
         print("trajcomp: interrupted: what was not finished was not written", file=sys.stderr)
         return INTERRUPTED
@@ -101,11 +97,22 @@ def _run(argv):
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())  # what is left unflushed goes nowhere at exit
         return PIPE_CLOSED
     except Exception as exc:  # anything else is a bug: say so, keep the traceback, exit 3
+        if stopped() is not None:  # a signal's exception that became another on its way (an ImportError)
+            return _stopped(stopped())
         debug = args.debug if args is not None else "--debug" in argv
         if debug:
             traceback.print_exc()
         print(f"trajcomp: {bug_message(exc, None if debug else save_traceback(exc), printed=debug)}", file=sys.stderr)
         return CRASHED
+
+
+def _stopped(stop):
+    """Say that the run was stopped by a signal (`Interrupted` ``stop``); its exit code."""
+    if stop.signum != signal.SIGINT:
+        print(f"trajcomp: terminated ({stop.name}): what was not finished was not written", file=sys.stderr)
+        return stop.exit_code
+    print("trajcomp: interrupted: what was not finished was not written", file=sys.stderr)
+    return INTERRUPTED
 
 
 if __name__ == "__main__":

@@ -209,3 +209,37 @@ def test_a_signal_the_process_ignores_stays_ignored():
             time.sleep(0.2)
     finally:
         signal.signal(signal.SIGHUP, previous)
+
+
+def test_a_stop_that_became_another_exception_on_its_way_exits_with_the_signal_code(monkeypatch, capsys):
+    """Raised into a C extension's initialisation, Interrupted comes out as ImportError: the run stopped all the same."""
+    import trajcomp.commands.robots as robots
+    from trajcomp.cli import main
+
+    def run(args):
+        try:
+            os.kill(os.getpid(), signal.SIGHUP)
+            time.sleep(1)
+        except Interrupted as stop:
+            raise ImportError("initialization failed") from stop
+
+    monkeypatch.setattr(robots, "run", run)
+    assert main(["robots"]) == 129
+    assert "terminated (SIGHUP)" in capsys.readouterr().err
+
+
+def test_a_background_result_never_asked_for_does_not_change_the_exit_code(tmp_path):
+    """The run failed before asking for it: at exit its worker is stopped, and its death stops nothing."""
+    script = (
+        "import sys, time\n"
+        "from trajcomp.support.parallel import in_background\n"
+        "from trajcomp.support.signals import raised\n"
+        "with raised():\n"
+        "    later = in_background(lambda: time.sleep(30), 2)\n"
+        "    time.sleep(0.3)\n"
+        "sys.exit(2)\n"
+    )
+    start = time.monotonic()
+    done = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=60,
+                          env=dict(os.environ, PYTHONPATH=os.getcwd()))
+    assert done.returncode == 2 and time.monotonic() - start < 10, done.stderr

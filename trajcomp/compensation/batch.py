@@ -17,6 +17,7 @@ from trajcomp.support import crash
 from trajcomp.support.atomic import write_atomic
 from trajcomp.errors import TrajcompError
 from trajcomp.support.parallel import WorkerLost, Workers, can_fork
+from trajcomp.support.signals import stopped
 
 PASS, FAIL, ERROR, CRASH = "pass", "fail", "error", "crash"
 EXIT_CODES = {PASS: 0, FAIL: 1, ERROR: 2, CRASH: crash.EXIT_CODE}  # a crash is a bug: neither success nor bad input
@@ -138,6 +139,8 @@ def run_one(job, path, output):
     except TrajcompError as exc:
         return FileResult(named(path), status=ERROR, message=str(exc))
     except Exception as exc:  # one file's bug must not stop the batch; it is reported as a crash
+        if stopped() is not None:  # a signal's exception that became another on its way: the batch stops
+            raise stopped() from exc
         return FileResult(named(path), status=CRASH, message=crash.bug_message(exc, crash.save_traceback(exc)))
 
 

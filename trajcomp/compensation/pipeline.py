@@ -36,6 +36,7 @@ from trajcomp.support.atomic import FileSet, refuse_inputs
 from trajcomp.support.memory import end_stage, kept_apart, release
 from trajcomp.support.parallel import in_background, meanwhile
 from trajcomp.support.progress import Stages
+from trajcomp.support.signals import held
 from trajcomp.timing.options import TOLERANCE
 
 # Targets below which the original and the corrected program are timed at once on two processes. A timing's
@@ -420,8 +421,10 @@ def _write_report(compliance, target, json_only, protect, written, outputs):
 
 
 def _import_timing():
-    """Import what re-timing needs (scipy's splines, 0.3 s) while the workers plan and compensate."""
-    importlib.import_module("scipy.interpolate")
+    """Import what re-timing needs (scipy's splines, 0.3 s) while the workers plan and compensate (a stopping
+    signal taken after it: raised into a C extension's initialisation, it would break the import)."""
+    with held():
+        importlib.import_module("scipy.interpolate")
 
 
 def _next(stages):

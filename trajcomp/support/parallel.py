@@ -20,6 +20,7 @@ that a signal to the process group or to any worker ends the whole run and
 no task is lost without an answer.
 """
 
+import atexit
 import collections
 import contextlib
 import ctypes
@@ -38,6 +39,7 @@ from trajcomp.support.threads import pin_loaded
 _LOOKAHEAD = 2  # blocks a worker may compute ahead of the consumer, each
 _MEANWHILE = []  # work for this process while the next pool's workers compute (`meanwhile`)
 _PR_SET_PDEATHSIG = 1  # prctl option of <linux/prctl.h>: the signal a process gets when its parent dies
+_OPEN = set()  # the `Workers` pools not yet closed
 _GRACE = 1.0  # s a worker is given to unwind after SIGTERM before SIGKILL ends it
 _LOADAVG = "/proc/loadavg"  # Linux: its 4th field counts the runnable processes, "running/all"
 
@@ -302,6 +304,7 @@ class Workers:
         self._closing = False
         for _ in range(workers):
             self._start_worker()
+        _OPEN.add(self)
         self._collector = threading.Thread(target=self._collect, name="trajcomp-workers", daemon=True)
         self._collector.start()
 
@@ -345,6 +348,7 @@ class Workers:
             self._collector.join()
         for receiving in self._connections.values():
             receiving.close()
+        _OPEN.discard(self)
         return False
 
     def _start_worker(self):
@@ -422,6 +426,14 @@ class Workers:
         self._dispatch()
 
 
+@atexit.register  # before multiprocessing's own exit function, registered earlier, terminates the workers
+def _close_open_pools():
+    """At exit, stop the workers of pools never closed (an `in_background` result not asked for: the run
+    failed first) as on an exception: their deaths then stop nothing."""
+    for pool in list(_OPEN):
+        pool.__exit__(TrajcompError, TrajcompError("exiting"), None)
+
+
 def _death(code):
     """How a process with exit code ``code`` ended, in words."""
     if code is not None and code < 0:
@@ -458,6 +470,8 @@ def _serve(function, connection, parent):
                 connection.send((k, False, TrajcompError(f"block {k}: its result cannot be sent back: {error!r}")))
     except KeyboardInterrupt as stop:  # SIGINT, SIGTERM, SIGHUP: unwound; now die by it, for the parent to see
         die_by(signal_of(stop))
+    for signum in STOPPING:  # done: a signal from now on ends it as it is (no exception in its exit)
+        signal.signal(signum, signal.SIG_DFL)
 
 
 def init_worker(parent=None):

@@ -72,6 +72,16 @@ def check():
         raise Interrupted(_STOPPED[0])
 
 
+def stopped():
+    """The `Interrupted` of the stopping signal this process's run received, or None.
+
+    An exception that a signal's `Interrupted` became on its way (an
+    ImportError when it was raised into a C extension's initialisation) is
+    told apart by it: the run stopped, it did not fail.
+    """
+    return Interrupted(_STOPPED[0]) if _STOPPED else None
+
+
 @contextlib.contextmanager
 def raised():
     """Within the block, each of `STOPPING` raises `Interrupted` in the main thread (the handlers restored after).
