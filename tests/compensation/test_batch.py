@@ -154,3 +154,14 @@ def test_outputs_that_only_their_extensions_kept_apart_are_refused_before_anythi
     code = main(["compensate", str(cam), "--model", str(kuka_model), "-o", str(tmp_path / "out"), "--to", "csv"])
     assert code == 2 and "would both be written to" in capsys.readouterr().err
     assert not (tmp_path / "out").exists()
+
+
+def test_a_batch_written_into_its_own_folder_is_refused_with_advice_about_the_folder(tmp_path, kuka_model, capsys):
+    cam = tmp_path / "cam"
+    cam.mkdir()
+    _krl(cam, "weld")
+    before = {p.name: p.read_bytes() for p in cam.iterdir()}
+    assert main(["compensate", str(cam), "--model", str(kuka_model), "-o", str(cam)]) == 2
+    err = capsys.readouterr().err
+    assert "would overwrite the input" in err and "give -o another folder" in err and "--summary" not in err
+    assert {p.name: p.read_bytes() for p in cam.iterdir()} == before

@@ -62,3 +62,16 @@ def test_magnitudes_no_program_states_are_refused(tmp_path, name, text, message)
     (tmp_path / name).write_text(text)
     with pytest.raises(ReadError, match=message):
         formats.read(tmp_path / name)
+
+
+def test_a_program_that_is_a_fifo_or_a_folder_is_named_as_such_not_as_missing(tmp_path):
+    import os
+
+    os.mkfifo(tmp_path / "pipe.src")
+    (tmp_path / "dir.src").mkdir()
+    with pytest.raises(ReadError, match=r"pipe\.src: is not a regular file \(a FIFO"):
+        formats.read(tmp_path / "pipe.src")
+    with pytest.raises(ReadError, match=r"dir\.src: is a folder"):
+        formats.read(tmp_path / "dir.src")
+    with pytest.raises(ReadError, match=r"gone\.src: no such file"):
+        formats.read(tmp_path / "gone.src")

@@ -121,7 +121,10 @@ def _run_batch(args, job):
     outputs = batch.output_paths(found, args.output, suffix)
     inputs = [path for path, _ in found]
     summary = Path(args.summary) if args.summary else Path(args.output) / "summary.json"
-    refuse_inputs([summary, *outputs], [*inputs, *model_files(args.model)], "give --summary another name")
+    models = model_files(args.model)
+    refuse_inputs(outputs, [*([] if args.in_place else inputs), *models],
+                  "give -o another folder than the programs' (or --in-place to replace them)")
+    refuse_inputs([summary], [*inputs, *models, *outputs], "give --summary another name")
     reports = [Path(args.report) / path.relative_to(args.output) for path in outputs] if args.report else []
     for folder in dict.fromkeys(path.parent for path in [*outputs, *reports]):  # a backup's layout is kept
         folder.mkdir(parents=True, exist_ok=True)

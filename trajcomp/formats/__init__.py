@@ -313,7 +313,9 @@ def read(path, format=None, *, workers=1):
     path = Path(path)
     fmt = find_format(path, format)
     if not path.is_file():
-        raise ReadError(f"{path}: no such file")
+        what = "a folder" if path.is_dir() else "not a regular file (a FIFO, socket or device)" if path.exists() \
+            else None
+        raise ReadError(f"{path}: no such file" if what is None else f"{path}: is {what}; a program is read from a file")
     recover(path.parent)  # a set of files a killed run left half-renamed is completed first
     with collection_paused():  # a program is made of many objects without cycles (`trajcomp.support.memory`)
         return uses_resolved(fmt.read(path, workers), fmt)
