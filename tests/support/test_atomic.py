@@ -278,3 +278,32 @@ def test_a_torn_pair_whose_new_file_is_gone_is_refused_and_a_run_writing_it_anew
         atomic.recover(out)
     write_files_atomic(_krl_set(out, 3))  # the whole set written again: the journal goes with it
     assert {p.name: p.read_bytes() for p in out.iterdir()} == {p.name: d for p, d in _krl_set(out, 3).items()}
+
+
+def test_a_stopping_signal_at_any_step_of_a_commit_leaves_a_whole_set_and_nothing_hidden(tmp_path, monkeypatch):
+    """SIGTERM, raised as an exception, at each file-system call of a commit: the commit ends first, then the run
+    stops; no backup, journal or temporary is left for the next run to clean."""
+    import signal
+
+    from trajcomp.support.signals import Interrupted, raised
+
+    for k in range(30):
+        for path, data in _krl_set(tmp_path, 1).items():
+            path.write_bytes(data)
+        calls = []
+
+        def stop(name):
+            calls.append(name)
+            if len(calls) == k + 1:
+                os.kill(os.getpid(), signal.SIGTERM)
+
+        with monkeypatch.context() as stopping, raised():
+            _count_steps(stopping, stop)
+            try:
+                write_files_atomic(_krl_set(tmp_path, 2))
+            except Interrupted:
+                pass
+        texts = {p.name: p.read_bytes() for p in tmp_path.iterdir()}
+        assert sorted(texts) == ["weld.dat", "weld.src"], (k, sorted(texts))
+        versions = {b"1" if b" 1" in text or b"X 1}" in text else b"2" for text in texts.values()}
+        assert len(versions) == 1, k

@@ -213,10 +213,10 @@ class FileSet:
     def __exit__(self, kind, error, trace):
         try:
             if error is None and self._staged:
-                with _locked_folders(self._staged):
-                    for folder in _folders(self._staged):
+                signals.check()  # a stop whose exception was lost on the way commits nothing
+                with signals.held(), _locked_folders(self._staged):  # a stopping signal: after the commit and
+                    for folder in _folders(self._staged):  # the unlock (no backup, journal or locked folder left)
                         recover(folder, names=[p.name for p in self._staged if _folder(p) == folder])
-                    signals.check()  # a stop whose exception was lost on the way commits nothing
                     _commit(self._staged, self._digests)
         except BaseException:
             self._remove()
@@ -514,10 +514,9 @@ def _commit(staged, digests):
                 backups[path] = _backup(path, f"{staged[path]}.bak")
         if len(staged) > 1:
             journal = _write_journal(staged, backups, digests)
-        with signals.held():  # Ctrl-C, SIGTERM or SIGHUP arrives after the last rename, not between two
-            for path, tmp in staged.items():
-                os.replace(tmp, path)
-                done.append(path)
+        for path, tmp in staged.items():
+            os.replace(tmp, path)
+            done.append(path)
         _sync_folders(staged)
     except OSError as exc:
         try:
