@@ -22,17 +22,21 @@ def install_plugin(monkeypatch, folder, name, module):
     monkeypatch.setattr(formats, "_PLUGINS", {"loaded": False, "failed": {}})
 
 
+def virtual_model(folder, robot, cube, side, step, folds):
+    """A model of the virtual ``robot`` calibrated on a cube at corner ``cube`` (plan, simulate, calibrate)."""
+    plan, meas, model = folder / "plan.csv", folder / "meas.csv", folder / f"{robot}.yaml"
+    assert main(["plan", "--robot", robot, "--cube", cube, "--side", str(side), "--step", str(step),
+                 "-o", str(plan)]) == 0
+    assert main(["simulate", str(plan), "--robot", robot, "--seed", "1", "-o", str(meas)]) == 0
+    assert main(["calibrate", str(meas), "--robot", robot, "--grid-step", str(step), "--folds", str(folds),
+                 "-o", str(model)]) == 0
+    return model
+
+
 @pytest.fixture(scope="session")
 def kuka_model(tmp_path_factory):
     """A composite model of the virtual KR6 around the example weld path (README commands)."""
-    folder = tmp_path_factory.mktemp("kuka")
-    plan, meas, model = folder / "plan.csv", folder / "meas.csv", folder / "kuka.yaml"
-    assert main(["plan", "--robot", "kuka_kr6_r900", "--cube", "400,-50,650", "--side", "200", "--step", "50",
-                 "-o", str(plan)]) == 0
-    assert main(["simulate", str(plan), "--robot", "kuka_kr6_r900", "--seed", "1", "-o", str(meas)]) == 0
-    assert main(["calibrate", str(meas), "--robot", "kuka_kr6_r900", "--grid-step", "50", "--folds", "3",
-                 "-o", str(model)]) == 0
-    return model
+    return virtual_model(tmp_path_factory.mktemp("kuka"), "kuka_kr6_r900", "400,-50,650", 200, 50, 3)
 
 
 @pytest.fixture

@@ -15,6 +15,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from tests.conftest import virtual_model
 from tests.programs.test_programs_as_run import OFFSET, _krl_point, _stand_in
 from trajcomp import formats
 from trajcomp.cli import main
@@ -437,12 +438,7 @@ def test_a_task_whose_motions_lie_in_its_second_module_gets_its_speeds_written_t
         f"MODULE ZMain\n  CONST robtarget p10:={_robtarget(robot, [0, 10, 15, 0, 50, 0])};\n"
         f"  CONST robtarget p20:={_robtarget(robot, [20, 10, 15, 0, 50, 0])};\n"
         "  PROC main()\n    MoveJ p10,v1000,z10,tGun;\n    MoveJ p20,v1000,z10,tGun;\n  ENDPROC\nENDMODULE\n")
-    plan, meas, model = tmp_path / "plan.csv", tmp_path / "meas.csv", tmp_path / "abb.yaml"
-    assert main(["plan", "--robot", "abb_irb4600", "--cube", "1000,-300,700", "--side", "240", "--step", "120",
-                 "-o", str(plan)]) == 0
-    assert main(["simulate", str(plan), "--robot", "abb_irb4600", "--seed", "1", "-o", str(meas)]) == 0
-    assert main(["calibrate", str(meas), "--robot", "abb_irb4600", "--grid-step", "120", "--folds", "0",
-                 "-o", str(model)]) == 0
+    model = virtual_model(tmp_path, "abb_irb4600", "1000,-300,700", 240, 120, 0)
     out = tmp_path / "out"
     assert main(["compensate", str(folder), "--model", str(model), "-o", str(out), "--jobs", "1"]) in (0, 1)
     (entry,) = json.loads((out / "summary.json").read_text())["files"]

@@ -9,20 +9,17 @@ import yaml
 
 from trajcomp import __version__
 from trajcomp.support import yaml_text
+from trajcomp.support.atomic import sha256_of
 from trajcomp.errors import ReadError
 
 
 
 def sha256(path):
     """Hex SHA-256 of a file's bytes."""
-    digest = hashlib.sha256()
     try:
-        with open(path, "rb") as handle:
-            for block in iter(lambda: handle.read(1 << 20), b""):
-                digest.update(block)
+        return sha256_of(path)
     except OSError as exc:
         raise ReadError(f"{path}: cannot read for its checksum: {exc.strerror}") from exc
-    return digest.hexdigest()
 
 
 def file_entry(role, path, data=None, staged=None):

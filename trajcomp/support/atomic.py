@@ -317,16 +317,21 @@ def _roll_forward(journal, names=()):
     _sync_folders([journal])
 
 
-def _sha256(path):
-    """The SHA-256 (hex) of a file's content, or None when it cannot be read."""
+def sha256_of(path):
+    """The SHA-256 (hex) of a file's content, read a MiB at a time (OSError when it cannot be read)."""
     digest = hashlib.sha256()
+    with open(path, "rb") as handle:
+        for block in iter(lambda: handle.read(1 << 20), b""):
+            digest.update(block)
+    return digest.hexdigest()
+
+
+def _sha256(path):
+    """`sha256_of`, or None when the file cannot be read."""
     try:
-        with open(path, "rb") as handle:
-            for block in iter(lambda: handle.read(1 << 20), b""):
-                digest.update(block)
+        return sha256_of(path)
     except OSError:
         return None
-    return digest.hexdigest()
 
 
 def _glob_escape(name):
