@@ -243,3 +243,21 @@ def test_a_background_result_never_asked_for_does_not_change_the_exit_code(tmp_p
     done = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=60,
                           env=dict(os.environ, PYTHONPATH=os.getcwd()))
     assert done.returncode == 2 and time.monotonic() - start < 10, done.stderr
+
+
+def test_a_dask_batch_file_whose_worker_dies_each_time_is_an_error_and_the_others_are_done(tmp_path):
+    pytest.importorskip("dask.distributed")
+
+    def job(path, output):  # defined here: Dask sends it by value
+        import os as here
+        import signal as signals
+
+        if path.name == "b":
+            here.kill(here.getpid(), signals.SIGKILL)
+        return FileResult(str(path), outputs=(str(output),))
+
+    names = ["a", "b", "c"]
+    results = run_batch(job, [tmp_path / n for n in names], [tmp_path / "out" / n for n in names], jobs=2,
+                        scheduler="local")
+    assert [r.status for r in results] == ["pass", ERROR, "pass"]
+    assert "Dask worker died" in results[1].message

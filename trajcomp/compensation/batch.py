@@ -201,7 +201,7 @@ def _reported(result, done):
 
 def _on_dask(job, inputs, outputs, jobs, scheduler, done):
     try:
-        from dask.distributed import Client, LocalCluster, as_completed
+        from dask.distributed import Client, KilledWorker, LocalCluster, as_completed
     except ImportError as exc:
         raise TrajcompError(
             f"--scheduler needs Dask distributed ({exc}); install it with: pip install 'trajcomp[cluster]'"
@@ -211,9 +211,18 @@ def _on_dask(job, inputs, outputs, jobs, scheduler, done):
     try:
         with Client(cluster if cluster is not None else scheduler, timeout="20s") as client:
             futures = client.map(run_one, [job] * len(inputs), inputs, outputs, pure=False)
+            where = {future.key: k for k, future in enumerate(futures)}
+            results = [None] * len(futures)
             for future in as_completed(futures):
-                done(future.result())
-            return client.gather(futures)
+                k = where[future.key]
+                try:
+                    results[k] = future.result()
+                except KilledWorker as lost:  # its worker died each time Dask tried it (the OOM killer): this file
+                    results[k] = FileResult(named(inputs[k]), status=ERROR,
+                                            message=f"its Dask worker died each time it was tried ({lost}); "
+                                            "it was not compensated")
+                done(results[k])
+            return results
     except OSError as exc:
         raise TrajcompError(f"--scheduler {scheduler}: cannot reach the Dask scheduler: {exc}") from exc
     finally:
