@@ -124,9 +124,11 @@ def held():
     this thread (where signal masks exist), and by `_raise`, which the
     interpreter runs in the main thread even when another thread took the
     signal. A process forked within the block inherits it held, until
-    `release_inherited`.
+    `release_inherited`. In a thread other than the main one (a pool's
+    collector starting a worker), only its mask holds them.
     """
-    _HELD[0] += 1
+    main = threading.current_thread() is threading.main_thread()  # another thread's hold is its mask only
+    _HELD[0] += main
     try:
         before = signal.pthread_sigmask(signal.SIG_BLOCK, STOPPING)
     except (AttributeError, OSError):
@@ -136,8 +138,9 @@ def held():
     finally:
         if before is not None:
             signal.pthread_sigmask(signal.SIG_SETMASK, before)  # a signal that waited in the mask is handled here
-        _HELD[0] -= 1
-        _raise_held()
+        _HELD[0] -= main
+        if main:
+            _raise_held()
 
 
 def release_inherited():
