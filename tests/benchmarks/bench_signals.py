@@ -48,11 +48,11 @@ def _setup(folder):
 COMMANDS = {  # name: (arguments, how long it runs about (s), what a finished run writes, what a stopped one may)
     "compensate": (["compensate", "../long.csv", "--model", "../kuka.yaml", "-o", "out.csv", "--jobs", "2"], 6.0,
                    lambda files: files == ["out.csv"], lambda files: not files),
-    "batch": (["compensate", "../cam", "--model", "../kuka.yaml", "-o", "out", "--jobs", "2"], 10.0,
+    "batch": (["compensate", "../cam", "--model", "../kuka.yaml", "-o", "out", "--jobs", "2"], 5.0,
               lambda files: set(files) == {f"out/p{k}.csv" for k in range(4)} | {"out/summary.json"},
               lambda files: set(files) <= {f"out/p{k}.csv" for k in range(4)}),
     "calibrate": (["calibrate", "../meas.csv", "--robot", ROBOT, "--grid-step", "50", "--folds", "3",
-                   "-o", "model.yaml"], 2.5,
+                   "-o", "model.yaml"], 1.8,
                   lambda files: files == ["model.yaml"], lambda files: not files),
 }
 
