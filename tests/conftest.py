@@ -22,14 +22,15 @@ def install_plugin(monkeypatch, folder, name, module):
     monkeypatch.setattr(formats, "_PLUGINS", {"loaded": False, "failed": {}})
 
 
-def calibrated_model(folder, robot, corner, side, step):
+def calibrated_model(folder, robot, corner, side, step, folds=3):
     """A composite model of the virtual ``robot`` (seed 1) calibrated on the cube at ``corner`` ("x,y,z", mm) of
-    ``side`` and ``step`` mm through the CLI, as the README runs it: the model file ``model.yaml`` in ``folder``."""
+    ``side`` and ``step`` mm with ``folds`` folds through the CLI, as the README runs it: the model file
+    ``model.yaml`` in ``folder``."""
     plan, meas, model = folder / "plan.csv", folder / "meas.csv", folder / "model.yaml"
     assert main(["plan", "--robot", robot, "--cube", corner, "--side", str(side), "--step", str(step),
                  "-o", str(plan)]) == 0
     assert main(["simulate", str(plan), "--robot", robot, "--seed", "1", "-o", str(meas)]) == 0
-    assert main(["calibrate", str(meas), "--robot", robot, "--grid-step", str(step), "--folds", "3",
+    assert main(["calibrate", str(meas), "--robot", robot, "--grid-step", str(step), "--folds", str(folds),
                  "-o", str(model)]) == 0
     return model
 

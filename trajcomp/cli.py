@@ -4,8 +4,10 @@ Library code raises TrajcompError; this is the only place that prints errors
 and chooses exit codes: 0 success, 1 the result fails a requested tolerance
 or limit, 2 bad usage or bad input, 3 an unexpected exception (a bug:
 `trajcomp.support.crash`); 130 (the shells' code of Ctrl-C) when the user interrupts
-the run and 143 when it is stopped by SIGTERM (what Docker, systemd and CI
-send), handled alike: what was not finished is not written; 141 (SIGPIPE's)
+the run, 143 when it is stopped by SIGTERM (what Docker, systemd and CI
+send) and 129 by SIGHUP (its terminal closed), handled alike, also when the
+signal reaches only one of its worker processes: what was not finished is
+not written (`trajcomp.support.signals`); 141 (SIGPIPE's)
 when the reader of its output went away (``| head``).
 
 Each process of a run computes on one BLAS / OpenMP thread unless the user
@@ -18,18 +20,17 @@ import logging
 import os
 import signal
 import sys
-import threading
 import traceback
 
 from trajcomp import __version__
 from trajcomp.support.crash import bug_message, save_traceback
 from trajcomp.support.crash import EXIT_CODE as CRASHED
+from trajcomp.support.signals import Interrupted, raised, stopped
 from trajcomp.support.threads import THREAD_VARIABLES
 from trajcomp.commands import COMMANDS
 from trajcomp.errors import ToleranceError, TrajcompError
 
-INTERRUPTED = 130  # exit code of a run stopped by Ctrl-C (SIGINT), as shells report it
-TERMINATED = 128 + signal.SIGTERM  # 143: stopped by SIGTERM, as shells report it
+INTERRUPTED = 128 + signal.SIGINT  # 130: exit code of a run stopped by Ctrl-C (SIGINT), as shells report it
 PIPE_CLOSED = 128 + signal.SIGPIPE  # 141: the output's reader went away, as shells report a tool SIGPIPE stops
 
 
@@ -65,26 +66,13 @@ def _needed(argv):
     return () if argv == ["--version"] else None
 
 
-class Terminated(KeyboardInterrupt):
-    """SIGTERM, raised where the run is so that it unwinds as after Ctrl-C (temporaries removed)."""
-
-
-def _terminate(signum, frame):
-    raise Terminated
-
-
 def main(argv=None):
     """Run the CLI; returns the exit code (also used as the console script)."""
     argv = sys.argv[1:] if argv is None else list(argv)
     for name in THREAD_VARIABLES:  # before the commands import numpy (this module does not)
         os.environ.setdefault(name, "1")
-    if threading.current_thread() is not threading.main_thread():  # signals go to the main thread only
+    with raised():  # SIGINT, SIGTERM and SIGHUP unwind the run (in the main thread; elsewhere as they are)
         return _run(argv)
-    previous = signal.signal(signal.SIGTERM, _terminate)
-    try:
-        return _run(argv)
-    finally:
-        signal.signal(signal.SIGTERM, previous)
 
 
 def _run(argv):
@@ -100,9 +88,8 @@ def _run(argv):
     except TrajcompError as exc:
         print(f"trajcomp: error: {exc}", file=sys.stderr)
         return 2
-    except Terminated:
-        print("trajcomp: terminated (SIGTERM): what was not finished was not written", file=sys.stderr)
-        return TERMINATED
+    except Interrupted as stop:
+        return _stopped(stop)
     except KeyboardInterrupt:
         print("trajcomp: interrupted: what was not finished was not written", file=sys.stderr)
         return INTERRUPTED
@@ -110,11 +97,22 @@ def _run(argv):
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())  # what is left unflushed goes nowhere at exit
         return PIPE_CLOSED
     except Exception as exc:  # anything else is a bug: say so, keep the traceback, exit 3
+        if stopped() is not None:  # a signal's exception that became another on its way (an ImportError)
+            return _stopped(stopped())
         debug = args.debug if args is not None else "--debug" in argv
         if debug:
             traceback.print_exc()
         print(f"trajcomp: {bug_message(exc, None if debug else save_traceback(exc), printed=debug)}", file=sys.stderr)
         return CRASHED
+
+
+def _stopped(stop):
+    """Say that the run was stopped by a signal (`Interrupted` ``stop``); its exit code."""
+    if stop.signum != signal.SIGINT:
+        print(f"trajcomp: terminated ({stop.name}): what was not finished was not written", file=sys.stderr)
+        return stop.exit_code
+    print("trajcomp: interrupted: what was not finished was not written", file=sys.stderr)
+    return INTERRUPTED
 
 
 if __name__ == "__main__":

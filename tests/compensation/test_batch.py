@@ -123,3 +123,45 @@ def test_a_crash_in_one_file_is_a_bug_report_and_exit_3(cell, tmp_path, kuka_mod
     message = files["beta.src"]["message"]
     assert "this is a bug" in message and "IndexError: a bug" in message
     Path(message.rsplit("traceback saved in ", 1)[1]).unlink()
+
+
+def test_reports_mirror_the_input_folders_as_the_programs_do(tmp_path, kuka_model):
+    cam = tmp_path / "cam"
+    for folder in ("a", "b"):
+        (cam / folder).mkdir(parents=True)
+        _krl(cam / folder, "weld")
+    out = tmp_path / "out"
+    assert main(["compensate", str(cam), "--model", str(kuka_model), "-o", str(out), "--report", str(out / "reports"),
+                 "--jobs", "1"]) == 0
+    files = json.loads((out / "summary.json").read_text())["files"]
+    for folder in ("a", "b"):
+        (entry,) = [f for f in files if Path(f["input"]).parent.name == folder]
+        report = out / "reports" / folder / "weld.src.json"
+        assert str(report) in entry["outputs"] and (out / folder / "weld.src").exists()
+        provenance = json.loads(report.read_text())
+        assert str(cam / folder / "weld.src") in json.dumps(provenance)
+        assert str(cam / ("b" if folder == "a" else "a")) not in json.dumps(provenance)
+    assert not (out / "reports" / "weld.src.json").exists()
+
+
+def test_outputs_that_only_their_extensions_kept_apart_are_refused_before_anything_is_written(tmp_path, kuka_model,
+                                                                                               capsys):
+    cam = tmp_path / "cam"
+    cam.mkdir()
+    _krl(cam, "weld")
+    (cam / "weld.csv").write_text((Path(__file__).resolve().parents[2] / "examples" / "programs" / "csv"
+                                   / "weld.csv").read_text())
+    code = main(["compensate", str(cam), "--model", str(kuka_model), "-o", str(tmp_path / "out"), "--to", "csv"])
+    assert code == 2 and "would both be written to" in capsys.readouterr().err
+    assert not (tmp_path / "out").exists()
+
+
+def test_a_batch_written_into_its_own_folder_is_refused_with_advice_about_the_folder(tmp_path, kuka_model, capsys):
+    cam = tmp_path / "cam"
+    cam.mkdir()
+    _krl(cam, "weld")
+    before = {p.name: p.read_bytes() for p in cam.iterdir()}
+    assert main(["compensate", str(cam), "--model", str(kuka_model), "-o", str(cam)]) == 2
+    err = capsys.readouterr().err
+    assert "would overwrite the input" in err and "give -o another folder" in err and "--summary" not in err
+    assert {p.name: p.read_bytes() for p in cam.iterdir()} == before

@@ -133,3 +133,40 @@ def test_the_api_compensates_with_the_model_file_as_it_is_now_not_as_a_cache_kep
     points = {name: path.with_suffix(".dat").read_bytes() for name, path in out.items()}  # the corrected targets
     assert points["after"] == points["reference"] != points["before"]
     assert after.compliance.doc["provenance"]["model"]["sha256"] == hashlib.sha256(path.read_bytes()).hexdigest()
+
+
+def _sha(path):
+    import hashlib
+
+    return hashlib.sha256(path.read_bytes()).hexdigest()
+
+
+def test_a_run_killed_while_its_report_is_drawn_leaves_the_old_program_with_its_own_report(tmp_path, kuka_model):
+    """The program and its report are one set: a kill between them left the new program beside the old report."""
+    import os
+    import signal
+
+    from trajcomp.report.document import Report
+
+    examples = Path(__file__).resolve().parents[2] / "examples" / "programs" / "kuka"
+    for version, z in (("a", "790"), ("b", "780")):
+        (tmp_path / version).mkdir()
+        shutil.copy(examples / "weld.src", tmp_path / version / "weld.src")
+        (tmp_path / version / "weld.dat").write_text((examples / "weld.dat").read_text().replace("Z 790", f"Z {z}"))
+    out = tmp_path / "out"
+    out.mkdir()
+    command = ["compensate", "--model", str(kuka_model), "-o", str(out / "weld.src"), "--report", str(out / "weld"),
+               "--jobs", "1"]
+    assert main(["compensate", str(tmp_path / "a" / "weld.src"), *command[1:]]) in (0, 1)
+    before = {p.name: p.read_bytes() for p in out.iterdir()}
+    pid = os.fork()
+    if pid == 0:  # the run killed while it draws its report, its program complete
+        Report.html_text = lambda self: os.kill(os.getpid(), signal.SIGKILL)
+        main(["compensate", str(tmp_path / "b" / "weld.src"), *command[1:]])
+        os._exit(0)
+    _, status = os.waitpid(pid, 0)
+    assert os.WIFSIGNALED(status)
+    entries = {Path(f["path"]).name: f["sha256"] for f in json.loads((out / "weld.json").read_text())["provenance"]["files"]
+               if f["role"] == "output"}
+    assert entries == {"weld.src": _sha(out / "weld.src"), "weld.dat": _sha(out / "weld.dat")}
+    assert {p.name: p.read_bytes() for p in out.iterdir() if not p.name.startswith(".")} == before

@@ -45,6 +45,27 @@ def test_malformed_rows_name_file_line_field_and_text(tmp_path, row, message):
         formats.read(path)
 
 
+@pytest.mark.parametrize("cell, message", [
+    ("-62_8.0", "field y: not a number '-62_8.0'"),  # Python's float reads it as -628
+    ("-\uff15\uff10", "field y: not a number '-\uff15\uff10'"),  # full-width digits: float reads -50
+])
+@pytest.mark.parametrize("rows", [1, 100])  # a row alone, and in a column the reader converts at once
+def test_numbers_python_reads_but_no_controller_writes_are_refused(tmp_path, cell, message, rows):
+    path = tmp_path / "bad.csv"
+    path.write_text("x,y,z,a,b,c\n0,0,0,0,0,0\n" + f"410,{cell},650,0,90,0\n" * rows, encoding="utf-8")
+    with pytest.raises(ReadError, match=rf"bad\.csv:3: {message}"):
+        formats.read(path)
+
+
+@pytest.mark.parametrize("column", ["zone", "speed"])
+@pytest.mark.parametrize("rows", [1, 100])
+def test_a_negative_zone_or_speed_is_refused(tmp_path, column, rows):
+    path = tmp_path / "bad.csv"
+    path.write_text(f"x,y,z,a,b,c,{column}\n" + "410,0,650,0,90,0,-5\n" * rows)
+    with pytest.raises(ReadError, match=rf"bad\.csv:2: field {column}: '-5' is negative"):
+        formats.read(path)
+
+
 def test_not_a_program_csv(tmp_path):
     path = tmp_path / "m.csv"
     path.write_text("mx,my,mz\n1,2,3\n")

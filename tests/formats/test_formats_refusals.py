@@ -62,3 +62,28 @@ def test_magnitudes_no_program_states_are_refused(tmp_path, name, text, message)
     (tmp_path / name).write_text(text)
     with pytest.raises(ReadError, match=message):
         formats.read(tmp_path / name)
+
+
+def test_a_program_that_is_a_fifo_or_a_folder_is_named_as_such_not_as_missing(tmp_path):
+    import os
+
+    os.mkfifo(tmp_path / "pipe.src")
+    (tmp_path / "dir.src").mkdir()
+    with pytest.raises(ReadError, match=r"pipe\.src: is not a regular file \(a FIFO"):
+        formats.read(tmp_path / "pipe.src")
+    with pytest.raises(ReadError, match=r"dir\.src: is a folder"):
+        formats.read(tmp_path / "dir.src")
+    with pytest.raises(ReadError, match=r"gone\.src: no such file"):
+        formats.read(tmp_path / "gone.src")
+
+
+@pytest.mark.parametrize("again", ["P3", "p3", "  DECL E6POS P3"])
+def test_a_krl_point_a_data_list_declares_twice_is_refused_as_the_controller_does(tmp_path, again):
+    """Accepted before: the last declaration was corrected, the first left as written."""
+    examples = Path(__file__).resolve().parents[2] / "examples" / "programs" / "kuka"
+    (tmp_path / "weld.src").write_text((examples / "weld.src").read_text())
+    declaration = again if again.strip().startswith("DECL") else f"DECL E6POS {again}"
+    (tmp_path / "weld.dat").write_text((examples / "weld.dat").read_text().replace(
+        "ENDDAT", f"{declaration}={{X 500.0,Y 0.0,Z 700.0,A 0.0,B 90.0,C 0.0,S 2,T 2}} ; again\nENDDAT"))
+    with pytest.raises(ReadError, match=r"weld\.dat:7: P3 is declared again \(first at line 4\)".replace("P3", again.split()[-1])):
+        formats.read(tmp_path / "weld.src")

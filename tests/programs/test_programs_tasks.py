@@ -15,6 +15,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from tests.conftest import calibrated_model
 from tests.programs.test_programs_as_run import OFFSET, _krl_point, _stand_in
 from trajcomp import formats
 from trajcomp.cli import main
@@ -423,3 +424,25 @@ def test_a_task_of_several_files_names_the_file_of_each_motion_it_lists(tmp_path
     (document,) = [json.loads(p.read_text()) for p in (tmp_path / "reports").rglob("*.json")]
     assert [(m.get("file"), m["line"], m["text"]) for m in document["not_compensated"]] == [
         ("seam.src", 4, "LIN {Z 400}"), ("weld.src", 4, "LIN {Z 500}")]
+
+
+def test_a_task_whose_motions_lie_in_its_second_module_gets_its_speeds_written_there(tmp_path):
+    """BData.mod (a tooldata only) sorts before ZMain.mod (the motions): the speed write-back once edited
+    the first module's text at the second's positions (IndexError, exit 3)."""
+    robot = load_robot("abb_irb4600")
+    folder = tmp_path / "task"
+    folder.mkdir()
+    (folder / "BData.mod").write_text("MODULE BData\n  PERS tooldata tGun:=[TRUE,[[0,0,150],[1,0,0,0]],"
+                                      "[2,[0,0,50],[1,0,0,0],0,0,0]];\nENDMODULE\n")
+    (folder / "ZMain.mod").write_text(
+        f"MODULE ZMain\n  CONST robtarget p10:={_robtarget(robot, [0, 10, 15, 0, 50, 0])};\n"
+        f"  CONST robtarget p20:={_robtarget(robot, [20, 10, 15, 0, 50, 0])};\n"
+        "  PROC main()\n    MoveJ p10,v1000,z10,tGun;\n    MoveJ p20,v1000,z10,tGun;\n  ENDPROC\nENDMODULE\n")
+    model = calibrated_model(tmp_path, "abb_irb4600", "1000,-300,700", 240, 120, folds=0)
+    out = tmp_path / "out"
+    assert main(["compensate", str(folder), "--model", str(model), "-o", str(out), "--jobs", "1"]) in (0, 1)
+    (entry,) = json.loads((out / "summary.json").read_text())["files"]
+    assert entry["status"] in ("pass", "fail"), entry["message"]
+    written = (out / "ZMain.mod").read_text()
+    assert re.search(r"MoveJ p20,v1000\\T:=[0-9.]+,z10,tGun;", written), written
+    assert "\\T" not in (folder / "BData.mod").read_text()

@@ -225,3 +225,85 @@ def test_a_file_system_without_locks_is_written_unlocked(tmp_path, monkeypatch):
     monkeypatch.setattr(atomic.fcntl, "flock", no_locks)
     write_files_atomic(_krl_set(tmp_path, 3))
     assert (tmp_path / "weld.dat").read_text().endswith("{X 3}\nENDDAT\n")
+
+
+def _torn(folder, monkeypatch):
+    """A KRL pair at version 1, then a run writing version 2 killed between its two renames (journal left)."""
+    import signal
+
+    for path, data in _krl_set(folder, 1).items():
+        path.write_bytes(data)
+    pid = os.fork()
+    if pid == 0:
+        real, calls = os.replace, []
+
+        def replace(*args, **kwargs):
+            calls.append(args)
+            if len(calls) == 3:  # the journal's, the .src's, then this, the .dat's
+                os.kill(os.getpid(), signal.SIGKILL)
+            return real(*args, **kwargs)
+
+        monkeypatch.setattr(os, "replace", replace)
+        write_files_atomic(_krl_set(folder, 2))
+        os._exit(0)
+    os.waitpid(pid, 0)
+    assert b"; 2" in (folder / "weld.src").read_bytes() and b"X 1}" in (folder / "weld.dat").read_bytes()
+    assert list(folder.glob(".trajcomp-commit.*.json"))
+
+
+@pytest.mark.parametrize("how", ["mv", "cp -a"])
+def test_a_torn_pair_moved_or_copied_with_its_journal_is_completed_where_it_now_lies(tmp_path, monkeypatch, how):
+    import shutil
+    import subprocess
+
+    out, moved = tmp_path / "out", tmp_path / "moved"
+    out.mkdir()
+    _torn(out, monkeypatch)
+    subprocess.run([*how.split(), str(out), str(moved)], check=True)
+    atomic.recover(moved)  # what reading moved/weld.src does first
+    assert sorted(p.name for p in moved.iterdir()) == ["weld.dat", "weld.src"]
+    assert {p.name: p.read_bytes() for p in moved.iterdir()} == {p.name: d for p, d in _krl_set(moved, 2).items()}
+    if how == "cp -a":  # the original is its own: still torn, its journal there for its own recovery
+        assert b"X 1}" in (out / "weld.dat").read_bytes() and list(out.glob(".trajcomp-commit.*.json"))
+    shutil.rmtree(out, ignore_errors=True)
+
+
+def test_a_torn_pair_whose_new_file_is_gone_is_refused_and_a_run_writing_it_anew_goes_on(tmp_path, monkeypatch):
+    out = tmp_path / "out"
+    out.mkdir()
+    _torn(out, monkeypatch)
+    for stray in out.glob(".weld.dat.*.tmp"):  # copied without the hidden temporaries
+        stray.unlink()
+    with pytest.raises(WriteError, match="torn: .*weld.dat is not the file that run wrote"):
+        atomic.recover(out)
+    write_files_atomic(_krl_set(out, 3))  # the whole set written again: the journal goes with it
+    assert {p.name: p.read_bytes() for p in out.iterdir()} == {p.name: d for p, d in _krl_set(out, 3).items()}
+
+
+def test_a_stopping_signal_at_any_step_of_a_commit_leaves_a_whole_set_and_nothing_hidden(tmp_path, monkeypatch):
+    """SIGTERM, raised as an exception, at each file-system call of a commit: the commit ends first, then the run
+    stops; no backup, journal or temporary is left for the next run to clean."""
+    import signal
+
+    from trajcomp.support.signals import Interrupted, raised
+
+    for k in range(30):
+        for path, data in _krl_set(tmp_path, 1).items():
+            path.write_bytes(data)
+        calls = []
+
+        def stop(name):
+            calls.append(name)
+            if len(calls) == k + 1:
+                os.kill(os.getpid(), signal.SIGTERM)
+
+        with monkeypatch.context() as stopping, raised():
+            _count_steps(stopping, stop)
+            try:
+                write_files_atomic(_krl_set(tmp_path, 2))
+            except Interrupted:
+                pass
+        texts = {p.name: p.read_bytes() for p in tmp_path.iterdir()}
+        assert sorted(texts) == ["weld.dat", "weld.src"], (k, sorted(texts))
+        versions = {b"1" if b" 1" in text or b"X 1}" in text else b"2" for text in texts.values()}
+        assert len(versions) == 1, k

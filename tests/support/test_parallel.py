@@ -142,14 +142,6 @@ def test_an_unreachable_target_stops_the_plan_alike_and_leaves_no_worker(tmp_pat
     assert messages[0] == messages[1] and "far.csv:27" in messages[0]
 
 
-def test_workers_leave_ctrl_c_to_the_parent():
-    """The parent stops them on Ctrl-C: they neither handle nor report it themselves."""
-    import signal
-
-    assert set(map_blocks(lambda k: signal.getsignal(signal.SIGINT), 3, 2)) == {signal.SIG_IGN}
-    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
-
-
 def test_a_background_result_comes_from_another_process_only_when_asked_for_one():
     data = np.arange(10.0)
     later = in_background(lambda: (os.getpid(), data.sum()), 2)

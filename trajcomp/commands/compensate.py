@@ -106,8 +106,6 @@ def run(args):
         return batch.EXIT_CODES[result.status]
     if args.json_only and not args.report:
         raise TrajcompError("--json-only: a batch writes one report per program; give --report FOLDER")
-    if args.report:
-        Path(args.report).mkdir(parents=True, exist_ok=True)
     return _run_batch(args, dataclasses.replace(job, report_folder=True, output_root=args.output))
 
 
@@ -119,14 +117,16 @@ def _run_batch(args, job):
     from trajcomp.support.progress import progress
 
     found = batch.expand_inputs(args.program)
-    outputs = batch.output_paths(found, args.output)
+    suffix = formats.find_format(format=args.to_format).extensions[0] if args.to_format else None
+    outputs = batch.output_paths(found, args.output, suffix)
     inputs = [path for path, _ in found]
-    if args.to_format:
-        suffix = formats.find_format(format=args.to_format).extensions[0]
-        outputs = [path.with_suffix(suffix) for path in outputs]
     summary = Path(args.summary) if args.summary else Path(args.output) / "summary.json"
-    refuse_inputs([summary, *outputs], [*inputs, *model_files(args.model)], "give --summary another name")
-    for folder in dict.fromkeys(path.parent for path in outputs):  # a backup's layout is kept
+    models = model_files(args.model)
+    refuse_inputs(outputs, [*([] if args.in_place else inputs), *models],
+                  "give -o another folder than the programs' (or --in-place to replace them)")
+    refuse_inputs([summary], [*inputs, *models, *outputs], "give --summary another name")
+    reports = [Path(args.report) / path.relative_to(args.output) for path in outputs] if args.report else []
+    for folder in dict.fromkeys(path.parent for path in [*outputs, *reports]):  # a backup's layout is kept
         folder.mkdir(parents=True, exist_ok=True)
     # the files of one task that share points run as one program (a shared point corrected once)
     tasks = task_groups(inputs) if not args.to_format else [[k] for k in range(len(inputs))]

@@ -10,14 +10,14 @@ cluster), and turns every error of one file into that file's result.
 import dataclasses
 import glob
 import json
-from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
 from trajcomp import __version__, formats
 from trajcomp.support import crash
 from trajcomp.support.atomic import write_atomic
 from trajcomp.errors import TrajcompError
-from trajcomp.support.parallel import init_worker
+from trajcomp.support.parallel import WorkerLost, Workers, can_fork
+from trajcomp.support.signals import stopped
 
 PASS, FAIL, ERROR, CRASH = "pass", "fail", "error", "crash"
 EXIT_CODES = {PASS: 0, FAIL: 1, ERROR: 2, CRASH: crash.EXIT_CODE}  # a crash is a bug: neither success nor bad input
@@ -92,31 +92,40 @@ def is_pattern(text):
     return glob.has_magic(text) and not Path(text).exists()
 
 
-def output_paths(inputs, out_dir):
-    """``out_dir / relative`` of every input (Path list).
+def output_paths(inputs, out_dir, suffix=None):
+    """``out_dir / relative`` of every input (Path list), its extension replaced by ``suffix`` when given.
+
+    Every per-program output (the program, its report under a report
+    folder) lies at that relative path, so that the input folders are
+    mirrored and two programs of the same name in two folders stay apart.
 
     Parameters
     ----------
     inputs : sequence of (Path, PurePath)
         As `expand_inputs` gives them.
     out_dir : str or Path
+    suffix : str, optional
+        The extension of another language written (``--to``).
 
     Raises
     ------
     TrajcompError
-        Two inputs written to the same file (their outputs would collide),
-        or ``out_dir`` is a file.
+        Two inputs written to the same file (their outputs would collide,
+        also when only their extensions tell them apart), or ``out_dir`` is
+        a file.
     """
     out_dir = Path(out_dir)
     if out_dir.exists() and not out_dir.is_dir():
         raise TrajcompError(f"{out_dir}: with several programs, -o names a folder, and this is a file")
-    seen = {}
+    seen, outputs = {}, []
     for path, relative in inputs:
+        relative = relative.with_suffix(suffix) if suffix else relative
         key = relative.as_posix().lower()  # KRL and Windows controllers do not tell case apart
         if key in seen:
             raise TrajcompError(f"{seen[key]} and {path} would both be written to {out_dir / relative}")
         seen[key] = path
-    return [out_dir / relative for _, relative in inputs]
+        outputs.append(out_dir / relative)
+    return outputs
 
 
 def run_one(job, path, output):
@@ -130,6 +139,8 @@ def run_one(job, path, output):
     except TrajcompError as exc:
         return FileResult(named(path), status=ERROR, message=str(exc))
     except Exception as exc:  # one file's bug must not stop the batch; it is reported as a crash
+        if stopped() is not None:  # a signal's exception that became another on its way: the batch stops
+            raise stopped() from exc
         return FileResult(named(path), status=CRASH, message=crash.bug_message(exc, crash.save_traceback(exc)))
 
 
@@ -154,6 +165,12 @@ def run_batch(job, inputs, outputs, *, jobs=1, scheduler=None, done=None):
     done : callable, optional
         ``done(result)`` as each file finishes (e.g. a progress bar's update).
 
+    A local pool's worker that dies (the OOM killer) fails its file
+    (``error``) and is replaced; one stopped by SIGINT, SIGTERM or SIGHUP
+    stops the batch as that signal would (`trajcomp.support.parallel.Workers`),
+    as do those signals sent to this process: the files under way unwind
+    (nothing half-written) and no summary is written.
+
     Returns
     -------
     list of FileResult
@@ -161,14 +178,20 @@ def run_batch(job, inputs, outputs, *, jobs=1, scheduler=None, done=None):
     done = done or (lambda result: None)
     if scheduler is not None:
         return _on_dask(job, inputs, outputs, jobs, scheduler, done)
-    if jobs <= 1 or len(inputs) <= 1:
+    if jobs <= 1 or len(inputs) <= 1 or not can_fork():
         results = (run_one(job, i, o) for i, o in zip(inputs, outputs))
         return [_reported(result, done) for result in results]
-    pool = ProcessPoolExecutor(max_workers=jobs, initializer=init_worker)
-    try:
-        return [_reported(result, done) for result in pool.map(run_one, [job] * len(inputs), inputs, outputs)]
-    finally:  # interrupted: the files not started are dropped, the running ones finish (each written whole)
-        pool.shutdown(cancel_futures=True)
+    results = []
+    with Workers(lambda k: run_one(job, inputs[k], outputs[k]), min(jobs, len(inputs)), replace=True) as pool:
+        for k in range(len(inputs)):
+            pool.submit(k)
+        for k in range(len(inputs)):
+            try:
+                result = pool.result(k)
+            except WorkerLost as lost:  # killed (the OOM killer): this file failed, the others go on
+                result = FileResult(named(inputs[k]), status=ERROR, message=f"{lost}; it was not compensated")
+            results.append(_reported(result, done))
+    return results
 
 
 def _reported(result, done):
@@ -178,7 +201,7 @@ def _reported(result, done):
 
 def _on_dask(job, inputs, outputs, jobs, scheduler, done):
     try:
-        from dask.distributed import Client, LocalCluster, as_completed
+        from dask.distributed import Client, KilledWorker, LocalCluster, as_completed
     except ImportError as exc:
         raise TrajcompError(
             f"--scheduler needs Dask distributed ({exc}); install it with: pip install 'trajcomp[cluster]'"
@@ -188,9 +211,18 @@ def _on_dask(job, inputs, outputs, jobs, scheduler, done):
     try:
         with Client(cluster if cluster is not None else scheduler, timeout="20s") as client:
             futures = client.map(run_one, [job] * len(inputs), inputs, outputs, pure=False)
+            where = {future.key: k for k, future in enumerate(futures)}
+            results = [None] * len(futures)
             for future in as_completed(futures):
-                done(future.result())
-            return client.gather(futures)
+                k = where[future.key]
+                try:
+                    results[k] = future.result()
+                except KilledWorker as lost:  # its worker died each time Dask tried it (the OOM killer): this file
+                    results[k] = FileResult(named(inputs[k]), status=ERROR,
+                                            message=f"its Dask worker died each time it was tried ({lost}); "
+                                            "it was not compensated")
+                done(results[k])
+            return results
     except OSError as exc:
         raise TrajcompError(f"--scheduler {scheduler}: cannot reach the Dask scheduler: {exc}") from exc
     finally:

@@ -34,10 +34,11 @@ from trajcomp.model.model_file import load_model, model_files
 from trajcomp.programs.frames import FrameTable
 from trajcomp.programs.program import place_text
 from trajcomp.report import Criteria, compliance_report, file_entry, model_entry, report_paths, summary_lines
-from trajcomp.support.atomic import refuse_inputs
+from trajcomp.support.atomic import FileSet, refuse_inputs
 from trajcomp.support.memory import end_stage, kept_apart, release
 from trajcomp.support.parallel import in_background, meanwhile
 from trajcomp.support.progress import Stages
+from trajcomp.support.signals import held
 from trajcomp.timing.options import TOLERANCE
 
 # Targets below which the original and the corrected program are timed at once on two processes. A timing's
@@ -126,8 +127,8 @@ class CompensationJob:
         share points (`trajcomp.formats.task.groups`), compensated as one
         program written beside the first output as they lie beside the
         first file. The report goes to ``report`` or, with
-        ``report_folder``, to ``report / <output name>`` (``.html`` and
-        ``.json``). No output may be an input (the program's files unless
+        ``report_folder``, to ``report / <output's path under
+        output_root>`` (``.html`` and ``.json``), its folder made. No output may be an input (the program's files unless
         ``in_place``, the model's); a report that cannot be written once
         the program is makes the file fail (exit 1) with the files written
         listed, not an input error.
@@ -137,7 +138,7 @@ class CompensationJob:
             path, output = task[0], output[0]
         if self.retime not in RETIME_CHOICES:
             raise TrajcompError(f"retime: expected one of {', '.join(RETIME_CHOICES)}, got {self.retime!r}")
-        target = _report_target(self.report, self.report_folder, output)
+        target = _report_target(self.report, self.report_folder, output, self.output_root)
         with Stages(STAGES, desc=Path(path).name, enabled=self.show_stages) as stages, kept_apart():
             model = loaded_model(self.model)
             whose = "the arm of the model" + (f" {self.source}" if self.source else "")
@@ -172,18 +173,20 @@ class CompensationJob:
                 timing = timing_lines(timed, before)
             _next(stages)
             protect = inputs[len(sources):] if self.in_place else inputs
-            written = formats.write(output, corrected, out_format.name, protect=protect, workers=self.workers,
-                                    root=self.output_root)
-            _next(stages)
-            mode = self.mode or model.method
-            compliance = compliance_report(
-                report, model.nominal, criteria=self.criteria, model=model,
-                model_info=_model_info(self.model, mode, self.source), mode=mode,
-                files=[file_entry("program", p) for p in sources] + [file_entry("output", p) for p in written],
-                options=self.options(), timing=timed, cycle_time_before=before if timed is not None else None,
-                workers=self.workers,
-            )
-            reports, unwritten = _write_report(compliance, target, self.json_only, [*inputs, *written], written)
+            with FileSet() as outputs:  # the program and its report land together, or neither
+                written = formats.write(output, corrected, out_format.name, protect=protect, workers=self.workers,
+                                        root=self.output_root, into=outputs)
+                _next(stages)
+                mode = self.mode or model.method
+                compliance = compliance_report(
+                    report, model.nominal, criteria=self.criteria, model=model,
+                    model_info=_model_info(self.model, mode, self.source), mode=mode,
+                    files=[file_entry("program", p) for p in sources] + _output_entries(written, outputs),
+                    options=self.options(), timing=timed, cycle_time_before=before if timed is not None else None,
+                    workers=self.workers,
+                )
+                reports, unwritten = _write_report(compliance, target, self.json_only, [*inputs, *written], written,
+                                                   outputs)
             _next(stages)
         lines = [*summary_lines(compliance.doc), *(f"warning: {w}" for w in report.warnings), *timing,
                  f"wrote {', '.join(map(str, written + reports))}"]
@@ -261,15 +264,16 @@ class RetimeJob:
         timed, timing = timed_program(program, self.robot, joints, self.method, self.path_tolerance, self.tools,
                                       self.frames)
         protect = inputs[len(sources):] if self.in_place else inputs
-        written = formats.write(output, timed, protect=protect)
-        report = as_written_report(program, plan, self.robot)
-        compliance = compliance_report(
-            report, self.robot, criteria=self.criteria, command="retime", timing=timing,
-            files=[file_entry("program", p) for p in sources] + [file_entry("output", p) for p in written],
-            options={"method": self.method, "path_tolerance_mm": self.path_tolerance},
-        )
-        reports, unwritten = _write_report(compliance, self.report and Path(self.report), self.json_only,
-                                           [*inputs, *written], written)
+        with FileSet() as outputs:  # the program and its report land together, or neither
+            written = formats.write(output, timed, protect=protect, into=outputs)
+            report = as_written_report(program, plan, self.robot)
+            compliance = compliance_report(
+                report, self.robot, criteria=self.criteria, command="retime", timing=timing,
+                files=[file_entry("program", p) for p in sources] + _output_entries(written, outputs),
+                options={"method": self.method, "path_tolerance_mm": self.path_tolerance},
+            )
+            reports, unwritten = _write_report(compliance, self.report and Path(self.report), self.json_only,
+                                               [*inputs, *written], written, outputs)
         lines = [*timing_lines(timing), f"wrote {', '.join(map(str, written))}", *summary_lines(compliance.doc)]
         if reports:
             lines.append(f"report: {', '.join(map(str, reports))}")
@@ -411,27 +415,37 @@ def _file_model_info(path, mode):
     return model_entry(path, _model_file(path), mode)
 
 
-def _report_target(report, folder, output):
-    """Where a job's report goes: ``report``, or ``report / <output name>`` for a batch's folder; None for none."""
+def _report_target(report, folder, output, root=None):
+    """Where a job's report goes: ``report``; for a batch's folder, ``report / <output's path under root>``
+    (the input folders mirrored, as the programs are), or ``report / <output name>`` without a root; None for none."""
     if not report:
         return None
-    return Path(report) / Path(output).name if folder else Path(report)
+    if not folder:
+        return Path(report)
+    return Path(report) / (Path(output).relative_to(root) if root is not None else Path(output).name)
 
 
-def _write_report(compliance, target, json_only, protect, written):
-    """Write the report to ``target`` (when given): ``(report files, "")``, or ``([], why)`` when it cannot be
-    written once the program is (``written``)."""
+def _output_entries(written, outputs):
+    """The report's entries of the program files ``written`` (staged in the `FileSet` ``outputs``)."""
+    return [file_entry("output", p, staged=outputs.digest(p)) for p in written]
+
+
+def _write_report(compliance, target, json_only, protect, written, outputs):
+    """Stage the report to ``target`` (when given) into the `FileSet` ``outputs`` beside the program
+    (``written``): ``(report files, "")``, or ``([], why)`` when it cannot be written (the program is, alone)."""
     if not target:
         return [], ""
     try:
-        return compliance.write(target, json_only=json_only, protect=protect), ""
+        return compliance.write(target, json_only=json_only, protect=protect, into=outputs), ""
     except TrajcompError as exc:
         return [], f"the program is written ({', '.join(map(str, written))}) but not its report: {exc}"
 
 
 def _import_timing():
-    """Import what re-timing needs (scipy's splines, 0.3 s) while the workers plan and compensate."""
-    importlib.import_module("scipy.interpolate")
+    """Import what re-timing needs (scipy's splines, 0.3 s) while the workers plan and compensate (a stopping
+    signal taken after it: raised into a C extension's initialisation, it would break the import)."""
+    with held():
+        importlib.import_module("scipy.interpolate")
 
 
 def _next(stages):

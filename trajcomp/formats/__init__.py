@@ -29,12 +29,13 @@ calls `register_format`::
 Plugins are imported lazily, on the first lookup that needs them.
 """
 
+import contextlib
 import dataclasses
 import importlib
 import os
 from pathlib import Path
 
-from trajcomp.support.atomic import recover, write_files_atomic
+from trajcomp.support.atomic import FileSet, recover
 from trajcomp.errors import ReadError, RobotError, TrajcompError, WriteError
 from trajcomp.support.memory import collection_paused
 
@@ -317,7 +318,9 @@ def read(path, format=None, *, workers=1, copies=True):
     path = Path(path)
     fmt = find_format(path, format)
     if not path.is_file():
-        raise ReadError(f"{path}: no such file")
+        what = "a folder" if path.is_dir() else "not a regular file (a FIFO, socket or device)" if path.exists() \
+            else None
+        raise ReadError(f"{path}: no such file" if what is None else f"{path}: is {what}; a program is read from a file")
     recover(path.parent)  # a set of files a killed run left half-renamed is completed first
     with collection_paused():  # a program is made of many objects without cycles (`trajcomp.support.memory`)
         program = fmt.read(path, workers)
@@ -363,7 +366,7 @@ def input_paths(path, program):
     return [path] + [Path(source.path) if source.path else path.parent / source.name for source in program.sources]
 
 
-def write(path, program, format=None, *, protect=(), workers=1, root=None):
+def write(path, program, format=None, *, protect=(), workers=1, root=None, into=None):
     """Write a robot program; its output files (a KRL .src and .dat, the other files of its task) land all or none.
 
     The content is written to temporary files (a writer's generator of
@@ -386,6 +389,9 @@ def write(path, program, format=None, *, protect=(), workers=1, root=None):
         task are written where they lie relative to it (`trajcomp.formats.task`),
         their folders made inside ``root``; one that would land outside is
         refused unless it is written over itself (in place).
+    into : trajcomp.support.atomic.FileSet, optional
+        Stage the files into this set, committed with its other files (a
+        program and its report); default: committed here.
 
     Returns
     -------
@@ -406,8 +412,8 @@ def write(path, program, format=None, *, protect=(), workers=1, root=None):
     with collection_paused():  # the texts are made of many objects without cycles (`trajcomp.support.memory`)
         files = find_format(path, format).write(program, path, workers)
         _task_folders(files, path, program, Path(root) if root is not None else path.parent)
-        write_files_atomic(files, protect=protect,
-                           advice="write to another file (-o) or give --in-place to replace it")
+        with FileSet() if into is None else contextlib.nullcontext(into) as outputs:
+            outputs.stage(files, protect=protect, advice="write to another file (-o) or give --in-place to replace it")
     return list(files)
 
 

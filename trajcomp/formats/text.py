@@ -238,8 +238,14 @@ def last_line(lines):
 
 
 def finite(text, source_name, line, original, field, limit=math.inf):
-    """The float a number's text states; ReadError naming the field if it is not a number within ``limit``."""
+    """The float a number's text states; ReadError naming the field if it is not a number within ``limit``.
+
+    A number is written in ASCII digits without ``_`` (Python's float reads
+    ``-62_8.0`` and full-width digits; no controller does).
+    """
     try:
+        if not text.isascii() or "_" in text:
+            raise ValueError(text)
         value = float(text)
     except ValueError:
         fail(source_name, line, original, f"{field}: not a number {text[:40]!r}")

@@ -8,6 +8,7 @@ per-target data carries them as arrays, written beside the JSON as a NumPy
 ``.npz`` sidecar (named in the document's ``full_data.path``).
 """
 
+import contextlib
 import dataclasses
 import io
 import json
@@ -17,7 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
-from trajcomp.support.atomic import write_files_atomic
+from trajcomp.support.atomic import FileSet
 from trajcomp.support.plain_data import plain
 
 SCHEMA = "trajcomp-report/1"
@@ -75,7 +76,7 @@ class Report:
 
         return render(self)
 
-    def write(self, path, *, json_only=False, protect=()):
+    def write(self, path, *, json_only=False, protect=(), into=None):
         """Write ``PATH.json``, unless ``json_only`` ``PATH.html``, and the sidecar, all or none.
 
         ``PATH`` is ``path`` without a ``.json`` or ``.html`` suffix
@@ -83,6 +84,9 @@ class Report:
         ``PATH.targets.npz`` (only with `data`) is named in the written
         document's ``full_data.path``. None of them may be one of the
         files ``protect`` names (the run's inputs and outputs).
+        With ``into`` (a `trajcomp.support.atomic.FileSet`) they are staged
+        into that set, committed with its other files (the program the
+        report is of).
 
         Returns
         -------
@@ -99,7 +103,8 @@ class Report:
         if not json_only:
             files[html_path] = report.html_text().encode("utf-8")
         files.update(sidecar)
-        write_files_atomic(files, protect=protect, advice="give --report another name")
+        with FileSet() if into is None else contextlib.nullcontext(into) as outputs:
+            outputs.stage(files, protect=protect, advice="give --report another name")
         return list(files)
 
 

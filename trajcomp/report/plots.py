@@ -6,6 +6,8 @@ matplotlib Figure; `trajcomp.report.html` embeds it as a PNG data URI.
 
 import numpy as np
 
+from trajcomp.support.signals import held
+
 AXES = ("x", "y", "z")
 WIDTH = 10.0  # in, figure width at the page's text width
 POINTS = 2000  # points per drawn series: longer ones are decimated (min-max envelope, every k-th target)
@@ -14,11 +16,17 @@ _INSIDE, _OUTSIDE, _LIMIT = "#1f5fa8", "#c0392b", "#7f8c8d"
 
 
 def pyplot():
-    """matplotlib.pyplot on the Agg backend (no display needed)."""
-    import matplotlib
+    """matplotlib.pyplot on the Agg backend (no display needed).
 
-    matplotlib.use("Agg", force=True)
-    import matplotlib.pyplot as plt
+    SIGINT, SIGTERM and SIGHUP wait for the end of its first import (about
+    a second): raised into the initialisation of one of its C extensions,
+    they would abort the interpreter (exit 134).
+    """
+    with held():
+        import matplotlib
+
+        matplotlib.use("Agg", force=True)
+        import matplotlib.pyplot as plt
 
     plt.rcParams.update({"font.size": 9, "axes.grid": True, "grid.alpha": 0.3, "axes.spines.top": False,
                          "axes.spines.right": False, "figure.dpi": 100})

@@ -9,24 +9,24 @@ import yaml
 
 from trajcomp import __version__
 from trajcomp.support import yaml_text
+from trajcomp.support.atomic import sha256_of
 from trajcomp.errors import ReadError
 
 
 
 def sha256(path):
     """Hex SHA-256 of a file's bytes."""
-    digest = hashlib.sha256()
     try:
-        with open(path, "rb") as handle:
-            for block in iter(lambda: handle.read(1 << 20), b""):
-                digest.update(block)
+        return sha256_of(path)
     except OSError as exc:
         raise ReadError(f"{path}: cannot read for its checksum: {exc.strerror}") from exc
-    return digest.hexdigest()
 
 
-def file_entry(role, path, data=None):
-    """``{"role", "path", "sha256", "bytes"}`` of a file on disk, or of the ``data`` (bytes) about to be written to it."""
+def file_entry(role, path, data=None, staged=None):
+    """``{"role", "path", "sha256", "bytes"}`` of a file on disk, of the ``data`` (bytes) about to be written to it,
+    or of its content ``staged`` in a set of outputs (`trajcomp.support.atomic.FileSet.digest`: SHA-256, bytes)."""
+    if staged is not None:
+        return {"role": role, "path": str(path), "sha256": staged[0], "bytes": staged[1]}
     if data is None:
         return {"role": role, "path": str(path), "sha256": sha256(path), "bytes": Path(path).stat().st_size}
     return {"role": role, "path": str(path), "sha256": hashlib.sha256(data).hexdigest(), "bytes": len(data)}

@@ -30,16 +30,17 @@ writing that file.
 
 import contextlib
 import errno
+import hashlib
 import json
 import os
 import shutil
-import signal
 import stat
 import tempfile
 import time
 from pathlib import Path
 
 from trajcomp.errors import WriteError
+from trajcomp.support import signals
 
 try:
     import fcntl
@@ -154,24 +155,82 @@ def write_files_atomic(files, *, protect=(), advice="write to another file"):
         A folder does not exist, a file cannot be written or is an input;
         nothing on disk has changed.
     """
-    files = {Path(path): data for path, data in files.items()}
-    refuse_inputs(files, protect, advice)
-    staged, holds = {}, []
-    try:
-        for path, data in files.items():
-            staged[path], hold = _stage(path, data)
-            holds.append(hold)
-        with _locked_folders(files):
-            for folder in _folders(files):
-                recover(folder, names=[p.name for p in files if _folder(p) == folder])
-            _commit(staged)
-    except BaseException:
-        for tmp in staged.values():
+    with FileSet() as outputs:
+        outputs.stage(files, protect=protect, advice=advice)
+
+
+class FileSet:
+    """Files staged one group after another and committed as one set at the end of the block, all or none.
+
+    For outputs that must not be told apart by a kill or a concurrent run,
+    and whose later files depend on the earlier ones: a program and its
+    report, which names the program's SHA-256 (`digest`). Each `stage`
+    writes its files to temporaries (`write_files_atomic`); leaving the
+    block normally renames every staged file into place in one commit;
+    leaving it by an exception removes them, nothing on disk changed.
+    """
+
+    def __init__(self):
+        self._staged, self._digests, self._holds = {}, {}, []
+
+    def stage(self, files, *, protect=(), advice="write to another file"):
+        """Write ``files`` to temporaries, to be committed with the set; all of them or, on an error, none.
+
+        Parameters as `write_files_atomic`'s.
+
+        Raises
+        ------
+        WriteError
+            A folder does not exist, a file cannot be written, is an input,
+            or is staged already; the set's other files stay staged.
+        """
+        files = {Path(path): data for path, data in files.items()}
+        refuse_inputs(files, protect, advice)
+        for path in files:
+            if path in self._staged:
+                raise WriteError(f"{path}: written twice in one set of outputs; {advice}")
+            if path.is_dir():  # found now, not when the set's renames fail
+                raise WriteError(f"{path}: is a folder; {advice}")
+        staged = {}
+        try:
+            for path, data in files.items():
+                staged[path], hold, self._digests[path] = _stage(path, data)
+                self._holds.append(hold)
+        except BaseException:
+            for tmp in staged.values():
+                Path(tmp).unlink(missing_ok=True)
+            raise
+        self._staged.update(staged)
+        return list(files)
+
+    def digest(self, path):
+        """``(SHA-256 hex, bytes)`` of a staged file's content."""
+        return self._digests[Path(path)], os.stat(self._staged[Path(path)]).st_size
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, kind, error, trace):
+        try:
+            if error is None and self._staged:
+                signals.check()  # a stop whose exception was lost on the way commits nothing
+                with signals.held(), _locked_folders(self._staged):  # a stopping signal: after the commit and
+                    for folder in _folders(self._staged):  # the unlock (no backup, journal or locked folder left)
+                        recover(folder, names=[p.name for p in self._staged if _folder(p) == folder])
+                    _commit(self._staged, self._digests)
+        except BaseException:
+            self._remove()
+            raise
+        finally:
+            if error is not None:
+                self._remove()
+            for hold in self._holds:
+                os.close(hold)
+        return False
+
+    def _remove(self):
+        for tmp in self._staged.values():
             Path(tmp).unlink(missing_ok=True)
-        raise
-    finally:
-        for hold in holds:
-            os.close(hold)
 
 
 def recover(folder, names=()):
@@ -207,7 +266,7 @@ def recover(folder, names=()):
     with _locked_folders([folder / "lock"]):
         for journal in journals:
             if journal.suffix == ".json":
-                _roll_forward(journal)
+                _roll_forward(journal, names)
             else:  # a journal being written when its run was killed: the commit never started
                 journal.unlink(missing_ok=True)
         for name in names:
@@ -216,24 +275,63 @@ def recover(folder, names=()):
                     stray.unlink(missing_ok=True)
 
 
-def _roll_forward(journal):
+def _roll_forward(journal, names=()):
+    """Do the renames a journal names that are still to do, then remove it and its backups.
+
+    Its paths are taken relative to its folder. A file whose new version
+    (its temporary) is gone and which is not that version (its SHA-256
+    differs: the folder was copied without the temporaries, or a file was
+    replaced since) leaves the set torn: refused, unless every file of the
+    set is among ``names``, which the run is writing anew.
+
+    Raises
+    ------
+    WriteError
+        The journal cannot be read, a rename fails, or the set is torn.
+    """
     try:
         entries = json.loads(journal.read_text(encoding="utf-8"))
+        here = journal.parent
+        renames = [(here / tmp, here / target, *digest) for tmp, target, *digest in entries["renames"]]
+        backups = [here / backup for backup in entries["backups"]]
     except FileNotFoundError:  # another run rolled it forward meanwhile
         return
-    except (OSError, ValueError) as exc:
+    except (OSError, ValueError, TypeError, KeyError) as exc:
         raise WriteError(f"{journal}: an interrupted commit's journal cannot be read: {exc}") from exc
+    torn = [target for tmp, target, *digest in renames if not tmp.exists() and digest and _sha256(target) != digest[0]]
+    if torn and not {target.name for _, target, *_ in renames} <= set(names):
+        raise WriteError(
+            f"{journal}: a set of files a run was stopped while committing is torn: {', '.join(map(str, torn))} "
+            "is not the file that run wrote, and its new version is gone (the folder copied or moved without "
+            "it?); write the set again, or restore it, then remove the journal")
     try:
-        for tmp, target in entries["renames"]:
-            if os.path.exists(tmp):
+        for tmp, target, *_ in renames:
+            if tmp.exists():
                 os.replace(tmp, target)
-        _sync_folders(target for _, target in entries["renames"])
-        for backup in entries["backups"]:
-            Path(backup).unlink(missing_ok=True)
+        _sync_folders(target for _, target, *_ in renames)
+        for backup in backups:
+            backup.unlink(missing_ok=True)
         journal.unlink()
     except OSError as exc:
         raise WriteError(f"{journal}: cannot complete an interrupted commit: {exc}") from exc
     _sync_folders([journal])
+
+
+def sha256_of(path):
+    """The SHA-256 (hex) of a file's content, read a MiB at a time (OSError when it cannot be read)."""
+    digest = hashlib.sha256()
+    with open(path, "rb") as handle:
+        for block in iter(lambda: handle.read(1 << 20), b""):
+            digest.update(block)
+    return digest.hexdigest()
+
+
+def _sha256(path):
+    """`sha256_of`, or None when the file cannot be read."""
+    try:
+        return sha256_of(path)
+    except OSError:
+        return None
 
 
 def _glob_escape(name):
@@ -311,8 +409,8 @@ def _lock(fd, path):
 def _stage(path, data):
     """A temporary file beside ``path`` holding ``data``, flushed to disk, with ``path``'s mode.
 
-    Returns its name and an open descriptor holding it locked (close it once
-    the temporary is renamed or removed).
+    Returns its name, an open descriptor holding it locked (close it once
+    the temporary is renamed or removed) and the SHA-256 of ``data`` (hex).
     """
     folder = _folder(path)
     if not folder.is_dir():
@@ -330,8 +428,11 @@ def _stage(path, data):
         Path(tmp).unlink(missing_ok=True)
         raise WriteError(f"{path}: cannot write: {exc}") from exc
     try:
+        digest = hashlib.sha256()
         with os.fdopen(fd, "wb") as handle:
-            handle.writelines([data] if isinstance(data, (bytes, bytearray, memoryview)) else data)
+            for piece in [data] if isinstance(data, (bytes, bytearray, memoryview)) else data:
+                digest.update(piece)
+                handle.write(piece)
             handle.flush()
             os.fsync(handle.fileno())
         os.chmod(tmp, _mode_for(path))
@@ -343,7 +444,7 @@ def _stage(path, data):
         os.close(hold)
         Path(tmp).unlink(missing_ok=True)
         raise
-    return tmp, hold
+    return tmp, hold, digest.hexdigest()
 
 
 def _mode_for(path):
@@ -365,21 +466,6 @@ def _backup(path, backup):
     return backup
 
 
-@contextlib.contextmanager
-def _signals_held():
-    """SIGINT and SIGTERM held back during the block, delivered after it (where signal masks exist)."""
-    held = {signal.SIGINT, signal.SIGTERM}
-    try:
-        before = signal.pthread_sigmask(signal.SIG_BLOCK, held)
-    except (AttributeError, OSError):
-        yield
-        return
-    try:
-        yield
-    finally:
-        signal.pthread_sigmask(signal.SIG_SETMASK, before)
-
-
 def _sync_folders(paths):
     """Flush the folders of ``paths`` to disk (their renames and new names); where a folder cannot be, skip."""
     for folder in _folders(paths):
@@ -395,11 +481,19 @@ def _sync_folders(paths):
             os.close(fd)
 
 
-def _write_journal(staged, backups):
-    """Write the journal of a commit beside its first file, whole (temporary, fsync, rename); its path."""
+def _write_journal(staged, backups, digests):
+    """Write the journal of a commit beside its first file, whole (temporary, fsync, rename); its path.
+
+    It names each rename (temporary, file, the new content's SHA-256) and
+    each backup by its path relative to the journal's folder, so that the
+    folder moved or copied with its journal still rolls forward its own
+    files, and a file that is not the new one is told apart (`_roll_forward`).
+    """
     first = next(iter(staged))
-    entries = {"renames": [[os.path.abspath(tmp), os.path.abspath(path)] for path, tmp in staged.items()],
-               "backups": [os.path.abspath(b) for b in backups.values()]}
+    here = os.path.abspath(_folder(first))
+    entries = {"renames": [[os.path.relpath(tmp, here), os.path.relpath(path, here), digests[path]]
+                           for path, tmp in staged.items()],
+               "backups": [os.path.relpath(b, here) for b in backups.values()]}
     fd, tmp = tempfile.mkstemp(prefix=JOURNAL_PREFIX, suffix=".json.tmp", dir=_folder(first))
     journal = Path(tmp[: -len(".tmp")])
     try:
@@ -415,19 +509,19 @@ def _write_journal(staged, backups):
     return journal
 
 
-def _commit(staged):
-    """Rename staged temporaries into place (through a journal for several); on failure put every replaced file back."""
+def _commit(staged, digests):
+    """Rename staged temporaries into place (through a journal for several, naming their ``digests``); on failure
+    put every replaced file back."""
     backups, done, journal, path = {}, [], None, None
     try:
         for path in staged:
             if path.exists():
                 backups[path] = _backup(path, f"{staged[path]}.bak")
         if len(staged) > 1:
-            journal = _write_journal(staged, backups)
-        with _signals_held():  # Ctrl-C or SIGTERM arrives after the last rename, not between two
-            for path, tmp in staged.items():
-                os.replace(tmp, path)
-                done.append(path)
+            journal = _write_journal(staged, backups, digests)
+        for path, tmp in staged.items():
+            os.replace(tmp, path)
+            done.append(path)
         _sync_folders(staged)
     except OSError as exc:
         try:

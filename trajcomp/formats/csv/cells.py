@@ -51,13 +51,17 @@ def _numbers(cells):
     """Values (B,) of a column's cells (B,) (NaN where empty) and which are empty; values None if a cell is no number.
 
     Canonical numbers (`_canonical`, the common case) are read from their
-    digits at once; a column of few distinct cells (speeds, zones) converts
+    digits at once; a column with a non-ASCII character or ``_`` is no
+    number (as `trajcomp.formats.text.finite` reads one); a column of few distinct cells (speeds, zones) converts
     each distinct one; other plain numbers are converted from the Python
     str at once; cells with quotes or empty ones go through a str array.
     """
     found = _canonical(cells) if len(cells) else None
     if found is not None and found[1] is not None:
         return found[1], np.zeros(len(cells), dtype=bool)
+    joined = "".join(cells)
+    if not joined.isascii() or "_" in joined:  # float() reads -62_8.0 and full-width digits: no number here
+        return None, np.zeros(len(cells), dtype=bool)
     distinct = set(cells) if len(cells) >= 64 else None
     try:
         if distinct is not None and len(distinct) <= len(cells) // 8:

@@ -27,6 +27,7 @@ from trajcomp.arm.transforms import pose_to_matrix
 LIMITS = dict.fromkeys(POSE[:3], LENGTH_LIMIT) | dict.fromkeys(POSE[3:], ANGLE_LIMIT) | dict.fromkeys(JOINTS, JOINT_LIMIT)
 KINDS = {"PTP": JOINT, "LIN": LINEAR}
 KNOWN = POSE + JOINTS + ("motion", "speed", "zone", "t")
+NOT_NEGATIVE = {"speed": "a TCP speed, mm/s", "zone": "a blending radius, mm"}  # columns no controller reads below 0
 
 
 def read(path, workers=1):
@@ -165,7 +166,8 @@ def _parse_block(name, header, lines, numbers):
     values, empty = {}, {}
     for column in [c for c in header if c in LIMITS or c in ("speed", "zone")]:
         number, empty[column] = _numbers(columns[column])
-        if number is None or np.any(~empty[column] & ~(np.abs(number) <= LIMITS.get(column, np.inf))):
+        if number is None or np.any(~empty[column] & ~(np.abs(number) <= LIMITS.get(column, np.inf))) \
+                or column in NOT_NEGATIVE and np.any(number < 0):
             _check_rows(name, header, lines, numbers)
         values[column] = number
     none = np.zeros(b, dtype=bool)
@@ -206,7 +208,9 @@ def _check_row(name, header, line, number):
     if not groups:
         fail(name, number, line, "a row needs x,y,z,a,b,c or j1..j6")
     for column in [c for group in groups for c in group] + [c for c in ("speed", "zone") if row.get(c)]:
-        finite(row[column], name, number, line, f"field {column}", LIMITS.get(column, math.inf))
+        value = finite(row[column], name, number, line, f"field {column}", LIMITS.get(column, math.inf))
+        if column in NOT_NEGATIVE and value < 0:
+            fail(name, number, line, f"field {column}: {row[column][:40]!r} is negative ({NOT_NEGATIVE[column]})")
     kind = row.get("motion", "").upper()
     if kind and kind not in KINDS:
         fail(name, number, line, f"field motion: expected PTP or LIN, got {kind!r}")

@@ -574,6 +574,7 @@ class _Reader:
         self.assigned = {}  # NAME -> first line of the .src that assigns it
         self.shared = set()  # NAMEs of GLOBAL points: other programs may assign them
         self.redeclared = False  # a point declared twice: the last declaration counts
+        self.in_data_list = {}  # (source index, NAME) -> line: the points each data list declares (once each)
         self.companions = {}  # file -> (source index, Lines, masked text) of other data lists read
         self.motion_spans = SpanTable(MOTION_SPANS)  # the spans of the motions, in order: all in the .src
 
@@ -614,6 +615,16 @@ class _Reader:
         if key in self.numbers:
             return self.numbers[key]
         return None, f"{field} = {text}: set at run time (line {line_no})"
+    def once_in_data_list(self, index, point, line_no, original):
+        """Refuse ``point`` declared at ``line_no`` of a data list (a ``.dat``: one scope) that declares it
+        already, whatever the case (``P3``, ``p3``): the controller refuses such a list."""
+        if not self.sources[index].name.lower().endswith(".dat"):
+            return  # a .src: each routine declares its own points
+        first = self.in_data_list.setdefault((index, point.upper()), line_no)
+        if first != line_no:
+            fail(self.sources[index].name, line_no, original,
+                 f"{point} is declared again (first at line {first}): a data list declares a name once")
+
     def add_source(self, source):
         self.sources.append(source)
         index = len(self.sources) - 1
@@ -635,6 +646,7 @@ class _Reader:
                 if _GLOBAL_WORD.search(text, 0, m.start(2)):
                     self.shared.add(point.upper())
                 self.redeclared |= point.upper() in self.points
+                self.once_in_data_list(index, point, line_no, original)
                 self.points[point.upper()] = len(self.targets)
                 self.targets.append(_point(members, point, name, line_no, original, typ))
             return True
@@ -965,6 +977,8 @@ def read(path):
             nonlocal rows
             stop = int(np.searchsorted(point_lines, before))
             declared = [name.upper() for name in names[rows:stop]]
+            for name, line_no in zip(names[rows:stop], point_lines[rows:stop].tolist()):
+                reader.once_in_data_list(dat_index, name, line_no, dat_lines.line(line_no))
             known = len(reader.points)
             reader.points.update(zip(declared, range(len(reader.targets), len(reader.targets) + len(declared))))
             reader.redeclared |= len(reader.points) < known + len(declared)  # a name declared before

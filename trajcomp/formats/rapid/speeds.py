@@ -10,7 +10,7 @@ def write_speeds(program, result, robot, plan):
     ``plan.cruise[k]`` (mm/s) are written for waypoint k, the end of motion ``result.motion[k]``; returns the
     program with its fields written and the setting written per waypoint.
     """
-    edits, settings = [], {}
+    edits, settings = [[] for _ in program.sources], {}  # per source: a task's motions may lie in any module
     source, start, end = program.motion_table().span_offsets("speed")  # as columns: no object per motion
     for k in sorted({**plan.times, **plan.cruise}):
         m = result.motion[k]
@@ -20,6 +20,6 @@ def write_speeds(program, result, robot, plan):
             written = f"{speed_data}\\V:={format_number(floor_places(plan.cruise[k], 3), 3)}"
         else:
             written = f"{speed_data}\\T:={format_number(ceil_places(plan.times[k], 3), 3)}"
-        edits.append((int(start[m]), int(end[m]), written))
+        edits[source[m]].append((int(start[m]), int(end[m]), written))
         settings[k] = written
-    return edit_sources(program, [edits]), settings
+    return edit_sources(program, edits), settings
