@@ -46,7 +46,8 @@ TURN = 2.0 * np.pi
 _WINDOW_TOL = 1e-9  # rad, slack of the joint limits
 _TURNS = np.arange(-3, 4)  # whole turns tried when placing a joint in its window
 METRES_BOX = 10.0  # mm: targets all this close to the base origin are positions in metres
-OTHER_ARM = 5.0  # mm: declared joints this far from their targets (median) were solved for another arm
+OTHER_ARM = 0.1  # of the reach: declared joints this far from their targets (median) were solved for another arm
+FITS = 5.0  # mm: declared joints this close to their targets (median) fit an arm
 BLOCK = 16_384  # undeclared targets whose eight branches are held at once: bounded memory at millions of targets
 
 
@@ -253,22 +254,26 @@ def _fail_other_arm(program, robot, index, joints, T_flange_tool, T_base_tcp):
     """IKError for a program whose declared joints (M, 6), rad, do not reach its own targets on ``robot``.
 
     A program carries the joints its generator solved for its targets on
-    the arm it was written for: where they put ``robot``'s TCP (with the
-    targets' tools, ``T_flange_tool`` (M, 4, 4)) more than `OTHER_ARM` mm
-    from the targets ``T_base_tcp`` (M, 4, 4) for most of them, the program
-    was written for another arm (a model of another robot). The message
-    names the built-in robots whose kinematics the joints do fit.
+    the arm it was written for (or a planner's joints near them, a few
+    degrees off: a hint): where they put ``robot``'s TCP (with the targets'
+    tools, ``T_flange_tool`` (M, 4, 4)) farther than `OTHER_ARM` of the
+    arm's reach from the targets ``T_base_tcp`` (M, 4, 4) for most of them,
+    and they fit the kinematics of another built-in robot within `FITS` mm,
+    the program was written for that arm, which the message names (joints
+    that fit no arm are a posture's hint, however far).
     """
     miss = np.median(_declared_miss(robot, joints, T_flange_tool, T_base_tcp)) if len(joints) else 0.0
-    if miss <= OTHER_ARM:
+    if miss <= OTHER_ARM * shoulder_and_reach(robot)[1]:
         return
     fitting = [name for name in builtin_robot_names() if name != robot.name
-               and np.median(_declared_miss(load_robot(name), joints, T_flange_tool, T_base_tcp)) <= OTHER_ARM]
-    fits = f"they fit robot {' or '.join(fitting)}" if fitting else "they fit no built-in robot"
+               and np.median(_declared_miss(load_robot(name), joints, T_flange_tool, T_base_tcp)) <= FITS]
+    if not fitting:  # hints that choose a posture only, far as they may be: nothing says another arm
+        return
     raise IKError(
         f"{program.name}: the joints it declares for its targets put robot {robot.name}'s TCP {miss:.1f} mm from "
-        f"them (median of {len(joints)}, {program.where(index[0])} first): the program was written for another arm "
-        f"({fits}); give the robot (or a model of the robot) it runs on. The program was not changed")
+        f"them (median of {len(joints)}, {program.where(index[0])} first); they fit robot {' or '.join(fitting)}: "
+        "the program was written for another arm; give the robot (or a model of the robot) it runs on. The "
+        "program was not changed")
 
 
 def _declared_miss(robot, joints, T_flange_tool, T_base_tcp):

@@ -18,7 +18,7 @@ import re
 
 import numpy as np
 
-NUMBER = r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?"  # a number as the robot languages write one
+NUMBER = r"[-+]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][-+]?[0-9]+)?"  # a number as the robot languages write one (ASCII digits)
 FIELDS_AT_ONCE = 65536  # fields laid out as a (width, fields) matrix together: bounds the matrices' memory
 _WIDEST = 24  # characters of the widest field read from its digits (more: read by `float`)
 _DIGITS = 15  # at most this many digits make a whole number below 2**53
