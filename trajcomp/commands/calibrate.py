@@ -59,14 +59,14 @@ def add_parser(sub):
     parser.set_defaults(run=run)
 
 
-def print_stats(title, stats):
-    """Print a table of per-mode statistics dicts (as in a model report)."""
+def print_stats(title, stats, file=None):
+    """Print a table of per-mode statistics dicts (as in a model report) to ``file`` (default stdout)."""
     from trajcomp.model.stats import ErrorStats, format_table
 
     rows = {mode: ErrorStats(**{**s, "signed_mean": tuple(s["signed_mean"]), "std": tuple(s["std"])})
             for mode, s in stats.items() if isinstance(s, dict)}
-    print(title)
-    print(format_table(rows))
+    print(title, file=file)
+    print(format_table(rows), file=file)
 
 
 def describe(model):
