@@ -222,6 +222,12 @@ def _poses(T):
     return pose
 
 
+def _near(angles, reference):
+    """Angles (K, 3), deg, each turned by whole turns to lie within 180 deg of ``reference`` (K, 3): a command's
+    A, B, C as the writers write them, next to the target's (C 180.077 by a target's 180, not -179.923)."""
+    return angles + 360.0 * np.round((reference - angles) / 360.0)
+
+
 def _round(array, digits):
     return np.round(np.asarray(array, dtype=float), digits).tolist()
 
@@ -233,9 +239,11 @@ def target_json(report, robot, measures, flags, index):
     q_row, previous = q[index], q[np.maximum(index - 1, 0)]
     correction = np.reshape(report.correction, (-1, 6))[index]
     v = {name: values[index] for name, values in measures.values.items()}
+    target, command = _poses(report.T_target[index]), _poses(report.T_command[index])
+    command[:, 3:] = _near(command[:, 3:], target[:, 3:])
     columns = {
-        "target": _round(_poses(report.T_target[index]), 4),
-        "command": _round(_poses(report.T_command[index]), 4),
+        "target": _round(target, 4),
+        "command": _round(command, 4),
         "correction_mm": _round(correction[:, :3], 4),
         "correction_deg": _round(correction[:, 3:], 5),
         "correction_norm_mm": _round(v["correction_mm"], 4),
