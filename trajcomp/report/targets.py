@@ -16,7 +16,7 @@ import numpy as np
 
 from trajcomp.support.parallel import map_blocks
 from trajcomp.report.measures import BRANCH_NAMES, joint_jumps, limit_distances, posture_measures
-from trajcomp.arm.transforms import matrix_to_pose
+from trajcomp.arm.transforms import angles_near, matrix_to_pose
 
 CHUNK = 2048  # targets per pass of the kinematic measures
 BLOCK = 16 * CHUNK  # targets per task of a process computing the kinematic measures
@@ -222,12 +222,6 @@ def _poses(T):
     return pose
 
 
-def _near(angles, reference):
-    """Angles (K, 3), deg, each turned by whole turns to lie within 180 deg of ``reference`` (K, 3): a command's
-    A, B, C as the writers write them, next to the target's (C 180.077 by a target's 180, not -179.923)."""
-    return angles + 360.0 * np.round((reference - angles) / 360.0)
-
-
 def _round(array, digits):
     return np.round(np.asarray(array, dtype=float), digits).tolist()
 
@@ -240,7 +234,7 @@ def target_json(report, robot, measures, flags, index):
     correction = np.reshape(report.correction, (-1, 6))[index]
     v = {name: values[index] for name, values in measures.values.items()}
     target, command = _poses(report.T_target[index]), _poses(report.T_command[index])
-    command[:, 3:] = _near(command[:, 3:], target[:, 3:])
+    command[:, 3:] = angles_near(command[:, 3:], target[:, 3:])
     columns = {
         "target": _round(target, 4),
         "command": _round(command, 4),
