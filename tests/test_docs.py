@@ -18,9 +18,10 @@ Rules (the README's "Set up" section points here):
 - ``--help``: the lines under ``example:`` of every sub-command run in the
   order of ``trajcomp.cli.COMMANDS``, as another session from the root of
   another such clone.
-- Docs pages: the pages under ``docs/`` the README links to, in the order
-  of their first link, continue the README's session: their ``sh`` blocks
-  run after the README's, in the same folder, with the files it made.
+- Docs pages: the pages under ``docs/`` the README lists (list items that
+  start with a link to one), in that order, continue the README's session:
+  their ``sh`` blocks run after the README's, in the same folder, with the
+  files it made.
 - Shown output: a fenced block whose info string is ``text output`` (the
   language, then the word ``output``, then optional ``abs=X`` and
   ``rel=Y``: the tolerance of its numbers, default exact) shows what the
@@ -31,6 +32,9 @@ Rules (the README's "Set up" section points here):
   ``abs + rel * |shown|`` of it; a line that is only ``...`` stands for
   any lines. Any other block that is not ``sh`` is illustration, not
   compared.
+- A ``python`` block whose first line is ``# examples/NAME.py...`` shows that
+  file whole, as it is (`test_shown_example_files_are_the_files`): the
+  commands that run it run what the page shows.
 - Not run: a command starting with one of `NOT_RUN` (installing, the test
   suite itself, CI, the benchmarks); in ``A && B`` only that part is left
   out. A command naming a path under ``shared/data/`` skips when that path
@@ -81,7 +85,7 @@ NOT_RUN = (
 COMMAND_LANGUAGES = {"sh"}
 REAL_DATA = re.compile(r"[^\s=,]*shared/data/[^\s,]*")
 FENCE = re.compile(r"^\s*```\s*(\S*)(.*)")
-DOCS_LINK = re.compile(r"\]\((docs/[\w./-]+\.md)\)")
+DOCS_LINK = re.compile(r"^\s*[-*]\s+\[[^\]]*\]\((docs/[\w./-]+\.md)\)", re.MULTILINE)
 NUMBER = re.compile(r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?")
 CONTINUED = "\\"
 COMMENT = re.compile(r"(^|\s)#.*")
@@ -149,7 +153,7 @@ def readme_commands(path=README):
 
 
 def docs_pages(path=README):
-    """The pages under docs/ a Markdown file links to, in the order of their first link."""
+    """The pages under docs/ a Markdown file lists (a list item starting with a link to one), in that order."""
     return [REPO / link for link in dict.fromkeys(DOCS_LINK.findall(path.read_text(encoding="utf-8")))
             if (REPO / link).is_file()]
 
@@ -437,3 +441,12 @@ def test_the_docs_pages_the_readme_links_continue_its_session():
     where = [c.where for c in README_COMMANDS]
     readme_last = max(k for k, w in enumerate(where) if w.startswith("README.md:"))
     assert all(not w.startswith("README.md:") for w in where[readme_last + 1:])
+
+
+def test_shown_example_files_are_the_files():
+    shown = [(page, lines) for page in (README, *docs_pages()) for language, lines in fenced_blocks(page)
+             if language == "python" and lines and re.match(r"# examples/\S+\.py", lines[0][1])]
+    for page, lines in shown:
+        name = re.match(r"# (examples/\S+\.py)", lines[0][1]).group(1)
+        assert "\n".join(text for _, text in lines) + "\n" == (REPO / name).read_text(), f"{page.name}:{lines[0][0]}"
+    assert any(page == README for page, _ in shown)
