@@ -53,6 +53,7 @@ import contextlib
 import dataclasses
 import importlib
 import io
+import logging
 import os
 import re
 import shlex
@@ -300,6 +301,10 @@ class Session:
         output = io.StringIO()
         previous = Path.cwd()
         os.chdir(self.cwd)
+        warnings = logging.StreamHandler(output)  # the console script's warnings on stderr (the root logger
+        warnings.setFormatter(logging.Formatter("trajcomp: warning: %(message)s"))  # has pytest's handlers)
+        warnings.setLevel(logging.WARNING)
+        logging.getLogger().addHandler(warnings)
         try:
             with contextlib.redirect_stdout(output), contextlib.redirect_stderr(output):
                 code = main(argv)
@@ -309,6 +314,7 @@ class Session:
             code = 1
             output.write(traceback.format_exc())
         finally:
+            logging.getLogger().removeHandler(warnings)
             os.chdir(previous)
         return code, output.getvalue()
 
