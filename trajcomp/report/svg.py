@@ -108,7 +108,7 @@ class Axes:
         values = []
         for kind, x, y, _ in self.items:
             v = x if axis == 0 else y
-            if kind == "hline" and axis == 0 or kind == "hspan" and axis == 0:
+            if kind in ("hline", "hspan") and axis == 0:  # they span the x axis, whatever its range
                 continue
             if isinstance(kind, tuple) and kind[0] == "bars":
                 if axis == 0:
@@ -122,7 +122,7 @@ class Axes:
         low, high = (data.min(), data.max()) if len(data) else (0.0, 1.0)
         if self.ylog and axis == 1:
             low, high = math.log10(low), math.log10(high)
-        pad = 0.04 * (high - low) if high > low else (0.5 if not self.ylog or axis == 0 else 0.5)
+        pad = 0.04 * (high - low) if high > low else 0.5
         low, high = low - pad, high + pad
         if self.ylog and axis == 1:
             low, high = 10 ** low, 10 ** high
@@ -136,7 +136,8 @@ class Axes:
         if self.equal:  # widen one range so that a mm is as long on both axes
             scale = max((x1 - x0) / width, (y1 - y0) / height)
             cx, cy = (x0 + x1) / 2, (y0 + y1) / 2
-            x0, x1, y0, y1 = cx - scale * width / 2, cx + scale * width / 2, cy - scale * height / 2, cy + scale * height / 2
+            x0, x1 = cx - scale * width / 2, cx + scale * width / 2
+            y0, y1 = cy - scale * height / 2, cy + scale * height / 2
         fy = _scale(y0, y1, top + height, top, self.ylog)
         fx = _scale(x0, x1, left, left + width, False)
         out = [f'<g font-size="{FONT}">']
@@ -253,10 +254,9 @@ class Axes:
 class Chart:
     """Panels in rows: ``Chart(width, [(height, [Axes, ...]), ...])`` (px); `svg` writes it."""
 
-    def __init__(self, width, rows, *, right=None):
+    def __init__(self, width, rows):
         self.width, self.rows = width, rows
-        self.right = right if right is not None else (
-            72 if any(ax.twin_axes for _, panels in rows for ax in panels) else _MARGIN["right"])
+        self.right = 72 if any(ax.twin_axes for _, panels in rows for ax in panels) else _MARGIN["right"]
 
     def svg(self, title):
         """The ``<svg>`` element (scales to the page's width); ``title``, unique in the page, names its parts."""
