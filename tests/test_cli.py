@@ -469,3 +469,17 @@ def test_retime_without_a_model_claims_no_tolerance(tmp_path, capsys):
     with pytest.raises(SystemExit):
         main(["retime", str(examples / "Weld.mod"), "-o", str(tmp_path / "W.mod"), "--robot", "abb_irb4600",
               "--tolerance", "0.1"])
+
+
+def test_calibrate_prints_parameters_seen_only_together_as_their_combinations(ur10_run, tmp_path, capsys):
+    """d2, d3, d4, a5, theta4 were printed as identified deltas and, on the next line, as not identified."""
+    model, _ = ur10_run
+    meas = Path(model).parent / "meas.csv"
+    assert main(["calibrate", str(meas), "--robot", "ur10", "--grid-step", "100", "--folds", "0",
+                 "-o", str(tmp_path / "m.yaml")]) == 0
+    lines = {line.split(":")[0]: line for line in capsys.readouterr().err.splitlines()}
+    fixed = [item.split(" (")[0] for item in lines["not identified on their own"].split(": ", 1)[1].split("), ")]
+    own = [item.split()[0] for item in lines[next(k for k in lines if k.startswith("identified 25 parameters"))]
+           .split(": ", 1)[1].split(", ")]
+    assert "d3" in fixed and not set(fixed) & set(own)
+    assert "d2 + d3" in lines["identified in combination"] and "d2" not in own

@@ -188,6 +188,21 @@ def identifiable_combinations(model, joints, residuals, rotation=False):
     return out
 
 
+def parameter_combinations(model, meas):
+    """`identifiable_combinations` of a model on the measurements it was fitted on (None when the fit kept
+    every parameter, or the rows have no joints): what ``trajcomp calibrate`` prints."""
+    joints, _, _, errors = _data(model, meas)
+    return _combinations(model, meas, joints, errors)
+
+
+def _combinations(model, meas, joints, errors):
+    if joints is None or not model.dh_fixed:
+        return None
+    used = ~np.isin(meas.lines, list(model.report.get("outlier_lines") or []))
+    residuals = errors["dh" if "dh" in errors else _after_mode(model)][used]
+    return identifiable_combinations(model, joints[used], residuals, rotation=meas.measured_orientation is not None)
+
+
 def combination_text(combination):
     """``"d2 + d3 + d4 - a5 - 2.026 alpha4"``: a combination's terms, coefficients of 1 left out."""
     text = combination["name"]
@@ -299,9 +314,7 @@ def calibration_report(model, meas, *, criteria=None, files=(), options=None):
                             "sigma": float(np.degrees(s) if is_angle(n) else s), "unit": "deg" if is_angle(n) else "mm"}
                            for n, d, s in zip(model.dh_names, model.dh_delta, model.dh_sigma)],
             "fixed": [{"name": n, "reason": r} for n, r in model.dh_fixed.items()],
-            "combinations": None if joints is None or not model.dh_fixed else identifiable_combinations(
-                model, joints[~excluded], errors["dh" if "dh" in errors else after][~excluded],
-                rotation=meas.measured_orientation is not None),
+            "combinations": _combinations(model, meas, joints, errors),
             "condition_number": (stored.get("identifiability") or {}).get("condition")},
         "joint_errors": _joint_errors(model),
         "outliers": {"file": meas.path, "lines": outlier_lines},
