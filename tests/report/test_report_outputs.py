@@ -289,3 +289,26 @@ def test_parameters_the_data_see_only_together_are_shown_as_their_combinations(t
         alone = moved({name: 0.1})
         hidden = moved({name: 0.1, **{k: -0.1 * coefficient for k, coefficient in terms.items()}})
         assert hidden < 0.05 * alone or alone < 1e-6, (name, terms, alone, hidden)
+
+
+def test_tracker_frame_data_show_the_arm_s_combination_the_registration_leaves(tmp_path):
+    """With the tracker registration refined too, base z and the turn about it take d1 and theta1; the arm's
+    own combination is d2 + d3 + d4 (parallel axes), and it is the virtual arm's true one."""
+    from trajcomp.arm.robot import load_robot
+    from trajcomp.calibration.simulate import VirtualRobot
+    from trajcomp.report.calibration import combination_text
+
+    plan, meas = tmp_path / "plan.csv", tmp_path / "tilted.csv"
+    assert main(["plan", "--robot", "ur10", "--cube", "300,-100,300", "--side", "400", "--step", "100",
+                 "--orientations", "5", "-o", str(plan)]) == 0
+    assert main(["simulate", str(plan), "--robot", "ur10", "--seed", "1", "--tracker", "2400,-1300,150,175,0,0",
+                 "--six-dof", "-o", str(meas)]) == 0
+    assert main(["calibrate", str(meas), "--robot", "ur10", "--frame", "tracker", "--folds", "0",
+                 "-o", str(tmp_path / "m.yaml"), "--report", str(tmp_path / "cal"), "--json-only"]) == 0
+    params = _valid(json.loads((tmp_path / "cal.json").read_text()))["parameters"]
+    assert {f["name"] for f in params["fixed"]} >= {"d1", "theta1", "d3", "d4"}
+    assert [combination_text(c) for c in params["combinations"]] == ["d2 + d3 + d4"]
+    nominal = load_robot("ur10").as_standard()
+    true = VirtualRobot.create(load_robot("ur10"), "paper", seed=1).true_robot.as_standard()
+    truth = float(np.sum(true.d[1:4] - nominal.d[1:4]))  # -0.081 mm; the separate deltas are -0.37 to +0.27
+    assert params["combinations"][0]["value"] == pytest.approx(truth, abs=0.05)

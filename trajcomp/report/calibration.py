@@ -139,7 +139,10 @@ def identifiable_combinations(model, joints, residuals, rotation=False):
     kept parameter k only as the combination ``k + sum_f A_kf f``. Its value
     (the fit's deltas put in) and standard deviation are what the
     measurements determine; the separate deltas are not (the fit spreads
-    them at least cost from the nominal arm).
+    them at least cost from the nominal arm). The frames the fit refines
+    with the arm count among the kept (the tracker registration of
+    tracker-frame data, the measured frame of orientations): a parameter
+    they stand in for (base z for d1) is in no combination of the arm's.
 
     Parameters
     ----------
@@ -156,15 +159,17 @@ def identifiable_combinations(model, joints, residuals, rotation=False):
     Returns
     -------
     list of dict
-        Per kept parameter that stands for fixed ones: ``name``, ``terms`` (``[{"name", "coefficient"}]``,
-        the fixed parameters in its combination, coefficient in the
-        combination's unit per the term's unit), ``value``, ``sigma``,
-        ``unit`` (mm or deg).
+        Per kept parameter of the arm that stands for fixed ones: ``name``,
+        ``terms`` (``[{"name", "coefficient"}]``, the fixed parameters in its
+        combination, coefficient in the combination's unit per the term's),
+        ``value``, ``sigma``, ``unit`` (mm or deg).
     """
-    from trajcomp.arm.parameters import pose_jacobian, scales
+    from trajcomp.arm.parameters import BASE_NAMES, TARGET_NAMES, pose_jacobian, scales
     from trajcomp.calibration.options import ORIENTATION_WEIGHT
 
-    names = list(model.dh_names)
+    frames = [*(BASE_NAMES if not np.allclose(model.T_tracker_base, np.eye(4)) else ()),
+              *(TARGET_NAMES if rotation else ())]
+    names = [*model.dh_names, *frames]
     _, jac = pose_jacobian(model.identified, joints, names, model.R_tcp_target)
     rows = np.concatenate([jac[:, :3], ORIENTATION_WEIGHT * jac[:, 3:]], axis=1) if rotation else jac[:, :3]
     scale = scales(names)
@@ -172,7 +177,7 @@ def identifiable_combinations(model, joints, residuals, rotation=False):
     kept = [k for k, n in enumerate(names) if n not in model.dh_fixed]
     fixed = [k for k, n in enumerate(names) if n in model.dh_fixed]
     stands_for = np.linalg.lstsq(J[:, kept], J[:, fixed], rcond=None)[0]  # (K, F): J_F = J_K A
-    x = np.asarray(model.dh_delta, dtype=float) / scale
+    x = np.r_[np.asarray(model.dh_delta, dtype=float), np.zeros(len(frames))] / scale  # frames: their own moves
     value = x[kept] + stands_for @ x[fixed]
     variance = float(np.sum(residuals**2)) / max(residuals.size - len(kept), 1)
     sigma = np.sqrt(np.clip(np.diag(np.linalg.pinv(J[:, kept].T @ J[:, kept])) * variance, 0.0, None))
@@ -182,8 +187,8 @@ def identifiable_combinations(model, joints, residuals, rotation=False):
         coefficients = stands_for[i] * user[k] / user[fixed]
         terms = [{"name": names[f], "coefficient": float(c)} for f, c in zip(fixed, coefficients)
                  if abs(c) >= SHOWN_TERM]
-        if terms:  # a parameter identified on its own keeps the fit's delta and sigma (``identified``)
-                out.append({"name": names[k], "terms": terms, "value": float(value[i] * user[k]),
+        if terms and names[k] in model.dh_names:  # one identified on its own keeps the fit's delta and sigma
+            out.append({"name": names[k], "terms": terms, "value": float(value[i] * user[k]),
                         "sigma": float(sigma[i] * user[k]), "unit": "deg" if is_angle(names[k]) else "mm"})
     return out
 
