@@ -4,10 +4,10 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import real_data
 
 from trajcomp.cli import main
 
-UR5_GRID = Path(__file__).resolve().parents[2] / "shared" / "data" / "ur5-grid" / "grid.csv"
 UR5_COLUMNS = ",".join([f"j{i}=joint_{i}" for i in range(1, 7)] + ["x=x_t", "y=y_t", "z=z_t",
                         "mx=x_t+x_dif", "my=y_t+y_dif", "mz=z_t+z_dif"])
 
@@ -58,10 +58,9 @@ def test_usage_errors_exit_2():
     assert exit_info.value.code == 2
 
 
-@pytest.mark.skipif(not UR5_GRID.exists(), reason="shared UR5 data not present")
 def test_real_ur5_grid_calibrates_far_below_its_raw_error(tmp_path, capsys):
     model = tmp_path / "ur5.yaml"
-    assert main(["calibrate", str(UR5_GRID), "--robot", "ur5", "--columns", UR5_COLUMNS,
+    assert main(["calibrate", str(real_data("ur5-grid", "grid.csv")), "--robot", "ur5", "--columns", UR5_COLUMNS,
                  "--interpolation", "knn", "-o", str(model)]) == 0
     cv = capsys.readouterr().out.split("cross-validation")[1]
     rows = {line.split()[0]: float(line.split()[2]) for line in cv.splitlines()[2:] if line.strip()}

@@ -64,18 +64,12 @@ import traceback
 from pathlib import Path
 
 import pytest
+from conftest import DATA_HOME, REAL_DATA_SOURCES
 
 from trajcomp.cli import COMMANDS, main
 
 REPO = Path(__file__).resolve().parents[1]
 README = REPO / "README.md"
-REAL_DATA_SOURCES = {  # a folder of shared/data: where its data come from (the tests skip without them)
-    "ur5-grid": "a UR5's 1,000 laser-tracker grid poses, UR5/3D_UR5_uncalibrated_grid_cleaned.csv of the public "
-                "repository pauljac7700/serial_robots_datasets (MIT)",
-    "ur10-ipa": "a UR10's laser-tracker measurements at 23 tool orientations, Series_A of the public repository "
-                "christianlandgraf/ipa-robot-accuracy (MIT)",
-}
-DATA_HOME = "a folder shared/data beside the clone (the data are not part of the repository)"
 
 NOT_RUN = (
     "pip install",  # changes the environment; the test runs the code of this checkout
