@@ -3,6 +3,7 @@
 from pathlib import Path
 
 from trajcomp.report.markup import Raw, esc, key_values, table
+from trajcomp.report.summary import judges_landing
 
 SHOWN = 30  # targets named per criterion before "and N more"
 
@@ -60,7 +61,7 @@ def _vector(values, digits):
 
 
 def compliance_sections(doc):
-    parts = [("verdict", "Verdict", verdict_section(doc["verdict"]) + _criteria_text(doc["criteria"]))]
+    parts = [("verdict", "Verdict", verdict_section(doc["verdict"]) + _criteria_text(doc["criteria"], doc["verdict"]))]
     if doc["missing"]:
         parts.append(("missing", "Not available in this run", missing_section(doc["missing"])))
     parts.append(("targets", "Targets", _targets(doc)))
@@ -76,11 +77,17 @@ def compliance_sections(doc):
     return parts
 
 
-def _criteria_text(criteria):
-    return (f"<p>Tolerance {criteria['tolerance_mm']:g} mm; joint limit margin {criteria['limit_margin_deg']:g} deg; "
-            f"singularity margins {criteria['singularity_margin_deg']:g} deg (elbow, wrist) and "
-            f"{criteria['shoulder_margin_mm']:g} mm (shoulder). A criterion that cannot be evaluated "
-            "does not fail the run; it says why.</p>")
+def _criteria_text(criteria, verdict):
+    """The criteria's settings; the tolerance only when a criterion it sets was evaluated (not in a run without
+    a model)."""
+    settings = [f"joint limit margin {criteria['limit_margin_deg']:g} deg",
+                f"singularity margins {criteria['singularity_margin_deg']:g} deg (elbow, wrist) and "
+                f"{criteria['shoulder_margin_mm']:g} mm (shoulder)"]
+    if judges_landing(verdict):
+        settings.insert(0, f"tolerance {criteria['tolerance_mm']:g} mm")
+    text = "; ".join(settings)
+    return (f"<p>{text[0].upper()}{text[1:]}. A criterion that cannot be evaluated does not fail the run; it says "
+            "why.</p>")
 
 
 def _shown(value, spec, unit=""):

@@ -37,7 +37,7 @@ def verdict_lines(verdict):
     return out
 
 
-def _judges_landing(verdict):
+def judges_landing(verdict):
     """Whether a criterion the tolerance sets (`HEADLINE`) was evaluated: else no tolerance is shown."""
     return any(c["id"] in HEADLINE and c["status"] != NOT_EVALUATED for c in verdict["criteria"])
 
@@ -51,7 +51,7 @@ def summary_lines(doc):
         out = [what]
     else:
         criteria = doc.get("criteria") or {}
-        tolerance = f", tolerance {criteria['tolerance_mm']:g} mm" if criteria and _judges_landing(verdict) else ""
+        tolerance = f", tolerance {criteria['tolerance_mm']:g} mm" if criteria and judges_landing(verdict) else ""
         out = [f"verdict: {verdict['result'].upper()}{tolerance}: {what}", *verdict_lines(verdict)]
     summary = doc.get("summary")
     if summary and summary["targets"] and summary["correction_max_mm"] is None:
