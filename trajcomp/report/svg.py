@@ -119,7 +119,7 @@ class Axes:
         data = np.concatenate(values) if values else np.zeros(0)
         if self.ylog and axis == 1:
             data = data[data > 0]
-        low, high = (data.min(), data.max()) if len(data) else (0.0, 1.0)
+        low, high = (data.min(), data.max()) if len(data) else ((1e-3, 1.0) if self.ylog and axis == 1 else (0.0, 1.0))
         if self.ylog and axis == 1:
             low, high = math.log10(low), math.log10(high)
         pad = 0.04 * (high - low) if high > low else 0.5
