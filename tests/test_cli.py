@@ -454,6 +454,9 @@ def test_a_batch_names_each_refused_file_once_and_leaves_no_empty_folder(kuka_mo
     assert "ERROR progs/bad/deep/bad1.csv:2: expected 6 fields, got 3: '1,2,3'\n" in err
     assert err.count("bad1.csv") == 1
     assert sorted(str(p) for p in Path("out").rglob("*")) == ["out/good", "out/good/p.csv", "out/summary.json"]
+    assert main(["compensate", "progs/bad", "--model", str(kuka_model), "-o", "refused/", "--report",
+                 "refused/reports", "--jobs", "1"]) == 2
+    assert sorted(str(p) for p in Path("refused").rglob("*")) == ["refused/summary.json"]  # no empty report folder
 
 
 def test_retime_without_a_model_claims_no_tolerance(tmp_path, capsys):

@@ -106,8 +106,6 @@ def run(args):
         return batch.EXIT_CODES[result.status]
     if args.json_only and not args.report:
         raise TrajcompError("--json-only: a batch writes one report per program; give --report FOLDER")
-    if args.report:
-        Path(args.report).mkdir(parents=True, exist_ok=True)
     return _run_batch(args, dataclasses.replace(job, report_folder=True, output_root=args.output))
 
 
@@ -126,7 +124,8 @@ def _run_batch(args, job):
         outputs = [path.with_suffix(suffix) for path in outputs]
     summary = Path(args.summary) if args.summary else Path(args.output) / "summary.json"
     refuse_inputs([summary, *outputs], [*inputs, *model_files(args.model)], "give --summary another name")
-    made = make_folders(dict.fromkeys(path.parent for path in outputs))  # a backup's layout is kept
+    reports = [Path(args.report)] if args.report else []  # one report per program in that folder
+    made = make_folders(dict.fromkeys([*(path.parent for path in outputs), *reports]))  # a backup's layout is kept
     try:
         # the files of one task that share points run as one program (a shared point corrected once)
         tasks = task_groups(inputs) if not args.to_format else [[k] for k in range(len(inputs))]
