@@ -2,11 +2,31 @@
 
 import importlib.metadata
 import sys
+from pathlib import Path
 
 import pytest
 
 from trajcomp import formats
 from trajcomp.cli import main
+
+
+REAL_DATA = Path(__file__).resolve().parents[2] / "shared" / "data"  # beside the clone, not in it
+REAL_DATA_SOURCES = {  # a folder of shared/data: where its data come from (the tests skip without them)
+    "ur5-grid": "a UR5's 1,000 laser-tracker grid poses, UR5/3D_UR5_uncalibrated_grid_cleaned.csv of the public "
+                "repository pauljac7700/serial_robots_datasets (MIT)",
+    "ur10-ipa": "a UR10's laser-tracker measurements at 23 tool orientations, Series_A of the public repository "
+                "christianlandgraf/ipa-robot-accuracy (MIT)",
+}
+DATA_HOME = "a folder shared/data beside the clone (the data are not part of the repository)"
+
+
+def real_data(name, file):
+    """The path of ``file`` of the real data set ``name``; the test is skipped, saying where the data come
+    from, when it is absent."""
+    path = REAL_DATA / name / file
+    if not path.exists():
+        pytest.skip(f"needs the real data {name}/{file}: {REAL_DATA_SOURCES[name]}, in {DATA_HOME}")
+    return path
 
 
 def install_plugin(monkeypatch, folder, name, module):

@@ -126,6 +126,7 @@ def test_a_pose_in_a_user_frame_and_its_form(comp, branches):
     command_v, _, _ = comp.filter_target(POSE, joints_hint=branches[3])  # x, y, z, a, b, c in, same out
     assert command_v.shape == (6,)
     np.testing.assert_allclose(matrix(command_v), command_b, atol=1e-9)
+    assert np.all(np.abs(command_v[3:] - POSE[3:]) < 1.0)  # C near the given 180 (180.08), not -179.92
 
 
 def test_the_calibrated_tool_given_explicitly_is_the_default(comp, branches, caplog):

@@ -4,10 +4,10 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import real_data
 
 from trajcomp.cli import main
 
-UR5_GRID = Path(__file__).resolve().parents[2] / "shared" / "data" / "ur5-grid" / "grid.csv"
 UR5_COLUMNS = ",".join([f"j{i}=joint_{i}" for i in range(1, 7)] + ["x=x_t", "y=y_t", "z=z_t",
                         "mx=x_t+x_dif", "my=y_t+y_dif", "mz=z_t+z_dif"])
 
@@ -58,10 +58,9 @@ def test_usage_errors_exit_2():
     assert exit_info.value.code == 2
 
 
-@pytest.mark.skipif(not UR5_GRID.exists(), reason="shared UR5 data not present")
 def test_real_ur5_grid_calibrates_far_below_its_raw_error(tmp_path, capsys):
     model = tmp_path / "ur5.yaml"
-    assert main(["calibrate", str(UR5_GRID), "--robot", "ur5", "--columns", UR5_COLUMNS,
+    assert main(["calibrate", str(real_data("ur5-grid", "grid.csv")), "--robot", "ur5", "--columns", UR5_COLUMNS,
                  "--interpolation", "knn", "-o", str(model)]) == 0
     cv = capsys.readouterr().out.split("cross-validation")[1]
     rows = {line.split()[0]: float(line.split()[2]) for line in cv.splitlines()[2:] if line.strip()}
@@ -350,3 +349,139 @@ def test_motions_left_untimed_are_in_the_report_warnings(tmp_path, capsys):
     assert any(w.startswith("not timed (the arm's position before the motion is unknown): motions to P4")
                for w in printed)
     assert json.loads((tmp_path / "r.json").read_text())["warnings"] == printed
+
+
+# command-line conventions (issue 38)
+
+def test_python_dash_m_trajcomp_runs_the_cli():
+    import subprocess
+    import sys
+
+    done = subprocess.run([sys.executable, "-m", "trajcomp", "--version"], capture_output=True, text=True,
+                          cwd=Path(__file__).resolve().parents[1])
+    assert done.returncode == 0 and done.stdout.startswith("trajcomp ")
+
+
+def test_exit_codes_are_in_the_help_of_the_tool_and_of_each_command(capsys):
+    for argv in (["--help"], ["validate", "--help"], ["compensate", "--help"]):
+        with pytest.raises(SystemExit) as exit_info:
+            main(argv)
+        assert exit_info.value.code == 0
+        shown = capsys.readouterr().out
+        assert "exit codes" in shown and "  2    bad usage or bad input" in shown and "  1    the work ran" in shown
+
+
+def test_a_mistyped_option_prints_the_usage_of_its_command(capsys):
+    with pytest.raises(SystemExit) as exit_info:
+        main(["validate", "model.yaml", "validation.csv", "--tolerence", "0.05"])
+    assert exit_info.value.code == 2
+    err = capsys.readouterr().err
+    assert err.startswith("usage: trajcomp validate ") and "--tolerance MM" in err
+    assert "trajcomp validate: error: unrecognized arguments: --tolerence 0.05" in err
+
+
+@pytest.fixture(scope="module")
+def ur10_run(tmp_path_factory):
+    """A UR10 model and a second measuring run of it."""
+    folder = tmp_path_factory.mktemp("ur10")
+    plan, meas, model, second = (folder / n for n in ("plan.csv", "meas.csv", "model.yaml", "run2.csv"))
+    assert main(["plan", "--robot", "ur10", "--cube", "300,-100,300", "--side", "400", "--step", "100",
+                 "-o", str(plan)]) == 0
+    assert main(["simulate", str(plan), "--robot", "ur10", "--seed", "1", "-o", str(meas)]) == 0
+    assert main(["calibrate", str(meas), "--robot", "ur10", "--grid-step", "100", "--folds", "0",
+                 "-o", str(model)]) == 0
+    assert main(["simulate", str(plan), "--robot", "ur10", "--seed", "1", "--run", "1", "-o", str(second)]) == 0
+    return model, second
+
+
+@pytest.mark.parametrize("name", ["-", "/dev/stdout"])
+def test_validate_json_to_stdout_is_all_stdout_holds(ur10_run, tmp_path, capsys, monkeypatch, name):
+    import json
+
+    model, second = ur10_run
+    monkeypatch.chdir(tmp_path)
+    assert main(["validate", str(model), str(second), "--tolerance", "0.5", "--json", name]) == 0
+    out, err = capsys.readouterr()
+    assert json.loads(out)["verdict"]["result"] == "pass"  # the whole of stdout is one JSON document
+    assert "|measured - predicted|" in err and "verdict: PASS" in err  # the table and summary on stderr
+    assert list(tmp_path.iterdir()) == []  # no file named -
+
+
+def test_see_the_report_only_when_a_report_was_asked_for(kuka_model, tmp_path, capsys):
+    program = tmp_path / "p.csv"
+    program.write_text("x,y,z,a,b,c,motion\n500,50,750,0,90,0,PTP\n520,50,750,0,90,0,LIN\n")
+    base = ["compensate", str(program), "--model", str(kuka_model), "--retime", "none", "--tolerance", "1e-9"]
+    assert main(base + ["-o", str(tmp_path / "a.csv")]) == 1
+    err = capsys.readouterr().err
+    assert "trajcomp: the program is written but fails its verdict (residual, model_accuracy)\n" in err
+    assert "see the report" not in err
+    assert main(base + ["-o", str(tmp_path / "b.csv"), "--report", str(tmp_path / "b")]) == 1
+    assert "fails its verdict (residual, model_accuracy); see the report" in capsys.readouterr().err
+
+
+def test_locations_read_file_line_field_message(tmp_path, capsys, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    Path("badmeas.csv").write_text("j1,j2,mx\n")
+    assert main(["calibrate", "badmeas.csv", "--robot", "ur10", "-o", "m.yaml"]) == 2
+    assert "trajcomp: error: badmeas.csv:1: " in capsys.readouterr().err
+    Path("nocmd.csv").write_text("mx,my,mz\n1,2,3\n")
+    assert main(["calibrate", "nocmd.csv", "--robot", "ur10", "-o", "m.yaml"]) == 2
+    assert "trajcomp: error: nocmd.csv:1: need commanded joints" in capsys.readouterr().err
+    # convert's warnings name the file of the motion, not a bare line
+    weld = (Path(__file__).resolve().parents[1] / "examples" / "programs" / "abb" / "Weld.mod").read_text()
+    Path("W.mod").write_text(weld.replace("MODULE Weld", "MODULE Weld\n  PERS speeddata vWeld := [20,500,5000,1000];")
+                             .replace("MoveL P3, v20", "MoveL P3, vWeld"))
+    assert main(["convert", "W.mod", "W.csv", "--robot", "abb_irb4600"]) == 1
+    warnings = [line for line in capsys.readouterr().err.splitlines() if line.startswith("trajcomp: warning:")]
+    assert warnings[-1] == ("trajcomp: warning: W.mod:12: speed of 'MoveL P3, vWeld, z5, tool0;': vWeld: PERS "
+                        "speeddata, set at run time (line 2): written at csv's slowest speed, set it before running")
+    assert all(line.startswith("trajcomp: warning: W.mod:1") for line in warnings)
+    assert main(["convert", "W.mod", "W.src", "--robot", "ur10"]) == 2
+    assert "W.src: a KUKA program (krl) cannot run on robot ur10" in capsys.readouterr().err
+    assert main(["convert", "W.mod", "W2.mod", "--robot", "ur10"]) == 2
+    assert "W2.mod: an ABB program (rapid) cannot run on robot ur10" in capsys.readouterr().err
+
+
+def test_a_batch_names_each_refused_file_once_and_leaves_no_empty_folder(kuka_model, tmp_path, capsys, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    for folder in ("progs/good", "progs/bad/deep"):
+        Path(folder).mkdir(parents=True)
+    Path("progs/good/p.csv").write_text("x,y,z,a,b,c,motion\n500,50,750,0,90,0,PTP\n")
+    Path("progs/bad/deep/bad1.csv").write_text("x,y,z,a,b,c\n1,2,3\n")
+    assert main(["compensate", "progs", "--model", str(kuka_model), "--retime", "none", "-o", "out/",
+                 "--jobs", "1"]) == 2
+    err = capsys.readouterr().err
+    assert "ERROR progs/bad/deep/bad1.csv:2: expected 6 fields, got 3: '1,2,3'\n" in err
+    assert err.count("bad1.csv") == 1
+    assert sorted(str(p) for p in Path("out").rglob("*")) == ["out/good", "out/good/p.csv", "out/summary.json"]
+    assert main(["compensate", "progs/bad", "--model", str(kuka_model), "-o", "refused/", "--report",
+                 "refused/reports", "--jobs", "1"]) == 2
+    assert sorted(str(p) for p in Path("refused").rglob("*")) == ["refused/summary.json"]  # no empty report folder
+
+
+def test_retime_without_a_model_claims_no_tolerance(tmp_path, capsys):
+    examples = Path(__file__).resolve().parents[1] / "examples" / "programs" / "abb"
+    assert main(["retime", str(examples / "Weld.mod"), "-o", str(tmp_path / "Weld.mod"), "--robot",
+                 "abb_irb4600"]) == 0
+    err = capsys.readouterr().err
+    assert "verdict: PASS: compliance report of Weld.mod" in err and "tolerance" not in err
+    unevaluated = [line for line in err.splitlines() if "not evaluated" in line]
+    assert unevaluated == ["    --  not evaluated: residual, outside_grid, orientation, tool, posture, uncompensated: "
+                           "no compensation model: the program runs as written (retime)"]
+    with pytest.raises(SystemExit):
+        main(["retime", str(examples / "Weld.mod"), "-o", str(tmp_path / "W.mod"), "--robot", "abb_irb4600",
+              "--tolerance", "0.1"])
+
+
+def test_calibrate_prints_parameters_seen_only_together_as_their_combinations(ur10_run, tmp_path, capsys):
+    """d2, d3, d4, a5, theta4 were printed as identified deltas and, on the next line, as not identified."""
+    model, _ = ur10_run
+    meas = Path(model).parent / "meas.csv"
+    assert main(["calibrate", str(meas), "--robot", "ur10", "--grid-step", "100", "--folds", "0",
+                 "-o", str(tmp_path / "m.yaml")]) == 0
+    lines = {line.split(":")[0]: line for line in capsys.readouterr().err.splitlines()}
+    fixed = [item.split(" (")[0] for item in lines["not identified on their own"].split(": ", 1)[1].split("), ")]
+    own = [item.split()[0] for item in lines[next(k for k in lines if k.startswith("identified 25 parameters"))]
+           .split(": ", 1)[1].split(", ")]
+    assert "d3" in fixed and not set(fixed) & set(own)
+    assert "d2 + d3" in lines["identified in combination"] and "d2" not in own

@@ -1,4 +1,5 @@
-"""The README's commands and every ``--help`` example run as written.
+"""The commands of the README and of the docs pages it links, and every ``--help`` example, run as written;
+the outputs they show are what the commands print.
 
 Rules (the README's "Set up" section points here):
 
@@ -17,10 +18,28 @@ Rules (the README's "Set up" section points here):
 - ``--help``: the lines under ``example:`` of every sub-command run in the
   order of ``trajcomp.cli.COMMANDS``, as another session from the root of
   another such clone.
+- Docs pages: the pages under ``docs/`` the README lists (list items that
+  start with a link to one), in that order, continue the README's session:
+  their ``sh`` blocks run after the README's, in the same folder, with the
+  files it made.
+- Shown output: a fenced block whose info string is ``text output`` (the
+  language, then the word ``output``, then optional ``abs=X`` and
+  ``rel=Y``: the tolerance of its numbers, default exact) shows what the
+  last command run before it printed (stdout and stderr). Each of its lines
+  must match a line of that output, in order, other lines of the output
+  between them allowed; in a line, ``...`` stands for any text, runs of
+  spaces for any run of spaces, and each number for a number within
+  ``abs + rel * |shown|`` of it; a line that is only ``...`` stands for
+  any lines. Any other block that is not ``sh`` is illustration, not
+  compared.
+- A ``python`` block whose first line is ``# examples/NAME.py...`` shows that
+  file whole, as it is (`test_shown_example_files_are_the_files`): the
+  commands that run it run what the page shows.
 - Not run: a command starting with one of `NOT_RUN` (installing, the test
   suite itself, CI, the benchmarks); in ``A && B`` only that part is left
   out. A command naming a path under ``shared/data/`` skips when that path
-  is absent.
+  is absent, saying where those data come from (`REAL_DATA_SOURCES`), and
+  so does the output block shown after it.
 - Every other command must exit 0; a failure names the README line (or the
   sub-command) and the command, with the end of its output.
 
@@ -34,6 +53,7 @@ import contextlib
 import dataclasses
 import importlib
 import io
+import logging
 import os
 import re
 import shlex
@@ -44,6 +64,7 @@ import traceback
 from pathlib import Path
 
 import pytest
+from conftest import DATA_HOME, REAL_DATA_SOURCES
 
 from trajcomp.cli import COMMANDS, main
 
@@ -58,7 +79,9 @@ NOT_RUN = (
 )
 COMMAND_LANGUAGES = {"sh"}
 REAL_DATA = re.compile(r"[^\s=,]*shared/data/[^\s,]*")
-FENCE = re.compile(r"^\s*```\s*(\S*)")
+FENCE = re.compile(r"^\s*```\s*(\S*)(.*)")
+DOCS_LINK = re.compile(r"^\s*[-*]\s+\[[^\]]*\]\((docs/[\w./-]+\.md)\)", re.MULTILINE)
+NUMBER = re.compile(r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?")
 CONTINUED = "\\"
 COMMENT = re.compile(r"(^|\s)#.*")
 TRAJCOMP_LINE = re.compile(r"^\s*(\$\s*)?trajcomp\s")
@@ -68,10 +91,13 @@ TIMEOUT = 300  # s, per shell command
 
 @dataclasses.dataclass(frozen=True)
 class Command:
-    """One command line as the docs show it: where it is written and its text."""
+    """One command line as the docs show it: where it is written and its text; or, with ``shown``, an output
+    block: the lines the command before it prints, and the tolerance of their numbers."""
 
     where: str
     text: str
+    shown: tuple = None
+    tolerance: tuple = (0.0, 0.0)  # (abs, rel)
 
     def __str__(self):
         return f"{self.where}: `{self.text}`"
@@ -79,24 +105,34 @@ class Command:
 
 def fenced_blocks(path):
     """``(language, [(line number, text), ...])`` of every fenced block of a Markdown file."""
+    return [(language, lines) for language, _, lines in _blocks(path)]
+
+
+def _blocks(path):
+    """``(language, the rest of the info string, [(line number, text), ...])`` of every fenced block."""
     blocks, current = [], None
     for number, line in enumerate(path.read_text(encoding="utf-8").splitlines(), start=1):
         fence = FENCE.match(line)
         if fence and current is None:
-            current = (fence.group(1), [])
+            current = (fence.group(1), fence.group(2).split(), [])
         elif fence:
             blocks.append(current)
             current = None
         elif current is not None:
-            current[1].append((number, line))
+            current[2].append((number, line))
     return blocks
 
 
 def readme_commands(path=README):
-    """The commands of the ``sh`` blocks, continued lines joined, comments dropped."""
+    """The commands of the ``sh`` blocks, continued lines joined, comments dropped, and the output blocks."""
     commands = []
-    for language, lines in fenced_blocks(path):
+    for language, info, lines in _blocks(path):
         if language not in COMMAND_LANGUAGES:
+            if info[:1] == ["output"]:
+                options = dict(word.split("=", 1) for word in info[1:])
+                commands.append(Command(f"{path.name}:{lines[0][0] - 1 if lines else 0}", "(shown output)",
+                                        tuple(text for _, text in lines),
+                                        (float(options.get("abs", 0)), float(options.get("rel", 0)))))
             continue
         pending = None
         for number, line in lines:
@@ -109,6 +145,59 @@ def readme_commands(path=README):
             if pending is None:
                 commands.append(Command(f"{path.name}:{start}", joined))
     return commands
+
+
+def docs_pages(path=README):
+    """The pages under docs/ a Markdown file lists (a list item starting with a link to one), in that order."""
+    return [REPO / link for link in dict.fromkeys(DOCS_LINK.findall(path.read_text(encoding="utf-8")))
+            if (REPO / link).is_file()]
+
+
+def session_commands():
+    """The README's commands, then those of the docs pages it links, one session."""
+    commands = readme_commands()
+    for page in docs_pages():
+        commands += [dataclasses.replace(c, where=f"docs/{c.where}") for c in readme_commands(page)]
+    return commands
+
+
+def line_pattern(shown):
+    """A regex of a shown output line (numbers captured, ``...`` any text, spaces any spaces) and its numbers."""
+    pattern, numbers, at = "", [], 0
+    for m in re.finditer(rf"\.\.\.|{NUMBER.pattern}|\s+", shown.strip()):
+        pattern += re.escape(shown.strip()[at:m.start()])
+        token = m.group()
+        if token == "...":
+            pattern += ".*?"
+        elif token.isspace():
+            pattern += r"\s+"
+        else:
+            pattern += f"({NUMBER.pattern})"
+            numbers.append(float(token))
+        at = m.end()
+    pattern += re.escape(shown.strip()[at:])
+    return re.compile(pattern), numbers
+
+
+def output_mismatch(shown, output, tolerance):
+    """The first shown line no output line matches, in order, within the tolerance (None when all do)."""
+    absolute, relative = tolerance
+    lines = output.splitlines()
+    at = 0
+    for text in shown:
+        if not text.strip() or text.strip() == "...":
+            continue
+        pattern, expected = line_pattern(text)
+        for k in range(at, len(lines)):
+            m = pattern.fullmatch(lines[k].strip())
+            if m and all(abs(float(got) - want) <= absolute + relative * abs(want)
+                         for got, want in zip(m.groups(), expected)):
+                at = k + 1
+                break
+        else:
+            near = [line for line in lines if pattern.fullmatch(line.strip())]
+            return text + (f"\n  printed: {near[0]}" if near else "\n  (no printed line of that form)")
+    return None
 
 
 def help_examples():
@@ -131,6 +220,7 @@ class Session:
         self.commands = commands
         self.next = 0
         self.failed = None
+        self.output, self.skipped = "", None  # the last command's output; why it was not run
         shutil.copytree(REPO / "examples", self.cwd / "examples")
         if (REPO.parent / "shared").is_dir():
             (root / "shared").symlink_to(REPO.parent / "shared")
@@ -161,13 +251,26 @@ class Session:
         return reason
 
     def run(self, command):
-        """Run one command in the session's folder; the reason it is not run, or None."""
+        """Run one command in the session's folder (or compare a shown output); the reason it is not, or None."""
+        if command.shown is not None:
+            if self.skipped:
+                return f"{command.where}: the output of a command not run: {self.skipped}"
+            wrong = output_mismatch(command.shown, self.output, command.tolerance)
+            if wrong:
+                pytest.fail(f"{command.where}: the shown output is not what the command before it printed "
+                            f"(tolerance abs {command.tolerance[0]:g}, rel {command.tolerance[1]:g}); first line "
+                            f"not matched:\n  shown:   {wrong}\n--- printed:\n{self.output[-3000:]}", pytrace=False)
+            return None
+        self.skipped = None
         parts = [p for p in re.split(r"\s+&&\s+", command.text) if not p.startswith(NOT_RUN)]
         if not parts:
             return f"{command}: not run in tests (it starts with one of {', '.join(NOT_RUN)})"
         for path in REAL_DATA.findall(command.text):
             if not (self.cwd / path).exists():
-                return f"{command}: needs the real data, {path} is absent"
+                folder = path.split("shared/data/", 1)[1].split("/")[0]
+                source = REAL_DATA_SOURCES.get(folder, "real data not described in tests/test_docs.py")
+                self.skipped = (f"{command}: needs the real data {path}, absent: {source}, in {DATA_HOME}")
+                return self.skipped
         for part in parts:
             words = shlex.split(part)
             if words[0] == "cd" and len(words) == 2:
@@ -177,6 +280,7 @@ class Session:
                 continue
             plain_trajcomp = words[0] == "trajcomp" and not SHELL_SYNTAX.search(part)
             code, output = self.trajcomp(words[1:]) if plain_trajcomp else self.shell(part)
+            self.output = output
             if code != 0:
                 tail = "\n".join(output.strip().splitlines()[-15:])
                 pytest.fail(f"{command} exited {code} in {self.cwd}:\n{tail}", pytrace=False)
@@ -191,6 +295,10 @@ class Session:
         output = io.StringIO()
         previous = Path.cwd()
         os.chdir(self.cwd)
+        warnings = logging.StreamHandler(output)  # the console script's warnings on stderr (the root logger
+        warnings.setFormatter(logging.Formatter("trajcomp: warning: %(message)s"))  # has pytest's handlers)
+        warnings.setLevel(logging.WARNING)
+        logging.getLogger().addHandler(warnings)
         try:
             with contextlib.redirect_stdout(output), contextlib.redirect_stderr(output):
                 code = main(argv)
@@ -200,6 +308,7 @@ class Session:
             code = 1
             output.write(traceback.format_exc())
         finally:
+            logging.getLogger().removeHandler(warnings)
             os.chdir(previous)
         return code, output.getvalue()
 
@@ -210,7 +319,7 @@ class Session:
         return done.returncode, done.stdout + done.stderr
 
 
-README_COMMANDS = readme_commands()
+README_COMMANDS = session_commands()
 HELP_EXAMPLES = [
     Command(f"trajcomp {name} --help, example {k}", text)
     for name, lines in help_examples().items()
@@ -248,8 +357,9 @@ def test_every_command_shows_an_example():
 
 def test_readme_commands_are_in_sh_blocks():
     hidden = [
-        f"README.md:{number}: {text.strip()}"
-        for language, lines in fenced_blocks(README)
+        f"{page.name}:{number}: {text.strip()}"
+        for page in (README, *docs_pages())
+        for language, lines in fenced_blocks(page)
         if language not in COMMAND_LANGUAGES
         for number, text in lines
         if TRAJCOMP_LINE.match(text)
@@ -296,6 +406,47 @@ def test_install_test_and_benchmark_commands_and_absent_data_are_skipped_by_rule
     ])
     assert "not run in tests" in session.run_through(0)
     assert "not run in tests" in session.run_through(1)
-    assert "needs the real data, ../shared/data/no-such-set/grid.csv is absent" in session.run_through(2)
+    assert ("needs the real data ../shared/data/no-such-set/grid.csv, absent: real data not described"
+            in session.run_through(2))
     assert session.run_through(3) is None  # the trajcomp part ran, through the shell
     assert "ur10" in (session.cwd / "robots.txt").read_text()
+
+
+def test_a_shown_output_is_compared_with_what_the_command_before_it_printed(tmp_path):
+    readme = tmp_path / "README.md"
+    readme.write_text("```sh\necho 'rms 0.0071 mm, 5,892 points'; echo extra; echo 'cycle time 9.180 s'\n```\n"
+                      "```text output abs=0.0005\nrms 0.007 mm, 5,892 points\n...\ncycle  time 9.18... s\n```\n"
+                      "```text output\nrms 0.006 mm, 5,892 points\n```\n")
+    commands = readme_commands(readme)
+    assert [c.shown is not None for c in commands] == [False, True, True] and commands[1].tolerance == (0.0005, 0.0)
+    session = Session(tmp_path, commands)
+    assert session.run_through(1) is None  # within 0.0005; "..." any lines or text; spaces any spaces
+    with pytest.raises(pytest.fail.Exception, match=r"README.md:9: the shown output is not what .*\n  shown:   rms "
+                                                    r"0.006 mm, 5,892 points\n  printed: rms 0.0071 mm"):
+        session.run_through(2)  # exact by default: a stale figure fails
+
+
+def test_the_output_of_a_command_that_needs_absent_data_is_skipped_with_where_the_data_come_from(tmp_path):
+    session = Session(tmp_path, [
+        Command("README.md:1", "trajcomp calibrate ../shared/data/ur10-ipa/none.csv --robot ur10 -o m.yaml"),
+        Command("README.md:2", "(shown output)", ("identified 25 parameters",)),
+    ])
+    assert "christianlandgraf/ipa-robot-accuracy" in session.run_through(0)
+    assert "the output of a command not run" in session.run_through(1)
+
+
+def test_the_docs_pages_the_readme_links_continue_its_session():
+    pages = docs_pages()
+    assert all(page.parent == REPO / "docs" for page in pages)
+    where = [c.where for c in README_COMMANDS]
+    readme_last = max(k for k, w in enumerate(where) if w.startswith("README.md:"))
+    assert all(not w.startswith("README.md:") for w in where[readme_last + 1:])
+
+
+def test_shown_example_files_are_the_files():
+    shown = [(page, lines) for page in (README, *docs_pages()) for language, lines in fenced_blocks(page)
+             if language == "python" and lines and re.match(r"# examples/\S+\.py", lines[0][1])]
+    for page, lines in shown:
+        name = re.match(r"# (examples/\S+\.py)", lines[0][1]).group(1)
+        assert "\n".join(text for _, text in lines) + "\n" == (REPO / name).read_text(), f"{page.name}:{lines[0][0]}"
+    assert any(page == README for page, _ in shown)

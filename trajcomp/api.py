@@ -46,7 +46,7 @@ from trajcomp.compensation.options import MAX_CORRECTION, MAX_JOINT_CHANGE
 from trajcomp.compensation.program import compensate_program
 from trajcomp.programs.program import Program
 from trajcomp.programs.items import LINEAR, Motion, Target
-from trajcomp.arm.transforms import matrix_to_pose, pose_to_matrix
+from trajcomp.arm.transforms import angles_near, matrix_to_pose, pose_to_matrix
 from trajcomp.report import Criteria
 from trajcomp.timing.path import TOLERANCE
 
@@ -240,7 +240,7 @@ class Compensator:
         command = np.array([t.pose for t in edited.targets]).reshape(n, 4, 4)
         joints = np.degrees(np.array([t.joints for t in edited.targets]).reshape(n, 6))
         outside = report.outside_grid | report.landing["unmeasured_posture"]
-        return Filtered(_in_form(command, form), joints, report.correction, outside, report)
+        return Filtered(_in_form(command, form, poses), joints, report.correction, outside, report)
 
     def filter_program(self, path, out_path=None, *, tools=None, frames=None, joint_targets="keep", in_place=False,
                        retime="auto", path_tolerance=TOLERANCE, criteria=None, report=None, json_only=False):
@@ -438,10 +438,11 @@ def _named_poses(values, what):
     return None if values is None else {str(name): _one_pose(pose, f"{what}[{name!r}]") for name, pose in values.items()}
 
 
-def _in_form(T, form):
-    """Matrices (N, 4, 4) returned as given: matrices, or x, y, z, a, b, c (mm, deg)."""
+def _in_form(T, form, given):
+    """Matrices (N, 4, 4) returned as ``given`` (N, 4, 4) or (N, 6) was: matrices, or x, y, z, a, b, c (mm, deg),
+    each angle within 180 deg of the given one (C 180.077 for a given 180, not -179.923)."""
     if form == "matrix":
         return T
     pose = matrix_to_pose(T)
-    pose[:, 3:] = np.degrees(pose[:, 3:])
+    pose[:, 3:] = angles_near(np.degrees(pose[:, 3:]), np.asarray(given, dtype=float)[:, 3:])
     return pose

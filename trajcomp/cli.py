@@ -27,7 +27,7 @@ from trajcomp.support.crash import bug_message, save_traceback
 from trajcomp.support.crash import EXIT_CODE as CRASHED
 from trajcomp.support.signals import Interrupted, raised, stopped
 from trajcomp.support.threads import THREAD_VARIABLES
-from trajcomp.commands import COMMANDS
+from trajcomp.commands import COMMANDS, EXIT_CODES_HELP
 from trajcomp.errors import ToleranceError, TrajcompError
 
 INTERRUPTED = 128 + signal.SIGINT  # 130: exit code of a run stopped by Ctrl-C (SIGINT), as shells report it
@@ -45,6 +45,8 @@ def build_parser(only=None):
     parser = argparse.ArgumentParser(
         prog="trajcomp",
         description="Offline absolute-accuracy compensation for 6-axis robot arms.",
+        epilog=EXIT_CODES_HELP,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     parser.add_argument("--version", action="version", version=f"trajcomp {__version__}")
     parser.add_argument("--debug", action="store_true",
@@ -66,6 +68,20 @@ def _needed(argv):
     return () if argv == ["--version"] else None
 
 
+def parse(parser, argv):
+    """``parser.parse_args(argv)``, but an unknown option is reported with its sub-command's usage.
+
+    argparse leaves the arguments a sub-command did not know to the top-level
+    parser, which would print ``usage: trajcomp [-h] ... COMMAND ...``: the
+    user of ``trajcomp validate --tolerence`` needs validate's options.
+    """
+    args, unknown = parser.parse_known_args(argv)
+    if unknown:
+        commands = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
+        commands.choices[args.command].error(f"unrecognized arguments: {' '.join(unknown)}")
+    return args
+
+
 def main(argv=None):
     """Run the CLI; returns the exit code (also used as the console script)."""
     argv = sys.argv[1:] if argv is None else list(argv)
@@ -79,7 +95,7 @@ def _run(argv):
     """Parse ``argv`` and run its command; the exit code."""
     args = None
     try:
-        args = build_parser(_needed(argv)).parse_args(argv)
+        args = parse(build_parser(_needed(argv)), argv)
         logging.basicConfig(level=logging.WARNING, format="trajcomp: warning: %(message)s")
         return args.run(args) or 0
     except ToleranceError as exc:

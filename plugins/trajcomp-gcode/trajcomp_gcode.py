@@ -304,17 +304,17 @@ def _generate(program):
             continue
         target = program.targets[item.target]
         if target.is_joint:
-            raise WriteError(f"{program.name}: line {item.line}: a joint target ({target.label}) cannot be "
+            raise WriteError(f"{program.location(item)}: a joint target ({target.label}) cannot be "
                              "written in G-code; compensate or convert it to a pose first")
         if item.frame != frame:
             if item.frame is None or not re.fullmatch(r"G5[4-9]", str(item.frame)):
-                raise WriteError(f"{program.name}: line {item.line}: frame {item.frame!r} after {frame!r}: G-code "
+                raise WriteError(f"{program.location(item)}: frame {item.frame!r} after {frame!r}: G-code "
                                  "states frames as work offsets G54 to G59 and cannot return to the base")
             lines.append(str(item.frame))
             frame = item.frame
         if item.tool != tool:
             if item.tool is None:
-                raise WriteError(f"{program.name}: line {item.line}: G-code cannot return to the robot's own "
+                raise WriteError(f"{program.location(item)}: G-code cannot return to the robot's own "
                                  f"tool after tool {tool!r}")
             name = "" if str(item.tool).isdigit() else f" ({_comment(str(item.tool))})"
             lines.append(f"T{tools[item.tool]} M6{name}")

@@ -4,6 +4,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import real_data
 
 from trajcomp.calibration.calibrate import calibrate
 from trajcomp.compensation.targets import compensate
@@ -186,15 +187,11 @@ def test_joints_outside_the_calibrated_range_follow_the_outside_policy(tilted):
     assert model.predict("composite", other_branch, targets[:, :3, 3])[1].all()
 
 
-UR10_IPA = Path(__file__).resolve().parents[3] / "shared" / "data" / "ur10-ipa" / "grid_A.csv"
-
-
-@pytest.mark.skipif(not UR10_IPA.exists(), reason="shared UR10 data not present")
 def test_real_ur10_at_23_orientations_in_the_tracker_frame(tmp_path, capsys):
     """A subset of the real data set as its authors wrote it: its nominal TCP is found 16 mm off."""
     from trajcomp.cli import main
 
-    lines = UR10_IPA.read_text(encoding="utf-8").splitlines()
+    lines = real_data("ur10-ipa", "grid_A.csv").read_text(encoding="utf-8").splitlines()
     subset = tmp_path / "grid_A.csv"
     subset.write_text("\n".join(lines[:1] + lines[1::6]) + "\n", encoding="utf-8")
     layout = Path(__file__).resolve().parents[2] / "examples" / "columns" / "ur10-ipa.yaml"

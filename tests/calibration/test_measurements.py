@@ -4,6 +4,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import real_data
 from scipy.spatial.transform import Rotation
 
 from trajcomp.calibration.layout import Layout, load_layout
@@ -148,15 +149,12 @@ def test_a_zero_quaternion_names_its_line(tmp_path):
         read_measurements(path, Layout(rotations={"orientation": "quaternion"}))
 
 
-DATA = Path(__file__).resolve().parents[3] / "shared" / "data"
 EXAMPLES = Path(__file__).resolve().parents[2] / "examples" / "columns"
 
 
 @pytest.mark.parametrize("name, file, rows", [("ur10-ipa", "grid_A.csv", 5892), ("ur5-grid", "grid.csv", 1000)])
 def test_the_shipped_layouts_read_the_real_files_as_their_authors_wrote_them(name, file, rows):
-    path = DATA / name / file
-    if not path.exists():
-        pytest.skip(f"shared data {name} not present")
+    path = real_data(name, file)
     meas = read_measurements(path, load_layout(EXAMPLES / f"{name}.yaml"))
     assert len(meas) == rows and meas.measured.shape == (rows, 3)
     if name == "ur10-ipa":  # line 3 of the file: elbow_joint -1,15395 rad, measurement_z -414,74345 mm

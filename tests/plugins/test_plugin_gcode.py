@@ -217,7 +217,7 @@ def test_other_languages_convert_to_g_code(gcode, tmp_path):
     np.testing.assert_allclose(np.array([t.pose for t in back.targets]), program.cartesian_targets().T, atol=1e-4)
     assert [m.kind for m in back.motions] == ["joint", "linear"] and back.motions[1].speed == pytest.approx(25.0)
     joint = formats.read(write(tmp_path, "joints.csv", "j1,j2,j3,j4,j5,j6,motion\n0,-90,90,-90,-90,0,PTP\n"))
-    with pytest.raises(WriteError, match="joint target"):
+    with pytest.raises(WriteError, match=r"^joints.csv:2: a joint target"):  # file:line, as the readers say
         formats.write(tmp_path / "joints.nc", joint)
 
 

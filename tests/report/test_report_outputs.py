@@ -35,9 +35,9 @@ def test_the_shipped_schema_is_a_valid_json_schema():
 
 def _self_contained(page):
     """The figures of a page (PNG bytes), after checking that it loads nothing from anywhere."""
-    assert not re.search(r"<script|<link|<iframe|@import|url\(", page, re.IGNORECASE)
+    assert not re.search(r"<script|<link|<iframe|@import|url\((?!#)", page, re.IGNORECASE)  # url(#id): in the page
     assert not re.search(r"(src|href)\s*=\s*[\"'](?!data:|#)", page, re.IGNORECASE)
-    assert "http://" not in page and "https://" not in page
+    assert "https://" not in page and "http://" not in page.replace('xmlns="http://www.w3.org/2000/svg"', "")
     images = re.findall(r'<img [^>]*src="data:image/png;base64,([A-Za-z0-9+/=]+)"', page)
     return [base64.b64decode(data) for data in images]
 
@@ -56,8 +56,11 @@ def test_compensate_writes_a_valid_report_and_a_self_contained_page(tmp_path, ku
     assert doc["target_table"]["complete"] and doc["full_data"] is None  # a short program: every target, no sidecar
     assert [t["index"] for t in doc["targets"]] == [1, 2, 3, 4, 5] and not any(t["flags"] for t in doc["targets"])
     assert doc["timing"]["within_limits"] and doc["timing"]["cycle_time_before_s"] > 0  # compensate re-times
-    figures = _self_contained((tmp_path / "weld-report.html").read_text())
-    assert len(figures) == 6 and all(png.startswith(b"\x89PNG\r\n\x1a\n") for png in figures)
+    page = (tmp_path / "weld-report.html").read_text()
+    assert _self_contained(page) == []  # no PNG: the compliance figures are inline SVG
+    assert len(re.findall(r'<svg xmlns="http://www.w3.org/2000/svg" ', page)) == 6
+    clips = re.findall(r'<clipPath id="([^"]+)"', page)
+    assert len(clips) == len(set(clips)) > 6  # one per panel, unique in the page (a repeated id clips elsewhere)
 
 
 def test_retime_writes_a_compliance_report_of_the_program_as_written(tmp_path, capsys):
@@ -102,15 +105,21 @@ def test_a_failing_verdict_exits_1_with_the_program_written(tmp_path, kuka_model
     assert "FAIL  singularity" in captured.err
 
 
-def test_json_only_does_not_import_matplotlib(tmp_path, kuka_model):
+@pytest.mark.parametrize("options", [["--json-only"], []])
+def test_a_compliance_report_imports_no_matplotlib(tmp_path, kuka_model, options):
+    """--json-only draws nothing; the page's figures are SVG written directly (matplotlib took seconds a page)."""
     script = (f"import sys; from trajcomp.cli import main; "
               f"code = main(['compensate', {str(EXAMPLE)!r}, '--model', {str(kuka_model)!r}, '-o', "
-              f"{str(tmp_path / 'w.src')!r}, '--report', {str(tmp_path / 'r')!r}, '--json-only']); "
+              f"{str(tmp_path / 'w.src')!r}, '--report', {str(tmp_path / 'r')!r}, *{options!r}]); "
               f"print(code, 'matplotlib' in sys.modules)")
     run = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, check=True,
                          cwd=Path(__file__).resolve().parents[2])
     assert run.stdout.split() == ["0", "False"]
-    assert (tmp_path / "r.json").exists() and not (tmp_path / "r.html").exists()
+    assert (tmp_path / "r.json").exists()
+    if options:
+        assert not (tmp_path / "r.html").exists()
+    else:
+        assert (tmp_path / "r.html").read_text().count("<svg ") == 6
 
 
 def test_validate_json_and_its_verdict(tmp_path, kuka_model):
@@ -194,3 +203,114 @@ def test_the_report_path_gets_json_and_html_appended(tmp_path):
     named = report.write(tmp_path / "cell.json", json_only=True)  # a given .json is not doubled
     assert [f.name for f in dotted + named] == ["ur10_path.report.json", "cell.json"]
     assert json.loads(dotted[0].read_text())["schema"] == "trajcomp-report/1"
+
+
+# issue 38: reports without blemishes
+
+def test_command_angles_are_shown_next_to_the_written_ones(tmp_path, kuka_model):
+    """A command C of 180.077 (as the program writes it) was shown as -179.923."""
+    program = tmp_path / "p.csv"
+    program.write_text("x,y,z,a,b,c,motion\n500,50,700,0,0,180,PTP\n520,50,700,0,0,-180,LIN\n")
+    assert main(["compensate", str(program), "--model", str(kuka_model), "-o", str(tmp_path / "o.csv"),
+                 "--retime", "none", "--report", str(tmp_path / "r"), "--json-only"]) in (0, 1)
+    doc = json.loads((tmp_path / "r.json").read_text())
+    written = np.loadtxt(tmp_path / "o.csv", delimiter=",", skiprows=1, usecols=(3, 4, 5))
+    for row, c_written in zip(doc["targets"], written[:, 2]):
+        assert abs(row["command"][5] - row["target"][5]) < 1.0  # within the correction of the target's angle
+        assert row["command"][5] == pytest.approx(c_written, abs=1e-3)  # and as the output writes it
+
+
+def test_the_concerns_column_is_shown_only_when_a_criterion_fails():
+    from trajcomp.report.sections import verdict_section
+
+    passed = {"result": "pass", "criteria": [{"id": "residual", "statement": "s", "detail": "d", "status": "pass",
+                                              "targets": [], "lines": [], "failing": 0}]}
+    assert "concerns" not in verdict_section(passed)
+    failed = {"result": "fail", "criteria": [dict(passed["criteria"][0], status="fail", targets=["P1 (a.src:3)"],
+                                                  failing=1)]}
+    assert "<th>concerns</th>" in verdict_section(failed) and "P1 (a.src:3)" in verdict_section(failed)
+
+
+def test_zero_errors_of_a_grid_are_drawn_as_zeros_not_as_bars_to_1e_20():
+    from trajcomp.report import plots
+
+    stats = {"none": {"mean": 2.0, "p95": 2.3}, "grid": {"mean": 3e-21, "p95": 0.0}, "dh": {"mean": 0.02, "p95": 0.04}}
+    fig = plots.mode_statistics({"fit": stats})
+    ax = fig.axes[0]
+    heights = [bar.get_height() for bar in ax.patches]
+    assert all(h > 1e-3 for h in heights if np.isfinite(h))  # no bar for a zero
+    assert ax.get_ylim()[0] >= 1e-3  # the axis does not reach down to the rounding noise
+    assert [t.get_text() for t in ax.texts] == ["0", "0"]  # the grid's mean and p95, written as zeros
+    assert ax.get_legend() is None and fig.legends  # the legend below the axes, off the bars
+
+
+def test_the_orientation_correction_axis_starts_at_zero():
+    """A correction of 0.0003 deg spanned the whole axis and looked like large swings."""
+    from trajcomp.report import compliance_figures
+
+    page = compliance_figures.corrections(np.array([2.0, 2.1, 2.2]), np.array([0.0962, 0.0963, 0.0961]),
+                                          np.array([0.03, 0.03, 0.03]), np.array([1e-7, 2e-7, 1e-7]), 0.1)
+    right = [float(v) for v in re.findall(r'<text x="9[0-9][0-9](?:\.\d)?" y="[\d.]+">([\d.]+)</text>', page)]
+    assert right[0] == 0.0 and right[-1] >= 0.096  # from zero to the largest, not 0.0961 to 0.0963
+
+
+def test_parameters_the_data_see_only_together_are_shown_as_their_combinations(tmp_path):
+    """d2, d3, d4, a5, theta4 were listed as deltas with sigma; the data see a combination of them only."""
+    from trajcomp.arm.kinematics import fk
+    from trajcomp.arm.parameters import apply_deltas, is_angle
+    from trajcomp.calibration.measurements import read_measurements
+    from trajcomp.report.calibration import combination_text
+
+    plan, meas, model_path = tmp_path / "plan.csv", tmp_path / "meas.csv", tmp_path / "m.yaml"
+    assert main(["plan", "--robot", "ur10", "--cube", "300,-100,300", "--side", "400", "--step", "100",
+                 "-o", str(plan)]) == 0
+    assert main(["simulate", str(plan), "--robot", "ur10", "--seed", "1", "-o", str(meas)]) == 0
+    assert main(["calibrate", str(meas), "--robot", "ur10", "--method", "dh", "--folds", "0",
+                 "-o", str(model_path), "--report", str(tmp_path / "cal")]) == 0
+    doc = _valid(json.loads((tmp_path / "cal.json").read_text()))
+    combinations = doc["parameters"]["combinations"]
+    assert any(combination_text(c).startswith("d2 + d3") for c in combinations)
+    page = (tmp_path / "cal.html").read_text()
+    fixed = {f["name"] for f in doc["parameters"]["fixed"]}
+    own = page[page.index("identified on their own"):page.index("Identified only in combination")]
+    assert not any(f"<td>{name}</td>" in own for name in fixed)  # no delta of theirs read as the arm's
+    # independent check: moving along what a combination leaves out does not move the arm
+    model = load_model(model_path)
+    joints = read_measurements(meas).joints
+    base = fk(model.identified, joints)[:, :3, 3]
+
+    def moved(changes):
+        names = list(model.dh_names)
+        delta = np.array(model.dh_delta, dtype=float)
+        for name, amount in changes.items():
+            delta[names.index(name)] += np.radians(amount) if is_angle(name) else amount
+        return np.abs(fk(apply_deltas(model.nominal, names, delta), joints)[:, :3, 3] - base).max()
+
+    for name in fixed:  # a fixed parameter moved, and every kept one by what its combination says: no motion
+        terms = {c["name"]: term["coefficient"] for c in combinations for term in c["terms"] if term["name"] == name}
+        alone = moved({name: 0.1})
+        hidden = moved({name: 0.1, **{k: -0.1 * coefficient for k, coefficient in terms.items()}})
+        assert hidden < 0.05 * alone or alone < 1e-6, (name, terms, alone, hidden)
+
+
+def test_tracker_frame_data_show_the_arm_s_combination_the_registration_leaves(tmp_path):
+    """With the tracker registration refined too, base z and the turn about it take d1 and theta1; the arm's
+    own combination is d2 + d3 + d4 (parallel axes), and it is the virtual arm's true one."""
+    from trajcomp.arm.robot import load_robot
+    from trajcomp.calibration.simulate import VirtualRobot
+    from trajcomp.report.calibration import combination_text
+
+    plan, meas = tmp_path / "plan.csv", tmp_path / "tilted.csv"
+    assert main(["plan", "--robot", "ur10", "--cube", "300,-100,300", "--side", "400", "--step", "100",
+                 "--orientations", "5", "-o", str(plan)]) == 0
+    assert main(["simulate", str(plan), "--robot", "ur10", "--seed", "1", "--tracker", "2400,-1300,150,175,0,0",
+                 "--six-dof", "-o", str(meas)]) == 0
+    assert main(["calibrate", str(meas), "--robot", "ur10", "--frame", "tracker", "--folds", "0",
+                 "-o", str(tmp_path / "m.yaml"), "--report", str(tmp_path / "cal"), "--json-only"]) == 0
+    params = _valid(json.loads((tmp_path / "cal.json").read_text()))["parameters"]
+    assert {f["name"] for f in params["fixed"]} >= {"d1", "theta1", "d3", "d4"}
+    assert [combination_text(c) for c in params["combinations"]] == ["d2 + d3 + d4"]
+    nominal = load_robot("ur10").as_standard()
+    true = VirtualRobot.create(load_robot("ur10"), "paper", seed=1).true_robot.as_standard()
+    truth = float(np.sum(true.d[1:4] - nominal.d[1:4]))  # -0.081 mm; the separate deltas are -0.37 to +0.27
+    assert params["combinations"][0]["value"] == pytest.approx(truth, abs=0.05)

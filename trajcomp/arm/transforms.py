@@ -97,6 +97,13 @@ def matrix_to_pose(mat):
     return pose[0] if mat.ndim == 2 else pose
 
 
+def angles_near(angles, reference):
+    """Angles (..., K), deg, each turned by whole turns to lie within 180 deg of ``reference`` (same shape):
+    A, B, C of a command as the writers write them, next to the target's (C 180.077 by a target's 180, not
+    -179.923)."""
+    return angles + 360.0 * np.round((np.asarray(reference) - angles) / 360.0)
+
+
 def quat_to_matrix(quat):
     """Rotation matrices from unit quaternions, scalar first ``[w, x, y, z]`` (N, 4)."""
     arr, single = _stack(quat, 4)

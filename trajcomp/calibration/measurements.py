@@ -273,7 +273,7 @@ def read_measurements(path, layout=None, max_rows=MAX_ROWS, why="split the file"
     columns = sorted({column for field_terms in terms.values() for _, column in field_terms})
     table, lines = _table(path, header, columns, rows)
     if not len(lines):
-        raise ReadError(f"{path}: header on line {header_line} but no data rows")
+        raise ReadError(f"{path}:{header_line}: a header but no data rows below it")
     at = {column: k for k, column in enumerate(columns)}
     values = {field: _combined(table, [(sign, at[column]) for sign, column in field_terms])
               for field, field_terms in terms.items()}
@@ -284,7 +284,7 @@ def read_measurements(path, layout=None, max_rows=MAX_ROWS, why="split the file"
             return None
         if len(present) != len(names):
             missing = [n for n in names if n not in values]
-            raise ReadError(f"{path}: line {header_line}: column group {','.join(names)} lacks {', '.join(missing)}")
+            raise ReadError(f"{path}:{header_line}: column group {','.join(names)} lacks {', '.join(missing)}")
         return np.column_stack([values[n] for n in names]) * scale
 
     def rotation(name, euler_fields, quaternion_fields):
@@ -307,7 +307,7 @@ def read_measurements(path, layout=None, max_rows=MAX_ROWS, why="split the file"
     joints = group(JOINTS, layout.scale("joints"))
     position = group(POSITION, layout.scale("position"))
     if joints is None and position is None:
-        raise ReadError(f"{path}: line {header_line}: need commanded joints j1..j6 or a commanded pose x,y,z")
+        raise ReadError(f"{path}:{header_line}: need commanded joints j1..j6 or a commanded pose x,y,z")
     return Measurements(
         joints=joints,
         position=position,

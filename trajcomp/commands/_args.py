@@ -9,7 +9,7 @@ import argparse
 import math
 import sys
 
-from trajcomp.commands import COMMANDS
+from trajcomp.commands import COMMANDS, EXIT_CODES_HELP
 from trajcomp.errors import TrajcompError
 
 
@@ -133,7 +133,7 @@ def command_parser(sub, name, description, *examples):
         name,
         help=COMMANDS[name],
         description=description,
-        epilog=f"{label}:\n" + "\n".join(f"  {example}" for example in examples),
+        epilog=f"{label}:\n" + "\n".join(f"  {example}" for example in examples) + f"\n\n{EXIT_CODES_HELP}",
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
 

@@ -9,18 +9,19 @@ def add_report_options(parser, *, verdict="posture"):
     """``--report``, ``--json-only`` and the verdict's criteria options.
 
     ``verdict``: ``"posture"`` (tolerance, joint limit and singularity
-    margins), ``"accuracy"`` (tolerance only) or None.
+    margins), ``"margins"`` (the margins only: a run without a model, whose
+    landing no tolerance judges), ``"accuracy"`` (tolerance only) or None.
     """
     group = parser.add_argument_group("report")
     group.add_argument("--report", metavar="PATH",
                        help="write the report as PATH.html (self-contained page) and PATH.json (schema trajcomp-report/1)")
     group.add_argument("--json-only", action="store_true",
                        help="only the JSON report, no page or plots: to PATH.json with --report, else to stdout")
-    if verdict:
+    if verdict in ("posture", "accuracy"):
         group.add_argument("--tolerance", type=float, default=0.1, metavar="MM",
                            help="largest acceptable landing error: per target (its landing estimate) and for 95 %% of "
                            "the model's held-out points (default %(default)g mm)")
-    if verdict == "posture":
+    if verdict in ("posture", "margins"):
         group.add_argument("--limit-margin", type=float, default=1.0, metavar="DEG",
                            help="smallest acceptable distance of a joint to its limits (default %(default)g deg)")
         group.add_argument("--singularity-margin", type=float, default=5.0, metavar="DEG",

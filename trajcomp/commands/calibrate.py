@@ -59,31 +59,38 @@ def add_parser(sub):
     parser.set_defaults(run=run)
 
 
-def print_stats(title, stats):
-    """Print a table of per-mode statistics dicts (as in a model report)."""
+def print_stats(title, stats, file=None):
+    """Print a table of per-mode statistics dicts (as in a model report) to ``file`` (default stdout)."""
     from trajcomp.model.stats import ErrorStats, format_table
 
     rows = {mode: ErrorStats(**{**s, "signed_mean": tuple(s["signed_mean"]), "std": tuple(s["std"])})
             for mode, s in stats.items() if isinstance(s, dict)}
-    print(title)
-    print(format_table(rows))
+    print(title, file=file)
+    print(format_table(rows), file=file)
 
 
-def describe(model):
-    """Lines on what was identified: parameters, TCP, registration, other tools."""
+def describe(model, combinations=None):
+    """Lines on what was identified: parameters (``combinations``: `trajcomp.report.calibration.
+    identifiable_combinations`, those the data see only together), TCP, registration, other tools."""
     import numpy as np
 
     from trajcomp.arm.parameters import is_angle
     from trajcomp.arm.transforms import matrix_to_pose
     from trajcomp.calibration.calibrate import selection_words
+    from trajcomp.report.calibration import combination_text
 
     lines = []
     if model.dh_names:
-        shown = ", ".join(
-            f"{n} {np.degrees(d) if is_angle(n) else d:+.4f}{' deg' if is_angle(n) else ''}"
-            for n, d in zip(model.dh_names, model.dh_delta)
-        )
-        lines.append(f"identified {len(model.dh_names)} parameters: {shown}")
+        hidden = {c["name"] for c in combinations or ()} | set(model.dh_fixed)  # no delta read as the arm's
+        own = [(n, np.degrees(d) if is_angle(n) else d, " deg" if is_angle(n) else "")
+               for n, d in zip(model.dh_names, model.dh_delta) if n not in hidden or combinations is None]
+        lines.append(f"identified {len(model.dh_names)} parameters"
+                     + (f", {len(own)} on their own" if combinations else "") + ": "
+                     + ", ".join(f"{n} {d:+.4f}{unit}" for n, d, unit in own))
+        if combinations:
+            lines.append("identified in combination: " + ", ".join(
+                f"{combination_text(c)} = {c['value']:+.4f}{' deg' if c['unit'] == 'deg' else ''}"
+                for c in combinations))
         lines.append(f"not identified on their own: {', '.join(f'{n} ({r})' for n, r in model.dh_fixed.items()) or 'none'}")
         tcp = model.identified.T_flange_tool[:3, 3]
         lines.append(f"TCP in the flange frame: {tcp[0]:.3f}, {tcp[1]:.3f}, {tcp[2]:.3f} mm")
@@ -108,6 +115,7 @@ def run(args):
     from trajcomp.errors import CalibrationError
     from trajcomp.model.model_file import model_files, save_model
     from trajcomp.report import calibration_report, file_entry, report_paths
+    from trajcomp.report.calibration import parameter_combinations
     from trajcomp.support.atomic import refuse_inputs
     from trajcomp.support.memory import keep_freed_blocks
 
@@ -139,7 +147,7 @@ def run(args):
              f"{fit.positions[0]:g}..{fit.positions[-1]:g} mm")
     save_model(args.output, model)
     report = model.report
-    for line in describe(model):
+    for line in describe(model, parameter_combinations(model, meas)):
         info(line)
     if not (args.json_only and not args.report):
         print_stats(f"fit on {report['measurements']['used']} measurements, residual {report['residual']} "

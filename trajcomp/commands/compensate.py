@@ -126,19 +126,38 @@ def _run_batch(args, job):
                   "give -o another folder than the programs' (or --in-place to replace them)")
     refuse_inputs([summary], [*inputs, *models, *outputs], "give --summary another name")
     reports = [Path(args.report) / path.relative_to(args.output) for path in outputs] if args.report else []
-    for folder in dict.fromkeys(path.parent for path in [*outputs, *reports]):  # a backup's layout is kept
-        folder.mkdir(parents=True, exist_ok=True)
-    # the files of one task that share points run as one program (a shared point corrected once)
-    tasks = task_groups(inputs) if not args.to_format else [[k] for k in range(len(inputs))]
-    inputs = [inputs[g[0]] if len(g) == 1 else tuple(inputs[k] for k in g) for g in tasks]
-    outputs = [outputs[g[0]] if len(g) == 1 else tuple(outputs[k] for k in g) for g in tasks]
-    with progress(len(inputs), desc="compensate", unit="file") as bar:
-        results = batch.run_batch(job, inputs, outputs, jobs=args.jobs, scheduler=args.scheduler,
-                                  done=lambda result: bar.update(1))
-    for result in results:
-        info(f"{result.status.upper():5} {result.input}" + (f": {result.message}" if result.message else ""))
-    batch.write_summary(summary, results, model=args.model, mode=args.mode or "model default",
-                        jobs=args.jobs, scheduler=args.scheduler)
+    made = make_folders(dict.fromkeys(path.parent for path in [*outputs, *reports]))  # a backup's layout is kept
+    try:
+        # the files of one task that share points run as one program (a shared point corrected once)
+        tasks = task_groups(inputs) if not args.to_format else [[k] for k in range(len(inputs))]
+        inputs = [inputs[g[0]] if len(g) == 1 else tuple(inputs[k] for k in g) for g in tasks]
+        outputs = [outputs[g[0]] if len(g) == 1 else tuple(outputs[k] for k in g) for g in tasks]
+        with progress(len(inputs), desc="compensate", unit="file") as bar:
+            results = batch.run_batch(job, inputs, outputs, jobs=args.jobs, scheduler=args.scheduler,
+                                      done=lambda result: bar.update(1))
+        for result in results:
+            info(batch.result_line(result))
+        batch.write_summary(summary, results, model=args.model, mode=args.mode or "model default",
+                            jobs=args.jobs, scheduler=args.scheduler)
+    finally:
+        remove_empty(made)  # the folders of refused files (or of all, when stopped before the summary)
     counts = {s: sum(r.status == s for r in results) for s in batch.EXIT_CODES}
     info(f"{len(results)} programs: " + ", ".join(f"{n} {s}" for s, n in counts.items() if n) + f"; summary {summary}")
     return batch.exit_code(results)
+
+
+def make_folders(folders):
+    """Make the folders (Paths) that do not exist, parents first; the ones made, deepest first."""
+    made = []
+    for folder in folders:
+        missing = [p for p in (folder, *folder.parents) if not p.exists()]
+        folder.mkdir(parents=True, exist_ok=True)
+        made += missing
+    return sorted(set(made), key=lambda p: len(p.parts), reverse=True)
+
+
+def remove_empty(folders):
+    """Remove those of the folders (deepest first) left empty: a batch leaves no folder for a file it refused."""
+    for folder in folders:
+        if folder.is_dir() and not any(folder.iterdir()):
+            folder.rmdir()

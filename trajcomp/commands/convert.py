@@ -125,7 +125,8 @@ def run(args):
         return 1
     unknown = [m for m in converted.motions if m.speed_why and m.target is not None]  # written at the slowest
     for motion in unknown[:LISTED]:
-        print(f"trajcomp: warning: line {motion.line} ({motion.text}): {motion.speed_why}", file=sys.stderr)
+        print(f"trajcomp: warning: {program.location(motion)}: speed of {motion.text!r}: {motion.speed_why}",
+              file=sys.stderr)
     if unknown:
         more = f" (the first {LISTED} listed)" if len(unknown) > LISTED else ""
         print(f"trajcomp: {len(unknown)} motion(s) whose speed could not be carried over are written at "

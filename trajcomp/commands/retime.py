@@ -32,7 +32,7 @@ def add_parser(sub):
     add_tolerance_option(parser)
     add_frame_options(parser)
     add_in_place_option(parser)
-    add_report_options(parser)
+    add_report_options(parser, verdict="margins")  # no model: no landing a tolerance judges
     parser.set_defaults(run=run)
 
 

@@ -22,7 +22,9 @@ def add_parser(sub):
     parser.add_argument("model", help="model file from `trajcomp calibrate`")
     parser.add_argument("measurements", help="measurement CSV with mx, my, mz")
     add_tracker_options(parser)
-    parser.add_argument("--json", metavar="PATH", help="write the statistics and verdict as JSON (trajcomp-report/1)")
+    parser.add_argument("--json", metavar="PATH",
+                        help="write the statistics and verdict as JSON (trajcomp-report/1); - (or /dev/stdout): "
+                        "to stdout, which then holds nothing else (the table goes to stderr)")
     add_report_options(parser, verdict="accuracy")
     parser.set_defaults(run=run)
 
@@ -93,14 +95,20 @@ def orientation_lines(model, meas, T_tracker_base):
     return lines
 
 
+STDOUT = ("-", "/dev/stdout")  # --json names of the standard output
+
+
 def run(args):
+    import sys
+
     from trajcomp.calibration.measurements import read_measurements
     from trajcomp.model.model_file import load_model, model_files
     from trajcomp.report import file_entry, report_paths, validation_report
     from trajcomp.support.atomic import refuse_inputs, write_atomic
 
+    json_out = None if args.json in STDOUT else args.json
     inputs = [*model_files(args.model), args.measurements, args.register, args.columns_file]
-    refuse_inputs(filter(None, [args.json, *(report_paths(args.report) if args.report else ())]), inputs)
+    refuse_inputs(filter(None, [json_out, *(report_paths(args.report) if args.report else ())]), inputs)
     model = load_model(args.model)
     meas = read_measurements(args.measurements, layout_of(args))
     meas.require_measured()
@@ -113,11 +121,16 @@ def run(args):
                "columns_file": args.columns_file, "frame": frame, "register": args.register,
                "tolerance_mm": args.tolerance}
     report = validation_report(placed, meas, criteria=criteria_of(args), files=files, options=options)
+    table = sys.stderr if args.json in STDOUT else sys.stdout  # a JSON on stdout is all stdout holds
     if not (args.json_only and not args.report):
         print_stats(f"{args.measurements}: {len(meas)} points, {frame} frame (|measured - predicted|, mm)",
-                    report.doc["modes"])
+                    report.doc["modes"], file=table)
         for line in orientation_lines(placed, meas, T_tracker_base):
-            print(line)
-    if args.json:
-        write_atomic(args.json, report.json_text())
-    return emit(report, args.report, args.json_only, protect=inputs, written_before=[args.json] if args.json else ())
+            print(line, file=table)
+    if json_out:
+        write_atomic(json_out, report.json_text())
+    elif args.json:
+        sys.stdout.write(report.json_text())
+    json_only = args.json_only and not (args.json in STDOUT and not args.report)  # the JSON is on stdout once
+    return emit(report, args.report, json_only, protect=inputs,
+                written_before=[json_out] if json_out else ())

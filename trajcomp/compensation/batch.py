@@ -230,6 +230,21 @@ def _on_dask(job, inputs, outputs, jobs, scheduler, done):
             cluster.close()
 
 
+def result_line(result):
+    """A file's line in the batch's list: ``PASS  a/weld.src``, ``ERROR a/bad.csv:3: x: not a number``.
+
+    A message that starts by naming the file (by its name, as a reader names
+    it) names it by its path in the batch instead of repeating it.
+    """
+    name = Path(result.input.split(" + ")[0]).name
+    message = result.message
+    if message.startswith(f"{result.input}:"):
+        return f"{result.status.upper():5} {message}"
+    if message.startswith(f"{name}:") and " + " not in result.input:
+        return f"{result.status.upper():5} {result.input}{message[len(name):]}"
+    return f"{result.status.upper():5} {result.input}" + (f": {message}" if message else "")
+
+
 def exit_code(results):
     """The batch's exit code: the worst of its files' (crash 3, error 2, fail 1, pass 0)."""
     return max((EXIT_CODES[r.status] for r in results), default=0)

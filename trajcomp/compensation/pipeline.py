@@ -194,7 +194,9 @@ class CompensationJob:
         if not compliance.passed:
             failed = [c["id"] for c in compliance.doc["verdict"]["criteria"] if c["status"] == "fail"]
             status = batch.FAIL
-            message = f"the program is written but fails its verdict ({', '.join(failed)}); see the report"
+            message = f"the program is written but fails its verdict ({', '.join(failed)})"
+            if reports or self.json_only:  # without a report the criteria's lines above say it all
+                message += "; see the report"
             if report.not_compensated:
                 passed = len(report.not_compensated) - report.motions_left
                 place, _, why = report.not_compensated[0]  # its own reason: run time, a frame unknown, a copy ..

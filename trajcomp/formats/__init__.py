@@ -443,7 +443,8 @@ def check_robot_language(path, format, robot, whose):
     """
     if format.vendor and robot.vendor and format.vendor.casefold() != robot.vendor.casefold():
         raise RobotError(
-            f"{path}: a {format.vendor} program ({format.name}) cannot run on robot {robot.name} "
+            f"{path}: {'an' if format.vendor[0] in 'AEIO' else 'a'} {format.vendor} program ({format.name}) "
+            f"cannot run on robot {robot.name} "
             f"({robot.vendor}), {whose}: give the arm (or a model of the arm) that runs it"
         )
 

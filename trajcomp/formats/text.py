@@ -972,11 +972,11 @@ def check_writable(program):
     bad_joints = (stated & ~np.isfinite(joints).all(axis=1))[used]
     for what, bad in (("pose", bad_pose), ("joints", bad_joints)):
         if bad.any():
-            raise WriteError(f"target {where(program.targets[used[np.argmax(bad)]])}: {what} not finite, nothing written")
+            raise WriteError(f"target {program.where(used[np.argmax(bad)])}: {what} not finite, nothing written")
     for i in used.tolist():
         external = targets.external[i]
         if external is not None and np.isinf(external).any():  # NaN: an unused axis
-            raise WriteError(f"target {where(program.targets[i])}: external axes not finite, nothing written")
+            raise WriteError(f"target {program.where(i)}: external axes not finite, nothing written")
     for kind, table in (("tool", program.tools), ("frame", program.frames)):
         for name, T in table.items():
             if not np.isfinite(T).all():
@@ -1016,16 +1016,16 @@ def active_axes(program, capacity, language):
         would move the program elsewhere.
     """
     used = sorted({i for m in program.motions for i in (m.target, m.via) if i is not None})
-    first = {}  # axis -> the first target giving it a value
+    first = {}  # axis -> the index of the first target giving it a value
     for i in used:
         external = program.targets[i].external
         if external is not None:
             for k, v in enumerate(external):
                 if not np.isnan(v) and v != 0.0:
-                    first.setdefault(k, program.targets[i])
+                    first.setdefault(k, i)
     beyond = sorted(k for k in first if k >= capacity)
     if beyond:
-        raise WriteError(f"{language} points hold {capacity} external axes; target {where(first[beyond[0]])} gives "
+        raise WriteError(f"{language} points hold {capacity} external axes; target {program.where(first[beyond[0]])} gives "
                          f"E{beyond[0] + 1} a value: it cannot be written without changing what the program does")
     active = set(first)
     return sorted(active)

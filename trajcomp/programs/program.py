@@ -186,6 +186,12 @@ class Program:
         `place_text`."""
         return f"{self.sources[item.source].name}:{item.line}" if self._joined else item.line
 
+    def location(self, item):
+        """Where a motion or statement is written, for messages: ``"weld.src:12"`` (the program's name for a
+        program built in memory)."""
+        name = self.sources[item.source].name if item.source < len(self.sources) else self.name
+        return f"{name}:{item.line}"
+
     @functools.cached_property
     def _joined(self):
         """Items of this program lie in more than one of its files."""

@@ -127,6 +127,98 @@ def _data(model, meas):
     return joints, position, measured, mode_errors(model, joints, position, measured)
 
 
+SHOWN_TERM = 0.01  # a combination shows the terms whose coefficient (mm/mm, mm/deg, deg/mm, deg/deg) is at least this
+
+
+def identifiable_combinations(model, joints, residuals, rotation=False):
+    """What the data identify of the parameters: each kept parameter with the fixed ones it stands in for.
+
+    A parameter the data do not identify on their own (``model.dh_fixed``,
+    pivoted QR of `trajcomp.calibration.identify`) has a column of the
+    Jacobian that the kept ones reproduce, J_F = J_K A: the data see each
+    kept parameter k only as the combination ``k + sum_f A_kf f``. Its value
+    (the fit's deltas put in) and standard deviation are what the
+    measurements determine; the separate deltas are not (the fit spreads
+    them at least cost from the nominal arm). The frames the fit refines
+    with the arm count among the kept (the tracker registration of
+    tracker-frame data, the measured frame of orientations): a parameter
+    they stand in for (base z for d1) is in no combination of the arm's.
+
+    Parameters
+    ----------
+    model : CompensationModel
+    joints : ndarray, shape (N, 6)
+        Commanded joints of the fit's rows, rad.
+    residuals : ndarray, shape (N, 3)
+        Measured minus predicted by the parameter model (mm): their
+        variance scales the standard deviations.
+    rotation : bool
+        The rows measured orientations too (their Jacobian rows count, at
+        the default orientation weight).
+
+    Returns
+    -------
+    list of dict
+        Per kept parameter of the arm that stands for fixed ones: ``name``,
+        ``terms`` (``[{"name", "coefficient"}]``, the fixed parameters in its
+        combination, coefficient in the combination's unit per the term's),
+        ``value``, ``sigma``, ``unit`` (mm or deg).
+    """
+    from trajcomp.arm.parameters import BASE_NAMES, TARGET_NAMES, pose_jacobian, scales
+    from trajcomp.calibration.options import ORIENTATION_WEIGHT
+
+    frames = [*(BASE_NAMES if not np.allclose(model.T_tracker_base, np.eye(4)) else ()),
+              *(TARGET_NAMES if rotation else ())]
+    names = [*model.dh_names, *frames]
+    _, jac = pose_jacobian(model.identified, joints, names, model.R_tcp_target)
+    rows = np.concatenate([jac[:, :3], ORIENTATION_WEIGHT * jac[:, 3:]], axis=1) if rotation else jac[:, :3]
+    scale = scales(names)
+    J = rows.reshape(-1, len(names)) * scale  # solver units, as the identification's analysis
+    kept = [k for k, n in enumerate(names) if n not in model.dh_fixed]
+    fixed = [k for k, n in enumerate(names) if n in model.dh_fixed]
+    stands_for = np.linalg.lstsq(J[:, kept], J[:, fixed], rcond=None)[0]  # (K, F): J_F = J_K A
+    x = np.r_[np.asarray(model.dh_delta, dtype=float), np.zeros(len(frames))] / scale  # frames: their own moves
+    value = x[kept] + stands_for @ x[fixed]
+    variance = float(np.sum(residuals**2)) / max(residuals.size - len(kept), 1)
+    sigma = np.sqrt(np.clip(np.diag(np.linalg.pinv(J[:, kept].T @ J[:, kept])) * variance, 0.0, None))
+    user = scale * np.where([is_angle(n) for n in names], np.degrees(1.0), 1.0)  # solver unit -> mm or deg
+    out = []
+    for i, k in enumerate(kept):
+        coefficients = stands_for[i] * user[k] / user[fixed]
+        terms = [{"name": names[f], "coefficient": float(c)} for f, c in zip(fixed, coefficients)
+                 if abs(c) >= SHOWN_TERM]
+        if terms and names[k] in model.dh_names:  # one identified on its own keeps the fit's delta and sigma
+            out.append({"name": names[k], "terms": terms, "value": float(value[i] * user[k]),
+                        "sigma": float(sigma[i] * user[k]), "unit": "deg" if is_angle(names[k]) else "mm"})
+    return out
+
+
+def parameter_combinations(model, meas):
+    """`identifiable_combinations` of a model on the measurements it was fitted on (None when the fit kept
+    every parameter, or the rows have no joints): what ``trajcomp calibrate`` prints."""
+    joints, _, _, errors = _data(model, meas)
+    return _combinations(model, meas, joints, errors)
+
+
+def _combinations(model, meas, joints, errors):
+    if joints is None or not model.dh_fixed:
+        return None
+    used = ~np.isin(meas.lines, list(model.report.get("outlier_lines") or []))
+    residuals = errors["dh" if "dh" in errors else _after_mode(model)][used]
+    return identifiable_combinations(model, joints[used], residuals, rotation=meas.measured_orientation is not None)
+
+
+def combination_text(combination):
+    """``"d2 + d3 + d4 - a5 - 2.026 alpha4"``: a combination's terms, coefficients of 1 left out."""
+    text = combination["name"]
+    for term in combination["terms"]:
+        c = term["coefficient"]
+        sign = "+" if c > 0 else "−"
+        size = "" if abs(abs(c) - 1.0) < 5e-4 else f"{abs(c):.3g} "
+        text += f" {sign} {size}{term['name']}"
+    return text
+
+
 def _after_mode(model):
     """The mode whose errors at the fit's own points are an honest 'after' map.
 
@@ -227,6 +319,7 @@ def calibration_report(model, meas, *, criteria=None, files=(), options=None):
                             "sigma": float(np.degrees(s) if is_angle(n) else s), "unit": "deg" if is_angle(n) else "mm"}
                            for n, d, s in zip(model.dh_names, model.dh_delta, model.dh_sigma)],
             "fixed": [{"name": n, "reason": r} for n, r in model.dh_fixed.items()],
+            "combinations": _combinations(model, meas, joints, errors),
             "condition_number": (stored.get("identifiability") or {}).get("condition")},
         "joint_errors": _joint_errors(model),
         "outliers": {"file": meas.path, "lines": outlier_lines},
@@ -325,8 +418,9 @@ def _figures(doc, position, errors, excluded, after, model, data):
               ) if data == "fit" else {"validation": doc["modes"]}
     return (
         Figure("statistics", "Mean and 95th percentile |error| per mode",
-               "Log scale; lower is better. A grid reproduces its own nodes, so its fit errors are zero and show no "
-               "bar; the held-out figures are its accuracy." if data == "fit" else "Log scale; lower is better.",
+               "Log scale; lower is better. A grid reproduces its own nodes, so its fit errors are zero (below "
+               f"{plots.ZERO:g} mm: rounding), drawn as 0 at the foot of the axis with no bar; the held-out figures "
+               "are its accuracy." if data == "fit" else "Log scale; lower is better.",
                lambda: plots.mode_statistics(tables)),
         Figure("trends", "Error per axis against each commanded coordinate",
                "Each error component (measured − commanded) against each commanded coordinate, with its "

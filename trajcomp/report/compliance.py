@@ -14,7 +14,7 @@ compensable motion, no grid in the mode, no re-timing) is listed under
 import numpy as np
 
 from trajcomp.model import landing
-from trajcomp.report import plots
+from trajcomp.report import compliance_figures, plots
 from trajcomp.report.measures import BRANCH_NAMES
 from trajcomp.report.document import Figure, Report
 from trajcomp.report.provenance import grid_box, header
@@ -362,7 +362,7 @@ def _figures(report, robot, measures, doc, field, timing=None, compensated=True)
                       "the calibration did not measure and diamonds beyond the measured orientations (inside the "
                       "grid box, but not where the model was measured)." if compensated else
                       " (no compensation model: no grid).") + plots.path_note(n),
-                   lambda: plots.targets_and_grid(report.T_target[:, :3, 3], np.asarray(report.outside_grid, bool),
+                   lambda: compliance_figures.targets_and_grid(report.T_target[:, :3, 3], np.asarray(report.outside_grid, bool),
                                                   box, posture, orientation)),
         ]
         if compensated:
@@ -373,17 +373,17 @@ def _figures(report, robot, measures, doc, field, timing=None, compensated=True)
                 "posture lies outside what was measured) and the convergence of the compensation (distance from "
                 "the target to where the model itself predicts the arm lands: the model agreeing with itself, "
                 "not an accuracy), against the tolerance." + envelope,
-                lambda: plots.corrections(v["correction_mm"], v["correction_deg"], v.get("landing_estimate_mm"),
+                lambda: compliance_figures.corrections(v["correction_mm"], v["correction_deg"], v.get("landing_estimate_mm"),
                                           v["convergence_mm"], c["tolerance_mm"])))
         figures += [
             Figure("posture", "Joints within their ranges",
                    "Each written joint as a fraction of its range; shaded: the limit margin." + envelope,
-                   lambda: plots.joint_ranges(np.degrees(np.reshape(report.q, (n, 6))), np.degrees(robot.q_min),
+                   lambda: compliance_figures.joint_ranges(np.degrees(np.reshape(report.q, (n, 6))), np.degrees(robot.q_min),
                                               np.degrees(robot.q_max), c["limit_margin_deg"])),
             Figure("posture", "Distance to singularities",
                    "Shoulder: wrist point from the axis-1 plane (mm); elbow: arm bend from stretched or folded; "
                    "wrist: angle between axes 4 and 6 (deg). Red: the margins." + envelope,
-                   lambda: plots.singularities({"shoulder": v["shoulder_mm"], "elbow": v["elbow_deg"],
+                   lambda: compliance_figures.singularities({"shoulder": v["shoulder_mm"], "elbow": v["elbow_deg"],
                                                 "wrist": v["wrist_deg"]},
                                                {"shoulder": c["shoulder_margin_mm"], "elbow": c["singularity_margin_deg"],
                                                 "wrist": c["singularity_margin_deg"]})),
@@ -391,7 +391,7 @@ def _figures(report, robot, measures, doc, field, timing=None, compensated=True)
     if doc["timing"] is not None:
         figures.append(Figure("timing", "Peaks against limits", "Peak joint velocity, acceleration and jerk of "
                               "the re-timed program as a percentage of the robot's limits (from the 1 kHz check).",
-                              lambda: plots.timing_peaks(doc["timing"])))
+                              lambda: compliance_figures.timing_peaks(doc["timing"])))
     if timing is not None and timing.cycle_time > 0:
         figures.append(Figure(
             "timing", "Joint motion over time against the limits",
@@ -403,11 +403,11 @@ def _figures(report, robot, measures, doc, field, timing=None, compensated=True)
 
 
 def _joint_motion(timing, robot, margin):
-    """The joint motion figure of a timing (`plots.joint_motion`), sampled at `TIMELINE` instants."""
+    """The joint motion figure of a timing (`compliance_figures.joint_motion`), sampled at `TIMELINE` instants."""
     t = np.linspace(0.0, timing.cycle_time, TIMELINE)
     q, qd, qdd = (np.degrees(a) for a in timing.at(t))
     limits = (np.degrees(a) for a in (robot.q_min, robot.q_max, timing.limit_velocity, timing.limit_acceleration))
-    return plots.joint_motion(t, q, qd, qdd, *limits, margin)
+    return compliance_figures.joint_motion(t, q, qd, qdd, *limits, margin)
 
 
 def _summary(report, measures, compensated=True):

@@ -1,9 +1,9 @@
 """A report: its JSON document, its figures (drawn only for HTML), its text summary, its files.
 
 The JSON document follows the schema ``trajcomp-report/1`` shipped as
-``trajcomp/report/schema.json``. Figures are callables that return a
-matplotlib figure; they run only when the HTML page is rendered, so a
-JSON-only run never imports matplotlib. A report that summarises its
+``trajcomp/report/schema.json``. Figures are callables that return an
+SVG text or a matplotlib figure; they run only when the HTML page is
+rendered, so a JSON-only run never draws (nor imports matplotlib). A report that summarises its
 per-target data carries them as arrays, written beside the JSON as a NumPy
 ``.npz`` sidecar (named in the document's ``full_data.path``).
 """
@@ -34,7 +34,7 @@ class Figure:
         Key of the page section it belongs to.
     title, caption : str
     draw : callable
-        ``draw() -> matplotlib.figure.Figure``.
+        ``draw() -> str`` (an ``<svg>`` element) or ``matplotlib.figure.Figure``.
     """
 
     section: str

@@ -1,4 +1,5 @@
-"""One self-contained HTML page per report: inline CSS, figures as PNG data URIs, no script, no network.
+"""One self-contained HTML page per report: inline CSS, figures as inline SVG or PNG data URIs, no script, no
+network.
 
 The page reads top-down as a sign-off sheet: verdict first (each criterion
 with what it concerns), then what is missing, then the evidence, then
@@ -39,7 +40,9 @@ nav a { color: var(--muted); margin-right: 12px; }
 table { border-collapse: collapse; width: 100%; margin: 6px 0 12px; font-size: 13px; }
 th, td { border-bottom: 1px solid var(--line); padding: 4px 7px; text-align: left; vertical-align: top; }
 th { background: var(--band); font-weight: 600; }
-td.num, th.num { text-align: right; font-variant-numeric: tabular-nums; white-space: nowrap; }
+td.num, th.num { text-align: right; font-variant-numeric: tabular-nums; }
+td.num { white-space: nowrap; }
+table.wide th { font-size: 11px; }
 tr:nth-child(even) td { background: #fafbfc; }
 td.bad { color: var(--fail); font-weight: 700; background: #fdeceb !important; }
 table.wide { font-size: 11.5px; }
@@ -49,7 +52,8 @@ code, .mono { font-family: ui-monospace, "SFMono-Regular", Menlo, Consolas, mono
 .callout { border-left: 4px solid #b9a55c; background: #fbf7e6; padding: 8px 12px; margin: 10px 0; }
 .callout p { margin: 3px 0; }
 figure { margin: 12px 0 20px; break-inside: avoid; }
-figure img { max-width: 100%; height: auto; display: block; border: 1px solid var(--line); }
+figure img, figure svg { max-width: 100%; height: auto; display: block; border: 1px solid var(--line); }
+figure svg { width: 100%; }
 figcaption { color: var(--muted); font-size: 12.5px; margin-top: 4px; }
 .scroll { overflow-x: auto; }
 footer { margin-top: 40px; color: var(--muted); font-size: 12px; }
@@ -67,8 +71,11 @@ footer { margin-top: 40px; color: var(--muted); font-size: 12px; }
 
 
 def figure_html(figure):
-    """A `Figure` drawn, as a <figure> with an embedded PNG."""
+    """A `Figure` drawn, as a <figure>: its SVG inline, or a matplotlib figure as an embedded PNG."""
     fig = figure.draw()
+    caption = f"<figcaption><b>{esc(figure.title)}.</b> {esc(figure.caption)}</figcaption></figure>"
+    if isinstance(fig, str):
+        return f"<figure>{fig}{caption}"
     buffer = io.BytesIO()
     fig.savefig(buffer, format="png", dpi=120, metadata={"Software": None})
     fig.clear()
@@ -76,8 +83,7 @@ def figure_html(figure):
 
     plt.close(fig)
     data = base64.b64encode(buffer.getvalue()).decode("ascii")
-    return (f'<figure><img alt="{esc(figure.title)}" src="data:image/png;base64,{data}">'
-            f"<figcaption><b>{esc(figure.title)}.</b> {esc(figure.caption)}</figcaption></figure>")
+    return f'<figure><img alt="{esc(figure.title)}" src="data:image/png;base64,{data}">{caption}'
 
 
 def banner(verdict, what):

@@ -3,6 +3,7 @@
 from pathlib import Path
 
 from trajcomp.report.markup import Raw, esc, key_values, table
+from trajcomp.report.summary import judges_landing
 
 SHOWN = 30  # targets named per criterion before "and N more"
 
@@ -25,9 +26,10 @@ def headline(doc):
 
 def verdict_section(verdict):
     badge = {"pass": "pass", "fail": "fail", "not evaluated": "na"}
-    rows = [(Raw(f'<span class="badge {badge[c["status"]]}">{esc(c["status"])}</span>'), c["statement"],
-             c["detail"], concerns(c) if c["status"] == "fail" else "") for c in verdict["criteria"]]
-    return table(("status", "criterion", "found", "concerns"), rows)
+    named = [concerns(c) if c["status"] == "fail" else "" for c in verdict["criteria"]]
+    rows = [(Raw(f'<span class="badge {badge[c["status"]]}">{esc(c["status"])}</span>'), c["statement"], c["detail"])
+            + ((what,) if any(named) else ()) for c, what in zip(verdict["criteria"], named)]
+    return table(("status", "criterion", "found", *(("concerns",) if any(named) else ())), rows)
 
 
 def missing_section(missing):
@@ -59,7 +61,7 @@ def _vector(values, digits):
 
 
 def compliance_sections(doc):
-    parts = [("verdict", "Verdict", verdict_section(doc["verdict"]) + _criteria_text(doc["criteria"]))]
+    parts = [("verdict", "Verdict", verdict_section(doc["verdict"]) + _criteria_text(doc["criteria"], doc["verdict"]))]
     if doc["missing"]:
         parts.append(("missing", "Not available in this run", missing_section(doc["missing"])))
     parts.append(("targets", "Targets", _targets(doc)))
@@ -75,11 +77,17 @@ def compliance_sections(doc):
     return parts
 
 
-def _criteria_text(criteria):
-    return (f"<p>Tolerance {criteria['tolerance_mm']:g} mm; joint limit margin {criteria['limit_margin_deg']:g} deg; "
-            f"singularity margins {criteria['singularity_margin_deg']:g} deg (elbow, wrist) and "
-            f"{criteria['shoulder_margin_mm']:g} mm (shoulder). A criterion that cannot be evaluated "
-            "does not fail the run; it says why.</p>")
+def _criteria_text(criteria, verdict):
+    """The criteria's settings; the tolerance only when a criterion it sets was evaluated (not in a run without
+    a model)."""
+    settings = [f"joint limit margin {criteria['limit_margin_deg']:g} deg",
+                f"singularity margins {criteria['singularity_margin_deg']:g} deg (elbow, wrist) and "
+                f"{criteria['shoulder_margin_mm']:g} mm (shoulder)"]
+    if judges_landing(verdict):
+        settings.insert(0, f"tolerance {criteria['tolerance_mm']:g} mm")
+    text = "; ".join(settings)
+    return (f"<p>{text[0].upper()}{text[1:]}. A criterion that cannot be evaluated does not fail the run; it says "
+            "why.</p>")
 
 
 def _shown(value, spec, unit=""):
@@ -195,8 +203,8 @@ def _target_tables(doc):
                      *(f"{v:.2f}" for v in t["joints_deg"]), f"{limit[nearest]:.2f} (J{nearest + 1})",
                      f"{t['singularity']['shoulder_mm']:.0f}", f"{t['singularity']['elbow_deg']:.1f}",
                      f"{t['singularity']['wrist_deg']:.1f}", f"{max(t['jump_deg'], key=abs):+.2f}", *reason(t)))
-    posture = table(("#", "target", "configuration declared → written", "posture from", "branch", "J1", "J2", "J3",
-                     "J4", "J5", "J6", "limit dist. deg", "shoulder mm", "elbow deg", "wrist deg", "max jump deg",
+    posture = table(("#", "target", "configuration declared → written", "from", "branch", "J1", "J2", "J3",
+                     "J4", "J5", "J6", "nearest limit", "shoulder mm", "elbow °", "wrist °", "max jump °",
                      *extra), rows, numeric={0, *range(5, 16)},
                     bad=marker({"configuration": (2, 4), "joint_limits": (11,), "singularity": (12, 13, 14)}),
                     css="wide")
@@ -208,9 +216,9 @@ def _target_tables(doc):
             + "<h3>Poses and corrections</h3><p>Target and command (cmd: the pose sent to the controller) in the "
             "robot base frame (mm; A, B, C in deg); dx, dy, dz = command − target (mm); d° the orientation "
             "correction (deg).</p>" + '<div class="scroll">' + poses + "</div>"
-            + "<h3>Posture</h3><p>Written joints (deg), the branch (shoulder/elbow/wrist) they put the arm in, "
-            "the nearest joint limit, the distance to each singularity, and the largest joint change from the "
-            "previous target.</p>" + '<div class="scroll">' + posture + "</div>")
+            + "<h3>Posture</h3><p>Written joints (deg), where the posture comes from, the branch "
+            "(shoulder/elbow/wrist) they put the arm in, the distance to the nearest joint limit (deg), the distance "
+            "to each singularity, and the largest joint change from the previous target.</p>" + '<div class="scroll">' + posture + "</div>")
 
 
 def _not_compensated(doc):
@@ -369,11 +377,25 @@ def _trends(trends):
 def _parameters(params):
     if params is None:
         return '<div class="callout"><p>No kinematic model was identified (method without DH).</p></div>'
+    combinations = params.get("combinations") or []
+    hidden = {c["name"] for c in combinations} | {f["name"] for f in params["fixed"]}  # no delta read as the arm's
     rows = [(p["name"], f"{p['delta']:+.5f}", f"{p['sigma']:.5f}", p["unit"],
-             "" if p["sigma"] == 0 else f"{abs(p['delta']) / p['sigma']:.1f}") for p in params["identified"]]
-    out = (f"<p>{len(params['identified'])} parameters identified (deltas to the nominal table with one standard "
+             "" if p["sigma"] == 0 else f"{abs(p['delta']) / p['sigma']:.1f}") for p in params["identified"]
+            if p["name"] not in hidden]
+    out = (f"<p>{len(rows)} parameters identified on their own (deltas to the nominal table with one standard "
            f"deviation); condition number of the scaled Jacobian {params['condition_number']:.1f}.</p>"
            + table(("parameter", "delta", "σ", "unit", "|delta|/σ"), rows, numeric=(1, 2, 4)))
+    if combinations:
+        from trajcomp.report.calibration import combination_text
+
+        out += ("<h3>Identified only in combination</h3><p>The data see these parameters only together: each row is "
+                "a combination the measurements determine (lengths in mm, angles in deg; a coefficient is the "
+                "combination's unit per the term's), not the separate deltas, which the fit spreads at least cost "
+                "from the nominal arm and an engineer should not read as errors of the arm.</p>"
+                + table(("combination", "value", "σ", "unit"),
+                        [(combination_text(c), f"{c['value']:+.5f}", f"{c['sigma']:.5f}", c["unit"])
+                         for c in combinations],
+                        numeric=(1, 2)))
     if params["fixed"]:
         out += ("<h3>Not identified on their own (moved only within combinations the data see)</h3>"
                 + table(("parameter", "why"), [(f["name"], f["reason"]) for f in params["fixed"]]))

@@ -18,20 +18,28 @@ HEADLINE = ("residual", "model_accuracy")  # criteria whose figures are shown ev
 
 
 def verdict_lines(verdict):
-    """One line per failed, unevaluated or headline criterion (status, id, what was found and, when failed, what it
-    concerns), then one line naming the other criteria that pass."""
-    out, passed = [], []
+    """One line per failed or headline criterion (status, id, what was found and, when failed, what it concerns),
+    one per reason criteria were not evaluated (naming them), then one line naming the other criteria that pass."""
+    out, passed, unevaluated = [], [], {}
     for c in verdict["criteria"]:
         if c["status"] == PASS and c["id"] not in HEADLINE:
             passed.append(c["id"])
             continue
-        status = {FAIL: "FAIL", NOT_EVALUATED: "  --"}.get(c["status"], "pass")
-        found = c["detail"] if c["status"] != NOT_EVALUATED else f"not evaluated: {c['detail']}"
+        if c["status"] == NOT_EVALUATED:
+            unevaluated.setdefault(c["detail"], []).append(c["id"])
+            continue
+        status = "FAIL" if c["status"] == FAIL else "pass"
         concerns = f": {_concerns(c)}" if c["status"] == FAIL and (c["targets"] or c["lines"]) else ""
-        out.append(f"  {status}  {c['id']:<15} {found}{concerns}")
+        out.append(f"  {status}  {c['id']:<15} {c['detail']}{concerns}")
+    out += [f"    --  not evaluated: {', '.join(ids)}: {why}" for why, ids in unevaluated.items()]
     if passed:
         out.append(f"  pass  {', '.join(passed)} (the report has what each found)")
     return out
+
+
+def judges_landing(verdict):
+    """Whether a criterion the tolerance sets (`HEADLINE`) was evaluated: else no tolerance is shown."""
+    return any(c["id"] in HEADLINE and c["status"] != NOT_EVALUATED for c in verdict["criteria"])
 
 
 def summary_lines(doc):
@@ -43,7 +51,7 @@ def summary_lines(doc):
         out = [what]
     else:
         criteria = doc.get("criteria") or {}
-        tolerance = f", tolerance {criteria['tolerance_mm']:g} mm" if criteria else ""
+        tolerance = f", tolerance {criteria['tolerance_mm']:g} mm" if criteria and judges_landing(verdict) else ""
         out = [f"verdict: {verdict['result'].upper()}{tolerance}: {what}", *verdict_lines(verdict)]
     summary = doc.get("summary")
     if summary and summary["targets"] and summary["correction_max_mm"] is None:

@@ -16,7 +16,7 @@ import numpy as np
 
 from trajcomp.support.parallel import map_blocks
 from trajcomp.report.measures import BRANCH_NAMES, joint_jumps, limit_distances, posture_measures
-from trajcomp.arm.transforms import matrix_to_pose
+from trajcomp.arm.transforms import angles_near, matrix_to_pose
 
 CHUNK = 2048  # targets per pass of the kinematic measures
 BLOCK = 16 * CHUNK  # targets per task of a process computing the kinematic measures
@@ -233,9 +233,11 @@ def target_json(report, robot, measures, flags, index):
     q_row, previous = q[index], q[np.maximum(index - 1, 0)]
     correction = np.reshape(report.correction, (-1, 6))[index]
     v = {name: values[index] for name, values in measures.values.items()}
+    target, command = _poses(report.T_target[index]), _poses(report.T_command[index])
+    command[:, 3:] = angles_near(command[:, 3:], target[:, 3:])
     columns = {
-        "target": _round(_poses(report.T_target[index]), 4),
-        "command": _round(_poses(report.T_command[index]), 4),
+        "target": _round(target, 4),
+        "command": _round(command, 4),
         "correction_mm": _round(correction[:, :3], 4),
         "correction_deg": _round(correction[:, 3:], 5),
         "correction_norm_mm": _round(v["correction_mm"], 4),
