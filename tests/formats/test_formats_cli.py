@@ -46,8 +46,8 @@ def test_convert_rapid_to_fanuc_computes_config(tmp_path, makerless, capsys):
     assert all(t.config == ("F", "U", "T", 0, 0, 0) for t in program.targets)  # IRB 4600 home wrist: J5 = +89 deg
     printed, err = capsys.readouterr()
     assert "wrote" in printed
-    assert "line 9 (MoveJ P1, v1000, z5, tool0;): speed 1000 mm/s cannot be converted (its start is unknown): " \
-           "written at fanuc_ls's slowest speed" in err
+    assert "Weld.mod:9: speed of 'MoveJ P1, v1000, z5, tool0;': speed 1000 mm/s cannot be converted (its start is " \
+           "unknown): written at fanuc_ls's slowest speed" in err
     assert [(m.speed, m.speed_unit) for m in program.motions[:1]] == [(1.0, "%")]
 
 
@@ -64,7 +64,7 @@ def test_convert_with_tools_and_frames(tmp_path, capsys):
     program = formats.read(out)
     out_text, err = capsys.readouterr()
     assert "2 computed at run time" in out_text
-    assert "line 35 (12:L P[6] 2sec CNT10 ;): speed 2 s cannot be converted (no robot given)" in err
+    assert "PICK_PLACE.LS:35: speed of '12:L P[6] 2sec CNT10 ;': speed 2 s cannot be converted (no robot given)" in err
     # set inline ($TOOL={X ..}): the controller's TOOL_DATA / BASE_DATA tables are never written
     assert sorted({tuple(program.tools[m.tool][:3, 3]) for m in program.motions if m.target is not None}) == [(0, 0, 200)]
     assert {tuple(program.frames[m.frame][:3, 3]) for m in program.motions if m.target is not None} == {(500, 0, 0)}

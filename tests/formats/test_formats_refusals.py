@@ -21,7 +21,8 @@ def test_non_finite_pose_is_refused_naming_the_target(tmp_path, suffix, bad):
     pose = converted.targets[1].pose.copy()
     pose[0, 3] = bad
     broken = converted.with_targets([1], poses=[pose])
-    with pytest.raises(WriteError, match=r"target line 4: pose not finite"):
+    # named by its line, with the file it came from where the program keeps it (CSV to CSV: path.csv)
+    with pytest.raises(WriteError, match=r"target (path\.csv:4|line 4): pose not finite"):
         formats.write(tmp_path / f"p{suffix}", broken)
     assert not list(tmp_path.iterdir())
 
@@ -30,7 +31,7 @@ def test_patched_file_refuses_a_non_finite_edit(tmp_path):
     program = formats.read(PATH)
     pose = program.targets[0].pose.copy()
     pose[2, 3] = np.nan
-    with pytest.raises(WriteError, match="target line 3: pose not finite"):
+    with pytest.raises(WriteError, match=r"target path\.csv:3: pose not finite"):
         formats.write(tmp_path / "out.csv", program.with_targets([0], poses=[pose]))
     assert not (tmp_path / "out.csv").exists()
 

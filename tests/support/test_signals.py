@@ -66,8 +66,9 @@ def test_a_signal_to_a_batch_group_ends_it_with_the_files_done_whole_and_no_summ
     finished = {f"out/p{k}.csv" for k in range(4)} | {"out/summary.json"}
     assert outcome.problems(signal.SIGTERM, lambda files: set(files) == finished,
                             lambda files: set(files) < finished - {"out/summary.json"}, deadline=SLACK) == []
-    for name in outcome.files:  # a program written before the signal is whole
-        assert len((tmp_path / name).read_text().splitlines()) == 1501
+    for name in outcome.files:  # a program written before the signal is whole (the summary: all were, in time)
+        if name.endswith(".csv"):
+            assert len((tmp_path / name).read_text().splitlines()) == 1501
     assert cam.exists()
 
 

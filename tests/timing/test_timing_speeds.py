@@ -257,6 +257,6 @@ def test_converting_a_speed_set_at_run_time_says_so(tmp_path, capsys):
     language's slowest and listed (exit 1)."""
     path = rapid_module(tmp_path, ["PERS speeddata vWeld := [20,500,5000,1000];"], ["MoveL P2, vWeld, fine, tool0;"])
     assert main(["convert", str(path), str(tmp_path / "speeds.csv"), "--robot", "abb_irb4600"]) == 1
-    assert ("line 7 (MoveL P2, vWeld, fine, tool0;): vWeld: PERS speeddata, set at run time (line 4): written at "
-            "csv's slowest speed, set it before running") in capsys.readouterr().err
+    assert ("Speeds.mod:7: speed of 'MoveL P2, vWeld, fine, tool0;': vWeld: PERS speeddata, set at run time (line 4): "
+            "written at csv's slowest speed, set it before running") in capsys.readouterr().err
     assert formats.read(tmp_path / "speeds.csv").motions[1].speed == 1.0

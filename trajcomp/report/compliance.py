@@ -71,7 +71,6 @@ def target_checks(report, measures, criteria, has_grid, mode, model=None):
     if not len(labels):
         return [not_evaluated(key, text, "no compensated target") for key, text in statements.items()], {}
     v = measures.values
-    n = len(labels)
     masks = {"configuration": measures.changed,
              "joint_limits": v["limit_distance_deg"] < c.limit_margin,
              "singularity": ((v["shoulder_mm"] < c.shoulder_margin) | (v["elbow_deg"] < c.singularity_margin)
