@@ -73,7 +73,7 @@ def test_a_signal_to_a_batch_group_ends_it_with_the_files_done_whole_and_no_summ
 
 
 def test_a_batch_worker_killed_by_sigkill_fails_its_file_and_the_batch_writes_its_summary(kuka_model, tmp_path):
-    _batch(tmp_path, count=3, targets=600)
+    _batch(tmp_path, count=3, targets=3000)
     command = ["compensate", "cam", "--model", str(kuka_model), "-o", "out", "--jobs", "2"]
     outcome = run_stopped(command, tmp_path, signal.SIGKILL, 0.5, "worker")  # one under way with a file
     summary = json.loads((tmp_path / "out" / "summary.json").read_text())

@@ -342,10 +342,11 @@ class Workers:
                     _signal(process, signal.SIGTERM)  # it unwinds (temporaries removed) and dies
         self._collector.join(_GRACE if error is not None else None)
         if self._collector.is_alive():
-            with self._lock:
-                for process in self._busy:
-                    _signal(process, signal.SIGKILL)
-            self._collector.join()
+            # a signal that interrupted this thread inside the lock can leave it held: kill without it, and never
+            # wait for the collector longer than the grace (a daemon thread, gone with the process)
+            for process in list(self._busy):
+                _signal(process, signal.SIGKILL)
+            self._collector.join(_GRACE)
         for receiving in self._connections.values():
             receiving.close()
         _OPEN.discard(self)
