@@ -10,6 +10,7 @@ cluster), and turns every error of one file into that file's result.
 import dataclasses
 import glob
 import json
+import logging
 from pathlib import Path
 
 from trajcomp import __version__, formats
@@ -18,6 +19,8 @@ from trajcomp.support.atomic import write_atomic
 from trajcomp.errors import TrajcompError
 from trajcomp.support.parallel import WorkerLost, Workers, can_fork
 from trajcomp.support.signals import stopped
+
+log = logging.getLogger(__name__)
 
 PASS, FAIL, ERROR, CRASH = "pass", "fail", "error", "crash"
 EXIT_CODES = {PASS: 0, FAIL: 1, ERROR: 2, CRASH: crash.EXIT_CODE}  # a crash is a bug: neither success nor bad input
@@ -227,7 +230,20 @@ def _on_dask(job, inputs, outputs, jobs, scheduler, done):
         raise TrajcompError(f"--scheduler {scheduler}: cannot reach the Dask scheduler: {exc}") from exc
     finally:
         if cluster is not None:
-            cluster.close()
+            _close_local(cluster)
+
+
+def _close_local(cluster):
+    """Close a local Dask cluster whose work is done; a failure of Dask's own clean-up is logged, not raised.
+
+    A nanny still restarting a worker that died (the OOM killer) can fail
+    the close ("can only join a started process"): the results are in by
+    then, and the processes go with the cluster.
+    """
+    try:
+        cluster.close()
+    except (AssertionError, RuntimeError, OSError, TimeoutError) as exc:
+        log.warning("the local Dask cluster did not close cleanly (%s); its results are complete", exc)
 
 
 def result_line(result):
