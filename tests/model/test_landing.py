@@ -210,3 +210,25 @@ def test_a_posture_never_measured_is_its_own_criterion_not_outside_the_grid(cell
     assert result.unmeasured_posture.all() and not result.outside.any()  # inside the grid box
     assert not compensate(model, targets, seed=home).unmeasured_posture.any()
     assert np.all(result.unseen > 0.0)
+
+
+def test_a_light_re_calibration_s_uncertainty_widens_every_estimate(cell):
+    """A model updated from a few rows (`trajcomp recalibrate`) carries its update's covariance into the estimate."""
+    import dataclasses
+
+    from trajcomp.model import update
+
+    robot, _, model, _ = cell
+    record = {"names": ["tool_x", "theta2"], "arm": ["tool_x", "theta2"], "applied": "update",
+              "units": ["mm", "deg"], "covariance": [[0.05**2, 0.0], [0.0, 0.0]]}  # tool_x +-0.05 mm
+    updated = dataclasses.replace(model, report={**model.report, "update": record})
+    targets = _tilted(robot, 0.0, 10, seed=9)
+    q = compensate(model, targets).q
+    added = update.position_covariance(updated, q)
+    np.testing.assert_allclose(np.trace(added, axis1=1, axis2=2), 0.05**2, rtol=1e-6)  # tool_x moves the TCP 1:1
+    assert not update.position_covariance(model, q).any()  # never updated: nothing added
+    skipped = dataclasses.replace(model, report={**model.report, "update": {**record, "applied": "registration"}})
+    assert not update.position_covariance(skipped, q).any()  # the rows kept the model: nothing added
+    before = landing.estimate(model, "composite", q, targets).total
+    after = landing.estimate(updated, "composite", q, targets).total
+    assert np.all(after > before) and np.all(after < before + 2.5 * 0.05)

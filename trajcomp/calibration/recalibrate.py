@@ -42,16 +42,14 @@ import dataclasses
 import numpy as np
 
 from trajcomp.arm.kinematics import fk
-from trajcomp.arm.parameters import BASE_NAMES, TARGET_NAMES, TOOL_NAMES, is_angle, is_robot_parameter, pose_jacobian
+from trajcomp.arm.parameters import BASE_NAMES, TARGET_NAMES, TOOL_NAMES, is_angle, is_robot_parameter
 from trajcomp.arm.transforms import invert, matrix_to_rotvec, mean_rotation, rotvec_to_matrix
 from trajcomp.calibration.identify import analyse_identifiability, best_fit_transform, region_folds, robust_weights
 from trajcomp.calibration.options import ORIENTATION_WEIGHT
 from trajcomp.errors import CalibrationError
+from trajcomp.model.update import PPM, SCALE, SCALED_LINKS, parameter_jacobian, position_covariance, to_display
 
 GROUPS = ("registration", "tool", "zeros", "scale")
-SCALE = "scale"  # the thermal scale's name: a fraction of each length (ppm in what is shown and stored)
-SCALED_LINKS = 5  # a and d of links 1..5 scale; link 6 ends in the tool
-PPM = 1e-6
 ITERATIONS = 30
 STEP_TOLERANCE = 1e-9  # scaled units (mm, or rad at 1 m): converged when no parameter moves more
 LEVER = 1000.0  # mm: an angle (or the scale) is scaled as its effect at this lever arm, as in `identify`
@@ -94,11 +92,6 @@ def parameter_names(groups, *, tracker, oriented):
 def _units(names):
     """Display unit of each parameter: deg, ppm or mm."""
     return ["deg" if is_angle(n) else "ppm" if n == SCALE else "mm" for n in names]
-
-
-def _to_display(names):
-    """Factor (P,) from internal units (mm, rad, fraction) to display units (mm, deg, ppm)."""
-    return np.array([np.degrees(1.0) if is_angle(n) else 1.0 / PPM if n == SCALE else 1.0 for n in names])
 
 
 def _solver_scale(names):
@@ -158,9 +151,7 @@ class _Rows:
         in internal units, of the updated model ``candidate``."""
         arm = candidate.arm("composite", outside="clamp")
         q = arm.reached_joints(self.joints)
-        geometric = [n for n in names if n != SCALE]
-        scale_names = [f"{k}{j + 1}" for j in range(SCALED_LINKS) for k in ("a", "d")]
-        T_tcp, jac = pose_jacobian(arm.robot, q, geometric + scale_names, candidate.R_tcp_target)
+        T_tcp, jac = parameter_jacobian(arm.robot, q, names, candidate.R_tcp_target)
         T_base_tracker = invert(candidate.T_tracker_base)
         measured = self.measured @ T_base_tracker[:3, :3].T + T_base_tracker[:3, 3]
         rows = [T_tcp[:, :3, 3] + self.field - measured]
@@ -171,11 +162,7 @@ class _Rows:
         residual = np.concatenate(rows, axis=1)
         if not jacobian:
             return residual, None
-        std = arm.robot.as_standard()
-        lengths = np.array([getattr(std, k)[j] for j in range(SCALED_LINKS) for k in ("a", "d")])
-        columns = [jac[:, :, [geometric.index(n)]] if n != SCALE else
-                   (jac[:, :, len(geometric):] @ lengths)[:, :, None] for n in names]
-        jac = np.concatenate(columns, axis=2)[:, :residual.shape[1]]
+        jac = jac[:, :residual.shape[1]]
         jac[:, 3:] *= self.weight
         return residual, jac
 
@@ -325,28 +312,17 @@ def added_sigma(update_fit, joints):
 def update_sigma(model, joints):
     """Position standard deviation (N,) mm per axis a model's last update adds at commanded joints (N, 6) rad.
 
-    From the model file alone: its ``report["update"]`` (`Update.record`),
-    the ``arm`` block of the covariance converted from display units. Zero
-    for a model the rows did not update (``applied`` other than ``update``)
-    or one never updated. What the landing estimate adds, in quadrature, to
-    a target's expected error.
+    From the model file alone: its ``report["update"]`` (`Update.record`,
+    `trajcomp.model.update.position_covariance`). Zero for a model the rows
+    did not update (``applied`` other than ``update``) or one never updated.
+    The landing estimate adds its covariance to every target's.
     """
-    record = model.report.get("update")
-    if not isinstance(record, dict) or record.get("applied") != "update" or not record.get("arm"):
-        return np.zeros(len(np.atleast_2d(joints)))
-    pick = [record["names"].index(n) for n in record["arm"]]
-    shown = _to_display(record["arm"])
-    covariance = np.asarray(record["covariance"], dtype=float)[np.ix_(pick, pick)] / np.outer(shown, shown)
-    return _position_sigma(model, np.atleast_2d(joints), list(record["arm"]), covariance)
+    return np.sqrt(np.trace(position_covariance(model, joints), axis1=1, axis2=2) / 3.0)
 
 
 def _position_sigma(model, joints, names, covariance):
     """``sqrt(trace(J C J^T) / 3)`` (N,) mm: parameters ``names`` of covariance C (P, P), internal units, at joints."""
-    if not names:
-        return np.zeros(len(joints))
-    rows = _Rows(model, joints, fk(model.nominal, joints)[:, :3, 3], np.zeros((len(joints), 3)), None, 1.0)
-    jac = rows.residual(model, names)[1][:, :3]
-    return np.sqrt(np.einsum("nip,pq,niq->n", jac, covariance, jac) / 3.0)
+    return np.sqrt(np.trace(position_covariance(model, joints, names, covariance), axis1=1, axis2=2) / 3.0)
 
 
 def held_out_errors(model, joints, position, measured, rotation, names, regions=REGIONS, **options):
@@ -463,7 +439,7 @@ class Update:
     def changes(self):
         """``[(name, value, sigma, unit)]`` of the update, display units (mm, deg, ppm)."""
         fit_ = self.updated
-        shown = _to_display(fit_.names)
+        shown = to_display(fit_.names)
         return list(zip(fit_.names, fit_.delta * shown, fit_.sigma * shown, _units(fit_.names)))
 
     def verdict(self):
@@ -514,7 +490,7 @@ class Update:
         ``verdict_reason``.
         """
         fit_ = self.updated
-        shown = _to_display(fit_.names)
+        shown = to_display(fit_.names)
         added = added_sigma(fit_, self.joints)
         word, why = self.verdict()
 

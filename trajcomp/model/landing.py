@@ -56,6 +56,7 @@ from trajcomp.arm.kinematics import jacobian
 from trajcomp.model.joint_errors import KIND as JOINT_KIND
 from trajcomp.arm.parameters import (ANGLE_LEVER, TOOL_NAMES, candidate_parameters, is_angle, is_robot_parameter,
                                      pose_jacobian)
+from trajcomp.model import update
 from trajcomp.model.stats import ErrorStats
 from trajcomp.arm.transforms import abc_to_matrix, matrix_to_abc, mean_rotation, rotation_angle_between
 
@@ -538,6 +539,7 @@ def estimate(model, mode, q, T_target, tool=None, postures=None, other_tool=Fals
         far_mode = "dh" if "dh" in data.growth else "none"
         near = np.where(outside, data.near_rms(far_mode, model.nominal, q, position), near)
     spread = near[:, None, None] ** 2 / 3.0 * np.eye(3) + np.einsum("nip,pq,njq->nij", jac, covariance, jac)
+    spread = spread + update.position_covariance(model, q)  # what a light re-calibration left uncertain
     if data.turning:  # the TCP offset's error absorbed in the measured orientation turns with the tool
         turn = (T_target[:, :3, :3] - data.reference) @ (model.nominal.T_flange_tool if tool is None else tool)[:3, :3].T
         spread = spread + data.turning**2 * turn @ turn.transpose(0, 2, 1)
