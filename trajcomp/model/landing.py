@@ -538,7 +538,8 @@ def estimate(model, mode, q, T_target, tool=None, postures=None, other_tool=Fals
     if (field or mode == "composite") and outside.any():
         far_mode = "dh" if "dh" in data.growth else "none"
         near = np.where(outside, data.near_rms(far_mode, model.nominal, q, position), near)
-    spread = near[:, None, None] ** 2 / 3.0 * np.eye(3) + np.einsum("nip,pq,njq->nij", jac, covariance, jac)
+    isotropic = near[:, None, None] ** 2 / 3.0 * np.eye(3)  # the held-out RMS, shared by the three axes
+    spread = isotropic + np.einsum("nip,pq,njq->nij", jac, covariance, jac)
     spread = spread + update.position_covariance(model, q)  # what a light re-calibration left uncertain
     if data.turning:  # the TCP offset's error absorbed in the measured orientation turns with the tool
         turn = (T_target[:, :3, :3] - data.reference) @ (model.nominal.T_flange_tool if tool is None else tool)[:3, :3].T
@@ -548,7 +549,7 @@ def estimate(model, mode, q, T_target, tool=None, postures=None, other_tool=Fals
         unknown = np.sum(data.identified[robot_rows][offset] ** 2) + np.trace(covariance[np.ix_(offset, offset)])
         spread = spread + unknown / 3.0 * np.eye(3)
     total = quantile_of_norm(jac @ mean, spread)
-    held_out = quantile_of_norm(np.zeros((n, 3)), near[:, None, None] ** 2 / 3.0 * np.eye(3))
+    held_out = quantile_of_norm(np.zeros((n, 3)), isotropic)
     if not names:  # no kinematic model: nothing tells how another orientation or tool lands
         total = np.where((beyond > 0) | other_tool, np.nan, total)
     return Estimate(held_out, np.maximum(total - held_out, 0.0), beyond)
