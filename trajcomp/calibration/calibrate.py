@@ -652,10 +652,10 @@ def _landing(robot, dh, frame, data, held, fitted, split, progress, orientation,
     mode, ``fitted`` the full fit's kinematic model and joint residual for
     `fold_errors`, ``split`` the k-fold's ``(folds, seed)``. The held-out
     errors and their distances from the rows that predicted them come from
-    the k-fold (a lattice field: node planes held out with its own
-    interpolator, `plane_errors`) and from the outer layers of the
-    measured positions held out in turn (`outer_layers`: how the errors
-    grow beyond the measured volume).
+    the k-fold and slabs of the measured positions (a lattice field: node
+    planes held out with its own interpolator, `plane_errors`) and from the
+    outer layers of the measured positions held out in turn (`outer_layers`:
+    how the errors grow beyond the measured volume).
     """
     _, joints, position, measured, rotation, options = data
     if options["kind"] in LATTICE_INTERPOLATORS:
@@ -690,13 +690,13 @@ def _landing(robot, dh, frame, data, held, fitted, split, progress, orientation,
                                                           for where, errors in sets]))
         finite = np.isfinite(d) & np.isfinite(e).all(axis=1)
         combined[mode] = (d[finite], g[finite], e[finite])
+    rotations = fk(robot, joints)[:, :3, :3] if joints is not None else (
+        abc_to_matrix(orientation) if orientation is not None else None)
     parameters = ([], np.zeros(0), np.zeros((0, 0)), np.zeros(0), 0.0)
     if dh is not None:
         parameters = landing.posterior(
             robot, dh.robot, joints, rotation, frame=frame, residuals=measured - fk(dh.robot, joints)[:, :3, 3],
             R_tcp_target=dh.R_tcp_target, fitted=dict(zip(dh.names, dh.delta)),
             hidden=sum(is_robot_parameter(n) for n in dh.identifiability.fixed),
-            located=locates_flange(orientation_spread(fk(robot, joints)[:, :3, :3])))
-    rotations = fk(robot, joints)[:, :3, :3] if joints is not None else (
-        abc_to_matrix(orientation) if orientation is not None else None)
+            located=locates_flange(orientation_spread(rotations)))
     return landing.build(combined, method, parameters, rotations, position, joints, by_joints).to_dict()
