@@ -149,3 +149,15 @@ def test_near_face_and_other_tool_targets_are_named_in_the_program_warnings(cell
     assert all(label in faces[0] for label, near in zip(["P1", "P2", "P3"], result.near_face) if near)
     assert any(w.startswith("1 targets use a tool other than the calibrated TCP") and w.endswith("P2 (p.src:4)")
                for w in warnings)
+
+
+def test_a_target_at_the_edge_of_the_reach_is_refused_naming_the_reach(cell):
+    """The elbow 0.5 deg from stretched: the real arm needs more reach than it has for the corrected command."""
+    from trajcomp.arm.kinematics import fk
+
+    stretched = fk(cell.robot, np.radians([[0.0, -90.0, 0.5, -90.0, -90.0, 0.0]]))
+    with pytest.raises(IKError, match=r"target 0: not converged\); 1 of them at the edge of the arm's reach "
+                                      r"\(the elbow 0\.50 deg from stretched\)"):
+        compensate(cell.model, stretched)
+    inside = fk(cell.robot, np.radians([[0.0, -90.0, 30.0, -90.0, -90.0, 0.0]]))
+    assert compensate(cell.model, inside).q.shape == (1, 6)  # the elbow bent: reached as any target

@@ -21,14 +21,16 @@ import functools
 import numpy as np
 
 from trajcomp.model import landing
-from trajcomp.errors import ModelError, TrajcompError
+from trajcomp.errors import IKError, ModelError, TrajcompError
 from trajcomp.programs.frames import tool_groups
 from trajcomp.arm.ik import IKResult, batch_seed, ik_near, ik_numeric, pose_error
 from trajcomp.arm.kinematics import fk
 from trajcomp.model.compensation_model import evaluate_field
+from trajcomp.report.measures import singularity_distances
 from trajcomp.support.parallel import map_blocks
 
 ITERATIONS = 3  # fixed-point passes at most
+REACH_EDGE = 2.0  # deg: an elbow this close to stretched is at the edge of the arm's reach
 LANDED = 1e-5  # mm: a target whose predicted landing error is below this needs no further pass
 CHUNK = 16384  # targets compensated together: the working arrays stay small and memory stays flat
 
@@ -231,7 +233,10 @@ def _compensate_rows(model, mode, nominal, arm, field, outside, label, tool, tar
         aimed[:, :3, 3] = goal[todo] - offset[todo]
         solved = _solve(arm.robot, nominal, aimed, q[todo], command[todo])
         if not solved.success.all():
-            _of_all(solved, todo, len(targets)).raise_on_failure(label, names)
+            try:
+                _of_all(solved, todo, len(targets)).raise_on_failure(label, names)
+            except IKError as error:
+                raise IKError(f"{error}{_at_the_reach(nominal, q[todo][~solved.success])}") from None
         q[todo] = arm.commanded_joints(solved.q)
         command[todo] = fk(nominal, q[todo])
         offset, flagged = error_term(command[:, :3, 3])
@@ -265,6 +270,18 @@ def _error_term(model, mode, field, outside, inside, commanded):
     if near_face.any():
         values[near_face] = evaluate_field(field, commanded[near_face], outside="clamp")[0]
     return values, flagged & ~inside
+
+
+def _at_the_reach(robot, seeds):
+    """Why targets that found no command (their joints before the correction, seeds (M, 6) rad) fail, where it is
+    the reach: the elbow within `REACH_EDGE` deg of stretched, so a correction outward asks more reach of the arm
+    than it has in the target's orientation (an empty text otherwise)."""
+    elbow = singularity_distances(robot, seeds)["elbow"]
+    if not (elbow < REACH_EDGE).any():
+        return ""
+    return (f"; {int((elbow < REACH_EDGE).sum())} of them at the edge of the arm's reach (the elbow "
+            f"{elbow.min():.2f} deg from stretched): the correction needs more reach than the arm has in the "
+            "target's orientation")
 
 
 def _of_all(solved, rows, n):
