@@ -107,7 +107,7 @@ class IKResult:
             fields[field.name] = values
         return IKResult(**fields)
 
-    def raise_on_failure(self, label="targets", names=None):
+    def raise_on_failure(self, label="targets", names=None, note=""):
         """Raise IKError naming the failed targets and why; else return self.
 
         Parameters
@@ -116,13 +116,16 @@ class IKResult:
             Names the set of targets in the message (e.g. a program file).
         names : sequence of str, length N, optional
             Names of the targets (label and line); default ``target k`` (0-based).
+        note : str
+            Appended to the message (what the failures have in common).
         """
         failed = np.flatnonzero(~self.success)
         if failed.size:
             name = (lambda i: f"target {i}") if names is None else names.__getitem__
             shown = ", ".join(f"{name(i)}: {self.reason[i]}" for i in failed[:5])
             more = f" and {failed.size - 5} more" if failed.size > 5 else ""
-            raise IKError(f"{label}: no IK solution for {failed.size} of {len(self.success)} targets ({shown}{more})")
+            raise IKError(f"{label}: no IK solution for {failed.size} of {len(self.success)} targets ({shown}{more})"
+                          f"{note}")
         return self
 
 

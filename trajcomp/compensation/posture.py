@@ -263,7 +263,7 @@ def _fail_other_arm(program, robot, index, joints, T_flange_tool, T_base_tcp):
     that fit no arm are a posture's hint, however far).
     """
     miss = np.median(_declared_miss(robot, joints, T_flange_tool, T_base_tcp)) if len(joints) else 0.0
-    if miss <= OTHER_ARM * shoulder_and_reach(robot)[1]:
+    if miss <= FITS or miss <= OTHER_ARM * shoulder_and_reach(robot)[1]:  # the reach only for joints that miss
         return
     fitting = [name for name in builtin_robot_names() if name != robot.name
                and np.median(_declared_miss(load_robot(name), joints, T_flange_tool, T_base_tcp)) <= FITS]

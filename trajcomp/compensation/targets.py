@@ -21,7 +21,7 @@ import functools
 import numpy as np
 
 from trajcomp.model import landing
-from trajcomp.errors import IKError, ModelError, TrajcompError
+from trajcomp.errors import ModelError, TrajcompError
 from trajcomp.programs.frames import tool_groups
 from trajcomp.arm.ik import IKResult, batch_seed, ik_near, ik_numeric, pose_error
 from trajcomp.arm.kinematics import fk
@@ -233,10 +233,8 @@ def _compensate_rows(model, mode, nominal, arm, field, outside, label, tool, tar
         aimed[:, :3, 3] = goal[todo] - offset[todo]
         solved = _solve(arm.robot, nominal, aimed, q[todo], command[todo])
         if not solved.success.all():
-            try:
-                _of_all(solved, todo, len(targets)).raise_on_failure(label, names)
-            except IKError as error:
-                raise IKError(f"{error}{_at_the_reach(nominal, q[todo][~solved.success])}") from None
+            _of_all(solved, todo, len(targets)).raise_on_failure(label, names,
+                                                                 _at_the_reach(nominal, q[todo][~solved.success]))
         q[todo] = arm.commanded_joints(solved.q)
         command[todo] = fk(nominal, q[todo])
         offset, flagged = error_term(command[:, :3, 3])

@@ -61,7 +61,7 @@ from trajcomp.model.stats import ErrorStats
 from trajcomp.arm.transforms import abc_to_matrix, matrix_to_abc, mean_rotation, rotation_angle_between
 
 QUANTILE = 0.95  # the landing estimate is this quantile of a target's predicted landing error
-GROWTH_KEYS = ("rms_mm", "from_mm", "slope", "outside_slope", "outside_curve_per_mm")  # `fit_growth`'s figures, as the model file names them
+GROWTH_KEYS = ("rms_mm", "from_mm", "slope", "outside_slope", "outside_curve_per_mm")  # `fit_growth`'s, as stored
 GROWTH_BINS = 8  # bins of the distance from the measured positions over which the held-out RMS is fitted
 POSITION_DIGITS = 1  # measured positions are stored rounded to 0.1 mm (and once each)
 SAME_PLACE = 5.0  # mm: measured positions closer than this are one place (several orientations at one node)
@@ -231,7 +231,7 @@ def outside_box(points, positions):
 
 
 def measured_spacing(positions):
-    """Median distance (mm) from a measured position to the nearest other place measured (`SAME_PLACE` apart or more)."""
+    """Median distance (mm) from a measured position to the nearest other place (`SAME_PLACE` apart or more)."""
     if len(positions) < 2:
         return SAME_PLACE
     near = cKDTree(positions).query(positions, k=min(len(positions), 64))[0]
@@ -251,9 +251,8 @@ def fit_growth(distance, beyond, errors, spacing, bins=GROWTH_BINS):
     ``g`` outside the box of the rows that predicted them, their RMS beyond
     what the interior growth predicts is fitted by ``outside_slope g +
     outside_curve g^2`` (non-negative). Outside, an error of the interior's
-    size may arise every half ``spacing``, which no measurement resolves
-    (a variation over two spacings is the finest the measurements see):
-    ``outside_slope`` is at least the interior RMS per half spacing.
+    size may arise within every ``spacing``, which no measurement resolves:
+    ``outside_slope`` is at least the interior RMS per spacing.
 
     Parameters
     ----------
@@ -274,23 +273,28 @@ def fit_growth(distance, beyond, errors, spacing, bins=GROWTH_BINS):
         mm, mm per mm, mm per mm^2.
     """
     inside = beyond <= 0.0
-    order = np.flatnonzero(inside)[np.argsort(distance[inside], kind="stable")]
-    groups = [g for g in np.array_split(order, min(bins, len(order))) if len(g)]
-    d = np.array([distance[g].mean() for g in groups])
-    rms = np.array([np.sqrt(np.mean(errors[g] ** 2)) for g in groups])
-    weight = np.sqrt([len(g) for g in groups])
+    groups = _bins(np.flatnonzero(inside), distance, bins)
+    d = np.array([distance[rows].mean() for rows in groups])
+    rms = np.array([np.sqrt(np.mean(errors[rows] ** 2)) for rows in groups])
+    weight = np.sqrt([len(rows) for rows in groups])
     (intercept, slope), _ = nnls(np.column_stack([np.ones_like(d), d - d[0]]) * weight[:, None], rms * weight)
     outside_slope = outside_curve = 0.0
     if (~inside).any():
-        rows = np.flatnonzero(~inside)[np.argsort(beyond[~inside], kind="stable")]
-        groups = [g for g in np.array_split(rows, min(bins, len(rows))) if len(g)]
-        g = np.array([beyond[k].mean() for k in groups])
-        interior = [np.sqrt(np.mean((intercept + slope * np.maximum(distance[k] - d[0], 0.0)) ** 2)) for k in groups]
-        excess = np.array([np.sqrt(np.mean(errors[k] ** 2)) for k in groups]) - interior
-        weight = np.sqrt([len(k) for k in groups])
+        groups = _bins(np.flatnonzero(~inside), beyond, bins)
+        g = np.array([beyond[rows].mean() for rows in groups])
+        interior = [np.sqrt(np.mean((intercept + slope * np.maximum(distance[rows] - d[0], 0.0)) ** 2))
+                    for rows in groups]
+        excess = np.array([np.sqrt(np.mean(errors[rows] ** 2)) for rows in groups]) - interior
+        weight = np.sqrt([len(rows) for rows in groups])
         (outside_slope, outside_curve), _ = nnls(np.column_stack([g, g**2]) * weight[:, None], excess * weight)
     outside_slope = max(outside_slope, intercept / spacing)
     return float(intercept), float(d[0]), float(slope), float(outside_slope), float(outside_curve)
+
+
+def _bins(rows, key, bins):
+    """Rows (M,) in at most ``bins`` groups of equal count (none empty), in the order of ``key`` (N,)."""
+    ordered = rows[np.argsort(key[rows], kind="stable")]
+    return [group for group in np.array_split(ordered, min(bins, len(ordered))) if len(group)]
 
 
 def posterior(robot, identified, joints, rotation, *, frame, residuals, R_tcp_target, fitted, hidden=0,
@@ -535,14 +539,15 @@ def estimate(model, mode, q, T_target, tool=None, postures=None, other_tool=Fals
     else:
         mean = data.shift[robot_rows]
     near = data.near_rms(mode, model.nominal, q, position)
-    if (field or mode == "composite") and outside.any():
+    if (field or mode == "composite") and outside.any():  # where the field does not apply, the kinematic model's
         far_mode = "dh" if "dh" in data.growth else "none"
-        near = np.where(outside, data.near_rms(far_mode, model.nominal, q, position), near)
+        near[outside] = data.near_rms(far_mode, model.nominal, q[outside], position[outside])
     isotropic = near[:, None, None] ** 2 / 3.0 * np.eye(3)  # the held-out RMS, shared by the three axes
     spread = isotropic + np.einsum("nip,pq,njq->nij", jac, covariance, jac)
     spread = spread + update.position_covariance(model, q)  # what a light re-calibration left uncertain
     if data.turning:  # the TCP offset's error absorbed in the measured orientation turns with the tool
-        turn = (T_target[:, :3, :3] - data.reference) @ (model.nominal.T_flange_tool if tool is None else tool)[:3, :3].T
+        R_tool = (model.nominal.T_flange_tool if tool is None else tool)[:3, :3]
+        turn = (T_target[:, :3, :3] - data.reference) @ R_tool.T
         spread = spread + data.turning**2 * turn @ turn.transpose(0, 2, 1)
     if other_tool and not model.places_other_tools and "tool_x" in names:
         offset = [names.index(name) for name in TOOL_NAMES]

@@ -108,8 +108,8 @@ def _landing_checks(report, v, tolerance, model, has_grid):
     data = report.landing
     unknown = np.ones(len(report.labels), bool)  # a target passes only with an estimate within the tolerance
     outside = np.asarray(report.outside_grid, dtype=bool)
-    measured = landing.of_model(model)
-    if not has_grid and measured is not None:
+    measured = None if has_grid else landing.of_model(model)
+    if measured is not None:
         outside = outside | (landing.outside_box(np.asarray(report.T_target)[:, :3, 3], measured.positions) > 0)
     where = "grid" if has_grid else "measured volume"
     if data is None:
