@@ -1,13 +1,16 @@
 """The landing estimate as a forecast: coverage and sharpness per class of target, on arms the calibration never saw.
 
-Run:  python tests/benchmarks/bench_verdict.py [virtual] [ur10] [--orientations N]   (default: both, 1)
+Run:  python tests/benchmarks/bench_verdict.py [virtual] [ur10] [--orientations N] [--probe X,Y,Z]
+      (default: both, 1 orientation, the built-in UR10's TCP as the measured point)
 
 ``virtual``: UR10 arms whose errors the project's simulator does not draw
 (`ForeignArm`: the paper and harsh profiles' errors plus a Hayati tilt of
 every link and third-order gear errors, seeds 21-23), calibrated as the
 README's flow does (one orientation, the cube corner 300, -100, 300, side
 400, step 100, composite, 5 folds: `calibrate`'s defaults; ``--orientations
-5``: the plan spread over five orientations, 30 deg apart). Per class of
+5``: the plan spread over five orientations, 30 deg apart; ``--probe``: the
+measured point that far from the flange, mm, e.g. 40,0,100 off the last
+axis, where five orientations locate the flange). Per class of
 target, 80 targets in 16 programs of 5, compensated in the default mode:
 
 - ``inside``: random positions in the measured cube, the measured orientation;
@@ -191,12 +194,15 @@ HEADER = (f"{'class':26s}{'true mean':>9s}{'max':>8s}{'estimate':>10s}{'covered'
           f"{'wPASS':>7s}{'wFAIL':>7s}")
 
 
-def virtual_table(seeds=(21, 22, 23), profiles=("paper", "harsh"), orientations=1):
+def virtual_table(seeds=(21, 22, 23), profiles=("paper", "harsh"), orientations=1, probe=None):
     """Coverage and sharpness per class on foreign virtual UR10 arms calibrated as the README does.
 
-    ``orientations``: how many the plan spreads (`trajcomp plan --orientations`, 30 deg tilts).
+    ``orientations``: how many the plan spreads (`trajcomp plan --orientations`, 30 deg tilts);
+    ``probe``: the measured point's offset from the flange (3,), mm (default the built-in TCP).
     """
     robot = load_robot("ur10")
+    if probe is not None:
+        robot = robot.replace(T_flange_tool=pose_to_matrix([*probe, 0.0, 0.0, 0.0]))
     plan = plan_grid(robot, CORNER, SIDE, STEP, spread_orientations(default_orientation(robot), orientations,
                                                                      np.radians(30.0)))
     q_plan = plan.joints[plan.reachable]
@@ -211,7 +217,8 @@ def virtual_table(seeds=(21, 22, 23), profiles=("paper", "harsh"), orientations=
                                 path="<foreign arm>")
             model = calibrate(robot, meas)
             print(f"\n== foreign UR10, profile {profile}, seed {seed}: {len(q_plan)} points, {orientations} orientation(s), "
-                  f"mode {model.method}; tolerance {TOLERANCE:g} mm, programs of {PROGRAM}")
+                  f"mode {model.method}, other tools {'placed' if model.places_other_tools else 'not placed'}; "
+                  f"tolerance {TOLERANCE:g} mm, programs of {PROGRAM}")
             print(HEADER)
             for name, (targets, tool, seed_q) in _classes(robot, rng, posture).items():
                 results = [_compensated(model, targets[i:i + 1], tool, None if seed_q is None else seed_q[i:i + 1])
@@ -265,10 +272,12 @@ TABLES = {"virtual": virtual_table, "ur10": ur10_table}
 
 if __name__ == "__main__":
     arguments = sys.argv[1:]
-    spread = 1
-    if "--orientations" in arguments:  # the plan of the virtual arms spread over this many orientations
-        at = arguments.index("--orientations")
-        spread = int(arguments[at + 1])
-        del arguments[at:at + 2]
+    options = {}
+    for flag, key, value in (("--orientations", "orientations", int),  # the plan spread over this many
+                             ("--probe", "probe", lambda text: [float(v) for v in text.split(",")])):
+        if flag in arguments:
+            at = arguments.index(flag)
+            options[key] = value(arguments[at + 1])
+            del arguments[at:at + 2]
     for table in arguments or TABLES:
-        TABLES[table](**({"orientations": spread} if table == "virtual" else {}))
+        TABLES[table](**(options if table == "virtual" else {}))

@@ -199,6 +199,27 @@ def test_a_tool_the_model_cannot_place_fails_its_own_criterion(cell):
     assert np.all(result.estimate > TOLERANCE) and true.mean() > 0.05  # the flange is not located: tenths of a mm
 
 
+def test_a_turn_of_the_flange_no_point_sees_moves_another_tool_by_its_lever(cell):
+    """A constant turn of the flange about the measured TCP leaves every measurement as it was (the calibration
+    cannot see it) and moves a tool 150 mm from that TCP by the turn times 150 mm: the estimate covers a turn of
+    1.5 times the stated prior angle, and adds nothing on the measured TCP itself (no lever)."""
+    robot, virtual, model, _ = cell
+    turn = landing.of_model(model).flange_turn
+    assert np.radians(0.001) < turn < np.radians(0.2)
+    probe = model.nominal.T_flange_tool
+    tool = probe @ pose_to_matrix([0.0, 0.0, 150.0, 0.0, 0.0, 0.0])
+    about_probe = pose_to_matrix([*probe[:3, 3], 0.0, 0.0, 0.0])
+    turned = about_probe @ pose_to_matrix([0.0, 0.0, 0.0, 1.5 * turn, 0.0, 0.0]) @ np.linalg.inv(about_probe)
+    targets = _tilted(robot, 0.0, 20, seed=8)
+    result = compensate(model, targets, tool=tool)
+    arm = virtual.true_robot.replace(T_flange_tool=turned @ tool)
+    true = np.linalg.norm(fk(arm, virtual.reached_joints(result.q))[:, :3, 3] - targets[:, :3, 3], axis=1)
+    assert true.mean() > 0.8 * 1.5 * turn * 150.0  # the turn is what moves the tool
+    assert np.mean(result.estimate >= true) >= 0.95
+    np.testing.assert_allclose(compensate(model, targets, tool=probe).estimate, compensate(model, targets).estimate,
+                               atol=1e-4)  # the identified TCP against its nominal: micrometres
+
+
 def test_a_posture_never_measured_is_its_own_criterion_not_outside_the_grid(cell):
     robot, virtual, model, _ = cell
     targets = _tilted(robot, 0.0, 6, seed=7)

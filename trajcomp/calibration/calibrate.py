@@ -692,7 +692,7 @@ def _landing(robot, dh, frame, data, held, fitted, split, progress, orientation,
         combined[mode] = (d[finite], g[finite], e[finite])
     rotations = fk(robot, joints)[:, :3, :3] if joints is not None else (
         abc_to_matrix(orientation) if orientation is not None else None)
-    parameters = ([], np.zeros(0), np.zeros((0, 0)), np.zeros(0), 0.0)
+    parameters = ([], np.zeros(0), np.zeros((0, 0)), np.zeros(0), 0.0, 0.0)
     if dh is not None:
         parameters = landing.posterior(
             robot, dh.robot, joints, rotation, frame=frame, residuals=measured - fk(dh.robot, joints)[:, :3, 3],

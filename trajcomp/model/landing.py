@@ -116,6 +116,9 @@ class LandingData:
         Standard deviation (mm per axis) of the TCP offset's error that
         turns with the tool, where the measurements do not locate the flange
         (`posterior`); 0 where they do.
+    flange_turn : float
+        Standard deviation (rad per axis) of the flange's orientation error
+        that no measured point observes: the prior of an angle (`posterior`).
     """
 
     held_out: dict
@@ -131,6 +134,7 @@ class LandingData:
     reference: np.ndarray
     spread: float
     turning: float
+    flange_turn: float
 
     def to_dict(self):
         """Plain data in user units (mm, deg), for the model file's report."""
@@ -146,7 +150,8 @@ class LandingData:
                            "identified": (self.identified * scale).tolist(),
                            "covariance": (self.covariance * np.outer(scale, scale)).tolist()},
             "orientation": {"reference_abc_deg": np.degrees(matrix_to_abc(self.reference)).tolist(),
-                            "spread_deg": float(np.degrees(self.spread)), "turning_tcp_mm": self.turning},
+                            "spread_deg": float(np.degrees(self.spread)), "turning_tcp_mm": self.turning,
+                            "flange_turn_deg": float(np.degrees(self.flange_turn))},
         }
 
     @classmethod
@@ -169,6 +174,7 @@ class LandingData:
                 reference=abc_to_matrix(np.radians(np.array(data["orientation"]["reference_abc_deg"], dtype=float))),
                 spread=float(np.radians(data["orientation"]["spread_deg"])),
                 turning=float(data["orientation"]["turning_tcp_mm"]),
+                flange_turn=float(np.radians(data["orientation"]["flange_turn_deg"])),
             )
         except (KeyError, TypeError, ValueError, AttributeError) as exc:
             raise ModelError(f"report.landing: malformed entry: {exc!r}") from None
@@ -356,6 +362,10 @@ def posterior(robot, identified, joints, rotation, *, frame, residuals, R_tcp_ta
         Standard deviation of the TCP offset's error that turns with the
         tool, mm per axis: the prior's length where the flange is not
         located, else 0 (the posterior holds it).
+    flange_turn : float
+        The prior's angle, rad: the size of the flange's orientation error,
+        which a measured point never observes (a constant turn of the flange
+        moves it as an offset of the tool does).
     """
     names = candidate_parameters(robot, tool=True, orientation=rotation is not None, tracker=frame == "tracker")
     names = names[:names.index("tool_x")] + list(EXTRA) + names[names.index("tool_x"):]
@@ -379,7 +389,7 @@ def posterior(robot, identified, joints, rotation, *, frame, residuals, R_tcp_ta
     covariance = np.linalg.inv(information)
     deltas = np.array([fitted.get(n, 0.0) if is_robot_parameter(n) else 0.0 for n in names])
     shift = covariance @ (jac.T @ residual / noise**2 - np.where(robot_part, deltas, 0.0) / prior**2)
-    return names, shift, (covariance + covariance.T) / 2.0, deltas, 0.0 if located else float(length)
+    return names, shift, (covariance + covariance.T) / 2.0, deltas, 0.0 if located else float(length), float(turn)
 
 
 def gauge_directions(robot, names, R_tcp_target=None, samples=GAUGE_SAMPLES):
@@ -425,7 +435,7 @@ def build(held, method, parameters, rotations, positions, joints, by_joints=froz
     method : str
         How they were held out, in words.
     parameters : tuple
-        `posterior` output ``(names, shift, covariance, deltas, turning)``.
+        `posterior` output ``(names, shift, covariance, deltas, turning, flange_turn)``.
     rotations : ndarray, shape (N, 3, 3), or None
         Commanded TCP orientations of the measurements (None: unknown, any
         orientation counts as measured).
@@ -437,7 +447,7 @@ def build(held, method, parameters, rotations, positions, joints, by_joints=froz
         The modes whose distances are `coverage_distance` (a joint-angle
         residual); the others' are between positions.
     """
-    names, shift, covariance, deltas, turning = parameters
+    names, shift, covariance, deltas, turning, flange_turn = parameters
     reference, spread = (np.eye(3), np.pi) if rotations is None else orientation_reference(rotations)
     stats = {mode: ErrorStats.from_errors(e).as_dict() for mode, (_, _, e) in held.items()}
     unique = np.unique(np.round(positions, POSITION_DIGITS), axis=0)
@@ -446,7 +456,7 @@ def build(held, method, parameters, rotations, positions, joints, by_joints=froz
     configurations = np.zeros((0, 6)) if joints is None else np.radians(
         np.unique(np.round(np.degrees(joints), JOINT_DIGITS), axis=0))
     return LandingData(stats, method, unique, configurations, growth, sorted(by_joints), list(names), shift,
-                       covariance, deltas, reference, spread, turning)
+                       covariance, deltas, reference, spread, turning, flange_turn)
 
 
 def of_model(model):
@@ -499,10 +509,14 @@ def estimate(model, mode, q, T_target, tool=None, postures=None, other_tool=Fals
         Targets in an arm posture the calibration did not measure: their
         reference configuration is taken in a measured posture.
     other_tool : bool
-        ``tool`` is not the measured TCP. With a model that cannot place
-        other tools, the measured TCP's offset error stays with the
-        measured tool, unknown for the program's: the prediction adds the
-        identified offset and the posterior variance of the offset.
+        ``tool`` is not the measured TCP and the model cannot place other
+        tools. Where the mode's correction is a field over the measured
+        TCP's positions, that field holds the measured TCP's offset error,
+        which the program's tool does not have: the prediction adds the
+        identified offset and the posterior variance of the offset. On any
+        tool other than the measured TCP, the flange's orientation error,
+        which no measured point observes, moves the program's TCP by its
+        lever from the measured one (`LandingData.flange_turn`).
     outside : ndarray of bool, shape (N,), optional
         Targets where the mode's error field or joint residual does not
         apply (outside its grid or joint range): the kinematic model alone
@@ -549,7 +563,11 @@ def estimate(model, mode, q, T_target, tool=None, postures=None, other_tool=Fals
         R_tool = (model.nominal.T_flange_tool if tool is None else tool)[:3, :3]
         turn = (T_target[:, :3, :3] - data.reference) @ R_tool.T
         spread = spread + data.turning**2 * turn @ turn.transpose(0, 2, 1)
-    if other_tool and not model.places_other_tools and "tool_x" in names:
+    if tool is not None and data.flange_turn:  # the flange's unobserved turn, on the lever to the measured TCP
+        lever = T_target[:, :3, :3] @ np.linalg.solve(tool, model.nominal.T_flange_tool)[:3, 3]
+        spread = spread + data.flange_turn**2 * (np.einsum("ni,ni->n", lever, lever)[:, None, None] * np.eye(3)
+                                                 - lever[:, :, None] * lever[:, None, :])
+    if other_tool and (field or mode in ("none", "linear")) and "tool_x" in names:
         offset = [names.index(name) for name in TOOL_NAMES]
         unknown = np.sum(data.identified[robot_rows][offset] ** 2) + np.trace(covariance[np.ix_(offset, offset)])
         spread = spread + unknown / 3.0 * np.eye(3)
