@@ -139,10 +139,13 @@ class _Scattered:
         ndarray, shape (N, 3)
             Residual error, mm.
         """
-        if method not in (None, self.kind):
-            raise ModelError(f"a {self.kind} residual field cannot be evaluated by {method!r}")
+        self._check_method(method)
         p = as_vectors(points, "query points", error=ModelError)
         return bounded_evaluate(self._kernel, p, self.lower, self.upper, outside)
+
+    def _check_method(self, method):
+        if method not in (None, self.kind):
+            raise ModelError(f"a {self.kind} residual field cannot be evaluated by {method!r}")
 
     def _fields(self):
         return {"kind": self.kind, "points": self.points.tolist(), "values": self.values.tolist()}
@@ -352,8 +355,7 @@ class Kriging(_Scattered):
 
     def evaluate(self, points, method=None, outside="error"):
         """The field (N, 3) mm at points (N, 3) mm; every point is inside (``outside`` is accepted, not needed)."""
-        if method not in (None, self.kind):
-            raise ModelError(f"a {self.kind} residual field cannot be evaluated by {method!r}")
+        self._check_method(method)
         return _correlation(as_vectors(points, "query points", error=ModelError), self.points, self.length) \
             @ self._weights
 
