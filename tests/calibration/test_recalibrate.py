@@ -137,6 +137,7 @@ def test_a_drift_no_parameter_holds_is_corrected_near_the_rows_and_the_correctio
     assert record["correction"] == {"kind": "kriging", "rows": 30, "length_mm": result.correction.length,
                                     "nugget": result.correction.nugget}
     assert record["corrected_mm"]["held_out"] < record["updated_mm"]["held_out"]
+    assert f"{record['corrected_mm']['held_out']:.4f} mm with the correction" in record["verdict_reason"]
     rest = _measure(worn, q[1::3], np.random.default_rng(9), MOVED)  # configurations none of the rows is
     errors = {}
     for label, candidate in (("updated", result.base.model), ("corrected", result.model)):

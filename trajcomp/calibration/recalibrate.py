@@ -516,6 +516,8 @@ class Update:
         figures = (f"residual {before:.4f} mm as the model is{' (registered anew)' if stale is self.registered else ''}"
                    f", {shown} after the update (each region of the rows predicted from the others), model's own "
                    f"error {expected:.4f} mm")
+        if self.correction is not None:
+            figures += f"; {self.corrected.held_out.mean():.4f} mm with the correction of what the fit leaves"
         if self.outside:
             figures += (f"; {self.outside} of the {len(self.joints)} rows lie outside the joint range the model was "
                         "calibrated on")
