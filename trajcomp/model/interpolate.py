@@ -406,8 +406,13 @@ class Kriging(_Scattered):
             gaps = np.sqrt(_squared_distances(p, p) + np.diag(np.full(len(p), np.inf)))
             spacing = float(np.median(gaps.min(axis=1)))
             lengths = [length for length in KRIGING_LENGTHS if length >= 2.0 * spacing] or KRIGING_LENGTHS[-1:]
-        candidates = [cls(p, v, length=length, nugget=nugget) for length in lengths for nugget in nuggets]
-        return max(candidates, key=lambda field: field.log_likelihood())
+        best = None
+        for length in lengths:
+            for nugget in nuggets:  # one candidate at a time: each holds an (N, N) factor
+                field = cls(p, v, length=length, nugget=nugget)
+                if best is None or field.log_likelihood() > best.log_likelihood():
+                    best = field
+        return best
 
     def to_dict(self):
         """Plain-list dict: kind, points, values, length, nugget."""
