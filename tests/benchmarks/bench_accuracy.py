@@ -66,7 +66,7 @@ from trajcomp.support.parallel import usable_cores
 from trajcomp.arm.transforms import abc_to_matrix, matrix_to_abc, pose_to_matrix, rotvec_to_matrix
 
 ROOT = Path(__file__).resolve().parents[2]
-DATA = ROOT.parent / "shared" / "data"
+DATA = Path(os.environ.get("TRAJCOMP_DATA", ROOT.parent / "shared" / "data"))
 UR5_GRID = DATA / "ur5-grid" / "grid.csv"
 UR10_IPA = DATA / "ur10-ipa" / "grid_A.csv"
 LAYOUTS = ROOT / "examples" / "columns"

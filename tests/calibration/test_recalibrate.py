@@ -117,10 +117,41 @@ def test_the_same_day_update_changes_nothing(cell):
     assert max(abs(change[f"tool_{a}"]) for a in "xyz") < 0.03  # mm
     moved = np.linalg.norm(result.model.arm("composite").fk(q)[:, :3, 3] - model.arm("composite").fk(q)[:, :3, 3], axis=1)
     assert moved.mean() < 0.01
-    assert result.verdict()[0] == "valid" and result.applied == "none"
+    assert result.verdict()[0] == "valid" and result.applied == "none" and result.correction is None
     np.testing.assert_array_equal(result.model.T_tracker_base, model.T_tracker_base)
     added = result.model.report["update"]["added_sigma_mm"]
     assert 0.0 < added["mean"] <= added["max"] < 0.02
+
+
+def test_a_drift_no_parameter_holds_is_corrected_near_the_rows_and_the_correction_kept_in_the_file(cell, tmp_path):
+    """The gear errors grew twofold between campaigns (a worn reducer): the joint zeros, scale, tool and tracker
+    do not hold that; the kriging correction of the rows' residuals predicts the arm elsewhere better."""
+    model, drifted, q = cell
+    worn = dataclasses.replace(drifted, profile=dataclasses.replace(
+        drifted.profile, gear_amplitude=2.0 * drifted.profile.gear_amplitude))
+    rows = _measure(worn, q[recalibrate.choose_rows(model, q, 30)[0]], np.random.default_rng(5), MOVED)
+    result = recalibrate.update(model, rows.joints, rows.position, rows.measured, abc_to_matrix(rows.measured_orientation))
+    assert result.applied == "update" and result.correction is not None
+    assert result.corrected.held_out.mean() < result.base.held_out.mean()  # why it was taken: the rows' regions
+    record = result.model.report["update"]
+    assert record["correction"] == {"kind": "kriging", "rows": 30, "length_mm": result.correction.length,
+                                    "nugget": result.correction.nugget}
+    assert record["corrected_mm"]["held_out"] < record["updated_mm"]["held_out"]
+    assert f"{record['corrected_mm']['held_out']:.4f} mm with the correction" in record["verdict_reason"]
+    rest = _measure(worn, q[1::3], np.random.default_rng(9), MOVED)  # configurations none of the rows is
+    errors = {}
+    for label, candidate in (("updated", result.base.model), ("corrected", result.model)):
+        seen = to_base(candidate.T_tracker_base, rest.measured)
+        errors[label] = np.linalg.norm(seen - candidate.predict("composite", rest.joints, rest.position)[0],
+                                       axis=1).mean()
+    assert errors["corrected"] < 0.9 * errors["updated"]
+    save_model(tmp_path / "worn.yaml", result.model)
+    again = load_model(tmp_path / "worn.yaml")
+    np.testing.assert_allclose(again.predict("composite", rest.joints, rest.position)[0],
+                               result.model.predict("composite", rest.joints, rest.position)[0], atol=1e-9)
+    # a later update starts from the model without this campaign's correction, and fits its own
+    later = recalibrate.update(again, rows.joints, rows.position, rows.measured, abc_to_matrix(rows.measured_orientation))
+    assert later.as_is.model.residual_field is None
 
 
 def test_the_cli_writes_the_updated_model_with_its_covariance_and_check_says_recalibrate(cell, tmp_path, capsys):

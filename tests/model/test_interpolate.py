@@ -7,7 +7,7 @@ import pytest
 
 from trajcomp.errors import CalibrationError, ModelError
 from trajcomp.model.grid import KINDS, ResidualGrid, field_from_dict, fit_field
-from trajcomp.model.interpolate import KNN, RBF
+from trajcomp.model.interpolate import KNN, RBF, Kriging
 
 
 def smooth_field(p):
@@ -141,3 +141,53 @@ def test_scattered_input_errors():
 def test_field_from_dict_rejects_bad_data(data, message):
     with pytest.raises(ModelError, match=message):
         field_from_dict(data)
+
+
+def test_kriging_hand_computed_one_and_two_points():
+    """One point: the value times exp(-d^2 / 2 L^2) / (1 + nugget); two: the 2 x 2 system solved by hand."""
+    value = np.array([[0.3, -0.2, 0.1]])
+    field = Kriging(np.zeros((1, 3)), value, length=200.0, nugget=0.25)
+    query = np.array([[0.0, 0.0, 0.0], [200.0, 0.0, 0.0], [0.0, 0.0, 5000.0]])
+    np.testing.assert_allclose(field.evaluate(query), value * (np.exp([0.0, -0.5, -312.5]) / 1.25)[:, None],
+                               atol=1e-15)
+    points = np.array([[0.0, 0.0, 0.0], [100.0, 0.0, 0.0]])
+    values = np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
+    c = np.exp(-100.0**2 / (2 * 200.0**2))  # the correlation of the two points
+    weights = np.array([[1.25, -c], [-c, 1.25]]) / (1.25**2 - c**2) @ values  # inverse of [[1.25, c], [c, 1.25]]
+    middle = np.array([[50.0, 0.0, 0.0]])
+    expected = np.exp(-50.0**2 / (2 * 200.0**2)) * weights.sum(axis=0)
+    np.testing.assert_allclose(Kriging(points, values, 200.0, 0.25).evaluate(middle)[0], expected, rtol=1e-12)
+
+
+def test_kriging_follows_its_points_returns_to_zero_far_away_and_round_trips():
+    rng = np.random.default_rng(4)
+    points = rng.uniform(0.0, 1000.0, (40, 3))
+    values = 0.2 * np.stack([np.sin(points[:, 0] / 300), np.cos(points[:, 1] / 400), np.sin(points[:, 2] / 350)], 1)
+    field = Kriging.fit(points, values)
+    assert field.contains(np.array([[1e5, -1e5, 0.0]])).all()  # defined everywhere: nothing is flagged outside
+    assert np.abs(field.evaluate(points) - values).max() < 0.05  # it follows the points (less the nugget's share)
+    np.testing.assert_allclose(field.evaluate(np.array([[20000.0, 500.0, 500.0]])), 0.0, atol=1e-12)
+    assert field.variance(np.array([[20000.0, 500.0, 500.0]]))[0] == pytest.approx(field.signal_variance().mean())
+    assert field.variance(points).max() < 0.5 * field.signal_variance().mean()
+    again = field_from_dict(json.loads(json.dumps(field.to_dict())))
+    np.testing.assert_allclose(again.evaluate(QUERY * 10), field.evaluate(QUERY * 10), rtol=1e-12)
+
+
+def test_kriging_likelihood_finds_the_correlation_length_of_a_sampled_process():
+    """Values drawn from a Gaussian process of length 300 mm (noise 10 %): the fit picks it among the candidates."""
+    rng = np.random.default_rng(7)
+    points = rng.uniform(0.0, 1000.0, (200, 3))
+    squared = np.sum((points[:, None] - points[None]) ** 2, axis=2)
+    covariance = np.exp(-squared / (2 * 300.0**2)) + 0.1 * np.eye(len(points))
+    values = 0.1 * np.linalg.cholesky(covariance) @ rng.standard_normal((len(points), 3))
+    field = Kriging.fit(points, values)
+    assert field.length == 300.0 and field.nugget in (0.03, 0.1, 0.2)
+    np.testing.assert_allclose(np.sqrt(field.signal_variance()), 0.1, rtol=0.5)
+    assert Kriging.fit(points, values, lengths=(100.0, 800.0)).log_likelihood() < field.log_likelihood()
+
+
+def test_kriging_refuses_bad_parameters():
+    with pytest.raises(CalibrationError, match="length > 0"):
+        Kriging(np.zeros((2, 3)), np.zeros((2, 3)), length=0.0)
+    with pytest.raises(ModelError, match="cannot be evaluated by"):
+        Kriging(np.zeros((1, 3)), np.zeros((1, 3))).evaluate(np.zeros((1, 3)), method="idw8")

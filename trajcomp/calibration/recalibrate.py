@@ -21,13 +21,24 @@ fit of the model's composite prediction to the new rows:
                   ``d`` of links 1-5 times ``1 + scale`` (link 6 ends in the
                   tool, whose length the ``tool`` group takes), in ppm.
 
+What these parameters leave at the rows is, on a real arm, not noise alone:
+the joint-error curves and the arm's compliance change between campaigns in
+ways no few parameters hold, and neighbouring rows share that change. On
+top of the fit the model takes, a correction over the commanded positions
+is tried (`correction`): the kriging mean of the rows' residuals
+(`trajcomp.model.interpolate.Kriging`), which follows them near the rows
+and returns to zero away from them. It is the updated model's field on top
+of its composite (not offered for a model whose composite already has a
+field over positions; an earlier update's correction is replaced, it
+belonged to the campaign its rows came from).
+
 An update the rows cannot support is refused (`UpdateRefused`): fewer
 residuals than twice the parameters, or a parameter the rows' Jacobian does
 not identify on its own (`trajcomp.calibration.identify.analyse_identifiability`).
 
 The result (`Update`) says what changed, by how much and with what standard
-deviation, and the rows' residual as the model is, registered anew and
-updated, on the rows themselves and with each region of them predicted from
+deviation, and the rows' residual as the model is, registered anew,
+updated and corrected, on the rows themselves and with each region of them predicted from
 the others (`held_out_errors`); the updated model takes the smallest of
 these fits that the rows do not show to be worse (`Update.kept`), and its
 ``report["update"]`` records the update (`Update.record`): the parameters'
@@ -47,6 +58,8 @@ from trajcomp.arm.transforms import invert, matrix_to_rotvec, mean_rotation, rot
 from trajcomp.calibration.identify import analyse_identifiability, best_fit_transform, region_folds, robust_weights
 from trajcomp.calibration.options import ORIENTATION_WEIGHT
 from trajcomp.errors import CalibrationError
+from trajcomp.model.interpolate import Kriging
+from trajcomp.model.options import KRIGING_KIND
 from trajcomp.model.update import PPM, SCALE, SCALED_LINKS, parameter_jacobian, position_covariance, to_display
 
 GROUPS = ("registration", "tool", "zeros", "scale")
@@ -325,16 +338,19 @@ def _position_sigma(model, joints, names, covariance):
     return np.sqrt(np.trace(position_covariance(model, joints, names, covariance), axis1=1, axis2=2) / 3.0)
 
 
-def held_out_errors(model, joints, position, measured, rotation, names, regions=REGIONS, **options):
+def held_out_errors(model, joints, position, measured, rotation, names, regions=REGIONS, corrected=False,
+                    **options):
     """|residual| (N,) mm of each row predicted by the fit of ``names`` to the rows of the other regions.
 
     The rows are cut into ``regions`` slabs of their commanded positions
     (`trajcomp.calibration.identify.region_folds`), as the accuracy of a
     model is judged: an update that follows the model's own errors at the
-    rows, not drift, fails to predict another region. None when the rows of
-    the other regions do not identify the parameters.
+    rows, not drift, fails to predict another region. ``corrected``: the
+    correction (`correction`) of the other regions' residuals is added to
+    that fit. None when the rows of the other regions do not identify the
+    parameters.
     """
-    if not names:  # nothing is fitted: each row's residual as the model is
+    if not names and not corrected:  # nothing is fitted: each row's residual as the model is
         return np.linalg.norm(fit(model, joints, position, measured, None, (), **options).residual, axis=1)
     errors = np.zeros(len(joints))
     for rows in region_folds(position, regions)[0]:
@@ -346,9 +362,34 @@ def held_out_errors(model, joints, position, measured, rotation, names, regions=
             fitted = fit(model, *pick, names, **options)
         except UpdateRefused:
             return None
-        seen = fit(fitted.model, joints[rows], position[rows], measured[rows], None, (), **options)
-        errors[rows] = np.linalg.norm(seen.residual, axis=1)
+        seen = fit(fitted.model, joints[rows], position[rows], measured[rows], None, (), **options).residual
+        if corrected:
+            seen = seen - correction(position[train], fitted.residual).evaluate(position[rows])
+        errors[rows] = np.linalg.norm(seen, axis=1)
     return errors
+
+
+def correction(position, residual):
+    """The correction (`Kriging`, chosen by maximum likelihood) of residuals (N, 3) mm at commanded positions
+    (N, 3) mm."""
+    return Kriging.fit(position, residual)
+
+
+def corrected_fit(fitted, joints, position, measured, rotation, **options):
+    """``fitted`` with the correction of its residuals at the rows as its model's field on top, held out by region.
+
+    None for a model whose composite has a field over positions already (a
+    field on top of a field is not offered). The correction's held-out
+    residual (`Fit.held_out`) refits ``fitted``'s parameters and the
+    correction on the other regions (`held_out_errors`).
+    """
+    model = fitted.model
+    if model.error_field("composite") is not None:
+        return None
+    field = correction(position, fitted.residual)
+    held = held_out_errors(model, joints, position, measured, rotation, fitted.names, corrected=True, **options)
+    return dataclasses.replace(fitted, model=dataclasses.replace(model, residual_field=field),
+                               residual=fitted.residual - field.evaluate(position), held_out=held)
 
 
 def better(fit_a, fit_b):
@@ -378,6 +419,9 @@ class Update:
         The registration alone (base-frame rows: the model as it was).
     updated : Fit
         The update.
+    corrected : Fit or None
+        The fit the model takes without a correction (`base`), with the
+        correction of its residuals at the rows on top (`corrected_fit`).
     expected_mm : float or None
         The model's own mean |error| (`expected_error`), what the rows are judged against.
     joints : ndarray, shape (N, 6)
@@ -391,13 +435,15 @@ class Update:
     as_is: Fit
     registered: Fit
     updated: Fit
+    corrected: Fit
     expected_mm: float
     joints: np.ndarray
     temperature: dict = None
 
     @property
-    def kept(self):
-        """The fit the updated model takes: the smallest the rows do not significantly improve on (`better`).
+    def base(self):
+        """The parameters' fit the updated model takes: the smallest the rows do not significantly improve on
+        (`better`).
 
         The registration replaces the model's only when it predicts the
         rows better (the tracker moved), the update the registration only
@@ -410,10 +456,21 @@ class Update:
         return self.updated if better(self.updated, kept) else kept
 
     @property
+    def kept(self):
+        """The fit the updated model takes: `base`, with the correction where that predicts the rows better."""
+        corrected = self.corrected is not None and better(self.corrected, self.base)
+        return self.corrected if corrected else self.base
+
+    @property
     def applied(self):
-        """What the updated model took: ``update``, ``registration`` or ``none`` (the model as it was)."""
-        kept = self.kept
-        return "update" if kept is self.updated else "registration" if kept is self.registered else "none"
+        """What the updated model's parameters took: ``update``, ``registration`` or ``none`` (the model as it was)."""
+        base = self.base
+        return "update" if base is self.updated else "registration" if base is self.registered else "none"
+
+    @property
+    def correction(self):
+        """The correction the updated model took (`Kriging`), or None."""
+        return self.kept.model.residual_field if self.kept is self.corrected else None
 
     @property
     def model(self):
@@ -459,6 +516,8 @@ class Update:
         figures = (f"residual {before:.4f} mm as the model is{' (registered anew)' if stale is self.registered else ''}"
                    f", {shown} after the update (each region of the rows predicted from the others), model's own "
                    f"error {expected:.4f} mm")
+        if self.correction is not None:
+            figures += f"; {self.corrected.held_out.mean():.4f} mm with the correction of what the fit leaves"
         if self.outside:
             figures += (f"; {self.outside} of the {len(self.joints)} rows lie outside the joint range the model was "
                         "calibrated on")
@@ -483,8 +542,12 @@ class Update:
         add at the rows: ``mean`` and ``max``); ``applied`` (``update``,
         ``registration`` or ``none``: what the model took, `kept`; the
         values and covariance are the model's only with ``update``);
-        ``as_is_mm``, ``registered_mm`` and ``updated_mm`` (the rows' mean
-        |residual|: ``fit``, and ``held_out`` by region, `held_out_errors`);
+        ``as_is_mm``, ``registered_mm``, ``updated_mm`` and
+        ``corrected_mm`` (the rows' mean |residual|: ``fit``, and
+        ``held_out`` by region, `held_out_errors`; ``corrected_mm`` None
+        where no correction was offered); ``correction`` (None, or the
+        correction the model took: ``kind``, ``rows``, ``length_mm``,
+        ``nugget``);
         ``outside_rows``; ``temperature_c`` (`temperature`) and
         ``scale_ppm_per_k`` (`scale_per_kelvin`), or None; ``verdict`` and
         ``verdict_reason``.
@@ -511,7 +574,11 @@ class Update:
             "as_is_mm": residual(self.as_is),
             "registered_mm": residual(self.registered),
             "updated_mm": residual(fit_),
+            "corrected_mm": None if self.corrected is None else residual(self.corrected),
             "applied": self.applied,
+            "correction": None if self.correction is None else {
+                "kind": self.correction.kind, "rows": len(self.correction.points),
+                "length_mm": self.correction.length, "nugget": self.correction.nugget},
             "outside_rows": self.outside,
             "temperature_c": self.temperature,
             "scale_ppm_per_k": self.scale_per_kelvin(),
@@ -551,12 +618,16 @@ def update(model, joints, position, measured, rotation=None, groups=GROUPS, *, t
     Update
     """
     common = dict(tracker=tracker, loss=loss, orientation_weight=orientation_weight)
+    if getattr(model.residual_field, "kind", None) == KRIGING_KIND:  # an earlier update's: this update's replaces it
+        model = dataclasses.replace(model, residual_field=None)
     rows = (model, joints, position, measured, rotation)
     levels = [(), BASE_NAMES if tracker else (), parameter_names(groups, tracker=tracker, oriented=rotation is not None)]
     fits = [fit(*rows, names, **common) for names in levels[::-1]][::-1]  # the update first: it needs the most rows
     fits = [dataclasses.replace(fitted, held_out=held_out_errors(*rows, names, **common))
             for fitted, names in zip(fits, levels)]
-    return Update(*fits, expected_error(model), joints, temperature_change(model, temperature))
+    result = Update(*fits, None, expected_error(model), joints, temperature_change(model, temperature))
+    return dataclasses.replace(result, corrected=corrected_fit(result.base, joints, position, measured, rotation,
+                                                               **common))
 
 
 def choose_rows(model, joints, count=30, groups=GROUPS, *, tracker=True, oriented=True,

@@ -99,7 +99,8 @@ def run(args):
     print("the rows' mean |residual| mm (in brackets: each region of the rows predicted from the others): "
           + ", ".join(f"{label} {record[key]['fit']:.4f} ({held(record[key]['held_out'])})" for label, key in
                       (("as the model is", "as_is_mm"), ("registered anew", "registered_mm"),
-                       ("updated", "updated_mm")) if key != "registered_mm" or "base_x" in record["names"]))
+                       ("updated", "updated_mm"), ("corrected", "corrected_mm"))
+                      if (key != "registered_mm" or "base_x" in record["names"]) and record[key] is not None))
     if record["temperature_c"]:
         change = record["temperature_c"]
         print(f"temperature: {change['rows']:.2f} deg C at the rows, {change['model']:.2f} at the model's measurements "
@@ -114,6 +115,12 @@ def run(args):
                            "registered anew",
            "none": "the rows show neither drift nor a moved tracker: the model written is the model as it was"}[
               record["applied"]])
+    if record["correction"]:
+        correction = record["correction"]
+        print(f"the model written takes a correction of what the update leaves at the {correction['rows']} rows "
+              f"(kriging over commanded positions, correlation length {correction['length_mm']:g} mm, nugget "
+              f"{correction['nugget']:g}): it predicts each region of the rows from the others significantly better, "
+              "and returns to zero away from the rows")
     print(record["verdict_reason"])
     save_model(args.output, result.model)
     info(f"wrote {args.output}")

@@ -187,7 +187,8 @@ class CompensationModel:
         -------
         predicted : ndarray, shape (N, 3)
         flagged : ndarray, shape (N,) bool
-            Points outside the grid that took the ``outside`` policy.
+            Points outside the grid that took the ``outside`` policy, or outside the joint range the joint errors
+            were fitted on.
         """
         self.check_mode(mode)
         flagged = np.zeros(len(position), dtype=bool)
@@ -206,8 +207,8 @@ class CompensationModel:
         field = self.error_field(mode)
         if field is None:
             return base, flagged
-        term, flagged = evaluate_field(field, position, interpolation, outside)
-        return base + term, flagged
+        term, beyond = evaluate_field(field, position, interpolation, outside)
+        return base + term, flagged | beyond
 
 
 @dataclasses.dataclass(frozen=True, eq=False)

@@ -21,7 +21,7 @@ import dataclasses
 import numpy as np
 
 from trajcomp.errors import CalibrationError, ModelError
-from trajcomp.model.interpolate import KNN, RBF, VERTEX_HIT, bounded_evaluate, fmt_point, in_box
+from trajcomp.model.interpolate import KNN, RBF, Kriging, VERTEX_HIT, bounded_evaluate, fmt_point, in_box
 from trajcomp.model.options import FIELD_KINDS as KINDS, LATTICE_KINDS as METHODS
 from trajcomp.model.stats import AXES, as_vectors
 
@@ -439,7 +439,7 @@ def field_from_dict(data):
     kind = data.get("kind")
     if kind == "grid":
         return ResidualGrid.from_dict(data)
-    classes = {KNN.kind: KNN, RBF.kind: RBF}
+    classes = {KNN.kind: KNN, RBF.kind: RBF, Kriging.kind: Kriging}
     if kind not in classes:
         raise ModelError(f"residual field: unknown kind {kind!r} (one of grid, {', '.join(classes)})")
     try:

@@ -8,10 +8,15 @@ module holds the fields of scattered data, which need no lattice:
   measured points;
 - :class:`RBF` (``rbf``): a smoothing radial basis function fit (thin-plate
   spline by default), its smoothing chosen by k-fold cross-validation unless
-  given.
+  given;
+- :class:`Kriging` (``kriging``): the mean of a Gaussian process of a few
+  scattered residuals (a light re-calibration's correction, see
+  `trajcomp.calibration.recalibrate`), its length and noise chosen by
+  maximum likelihood; it returns to zero away from its points.
 
-Their domain is the bounding box of the data; :func:`bounded_evaluate`
-applies the same outside policy as the lattice fields.
+The domain of the first two is the bounding box of the data;
+:func:`bounded_evaluate` applies the same outside policy as the lattice
+fields. Kriging's is all space: far from its points it adds nothing.
 """
 
 import dataclasses
@@ -19,7 +24,7 @@ import dataclasses
 import numpy as np
 
 from trajcomp.errors import CalibrationError, ModelError
-from trajcomp.model.options import KNN_KIND, RBF_KIND
+from trajcomp.model.options import KNN_KIND, KRIGING_KIND, RBF_KIND
 from trajcomp.model.stats import as_vectors, kfold_indices
 
 OUTSIDE = ("error", "clamp", "nan")
@@ -27,6 +32,10 @@ VERTEX_HIT = 1e-6
 """Distance (mm) under which a query counts as coinciding with a data point or vertex."""
 SMOOTHING_CANDIDATES = (0.0, *(10.0**e for e in range(-6, 1)))
 """Smoothing values tried by cross-validation (coordinates scaled to the unit box)."""
+KRIGING_LENGTHS = (100.0, 150.0, 200.0, 300.0, 400.0, 600.0, 800.0)
+"""Correlation lengths (mm) `Kriging.fit` tries: a tenth to most of an arm's reach."""
+KRIGING_NUGGETS = (0.03, 0.1, 0.2, 0.3, 0.5, 1.0, 2.0)
+"""Noise-to-signal variance ratios `Kriging.fit` tries."""
 
 
 def fmt_point(point):
@@ -130,10 +139,13 @@ class _Scattered:
         ndarray, shape (N, 3)
             Residual error, mm.
         """
-        if method not in (None, self.kind):
-            raise ModelError(f"a {self.kind} residual field cannot be evaluated by {method!r}")
+        self._check_method(method)
         p = as_vectors(points, "query points", error=ModelError)
         return bounded_evaluate(self._kernel, p, self.lower, self.upper, outside)
+
+    def _check_method(self, method):
+        if method not in (None, self.kind):
+            raise ModelError(f"a {self.kind} residual field cannot be evaluated by {method!r}")
 
     def _fields(self):
         return {"kind": self.kind, "points": self.points.tolist(), "values": self.values.tolist()}
@@ -286,3 +298,122 @@ def _cv_score(x, values, splits, smoothing, options):
             return np.inf
         total += np.sum((rbf(x[test]) - values[test]) ** 2)
     return total / len(x)
+
+
+def _squared_distances(a, b):
+    """Squared distances (N, M) mm^2 between points a (N, 3) and b (M, 3), mm."""
+    return np.maximum(np.sum(a**2, axis=1)[:, None] + np.sum(b**2, axis=1)[None, :] - 2.0 * a @ b.T, 0.0)
+
+
+def _correlation(a, b, length):
+    """Squared-exponential correlation (N, M) of points a (N, 3) and b (M, 3), mm, at ``length`` mm."""
+    return np.exp(-_squared_distances(a, b) / (2.0 * length**2))
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class Kriging(_Scattered):
+    """Gaussian-process mean (simple kriging, zero prior mean) of residuals at a few scattered points.
+
+    Each axis of the residual is a zero-mean Gaussian process of the
+    position with covariance ``variance * (exp(-d^2 / (2 length^2)) +
+    nugget * [d = 0])``: near a point the field follows the residuals seen
+    there (less the nugget's share, measurement noise), between points it
+    blends them, and beyond a few ``length`` from every point it returns to
+    zero: it never extrapolates a shape the points did not show, so it is
+    defined everywhere (`contains` is all true). Build with `fit` to choose
+    ``length`` and ``nugget`` by maximum likelihood.
+
+    Attributes
+    ----------
+    points, values : ndarray, shape (N, 3)
+        Data positions and residual errors, mm.
+    length : float
+        Correlation length, mm (> 0).
+    nugget : float
+        Noise variance as a fraction of the signal variance (> 0).
+    """
+
+    length: float = 400.0
+    nugget: float = 0.3
+    kind = KRIGING_KIND
+
+    def __post_init__(self):
+        p, v = _scattered_data(self.points, self.values)
+        if not (np.isfinite(self.length) and self.length > 0 and np.isfinite(self.nugget) and self.nugget > 0):
+            raise CalibrationError(f"kriging: need length > 0 mm and nugget > 0, got {self.length}, {self.nugget}")
+        object.__setattr__(self, "points", p)
+        object.__setattr__(self, "values", v)
+        object.__setattr__(self, "length", float(self.length))
+        object.__setattr__(self, "nugget", float(self.nugget))
+        factor = np.linalg.cholesky(_correlation(p, p, self.length) + self.nugget * np.eye(len(p)))
+        object.__setattr__(self, "_factor", factor)
+        object.__setattr__(self, "_weights", np.linalg.solve(factor.T, np.linalg.solve(factor, v)))
+
+    def contains(self, points):
+        """All true (N,): the field is defined everywhere (zero far from its points)."""
+        return np.ones(len(as_vectors(points, "query points", error=ModelError)), bool)
+
+    def evaluate(self, points, method=None, outside="error"):
+        """The field (N, 3) mm at points (N, 3) mm; every point is inside (``outside`` is accepted, not needed)."""
+        self._check_method(method)
+        return _correlation(as_vectors(points, "query points", error=ModelError), self.points, self.length) \
+            @ self._weights
+
+    def signal_variance(self):
+        """Maximum-likelihood variance (3,) mm^2 of each axis's signal, given ``length`` and ``nugget``."""
+        whitened = np.linalg.solve(self._factor, self.values)
+        return np.sum(whitened**2, axis=0) / len(self.points)
+
+    def variance(self, points):
+        """Posterior variance (N,) mm^2 per axis of the field's signal at points (N, 3), mm (mean of the axes).
+
+        Zero at no point; the signal's variance far from every data point.
+        """
+        p = as_vectors(points, "query points", error=ModelError)
+        solved = np.linalg.solve(self._factor, _correlation(self.points, p, self.length))
+        return (1.0 - np.sum(solved**2, axis=0)) * float(self.signal_variance().mean())
+
+    def log_likelihood(self):
+        """Log marginal likelihood of the values under the process, its variances at their maximum."""
+        count = len(self.points)
+        determinant = 2.0 * np.sum(np.log(np.diag(self._factor)))
+        return float(-0.5 * np.sum(count * np.log(self.signal_variance()) + determinant + count))
+
+    @classmethod
+    def fit(cls, points, values, lengths=None, nuggets=KRIGING_NUGGETS):
+        """The candidate ``length`` x ``nugget`` of the highest marginal likelihood (`log_likelihood`).
+
+        Parameters
+        ----------
+        points, values : array_like, shape (N, 3)
+            Data positions (N >= 2) and residual errors, mm.
+        lengths : sequence of float, optional
+            Correlation lengths tried, mm. Default: those of
+            `KRIGING_LENGTHS` at least twice the median distance from a
+            point to its nearest neighbour (at least the longest): a
+            shorter correlation the points cannot tell from their noise,
+            and the likelihood of a few points then takes it for the
+            signal.
+        nuggets : sequence of float
+            Noise-to-signal variance ratios tried.
+
+        Returns
+        -------
+        Kriging
+        """
+        p, v = _scattered_data(points, values)
+        if lengths is None:
+            gaps = np.sqrt(_squared_distances(p, p) + np.diag(np.full(len(p), np.inf)))
+            spacing = float(np.median(gaps.min(axis=1)))
+            lengths = [length for length in KRIGING_LENGTHS if length >= 2.0 * spacing] or KRIGING_LENGTHS[-1:]
+        best = None
+        for length in lengths:
+            for nugget in nuggets:  # one candidate at a time: each holds an (N, N) factor
+                field = cls(p, v, length=length, nugget=nugget)
+                if best is None or field.log_likelihood() > best.log_likelihood():
+                    best = field
+        return best
+
+    def to_dict(self):
+        """Plain-list dict: kind, points, values, length, nugget."""
+        return {**self._fields(), "length": self.length, "nugget": self.nugget}

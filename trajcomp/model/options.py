@@ -11,4 +11,5 @@ LATTICE_KINDS = ("idw8", "trilinear")  # residual fields on a lattice (`trajcomp
 KNN_KIND = "knn"  # residual field on scattered points, k nearest neighbours (`trajcomp.model.interpolate.KNN`)
 RBF_KIND = "rbf"  # residual field on scattered points, radial basis functions (`trajcomp.model.interpolate.RBF`)
 FIELD_KINDS = (*LATTICE_KINDS, KNN_KIND, RBF_KIND)  # residual fields over positions
+KRIGING_KIND = "kriging"  # a re-calibration's correction from a few rows (`trajcomp.model.interpolate.Kriging`)
 JOINT_KIND = "joint"  # joint-angle error terms (`trajcomp.model.joint_errors`)
