@@ -220,6 +220,29 @@ def test_a_turn_of_the_flange_no_point_sees_moves_another_tool_by_its_lever(cell
                                atol=1e-4)  # the identified TCP against its nominal: micrometres
 
 
+def test_a_re_calibration_s_correction_adds_its_own_uncertainty_growing_away_from_its_rows(cell):
+    """A correction kriged from a later campaign's few rows (`trajcomp recalibrate`) is as uncertain as those rows
+    leave it: about nothing beside a row, its whole signal variance far from every row."""
+    import dataclasses
+
+    from trajcomp.model.interpolate import Kriging
+
+    robot, _, model, _ = cell
+    rows = np.array([[400.0, 0.0, 400.0], [600.0, 200.0, 400.0], [500.0, 100.0, 650.0]])
+    values = np.array([[0.05, -0.02, 0.01], [-0.04, 0.03, 0.02], [0.02, 0.04, -0.05]])
+    near, far = _tilted(robot, 0.0, 2, seed=9), _tilted(robot, 0.0, 2, seed=9)
+    near[:, :3, 3], far[:, :3, 3] = rows[:2] + 1.0, [[300.0, 300.0, 700.0], [700.0, -100.0, 300.0]]
+    added = {}
+    for label, scale in (("signal", 1.0), ("none", 1e-6)):
+        corrected = dataclasses.replace(model, residual=Kriging(rows, scale * values, length=100.0, nugget=0.01))
+        for where, targets in (("near", near), ("far", far)):
+            q = compensate(corrected, targets).q
+            added[label, where] = landing.estimate(corrected, "composite", q, targets).total
+    variance = Kriging(rows, values, length=100.0, nugget=0.01).signal_variance().mean()
+    assert np.all(added["signal", "far"] - added["none", "far"] > 0.5 * np.sqrt(3 * variance))
+    assert np.all(added["signal", "near"] - added["none", "near"] < 0.2 * np.sqrt(3 * variance))
+
+
 def test_a_posture_never_measured_is_its_own_criterion_not_outside_the_grid(cell):
     robot, virtual, model, _ = cell
     targets = _tilted(robot, 0.0, 6, seed=7)

@@ -36,6 +36,10 @@ unseen
     that of the measured orientation and tool at the same position (in a
     measured posture): zero at a measured orientation, growing with the tilt.
 
+A light re-calibration (`trajcomp recalibrate`) adds the uncertainty of its
+update's parameters and of its correction kriged from a few rows (zero
+beside a row, the correction's whole variance far from them).
+
 ``tests/benchmarks/bench_verdict.py`` measures the forecast per class of
 target, coverage and sharpness, on virtual arms whose errors the
 calibration never saw and on the real UR10.
@@ -57,6 +61,7 @@ from trajcomp.model.joint_errors import KIND as JOINT_KIND
 from trajcomp.arm.parameters import (ANGLE_LEVER, TOOL_NAMES, candidate_parameters, is_angle, is_robot_parameter,
                                      pose_jacobian)
 from trajcomp.model import update
+from trajcomp.model.options import KRIGING_KIND
 from trajcomp.model.stats import ErrorStats
 from trajcomp.arm.transforms import abc_to_matrix, matrix_to_abc, mean_rotation, rotation_angle_between
 
@@ -541,7 +546,9 @@ def estimate(model, mode, q, T_target, tool=None, postures=None, other_tool=Fals
     identified = model.identified if model.dh_names else model.nominal.as_standard()
     at_target = identified if tool is None else identified.replace(T_flange_tool=tool)
     jac = pose_jacobian(at_target, q, names)[1][:, :3, :]
-    field = mode in ("grid", "composite") and model.error_field(mode) is not None
+    correction = model.error_field(mode) if mode == "composite" else None
+    correction = correction if getattr(correction, "kind", None) == KRIGING_KIND else None
+    field = mode in ("grid", "composite") and model.error_field(mode) is not None and correction is None
     if (field or mode in ("none", "linear")) and data.spread < np.radians(ORIENTATION_MARGIN):
         # the field (or the raw errors it stands for) absorbed the error the measured configuration sees there
         absorbed = _reference_jacobian(model, identified, data, T_target, q, names, postures)
@@ -559,6 +566,8 @@ def estimate(model, mode, q, T_target, tool=None, postures=None, other_tool=Fals
     isotropic = near[:, None, None] ** 2 / 3.0 * np.eye(3)  # the held-out RMS, shared by the three axes
     spread = isotropic + np.einsum("nip,pq,njq->nij", jac, covariance, jac)
     spread = spread + update.position_covariance(model, q)  # what a light re-calibration left uncertain
+    if correction is not None:  # the re-calibration's correction, as uncertain as its few rows leave it
+        spread = spread + correction.variance(position)[:, None, None] * np.eye(3)
     if data.turning:  # the TCP offset's error absorbed in the measured orientation turns with the tool
         R_tool = (model.nominal.T_flange_tool if tool is None else tool)[:3, :3]
         turn = (T_target[:, :3, :3] - data.reference) @ R_tool.T
