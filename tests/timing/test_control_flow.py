@@ -233,6 +233,9 @@ ENDMODULE
 """)
 
 
+SLOWEST_MM_S = 1.0  # a speed that cannot be carried over is written at the target's slowest
+
+
 def rapid_ops(text):
     """The controller's reading of a RAPID module: each motion keyed by its order in the file, with its TCP
     speed (mm/s), time (\\T) and point; VelSet as settings."""
@@ -281,10 +284,11 @@ def rapid_least_times(text, points=None):
         override, top = visit.setting("velset")
         point, v, own_v, t, _ = fields[key]
         speed = min((float(own_v) if own_v else v) * override / 100.0, top)
-        least = None if not visit.before else np.linalg.norm(
-            np.subtract(points[point], points[fields[visit.before][0]])) / speed
-        if t is not None:
-            least = max(least or 0.0, float(t) * 100.0 / override)
+        if t is not None:  # the controller takes the time, whatever the VelSet's max (its override stretches it)
+            least = float(t) * 100.0 / override
+        else:
+            least = None if not visit.before else np.linalg.norm(
+                np.subtract(points[point], points[fields[visit.before][0]])) / speed
         out[(key, path)] = (least, speed, visit)
     return out, fields
 
@@ -310,6 +314,9 @@ def assert_rapid_no_faster(source_text, written_text):
     return checked
 
 
+RAPID_FIELDS = {op.name: op.value for op in rapid_ops(RAPID_MODULE) if op.kind == "motion"}
+
+
 @pytest.fixture
 def rapid_source(tmp_path):
     folder = tmp_path / "in"
@@ -326,7 +333,9 @@ def test_rapid_reader_follows_calls_loops_branches_velset_and_waits(rapid_source
     at = {f"{n}": lines[i + 1] for n, i in enumerate(i for i, line in enumerate(text) if "Move" in line)}
     assert "line 41" in table.start_why[at["2"]]  # after go_far: it starts at go_far's P6, not at P2
     assert table.speed[at["3"]] == 20.0 and table.speed[at["4"]] == 20.0  # VelSet 100, 20 caps v1000 and \V:=800
-    assert "VelSet" in table.speed_why[at["5"]]  # \T:=0.2 held to 20 mm/s too: left as written
+    # \T:=0.2 under VelSet 100, 20: a stated time is not held to VelSet's max (RAPID reference, VelSet's
+    # limitations): read as its time, timed, not left as written
+    assert table.speed[at["5"]] == 0.2 and table.speed_unit[at["5"]] == "s" and not table.speed_why[at["5"]]
     assert table.speed[at["6"]] == 250.0 and table.start_why[at["6"]]  # VelSet 50: v500 at half; after P4 or P8
     assert table.speed[at["8"]] == 100.0  # IF: VelSet 100 or 10: the slowest, 10 % of v1000
     assert np.isnan(table.zone[at["8"]]) and np.isnan(table.zone[at["9"]])  # WaitTime, WaitDI after them
@@ -625,10 +634,18 @@ def assert_converted_no_faster(source, ops, entry, initial, line_speed, target, 
 
 
 def rapid_line_speed(fields, visit):
-    """A RAPID line's TCP speed on a visit: its speed data's (or \\V) under the VelSet in force, mm/s."""
+    """A RAPID line's TCP speed on a visit: its speed data's (or \\V) under the VelSet in force, mm/s; for a
+    ``\\T`` (not held to VelSet's max), the peak any profile that takes that time (stretched by the override)
+    over the line from the visit's start may reach: twice its mean speed (a triangle)."""
     override, top = visit.setting("velset")
-    _, v, own_v, _, _ = fields
-    return min((float(own_v) if own_v else v) * override / 100.0, top)
+    point, v, own_v, t, _ = fields
+    if t is None:
+        return min((float(own_v) if own_v else v) * override / 100.0, top)
+    if not visit.before:
+        return SLOWEST_MM_S  # no start: the converter cannot carry a time over
+    start = RAPID_FIELDS[visit.before][0]
+    length = np.linalg.norm(np.subtract(RAPID_POINTS[point], RAPID_POINTS[start]))
+    return 2.0 * length / (float(t) * 100.0 / override)
 
 
 @pytest.mark.parametrize("target", [".src", ".ls", ".script", ".csv"])

@@ -15,11 +15,13 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from trajcomp.arm.kinematics import fk
 from trajcomp.errors import TimingError
 from trajcomp.programs.frames import FrameTable
 from trajcomp.programs.items import CIRCULAR, JOINT, LINEAR
 from trajcomp.programs.tables import _codes, rows_of
 from trajcomp.programs.program import place_text
+from trajcomp.formats.speeds import arc_length
 
 KINDS = (JOINT, LINEAR, CIRCULAR)
 
@@ -150,6 +152,22 @@ class Moves:
             labels=labels if labels is not None else WaypointLabels(m),
             motion=np.arange(m),
         )
+
+
+def corner_lengths(moves, robot, k):
+    """The programmed TCP length (n,) of linear and circular motions k (n,), mm: corner to corner, the line's
+    chord or the circle's arc through its via point (a blended corner's zone cuts it on the timed path)."""
+    k = np.asarray(k, dtype=int)
+    out = np.zeros(len(k))
+    for tool_index in np.unique(moves.tool[k]).tolist():
+        rows = np.flatnonzero(moves.tool[k] == tool_index)
+        arm = robot.replace(T_flange_tool=moves.tools[tool_index])
+        start, end = fk(arm, moves.q[k[rows] - 1])[:, :3, 3], fk(arm, moves.q[k[rows]])[:, :3, 3]
+        out[rows] = np.linalg.norm(end - start, axis=1)
+        for i in np.flatnonzero(moves.kind[k[rows]] == CIRCULAR).tolist():
+            via = fk(arm, moves.via[k[rows[i]]][None])[0, :3, 3]
+            out[rows[i]] = arc_length(np.array([start[i], via, end[i]]))
+    return out
 
 
 class _RowLabels(Sequence):

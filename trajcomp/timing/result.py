@@ -93,6 +93,12 @@ class TimingResult:
         Joints of each waypoint, rad.
     tcp_length : ndarray, shape (M,)
         TCP path length of the motion into each waypoint, mm (0 for untimed).
+    programmed_length : ndarray, shape (M,)
+        TCP length of the motion into each waypoint as programmed, corner
+        to corner (`trajcomp.timing.moves.corner_lengths`), where a
+        blended corner at either end makes the timed path shorter; else
+        ``tcp_length``. A controller paces a time given to a blended
+        motion over this length (`trajcomp.timing.writeback`).
     labels : tuple of str, length M
         Waypoint names with file and line.
     motion : ndarray of int, shape (M,)
@@ -130,6 +136,7 @@ class TimingResult:
     peak_speed_ratio: float
     q: np.ndarray
     tcp_length: np.ndarray
+    programmed_length: np.ndarray
     labels: tuple
     motion: np.ndarray
     untimed: tuple

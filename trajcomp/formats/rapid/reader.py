@@ -1175,9 +1175,11 @@ def _flow_speeds(table, reached):
 
     VelSet override, max runs a motion's TCP and orientation speeds at
     override % and its TCP speed at most max mm/s, and a ``\\T`` at
-    100 / override times as long; a ``\\T`` held to a max below vmax is
-    left as written (its time and a TCP speed bound it, which no one
-    field of the timing states). Several VelSets
+    100 / override times as long, whatever the max: the controller does not
+    hold a motion with a stated time to VelSet's max (RAPID reference,
+    VelSet's limitations), so a time is read and written as such (a time
+    written for a motion without one is at least its length over the max,
+    the speed read here). Several VelSets
     reaching a motion: the lowest override and max; one set at run time:
     the motion's speed is so (left as written).
     """
@@ -1194,8 +1196,6 @@ def _flow_speeds(table, reached):
             continue
         override, top = min(v[0] for v in velsets) / 100.0, min(v[1] for v in velsets)
         timed = table.speed_unit[rows] == "s"
-        if top < VMAX:  # a time held to a TCP speed: no one field states both
-            why[rows[timed]] = f"\\T under VelSet's max {top:g} mm/s, which holds it too: left as written"
         speed[rows[timed]] /= override
         paced = rows[~timed]
         tcp = np.where(np.isnan(speed[paced]), VMAX, speed[paced])
