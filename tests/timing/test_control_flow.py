@@ -363,6 +363,29 @@ def test_rapid_retimed_and_compensated_run_no_faster_on_any_path(rapid_source, t
     assert assert_rapid_no_faster(RAPID_MODULE, comp.read_text()) >= 3
 
 
+def test_motions_whose_start_is_not_unique_are_listed_as_unknown_not_failed(rapid_source, tmp_path, capsys):
+    """A loop's first motion, one after a call or a branch, one after a call of another module's routine: not
+    timed, left as written (no faster than programmed): the criterion ``starts`` is not evaluated and lists them,
+    ``speeds`` (speeds set at run time) passes, the verdict passes on what was checked and the run exits 0."""
+    import json
+
+    out, report = tmp_path / "out" / "Cell.mod", tmp_path / "report.json"
+    out.parent.mkdir()
+    assert main(["retime", str(rapid_source), "-o", str(out), "--robot", "abb_irb4600", "--report", str(report)]) == 0
+    doc = json.loads(report.read_text())
+    criteria = {c["id"]: c for c in doc["verdict"]["criteria"]}
+    assert doc["verdict"]["result"] == "pass" and criteria["speeds"]["status"] == "pass"
+    starts = criteria["starts"]
+    assert starts["status"] == "not evaluated" and "not checked" in starts["detail"]
+    ops = rapid_ops(RAPID_MODULE)
+    keys = [op.name for op in ops if op.kind == "motion"]
+    seen = by_motion(visits(ops, "main", {"velset": (100.0, 5000.0)}))
+    several = [k for n, k in enumerate(keys) if {v.before for v in seen[k]} != {keys[n - 1] if n else ""}]
+    several += [keys[-1]]  # after Elsewhere, a routine of another module: its start is not known
+    assert doc["timing"]["unknown_start"]["count"] == len(several) == len(starts["targets"])
+    assert "start not unique" in capsys.readouterr().err
+
+
 FANUC_POINTS = {1: (385, 0, 595, "N U T"), 2: (385, 0, 515, "N U T"), 3: (445, 0, 515, "F U T"),
                 4: (445, 40, 515, "N U T"), 5: (400, -60, 560, "N U T"), 6: (300, 200, 600, "N U T")}
 FANUC_MN = """   1:  UFRAME_NUM=0 ;
