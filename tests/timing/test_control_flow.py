@@ -174,6 +174,42 @@ def test_krl_retimed_and_compensated_run_no_faster_on_any_path(tmp_path, kuka_mo
     assert_krl_no_faster(KRL_SRC, (comp / "main.src").read_text())
 
 
+KRL_RESTORED = {  # a speed lowered inside a loop, and inside a branch, before motions that keep theirs
+    "loop": "  WHILE $IN[2]\n    LIN P2\n    $VEL.CP=3.0\n    LIN P3\n    LIN P4\n  ENDWHILE\n  LIN P5\n",
+    "branch": "  IF $IN[1] THEN\n    $VEL.CP=3.0\n    LIN P2\n    LIN P3\n  ENDIF\n  LIN P4\n  LIN P5\n",
+}
+
+
+@pytest.mark.parametrize("body", sorted(KRL_RESTORED))
+def test_krl_speed_set_back_so_every_path_runs_the_programmed_speed(tmp_path, body):
+    """A $VEL.CP inserted for a motion the timing slows sets the modal speed for whatever runs next on every path:
+    the loop's next iteration, the motions after the branch. Run every path the controller's way: each motion
+    runs at its programmed speed on every path, or at one lowered speed on every path (the timing's), and never
+    faster."""
+    source = ("DEF main( )\n  BAS(#VEL_PTP,100)\n  $VEL.CP=0.05\n  PTP HOME\n  LIN P1\n" + KRL_RESTORED[body]
+              + "END\n")
+    folder = tmp_path / "in"
+    folder.mkdir()
+    (folder / "main.src").write_text(source)
+    (folder / "main.dat").write_text(KRL_DAT)
+    out = tmp_path / "out" / "main.src"
+    out.parent.mkdir()
+    assert main(["retime", str(folder / "main.src"), "-o", str(out), "--robot", "kuka_kr6_r900"]) == 0
+    before, after = visits(krl_ops(source), "main", KRL_START), visits(krl_ops(out.read_text()), "main", KRL_START)
+    assert before.keys() == after.keys()
+    runs = {}
+    for (key, path), seen in after.items():
+        if key.startswith("LIN"):
+            runs.setdefault(key, []).append((before[(key, path)].setting("cp"), seen.setting("cp")))
+    lowered = 0
+    for key, pairs in runs.items():
+        assert all(written <= programmed for programmed, written in pairs), (key, pairs)
+        if any(written != programmed for programmed, written in pairs):
+            assert len({written for _, written in pairs}) == 1, (key, pairs)  # one lowered speed on every path
+            lowered += 1
+    assert lowered >= 1 and lowered < len(runs)
+
+
 @pytest.mark.parametrize("target", [".mod", ".ls", ".script", ".csv"])
 def test_krl_converted_runs_no_faster_than_any_path(tmp_path, target, makerless):
     source = krl_files(tmp_path / "in")
