@@ -243,7 +243,7 @@ RAPID_MODULE = ("MODULE Cell\n" + "".join(
     MoveL P2, v1000\\V:=800, z10, tool0;
     MoveL P3, v1000\\T:=0.2, fine, tool0;
     VelSet 50, 5000;
-    AccSet 50, 50;
+    AccSet 50, 100;
     WHILE n < 3 DO
       MoveL P7, v500, z10, tool0;
       MoveL P8, v500, z10, tool0;
@@ -374,6 +374,7 @@ def test_rapid_reader_follows_calls_loops_branches_velset_and_waits(rapid_source
     assert table.speed[at["5"]] == 0.2 and table.speed_unit[at["5"]] == "s" and not table.speed_why[at["5"]]
     assert table.speed[at["6"]] == 250.0 and table.start_why[at["6"]]  # VelSet 50: v500 at half; after P4 or P8
     assert table.speed[at["8"]] == 100.0  # IF: VelSet 100 or 10: the slowest, 10 % of v1000
+    assert np.isnan(table.acceleration_share[at["5"]]) and table.acceleration_share[at["6"]] == 0.5  # AccSet 50
     assert np.isnan(table.zone[at["8"]]) and np.isnan(table.zone[at["9"]])  # WaitTime, WaitDI after them
     assert "Elsewhere" in table.start_why[at["11"]] and "Elsewhere" in table.speed_why[at["11"]]
 
