@@ -51,6 +51,13 @@ def least_joint_time(robot, q_a, q_b, share):
     return float(np.max(2.0 * np.sqrt(np.abs(q_b - q_a) / (share * robot.a_max))))
 
 
+ACC_MODULE = ("MODULE Acc\n"
+              "  CONST robtarget P1:=[[1135,0,1415],[0,0,1,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]];\n"
+              "  CONST robtarget P2:=[[1141,4,1411],[0,0,1,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]];\n"
+              "  PROC main()\n    MoveJ P1, v1000, fine, tool0;\n    AccSet 20, 100;\n"
+              "    MoveJ P2, v1000, fine, tool0;\n    MoveJ P1, v1000, fine, tool0;\n  ENDPROC\nENDMODULE\n")
+
+
 def test_rapid_accset_bounds_the_time_written(tmp_path):
     module = ("MODULE Acc\n"
               "  CONST robtarget P1:=[[1135,0,1415],[0,0,1,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]];\n"
@@ -106,3 +113,26 @@ def test_urscript_movel_a_bounds_the_timing(tmp_path):
     length = np.linalg.norm(fk(robot, q[1])[:3, 3] - fk(robot, q[0])[:3, 3])
     assert "a=0.1" in text and length > 10.0
     assert t[1] - t[0] >= 2.0 * np.sqrt(length / 100.0) - STAMP  # 0.1 m/s^2, from rest to rest
+
+
+def test_rapid_accset_carried_into_a_conversion(tmp_path, makerless):
+    """Converted to FANUC, whose J motion states a percentage its controller runs at its full ramps: the motions
+    after AccSet 20 take no less time than their 20 % ramps need (the percentage lowered to make up for them)."""
+    source = tmp_path / "Acc.mod"
+    source.write_text(ACC_MODULE)
+    out = tmp_path / "ACC.LS"
+    assert main(["convert", str(source), str(out), "--robot", makerless("abb_irb4600")]) in (0, 1)
+    program, robot = formats.read(source), load_robot("abb_irb4600")
+    plan = planned_joints(program, robot)
+    q = planned(program, plan.index, plan.q)[program.motion_table().target]
+    fields = re.findall(r"J P\[\d+\] (\d+)(%|msec)", out.read_text())
+    assert len(fields) == 3
+    for k in (1, 2):
+        value, unit = float(fields[k][0]), fields[k][1]
+        change = np.abs(q[k] - q[k - 1])
+        if unit == "msec":
+            taken = value / 1000.0
+        else:  # synchronized: the path parameter cruises at the slowest joint's p % and ramps at its limit
+            cruise, ramps = np.min(value / 100.0 * robot.v_max / change), np.min(robot.a_max / change)
+            taken = 1.0 / cruise + cruise / ramps if cruise < np.sqrt(ramps) else 2.0 / np.sqrt(ramps)
+        assert taken >= least_joint_time(robot, q[k - 1], q[k], 0.2) * (1 - 1e-6), (k, fields[k])
