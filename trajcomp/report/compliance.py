@@ -20,7 +20,8 @@ from trajcomp.report.document import Figure, Report
 from trajcomp.report.provenance import grid_box, header
 from trajcomp.report.targets import ARRAYS, ROWS, TIMES, flag_bits, full_data, statistics, table_rows, target_json, \
     target_measures
-from trajcomp.report.verdict import FAIL, LISTED, NOT_EVALUATED, PASS, Check, Criteria, accuracy_check, check, not_evaluated, verdict
+from trajcomp.report.verdict import (FAIL, LISTED, NOT_EVALUATED, PASS, Check, Criteria, accuracy_check, check,
+                                     not_evaluated, verdict)
 
 TIMING_SLACK = 0.01  # relative: a peak up to 1 % over its limit passes (the timing's own dense check)
 
@@ -237,16 +238,9 @@ def timing_check(section):
 
 def speeds_check(section):
     """The criterion that every timed motion's speed is known (none left as written because it is set at run time)."""
-    statement = "every timed motion's speed known to the re-timing (none set at run time)"
-    if section is None:
-        return not_evaluated("speeds", statement, "the program was not re-timed")
-    kept = section["not_retimed"]
-    if not kept["count"]:
-        return Check("speeds", statement, PASS, "every speed stated or provably constant")
-    return Check("speeds", statement, FAIL,
-                 f"{kept['count']} motion(s) not re-timed, speed set at run time (left as written): "
-                 f"{kept['motions'][0]['why']}", targets=tuple(m["waypoint"] for m in kept["motions"][:LISTED]),
-                 failing=kept["count"])
+    return _listed_check(section, "speeds", "every timed motion's speed known to the re-timing (none set at run time)",
+                         "not_retimed", FAIL, "every speed stated or provably constant",
+                         "not re-timed, speed set at run time (left as written)")
 
 
 def starts_check(section):
@@ -259,16 +253,25 @@ def starts_check(section):
     a failure (the program is as safe as written): the criterion is not
     evaluated for them and lists them; it passes where there are none.
     """
-    statement = "every motion timed from the one position it starts at on every path the program can take"
+    return _listed_check(section, "starts",
+                         "every motion timed from the one position it starts at on every path the program can take",
+                         "unknown_start", NOT_EVALUATED,
+                         "every timed motion's start is the motion before it on every path",
+                         "not timed, start not unique or not known (left as written: no faster than programmed; "
+                         "their timing and limits not checked)")
+
+
+def _listed_check(section, id, statement, key, status, clean, found):
+    """A criterion over the motions the timing section lists under ``key``: passed where there are none (``clean``
+    says so), else ``status`` with how many were ``found`` and the first one's reason."""
     if section is None:
-        return not_evaluated("starts", statement, "the program was not re-timed")
-    unknown = section["unknown_start"]
-    if not unknown["count"]:
-        return Check("starts", statement, PASS, "every timed motion's start is the motion before it on every path")
-    return Check("starts", statement, NOT_EVALUATED,
-                 f"{unknown['count']} motion(s) not timed, start not unique or not known (left as written: no "
-                 f"faster than programmed; their timing and limits not checked): {unknown['motions'][0]['why']}",
-                 targets=tuple(m["waypoint"] for m in unknown["motions"][:LISTED]))
+        return not_evaluated(id, statement, "the program was not re-timed")
+    listed = section[key]
+    if not listed["count"]:
+        return Check(id, statement, PASS, clean)
+    return Check(id, statement, status, f"{listed['count']} motion(s) {found}: {listed['motions'][0]['why']}",
+                 targets=tuple(m["waypoint"] for m in listed["motions"][:LISTED]),
+                 failing=listed["count"] if status == FAIL else 0)
 
 
 def compliance_report(report, robot, *, criteria=None, model=None, model_info=None, mode=None, files=(),

@@ -183,7 +183,9 @@ def _programmed(speed, group):
     unknown (NaN)."""
     if np.isnan(speed):
         return None
-    return format_number(floor_places(speed / 1000.0, 6), 6) if group == "cp" else format_number(floor_places(speed, 3), 3)
+    if group == "cp":
+        return format_number(floor_places(speed / 1000.0, 6), 6)
+    return format_number(floor_places(speed, 3), 3)
 
 
 def _slower(a, b):
