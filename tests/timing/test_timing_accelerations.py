@@ -15,6 +15,7 @@ import json
 import re
 
 import numpy as np
+import pytest
 
 from trajcomp import formats
 from trajcomp.arm.kinematics import fk
@@ -24,9 +25,9 @@ from trajcomp.compensation.pipeline import planned
 from trajcomp.compensation.posture import planned_joints
 
 
-def retimed(tmp_path, name, text, robot_name, extra=None):
-    """``name`` holding ``text`` (and ``extra`` files) re-timed: (its motions' joints (M, 6) rad, the report's time
-    stamps (M,) s, the written text)."""
+def retimed(tmp_path, name, text, robot_name, extra=None, model=None):
+    """``name`` holding ``text`` (and ``extra`` files) re-timed (``retime``, or with a ``model`` ``compensate
+    --retime auto``): (the written motions' joints (M, 6) rad, the report's time stamps (M,) s, the written text)."""
     folder = tmp_path / "in"
     folder.mkdir()
     (folder / name).write_text(text)
@@ -34,8 +35,11 @@ def retimed(tmp_path, name, text, robot_name, extra=None):
         (folder / other).write_text(content)
     out, report = tmp_path / "out" / name, tmp_path / "report.json"
     out.parent.mkdir()
-    assert main(["retime", str(folder / name), "-o", str(out), "--robot", robot_name, "--report", str(report)]) == 0
-    program, robot = formats.read(folder / name), load_robot(robot_name)
+    run = ["retime", "--robot", robot_name] if model is None else ["compensate", "--model", str(model), "--retime",
+                                                                   "auto"]
+    assert main([*run, str(folder / name), "-o", str(out), "--report", str(report)]) in ((0,) if model is None
+                                                                                         else (0, 1))
+    program, robot = formats.read(out), load_robot(robot_name)
     plan = planned_joints(program, robot)
     q = planned(program, plan.index, plan.q)
     joints = q[program.motion_table().target]
@@ -73,14 +77,16 @@ def test_rapid_accset_bounds_the_time_written(tmp_path):
         assert t[k] - t[k - 1] >= least - STAMP and time >= least * (1 - 1e-6), (k, time, least)
 
 
+ACC_LS = ("/PROG  ACC\n/ATTR\nOWNER\t\t= MNEDITOR;\nDEFAULT_GROUP\t= 1,*,*,*,*;\n/MN\n"
+          "   1:J P[1] 100% FINE    ;\n   2:J P[2] 100% FINE ACC20    ;\n   3:J P[1] 100% FINE ACC150    ;\n"
+          "/POS\n" + "".join(f"P[{n}]{{\n   GP1:\n\tUF : 0, UT : 0,\t\tCONFIG : 'N U T, 0, 0, 0',\n"
+                             f"\tX = {x:.6f}  mm,\tY = {y:.6f}  mm,\tZ = {z:.6f}  mm,\n"
+                             "\tW = 180.000000000 deg,\tP = 0.000000000 deg,\tR = 0.000000000 deg\n};\n"
+                             for n, (x, y, z) in {1: (385, 0, 595), 2: (390, 4, 591)}.items()) + "/END\n")
+
+
 def test_fanuc_acc_bounds_the_time_written_and_above_100_is_read_as_100(tmp_path):
-    program = ("/PROG  ACC\n/ATTR\nOWNER\t\t= MNEDITOR;\nDEFAULT_GROUP\t= 1,*,*,*,*;\n/MN\n"
-               "   1:J P[1] 100% FINE    ;\n   2:J P[2] 100% FINE ACC20    ;\n   3:J P[1] 100% FINE ACC150    ;\n"
-               "/POS\n" + "".join(f"P[{n}]{{\n   GP1:\n\tUF : 0, UT : 0,\t\tCONFIG : 'N U T, 0, 0, 0',\n"
-                                  f"\tX = {x:.6f}  mm,\tY = {y:.6f}  mm,\tZ = {z:.6f}  mm,\n"
-                                  "\tW = 180.000000000 deg,\tP = 0.000000000 deg,\tR = 0.000000000 deg\n};\n"
-                                  for n, (x, y, z) in {1: (385, 0, 595), 2: (390, 4, 591)}.items()) + "/END\n")
-    q, t, text = retimed(tmp_path, "ACC.LS", program, "fanuc_lrmate200id")
+    q, t, text = retimed(tmp_path, "ACC.LS", ACC_LS, "fanuc_lrmate200id")
     robot = load_robot("fanuc_lrmate200id")
     written = [float(v) / 1000.0 for v in re.findall(r"(\d+)msec", text)]
     assert len(written) == 2 and "ACC20" in text and "ACC150" in text  # the options kept
@@ -91,13 +97,14 @@ def test_fanuc_acc_bounds_the_time_written_and_above_100_is_read_as_100(tmp_path
     assert written[1] >= least_joint_time(robot, q[1], q[2], 1.0) * (1 - 1e-6)
 
 
-def test_krl_acc_ptp_and_acc_cp_bound_the_timing(tmp_path):
+@pytest.mark.parametrize("compensated", [False, True])
+def test_krl_acc_ptp_and_acc_cp_bound_the_timing(tmp_path, kuka_model, compensated):
     src = ("DEF acc( )\n  BAS(#VEL_PTP,100)\n  $VEL.CP=2.0\n  PTP HOME\n  PTP P1\n  BAS(#ACC_PTP,20)\n  PTP P2\n"
            "  $ACC={CP 0.1,ORI1 100,ORI2 100}\n  LIN P1\nEND\n")
     dat = ("DEFDAT acc\n  DECL E6AXIS HOME={A1 0,A2 -90,A3 90,A4 0,A5 45,A6 0}\n"
            "  DECL E6POS P1={X 400,Y -100,Z 700,A 0,B 90,C 0}\n  DECL E6POS P2={X 404,Y -96,Z 703,A 0,B 90,C 0}\n"
            "ENDDAT\n")
-    q, t, _ = retimed(tmp_path, "acc.src", src, "kuka_kr6_r900", {"acc.dat": dat})
+    q, t, _ = retimed(tmp_path, "acc.src", src, "kuka_kr6_r900", {"acc.dat": dat}, kuka_model if compensated else None)
     robot = load_robot("kuka_kr6_r900")
     assert t[2] - t[1] >= least_joint_time(robot, q[1], q[2], 0.2) - STAMP  # the PTP at 20 % of the ramps
     length = np.linalg.norm(fk(robot, q[3])[:3, 3] - fk(robot, q[2])[:3, 3])
@@ -136,3 +143,16 @@ def test_rapid_accset_carried_into_a_conversion(tmp_path, makerless):
             cruise, ramps = np.min(value / 100.0 * robot.v_max / change), np.min(robot.a_max / change)
             taken = 1.0 / cruise + cruise / ramps if cruise < np.sqrt(ramps) else 2.0 / np.sqrt(ramps)
         assert taken >= least_joint_time(robot, q[k - 1], q[k], 0.2) * (1 - 1e-6), (k, fields[k])
+
+
+def test_fanuc_acc_carried_into_a_conversion(tmp_path, makerless):
+    """Converted to RAPID: the motion under ACC20 gets a \\T no shorter than its 20 % ramps need."""
+    source = tmp_path / "ACC.LS"
+    source.write_text(ACC_LS)
+    out = tmp_path / "Acc.mod"
+    assert main(["convert", str(source), str(out), "--robot", makerless("fanuc_lrmate200id")]) in (0, 1)
+    program, robot = formats.read(source), load_robot("fanuc_lrmate200id")
+    plan = planned_joints(program, robot)
+    q = planned(program, plan.index, plan.q)[program.motion_table().target]
+    times = [float(v) for v in re.findall(r"MoveJ \w+, \w+\\T:=([\d.]+)", out.read_text())]
+    assert len(times) == 2 and times[0] >= least_joint_time(robot, q[0], q[1], 0.2) * (1 - 1e-6)
