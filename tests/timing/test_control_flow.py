@@ -104,6 +104,10 @@ def krl_ops(text):
             ops.append(Op("loop"))
         elif re.match(r"WAIT\s+(SEC|FOR)\b", upper):
             ops.append(Op("wait"))
+        elif m := re.match(r"GOTO\s+(\w+)$", line, re.I):
+            ops.append(Op("jump", m.group(1)))
+        elif m := re.match(r"(\w+)\s*:$", line):
+            ops.append(Op("label", m.group(1)))
         elif m := re.match(r"\$VEL\.CP\s*=\s*([\d.]+)$", line, re.I):
             ops.append(Op("set", "cp", float(m.group(1))))
         elif m := re.match(r"\$VEL\s*=\s*\{.*\bCP\s+([\d.]+)", line, re.I):
@@ -178,6 +182,22 @@ KRL_RESTORED = {  # a speed lowered inside a loop, and inside a branch, before m
     "loop": "  WHILE $IN[2]\n    LIN P2\n    $VEL.CP=3.0\n    LIN P3\n    LIN P4\n  ENDWHILE\n  LIN P5\n",
     "branch": "  IF $IN[1] THEN\n    $VEL.CP=3.0\n    LIN P2\n    LIN P3\n  ENDIF\n  LIN P4\n  LIN P5\n",
 }
+
+
+def test_krl_goto_over_a_speed_setting_runs_no_faster_on_either_path(tmp_path):
+    """GOTO over ``$VEL.CP=0.02``: the LIN after the label runs at 3 m/s or 0.02 m/s, the slowest reaching it."""
+    source = ("DEF main( )\n  BAS(#VEL_PTP,100)\n  $VEL.CP=3.0\n  PTP HOME\n  LIN P1\n  IF $IN[1] THEN\n"
+              "    GOTO SKIP\n  ENDIF\n  $VEL.CP=0.02\n  LIN P3\n  SKIP:\n  LIN P2\n  LIN P4\nEND\n")
+    folder = tmp_path / "in"
+    folder.mkdir()
+    (folder / "main.src").write_text(source)
+    (folder / "main.dat").write_text(KRL_DAT)
+    table = formats.read(folder / "main.src").motion_table()
+    assert table.speed[3] == 20.0 and table.start_why[3]  # after P1 (the jump) or P3
+    out = tmp_path / "out" / "main.src"
+    out.parent.mkdir()
+    assert main(["retime", str(folder / "main.src"), "-o", str(out), "--robot", "kuka_kr6_r900"]) == 0
+    assert_krl_no_faster(source, out.read_text())
 
 
 @pytest.mark.parametrize("body", sorted(KRL_RESTORED))
