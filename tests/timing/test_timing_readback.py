@@ -149,3 +149,38 @@ def test_the_written_fields_run_the_controllers_way_never_faster_than_programmed
             tcp = np.linalg.norm(np.einsum("nij,nj->ni", jacobian(tool, q)[:, :3], qd), axis=1)
             assert np.max(tcp) <= joint_speed["mm/s"] * SLACK
     assert checked == ({"cruise", "percent"} if language == "krl" else {"cruise", "time"})
+
+
+def test_a_time_on_a_blended_motion_spans_its_programmed_length_corner_to_corner(tmp_path):
+    """A controller given a time for a blended line or arc (RAPID ``\\T``) paces it over the programmed length,
+    corner to corner, not over the shorter timed path between blend middles: the timing carries that length, the
+    targets' chord and the arc through the via point (computed here from the robtargets alone)."""
+    from trajcomp.timing.writeback import retime_program
+
+    def at(r, deg):
+        return f"[[{r * np.cos(np.radians(deg)):.3f},{r * np.sin(np.radians(deg)):.3f},1100],[0,0,1,0],[0,0,0,0]," \
+               "[9E9,9E9,9E9,9E9,9E9,9E9]]"
+
+    module = (f"MODULE Arc\n  CONST robtarget Q0:={at(900, 10)};\n  CONST robtarget Q1:={at(450, 10)};\n"
+              f"  CONST robtarget V1:={at(450, 35)};\n  CONST robtarget Q2:={at(450, 60)};\n"
+              f"  CONST robtarget Q3:={at(900, 60)};\n  PROC main()\n    MoveJ Q0, v1000, fine, tool0;\n"
+              "    MoveL Q1, v1000\\T:=0.01, z100, tool0;\n    MoveC V1, Q2, v1000\\T:=0.01, z100, tool0;\n"
+              "    MoveL Q3, v1000\\T:=0.01, fine, tool0;\n  ENDPROC\nENDMODULE\n")
+    path = tmp_path / "Arc.mod"
+    path.write_text(module)
+    program, robot = formats.read(path), load_robot("abb_irb4600")
+    plan = planned_joints(program, robot)
+    result = retime_program(program, robot, planned(program, plan.index, plan.q))
+    expected = [450.0, 450.0 * np.radians(50.0), 450.0]  # the lines' chords, the arc of 50 deg at 450 mm
+    assert np.allclose(result.programmed_length[1:], expected, atol=1e-3)
+    assert np.all(result.tcp_length[1:] < np.array(expected) - 1.0)  # the timed path cuts the blended corners
+    timed = formats.read(_retimed(path, tmp_path, "abb_irb4600")).motion_table()
+    cruise = robot.v_max[0] * 450.0  # mm/s: J1 alone turns the TCP along the arc, at 450 mm from its axis
+    assert timed.speed[2] >= expected[1] / cruise  # the controller's pace over the arc: within J1's limit
+
+
+def _retimed(path, tmp_path, robot_name):
+    out = tmp_path / "out" / path.name
+    out.parent.mkdir(exist_ok=True)
+    assert main(["retime", str(path), "-o", str(out), "--robot", robot_name]) in (0, 1)
+    return out

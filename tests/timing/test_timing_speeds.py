@@ -84,7 +84,7 @@ def test_rapid_speeddata_set_at_run_time_is_left_as_written_and_listed(tmp_path,
                                                                      "set at run time"}
     speeds = next(c for c in report["verdict"]["criteria"] if c["id"] == "speeds")
     assert speeds["status"] == "fail" and speeds["failing"] == 2
-    assert "not re-timed, speed set at run time or start not unique (left as written): 2 motion(s)" \
+    assert "not re-timed, speed set at run time (left as written): 2 motion(s)" \
         in capsys.readouterr().err
 
 

@@ -151,14 +151,15 @@ def arc_length(points):
     return float(radius * (2.0 * np.pi - 2.0 * at_via))
 
 
-def cruise_rate(kind, speed, unit, orientation_speed, geometry, index, robot, acceleration=None):
+def cruise_rate(kind, speed, unit, orientation_speed, geometry, index, robot, acceleration=None, share=None):
     """The cruise rate c (1/s) at which motion ``index`` runs under its speed field (see the module).
 
-    A programmed ``acceleration`` below the arm's (UR ``a=``) makes the
-    motion take longer than its cruise rate's trapezoid at the arm's
-    ramps: c is then the rate whose trapezoid at the arm's ramps takes
-    that longer time, so that a field stating c in any unit is no faster
-    in its cruise nor in its time.
+    A programmed ``acceleration`` below the arm's (UR ``a=``, KRL
+    ``$ACC.CP``) or a ``share`` of the arm's (KRL ``$ACC_AXIS``, RAPID
+    ``AccSet``, FANUC ``ACC``) makes the motion take longer than its cruise
+    rate's trapezoid at the arm's ramps: c is then the rate whose
+    trapezoid at the arm's ramps takes that longer time, so that a field
+    stating c in any unit is no faster in its cruise nor in its time.
 
     Parameters
     ----------
@@ -174,6 +175,10 @@ def cruise_rate(kind, speed, unit, orientation_speed, geometry, index, robot, ac
     index : int
         The motion's index; its geometry must be known.
     robot : Robot
+    acceleration : float, optional
+        Of the leading axis (rad/s^2) of a joint motion, of the TCP (mm/s^2) of another.
+    share : float, optional
+        Of the arm's acceleration limits, (0, 1].
 
     Returns
     -------
@@ -201,8 +206,11 @@ def cruise_rate(kind, speed, unit, orientation_speed, geometry, index, robot, ac
     rate = float(min(rates))
     extent = dq.max() if kind == JOINT else geometry.length[index]
     ramps = path_acceleration(dq, robot)
-    if acceleration is not None and extent > 0 and acceleration / extent < ramps:
-        rate = _rate_of_time(_trapezoid_time(rate, acceleration / extent), ramps)
+    programmed = ramps * (1.0 if share is None else min(share, 1.0))
+    if acceleration is not None and extent > 0:
+        programmed = min(programmed, acceleration / extent)
+    if programmed < ramps:
+        rate = _rate_of_time(_trapezoid_time(rate, programmed), ramps)
     return rate
 
 
@@ -295,11 +303,12 @@ def _converted(motion, index, stated, robot, geometry):
     speed, unit = motion.speed, motion.speed_unit
     known = robot is not None and geometry is not None and geometry.known[index]
     dropped = motion.orientation_speed is not None and "v_ori" not in stated  # a bound the target cannot state
-    dropped |= motion.acceleration is not None  # a programmed acceleration: no language states it beside a speed
+    # a programmed acceleration or share of the arm's: no language states it beside a speed
+    dropped |= motion.acceleration is not None or motion.acceleration_share is not None
     if dropped and known:  # it matters only where it binds
         free = cruise_rate(motion.kind, speed, unit, None, geometry, index, robot)
         dropped = cruise_rate(motion.kind, speed, unit, motion.orientation_speed, geometry, index, robot,
-                              motion.acceleration) < free
+                              motion.acceleration, motion.acceleration_share) < free
     default = next(iter(stated))
     if speed is None and not dropped:
         return None, default, ""  # the arm's limits: the language's own default
@@ -320,7 +329,8 @@ def _converted(motion, index, stated, robot, geometry):
         return None, None, f"speed {shown} cannot be converted ({what})"
     if not np.any(geometry.dq[index]):  # the arm does not move: any speed is no faster
         return None, default, ""
-    rate = cruise_rate(motion.kind, speed, unit, motion.orientation_speed, geometry, index, robot, motion.acceleration)
+    rate = cruise_rate(motion.kind, speed, unit, motion.orientation_speed, geometry, index, robot, motion.acceleration,
+                       motion.acceleration_share)
     for target_unit in stated:
         value = None if target_unit == "v_ori" else field_of_rate(motion.kind, rate, target_unit, geometry, index,
                                                                    robot)

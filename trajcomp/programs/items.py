@@ -275,6 +275,12 @@ class Motion:
         the arm's: of the leading axis (rad/s^2) for a joint motion, of the
         TCP (mm/s^2) for a linear or circular one (UR ``a=``); None where
         the controller's own applies.
+    acceleration_share : float or None
+        The share (0, 1] of the arm's acceleration limits the program's
+        acceleration override leaves the motion (KRL ``$ACC_AXIS[n]``, the
+        slowest axis's; RAPID ``AccSet``; FANUC ``ACC``, above 100 % read
+        as 100 %: the timing keeps the arm's limits); None where the
+        controller's own applies.
     start_why : str
         Why the position the motion starts from is not unique (it can be
         reached after a call, a loop's back jump, a branch or a jump from
@@ -302,6 +308,7 @@ class Motion:
     orientation_speed: float = None
     start_why: str = ""
     acceleration: float = None
+    acceleration_share: float = None
 
 
 @dataclasses.dataclass(frozen=True)

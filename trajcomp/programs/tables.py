@@ -43,6 +43,8 @@ class MotionTable:
         Rad/s; NaN where none bounds the motion.
     acceleration : ndarray, shape (M,)
         As `Motion.acceleration`; NaN where none is stated.
+    acceleration_share : ndarray, shape (M,)
+        As `Motion.acceleration_share`; NaN where none is stated.
     source : ndarray of int, shape (M,)
         Index of the file each motion is written in.
     text : Sequence of str, length M
@@ -73,6 +75,7 @@ class MotionTable:
     refs: Mapping = None
     start_why: np.ndarray = None
     acceleration: np.ndarray = None
+    acceleration_share: np.ndarray = None
     spans: Sequence = None
 
     def __post_init__(self):
@@ -80,7 +83,8 @@ class MotionTable:
         defaults = {"orientation_speed": lambda: np.full(m, np.nan), "source": lambda: np.zeros(m, dtype=int),
                     "text": lambda: repeated("", m), "reason": lambda: repeated("", m),
                     "speed_why": lambda: repeated("", m), "refs": dict, "start_why": lambda: repeated("", m),
-                    "acceleration": lambda: np.broadcast_to(np.nan, (m,))}
+                    "acceleration": lambda: np.broadcast_to(np.nan, (m,)),
+                    "acceleration_share": lambda: np.broadcast_to(np.nan, (m,))}
         for name, default in defaults.items():
             if getattr(self, name) is None:
                 object.__setattr__(self, name, default())
@@ -116,6 +120,7 @@ class MotionTable:
             speed_why=column([m.speed_why for m in motions], object),
             start_why=column([m.start_why for m in motions], object),
             acceleration=column([number(m.acceleration) for m in motions], float),
+            acceleration_share=column([number(m.acceleration_share) for m in motions], float),
             refs={k: m.refs for k, m in enumerate(motions) if m.refs},
             spans=spans if any(spans) else None,
         )
@@ -185,7 +190,8 @@ class MotionTable:
         if any(t.spans is not None for t in tables):
             spans = Picked([t.spans if t.spans is not None else repeated({}, len(t)) for t in tables], part, row)
         names = ("kind", "target", "via", "speed", "speed_unit", "zone", "tool", "frame", "axis_position",
-                 "orientation_speed", "reason", "speed_why", "start_why", "acceleration")
+                 "orientation_speed", "reason", "speed_why", "start_why", "acceleration",
+                 "acceleration_share")
         return cls(line=line[order], source=source[order], text=sequence("text"), refs=refs, spans=spans,
                    **{name: column(name) for name in names})
 
@@ -252,6 +258,7 @@ class MotionTable:
             axis_position=bool(self.axis_position[k]), speed_why=self.speed_why[k], source=int(self.source[k]),
             orientation_speed=optional(self.orientation_speed[k], float), start_why=self.start_why[k],
             acceleration=optional(self.acceleration[k], float),
+            acceleration_share=optional(self.acceleration_share[k], float),
         )
 
 

@@ -20,7 +20,8 @@ from trajcomp.report.document import Figure, Report
 from trajcomp.report.provenance import grid_box, header
 from trajcomp.report.targets import ARRAYS, ROWS, TIMES, flag_bits, full_data, statistics, table_rows, target_json, \
     target_measures
-from trajcomp.report.verdict import FAIL, LISTED, PASS, Check, Criteria, accuracy_check, check, not_evaluated, verdict
+from trajcomp.report.verdict import (FAIL, LISTED, NOT_EVALUATED, PASS, Check, Criteria, accuracy_check, check,
+                                     not_evaluated, verdict)
 
 TIMING_SLACK = 0.01  # relative: a peak up to 1 % over its limit passes (the timing's own dense check)
 
@@ -179,7 +180,8 @@ def timing_section(timing, before=None, times=True):
     segments = [{"kind": s.kind, "first": int(s.first), "last": int(s.last), "duration_s": float(s.duration),
                  "speed": getattr(s, "speed", None), "jerk_limited": bool(s.jerk_limited)}
                 for s in timing.segments[:ROWS]]
-    as_written, lowered = getattr(timing, "as_written", ()), getattr(timing, "lowered", ())
+    lowered = getattr(timing, "lowered", ())
+    run_time, starts = getattr(timing, "run_time_speeds", ()), getattr(timing, "unknown_starts", ())
     section = {
         "cycle_time_s": float(timing.cycle_time),
         "cycle_time_before_s": None if before is None else float(before),
@@ -190,9 +192,15 @@ def timing_section(timing, before=None, times=True):
         "segment_count": len(timing.segments),
         "segments_by_kind": by_kind,
         "segments": segments,
-        "not_retimed": {"count": len(as_written),
-                        "reason": "speed set at run time or start not unique: the field is left as written",
-                        "motions": [{"waypoint": str(timing.labels[k]), "why": why} for k, why in as_written[:ROWS]]},
+        "not_retimed": {"count": len(run_time),
+                        "reason": "speed set at run time: the motion is timed at the arm's limits, its field is left "
+                                  "as written",
+                        "motions": [{"waypoint": str(timing.labels[k]), "why": why} for k, why in run_time[:ROWS]]},
+        "unknown_start": {"count": len(starts),
+                          "reason": "start not unique (a call, a loop, a branch or a jump can lead to it) or not "
+                                    "known: the motion is not timed, its field is left as written (it runs no faster "
+                                    "than programmed); its timing and limits are not checked",
+                          "motions": [{"waypoint": str(timing.labels[k]), "why": why} for k, why in starts[:ROWS]]},
         "lowered": {"count": len(lowered),
                     "motions": [{"waypoint": str(timing.labels[k]), "detail": text} for k, text in lowered[:ROWS]]},
     }
@@ -230,17 +238,40 @@ def timing_check(section):
 
 def speeds_check(section):
     """The criterion that every timed motion's speed is known (none left as written because it is set at run time)."""
-    statement = "every timed motion's speed known to the re-timing (none set at run time)"
+    return _listed_check(section, "speeds", "every timed motion's speed known to the re-timing (none set at run time)",
+                         "not_retimed", FAIL, "every speed stated or provably constant",
+                         "not re-timed, speed set at run time (left as written)")
+
+
+def starts_check(section):
+    """The criterion that every motion was timed from its one start, or what is unknown.
+
+    A motion whose start is not unique (the first of a loop, after a call
+    or a branch) or not known (after a call of a routine the read does not
+    include) is not timed: its field is left as written, so it runs no
+    faster than programmed, but its time and limits were not checked. Not
+    a failure (the program is as safe as written): the criterion is not
+    evaluated for them and lists them; it passes where there are none.
+    """
+    return _listed_check(section, "starts",
+                         "every motion timed from the one position it starts at on every path the program can take",
+                         "unknown_start", NOT_EVALUATED,
+                         "every timed motion's start is the motion before it on every path",
+                         "not timed, start not unique or not known (left as written: no faster than programmed; "
+                         "their timing and limits not checked)")
+
+
+def _listed_check(section, id, statement, key, status, clean, found):
+    """A criterion over the motions the timing section lists under ``key``: passed where there are none (``clean``
+    says so), else ``status`` with how many were ``found`` and the first one's reason."""
     if section is None:
-        return not_evaluated("speeds", statement, "the program was not re-timed")
-    kept = section["not_retimed"]
-    if not kept["count"]:
-        return Check("speeds", statement, PASS, "every speed stated or provably constant")
-    return Check("speeds", statement, FAIL,
-                 f"{kept['count']} motion(s) not re-timed, speed set at run time or start not unique (left as "
-                 "written): "
-                 f"{kept['motions'][0]['why']}", targets=tuple(m["waypoint"] for m in kept["motions"][:LISTED]),
-                 failing=kept["count"])
+        return not_evaluated(id, statement, "the program was not re-timed")
+    listed = section[key]
+    if not listed["count"]:
+        return Check(id, statement, PASS, clean)
+    return Check(id, statement, status, f"{listed['count']} motion(s) {found}: {listed['motions'][0]['why']}",
+                 targets=tuple(m["waypoint"] for m in listed["motions"][:LISTED]),
+                 failing=listed["count"] if status == FAIL else 0)
 
 
 def compliance_report(report, robot, *, criteria=None, model=None, model_info=None, mode=None, files=(),
@@ -310,6 +341,7 @@ def compliance_report(report, robot, *, criteria=None, model=None, model_info=No
                             lines=lines[:ROWS], failing=len(lines)))
     checks.append(timing_check(section))
     checks.append(speeds_check(section))
+    checks.append(starts_check(section))
     data = None
     if not table["complete"] or long_times:
         data = full_data(report, measures, flags, None if timing is None else timing.t)

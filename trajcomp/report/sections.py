@@ -250,9 +250,12 @@ def _timing(section):
                                        for kind, k in section["segments_by_kind"].items()) or "none"),
         ("segments", _names([f"{s['kind']} {s['first']}–{s['last']} {s['duration_s']:.3f} s" for s in section["segments"]],
                     section["segment_count"])),
-        ("not re-timed: speed set at run time or start not unique (left as written)",
+        ("not re-timed: speed set at run time (left as written)",
          _names([f"{m['waypoint']} ({m['why']})" for m in section["not_retimed"]["motions"]],
                 section["not_retimed"]["count"])),
+        ("not timed: start not unique or not known (left as written; timing and limits not checked)",
+         _names([f"{m['waypoint']} ({m['why']})" for m in section["unknown_start"]["motions"]],
+                section["unknown_start"]["count"])),
         ("slower than timed: a speed lowered or a time raised where a limit binds",
          _names([m["detail"] for m in section["lowered"]["motions"]], section["lowered"]["count"])),
     ])

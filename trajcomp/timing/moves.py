@@ -15,11 +15,13 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from trajcomp.arm.kinematics import fk
 from trajcomp.errors import TimingError
 from trajcomp.programs.frames import FrameTable
 from trajcomp.programs.items import CIRCULAR, JOINT, LINEAR
 from trajcomp.programs.tables import _codes, rows_of
 from trajcomp.programs.program import place_text
+from trajcomp.formats.speeds import arc_length
 
 KINDS = (JOINT, LINEAR, CIRCULAR)
 
@@ -152,6 +154,22 @@ class Moves:
         )
 
 
+def corner_lengths(moves, robot, k):
+    """The programmed TCP length (n,) of linear and circular motions k (n,), mm: corner to corner, the line's
+    chord or the circle's arc through its via point (a blended corner's zone cuts it on the timed path)."""
+    k = np.asarray(k, dtype=int)
+    out = np.zeros(len(k))
+    for tool_index in np.unique(moves.tool[k]).tolist():
+        rows = np.flatnonzero(moves.tool[k] == tool_index)
+        arm = robot.replace(T_flange_tool=moves.tools[tool_index])
+        start, end = fk(arm, moves.q[k[rows] - 1])[:, :3, 3], fk(arm, moves.q[k[rows]])[:, :3, 3]
+        out[rows] = np.linalg.norm(end - start, axis=1)
+        for i in np.flatnonzero(moves.kind[k[rows]] == CIRCULAR).tolist():
+            via = fk(arm, moves.via[k[rows[i]]][None])[0, :3, 3]
+            out[rows[i]] = arc_length(np.array([start[i], via, end[i]]))
+    return out
+
+
 class _RowLabels(Sequence):
     """Labels lo .. hi - 1 of another sequence, looked up on access."""
 
@@ -236,11 +254,40 @@ def moves_from_program(program, robot, joints, *, tools=None, frames=None):
     frame_table = FrameTable(program, robot, tools, frames)
     labels = program.labels(target)
     speeds = _speed_limits(table, rows, robot, program, labels)
-    return Moves(
+    moves = Moves(
         q=q, kind=table.kind[rows], via=via_q, stop=np.isnan(zone), zone=np.nan_to_num(zone, nan=0.0),
         tools=np.array([frame_table.tool(name) for name in names]).reshape(-1, 4, 4), tool=tool, start=start,
         labels=labels, motion=rows, **speeds,
     )
+    return _tcp_accelerations(moves, robot, table.acceleration[rows])
+
+
+def _tcp_accelerations(moves, robot, stated):
+    """``moves`` whose linear and circular motions with a programmed TCP acceleration ``stated`` (M,) mm/s^2
+    (UR movel ``a=``, KRL ``$ACC.CP``; NaN: none) take no less time than the controller's ramps at it allow.
+
+    The controller runs such a motion of programmed length L at its cruise
+    speed v (the programmed TCP speed) between ramps at a, where it starts
+    or ends at rest: at least L / v + v / (2 a) per end at rest, or the
+    ramps alone where it cannot reach v. That time bounds the motion as a
+    programmed time does (`Moves.min_duration`): the timing is no faster
+    than the controller under its acceleration (the TCP's acceleration
+    itself is not sampled).
+    """
+    k = np.flatnonzero((moves.kind != JOINT) & (stated > 0) & ~moves.start)
+    if not k.size:
+        return moves
+    length, a, v = corner_lengths(moves, robot, k), stated[k], moves.tcp_speed[k]
+    ends = moves.stop[k - 1].astype(int) + moves.stop[k].astype(int)  # ends at rest: 0, 1 or 2
+    with np.errstate(divide="ignore", invalid="ignore"):
+        ramp_length = ends * v**2 / (2.0 * a)  # TCP mm the ramps take to reach v
+        cruising = np.where(np.isfinite(v), length / v + ends * v / (2.0 * a), 0.0)
+        # ramps only: up and down (2 ends) 2 sqrt(L / a); one end sqrt(2 L / a); none: the cruise alone
+        ramps = np.where(ends == 2, 2.0 * np.sqrt(length / a), np.where(ends == 1, np.sqrt(2.0 * length / a), 0.0))
+    least = np.where(length >= ramp_length, cruising, np.maximum(ramps, np.nan_to_num(length / v)))
+    min_duration = moves.min_duration.copy()
+    min_duration[k] = np.maximum(min_duration[k], least)
+    return dataclasses.replace(moves, min_duration=min_duration)
 
 
 def _speed_limits(table, rows, robot, program, labels):
@@ -263,12 +310,14 @@ def _speed_limits(table, rows, robot, program, labels):
         velocity = velocity.copy()
         velocity[percent] = robot.v_max * np.minimum(speed[percent, None], 100.0) / 100.0
         velocity[absolute] = np.minimum(robot.v_max, speed[absolute, None])
-    stated = table.acceleration[rows]
+    stated, share = table.acceleration[rows], table.acceleration_share[rows]
     accelerating = (kind == JOINT) & (stated > 0)
+    shared = share < 1.0
     acceleration = np.broadcast_to(robot.a_max, (m, 6))
-    if accelerating.any():
+    if accelerating.any() or shared.any():
         acceleration = acceleration.copy()
-        acceleration[accelerating] = np.minimum(robot.a_max, stated[accelerating, None])
+        acceleration[shared] = robot.a_max * share[shared, None]
+        acceleration[accelerating] = np.minimum(acceleration[accelerating], stated[accelerating, None])
     return {
         "tcp_speed": np.where(given & (unit == "mm/s"), speed, np.inf),
         "min_duration": np.where(given & (unit == "s"), speed, 0.0),

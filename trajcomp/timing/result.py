@@ -93,6 +93,12 @@ class TimingResult:
         Joints of each waypoint, rad.
     tcp_length : ndarray, shape (M,)
         TCP path length of the motion into each waypoint, mm (0 for untimed).
+    programmed_length : ndarray, shape (M,)
+        TCP length of the motion into each waypoint as programmed, corner
+        to corner (`trajcomp.timing.moves.corner_lengths`), where a
+        blended corner at either end makes the timed path shorter; else
+        ``tcp_length``. A controller paces a time given to a blended
+        motion over this length (`trajcomp.timing.writeback`).
     labels : tuple of str, length M
         Waypoint names with file and line.
     motion : ndarray of int, shape (M,)
@@ -130,6 +136,7 @@ class TimingResult:
     peak_speed_ratio: float
     q: np.ndarray
     tcp_length: np.ndarray
+    programmed_length: np.ndarray
     labels: tuple
     motion: np.ndarray
     untimed: tuple
@@ -210,6 +217,18 @@ class TimingResult:
                      "acceleration at its grid points; without a jerk limit ruckig steps the acceleration)")
         return f"jerk: {unbounded}" if not limited else f"jerk: within the limits in {limited} segments, {unbounded}"
 
+    @property
+    def unknown_starts(self):
+        """``((k, why), ...)`` of `as_written`: the motions not timed because their start is not unique."""
+        untimed = set(self.untimed)
+        return tuple((k, why) for k, why in self.as_written if k in untimed)
+
+    @property
+    def run_time_speeds(self):
+        """``((k, why), ...)`` of `as_written`: the timed motions whose speed the program sets at run time."""
+        untimed = set(self.untimed)
+        return tuple((k, why) for k, why in self.as_written if k not in untimed)
+
     def with_settings(self, settings, as_written=(), lowered=()):
         """A copy whose segments carry the written settings.
 
@@ -260,12 +279,13 @@ class TimingResult:
         if self.lowered:  # the cycle is the timing's; these motions run longer than it
             cycle += f" as timed; {len(self.lowered)} motion(s) written slower than timed (a limit binds, below)"
         out.append(cycle)
-        if self.as_written:
-            names = ", ".join(self.labels[k] for k, _ in self.as_written[:5])
-            more = f" and {len(self.as_written) - 5} more" if len(self.as_written) > 5 else ""
-            out.append(f"not re-timed, speed set at run time or start not unique (left as written): "
-                       f"{len(self.as_written)} motion(s): "
-                       f"{names}{more}; first: {self.as_written[0][1]}")
+        for listed, what in ((self.run_time_speeds, "not re-timed, speed set at run time (left as written)"),
+                             (self.unknown_starts, "not timed, start not unique (left as written, no faster than "
+                                                   "programmed; its timing and limits not checked)")):
+            if listed:
+                names = ", ".join(self.labels[k] for k, _ in listed[:5])
+                more = f" and {len(listed) - 5} more" if len(listed) > 5 else ""
+                out.append(f"{what}: {len(listed)} motion(s): {names}{more}; first: {listed[0][1]}")
         out += [f"slower than timed, a limit binds: {text}" for _, text in self.lowered[:5]]
         if len(self.lowered) > 5:
             out.append(f"slower than timed, a limit binds: {len(self.lowered) - 5} more motion(s) (see the report)")

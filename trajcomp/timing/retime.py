@@ -37,6 +37,7 @@ import numpy as np
 from trajcomp.programs.items import JOINT
 from trajcomp.timing.check import (LIMIT_TOLERANCE, Peaks, dense_check, dense_checks, rest_to_rest_checks,
                                    segment_peaks)
+from trajcomp.timing.moves import corner_lengths
 from trajcomp.timing.options import METHODS, TOLERANCE
 from trajcomp.timing.path import stop_paths
 from trajcomp.timing.result import Segment, TimingResult
@@ -312,6 +313,17 @@ def _turn_warnings(moves, arrived):
     return tuple(out)
 
 
+def _programmed_lengths(moves, robot, timed):
+    """TCP length (M,) of each motion as programmed: `corner_lengths` of the linear and circular motions with a
+    blended corner at either end, the ``timed`` length (M,) of the others."""
+    corner = ~moves.stop & (moves.zone > 0)
+    k = np.flatnonzero(corner[:-1] | corner[1:]) + 1
+    k = k[(moves.kind[k] != JOINT) & ~moves.start[k]]
+    out = np.array(timed, dtype=float)
+    out[k] = np.maximum(out[k], corner_lengths(moves, robot, k))
+    return out
+
+
 class _Timeline:
     """What re-timing has found so far, segment by segment, and the `TimingResult` it makes."""
 
@@ -390,6 +402,7 @@ class _Timeline:
             peak_speed_ratio=max([p.speed_ratio for p in peaks], default=0.0),
             q=self.arrived,
             tcp_length=self.tcp_length,
+            programmed_length=_programmed_lengths(moves, robot, self.tcp_length),
             labels=moves.labels,
             motion=moves.motion,
             untimed=tuple(self.untimed_at),

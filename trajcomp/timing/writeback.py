@@ -18,9 +18,11 @@ TCP keeps between the controller's own ramps; a time (RAPID ``\\T``, UR
   not unique (after a call, a loop's back jump, a branch:
   `trajcomp.programs.items.Motion.start_why`), which is not timed;
 - any other motion (joint motions, motions with a stated time) gets its
-  timed duration T (for a linear or circular one at least its TCP length
-  over its cruise speed, so that a controller cruising at L/T keeps the
-  limits; for a RAPID motion at least the time its speed data's v_ori
+  timed duration T (for a linear or circular one at least its programmed
+  TCP length L over its cruise speed, so that a controller cruising at L/T
+  keeps the limits: L corner to corner, `TimingResult.programmed_length`,
+  as a controller paces a time given to a blended motion, not the
+  shorter timed path between blend middles; for a RAPID motion at least the time its speed data's v_ori
   allows the reorientation, `trajcomp.formats.speeds.orientation_time`:
   ``\\T`` replaces the speed data).
 
@@ -195,9 +197,10 @@ def _plan(program, result, robot):
     process = path & ~np.isnan(speed) & (table.speed_unit[rows] == "mm/s")  # a stated process speed
     lowered = process & (limit < speed)
     times = np.where(process, np.nan, duration)
+    programmed = result.programmed_length[k]  # a controller paces a time over it, corner to corner
     with np.errstate(divide="ignore"):
-        slower = ~process & path & (length / limit > duration)
-    times[slower] = length[slower] / limit[slower]
+        slower = ~process & path & (programmed / limit > duration)
+    times[slower] = programmed[slower] / limit[slower]
     reasons = {w: binding[w] for w in k[lowered | slower].tolist()}
     stated = dict(zip(k[lowered | slower].tolist(), np.where(lowered, speed, duration)[lowered | slower].tolist()))
     bounded = np.flatnonzero(~process & ~np.isnan(table.orientation_speed[rows]))  # RAPID's v_ori: a time written

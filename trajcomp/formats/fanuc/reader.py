@@ -53,6 +53,7 @@ _SPEED_TERM = re.compile(
 )
 _SPEED_FIELD = re.compile(r"(?:" + NUMBER + r")\s*(?:" + _UNIT + r")(?=\s+(?:FINE|FEIN|CNT|CR|CD))", re.I)
 _RUNTIME = re.compile(r"\b(Offset|Tool_Offset|INC|VOFFSET)\b", re.I)
+_ACC = re.compile(r"\bACC\s*(" + NUMBER + r"|A?R\[[^\]]*\])", re.I)  # the motion's acceleration override, %
 _STATE = re.compile(r"^\s*(UFRAME_NUM|UTOOL_NUM|BENUTZER_NUM|WKZ_NUM)\s*=\s*(.*?)\s*;", re.I)
 _SET_FRAME = re.compile(r"^\s*(UFRAME|UTOOL|BENUTZER|WKZ)\s*\[\s*(\d+)\s*\]\s*=\s*(.*?)\s*;", re.I)
 _POINT_REF = re.compile(r"\bP\[\s*(\d+)\s*(?::[^\]]*)?\]", re.I)
@@ -524,6 +525,7 @@ def _motion(m, points, unread, name, number, original, registers, register_why):
         speed_why = f"speed {term}: a register, set at run time"
     blend = spec.group(4) or spec.group(5)
     zone = finite(blend, name, number, original, "CNT") if blend is not None else None
+    share, speed_why = _acceleration_share(rest[spec.end(3):], speed_why, name, number, original)
     runtime = _RUNTIME.search(rest)
     found, reason = [], ""
     for kind_ref, ref in refs:
@@ -557,10 +559,27 @@ def _motion(m, points, unread, name, number, original, registers, register_why):
         reason=reason,
         refs=named if reason else (),
         speed_why=speed_why,
+        acceleration_share=share,
     )
     if reason:
         return dataclasses.replace(motion, target=None, via=None)
     return whole_circle(motion)
+
+
+def _acceleration_share(options, speed_why, name, number, original):
+    """``(share, speed_why)`` of a motion's options (after its FINE / CNT): ``ACC n`` runs its accelerations at n %
+    of the arm's (`trajcomp.programs.items.Motion.acceleration_share`; above 100 read as 100: the timing keeps the
+    arm's limits, and a time written at them is no shorter than the controller's steeper ramps take); ``ACC R[n]``
+    is set at run time."""
+    m = _ACC.search(options)
+    if m is None:
+        return None, speed_why
+    if not re.fullmatch(NUMBER, m.group(1)):
+        return None, speed_why or f"ACC {m.group(1)}: a register, set at run time"
+    percent = finite(m.group(1), name, number, original, "ACC")
+    if percent <= 0:
+        fail(name, number, original, f"ACC {m.group(1)}: an acceleration override is positive")
+    return (percent / 100.0 if percent < 100.0 else None), speed_why
 
 
 POSITIONS_AT_ONCE = 8192  # /POS entries whose fields are found together (`MOTIONS_AT_ONCE`)

@@ -69,6 +69,11 @@ _ACT = re.compile(r"^\s*(FDAT|PDAT|LDAT)_ACT\s*=\s*(\w+)\s*$", re.I)
 _VEL_CP = re.compile(r"^\s*\$VEL\.CP\s*=\s*(.*?)\s*$", re.I)
 _VEL = re.compile(r"^\s*\$VEL\s*=\s*\{(.*)\}\s*$", re.I)  # $VEL={CP 0.2,ORI1 200,ORI2 200}
 _VEL_AXIS = re.compile(r"^\s*\$VEL_AXIS\s*\[\s*([1-6])\s*\]\s*=\s*(.*?)\s*$", re.I)
+_ACC_CP = re.compile(r"^\s*\$ACC\.CP\s*=\s*(.*?)\s*$", re.I)
+_ACC = re.compile(r"^\s*\$ACC\s*=\s*\{(.*)\}\s*$", re.I)  # $ACC={CP 2.3,ORI1 100,ORI2 100}
+_ACC_AXIS = re.compile(r"^\s*\$ACC_AXIS\s*\[\s*([1-6])\s*\]\s*=\s*(.*?)\s*$", re.I)
+_BAS_ACC = re.compile(r"^\s*BAS\s*\(\s*#ACC_PTP\s*,\s*(.*?)\s*\)\s*$", re.I)  # every axis's $ACC_AXIS
+ACC_GROUPS = tuple(f"acc{n}" for n in range(1, 7))  # the flow's acceleration groups of a PTP: each axis's %
 AXIS_GROUPS = tuple(f"ptp{n}" for n in range(1, 7))  # the flow's speed groups of a PTP: each axis's % (`_Reader.give`)
 # the statements that change the order a program runs in (`trajcomp.programs.flow.Step`): keyword -> step kind
 _FLOW_WORDS = {"IF": "if", "ELSE": "else", "ENDIF": "endif", "SWITCH": "if", "CASE": "elif", "DEFAULT": "elif",
@@ -566,6 +571,7 @@ class _Reader:
         # (value, why, span) of each speed setting in force: the TCP's (mm/s), each axis's (%): `give`
         self.initial = {"cp": (None, self.speed_why[LINEAR], None)}
         self.initial |= dict.fromkeys(AXIS_GROUPS, (None, self.speed_why[JOINT], None))
+        self.initial |= dict.fromkeys(ACC_GROUPS + ("acc_cp",), (None, ""))  # the controller's own: (value, why)
         self.axes = [self.initial["ptp1"]] * 6
         self.steps = []  # what the .src does besides moving, in order (`trajcomp.programs.flow`)
         self.siblings = set()  # upper names of the other .src files beside it: routines the read does not include
@@ -787,8 +793,27 @@ class _Reader:
                 span = members["cp"]
                 value, why = self.number_value(span.text, index, line_no, original, "$VEL.CP")
                 self.give(LINEAR, None if value is None else value * 1000.0, why, span, line_no, index)
+        elif m := _ACC_CP.match(text):
+            self.accelerate("acc_cp", m.group(1), 1000.0, index, line_no, original, "$ACC.CP")
+        elif m := _ACC.match(text):
+            members = _members(m.group(1), start + m.start(1), index, name, line_no, original, False)
+            if "cp" in members:
+                self.accelerate("acc_cp", members["cp"].text, 1000.0, index, line_no, original, "$ACC.CP")
+        elif m := _ACC_AXIS.match(text):
+            self.accelerate(ACC_GROUPS[int(m.group(1)) - 1], m.group(2), 1.0, index, line_no, original,
+                            f"$ACC_AXIS[{m.group(1)}]")
+        elif m := _BAS_ACC.match(text):
+            for group in ACC_GROUPS:
+                self.accelerate(group, m.group(1), 1.0, index, line_no, original, "BAS(#ACC_PTP)")
         elif m := _APO.match(text):
             self.zone = finite(m.group(1), name, line_no, original, "$APO.CDIS")
+
+    def accelerate(self, group, text, scale, index, line_no, original, field):
+        """An acceleration setting of ``group`` (``acc_cp``: the TCP's, m/s^2 read as mm/s^2 by ``scale``;
+        ``accN``: axis N's, %) from the value ``text``, for the motions it reaches (`_flow_speeds`)."""
+        value, why = self.number_value(text, index, line_no, original, field)
+        setting = (None if value is None else value * scale, why)
+        self.steps.append(Step("set", group, setting, line_no, index))
 
     def set_speed(self, group, m, at, index, start, line_no, original, field, axis=None):
         """A statement sets the speed of the motions of ``group`` (JOINT: % of axis ``axis`` or all, LINEAR: m/s)
@@ -1008,8 +1033,10 @@ def read(path):
         statements = StatementTable.of([i for i in items if not isinstance(i, Motion)])
         program = Program("krl", path.stem, ItemRows(statements, motions), targets, reader.tools, reader.frames,
                           tuple(reader.sources), notes=notes)
-    # calls, branches, loops, jumps or waits: speeds and starts as the program runs
-    return flow.program_followed(program, reader.steps, reader.initial, _flow_speeds)
+    # calls, branches, loops, jumps or waits: speeds and starts as the program runs; accelerations, which the
+    # reading in file order does not hold, whenever the program sets one
+    accelerating = any(step.kind == "set" and step.name.startswith("acc") for step in reader.steps)
+    return flow.program_followed(program, reader.steps, reader.initial, _flow_speeds, settings=accelerating)
 
 
 def in_force(settings):
@@ -1052,8 +1079,33 @@ def _flow_speeds(table, reached):
     moved = np.flatnonzero(~own & ((new[:, 0] != start) | (new[:, 1] != end)))
     spans = [{**{role: value for role, value in table.spans[k].items() if role != "speed"},
               **({} if span[k] is None else {"speed": span[k]})} for k in moved.tolist()]
-    columns = {"speed": speed, "speed_why": why}
+    columns = {"speed": speed, "speed_why": why} | _flow_accelerations(table, reached, joint, why)
     return columns | ({"spans": (moved, spans)} if len(moved) else {})
+
+
+def _flow_accelerations(table, reached, joint, why):
+    """The acceleration columns of a KRL program's motions from the settings that can reach each: a PTP's share
+    of the arm's (the slowest of its axes' ``$ACC_AXIS``, %), a LIN's or CIRC's TCP acceleration (``$ACC.CP``,
+    mm/s^2), the slowest that can reach it; where one is the controller's own (none set) and others are set, the
+    TCP's is not known (none is stated), each axis's own is 100 %. One set at run time leaves the motion as
+    written (``why``, changed in place)."""
+    share, tcp = np.full(len(table), np.nan), np.array(table.acceleration, dtype=float)
+    for r, settings in enumerate(reached.settings):
+        rows = np.arange(len(table))[reached.rows(r)]
+        for groups, members in ((ACC_GROUPS, joint[rows]), (("acc_cp",), ~joint[rows])):
+            at = rows[members]
+            found = [s for group in groups for s in settings[group]]
+            unknown = [s.why if isinstance(s, Unknown) else s[1] for s in found if isinstance(s, Unknown) or s[1]]
+            if not len(at):
+                continue
+            if unknown:
+                why[at[why[at] == ""]] = f"acceleration: {unknown[0]}"
+            elif groups == ACC_GROUPS:
+                least = min(100.0 if value is None else value for value, _ in found)
+                share[at] = least / 100.0 if least < 100.0 else np.nan
+            elif all(value is not None for value, _ in found):
+                tcp[at] = min(value for value, _ in found)
+    return {"acceleration_share": share, "acceleration": tcp}
 
 
 def _controller_tables(reader, path, walk):

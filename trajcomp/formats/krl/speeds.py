@@ -64,6 +64,8 @@ def write_speeds(program, result, robot, plan):
 
     speed_with, speed, motion_at = (table.span_offsets(role) for role in ("speed_with", "speed", "motion"))
     inserted = {}  # (source, offset, group) -> (the line inserted there, its value)
+    restored = _restored(joint, speed_with[1] >= 0, np.isin(np.arange(len(table)), list(wanted)),
+                         np.asarray(table.start_why, dtype=object) != "")
     edited = {}  # (source, start, end) of a span edited -> the value written there
     running = {"ptp": None, "cp": None}  # the speed value in force as the program runs down
     governing = {"ptp": None, "cp": None}  # (source, offset) of the statement that set it
@@ -96,8 +98,17 @@ def write_speeds(program, result, robot, plan):
             need = inserted[key][1]
         inserted[key] = (f"{indent}{_krl_statement(group, '{}')}{newline}", need)
         running[group] = need
-        if want is not None:
-            settings[k] = _krl_statement(group, want)
+        if want is None:
+            continue
+        settings[k] = _krl_statement(group, want)
+        programmed = span.text if span is not None else _programmed(table.speed[m], group)
+        if restored[m] and programmed is not None and not _same(want, programmed):
+            after = folds[at.source].after(at.end)  # the state the program has there, on every path from it
+            key = (at.source, after, group)
+            if key in inserted and _slower(inserted[key][1], programmed):
+                programmed = inserted[key][1]
+            inserted[key] = (f"{indent}{_krl_statement(group, '{}')}{newline}", programmed)
+            running[group] = programmed
     for (source, start, end), value in edited.items():
         span = Span(source, start, end, program.sources[source].text[start:end])
         edits[source].append((start, end, value))
@@ -131,6 +142,50 @@ def _changing(joint, own, speed, wanted):
         new[1:] = (key[1:] != key[:-1]).any(axis=1) | wanted[rows[:-1]]
         changing[rows[new]] = True
     return np.flatnonzero(changing)
+
+
+def _restored(joint, own, wanted, elsewhere):
+    """The motions (M,) bool after whose line a speed inserted for them is set back to the programmed one.
+
+    A line inserted before a motion sets the modal speed for whatever runs
+    next on every path: the motion after it in the file, and, through a
+    loop's back jump, a branch's end or a jump, others. Set back right
+    after the motion, every path from there runs the programmed speed, as
+    the program's own statements give it. Not needed where nothing of its
+    group runs after it: the next motion of its group in the file follows
+    it alone (no other path reaches it) and gets its own speed, or it is
+    the last of its group and no path leads back (no motion of the program
+    is reached from elsewhere).
+
+    Parameters
+    ----------
+    joint, own, wanted, elsewhere : ndarray of bool, shape (M,)
+        PTP motions; motions with their own speed (WITH); motions given a
+        new speed; motions reached from elsewhere than the one before them
+        (`trajcomp.programs.items.Motion.start_why`).
+    """
+    m = len(joint)
+    out = np.zeros(m, dtype=bool)
+    flow = bool(elsewhere.any())
+    for group in (joint & ~own, ~joint & ~own):
+        rows = np.flatnonzero(group & wanted)
+        members = np.flatnonzero(group)
+        following = np.searchsorted(members, rows, side="right")  # index in members of the next of its group
+        has_next = following < len(members)
+        nxt = members[np.minimum(following, len(members) - 1)]
+        alone = has_next & wanted[nxt] & ~elsewhere[nxt] & (nxt == rows + 1)
+        out[rows] = ~alone & (has_next | flow)
+    return out
+
+
+def _programmed(speed, group):
+    """The KRL value of a programmed speed ``speed`` (LIN: mm/s, written in m/s; PTP: %), rounded down; None where
+    unknown (NaN)."""
+    if np.isnan(speed):
+        return None
+    if group == "cp":
+        return format_number(floor_places(speed / 1000.0, 6), 6)
+    return format_number(floor_places(speed, 3), 3)
 
 
 def _slower(a, b):
@@ -189,6 +244,17 @@ class _Folds:
         offset = offset if fold is None else fold[0]
         block = bisect.bisect_right(self.splines, (offset, math.inf)) - 1
         return self.splines[block][0] if block >= 0 and offset < self.splines[block][1] else offset
+
+    def after(self, offset):
+        """Where a line inserted after the statement at ``offset`` goes: the start of the line after it, or after
+        the inline form's fold or the spline block around it."""
+        fold = self.enclosing(offset)
+        offset = offset if fold is None else fold[1]
+        block = bisect.bisect_right(self.splines, (offset, math.inf)) - 1
+        if block >= 0 and offset < self.splines[block][1]:
+            offset = self.splines[block][1]
+        end = self.text.find("\n", offset)
+        return len(self.text) if end < 0 else end + 1
 
     def header_edits(self, span, value):
         """Edits (start, end, text) that make the fold around ``span`` show speed ``value`` where it showed the old one."""

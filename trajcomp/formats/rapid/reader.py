@@ -118,6 +118,7 @@ _FLOW_WORDS = {"if": "if", "elseif": "elif", "else": "else", "endif": "endif", "
                "endproc": "end", "endfunc": "end", "endtrap": "end"}
 _WAITS = re.compile(r"^\s*(Wait\w*|Stop|StopMove|Break)\b", re.I)  # the arm stops there: WaitTime, WaitDI, ...
 _VELSET = re.compile(r"^\s*VelSet\s+([^,;]+),\s*([^,;]+);", re.I)
+_ACCSET = re.compile(r"^\s*AccSet\s+([^,;]+),\s*([^,;\\]+)[^;]*;", re.I)  # Acc, Ramp [\FinePointRamp]
 _LABEL = re.compile(r"^\s*([A-Za-z]\w*)\s*:\s*$")
 _ROUTINE_NAME = re.compile(r"^\s*(?:LOCAL\s+)?(?:PROC|FUNC\s+\w+|TRAP)\s+(\w+)", re.I)
 _NOT_CALLS = {"module", "endmodule", "local", "task", "error", "backward", "undo", "record", "endrecord", "alias"}
@@ -754,6 +755,11 @@ class _Reader:
             top, top_why = self.constant(m.group(2).strip(), "num", line, original, "VelSet max")
             self.steps.append(Step("set", "velset", (override, top, why or top_why), line, self.index))
             return
+        if m := _ACCSET.match(text):
+            acc, why = self.constant(m.group(1).strip(), "num", line, original, "AccSet Acc")
+            ramp, ramp_why = self.constant(m.group(2).strip(), "num", line, original, "AccSet Ramp")
+            self.steps.append(Step("set", "accset", (acc, ramp, why or ramp_why), line, self.index))
+            return
         if _WAITS.match(text):
             self.steps.append(Step("wait", line=line, source=self.index))
             return
@@ -1167,7 +1173,8 @@ def read(path):
         rotation, or motions to points the module does not declare.
     """
     program, steps = _read(path)
-    return flow.program_followed(program, steps, {"velset": (100.0, VMAX, "")}, _flow_speeds, settings=True)
+    return flow.program_followed(program, steps, {"velset": (100.0, VMAX, ""), "accset": (100.0, 100.0, "")},
+                                 _flow_speeds, settings=True)
 
 
 def _flow_speeds(table, reached):
@@ -1175,33 +1182,48 @@ def _flow_speeds(table, reached):
 
     VelSet override, max runs a motion's TCP and orientation speeds at
     override % and its TCP speed at most max mm/s, and a ``\\T`` at
-    100 / override times as long; a ``\\T`` held to a max below vmax is
-    left as written (its time and a TCP speed bound it, which no one
-    field of the timing states). Several VelSets
+    100 / override times as long, whatever the max: the controller does not
+    hold a motion with a stated time to VelSet's max (RAPID reference,
+    VelSet's limitations), so a time is read and written as such (a time
+    written for a motion without one is at least its length over the max,
+    the speed read here). Several VelSets
     reaching a motion: the lowest override and max; one set at run time:
     the motion's speed is so (left as written).
+
+    AccSet acc, ramp runs the motion's accelerations at acc % of the
+    arm's (the lowest of those reaching it: ``acceleration_share``); a
+    ramp below 100 % lowers the controller's jerk, which the timing does
+    not model: such a motion is left as written and listed.
     """
     speed = np.array(table.speed, dtype=float)
     orientation = np.array(table.orientation_speed, dtype=float)
     why = np.array(table.speed_why, dtype=object)
+    share = np.full(len(table), np.nan)
     for r, settings in enumerate(reached.settings):
         rows = np.arange(len(table))[reached.rows(r)]
         rows = rows[why[rows] == ""]  # a speed data set at run time: left as written anyway
-        velsets = settings["velset"]
-        unknown = [v.why if isinstance(v, Unknown) else v[2] for v in velsets if isinstance(v, Unknown) or v[2]]
+        velsets, accsets = settings["velset"], settings["accset"]
+        unknown = [f"{name}: {v.why if isinstance(v, Unknown) else v[2]}"
+                   for name, found in (("VelSet", velsets), ("AccSet", accsets))
+                   for v in found if isinstance(v, Unknown) or v[2]]
         if unknown:
-            why[rows] = f"VelSet: {unknown[0]}"
+            why[rows] = unknown[0]
             continue
+        acc, ramp = min(v[0] for v in accsets), min(v[1] for v in accsets)
+        if ramp < 100.0:
+            why[rows] = (f"AccSet ramp {ramp:g} %: the controller's jerk is lowered, which the timing does not model: "
+                         "left as written")
+            continue
+        if acc < 100.0:
+            share[rows] = acc / 100.0
         override, top = min(v[0] for v in velsets) / 100.0, min(v[1] for v in velsets)
         timed = table.speed_unit[rows] == "s"
-        if top < VMAX:  # a time held to a TCP speed: no one field states both
-            why[rows[timed]] = f"\\T under VelSet's max {top:g} mm/s, which holds it too: left as written"
         speed[rows[timed]] /= override
         paced = rows[~timed]
         tcp = np.where(np.isnan(speed[paced]), VMAX, speed[paced])
         speed[paced] = np.where((override < 1.0) | (top < tcp), np.minimum(tcp * override, top), speed[paced])
         orientation[paced] *= override
-    return {"speed": speed, "orientation_speed": orientation, "speed_why": why}
+    return {"speed": speed, "orientation_speed": orientation, "speed_why": why, "acceleration_share": share}
 
 
 def _read(path):
