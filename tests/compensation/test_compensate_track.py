@@ -10,6 +10,7 @@ from the carriage where the target's track value puts it, lands within
 A program on a track whose robot description has none is refused saying so.
 """
 
+import json
 import re
 from importlib import resources
 from pathlib import Path
@@ -265,14 +266,16 @@ def test_a_track_description_is_checked_field_by_field(track, message):
         on_track("kuka_kr6_r900", track)
 
 
-def test_compensate_on_a_track_through_the_cli_leaves_speeds_as_written_and_says_why(tmp_path, monkeypatch, capsys):
-    """The re-timing times the arm in its carriage and not the track's travel: a program that moves the track
-    keeps every speed as written (never faster), and the run says so; ``retime`` alone refuses it."""
+def test_compensate_and_retime_on_a_track_through_the_cli_time_the_track_as_a_joint(tmp_path, monkeypatch, capsys):
+    """A program that moves the track is re-timed with the track as a joint: ``compensate`` and ``retime`` print
+    its line of the limits table and write the world TCP speed the track allows (`tests/timing/test_timing_track.py`
+    checks the figures)."""
     from trajcomp.cli import main
 
     monkeypatch.chdir(tmp_path)
     text = resources.files("trajcomp.arm.robots").joinpath("kuka_kr6_r900.yaml").read_text(encoding="utf-8")
-    (tmp_path / "kr6_rail.yaml").write_text(text.replace("name: kuka_kr6_r900", "name: kr6_rail") + TRACK)
+    slow = TRACK.replace("velocity: 2000", "velocity: 500")
+    (tmp_path / "kr6_rail.yaml").write_text(text.replace("name: kuka_kr6_r900", "name: kr6_rail") + slow)
     robot = load_robot("kr6_rail.yaml")
     angles = np.degrees(matrix_to_abc(orientation(robot)))
     assert main(["plan", "--robot", "kr6_rail.yaml", "--cube", "400,-50,650", "--side", "200", "--step", "50",
@@ -282,14 +285,19 @@ def test_compensate_on_a_track_through_the_cli_leaves_speeds_as_written_and_says
                  "-o", "model.yaml"]) == 0
     world, q = world_targets(robot, "kuka_kr6_r900")
     src = _krl(tmp_path, world, q, robot)
+    src.write_text(src.read_text().replace("$VEL.CP=0.2", "$VEL.CP=2"))
     before = src.read_text()
     capsys.readouterr()
     code = main(["compensate", "rail.src", "--model", "model.yaml", "-o", "out.src"])
-    err = capsys.readouterr().err
-    assert code in (0, 1) and "not re-timed: the program moves the robot's track (E1)" in err
-    assert "$VEL.CP=0.2" in (tmp_path / "out.src").read_text() and src.read_text() == before
-    assert main(["retime", "rail.src", "--robot", "kr6_rail.yaml", "-o", "timed.src"]) == 2
-    assert "moves the robot's track (E1)" in capsys.readouterr().err and not (tmp_path / "timed.src").exists()
+    out = "".join(capsys.readouterr())
+    assert code in (0, 1) and re.search(r"^E1 +[\d.]+ +500 ", out, re.M), out
+    assert "the track's (E1) velocity limit" in out and src.read_text() == before
+    written = [float(v) for v in re.findall(r"\$VEL\.CP=([\d.]+)", (tmp_path / "out.src").read_text())]
+    assert written and all(0.45 < v < 0.5 for v in written)  # m/s: the track's 500 mm/s over 1850 mm in 1802
+    assert main(["retime", "rail.src", "--robot", "kr6_rail.yaml", "-o", "timed.src", "--report", "timed.html"]) == 0
+    assert "$VEL.CP=0.486" in (tmp_path / "timed.src").read_text()
+    track = json.loads((tmp_path / "timed.json").read_text())["timing"]["track"]
+    assert track["field"] == "E1" and 490 < track["velocity"]["peak"] <= 505 and track["velocity"]["limit"] == 500
 
 
 # ------------------------------------------------------------------ calibration with a track
