@@ -129,3 +129,41 @@ def test_a_linear_motion_on_the_track_takes_the_time_toppra_finds_with_the_track
     best = reference.compute_trajectory().duration
     ours = result.t[2] - result.t[1]
     assert best * 0.995 <= ours <= best * 1.02, (ours, best)
+
+
+def test_a_motion_that_moves_only_the_track_is_left_as_written_and_one_beyond_its_travel_refused(tmp_path):
+    """XP4: XP3's arm pose carried 500 mm further (the world target moved with the carriage): only the track
+    moves, the controller times it; its field stays as written and the timing says why. E1 beyond the travel:
+    refused naming the point."""
+    from trajcomp.errors import TimingError
+
+    robot = on_track("kuka_kr6_r900", SLOW_TRACK)
+    world, q = world_targets(robot, "kuka_kr6_r900")
+    path = _krl(tmp_path, world, q, robot)
+    dat = path.with_suffix(".dat")
+    last = dat.read_text().splitlines()[-2]
+    x = float(re.search(r"X ([-\d.]+)", last).group(1))
+    shifted = re.sub(r"X [-\d.]+", f"X {x + 500.0 * robot.track.direction[0]:.4f}", last)
+    y = float(re.search(r"Y ([-\d.]+)", last).group(1))
+    shifted = re.sub(r"Y [-\d.]+", f"Y {y + 500.0 * robot.track.direction[1]:.4f}", shifted)
+    shifted = shifted.replace("XP3", "XP4").replace("E1 4200.0", "E1 4700.0")
+    dat.write_text(dat.read_text().replace("ENDDAT", shifted + "\nENDDAT"))
+    path.write_text(path.read_text().replace("LIN XP3\n", "LIN XP3\n$VEL.CP=0.05\nLIN XP4\n"))
+    program = formats.read(path)
+    plan = planned_joints(program, robot)
+    result = retime_program(program, robot, planned(program, plan.index, plan.q))
+    edited, result = apply_timing(program, result, robot)
+    (k, why), = result.track.left
+    assert result.labels[k].startswith("XP4") and "only the track moves" in why
+    assert any("not timed, left as written: 1 motion(s) moving the track (E1): XP4" in line
+               for line in result.lines_of_text())
+    assert not any("position before the motion is unknown" in n and "XP4" in n for n in result.notices)
+    out = tmp_path / "out"
+    out.mkdir()
+    formats.write(out / path.name, edited)
+    assert "$VEL.CP=0.05\nLIN XP4" in (out / path.name).read_text()
+    dat.write_text(dat.read_text().replace("E1 4700.0", "E1 6000.0"))
+    program = formats.read(path)
+    with pytest.raises(TimingError, match=r"XP4 \(rail\.dat:5\): E1 6000 mm is beyond the track's travel -100 \.\. "
+                                          r"5800 mm"):
+        retime_program(program, robot, planned(program, plan.index, plan.q))
