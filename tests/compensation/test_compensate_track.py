@@ -245,13 +245,74 @@ def test_a_program_on_a_track_whose_robot_has_none_is_refused_for_that_reason(tm
 
 
 def test_a_target_without_its_track_position_is_named(tmp_path):
+    """KRL: the first motion's point states no E1: the controller keeps the track where it stands, which the
+    program does not say."""
     robot = on_track("kuka_kr6_r900")
     world, q = world_targets(robot, "kuka_kr6_r900")
     path = _krl(tmp_path, world, q, robot)
     dat = path.with_suffix(".dat")
     dat.write_text(re.sub(r",E1 [-\d.]+,E2 0.0,E3 0.0,E4 0.0,E5 0.0,E6 0.0", "", dat.read_text(), count=1))
-    with pytest.raises(TrajcompError, match=r"XP1 \(rail\.dat:2\) states no E1: its track position"):
+    with pytest.raises(TrajcompError, match=r"XP1 \(rail\.dat:2\) states no E1: its track position, hence the "
+                                            r"arm's base, is unknown \(1 target\(s\) so\); the controller keeps the "
+                                            r"track where the motion before leaves it, which starts from a position"):
         compensate_program(formats.read(path), cell("kuka_kr6_r900")[2], robot)
+
+
+def _krl_with_pos(tmp_path, robot, world, q, motions):
+    """The KRL program with XP4: XP3's world pose as a POS (no E1), its motions ``motions`` after XP3's."""
+    path = _krl(tmp_path, world, q, robot)
+    dat = path.with_suffix(".dat")
+    last = dat.read_text().splitlines()[-2]
+    dat.write_text(dat.read_text().replace("ENDDAT", re.sub(r",E1 .*\}", "}", last).replace("E6POS XP3", "POS XP4")
+                                           + "\nENDDAT"))
+    path.write_text(path.read_text().replace("LIN XP3\n", "LIN XP3\n" + motions))
+    return path
+
+
+def test_a_krl_point_without_e1_keeps_the_track_where_the_motion_before_left_it(tmp_path):
+    """KRL: a POS point (or an aggregate without E1) leaves the external axes where they are: XP4 after XP3 is
+    reached from the carriage at 4200 mm and lands on its world target there; used after two track positions it
+    has no one carriage, and is refused naming them."""
+    robot, virtual, correct = cell("kuka_kr6_r900")
+    world, q = world_targets(robot, "kuka_kr6_r900")
+    path = _krl_with_pos(tmp_path, robot, world, q, "LIN XP4\n")
+    edited, report = compensate_program(formats.read(path), correct, robot)
+    assert len(report.labels) == 4 and not report.not_compensated
+    out = tmp_path / "out"
+    out.mkdir()
+    formats.write(out / path.name, edited)
+    m = re.search(r"POS XP4=\{X ([-\d.]+),Y ([-\d.]+),Z ([-\d.]+),A ([-\d.]+),B ([-\d.]+),C ([-\d.]+),",
+                  (out / path.name).with_suffix(".dat").read_text())
+    command = np.eye(4)
+    v = [float(x) for x in m.groups()]
+    command[:3, :3], command[:3, 3] = Rotation.from_euler("ZYX", v[3:], degrees=True).as_matrix(), v[:3]
+    landed = landing(robot, virtual, command[None], [CARRIAGE[2]])
+    assert np.linalg.norm(landed[0] - world[2, :3, 3]) < 0.02
+    path = _krl_with_pos(tmp_path, robot, world, q, "LIN XP4\nLIN XP2\nLIN XP4\n")
+    with pytest.raises(TrajcompError, match=r"XP4 \(rail\.dat:5\) states no E1: .*the controller keeps the track "
+                                            r"where the motion before leaves it: 1850 and 4200 mm on its uses"):
+        compensate_program(formats.read(path), correct, robot)
+
+
+@pytest.mark.parametrize("name", ["fanuc_lrmate200id", "abb_irb4600"])
+def test_a_fanuc_or_rapid_target_without_its_track_value_is_refused_as_its_controller_does(tmp_path, name):
+    """RAPID: 9E9 in eax_a of an active axis is the controller's error 40512 (missing external axis value); FANUC:
+    a position of a group with an extended axis holds its value (an LS without it does not load). Both refused,
+    naming the target, even after a target that states it."""
+    robot, _, correct = cell(name)
+    world, q = world_targets(robot, name)
+    write = LANGUAGES[name][0]
+    path = write(tmp_path, world, q, robot)
+    text = path.read_text()
+    if name == "abb_irb4600":
+        text = text.replace("[4200.00,9E9", "[9E9,9E9")
+        where, field = r"pRail3 \(Rail\.mod:4\)", "eax_a"
+    else:
+        text = re.sub(r",?\s*E1 =\s*4200\.000\s*mm", "", text)
+        where, field = r"P\[3\] \(RAIL\.LS:\d+\)", "E1"
+    path.write_text(text)
+    with pytest.raises(TrajcompError, match=where + f" states no {field}: .*; state {field} in every Cartesian target"):
+        compensate_program(formats.read(path), correct, robot)
 
 
 @pytest.mark.parametrize("track, message", [
