@@ -10,6 +10,7 @@ from the carriage where the target's track value puts it, lands within
 A program on a track whose robot description has none is refused saying so.
 """
 
+import dataclasses
 import json
 import re
 from importlib import resources
@@ -53,7 +54,7 @@ def on_track(name, track=TRACK):
     return robot_from_yaml(text + track, f"{name} on a track")
 
 
-_CELL = {}
+_CELL, _CELL_MODEL = {}, {}  # per arm: (robot, virtual arm, corrector), and its calibrated model
 
 
 def cell(name):
@@ -68,7 +69,7 @@ def cell(name):
                             measured=virtual.measure(q, np.random.default_rng(5)), lines=np.arange(len(q)) + 2,
                             path="grid.csv")
         model = calibrate(robot, meas, method="composite", grid_step=step, folds=0)
-        _CELL[name] = (robot, virtual, program_corrector(model))
+        _CELL[name], _CELL_MODEL[name] = (robot, virtual, program_corrector(model)), model
     return _CELL[name]
 
 
@@ -398,6 +399,7 @@ def test_a_track_calibration_recovers_its_direction_and_scale_and_compensation_t
     assert fit.residual_rms < 0.03 and np.linalg.norm(fit.offset) < 0.02
     np.testing.assert_array_equal(fit.positions, [0, 1400, 2800, 4200, 5600])
     assert fit.track.beyond_measured([-50.0, 3000.0, 5700.0]).tolist() == [True, False, True]
+    assert fit.track.straightness is None and fit.straightness_rms < 3 * fit.noise_rms  # straight: no table
     # the program: world targets where the real track puts the arm
     world, q_targets = world_targets(robot, "kuka_kr6_r900")
     world = true.placements(robot.T_world_base, np.array(CARRIAGE)) @ np.linalg.inv(
@@ -417,6 +419,63 @@ def test_a_track_calibration_recovers_its_direction_and_scale_and_compensation_t
         errors[label] = np.linalg.norm(landed - world[:, :3, 3], axis=1)
     assert errors["nominal"].max() > 2.0  # 0.1 deg and 0.05 % of 4.2 m
     assert errors["identified"].max() < 0.02, errors
+
+
+def test_a_track_that_is_not_straight_is_identified_as_a_table_and_compensation_lands_between_its_positions(
+        tmp_path):
+    """The real track bows 0.08 mm sideways and 0.04 mm up over its travel (a sine along it). Measured at nine
+    carriage positions 700 mm apart (eight poses each, 0.01 mm noise), the fit keeps a straightness table that
+    matches the bow within 0.01 mm at each; targets between the measured positions then land within 0.02 mm,
+    where the line alone misses by the bow; the model file keeps the table."""
+    from trajcomp.calibration.track import identify_track
+    from trajcomp.model.model_file import load_model, save_model
+
+    robot, virtual, correct = cell("kuka_kr6_r900")
+    dense = np.linspace(-100.0, 5800.0, 119)
+    bow = np.sin(np.pi * (dense + 100.0) / 5900.0)[:, None] * [0.0, 0.08, 0.04]
+    true = robot.track.replace(actual_direction=robot.track.direction, actual_scale=1.0, measured_positions=dense,
+                               straightness=bow)
+    corner, side, _ = CELLS["kuka_kr6_r900"]
+    rng = np.random.default_rng(12)
+    local = np.tile(np.eye(4), (8, 1, 1))
+    local[:, :3, :3] = orientation(robot)
+    local[:, :3, 3] = np.asarray(corner) + rng.uniform(0.1 * side, 0.9 * side, (8, 3))
+    q = ik(robot, local, seed=np.tile(robot.home, (8, 1))).raise_on_failure("poses").q
+    stations = np.arange(0.0, 5601.0, 700.0)
+    positions = np.repeat(stations, len(q))
+    joints = np.tile(q, (len(stations), 1))
+    measured = (true.placements(robot.T_world_base, positions) @ virtual.reached_poses(joints))[:, :3, 3]
+    measured += rng.normal(0.0, 0.01, measured.shape)
+    model = _CELL_MODEL["kuka_kr6_r900"]
+    predicted, _ = model.predict("composite", joints, fk(robot, joints)[:, :3, 3])
+    fit = identify_track(robot.track, robot.T_world_base, positions, predicted, measured)
+    assert fit.track.straightness is not None and fit.straightness_rms > 3 * fit.noise_rms
+    line = fit.track.replace(straightness=None)
+    deviation = true.shift(stations) - line.shift(stations)  # the bow beyond the fitted line through 0
+    np.testing.assert_allclose(fit.track.straightness, deviation, atol=0.01)
+    world, q_targets = world_targets(robot, "kuka_kr6_r900")
+    world = true.placements(robot.T_world_base, np.array(CARRIAGE)) @ np.linalg.inv(
+        robot.track.placements(robot.T_world_base, np.array(CARRIAGE))) @ world
+    path = _krl(tmp_path, world, q_targets, robot)
+    errors = {}
+    for label, used in (("line", line), ("table", fit.track)):
+        edited, _ = compensate_program(formats.read(path), correct, robot.replace(track=used))
+        out = tmp_path / label
+        out.mkdir()
+        formats.write(out / path.name, edited)
+        commands, carriage = _read_krl(out / path.name)
+        arm_q = ik(robot, np.linalg.inv(robot.track.placements(robot.T_world_base, carriage)) @ commands,
+                   seed=np.tile(robot.home, (len(commands), 1))).raise_on_failure("commands").q
+        landed = (true.placements(robot.T_world_base, carriage) @ virtual.reached_poses(arm_q))[:, :3, 3]
+        errors[label] = np.linalg.norm(landed - world[:, :3, 3], axis=1)
+    assert errors["line"].max() > 0.04 and errors["table"].max() < 0.02, errors
+    text = resources.files("trajcomp.arm.robots").joinpath("kuka_kr6_r900.yaml").read_text(encoding="utf-8")
+    (tmp_path / "kr6_rail.yaml").write_text(text.replace("name: kuka_kr6_r900", "name: kr6_rail") + TRACK)
+    on_file = load_robot(str(tmp_path / "kr6_rail.yaml"))
+    saved = tmp_path / "model.yaml"
+    save_model(saved, dataclasses.replace(model, nominal=on_file.replace(track=fit.track),
+                                          robot_ref=str(tmp_path / "kr6_rail.yaml")))
+    np.testing.assert_allclose(load_model(saved).nominal.track.straightness, fit.track.straightness, atol=1e-6)
 
 
 def test_a_real_backup_on_a_track_is_recognised_and_compensated_once_its_track_is_described():

@@ -68,6 +68,12 @@ class Track:
         The real world mm per mm of track position a calibration identified (None: ``scale``).
     measured_positions : ndarray, shape (P,), or None
         The track positions that calibration measured, mm, ascending.
+    straightness : ndarray, shape (P, 3), or None
+        The real carriage's displacement beyond ``actual_scale * e *
+        actual_direction`` at each measured position, world mm
+        (`trajcomp.calibration.track`; about 0 at track position 0, where the
+        arm was calibrated): linear between them, held at the ends beyond
+        them. None: straight within what the calibration could tell.
     """
 
     direction: np.ndarray
@@ -81,6 +87,7 @@ class Track:
     actual_direction: np.ndarray = None
     actual_scale: float = None
     measured_positions: np.ndarray = None
+    straightness: np.ndarray = None
 
     def index(self, language):
         """The external axis index of ``language``'s targets that holds the track position, or None."""
@@ -95,9 +102,14 @@ class Track:
         """World translations (N, 3), mm, of the base at track positions ``values`` (N,) from its place at 0:
         on the real track (``actual``, as identified; the controller's when none is), else the controller's."""
         direction, scale = self.direction, self.scale
+        values = np.asarray(values, dtype=float)
         if actual and self.identified:
             direction, scale = self.actual_direction, self.actual_scale
-        return scale * np.asarray(values, dtype=float)[:, None] * direction
+        out = scale * values[:, None] * direction
+        if actual and self.straightness is not None:
+            out += np.stack([np.interp(values, self.measured_positions, column) for column in self.straightness.T],
+                            axis=1)
+        return out
 
     def placements(self, T_world_base, values, actual=True):
         """``T_world_base(e)`` (N, 4, 4) at track positions ``values`` (N,), mm: the carriage frames (`shift`)."""
