@@ -316,10 +316,47 @@ def test_a_fanuc_or_rapid_target_without_its_track_value_is_refused_as_its_contr
         compensate_program(formats.read(path), correct, robot)
 
 
+def test_a_fanuc_rail_as_motion_group_2_is_read_compensated_retimed_and_written_back(tmp_path):
+    """A rail as FANUC motion group 2 (GP2: J1 in mm in each /POS entry, DEFAULT_GROUP = 1,1,...), described as
+    ``fanuc_ls: GP2:J1``: the arm part lands within 0.02 mm of the world targets from the rail's carriage, the
+    program is re-timed with the rail as a joint, and every byte but group 1's pose numbers is written back."""
+    from trajcomp.compensation.pipeline import planned
+    from trajcomp.compensation.posture import planned_joints
+    from trajcomp.timing.writeback import retime_program
+
+    _, virtual, correct = cell("fanuc_lrmate200id")
+    robot = on_track("fanuc_lrmate200id", TRACK.replace("fanuc_ls: E1", "fanuc_ls: 'GP2:J1'"))
+    world, q = world_targets(robot, "fanuc_lrmate200id")
+    path = _fanuc(tmp_path, world, q, robot)
+    text = re.sub(r",\n\tE1 =\s*([-\d.]+)\s*mm\n\}",
+                  lambda m: f"\n   GP2:\n\tUF : 0, UT : 1,\n\tJ1 = {float(m.group(1)):10.3f}  mm\n}}", path.read_text())
+    text = text.replace("DEFAULT_GROUP\t= 1,*,*,*,*;", "DEFAULT_GROUP\t= 1,1,*,*,*;")
+    assert text.count("GP2:") == 3 and "E1" not in text
+    path.write_text(text)
+    program = formats.read(path)
+    edited, report = compensate_program(program, correct, robot)
+    assert not report.not_compensated and not [w for w in report.warnings if "external axes" in w]
+    out = tmp_path / "out"
+    out.mkdir()
+    formats.write(out / path.name, edited)
+    written = (out / path.name).read_text()
+    pose_lines = re.compile(r"^\t[XW] = .*$", re.M)
+    assert pose_lines.sub("", written) == pose_lines.sub("", text)  # header, group mask, GP2 entries as they were
+    commands, _ = _read_poses(written, r"X =\s*([-\d.]+)\s*mm,\s*Y =\s*([-\d.]+)\s*mm,\s*Z =\s*([-\d.]+)\s*mm,"
+                              r"\s*W =\s*([-\d.]+)\s*deg,\s*P =\s*([-\d.]+)\s*deg,\s*R =\s*([-\d.]+)\s*deg"
+                              r"\s*GP2:\s*UF : 0, UT : 1,\s*J1 =\s*([-\d.]+)",
+                              lambda wpr: Rotation.from_euler("xyz", wpr, degrees=True))
+    landed = landing(robot, virtual, commands, CARRIAGE)
+    assert np.linalg.norm(landed - world[:, :3, 3], axis=1).max() < 0.02
+    plan = planned_joints(program, robot)
+    timing = retime_program(program, robot, planned(program, plan.index, plan.q))
+    assert timing.track.field == "GP2:J1" and timing.within_limits and timing.track.peak_velocity > 100.0
+
+
 @pytest.mark.parametrize("track, message", [
     (TRACK.replace("[1.0, 0.02, 0.0]", "[0, 0, 0]"), "track.direction: the zero vector"),
     (TRACK.replace("position_min: -100", "position_min: 6000"), "position_min 6000 mm is not below"),
-    (TRACK.replace("rapid: eax_a", "rapid: A1"), "track.fields.rapid: expected E1..E6 or eax_a..eax_f"),
+    (TRACK.replace("rapid: eax_a", "rapid: A1"), "track.fields.rapid: expected E1..E6, eax_a..eax_f or GP2:J1..J6"),
     (TRACK.replace("velocity: 2000", "velocity: -1"), "track.limits.velocity: expected a positive number"),
     ("\ntrack: [1, 0, 0]\n", "field track: expected a mapping"),
 ])

@@ -14,7 +14,7 @@ under ``track`` (user units: mm, mm/s, mm/s^2)::
         acceleration: 2500       # mm/s^2
       fields:                    # the program field that holds the track position, per language
         krl: E1
-        fanuc_ls: E1
+        fanuc_ls: E1             # or GP2:J1, a rail as motion group 2 (group 1 then states no E1..)
         rapid: eax_a
       scale: 1.0                 # optional: world mm per mm of track position (a calibration identifies it)
 
@@ -39,7 +39,8 @@ import numpy as np
 
 from trajcomp.errors import RobotError
 
-_FIELD = re.compile(r"^(?:E([1-6])|eax_([a-f]))$", re.I)  # KUKA / FANUC E1..E6, ABB eax_a..eax_f
+# KUKA / FANUC E1..E6, ABB eax_a..eax_f, a FANUC rail as motion group 2: GP2:J1 (its axes follow group 1's E1..)
+_FIELD = re.compile(r"^(?:E([1-6])|eax_([a-f])|GP2\s*:\s*J([1-6]))$", re.I)
 MAGNITUDE_BOUND = 1e5  # mm, mm/s, mm/s^2: a track longer than 100 m, or faster than 100 m/s, is damage
 
 
@@ -220,8 +221,10 @@ def track_from_doc(doc, label):
     for language, field in fields.items():
         m = _FIELD.match(str(field))
         if m is None:
-            raise RobotError(f"{label}: field track.fields.{language}: expected E1..E6 or eax_a..eax_f, got {field!r}")
-        index[str(language)] = int(m.group(1)) - 1 if m.group(1) else ord(m.group(2).lower()) - ord("a")
+            raise RobotError(f"{label}: field track.fields.{language}: expected E1..E6, eax_a..eax_f or GP2:J1..J6, "
+                             f"got {field!r}")
+        index[str(language)] = (int(m.group(1)) - 1 if m.group(1) else int(m.group(3)) - 1 if m.group(3)
+                                else ord(m.group(2).lower()) - ord("a"))
     scale = value.get("scale", 1.0)
     if not _number(scale) or not 0.5 < scale < 2.0:
         raise RobotError(f"{label}: field track.scale: expected a number near 1 (world mm per mm of track), "
