@@ -167,3 +167,37 @@ def test_a_motion_that_moves_only_the_track_is_left_as_written_and_one_beyond_it
     with pytest.raises(TimingError, match=r"XP4 \(rail\.dat:5\): E1 6000 mm is beyond the track's travel -100 \.\. "
                                           r"5800 mm"):
         retime_program(program, robot, planned(program, plan.index, plan.q))
+
+
+@pytest.mark.parametrize("name", sorted(ASKING))
+def test_a_program_on_a_track_is_compensated_retimed_and_judged_landing_within_0_02_mm(tmp_path, name):
+    """The issue's figure, end to end as ``compensate`` runs it (`CompensationJob`, default re-timing, a model
+    calibrated with held-out folds): each language's program on the track lands within 0.02 mm of its world
+    targets, its timing keeps the track's and the joints' limits, and its verdict passes."""
+    from tests.compensation.test_compensate_track import CELLS, cell, landing, orientation
+    from trajcomp.arm.transforms import matrix_to_abc
+    from trajcomp.calibration.calibrate import calibrate
+    from trajcomp.calibration.measurement_plan import plan_grid
+    from trajcomp.calibration.measurements import Measurements
+    from trajcomp.compensation.pipeline import CompensationJob
+
+    robot, virtual, _ = cell(name)
+    corner, side, step = CELLS[name]
+    plan = plan_grid(robot, corner, side, step, orientation=matrix_to_abc(orientation(robot)))
+    grid_q = plan.joints[plan.reachable]
+    meas = Measurements(joints=grid_q, position=plan.position[plan.reachable],
+                        measured=virtual.measure(grid_q, np.random.default_rng(5)), lines=np.arange(len(grid_q)) + 2,
+                        path="grid.csv")
+    model = calibrate(robot, meas, method="composite", grid_step=step, folds=3)
+    write, read = LANGUAGES[name]
+    world, q = world_targets(robot, name)
+    path = write(tmp_path, world, q, robot)
+    out = tmp_path / "out"
+    out.mkdir()
+    run = CompensationJob(model).run(path, out / path.name)
+    commands, carriage = read(out / path.name)
+    errors = np.linalg.norm(landing(robot, virtual, commands, carriage) - world[:, :3, 3], axis=1)
+    assert errors.max() < 0.02, errors
+    assert run.timing is not None and run.timing.track is not None and run.timing.within_limits
+    assert run.compliance.doc["timing"]["track"]["velocity"]["peak"] <= 2000 * 1.01
+    assert run.compliance.passed, [c for c in run.compliance.doc["verdict"]["criteria"] if c["status"] == "fail"]
