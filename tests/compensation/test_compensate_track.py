@@ -515,6 +515,41 @@ def test_a_track_that_is_not_straight_is_identified_as_a_table_and_compensation_
     np.testing.assert_allclose(load_model(saved).nominal.track.straightness, fit.track.straightness, atol=1e-6)
 
 
+def test_where_the_identified_track_places_the_carriage_is_estimated_within_its_measured_travel():
+    """A straight track 0.1 deg off and 0.05 % long, measured at 0, 1400 and 2800 mm (eight poses each, 0.01 mm
+    noise; three draws): the carriage's placement error at 400 positions within that travel lies within the
+    95 % radius `Track.placement_sigma` gives in 95 % of cases or more; the radius grows away from the measured
+    positions and is zero without a calibration."""
+    from trajcomp.calibration.track import identify_track
+
+    robot, virtual, _ = cell("kuka_kr6_r900")
+    model = _CELL_MODEL["kuka_kr6_r900"]
+    turn = Rotation.from_euler("z", 0.1, degrees=True).as_matrix()
+    true = robot.track.replace(actual_direction=turn @ robot.track.direction, actual_scale=1.0005)
+    corner, side, _ = CELLS["kuka_kr6_r900"]
+    covered, radii = [], []
+    for seed in range(3):
+        rng = np.random.default_rng(seed)
+        local = np.tile(np.eye(4), (8, 1, 1))
+        local[:, :3, :3] = orientation(robot)
+        local[:, :3, 3] = np.asarray(corner) + rng.uniform(0.1 * side, 0.9 * side, (8, 3))
+        q = ik(robot, local, seed=np.tile(robot.home, (8, 1))).raise_on_failure("poses").q
+        positions = np.repeat([0.0, 1400.0, 2800.0], len(q))
+        joints = np.tile(q, (3, 1))
+        measured = (true.placements(robot.T_world_base, positions) @ virtual.reached_poses(joints))[:, :3, 3]
+        measured += rng.normal(0.0, 0.01, measured.shape)
+        predicted, _ = model.predict("composite", joints, fk(robot, joints)[:, :3, 3])
+        track = identify_track(robot.track, robot.T_world_base, positions, predicted, measured).track
+        e = rng.uniform(0.0, 2800.0, 400)
+        error = np.linalg.norm(true.shift(e) - track.shift(e), axis=1)
+        radius = np.sqrt(7.8147) * track.placement_sigma(e)  # chi-square 95 % of 3 degrees of freedom
+        covered.append(error <= radius)
+        radii.append(track.placement_sigma(np.array([1400.0, 700.0])))
+    assert np.mean(covered) >= 0.95, np.mean(covered, axis=1)
+    assert all(mid > at for at, mid in radii)  # midway between two positions more than at one
+    assert not robot.track.placement_sigma(np.array([100.0])).any()
+
+
 def test_a_real_backup_on_a_track_is_recognised_and_compensated_once_its_track_is_described():
     """tests/data/programs/real/rapid/1_T_ROB2.mod (a COMPAS RRC backup: eax_a moves 682-3651 mm with the targets,
     SOURCES.txt). On the IRB 4600 as built in, the refusal names the track; described along x, it is compensated."""
@@ -556,7 +591,7 @@ def test_calibrate_with_a_track_column_identifies_the_track_and_compensate_uses_
     measured += rng.normal(0.0, 0.01, measured.shape)
     rows = [",".join(f"{v:.6f}" for v in (*np.degrees(q), *m, e)) for q, m, e in zip(joints, measured, positions)]
     (tmp_path / "meas.csv").write_text("j1,j2,j3,j4,j5,j6,mx,my,mz,track\n" + "\n".join(rows) + "\n")
-    assert main(["calibrate", "meas.csv", "--robot", "kr6_rail.yaml", "--grid-step", "50", "--folds", "0",
+    assert main(["calibrate", "meas.csv", "--robot", "kr6_rail.yaml", "--grid-step", "50", "--folds", "3",
                  "-o", "model.yaml"]) == 0
     assert "track: direction" in capsys.readouterr().err
     identified = load_model("model.yaml").nominal.track
@@ -568,7 +603,11 @@ def test_calibrate_with_a_track_column_identifies_the_track_and_compensate_uses_
     world = true.placements(robot.T_world_base, np.array(CARRIAGE)) @ np.linalg.inv(
         robot.track.placements(robot.T_world_base, np.array(CARRIAGE))) @ world
     _krl(tmp_path, world, q, robot)
-    assert main(["compensate", "rail.src", "--model", "model.yaml", "-o", "out.src", "--retime", "none"]) in (0, 1)
+    assert main(["compensate", "rail.src", "--model", "model.yaml", "-o", "out.src", "--retime", "none",
+                 "--report", "out.html"]) == 0  # between the measured positions: an estimate within 0.1 mm
+    residual = next(c for c in json.loads((tmp_path / "out.json").read_text())["verdict"]["criteria"]
+                    if c["id"] == "residual")
+    assert residual["status"] == "pass", residual
     commands, carriage = _read_krl(tmp_path / "out.src")
     arm_q = ik(robot, np.linalg.inv(robot.track.placements(robot.T_world_base, carriage)) @ commands,
                seed=np.tile(robot.home, (len(commands), 1))).raise_on_failure("commands").q
@@ -578,9 +617,13 @@ def test_calibrate_with_a_track_column_identifies_the_track_and_compensate_uses_
     dat = tmp_path / "rail.dat"
     dat.write_text(dat.read_text().replace("E1 4200.0", "E1 5200.0"))
     capsys.readouterr()
-    main(["compensate", "rail.src", "--model", "model.yaml", "-o", "out2.src", "--retime", "none"])
+    assert main(["compensate", "rail.src", "--model", "model.yaml", "-o", "out2.src", "--retime", "none",
+                 "--report", "out2.html"]) == 1  # a finding: its landing is not estimated there
     assert ("1 targets stand at track positions beyond the travel the track's calibration measured (0..5000 mm)"
             in capsys.readouterr().err)
+    residual = next(c for c in json.loads((tmp_path / "out2.json").read_text())["verdict"]["criteria"]
+                    if c["id"] == "residual")
+    assert residual["status"] == "fail" and residual["targets"] == ["XP3 (rail.dat:4)"], residual
 
 
 CORPUS = Path(__file__).parents[1] / "data" / "programs"  # hand-written track programs: ../data/programs/TRACKS.txt

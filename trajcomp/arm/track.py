@@ -75,6 +75,9 @@ class Track:
         (`trajcomp.calibration.track`; about 0 at track position 0, where the
         arm was calibrated): linear between them, held at the ends beyond
         them. None: straight within what the calibration could tell.
+    scatter : float or None
+        Per axis RMS of the measured positions' mean offsets from the fitted
+        line, mm (straightness and noise): the scale of `placement_sigma`.
     """
 
     direction: np.ndarray
@@ -89,6 +92,7 @@ class Track:
     actual_scale: float = None
     measured_positions: np.ndarray = None
     straightness: np.ndarray = None
+    scatter: float = None
 
     def index(self, language):
         """The external axis index of ``language``'s targets that holds the track position, or None."""
@@ -125,6 +129,26 @@ class Track:
         if self.measured_positions is None:
             return np.zeros(len(values), dtype=bool)
         return (values < self.measured_positions[0]) | (values > self.measured_positions[-1])
+
+    def placement_sigma(self, values):
+        """Standard deviation (N,) per axis, mm, of where the identified track places the carriage at track
+        positions ``values`` (N,) within the travel its calibration measured (zeros without one).
+
+        ``scatter`` times the square root of the fitted line's variance
+        factor, 1 / P + (e - mean)^2 / sum (e_i - mean)^2 over the P measured
+        positions, plus the square of the gap to the nearest one, 2 d / h for
+        a distance d and a mean spacing h (1 midway: the straightness between
+        two positions is not measured). Beyond the measured travel the place
+        is not estimated (`beyond_measured`).
+        """
+        values = np.asarray(values, dtype=float)
+        if self.measured_positions is None or self.scatter is None:
+            return np.zeros(len(values))
+        measured = self.measured_positions
+        centre = measured.mean()
+        line = 1.0 / len(measured) + (values - centre) ** 2 / np.sum((measured - centre) ** 2)
+        gap = 2.0 * np.min(np.abs(values[:, None] - measured), axis=1) / (np.ptp(measured) / (len(measured) - 1))
+        return self.scatter * np.sqrt(line + np.minimum(gap, 1.0) ** 2)
 
     def replace(self, **changes):
         """A copy with some attributes changed (an identified direction or scale)."""

@@ -124,10 +124,11 @@ def identify_track(track, T_world_base, positions, predicted, measured):
     left = residual - design @ np.array([slope, offset])
     turn = np.degrees(np.arccos(np.clip(direction @ track.direction, -1.0, 1.0)))
     table, table_rms, noise_rms = _straightness(positions, distinct, left)
+    scatter = _scatter(np.searchsorted(distinct, positions), left)
     if table is not None:  # the carriage's displacement beyond the line through track position 0, where the arm's
         table = table + offset  # calibration placed it (there the rows' mean residual is about 0)
     identified = track.replace(actual_direction=direction, actual_scale=scale, measured_positions=distinct,
-                               straightness=table)
+                               straightness=table, scatter=scatter)
     return TrackFit(identified, offset, distinct, float(np.sqrt(np.mean(np.sum(left ** 2, axis=1)))), float(turn),
                     scale / track.scale - 1.0, table_rms, noise_rms)
 
@@ -141,8 +142,7 @@ def _straightness(positions, distinct, left):
     counts = np.bincount(which, minlength=len(distinct))
     if len(distinct) < STRAIGHTNESS_POSITIONS or counts.min() < 2:
         return None, None, None
-    mean = np.stack([np.bincount(which, weights=column, minlength=len(distinct)) for column in left.T], axis=1)
-    mean /= counts[:, None]
+    mean = _position_means(which, left)
     spread = left - mean[which]
     variance = np.sum(spread**2) / max(len(positions) - len(distinct), 1) / 3.0  # per axis, about each position's mean
     table_rms = float(np.sqrt(np.mean(np.sum(mean**2, axis=1))))
@@ -192,3 +192,20 @@ def with_identified_track(model, meas):
     fit = identify_track(robot.track, robot.T_world_base, meas.track, predicted, measured)
     report = {**model.report, "track": fit.summary()}
     return dataclasses.replace(model, nominal=robot.replace(track=fit.track), report=report), fit
+
+
+def _position_means(which, left):
+    """The mean (P, 3) of the rows ``left`` (N, 3) at each measured position (``which`` (N,): its index)."""
+    counts = np.bincount(which)
+    return np.stack([np.bincount(which, weights=column, minlength=len(counts)) for column in left.T],
+                    axis=1) / counts[:, None]
+
+
+def _scatter(which, left):
+    """Per axis standard deviation (mm) of a position's mean offset from the fitted line: the larger of the means'
+    own scatter (P - 2 degrees of freedom: the line took two) and the rows' noise averaged over a position's rows."""
+    means, counts = _position_means(which, left), np.bincount(which)
+    between = np.sum(means**2) / (3.0 * max(len(counts) - 2, 1))
+    spread = left - means[which]
+    within = np.sum(spread**2) / (3.0 * max(len(which) - len(counts), 1)) * np.mean(1.0 / counts)
+    return float(np.sqrt(max(between, within)))

@@ -325,7 +325,8 @@ def _track_user(track):
         return None
     return {"direction": [float(v) for v in track.actual_direction], "scale": float(track.actual_scale),
             "measured_positions": [float(v) for v in track.measured_positions],
-            "straightness": None if track.straightness is None else np.round(track.straightness, 6).tolist()}
+            "straightness": None if track.straightness is None else np.round(track.straightness, 6).tolist(),
+            "scatter_mm": None if track.scatter is None else float(track.scatter)}
 
 
 def _track_internal(entry, nominal, path):
@@ -347,8 +348,13 @@ def _track_internal(entry, nominal, path):
             raise ModelError(f"{path}: field robot.track.straightness: expected a row (mm) per measured position, "
                              "ascending, within 100 mm of the line")
         table = table.reshape(-1, 3)
+    scatter = entry.get("scatter_mm")
+    if scatter is not None:
+        scatter = float(_finite([scatter], f"{path}: field robot.track.scatter_mm", 1)[0])
+        if scatter < 0:
+            raise ModelError(f"{path}: field robot.track.scatter_mm: expected a positive number, got {scatter:g}")
     return nominal.track.replace(actual_direction=direction / np.linalg.norm(direction), actual_scale=scale,
-                                 measured_positions=np.sort(positions), straightness=table)
+                                 measured_positions=np.sort(positions), straightness=table, scatter=scatter)
 
 
 def _finite(values, where, count=None):
