@@ -61,16 +61,30 @@ def cell(name):
     """(robot on the track, virtual arm, program corrector) of arm ``name``, calibrated once per test run."""
     if name not in _CELL:
         robot = on_track(name)
-        corner, side, step = CELLS[name]
         virtual = VirtualRobot.create(robot, "paper", seed=4)
-        plan = plan_grid(robot, corner, side, step, orientation=matrix_to_abc(orientation(robot)))
-        q = plan.joints[plan.reachable]
-        meas = Measurements(joints=q, position=plan.position[plan.reachable],
-                            measured=virtual.measure(q, np.random.default_rng(5)), lines=np.arange(len(q)) + 2,
-                            path="grid.csv")
-        model = calibrate(robot, meas, method="composite", grid_step=step, folds=0)
+        model = calibrated(robot, virtual, name, folds=0)
         _CELL[name], _CELL_MODEL[name] = (robot, virtual, program_corrector(model)), model
     return _CELL[name]
+
+
+def calibrated(robot, virtual, name, folds):
+    """The composite model of arm ``name``'s cell, calibrated from its cube measured by ``virtual``."""
+    corner, side, step = CELLS[name]
+    plan = plan_grid(robot, corner, side, step, orientation=matrix_to_abc(orientation(robot)))
+    q = plan.joints[plan.reachable]
+    meas = Measurements(joints=q, position=plan.position[plan.reachable],
+                        measured=virtual.measure(q, np.random.default_rng(5)), lines=np.arange(len(q)) + 2,
+                        path="grid.csv")
+    return calibrate(robot, meas, method="composite", grid_step=step, folds=folds)
+
+
+def arm_poses(robot, rng, count=8):
+    """Joints (count, 6) of random poses in the KUKA cell's cube, in the targets' orientation."""
+    corner, side, _ = CELLS["kuka_kr6_r900"]
+    local = np.tile(np.eye(4), (count, 1, 1))
+    local[:, :3, :3] = orientation(robot)
+    local[:, :3, 3] = np.asarray(corner) + rng.uniform(0.1 * side, 0.9 * side, (count, 3))
+    return ik(robot, local, seed=np.tile(robot.home, (count, 1))).raise_on_failure("poses").q
 
 
 def orientation(robot):
@@ -413,10 +427,7 @@ def test_a_track_calibration_recovers_its_direction_and_scale_and_compensation_t
     true = robot.track.replace(actual_direction=turn @ robot.track.direction, actual_scale=1.0005)
     corner, side, _ = CELLS["kuka_kr6_r900"]
     rng = np.random.default_rng(11)
-    local = np.tile(np.eye(4), (8, 1, 1))
-    local[:, :3, :3] = orientation(robot)
-    local[:, :3, 3] = np.asarray(corner) + rng.uniform(0.1 * side, 0.9 * side, (8, 3))
-    q = ik(robot, local, seed=np.tile(robot.home, (8, 1))).raise_on_failure("poses").q
+    q = arm_poses(robot, rng)
     positions = np.repeat([0.0, 1400.0, 2800.0, 4200.0, 5600.0], len(q))
     joints = np.tile(q, (5, 1))
     measured = (true.placements(robot.T_world_base, positions) @ virtual.reached_poses(joints))[:, :3, 3]
@@ -472,12 +483,8 @@ def test_a_track_that_is_not_straight_is_identified_as_a_table_and_compensation_
     bow = np.sin(np.pi * (dense + 100.0) / 5900.0)[:, None] * [0.0, 0.08, 0.04]
     true = robot.track.replace(actual_direction=robot.track.direction, actual_scale=1.0, measured_positions=dense,
                                straightness=bow)
-    corner, side, _ = CELLS["kuka_kr6_r900"]
     rng = np.random.default_rng(12)
-    local = np.tile(np.eye(4), (8, 1, 1))
-    local[:, :3, :3] = orientation(robot)
-    local[:, :3, 3] = np.asarray(corner) + rng.uniform(0.1 * side, 0.9 * side, (8, 3))
-    q = ik(robot, local, seed=np.tile(robot.home, (8, 1))).raise_on_failure("poses").q
+    q = arm_poses(robot, rng)
     stations = np.arange(0.0, 5601.0, 700.0)
     positions = np.repeat(stations, len(q))
     joints = np.tile(q, (len(stations), 1))
@@ -526,14 +533,10 @@ def test_where_the_identified_track_places_the_carriage_is_estimated_within_its_
     model = _CELL_MODEL["kuka_kr6_r900"]
     turn = Rotation.from_euler("z", 0.1, degrees=True).as_matrix()
     true = robot.track.replace(actual_direction=turn @ robot.track.direction, actual_scale=1.0005)
-    corner, side, _ = CELLS["kuka_kr6_r900"]
     covered, radii = [], []
     for seed in range(3):
         rng = np.random.default_rng(seed)
-        local = np.tile(np.eye(4), (8, 1, 1))
-        local[:, :3, :3] = orientation(robot)
-        local[:, :3, 3] = np.asarray(corner) + rng.uniform(0.1 * side, 0.9 * side, (8, 3))
-        q = ik(robot, local, seed=np.tile(robot.home, (8, 1))).raise_on_failure("poses").q
+        q = arm_poses(robot, rng)
         positions = np.repeat([0.0, 1400.0, 2800.0], len(q))
         joints = np.tile(q, (3, 1))
         measured = (true.placements(robot.T_world_base, positions) @ virtual.reached_poses(joints))[:, :3, 3]

@@ -174,21 +174,11 @@ def test_a_program_on_a_track_is_compensated_retimed_and_judged_landing_within_0
     """The issue's figure, end to end as ``compensate`` runs it (`CompensationJob`, default re-timing, a model
     calibrated with held-out folds): each language's program on the track lands within 0.02 mm of its world
     targets, its timing keeps the track's and the joints' limits, and its verdict passes."""
-    from tests.compensation.test_compensate_track import CELLS, cell, landing, orientation
-    from trajcomp.arm.transforms import matrix_to_abc
-    from trajcomp.calibration.calibrate import calibrate
-    from trajcomp.calibration.measurement_plan import plan_grid
-    from trajcomp.calibration.measurements import Measurements
+    from tests.compensation.test_compensate_track import calibrated, cell, landing
     from trajcomp.compensation.pipeline import CompensationJob
 
     robot, virtual, _ = cell(name)
-    corner, side, step = CELLS[name]
-    plan = plan_grid(robot, corner, side, step, orientation=matrix_to_abc(orientation(robot)))
-    grid_q = plan.joints[plan.reachable]
-    meas = Measurements(joints=grid_q, position=plan.position[plan.reachable],
-                        measured=virtual.measure(grid_q, np.random.default_rng(5)), lines=np.arange(len(grid_q)) + 2,
-                        path="grid.csv")
-    model = calibrate(robot, meas, method="composite", grid_step=step, folds=3)
+    model = calibrated(robot, virtual, name, folds=3)
     write, read = LANGUAGES[name]
     world, q = world_targets(robot, name)
     path = write(tmp_path, world, q, robot)

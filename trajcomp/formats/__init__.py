@@ -329,7 +329,7 @@ def read(path, format=None, *, workers=1, copies=True):
         raise ReadError(f"{path}: no such file" if what is None else f"{path}: is {what}; a program is read from a file")
     recover(path.parent)  # a set of files a killed run left half-renamed is completed first
     with collection_paused():  # a program is made of many objects without cycles (`trajcomp.support.memory`)
-        program = fmt.read(path, workers)
+        program = _with_kept_axes(fmt.read(path, workers), fmt)
         return uses_resolved(program, fmt) if copies else program.with_shared_targets_left()
 
 
@@ -362,7 +362,13 @@ def read_task(paths, format=None):
     from trajcomp.formats.task import merge
 
     programs = [read(path, format) for path in paths]
-    return uses_resolved(merge(programs), find_format(paths[0], format))
+    fmt = find_format(paths[0], format)
+    return uses_resolved(_with_kept_axes(merge(programs), fmt), fmt)
+
+
+def _with_kept_axes(program, fmt):
+    """``program`` marked with its language's reading of the external axes a target does not state."""
+    return dataclasses.replace(program, kept_axes=True) if fmt.kept_axes else program
 
 
 def input_paths(path, program):

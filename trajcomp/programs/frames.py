@@ -13,7 +13,6 @@ missing one is an error, never a guess. Frame ``None`` is the base, tool
 import numpy as np
 
 from trajcomp.errors import TrajcompError
-from trajcomp.formats import registered
 from trajcomp.programs.tables import _codes, rows_of
 from trajcomp.arm.transforms import invert
 
@@ -76,9 +75,9 @@ class FrameTable:
         program's language; zeros on a fixed base or for a language the track names no field of.
 
         A target that states no value: in a language whose targets keep the
-        external axes they do not state (`trajcomp.formats.Format.kept_axes`:
-        KRL), the value the motions into it leave the track at, the one
-        before them (`carried_over`); otherwise none.
+        external axes they do not state (`Program.kept_axes`: KRL), the value
+        the motions into it leave the track at, the one before them
+        (`carried_over`); otherwise none.
 
         Raises
         ------
@@ -91,7 +90,7 @@ class FrameTable:
             return np.zeros(len(index))
         values = self._stated(axis)
         missing = ~np.isfinite(values[index])
-        if missing.any() and _kept_axes(self.program.format):
+        if missing.any() and self.program.kept_axes:
             values, why = self.carried_over(values)
             missing = ~np.isfinite(values[index])
         else:
@@ -211,9 +210,3 @@ def tool_groups(tools):
         return [(tools[0], np.arange(len(tools)))] if len(tools) else []
     unique, group = np.unique(tools.reshape(len(tools), 16), axis=0, return_inverse=True)
     return [(tool.reshape(4, 4), np.flatnonzero(group.ravel() == g)) for g, tool in enumerate(unique)]
-
-
-def _kept_axes(language):
-    """Whether ``language``'s targets keep the external axes they do not state (`trajcomp.formats.Format.kept_axes`)."""
-    found = registered(language)
-    return found is not None and found.kept_axes

@@ -180,7 +180,7 @@ def retime_on_track(moves, robot, values, field, *, method="auto", tolerance=TOL
         tcp_speed=np.minimum(moves.tcp_speed / ratio, bound),
         velocity=np.minimum(moves.velocity, track.velocity * share),
         acceleration=np.minimum(moves.acceleration, track.acceleration * share))
-    from trajcomp.timing.retime import retime  # which times the track through `with_track`
+    from trajcomp.timing.retime import retime  # here: retime's TOPP-RA imports `with_track` from this module
 
     slow = np.ones(len(moves))
     for _ in range(ROUNDS):
@@ -188,9 +188,9 @@ def retime_on_track(moves, robot, values, field, *, method="auto", tolerance=TOL
         peaks = [_run_peaks(run, law, limited, values) for _, run, law in result.pieces]
         over = False
         for (_, run, _), (velocity, acceleration) in zip(result.pieces, peaks):
-            share = max(velocity / track.velocity, np.sqrt(acceleration / track.acceleration))
-            if share > 1.0 + 0.5 * LIMIT_TOLERANCE:
-                slow[run.first + 1 : run.last + 1] *= share * MARGIN
+            excess = max(velocity / track.velocity, np.sqrt(acceleration / track.acceleration))
+            if excess > 1.0 + 0.5 * LIMIT_TOLERANCE:
+                slow[run.first + 1 : run.last + 1] *= excess * MARGIN
                 over = True
         if not over:
             break
