@@ -416,6 +416,28 @@ def test_compensate_and_retime_on_a_track_through_the_cli_time_the_track_as_a_jo
 # ------------------------------------------------------------------ calibration with a track
 
 
+def on_the_real_track(tmp_path, robot, virtual, correct, true, tracks):
+    """Landing errors (3,), mm, of the KRL program at `CARRIAGE` whose world targets are where the real track
+    ``true`` puts the arm, compensated with each track of ``tracks`` (``{label: Track}``): ``{label: errors}``.
+    The controller places the arm with its own (nominal) track; the arm stands on the real one."""
+    world, q_targets = world_targets(robot, "kuka_kr6_r900")
+    world = true.placements(robot.T_world_base, np.array(CARRIAGE)) @ np.linalg.inv(
+        robot.track.placements(robot.T_world_base, np.array(CARRIAGE))) @ world
+    path = _krl(tmp_path, world, q_targets, robot)
+    errors = {}
+    for label, used in tracks.items():
+        edited, _ = compensate_program(formats.read(path), correct, robot.replace(track=used))
+        out = tmp_path / label
+        out.mkdir()
+        formats.write(out / path.name, edited)
+        commands, carriage = _read_krl(out / path.name)
+        arm_q = ik(robot, np.linalg.inv(robot.track.placements(robot.T_world_base, carriage)) @ commands,
+                   seed=np.tile(robot.home, (len(commands), 1))).raise_on_failure("commands").q
+        landed = (true.placements(robot.T_world_base, carriage) @ virtual.reached_poses(arm_q))[:, :3, 3]
+        errors[label] = np.linalg.norm(landed - world[:, :3, 3], axis=1)
+    return errors
+
+
 def test_a_track_calibration_recovers_its_direction_and_scale_and_compensation_then_lands(tmp_path):
     """The real track runs 0.1 deg off its nominal direction and 0.05 % long. Measured at five carriage positions
     (eight arm poses each, 0.01 mm tracker noise), the fit recovers both; compensated with the identified track, a
@@ -448,23 +470,8 @@ def test_a_track_calibration_recovers_its_direction_and_scale_and_compensation_t
     np.testing.assert_array_equal(fit.positions, [0, 1400, 2800, 4200, 5600])
     assert fit.track.beyond_measured([-50.0, 3000.0, 5700.0]).tolist() == [True, False, True]
     assert fit.track.straightness is None and fit.straightness_rms < 3 * fit.noise_rms  # straight: no table
-    # the program: world targets where the real track puts the arm
-    world, q_targets = world_targets(robot, "kuka_kr6_r900")
-    world = true.placements(robot.T_world_base, np.array(CARRIAGE)) @ np.linalg.inv(
-        robot.track.placements(robot.T_world_base, np.array(CARRIAGE))) @ world
-    path = _krl(tmp_path, world, q_targets, robot)
-    errors = {}
-    for label, used in (("nominal", robot), ("identified", robot.replace(track=fit.track))):
-        edited, _ = compensate_program(formats.read(path), correct, used)
-        out = tmp_path / label
-        out.mkdir()
-        formats.write(out / path.name, edited)
-        commands, carriage = _read_krl(out / path.name)
-        # the controller places the arm with its own (nominal) track; the arm stands on the real one
-        arm_q = ik(robot, np.linalg.inv(robot.track.placements(robot.T_world_base, carriage)) @ commands,
-                   seed=np.tile(robot.home, (len(commands), 1))).raise_on_failure("commands").q
-        landed = (true.placements(robot.T_world_base, carriage) @ virtual.reached_poses(arm_q))[:, :3, 3]
-        errors[label] = np.linalg.norm(landed - world[:, :3, 3], axis=1)
+    errors = on_the_real_track(tmp_path, robot, virtual, correct, true,
+                               {"nominal": robot.track, "identified": fit.track})
     assert errors["nominal"].max() > 2.0  # 0.1 deg and 0.05 % of 4.2 m
     assert errors["identified"].max() < 0.02, errors
 
@@ -497,21 +504,7 @@ def test_a_track_that_is_not_straight_is_identified_as_a_table_and_compensation_
     line = fit.track.replace(straightness=None)
     deviation = true.shift(stations) - line.shift(stations)  # the bow beyond the fitted line through 0
     np.testing.assert_allclose(fit.track.straightness, deviation, atol=0.01)
-    world, q_targets = world_targets(robot, "kuka_kr6_r900")
-    world = true.placements(robot.T_world_base, np.array(CARRIAGE)) @ np.linalg.inv(
-        robot.track.placements(robot.T_world_base, np.array(CARRIAGE))) @ world
-    path = _krl(tmp_path, world, q_targets, robot)
-    errors = {}
-    for label, used in (("line", line), ("table", fit.track)):
-        edited, _ = compensate_program(formats.read(path), correct, robot.replace(track=used))
-        out = tmp_path / label
-        out.mkdir()
-        formats.write(out / path.name, edited)
-        commands, carriage = _read_krl(out / path.name)
-        arm_q = ik(robot, np.linalg.inv(robot.track.placements(robot.T_world_base, carriage)) @ commands,
-                   seed=np.tile(robot.home, (len(commands), 1))).raise_on_failure("commands").q
-        landed = (true.placements(robot.T_world_base, carriage) @ virtual.reached_poses(arm_q))[:, :3, 3]
-        errors[label] = np.linalg.norm(landed - world[:, :3, 3], axis=1)
+    errors = on_the_real_track(tmp_path, robot, virtual, correct, true, {"line": line, "table": fit.track})
     assert errors["line"].max() > 0.04 and errors["table"].max() < 0.02, errors
     text = resources.files("trajcomp.arm.robots").joinpath("kuka_kr6_r900.yaml").read_text(encoding="utf-8")
     (tmp_path / "kr6_rail.yaml").write_text(text.replace("name: kuka_kr6_r900", "name: kr6_rail") + TRACK)
