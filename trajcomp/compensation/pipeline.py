@@ -31,7 +31,6 @@ from trajcomp.compensation.targets import program_corrector
 from trajcomp.errors import TimingError, TrajcompError
 from trajcomp.model.compensation_model import CompensationModel
 from trajcomp.model.model_file import load_model, model_files
-from trajcomp.programs.frames import FrameTable
 from trajcomp.programs.program import place_text
 from trajcomp.report import Criteria, compliance_report, file_entry, model_entry, report_paths, summary_lines
 from trajcomp.support.atomic import FileSet, refuse_inputs
@@ -163,10 +162,7 @@ class CompensationJob:
                                             frames=self.frames)
             _next(stages)
             timing, timed, before = [], None, None
-            track = moving_track(program, model.nominal, self.tools, self.frames) if self.retime != "none" else ""
-            if track:  # the arm's timing would not bind the track's limits: the speeds stay as written, said
-                report = dataclasses.replace(report, warnings=report.warnings + (_NOT_TIMED_ON_A_TRACK.format(track),))
-            elif self.retime != "none":
+            if self.retime != "none":
                 corrected, timed, before = retime_compensated(program, corrected, model.nominal, self.retime,
                                                               self.path_tolerance, self.tools, self.frames,
                                                               q_planned=report.q_planned, workers=self.workers)
@@ -260,8 +256,6 @@ class RetimeJob:
         inputs = [*sources, *([self.robot_file] if self.robot_file else [])]
         refuse_inputs(report_paths(self.report) if self.report else (), inputs, "give --report another name")
         plan = planned_joints(program, self.robot, tools=self.tools, frames=self.frames)
-        if track := moving_track(program, self.robot, self.tools, self.frames):
-            raise TrajcompError(f"{path}: {_NOT_TIMED_ON_A_TRACK.format(track)}; nothing written")
         joints = planned(program, plan.index, plan.q)
         timed, timing = timed_program(program, self.robot, joints, self.method, self.path_tolerance, self.tools,
                                       self.frames)
@@ -293,19 +287,6 @@ def planned(program, index, q):
     joints = np.full((len(program.target_table()), 6), np.nan)
     joints[index] = q
     return joints
-
-
-_NOT_TIMED_ON_A_TRACK = ("not re-timed: the program moves the robot's track ({}), whose travel the re-timing does not "
-                         "model (it times the arm in its carriage): every speed is left as written, the controller "
-                         "limits the track")
-
-
-def moving_track(program, robot, tools=None, frames=None):
-    """The field of the robot's track (``"E1"``) when the program's targets move it, else ``""``."""
-    if robot.track is None or robot.track.index(program.format) is None:
-        return ""
-    values = FrameTable(program, robot, tools, frames).track_positions(planned_targets(program))
-    return robot.track.written[program.format] if len(values) and np.ptp(values) > 0 else ""
 
 
 def timed_program(program, robot, joints, method, tolerance, tools, frames):

@@ -152,6 +152,17 @@ def _landing_checks(report, v, tolerance, model, has_grid):
     return out
 
 
+def _track_entry(timing):
+    """A moving track's part of the timing (`trajcomp.timing.track.TrackTiming`) as plain data, or None."""
+    track = getattr(timing, "track", None)
+    if track is None:
+        return None
+    return {"field": track.field,
+            "velocity": {"peak": track.peak_velocity, "limit": track.limit_velocity, "unit": "mm/s"},
+            "acceleration": {"peak": track.peak_acceleration, "limit": track.limit_acceleration, "unit": "mm/s^2"},
+            "not_timed": [{"waypoint": str(timing.labels[k]), "why": why} for k, why in track.left[:ROWS]]}
+
+
 def timing_section(timing, before=None, times=True):
     """The timing dict of a `trajcomp.timing.result.TimingResult`, with the cycle time ``before`` (s) if known.
 
@@ -203,6 +214,7 @@ def timing_section(timing, before=None, times=True):
                           "motions": [{"waypoint": str(timing.labels[k]), "why": why} for k, why in starts[:ROWS]]},
         "lowered": {"count": len(lowered),
                     "motions": [{"waypoint": str(timing.labels[k]), "detail": text} for k, text in lowered[:ROWS]]},
+        "track": _track_entry(timing),
     }
     if times:
         section["t_s"] = np.round(np.asarray(timing.t, dtype=float), 4).tolist()

@@ -104,7 +104,7 @@ def _names(names, total=None):
 
 STATISTICS = {"correction_mm": "correction, position", "correction_deg": "correction, orientation",
               "landing_estimate_mm": "landing estimate", "held_out_mm": "held-out error nearby",
-              "unseen_mm": "unseen (orientation, tool, posture)", "orientation_beyond_deg": "orientation beyond measured",
+              "unseen_mm": "unseen (orientation, tool, posture, track)", "orientation_beyond_deg": "orientation beyond measured",
               "convergence_mm": "convergence (model vs itself)", "limit_distance_deg": "nearest joint limit",
               "shoulder_mm": "shoulder singularity", "elbow_deg": "elbow singularity",
               "wrist_deg": "wrist singularity", "jump_deg": "largest joint change"}
