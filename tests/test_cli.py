@@ -319,7 +319,7 @@ def test_plan_keeps_one_arm_posture_and_lists_the_targets_it_cannot_reach(tmp_pa
 
     plan = tmp_path / "plan.csv"
     assert main(["plan", "--robot", "ur10", "--cube", "300,-100,300", "--side", "500", "--step", "100",
-                 "-o", str(plan)]) == 1
+                 "--orientations", "1", "-o", str(plan)]) == 1  # the paper's one orientation
     err = capsys.readouterr().err
     corners = ["800.000,400.000,700.000", "800.000,-100.000,800.000", "800.000,100.000,800.000",
                "800.000,200.000,800.000", "800.000,300.000,800.000", "700.000,400.000,800.000",
