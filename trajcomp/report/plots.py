@@ -149,6 +149,42 @@ def mode_statistics(tables):
     return fig
 
 
+def reliability(data):
+    """The landing estimate's reliability: its stated quantile against the true held-out errors, per class.
+
+    One series per class of holdout (k-fold, node planes, slabs, outer
+    layers): each bin of held-out rows (`trajcomp.calibration.calibrate.reliability`)
+    at its mean stated quantile (x) and the same quantile of its true errors
+    (y). On the diagonal the forecast is calibrated; below it, conservative
+    (it states more than the errors reach); above it, it misses.
+
+    Parameters
+    ----------
+    data : dict
+        ``{"quantile", "classes": {class: {"rows", "covered", "bins": [{"stated_mm", "true_quantile_mm"}]}}}``.
+    """
+    plt = pyplot()
+    fig, ax = plt.subplots(figsize=(WIDTH * 0.6, 4.6), constrained_layout=True)
+    colors, shapes = (_INSIDE, _OUTSIDE, "#1e7d45", "#8e44ad"), ("o", "s", "^", "D")
+    values = [0.0]
+    for k, (name, c) in enumerate(data["classes"].items()):
+        x = [b["stated_mm"] for b in c["bins"]]
+        y = [b["true_quantile_mm"] for b in c["bins"]]
+        values += x + y
+        ax.scatter(x, y, s=36, marker=shapes[k % len(shapes)], color=colors[k % len(colors)], alpha=0.75,
+                   linewidths=0, label=f"{name}: {c['rows']} rows, {c['covered']:.1%} within the stated quantile")
+    top = 1.08 * max(values)
+    ax.plot([0.0, top], [0.0, top], color=_LIMIT, lw=1.0, ls="--", label="calibrated (stated = true)")
+    ax.set_xlim(0.0, top)
+    ax.set_ylim(0.0, top)
+    ax.set_aspect("equal")
+    percent = f"{100 * data['quantile']:g} %"
+    ax.set_xlabel(f"stated {percent} quantile of the landing error (mm)")
+    ax.set_ylabel(f"true {percent} quantile of the held-out errors (mm)")
+    ax.legend(loc="upper left", fontsize=8)
+    return fig
+
+
 def envelope(values, points=POINTS):
     """A per-target series decimated to at most ``points`` bins, keeping every extreme.
 
