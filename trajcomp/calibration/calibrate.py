@@ -293,7 +293,7 @@ def other_tools(robot, method, kind, joints, spread, oriented, field_on_top=None
     if not locates_flange(spread):
         return False, (f"{turned}; at least {MIN_SPREAD:g} deg about two axes are needed to locate the flange, so a "
                        "tool other than the measured TCP may miss by tenths of a mm: measure at several orientations "
-                       "(trajcomp plan --orientations)")
+                       "(trajcomp plan, by default)")
     offset = axis_offset(robot)
     if not oriented and offset < MIN_AXIS_OFFSET:
         return False, (f"{turned}, but the measured point lies {offset:.1f} mm from the last joint's axis, so the "
@@ -684,15 +684,16 @@ def _landing(robot, dh, frame, data, held, fitted, split, progress, orientation,
     if splits:
         # slabs and layers in turn, a row held out by several keeping the last one's error and distances, as
         # `fold_errors` and `split_distances` do over all their splits; the reliability shows the slabs whole
+        regions = None
         for kind, part in (("slabs", splits[:len(slabs)]), ("outer layers", splits[len(slabs):])):
             if part:
                 errors = fold_errors(*data, len(part), 0, progress, fitted, workers, splits=part)
                 errors.pop("interpolation")
                 shown[kind] = (split_distances(robot, joints, position, part), errors)
-        parts = list(shown.values())[1:]
-        sets.append(parts[0] if len(parts) == 1 else (
-            {key: np.where(np.isnan(parts[1][0][key]), parts[0][0][key], parts[1][0][key]) for key in parts[0][0]},
-            {mode: np.where(np.isnan(parts[1][1][mode]), parts[0][1][mode], parts[1][1][mode]) for mode in parts[0][1]}))
+                regions = shown[kind] if regions is None else tuple(
+                    {key: np.where(np.isnan(above[key]), below[key], above[key]) for key in below}
+                    for below, above in zip(regions, shown[kind]))
+        sets.append(regions)
         method += f"; {words} held out in turn"
     # a field over positions errs by how far a target lies from the measured positions; every other mode by how far
     # its joints lie from the measured ones

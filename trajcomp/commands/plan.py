@@ -187,5 +187,5 @@ def describe_needs(robot, plan, orientations):
     if not locates_flange(spread):
         lines.append(f"the tool turns {spread[0]:.1f} and {spread[1]:.1f} deg RMS about its two main axes: too little "
                      "to locate the flange; a model from this plan serves the measured TCP and orientation only "
-                     "(--orientations 5 tilts it about two axes)")
+                     "(the default, five orientations, tilts it about two axes)")
     return lines
