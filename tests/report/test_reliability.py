@@ -63,3 +63,17 @@ def test_the_calibration_report_plots_the_holdout_classes_of_a_lattice_at_their_
     assert "reliability" in [f.section for f in report.figures]
     page = report.html_text()
     assert '<section id="reliability">' in page and len(_self_contained(page)) == len(report.figures)
+
+
+def test_the_plot_draws_each_bin_and_turns_to_log_axes_when_its_values_span_a_decade():
+    from trajcomp.report import plots
+
+    def data(far):
+        bins = [{"rows": 10, "stated_mm": s, "true_quantile_mm": t, "covered": 1.0} for s, t in ((0.1, 0.09), (far, 0.5))]
+        return {"mode": "dh", "quantile": 0.95, "classes": {"k": {"rows": 20, "covered": 1.0, "bins": bins}}}
+
+    for far, scale in ((0.6, "linear"), (1.6, "log")):
+        ax = plots.reliability(data(far)).axes[0]
+        assert ax.get_xscale() == ax.get_yscale() == scale
+        np.testing.assert_allclose(ax.collections[0].get_offsets(), [[0.1, 0.09], [far, 0.5]])
+        assert ax.get_xlim()[1] >= far and ax.get_ylim() == ax.get_xlim()  # square, the diagonal through both
