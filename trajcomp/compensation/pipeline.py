@@ -23,7 +23,6 @@ import numpy as np
 
 from trajcomp import formats
 from trajcomp.arm.transforms import matrix_to_pose
-from trajcomp.calibration.measurements import read_measurements
 from trajcomp.compensation import batch
 from trajcomp.compensation.options import MAX_CORRECTION, MAX_JOINT_CHANGE, RETIME_CHOICES
 from trajcomp.compensation.posture import planned_joints, planned_targets
@@ -35,7 +34,7 @@ from trajcomp.model.model_file import load_model, model_files
 from trajcomp.programs.frames import FrameTable
 from trajcomp.programs.program import place_text
 from trajcomp.report import Criteria, compliance_report, file_entry, model_entry, report_paths, summary_lines
-from trajcomp.report.measured import measured_landing
+from trajcomp.report.measured import measured_landing, read_validation_run
 from trajcomp.support.atomic import FileSet, refuse_inputs
 from trajcomp.support.memory import end_stage, kept_apart, release
 from trajcomp.support.parallel import in_background, meanwhile
@@ -153,7 +152,7 @@ class CompensationJob:
             inputs = [*sources, *(model_files(self.source) if self.source else []),
                       *([self.measured] if self.measured else [])]
             refuse_inputs(report_paths(target) if target else (), [*inputs, output], "give --report another name")
-            validation = None if self.measured is None else read_measurements(self.measured)
+            validation = None if self.measured is None else read_validation_run(self.measured)
             correct = program_corrector(model, mode=self.mode, outside=self.outside, label=str(path),
                                         workers=self.workers)
             _next(stages)

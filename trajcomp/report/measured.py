@@ -13,10 +13,20 @@ the landing estimate, and how often the estimate covered it.
 import numpy as np
 from scipy.spatial import cKDTree
 
+from trajcomp.calibration.measurements import read_measurements
 from trajcomp.errors import ReadError
 from trajcomp.report.verdict import check
 
 MATCH_DEG = 0.01  # a row commanding every joint within this of a target's written joints measured that target
+
+
+def read_validation_run(path):
+    """The rows of a validation run (`Measurements`), refused (ReadError) without commanded joints or measured positions."""
+    meas = read_measurements(path)
+    if meas.joints is None or meas.measured is None:
+        raise ReadError(f"{meas.path}: measured landings need the commanded joints j1..j6 (as written) and the "
+                        "measured positions mx, my, mz")
+    return meas
 
 
 def measured_landing(report, meas, T_tracker_base=None):
@@ -27,22 +37,18 @@ def measured_landing(report, meas, T_tracker_base=None):
     report : ProgramReport
         The compensation's targets (``T_target`` (N, 4, 4), written joints ``q`` (N, 6) rad).
     meas : Measurements
-        The validation run: commanded joints and measured TCP positions, base
-        frame (or tracker frame, when its layout says so and
-        ``T_tracker_base`` is given).
+        The validation run (`read_validation_run`): commanded joints and
+        measured TCP positions, base frame (or tracker frame, when its layout
+        says so and ``T_tracker_base`` is given).
     T_tracker_base : ndarray, shape (4, 4), optional
         The model's tracker registration, for rows measured in the tracker frame.
 
     Raises
     ------
     ReadError
-        Rows without commanded joints or measured positions, measured in the
-        tracker frame without a registration, or commanding joints no target
-        was written with (file and line named).
+        Rows measured in the tracker frame without a registration, or
+        commanding joints no target was written with (file and line named).
     """
-    if meas.joints is None or meas.measured is None:
-        raise ReadError(f"{meas.path}: measured landings need the commanded joints j1..j6 (as written) and the "
-                        "measured positions mx, my, mz")
     measured = meas.measured
     if meas.frame == "tracker":
         if T_tracker_base is None:
