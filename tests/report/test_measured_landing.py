@@ -1,4 +1,5 @@
-"""`compensate --measured`: a validation run's measured landings beside the landing estimates in the compliance report."""
+"""`compensate --measured`: a validation run's measured landings beside the landing estimates in the compliance
+report."""
 
 import json
 from pathlib import Path
@@ -26,7 +27,8 @@ def run(kuka_model, tmp_path_factory):
     targets = json.loads((folder / "plain.json").read_text())["targets"]
     joints = np.array([t["joints_deg"] for t in targets])
     arm = VirtualRobot.create(load_robot("kuka_kr6_r900"), "paper", 1)
-    landed = arm.reached_poses(np.radians(joints))[:, :3, 3] + np.random.default_rng(3).normal(0.0, 0.003, (len(joints), 3))
+    noise = np.random.default_rng(3).normal(0.0, 0.003, (len(joints), 3))  # the tracker's
+    landed = arm.reached_poses(np.radians(joints))[:, :3, 3] + noise
     skipped = next(k for k in range(len(joints)) if (np.abs(joints - joints[k]).max(axis=1) < 0.01).sum() == 1)
     measured = np.arange(len(joints)) != skipped
     rows = ["j1,j2,j3,j4,j5,j6,mx,my,mz"] + [",".join(f"{v:.6f}" for v in (*q, *m))
@@ -35,8 +37,8 @@ def run(kuka_model, tmp_path_factory):
     same = np.abs(joints[:, None] - joints[None]).max(axis=2) < 0.01  # (N, N): one command
     assert same.sum() > len(joints)  # a command measured twice
     landed = (same & measured) @ landed / np.maximum((same & measured).sum(axis=1), 1)[:, None]  # its rows' mean
-    expected = np.linalg.norm(landed - np.array([pose_to_matrix(np.r_[t["target"][:3], np.radians(t["target"][3:])])[:3, 3]
-                                                 for t in targets]), axis=1)
+    target = np.array([pose_to_matrix(np.r_[t["target"][:3], np.radians(t["target"][3:])])[:3, 3] for t in targets])
+    expected = np.linalg.norm(landed - target, axis=1)
     expected[skipped] = np.nan
     return folder, targets, expected
 

@@ -1,4 +1,5 @@
-"""The calibration report's reliability plot: the landing estimate's stated quantile against the true held-out errors."""
+"""The calibration report's reliability plot: the landing estimate's stated quantile against the true held-out
+errors."""
 
 import json
 from pathlib import Path
@@ -69,7 +70,8 @@ def test_the_plot_draws_each_bin_and_turns_to_log_axes_when_its_values_span_a_de
     from trajcomp.report import plots
 
     def data(far):
-        bins = [{"rows": 10, "stated_mm": s, "true_quantile_mm": t, "covered": 1.0} for s, t in ((0.1, 0.09), (far, 0.5))]
+        bins = [{"rows": 10, "stated_mm": s, "true_quantile_mm": t, "covered": 1.0}
+                for s, t in ((0.1, 0.09), (far, 0.5))]
         return {"mode": "dh", "quantile": 0.95, "classes": {"k": {"rows": 20, "covered": 1.0, "bins": bins}}}
 
     for far, scale in ((0.6, "linear"), (1.6, "log")):

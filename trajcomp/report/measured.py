@@ -21,7 +21,7 @@ MATCH_DEG = 0.01  # a row commanding every joint within this of a target's writt
 
 
 def read_validation_run(path):
-    """The rows of a validation run (`Measurements`), refused (ReadError) without commanded joints or measured positions."""
+    """The rows of a validation run (`Measurements`); ReadError without commanded joints or measured positions."""
     meas = read_measurements(path)
     if meas.joints is None or meas.measured is None:
         raise ReadError(f"{meas.path}: measured landings need the commanded joints j1..j6 (as written) and the "
