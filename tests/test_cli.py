@@ -14,7 +14,8 @@ UR5_COLUMNS = ",".join([f"j{i}=joint_{i}" for i in range(1, 7)] + ["x=x_t", "y=y
 
 def test_plan_simulate_calibrate_validate_predict(tmp_path, capsys):
     plan, meas, model = tmp_path / "plan.csv", tmp_path / "meas.csv", tmp_path / "model.yaml"
-    assert main(["plan", "--robot", "ur10", "--cube", "300,-100,300", "--side", "400", "--step", "100", "-o", str(plan)]) == 0
+    assert main(["plan", "--robot", "ur10", "--cube", "300,-100,300", "--side", "400", "--step", "100",
+                 "--orientations", "1", "-o", str(plan)]) == 0  # one orientation: a grid model, whose step is checked
     assert main(["simulate", str(plan), "--robot", "ur10", "--seed", "1", "-o", str(meas)]) == 0
     assert main(["calibrate", str(meas), "--robot", "ur10", "--grid-step", "100", "-o", str(model)]) == 0
     assert "cross-validation" in capsys.readouterr().out
@@ -319,7 +320,7 @@ def test_plan_keeps_one_arm_posture_and_lists_the_targets_it_cannot_reach(tmp_pa
 
     plan = tmp_path / "plan.csv"
     assert main(["plan", "--robot", "ur10", "--cube", "300,-100,300", "--side", "500", "--step", "100",
-                 "-o", str(plan)]) == 1
+                 "--orientations", "1", "-o", str(plan)]) == 1  # the paper's one orientation
     err = capsys.readouterr().err
     corners = ["800.000,400.000,700.000", "800.000,-100.000,800.000", "800.000,100.000,800.000",
                "800.000,200.000,800.000", "800.000,300.000,800.000", "700.000,400.000,800.000",

@@ -15,6 +15,7 @@ import numpy as np
 
 from trajcomp.model import landing
 from trajcomp.report import compliance_figures, plots
+from trajcomp.report.measured import measured_check, measured_summary
 from trajcomp.report.measures import BRANCH_NAMES
 from trajcomp.report.document import Figure, Report
 from trajcomp.report.provenance import grid_box, header
@@ -287,7 +288,8 @@ def _listed_check(section, id, statement, key, status, clean, found):
 
 
 def compliance_report(report, robot, *, criteria=None, model=None, model_info=None, mode=None, files=(),
-                      options=None, timing=None, cycle_time_before=None, command="compensate", workers=1):
+                      options=None, timing=None, cycle_time_before=None, command="compensate", workers=1,
+                      measured=None):
     """The compliance report of one run (schema ``trajcomp-report/1``, kind ``compliance``).
 
     Parameters
@@ -315,6 +317,10 @@ def compliance_report(report, robot, *, criteria=None, model=None, model_info=No
         The command that ran (``compensate``, ``retime``).
     workers : int
         Processes that share the per-target measures (`target_measures`).
+    measured : ndarray, shape (N,), optional
+        The measured landing of each target of a validation run, mm, NaN where
+        not measured (`trajcomp.report.measured.measured_landing`): tabulated
+        beside the estimate, summarised, and judged (criterion ``measured``).
 
     Returns
     -------
@@ -344,6 +350,9 @@ def compliance_report(report, robot, *, criteria=None, model=None, model_info=No
                        "joint velocity, acceleration or jerk")
     if model is not None:
         checks.insert(1, _model_accuracy(model, mode, has_grid, criteria.tolerance, measures))
+    seen = measured is not None and np.isfinite(measured).any()
+    if seen:
+        checks.insert(2, measured_check(measured, report.labels, criteria.tolerance))
     lines = tuple(_line_and_file(place)[0] for place, *_ in report.not_compensated)
     if model is None:
         checks.append(not_evaluated("uncompensated", "every motion compensated", AS_WRITTEN))
@@ -365,7 +374,10 @@ def compliance_report(report, robot, *, criteria=None, model=None, model_info=No
         "verdict": verdict(checks),
         "summary": _summary(report, measures, compensated=model is not None),
         "target_table": table,
-        "targets": _as_run(target_json(report, robot, measures, flags, index), model is not None),
+        "targets": _with_measured(_as_run(target_json(report, robot, measures, flags, index), model is not None),
+                                  measured, index),
+        "measured": measured_summary(measured, measures.values["landing_estimate_mm"], criteria.tolerance)
+        if seen and "landing_estimate_mm" in measures.values else None,
         "not_compensated": [_not_compensated_entry(place, text, reason)
                             for place, text, reason in report.not_compensated[:ROWS]],
         "unused": list(report.unused[:ROWS]),
@@ -498,6 +510,14 @@ def _as_run(rows, compensated):
     if not compensated:
         for row in rows:
             row.update(dict.fromkeys(MODEL_FIELDS))
+    return rows
+
+
+def _with_measured(rows, measured, index):
+    """The target rows with their measured landing (mm, None where not measured), when there is a validation run."""
+    if measured is not None:
+        for row, value in zip(rows, measured[index].tolist()):
+            row["measured_landing_mm"] = None if np.isnan(value) else round(value, 5)
     return rows
 
 
