@@ -69,7 +69,14 @@ def mask(text, comment, quote='"'):
     marks are looked for with ``str.find`` (each mark's next one found once
     for the stretch up to it), not a pattern tried at every character: a
     long program with few comments is scanned at memory speed.
+
+    A line ending that is a carriage return alone (old Mac text, some
+    controllers' exports) becomes a line feed here, so that the readers'
+    patterns (``^``, ``$``, ``\n``) see its lines; the source text, and so
+    what is written, keeps it.
     """
+    if "\r" in text:
+        text = _LONE_CARRIAGE_RETURN.sub("\n", text)
     if quote not in text and comment not in text:  # a statement's line, mostly
         return text
     end = len(text)
@@ -97,6 +104,7 @@ def mask(text, comment, quote='"'):
 
 
 _NOT_LINE_BREAK = re.compile(r"[^\r\n]")
+_LONE_CARRIAGE_RETURN = re.compile(r"\r(?!\n)")
 
 
 class Lines:
