@@ -1,6 +1,7 @@
 """Every writer refuses numbers that are not finite: robot code never receives nan or inf."""
 
 import dataclasses
+import re
 from pathlib import Path
 
 import numpy as np
@@ -88,3 +89,43 @@ def test_a_krl_point_a_data_list_declares_twice_is_refused_as_the_controller_doe
         "ENDDAT", f"{declaration}={{X 500.0,Y 0.0,Z 700.0,A 0.0,B 90.0,C 0.0,S 2,T 2}} ; again\nENDDAT"))
     with pytest.raises(ReadError, match=r"weld\.dat:7: P3 is declared again \(first at line 4\)".replace("P3", again.split()[-1])):
         formats.read(tmp_path / "weld.src")
+
+
+EXAMPLES = Path(__file__).resolve().parents[2] / "examples" / "programs"
+LONG_LINES = {  # a program of each language with a line LINE_LIMIT + 1 bytes long, and that line's number
+    "weld.csv": (lambda text, long: text.replace("\n", "\n#" + long + "\n", 1), 2),
+    "weld.src": (lambda text, long: text.replace("DEF weld( )\n", "DEF weld( )\n  ;" + long + "\n"), 2),
+    "Weld.mod": (lambda text, long: text.replace("MODULE Weld\n", "MODULE Weld\n  !" + long + "\n"), 2),
+    "WELD.LS": (lambda text, long: text.replace("/MN\n", "/MN\n   1:  !" + long + " ;\n"), 22),
+    "weld.script": (lambda text, long: text.replace("def weld():\n", "def weld():\n  #" + long + "\n"), 2),
+}
+
+
+@pytest.mark.parametrize("name", LONG_LINES)
+def test_a_line_longer_than_any_program_writes_is_refused_naming_it(tmp_path, name):
+    """A 50 MB line took 2.2 GB (CSV header) and minutes (a RAPID comment): a MemoryError (exit 3) under a limit."""
+    from trajcomp.formats.text import LINE_LIMIT
+
+    edit, line = LONG_LINES[name]
+    original = next(EXAMPLES.rglob(name))
+    for companion in original.parent.glob(original.stem + ".*"):
+        (tmp_path / companion.name).write_bytes(companion.read_bytes())
+    (tmp_path / name).write_text(edit(original.read_text(), "x" * LINE_LIMIT))
+    with pytest.raises(ReadError, match=rf"{re.escape(name)}:{line}: a line longer than 1,048,576 bytes"):
+        formats.read(tmp_path / name)
+    (tmp_path / name).write_text(edit(original.read_text(), "x" * (LINE_LIMIT - 80)))  # just below: read
+    formats.read(tmp_path / name)
+
+
+def test_a_program_with_a_line_of_tens_of_megabytes_is_refused_with_exit_2_under_a_memory_limit(tmp_path):
+    import subprocess
+    import sys
+
+    program = tmp_path / "p.csv"
+    program.write_text((EXAMPLES / "csv" / "weld.csv").read_text().replace("\n", "," + "x" * 20_000_000 + "\n", 1))
+    limit = "import resource; resource.setrlimit(resource.RLIMIT_AS, (1_500_000_000,) * 2); "
+    done = subprocess.run([sys.executable, "-c", limit + "from trajcomp.cli import main; raise SystemExit(main())",
+                           "convert", str(program), str(tmp_path / "p.src")], capture_output=True, text=True,
+                          timeout=120)
+    assert done.returncode == 2 and "p.csv:1: a line longer than" in done.stderr, done.stderr
+    assert not (tmp_path / "p.src").exists()

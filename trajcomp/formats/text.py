@@ -34,6 +34,9 @@ JOINT_LIMIT = 3600.0  # deg (ten turns)
 _BRACKET_OR_COMMA = re.compile(r"[{}\[\](),]")  # what `split_top` looks at
 
 
+LINE_LIMIT = 1 << 20  # bytes in one line (1 MiB): thousands of times the longest line a robot program writes
+
+
 def read_source(path, name=None, companion=False):
     """Decode a text file exactly: UTF-8 (with or without BOM), else Latin-1.
 
@@ -42,7 +45,9 @@ def read_source(path, name=None, companion=False):
     Raises
     ------
     ReadError
-        Unreadable, or binary (NUL bytes).
+        Unreadable, binary (NUL bytes), or a line longer than `LINE_LIMIT`
+        (damage or not a program: parsing it would take memory and time
+        out of proportion to the file).
     """
     path = Path(path)
     try:
@@ -51,6 +56,10 @@ def read_source(path, name=None, companion=False):
         raise ReadError(f"{path}: cannot read: {exc.strerror}") from exc
     if b"\0" in data:
         raise ReadError(f"{path}: not a text file")
+    if (start := _long_line_start(data)) >= 0:
+        line = data.count(b"\n", 0, start) + data.count(b"\r", 0, start) - data.count(b"\r\n", 0, start) + 1
+        raise ReadError(f"{name or path.name}:{line}: a line longer than {LINE_LIMIT:,} bytes, beyond any robot "
+                        f"program's (damaged, or not a program): {data[start:start + 40].decode('latin-1')!r}...")
     encoding = "utf-8-sig" if data.startswith(b"\xef\xbb\xbf") else "utf-8"
     try:
         text = data.decode(encoding)
@@ -58,6 +67,23 @@ def read_source(path, name=None, companion=False):
         encoding = "latin-1"
         text = data.decode(encoding)
     return Source(name or path.name, text, encoding, str(path), companion)
+
+
+def _long_line_start(data, piece=1 << 22):
+    """Offset of the first line of ``data`` (bytes) longer than `LINE_LIMIT`, -1 if none; looked at ``piece``
+    bytes at a time."""
+    if len(data) <= LINE_LIMIT:
+        return -1
+    start = 0  # of the line running into the piece
+    for at in range(0, len(data), piece):
+        codes = np.frombuffer(data, np.uint8, count=min(piece, len(data) - at), offset=at)
+        ends = np.flatnonzero((codes == ord("\n")) | (codes == ord("\r"))) + at
+        starts = np.append(start, ends + 1)
+        long = np.flatnonzero(np.append(ends, at + len(codes)) - starts > LINE_LIMIT)
+        if len(long):
+            return int(starts[long[0]])
+        start = int(starts[-1])
+    return -1
 
 
 def mask(text, comment, quote='"'):
