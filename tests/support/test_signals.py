@@ -181,6 +181,30 @@ def test_a_stopping_signal_while_matplotlib_loads_is_taken_after_it(tmp_path):
         assert done.returncode == 143 and "Fatal" not in done.stderr and "Traceback" not in done.stderr, done.stderr
 
 
+@pytest.mark.parametrize("entry", ["trajcomp", "trajcomp.cli"])
+@pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM])
+def test_a_signal_during_the_command_lines_imports_ends_the_run_with_its_code(entry, signum):
+    """The earliest moment trajcomp's code runs: a SIGINT there was a KeyboardInterrupt traceback out of an
+    import (bench_signals.py's one broken run in 100), a SIGTERM a kill without a word. Sent as `trajcomp.commands`
+    is imported, by the program's own entries (the console script runs ``trajcomp.__main__``)."""
+    script = (
+        "import os, runpy, signal, sys\n"
+        "signum = int(sys.argv[2])\n"
+        "class SignalOnImport:\n"
+        "    def find_spec(self, name, path=None, target=None):\n"
+        "        if name == 'trajcomp.commands':\n"
+        "            os.kill(os.getpid(), signum)\n"
+        "sys.meta_path.insert(0, SignalOnImport())\n"
+        "entry, sys.argv = sys.argv[1], ['trajcomp', 'robots']\n"
+        "runpy.run_module(entry, run_name='__main__', alter_sys=True)\n"
+    )
+    done = subprocess.run([sys.executable, "-c", script, entry, str(int(signum))], capture_output=True, text=True,
+                          timeout=60, env=dict(os.environ, PYTHONPATH=os.getcwd()))
+    assert done.returncode == STOPPING[signum], done.stderr
+    assert "Traceback" not in done.stderr and "what was not finished was not written" in done.stderr
+    assert not done.stdout  # the command did not run
+
+
 def test_a_signal_held_while_another_thread_runs_is_raised_after_the_block():
     """The kernel gives a process's signal to a thread not blocking it: the hold must not depend on the mask."""
     import threading
