@@ -129,6 +129,17 @@ def mask(text, comment, quote='"'):
     return "".join(pieces)
 
 
+def statement_text(masked, start, end):
+    """``masked[start:end]`` without the blanks a comment left at its end (`mask`): a statement's patterns are not
+    run over a blanked comment's length (each pattern that fails on a line would look at every blank again)."""
+    return masked[start:end].rstrip(" \t")
+
+
+def code_of(text, comment):
+    """A statement's ``text`` without its comments and strings (`mask`) nor the blanks they leave at its end."""
+    return statement_text(mask(text, comment), 0, len(text))
+
+
 _NOT_LINE_BREAK = re.compile(r"[^\r\n]")
 _LONE_CARRIAGE_RETURN = re.compile(r"\r(?!\n)")
 
@@ -219,12 +230,16 @@ def runs_between(start, end, length):
     return list(zip(part_start[between].tolist(), part_end[between].tolist()))
 
 
-def check_closed(source, masked, opener, closer, closing, parts=None):
-    """Refuse a text whose last block is never closed: a file cut off in transfer.
+def check_closed(source, masked, opener, closer, closing, parts=None, outside=None):
+    """Refuse a text whose blocks are not closed in order: a file cut off in transfer, or one its controller
+    refuses to load.
 
     Every controller refuses such a file (a syntax error on loading, or
     when the program is selected); a reader that took it would compensate
-    and write the part that arrived as if it were the whole program.
+    and write the part that arrived as if it were the whole program. A
+    block closed by the keyword of a block around it (``END`` while an
+    ``IF`` is open), a closing keyword with no block to close, and (with
+    ``outside``) a statement outside every block are refused the same way.
 
     Parameters
     ----------
@@ -241,29 +256,55 @@ def check_closed(source, masked, opener, closer, closing, parts=None):
         ``(start, end)`` offsets of whole lines of ``masked`` where a block
         may open or close, the others known to do neither (a reader's
         motion lines: not scanned); default the whole text.
+    outside : re.Pattern, optional
+        The lines that may stand outside every block (a KRL ``&ACCESS``
+        line, RAPID's ``%%%`` header); blank and comment lines may too.
+        None: any line may (URScript's top-level statements).
 
     Raises
     ------
     ReadError
-        A block open at the end of the text, naming its line and the
-        keyword that should close it.
+        Naming the line and the keyword of the block left open, or the
+        line out of place.
     """
     parts = [(0, len(masked))] if parts is None else parts
     marks = sorted([(m.start(), m.group(1).upper(), opens) for start, end in parts
                     for pattern, opens in ((opener, True), (closer, False))
                     for m in pattern.finditer(masked, start, end)])
-    open_blocks = []
+    lines = Lines(source.text)
+
+    def refuse(at, message):
+        line = lines.number(at)
+        fail(source.name, line, lines.line(line), message)
+
+    open_blocks, outermost = [], []  # the blocks open, and the (start, end) offsets of those closed around no other
     for at, keyword, opens in marks:
         if opens:
             open_blocks.append((at, keyword))
         elif open_blocks and closing[open_blocks[-1][1]] == keyword:
-            open_blocks.pop()
+            start, _ = open_blocks.pop()
+            if not open_blocks:
+                outermost.append((start, at))
+        elif open_blocks and keyword in (closing[k] for _, k in open_blocks):
+            inner_at, inner = open_blocks[-1]
+            refuse(inner_at, f"{inner} has no {closing[inner]} before the {keyword} of line {lines.number(at)}")
+        else:
+            refuse(at, f"{keyword} closes no block")
     if open_blocks:
         at, keyword = open_blocks[-1]
-        lines = Lines(source.text)
-        line = lines.number(at)
-        fail(source.name, line, lines.line(line),
-             f"{keyword} has no {closing[keyword]} (the text ends at line {last_line(lines)}): the program is cut off")
+        refuse(at, f"{keyword} has no {closing[keyword]} (the text ends at line {last_line(lines)}): "
+                   "the program is cut off")
+    if outside is not None:
+        gaps = zip([0] + [masked.find("\n", end) % (len(masked) + 1) for _, end in outermost],
+                   [start for start, _ in outermost] + [len(masked)])
+        for start, end in gaps:
+            for m in _STATEMENT_LINE.finditer(masked, start, end):
+                if not outside.match(m.group()):
+                    first = next(iter(closing))
+                    refuse(m.start(), f"a statement outside every {first} ... {closing[first]} block")
+
+
+_STATEMENT_LINE = re.compile(r'^[ \t"]*[^\s"].*$', re.M)  # a masked line with more than blanks and quotes
 
 
 def last_line(lines):
