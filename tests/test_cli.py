@@ -7,6 +7,7 @@ import pytest
 from conftest import real_data
 
 from trajcomp.cli import main
+from trajcomp.model.model_file import load_model
 
 UR5_COLUMNS = ",".join([f"j{i}=joint_{i}" for i in range(1, 7)] + ["x=x_t", "y=y_t", "z=z_t",
                         "mx=x_t+x_dif", "my=y_t+y_dif", "mz=z_t+z_dif"])
@@ -32,6 +33,18 @@ def test_plan_simulate_calibrate_validate_predict(tmp_path, capsys):
     predicted = tmp_path / "pred.csv"
     assert main(["predict", str(model), str(plan), "-o", str(predicted)]) == 0
     assert "px,py,pz" in predicted.read_text()
+
+
+def test_a_grid_step_no_lattice_checks_is_said_to_be_unused(tmp_path, capsys):
+    """Several orientations give a joint-angle model with a scattered field on top: no lattice for the step."""
+    plan, meas, model = tmp_path / "plan.csv", tmp_path / "meas.csv", tmp_path / "model.yaml"
+    assert main(["plan", "--robot", "ur10", "--cube", "300,-100,300", "--side", "200", "--step", "100",
+                 "-o", str(plan)]) == 0
+    assert main(["simulate", str(plan), "--robot", "ur10", "--seed", "1", "-o", str(meas)]) == 0
+    assert main(["calibrate", str(meas), "--robot", "ur10", "--grid-step", "100", "--folds", "0",
+                 "-o", str(model)]) == 0
+    warnings = load_model(model).report["warnings"]
+    assert any(w.startswith("--grid-step is not used: it checks the nodes of a lattice field") for w in warnings)
 
 
 def test_unreachable_targets_are_reported_with_exit_1(tmp_path, capsys):

@@ -30,7 +30,7 @@ from scipy.spatial import cKDTree
 from trajcomp.calibration.options import INTERPOLATIONS, LOSSES, METHODS, ORIENTATION_WEIGHT
 from trajcomp.errors import CalibrationError
 from trajcomp.model import landing
-from trajcomp.model.grid import METHODS as LATTICE_INTERPOLATORS, TOLERANCE, detect_lattice, fit_field
+from trajcomp.model.grid import METHODS as LATTICE_INTERPOLATORS, TOLERANCE, ResidualGrid, detect_lattice, fit_field
 from trajcomp.calibration.identify import (best_fit_transform, identify, linearise, outlier_rows, region_folds,
                                            select_splines)
 from trajcomp.arm.ik import batch_seed, branch_index, ik
@@ -418,6 +418,12 @@ def calibrate(robot, meas, *, robot_ref=None, method="composite", frame=None, gr
         warnings.append(f"{len(lines)} gross outliers (residual far beyond the others; the robust loss bounds their "
                         f"pull on the fit) are left out of the grids and statistics, their nodes filled from the "
                         f"model: lines {lines[:20]}" + (" ..." if len(lines) > 20 else ""))
+    fields = [field for field in (parts.grid, parts.residual, parts.residual_field)
+              if field is not None and getattr(field, "kind", None) != JOINT_KIND]
+    if grid_step is not None and not any(isinstance(field, ResidualGrid) for field in fields):
+        warnings.append(f"--grid-step is not used: it checks the nodes of a lattice field, and this model's fields "
+                        f"are {', '.join(sorted({field.kind for field in fields})) or 'none'} (scattered, no lattice; "
+                        "the joint residual is chosen where several orientations were measured)")
     report = {
         "measurements": {"file": meas.path, "rows": len(meas), "used": int(keep.sum()), "frame": frame,
                          "orientation_spread_deg": [round(float(v), 3) for v in spread]}
@@ -716,8 +722,7 @@ def _landing(robot, dh, frame, data, held, fitted, split, progress, orientation,
     rows = {kind: _held_rows([where], mode, "joints" if mode in by_joints else "positions")
             for kind, where in shown.items()}
     d, g, e = (np.concatenate(part) for part in zip(*rows.values()))
-    rms, start, slope, outside_slope, outside_curve = built.growth[mode]  # as `LandingData.near_rms` reads it
-    near = rms + slope * np.maximum(d - start, 0.0) + g * (outside_slope + outside_curve * g)
+    near = built.rms_at(mode, d, g)
     stated = landing.quantile_of_norm(np.zeros((len(near), 3)), near[:, None, None] ** 2 / 3.0 * np.eye(3))
     classes = np.repeat(list(rows), [len(r[0]) for r in rows.values()])
     return built.to_dict(), reliability(stated, np.linalg.norm(e, axis=1), classes, mode)
