@@ -9,15 +9,20 @@ program CSV, mm and deg, 3 and 4 decimals) on the virtual UR10 is
 compensated in composite mode and re-timed (the default) by the CLI
 in a fresh process (`python -m trajcomp.cli compensate`), start-up
 included, on one process (`--jobs 1`) and on every usable core (the
-default); the table gives wall time and waypoints/s (the median of
-`RUNS` runs without sampling: this machine's speed varies by 10-30 % from
-run to run), and from another run the peak memory of the process tree
-(summed proportional set sizes: the physical memory the run takes) and
-the peak resident memory of its largest process.
+default), with the model a user gets (`make_model`: `calibrate`'s
+defaults, so each target's landing estimate is computed); the table gives
+wall time, CPU time (user + system of the process and its workers) and
+waypoints/s (the median of `RUNS` runs without sampling: this machine's
+speed varies by 10-30 % from run to run), and from another run the peak
+memory of the process tree (summed proportional set sizes: the physical
+memory the run takes) and the peak resident memory of its largest process;
+then pandas' read_csv + to_csv of the same file and the default run's
+ratios to it (wall and CPU time).
 Also: CLI start-up (`trajcomp --version`) and the compensation core alone
 (targets/s on one core).
 Targets (issue 11): >= 50,000 waypoints/s at 300,000 points, < 1 GB peak at
-1,000,000 points, start-up < 0.3 s.
+1,000,000 points, start-up < 0.3 s; (issue 38) the default run within 4x
+pandas' read and write at 300,000 points.
 
 ``languages``: the same helix in every language, each on a built-in arm of
 its vendor (CSV and URScript on the UR10, KRL on the KUKA, RAPID on the
@@ -90,18 +95,20 @@ def write_program(path, robot, n, **placement):
 
 
 def run_cli(args, sample=False):
-    """Wall time (s) and memory of ``python -m trajcomp.cli ARGS`` in a fresh process (`run_python`)."""
+    """Wall time (s), memory and CPU time of ``python -m trajcomp.cli ARGS`` in a fresh process (`run_python`)."""
     return run_python(["-m", "trajcomp.cli", *args], sample)
 
 
 def run_python(args, sample=False):
-    """Wall time (s) and memory of ``python ARGS`` in a fresh process.
+    """Wall time (s), memory and CPU time (s) of ``python ARGS`` in a fresh process.
 
     Memory (MB, with ``sample``, which costs the run some CPU): the peak of
     the process tree's physical memory, the sum of its processes'
     proportional set sizes sampled every 10 ms (what a forked worker shares
     with its parent counts once), and the kernel's peak resident memory of
     its largest process (a forked worker's counts the pages it shares).
+    CPU time: user + system of the process and the workers it waited for
+    (what a busy shared machine changes least).
     """
     start = time.perf_counter()
     with tempfile.TemporaryFile() as err:
@@ -116,7 +123,7 @@ def run_python(args, sample=False):
         if child.returncode not in (0, 1):  # 1: written, its verdict fails
             err.seek(0)
             raise SystemExit(f"python {' '.join(args)} exited {child.returncode}:\n{err.read()[-2000:].decode()}")
-    return wall, tree, usage.ru_maxrss / 1024.0
+    return wall, tree, usage.ru_maxrss / 1024.0, usage.ru_utime + usage.ru_stime
 
 
 def _ended(pid):
@@ -232,17 +239,22 @@ def _language_row(n, label, robot, paths, model, out, csv_time):
           f"{wall / floor:>8.2f} {peak:>8,.0f} {(peak - start) * 1024 / n:>12.2f}", flush=True)
 
 
-def _pandas_floor(program, out, wall):
-    """Print pandas' read_csv + to_csv of the CSV program (a fresh process) and the CSV path's ratio to it."""
+def _pandas_floor(program, out, wall, cpu=None):
+    """Print pandas' read_csv + to_csv of the CSV program (a fresh process, median of `RUNS`) and the CSV path's
+    ratios to it: wall time ``wall`` (s), and CPU time ``cpu`` (s) where given."""
     try:
         import pandas  # noqa: F401 (only whether it is installed)
     except ImportError:
         print(f"{'':>10} {'pandas':>22} not installed: no pandas floor")
         return
-    floor = float(np.median([run_python(["-c", "import pandas, sys; pandas.read_csv(sys.argv[1]).to_csv("
-                                         "sys.argv[2], index=False)", str(program), str(out)])[0]
-                             for _ in range(RUNS)]))
-    print(f"{'':>10} {'pandas':>22} {'(CSV floor)':>18} {floor:>8.2f} {'':>13} {'':>6} {wall / floor:>8.2f}")
+    runs = [run_python(["-c", "import pandas, sys; pandas.read_csv(sys.argv[1]).to_csv(sys.argv[2], index=False)",
+                        str(program), str(out)]) for _ in range(RUNS)]
+    floor, floor_cpu = (float(np.median(column)) for column in zip(*((r[0], r[3]) for r in runs)))
+    if cpu is None:
+        print(f"{'':>10} {'pandas':>22} {'(CSV floor)':>18} {floor:>8.2f} {'':>13} {'':>6} {wall / floor:>8.2f}")
+    else:
+        print(f"{'':>10} {'pandas read + write':>22} {floor:>8.2f} {floor_cpu:>8.2f}   the default run: "
+              f"{wall / floor:.1f}x pandas' wall time, {cpu / floor_cpu:.1f}x its CPU time")
 
 
 def main_bench(sizes):
@@ -257,18 +269,23 @@ def main_bench(sizes):
     compensate(model, T, seed=seed)
     core = len(T) / (time.perf_counter() - start)
     print(f"compensation core, composite, 100,000 seeded targets, this process: {core:,.0f} targets/s")
-    print(f"\n{'waypoints':>10} {'jobs':>5} {'wall s':>8} {'waypoints/s':>12} {'peak MB':>8} {'largest RSS MB':>15}")
+    print(f"\n{'waypoints':>10} {'jobs':>5} {'wall s':>8} {'CPU s':>8} {'waypoints/s':>12} {'peak MB':>8} "
+          f"{'largest RSS MB':>15}")
     for n in sizes:
         program = folder / f"helix{n}.csv"
         write_program(program, model.nominal, n)
         for jobs in sorted({1, usable_cores()}):
             args = ["compensate", str(program), "--model", str(model_path), "-o", str(folder / "out.csv"),
                     "--jobs", str(jobs)]
-            wall = float(np.median([run_cli(args)[0] for _ in range(RUNS)]))
-            _, peak, largest = run_cli(args, sample=True)  # another run: sampling costs CPU
-            print(f"{n:>10,} {jobs:>5} {wall:>8.2f} {n / wall:>12,.0f} {peak:>8,.0f} {largest:>15,.0f}")
+            runs = [run_cli(args) for _ in range(RUNS)]
+            wall, cpu = (float(np.median(column)) for column in zip(*((r[0], r[3]) for r in runs)))
+            _, peak, largest, _ = run_cli(args, sample=True)  # another run: sampling costs CPU
+            print(f"{n:>10,} {jobs:>5} {wall:>8.2f} {cpu:>8.2f} {n / wall:>12,.0f} {peak:>8,.0f} {largest:>15,.0f}",
+                  flush=True)
+        _pandas_floor(program, folder / "pandas.csv", wall, cpu)  # against the default run (every usable core)
         program.unlink()
-    print("targets: >= 50,000 waypoints/s at 300,000; < 1,000 MB at 1,000,000")
+    print("targets: >= 50,000 waypoints/s at 300,000; < 1,000 MB at 1,000,000; the default run within 4x pandas' "
+          "read and write at 300,000")
 
 
 if __name__ == "__main__":

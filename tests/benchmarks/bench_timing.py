@@ -143,15 +143,16 @@ def program_moves(path, robot):
 
 
 def model_of(folder, robot_name, corner, side):
-    """A composite model of the robot's virtual copy calibrated on a cube around the path (README commands)."""
+    """A composite model of the robot's virtual copy calibrated on a cube around the path (README commands,
+    `calibrate`'s defaults: the model a user gets)."""
     plan, meas, model = (folder / f"{robot_name}-{name}" for name in ("plan.csv", "meas.csv", "model.yaml"))
     if not model.exists():
         arm = ["--robot", robot_name]
         with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()):
             assert cli(["plan", *arm, f"--cube={corner}", "--side", str(side), "--step", "50", "-o", str(plan)]) == 0
             assert cli(["simulate", str(plan), *arm, "--profile", "paper", "--seed", "1", "-o", str(meas)]) == 0
-            assert cli(["calibrate", str(meas), *arm, "--method", "composite", "--grid-step", "50", "--folds", "0",
-                        "-o", str(model)]) == 0
+            assert cli(["calibrate", str(meas), *arm, "--method", "composite", "--grid-step", "50", "-o",
+                        str(model)]) == 0
     return load_model(model)
 
 

@@ -567,7 +567,7 @@ def estimate(model, mode, q, T_target, tool=None, postures=None, other_tool=Fals
         far_mode = "dh" if "dh" in data.growth else "none"
         near[outside] = data.near_rms(far_mode, model.nominal, q[outside], position[outside])
     isotropic = near[:, None, None] ** 2 / 3.0 * np.eye(3)  # the held-out RMS, shared by the three axes
-    spread = isotropic + np.einsum("nip,pq,njq->nij", jac, covariance, jac)
+    spread = isotropic + (jac @ covariance) @ jac.transpose(0, 2, 1)  # J C J^T at each target
     spread = spread + update.position_covariance(model, q)  # what a light re-calibration left uncertain
     if correction is not None:  # the re-calibration's correction, as uncertain as its few rows leave it
         spread = spread + correction.variance(position)[:, None, None] * np.eye(3)
