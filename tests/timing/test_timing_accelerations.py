@@ -25,7 +25,7 @@ from trajcomp.compensation.pipeline import planned
 from trajcomp.compensation.posture import planned_joints
 
 
-def retimed(tmp_path, name, text, robot_name, extra=None, model=None):
+def retimed(tmp_path, name, text, robot_name, extra=None, model=None, codes=(0,)):
     """``name`` holding ``text`` (and ``extra`` files) re-timed (``retime``, or with a ``model`` ``compensate
     --retime auto``): (the written motions' joints (M, 6) rad, the report's time stamps (M,) s, the written text)."""
     folder = tmp_path / "in"
@@ -37,7 +37,7 @@ def retimed(tmp_path, name, text, robot_name, extra=None, model=None):
     out.parent.mkdir()
     run = ["retime", "--robot", robot_name] if model is None else ["compensate", "--model", str(model), "--retime",
                                                                    "auto"]
-    assert main([*run, str(folder / name), "-o", str(out), "--report", str(report)]) in ((0,) if model is None
+    assert main([*run, str(folder / name), "-o", str(out), "--report", str(report)]) in (codes if model is None
                                                                                          else (0, 1))
     program, robot = formats.read(out), load_robot(robot_name)
     plan = planned_joints(program, robot)
@@ -156,3 +156,21 @@ def test_fanuc_acc_carried_into_a_conversion(tmp_path, makerless):
     q = planned(program, plan.index, plan.q)[program.motion_table().target]
     times = [float(v) for v in re.findall(r"MoveJ \w+, \w+\\T:=([\d.]+)", out.read_text())]
     assert len(times) == 2 and times[0] >= least_joint_time(robot, q[0], q[1], 0.2) * (1 - 1e-6)
+
+
+@pytest.mark.parametrize("accset", ["AccSet 50, 30;", "AccSet 50, 100\\FinePointRamp:=30;"])
+def test_rapid_softer_ramps_time_a_speed_and_leave_a_time_as_written(tmp_path, accset):
+    """A ramp below 100 % (or \\FinePointRamp, for a motion to a fine point) only softens how fast the
+    accelerations build up: a line's speed data cruises behind it no faster, so it is timed under AccSet's 50 %
+    (its report time no shorter than joints at 50 % of their limits from rest to rest allow); a MoveJ, whose written
+    field would be a time the controller keeps by cruising faster behind softer ramps, keeps its field as
+    written, listed."""
+    module = ACC_MODULE.replace("AccSet 20, 100;", accset).replace(
+        "MoveJ P1, v1000, fine, tool0;\n  ENDPROC", "MoveL P1, v1000, fine, tool0;\n  ENDPROC")
+    q, t, text = retimed(tmp_path, "Acc.mod", module, "abb_irb4600", codes=(1,))  # a motion left as written
+    assert "MoveJ P2, v1000, fine, tool0;" in text  # left as written
+    assert "MoveL P1, v1000, fine, tool0;" in text  # a speed the arm keeps: kept
+    report = json.loads((tmp_path / "report.json").read_text())["timing"]
+    assert "AccSet ramp 30 %" in json.dumps(report)
+    # each joint from rest to rest at most at 50 % of its limit, whatever its path
+    assert t[2] - t[1] >= least_joint_time(load_robot("abb_irb4600"), q[1], q[2], 0.5) - STAMP
