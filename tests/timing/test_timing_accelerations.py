@@ -104,7 +104,10 @@ def test_krl_acc_ptp_and_acc_cp_bound_the_timing(tmp_path, kuka_model, compensat
     dat = ("DEFDAT acc\n  DECL E6AXIS HOME={A1 0,A2 -90,A3 90,A4 0,A5 45,A6 0}\n"
            "  DECL E6POS P1={X 400,Y -100,Z 700,A 0,B 90,C 0}\n  DECL E6POS P2={X 404,Y -96,Z 703,A 0,B 90,C 0}\n"
            "ENDDAT\n")
-    q, t, _ = retimed(tmp_path, "acc.src", src, "kuka_kr6_r900", {"acc.dat": dat}, kuka_model if compensated else None)
+    q, t, _ = retimed(tmp_path, "acc.src", src, "kuka_kr6_r900", {"acc.dat": dat}, kuka_model if compensated else None,
+                      codes=(1,))
+    # ORI1 and ORI2, orientation accelerations the timing does not model: the LIN left as written, listed
+    assert "$ACC.ORI1 100 deg/s^2" in (tmp_path / "report.json").read_text()
     robot = load_robot("kuka_kr6_r900")
     assert t[2] - t[1] >= least_joint_time(robot, q[1], q[2], 0.2) - STAMP  # the PTP at 20 % of the ramps
     length = np.linalg.norm(fk(robot, q[3])[:3, 3] - fk(robot, q[2])[:3, 3])
@@ -120,6 +123,22 @@ def test_urscript_movel_a_bounds_the_timing(tmp_path):
     length = np.linalg.norm(fk(robot, q[1])[:3, 3] - fk(robot, q[0])[:3, 3])
     assert "a=0.1" in text and length > 10.0
     assert t[1] - t[0] >= 2.0 * np.sqrt(length / 100.0) - STAMP  # 0.1 m/s^2, from rest to rest
+
+
+@pytest.mark.parametrize("setting", ["$ACC.ORI2=20", "$ACC={CP 2.0,ORI1 30,ORI2 200}"])
+def test_krl_orientation_acceleration_leaves_a_line_as_written(tmp_path, setting):
+    """``$ACC.ORI1`` / ``ORI2`` bound how fast a LIN may turn the tool, which the timing does not model: a LIN
+    after one keeps its speed as written (here a 3 m/s the arm cannot keep would be lowered), listed; a PTP is not
+    concerned."""
+    src = (f"DEF acc( )\n  BAS(#VEL_PTP,100)\n  $VEL.CP=3.0\n  PTP HOME\n  PTP P1\n  {setting}\n  LIN P2\n"
+           "  PTP P1\nEND\n")
+    dat = ("DEFDAT acc\n  DECL E6AXIS HOME={A1 0,A2 -90,A3 90,A4 0,A5 45,A6 0}\n"
+           "  DECL E6POS P1={X 400,Y -100,Z 700,A 0,B 90,C 0}\n  DECL E6POS P2={X 500,Y 100,Z 600,A 90,B 60,C 0}\n"
+           "ENDDAT\n")
+    _, _, text = retimed(tmp_path, "acc.src", src, "kuka_kr6_r900", {"acc.dat": dat}, codes=(1,))
+    assert text.count("$VEL.CP") == 1 and "$VEL.CP=3.0" in text  # nothing lowered or inserted for the LIN
+    listed = json.loads((tmp_path / "report.json").read_text())["timing"]["not_retimed"]
+    assert listed["count"] == 1 and "an orientation acceleration" in json.dumps(listed)
 
 
 def test_rapid_accset_carried_into_a_conversion(tmp_path, makerless):
