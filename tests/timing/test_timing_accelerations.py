@@ -23,6 +23,8 @@ from trajcomp.arm.robot import load_robot
 from trajcomp.cli import main
 from trajcomp.compensation.pipeline import planned
 from trajcomp.compensation.posture import planned_joints
+from tests.conftest import calibrated_model
+from tests.timing.test_control_flow import ur_least_time
 
 
 def retimed(tmp_path, name, text, robot_name, extra=None, model=None, codes=(0,)):
@@ -40,10 +42,15 @@ def retimed(tmp_path, name, text, robot_name, extra=None, model=None, codes=(0,)
     assert main([*run, str(folder / name), "-o", str(out), "--report", str(report)]) in (codes if model is None
                                                                                          else (0, 1))
     program, robot = formats.read(out), load_robot(robot_name)
-    plan = planned_joints(program, robot)
+    return motion_joints(program, robot), np.array(json.loads(report.read_text())["timing"]["t_s"]), out.read_text()
+
+
+def motion_joints(program, robot):
+    """Joints (M, 6) rad of a program's M motions' targets: a joint target's own, a pose's in its posture."""
+    plan, table = planned_joints(program, robot), program.target_table()
     q = planned(program, plan.index, plan.q)
-    joints = q[program.motion_table().target]
-    return joints, np.array(json.loads(report.read_text())["timing"]["t_s"]), out.read_text()
+    q[table.is_joint] = table.joints[table.is_joint]
+    return q[program.motion_table().target]
 
 
 STAMP = 1e-4  # s: the report's time stamps are rounded to 4 decimals
@@ -141,55 +148,118 @@ def test_krl_orientation_acceleration_leaves_a_line_as_written(tmp_path, setting
     assert listed["count"] == 1 and "an orientation acceleration" in json.dumps(listed)
 
 
-def test_rapid_accset_carried_into_a_conversion(tmp_path, makerless):
-    """Converted to FANUC, whose J motion states a percentage its controller runs at its full ramps: the motions
-    after AccSet 20 take no less time than their 20 % ramps need (the percentage lowered to make up for them)."""
-    source = tmp_path / "Acc.mod"
-    source.write_text(ACC_MODULE)
-    out = tmp_path / "ACC.LS"
-    assert main(["convert", str(source), str(out), "--robot", makerless("abb_irb4600")]) in (0, 1)
-    program, robot = formats.read(source), load_robot("abb_irb4600")
-    plan = planned_joints(program, robot)
-    q = planned(program, plan.index, plan.q)[program.motion_table().target]
-    fields = re.findall(r"J P\[\d+\] (\d+)(%|msec)", out.read_text())
-    assert len(fields) == 3
-    for k in (1, 2):
-        value, unit = float(fields[k][0]), fields[k][1]
-        change = np.abs(q[k] - q[k - 1])
-        if unit == "msec":
-            taken = value / 1000.0
-        else:  # synchronized: the path parameter cruises at the slowest joint's p % and ramps at its limit
-            cruise, ramps = np.min(value / 100.0 * robot.v_max / change), np.min(robot.a_max / change)
-            taken = 1.0 / cruise + cruise / ramps if cruise < np.sqrt(ramps) else 2.0 / np.sqrt(ramps)
-        assert taken >= least_joint_time(robot, q[k - 1], q[k], 0.2) * (1 - 1e-6), (k, fields[k])
+KRL_ACC_SRC = "DEF acc( )\n  BAS(#VEL_PTP,100)\n  PTP HOME\n  PTP P1\n  BAS(#ACC_PTP,20)\n  PTP P2\n  PTP P1\nEND\n"
+KRL_ACC_DAT = ("DEFDAT acc\n  DECL E6AXIS HOME={A1 0,A2 -90,A3 90,A4 0,A5 45,A6 0}\n"
+               "  DECL E6POS P1={X 400,Y -100,Z 700,A 0,B 90,C 0}\n  DECL E6POS P2={X 404,Y -96,Z 703,A 0,B 90,C 0}\n"
+               "ENDDAT\n")
+UR_ACC = ("def acc():\n  movej([3.1, -1.57, 1.57, -1.57, -1.57, 0.0], a=1.4, v=1.05)\n"
+          "  movej([3.15, -1.55, 1.55, -1.57, -1.57, 0.0], a=0.3, v=1.05)\n"
+          "  movej([3.1, -1.57, 1.57, -1.57, -1.57, 0.0], a=1.4, v=1.05)\nend\n")
+UR_DEFAULT_A = 1.4  # rad/s^2: a movej's acceleration where it states none (URScript manual)
+# language: (file, text, other files, robot, model cube (corner, side, step), {motion: (form, value)}): each joint
+# motion's programmed acceleration, a share of every joint's limit or the leading axis's (UR movej a=, rad/s^2)
+ACC_SOURCES = {
+    "krl": ("acc.src", KRL_ACC_SRC, {"acc.dat": KRL_ACC_DAT}, "kuka_kr6_r900", None,
+            {2: ("share", 0.2), 3: ("share", 0.2)}),
+    "rapid": ("Acc.mod", ACC_MODULE, {}, "abb_irb4600", ("1050,-100,1300", 200, 50),
+              {1: ("share", 0.2), 2: ("share", 0.2)}),
+    "fanuc": ("ACC.LS", ACC_LS, {}, "fanuc_lrmate200id", None, {1: ("share", 0.2)}),
+    "urscript": ("acc.script", UR_ACC, {}, "ur10", ("600,50,550", 200, 50), {1: ("leading", 0.3)}),
+}
 
 
-def test_fanuc_acc_carried_into_a_conversion(tmp_path, makerless):
-    """Converted to RAPID: the motion under ACC20 gets a \\T no shorter than its 20 % ramps need."""
-    source = tmp_path / "ACC.LS"
-    source.write_text(ACC_LS)
-    out = tmp_path / "Acc.mod"
-    assert main(["convert", str(source), str(out), "--robot", makerless("fanuc_lrmate200id")]) in (0, 1)
-    program, robot = formats.read(source), load_robot("fanuc_lrmate200id")
-    plan = planned_joints(program, robot)
-    q = planned(program, plan.index, plan.q)[program.motion_table().target]
-    times = [float(v) for v in re.findall(r"MoveJ \w+, \w+\\T:=([\d.]+)", out.read_text())]
-    assert len(times) == 2 and times[0] >= least_joint_time(robot, q[0], q[1], 0.2) * (1 - 1e-6)
+def least_programmed_time(robot, form, q_a, q_b):
+    """The least time (s) from rest to rest the programmed acceleration ``form`` allows: every joint at most its
+    share of its limit, or the leading axis at most a (rad/s^2)."""
+    kind, value = form
+    if kind == "share":
+        return least_joint_time(robot, q_a, q_b, value)
+    return 2.0 * np.sqrt(np.max(np.abs(q_b - q_a)) / value)
 
 
-@pytest.mark.parametrize("accset", ["AccSet 50, 30;", "AccSet 50, 100\\FinePointRamp:=30;"])
-def test_rapid_softer_ramps_time_a_speed_and_leave_a_time_as_written(tmp_path, accset):
-    """A ramp below 100 % (or \\FinePointRamp, for a motion to a fine point) only softens how fast the
-    accelerations build up: a line's speed data cruises behind it no faster, so it is timed under AccSet's 50 %
-    (its report time no shorter than joints at 50 % of their limits from rest to rest allow); a MoveJ, whose written
-    field would be a time the controller keeps by cruising faster behind softer ramps, keeps its field as
-    written, listed."""
-    module = ACC_MODULE.replace("AccSet 20, 100;", accset).replace(
-        "MoveJ P1, v1000, fine, tool0;\n  ENDPROC", "MoveL P1, v1000, fine, tool0;\n  ENDPROC")
-    q, t, text = retimed(tmp_path, "Acc.mod", module, "abb_irb4600", codes=(1,))  # a motion left as written
-    assert "MoveJ P2, v1000, fine, tool0;" in text  # left as written
-    assert "MoveL P1, v1000, fine, tool0;" in text  # a speed the arm keeps: kept
-    report = json.loads((tmp_path / "report.json").read_text())["timing"]
-    assert "AccSet ramp 30 %" in json.dumps(report)
-    # each joint from rest to rest at most at 50 % of its limit, whatever its path
-    assert t[2] - t[1] >= least_joint_time(load_robot("abb_irb4600"), q[1], q[2], 0.5) - STAMP
+def controller_time(motion, q_a, q_b, robot):
+    """The least time (s) the controller takes for a written joint motion from rest to rest, from its field alone
+    (`trajcomp.formats.read`): a time; a percentage (KRL PTP, FANUC J): the path parameter cruising at the slowest
+    joint's p % of its limit, ramping at the acceleration the motion states (``acceleration_share``) or the arm's;
+    a UR movej: the leading axis at its v and a (1.4 rad/s^2 unless stated). None for a TCP speed (RAPID MoveJ
+    speed data, CSV), which this does not run."""
+    change = np.abs(q_b - q_a)
+    if motion.speed_unit == "s":
+        return motion.speed
+    if motion.speed_unit == "%":
+        moving = change > 1e-12
+        share = motion.acceleration_share or 1.0
+        cruise = np.min(motion.speed / 100.0 * robot.v_max[moving] / change[moving])
+        ramps = np.min(share * robot.a_max[moving] / change[moving])
+        return 1.0 / cruise + cruise / ramps if cruise < np.sqrt(ramps) else 2.0 / np.sqrt(ramps)
+    if motion.speed_unit == "rad/s":
+        return ur_least_time(np.max(change), motion.acceleration or UR_DEFAULT_A, motion.speed)
+    return None
+
+
+def source_folder(tmp_path, language):
+    name, text, extra, robot, _, _ = ACC_SOURCES[language]
+    folder = tmp_path / "source"
+    folder.mkdir()
+    for file, content in {name: text, **extra}.items():
+        (folder / file).write_text(content)
+    return folder / name
+
+
+@pytest.fixture(scope="module")
+def acc_models(tmp_path_factory, request):
+    """``model(language)``: a compensation model of the language's arm around its acceleration program."""
+    made = {}
+
+    def model(language):
+        _, _, _, robot, cube, _ = ACC_SOURCES[language]
+        if cube is None:
+            return request.getfixturevalue({"kuka_kr6_r900": "kuka_model", "fanuc_lrmate200id": "fanuc_model"}[robot])
+        if language not in made:
+            made[language] = calibrated_model(tmp_path_factory.mktemp(language), robot, *cube)
+        return made[language]
+
+    return model
+
+
+@pytest.mark.parametrize("language", sorted(ACC_SOURCES))
+def test_programmed_accelerations_bound_a_compensated_program(tmp_path, language, acc_models):
+    """``compensate --retime auto``: each motion under its programmed acceleration takes, in the report and in
+    its written field, no less time than that acceleration allows between its compensated joints."""
+    name, text, extra, robot_name, _, forms = ACC_SOURCES[language]
+    q, t, _ = retimed(tmp_path, name, text, robot_name, extra, acc_models(language))
+    robot = load_robot(robot_name)
+    written = formats.read(tmp_path / "out" / name).motions
+    checked = 0
+    for k, form in forms.items():
+        least = least_programmed_time(robot, form, q[k - 1], q[k])
+        assert t[k] - t[k - 1] >= least - STAMP, (k, t[k] - t[k - 1], least)
+        taken = controller_time(written[k], q[k - 1], q[k], robot)
+        if taken is not None:
+            assert taken >= least * (1 - 1e-6), (k, written[k].text, taken, least)
+            checked += 1
+    assert checked or language == "rapid"  # a RAPID MoveJ's speed data kept: a TCP speed, not run here
+
+
+@pytest.mark.parametrize("source, target", [(s, t) for s in sorted(ACC_SOURCES) for t in sorted(ACC_SOURCES)
+                                            if s != t])
+def test_programmed_accelerations_carried_into_every_conversion(tmp_path, makerless, source, target):
+    """Converted into each other language, whose field states a time, a percentage run at the arm's ramps, or a UR
+    speed at its default a: each motion under its programmed acceleration takes no less time than that
+    acceleration allows (the field lowered to make up for it). CSV states no motion time (the rows are timed by
+    ``retime``)."""
+    name, text, extra, robot_name, _, forms = ACC_SOURCES[source]
+    path = source_folder(tmp_path, source)
+    out = tmp_path / ("out" + {"krl": ".src", "rapid": ".mod", "fanuc": ".ls", "urscript": ".script"}[target])
+    assert main(["convert", str(path), str(out), "--robot", makerless(robot_name)]) in (0, 1)
+    q = motion_joints(formats.read(path), robot := load_robot(robot_name))
+    converted = formats.read(out).motions
+    assert len(converted) == len(q)
+    checked = 0
+    for k, form in forms.items():
+        taken = controller_time(converted[k], q[k - 1], q[k], robot)
+        least = least_programmed_time(robot, form, q[k - 1], q[k])
+        if taken is not None:
+            assert taken >= least * (1 - 1e-6), (k, converted[k].text, taken, least)
+            checked += 1
+    assert checked
