@@ -633,7 +633,31 @@ def ur_least_time(distance, a, v):
     return distance / v + v / a if distance >= v * v / a else 2.0 * np.sqrt(distance / a)
 
 
-def test_urscript_retimed_runs_no_faster_on_any_path_under_its_a_and_v(tmp_path, capsys):
+def assert_urscript_no_faster(written_text):
+    """Every movej of the written script given a time takes, on every path, no less than its programmed a and v
+    allow from the written joints of the motion before it; a time written where the start is not unique, or for a
+    movel, is a failure. Returns the times checked."""
+    ops = ur_ops(UR_SCRIPT)
+    fields = {op.name: op.value for op in ops if op.kind == "motion"}
+    written = {op.name: op.value for op in ur_ops(written_text) if op.kind == "motion"}
+    visited = visits(ur_ops(written_text), "cell", {})
+    assert visited.keys() == visits(ops, "cell", {}).keys()
+    checked = 0
+    for (key, path), visit in visited.items():
+        function, q, a, v, t = written[key]
+        if (function, a, v, t) == (fields[key][0], *fields[key][2:]):
+            continue  # its fields left as written (a compensated one moves its joints a little)
+        assert t is not None and function == "movej", (key, written[key])
+        assert visit.before, (key, path, "a time written where the motion's start is not unique")
+        assert (a, v) == fields[key][2:4]  # the programmed a and v kept beside the time
+        distance = np.max(np.abs(np.subtract(q, written[visit.before][1])))
+        least = ur_least_time(distance, a, v)
+        assert t >= least * (1 - 1e-4), (key, path, t, least)  # t is written to 4 decimals, rounded up
+        checked += 1
+    return checked
+
+
+def test_urscript_retimed_and_compensated_run_no_faster_on_any_path_under_its_a_and_v(tmp_path, tmp_path_factory):
     source = tmp_path / "cell.script"
     source.write_text(UR_SCRIPT)
     table = formats.read(source).motion_table()
@@ -643,23 +667,13 @@ def test_urscript_retimed_runs_no_faster_on_any_path_under_its_a_and_v(tmp_path,
     out = tmp_path / "out" / "cell.script"
     out.parent.mkdir()
     assert main(["retime", str(source), "-o", str(out), "--robot", "ur10"]) in (0, 1)
-    ops = ur_ops(UR_SCRIPT)
-    fields = {op.name: op.value for op in ops if op.kind == "motion"}
-    written = {op.name: op.value for op in ur_ops(out.read_text()) if op.kind == "motion"}
-    visited = visits(ur_ops(out.read_text()), "cell", {})
-    assert visited.keys() == visits(ops, "cell", {}).keys()
-    checked = 0
-    for (key, path), visit in visited.items():
-        function, q, a, v, t = written[key]
-        if written[key] == fields[key]:
-            continue  # left as written
-        assert t is not None and function == "movej", (key, written[key])
-        assert visit.before, (key, path, "a time written where the motion's start is not unique")
-        distance = np.max(np.abs(np.subtract(q, fields[visit.before][1])))
-        least = ur_least_time(distance, a, v)
-        assert t >= least * (1 - 1e-4), (key, path, t, least)  # t is written to 4 decimals, rounded up
-        checked += 1
-    assert checked >= 3
+    assert assert_urscript_no_faster(out.read_text()) >= 3
+    model = calibrated_model(tmp_path_factory.mktemp("ur10"), "ur10", "-800,-600,400", 300, 100)
+    comp = tmp_path / "comp" / "cell.script"
+    comp.parent.mkdir()
+    assert main(["compensate", str(source), "--model", str(model), "--retime", "auto", "-o", str(comp)]) in (0, 1)
+    assert ur_ops(comp.read_text()) != ur_ops(UR_SCRIPT)  # compensated
+    assert assert_urscript_no_faster(comp.read_text()) >= 3
 
 
 def test_krl_spline_block_runs_at_its_with_speed_and_gets_no_statement_inside(tmp_path):
