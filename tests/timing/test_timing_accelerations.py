@@ -263,3 +263,49 @@ def test_programmed_accelerations_carried_into_every_conversion(tmp_path, makerl
             assert taken >= least * (1 - 1e-6), (k, converted[k].text, taken, least)
             checked += 1
     assert checked
+
+
+TCP_SOURCES = {  # language: (file, text, other files, robot, the line's index, its TCP acceleration mm/s^2)
+    "krl": ("acc.src", KRL_ACC_SRC.replace("  BAS(#ACC_PTP,20)\n  PTP P2", "  $VEL.CP=2.0\n  $ACC.CP=0.1\n  LIN P2"),
+            {"acc.dat": KRL_ACC_DAT.replace("Y -96,Z 703", "Y -56,Z 703")}, "kuka_kr6_r900", 2, 100.0),
+    "urscript": ("acc.script", UR_ACC.replace("movej([3.15, -1.55, 1.55, -1.57, -1.57, 0.0], a=0.3, v=1.05)",
+                                              "movel([3.15, -1.55, 1.55, -1.57, -1.57, 0.0], a=0.1, v=0.25)"),
+                 {}, "ur10", 1, 100.0),
+}
+
+
+@pytest.mark.parametrize("source, target", [(s, t) for s in sorted(TCP_SOURCES) for t in sorted(ACC_SOURCES)
+                                            if s != t])
+def test_a_tcp_acceleration_carried_into_every_conversion(tmp_path, makerless, source, target):
+    """A line under a programmed TCP acceleration a (KRL ``$ACC.CP``, UR movel ``a=``) converted into each other
+    language takes no less than 2 sqrt(L / a) from rest to rest: a written time no shorter; a written TCP speed v,
+    which no controller exceeds, with L / v no shorter within 0.5 % (the target controller's own ramps add the
+    rest)."""
+    name, text, extra, robot_name, k, a = TCP_SOURCES[source]
+    folder = tmp_path / "source"
+    folder.mkdir()
+    for file, content in {name: text, **extra}.items():
+        (folder / file).write_text(content)
+    out = tmp_path / ("out" + {"krl": ".src", "rapid": ".mod", "fanuc": ".ls", "urscript": ".script"}[target])
+    assert main(["convert", str(folder / name), str(out), "--robot", makerless(robot_name)]) in (0, 1)
+    robot = load_robot(robot_name)
+    q = motion_joints(formats.read(folder / name), robot)
+    length = np.linalg.norm(fk(robot, q[k])[:3, 3] - fk(robot, q[k - 1])[:3, 3])
+    least = 2.0 * np.sqrt(length / a)
+    motion = formats.read(out).motions[k]
+    assert motion.speed_unit in ("s", "mm/s"), motion.text
+    taken = motion.speed if motion.speed_unit == "s" else length / motion.speed
+    assert taken >= least * (1 - 5e-3), (motion.text, taken, least)
+
+
+@pytest.mark.parametrize("language", sorted(TCP_SOURCES))
+def test_a_tcp_acceleration_bounds_a_compensated_line(tmp_path, language, acc_models):
+    """``compensate --retime auto``: the line under its TCP acceleration a takes, in the report, no less than
+    2 sqrt(L / a) over its compensated length L; its written field (a TCP speed) no faster than programmed."""
+    name, text, extra, robot_name, k, a = TCP_SOURCES[language]
+    q, t, _ = retimed(tmp_path, name, text, robot_name, extra, acc_models(language))
+    robot = load_robot(robot_name)
+    length = np.linalg.norm(fk(robot, q[k])[:3, 3] - fk(robot, q[k - 1])[:3, 3])
+    assert t[k] - t[k - 1] >= 2.0 * np.sqrt(length / a) - STAMP
+    source, written = formats.read(tmp_path / "in" / name).motions[k], formats.read(tmp_path / "out" / name).motions[k]
+    assert written.speed_unit == source.speed_unit == "mm/s" and written.speed <= source.speed
