@@ -42,13 +42,18 @@ def install_plugin(monkeypatch, folder, name, module):
     monkeypatch.setattr(formats, "_PLUGINS", {"loaded": False, "failed": {}})
 
 
-def calibrated_model(folder, robot, corner, side, step, folds=3):
+def calibrated_model(folder, robot, corner, side, step, folds=3, orientations="1"):
     """A composite model of the virtual ``robot`` (seed 1) calibrated on the cube at ``corner`` ("x,y,z", mm) of
     ``side`` and ``step`` mm with ``folds`` folds through the CLI, as the README runs it: the model file
-    ``model.yaml`` in ``folder``."""
+    ``model.yaml`` in ``folder``.
+
+    ``orientations`` is `trajcomp plan --orientations`: by default the paper's one orientation, a grid
+    model over positions, for the tests of programs, reports and timing, which are not about tilted
+    targets (the default plan's five orientations: ``"auto"``, as `test_cli` runs them).
+    """
     plan, meas, model = folder / "plan.csv", folder / "meas.csv", folder / "model.yaml"
     assert main(["plan", "--robot", robot, f"--cube={corner}", "--side", str(side), "--step", str(step),
-                 "-o", str(plan)]) == 0
+                 "--orientations", orientations, "-o", str(plan)]) == 0
     assert main(["simulate", str(plan), "--robot", robot, "--seed", "1", "-o", str(meas)]) == 0
     assert main(["calibrate", str(meas), "--robot", robot, "--grid-step", str(step), "--folds", str(folds),
                  "-o", str(model)]) == 0

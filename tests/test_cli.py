@@ -7,6 +7,7 @@ import pytest
 from conftest import real_data
 
 from trajcomp.cli import main
+from trajcomp.model.model_file import load_model
 
 UR5_COLUMNS = ",".join([f"j{i}=joint_{i}" for i in range(1, 7)] + ["x=x_t", "y=y_t", "z=z_t",
                         "mx=x_t+x_dif", "my=y_t+y_dif", "mz=z_t+z_dif"])
@@ -14,7 +15,8 @@ UR5_COLUMNS = ",".join([f"j{i}=joint_{i}" for i in range(1, 7)] + ["x=x_t", "y=y
 
 def test_plan_simulate_calibrate_validate_predict(tmp_path, capsys):
     plan, meas, model = tmp_path / "plan.csv", tmp_path / "meas.csv", tmp_path / "model.yaml"
-    assert main(["plan", "--robot", "ur10", "--cube", "300,-100,300", "--side", "400", "--step", "100", "-o", str(plan)]) == 0
+    assert main(["plan", "--robot", "ur10", "--cube", "300,-100,300", "--side", "400", "--step", "100",
+                 "--orientations", "1", "-o", str(plan)]) == 0  # one orientation: a grid model, whose step is checked
     assert main(["simulate", str(plan), "--robot", "ur10", "--seed", "1", "-o", str(meas)]) == 0
     assert main(["calibrate", str(meas), "--robot", "ur10", "--grid-step", "100", "-o", str(model)]) == 0
     assert "cross-validation" in capsys.readouterr().out
@@ -31,6 +33,18 @@ def test_plan_simulate_calibrate_validate_predict(tmp_path, capsys):
     predicted = tmp_path / "pred.csv"
     assert main(["predict", str(model), str(plan), "-o", str(predicted)]) == 0
     assert "px,py,pz" in predicted.read_text()
+
+
+def test_a_grid_step_no_lattice_checks_is_said_to_be_unused(tmp_path, capsys):
+    """Several orientations give a joint-angle model with a scattered field on top: no lattice for the step."""
+    plan, meas, model = tmp_path / "plan.csv", tmp_path / "meas.csv", tmp_path / "model.yaml"
+    assert main(["plan", "--robot", "ur10", "--cube", "300,-100,300", "--side", "200", "--step", "100",
+                 "-o", str(plan)]) == 0
+    assert main(["simulate", str(plan), "--robot", "ur10", "--seed", "1", "-o", str(meas)]) == 0
+    assert main(["calibrate", str(meas), "--robot", "ur10", "--grid-step", "100", "--folds", "0",
+                 "-o", str(model)]) == 0
+    warnings = load_model(model).report["warnings"]
+    assert any(w.startswith("--grid-step is not used: it checks the nodes of a lattice field") for w in warnings)
 
 
 def test_unreachable_targets_are_reported_with_exit_1(tmp_path, capsys):
@@ -319,7 +333,7 @@ def test_plan_keeps_one_arm_posture_and_lists_the_targets_it_cannot_reach(tmp_pa
 
     plan = tmp_path / "plan.csv"
     assert main(["plan", "--robot", "ur10", "--cube", "300,-100,300", "--side", "500", "--step", "100",
-                 "-o", str(plan)]) == 1
+                 "--orientations", "1", "-o", str(plan)]) == 1  # the paper's one orientation
     err = capsys.readouterr().err
     corners = ["800.000,400.000,700.000", "800.000,-100.000,800.000", "800.000,100.000,800.000",
                "800.000,200.000,800.000", "800.000,300.000,800.000", "700.000,400.000,800.000",

@@ -14,7 +14,12 @@ Each process of a run computes on one BLAS / OpenMP thread unless the user
 set the thread variables (`trajcomp.support.threads`).
 """
 
-import argparse
+if __name__ == "__main__":  # ``python -m trajcomp.cli``: a stopping signal from here on ends the run with its code
+    from trajcomp.support.signals import hold_from_start
+
+    hold_from_start()
+
+import argparse  # noqa: E402 (after the hold: a signal during the imports is kept for the run)
 import importlib
 import logging
 import os
@@ -25,7 +30,7 @@ import traceback
 from trajcomp import __version__
 from trajcomp.support.crash import bug_message, save_traceback
 from trajcomp.support.crash import EXIT_CODE as CRASHED
-from trajcomp.support.signals import Interrupted, raised, stopped
+from trajcomp.support.signals import Interrupted, check, raised, stopped
 from trajcomp.support.threads import THREAD_VARIABLES
 from trajcomp.commands import COMMANDS, EXIT_CODES_HELP
 from trajcomp.errors import ToleranceError, TrajcompError
@@ -95,6 +100,7 @@ def _run(argv):
     """Parse ``argv`` and run its command; the exit code."""
     args = None
     try:
+        check()  # a signal that came while the program started (`trajcomp.support.signals.hold_from_start`)
         args = parse(build_parser(_needed(argv)), argv)
         logging.basicConfig(level=logging.WARNING, format="trajcomp: warning: %(message)s")
         return args.run(args) or 0

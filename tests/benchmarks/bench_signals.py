@@ -3,7 +3,8 @@
 Runs ``MOMENTS`` (100 by default) ``trajcomp`` processes, each in a process
 group of its own (tests/signal_runs.py): ``compensate`` of a 20,000-target
 CSV program (``--jobs 2``), a batch of four 3,000-target programs
-(``--jobs 2``) and ``calibrate`` of a 125-point plan, with SIGTERM, SIGINT
+(``--jobs 2``), the same batch on a local Dask cluster (``--scheduler local``,
+when Dask is installed) and ``calibrate`` of a 125-point plan, with SIGTERM, SIGINT
 or SIGHUP sent to the group, to the main process or to a worker at a
 random moment of the run. Prints per command, signal and target: runs,
 runs stopped with the signal's code, runs that had finished first, runs
@@ -16,6 +17,7 @@ every run ended within 2 s.
 """
 
 import collections
+import importlib.util
 import random
 import signal
 import subprocess
@@ -51,6 +53,10 @@ COMMANDS = {  # name: (arguments, how long it runs about (s), what a finished ru
     "batch": (["compensate", "../cam", "--model", "../kuka.yaml", "-o", "out", "--jobs", "2"], 5.0,
               lambda files: set(files) == {f"out/p{k}.csv" for k in range(4)} | {"out/summary.json"},
               lambda files: set(files) <= {f"out/p{k}.csv" for k in range(4)}),
+    "dask batch": (["compensate", "../cam", "--model", "../kuka.yaml", "-o", "out", "--jobs", "2",
+                    "--scheduler", "local"],
+                   8.0, lambda files: set(files) == {f"out/p{k}.csv" for k in range(4)} | {"out/summary.json"},
+                   lambda files: set(files) <= {f"out/p{k}.csv" for k in range(4)}),
     "calibrate": (["calibrate", "../meas.csv", "--robot", ROBOT, "--grid-step", "50", "--folds", "3",
                    "-o", "model.yaml"], 1.8,
                   lambda files: files == ["model.yaml"], lambda files: not files),
@@ -60,13 +66,14 @@ COMMANDS = {  # name: (arguments, how long it runs about (s), what a finished ru
 def main(moments=100, seed=0):
     signal.signal(signal.SIGINT, signal.default_int_handler)  # not ignored by the runs (a shell's background job)
     rng = random.Random(seed)
+    commands = [name for name in COMMANDS if name != "dask batch" or importlib.util.find_spec("distributed")]
     table = collections.defaultdict(lambda: [0, 0, 0, 0, 0.0])
     broken = []
     with tempfile.TemporaryDirectory() as tmp:
         folder = Path(tmp)
         _setup(folder)
         for k in range(moments):
-            name = rng.choice(list(COMMANDS))
+            name = rng.choice(commands)
             signum = rng.choice([signal.SIGTERM, signal.SIGINT, signal.SIGHUP])
             target = rng.choice(["group", "group", "main", "worker"])
             arguments, duration, finished, stopped = COMMANDS[name]
@@ -83,9 +90,10 @@ def main(moments=100, seed=0):
             row[4] = max(row[4], outcome.seconds)
             if problems:
                 broken.append((name, signal.Signals(signum).name, outcome.sent_to, f"{delay:.2f} s", problems))
-    print(f"{'command':<11}{'signal':<8}{'to':<8}{'runs':>5}{'stopped':>9}{'finished':>9}{'broken':>7}{'max end s':>11}")
+    print(f"{'command':<12}{'signal':<8}{'to':<8}{'runs':>5}{'stopped':>9}{'finished':>9}{'broken':>7}"
+          f"{'max end s':>11}")
     for (name, signame, target), (runs, stopped, done, bad, longest) in sorted(table.items()):
-        print(f"{name:<11}{signame:<8}{target:<8}{runs:>5}{stopped:>9}{done:>9}{bad:>7}{longest:>11.2f}")
+        print(f"{name:<12}{signame:<8}{target:<8}{runs:>5}{stopped:>9}{done:>9}{bad:>7}{longest:>11.2f}")
     total = sum(row[0] for row in table.values())
     print(f"{total} runs, {len(broken)} broken, longest end {max(row[4] for row in table.values()):.2f} s")
     for case in broken:

@@ -1,16 +1,17 @@
 """The landing estimate as a forecast: coverage and sharpness per class of target, on arms the calibration never saw.
 
 Run:  python tests/benchmarks/bench_verdict.py [virtual] [ur10] [--orientations N] [--probe X,Y,Z]
-      (default: both, 1 orientation, the built-in UR10's TCP as the measured point)
+      (default: both, 5 orientations, the built-in UR10's TCP as the measured point)
 
 ``virtual``: UR10 arms whose errors the project's simulator does not draw
 (`ForeignArm`: the paper and harsh profiles' errors plus a Hayati tilt of
 every link and third-order gear errors, seeds 21-23), calibrated as the
-README's flow does (one orientation, the cube corner 300, -100, 300, side
-400, step 100, composite, 5 folds: `calibrate`'s defaults; ``--orientations
-5``: the plan spread over five orientations, 30 deg apart; ``--probe``: the
-measured point that far from the flange, mm, e.g. 40,0,100 off the last
-axis, where five orientations locate the flange). Per class of
+README's flow does (`trajcomp plan`'s default orientations: five, the home
+pose's and 30 deg tilts about +-x, +-y of the tool; the cube corner 300,
+-100, 300, side 400, step 100, composite, 5 folds: `calibrate`'s defaults;
+``--orientations 1``: the paper's one orientation; ``--probe``: the measured
+point that far from the flange, mm, e.g. 40,0,100 off the last axis, where
+five orientations locate the flange). Per class of
 target, 80 targets in 16 programs of 5, compensated in the default mode:
 
 - ``inside``: random positions in the measured cube, the measured orientation;
@@ -59,6 +60,7 @@ from trajcomp.calibration.measurement_plan import default_orientation, plan_grid
 from trajcomp.calibration.orientations import spread_orientations  # noqa: E402
 from trajcomp.calibration.measurements import Measurements, read_measurements  # noqa: E402
 from trajcomp.calibration.simulate import VirtualRobot  # noqa: E402
+from trajcomp.commands.plan import DEFAULT_ORIENTATIONS, DEFAULT_TILT  # noqa: E402
 from trajcomp.compensation.targets import compensate  # noqa: E402
 from trajcomp.errors import IKError  # noqa: E402
 from trajcomp.model import landing  # noqa: E402
@@ -194,17 +196,17 @@ HEADER = (f"{'class':26s}{'true mean':>9s}{'max':>8s}{'estimate':>10s}{'covered'
           f"{'wPASS':>7s}{'wFAIL':>7s}")
 
 
-def virtual_table(seeds=(21, 22, 23), profiles=("paper", "harsh"), orientations=1, probe=None):
+def virtual_table(seeds=(21, 22, 23), profiles=("paper", "harsh"), orientations=DEFAULT_ORIENTATIONS, probe=None):
     """Coverage and sharpness per class on foreign virtual UR10 arms calibrated as the README does.
 
-    ``orientations``: how many the plan spreads (`trajcomp plan --orientations`, 30 deg tilts);
+    ``orientations``: how many the plan spreads (`trajcomp plan --orientations`, its default tilt);
     ``probe``: the measured point's offset from the flange (3,), mm (default the built-in TCP).
     """
     robot = load_robot("ur10")
     if probe is not None:
         robot = robot.replace(T_flange_tool=pose_to_matrix([*probe, 0.0, 0.0, 0.0]))
     plan = plan_grid(robot, CORNER, SIDE, STEP, spread_orientations(default_orientation(robot), orientations,
-                                                                     np.radians(30.0)))
+                                                                     np.radians(DEFAULT_TILT)))
     q_plan = plan.joints[plan.reachable]
     posture = int(np.bincount(branch_index(robot, q_plan)).argmax())
     missed = 0

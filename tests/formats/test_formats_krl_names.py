@@ -51,7 +51,7 @@ def test_a_program_without_dat_is_renamed_too(tmp_path):
 def test_def_and_defdat_after_a_long_header_are_renamed_as_the_whole_text_reads_them(tmp_path, cut):
     # the names are searched in growing beginnings of the text (64 KB first): a name cut at the end of one is
     # read whole, and a DEF in a string before them is none
-    lines = ";" + "x" * 65000 + '\nMSG = "\nDEF no( )\nDEFDAT no\n'
+    lines = ";" + "x" * 65000 + '\n&PARAM MSG = "\nDEF no( )\nDEFDAT no\n'
     header = lines + "y" * (65536 - 7 - cut - len(lines) - 2) + '"\n'  # DEFDAT's name cut after ``cut`` letters
     (tmp_path / "prog_name.src").write_text(header + "DEF prog_name( )\n  PTP XP1\nEND\n")
     (tmp_path / "prog_name.dat").write_text(header + "DEFDAT prog_name\nDECL E6POS XP1={X 1,Y 2,Z 3,A 0,B 0,C 0}\n"

@@ -99,14 +99,15 @@ def test_mask_blanks_comments_and_string_contents_keeping_offsets():
 
 
 def _masked_by_pattern(text, comment, quote):
-    """The reference: one pattern of a string (to its closing quote or the end) or a comment, left to right."""
+    """The reference: one pattern of a string (to its closing quote or the end) or a comment, left to right; a
+    carriage return alone made a line feed."""
     def blanked(m):
         if m.group(1) is None:
             return " " * len(m.group(0))
         return quote + re.sub(r"[^\r\n]", " ", m.group(1)) + m.group(0)[1 + len(m.group(1)):]
 
     q, c = re.escape(quote), re.escape(comment)
-    return re.sub(f"{q}([^{q}]*)(?:{q}|\\Z)|{c}[^\r\n]*", blanked, text)
+    return re.sub(f"{q}([^{q}]*)(?:{q}|\\Z)|{c}[^\r\n]*", blanked, re.sub("\r(?!\n)", "\n", text))
 
 
 @pytest.mark.parametrize("comment", [";", "!", "//"])

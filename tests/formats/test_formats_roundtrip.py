@@ -2,7 +2,7 @@
 
 One shared helper (meshio style) runs over every file in
 tests/data/programs/ (the .dat of a KRL program travels with its .src), in
-its stored line endings and with them swapped (LF <-> CRLF), and checks that
+its stored line endings and with them swapped (LF, CRLF, CR alone), and checks that
 a compensation-like edit (a known rigid shift of every Cartesian target)
 changes only the lines holding those targets' numbers.
 """
@@ -42,9 +42,7 @@ def copy_program(path, folder, newline=None):
     for file in companions(path):
         data = file.read_bytes()
         if newline is not None:
-            data = data.replace(b"\r\n", b"\n")
-            if newline == b"\r\n":
-                data = data.replace(b"\n", b"\r\n")
+            data = data.replace(b"\r\n", b"\n").replace(b"\n", newline)
         (folder / file.name).write_bytes(data)
     return folder / path.name
 
@@ -66,7 +64,7 @@ def test_there_is_a_golden_program_per_format():
     assert found == {"csv", "krl", "rapid", "fanuc_ls", "urscript"}
 
 
-@pytest.mark.parametrize("newline", [None, b"\n", b"\r\n"], ids=["stored", "lf", "crlf"])
+@pytest.mark.parametrize("newline", [None, b"\n", b"\r\n", b"\r"], ids=["stored", "lf", "crlf", "cr"])
 @pytest.mark.parametrize("path", PROGRAMS, ids=lambda p: f"{p.parent.name}/{p.name}")
 def test_unchanged_program_writes_back_byte_for_byte(path, newline, tmp_path):
     (tmp_path / "in").mkdir()
@@ -95,9 +93,14 @@ def _line_of(text, offset):
     return len(text[:offset].splitlines()) if offset else 1
 
 
+@pytest.mark.parametrize("newline", [None, b"\r"], ids=["stored", "cr"])
 @pytest.mark.parametrize("path", PROGRAMS, ids=lambda p: f"{p.parent.name}/{p.name}")
-def test_rigid_shift_changes_only_the_compensated_numbers(path, tmp_path):
+def test_rigid_shift_changes_only_the_compensated_numbers(path, newline, tmp_path):
+    """With the line endings as stored and as a carriage return alone (read as lines, kept on write: a CR-only
+    KRL or RAPID file was refused as cut off before)."""
     shift = np.array([0.5, -0.25, 0.125])
+    (tmp_path / "in").mkdir()
+    path = copy_program(path, tmp_path / "in", newline)
     program = formats.read(path)
     stack = program.cartesian_targets()
     moved = stack.T.copy()
@@ -110,6 +113,8 @@ def test_rigid_shift_changes_only_the_compensated_numbers(path, tmp_path):
         for span in program.targets[i].spans.values()
     } | {(program.sources[0].name, program.targets[i].line) for i in stack.index if not program.targets[i].spans}
     after = _lines(tmp_path, path)
+    if newline == b"\r":
+        assert not any(b"\n" in file.read_bytes() for file in companions(tmp_path / path.name))
     for name, old_lines in _lines(path.parent, path).items():
         new_lines = after[name]
         assert len(new_lines) == len(old_lines), name

@@ -183,7 +183,7 @@ def test_calibration_report_with_repeats_is_valid_and_embeds_its_figures(kuka_mo
     no_cv = dataclasses.replace(model, report={k: v for k, v in model.report.items() if k != "cross_validation"})
     assert any(m.startswith("no cross-validation") for m in calibration_report(no_cv, twice).doc["missing"])
     figures = _self_contained(report.html_text())
-    assert len(figures) == len(report.figures) == 3
+    assert len(figures) == len(report.figures) == 4  # statistics, trends, maps, reliability
 
 
 def test_calibrate_report_without_a_grid_says_so(tmp_path, kuka_model):

@@ -14,7 +14,7 @@ under ``track`` (user units: mm, mm/s, mm/s^2)::
         acceleration: 2500       # mm/s^2
       fields:                    # the program field that holds the track position, per language
         krl: E1
-        fanuc_ls: E1
+        fanuc_ls: E1             # or GP2:J1, a rail as motion group 2 (group 1 then states no E1..)
         rapid: eax_a
       scale: 1.0                 # optional: world mm per mm of track position (a calibration identifies it)
 
@@ -39,7 +39,8 @@ import numpy as np
 
 from trajcomp.errors import RobotError
 
-_FIELD = re.compile(r"^(?:E([1-6])|eax_([a-f]))$", re.I)  # KUKA / FANUC E1..E6, ABB eax_a..eax_f
+# KUKA / FANUC E1..E6, ABB eax_a..eax_f, a FANUC rail as motion group 2: GP2:J1 (its axes follow group 1's E1..)
+_FIELD = re.compile(r"^(?:E([1-6])|eax_([a-f])|GP2\s*:\s*J([1-6]))$", re.I)
 MAGNITUDE_BOUND = 1e5  # mm, mm/s, mm/s^2: a track longer than 100 m, or faster than 100 m/s, is damage
 
 
@@ -68,6 +69,15 @@ class Track:
         The real world mm per mm of track position a calibration identified (None: ``scale``).
     measured_positions : ndarray, shape (P,), or None
         The track positions that calibration measured, mm, ascending.
+    straightness : ndarray, shape (P, 3), or None
+        The real carriage's displacement beyond ``actual_scale * e *
+        actual_direction`` at each measured position, world mm
+        (`trajcomp.calibration.track`; about 0 at track position 0, where the
+        arm was calibrated): linear between them, held at the ends beyond
+        them. None: straight within what the calibration could tell.
+    scatter : float or None
+        Per axis RMS of the measured positions' mean offsets from the fitted
+        line, mm (straightness and noise): the scale of `placement_sigma`.
     """
 
     direction: np.ndarray
@@ -81,6 +91,8 @@ class Track:
     actual_direction: np.ndarray = None
     actual_scale: float = None
     measured_positions: np.ndarray = None
+    straightness: np.ndarray = None
+    scatter: float = None
 
     def index(self, language):
         """The external axis index of ``language``'s targets that holds the track position, or None."""
@@ -95,9 +107,14 @@ class Track:
         """World translations (N, 3), mm, of the base at track positions ``values`` (N,) from its place at 0:
         on the real track (``actual``, as identified; the controller's when none is), else the controller's."""
         direction, scale = self.direction, self.scale
+        values = np.asarray(values, dtype=float)
         if actual and self.identified:
             direction, scale = self.actual_direction, self.actual_scale
-        return scale * np.asarray(values, dtype=float)[:, None] * direction
+        out = scale * values[:, None] * direction
+        if actual and self.straightness is not None:
+            out += np.stack([np.interp(values, self.measured_positions, column) for column in self.straightness.T],
+                            axis=1)
+        return out
 
     def placements(self, T_world_base, values, actual=True):
         """``T_world_base(e)`` (N, 4, 4) at track positions ``values`` (N,), mm: the carriage frames (`shift`)."""
@@ -112,6 +129,26 @@ class Track:
         if self.measured_positions is None:
             return np.zeros(len(values), dtype=bool)
         return (values < self.measured_positions[0]) | (values > self.measured_positions[-1])
+
+    def placement_sigma(self, values):
+        """Standard deviation (N,) per axis, mm, of where the identified track places the carriage at track
+        positions ``values`` (N,) within the travel its calibration measured (zeros without one).
+
+        ``scatter`` times the square root of the fitted line's variance
+        factor, 1 / P + (e - mean)^2 / sum (e_i - mean)^2 over the P measured
+        positions, plus the square of the gap to the nearest one, 2 d / h for
+        a distance d and a mean spacing h (1 midway: the straightness between
+        two positions is not measured). Beyond the measured travel the place
+        is not estimated (`beyond_measured`).
+        """
+        values = np.asarray(values, dtype=float)
+        if self.measured_positions is None or self.scatter is None:
+            return np.zeros(len(values))
+        measured = self.measured_positions
+        centre = measured.mean()
+        line = 1.0 / len(measured) + (values - centre) ** 2 / np.sum((measured - centre) ** 2)
+        gap = 2.0 * np.min(np.abs(values[:, None] - measured), axis=1) / (np.ptp(measured) / (len(measured) - 1))
+        return self.scatter * np.sqrt(line + np.minimum(gap, 1.0) ** 2)
 
     def replace(self, **changes):
         """A copy with some attributes changed (an identified direction or scale)."""
@@ -208,8 +245,10 @@ def track_from_doc(doc, label):
     for language, field in fields.items():
         m = _FIELD.match(str(field))
         if m is None:
-            raise RobotError(f"{label}: field track.fields.{language}: expected E1..E6 or eax_a..eax_f, got {field!r}")
-        index[str(language)] = int(m.group(1)) - 1 if m.group(1) else ord(m.group(2).lower()) - ord("a")
+            raise RobotError(f"{label}: field track.fields.{language}: expected E1..E6, eax_a..eax_f or GP2:J1..J6, "
+                             f"got {field!r}")
+        index[str(language)] = (int(m.group(1)) - 1 if m.group(1) else int(m.group(3)) - 1 if m.group(3)
+                                else ord(m.group(2).lower()) - ord("a"))
     scale = value.get("scale", 1.0)
     if not _number(scale) or not 0.5 < scale < 2.0:
         raise RobotError(f"{label}: field track.scale: expected a number near 1 (world mm per mm of track), "

@@ -30,7 +30,7 @@ from scipy.spatial import cKDTree
 from trajcomp.calibration.options import INTERPOLATIONS, LOSSES, METHODS, ORIENTATION_WEIGHT
 from trajcomp.errors import CalibrationError
 from trajcomp.model import landing
-from trajcomp.model.grid import METHODS as LATTICE_INTERPOLATORS, TOLERANCE, detect_lattice, fit_field
+from trajcomp.model.grid import METHODS as LATTICE_INTERPOLATORS, TOLERANCE, ResidualGrid, detect_lattice, fit_field
 from trajcomp.calibration.identify import (best_fit_transform, identify, linearise, outlier_rows, region_folds,
                                            select_splines)
 from trajcomp.arm.ik import batch_seed, branch_index, ik
@@ -52,6 +52,7 @@ MAX_ROWS = 100_000  # measurements one calibration fits: 12 min and 1.3 GB (2-co
 LAYER_PLANES = 20  # positions with at most this many distinct coordinates along an axis are node planes along it
 OUTER_SHARE = 0.1  # the outer layer of scattered positions: this share of the rows on each side of an axis
 OUTER_LAYERS = 2  # outer layers held out on each side of each axis, one and two at a time
+RELIABILITY_BINS = 8  # bins of the stated quantile per class of holdout in the calibration report's reliability
 FIELD_ON_TOP = "knn"  # the residual field a joint residual may take on top: scattered, so held-out rows leave no hole
 
 
@@ -292,7 +293,7 @@ def other_tools(robot, method, kind, joints, spread, oriented, field_on_top=None
     if not locates_flange(spread):
         return False, (f"{turned}; at least {MIN_SPREAD:g} deg about two axes are needed to locate the flange, so a "
                        "tool other than the measured TCP may miss by tenths of a mm: measure at several orientations "
-                       "(trajcomp plan --orientations)")
+                       "(trajcomp plan, by default)")
     offset = axis_offset(robot)
     if not oriented and offset < MIN_AXIS_OFFSET:
         return False, (f"{turned}, but the measured point lies {offset:.1f} mm from the last joint's axis, so the "
@@ -417,6 +418,12 @@ def calibrate(robot, meas, *, robot_ref=None, method="composite", frame=None, gr
         warnings.append(f"{len(lines)} gross outliers (residual far beyond the others; the robust loss bounds their "
                         f"pull on the fit) are left out of the grids and statistics, their nodes filled from the "
                         f"model: lines {lines[:20]}" + (" ..." if len(lines) > 20 else ""))
+    fields = [field for field in (parts.grid, parts.residual, parts.residual_field)
+              if field is not None and getattr(field, "kind", None) != JOINT_KIND]
+    if grid_step is not None and not any(isinstance(field, ResidualGrid) for field in fields):
+        warnings.append(f"--grid-step is not used: it checks the nodes of a lattice field, and this model's fields "
+                        f"are {', '.join(sorted({field.kind for field in fields})) or 'none'} (scattered, no lattice; "
+                        "the joint residual is chosen where several orientations were measured)")
     report = {
         "measurements": {"file": meas.path, "rows": len(meas), "used": int(keep.sum()), "frame": frame,
                          "orientation_spread_deg": [round(float(v), 3) for v in spread]}
@@ -444,8 +451,10 @@ def calibrate(robot, meas, *, robot_ref=None, method="composite", frame=None, gr
         held = fold_errors(*data, folds, seed, progress, fitted, workers)
         report["cross_validation"] = {"folds": folds, "interpolation": held.pop("interpolation")} | {
             m: ErrorStats.from_errors(e).as_dict() for m, e in held.items()}
-        report["landing"] = _landing(robot, dh, frame, data, held, fitted, (folds, seed), progress, meas.orientation,
-                                     workers)
+        report["landing"], reliability = _landing(robot, dh, frame, data, held, fitted, (folds, seed), progress,
+                                                  meas.orientation, workers)
+        if reliability is not None:
+            report["reliability"] = reliability
     for message in warnings:
         log.warning(message)
     return model
@@ -644,7 +653,8 @@ def outer_layers(position):
 
 
 def _landing(robot, dh, frame, data, held, fitted, split, progress, orientation, workers):
-    """The plain-data `trajcomp.model.landing.LandingData` of a calibration (its report's ``landing``), or None
+    """The plain-data `trajcomp.model.landing.LandingData` of a calibration (its report's ``landing``) and the
+    `reliability` of its stated quantile in the model's mode (its report's ``reliability``), or ``(None, None)``
     when no held-out errors could be computed.
 
     ``data`` are the rows the statistics use ``(robot, joints, position,
@@ -658,38 +668,44 @@ def _landing(robot, dh, frame, data, held, fitted, split, progress, orientation,
     how the errors grow beyond the measured volume).
     """
     _, joints, position, measured, rotation, options = data
+    layers = outer_layers(position)
     if options["kind"] in LATTICE_INTERPOLATORS:
         held, distances = plane_errors(*data, progress)
         method = (f"{options['kind']} on the lattice with every other node plane along each axis held out "
                   "(cells twice as long along that axis)")
-        splits = outer_layers(position)
+        splits, first, slabs = layers, "node planes", []
         words = "one and two outer layers of the measured positions on each side"
     else:
         distances = split_distances(robot, joints, position, kfold_indices(len(position), *split))
         method = f"{split[0]}-fold cross-validation, residual {options['kind']}"
+        first = f"{split[0]}-fold"
         slabs, words = region_folds(position, split[0])
         every = np.arange(len(position))
-        splits = [(np.setdiff1d(every, test), test) for test in slabs] + outer_layers(position)
+        splits = [(np.setdiff1d(every, test), test) for test in slabs] + layers
         words += ", and one and two outer layers of the measured positions on each side"
     if not held:  # no plane could be held out (outliers left too few): no landing data, as with --folds 0
-        return None
+        return None, None
     sets = [(distances, held)]
+    shown = {first: (distances, held)}  # the reliability's classes of holdout
     if splits:
-        regions = fold_errors(*data, len(splits), 0, progress, fitted, workers, splits=splits)
-        regions.pop("interpolation")
-        sets.append((split_distances(robot, joints, position, splits), regions))
+        # slabs and layers in turn, a row held out by several keeping the last one's error and distances, as
+        # `fold_errors` and `split_distances` do over all their splits; the reliability shows the slabs whole
+        regions = None
+        for kind, part in (("slabs", splits[:len(slabs)]), ("outer layers", splits[len(slabs):])):
+            if part:
+                errors = fold_errors(*data, len(part), 0, progress, fitted, workers, splits=part)
+                errors.pop("interpolation")
+                shown[kind] = (split_distances(robot, joints, position, part), errors)
+                regions = shown[kind] if regions is None else tuple(
+                    {key: np.where(np.isnan(above[key]), below[key], above[key]) for key in below}
+                    for below, above in zip(regions, shown[kind]))
+        sets.append(regions)
         method += f"; {words} held out in turn"
     # a field over positions errs by how far a target lies from the measured positions; every other mode by how far
     # its joints lie from the measured ones
     fields = {"grid"} | ({"composite"} if options["kind"] != JOINT_KIND else set())
     by_joints = set() if joints is None else set(held) - fields
-    combined = {}
-    for mode in held:
-        metric = "joints" if mode in by_joints else "positions"
-        d, g, e = (np.concatenate(part) for part in zip(*[(where[metric], where["beyond"], errors[mode])
-                                                          for where, errors in sets]))
-        finite = np.isfinite(d) & np.isfinite(e).all(axis=1)
-        combined[mode] = (d[finite], g[finite], e[finite])
+    combined = {mode: _held_rows(sets, mode, "joints" if mode in by_joints else "positions") for mode in held}
     rotations = fk(robot, joints)[:, :3, :3] if joints is not None else (
         abc_to_matrix(orientation) if orientation is not None else None)
     parameters = ([], np.zeros(0), np.zeros((0, 0)), np.zeros(0), 0.0, 0.0)
@@ -699,4 +715,62 @@ def _landing(robot, dh, frame, data, held, fitted, split, progress, orientation,
             R_tcp_target=dh.R_tcp_target, fitted=dict(zip(dh.names, dh.delta)),
             hidden=sum(is_robot_parameter(n) for n in dh.identifiability.fixed),
             located=locates_flange(orientation_spread(rotations)))
-    return landing.build(combined, method, parameters, rotations, position, joints, by_joints).to_dict()
+    built = landing.build(combined, method, parameters, rotations, position, joints, by_joints)
+    mode = options["method"]
+    if mode not in combined:
+        return built.to_dict(), None
+    rows = {kind: _held_rows([where], mode, "joints" if mode in by_joints else "positions")
+            for kind, where in shown.items()}
+    d, g, e = (np.concatenate(part) for part in zip(*rows.values()))
+    near = built.rms_at(mode, d, g)
+    stated = landing.quantile_of_norm(np.zeros((len(near), 3)), near[:, None, None] ** 2 / 3.0 * np.eye(3))
+    classes = np.repeat(list(rows), [len(r[0]) for r in rows.values()])
+    return built.to_dict(), reliability(stated, np.linalg.norm(e, axis=1), classes, mode)
+
+
+def _held_rows(sets, mode, metric):
+    """``(distance, beyond, error)`` (M,), (M,), (M, 3) of the rows held out in ``sets`` ``[(distances, errors)]``
+    (`split_distances`, per-mode (N, 3) errors): distance by ``metric``, NaN rows (never held out) left out."""
+    d, g, e = (np.concatenate(part) for part in zip(*[(where[metric], where["beyond"], errors[mode])
+                                                      for where, errors in sets]))
+    finite = np.isfinite(d) & np.isfinite(e).all(axis=1)
+    return d[finite], g[finite], e[finite]
+
+
+def reliability(stated, true, classes, mode, bins=RELIABILITY_BINS):
+    """How the stated quantile of held-out errors compares with their true size, per class of holdout.
+
+    Per class, the rows are split by their stated quantile into at most
+    ``bins`` groups of equal count; each bin gives its mean stated quantile,
+    the `landing.QUANTILE` quantile of its true errors (on the diagonal of a
+    reliability plot when the forecast is calibrated, below it when
+    conservative) and the share of its rows whose true error is within the
+    stated quantile.
+
+    Parameters
+    ----------
+    stated : ndarray, shape (M,)
+        The quantile the landing estimate states at each held-out row (its
+        held-out part, at the row's distance from the fit that predicted it), mm.
+    true : ndarray, shape (M,)
+        The row's held-out |error|, mm.
+    classes : ndarray of str, shape (M,)
+        How each row was held out (k-fold, node planes, slabs, outer layers).
+    mode : str
+        The mode of the errors.
+
+    Returns
+    -------
+    dict
+        ``{"mode", "quantile", "classes": {class: {"rows", "covered", "bins": [{"rows", "stated_mm",
+        "true_quantile_mm", "covered"}]}}}``.
+    """
+    out = {}
+    for kind in dict.fromkeys(classes.tolist()):
+        rows = np.flatnonzero(classes == kind)
+        groups = np.array_split(rows[np.argsort(stated[rows], kind="stable")], min(bins, len(rows)))
+        out[kind] = {"rows": len(rows), "covered": round(float(np.mean(true[rows] <= stated[rows])), 4), "bins": [
+            {"rows": len(group), "stated_mm": round(float(stated[group].mean()), 6),
+             "true_quantile_mm": round(float(np.quantile(true[group], landing.QUANTILE)), 6),
+             "covered": round(float(np.mean(true[group] <= stated[group])), 4)} for group in groups]}
+    return {"mode": mode, "quantile": landing.QUANTILE, "classes": out}

@@ -11,9 +11,15 @@ calibrated arm model places it, moved by the carriage:
 registration at the carriage's zero). A least-squares line through the
 residuals ``measured - T_world_base(0) @ predicted`` against ``e`` gives
 ``scale * direction`` (its slope) and ``offset``; what is left is the
-track's straightness and the noise (`TrackFit.residual_rms`). The fit
-names the track positions it measured: a target beyond them is a
-forecast outside the measured travel (`trajcomp.arm.track.Track.beyond_measured`).
+track's straightness and the noise (`TrackFit.residual_rms`). With
+`STRAIGHTNESS_POSITIONS` positions or more, each measured by at least two
+rows, the mean left at each position is the track's straightness there
+(`trajcomp.arm.track.Track.straightness`, a table of world mm the carriage
+is placed with, linear between the positions), kept when it stands out of
+the noise: its RMS above `SIGNIFICANCE` times that of its own standard
+errors. The fit names the track positions it measured: a target beyond
+them is a forecast outside the measured travel
+(`trajcomp.arm.track.Track.beyond_measured`).
 
 A measurement file states the track position of each row in its
 ``track`` column (`with_identified_track`): the rows at track position 0
@@ -27,6 +33,8 @@ import numpy as np
 from trajcomp.errors import CalibrationError
 
 MIN_POSITIONS = 3  # distinct carriage positions: a line through two leaves nothing to check it with
+STRAIGHTNESS_POSITIONS = 5  # distinct positions (two rows each at least) before the straightness is a table
+SIGNIFICANCE = 3.0  # the table's RMS over its standard errors' RMS above which the track is not straight
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -43,6 +51,11 @@ class TrackFit:
         The distinct track positions measured, mm, ascending.
     residual_rms : float
         RMS of the measured positions about the fitted line, mm (straightness and noise).
+    straightness_rms : float or None
+        RMS of the straightness table (``track.straightness``), mm, whether kept or not; None when the
+        positions are too few to tell.
+    noise_rms : float or None
+        RMS of the table's standard errors, mm (the measurement noise averaged at each position).
     direction_change_deg : float
         Angle between the nominal and the identified direction, deg.
     scale_change : float
@@ -55,13 +68,17 @@ class TrackFit:
     residual_rms: float
     direction_change_deg: float
     scale_change: float
+    straightness_rms: float = None
+    noise_rms: float = None
 
     def summary(self):
         """The fit as plain data for the model's report (mm, deg)."""
         return {"direction": self.track.actual_direction.tolist(), "scale": self.track.actual_scale,
                 "direction_change_deg": self.direction_change_deg, "scale_change": self.scale_change,
                 "offset_mm": self.offset.tolist(), "residual_rms_mm": self.residual_rms,
-                "positions_mm": self.positions.tolist()}
+                "positions_mm": self.positions.tolist(), "straightness_rms_mm": self.straightness_rms,
+                "straightness_noise_rms_mm": self.noise_rms,
+                "straightness_mm": None if self.track.straightness is None else self.track.straightness.tolist()}
 
 
 def identify_track(track, T_world_base, positions, predicted, measured):
@@ -106,9 +123,31 @@ def identify_track(track, T_world_base, positions, predicted, measured):
     direction = slope / scale
     left = residual - design @ np.array([slope, offset])
     turn = np.degrees(np.arccos(np.clip(direction @ track.direction, -1.0, 1.0)))
-    identified = track.replace(actual_direction=direction, actual_scale=scale, measured_positions=distinct)
-    return TrackFit(identified, offset, distinct,
-                    float(np.sqrt(np.mean(np.sum(left ** 2, axis=1)))), float(turn), scale / track.scale - 1.0)
+    table, table_rms, noise_rms = _straightness(positions, distinct, left)
+    scatter = _scatter(np.searchsorted(distinct, positions), left)
+    if table is not None:  # the carriage's displacement beyond the line through track position 0, where the arm's
+        table = table + offset  # calibration placed it (there the rows' mean residual is about 0)
+    identified = track.replace(actual_direction=direction, actual_scale=scale, measured_positions=distinct,
+                               straightness=table, scatter=scatter)
+    return TrackFit(identified, offset, distinct, float(np.sqrt(np.mean(np.sum(left ** 2, axis=1)))), float(turn),
+                    scale / track.scale - 1.0, table_rms, noise_rms)
+
+
+def _straightness(positions, distinct, left):
+    """The straightness table (P, 3) or None, its RMS and its standard errors' RMS (mm; None: too few positions).
+
+    ``left`` (N, 3): each row's residual about the fitted line at its position ``positions`` (N,).
+    """
+    which = np.searchsorted(distinct, positions)
+    counts = np.bincount(which, minlength=len(distinct))
+    if len(distinct) < STRAIGHTNESS_POSITIONS or counts.min() < 2:
+        return None, None, None
+    mean = _position_means(which, left)
+    spread = left - mean[which]
+    variance = np.sum(spread**2) / max(len(positions) - len(distinct), 1) / 3.0  # per axis, about each position's mean
+    table_rms = float(np.sqrt(np.mean(np.sum(mean**2, axis=1))))
+    noise_rms = float(np.sqrt(3.0 * variance * np.mean(1.0 / counts)))
+    return (mean if table_rms > SIGNIFICANCE * noise_rms else None), table_rms, noise_rms
 
 
 def arm_rows(meas, robot):
@@ -153,3 +192,20 @@ def with_identified_track(model, meas):
     fit = identify_track(robot.track, robot.T_world_base, meas.track, predicted, measured)
     report = {**model.report, "track": fit.summary()}
     return dataclasses.replace(model, nominal=robot.replace(track=fit.track), report=report), fit
+
+
+def _position_means(which, left):
+    """The mean (P, 3) of the rows ``left`` (N, 3) at each measured position (``which`` (N,): its index)."""
+    counts = np.bincount(which)
+    return np.stack([np.bincount(which, weights=column, minlength=len(counts)) for column in left.T],
+                    axis=1) / counts[:, None]
+
+
+def _scatter(which, left):
+    """Per axis standard deviation (mm) of a position's mean offset from the fitted line: the larger of the means'
+    own scatter (P - 2 degrees of freedom: the line took two) and the rows' noise averaged over a position's rows."""
+    means, counts = _position_means(which, left), np.bincount(which)
+    between = np.sum(means**2) / (3.0 * max(len(counts) - 2, 1))
+    spread = left - means[which]
+    within = np.sum(spread**2) / (3.0 * max(len(which) - len(counts), 1)) * np.mean(1.0 / counts)
+    return float(np.sqrt(max(between, within)))

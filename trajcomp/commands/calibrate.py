@@ -145,6 +145,10 @@ def run(args):
              f"({fit.direction_change_deg:.4f} deg from the description), scale {fit.track.actual_scale:.6f}, "
              f"{fit.residual_rms:.4f} mm RMS about the line, measured at {len(fit.positions)} positions "
              f"{fit.positions[0]:g}..{fit.positions[-1]:g} mm")
+        if fit.straightness_rms is not None:
+            kept = "kept as a table" if fit.track.straightness is not None else "within the noise: not kept"
+            info(f"track straightness: {fit.straightness_rms:.4f} mm RMS at the {len(fit.positions)} positions "
+                 f"(noise {fit.noise_rms:.4f} mm): {kept}")
     save_model(args.output, model)
     report = model.report
     for line in describe(model, parameter_combinations(model, meas)):

@@ -55,6 +55,11 @@ def add_parser(sub):
                         "the program's speeds (default %(default)s)")
     add_tolerance_option(parser)
     add_in_place_option(parser)
+    parser.add_argument("--measured", metavar="CSV",
+                        help="a validation run of the compensated program: a measurement CSV with the joints as "
+                        "written (j1..j6) and the measured TCP (mx,my,mz, base frame unless its layout says tracker); "
+                        "the report shows each target's measured landing beside its estimate and fails a measured "
+                        "landing above the tolerance (one program)")
     parser.add_argument("-o", "--output", required=True,
                         help="corrected program to write, in the input's language (an extension of another is "
                         "refused without --to); for a batch, the folder to write into")
@@ -86,7 +91,7 @@ def run(args):
         joint_targets=args.joint_targets, max_joint_change=math.radians(args.max_joint_change),
         max_correction=args.max_correction, in_place=args.in_place, criteria=criteria_of(args),
         report=args.report, json_only=args.json_only, retime=args.retime, path_tolerance=args.path_tolerance,
-        to_format=args.to_format,
+        to_format=args.to_format, measured=args.measured,
     )
     model = loaded_model(job.model)  # a broken model fails the run once, before any file
     if args.robot is not None and load_robot(args.robot).name != model.nominal.name:
@@ -106,6 +111,8 @@ def run(args):
         return batch.EXIT_CODES[result.status]
     if args.json_only and not args.report:
         raise TrajcompError("--json-only: a batch writes one report per program; give --report FOLDER")
+    if args.measured:
+        raise TrajcompError("--measured: a validation run belongs to one program; give one program file")
     return _run_batch(args, dataclasses.replace(job, report_folder=True, output_root=args.output))
 
 

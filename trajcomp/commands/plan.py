@@ -5,14 +5,19 @@ import argparse
 from trajcomp.commands._args import add_robot, command_parser, info, numbers, positive_int, positive_number, robot_of
 from trajcomp.errors import ToleranceError
 
+DEFAULT_ORIENTATIONS = 5  # the default plan's orientations: the given one, then tilted about +-x, +-y of the tool
+DEFAULT_TILT = 30.0  # deg, the tilt of the spread orientations
+
 
 def orientation_list(text):
-    """An argparse type: a count of orientations to spread (``5``) or a list ``A,B,C;A,B,C`` (deg)."""
+    """An argparse type: ``auto``, a count of orientations to spread (``5``) or a list ``A,B,C;A,B,C`` (deg)."""
+    if text == "auto":
+        return text
     if ";" not in text and "," not in text:
         try:
             count = int(text)
         except ValueError:
-            raise argparse.ArgumentTypeError(f"expected a count or A,B,C;A,B,C;... (deg), got {text!r}") from None
+            raise argparse.ArgumentTypeError(f"expected auto, a count or A,B,C;A,B,C;... (deg), got {text!r}") from None
         if not 1 <= count <= 50:
             raise argparse.ArgumentTypeError(f"expected 1 to 50 orientations, got {count}")
         return count
@@ -56,10 +61,14 @@ def add_parser(sub):
                         help="with --update: the tracker will measure orientations too (6-DoF)")
     parser.add_argument("--orientation", type=numbers(3), metavar="A,B,C",
                         help="TCP orientation, deg (default: that of the robot's home configuration)")
-    parser.add_argument("--orientations", type=orientation_list, default=1, metavar="N|A,B,C;A,B,C;...",
-                        help="several tool orientations: a count spread around --orientation by --tilt (5: the "
-                        "orientation, then tilted about +x, +y, -x, -y of the tool), or a list, deg (default 1)")
-    parser.add_argument("--tilt", type=positive_number, default=30.0, help="tilt of the spread orientations, deg (default 30)")
+    parser.add_argument("--orientations", type=orientation_list, default="auto", metavar="auto|N|A,B,C;A,B,C;...",
+                        help="tool orientations: a count spread around --orientation by --tilt (5: the orientation, "
+                        "then tilted about +x, +y, -x, -y of the tool), or a list, deg. Default auto: "
+                        f"{DEFAULT_ORIENTATIONS} spread, where a tilted target is unreachable it is left out (listed, "
+                        "exit 0); a model from them serves tilted targets and other tools. 1: the paper's one "
+                        "orientation (a model for that orientation and TCP only)")
+    parser.add_argument("--tilt", type=positive_number, default=DEFAULT_TILT,
+                        help=f"tilt of the spread orientations, deg (default {DEFAULT_TILT:g})")
     parser.add_argument("-o", "--output", required=True, help="plan CSV to write")
     parser.set_defaults(run=run)
 
@@ -123,28 +132,38 @@ def run_grid(args):
     refuse_inputs([args.output], [args.robot])
     robot = robot_of(args)
     orientation = default_orientation(robot) if args.orientation is None else np.radians(args.orientation)
-    if isinstance(args.orientations, int):
-        orientations = spread_orientations(orientation, args.orientations, np.radians(args.tilt))
+    auto = args.orientations == "auto"
+    if not isinstance(args.orientations, np.ndarray):
+        count = DEFAULT_ORIENTATIONS if auto else args.orientations
+        orientations = spread_orientations(orientation, count, np.radians(args.tilt))
     else:
         orientations = args.orientations
     plan = plan_grid(robot, args.cube, args.side, args.step, orientations)
     ok = plan.reachable
+    # the default's tilted targets are extra measurements: one the arm cannot reach is left out, not a failure
+    left_out = ~ok & (np.arange(len(ok)) % len(orientations) > 0) if auto else np.zeros(len(ok), dtype=bool)
     lost = [
         f"unreachable target {x:.3f},{y:.3f},{z:.3f} at {a:.2f},{b:.2f},{c:.2f} deg: {reason}"
-        for (x, y, z), (a, b, c), reason in zip(plan.position[~ok], np.degrees(plan.orientation[~ok]), plan.reason[~ok])
+        + (" (a tilted target of the default plan: left out)" if tilted else "")
+        for (x, y, z), (a, b, c), reason, tilted in zip(plan.position[~ok], np.degrees(plan.orientation[~ok]),
+                                                        plan.reason[~ok], left_out[~ok])
     ]
     meas = Measurements(joints=plan.joints[ok], position=plan.position[ok], orientation=plan.orientation[ok],
                         lines=np.flatnonzero(ok))
     write_measurements(args.output, meas, comments=[f"trajcomp plan for robot {robot.name}"] + lost)
     postures = ", ".join(str(Configuration.from_index(b)) for b in dict.fromkeys(plan.posture.tolist()) if b >= 0)
     info(f"{args.output}: {ok.sum()} of {len(ok)} targets reachable, {len(orientations)} orientation(s)"
-         + (f", arm posture {postures}" if postures else ""))
+         + (f" (the default: tilted {args.tilt:g} deg about two axes of the tool; --orientations 1 plans one)"
+            if auto else "") + (f", arm posture {postures}" if postures else ""))
     for line in describe_needs(robot, plan, orientations):
         info(line)
-    for line in lost[:10]:
+    for line in sorted(lost, key=lambda line: line.endswith("left out)"))[:10]:  # the failing ones first
         info(line)
-    if lost:
-        raise ToleranceError(f"{len(lost)} of {len(ok)} targets are unreachable (listed in {args.output})")
+    failed = int((~ok & ~left_out).sum())
+    if left_out.any():
+        info(f"{int(left_out.sum())} tilted targets the arm cannot reach are left out (listed in {args.output})")
+    if failed:
+        raise ToleranceError(f"{failed} of {len(ok)} targets are unreachable (listed in {args.output})")
     return 0
 
 
@@ -168,5 +187,5 @@ def describe_needs(robot, plan, orientations):
     if not locates_flange(spread):
         lines.append(f"the tool turns {spread[0]:.1f} and {spread[1]:.1f} deg RMS about its two main axes: too little "
                      "to locate the flange; a model from this plan serves the measured TCP and orientation only "
-                     "(--orientations 5 tilts it about two axes)")
+                     "(the default, five orientations, tilts it about two axes)")
     return lines

@@ -31,9 +31,9 @@ from trajcomp.compensation.targets import program_corrector
 from trajcomp.errors import TimingError, TrajcompError
 from trajcomp.model.compensation_model import CompensationModel
 from trajcomp.model.model_file import load_model, model_files
-from trajcomp.programs.frames import FrameTable
 from trajcomp.programs.program import place_text
 from trajcomp.report import Criteria, compliance_report, file_entry, model_entry, report_paths, summary_lines
+from trajcomp.report.measured import measured_landing, read_validation_run
 from trajcomp.support.atomic import FileSet, refuse_inputs
 from trajcomp.support.memory import end_stage, kept_apart, release
 from trajcomp.support.parallel import in_background, meanwhile
@@ -115,6 +115,7 @@ class CompensationJob:
     show_stages: bool = False  # a bar over STAGES on a terminal (one file; a batch shows files instead)
     workers: int = 1  # processes sharing the compensation of one file (a batch spreads files instead)
     output_root: str = None  # the folder every output stays in (a batch's); default the output's own folder
+    measured: str = None  # a validation run of the compensated program (measurement CSV): its landings in the report
 
     def __call__(self, path, output):
         """Compensate ``path`` into ``output``; a `batch.FileResult` (raises TrajcompError on bad input)."""
@@ -147,8 +148,10 @@ class CompensationJob:
             out_format = formats.output_format(output, program, self.to_format)
             formats.check_robot_language(output, out_format, model.nominal, whose)
             sources = list(dict.fromkeys(formats.input_paths(path, program)))
-            inputs = [*sources, *(model_files(self.source) if self.source else [])]
+            inputs = [*sources, *(model_files(self.source) if self.source else []),
+                      *([self.measured] if self.measured else [])]
             refuse_inputs(report_paths(target) if target else (), [*inputs, output], "give --report another name")
+            validation = None if self.measured is None else read_validation_run(self.measured)
             correct = program_corrector(model, mode=self.mode, outside=self.outside, label=str(path),
                                         workers=self.workers)
             _next(stages)
@@ -163,10 +166,7 @@ class CompensationJob:
                                             frames=self.frames)
             _next(stages)
             timing, timed, before = [], None, None
-            track = moving_track(program, model.nominal, self.tools, self.frames) if self.retime != "none" else ""
-            if track:  # the arm's timing would not bind the track's limits: the speeds stay as written, said
-                report = dataclasses.replace(report, warnings=report.warnings + (_NOT_TIMED_ON_A_TRACK.format(track),))
-            elif self.retime != "none":
+            if self.retime != "none":
                 corrected, timed, before = retime_compensated(program, corrected, model.nominal, self.retime,
                                                               self.path_tolerance, self.tools, self.frames,
                                                               q_planned=report.q_planned, workers=self.workers)
@@ -178,12 +178,15 @@ class CompensationJob:
                                         root=self.output_root, into=outputs)
                 _next(stages)
                 mode = self.mode or model.method
+                landed = None if validation is None else measured_landing(report, validation, model.T_tracker_base)
                 compliance = compliance_report(
                     report, model.nominal, criteria=self.criteria, model=model,
                     model_info=_model_info(self.model, mode, self.source), mode=mode,
-                    files=[file_entry("program", p) for p in sources] + _output_entries(written, outputs),
+                    files=[file_entry("program", p) for p in sources]
+                    + ([file_entry("validation run", self.measured)] if self.measured else [])
+                    + _output_entries(written, outputs),
                     options=self.options(), timing=timed, cycle_time_before=before if timed is not None else None,
-                    workers=self.workers,
+                    workers=self.workers, measured=landed,
                 )
                 reports, unwritten = _write_report(compliance, target, self.json_only, [*inputs, *written], written,
                                                    outputs)
@@ -260,8 +263,6 @@ class RetimeJob:
         inputs = [*sources, *([self.robot_file] if self.robot_file else [])]
         refuse_inputs(report_paths(self.report) if self.report else (), inputs, "give --report another name")
         plan = planned_joints(program, self.robot, tools=self.tools, frames=self.frames)
-        if track := moving_track(program, self.robot, self.tools, self.frames):
-            raise TrajcompError(f"{path}: {_NOT_TIMED_ON_A_TRACK.format(track)}; nothing written")
         joints = planned(program, plan.index, plan.q)
         timed, timing = timed_program(program, self.robot, joints, self.method, self.path_tolerance, self.tools,
                                       self.frames)
@@ -293,19 +294,6 @@ def planned(program, index, q):
     joints = np.full((len(program.target_table()), 6), np.nan)
     joints[index] = q
     return joints
-
-
-_NOT_TIMED_ON_A_TRACK = ("not re-timed: the program moves the robot's track ({}), whose travel the re-timing does not "
-                         "model (it times the arm in its carriage): every speed is left as written, the controller "
-                         "limits the track")
-
-
-def moving_track(program, robot, tools=None, frames=None):
-    """The field of the robot's track (``"E1"``) when the program's targets move it, else ``""``."""
-    if robot.track is None or robot.track.index(program.format) is None:
-        return ""
-    values = FrameTable(program, robot, tools, frames).track_positions(planned_targets(program))
-    return robot.track.written[program.format] if len(values) and np.ptp(values) > 0 else ""
 
 
 def timed_program(program, robot, joints, method, tolerance, tools, frames):

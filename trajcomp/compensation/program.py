@@ -13,6 +13,7 @@ language.
 import dataclasses
 
 import numpy as np
+from scipy.stats import chi2
 
 from trajcomp.formats import find_format
 from trajcomp.formats.speeds import MotionGeometry, convert_speeds
@@ -23,6 +24,7 @@ from trajcomp.arm.kinematics import fk
 from trajcomp.programs.frames import FrameTable, in_frames
 from trajcomp.compensation.options import MAX_CORRECTION, MAX_JOINT_CHANGE
 from trajcomp.compensation.posture import check_posture, planned_joints
+from trajcomp.model.landing import QUANTILE
 from trajcomp.programs.program import Program, place_text
 from trajcomp.programs.items import replaced
 
@@ -207,7 +209,7 @@ def compensate_program(program, correct, robot, *, tools=None, frames=None, join
         not_compensated=_not_compensated(program, cartesian),
         motions_left=sum(not m.axis_position for m in program.runtime_motions()),
         **_program_facts(program, robot, joint_index, joint_targets),
-        landing=None if result is None else landing_of(result),
+        landing=None if result is None else _with_track_placement(landing_of(result), robot, table, cartesian),
     )
     if result is not None:
         report = dataclasses.replace(report, warnings=report.warnings + _compensation_warnings(result, labels))
@@ -217,6 +219,25 @@ def compensate_program(program, correct, robot, *, tools=None, frames=None, join
     if beyond := _beyond_the_measured_travel(table, robot, cartesian, labels):
         report = dataclasses.replace(report, warnings=report.warnings + (beyond,))
     return edited, report
+
+
+def _with_track_placement(landing, robot, table, index):
+    """The landing arrays with where the identified track places each target's carriage (targets ``index`` (n,),
+    the first n rows): within the measured travel its `QUANTILE` radius (an isotropic error of
+    `trajcomp.arm.track.Track.placement_sigma` per axis) joined in quadrature and counted as unseen; beyond it
+    no estimate (NaN: the verdict fails the target, `_beyond_the_measured_travel` says why)."""
+    track = robot.track
+    if track is None or track.scatter is None or not len(index):
+        return landing
+    values = table.track_positions(index)
+    radius = np.sqrt(chi2.ppf(QUANTILE, 3)) * track.placement_sigma(values)
+    radius[track.beyond_measured(values)] = np.nan
+    n = len(index)
+    estimate, unseen = landing["estimate_mm"].copy(), landing["unseen_mm"].copy()
+    total = np.hypot(estimate[:n], radius)
+    unseen[:n] += total - estimate[:n]
+    estimate[:n] = total
+    return {**landing, "estimate_mm": estimate, "unseen_mm": unseen}
 
 
 def _beyond_the_measured_travel(table, robot, index, labels):
@@ -231,7 +252,8 @@ def _beyond_the_measured_travel(table, robot, index, labels):
     more = f" and {beyond.size - 10} more" if beyond.size > 10 else ""
     return (f"{beyond.size} targets stand at track positions beyond the travel the track's calibration measured "
             f"({track.measured_positions[0]:g}..{track.measured_positions[-1]:g} mm), where the carriage is placed by "
-            f"the fitted line alone: {', '.join(labels[k] for k in beyond[:10])}{more}")
+            f"the fitted line alone and its place is not estimated (their landing is unknown: the verdict fails them; "
+            f"measure the track there): {', '.join(labels[k] for k in beyond[:10])}{more}")
 
 
 def _compensation_warnings(result, labels):

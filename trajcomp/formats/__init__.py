@@ -67,6 +67,7 @@ class Format:
     frameless: bool = False
     speed_units: object = None
     speed_fields: str = None
+    kept_axes: bool = False
 
     def _resolve(self, ref):
         if callable(ref):
@@ -96,7 +97,7 @@ _PLUGINS = {"loaded": False, "failed": {}}
 
 def register_format(name, extensions, reader, writer, *, source="built-in", blocks=False, vendor=None, tasks=False,
                     copies=False, speeds=None, timed_rows=False, configuration=None, frameless=False,
-                    speed_units=None, speed_fields=None):
+                    speed_units=None, speed_fields=None, kept_axes=False):
     """Register (or replace) a format.
 
     Parameters
@@ -158,10 +159,15 @@ def register_format(name, extensions, reader, writer, *, source="built-in", bloc
     speed_fields : str, optional
         The fields ``speeds`` writes, as the language names them, for help
         texts and ``trajcomp formats`` (``"$VEL.CP, BAS(#VEL_PTP, %)"``).
+    kept_axes : bool
+        A Cartesian target that does not state an external axis keeps it
+        where the motion before left it (KRL: a POS or FRAME point, or an
+        aggregate without E1); otherwise the axis is unknown there
+        (`trajcomp.programs.frames.FrameTable.track_positions`).
     """
     _FORMATS[name] = Format(name, tuple(e.lower() for e in extensions), reader, writer, source, blocks, vendor, tasks,
                             copies, speeds, timed_rows, configuration, frameless, speed_units,
-                            speed_fields)
+                            speed_fields, kept_axes)
 
 
 def entry_points(group):
@@ -323,7 +329,7 @@ def read(path, format=None, *, workers=1, copies=True):
         raise ReadError(f"{path}: no such file" if what is None else f"{path}: is {what}; a program is read from a file")
     recover(path.parent)  # a set of files a killed run left half-renamed is completed first
     with collection_paused():  # a program is made of many objects without cycles (`trajcomp.support.memory`)
-        program = fmt.read(path, workers)
+        program = _with_kept_axes(fmt.read(path, workers), fmt)
         return uses_resolved(program, fmt) if copies else program.with_shared_targets_left()
 
 
@@ -356,7 +362,13 @@ def read_task(paths, format=None):
     from trajcomp.formats.task import merge
 
     programs = [read(path, format) for path in paths]
-    return uses_resolved(merge(programs), find_format(paths[0], format))
+    fmt = find_format(paths[0], format)
+    return uses_resolved(_with_kept_axes(merge(programs), fmt), fmt)
+
+
+def _with_kept_axes(program, fmt):
+    """``program`` marked with its language's reading of the external axes a target does not state."""
+    return dataclasses.replace(program, kept_axes=True) if fmt.kept_axes else program
 
 
 def input_paths(path, program):

@@ -34,6 +34,9 @@ JOINT_LIMIT = 3600.0  # deg (ten turns)
 _BRACKET_OR_COMMA = re.compile(r"[{}\[\](),]")  # what `split_top` looks at
 
 
+LINE_LIMIT = 1 << 20  # bytes in one line (1 MiB): thousands of times the longest line a robot program writes
+
+
 def read_source(path, name=None, companion=False):
     """Decode a text file exactly: UTF-8 (with or without BOM), else Latin-1.
 
@@ -42,7 +45,9 @@ def read_source(path, name=None, companion=False):
     Raises
     ------
     ReadError
-        Unreadable, or binary (NUL bytes).
+        Unreadable, binary (NUL bytes), or a line longer than `LINE_LIMIT`
+        (damage or not a program: parsing it would take memory and time
+        out of proportion to the file).
     """
     path = Path(path)
     try:
@@ -51,6 +56,10 @@ def read_source(path, name=None, companion=False):
         raise ReadError(f"{path}: cannot read: {exc.strerror}") from exc
     if b"\0" in data:
         raise ReadError(f"{path}: not a text file")
+    if (start := _long_line_start(data)) >= 0:
+        line = data.count(b"\n", 0, start) + data.count(b"\r", 0, start) - data.count(b"\r\n", 0, start) + 1
+        raise ReadError(f"{name or path.name}:{line}: a line longer than {LINE_LIMIT:,} bytes, beyond any robot "
+                        f"program's (damaged, or not a program): {data[start:start + 40].decode('latin-1')!r}...")
     encoding = "utf-8-sig" if data.startswith(b"\xef\xbb\xbf") else "utf-8"
     try:
         text = data.decode(encoding)
@@ -58,6 +67,23 @@ def read_source(path, name=None, companion=False):
         encoding = "latin-1"
         text = data.decode(encoding)
     return Source(name or path.name, text, encoding, str(path), companion)
+
+
+def _long_line_start(data, piece=1 << 22):
+    """Offset of the first line of ``data`` (bytes) longer than `LINE_LIMIT`, -1 if none; looked at ``piece``
+    bytes at a time."""
+    if len(data) <= LINE_LIMIT:
+        return -1
+    start = 0  # of the line running into the piece
+    for at in range(0, len(data), piece):
+        codes = np.frombuffer(data, np.uint8, count=min(piece, len(data) - at), offset=at)
+        ends = np.flatnonzero((codes == ord("\n")) | (codes == ord("\r"))) + at
+        starts = np.append(start, ends + 1)
+        long = np.flatnonzero(np.append(ends, at + len(codes)) - starts > LINE_LIMIT)
+        if len(long):
+            return int(starts[long[0]])
+        start = int(starts[-1])
+    return -1
 
 
 def mask(text, comment, quote='"'):
@@ -69,7 +95,14 @@ def mask(text, comment, quote='"'):
     marks are looked for with ``str.find`` (each mark's next one found once
     for the stretch up to it), not a pattern tried at every character: a
     long program with few comments is scanned at memory speed.
+
+    A line ending that is a carriage return alone (old Mac text, some
+    controllers' exports) becomes a line feed here, so that the readers'
+    patterns (``^``, ``$``, ``\n``) see its lines; the source text, and so
+    what is written, keeps it.
     """
+    if "\r" in text:
+        text = _LONE_CARRIAGE_RETURN.sub("\n", text)
     if quote not in text and comment not in text:  # a statement's line, mostly
         return text
     end = len(text)
@@ -96,7 +129,19 @@ def mask(text, comment, quote='"'):
     return "".join(pieces)
 
 
+def statement_text(masked, start, end):
+    """``masked[start:end]`` without the blanks a comment left at its end (`mask`): a statement's patterns are not
+    run over a blanked comment's length (each pattern that fails on a line would look at every blank again)."""
+    return masked[start:end].rstrip(" \t")
+
+
+def code_of(text, comment):
+    """A statement's ``text`` without its comments and strings (`mask`) nor the blanks they leave at its end."""
+    return statement_text(mask(text, comment), 0, len(text))
+
+
 _NOT_LINE_BREAK = re.compile(r"[^\r\n]")
+_LONE_CARRIAGE_RETURN = re.compile(r"\r(?!\n)")
 
 
 class Lines:
@@ -185,12 +230,16 @@ def runs_between(start, end, length):
     return list(zip(part_start[between].tolist(), part_end[between].tolist()))
 
 
-def check_closed(source, masked, opener, closer, closing, parts=None):
-    """Refuse a text whose last block is never closed: a file cut off in transfer.
+def check_closed(source, masked, opener, closer, closing, parts=None, outside=None):
+    """Refuse a text whose blocks are not closed in order: a file cut off in transfer, or one its controller
+    refuses to load.
 
     Every controller refuses such a file (a syntax error on loading, or
     when the program is selected); a reader that took it would compensate
-    and write the part that arrived as if it were the whole program.
+    and write the part that arrived as if it were the whole program. A
+    block closed by the keyword of a block around it (``END`` while an
+    ``IF`` is open), a closing keyword with no block to close, and (with
+    ``outside``) a statement outside every block are refused the same way.
 
     Parameters
     ----------
@@ -207,29 +256,55 @@ def check_closed(source, masked, opener, closer, closing, parts=None):
         ``(start, end)`` offsets of whole lines of ``masked`` where a block
         may open or close, the others known to do neither (a reader's
         motion lines: not scanned); default the whole text.
+    outside : re.Pattern, optional
+        The lines that may stand outside every block (a KRL ``&ACCESS``
+        line, RAPID's ``%%%`` header); blank and comment lines may too.
+        None: any line may (URScript's top-level statements).
 
     Raises
     ------
     ReadError
-        A block open at the end of the text, naming its line and the
-        keyword that should close it.
+        Naming the line and the keyword of the block left open, or the
+        line out of place.
     """
     parts = [(0, len(masked))] if parts is None else parts
     marks = sorted([(m.start(), m.group(1).upper(), opens) for start, end in parts
                     for pattern, opens in ((opener, True), (closer, False))
                     for m in pattern.finditer(masked, start, end)])
-    open_blocks = []
+    lines = Lines(source.text)
+
+    def refuse(at, message):
+        line = lines.number(at)
+        fail(source.name, line, lines.line(line), message)
+
+    open_blocks, outermost = [], []  # the blocks open, and the (start, end) offsets of those closed around no other
     for at, keyword, opens in marks:
         if opens:
             open_blocks.append((at, keyword))
         elif open_blocks and closing[open_blocks[-1][1]] == keyword:
-            open_blocks.pop()
+            start, _ = open_blocks.pop()
+            if not open_blocks:
+                outermost.append((start, at))
+        elif open_blocks and keyword in (closing[k] for _, k in open_blocks):
+            inner_at, inner = open_blocks[-1]
+            refuse(inner_at, f"{inner} has no {closing[inner]} before the {keyword} of line {lines.number(at)}")
+        else:
+            refuse(at, f"{keyword} closes no block")
     if open_blocks:
         at, keyword = open_blocks[-1]
-        lines = Lines(source.text)
-        line = lines.number(at)
-        fail(source.name, line, lines.line(line),
-             f"{keyword} has no {closing[keyword]} (the text ends at line {last_line(lines)}): the program is cut off")
+        refuse(at, f"{keyword} has no {closing[keyword]} (the text ends at line {last_line(lines)}): "
+                   "the program is cut off")
+    if outside is not None:
+        gaps = zip([0] + [masked.find("\n", end) % (len(masked) + 1) for _, end in outermost],
+                   [start for start, _ in outermost] + [len(masked)])
+        for start, end in gaps:
+            for m in _STATEMENT_LINE.finditer(masked, start, end):
+                if not outside.match(m.group()):
+                    first = next(iter(closing))
+                    refuse(m.start(), f"a statement outside every {first} ... {closing[first]} block")
+
+
+_STATEMENT_LINE = re.compile(r'^[ \t"]*[^\s"].*$', re.M)  # a masked line with more than blanks and quotes
 
 
 def last_line(lines):

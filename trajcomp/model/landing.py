@@ -203,10 +203,13 @@ class LandingData:
         It grows with their distance from the measured configurations and
         outside the box of the measured positions (`fit_growth`).
         """
+        return self.rms_at(mode, self.distance(mode, robot, q, points), outside_box(points, self.positions))
+
+    def rms_at(self, mode, distance, beyond):
+        """RMS held-out |error| (N,) mm in ``mode`` at a distance (N,) mm from what was measured and (N,) mm
+        outside the box of the measured positions, as `fit_growth` fitted it."""
         rms, start, slope, outside_slope, outside_curve = self.growth[mode]
-        beyond = outside_box(points, self.positions)
-        return rms + slope * np.maximum(self.distance(mode, robot, q, points) - start, 0.0) + beyond * (
-            outside_slope + outside_curve * beyond)
+        return rms + slope * np.maximum(distance - start, 0.0) + beyond * (outside_slope + outside_curve * beyond)
 
 
 def coverage_distance(robot, measured, q):

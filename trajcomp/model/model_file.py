@@ -324,7 +324,9 @@ def _track_user(track):
     if track is None or not track.identified:
         return None
     return {"direction": [float(v) for v in track.actual_direction], "scale": float(track.actual_scale),
-            "measured_positions": [float(v) for v in track.measured_positions]}
+            "measured_positions": [float(v) for v in track.measured_positions],
+            "straightness": None if track.straightness is None else np.round(track.straightness, 6).tolist(),
+            "scatter_mm": None if track.scatter is None else float(track.scatter)}
 
 
 def _track_internal(entry, nominal, path):
@@ -339,8 +341,20 @@ def _track_internal(entry, nominal, path):
     positions = _finite(entry["measured_positions"], f"{path}: field robot.track.measured_positions")
     if not 0.5 < scale < 2.0 or not 0.5 < np.linalg.norm(direction) < 1.5:
         raise ModelError(f"{path}: field robot.track: scale {scale:g} or direction {direction.tolist()} is no track's")
+    table = entry.get("straightness")
+    if table is not None:
+        table = _finite(np.ravel(table).tolist(), f"{path}: field robot.track.straightness", 3 * len(positions))
+        if np.any(np.diff(positions) <= 0) or np.abs(table).max() > 100.0:
+            raise ModelError(f"{path}: field robot.track.straightness: expected a row (mm) per measured position, "
+                             "ascending, within 100 mm of the line")
+        table = table.reshape(-1, 3)
+    scatter = entry.get("scatter_mm")
+    if scatter is not None:
+        scatter = float(_finite([scatter], f"{path}: field robot.track.scatter_mm", 1)[0])
+        if scatter < 0:
+            raise ModelError(f"{path}: field robot.track.scatter_mm: expected a positive number, got {scatter:g}")
     return nominal.track.replace(actual_direction=direction / np.linalg.norm(direction), actual_scale=scale,
-                                 measured_positions=np.sort(positions))
+                                 measured_positions=np.sort(positions), straightness=table, scatter=scatter)
 
 
 def _finite(values, where, count=None):

@@ -74,26 +74,87 @@ class FrameTable:
         """The track positions (N,), mm, targets ``index`` (N,) state in the field the robot's track names for the
         program's language; zeros on a fixed base or for a language the track names no field of.
 
+        A target that states no value: in a language whose targets keep the
+        external axes they do not state (`Program.kept_axes`: KRL), the value
+        the motions into it leave the track at, the one before them
+        (`carried_over`); otherwise none.
+
         Raises
         ------
         TrajcompError
-            A target that states no value in that field.
+            A target without a value it states or keeps (named with its file and line).
         """
         index = np.asarray(index, dtype=int)
         axis = None if self.track is None else self.track.index(self.program.format)
         if axis is None:
             return np.zeros(len(index))
-        external = self.program.target_table().external
-        values = np.array([np.nan if external[i] is None or len(external[i]) <= axis else external[i][axis]
-                           for i in index.tolist()], dtype=float).reshape(-1)
-        missing = np.flatnonzero(~np.isfinite(values))
-        if missing.size:
+        values = self._stated(axis)
+        missing = ~np.isfinite(values[index])
+        if missing.any() and self.program.kept_axes:
+            values, why = self.carried_over(values)
+            missing = ~np.isfinite(values[index])
+        else:
+            why = np.full(len(values), "", dtype=object)
+        if missing.any():
             field = self.track.written[self.program.format]
+            first = int(index[np.flatnonzero(missing)[0]])
+            kept = (f"; {why[first]}" if why[first] else
+                    f"; state {field} in every Cartesian target of a robot on a track")
             raise TrajcompError(
-                f"{self.program.name}: {self.program.where(int(index[missing[0]]))} states no {field}: its track "
-                f"position, hence the arm's base, is unknown ({missing.size} target(s) so); state {field} in every "
-                "Cartesian target of a robot on a track")
-        return values
+                f"{self.program.name}: {self.program.where(first)} states no {field}: its track position, hence the "
+                f"arm's base, is unknown ({int(missing.sum())} target(s) so){kept}")
+        return values[index]
+
+    def _stated(self, axis):
+        """The track position (T,) each of the program's targets states in external axis ``axis`` (NaN: none)."""
+        external = self.program.target_table().external
+        return np.array([np.nan if e is None or len(e) <= axis else e[axis] for e in external], dtype=float)
+
+    def carried_over(self, values):
+        """Each target's track position (T,) where targets keep the value of the motion before, and why not.
+
+        A target without a value of its own gets the one the motion into
+        it starts from (the target before's, its own or kept in turn), when
+        every motion into it starts from the same value. Unknown (NaN, and
+        the reason) where a motion into it starts from a position the
+        program does not state (the first motion, one after a position
+        computed at run time, after a call or a branch: `Motion.start_why`)
+        or its motions start from different values.
+
+        Parameters
+        ----------
+        values : ndarray, shape (T,)
+            Stated values, NaN where a target states none.
+
+        Returns
+        -------
+        values : ndarray, shape (T,)
+        why : ndarray of object, shape (T,)
+            ``""`` where known.
+        """
+        table = self.program.motion_table()
+        target = table.target
+        named = target >= 0
+        value = np.where(named, values[np.maximum(target, 0)], np.nan)
+        stated = np.isfinite(value)
+        unknown_start = ~named | (table.start_why != "")
+        unknown_start[:1] = True
+        anchor = np.maximum.accumulate(np.where(stated | unknown_start, np.arange(len(target)), 0))
+        kept = np.where(stated[anchor], value[anchor], np.nan)  # the value each motion leaves the track at
+        out, why = values.copy(), np.full(len(values), "", dtype=object)
+        for t in np.flatnonzero(~np.isfinite(values)).tolist():
+            uses = kept[target == t]
+            if not len(uses):
+                continue
+            if np.isnan(uses).any():
+                why[t] = ("the controller keeps the track where the motion before leaves it, which starts from a "
+                          "position the program does not state here")
+            elif np.ptp(uses) > 0:
+                why[t] = (f"the controller keeps the track where the motion before leaves it: {uses.min():g} and "
+                          f"{uses.max():g} mm on its uses")
+            else:
+                out[t] = uses[0]
+        return out, why
 
     def carriage_offsets(self, index):
         """``T_base(e)_base(0)`` (N, 4, 4): the arm base at track position 0 seen from the real carriage at each

@@ -114,6 +114,10 @@ class Program:
     notes : tuple of str
         What reading did to the program that its report must say (a point
         written as a copy per use, `trajcomp.formats.uses`).
+    kept_axes : bool
+        A Cartesian target that does not state an external axis keeps it
+        where the motion before left it (its language's, set when it is
+        read: `trajcomp.formats.Format.kept_axes`).
     """
 
     format: str
@@ -125,6 +129,7 @@ class Program:
     sources: tuple = ()
     times: np.ndarray = None
     notes: tuple = ()
+    kept_axes: bool = False
 
     @classmethod
     def from_tables(cls, format, name, statements, motions, targets, sources=(), **fields):

@@ -310,6 +310,7 @@ def calibration_report(model, meas, *, criteria=None, files=(), options=None):
             "modes": {m: s for m, s in cv.items() if isinstance(s, dict)}},
         "held_out": None if "landing" not in stored else {
             "method": stored["landing"]["method"], "modes": stored["landing"]["held_out"]},
+        "reliability": stored.get("reliability"),
         "iso9283": iso,
         "trends": trends(position[~excluded], errors["none"][~excluded]),
         "linear": None if model.linear is None else model.linear.to_dict(),
@@ -427,4 +428,9 @@ def _figures(doc, position, errors, excluded, after, model, data):
                "least-squares line; red lines mark strong linear relations (R² ≥ 0.5).",
                lambda: plots.error_trends(position, errors["none"], doc["trends"], excluded)),
         Figure("maps", "Error maps", doc["maps_note"], lambda: plots.error_maps(position[keep], maps, box)),
+        *([Figure("reliability", "Stated quantile against the true held-out errors",
+                  "Each point is a bin of held-out rows of one class, at its mean stated quantile and the same "
+                  "quantile of its true errors. On the dashed diagonal the estimate is calibrated; below it, "
+                  "conservative; above it, it misses. The growth with distance was fitted on these same errors.",
+                  lambda: plots.reliability(doc["reliability"]))] if doc.get("reliability") else []),
     )

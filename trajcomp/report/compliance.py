@@ -15,6 +15,7 @@ import numpy as np
 
 from trajcomp.model import landing
 from trajcomp.report import compliance_figures, plots
+from trajcomp.report.measured import measured_check, measured_summary
 from trajcomp.report.measures import BRANCH_NAMES
 from trajcomp.report.document import Figure, Report
 from trajcomp.report.provenance import grid_box, header
@@ -152,6 +153,17 @@ def _landing_checks(report, v, tolerance, model, has_grid):
     return out
 
 
+def _track_entry(timing):
+    """A moving track's part of the timing (`trajcomp.timing.track.TrackTiming`) as plain data, or None."""
+    track = getattr(timing, "track", None)
+    if track is None:
+        return None
+    return {"field": track.field,
+            "velocity": {"peak": track.peak_velocity, "limit": track.limit_velocity, "unit": "mm/s"},
+            "acceleration": {"peak": track.peak_acceleration, "limit": track.limit_acceleration, "unit": "mm/s^2"},
+            "not_timed": [{"waypoint": str(timing.labels[k]), "why": why} for k, why in track.left[:ROWS]]}
+
+
 def timing_section(timing, before=None, times=True):
     """The timing dict of a `trajcomp.timing.result.TimingResult`, with the cycle time ``before`` (s) if known.
 
@@ -203,6 +215,7 @@ def timing_section(timing, before=None, times=True):
                           "motions": [{"waypoint": str(timing.labels[k]), "why": why} for k, why in starts[:ROWS]]},
         "lowered": {"count": len(lowered),
                     "motions": [{"waypoint": str(timing.labels[k]), "detail": text} for k, text in lowered[:ROWS]]},
+        "track": _track_entry(timing),
     }
     if times:
         section["t_s"] = np.round(np.asarray(timing.t, dtype=float), 4).tolist()
@@ -275,7 +288,8 @@ def _listed_check(section, id, statement, key, status, clean, found):
 
 
 def compliance_report(report, robot, *, criteria=None, model=None, model_info=None, mode=None, files=(),
-                      options=None, timing=None, cycle_time_before=None, command="compensate", workers=1):
+                      options=None, timing=None, cycle_time_before=None, command="compensate", workers=1,
+                      measured=None):
     """The compliance report of one run (schema ``trajcomp-report/1``, kind ``compliance``).
 
     Parameters
@@ -303,6 +317,10 @@ def compliance_report(report, robot, *, criteria=None, model=None, model_info=No
         The command that ran (``compensate``, ``retime``).
     workers : int
         Processes that share the per-target measures (`target_measures`).
+    measured : ndarray, shape (N,), optional
+        The measured landing of each target of a validation run, mm, NaN where
+        not measured (`trajcomp.report.measured.measured_landing`): tabulated
+        beside the estimate, summarised, and judged (criterion ``measured``).
 
     Returns
     -------
@@ -332,6 +350,9 @@ def compliance_report(report, robot, *, criteria=None, model=None, model_info=No
                        "joint velocity, acceleration or jerk")
     if model is not None:
         checks.insert(1, _model_accuracy(model, mode, has_grid, criteria.tolerance, measures))
+    seen = measured is not None and np.isfinite(measured).any()
+    if seen:
+        checks.insert(2, measured_check(measured, report.labels, criteria.tolerance))
     lines = tuple(_line_and_file(place)[0] for place, *_ in report.not_compensated)
     if model is None:
         checks.append(not_evaluated("uncompensated", "every motion compensated", AS_WRITTEN))
@@ -353,7 +374,10 @@ def compliance_report(report, robot, *, criteria=None, model=None, model_info=No
         "verdict": verdict(checks),
         "summary": _summary(report, measures, compensated=model is not None),
         "target_table": table,
-        "targets": _as_run(target_json(report, robot, measures, flags, index), model is not None),
+        "targets": _with_measured(_as_run(target_json(report, robot, measures, flags, index), model is not None),
+                                  measured, index),
+        "measured": measured_summary(measured, measures.values["landing_estimate_mm"], criteria.tolerance)
+        if seen and "landing_estimate_mm" in measures.values else None,
         "not_compensated": [_not_compensated_entry(place, text, reason)
                             for place, text, reason in report.not_compensated[:ROWS]],
         "unused": list(report.unused[:ROWS]),
@@ -486,6 +510,14 @@ def _as_run(rows, compensated):
     if not compensated:
         for row in rows:
             row.update(dict.fromkeys(MODEL_FIELDS))
+    return rows
+
+
+def _with_measured(rows, measured, index):
+    """The target rows with their measured landing (mm, None where not measured), when there is a validation run."""
+    if measured is not None:
+        for row, value in zip(rows, measured[index].tolist()):
+            row["measured_landing_mm"] = None if np.isnan(value) else round(value, 5)
     return rows
 
 

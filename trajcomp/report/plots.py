@@ -16,6 +16,7 @@ WIDTH = 10.0  # in, figure width at the page's text width
 POINTS = 2000  # points per drawn series: longer ones are decimated (min-max envelope, every k-th target)
 CELLS = 400  # raster cells per axis of a view of a long path: one marker per occupied cell
 ZERO = 1e-9  # mm: an error statistic at or below it is a zero of rounding, drawn as 0
+WIDE_RANGE = 8.0  # a reliability plot whose values span more than this ratio is drawn on log axes
 _INSIDE, _OUTSIDE, _LIMIT = "#1f5fa8", "#c0392b", "#7f8c8d"
 
 
@@ -146,6 +147,55 @@ def mode_statistics(tables):
     ax.set_ylim(bottom=foot)
     ax.set_ylabel("|error| (mm)")
     fig.legend(*ax.get_legend_handles_labels(), loc="outside lower center", ncols=2 * len(tables), fontsize=8)
+    return fig
+
+
+def reliability(data):
+    """The landing estimate's reliability: its stated quantile against the true held-out errors, per class.
+
+    One series per class of holdout (k-fold, node planes, slabs, outer
+    layers): each bin of held-out rows (`trajcomp.calibration.calibrate.reliability`)
+    at its mean stated quantile (x) and the same quantile of its true errors
+    (y). On the diagonal the forecast is calibrated; below it, conservative
+    (it states more than the errors reach); above it, it misses. Values
+    spanning more than `WIDE_RANGE` are drawn on log axes.
+
+    Parameters
+    ----------
+    data : dict
+        ``{"quantile", "classes": {class: {"rows", "covered", "bins": [{"stated_mm", "true_quantile_mm"}]}}}``.
+    """
+    plt = pyplot()
+    fig, ax = plt.subplots(figsize=(WIDTH * 0.6, 4.6), constrained_layout=True)
+    colors, shapes = (_INSIDE, _OUTSIDE, "#1e7d45", "#8e44ad"), ("o", "s", "^", "D")
+    values = []
+    for k, (name, c) in enumerate(data["classes"].items()):
+        x = [b["stated_mm"] for b in c["bins"]]
+        y = [b["true_quantile_mm"] for b in c["bins"]]
+        values += x + y
+        ax.scatter(x, y, s=36, marker=shapes[k % len(shapes)], color=colors[k % len(colors)], alpha=0.75,
+                   linewidths=0, label=f"{name}: {c['rows']} rows, {c['covered']:.1%} within the stated quantile")
+    positive = [v for v in values if v > ZERO] or [1.0]
+    top, low = 1.08 * max(positive), min(positive)
+    wide = top / low > WIDE_RANGE  # a few bins far out would squeeze the others into a corner: log axes
+    bottom = low / 1.25 if wide else 0.0
+    ax.plot([bottom, top], [bottom, top], color=_LIMIT, lw=1.0, ls="--", label="calibrated (stated = true)")
+    if wide:
+        from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter
+
+        ax.set_xscale("log")
+        ax.set_yscale("log")
+        for axis in (ax.xaxis, ax.yaxis):
+            axis.set_major_locator(LogLocator(subs=(1.0, 2.0, 5.0)))
+            axis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:g}"))
+            axis.set_minor_formatter(NullFormatter())
+    ax.set_xlim(bottom, top)
+    ax.set_ylim(bottom, top)
+    ax.set_aspect("equal")
+    percent = f"{100 * data['quantile']:g} %"
+    ax.set_xlabel(f"stated {percent} quantile of the landing error (mm)")
+    ax.set_ylabel(f"true {percent} quantile of the held-out errors (mm)")
+    ax.legend(loc="upper left", fontsize=8)
     return fig
 
 

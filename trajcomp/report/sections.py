@@ -104,7 +104,7 @@ def _names(names, total=None):
 
 STATISTICS = {"correction_mm": "correction, position", "correction_deg": "correction, orientation",
               "landing_estimate_mm": "landing estimate", "held_out_mm": "held-out error nearby",
-              "unseen_mm": "unseen (orientation, tool, posture)", "orientation_beyond_deg": "orientation beyond measured",
+              "unseen_mm": "unseen (orientation, tool, posture, track)", "orientation_beyond_deg": "orientation beyond measured",
               "convergence_mm": "convergence (model vs itself)", "limit_distance_deg": "nearest joint limit",
               "shoulder_mm": "shoulder singularity", "elbow_deg": "elbow singularity",
               "wrist_deg": "wrist singularity", "jump_deg": "largest joint change"}
@@ -180,12 +180,23 @@ def _target_tables(doc):
                   "tool the model cannot place" if t["other_tool"] else ""]
         return ", ".join(p for p in places if p) or "measured"
 
-    rows = [(t["index"], t["label"], t["line"], _shown(t["landing_estimate_mm"], ".4f"), _shown(t["held_out_mm"], ".4f"),
+    measured = doc.get("measured")
+    flagged = marker({"residual": (3,), "outside_grid": (7,), "orientation": (7,), "tool": (7,), "posture": (7,)})
+    if measured:  # the measured landing beside the estimate: red where it exceeds the estimate or the tolerance
+        tolerance = doc["criteria"]["tolerance_mm"]
+
+        def missed(t):
+            value = t.get("measured_landing_mm")
+            return value is not None and (value > tolerance or value > (t["landing_estimate_mm"] or 0.0))
+
+        def bad(r, col):
+            return missed(targets[r]) if col == 4 else flagged(r, col - (col > 4))
+    rows = [(t["index"], t["label"], t["line"], _shown(t["landing_estimate_mm"], ".4f"),
+             *((_shown(t.get("measured_landing_mm"), ".4f"),) if measured else ()), _shown(t["held_out_mm"], ".4f"),
              _shown(t["unseen_mm"], ".4f"), _shown(t["convergence_mm"], ".0e"), where(t), *reason(t)) for t in targets]
-    estimates = table(("#", "target", "line", "landing estimate mm", "held-out nearby mm", "unseen mm",
-                       "convergence mm", "where the measurements cover it", *extra), rows, numeric={0, 2, 3, 4, 5, 6},
-                      bad=marker({"residual": (3,), "outside_grid": (7,), "orientation": (7,), "tool": (7,),
-                                  "posture": (7,)}))
+    estimates = table(("#", "target", "line", "landing estimate mm", *(("measured landing mm",) if measured else ()),
+                       "held-out nearby mm", "unseen mm", "convergence mm", "where the measurements cover it", *extra),
+                      rows, numeric={0, 2, 3, 4, 5, 6, *((7,) if measured else ())}, bad=bad if measured else flagged)
     if all(t["landing_estimate_mm"] is None and t["held_out_mm"] is None for t in targets):
         estimates = "<p>No landing estimate: the program runs as written, without a compensation model.</p>"
     rows = [(t["index"], t["label"], *(f"{v:.3f}" for v in t["target"]), *(f"{v:.3f}" for v in t["command"]),
@@ -212,13 +223,26 @@ def _target_tables(doc):
             "judges: held-out (the largest error of the model near the target at measured points held out of its "
             "fit, with the mode and interpolator the compensation used) + unseen (what the measurements could not "
             "see at the target's orientation, tool and posture) + convergence (the compensation's own residual: "
-            "the model agreeing with itself, not an accuracy).</p>" + '<div class="scroll">' + estimates + "</div>"
+            "the model agreeing with itself, not an accuracy).</p>" + _measured_text(doc) + '<div class="scroll">'
+            + estimates + "</div>"
             + "<h3>Poses and corrections</h3><p>Target and command (cmd: the pose sent to the controller) in the "
             "robot base frame (mm; A, B, C in deg); dx, dy, dz = command − target (mm); d° the orientation "
             "correction (deg).</p>" + '<div class="scroll">' + poses + "</div>"
             + "<h3>Posture</h3><p>Written joints (deg), where the posture comes from, the branch "
             "(shoulder/elbow/wrist) they put the arm in, the distance to the nearest joint limit (deg), the distance "
             "to each singularity, and the largest joint change from the previous target.</p>" + '<div class="scroll">' + posture + "</div>")
+
+
+def _measured_text(doc):
+    """What the validation run's measured landings say of the estimates (empty without one)."""
+    m = doc.get("measured")
+    if not m:
+        return ""
+    return (f"<p>Measured landing: where the validation run measured the arm, {m['targets']} of "
+            f"{doc['summary']['targets']} targets: mean {m['mean_mm']:.4f} mm, largest {m['max_mm']:.4f} mm, "
+            f"{m['above_tolerance']} above the tolerance. The estimate covered {m['covered']:.1%} of them (the "
+            f"estimate is a 95 % quantile) and was {m['sharpness']:.2f} times the measured landing (median). Red: "
+            "a measured landing above its estimate or the tolerance.</p>")
 
 
 def _not_compensated(doc):
@@ -318,6 +342,8 @@ def calibration_sections(doc):
         parts.append(("iso9283", "ISO 9283 pose accuracy and repeatability", _iso(doc["iso9283"])))
     parts.append(("trends", "Error against the commanded coordinates", _trends(doc["trends"])))
     parts.append(("maps", "Error maps before and after", f"<p>{esc(doc['maps_note'])}</p>"))
+    if doc.get("reliability"):
+        parts.append(("reliability", "Reliability of the landing estimate", _reliability(doc["reliability"])))
     if doc["kind"] == "calibration":
         parts.append(("parameters", "Identified parameters", _parameters(doc["parameters"])))
         if doc.get("joint_errors"):
@@ -331,6 +357,21 @@ def calibration_sections(doc):
                   + "<h3>Robot</h3>" + key_values([("name", p["robot"]["name"]), ("source", p["robot"]["source"])])
                   + "<h3>Options</h3>" + options_table(p["options"])))
     return parts
+
+
+def _reliability(r):
+    percent = f"{100 * r['quantile']:g} %"
+    def stated(c):
+        low, high = (f"{f(b['stated_mm'] for b in c['bins']):.4f}" for f in (min, max))
+        return low if low == high else f"{low} – {high}"
+
+    rows = [(name, c["rows"], f"{c['covered']:.1%}", stated(c)) for name, c in r["classes"].items()]
+    return (f"<p>The landing estimate states the {percent} quantile of a target's landing error. Here is its held-out "
+            f"part (mode {esc(r['mode'])}) at measured points held out of the fit that predicted them, at their "
+            "distance from that fit's points, against their true error, per way of holding out: within the "
+            f"stated quantile should be about {percent} (more: conservative).</p>"
+            + table(("held out as", "rows", "within the stated quantile", "stated quantile mm"), rows,
+                    numeric={1, 2, 3}))
 
 
 def _statistics(doc):

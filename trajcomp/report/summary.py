@@ -14,7 +14,7 @@ def _concerns(criterion):
     return ", ".join(named[:NAMED]) + more
 
 
-HEADLINE = ("residual", "model_accuracy")  # criteria whose figures are shown even when they pass
+HEADLINE = ("residual", "model_accuracy", "measured")  # criteria whose figures are shown even when they pass
 
 
 def verdict_lines(verdict):

@@ -216,7 +216,7 @@ class FileSet:
                 signals.check()  # a stop whose exception was lost on the way commits nothing
                 with signals.held(), _locked_folders(self._staged):  # a stopping signal: after the commit and
                     for folder in _folders(self._staged):  # the unlock (no backup, journal or locked folder left)
-                        recover(folder, names=[p.name for p in self._staged if _folder(p) == folder])
+                        recover(folder, names=[p.name for p in self._staged if _folders([p]) == [folder]])
                     _commit(self._staged, self._digests)
         except BaseException:
             self._remove()

@@ -20,6 +20,7 @@ import threading
 STOPPING = tuple(getattr(signal, name) for name in ("SIGINT", "SIGTERM", "SIGHUP") if hasattr(signal, name))
 _STOPPED = []  # the signal that stopped this process's run, once raised (a second one is not raised again)
 _HELD = [0]  # how deep within `held` this process is, then the signal that came meanwhile, if one did
+_STARTING = {}  # from `hold_from_start` to `raised`: each stopping signal's handler before, and "came": the first
 
 
 class Interrupted(KeyboardInterrupt):
@@ -82,22 +83,48 @@ def stopped():
     return Interrupted(_STOPPED[0]) if _STOPPED else None
 
 
+def hold_from_start():
+    """Keep each of `STOPPING` that comes before the run begins (`raised`), which then raises it (`check`).
+
+    Called by the program's first line (``python -m trajcomp``, the
+    console script, ``python -m trajcomp.cli``), never on a library's
+    import: a signal during the command line's imports ends the run with
+    its code and message, not with a traceback out of an import. Before
+    that line (the interpreter's own start-up) Python's defaults hold.
+    """
+    if threading.current_thread() is not threading.main_thread():
+        return
+    for signum in STOPPING:
+        handler = signal.getsignal(signum)
+        if handler not in (signal.SIG_IGN, _keep):
+            _STARTING[signum] = handler
+            signal.signal(signum, _keep)
+
+
+def _keep(signum, frame):
+    """`hold_from_start`'s handler: the first signal kept for `raised`."""
+    _STARTING.setdefault("came", signum)
+
+
 @contextlib.contextmanager
 def raised():
     """Within the block, each of `STOPPING` raises `Interrupted` in the main thread (the handlers restored after).
 
     A signal this process ignores (``nohup`` ignores SIGHUP, a shell's
-    background job SIGINT) stays ignored. Elsewhere than in the main thread,
+    background job SIGINT) stays ignored. One that came while the program
+    started (`hold_from_start`) is raised by the block's first `check`. Elsewhere than in the main thread,
     where no handler can be set, the block runs as it is.
     """
     if threading.current_thread() is not threading.main_thread():
         yield
         return
     _STOPPED.clear()
-    previous = {signum: signal.getsignal(signum) for signum in STOPPING}
+    previous = {signum: _STARTING.pop(signum, signal.getsignal(signum)) for signum in STOPPING}
     for signum, handler in previous.items():
         if handler is not signal.SIG_IGN:
             signal.signal(signum, _raise)
+    if "came" in _STARTING:  # a signal during the program's start (`hold_from_start`): raised by the first `check`
+        _STOPPED.append(_STARTING.pop("came"))
     try:
         yield
     finally:

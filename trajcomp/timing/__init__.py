@@ -13,6 +13,7 @@ into the program's speed fields.
 - `trajcomp.timing.ruckig_move`: jerk-limited rest-to-rest motion with ruckig;
 - `trajcomp.timing.check`: the dense 1 kHz check;
 - `trajcomp.timing.retime`: segments and the `TimingResult`;
+- `trajcomp.timing.track`: a moving track as a joint of the timed path;
 - `trajcomp.timing.writeback`: the timing as each language's speed fields;
 - `trajcomp.timing.options`: the methods and the path tolerance, without numpy (for the command line).
 

@@ -67,6 +67,10 @@ class Moves:
         Waypoint names with file and line, for messages.
     motion : ndarray of int, shape (M,)
         Index into `Program.motions` of motion k (``arange(M)`` for a joint path).
+    track_position, track_acceleration : ndarray, shape (M,)
+        On a track that moves (`trajcomp.timing.track`): its position at
+        waypoint k, mm, and its acceleration limit along motion k, mm/s^2;
+        NaN and ``inf`` (read-only views) on a fixed base.
     """
 
     q: np.ndarray
@@ -83,6 +87,8 @@ class Moves:
     start: np.ndarray
     labels: Sequence
     motion: np.ndarray
+    track_position: np.ndarray = None
+    track_acceleration: np.ndarray = None
 
     def __post_init__(self):
         stop = np.array(self.stop, dtype=bool)
@@ -92,6 +98,14 @@ class Moves:
         stop[np.flatnonzero(np.asarray(self.start, dtype=bool)) - 1] = True
         object.__setattr__(self, "stop", stop)
         object.__setattr__(self, "kind", np.asarray(self.kind, dtype=object).reshape(len(self.q)))
+        if self.track_position is None:
+            object.__setattr__(self, "track_position", np.broadcast_to(np.nan, (len(self.q),)))
+            object.__setattr__(self, "track_acceleration", np.broadcast_to(np.inf, (len(self.q),)))
+
+    @property
+    def on_track(self):
+        """Whether the waypoints stand at track positions (a track that moves: a joint of the timed path)."""
+        return len(self.q) > 0 and not np.isnan(self.track_position[0])
 
     def __len__(self):
         return len(self.q)

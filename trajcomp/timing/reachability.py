@@ -47,9 +47,9 @@ def squared_speeds(s, dq, ddq, acceleration, x_max, rest, *, ramp=None):
     ----------
     s : ndarray, shape (G,)
         Grid, strictly increasing (rad of path).
-    dq, ddq : ndarray, shape (G, 6)
-        Path derivatives q'(s), q''(s) at the grid points.
-    acceleration : ndarray, shape (6,) or (G - 1, 6)
+    dq, ddq : ndarray, shape (G, n)
+        Path derivatives q'(s), q''(s) at the grid points (n = 6, or 7 with a moving track's position).
+    acceleration : ndarray, shape (n,) or (G - 1, n)
         Joint acceleration limits, rad/s^2 (per interval: independent runs in one problem).
     x_max : ndarray, shape (G,)
         Upper bound of x at each grid point (joint velocity, TCP speed), finite.
@@ -195,9 +195,10 @@ class Bands:
 
     Attributes
     ----------
-    sigma, w : ndarray, shape (I, 12)
+    sigma, w : ndarray, shape (I, 2 n)
         Per interval: joint j's acceleration limit at the interval's start
-        (first 6) and end (last 6); w = inf where the joint does not move.
+        (first n) and end (last n); w = inf where the joint does not move.
+        n = 6, or 7 with a moving track as the last joint (mm, mm/s^2).
     x_bound : ndarray, shape (I,)
         Bound on x_i alone (a joint that does not move).
     """
@@ -207,16 +208,16 @@ class Bands:
 
     @classmethod
     def of_path(cls, ds, dq, ddq, acceleration):
-        """The bands of a grid's intervals ds (G - 1,), from q', q'' (G, 6) at the grid points and the joint
-        acceleration limits (6,) or (G - 1, 6), rad/s^2."""
-        # alpha x_i + beta x_{i+1} in [-a, a]: joint j at the interval's start (first 6), at its end (last 6)
-        two_ds = 2.0 * ds[:, None]
-        beta, alpha = np.empty((2, len(ds), 12))  # filled in place: these are the largest arrays of a long run
-        np.divide(dq[:-1], two_ds, out=beta[:, :6])
-        np.divide(dq[1:], two_ds, out=alpha[:, 6:])
-        np.add(alpha[:, 6:], ddq[1:], out=beta[:, 6:])
-        np.subtract(ddq[:-1], beta[:, :6], out=alpha[:, :6])
-        np.negative(alpha[:, 6:], out=alpha[:, 6:])
+        """The bands of a grid's intervals ds (G - 1,), from q', q'' (G, n) at the grid points and the joint
+        acceleration limits (n,) or (G - 1, n), rad/s^2 (a track's: mm/s^2)."""
+        # alpha x_i + beta x_{i+1} in [-a, a]: joint j at the interval's start (first n), at its end (last n)
+        two_ds, n = 2.0 * ds[:, None], dq.shape[1]  # n: the arm's 6 joints, and a track's position (7)
+        beta, alpha = np.empty((2, len(ds), 2 * n))  # filled in place: these are the largest arrays of a long run
+        np.divide(dq[:-1], two_ds, out=beta[:, :n])
+        np.divide(dq[1:], two_ds, out=alpha[:, n:])
+        np.add(alpha[:, n:], ddq[1:], out=beta[:, n:])
+        np.subtract(ddq[:-1], beta[:, :n], out=alpha[:, :n])
+        np.negative(alpha[:, n:], out=alpha[:, n:])
         acceleration = np.asarray(acceleration, dtype=float)
         a = np.concatenate([acceleration, acceleration], axis=-1)
         with np.errstate(divide="ignore", invalid="ignore"):

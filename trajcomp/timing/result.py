@@ -121,6 +121,9 @@ class TimingResult:
     lowered : tuple of (int, str)
         Waypoints whose stated speed a joint limit forced lower (or whose
         time it forced longer), with what was written and why.
+    track : TrackTiming or None
+        On a track that moves: its positions, peaks and limits, the world
+        TCP's share of each motion (`trajcomp.timing.track`); None otherwise.
     """
 
     t: np.ndarray
@@ -145,14 +148,17 @@ class TimingResult:
     pieces: tuple = dataclasses.field(default=(), repr=False)
     as_written: tuple = ()
     lowered: tuple = ()
+    track: object = None
 
     @property
     def notices(self):
         """What the user must know of this timing (tuple of str): the motions left untimed, then `warnings`."""
-        if not self.untimed:
+        on_track = {k for k, _ in self.track.left} if self.track is not None else set()  # said with the track
+        untimed = [k for k in self.untimed if k not in on_track]
+        if not untimed:
             return tuple(self.warnings)
-        names = ", ".join(self.labels[k] for k in self.untimed[:5])
-        more = f" and {len(self.untimed) - 5} more" if len(self.untimed) > 5 else ""
+        names = ", ".join(self.labels[k] for k in untimed[:5])
+        more = f" and {len(untimed) - 5} more" if len(untimed) > 5 else ""
         return (f"not timed (the arm's position before the motion is unknown): motions to {names}{more}",
                 *self.warnings)
 
@@ -268,6 +274,8 @@ class TimingResult:
                 f"{deg(self.peak_acceleration[j]):>13.1f}{deg(self.limit_acceleration[j]):>8.0f}"
                 f"{jerk:>13}{jerk_limit:>9}"
             )
+        if self.track is not None:
+            out += self.track.lines(self.labels)
         verdict = "within" if self.within_limits else f"ABOVE (by more than {100 * LIMIT_TOLERANCE:.0f} %)"
         out.append(f"dense check at {RATE:.0f} Hz: {verdict} the limits; peak TCP speed "
                    f"{100 * self.peak_speed_ratio:.1f} % of the programmed speed")

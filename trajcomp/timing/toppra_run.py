@@ -24,6 +24,7 @@ import numpy as np
 from trajcomp.errors import TimingError
 from trajcomp.timing.path import squared_speed_bound, tcp_limits, time_limits
 from trajcomp.timing.reachability import Bands, backward, forward, squared_speeds
+from trajcomp.timing.track import with_track
 
 _X_CAP = 1e12  # (rad/s)^2 ceiling of the squared path speed where no limit binds
 GROUP_POINTS = 1 << 17  # grid points of consecutive windows solved as one problem at most
@@ -228,7 +229,7 @@ def _joined_problem(runs, moves, *, with_bound):
         parts.append(Bands.of_path(np.diff(grid), dq, ddq, acceleration))
         offsets.append(offsets[-1] + len(grid) - 1)
         if with_bound:
-            x_max = np.minimum(run.speed_bound(moves, dq=dq)[0], _X_CAP)
+            x_max = np.minimum(run.speed_bound(moves, dq=dq[:, :6])[0], _X_CAP)
             if bound:
                 bound[-1][-1] = min(bound[-1][-1], x_max[0])
                 x_max = x_max[1:]
@@ -271,7 +272,11 @@ def rest_to_rest_laws(stops, paths, moves):
     ends = np.cumsum(sizes)
     shift = np.r_[0.0, np.cumsum(stops.pieces.ends[paths] + 1.0)[:-1]]
     acceleration = np.repeat(moves.acceleration[k], sizes, axis=0)[:-1]
-    x = squared_speeds(grid + np.repeat(shift, sizes), dq, ddq, acceleration, x_max, np.r_[ends - sizes, ends - 1],
+    bands = dq, ddq, acceleration
+    if moves.on_track:  # the track's position a 7th joint: paths laid end to end, none within another
+        bands = with_track(moves, np.repeat(k, sizes), grid, dq, ddq, stops.rate[points], acceleration,
+                           ~np.isin(np.arange(len(grid) - 1), ends[:-1] - 1))
+    x = squared_speeds(grid + np.repeat(shift, sizes), *bands, x_max, np.r_[ends - sizes, ends - 1],
                        ramp=int(sizes.max()))
     laws = ConstantAccelerations.from_speeds(grid, np.sqrt(x), sizes)
     if laws.stuck.size:
@@ -284,9 +289,13 @@ def rest_to_rest_laws(stops, paths, moves):
 
 
 def _path_problem(run, moves):
-    """What the forward pass needs of a run: grid (G,), q' and q'' there (G, 6), acceleration limits (6,)."""
+    """What the forward pass needs of a run: grid (G,), q' and q'' there (G, n), acceleration limits (n,): the
+    arm's joints, and a moving track's position (`trajcomp.timing.track.with_track`)."""
     acceleration = np.min(moves.acceleration[run.first + 1 : run.last + 1], axis=0)
-    return run.grid, run.path(run.grid, 1), run.path(run.grid, 2), acceleration
+    grid, dq, ddq = run.grid, run.path(run.grid, 1), run.path(run.grid, 2)
+    if moves.on_track:
+        return grid, *with_track(moves, run.motion_at(grid), grid, dq, ddq, run.grid_rate, acceleration)
+    return grid, dq, ddq, acceleration
 
 
 def _where(run, moves, grid_s):

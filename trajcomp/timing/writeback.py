@@ -50,6 +50,7 @@ from trajcomp.programs.items import JOINT
 from trajcomp.timing.moves import moves_from_program
 from trajcomp.timing.path import TOLERANCE
 from trajcomp.timing.retime import retime
+from trajcomp.timing.track import retime_on_track, track_values
 
 # a cruise speed is kept this much below its bound: the fitted path's second derivative differs from the exact
 # line's (solved every 0.05 mm) by up to ~0.05 % of the acceleration at the slowest point
@@ -67,6 +68,10 @@ def retime_program(program, robot, joints, *, method="auto", tools=None, frames=
     TimingResult
     """
     moves = moves_from_program(program, robot, joints, tools=tools, frames=frames)
+    values = track_values(program, robot, moves, tools, frames)
+    if values is not None:  # the track moves: a joint of the timed path
+        return retime_on_track(moves, robot, values, robot.track.written[program.format], method=method,
+                               tolerance=tolerance)
     return retime(moves, robot, method=method, tolerance=tolerance)
 
 
@@ -280,4 +285,10 @@ def cruise_speeds(result, robot, zone):
             speed[k[first][lower]], which[k[first][lower]] = bound[first][lower], limit[first][lower]
     binding = [f"J{w % 6 + 1} {'velocity' if w < 6 else 'acceleration'} limit at its slowest point" if w >= 0 else ""
                for w in which.tolist()]
+    if result.track is not None:  # world TCP speeds, and the track's velocity limit along each line
+        speed = speed * result.track.world_ratio
+        by_track = result.track.speed_bound < speed
+        speed[by_track] = CRUISE_MARGIN * result.track.speed_bound[by_track]
+        for k in np.flatnonzero(by_track).tolist():
+            binding[k] = f"the track's ({result.track.field}) velocity limit"
     return speed, binding

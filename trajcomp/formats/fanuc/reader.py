@@ -761,28 +761,47 @@ def _positions(source, masked, lines, starts, start, end):
         written = _written_positions(masked, start, end)
         heads = _entry_heads(masked, start, end)
         if np.array_equal(heads, written["at"][:, 0]):  # every entry is written as the pendant writes it
+            _once(source, written["p"].tolist(), heads.tolist(), starts)
             points = dict(zip(written["p"].tolist(), range(len(heads))))
             return _target_table(source.text, written, np.arange(len(heads)), [], starts), points, unread
         at = dict(zip(written["at"][:, 0].tolist(), range(len(written["at"]))))
         written_end, written_p = written["at"][:, 1].tolist(), written["p"].tolist()
         reached = start  # the entries are those `_POS.finditer` gives: where one ends the next is looked for
+        given = []  # (P number, offset) of each entry, in order
         for head in heads.tolist():
             if head < reached:
                 continue
             if (k := at.get(head)) is not None:
+                given.append((written_p[k], head))
                 points[written_p[k]] = len(order)
                 order.append(k)
                 reached = written_end[k]
             elif m := _POS.match(masked, head, end):
                 reached = m.end()
+                given.append((int(m.group(1)), head))
                 target = _position(source, masked, lines, m, unread)
                 if target is not None:
                     points[int(m.group(1))] = len(order)
                     order.append(-1 - len(slow))
                     slow.append((target, m.span(1)))
+        _once(source, [number for number, _ in given], [offset for _, offset in given], starts)
     else:
         written = _written_positions(masked, 0, 0)
     return _target_table(source.text, written, np.array(order, dtype=np.int64), slow, starts), points, unread
+
+
+def _once(source, numbers, offsets, starts):
+    """Refuse a /POS section that gives a position number twice (``numbers``: list of int, of its entries, at
+    ``offsets`` of ``source``'s text; ``starts``: its lines' start offsets), as the controller refuses to load it."""
+    if len(set(numbers)) == len(numbers):
+        return
+    first = {}
+    for number, offset in zip(numbers, offsets):
+        line = int(np.searchsorted(starts, offset, side="right"))
+        if number in first:
+            fail(source.name, line, source.text[offset:offset + 40].splitlines()[0],
+                 f"P[{number}] is given again in /POS (first at line {first[number]}): a program has one of each")
+        first[number] = line
 
 
 def _target_table(text, written, order, slow, starts):

@@ -63,4 +63,5 @@ register_format(
     speed_fields="$VEL.CP, BAS(#VEL_PTP, %)",
     speed_units={"joint": {"%": 1e-3}, "linear": {"mm/s": 1e-3}, "circular": {"mm/s": 1e-3}},
     configuration=f"{__name__}.configuration",
+    kept_axes=True,  # a POS or FRAME point, or an E6POS without E1, leaves the external axes where they are
 )

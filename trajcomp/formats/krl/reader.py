@@ -22,6 +22,7 @@ from trajcomp.formats.text import (
     DeclaredElsewhere,
     Lines,
     check_closed,
+    code_of,
     fail,
     finite,
     integer,
@@ -30,6 +31,7 @@ from trajcomp.formats.text import (
     read_source,
     runs_between,
     split_top,
+    statement_text,
     unresolved,
     whole_circle,
 )
@@ -107,8 +109,14 @@ _DEF = re.compile(r"^\s*(?:GLOBAL\s+)?DEF(?:FCT\s+\w+)?\s+(\w+)\s*\(", re.I | re
 _DEF_LINE = re.compile(r"^\s*(?:GLOBAL\s+)?DEF(?:FCT\s+\w+)?\s+\w+\s*\((.*?)\)", re.I)
 _DEFDAT = re.compile(r"^\s*DEFDAT\s+(\w+)", re.I | re.M)
 _ENDDAT = re.compile(r"^\s*ENDDAT\b", re.I | re.M)
-_BLOCK_OPENS = re.compile(r"^[ \t]*(?:GLOBAL\s+)?(DEFFCT|DEF)\b", re.I | re.M)  # a routine or function
-_BLOCK_CLOSES = re.compile(r"^[ \t]*(ENDFCT|END)\b", re.I | re.M)
+# the blocks of a .src (a routine or function, the control structures, a spline block) and the keywords closing them
+_CLOSING = {"DEF": "END", "DEFFCT": "ENDFCT", "IF": "ENDIF", "FOR": "ENDFOR", "WHILE": "ENDWHILE", "LOOP": "ENDLOOP",
+            "REPEAT": "UNTIL", "SWITCH": "ENDSWITCH", "SPLINE": "ENDSPLINE", "PTP_SPLINE": "ENDSPLINE"}
+_BLOCK_OPENS = re.compile(r"^[ \t]*(?:GLOBAL\s+)?(DEFFCT|DEF|IF|FOR|WHILE|LOOP|REPEAT|SWITCH|SPLINE|PTP_SPLINE)\b",
+                          re.I | re.M)
+_BLOCK_CLOSES = re.compile(r"^[ \t]*(ENDFCT|END|ENDIF|ENDFOR|ENDWHILE|ENDLOOP|UNTIL|ENDSWITCH|ENDSPLINE)\b",
+                           re.I | re.M)
+_OUTSIDE_ROUTINES = re.compile(r"[ \t]*&")  # what a .src holds outside its routines: its &ACCESS, &REL ... lines
 _PROGRAM_NAME = re.compile(r"^[A-Za-z_][A-Za-z0-9_]{0,23}$")  # KRL names: 24 characters at most
 # A Cartesian point declared as KUKA's editors and CAM post-processors write it, one a line:
 # DECL E6POS XP1={X 1.0,Y 2.0,Z 3.0,A 0.0,B 90.0,C 0.0,S 2,T 35,E1 0.0,..,E6 0.0} (S, T and E1..E6 optional):
@@ -265,8 +273,8 @@ def _written_points(index, masked, lines):
         blocks.append(_written_block(start[read], end[read], numbers[read], shared[read], offset, configs))
     others, matched = np.flatnonzero(~taken), False
     for lo in range(0, len(others), AT_ONCE):
-        found = [m for k in others[lo:lo + AT_ONCE].tolist()
-                 if (m := _WRITTEN_POINT.match(masked, int(starts[k]), int(ends[k])))]
+        found = [m for k in others[lo:lo + AT_ONCE].tolist() if not masked[starts[k]:ends[k]].isspace()
+                 and (m := _WRITTEN_POINT.match(masked, int(starts[k]), int(ends[k])))]
         if not found:
             continue
         matched = True
@@ -602,7 +610,7 @@ class _Reader:
     def scan_assignments(self, masked, lines):
         """Note the names the .src assigns (a declared speed is a constant only if nothing assigns it)."""
         for line_no, start, end in lines:
-            text = masked[start:end]
+            text = statement_text(masked, start, end)
             if (m := _ASSIGN.match(text)) and not _NUMBER_DECL.match(text):
                 self.assigned.setdefault(m.group(1).upper(), line_no)
 
@@ -642,7 +650,7 @@ class _Reader:
     def declarations(self, index, masked, line_no, start, end):
         """Handle a point, FDAT/PDAT/LDAT or TOOL_DATA/BASE_DATA line; True if it was one."""
         name = self.sources[index].name
-        text = masked[start:end]
+        text = statement_text(masked, start, end)
         original = self.sources[index].text[start:end]
         m = _DECL.match(text)
         if m:
@@ -690,7 +698,7 @@ class _Reader:
     def statement(self, index, masked, line_no, start, end):
         """Handle one .src line."""
         name = self.sources[index].name
-        text = masked[start:end]
+        text = statement_text(masked, start, end)
         original = self.sources[index].text[start:end]
         if m := _DEF_LINE.match(text):
             self.params = {p.split(":")[0].strip().upper() for p in m.group(1).split(",") if p.strip()}
@@ -990,8 +998,8 @@ def read(path):
     src = reader.sources[src_index]
     written, inline = _written_motions(src_index, src_masked, src_lines)
     # the motion lines read at once open and close no block: the runs of other lines between them
-    check_closed(src, src_masked, _BLOCK_OPENS, _BLOCK_CLOSES, {"DEF": "END", "DEFFCT": "ENDFCT"},
-                 runs_between(written["start"], written["end"], len(src_masked)))
+    check_closed(src, src_masked, _BLOCK_OPENS, _BLOCK_CLOSES, _CLOSING,
+                 runs_between(written["start"], written["end"], len(src_masked)), _OUTSIDE_ROUTINES)
     others = _other_lines(src_lines, written["line"])
     reader.scan_assignments(src_masked, others)
     dat_path, table = _sibling_dat(path), None
@@ -1195,6 +1203,8 @@ def _written_motions(index, masked, lines):
     for lo in range(0, len(others), AT_ONCE):
         found, inline = [], []
         for k in others[lo:lo + AT_ONCE].tolist():
+            if masked[starts[k]:ends[k]].isspace():  # a comment's line: the patterns would look at each blank
+                continue
             if m := _WRITTEN_MOTION.match(masked, int(starts[k]), int(ends[k])):
                 found.append(m)
             elif m := _INLINE_MOTION.match(masked, int(starts[k]), int(ends[k])):
@@ -1565,7 +1575,7 @@ def _resolve(reader, path, dat_path, walk):
     elsewhere = DeclaredElsewhere(dat_path or path, folders, (".dat",), _GLOBAL_POINT, ";", assignment=_ASSIGN,
                                   code=(".src", ".sub"), visible=_visible)
     for item in reader.items:
-        if isinstance(item, Statement) and (m := _ASSIGN.match(mask(item.text, ";"))):
+        if isinstance(item, Statement) and (m := _ASSIGN.match(code_of(item.text, ";"))):
             assigned.setdefault(m.group(1).upper(), item.line)
     missing = []
 
