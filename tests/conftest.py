@@ -52,7 +52,7 @@ def calibrated_model(folder, robot, corner, side, step, folds=3, orientations="1
     targets (the default plan's five orientations: ``"auto"``, as `test_cli` runs them).
     """
     plan, meas, model = folder / "plan.csv", folder / "meas.csv", folder / "model.yaml"
-    assert main(["plan", "--robot", robot, "--cube", corner, "--side", str(side), "--step", str(step),
+    assert main(["plan", "--robot", robot, f"--cube={corner}", "--side", str(side), "--step", str(step),
                  "--orientations", orientations, "-o", str(plan)]) == 0
     assert main(["simulate", str(plan), "--robot", robot, "--seed", "1", "-o", str(meas)]) == 0
     assert main(["calibrate", str(meas), "--robot", robot, "--grid-step", str(step), "--folds", str(folds),

@@ -305,6 +305,10 @@ def rapid_ops(text):
             ops.append(Op({"ENDPROC": "end", "ENDIF": "endif", "ELSE": "else", "ENDWHILE": "endloop"}[word]))
         elif word == "IF":
             ops.append(Op("if"))
+        elif m := re.match(r"GOTO\s+(\w+)\s*;$", line, re.I):
+            ops.append(Op("jump", m.group(1)))
+        elif m := re.match(r"(\w+):$", line):
+            ops.append(Op("label", m.group(1)))
         elif word == "WHILE":
             ops.append(Op("loop"))
         elif word.startswith("WAIT"):
@@ -397,6 +401,51 @@ def test_rapid_reader_follows_calls_loops_branches_velset_and_waits(rapid_source
     assert np.isnan(table.acceleration_share[at["5"]]) and table.acceleration_share[at["6"]] == 0.5  # AccSet 50
     assert np.isnan(table.zone[at["8"]]) and np.isnan(table.zone[at["9"]])  # WaitTime, WaitDI after them
     assert "Elsewhere" in table.start_why[at["11"]] and "Elsewhere" in table.speed_why[at["11"]]
+
+
+RAPID_GOTO = RAPID_MODULE.split("  PROC main()")[0] + """  PROC main()
+    MoveJ P1, v1000, fine, tool0;
+    MoveL P2, v1000, fine, tool0;
+    IF di1 = 1 THEN
+      GOTO skip;
+    ENDIF
+    VelSet 100, 20;
+    MoveL P3, v1000, fine, tool0;
+    skip:
+    MoveL P4, v1000, fine, tool0;
+    MoveJ P5, v1000, fine, tool0;
+    again:
+    MoveL P7, v500, z10, tool0;
+    MoveJ P8, v500, fine, tool0;
+    Incr n;
+    IF n < 3 THEN
+      GOTO again;
+    ENDIF
+    MoveJ P1, v1000, fine, tool0;
+  ENDPROC
+ENDMODULE
+"""
+
+
+def test_rapid_goto_forward_over_a_velset_and_back_as_a_loop_runs_no_faster_on_any_path(tmp_path, abb_model,
+                                                                                        makerless):
+    """``GOTO skip`` over ``VelSet 100, 20``: the MoveL after the label runs at 1000 or 20 mm/s, from P2 or P3;
+    ``GOTO again`` back: the first motion after the label starts at P5 or P8. Run every path the controller's way
+    (retime, compensate, each conversion): nothing faster, no time from a start that is not unique."""
+    source = tmp_path / "in" / "Goto.mod"
+    source.parent.mkdir()
+    source.write_text(RAPID_GOTO)
+    table = formats.read(source).motion_table()
+    assert table.speed[3] == 20.0 and table.start_why[3]  # after P2 (the jump) or P3 (under VelSet 100, 20)
+    assert table.start_why[5] and not table.start_why[6]  # P7: after P5 or P8; P8 after P7
+    for run in (["retime", "--robot", "abb_irb4600"], ["compensate", "--model", str(abb_model), "--retime", "auto"]):
+        out = tmp_path / run[0] / "Goto.mod"
+        out.parent.mkdir()
+        assert main([run[0], str(source), "-o", str(out), *run[1:]]) in (0, 1)
+        assert assert_rapid_no_faster(RAPID_GOTO, out.read_text()) >= 2
+    for target in (".src", ".ls", ".script", ".csv"):
+        assert_converted_no_faster(source, rapid_ops(RAPID_GOTO), "main", {"velset": (100.0, 5000.0)},
+                                   rapid_line_speed, target, makerless("abb_irb4600"), tmp_path)
 
 
 @pytest.fixture(scope="module")
@@ -633,7 +682,31 @@ def ur_least_time(distance, a, v):
     return distance / v + v / a if distance >= v * v / a else 2.0 * np.sqrt(distance / a)
 
 
-def test_urscript_retimed_runs_no_faster_on_any_path_under_its_a_and_v(tmp_path, capsys):
+def assert_urscript_no_faster(written_text):
+    """Every movej of the written script given a time takes, on every path, no less than its programmed a and v
+    allow from the written joints of the motion before it; a time written where the start is not unique, or for a
+    movel, is a failure. Returns the times checked."""
+    ops = ur_ops(UR_SCRIPT)
+    fields = {op.name: op.value for op in ops if op.kind == "motion"}
+    written = {op.name: op.value for op in ur_ops(written_text) if op.kind == "motion"}
+    visited = visits(ur_ops(written_text), "cell", {})
+    assert visited.keys() == visits(ops, "cell", {}).keys()
+    checked = 0
+    for (key, path), visit in visited.items():
+        function, q, a, v, t = written[key]
+        if (function, a, v, t) == (fields[key][0], *fields[key][2:]):
+            continue  # its fields left as written (a compensated one moves its joints a little)
+        assert t is not None and function == "movej", (key, written[key])
+        assert visit.before, (key, path, "a time written where the motion's start is not unique")
+        assert (a, v) == fields[key][2:4]  # the programmed a and v kept beside the time
+        distance = np.max(np.abs(np.subtract(q, written[visit.before][1])))
+        least = ur_least_time(distance, a, v)
+        assert t >= least * (1 - 1e-4), (key, path, t, least)  # t is written to 4 decimals, rounded up
+        checked += 1
+    return checked
+
+
+def test_urscript_retimed_and_compensated_run_no_faster_on_any_path_under_its_a_and_v(tmp_path, tmp_path_factory):
     source = tmp_path / "cell.script"
     source.write_text(UR_SCRIPT)
     table = formats.read(source).motion_table()
@@ -643,23 +716,13 @@ def test_urscript_retimed_runs_no_faster_on_any_path_under_its_a_and_v(tmp_path,
     out = tmp_path / "out" / "cell.script"
     out.parent.mkdir()
     assert main(["retime", str(source), "-o", str(out), "--robot", "ur10"]) in (0, 1)
-    ops = ur_ops(UR_SCRIPT)
-    fields = {op.name: op.value for op in ops if op.kind == "motion"}
-    written = {op.name: op.value for op in ur_ops(out.read_text()) if op.kind == "motion"}
-    visited = visits(ur_ops(out.read_text()), "cell", {})
-    assert visited.keys() == visits(ops, "cell", {}).keys()
-    checked = 0
-    for (key, path), visit in visited.items():
-        function, q, a, v, t = written[key]
-        if written[key] == fields[key]:
-            continue  # left as written
-        assert t is not None and function == "movej", (key, written[key])
-        assert visit.before, (key, path, "a time written where the motion's start is not unique")
-        distance = np.max(np.abs(np.subtract(q, fields[visit.before][1])))
-        least = ur_least_time(distance, a, v)
-        assert t >= least * (1 - 1e-4), (key, path, t, least)  # t is written to 4 decimals, rounded up
-        checked += 1
-    assert checked >= 3
+    assert assert_urscript_no_faster(out.read_text()) >= 3
+    model = calibrated_model(tmp_path_factory.mktemp("ur10"), "ur10", "-800,-600,400", 300, 100)
+    comp = tmp_path / "comp" / "cell.script"
+    comp.parent.mkdir()
+    assert main(["compensate", str(source), "--model", str(model), "--retime", "auto", "-o", str(comp)]) in (0, 1)
+    assert ur_ops(comp.read_text()) != ur_ops(UR_SCRIPT)  # compensated
+    assert assert_urscript_no_faster(comp.read_text()) >= 3
 
 
 def test_krl_spline_block_runs_at_its_with_speed_and_gets_no_statement_inside(tmp_path):

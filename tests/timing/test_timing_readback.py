@@ -179,6 +179,34 @@ def test_a_time_on_a_blended_motion_spans_its_programmed_length_corner_to_corner
     assert timed.speed[2] >= expected[1] / cruise  # the controller's pace over the arc: within J1's limit
 
 
+def test_a_time_paced_over_the_programmed_length_keeps_the_joint_limits_on_the_straight_part(tmp_path):
+    """A ``\\T`` asked faster than the arm can go on a blended line (z200 both ends) passing 300 mm from J1's
+    axis: the controller paces the written time over the programmed length, corner to corner, so it runs the
+    straight part between the zones at L / T. Sampled at 1 kHz with IK there (independent of the timing), no
+    joint exceeds its velocity limit (J1 at 300 mm binds). Timed over the shorter path between blend middles
+    (1.039 s where 1.092 s are needed), J1 would run 5 % over its limit."""
+    corners = [(1300, -500), (300, -500), (300, 500), (1300, 500)]
+    quadrant = [int(np.floor(np.degrees(np.arctan2(y, x)) / 90.0)) for x, y in corners]
+    module = ("MODULE Near\n" + "".join(
+        f"  CONST robtarget Q{n}:=[[{x},{y},1300],[0,0,1,0],[{c},0,{c},0],[9E9,9E9,9E9,9E9,9E9,9E9]];\n"
+        for n, ((x, y), c) in enumerate(zip(corners, quadrant)))
+        + "  PROC main()\n    MoveJ Q0, v1000, fine, tool0;\n    MoveL Q1, v1000\\T:=0.01, z200, tool0;\n"
+        "    MoveL Q2, v1000\\T:=0.01, z200, tool0;\n    MoveL Q3, v1000\\T:=0.01, fine, tool0;\n"
+        "  ENDPROC\nENDMODULE\n")
+    path = tmp_path / "Near.mod"
+    path.write_text(module)
+    robot = load_robot("abb_irb4600")
+    timed = formats.read(_retimed(path, tmp_path, "abb_irb4600")).motion_table()
+    assert timed.speed_unit[2] == "s"
+    pace = 1000.0 / timed.speed[2]  # mm/s: the programmed 1000 mm from Q1 to Q2 over the written time
+    down = np.diag([-1.0, 1.0, -1.0])  # [0,0,1,0]: the tool turned half about y
+    start, end = np.eye(4), np.eye(4)
+    start[:3, :3] = end[:3, :3] = down
+    start[:3, 3], end[:3, 3] = (300.0, -300.0, 1300.0), (300.0, 300.0, 1300.0)  # 200 mm in from each corner
+    velocity, _ = line_demand(robot.replace(T_flange_tool=np.eye(4)), start, end, pace)
+    assert np.max(np.abs(velocity) / robot.v_max) <= 1.005
+
+
 def _retimed(path, tmp_path, robot_name):
     out = tmp_path / "out" / path.name
     out.parent.mkdir(exist_ok=True)

@@ -73,9 +73,11 @@ _VEL = re.compile(r"^\s*\$VEL\s*=\s*\{(.*)\}\s*$", re.I)  # $VEL={CP 0.2,ORI1 20
 _VEL_AXIS = re.compile(r"^\s*\$VEL_AXIS\s*\[\s*([1-6])\s*\]\s*=\s*(.*?)\s*$", re.I)
 _ACC_CP = re.compile(r"^\s*\$ACC\.CP\s*=\s*(.*?)\s*$", re.I)
 _ACC = re.compile(r"^\s*\$ACC\s*=\s*\{(.*)\}\s*$", re.I)  # $ACC={CP 2.3,ORI1 100,ORI2 100}
+_ACC_ORI = re.compile(r"^\s*\$ACC\.(ORI[12])\s*=\s*(.*?)\s*$", re.I)
 _ACC_AXIS = re.compile(r"^\s*\$ACC_AXIS\s*\[\s*([1-6])\s*\]\s*=\s*(.*?)\s*$", re.I)
 _BAS_ACC = re.compile(r"^\s*BAS\s*\(\s*#ACC_PTP\s*,\s*(.*?)\s*\)\s*$", re.I)  # every axis's $ACC_AXIS
 ACC_GROUPS = tuple(f"acc{n}" for n in range(1, 7))  # the flow's acceleration groups of a PTP: each axis's %
+ORI_GROUPS = ("acc_ori1", "acc_ori2")  # the orientation accelerations of a LIN or CIRC, deg/s^2
 AXIS_GROUPS = tuple(f"ptp{n}" for n in range(1, 7))  # the flow's speed groups of a PTP: each axis's % (`_Reader.give`)
 # the statements that change the order a program runs in (`trajcomp.programs.flow.Step`): keyword -> step kind
 _FLOW_WORDS = {"IF": "if", "ELSE": "else", "ENDIF": "endif", "SWITCH": "if", "CASE": "elif", "DEFAULT": "elif",
@@ -579,7 +581,8 @@ class _Reader:
         # (value, why, span) of each speed setting in force: the TCP's (mm/s), each axis's (%): `give`
         self.initial = {"cp": (None, self.speed_why[LINEAR], None)}
         self.initial |= dict.fromkeys(AXIS_GROUPS, (None, self.speed_why[JOINT], None))
-        self.initial |= dict.fromkeys(ACC_GROUPS + ("acc_cp",), (None, ""))  # the controller's own: (value, why)
+        # the controller's own: (value, why)
+        self.initial |= dict.fromkeys(ACC_GROUPS + ("acc_cp",) + ORI_GROUPS, (None, ""))
         self.axes = [self.initial["ptp1"]] * 6
         self.steps = []  # what the .src does besides moving, in order (`trajcomp.programs.flow`)
         self.siblings = set()  # upper names of the other .src files beside it: routines the read does not include
@@ -807,6 +810,12 @@ class _Reader:
             members = _members(m.group(1), start + m.start(1), index, name, line_no, original, False)
             if "cp" in members:
                 self.accelerate("acc_cp", members["cp"].text, 1000.0, index, line_no, original, "$ACC.CP")
+            for member in sorted(set(members) & {"ori1", "ori2"}):
+                self.accelerate(f"acc_{member}", members[member].text, 1.0, index, line_no, original,
+                                f"$ACC.{member.upper()}")
+        elif m := _ACC_ORI.match(text):
+            self.accelerate(f"acc_{m.group(1).lower()}", m.group(2), 1.0, index, line_no, original,
+                            f"$ACC.{m.group(1).upper()}")
         elif m := _ACC_AXIS.match(text):
             self.accelerate(ACC_GROUPS[int(m.group(1)) - 1], m.group(2), 1.0, index, line_no, original,
                             f"$ACC_AXIS[{m.group(1)}]")
@@ -1096,7 +1105,8 @@ def _flow_accelerations(table, reached, joint, why):
     of the arm's (the slowest of its axes' ``$ACC_AXIS``, %), a LIN's or CIRC's TCP acceleration (``$ACC.CP``,
     mm/s^2), the slowest that can reach it; where one is the controller's own (none set) and others are set, the
     TCP's is not known (none is stated), each axis's own is 100 %. One set at run time leaves the motion as
-    written (``why``, changed in place)."""
+    written (``why``, changed in place); so does an orientation acceleration (``$ACC.ORI1``, ``ORI2``) stated for a
+    LIN or CIRC, which the timing does not model (its joint limits may turn the tool faster)."""
     share, tcp = np.full(len(table), np.nan), np.array(table.acceleration, dtype=float)
     for r, settings in enumerate(reached.settings):
         rows = np.arange(len(table))[reached.rows(r)]
@@ -1113,6 +1123,14 @@ def _flow_accelerations(table, reached, joint, why):
                 share[at] = least / 100.0 if least < 100.0 else np.nan
             elif all(value is not None for value, _ in found):
                 tcp[at] = min(value for value, _ in found)
+        at = rows[~joint[rows]]
+        stated = [(group[4:].upper(), s) for group in ORI_GROUPS for s in settings[group]
+                  if isinstance(s, Unknown) or s[0] is not None or s[1]]
+        if len(at) and stated:
+            group, s = stated[0]
+            value = "set at run time" if isinstance(s, Unknown) or s[1] else f"{s[0]:g} deg/s^2"
+            why[at[why[at] == ""]] = (f"$ACC.{group} {value}: an orientation acceleration, which the timing does not "
+                                      "model: left as written")
     return {"acceleration_share": share, "acceleration": tcp}
 
 

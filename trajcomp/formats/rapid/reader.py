@@ -121,7 +121,8 @@ _FLOW_WORDS = {"if": "if", "elseif": "elif", "else": "else", "endif": "endif", "
                "endproc": "end", "endfunc": "end", "endtrap": "end"}
 _WAITS = re.compile(r"^\s*(Wait\w*|Stop|StopMove|Break)\b", re.I)  # the arm stops there: WaitTime, WaitDI, ...
 _VELSET = re.compile(r"^\s*VelSet\s+([^,;]+),\s*([^,;]+);", re.I)
-_ACCSET = re.compile(r"^\s*AccSet\s+([^,;]+),\s*([^,;\\]+)[^;]*;", re.I)  # Acc, Ramp [\FinePointRamp]
+_ACCSET = re.compile(r"^\s*AccSet\s+([^,;]+),\s*([^,;\\]+)(?:\\FinePointRamp\s*:=\s*([^,;\\]+))?\s*;",
+                     re.I)  # Acc, Ramp [\FinePointRamp:=n]
 _LABEL = re.compile(r"^\s*([A-Za-z]\w*)\s*:\s*$")
 _ROUTINE_NAME = re.compile(r"^\s*(?:LOCAL\s+)?(?:PROC|FUNC\s+\w+|TRAP)\s+(\w+)", re.I)
 _NOT_CALLS = {"module", "endmodule", "local", "task", "error", "backward", "undo", "record", "endrecord", "alias"}
@@ -781,7 +782,9 @@ class _Reader:
         if m := _ACCSET.match(text):
             acc, why = self.constant(m.group(1).strip(), "num", line, original, "AccSet Acc")
             ramp, ramp_why = self.constant(m.group(2).strip(), "num", line, original, "AccSet Ramp")
-            self.steps.append(Step("set", "accset", (acc, ramp, why or ramp_why), line, self.index))
+            fine, fine_why = (100.0, "") if m.group(3) is None else self.constant(
+                m.group(3).strip(), "num", line, original, "AccSet \\FinePointRamp")
+            self.steps.append(Step("set", "accset", (acc, ramp, fine, why or ramp_why or fine_why), line, self.index))
             return
         if _WAITS.match(text):
             self.steps.append(Step("wait", line=line, source=self.index))
@@ -1217,7 +1220,7 @@ def read(path):
         rotation, or motions to points the module does not declare.
     """
     program, steps = _read(path)
-    return flow.program_followed(program, steps, {"velset": (100.0, VMAX, ""), "accset": (100.0, 100.0, "")},
+    return flow.program_followed(program, steps, {"velset": (100.0, VMAX, ""), "accset": (100.0, 100.0, 100.0, "")},
                                  _flow_speeds, settings=True)
 
 
@@ -1234,10 +1237,15 @@ def _flow_speeds(table, reached):
     reaching a motion: the lowest override and max; one set at run time:
     the motion's speed is so (left as written).
 
-    AccSet acc, ramp runs the motion's accelerations at acc % of the
-    arm's (the lowest of those reaching it: ``acceleration_share``); a
-    ramp below 100 % lowers the controller's jerk, which the timing does
-    not model: such a motion is left as written and listed.
+    AccSet acc, ramp [\\FinePointRamp:=f] runs the motion's accelerations
+    at acc % of the arm's (the lowest of those reaching it:
+    ``acceleration_share``); a ramp below 100 % (f for a motion to a fine
+    point) only softens how fast they build up (the jerk), as decided per
+    written field: a speed (a line's speed data, ``\\V``) cruises at it
+    behind softer ramps, never faster, so the motion is timed as at 100 %;
+    a time (``\\T``, written for a joint motion or one with a time) would
+    be kept by cruising faster behind softer ramps, so such a motion is left
+    as written and listed.
     """
     speed = np.array(table.speed, dtype=float)
     orientation = np.array(table.orientation_speed, dtype=float)
@@ -1247,17 +1255,19 @@ def _flow_speeds(table, reached):
         rows = np.arange(len(table))[reached.rows(r)]
         rows = rows[why[rows] == ""]  # a speed data set at run time: left as written anyway
         velsets, accsets = settings["velset"], settings["accset"]
-        unknown = [f"{name}: {v.why if isinstance(v, Unknown) else v[2]}"
+        unknown = [f"{name}: {v.why if isinstance(v, Unknown) else v[-1]}"
                    for name, found in (("VelSet", velsets), ("AccSet", accsets))
-                   for v in found if isinstance(v, Unknown) or v[2]]
+                   for v in found if isinstance(v, Unknown) or v[-1]]
         if unknown:
             why[rows] = unknown[0]
             continue
         acc, ramp = min(v[0] for v in accsets), min(v[1] for v in accsets)
-        if ramp < 100.0:
-            why[rows] = (f"AccSet ramp {ramp:g} %: the controller's jerk is lowered, which the timing does not model: "
-                         "left as written")
-            continue
+        ramp = np.where(np.isnan(table.zone[rows]), min(ramp, min(v[2] for v in accsets)), ramp)
+        written_time = (table.kind[rows] == JOINT) | (table.speed_unit[rows] != "mm/s")  # `timing.writeback`
+        softer = written_time & (ramp < 100.0)
+        why[rows[softer]] = [f"AccSet ramp {r:g} %: softer ramps, which the controller would make up for by cruising "
+                             "faster to keep a written time: left as written" for r in ramp[softer]]
+        rows = rows[~softer]
         if acc < 100.0:
             share[rows] = acc / 100.0
         override, top = min(v[0] for v in velsets) / 100.0, min(v[1] for v in velsets)
