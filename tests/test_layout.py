@@ -59,19 +59,3 @@ def test_a_programs_route_to_the_written_file_never_enters_the_commands():
                  if "commands" in _imported_wings(path) and path.parent.name != "commands"}
     assert importers == {"cli.py"}
 
-
-@pytest.mark.parametrize("old, new, name", [("program", "programs.program", "Program"),
-                                            ("program_items", "programs.items", "Target"),
-                                            ("transforms", "arm.transforms", "pose_to_matrix"),
-                                            ("robot", "arm.robot", "load_robot"),
-                                            ("kinematics", "arm.kinematics", "fk"),
-                                            ("ik", "arm.ik", "ik")])
-def test_a_plugin_written_before_the_wings_still_imports_its_names_and_is_told_where_they_went(old, new, name):
-    import importlib
-
-    former = importlib.import_module(f"trajcomp.{old}")
-    with pytest.warns(DeprecationWarning, match=f"trajcomp.{old} moved to trajcomp.{new}"):
-        value = getattr(former, name)
-    assert value is getattr(importlib.import_module(f"trajcomp.{new}"), name)
-    with pytest.raises(AttributeError):
-        former.no_such_name  # noqa: B018
