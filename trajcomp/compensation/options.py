@@ -8,8 +8,8 @@ import them from here).
 
 import math
 
-from trajcomp.timing.options import METHODS
+from trajcomp.timing.options import RETIME_METHODS
 
 MAX_JOINT_CHANGE = math.radians(5.0)  # rad: default bound of the joint change a correction may cause
 MAX_CORRECTION = 10.0  # mm, default bound of a plausible correction of a calibrated arm
-RETIME_CHOICES = METHODS + ("none",)  # a re-timing method, or none: the program's speeds kept
+RETIME_CHOICES = RETIME_METHODS + ("none",)  # a re-timing method, or none: the program's speeds kept

@@ -336,7 +336,7 @@ def retime_compensated(original, corrected, robot, method, tolerance, tools=None
     robot : Robot
         The nominal robot.
     method : str
-        One of `trajcomp.timing.METHODS`.
+        One of `trajcomp.timing.RETIME_METHODS`.
     tolerance : float
         Path tolerance, mm.
     tools, frames : Mapping[str, ndarray (4, 4)], optional

@@ -27,7 +27,7 @@ import types
 from trajcomp.support.lazy import lazy_names
 
 _MODULES = {
-    "METHODS": "options",
+    "RETIME_METHODS": "options",
     "Moves": "moves",
     "Segment": "result",
     "TimingResult": "result",

@@ -5,5 +5,5 @@ them without loading the timing (`trajcomp.timing.retime` and
 `trajcomp.timing.path` import them from here).
 """
 
-METHODS = ("auto", "toppra", "ruckig")  # auto: TOPP-RA along continuous runs, ruckig for stops and joint motions
+RETIME_METHODS = ("auto", "toppra", "ruckig")  # auto: TOPP-RA along continuous runs, ruckig for stops and joint motions
 TOLERANCE = 0.005  # mm, largest deviation of the timed path from a waypoint or sample
