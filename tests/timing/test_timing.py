@@ -10,7 +10,6 @@ trapezoid and jerk-limited profiles.
 
 import csv
 import dataclasses
-import importlib
 
 import numpy as np
 import pytest
@@ -26,8 +25,8 @@ from trajcomp.arm.robot import load_robot
 from trajcomp.timing import Moves, retime
 from trajcomp.timing.toppra_run import ConstantAcceleration
 from trajcomp.arm.transforms import abc_to_matrix, matrix_to_abc
+import trajcomp.timing.retiming as retime_module
 
-retime_module = importlib.import_module("trajcomp.timing.retime")  # the module, not the function
 UR10 = load_robot("ur10")
 KUKA = load_robot("kuka_kr6_r900")
 FD_TOLERANCE = 0.02  # finite differences of a written 1 us-resolution timing, 10 ms apart

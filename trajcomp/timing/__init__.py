@@ -12,7 +12,7 @@ into the program's speed fields.
 - `trajcomp.timing.toppra_run`: TOPP-RA along a run (`trajcomp.timing.reachability`, constant acceleration);
 - `trajcomp.timing.ruckig_move`: jerk-limited rest-to-rest motion with ruckig;
 - `trajcomp.timing.check`: the dense 1 kHz check;
-- `trajcomp.timing.retime`: segments and the `TimingResult`;
+- `trajcomp.timing.retiming`: segments and the `TimingResult`;
 - `trajcomp.timing.writeback`: the timing as each language's speed fields;
 - `trajcomp.timing.options`: the methods and the path tolerance, without numpy (for the command line).
 
@@ -32,8 +32,8 @@ _MODULES = {
     "Segment": "result",
     "TimingResult": "result",
     "moves_from_program": "moves",
-    "plan_segments": "retime",
-    "retime": "retime",
+    "plan_segments": "retiming",
+    "retime": "retiming",
 }
 __all__ = sorted(_MODULES)
 

@@ -1,7 +1,7 @@
 """The re-timing's methods and path tolerance: what ``trajcomp retime`` and ``compensate --retime`` offer.
 
 Plain constants, no numpy: a command's ``--help`` builds its parser from
-them without loading the timing (`trajcomp.timing.retime` and
+them without loading the timing (`trajcomp.timing.retiming` and
 `trajcomp.timing.path` import them from here).
 """
 

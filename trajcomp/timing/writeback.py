@@ -47,7 +47,7 @@ from trajcomp.formats.speeds import orientation_time
 from trajcomp.programs.items import JOINT
 from trajcomp.timing.moves import moves_from_program
 from trajcomp.timing.path import TOLERANCE
-from trajcomp.timing.retime import retime
+from trajcomp.timing.retiming import retime
 
 # a cruise speed is kept this much below its bound: the fitted path's second derivative differs from the exact
 # line's (solved every 0.05 mm) by up to ~0.05 % of the acceleration at the slowest point
