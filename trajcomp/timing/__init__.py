@@ -21,9 +21,6 @@ command's ``--help`` can read `trajcomp.timing.options` without loading the
 timing (numpy, scipy, ruckig).
 """
 
-import sys
-import types
-
 from trajcomp.support.lazy import lazy_names
 
 _MODULES = {
@@ -39,15 +36,3 @@ __all__ = sorted(_MODULES)
 
 __getattr__ = lazy_names(__name__, _MODULES)
 
-
-class _Package(types.ModuleType):
-    """This package: ``trajcomp.timing.retime`` stays the function when the import system sets the module of that
-    name as an attribute (which it does whenever the module is first imported, by anyone)."""
-
-    def __setattr__(self, name, value):
-        if name == "retime" and isinstance(value, types.ModuleType):
-            value = value.retime
-        super().__setattr__(name, value)
-
-
-sys.modules[__name__].__class__ = _Package
