@@ -33,7 +33,7 @@ from trajcomp.errors import TrajcompError
 from trajcomp.formats.text import check_writable
 from trajcomp.calibration.measurements import Measurements
 from trajcomp.calibration.measurement_plan import plan_grid
-from trajcomp.compensation.program import compensate_program, convert_program
+from trajcomp.compensation.program_rewrite import compensate_program, convert_program
 from trajcomp.arm.robot import load_robot
 from trajcomp.calibration.simulate import VirtualRobot
 from trajcomp.arm.transforms import pose_to_matrix

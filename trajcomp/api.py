@@ -25,7 +25,7 @@ turns nearest the hint, and the command's joints are in that posture; a
 correction that would leave it is refused (`trajcomp.IKError`). Without a
 hint, each pose takes the posture nearest the joints of the pose before it
 (the first: nearest the robot's home), as a controller moves on from where
-the arm is. Everything else is `trajcomp.compensation.program.compensate_program`'s:
+the arm is. Everything else is `trajcomp.compensation.program_rewrite.compensate_program`'s:
 this module feeds it a small in-memory program.
 """
 
@@ -43,7 +43,7 @@ from trajcomp.errors import TrajcompError
 from trajcomp.model.compensation_model import CompensationModel
 from trajcomp.model.model_file import load_model
 from trajcomp.compensation.options import MAX_CORRECTION, MAX_JOINT_CHANGE
-from trajcomp.compensation.program import compensate_program
+from trajcomp.compensation.program_rewrite import compensate_program
 from trajcomp.programs.program import Program
 from trajcomp.programs.items import LINEAR, Motion, Target
 from trajcomp.arm.transforms import angles_near, matrix_to_pose, pose_to_matrix

@@ -21,7 +21,7 @@ from trajcomp.errors import TrajcompError
 from trajcomp.arm.ik import batch_seed, ik
 from trajcomp.arm.kinematics import shoulder_and_reach
 from trajcomp.calibration.measurements import Measurements, read_measurements
-from trajcomp.compensation.program import compensate_program
+from trajcomp.compensation.program_rewrite import compensate_program
 from trajcomp.calibration.measurement_plan import default_orientation, plan_grid
 from trajcomp.arm.robot import load_robot
 from trajcomp.calibration.profiles import PAPER_ROBOT

@@ -18,7 +18,7 @@ from trajcomp.calibration.calibrate import calibrate
 from trajcomp.compensation.targets import program_corrector
 from trajcomp.calibration.measurements import Measurements
 from trajcomp.calibration.measurement_plan import plan_grid
-from trajcomp.compensation.program import compensate_program
+from trajcomp.compensation.program_rewrite import compensate_program
 from trajcomp.arm.robot import load_robot
 from trajcomp.calibration.simulate import VirtualRobot
 

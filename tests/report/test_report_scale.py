@@ -15,7 +15,7 @@ import pytest
 
 from trajcomp.arm.kinematics import fk
 from trajcomp.model.model_file import load_model
-from trajcomp.compensation.program import ProgramReport
+from trajcomp.compensation.program_rewrite import ProgramReport
 from trajcomp.report import compliance_report, schema, summary_lines
 from trajcomp.report import plots, targets
 from trajcomp.report.measures import singularity_distances

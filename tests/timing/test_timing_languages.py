@@ -208,7 +208,7 @@ def test_the_compensations_planned_joints_time_the_original_as_its_posture_plan_
     from trajcomp.compensation.pipeline import retime_compensated
     from trajcomp.compensation.targets import program_corrector
     from trajcomp.model.model_file import load_model
-    from trajcomp.compensation.program import compensate_program
+    from trajcomp.compensation.program_rewrite import compensate_program
 
     model = load_model(kuka_model)
     shutil.copy(EXAMPLES / "kuka" / "weld.dat", tmp_path / "weld.dat")

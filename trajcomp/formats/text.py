@@ -418,7 +418,7 @@ def written_speed(motion, language):
     WriteError
         A speed in a unit the language does not state (its format's
         ``speed_units``): the program must be converted into it first
-        (`trajcomp.compensation.program.convert_program`), never written faster.
+        (`trajcomp.compensation.program_rewrite.convert_program`), never written faster.
     """
     from trajcomp.formats import find_format
 

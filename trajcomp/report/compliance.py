@@ -1,6 +1,6 @@
 """The compliance report of a compensated (and re-timed) program, as a JSON-ready dict.
 
-Built from the run's `trajcomp.compensation.program.ProgramReport` (one row per
+Built from the run's `trajcomp.compensation.program_rewrite.ProgramReport` (one row per
 compensated target, motion order), the nominal robot, the model and, when
 the program was re-timed, the `trajcomp.timing` result. Every criterion of
 the verdict is stated with its threshold; each failing one counts and
@@ -250,7 +250,7 @@ def compliance_report(report, robot, *, criteria=None, model=None, model_info=No
     Parameters
     ----------
     report : ProgramReport
-        What the compensation did (`trajcomp.compensation.program.ProgramReport`).
+        What the compensation did (`trajcomp.compensation.program_rewrite.ProgramReport`).
     robot : Robot
         The nominal robot.
     criteria : Criteria, optional
