@@ -20,7 +20,7 @@ from scipy.spatial.transform import Rotation
 from virtual_cell import landing_error, virtual_cell
 
 import trajcomp
-import trajcomp.compensation.targets as compensation
+import trajcomp.compensation.target_correction as compensation
 from trajcomp import api, formats
 from trajcomp.errors import CompensationError, IKError, ModelError, TrajcompError, WriteError
 from trajcomp.arm.ik import configuration_of, ik_all

@@ -28,7 +28,7 @@ import pytest
 
 from trajcomp import formats
 from trajcomp.calibration.calibrate import calibrate
-from trajcomp.compensation.targets import program_corrector
+from trajcomp.compensation.target_correction import program_corrector
 from trajcomp.errors import TrajcompError
 from trajcomp.formats.text import check_writable
 from trajcomp.calibration.measurements import Measurements

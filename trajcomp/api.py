@@ -38,7 +38,7 @@ from pathlib import Path
 import numpy as np
 
 from trajcomp.compensation.pipeline import CompensationJob
-from trajcomp.compensation.targets import program_corrector
+from trajcomp.compensation.target_correction import program_corrector
 from trajcomp.errors import TrajcompError
 from trajcomp.model.compensation_model import CompensationModel
 from trajcomp.model.model_file import load_model

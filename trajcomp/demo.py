@@ -16,7 +16,7 @@ import numpy as np
 from trajcomp import formats
 from trajcomp.support.atomic import write_atomic
 from trajcomp.calibration.calibrate import calibrate
-from trajcomp.compensation.targets import compensate, program_corrector
+from trajcomp.compensation.target_correction import compensate, program_corrector
 from trajcomp.errors import TrajcompError
 from trajcomp.arm.ik import batch_seed, ik
 from trajcomp.arm.kinematics import shoulder_and_reach

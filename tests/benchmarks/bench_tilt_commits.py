@@ -19,7 +19,7 @@ import inspect
 import numpy as np
 
 from trajcomp.calibration.calibrate import calibrate
-from trajcomp.compensation.targets import compensate
+from trajcomp.compensation.target_correction import compensate
 from trajcomp.calibration.measurements import Measurements
 from trajcomp.calibration.measurement_plan import default_orientation, plan_grid
 from trajcomp.arm.robot import load_robot

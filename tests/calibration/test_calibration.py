@@ -7,7 +7,7 @@ import pytest
 from conftest import real_data
 
 from trajcomp.calibration.calibrate import calibrate
-from trajcomp.compensation.targets import compensate
+from trajcomp.compensation.target_correction import compensate
 from trajcomp.errors import ModelError
 from trajcomp.arm.kinematics import fk
 from trajcomp.calibration.measurements import Measurements

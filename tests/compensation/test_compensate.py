@@ -3,8 +3,8 @@
 import numpy as np
 import pytest
 
-import trajcomp.compensation.targets as compensation
-from trajcomp.compensation.targets import compensate, program_corrector
+import trajcomp.compensation.target_correction as compensation
+from trajcomp.compensation.target_correction import compensate, program_corrector
 from trajcomp.errors import IKError, ModelError
 from trajcomp.arm.ik import IKResult
 from trajcomp.calibration.measurement_plan import default_orientation

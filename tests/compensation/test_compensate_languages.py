@@ -33,7 +33,7 @@ from scipy.spatial.transform import Rotation
 from trajcomp import formats
 from trajcomp.calibration.calibrate import calibrate
 from trajcomp.cli import main
-from trajcomp.compensation.targets import compensate
+from trajcomp.compensation.target_correction import compensate
 from trajcomp.formats.configuration import BOUNDARY_TOLERANCE, configuration_for, declared_windows
 from trajcomp.arm.ik import configuration_of, ik, ik_all
 from trajcomp.arm.kinematics import fk

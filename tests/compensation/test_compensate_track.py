@@ -28,7 +28,7 @@ from trajcomp.calibration.measurement_plan import plan_grid
 from trajcomp.calibration.measurements import Measurements
 from trajcomp.calibration.simulate import VirtualRobot
 from trajcomp.compensation.program_rewrite import compensate_program
-from trajcomp.compensation.targets import program_corrector
+from trajcomp.compensation.target_correction import program_corrector
 from trajcomp.errors import IKError, RobotError, TrajcompError
 from trajcomp.formats.configuration import configuration_for
 

@@ -15,7 +15,7 @@ import pytest
 from trajcomp import formats
 from trajcomp.compensation import posture
 from trajcomp.cli import main
-from trajcomp.compensation.targets import CompensationResult
+from trajcomp.compensation.target_correction import CompensationResult
 from trajcomp.formats.configuration import configuration_for, declared_windows
 from trajcomp.errors import CompensationError, IKError
 from trajcomp.arm.ik import configuration_of, ik, ik_all

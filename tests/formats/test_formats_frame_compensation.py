@@ -15,7 +15,7 @@ from scipy.spatial.transform import Rotation
 
 from trajcomp import formats
 from trajcomp.calibration.calibrate import calibrate
-from trajcomp.compensation.targets import program_corrector
+from trajcomp.compensation.target_correction import program_corrector
 from trajcomp.calibration.measurements import Measurements
 from trajcomp.calibration.measurement_plan import plan_grid
 from trajcomp.compensation.program_rewrite import compensate_program

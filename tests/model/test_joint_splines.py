@@ -7,7 +7,7 @@ import pytest
 
 from trajcomp.model import joint_errors
 from trajcomp.calibration.calibrate import calibrate
-from trajcomp.compensation.targets import compensate
+from trajcomp.compensation.target_correction import compensate
 from trajcomp.calibration.identify import identify, linearise, region_folds
 from trajcomp.model.joint_errors import JointResidual, SplineBasis
 from trajcomp.arm.kinematics import fk

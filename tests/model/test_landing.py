@@ -14,7 +14,7 @@ import pytest
 from trajcomp.model import landing
 from trajcomp.calibration.calibrate import calibrate
 from trajcomp.cli import main
-from trajcomp.compensation.targets import compensate
+from trajcomp.compensation.target_correction import compensate
 from trajcomp.arm.ik import Configuration, ik
 from trajcomp.arm.kinematics import fk
 from trajcomp.calibration.measurements import Measurements

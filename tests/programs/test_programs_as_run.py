@@ -13,7 +13,7 @@ import pytest
 
 from trajcomp import formats
 from trajcomp.cli import main
-from trajcomp.compensation.targets import CompensationResult
+from trajcomp.compensation.target_correction import CompensationResult
 from trajcomp.formats.configuration import configuration_for, written_configuration
 from trajcomp.errors import ReadError
 from trajcomp.arm.ik import ik

@@ -206,7 +206,7 @@ def test_the_compensations_planned_joints_time_the_original_as_its_posture_plan_
     from trajcomp.support import parallel
     from trajcomp.compensation import pipeline
     from trajcomp.compensation.pipeline import retime_compensated
-    from trajcomp.compensation.targets import program_corrector
+    from trajcomp.compensation.target_correction import program_corrector
     from trajcomp.model.model_file import load_model
     from trajcomp.compensation.program_rewrite import compensate_program
 
