@@ -6,7 +6,7 @@ the program was re-timed, the `trajcomp.timing` result. Every criterion of
 the verdict is stated with its threshold; each failing one counts and
 lists the targets or lines it concerns. Measures, statistics and verdict
 cover every target; a long program's table is summarised
-(`trajcomp.report.targets`). What the run could not provide (no
+(`trajcomp.report.per_target`). What the run could not provide (no
 compensable motion, no grid in the mode, no re-timing) is listed under
 ``missing`` instead of being shown empty.
 """
@@ -18,7 +18,7 @@ from trajcomp.report import compliance_figures, plots
 from trajcomp.report.measures import BRANCH_NAMES
 from trajcomp.report.document import Figure, Report
 from trajcomp.report.provenance import grid_box, header
-from trajcomp.report.targets import ARRAYS, ROWS, TIMES, flag_bits, full_data, statistics, table_rows, target_json, \
+from trajcomp.report.per_target import ARRAYS, ROWS, TIMES, flag_bits, full_data, statistics, table_rows, target_json, \
     target_measures
 from trajcomp.report.verdict import FAIL, LISTED, PASS, Check, Criteria, accuracy_check, check, not_evaluated, verdict
 
