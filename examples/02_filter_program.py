@@ -20,7 +20,7 @@ import numpy as np
 import trajcomp
 from trajcomp.demo import PAPER_CUBES, run_cube
 from trajcomp.arm.robot import load_robot
-from trajcomp.calibration.simulate import VirtualRobot
+from trajcomp.calibration.virtual_arm import VirtualRobot
 
 PROGRAM = Path(__file__).with_name("ur10_path.csv")
 

@@ -35,7 +35,7 @@ from trajcomp.calibration.measurements import Measurements
 from trajcomp.calibration.measurement_plan import plan_grid
 from trajcomp.compensation.program_rewrite import compensate_program, convert_program
 from trajcomp.arm.robot import load_robot
-from trajcomp.calibration.simulate import VirtualRobot
+from trajcomp.calibration.virtual_arm import VirtualRobot
 from trajcomp.arm.transforms import pose_to_matrix
 
 ROOT = Path(__file__).parent.parent

@@ -25,7 +25,7 @@ from trajcomp.compensation.program_rewrite import compensate_program
 from trajcomp.calibration.measurement_plan import default_orientation, plan_grid
 from trajcomp.arm.robot import load_robot
 from trajcomp.calibration.profiles import PAPER_ROBOT
-from trajcomp.calibration.simulate import VirtualRobot
+from trajcomp.calibration.virtual_arm import VirtualRobot
 from trajcomp.model.stats import ErrorStats
 from trajcomp.arm.transforms import abc_to_matrix
 

@@ -60,7 +60,7 @@ from trajcomp.calibration.measurements import Measurements, read_measurements
 from trajcomp.calibration.orientations import spread_orientations
 from trajcomp.calibration.measurement_plan import default_orientation, plan_grid
 from trajcomp.arm.robot import load_robot
-from trajcomp.calibration.simulate import VirtualRobot
+from trajcomp.calibration.virtual_arm import VirtualRobot
 from trajcomp.model.stats import ErrorStats, format_table
 from trajcomp.support.parallel import usable_cores
 from trajcomp.arm.transforms import abc_to_matrix, matrix_to_abc, pose_to_matrix, rotvec_to_matrix

@@ -14,7 +14,7 @@ from trajcomp.calibration.measurements import Measurements
 from trajcomp.model.model_file import FORMAT, load_model, save_model
 from trajcomp.calibration.measurement_plan import default_orientation, plan_grid
 from trajcomp.arm.robot import load_robot
-from trajcomp.calibration.simulate import VirtualRobot
+from trajcomp.calibration.virtual_arm import VirtualRobot
 from trajcomp.arm.transforms import abc_to_matrix
 
 

@@ -26,7 +26,7 @@ from trajcomp.arm.transforms import matrix_to_abc
 from trajcomp.calibration.calibrate import calibrate
 from trajcomp.calibration.measurement_plan import plan_grid
 from trajcomp.calibration.measurements import Measurements
-from trajcomp.calibration.simulate import VirtualRobot
+from trajcomp.calibration.virtual_arm import VirtualRobot
 from trajcomp.compensation.program_rewrite import compensate_program
 from trajcomp.compensation.target_correction import program_corrector
 from trajcomp.errors import IKError, RobotError, TrajcompError

@@ -20,7 +20,7 @@ from trajcomp.calibration.measurements import Measurements
 from trajcomp.calibration.measurement_plan import plan_grid
 from trajcomp.compensation.program_rewrite import compensate_program
 from trajcomp.arm.robot import load_robot
-from trajcomp.calibration.simulate import VirtualRobot
+from trajcomp.calibration.virtual_arm import VirtualRobot
 
 FRAME = [-0.6, -0.1, 0.5, 0.0, 0.0, 0.3]  # m, rotation vector rad
 LOCAL = [[0.05, -0.02, 0.1, 3.14159, 0.0, 0.0], [0.1, 0.05, 0.12, 3.0, 0.2, 0.1]]

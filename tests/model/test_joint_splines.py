@@ -18,7 +18,7 @@ from trajcomp.calibration.measurement_plan import default_orientation, plan_grid
 from trajcomp.report.calibration import calibration_report
 from trajcomp.report.html import render
 from trajcomp.arm.robot import load_robot
-from trajcomp.calibration.simulate import ErrorProfile, VirtualRobot
+from trajcomp.calibration.virtual_arm import ErrorProfile, VirtualRobot
 from trajcomp.arm.transforms import abc_to_matrix, rotvec_to_matrix
 
 RANGE = np.radians([[-60, 60], [-120, -40], [40, 130], [-150, -30], [60, 120], [-90, 90]])
