@@ -299,7 +299,7 @@ def test_a_track_calibration_recovers_its_direction_and_scale_and_compensation_t
     """The real track runs 0.1 deg off its nominal direction and 0.05 % long. Measured at five carriage positions
     (eight arm poses each, 0.01 mm tracker noise), the fit recovers both; compensated with the identified track, a
     program lands within 0.02 mm at 4.2 m of travel, where the nominal track misses by millimetres."""
-    from trajcomp.calibration.track import identify_track
+    from trajcomp.calibration.track_fit import identify_track
 
     robot, virtual, correct = cell("kuka_kr6_r900")
     turn = Rotation.from_euler("z", 0.1, degrees=True).as_matrix()

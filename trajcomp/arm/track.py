@@ -22,7 +22,7 @@ At track position ``e`` the arm's base, the carriage frame, is
 ``T_world_base(e) = Trans(scale * e * direction) @ T_world_base(0)``: a pure
 translation of the base placed by ``world`` (and ``origin``). That is the
 track as the controller knows it; a calibration may identify the real one
-(`trajcomp.calibration.track`: ``actual_direction``, ``actual_scale``):
+(`trajcomp.calibration.track_fit`: ``actual_direction``, ``actual_scale``):
 targets are then placed on the real carriage, and each command is
 written so that the controller, with its own track, sends the arm to
 it (`trajcomp.programs.frames.FrameTable.command_offsets`). A target

@@ -112,7 +112,7 @@ def run(args):
     from trajcomp.arm.transforms import matrix_to_pose
     from trajcomp.calibration.calibrate import MAX_ROWS, calibrate, too_many_rows
     from trajcomp.calibration.measurements import read_measurements
-    from trajcomp.calibration.track import arm_rows, with_identified_track
+    from trajcomp.calibration.track_fit import arm_rows, with_identified_track
     from trajcomp.errors import CalibrationError
     from trajcomp.model.model_file import model_files, save_model
     from trajcomp.report import calibration_report, file_entry, report_paths
