@@ -53,7 +53,7 @@ import numpy as np  # noqa: E402
 from trajcomp.calibration.calibrate import calibrate, commanded, mode_errors, selection_words, to_base
 from trajcomp.calibration.layout import Layout, load_layout
 from trajcomp.compensation.target_correction import compensate
-from trajcomp.demo import format_comparison, run_demo
+from trajcomp.paper_protocol import format_comparison, run_demo
 from trajcomp.calibration.identify import region_folds
 from trajcomp.arm.kinematics import fk
 from trajcomp.calibration.measurements import Measurements, read_measurements
