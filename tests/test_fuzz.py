@@ -30,7 +30,7 @@ from trajcomp import formats
 from trajcomp.calibration.calibrate import calibrate
 from trajcomp.compensation.target_correction import program_corrector
 from trajcomp.errors import TrajcompError
-from trajcomp.formats.text import check_writable
+from trajcomp.formats.file_writing import check_writable
 from trajcomp.calibration.measurements import Measurements
 from trajcomp.calibration.measurement_plan import plan_grid
 from trajcomp.compensation.program_rewrite import compensate_program, convert_program

@@ -241,12 +241,12 @@ def test_the_csv_settings_are_the_t_cells_written_and_made_on_demand(tmp_path, m
     import csv as csv_module
 
     from trajcomp.arm.robot import load_robot
-    from trajcomp.formats import text as text_module
-    from trajcomp.formats.text import Texts
+    from trajcomp.formats import text_sequence
+    from trajcomp.formats.text_sequence import Texts
     from trajcomp.timing.writeback import apply_timing, retime_program
     from tests.timing.test_timing import helix, write_joint_program
 
-    monkeypatch.setattr(text_module, "TEXT_BLOCK", 7)
+    monkeypatch.setattr(text_sequence, "TEXT_BLOCK", 7)
     robot = load_robot("ur10")
     _, q = helix(robot, 120, turns=1)
     zones = ["1"] * 120
@@ -274,7 +274,7 @@ def test_the_csv_settings_are_the_t_cells_written_and_made_on_demand(tmp_path, m
 def test_spans_and_lines_move_with_the_edits_as_the_rule_says():
     """Offsets after text edits, vectorized, against the rule itself: a position moves by every edit ending at or
     before it; a span's end not by an insertion exactly there (the insertion goes after the span)."""
-    from trajcomp.formats.text import _Shift
+    from trajcomp.formats.source_shifts import _Shift
 
     rng = np.random.default_rng(4)
     text = "".join(rng.choice(list("ab \n"), 3000))

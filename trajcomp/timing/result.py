@@ -5,7 +5,7 @@ from collections.abc import Mapping, Sequence
 
 import numpy as np
 
-from trajcomp.formats.text import Texts
+from trajcomp.formats.text_sequence import Texts
 from trajcomp.timing.check import LIMIT_TOLERANCE, RATE, evaluate, sample_times
 
 @dataclasses.dataclass(frozen=True)
