@@ -37,7 +37,7 @@ from pathlib import Path
 
 import numpy as np
 
-from trajcomp.compensation.pipeline import CompensationJob
+from trajcomp.jobs.pipeline import CompensationJob
 from trajcomp.compensation.target_correction import program_corrector
 from trajcomp.errors import TrajcompError
 from trajcomp.model.compensation_model import CompensationModel
@@ -252,7 +252,7 @@ class Compensator:
         the corrected joints, the program is re-timed under the arm's
         limits (never faster than programmed) and written in the same
         language, and its verdict is computed: the same job
-        (`trajcomp.compensation.pipeline.CompensationJob`) as the command
+        (`trajcomp.jobs.pipeline.CompensationJob`) as the command
         line's, so the same bytes and verdict for the same options.
 
         Parameters

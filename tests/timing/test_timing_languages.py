@@ -204,8 +204,8 @@ def test_krl_restores_the_speed_of_a_motion_that_is_not_retimed(tmp_path):
 def test_the_compensations_planned_joints_time_the_original_as_its_posture_plan_does(
         tmp_path, kuka_model, joint_targets, monkeypatch):
     from trajcomp.support import parallel
-    from trajcomp.compensation import pipeline
-    from trajcomp.compensation.pipeline import retime_compensated
+    from trajcomp.jobs import pipeline
+    from trajcomp.jobs.pipeline import retime_compensated
     from trajcomp.compensation.target_correction import program_corrector
     from trajcomp.model.model_file import load_model
     from trajcomp.compensation.program_rewrite import compensate_program

@@ -1,7 +1,7 @@
 """``trajcomp compensate``: correct robot programs with a compensation model, one file or a batch.
 
-The options become a `trajcomp.compensation.pipeline.CompensationJob`; one
-file runs it here, a batch in workers (`trajcomp.compensation.batch`).
+The options become a `trajcomp.jobs.pipeline.CompensationJob`; one
+file runs it here, a batch in workers (`trajcomp.jobs.batch`).
 """
 
 import dataclasses
@@ -75,8 +75,8 @@ def add_parser(sub):
 
 def run(args):
     from trajcomp.arm.robot import load_robot
-    from trajcomp.compensation import batch
-    from trajcomp.compensation.pipeline import CompensationJob, loaded_model
+    from trajcomp.jobs import batch
+    from trajcomp.jobs.pipeline import CompensationJob, loaded_model
 
     if args.jobs < 1:
         raise TrajcompError(f"--jobs: expected a whole number of at least 1, got {args.jobs}")
@@ -110,7 +110,7 @@ def run(args):
 
 
 def _run_batch(args, job):
-    from trajcomp.compensation import batch
+    from trajcomp.jobs import batch
     from trajcomp.formats.task import groups as task_groups
     from trajcomp.model.model_file import model_files
     from trajcomp.support.atomic import refuse_inputs

@@ -1,6 +1,6 @@
 """``trajcomp retime IN -o OUT --robot R``: time a program under the arm's limits and write the timing into it.
 
-The options become a `trajcomp.compensation.pipeline.RetimeJob`.
+The options become a `trajcomp.jobs.pipeline.RetimeJob`.
 """
 
 import sys
@@ -44,8 +44,8 @@ def add_tolerance_option(parser):
 
 
 def run(args):
-    from trajcomp.compensation.batch import EXIT_CODES
-    from trajcomp.compensation.pipeline import RetimeJob
+    from trajcomp.jobs.batch import EXIT_CODES
+    from trajcomp.jobs.pipeline import RetimeJob
 
     tools, frames = frame_options(args)
     job = RetimeJob(robot_of(args), robot_file=args.robot, method=args.method, path_tolerance=args.path_tolerance,

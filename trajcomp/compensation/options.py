@@ -2,7 +2,7 @@
 
 Plain constants, no numpy: a command's ``--help`` builds its parser from
 them without loading the compensation (`trajcomp.compensation.posture`,
-`trajcomp.compensation.program_rewrite` and `trajcomp.compensation.pipeline`
+`trajcomp.compensation.program_rewrite` and `trajcomp.jobs.pipeline`
 import them from here).
 """
 

@@ -4,7 +4,7 @@ Every face of trajcomp runs these jobs: ``trajcomp compensate`` (one file,
 or a batch on local processes or a Dask cluster), ``trajcomp retime``, the
 Python API (`trajcomp.Compensator.filter_program`) and the plugins. The
 same program and options give the same bytes and the same verdict through
-each of them (tests/compensation/test_pipeline.py).
+each of them (tests/jobs/test_pipeline.py).
 
 `CompensationJob` compensates one program file with a model;
 `RetimeJob` times one under an arm's limits without a model. Both are
@@ -23,7 +23,7 @@ import numpy as np
 
 from trajcomp import formats
 from trajcomp.arm.transforms import matrix_to_pose
-from trajcomp.compensation import batch
+from trajcomp.jobs import batch
 from trajcomp.compensation.options import MAX_CORRECTION, MAX_JOINT_CHANGE, RETIME_CHOICES
 from trajcomp.compensation.posture import planned_joints, planned_targets
 from trajcomp.compensation.program_rewrite import as_written_report, compensate_program, convert_program

@@ -1,7 +1,7 @@
 """Batch runs: many program files through one job, in parallel, a failing file never stopping the others.
 
 A job is a picklable callable ``job(input: Path, output: Path) -> FileResult``
-(e.g. `trajcomp.compensation.pipeline.CompensationJob`). `run_batch` runs it over
+(e.g. `trajcomp.jobs.pipeline.CompensationJob`). `run_batch` runs it over
 the files inline, in a local process pool (``jobs`` > 1) or on a Dask
 distributed cluster (``scheduler``: an address, or ``"local"`` for a local
 cluster), and turns every error of one file into that file's result.
