@@ -223,7 +223,7 @@ def test_module_functions_load_a_model_file_once_per_version(cell, tmp_path, bra
     np.testing.assert_allclose(command, first.filter_target(POSE, joints_hint=branches[3])[0], atol=1e-12)
     with pytest.raises(TypeError, match="belong to the Compensator"):
         api.compensator(first, mode="dh")
-    with pytest.raises(TrajcompError, match="cannot read the model file"):
+    with pytest.raises(TrajcompError, match="missing.yaml: cannot read"):
         api.compensator(tmp_path / "missing.yaml")
 
 

@@ -30,7 +30,6 @@ this module feeds it a small in-memory program.
 """
 
 import dataclasses
-import functools
 import logging
 import os
 from pathlib import Path
@@ -38,7 +37,7 @@ from pathlib import Path
 import numpy as np
 
 from trajcomp.jobs.batch import run_programs
-from trajcomp.jobs.pipeline import CompensationJob
+from trajcomp.jobs.pipeline import CompensationJob, loaded_model
 from trajcomp.compensation.target_correction import program_corrector
 from trajcomp.errors import TrajcompError
 from trajcomp.model.compensation_model import CompensationModel
@@ -408,12 +407,7 @@ def compensator(model, **options):
             raise TypeError(f"options {sorted(options)} belong to the Compensator's constructor")
         return model
     if isinstance(model, (str, os.PathLike)):
-        path = Path(model).resolve()
-        try:
-            version = path.stat().st_mtime_ns
-        except OSError as exc:
-            raise TrajcompError(f"{model}: cannot read the model file: {exc.strerror}") from exc
-        return Compensator(_load(path, version), source=path, **options)
+        return Compensator(loaded_model(model), source=Path(model).resolve(), **options)
     return Compensator(model, **options)
 
 
@@ -443,12 +437,6 @@ def filter_programs(programs, out_dir, *, model, tools=None, frames=None, joint_
         programs, out_dir, tools=tools, frames=frames, joint_targets=joint_targets, in_place=in_place,
         retime=retime, path_tolerance=path_tolerance, criteria=criteria, report=report, json_only=json_only,
         summary=summary, jobs=jobs)
-
-
-@functools.lru_cache(maxsize=8)
-def _load(path, version):
-    """The model in ``path``; ``version`` (its modification time) makes an edited file load again."""
-    return load_model(path)
 
 
 def _finite(values, what, *shapes):

@@ -394,13 +394,25 @@ def retime_compensated(original, corrected, robot, method, tolerance, tools=None
 
 
 def loaded_model(model):
-    """The `CompensationModel` of a job: ``model`` itself, or its file loaded once per process."""
-    return model if isinstance(model, CompensationModel) else _model_file(str(model))
+    """The `CompensationModel` of a job or an API call: ``model`` itself, or its file loaded once per process and
+    file version (a batch worker serves many files; a file recalibrated under the same name loads again)."""
+    if isinstance(model, CompensationModel):
+        return model
+    path = Path(model).resolve()
+    return _model_file(str(path), _version(path))
 
 
-@functools.lru_cache(maxsize=4)
-def _model_file(path):
-    """The model file, loaded once per process (a batch worker serves many files)."""
+def _version(path):
+    """The modification time of file ``path``, ns; None for a file that cannot be read (`load_model` then says why)."""
+    try:
+        return Path(path).stat().st_mtime_ns
+    except OSError:
+        return None
+
+
+@functools.lru_cache(maxsize=8)
+def _model_file(path, version):
+    """The model in ``path``; ``version`` (its modification time) makes an edited file load again."""
     return load_model(path)
 
 
@@ -409,12 +421,12 @@ def _model_info(model, mode, source):
     ``source`` (its file, or None) for a loaded model."""
     if isinstance(model, CompensationModel):
         return model_entry(source, model, mode)
-    return _file_model_info(source, mode)
+    return _file_model_info(source, _version(source), mode)
 
 
 @functools.lru_cache(maxsize=4)
-def _file_model_info(path, mode):
-    return model_entry(path, _model_file(path), mode)
+def _file_model_info(path, version, mode):
+    return model_entry(path, loaded_model(path), mode)
 
 
 def _report_target(report, folder, output, root=None):
