@@ -7,7 +7,7 @@ instead, the joints of that command (same posture) and the correction.
     python examples/01_filter_target.py [model.yaml]
 
 Without a model file, a UR10-class virtual arm is calibrated on the paper's
-large cube first (trajcomp.demo, about a second), and both the planned and
+large cube first (trajcomp.paper_protocol, about a second), and both the planned and
 the compensated joints are run on it to show where the TCP really lands.
 """
 
@@ -16,9 +16,9 @@ import sys
 import numpy as np
 
 import trajcomp
-from trajcomp.demo import PAPER_CUBES, run_cube
+from trajcomp.paper_protocol import PAPER_CUBES, run_cube
 from trajcomp.arm.robot import load_robot
-from trajcomp.calibration.simulate import VirtualRobot
+from trajcomp.calibration.virtual_arm import VirtualRobot
 
 
 def main(model_path=None):

@@ -8,7 +8,7 @@ language with its verdict, as `trajcomp compensate` does.
     python examples/02_filter_program.py [model.yaml [program [output]]]
 
 Defaults: a UR10-class virtual arm calibrated on the paper's large cube
-(trajcomp.demo), examples/ur10_path.csv, and the output
+(trajcomp.paper_protocol), examples/ur10_path.csv, and the output
 ur10_path_compensated.csv in the current folder.
 """
 
@@ -18,9 +18,9 @@ from pathlib import Path
 import numpy as np
 
 import trajcomp
-from trajcomp.demo import PAPER_CUBES, run_cube
+from trajcomp.paper_protocol import PAPER_CUBES, run_cube
 from trajcomp.arm.robot import load_robot
-from trajcomp.calibration.simulate import VirtualRobot
+from trajcomp.calibration.virtual_arm import VirtualRobot
 
 PROGRAM = Path(__file__).with_name("ur10_path.csv")
 

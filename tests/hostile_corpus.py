@@ -50,7 +50,7 @@ from trajcomp.calibration.measurements import Measurements, write_measurements
 from trajcomp.model.model_file import save_model
 from trajcomp.calibration.measurement_plan import plan_grid
 from trajcomp.arm.robot import load_robot
-from trajcomp.calibration.simulate import VirtualRobot
+from trajcomp.calibration.virtual_arm import VirtualRobot
 
 CUBE = ("-800,-300,400", "400", "100")  # corner, side, step (mm) of the base plan: 125 points
 VALUES = (1e308, -1e308, math.nan, math.inf, 1e-320, 10**400, -0.0, "text", None, True, [], {}, [1.0] * 7)

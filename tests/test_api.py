@@ -20,7 +20,7 @@ from scipy.spatial.transform import Rotation
 from virtual_cell import landing_error, virtual_cell
 
 import trajcomp
-import trajcomp.compensation.targets as compensation
+import trajcomp.compensation.target_correction as compensation
 from trajcomp import api, formats
 from trajcomp.errors import CompensationError, IKError, ModelError, TrajcompError, WriteError
 from trajcomp.arm.ik import configuration_of, ik_all
@@ -190,6 +190,27 @@ def test_a_program_file_is_compensated_and_written(cell, comp, tmp_path):
     assert program.read_bytes() != before
 
 
+def test_a_batch_of_program_files_is_compensated_as_each_alone_with_a_summary(cell, comp, tmp_path):
+    """The API's batch: the files of a folder mirrored into another, each as `filter_program` writes it alone, a
+    broken file refused without stopping the others, and the summary the command line writes."""
+    import json
+
+    folder = tmp_path / "in"
+    (folder / "cell").mkdir(parents=True)
+    shutil.copy(ROOT / "examples" / "ur10_path.csv", folder / "a.csv")
+    shutil.copy(ROOT / "examples" / "ur10_path.csv", folder / "cell" / "b.csv")
+    (folder / "broken.csv").write_text("x,y,z,a,b,c\n1,2\n")
+    results, summary = trajcomp.filter_programs([folder], tmp_path / "out", model=cell.model_path, retime="none")
+    status = {Path(r.input).name: r.status for r in results}
+    assert status["broken.csv"] == "error" and status["a.csv"] == status["b.csv"] != "error"
+    alone = comp.filter_program(folder / "a.csv", tmp_path / "alone.csv", retime="none").written[0]
+    for written in (tmp_path / "out" / "a.csv", tmp_path / "out" / "cell" / "b.csv"):
+        assert written.read_bytes() == alone.read_bytes()
+    assert not (tmp_path / "out" / "broken.csv").exists()
+    doc = json.loads(summary.read_text())
+    assert summary == tmp_path / "out" / "summary.json" and doc["schema"] == "trajcomp-batch/1"
+    assert sorted(Path(f["input"]).name for f in doc["files"]) == ["a.csv", "b.csv", "broken.csv"]
+
 def test_module_functions_load_a_model_file_once_per_version(cell, tmp_path, branches):
     path = tmp_path / "model.yaml"
     shutil.copy(cell.model_path, path)
@@ -202,7 +223,7 @@ def test_module_functions_load_a_model_file_once_per_version(cell, tmp_path, bra
     np.testing.assert_allclose(command, first.filter_target(POSE, joints_hint=branches[3])[0], atol=1e-12)
     with pytest.raises(TypeError, match="belong to the Compensator"):
         api.compensator(first, mode="dh")
-    with pytest.raises(TrajcompError, match="cannot read the model file"):
+    with pytest.raises(TrajcompError, match="missing.yaml: cannot read"):
         api.compensator(tmp_path / "missing.yaml")
 
 

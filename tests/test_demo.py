@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from trajcomp.demo import PAPER_CUBES, Cube, demo_cubes, run_demo
+from trajcomp.paper_protocol import PAPER_CUBES, Cube, demo_cubes, run_demo
 from trajcomp.errors import TrajcompError
 from trajcomp.arm.kinematics import fk
 from trajcomp.calibration.measurement_plan import default_orientation, grid_points, plan_grid

@@ -28,14 +28,14 @@ import pytest
 
 from trajcomp import formats
 from trajcomp.calibration.calibrate import calibrate
-from trajcomp.compensation.targets import program_corrector
+from trajcomp.compensation.target_correction import program_corrector
 from trajcomp.errors import TrajcompError
-from trajcomp.formats.text import check_writable
+from trajcomp.formats.file_writing import check_writable
 from trajcomp.calibration.measurements import Measurements
 from trajcomp.calibration.measurement_plan import plan_grid
-from trajcomp.compensation.program import compensate_program, convert_program
+from trajcomp.compensation.program_rewrite import compensate_program, convert_program
 from trajcomp.arm.robot import load_robot
-from trajcomp.calibration.simulate import VirtualRobot
+from trajcomp.calibration.virtual_arm import VirtualRobot
 from trajcomp.arm.transforms import pose_to_matrix
 
 ROOT = Path(__file__).parent.parent

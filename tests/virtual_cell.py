@@ -14,7 +14,7 @@ from trajcomp.calibration.measurements import Measurements
 from trajcomp.model.model_file import save_model
 from trajcomp.calibration.measurement_plan import plan_grid
 from trajcomp.arm.robot import load_robot
-from trajcomp.calibration.simulate import VirtualRobot
+from trajcomp.calibration.virtual_arm import VirtualRobot
 
 CORNER, SIDE, STEP = (300.0, -100.0, 300.0), 500.0, 100.0
 

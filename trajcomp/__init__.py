@@ -18,7 +18,7 @@ from trajcomp.errors import (
 __version__ = "0.1.0"
 
 # The Python API (trajcomp.api), imported on first use so that the CLI starts without it.
-_API = ("Compensator", "filter_program", "filter_target", "filter_targets")
+_API = ("Compensator", "filter_program", "filter_programs", "filter_target", "filter_targets")
 
 logging.getLogger(__name__).addHandler(logging.NullHandler())
 

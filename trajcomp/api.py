@@ -25,25 +25,25 @@ turns nearest the hint, and the command's joints are in that posture; a
 correction that would leave it is refused (`trajcomp.IKError`). Without a
 hint, each pose takes the posture nearest the joints of the pose before it
 (the first: nearest the robot's home), as a controller moves on from where
-the arm is. Everything else is `trajcomp.compensation.program.compensate_program`'s:
+the arm is. Everything else is `trajcomp.compensation.program_rewrite.compensate_program`'s:
 this module feeds it a small in-memory program.
 """
 
 import dataclasses
-import functools
 import logging
 import os
 from pathlib import Path
 
 import numpy as np
 
-from trajcomp.compensation.pipeline import CompensationJob
-from trajcomp.compensation.targets import program_corrector
+from trajcomp.jobs.batch import run_programs
+from trajcomp.jobs.pipeline import CompensationJob, loaded_model
+from trajcomp.compensation.target_correction import program_corrector
 from trajcomp.errors import TrajcompError
 from trajcomp.model.compensation_model import CompensationModel
-from trajcomp.model.model_file import load_model
+from trajcomp.model.model_file import load_model, model_files
 from trajcomp.compensation.options import MAX_CORRECTION, MAX_JOINT_CHANGE
-from trajcomp.compensation.program import compensate_program
+from trajcomp.compensation.program_rewrite import compensate_program
 from trajcomp.programs.program import Program
 from trajcomp.programs.items import LINEAR, Motion, Target
 from trajcomp.arm.transforms import angles_near, matrix_to_pose, pose_to_matrix
@@ -252,7 +252,7 @@ class Compensator:
         the corrected joints, the program is re-timed under the arm's
         limits (never faster than programmed) and written in the same
         language, and its verdict is computed: the same job
-        (`trajcomp.compensation.pipeline.CompensationJob`) as the command
+        (`trajcomp.jobs.pipeline.CompensationJob`) as the command
         line's, so the same bytes and verdict for the same options.
 
         Parameters
@@ -300,16 +300,64 @@ class Compensator:
         """
         path = Path(path)
         out_path = path.with_name(f"{path.stem}_compensated{path.suffix}") if out_path is None else Path(out_path)
-        job = CompensationJob(
-            self.model, model_file=self.model_file, mode=self.mode, outside=self.outside,
-            tools=_named_poses(tools, "tools") or {}, frames=_named_poses(frames, "frames") or {},
-            joint_targets=joint_targets, max_joint_change=np.radians(self.max_joint_change),
-            max_correction=self.max_correction, in_place=in_place, criteria=criteria or Criteria(), report=report,
-            json_only=json_only, retime=retime, path_tolerance=path_tolerance, workers=self.workers,
-        )
+        job = self._job(tools=tools, frames=frames, joint_targets=joint_targets, in_place=in_place, retime=retime,
+                        path_tolerance=path_tolerance, criteria=criteria, report=report, json_only=json_only)
         run = job.run(path, out_path)
         _log_warnings(str(path), run.report, self.outside)
         return run
+
+    def filter_programs(self, programs, out_dir, *, tools=None, frames=None, joint_targets="keep", in_place=False,
+                        retime="auto", path_tolerance=TOLERANCE, criteria=None, report=None, json_only=False,
+                        summary=None, jobs=1):
+        """Compensate a batch of program files into a folder, as ``trajcomp compensate`` does with several.
+
+        Every file is compensated as `filter_program` would (the same bytes
+        and verdict), written under ``out_dir`` at its path relative to the
+        folder or pattern that named it; the files of one task that share
+        points run as one program; a file that fails or is refused never
+        stops the others; a summary JSON (``trajcomp-batch/1``) lists them
+        all (`trajcomp.jobs.batch.run_programs`).
+
+        Parameters
+        ----------
+        programs : sequence of str or Path
+            Program files, folders or glob patterns.
+        out_dir : str or Path
+            The folder to write into.
+        report : str or Path, optional
+            The folder of the compliance reports, one per program, mirrored as the outputs are.
+        summary : str or Path, optional
+            The summary JSON; default ``out_dir / "summary.json"``.
+        jobs : int
+            Files compensated at once (processes).
+        tools, frames, joint_targets, in_place, retime, path_tolerance, criteria, json_only
+            As `filter_program`.
+
+        Returns
+        -------
+        results : list of trajcomp.jobs.batch.FileResult
+            Per program, in input order: ``.status`` (``"pass"``, ``"fail"``,
+            ``"error"``, ``"crash"``), ``.outputs``, ``.message``, ``.lines``.
+        summary : Path
+            The summary written.
+        """
+        job = dataclasses.replace(
+            self._job(tools=tools, frames=frames, joint_targets=joint_targets, in_place=in_place, retime=retime,
+                      path_tolerance=path_tolerance, criteria=criteria, report=report, json_only=json_only),
+            report_folder=True, output_root=str(out_dir), workers=self.workers if jobs == 1 else 1)
+        return run_programs(job, programs, out_dir, in_place=in_place,
+                            models=model_files(self.model_file) if self.model_file else [], report=report,
+                            summary=summary, jobs=jobs, model=self.model_file,
+                            mode=self.mode or "model default")
+
+    def _job(self, *, tools, frames, criteria, **options):
+        """The `CompensationJob` of this compensator's model and options and a program's ``options``."""
+        return CompensationJob(
+            self.model, model_file=self.model_file, mode=self.mode, outside=self.outside,
+            tools=_named_poses(tools, "tools") or {}, frames=_named_poses(frames, "frames") or {},
+            max_joint_change=np.radians(self.max_joint_change), max_correction=self.max_correction,
+            criteria=criteria or Criteria(), workers=self.workers, **options,
+        )
 
     def _hint(self, joints_hint, n):
         """Hint joints (n, 6), rad, of a (6,) or (n, 6) array in deg, finite and inside the joint limits."""
@@ -359,12 +407,7 @@ def compensator(model, **options):
             raise TypeError(f"options {sorted(options)} belong to the Compensator's constructor")
         return model
     if isinstance(model, (str, os.PathLike)):
-        path = Path(model).resolve()
-        try:
-            version = path.stat().st_mtime_ns
-        except OSError as exc:
-            raise TrajcompError(f"{model}: cannot read the model file: {exc.strerror}") from exc
-        return Compensator(_load(path, version), source=path, **options)
+        return Compensator(loaded_model(model), source=Path(model).resolve(), **options)
     return Compensator(model, **options)
 
 
@@ -386,10 +429,14 @@ def filter_program(path, out_path=None, *, model, tools=None, frames=None, joint
         path_tolerance=path_tolerance, criteria=criteria, report=report, json_only=json_only)
 
 
-@functools.lru_cache(maxsize=8)
-def _load(path, version):
-    """The model in ``path``; ``version`` (its modification time) makes an edited file load again."""
-    return load_model(path)
+def filter_programs(programs, out_dir, *, model, tools=None, frames=None, joint_targets="keep", in_place=False,
+                    retime="auto", path_tolerance=TOLERANCE, criteria=None, report=None, json_only=False,
+                    summary=None, jobs=1, **options):
+    """`Compensator.filter_programs` with a model file, model or Compensator (see `compensator`)."""
+    return compensator(model, **options).filter_programs(
+        programs, out_dir, tools=tools, frames=frames, joint_targets=joint_targets, in_place=in_place,
+        retime=retime, path_tolerance=path_tolerance, criteria=criteria, report=report, json_only=json_only,
+        summary=summary, jobs=jobs)
 
 
 def _finite(values, what, *shapes):

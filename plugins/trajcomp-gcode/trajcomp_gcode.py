@@ -50,19 +50,13 @@ import numpy as np
 
 from trajcomp.errors import ReadError, WriteError
 from trajcomp.formats import register_format
-from trajcomp.formats.text import (
-    NUMBER,
-    Lines,
-    apply_edits,
-    decimals,
-    edit_sources,
-    encode_text,
-    encode_xyzabc,
-    floor_places,
-    format_number,
-    numbered,
-    read_source,
-)
+from trajcomp.formats.text import Lines, read_source
+from trajcomp.formats.file_writing import numbered
+from trajcomp.formats.number_fields import NUMBER, decimals
+from trajcomp.formats.number_writing import floor_places, format_number
+from trajcomp.formats.pose_encoding import encode_xyzabc
+from trajcomp.formats.source_shifts import edit_sources
+from trajcomp.formats.text_edits import apply_edits, encode_text
 from trajcomp.programs.program import JOINT, LINEAR, Motion, Program, Span, Statement, Target
 from trajcomp.arm.transforms import abc_to_matrix, matrix_to_abc
 

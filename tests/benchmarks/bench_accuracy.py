@@ -52,15 +52,15 @@ import numpy as np  # noqa: E402
 
 from trajcomp.calibration.calibrate import calibrate, commanded, mode_errors, selection_words, to_base
 from trajcomp.calibration.layout import Layout, load_layout
-from trajcomp.compensation.targets import compensate
-from trajcomp.demo import format_comparison, run_demo
+from trajcomp.compensation.target_correction import compensate
+from trajcomp.paper_protocol import format_comparison, run_demo
 from trajcomp.calibration.identify import region_folds
 from trajcomp.arm.kinematics import fk
 from trajcomp.calibration.measurements import Measurements, read_measurements
 from trajcomp.calibration.orientations import spread_orientations
 from trajcomp.calibration.measurement_plan import default_orientation, plan_grid
 from trajcomp.arm.robot import load_robot
-from trajcomp.calibration.simulate import VirtualRobot
+from trajcomp.calibration.virtual_arm import VirtualRobot
 from trajcomp.model.stats import ErrorStats, format_table
 from trajcomp.support.parallel import usable_cores
 from trajcomp.arm.transforms import abc_to_matrix, matrix_to_abc, pose_to_matrix, rotvec_to_matrix

@@ -14,10 +14,10 @@ import time
 
 import numpy as np
 
-from trajcomp.demo import run_demo
+from trajcomp.paper_protocol import run_demo
 from trajcomp.errors import TrajcompError
 from trajcomp.arm.robot import builtin_robot_names, load_robot
-from trajcomp.calibration.simulate import PROFILES
+from trajcomp.calibration.virtual_arm import PROFILES
 
 
 def main():

@@ -30,9 +30,9 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 import test_fuzz as fuzz  # noqa: E402 (the suite's operators and steps)
 from trajcomp import formats  # noqa: E402
 from trajcomp.calibration.calibrate import calibrate  # noqa: E402
-from trajcomp.compensation.targets import program_corrector  # noqa: E402
+from trajcomp.compensation.target_correction import program_corrector  # noqa: E402
 from trajcomp.errors import TrajcompError  # noqa: E402
-from trajcomp.compensation.pipeline import planned  # noqa: E402
+from trajcomp.jobs.pipeline import planned  # noqa: E402
 from trajcomp.compensation.posture import planned_joints  # noqa: E402
 from trajcomp.timing.writeback import retime_program  # noqa: E402
 

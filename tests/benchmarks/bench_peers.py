@@ -46,7 +46,7 @@ from trajcomp.calibration.measurements import Measurements  # noqa: E402
 from trajcomp.arm.parameters import apply_deltas  # noqa: E402
 from trajcomp.calibration.measurement_plan import plan_grid  # noqa: E402
 from trajcomp.arm.robot import load_robot  # noqa: E402
-from trajcomp.calibration.simulate import VirtualRobot  # noqa: E402
+from trajcomp.calibration.virtual_arm import VirtualRobot  # noqa: E402
 from trajcomp.arm.transforms import rotation_angle_between  # noqa: E402
 
 REPEATS = 3

@@ -33,7 +33,7 @@ print(json.dumps(measure(int(sys.argv[1]), sys.argv[2])))
 def program_report(n):
     """A ProgramReport of n targets on the nominal UR10: a sweep of axis 1 with a small wrist wave."""
     from trajcomp.arm.kinematics import fk
-    from trajcomp.compensation.program import ProgramReport
+    from trajcomp.compensation.program_rewrite import ProgramReport
     from trajcomp.arm.robot import load_robot
 
     robot = load_robot("ur10")

@@ -54,8 +54,8 @@ import numpy as np
 
 from cam_forms import FORMS
 from trajcomp.cli import main
-from trajcomp.compensation.targets import compensate
-from trajcomp.demo import demo_cubes
+from trajcomp.compensation.target_correction import compensate
+from trajcomp.paper_protocol import demo_cubes
 from trajcomp.arm.ik import ik
 from trajcomp.model.model_file import load_model
 from trajcomp.support.parallel import usable_cores

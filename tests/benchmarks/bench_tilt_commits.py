@@ -19,11 +19,11 @@ import inspect
 import numpy as np
 
 from trajcomp.calibration.calibrate import calibrate
-from trajcomp.compensation.targets import compensate
+from trajcomp.compensation.target_correction import compensate
 from trajcomp.calibration.measurements import Measurements
 from trajcomp.calibration.measurement_plan import default_orientation, plan_grid
 from trajcomp.arm.robot import load_robot
-from trajcomp.calibration.simulate import VirtualRobot
+from trajcomp.calibration.virtual_arm import VirtualRobot
 from trajcomp.arm.transforms import abc_to_matrix, rotvec_to_matrix
 
 COUNT = 40  # targets per seed

@@ -63,12 +63,12 @@ import toppra.constraint  # noqa: E402
 
 from trajcomp import formats  # noqa: E402
 from trajcomp.cli import main as cli  # noqa: E402
-from trajcomp.compensation.pipeline import planned, retime_compensated  # noqa: E402
-from trajcomp.compensation.targets import program_corrector  # noqa: E402
+from trajcomp.jobs.pipeline import planned, retime_compensated  # noqa: E402
+from trajcomp.compensation.target_correction import program_corrector  # noqa: E402
 from trajcomp.arm.ik import ik  # noqa: E402
 from trajcomp.arm.kinematics import fk  # noqa: E402
 from trajcomp.model.model_file import load_model  # noqa: E402
-from trajcomp.compensation.program import compensate_program  # noqa: E402
+from trajcomp.compensation.program_rewrite import compensate_program  # noqa: E402
 from trajcomp.compensation.posture import planned_joints  # noqa: E402
 from trajcomp.arm.robot import load_robot  # noqa: E402
 from trajcomp.timing import Moves, moves_from_program, retime  # noqa: E402

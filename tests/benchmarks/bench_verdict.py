@@ -59,9 +59,9 @@ from trajcomp.calibration.layout import Layout, load_layout  # noqa: E402
 from trajcomp.calibration.measurement_plan import default_orientation, plan_grid  # noqa: E402
 from trajcomp.calibration.orientations import spread_orientations  # noqa: E402
 from trajcomp.calibration.measurements import Measurements, read_measurements  # noqa: E402
-from trajcomp.calibration.simulate import VirtualRobot  # noqa: E402
+from trajcomp.calibration.virtual_arm import VirtualRobot  # noqa: E402
 from trajcomp.commands.plan import DEFAULT_ORIENTATIONS, DEFAULT_TILT  # noqa: E402
-from trajcomp.compensation.targets import compensate  # noqa: E402
+from trajcomp.compensation.target_correction import compensate  # noqa: E402
 from trajcomp.errors import IKError  # noqa: E402
 from trajcomp.model import landing  # noqa: E402
 from trajcomp.report.measures import singularity_distances  # noqa: E402

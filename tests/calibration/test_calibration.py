@@ -7,14 +7,14 @@ import pytest
 from conftest import real_data
 
 from trajcomp.calibration.calibrate import calibrate
-from trajcomp.compensation.targets import compensate
+from trajcomp.compensation.target_correction import compensate
 from trajcomp.errors import ModelError
 from trajcomp.arm.kinematics import fk
 from trajcomp.calibration.measurements import Measurements
 from trajcomp.model.model_file import FORMAT, load_model, save_model
 from trajcomp.calibration.measurement_plan import default_orientation, plan_grid
 from trajcomp.arm.robot import load_robot
-from trajcomp.calibration.simulate import VirtualRobot
+from trajcomp.calibration.virtual_arm import VirtualRobot
 from trajcomp.arm.transforms import abc_to_matrix
 
 

@@ -9,7 +9,7 @@ from trajcomp.calibration.identify import _Problem, best_fit_transform, identify
 from trajcomp.arm.kinematics import fk
 from trajcomp.arm.parameters import apply_deltas, candidate_parameters, scales
 from trajcomp.arm.robot import load_robot
-from trajcomp.calibration.simulate import ErrorProfile, VirtualRobot
+from trajcomp.calibration.virtual_arm import ErrorProfile, VirtualRobot
 from trajcomp.arm.transforms import matrix_to_rotvec, pose_to_matrix, rotvec_to_matrix
 
 GEOMETRIC = ErrorProfile("geometric", length_sigma=0.5, angle_sigma=np.radians(0.05), tool_sigma=0.2)

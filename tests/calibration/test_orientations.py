@@ -79,9 +79,9 @@ def test_the_default_flow_lands_tilted_targets_within_45_micrometres(tmp_path):
     """The README's plan -> simulate -> calibrate on the harsh profile's virtual arm, then targets inside the cube
     tilted up to 15 deg compensated: the arm lands them within 0.045 mm on average (0.0045; from a plan at one
     orientation 0.089), and untilted ones within 0.010 mm (0.0045; from one orientation 0.019)."""
-    from trajcomp.calibration.simulate import VirtualRobot
+    from trajcomp.calibration.virtual_arm import VirtualRobot
     from trajcomp.cli import main
-    from trajcomp.compensation.targets import compensate
+    from trajcomp.compensation.target_correction import compensate
     from trajcomp.model.model_file import load_model
     from trajcomp.arm.transforms import abc_to_matrix, rotvec_to_matrix
 

@@ -14,7 +14,7 @@ from trajcomp.calibration.measurements import Measurements, write_measurements
 from trajcomp.model.model_file import save_model
 from trajcomp.calibration.measurement_plan import plan_grid
 from trajcomp.arm.robot import load_robot
-from trajcomp.calibration.simulate import VirtualRobot
+from trajcomp.calibration.virtual_arm import VirtualRobot
 
 
 @pytest.fixture(scope="module")

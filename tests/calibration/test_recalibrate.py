@@ -15,7 +15,7 @@ from trajcomp.calibration.measurement_plan import default_orientation, plan_grid
 from trajcomp.calibration.measurements import Measurements, read_measurements, write_measurements
 from trajcomp.calibration.orientations import spread_orientations
 from trajcomp.calibration import recalibrate
-from trajcomp.calibration.simulate import VirtualRobot
+from trajcomp.calibration.virtual_arm import VirtualRobot
 from trajcomp.cli import main
 from trajcomp.model.model_file import load_model, save_model
 

@@ -3,12 +3,12 @@
 import numpy as np
 import pytest
 
-import trajcomp.compensation.targets as compensation
-from trajcomp.compensation.targets import compensate, program_corrector
+import trajcomp.compensation.target_correction as compensation
+from trajcomp.compensation.target_correction import compensate, program_corrector
 from trajcomp.errors import IKError, ModelError
 from trajcomp.arm.ik import IKResult
 from trajcomp.calibration.measurement_plan import default_orientation
-from trajcomp.compensation.program import _compensation_warnings
+from trajcomp.compensation.program_rewrite import _compensation_warnings
 from trajcomp.arm.transforms import abc_to_matrix
 from virtual_cell import CORNER, SIDE, landing_error, virtual_cell
 

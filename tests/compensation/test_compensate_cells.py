@@ -9,7 +9,7 @@ from tests.programs.test_programs_as_run import _stand_in
 from trajcomp import formats
 from trajcomp.arm.robot import load_robot
 from trajcomp.cli import main
-from trajcomp.compensation.program import compensate_program
+from trajcomp.compensation.program_rewrite import compensate_program
 from trajcomp.errors import IKError
 
 

@@ -33,7 +33,7 @@ from scipy.spatial.transform import Rotation
 from trajcomp import formats
 from trajcomp.calibration.calibrate import calibrate
 from trajcomp.cli import main
-from trajcomp.compensation.targets import compensate
+from trajcomp.compensation.target_correction import compensate
 from trajcomp.formats.configuration import BOUNDARY_TOLERANCE, configuration_for, declared_windows
 from trajcomp.arm.ik import configuration_of, ik, ik_all
 from trajcomp.arm.kinematics import fk
@@ -42,7 +42,7 @@ from trajcomp.model.model_file import save_model
 from trajcomp.calibration.orientations import spread_orientations
 from trajcomp.calibration.measurement_plan import default_orientation, plan_grid
 from trajcomp.arm.robot import load_robot
-from trajcomp.calibration.simulate import VirtualRobot
+from trajcomp.calibration.virtual_arm import VirtualRobot
 
 LANDED = 0.05  # mm, largest landing error of a compensated target
 MISSED = 0.2  # mm, smallest landing error of an uncompensated target

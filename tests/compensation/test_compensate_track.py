@@ -28,9 +28,9 @@ from trajcomp.arm.transforms import matrix_to_abc
 from trajcomp.calibration.calibrate import calibrate
 from trajcomp.calibration.measurement_plan import plan_grid
 from trajcomp.calibration.measurements import Measurements
-from trajcomp.calibration.simulate import VirtualRobot
-from trajcomp.compensation.program import compensate_program
-from trajcomp.compensation.targets import program_corrector
+from trajcomp.calibration.virtual_arm import VirtualRobot
+from trajcomp.compensation.program_rewrite import compensate_program
+from trajcomp.compensation.target_correction import program_corrector
 from trajcomp.errors import IKError, RobotError, TrajcompError
 from trajcomp.formats.configuration import configuration_for
 
@@ -334,7 +334,7 @@ def test_a_fanuc_rail_as_motion_group_2_is_read_compensated_retimed_and_written_
     """A rail as FANUC motion group 2 (GP2: J1 in mm in each /POS entry, DEFAULT_GROUP = 1,1,...), described as
     ``fanuc_ls: GP2:J1``: the arm part lands within 0.02 mm of the world targets from the rail's carriage, the
     program is re-timed with the rail as a joint, and every byte but group 1's pose numbers is written back."""
-    from trajcomp.compensation.pipeline import planned
+    from trajcomp.jobs.pipeline import planned
     from trajcomp.compensation.posture import planned_joints
     from trajcomp.timing.writeback import retime_program
 
@@ -442,7 +442,7 @@ def test_a_track_calibration_recovers_its_direction_and_scale_and_compensation_t
     """The real track runs 0.1 deg off its nominal direction and 0.05 % long. Measured at five carriage positions
     (eight arm poses each, 0.01 mm tracker noise), the fit recovers both; compensated with the identified track, a
     program lands within 0.02 mm at 4.2 m of travel, where the nominal track misses by millimetres."""
-    from trajcomp.calibration.track import identify_track
+    from trajcomp.calibration.track_fit import identify_track
 
     robot, virtual, correct = cell("kuka_kr6_r900")
     turn = Rotation.from_euler("z", 0.1, degrees=True).as_matrix()
@@ -482,7 +482,7 @@ def test_a_track_that_is_not_straight_is_identified_as_a_table_and_compensation_
     carriage positions 700 mm apart (eight poses each, 0.01 mm noise), the fit keeps a straightness table that
     matches the bow within 0.01 mm at each; targets between the measured positions then land within 0.02 mm,
     where the line alone misses by the bow; the model file keeps the table."""
-    from trajcomp.calibration.track import identify_track
+    from trajcomp.calibration.track_fit import identify_track
     from trajcomp.model.model_file import load_model, save_model
 
     robot, virtual, correct = cell("kuka_kr6_r900")
@@ -520,7 +520,7 @@ def test_where_the_identified_track_places_the_carriage_is_estimated_within_its_
     noise; three draws): the carriage's placement error at 400 positions within that travel lies within the
     95 % radius `Track.placement_sigma` gives in 95 % of cases or more; the radius grows away from the measured
     positions and is zero without a calibration."""
-    from trajcomp.calibration.track import identify_track
+    from trajcomp.calibration.track_fit import identify_track
 
     robot, virtual, _ = cell("kuka_kr6_r900")
     model = _CELL_MODEL["kuka_kr6_r900"]

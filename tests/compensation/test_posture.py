@@ -15,12 +15,12 @@ import pytest
 from trajcomp import formats
 from trajcomp.compensation import posture
 from trajcomp.cli import main
-from trajcomp.compensation.targets import CompensationResult
+from trajcomp.compensation.target_correction import CompensationResult
 from trajcomp.formats.configuration import configuration_for, declared_windows
 from trajcomp.errors import CompensationError, IKError
 from trajcomp.arm.ik import configuration_of, ik, ik_all
 from trajcomp.arm.kinematics import fk
-from trajcomp.compensation.program import compensate_program
+from trajcomp.compensation.program_rewrite import compensate_program
 from trajcomp.compensation.posture import planned_joints
 from trajcomp.arm.robot import load_robot
 from trajcomp.arm.transforms import matrix_to_abc

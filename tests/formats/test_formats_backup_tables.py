@@ -20,7 +20,7 @@ from tests.programs.test_programs_as_run import OFFSET, _stand_in
 from trajcomp import formats
 from trajcomp.arm.kinematics import fk
 from trajcomp.arm.robot import load_robot
-from trajcomp.compensation.program import compensate_program
+from trajcomp.compensation.program_rewrite import compensate_program
 from trajcomp.errors import TrajcompError
 from trajcomp.formats.configuration import configuration_for
 

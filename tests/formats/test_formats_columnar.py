@@ -16,10 +16,10 @@ from trajcomp.formats.krl import reader as krl_reader
 from trajcomp.formats.krl import writer as krl_writer
 from trajcomp.formats.rapid import reader as rapid_reader
 from trajcomp.formats.urscript import reader as urscript_reader
-from trajcomp.formats import text as text_module
-from trajcomp.formats.text import (
-    Edits, apply_edits, edit_sources, format_number, patched, target_edits, written_numbers,
-)
+from trajcomp.formats import text_edits
+from trajcomp.formats.number_writing import format_number, written_numbers
+from trajcomp.formats.source_shifts import edit_sources
+from trajcomp.formats.text_edits import Edits, apply_edits, patched, target_edits
 from trajcomp.programs.items import SpanColumns
 from trajcomp.programs.tables import TargetRows, TextSlices
 from trajcomp.arm.transforms import abc_to_matrix
@@ -253,10 +253,10 @@ def test_a_table_written_as_its_edits_are_made_is_the_text_with_every_edit_appli
                 for text, e, extra, source in zip((src, dat), target_edits(moved, *COLUMN_ENCODERS[".src"][::2],
                                                                            krl_writer._encode_columns),
                                                   renames, moved.sources)]
-    monkeypatch.setattr(text_module, "TARGETS_AT_ONCE", 7)  # edits made in many batches,
+    monkeypatch.setattr(text_edits, "TARGETS_AT_ONCE", 7)  # edits made in many batches,
     monkeypatch.setattr(Edits, "EDITS_AT_ONCE", 5)  # joined a few at a time,
-    monkeypatch.setattr(text_module, "TEXT_PIECE", 100)  # the text after the last one encoded in pieces
-    monkeypatch.setattr(text_module, "target_edits", None)  # never made all at once
+    monkeypatch.setattr(text_edits, "TEXT_PIECE", 100)  # the text after the last one encoded in pieces
+    monkeypatch.setattr(text_edits, "target_edits", None)  # never made all at once
     written = patched(moved, krl_writer._encode, krl_writer.MIN_PLACES, krl_writer._encode_columns, renames)
     assert [b"".join(w) for w in written] == expected == [b"".join(w) for w in written]  # made again when iterated
     assert expected[1].startswith(f"{mark}DEFDAT q ; hélix".encode(encoding)) and b"YP31=" in expected[1]
@@ -265,10 +265,10 @@ def test_a_table_written_as_its_edits_are_made_is_the_text_with_every_edit_appli
 def test_a_table_whose_points_are_not_in_text_order_is_edited_at_once_before_it_is_written(tmp_path, monkeypatch):
     moved = _moved(formats.read(_helix_krl(tmp_path, 40)), np.random.default_rng(6))
     table = moved.targets.table
-    monkeypatch.setattr(text_module, "TARGETS_AT_ONCE", 8)
-    assert text_module._batches_in_order(table)
+    monkeypatch.setattr(text_edits, "TARGETS_AT_ONCE", 8)
+    assert text_edits._batches_in_order(table)
     shuffled = _permuted(table, np.random.default_rng(1).permutation(len(table)))
-    assert not text_module._batches_in_order(shuffled)
+    assert not text_edits._batches_in_order(shuffled)
     encoders = krl_writer._encode, krl_writer.MIN_PLACES, krl_writer._encode_columns
     expected = [e.applied(s.text).encode(s.encoding) for e, s in zip(target_edits(moved, *encoders), moved.sources)]
     written = patched(moved.replace(targets=TargetRows(shuffled)), *encoders)

@@ -7,9 +7,9 @@ import pytest
 
 from trajcomp import formats
 from trajcomp.errors import TrajcompError, WriteError
-from trajcomp.compensation.program import compensate_program, convert_program
+from trajcomp.compensation.program_rewrite import compensate_program, convert_program
 from trajcomp.arm.robot import load_robot
-from trajcomp.compensation.targets import CompensationResult
+from trajcomp.compensation.target_correction import CompensationResult
 from trajcomp.formats.krl.configuration import encode as kuka_status_turn
 from trajcomp.formats.rapid.configuration import encode as abb_confdata
 from trajcomp.programs.frames import FrameTable

@@ -38,7 +38,7 @@ from trajcomp.arm.kinematics import fk, jacobian
 from trajcomp.arm.robot import load_robot
 from trajcomp.cli import main
 from trajcomp.arm.transforms import matrix_to_pose, matrix_to_quat, matrix_to_rotvec, rotation_angle_between
-from trajcomp.compensation.program import convert_program
+from trajcomp.compensation.program_rewrite import convert_program
 from trajcomp.formats.fanuc.configuration import encode as fanuc_config
 from trajcomp.formats.rapid.configuration import encode as abb_confdata
 from trajcomp.formats.speeds import arc_length

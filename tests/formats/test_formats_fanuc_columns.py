@@ -9,7 +9,9 @@ import pytest
 from trajcomp import formats
 from trajcomp.errors import ReadError, WriteError
 from trajcomp.formats.fanuc import reader, speeds, writer
-from trajcomp.formats.text import Lines, edit_sources, target_edits
+from trajcomp.formats.text import Lines
+from trajcomp.formats.source_shifts import edit_sources
+from trajcomp.formats.text_edits import target_edits
 from trajcomp.programs.tables import ItemRows, TargetRows
 from trajcomp.arm.transforms import abc_to_matrix
 

@@ -16,7 +16,7 @@ from trajcomp import formats
 from trajcomp.arm.kinematics import fk
 from trajcomp.arm.robot import load_robot
 from trajcomp.arm.transforms import matrix_to_pose
-from trajcomp.compensation.program import compensate_program
+from trajcomp.compensation.program_rewrite import compensate_program
 from trajcomp.errors import WriteError
 from trajcomp.formats.configuration import configuration_for
 from trajcomp.formats.task import groups

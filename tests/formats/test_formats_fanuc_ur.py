@@ -193,7 +193,7 @@ def test_a_circle_without_its_via_point_is_never_written(tmp_path):
     program = formats.read(DATA / "fanuc" / "PICK_PLACE.LS")
     items = [dataclasses.replace(m, via=None) if getattr(m, "kind", "") == "circular" else m for m in program.items]
     for suffix in (".LS", ".src", ".mod", ".script"):
-        from trajcomp.compensation.program import convert_program
+        from trajcomp.compensation.program_rewrite import convert_program
 
         converted = convert_program(program.replace(items=tuple(items)), formats.find_format(tmp_path / f"x{suffix}").name,
                                     tools={"1": np.eye(4), "2": np.eye(4)}, frames={"1": np.eye(4)})
@@ -213,7 +213,7 @@ ROBODK_UR = DATA / "real" / "ur" / "Prog1.script"
 def test_robodk_urscript_poses_in_ref_frame_are_compensable_targets(tmp_path):
     from scipy.spatial.transform import Rotation
 
-    from trajcomp.compensation.program import convert_program
+    from trajcomp.compensation.program_rewrite import convert_program
 
     program = formats.read(ROBODK_UR)
     assert program.not_compensated() == ()
@@ -307,7 +307,7 @@ def test_urscript_qnear_out_of_range_is_refused(tmp_path):
 
 
 def test_urscript_movec_with_a_run_time_via_point_converts_to_ls_as_a_comment(tmp_path):
-    from trajcomp.compensation.program import convert_program
+    from trajcomp.compensation.program_rewrite import convert_program
 
     path = _script(tmp_path, ["movel(p[0.4, 0.1, 0.3, 0, 3.14, 0])",
                               "movec(pose_add(get_actual_tcp_pose(), p[0, 0.01, 0, 0, 0, 0]), p[0.42, 0.12, 0.3, 0, 3.14, 0])"])

@@ -15,12 +15,12 @@ from scipy.spatial.transform import Rotation
 
 from trajcomp import formats
 from trajcomp.calibration.calibrate import calibrate
-from trajcomp.compensation.targets import program_corrector
+from trajcomp.compensation.target_correction import program_corrector
 from trajcomp.calibration.measurements import Measurements
 from trajcomp.calibration.measurement_plan import plan_grid
-from trajcomp.compensation.program import compensate_program
+from trajcomp.compensation.program_rewrite import compensate_program
 from trajcomp.arm.robot import load_robot
-from trajcomp.calibration.simulate import VirtualRobot
+from trajcomp.calibration.virtual_arm import VirtualRobot
 
 FRAME = [-0.6, -0.1, 0.5, 0.0, 0.0, 0.3]  # m, rotation vector rad
 LOCAL = [[0.05, -0.02, 0.1, 3.14159, 0.0, 0.0], [0.1, 0.05, 0.12, 3.0, 0.2, 0.1]]

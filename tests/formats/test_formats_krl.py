@@ -178,7 +178,7 @@ def test_external_axes_are_read_and_their_motion_detected(tmp_path):
 
 
 def test_external_axes_are_carried_by_conversion_and_zero_ones_left_out(tmp_path):
-    from trajcomp.compensation.program import convert_program
+    from trajcomp.compensation.program_rewrite import convert_program
 
     dat = DAT.replace("S 2,T 2}", "S 2,T 2,E1 0.0,E2 0.0}").replace("Z 6,A 0,B 0,C 0,S 2,T 2,E1 0.0", "Z 6,A 0,B 0,C 0,S 2,T 2,E1 -250.5")
     program = formats.read(_write(tmp_path, SRC, dat))

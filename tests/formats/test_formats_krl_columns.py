@@ -11,7 +11,8 @@ from trajcomp import formats
 from trajcomp.errors import ReadError
 from trajcomp.formats.krl import reader as krl_reader
 from trajcomp.formats.number_fields import text_codes
-from trajcomp.formats.text import Lines, edit_sources, mask
+from trajcomp.formats.text import Lines, mask
+from trajcomp.formats.source_shifts import edit_sources
 from trajcomp.programs.tables import ItemRows, TargetRows
 from tests.formats.test_formats_columnar import NO_INLINE, _seen
 

@@ -205,7 +205,7 @@ def test_real_compas_rrc_module_with_a_moving_track(tmp_path):
     assert {m.frame for m in program.motions} == {"DefaultFrame", "wobj0"}
     assert program.targets[1].external[0] == 681.92 and np.isnan(program.targets[1].external[1:]).all()
     assert program.moving_external_axes() == ("E1",)
-    from trajcomp.compensation.program import convert_program
+    from trajcomp.compensation.program_rewrite import convert_program
 
     formats.write(tmp_path / "track.src", convert_program(program, "krl"))  # no robot: no S/T, the track is kept
     again = formats.read(tmp_path / "track.src")

@@ -20,7 +20,7 @@ from trajcomp.arm.kinematics import fk
 from trajcomp.arm.robot import load_robot
 from trajcomp.arm.transforms import matrix_to_quat
 from trajcomp.cli import main
-from trajcomp.compensation.program import convert_program
+from trajcomp.compensation.program_rewrite import convert_program
 from trajcomp.formats.rapid.configuration import encode as abb_confdata
 
 POSTS = Path(__file__).parents[1] / "data" / "robodk_posts"

@@ -9,7 +9,7 @@ import pytest
 
 from trajcomp import formats
 from trajcomp.errors import ReadError, WriteError
-from trajcomp.compensation.program import convert_program
+from trajcomp.compensation.program_rewrite import convert_program
 
 PATH = Path(__file__).parents[1] / "data" / "programs" / "csv" / "path.csv"
 

@@ -9,7 +9,8 @@ import pytest
 
 from trajcomp import formats
 from trajcomp.errors import ReadError, TrajcompError
-from trajcomp.formats.text import Lines, mask, target_edits
+from trajcomp.formats.text import Lines, mask
+from trajcomp.formats.text_edits import target_edits
 from trajcomp.formats.urscript import lines as cam
 from trajcomp.formats.urscript import reader, speeds, writer
 from trajcomp.programs.tables import ItemRows

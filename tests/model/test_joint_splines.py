@@ -7,7 +7,7 @@ import pytest
 
 from trajcomp.model import joint_errors
 from trajcomp.calibration.calibrate import calibrate
-from trajcomp.compensation.targets import compensate
+from trajcomp.compensation.target_correction import compensate
 from trajcomp.calibration.identify import identify, linearise, region_folds
 from trajcomp.model.joint_errors import JointResidual, SplineBasis
 from trajcomp.arm.kinematics import fk
@@ -18,7 +18,7 @@ from trajcomp.calibration.measurement_plan import default_orientation, plan_grid
 from trajcomp.report.calibration import calibration_report
 from trajcomp.report.html import render
 from trajcomp.arm.robot import load_robot
-from trajcomp.calibration.simulate import ErrorProfile, VirtualRobot
+from trajcomp.calibration.virtual_arm import ErrorProfile, VirtualRobot
 from trajcomp.arm.transforms import abc_to_matrix, rotvec_to_matrix
 
 RANGE = np.radians([[-60, 60], [-120, -40], [40, 130], [-150, -30], [60, 120], [-90, 90]])

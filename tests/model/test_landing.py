@@ -14,14 +14,14 @@ import pytest
 from trajcomp.model import landing
 from trajcomp.calibration.calibrate import calibrate
 from trajcomp.cli import main
-from trajcomp.compensation.targets import compensate
+from trajcomp.compensation.target_correction import compensate
 from trajcomp.arm.ik import Configuration, ik
 from trajcomp.arm.kinematics import fk
 from trajcomp.calibration.measurements import Measurements
 from trajcomp.model.model_file import save_model
 from trajcomp.calibration.measurement_plan import default_orientation, plan_grid
 from trajcomp.arm.robot import load_robot
-from trajcomp.calibration.simulate import VirtualRobot
+from trajcomp.calibration.virtual_arm import VirtualRobot
 from trajcomp.arm.parameters import pose_jacobian
 from trajcomp.arm.transforms import abc_to_matrix, matrix_to_abc, pose_to_matrix, rotvec_to_matrix
 

@@ -10,7 +10,7 @@ from trajcomp.calibration.measurements import Measurements
 from trajcomp.model.model_file import load_model, save_model, sidecar_path
 from trajcomp.calibration.measurement_plan import plan_grid
 from trajcomp.arm.robot import load_robot
-from trajcomp.calibration.simulate import VirtualRobot
+from trajcomp.calibration.virtual_arm import VirtualRobot
 
 
 def small_cube_model(seed):

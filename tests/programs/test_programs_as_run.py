@@ -13,12 +13,12 @@ import pytest
 
 from trajcomp import formats
 from trajcomp.cli import main
-from trajcomp.compensation.targets import CompensationResult
+from trajcomp.compensation.target_correction import CompensationResult
 from trajcomp.formats.configuration import configuration_for, written_configuration
 from trajcomp.errors import ReadError
 from trajcomp.arm.ik import ik
 from trajcomp.arm.kinematics import fk
-from trajcomp.compensation.program import compensate_program, convert_program
+from trajcomp.compensation.program_rewrite import compensate_program, convert_program
 from trajcomp.compensation.posture import planned_joints
 from trajcomp.arm.robot import load_robot
 from trajcomp.arm.transforms import matrix_to_abc, matrix_to_quat

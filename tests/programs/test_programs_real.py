@@ -16,9 +16,9 @@ import numpy as np
 import pytest
 
 from trajcomp import formats
-from trajcomp.compensation.targets import CompensationResult
+from trajcomp.compensation.target_correction import CompensationResult
 from trajcomp.errors import IKError, ReadError
-from trajcomp.compensation.program import compensate_program
+from trajcomp.compensation.program_rewrite import compensate_program
 from trajcomp.arm.robot import load_robot
 
 DATA = Path(__file__).parents[1] / "data"

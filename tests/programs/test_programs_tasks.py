@@ -23,7 +23,7 @@ from trajcomp.formats.configuration import configuration_for
 from trajcomp.errors import ReadError, WriteError
 from trajcomp.formats.task import groups
 from trajcomp.arm.kinematics import fk
-from trajcomp.compensation.program import compensate_program
+from trajcomp.compensation.program_rewrite import compensate_program
 from trajcomp.arm.robot import load_robot
 from trajcomp.arm.transforms import matrix_to_quat, matrix_to_rotvec
 

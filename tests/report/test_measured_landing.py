@@ -9,7 +9,7 @@ import pytest
 
 from trajcomp.arm.robot import load_robot
 from trajcomp.arm.transforms import pose_to_matrix
-from trajcomp.calibration.simulate import VirtualRobot
+from trajcomp.calibration.virtual_arm import VirtualRobot
 from trajcomp.cli import main
 from test_report_outputs import _valid
 

@@ -15,7 +15,7 @@ import pytest
 from trajcomp.arm.kinematics import fk
 from trajcomp.model.model_file import load_model
 from trajcomp.model import landing
-from trajcomp.compensation.program import ProgramReport, landing_of
+from trajcomp.compensation.program_rewrite import ProgramReport, landing_of
 from trajcomp.report import Criteria, compliance_report
 from trajcomp.report.measures import joint_jumps, limit_distances, singularity_distances
 from trajcomp.arm.robot import load_robot

@@ -297,7 +297,7 @@ def test_tracker_frame_data_show_the_arm_s_combination_the_registration_leaves(t
     """With the tracker registration refined too, base z and the turn about it take d1 and theta1; the arm's
     own combination is d2 + d3 + d4 (parallel axes), and it is the virtual arm's true one."""
     from trajcomp.arm.robot import load_robot
-    from trajcomp.calibration.simulate import VirtualRobot
+    from trajcomp.calibration.virtual_arm import VirtualRobot
     from trajcomp.report.calibration import combination_text
 
     plan, meas = tmp_path / "plan.csv", tmp_path / "tilted.csv"

@@ -15,11 +15,11 @@ import pytest
 
 from trajcomp.arm.kinematics import fk
 from trajcomp.model.model_file import load_model
-from trajcomp.compensation.program import ProgramReport
+from trajcomp.compensation.program_rewrite import ProgramReport
 from trajcomp.report import compliance_report, schema, summary_lines
-from trajcomp.report import plots, targets
+from trajcomp.report import per_target, plots
 from trajcomp.report.measures import singularity_distances
-from trajcomp.report.targets import FLAGS, ROWS, WORST, TargetMeasures, worst_targets
+from trajcomp.report.per_target import FLAGS, ROWS, WORST, TargetMeasures, worst_targets
 from trajcomp.arm.robot import load_robot
 from trajcomp.timing import Segment
 
@@ -316,9 +316,9 @@ def test_the_times_of_a_long_joint_program_go_to_the_sidecar(tmp_path):
 
 def test_the_measures_on_two_processes_equal_those_of_one(sweep, monkeypatch):
     """Blocks split between processes (jumps measured across their boundaries) give the same measures."""
-    monkeypatch.setattr(targets, "BLOCK", 3 * targets.CHUNK + 5)
+    monkeypatch.setattr(per_target, "BLOCK", 3 * per_target.CHUNK + 5)
     report, _ = sweep
-    one, two = targets.target_measures(report, KUKA, workers=1), targets.target_measures(report, KUKA, workers=2)
+    one, two = per_target.target_measures(report, KUKA, workers=1), per_target.target_measures(report, KUKA, workers=2)
     for name, values in one.values.items():
         np.testing.assert_array_equal(two.values[name], values, err_msg=name)
     for name in ("branch", "branch_planned", "changed"):

@@ -70,7 +70,7 @@ def test_a_compensate_run_leaves_nothing_out_of_the_collectors_scans(tmp_path, k
         memory.end_stage()
         frozen.append(gc.get_freeze_count())
 
-    monkeypatch.setattr("trajcomp.compensation.pipeline.end_stage", end_stage)
+    monkeypatch.setattr("trajcomp.jobs.pipeline.end_stage", end_stage)
     kuka = Path(__file__).resolve().parents[2] / "examples" / "programs" / "kuka"
     for name in ("weld.src", "weld.dat"):
         shutil.copy(kuka / name, tmp_path / name)

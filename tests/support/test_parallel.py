@@ -6,10 +6,10 @@ import os
 import numpy as np
 import pytest
 
-import trajcomp.compensation.targets as compensation
+import trajcomp.compensation.target_correction as compensation
 import trajcomp.compensation.posture as posture
 from trajcomp import formats
-from trajcomp.compensation.targets import compensate
+from trajcomp.compensation.target_correction import compensate
 from trajcomp.errors import IKError
 from trajcomp.support import parallel
 from trajcomp.support.parallel import in_background, map_blocks, meanwhile, share_blocks, usable_cores

@@ -17,7 +17,7 @@ from pathlib import Path
 import pytest
 
 from tests.signal_runs import STOPPING, long_program, run_stopped
-from trajcomp.compensation.batch import ERROR, FileResult, run_batch
+from trajcomp.jobs.batch import ERROR, FileResult, run_batch
 from trajcomp.support.parallel import WorkerLost, in_background, map_blocks, share_blocks
 from trajcomp.support.signals import Interrupted, held, raised
 

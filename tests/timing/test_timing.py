@@ -10,7 +10,6 @@ trapezoid and jerk-limited profiles.
 
 import csv
 import dataclasses
-import importlib
 
 import numpy as np
 import pytest
@@ -26,8 +25,8 @@ from trajcomp.arm.robot import load_robot
 from trajcomp.timing import Moves, retime
 from trajcomp.timing.toppra_run import ConstantAcceleration
 from trajcomp.arm.transforms import abc_to_matrix, matrix_to_abc
+import trajcomp.timing.retiming as retime_module
 
-retime_module = importlib.import_module("trajcomp.timing.retime")  # the module, not the function
 UR10 = load_robot("ur10")
 KUKA = load_robot("kuka_kr6_r900")
 FD_TOLERANCE = 0.02  # finite differences of a written 1 us-resolution timing, 10 ms apart
@@ -396,7 +395,7 @@ def test_every_method_keeps_the_limits_and_toppra_is_fastest():
 def test_a_task_s_timing_error_names_the_file_of_the_motion(tmp_path):
     """In a task joined from several files, a line number alone would point into the wrong file."""
     from trajcomp import formats
-    from trajcomp.compensation.pipeline import planned
+    from trajcomp.jobs.pipeline import planned
     from trajcomp.compensation.posture import planned_joints
     from trajcomp.timing import moves_from_program
 

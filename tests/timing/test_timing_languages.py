@@ -204,11 +204,11 @@ def test_krl_restores_the_speed_of_a_motion_that_is_not_retimed(tmp_path):
 def test_the_compensations_planned_joints_time_the_original_as_its_posture_plan_does(
         tmp_path, kuka_model, joint_targets, monkeypatch):
     from trajcomp.support import parallel
-    from trajcomp.compensation import pipeline
-    from trajcomp.compensation.pipeline import retime_compensated
-    from trajcomp.compensation.targets import program_corrector
+    from trajcomp.jobs import pipeline
+    from trajcomp.jobs.pipeline import retime_compensated
+    from trajcomp.compensation.target_correction import program_corrector
     from trajcomp.model.model_file import load_model
-    from trajcomp.compensation.program import compensate_program
+    from trajcomp.compensation.program_rewrite import compensate_program
 
     model = load_model(kuka_model)
     shutil.copy(EXAMPLES / "kuka" / "weld.dat", tmp_path / "weld.dat")
@@ -241,12 +241,12 @@ def test_the_csv_settings_are_the_t_cells_written_and_made_on_demand(tmp_path, m
     import csv as csv_module
 
     from trajcomp.arm.robot import load_robot
-    from trajcomp.formats import text as text_module
-    from trajcomp.formats.text import Texts
+    from trajcomp.formats import text_sequence
+    from trajcomp.formats.text_sequence import Texts
     from trajcomp.timing.writeback import apply_timing, retime_program
     from tests.timing.test_timing import helix, write_joint_program
 
-    monkeypatch.setattr(text_module, "TEXT_BLOCK", 7)
+    monkeypatch.setattr(text_sequence, "TEXT_BLOCK", 7)
     robot = load_robot("ur10")
     _, q = helix(robot, 120, turns=1)
     zones = ["1"] * 120
@@ -274,7 +274,7 @@ def test_the_csv_settings_are_the_t_cells_written_and_made_on_demand(tmp_path, m
 def test_spans_and_lines_move_with_the_edits_as_the_rule_says():
     """Offsets after text edits, vectorized, against the rule itself: a position moves by every edit ending at or
     before it; a span's end not by an insertion exactly there (the insertion goes after the span)."""
-    from trajcomp.formats.text import _Shift
+    from trajcomp.formats.source_shifts import _Shift
 
     rng = np.random.default_rng(4)
     text = "".join(rng.choice(list("ab \n"), 3000))

@@ -1,7 +1,5 @@
 """A program of exact stops, timed in batches: each motion gets the timing it gets alone."""
 
-import importlib
-
 import numpy as np
 import pytest
 
@@ -13,9 +11,9 @@ from trajcomp.timing import Moves, retime
 from trajcomp.timing.path import run_path
 from trajcomp.timing.ruckig_move import ruckig_law
 from trajcomp.timing.toppra_run import toppra_laws
+import trajcomp.timing.retiming as retime_module
 
 UR10 = load_robot("ur10")
-retime_module = importlib.import_module("trajcomp.timing.retime")  # the module, not the function of that name
 
 
 @pytest.fixture(scope="module")

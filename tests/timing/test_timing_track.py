@@ -26,7 +26,7 @@ from tests.compensation.test_compensate_track import (
 from trajcomp import formats
 from trajcomp.arm.ik import ik
 from trajcomp.arm.kinematics import fk, jacobian
-from trajcomp.compensation.pipeline import planned
+from trajcomp.jobs.pipeline import planned
 from trajcomp.compensation.posture import planned_joints
 from trajcomp.timing.writeback import apply_timing, retime_program
 
@@ -175,7 +175,7 @@ def test_a_program_on_a_track_is_compensated_retimed_and_judged_landing_within_0
     calibrated with held-out folds): each language's program on the track lands within 0.02 mm of its world
     targets, its timing keeps the track's and the joints' limits, and its verdict passes."""
     from tests.compensation.test_compensate_track import calibrated, cell, landing
-    from trajcomp.compensation.pipeline import CompensationJob
+    from trajcomp.jobs.pipeline import CompensationJob
 
     robot, virtual, _ = cell(name)
     model = calibrated(robot, virtual, name, folds=3)

@@ -5,8 +5,6 @@ its declared joints, a linear one turns each joint by its declared change
 wrapped to less than half a turn.
 """
 
-import importlib
-
 import numpy as np
 import pytest
 
@@ -16,8 +14,8 @@ from trajcomp.arm.kinematics import fk
 from trajcomp.programs.items import JOINT, LINEAR
 from trajcomp.arm.robot import load_robot
 from trajcomp.timing import Moves, retime
+import trajcomp.timing.retiming as retime_module
 
-retime_module = importlib.import_module("trajcomp.timing.retime")  # the module, not the function
 UR10 = load_robot("ur10")
 TURN = 2.0 * np.pi
 

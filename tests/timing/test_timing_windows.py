@@ -1,7 +1,5 @@
 """A long run timed in windows: the same timing as in one piece, continuous at the joins, within the limits."""
 
-import importlib
-
 import numpy as np
 import pytest
 
@@ -9,9 +7,9 @@ from trajcomp.arm.ik import ik
 from trajcomp.arm.kinematics import fk
 from trajcomp.arm.robot import load_robot
 from trajcomp.timing import Moves, retime, toppra_run
+import trajcomp.timing.retiming as retime_module
 
 UR10 = load_robot("ur10")
-retime_module = importlib.import_module("trajcomp.timing.retime")  # the module, not the function of that name
 
 
 @pytest.fixture(scope="module")

@@ -22,7 +22,7 @@ At track position ``e`` the arm's base, the carriage frame, is
 ``T_world_base(e) = Trans(scale * e * direction) @ T_world_base(0)``: a pure
 translation of the base placed by ``world`` (and ``origin``). That is the
 track as the controller knows it; a calibration may identify the real one
-(`trajcomp.calibration.track`: ``actual_direction``, ``actual_scale``):
+(`trajcomp.calibration.track_fit`: ``actual_direction``, ``actual_scale``):
 targets are then placed on the real carriage, and each command is
 written so that the controller, with its own track, sends the arm to
 it (`trajcomp.programs.frames.FrameTable.command_offsets`). A target
@@ -72,7 +72,7 @@ class Track:
     straightness : ndarray, shape (P, 3), or None
         The real carriage's displacement beyond ``actual_scale * e *
         actual_direction`` at each measured position, world mm
-        (`trajcomp.calibration.track`; about 0 at track position 0, where the
+        (`trajcomp.calibration.track_fit`; about 0 at track position 0, where the
         arm was calibrated): linear between them, held at the ends beyond
         them. None: straight within what the calibration could tell.
     scatter : float or None

@@ -1,6 +1,6 @@
 """The calibration half: plan measurements, read them, identify a model, validate it.
 
-`measurement_plan` (grids and orientations to measure), `simulate` (a
+`measurement_plan` (grids and orientations to measure), `virtual_arm` (a
 virtual arm with known errors), `measurements` and `layout` (reading
 laser-tracker files by an explicit column layout), `orientations` (whether
 measurements locate the flange), `identify` (DH, tool and tracker

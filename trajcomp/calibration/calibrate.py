@@ -27,10 +27,11 @@ import logging
 import numpy as np
 from scipy.spatial import cKDTree
 
-from trajcomp.calibration.options import INTERPOLATIONS, LOSSES, METHODS, ORIENTATION_WEIGHT
+from trajcomp.calibration.options import CALIBRATION_METHODS, INTERPOLATIONS, LOSSES, ORIENTATION_WEIGHT
 from trajcomp.errors import CalibrationError
 from trajcomp.model import landing
-from trajcomp.model.grid import METHODS as LATTICE_INTERPOLATORS, TOLERANCE, ResidualGrid, detect_lattice, fit_field
+from trajcomp.model.grid import TOLERANCE, ResidualGrid, detect_lattice, fit_field
+from trajcomp.model.options import LATTICE_KINDS
 from trajcomp.calibration.identify import (best_fit_transform, identify, linearise, outlier_rows, region_folds,
                                            select_splines)
 from trajcomp.arm.ik import batch_seed, branch_index, ik
@@ -196,7 +197,7 @@ class _Parts:
 
 def _field(position, values, left_out, kind, grid_step):
     """A field over commanded positions; lattice kinds take the left-out rows' model values, the others drop them."""
-    if kind in LATTICE_INTERPOLATORS:
+    if kind in LATTICE_KINDS:
         return fit_field(position, values, step=grid_step, interpolation=kind, left_out=left_out)
     return fit_field(position[~left_out], values[~left_out], interpolation=kind)
 
@@ -372,8 +373,8 @@ def calibrate(robot, meas, *, robot_ref=None, method="composite", frame=None, gr
         data or identification, too few points for the parameters, or a
         degenerate grid.
     """
-    if method not in METHODS:
-        raise CalibrationError(f"unknown method {method!r} (one of {', '.join(METHODS)})")
+    if method not in CALIBRATION_METHODS:
+        raise CalibrationError(f"unknown method {method!r} (one of {', '.join(CALIBRATION_METHODS)})")
     if loss not in LOSSES:
         raise CalibrationError(f"unknown loss {loss!r} (one of {', '.join(LOSSES)})")
     if not (isinstance(seed, (int, np.integer)) and seed >= 0):
@@ -481,7 +482,7 @@ def fold_errors(robot, joints, position, measured, rotation, options, folds, see
     """
     if len(position) < 2 * folds:
         raise CalibrationError(f"{len(position)} measurements are too few for {folds}-fold cross-validation")
-    if options["kind"] in LATTICE_INTERPOLATORS:
+    if options["kind"] in LATTICE_KINDS:
         options = options | {"kind": "knn", "grid_step": None}
     refit = None if fitted is None else _Refit(robot, joints, measured, rotation, options, *fitted)
     splits = kfold_indices(len(position), folds, seed) if splits is None else splits
@@ -669,7 +670,7 @@ def _landing(robot, dh, frame, data, held, fitted, split, progress, orientation,
     """
     _, joints, position, measured, rotation, options = data
     layers = outer_layers(position)
-    if options["kind"] in LATTICE_INTERPOLATORS:
+    if options["kind"] in LATTICE_KINDS:
         held, distances = plane_errors(*data, progress)
         method = (f"{options['kind']} on the lattice with every other node plane along each axis held out "
                   "(cells twice as long along that axis)")

@@ -4,7 +4,7 @@ Profiles (``PROFILES``): ``ideal`` (no error at all), ``paper`` (a UR10-class
 arm with 1-3 mm uncompensated error, as in the paper), ``harsh`` (twice the
 geometric and non-geometric errors, heavier payload, noisier). Plain data,
 no numpy: a command's ``--help`` builds its parser from them without loading
-the virtual robot (`trajcomp.calibration.simulate`, which draws the errors).
+the virtual robot (`trajcomp.calibration.virtual_arm`, which draws the errors).
 """
 
 import dataclasses

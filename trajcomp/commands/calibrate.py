@@ -1,6 +1,6 @@
 """``trajcomp calibrate``: identify a compensation model from measurements."""
 
-from trajcomp.calibration.options import INTERPOLATIONS, LOSSES, METHODS, ORIENTATION_WEIGHT
+from trajcomp.calibration.options import CALIBRATION_METHODS, INTERPOLATIONS, LOSSES, ORIENTATION_WEIGHT
 from trajcomp.commands._args import (
     add_layout,
     add_robot,
@@ -34,7 +34,8 @@ def add_parser(sub):
     add_robot(parser)
     parser.add_argument("--tool", type=pose, metavar="x,y,z,a,b,c",
                         help="nominal TCP of the measured point in the flange frame, mm and deg (default: the robot's)")
-    parser.add_argument("--method", choices=METHODS, default="composite", help="default mode of the model (default composite)")
+    parser.add_argument("--method", choices=CALIBRATION_METHODS, default="composite",
+                        help="default mode of the model (default composite)")
     parser.add_argument("--grid-step", type=steps, metavar="STEP[,STEP,STEP]",
                         help="expected grid step, mm, or one per axis x,y,z (checked against the data)")
     parser.add_argument("--interpolation", choices=INTERPOLATIONS, default="auto",
@@ -111,7 +112,7 @@ def run(args):
     from trajcomp.arm.transforms import matrix_to_pose
     from trajcomp.calibration.calibrate import MAX_ROWS, calibrate, too_many_rows
     from trajcomp.calibration.measurements import read_measurements
-    from trajcomp.calibration.track import arm_rows, with_identified_track
+    from trajcomp.calibration.track_fit import arm_rows, with_identified_track
     from trajcomp.errors import CalibrationError
     from trajcomp.model.model_file import model_files, save_model
     from trajcomp.report import calibration_report, file_entry, report_paths

@@ -1,7 +1,7 @@
 """``trajcomp compensate``: correct robot programs with a compensation model, one file or a batch.
 
-The options become a `trajcomp.compensation.pipeline.CompensationJob`; one
-file runs it here, a batch in workers (`trajcomp.compensation.batch`).
+The options become a `trajcomp.jobs.pipeline.CompensationJob`; one
+file runs it here, a batch in workers (`trajcomp.jobs.batch`).
 """
 
 import dataclasses
@@ -9,7 +9,6 @@ import math
 import sys
 from pathlib import Path
 
-from trajcomp import formats
 from trajcomp.commands._args import command_parser, info, language_names, languages, positive_number
 from trajcomp.commands._report import add_report_options, criteria_of
 from trajcomp.commands.convert import add_frame_options, add_in_place_option, frame_options
@@ -80,8 +79,8 @@ def add_parser(sub):
 
 def run(args):
     from trajcomp.arm.robot import load_robot
-    from trajcomp.compensation import batch
-    from trajcomp.compensation.pipeline import CompensationJob, loaded_model
+    from trajcomp.jobs import batch
+    from trajcomp.jobs.pipeline import CompensationJob, loaded_model
 
     if args.jobs < 1:
         raise TrajcompError(f"--jobs: expected a whole number of at least 1, got {args.jobs}")
@@ -117,54 +116,15 @@ def run(args):
 
 
 def _run_batch(args, job):
-    from trajcomp.compensation import batch
-    from trajcomp.formats.task import groups as task_groups
+    from trajcomp.jobs import batch
     from trajcomp.model.model_file import model_files
-    from trajcomp.support.atomic import refuse_inputs
-    from trajcomp.support.progress import progress
 
-    found = batch.expand_inputs(args.program)
-    suffix = formats.find_format(format=args.to_format).extensions[0] if args.to_format else None
-    outputs = batch.output_paths(found, args.output, suffix)
-    inputs = [path for path, _ in found]
-    summary = Path(args.summary) if args.summary else Path(args.output) / "summary.json"
-    models = model_files(args.model)
-    refuse_inputs(outputs, [*([] if args.in_place else inputs), *models],
-                  "give -o another folder than the programs' (or --in-place to replace them)")
-    refuse_inputs([summary], [*inputs, *models, *outputs], "give --summary another name")
-    reports = [Path(args.report) / path.relative_to(args.output) for path in outputs] if args.report else []
-    made = make_folders(dict.fromkeys(path.parent for path in [*outputs, *reports]))  # a backup's layout is kept
-    try:
-        # the files of one task that share points run as one program (a shared point corrected once)
-        tasks = task_groups(inputs) if not args.to_format else [[k] for k in range(len(inputs))]
-        inputs = [inputs[g[0]] if len(g) == 1 else tuple(inputs[k] for k in g) for g in tasks]
-        outputs = [outputs[g[0]] if len(g) == 1 else tuple(outputs[k] for k in g) for g in tasks]
-        with progress(len(inputs), desc="compensate", unit="file") as bar:
-            results = batch.run_batch(job, inputs, outputs, jobs=args.jobs, scheduler=args.scheduler,
-                                      done=lambda result: bar.update(1))
-        for result in results:
-            info(batch.result_line(result))
-        batch.write_summary(summary, results, model=args.model, mode=args.mode or "model default",
-                            jobs=args.jobs, scheduler=args.scheduler)
-    finally:
-        remove_empty(made)  # the folders of refused files (or of all, when stopped before the summary)
+    results, summary = batch.run_programs(
+        job, args.program, args.output, to_format=args.to_format, in_place=args.in_place,
+        models=model_files(args.model), report=args.report, summary=args.summary, jobs=args.jobs,
+        scheduler=args.scheduler, show_progress=True, model=args.model, mode=args.mode or "model default")
+    for result in results:
+        info(batch.result_line(result))
     counts = {s: sum(r.status == s for r in results) for s in batch.EXIT_CODES}
     info(f"{len(results)} programs: " + ", ".join(f"{n} {s}" for s, n in counts.items() if n) + f"; summary {summary}")
     return batch.exit_code(results)
-
-
-def make_folders(folders):
-    """Make the folders (Paths) that do not exist, parents first; the ones made, deepest first."""
-    made = []
-    for folder in folders:
-        missing = [p for p in (folder, *folder.parents) if not p.exists()]
-        folder.mkdir(parents=True, exist_ok=True)
-        made += missing
-    return sorted(set(made), key=lambda p: len(p.parts), reverse=True)
-
-
-def remove_empty(folders):
-    """Remove those of the folders (deepest first) left empty: a batch leaves no folder for a file it refused."""
-    for folder in folders:
-        if folder.is_dir() and not any(folder.iterdir()):
-            folder.rmdir()

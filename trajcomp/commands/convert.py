@@ -98,7 +98,7 @@ LISTED = 20  # motions named on stderr
 
 def run(args):
     from trajcomp.arm.robot import load_robot
-    from trajcomp.compensation.program import convert_program
+    from trajcomp.compensation.program_rewrite import convert_program
     from trajcomp.programs.program import place_text
 
     tools, frames = frame_options(args)

@@ -26,7 +26,7 @@ def add_parser(sub):
 
 def run(args):
     from trajcomp.arm.robot import load_robot
-    from trajcomp.demo import format_comparison, run_demo, run_program
+    from trajcomp.paper_protocol import format_comparison, run_demo, run_program
     from trajcomp.model.model_file import save_model
 
     robot = load_robot(args.robot)

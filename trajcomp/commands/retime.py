@@ -1,6 +1,6 @@
 """``trajcomp retime IN -o OUT --robot R``: time a program under the arm's limits and write the timing into it.
 
-The options become a `trajcomp.compensation.pipeline.RetimeJob`.
+The options become a `trajcomp.jobs.pipeline.RetimeJob`.
 """
 
 import sys
@@ -8,7 +8,7 @@ import sys
 from trajcomp.commands._args import add_robot, command_parser, info, robot_of, speed_field_names
 from trajcomp.commands._report import add_report_options, criteria_of
 from trajcomp.commands.convert import add_frame_options, add_in_place_option, frame_options
-from trajcomp.timing.options import METHODS, TOLERANCE
+from trajcomp.timing.options import RETIME_METHODS, TOLERANCE
 
 METHOD_HELP = ("auto: TOPP-RA for continuous LIN/CIRC runs, ruckig (jerk-limited) for point-to-point "
                "and stop-to-stop motions; toppra or ruckig: that one for every segment")
@@ -28,7 +28,7 @@ def add_parser(sub):
     parser.add_argument("program", metavar="IN", help="program file")
     parser.add_argument("-o", "--output", required=True, help="program to write (same language as IN)")
     add_robot(parser)
-    parser.add_argument("--method", choices=METHODS, default="auto", help=METHOD_HELP)
+    parser.add_argument("--method", choices=RETIME_METHODS, default="auto", help=METHOD_HELP)
     add_tolerance_option(parser)
     add_frame_options(parser)
     add_in_place_option(parser)
@@ -44,8 +44,8 @@ def add_tolerance_option(parser):
 
 
 def run(args):
-    from trajcomp.compensation.batch import EXIT_CODES
-    from trajcomp.compensation.pipeline import RetimeJob
+    from trajcomp.jobs.batch import EXIT_CODES
+    from trajcomp.jobs.pipeline import RetimeJob
 
     tools, frames = frame_options(args)
     job = RetimeJob(robot_of(args), robot_file=args.robot, method=args.method, path_tolerance=args.path_tolerance,

@@ -38,7 +38,7 @@ def run(args):
     from trajcomp.arm.transforms import matrix_to_abc
     from trajcomp.calibration.calibrate import commanded
     from trajcomp.calibration.measurements import read_measurements, write_measurements
-    from trajcomp.calibration.simulate import VirtualRobot
+    from trajcomp.calibration.virtual_arm import VirtualRobot
     from trajcomp.support.atomic import refuse_inputs
 
     refuse_inputs([args.output], [args.plan, args.robot])

@@ -17,7 +17,10 @@ copy) whose ``__init__`` describes the language and registers it with
 
 Adding a language is one folder with these faces and one line in
 `BUILT_IN` (or, outside trajcomp, an entry point). The text toolkit the
-built-in languages share is public: `trajcomp.formats.text`.
+built-in languages share is public, a module per job: `trajcomp.formats.text`
+(reading and scanning a source), `number_fields` (reading its numbers),
+`number_writing`, `pose_encoding`, `text_edits` (the edit engine),
+`source_shifts`, `file_writing` and `text_sequence`.
 
 Third-party packages add formats through the entry-point group
 ``trajcomp.formats``: an entry point names a module (or object) whose import
@@ -417,7 +420,7 @@ def write(path, program, format=None, *, protect=(), workers=1, root=None, into=
         or cannot be written, or a number to write is not finite (``nan``,
         ``inf``: never into robot code).
     """
-    from trajcomp.formats.text import check_writable  # lazily, like the format modules
+    from trajcomp.formats.file_writing import check_writable  # lazily, like the format modules
 
     path = Path(path)
     check_writable(program)

@@ -9,7 +9,7 @@ are compensated together: `merge` joins their programs so that a point
 declared once is one target, corrected once and consistently for every
 file that uses it, and `groups` finds which files of a batch belong
 together. The writer then writes every changed file where it lies
-(`trajcomp.formats.text.companion_outputs`), all of them in one atomic
+(`trajcomp.formats.file_writing.companion_outputs`), all of them in one atomic
 commit (`trajcomp.formats.write`).
 """
 

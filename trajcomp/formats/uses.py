@@ -19,7 +19,8 @@ a name a motion's line writes more than once.
 import dataclasses
 import re
 
-from trajcomp.formats.text import Lines, edit_sources
+from trajcomp.formats.text import Lines
+from trajcomp.formats.source_shifts import edit_sources
 from trajcomp.programs.items import Motion, Span
 from trajcomp.programs.program import place_text
 

@@ -22,7 +22,7 @@ import numpy as np
 
 from trajcomp.errors import CalibrationError, ModelError
 from trajcomp.model.interpolate import KNN, RBF, Kriging, VERTEX_HIT, bounded_evaluate, fmt_point, in_box
-from trajcomp.model.options import FIELD_KINDS as KINDS, LATTICE_KINDS as METHODS
+from trajcomp.model.options import FIELD_KINDS as KINDS, LATTICE_KINDS
 from trajcomp.model.stats import AXES, as_vectors
 
 TOLERANCE = 0.5
@@ -226,8 +226,8 @@ class ResidualGrid:
             if arr.shape != want or not np.isfinite(arr).all():
                 raise ModelError(f"residual grid: {name} must be finite with shape {want}, got shape {arr.shape}")
             object.__setattr__(self, name, arr)
-        if self.method not in METHODS:
-            raise ModelError(f"residual grid: unknown method {self.method!r} (one of {', '.join(METHODS)})")
+        if self.method not in LATTICE_KINDS:
+            raise ModelError(f"residual grid: unknown method {self.method!r} (one of {', '.join(LATTICE_KINDS)})")
 
     @classmethod
     def from_points(cls, points, values, tol=TOLERANCE, method="idw8", measured=None, step=None, left_out=None):
@@ -321,8 +321,8 @@ class ResidualGrid:
             unknown method.
         """
         method = self.method if method is None else method
-        if method not in METHODS:
-            raise ModelError(f"unknown grid interpolation method {method!r} (one of {', '.join(METHODS)})")
+        if method not in LATTICE_KINDS:
+            raise ModelError(f"unknown grid interpolation method {method!r} (one of {', '.join(LATTICE_KINDS)})")
         p = as_vectors(points, "query points", error=ModelError)
         kernel = self._idw8 if method == "idw8" else self._trilinear
         return bounded_evaluate(kernel, p, self.lattice.origin, self.lattice.upper, outside)
@@ -423,7 +423,7 @@ def fit_field(points, values, step=None, interpolation="idw8", **options):
         return KNN(points, values, **options)
     if interpolation == RBF.kind:
         return RBF.fit(points, values, **options)
-    if interpolation not in METHODS:
+    if interpolation not in LATTICE_KINDS:
         raise ValueError(f"unknown interpolation {interpolation!r} (one of {', '.join(KINDS)})")
     return ResidualGrid.from_points(points, values, method=interpolation, step=step, **options)
 

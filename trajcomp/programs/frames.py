@@ -13,7 +13,7 @@ missing one is an error, never a guess. Frame ``None`` is the base, tool
 import numpy as np
 
 from trajcomp.errors import TrajcompError
-from trajcomp.programs.tables import _codes, rows_of
+from trajcomp.programs.tables import rows_of, value_codes
 from trajcomp.arm.transforms import invert
 
 
@@ -199,7 +199,7 @@ def _values(names, value):
 
     A read-only view of one matrix when every name is the same (no copy per row).
     """
-    codes, distinct = _codes(names)
+    codes, distinct = value_codes(names)
     values = np.array([value(name) for name in distinct]).reshape(-1, 4, 4)
     return np.broadcast_to(values[0], (len(names), 4, 4)) if len(distinct) == 1 else values[codes]
 

@@ -24,7 +24,7 @@ class Source:
     the program uses from it (another module of a RAPID task, a KUKA data
     list or ``$config.dat``, FANUC position registers): its points are
     corrected where they are declared, and it is written back only when
-    they changed (`trajcomp.formats.text.companion_outputs`).
+    they changed (`trajcomp.formats.file_writing.companion_outputs`).
     """
 
     name: str

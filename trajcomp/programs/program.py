@@ -37,7 +37,7 @@ import numpy as np
 
 from trajcomp.errors import TrajcompError
 from trajcomp.programs.items import CIRCULAR, JOINT, LINEAR, Motion, Source, Span, Statement, Target, replaced
-from trajcomp.programs.tables import ItemRows, LineLabels, MotionTable, Rows, TargetRows, TargetTable, _codes
+from trajcomp.programs.tables import ItemRows, LineLabels, MotionTable, Rows, TargetRows, TargetTable, value_codes
 
 # The program model as format plugins import it (README "Plugins", plugins/trajcomp-points): the item
 # classes are defined in trajcomp.programs.items and stay importable from here.
@@ -306,8 +306,8 @@ class Program:
         own_tool, own_frame = targets.tool[index], targets.frame[index]
         tool = np.where(np.equal(own_tool, None), motions.tool[rows], own_tool)
         frame = np.where(np.equal(own_frame, None), motions.frame[rows], own_frame)
-        tool_code, _ = _codes(tool)
-        frame_code, _ = _codes(frame)
+        tool_code, _ = value_codes(tool)
+        frame_code, _ = value_codes(frame)
         key = tool_code * (frame_code.max(initial=0) + 1) + frame_code
         order = np.argsort(index, kind="stable")
         first = np.ones(len(order), dtype=bool)

@@ -3,7 +3,7 @@
 `MotionTable` and `TargetTable` hold all motions and targets of a program as
 columns (what the pipeline stages read, see `trajcomp.programs.program`), with the
 row helpers that keep long columns from being copied (`rows_of`,
-`every_row`, `repeated`, `read_only`), `_codes` for object columns, and the
+`every_row`, `repeated`, `read_only`), `value_codes` for object columns, and the
 sequences that show a table as `Motion` / `Target` objects built on access
 (`TargetRows`, `ItemRows`, `LineLabels`).
 """
@@ -619,7 +619,7 @@ class LineLabels(Sequence):
         return f"{self.source_name}:{self.lines[k]}"
 
 
-def _codes(values):
+def value_codes(values):
     """Integer codes (N,) of hashable values (N,) and the distinct values in first-seen order."""
     values = list(values)
     names = list(dict.fromkeys(values))

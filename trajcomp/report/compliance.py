@@ -1,12 +1,12 @@
 """The compliance report of a compensated (and re-timed) program, as a JSON-ready dict.
 
-Built from the run's `trajcomp.compensation.program.ProgramReport` (one row per
+Built from the run's `trajcomp.compensation.program_rewrite.ProgramReport` (one row per
 compensated target, motion order), the nominal robot, the model and, when
 the program was re-timed, the `trajcomp.timing` result. Every criterion of
 the verdict is stated with its threshold; each failing one counts and
 lists the targets or lines it concerns. Measures, statistics and verdict
 cover every target; a long program's table is summarised
-(`trajcomp.report.targets`). What the run could not provide (no
+(`trajcomp.report.per_target`). What the run could not provide (no
 compensable motion, no grid in the mode, no re-timing) is listed under
 ``missing`` instead of being shown empty.
 """
@@ -19,7 +19,7 @@ from trajcomp.report.measured import measured_check, measured_summary
 from trajcomp.report.measures import BRANCH_NAMES
 from trajcomp.report.document import Figure, Report
 from trajcomp.report.provenance import grid_box, header
-from trajcomp.report.targets import ARRAYS, ROWS, TIMES, flag_bits, full_data, statistics, table_rows, target_json, \
+from trajcomp.report.per_target import ARRAYS, ROWS, TIMES, flag_bits, full_data, statistics, table_rows, target_json, \
     target_measures
 from trajcomp.report.verdict import (FAIL, LISTED, NOT_EVALUATED, PASS, Check, Criteria, accuracy_check, check,
                                      not_evaluated, verdict)
@@ -295,7 +295,7 @@ def compliance_report(report, robot, *, criteria=None, model=None, model_info=No
     Parameters
     ----------
     report : ProgramReport
-        What the compensation did (`trajcomp.compensation.program.ProgramReport`).
+        What the compensation did (`trajcomp.compensation.program_rewrite.ProgramReport`).
     robot : Robot
         The nominal robot.
     criteria : Criteria, optional

@@ -12,7 +12,7 @@ into the program's speed fields.
 - `trajcomp.timing.toppra_run`: TOPP-RA along a run (`trajcomp.timing.reachability`, constant acceleration);
 - `trajcomp.timing.ruckig_move`: jerk-limited rest-to-rest motion with ruckig;
 - `trajcomp.timing.check`: the dense 1 kHz check;
-- `trajcomp.timing.retime`: segments and the `TimingResult`;
+- `trajcomp.timing.retiming`: segments and the `TimingResult`;
 - `trajcomp.timing.track`: a moving track as a joint of the timed path;
 - `trajcomp.timing.writeback`: the timing as each language's speed fields;
 - `trajcomp.timing.options`: the methods and the path tolerance, without numpy (for the command line).
@@ -22,33 +22,18 @@ command's ``--help`` can read `trajcomp.timing.options` without loading the
 timing (numpy, scipy, ruckig).
 """
 
-import sys
-import types
-
 from trajcomp.support.lazy import lazy_names
 
 _MODULES = {
-    "METHODS": "options",
+    "RETIME_METHODS": "options",
     "Moves": "moves",
     "Segment": "result",
     "TimingResult": "result",
     "moves_from_program": "moves",
-    "plan_segments": "retime",
-    "retime": "retime",
+    "plan_segments": "retiming",
+    "retime": "retiming",
 }
 __all__ = sorted(_MODULES)
 
 __getattr__ = lazy_names(__name__, _MODULES)
 
-
-class _Package(types.ModuleType):
-    """This package: ``trajcomp.timing.retime`` stays the function when the import system sets the module of that
-    name as an attribute (which it does whenever the module is first imported, by anyone)."""
-
-    def __setattr__(self, name, value):
-        if name == "retime" and isinstance(value, types.ModuleType):
-            value = value.retime
-        super().__setattr__(name, value)
-
-
-sys.modules[__name__].__class__ = _Package

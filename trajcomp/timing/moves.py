@@ -19,7 +19,7 @@ from trajcomp.arm.kinematics import fk
 from trajcomp.errors import TimingError
 from trajcomp.programs.frames import FrameTable
 from trajcomp.programs.items import CIRCULAR, JOINT, LINEAR
-from trajcomp.programs.tables import _codes, rows_of
+from trajcomp.programs.tables import rows_of, value_codes
 from trajcomp.programs.program import place_text
 from trajcomp.formats.speeds import arc_length
 
@@ -264,7 +264,7 @@ def moves_from_program(program, robot, joints, *, tools=None, frames=None):
         via_q[circular] = known[via[circular]]
     zone = table.zone[rows]
     used = program.usage_table()
-    tool, names = _codes(used.tool[np.searchsorted(used.index, target)])
+    tool, names = value_codes(used.tool[np.searchsorted(used.index, target)])
     frame_table = FrameTable(program, robot, tools, frames)
     labels = program.labels(target)
     speeds = _speed_limits(table, rows, robot, program, labels)

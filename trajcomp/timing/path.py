@@ -489,7 +489,7 @@ def tcp_speeds(robot, moves, owner, q, qd):
     of its motion ``owner`` (n,); mm per unit of qd's time (rad/s: mm/s).
 
     The velocity of the TCP point summed over the DH axes, z_i x (p - o_i)
-    times the axis rate, from the DH frames (`trajcomp.kinematics.frame_columns`)
+    times the axis rate, from the DH frames (`trajcomp.arm.kinematics.frame_columns`)
     without forming the Jacobians.
     """
     if not len(owner):

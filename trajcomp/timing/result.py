@@ -1,11 +1,11 @@
 """What re-timing produced: time stamps, segments with their speed settings, and the dense check."""
 
 import dataclasses
-from collections.abc import Mapping, Sequence
+from collections.abc import Mapping
 
 import numpy as np
 
-from trajcomp.formats.text import Texts
+from trajcomp.formats.text_sequence import Texts
 from trajcomp.timing.check import LIMIT_TOLERANCE, RATE, evaluate, sample_times
 
 @dataclasses.dataclass(frozen=True)

@@ -139,7 +139,7 @@ def retime_on_track(moves, robot, values, field, *, method="auto", tolerance=TOL
     field : str
         The program field that holds it (for messages).
     method, tolerance
-        As `trajcomp.timing.retime.retime`.
+        As `trajcomp.timing.retiming.retime`.
 
     Returns
     -------
@@ -180,7 +180,7 @@ def retime_on_track(moves, robot, values, field, *, method="auto", tolerance=TOL
         tcp_speed=np.minimum(moves.tcp_speed / ratio, bound),
         velocity=np.minimum(moves.velocity, track.velocity * share),
         acceleration=np.minimum(moves.acceleration, track.acceleration * share))
-    from trajcomp.timing.retime import retime  # here: retime's TOPP-RA imports `with_track` from this module
+    from trajcomp.timing.retiming import retime  # here: retime's TOPP-RA imports `with_track` from this module
 
     slow = np.ones(len(moves))
     for _ in range(ROUNDS):

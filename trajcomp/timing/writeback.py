@@ -49,7 +49,7 @@ from trajcomp.formats.speeds import orientation_time
 from trajcomp.programs.items import JOINT
 from trajcomp.timing.moves import moves_from_program
 from trajcomp.timing.path import TOLERANCE
-from trajcomp.timing.retime import retime
+from trajcomp.timing.retiming import retime
 from trajcomp.timing.track import retime_on_track, track_values
 
 # a cruise speed is kept this much below its bound: the fitted path's second derivative differs from the exact

@@ -3,7 +3,7 @@
 import numpy as np
 
 from trajcomp.formats.csv.writer import time_texts, with_times
-from trajcomp.formats.text import Texts
+from trajcomp.formats.text_sequence import Texts
 
 
 def write_speeds(program, result, robot, plan):

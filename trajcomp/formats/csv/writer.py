@@ -18,16 +18,10 @@ from trajcomp.formats.csv.cells import (
     _value,
 )
 from trajcomp.formats.fixed_text import joined_rows
-from trajcomp.formats.text import (
-    BARE_ZERO,
-    active_axes,
-    column_decimals,
-    encode_text,
-    floor_places,
-    format_number,
-    turned_abc,
-    written_speed,
-)
+from trajcomp.formats.file_writing import active_axes, written_speed
+from trajcomp.formats.number_writing import BARE_ZERO, column_decimals, floor_places, format_number
+from trajcomp.formats.pose_encoding import turned_abc
+from trajcomp.formats.text_edits import encode_text
 from trajcomp.support.parallel import map_blocks
 from trajcomp.programs.items import JOINT, LINEAR, Source
 from trajcomp.arm.transforms import matrix_to_pose

@@ -43,8 +43,8 @@ import numpy as np
 
 from trajcomp.errors import ReadError
 from trajcomp.formats.fanuc.reader import _CONFIG_VALUE, JOINTS, XYZWPR
-from trajcomp.formats.text import (ANGLE_LIMIT, JOINT_LIMIT, LENGTH_LIMIT, NUMBER, Lines, fail, finite, mask,
-                                   read_source)
+from trajcomp.formats.text import ANGLE_LIMIT, JOINT_LIMIT, LENGTH_LIMIT, Lines, fail, finite, mask, read_source
+from trajcomp.formats.number_fields import NUMBER
 from trajcomp.programs.items import Span, Target
 from trajcomp.arm.transforms import pose_to_matrix
 

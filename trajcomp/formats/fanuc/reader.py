@@ -9,12 +9,11 @@ from pathlib import Path
 import numpy as np
 
 from trajcomp.errors import ReadError
-from trajcomp.formats.number_fields import character_table, offset_type, read_numbers, text_codes
+from trajcomp.formats.number_fields import NUMBER, character_table, offset_type, read_numbers, text_codes
 from trajcomp.formats.text import (
     ANGLE_LIMIT,
     JOINT_LIMIT,
     LENGTH_LIMIT,
-    NUMBER,
     Lines,
     fail,
     finite,

@@ -4,7 +4,8 @@ import math
 
 import numpy as np
 
-from trajcomp.formats.text import ceil_places, edit_sources, format_number
+from trajcomp.formats.number_writing import ceil_places, format_number
+from trajcomp.formats.source_shifts import edit_sources
 from trajcomp.programs.items import SpanColumns
 
 MSEC_LIMIT = 32000  # FANUC msec speeds: 1 .. 32000

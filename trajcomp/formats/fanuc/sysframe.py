@@ -32,7 +32,8 @@ from pathlib import Path
 
 import numpy as np
 
-from trajcomp.formats.text import ANGLE_LIMIT, LENGTH_LIMIT, NUMBER, Lines, finite, read_source
+from trajcomp.formats.text import ANGLE_LIMIT, LENGTH_LIMIT, Lines, finite, read_source
+from trajcomp.formats.number_fields import NUMBER
 from trajcomp.arm.transforms import pose_to_matrix
 
 FILE_NAME = "sysframe.va"

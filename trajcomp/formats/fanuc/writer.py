@@ -11,17 +11,10 @@ from trajcomp.errors import WriteError
 
 from trajcomp.formats.fanuc.reader import ABC_ORDER, JOINTS, MIN_PLACES, _config
 from trajcomp.formats.fanuc.speeds import time_field
-from trajcomp.formats.text import (
-    active_axes,
-    encode_targets,
-    encode_xyzabc,
-    format_number,
-    numbered,
-    turned_abc,
-    where,
-    write_single_file,
-    written_speed,
-)
+from trajcomp.formats.file_writing import active_axes, numbered, write_single_file, written_speed
+from trajcomp.formats.number_writing import format_number
+from trajcomp.formats.pose_encoding import encode_targets, encode_xyzabc, turned_abc
+from trajcomp.formats.text_edits import where
 from trajcomp.programs.items import CIRCULAR, JOINT, LINEAR
 from trajcomp.arm.transforms import matrix_to_pose
 
@@ -43,7 +36,7 @@ def _cartesian(targets, olds):
 
 
 def _encode_columns(table, rows, old):
-    """The numbers of a `TargetTable`'s rows (K,) in FANUC LS, as columns (`trajcomp.formats.text.target_edits`):
+    """The numbers of a `TargetTable`'s rows (K,) in FANUC LS, as columns (`trajcomp.formats.text_edits.target_edits`):
     what `_encode` gives each, a number that is not finite as ``inf`` (refused)."""
     joint = table.is_joint[rows]
     pose = table.pose[rows]

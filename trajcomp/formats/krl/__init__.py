@@ -34,7 +34,7 @@ the home positions ``XHOME``.. of $config.dat and ``$AXIS_ACT`` (axis positions:
 assigns (GLOBAL ones). A point another data list beside the program
 declares GLOBAL, or $config.dat (beside it or in a backup's R1/System),
 is read from that file (a companion `Source`): corrected there, which is
-written back beside the output (`trajcomp.formats.text.companion_outputs`)
+written back beside the output (`trajcomp.formats.file_writing.companion_outputs`)
 when it changed. A motion to a point no data list defines (no .dat, a
 cut .dat) is a ReadError naming the points; so is a declaration cut off mid-line. Points the program passes to
 routines (``MYPROC(XP1)``) are `Statement.refs`.

@@ -12,13 +12,12 @@ from trajcomp.errors import ReadError
 from trajcomp.formats.krl import config_dat
 from trajcomp.formats.number_fields import BLANK as _BLANK, DIGIT as _DIGIT, WORD_CHARACTER as _WORD_CHARACTER
 from trajcomp.formats.number_fields import character_table as _character_table, line_bounds as _line_bounds
-from trajcomp.formats.number_fields import offset_type, read_numbers, text_codes
+from trajcomp.formats.number_fields import NUMBER, offset_type, read_numbers, text_codes
 from trajcomp.formats.number_fields import spells as _spells, spelt as _spelt, starts_with as _starts_with
 from trajcomp.formats.text import (
     ANGLE_LIMIT,
     JOINT_LIMIT,
     LENGTH_LIMIT,
-    NUMBER,
     DeclaredElsewhere,
     Lines,
     check_closed,

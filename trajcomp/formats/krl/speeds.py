@@ -6,7 +6,9 @@ import re
 
 import numpy as np
 
-from trajcomp.formats.text import NUMBER, edit_sources, floor_places, format_number
+from trajcomp.formats.number_fields import NUMBER
+from trajcomp.formats.number_writing import floor_places, format_number
+from trajcomp.formats.source_shifts import edit_sources
 from trajcomp.programs.items import JOINT, Span
 
 _INDENT = re.compile(r"[ \t]*")

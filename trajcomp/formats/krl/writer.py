@@ -8,19 +8,11 @@ import numpy as np
 
 from trajcomp.errors import WriteError
 from trajcomp.formats.krl.reader import _DEF, _DEFDAT, _NAME, _PROGRAM_NAME, AXES, MIN_PLACES, POSE, read
-from trajcomp.formats.text import (
-    active_axes,
-    companion_outputs,
-    encode_targets,
-    encode_xyzabc,
-    floor_places,
-    format_number,
-    mask,
-    numbered,
-    patched,
-    turned_abc,
-    written_speed,
-)
+from trajcomp.formats.text import mask
+from trajcomp.formats.file_writing import active_axes, companion_outputs, numbered, written_speed
+from trajcomp.formats.number_writing import floor_places, format_number
+from trajcomp.formats.pose_encoding import encode_targets, encode_xyzabc, turned_abc
+from trajcomp.formats.text_edits import patched
 from trajcomp.programs.items import CIRCULAR, JOINT, LINEAR
 from trajcomp.arm.transforms import matrix_to_pose
 
@@ -48,7 +40,7 @@ def _cartesian(targets, olds):
 
 
 def _encode_columns(table, rows, old):
-    """The numbers of a `TargetTable`'s rows (K,) in KRL, as columns (`trajcomp.formats.text.target_edits`)."""
+    """The numbers of a `TargetTable`'s rows (K,) in KRL, as columns (`trajcomp.formats.text_edits.target_edits`)."""
     joint = table.is_joint[rows]
     pose = table.pose[rows]
     out = dict(zip(AXES, np.where(joint[:, None], np.degrees(table.joints[rows]), np.nan).T))

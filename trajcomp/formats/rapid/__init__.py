@@ -28,7 +28,7 @@ tools and work objects another module of the task assigns. A point
 another module of the task declares (not LOCAL; a module of the same
 folder, or of a backup's TASKn/PROGMOD and SYSMOD) is read from that module
 (a companion `Source`): corrected there, which is written back beside the
-output (`trajcomp.formats.text.companion_outputs`) when it changed. A
+output (`trajcomp.formats.file_writing.companion_outputs`) when it changed. A
 motion to a point no module declares is a ReadError naming the points; so are
 numbers out of range and quaternions that are not rotations. Points passed
 to routines (``MyProc p10;``) are `Statement.refs`.

@@ -10,12 +10,11 @@ import numpy as np
 from trajcomp.errors import ReadError
 from trajcomp.formats.configuration import distinct_tuples
 from trajcomp.formats.number_fields import (
-    BLANK, WORD_CHARACTER, line_bounds, offset_type, read_numbers, spelt, starts_with, text_codes,
+    NUMBER, BLANK, WORD_CHARACTER, line_bounds, offset_type, read_numbers, spelt, starts_with, text_codes,
 )
 from trajcomp.formats.text import (
     JOINT_LIMIT,
     LENGTH_LIMIT,
-    NUMBER,
     DeclaredElsewhere,
     Lines,
     check_closed,

@@ -1,6 +1,7 @@
 """Re-timing written into a RAPID module: ``\\T`` and ``\\V`` after a motion's speed data (`trajcomp.timing.writeback`)."""
 
-from trajcomp.formats.text import ceil_places, edit_sources, floor_places, format_number
+from trajcomp.formats.number_writing import ceil_places, floor_places, format_number
+from trajcomp.formats.source_shifts import edit_sources
 
 
 def write_speeds(program, result, robot, plan):

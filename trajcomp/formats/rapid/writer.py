@@ -6,17 +6,10 @@ import numpy as np
 
 from trajcomp.errors import WriteError
 from trajcomp.formats.rapid.reader import CONF, JOINTS, POSITION, PREDEFINED_V_ORI, QUAT, read
-from trajcomp.formats.text import (
-    active_axes,
-    ceil_places,
-    encode_targets,
-    floor_places,
-    format_number,
-    same_rotation,
-    where,
-    write_single_file,
-    written_speed,
-)
+from trajcomp.formats.file_writing import active_axes, write_single_file, written_speed
+from trajcomp.formats.number_writing import ceil_places, floor_places, format_number
+from trajcomp.formats.pose_encoding import encode_targets, same_rotation
+from trajcomp.formats.text_edits import where
 from trajcomp.programs.items import CIRCULAR, JOINT, LINEAR
 from trajcomp.arm.transforms import matrix_to_quat, quat_to_matrix
 
@@ -52,7 +45,7 @@ def _cartesian(targets, olds):
 
 
 def _encode_columns(table, rows, old):
-    """The numbers of a `TargetTable`'s rows (K,) in RAPID, as columns (`trajcomp.formats.text.target_edits`):
+    """The numbers of a `TargetTable`'s rows (K,) in RAPID, as columns (`trajcomp.formats.text_edits.target_edits`):
     `_encode` without an object per target."""
     joint = table.is_joint[rows]
     out = dict(zip(JOINTS, np.where(joint[:, None], np.degrees(table.joints[rows]), np.nan).T))

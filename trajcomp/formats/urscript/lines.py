@@ -26,8 +26,8 @@ import re
 
 import numpy as np
 
-from trajcomp.formats.number_fields import BLANK, WORD_CHARACTER, character_table, read_numbers, text_codes
-from trajcomp.formats.text import JOINT_LIMIT, LENGTH_LIMIT, NUMBER
+from trajcomp.formats.number_fields import NUMBER, BLANK, WORD_CHARACTER, character_table, read_numbers, text_codes
+from trajcomp.formats.text import JOINT_LIMIT, LENGTH_LIMIT
 from trajcomp.programs.tables import TextSlices
 
 FUNCTIONS = ("movel", "movej", "movep")

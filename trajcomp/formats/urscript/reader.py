@@ -9,11 +9,10 @@ from pathlib import Path
 import numpy as np
 
 from trajcomp.errors import ReadError
-from trajcomp.formats.number_fields import offset_type
+from trajcomp.formats.number_fields import NUMBER, offset_type
 from trajcomp.formats.text import (
     JOINT_LIMIT,
     LENGTH_LIMIT,
-    NUMBER,
     Lines,
     check_closed,
     fail,

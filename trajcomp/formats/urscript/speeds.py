@@ -2,7 +2,8 @@
 
 import re
 
-from trajcomp.formats.text import ceil_places, edit_sources, floor_places, format_number
+from trajcomp.formats.number_writing import ceil_places, floor_places, format_number
+from trajcomp.formats.source_shifts import edit_sources
 
 _FUNCTION = re.compile(r"(\w+)\s*\(")  # the function a motion calls (also after a sign: ``+movel(...)``)
 

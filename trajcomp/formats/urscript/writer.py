@@ -5,16 +5,9 @@ import re
 import numpy as np
 
 from trajcomp.errors import WriteError
-from trajcomp.formats.text import (
-    active_axes,
-    ceil_places,
-    encode_targets,
-    floor_places,
-    format_number,
-    same_rotation,
-    write_single_file,
-    written_speed,
-)
+from trajcomp.formats.file_writing import active_axes, write_single_file, written_speed
+from trajcomp.formats.number_writing import ceil_places, floor_places, format_number
+from trajcomp.formats.pose_encoding import encode_targets, same_rotation
 from trajcomp.formats.urscript.reader import JOINTS, NEAR, POSE, read
 from trajcomp.programs.items import CIRCULAR, JOINT, LINEAR
 from trajcomp.arm.transforms import matrix_to_rotvec, rotvec_to_matrix
@@ -55,7 +48,7 @@ def _cartesian(targets, olds):
 
 
 def _encode_columns(table, rows, old):
-    """The numbers of a `TargetTable`'s rows (K,) in URScript, as columns (`trajcomp.formats.text.target_edits`):
+    """The numbers of a `TargetTable`'s rows (K,) in URScript, as columns (`trajcomp.formats.text_edits.target_edits`):
     what `_encode` gives each, NaN where it gives none."""
     joint = table.is_joint[rows]
     pose, joints = table.pose[rows], table.joints[rows]

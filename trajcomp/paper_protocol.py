@@ -16,16 +16,16 @@ import numpy as np
 from trajcomp import formats
 from trajcomp.support.atomic import write_atomic
 from trajcomp.calibration.calibrate import calibrate
-from trajcomp.compensation.targets import compensate, program_corrector
+from trajcomp.compensation.target_correction import compensate, program_corrector
 from trajcomp.errors import TrajcompError
 from trajcomp.arm.ik import batch_seed, ik
 from trajcomp.arm.kinematics import shoulder_and_reach
 from trajcomp.calibration.measurements import Measurements, read_measurements
-from trajcomp.compensation.program import compensate_program
+from trajcomp.compensation.program_rewrite import compensate_program
 from trajcomp.calibration.measurement_plan import default_orientation, plan_grid
 from trajcomp.arm.robot import load_robot
 from trajcomp.calibration.profiles import PAPER_ROBOT
-from trajcomp.calibration.simulate import VirtualRobot
+from trajcomp.calibration.virtual_arm import VirtualRobot
 from trajcomp.model.stats import ErrorStats
 from trajcomp.arm.transforms import abc_to_matrix
 

@@ -38,7 +38,7 @@ from trajcomp.programs.items import JOINT
 from trajcomp.timing.check import (LIMIT_TOLERANCE, Peaks, dense_check, dense_checks, rest_to_rest_checks,
                                    segment_peaks)
 from trajcomp.timing.moves import corner_lengths
-from trajcomp.timing.options import METHODS, TOLERANCE
+from trajcomp.timing.options import RETIME_METHODS, TOLERANCE
 from trajcomp.timing.path import stop_paths
 from trajcomp.timing.result import Segment, TimingResult
 from trajcomp.timing.samples import AMBIGUOUS_DEG, swept_changes
@@ -76,8 +76,8 @@ def retime(moves, robot, *, method="auto", tolerance=TOLERANCE):
     TimingError
         A motion the limits cannot be met on, named by waypoint, line and joint.
     """
-    if method not in METHODS:
-        raise ValueError(f"method must be one of {METHODS}, got {method!r}")
+    if method not in RETIME_METHODS:
+        raise ValueError(f"method must be one of {RETIME_METHODS}, got {method!r}")
     timeline = _Timeline(moves, robot)
     reached = moves  # the joints each waypoint is reached with: moves.q until one differs, then a copy
     for batch in _batches(plan_segments(moves, method)):

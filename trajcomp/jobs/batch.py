@@ -1,10 +1,13 @@
 """Batch runs: many program files through one job, in parallel, a failing file never stopping the others.
 
 A job is a picklable callable ``job(input: Path, output: Path) -> FileResult``
-(e.g. `trajcomp.compensation.pipeline.CompensationJob`). `run_batch` runs it over
+(e.g. `trajcomp.jobs.pipeline.CompensationJob`). `run_batch` runs it over
 the files inline, in a local process pool (``jobs`` > 1) or on a Dask
 distributed cluster (``scheduler``: an address, or ``"local"`` for a local
 cluster), and turns every error of one file into that file's result.
+`run_programs` is a whole batch as ``trajcomp compensate`` and the API run
+it: the files named by paths, folders and patterns, their outputs, the
+files of one task together, the summary.
 """
 
 import dataclasses
@@ -15,9 +18,10 @@ from pathlib import Path
 
 from trajcomp import __version__, formats
 from trajcomp.support import crash
-from trajcomp.support.atomic import write_atomic
+from trajcomp.support.atomic import refuse_inputs, write_atomic
 from trajcomp.errors import TrajcompError
 from trajcomp.support.parallel import WorkerLost, Workers, can_fork
+from trajcomp.support.progress import progress
 from trajcomp.support.signals import stopped
 
 log = logging.getLogger(__name__)
@@ -284,3 +288,90 @@ def write_summary(path, results, **context):
         ],
     }
     write_atomic(path, json.dumps(document, indent=2) + "\n")
+
+
+def run_programs(job, programs, out_dir, *, to_format=None, in_place=False, models=(), report=None, summary=None,
+                 jobs=1, scheduler=None, show_progress=False, **context):
+    """Run ``job`` over the program files named by ``programs``, each into ``out_dir``, and write the summary.
+
+    The batch of ``trajcomp compensate`` and of `trajcomp.api.filter_programs`.
+    The inputs are expanded (`expand_inputs`) and mirrored under ``out_dir``
+    (`output_paths`); an output that would replace an input (unless
+    ``in_place``) or a model file is refused, and so is a summary that would
+    replace any of them; the files of one task that share points run as one
+    program (`trajcomp.formats.task.groups`; not when converting); folders
+    made for files that were not written are removed.
+
+    Parameters
+    ----------
+    job : callable
+        ``job(input, output) -> FileResult``, picklable for ``jobs`` > 1.
+    programs : sequence of str or Path
+        Files, folders or glob patterns.
+    out_dir : str or Path
+        The folder written into.
+    to_format : str, optional
+        The language written (its first extension replaces the inputs').
+    in_place : bool
+        Allow an output to replace its input.
+    models : sequence of Path
+        The model's files: never replaced.
+    report : str or Path, optional
+        The folder of the per-program reports (mirrored as the outputs are).
+    summary : str or Path, optional
+        The summary JSON; default ``out_dir / "summary.json"``.
+    jobs, scheduler
+        As `run_batch`.
+    show_progress : bool
+        A bar over the files on a terminal.
+    **context
+        Recorded in the summary (`write_summary`).
+
+    Returns
+    -------
+    results : list of FileResult
+        In input order, a task's files as one.
+    summary : Path
+        The summary written.
+    """
+    from trajcomp.formats.task import groups as task_groups
+
+    found = expand_inputs(programs)
+    suffix = formats.find_format(format=to_format).extensions[0] if to_format else None
+    outputs = output_paths(found, out_dir, suffix)
+    inputs = [path for path, _ in found]
+    summary = Path(summary) if summary else Path(out_dir) / "summary.json"
+    refuse_inputs(outputs, [*([] if in_place else inputs), *models],
+                  "give -o another folder than the programs' (or --in-place to replace them)")
+    refuse_inputs([summary], [*inputs, *models, *outputs], "give --summary another name")
+    reports = [Path(report) / path.relative_to(out_dir) for path in outputs] if report else []
+    made = make_folders(dict.fromkeys(path.parent for path in [*outputs, *reports]))  # a backup's layout is kept
+    try:
+        # the files of one task that share points run as one program (a shared point corrected once)
+        tasks = task_groups(inputs) if not to_format else [[k] for k in range(len(inputs))]
+        inputs = [inputs[g[0]] if len(g) == 1 else tuple(inputs[k] for k in g) for g in tasks]
+        outputs = [outputs[g[0]] if len(g) == 1 else tuple(outputs[k] for k in g) for g in tasks]
+        with progress(len(inputs), desc="compensate", unit="file", enabled=show_progress) as bar:
+            results = run_batch(job, inputs, outputs, jobs=jobs, scheduler=scheduler,
+                                done=lambda result: bar.update(1))
+        write_summary(summary, results, **context, jobs=jobs, scheduler=scheduler)
+    finally:
+        remove_empty(made)  # the folders of refused files (or of all, when stopped before the summary)
+    return results, summary
+
+
+def make_folders(folders):
+    """Make the folders (Paths) that do not exist, parents first; the ones made, deepest first."""
+    made = []
+    for folder in folders:
+        missing = [p for p in (folder, *folder.parents) if not p.exists()]
+        folder.mkdir(parents=True, exist_ok=True)
+        made += missing
+    return sorted(set(made), key=lambda p: len(p.parts), reverse=True)
+
+
+def remove_empty(folders):
+    """Remove those of the folders (deepest first) left empty: a batch leaves no folder for a file it refused."""
+    for folder in folders:
+        if folder.is_dir() and not any(folder.iterdir()):
+            folder.rmdir()

@@ -77,7 +77,7 @@ class ProgramReport:
         The landing estimate (None: no model): ``estimate_mm`` (what the
         verdict judges), its parts ``held_out_mm`` and ``unseen_mm``,
         ``orientation_beyond_deg``, ``unmeasured_posture`` and ``other_tool``
-        (`trajcomp.compensation.targets.CompensationResult`).
+        (`trajcomp.compensation.target_correction.CompensationResult`).
     """
 
     labels: tuple
@@ -134,7 +134,7 @@ def compensate_program(program, correct, robot, *, tools=None, frames=None, join
         names (N,)) -> CompensationResult``: the nominal-model TCP pose that
         makes the real arm land on each target and its joints (rad), solved
         next to the seed joints. Called once, for all targets (see
-        `trajcomp.compensation.targets.program_corrector`).
+        `trajcomp.compensation.target_correction.program_corrector`).
     robot : Robot
         The nominal robot (posture, configuration data, joint-target poses,
         base placement and default tool).
@@ -150,7 +150,7 @@ def compensate_program(program, correct, robot, *, tools=None, frames=None, join
         Largest plausible position correction, mm.
     workers : int
         Processes that share the posture planning (`planned_joints`); give
-        ``correct`` as many (`trajcomp.compensation.targets.program_corrector`).
+        ``correct`` as many (`trajcomp.compensation.target_correction.program_corrector`).
 
     Returns
     -------

@@ -312,7 +312,7 @@ def _solve(real, nominal, targets, seed, seed_pose):
 
 
 def program_corrector(model, *, mode=None, outside="model", label="program", workers=1):
-    """The ``correct`` callable of `trajcomp.compensation.program.compensate_program` for a model.
+    """The ``correct`` callable of `trajcomp.compensation.program_rewrite.compensate_program` for a model.
 
     ``correct(targets (N, 4, 4), tools (N, 4, 4), seeds (N, 6), names) ->
     CompensationResult``. Targets are grouped by tool (a program uses few)

@@ -4,7 +4,7 @@ Every face of trajcomp runs these jobs: ``trajcomp compensate`` (one file,
 or a batch on local processes or a Dask cluster), ``trajcomp retime``, the
 Python API (`trajcomp.Compensator.filter_program`) and the plugins. The
 same program and options give the same bytes and the same verdict through
-each of them (tests/compensation/test_pipeline.py).
+each of them (tests/jobs/test_pipeline.py).
 
 `CompensationJob` compensates one program file with a model;
 `RetimeJob` times one under an arm's limits without a model. Both are
@@ -23,11 +23,11 @@ import numpy as np
 
 from trajcomp import formats
 from trajcomp.arm.transforms import matrix_to_pose
-from trajcomp.compensation import batch
+from trajcomp.jobs import batch
 from trajcomp.compensation.options import MAX_CORRECTION, MAX_JOINT_CHANGE, RETIME_CHOICES
 from trajcomp.compensation.posture import planned_joints, planned_targets
-from trajcomp.compensation.program import as_written_report, compensate_program, convert_program
-from trajcomp.compensation.targets import program_corrector
+from trajcomp.compensation.program_rewrite import as_written_report, compensate_program, convert_program
+from trajcomp.compensation.target_correction import program_corrector
 from trajcomp.errors import TimingError, TrajcompError
 from trajcomp.model.compensation_model import CompensationModel
 from trajcomp.model.model_file import load_model, model_files
@@ -324,7 +324,7 @@ def retime_compensated(original, corrected, robot, method, tolerance, tools=None
     robot : Robot
         The nominal robot.
     method : str
-        One of `trajcomp.timing.METHODS`.
+        One of `trajcomp.timing.RETIME_METHODS`.
     tolerance : float
         Path tolerance, mm.
     tools, frames : Mapping[str, ndarray (4, 4)], optional
@@ -382,13 +382,25 @@ def retime_compensated(original, corrected, robot, method, tolerance, tools=None
 
 
 def loaded_model(model):
-    """The `CompensationModel` of a job: ``model`` itself, or its file loaded once per process."""
-    return model if isinstance(model, CompensationModel) else _model_file(str(model))
+    """The `CompensationModel` of a job or an API call: ``model`` itself, or its file loaded once per process and
+    file version (a batch worker serves many files; a file recalibrated under the same name loads again)."""
+    if isinstance(model, CompensationModel):
+        return model
+    path = Path(model).resolve()
+    return _model_file(str(path), _version(path))
 
 
-@functools.lru_cache(maxsize=4)
-def _model_file(path):
-    """The model file, loaded once per process (a batch worker serves many files)."""
+def _version(path):
+    """The modification time of file ``path``, ns; None for a file that cannot be read (`load_model` then says why)."""
+    try:
+        return Path(path).stat().st_mtime_ns
+    except OSError:
+        return None
+
+
+@functools.lru_cache(maxsize=8)
+def _model_file(path, version):
+    """The model in ``path``; ``version`` (its modification time) makes an edited file load again."""
     return load_model(path)
 
 
@@ -397,12 +409,12 @@ def _model_info(model, mode, source):
     ``source`` (its file, or None) for a loaded model."""
     if isinstance(model, CompensationModel):
         return model_entry(source, model, mode)
-    return _file_model_info(source, mode)
+    return _file_model_info(source, _version(source), mode)
 
 
 @functools.lru_cache(maxsize=4)
-def _file_model_info(path, mode):
-    return model_entry(path, _model_file(path), mode)
+def _file_model_info(path, version, mode):
+    return model_entry(path, loaded_model(path), mode)
 
 
 def _report_target(report, folder, output, root=None):

@@ -1,5 +1,0 @@
-"""Former home of `trajcomp.arm.kinematics`, kept for plugins until trajcomp 0.2 (`trajcomp.support.moved`)."""
-
-from trajcomp.support.moved import forwarding
-
-__getattr__ = forwarding(__name__, "trajcomp.arm.kinematics")
