@@ -26,7 +26,7 @@ from trajcomp.arm.transforms import matrix_to_pose
 from trajcomp.compensation import batch
 from trajcomp.compensation.options import MAX_CORRECTION, MAX_JOINT_CHANGE, RETIME_CHOICES
 from trajcomp.compensation.posture import planned_joints, planned_targets
-from trajcomp.compensation.program import as_written_report, compensate_program, convert_program
+from trajcomp.compensation.program import as_written_report, compensate_program, convert_program, placed_on_track
 from trajcomp.compensation.targets import program_corrector
 from trajcomp.errors import TimingError, TrajcompError
 from trajcomp.model.compensation_model import CompensationModel
@@ -143,6 +143,7 @@ class CompensationJob:
             whose = "the arm of the model" + (f" {self.source}" if self.source else "")
             program = formats.read(path, workers=self.workers) if task is None else formats.read_task(task)
             formats.check_robot_language(path, formats.find_format(format=program.format), model.nominal, whose)
+            program = placed_on_track(program, model.nominal, self.tools, self.frames)  # also the timing's original
             out_format = formats.output_format(output, program, self.to_format)
             formats.check_robot_language(output, out_format, model.nominal, whose)
             sources = list(dict.fromkeys(formats.input_paths(path, program)))
