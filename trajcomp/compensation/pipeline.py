@@ -249,6 +249,7 @@ class RetimeJob:
         """Time ``path`` into ``output`` (same language), judge it and write its report: a `ProgramRun`."""
         program = formats.read(path)
         formats.check_robot_language(path, formats.find_format(format=program.format), self.robot, "the arm --robot names")
+        program = placed_on_track(program, self.robot, self.tools, self.frames)
         out_format = formats.find_format(output).name
         if out_format != program.format:
             raise TrajcompError(f"{output}: retime writes the language it reads ({program.format}); "
