@@ -191,3 +191,46 @@ def test_a_program_on_a_track_is_compensated_retimed_and_judged_landing_within_0
     assert run.timing is not None and run.timing.track is not None and run.timing.within_limits
     assert run.compliance.doc["timing"]["track"]["velocity"]["peak"] <= 2000 * 1.01
     assert run.compliance.passed, [c for c in run.compliance.doc["verdict"]["criteria"] if c["status"] == "fail"]
+
+
+V_LEAX = 300.0  # mm/s: the program's speed of the track, below its limit (2000 mm/s)
+
+
+def test_rapid_v_leax_bounds_the_track_under_the_field_the_timing_writes(tmp_path):
+    """RAPID speeddata's v_leax bounds the track beside v_tcp; a written ``\\T`` replaces the speed data (v_leax
+    too), a written ``\\V`` keeps it. A module asks 2000 mm/s of the TCP with v_leax 300 mm/s: a CONST speeddata
+    on a MoveJ (timed: a ``\\T`` written), a literal with ``\\V`` on a MoveL (a process speed: a ``\\V``). Read
+    back as the controller reads it: a ``\\T`` moves the track at travel / T, a ``\\V`` at most at the speed
+    data's v_leax; the timing's 1 kHz samples keep v_leax too."""
+    robot = on_track("abb_irb4600")  # the track's own limit, 2000 mm/s, does not bind
+    world, q = world_targets(robot, "abb_irb4600")
+    path = _rapid(tmp_path, world, q, robot)
+    text = path.read_text().replace("  PROC main()", f"  CONST speeddata vRail:=[2000,500,{V_LEAX:g},1000];\n"
+                                                     "  PROC main()")
+    text = text.replace("MoveL pRail2,v200,z10", "MoveJ pRail2,vRail,fine")
+    text = text.replace("MoveL pRail3,v200,fine", f"MoveL pRail3,[2000,500,{V_LEAX:g},1000]\\V:=1500,fine")
+    path.write_text(text)
+    program = formats.read(path)
+    assert program.motion_table().external_speed.tolist()[1:] == [V_LEAX, V_LEAX]
+    plan = planned_joints(program, robot)
+    result = retime_program(program, robot, planned(program, plan.index, plan.q))
+    edited, result = apply_timing(program, result, robot)
+    out = tmp_path / "out"
+    out.mkdir()
+    formats.write(out / path.name, edited)
+    written = re.findall(r"Move[JL] pRail[23],(\[[^\]]*\]|[^,\\]+)(?:\\V:=([\d.]+)|\\T:=([\d.]+))?,",
+                         (out / path.name).read_text())
+    _, carriage = LANGUAGES["abb_irb4600"][1](path)
+    travel = np.abs(np.diff(carriage))
+    world_length = np.linalg.norm(np.diff(world[:, :3, 3], axis=0), axis=1)
+    for (data, v, t), e, length in zip(written, travel, world_length):
+        v_leax = V_LEAX if data in ("vRail", f"[2000,500,{V_LEAX:g},1000]") else 5000.0  # the data as written
+        if t:  # \T: the speed data, v_leax with it, no longer applies
+            track_speed = e / float(t)
+        else:  # v_tcp or \V, and the speed data's v_leax
+            speed = float(v) if v else 2000.0
+            track_speed = min(speed * e / length, v_leax)
+        assert track_speed <= V_LEAX * 1.001, (data, v, t, track_speed)
+        assert track_speed >= 0.9 * V_LEAX, (data, v, t, track_speed)  # and not needlessly slower
+    assert [bool(t) for _, _, t in written] == [True, False]  # a \T on the MoveJ, a \V on the MoveL
+    assert result.track.peak_velocity <= V_LEAX * 1.01 and result.within_limits
