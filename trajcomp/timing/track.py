@@ -45,8 +45,9 @@ Not timed, left as written and listed: a circular motion that moves the
 track (the carriage TCP then runs on no circle), a motion that moves only
 the track (the arm rests in its carriage) or whose TCP rests in the world
 while the track moves (no TCP speed to keep). At a blended corner the
-track's velocity changes from one motion's to the next as the controller
-blends it, within the zone; that change is not measured here.
+controller blends the track as the position (each motion's share of the
+superposed blend), faster than the TCP's travel where the blend cuts the
+corner; that change is not measured here (docs/tracks.md gives the gap).
 Written speeds are world TCP speeds (`cruise_speeds` converts through
 ``TrackTiming.world_ratio`` and bounds them by ``speed_bound``).
 """
@@ -80,8 +81,9 @@ class TrackTiming:
     world_ratio : ndarray, shape (M,)
         World TCP length over carriage TCP length of the motion into each waypoint (1 where either is 0).
     speed_bound : ndarray, shape (M,)
-        World TCP speed, mm/s, at which the track reaches its velocity limit along the (linear) motion into each
-        waypoint; ``inf`` where the track does not move.
+        World TCP speed, mm/s, at which the track reaches its velocity limit (or the motion's programmed speed of
+        the external axes, where lower) along the (linear) motion into each waypoint; ``inf`` where the track does
+        not move.
     peak_velocity, peak_acceleration : float
         Largest sampled |track velocity| (mm/s) and |acceleration| (mm/s^2).
     limit_velocity, limit_acceleration : float
