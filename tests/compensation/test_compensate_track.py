@@ -262,8 +262,9 @@ def test_a_program_on_a_track_whose_robot_has_none_is_refused_for_that_reason(tm
 def test_a_krl_point_without_e1_on_the_first_motion_is_left_as_written_and_the_rest_compensated(tmp_path):
     """KRL: the first motion's point states no E1: the controller runs it from wherever the track stands, which
     the program does not say. That motion is left as written and listed with the reason; the others land within
-    0.02 mm of their world targets; run as ``compensate`` runs it, the verdict fails on it (exit 1)."""
-    from trajcomp.compensation.pipeline import CompensationJob
+    0.02 mm of their world targets; run as ``compensate`` runs it, the verdict fails on it (exit 1); ``retime``
+    runs it as written."""
+    from trajcomp.compensation.pipeline import CompensationJob, RetimeJob
 
     robot, virtual, correct = cell("kuka_kr6_r900")
     world, q = world_targets(robot, "kuka_kr6_r900")
@@ -291,6 +292,11 @@ def test_a_krl_point_without_e1_on_the_first_motion_is_left_as_written_and_the_r
     assert "1 of 3 motions were not compensated (the first, line 5: states no E1" in run.result.message
     [entry] = run.compliance.doc["not_compensated"]
     assert entry["line"] == 5 and "states no E1" in entry["reason"]
+    timed = tmp_path / "timed"
+    timed.mkdir()
+    run = RetimeJob(robot).run(path, timed / path.name)  # retime runs it as written, not refusing the program
+    assert run.result.status == "pass" and run.timing.track is not None
+    assert (timed / dat.name).read_text().splitlines()[1] == before and "PTP XP1" in (timed / path.name).read_text()
 
 
 def _krl_with_pos(tmp_path, robot, world, q, motions):

@@ -234,6 +234,9 @@ def test_rapid_v_leax_bounds_the_track_under_the_field_the_timing_writes(tmp_pat
         assert track_speed >= 0.9 * V_LEAX, (data, v, t, track_speed)  # and not needlessly slower
     assert [bool(t) for _, _, t in written] == [True, False]  # a \T on the MoveJ, a \V on the MoveL
     assert result.track.peak_velocity <= V_LEAX * 1.01 and result.within_limits
+    path.write_text(text.replace("  PROC main()\n", "  PROC main()\n    VelSet 50, 5000;\n"))
+    external = formats.read(path).motion_table().external_speed.tolist()  # VelSet's override lowers v_leax too
+    assert external == [2500.0, 0.5 * V_LEAX, 0.5 * V_LEAX]
 
 
 @pytest.mark.xfail(strict=True, reason="known gap (issue 35): the timing moves the track with the TCP's travel in a "
