@@ -56,6 +56,13 @@ def timed(tmp_path, name):
         assert old in text
         text = text.replace(old, new)
     path.write_text(text)
+    result, written = retimed(tmp_path, robot, path)
+    _, carriage = LANGUAGES[name][1](path)
+    return robot, world, carriage, result, written
+
+
+def retimed(tmp_path, robot, path):
+    """(timing, written text) of the program at ``path`` re-timed for ``robot``, written into ``tmp_path / out``."""
     program = formats.read(path)
     plan = planned_joints(program, robot)
     result = retime_program(program, robot, planned(program, plan.index, plan.q))
@@ -63,8 +70,7 @@ def timed(tmp_path, name):
     out = tmp_path / "out"
     out.mkdir()
     formats.write(out / path.name, edited)
-    _, carriage = LANGUAGES[name][1](path)
-    return robot, world, carriage, result, (out / path.name).read_text()
+    return result, (out / path.name).read_text()
 
 
 @pytest.mark.parametrize("name", sorted(ASKING))
@@ -210,16 +216,9 @@ def test_rapid_v_leax_bounds_the_track_under_the_field_the_timing_writes(tmp_pat
     text = text.replace("MoveL pRail2,v200,z10", "MoveJ pRail2,vRail,fine")
     text = text.replace("MoveL pRail3,v200,fine", f"MoveL pRail3,[2000,500,{V_LEAX:g},1000]\\V:=1500,fine")
     path.write_text(text)
-    program = formats.read(path)
-    assert program.motion_table().external_speed.tolist()[1:] == [V_LEAX, V_LEAX]
-    plan = planned_joints(program, robot)
-    result = retime_program(program, robot, planned(program, plan.index, plan.q))
-    edited, result = apply_timing(program, result, robot)
-    out = tmp_path / "out"
-    out.mkdir()
-    formats.write(out / path.name, edited)
-    written = re.findall(r"Move[JL] pRail[23],(\[[^\]]*\]|[^,\\]+)(?:\\V:=([\d.]+)|\\T:=([\d.]+))?,",
-                         (out / path.name).read_text())
+    assert formats.read(path).motion_table().external_speed.tolist()[1:] == [V_LEAX, V_LEAX]
+    result, text_written = retimed(tmp_path, robot, path)
+    written = re.findall(r"Move[JL] pRail[23],(\[[^\]]*\]|[^,\\]+)(?:\\V:=([\d.]+)|\\T:=([\d.]+))?,", text_written)
     _, carriage = LANGUAGES["abb_irb4600"][1](path)
     travel = np.abs(np.diff(carriage))
     world_length = np.linalg.norm(np.diff(world[:, :3, 3], axis=0), axis=1)
