@@ -1187,8 +1187,9 @@ def _flow_speeds(table, reached):
     """A RAPID module's speed columns under the VelSet that can reach each motion (`trajcomp.programs.flow`).
 
     VelSet override, max runs a motion's TCP, orientation and linear
-    external axes' speeds (v_tcp, v_ori, v_leax) at override % and its TCP speed at most max mm/s, and a ``\\T`` at
-    100 / override times as long, whatever the max: the controller does not
+    external axes' speeds (v_tcp, v_ori, v_leax) at override % and its
+    TCP speed at most max mm/s, and a ``\\T`` at 100 / override times as
+    long, whatever the max: the controller does not
     hold a motion with a stated time to VelSet's max (RAPID reference,
     VelSet's limitations), so a time is read and written as such (a time
     written for a motion without one is at least its length over the max,
