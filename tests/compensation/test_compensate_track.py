@@ -259,18 +259,44 @@ def test_a_program_on_a_track_whose_robot_has_none_is_refused_for_that_reason(tm
     assert "track" not in str(refused.value)
 
 
-def test_a_target_without_its_track_position_is_named(tmp_path):
-    """KRL: the first motion's point states no E1: the controller keeps the track where it stands, which the
-    program does not say."""
-    robot = on_track("kuka_kr6_r900")
+def test_a_krl_point_without_e1_on_the_first_motion_is_left_as_written_and_the_rest_compensated(tmp_path):
+    """KRL: the first motion's point states no E1: the controller runs it from wherever the track stands, which
+    the program does not say. That motion is left as written and listed with the reason; the others land within
+    0.02 mm of their world targets; run as ``compensate`` runs it, the verdict fails on it (exit 1); ``retime``
+    runs it as written."""
+    from trajcomp.jobs.pipeline import CompensationJob, RetimeJob
+
+    robot, virtual, correct = cell("kuka_kr6_r900")
     world, q = world_targets(robot, "kuka_kr6_r900")
     path = _krl(tmp_path, world, q, robot)
     dat = path.with_suffix(".dat")
     dat.write_text(re.sub(r",E1 [-\d.]+,E2 0.0,E3 0.0,E4 0.0,E5 0.0,E6 0.0", "", dat.read_text(), count=1))
-    with pytest.raises(TrajcompError, match=r"XP1 \(rail\.dat:2\) states no E1: its track position, hence the "
-                                            r"arm's base, is unknown \(1 target\(s\) so\); the controller keeps the "
-                                            r"track where the motion before leaves it, which starts from a position"):
-        compensate_program(formats.read(path), cell("kuka_kr6_r900")[2], robot)
+    before = dat.read_text().splitlines()[1]
+    edited, report = compensate_program(formats.read(path), correct, robot)
+    assert len(report.labels) == 2 and report.motions_left == 1
+    [(line, text, why)] = report.not_compensated
+    assert (line, text) == (5, "PTP XP1")
+    assert why.startswith("states no E1, so its track position, hence the arm's base, is unknown: the controller "
+                          "keeps the track where the motion before leaves it, which starts from a position"), why
+    out = tmp_path / "out"
+    out.mkdir()
+    formats.write(out / path.name, edited)
+    assert (out / dat.name).read_text().splitlines()[1] == before  # XP1 as written
+    commands, carriage = _read_krl(out / path.name)
+    errors = np.linalg.norm(landing(robot, virtual, commands, carriage) - world[1:, :3, 3], axis=1)
+    assert errors.max() < 0.02, errors
+    job = tmp_path / "job"
+    job.mkdir()
+    run = CompensationJob(_CELL_MODEL["kuka_kr6_r900"]).run(path, job / path.name)
+    assert run.result.status == "fail" and "uncompensated" in run.result.message
+    assert "1 of 3 motions were not compensated (the first, line 5: states no E1" in run.result.message
+    [entry] = run.compliance.doc["not_compensated"]
+    assert entry["line"] == 5 and "states no E1" in entry["reason"]
+    timed = tmp_path / "timed"
+    timed.mkdir()
+    run = RetimeJob(robot).run(path, timed / path.name)  # retime runs it as written, not refusing the program
+    assert run.result.status == "pass" and run.timing.track is not None
+    assert (timed / dat.name).read_text().splitlines()[1] == before and "PTP XP1" in (timed / path.name).read_text()
 
 
 def _krl_with_pos(tmp_path, robot, world, q, motions):
@@ -304,9 +330,10 @@ def test_a_krl_point_without_e1_keeps_the_track_where_the_motion_before_left_it(
     landed = landing(robot, virtual, command[None], [CARRIAGE[2]])
     assert np.linalg.norm(landed[0] - world[2, :3, 3]) < 0.02
     path = _krl_with_pos(tmp_path, robot, world, q, "LIN XP4\nLIN XP2\nLIN XP4\n")
-    with pytest.raises(TrajcompError, match=r"XP4 \(rail\.dat:5\) states no E1: .*the controller keeps the track "
-                                            r"where the motion before leaves it: 1850 and 4200 mm on its uses"):
-        compensate_program(formats.read(path), correct, robot)
+    _, report = compensate_program(formats.read(path), correct, robot)
+    assert len(report.labels) == 3 and [(line, why) for line, _, why in report.not_compensated] == [
+        (line, "states no E1, so its track position, hence the arm's base, is unknown: the controller keeps the "
+               "track where the motion before leaves it: 1850 and 4200 mm on its uses") for line in (8, 10)]
 
 
 @pytest.mark.parametrize("name", ["fanuc_lrmate200id", "abb_irb4600"])

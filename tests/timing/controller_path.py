@@ -98,6 +98,29 @@ class ProgrammedPath:
             T[rows, :3, 3], T[rows, :3, :3] = position, rotation.as_matrix()
         return T
 
+    def coordinate(self, sigma, values):
+        """An axis that moves with the path (a track), (N,) at parameters sigma (N,): linear in each motion's
+        progress from waypoint value ``values[m]`` (n,) to the next, blended in a zone as the position is (the
+        incoming and outgoing motions superposed)."""
+        sigma = np.clip(sigma, 0.0, self.total)
+        piece = np.clip(np.searchsorted(self.starts, sigma, side="right") - 1, 0, len(self.pieces) - 1)
+        out = np.empty(len(sigma))
+
+        def along(m, d):
+            return values[m] + d / self.length[m] * (values[m + 1] - values[m])
+
+        for i in np.unique(piece):
+            rows = piece == i
+            local = sigma[rows] - self.starts[i]
+            kind, index, span = self.pieces[i]
+            if kind == "line":
+                out[rows] = along(index, span[0] + local)
+            else:
+                k, r, u = index, span / 2.0, local / span
+                out[rows] = (along(k - 1, self.length[k - 1] - r + 2.0 * r * (u - _omega(u)))
+                             + along(k, 2.0 * r * _omega(u)) - values[k])
+        return out
+
     def project(self, points):
         """Parameters (N,) of the path points nearest ``points`` (N, 3), and the distances (N,), mm."""
         sigma = np.linspace(0.0, self.total, max(int(np.ceil(self.total / POLYLINE_MM)), 2) + 1)

@@ -169,6 +169,7 @@ def compensate_program(program, correct, robot, *, tools=None, frames=None, join
     """
     if joint_targets not in ("keep", "compensate"):
         raise ValueError(f"joint_targets must be 'keep' or 'compensate', got {joint_targets!r}")
+    program = placed_on_track(program, robot, tools, frames)
     table = FrameTable(program, robot, tools, frames)
     plan = planned_joints(program, robot, tools=tools, frames=frames, workers=workers)
     cartesian, T_base_frame, T_tool, T_target = plan.index, plan.T_base_frame, plan.T_flange_tool, plan.T_base_tcp
@@ -219,6 +220,13 @@ def compensate_program(program, correct, robot, *, tools=None, frames=None, join
     if beyond := _beyond_the_measured_travel(table, robot, cartesian, labels):
         report = dataclasses.replace(report, warnings=report.warnings + (beyond,))
     return edited, report
+
+
+def placed_on_track(program, robot, tools=None, frames=None):
+    """``program`` with the motions to targets whose track position it leaves unknown left as written and listed
+    (`trajcomp.programs.frames.FrameTable.unplaced`: a KRL point without E1 on the first motion, after a call
+    or a branch); the program itself when there is none."""
+    return program.with_targets_left(FrameTable(program, robot, tools, frames).unplaced())
 
 
 def _with_track_placement(landing, robot, table, index):

@@ -26,7 +26,8 @@ from trajcomp.arm.transforms import matrix_to_pose
 from trajcomp.jobs import batch
 from trajcomp.compensation.options import MAX_CORRECTION, MAX_JOINT_CHANGE, RETIME_CHOICES
 from trajcomp.compensation.posture import planned_joints, planned_targets
-from trajcomp.compensation.program_rewrite import as_written_report, compensate_program, convert_program
+from trajcomp.compensation.program_rewrite import (as_written_report, compensate_program, convert_program,
+                                                   placed_on_track)
 from trajcomp.compensation.target_correction import program_corrector
 from trajcomp.errors import TimingError, TrajcompError
 from trajcomp.model.compensation_model import CompensationModel
@@ -145,6 +146,7 @@ class CompensationJob:
             whose = "the arm of the model" + (f" {self.source}" if self.source else "")
             program = formats.read(path, workers=self.workers) if task is None else formats.read_task(task)
             formats.check_robot_language(path, formats.find_format(format=program.format), model.nominal, whose)
+            program = placed_on_track(program, model.nominal, self.tools, self.frames)  # also the timing's original
             out_format = formats.output_format(output, program, self.to_format)
             formats.check_robot_language(output, out_format, model.nominal, whose)
             sources = list(dict.fromkeys(formats.input_paths(path, program)))
@@ -255,6 +257,7 @@ class RetimeJob:
         """Time ``path`` into ``output`` (same language), judge it and write its report: a `ProgramRun`."""
         program = formats.read(path)
         formats.check_robot_language(path, formats.find_format(format=program.format), self.robot, "the arm --robot names")
+        program = placed_on_track(program, self.robot, self.tools, self.frames)
         out_format = formats.find_format(output).name
         if out_format != program.format:
             raise TrajcompError(f"{output}: retime writes the language it reads ({program.format}); "

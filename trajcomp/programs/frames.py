@@ -105,6 +105,21 @@ class FrameTable:
                 f"arm's base, is unknown ({int(missing.sum())} target(s) so){kept}")
         return values[index]
 
+    def unplaced(self):
+        """``{target index: why}``: the targets the motions use whose track position the program leaves unknown,
+        in a language whose controller runs them from where the track stands (`Program.kept_axes`: KRL); empty
+        elsewhere, on a fixed base or where every used target's position is known (`carried_over` says why not).
+        """
+        axis = None if self.track is None else self.track.index(self.program.format)
+        if axis is None or not self.program.kept_axes:
+            return {}
+        values, why = self.carried_over(self._stated(axis))
+        used = self.program.usage_table().index
+        field = self.track.written[self.program.format]
+        return {int(t): (f"states no {field}, so its track position, hence the arm's base, is unknown"
+                         + (f": {why[t]}" if why[t] else ""))
+                for t in used[~np.isfinite(values[used])].tolist()}
+
     def _stated(self, axis):
         """The track position (T,) each of the program's targets states in external axis ``axis`` (NaN: none)."""
         external = self.program.target_table().external

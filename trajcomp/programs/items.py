@@ -239,6 +239,9 @@ class Motion:
     orientation_speed : float or None
         An orientation speed that bounds the motion beside its TCP speed
         (RAPID speeddata's v_ori), rad/s; None where none does.
+    external_speed : float or None
+        A speed that bounds the linear external axes (a track) beside the
+        TCP speed (RAPID speeddata's v_leax), mm/s; None where none does.
     zone : float or None
         Blend radius, mm; None for an exact stop (fine).
     tool, frame : str or None
@@ -306,6 +309,7 @@ class Motion:
     speed_why: str = ""
     source: int = 0
     orientation_speed: float = None
+    external_speed: float = None
     start_why: str = ""
     acceleration: float = None
     acceleration_share: float = None

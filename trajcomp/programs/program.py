@@ -329,9 +329,6 @@ class Program:
         refused. The program itself when there is none.
         """
         uses = self._uses
-        if not uses["clash"].size:
-            return self
-        shared = set(uses["index"][uses["clash"]].tolist())
         why = {}
         for j in uses["clash"].tolist():
             i, k = int(uses["index"][j]), int(uses["first"][j])
@@ -339,9 +336,29 @@ class Program:
                               f"{(uses['tool'][k], uses['frame'][k])} (line {uses['line'][k]}) and "
                               f"{(uses['tool'][j], uses['frame'][j])} (line {uses['line'][j]}): one set of numbers "
                               "cannot be right for both, its motions are left as written")
+        return self.with_targets_left(why)
+
+    def with_targets_left(self, why):
+        """The program with every motion to or via the targets ``why`` names left as written.
+
+        Each such motion passes through unchanged (its points kept as its
+        ``refs``), listed with the reason (`Motion.reason`).
+
+        Parameters
+        ----------
+        why : Mapping[int, str]
+            Target index to the reason its motions are not compensated.
+
+        Returns
+        -------
+        Program
+            The program itself when ``why`` is empty.
+        """
+        if not why:
+            return self
         items = []
         for item in self.items:
-            if isinstance(item, Motion) and (points := [i for i in (item.via, item.target) if i in shared]):
+            if isinstance(item, Motion) and (points := [i for i in (item.via, item.target) if i in why]):
                 item = dataclasses.replace(item, target=None, via=None, reason=why[points[0]],
                                            refs=tuple(dict.fromkeys(item.refs + tuple(points))))
             items.append(item)

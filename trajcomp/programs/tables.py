@@ -41,6 +41,8 @@ class MotionTable:
     axis_position : ndarray of bool, shape (M,)
     orientation_speed : ndarray, shape (M,)
         Rad/s; NaN where none bounds the motion.
+    external_speed : ndarray, shape (M,)
+        As `Motion.external_speed`, mm/s; NaN where none bounds the motion.
     acceleration : ndarray, shape (M,)
         As `Motion.acceleration`; NaN where none is stated.
     acceleration_share : ndarray, shape (M,)
@@ -68,6 +70,7 @@ class MotionTable:
     line: np.ndarray
     axis_position: np.ndarray
     orientation_speed: np.ndarray = None
+    external_speed: np.ndarray = None
     source: np.ndarray = None
     text: Sequence = None
     reason: np.ndarray = None
@@ -80,7 +83,8 @@ class MotionTable:
 
     def __post_init__(self):
         m = len(self.line)
-        defaults = {"orientation_speed": lambda: np.full(m, np.nan), "source": lambda: np.zeros(m, dtype=int),
+        defaults = {"orientation_speed": lambda: np.full(m, np.nan), "external_speed": lambda: np.full(m, np.nan),
+                    "source": lambda: np.zeros(m, dtype=int),
                     "text": lambda: repeated("", m), "reason": lambda: repeated("", m),
                     "speed_why": lambda: repeated("", m), "refs": dict, "start_why": lambda: repeated("", m),
                     "acceleration": lambda: np.broadcast_to(np.nan, (m,)),
@@ -114,6 +118,7 @@ class MotionTable:
             line=column([m.line for m in motions], int),
             axis_position=column([m.axis_position for m in motions], bool),
             orientation_speed=column([number(m.orientation_speed) for m in motions], float),
+            external_speed=column([number(m.external_speed) for m in motions], float),
             source=column([m.source for m in motions], int),
             text=tuple(m.text for m in motions),
             reason=column([m.reason for m in motions], object),
@@ -190,7 +195,7 @@ class MotionTable:
         if any(t.spans is not None for t in tables):
             spans = Picked([t.spans if t.spans is not None else repeated({}, len(t)) for t in tables], part, row)
         names = ("kind", "target", "via", "speed", "speed_unit", "zone", "tool", "frame", "axis_position",
-                 "orientation_speed", "reason", "speed_why", "start_why", "acceleration",
+                 "orientation_speed", "external_speed", "reason", "speed_why", "start_why", "acceleration",
                  "acceleration_share")
         return cls(line=line[order], source=source[order], text=sequence("text"), refs=refs, spans=spans,
                    **{name: column(name) for name in names})
@@ -257,6 +262,7 @@ class MotionTable:
             reason=self.reason[k], refs=self.refs.get(k, ()), spans={} if self.spans is None else self.spans[k],
             axis_position=bool(self.axis_position[k]), speed_why=self.speed_why[k], source=int(self.source[k]),
             orientation_speed=optional(self.orientation_speed[k], float), start_why=self.start_why[k],
+            external_speed=optional(self.external_speed[k], float),
             acceleration=optional(self.acceleration[k], float),
             acceleration_share=optional(self.acceleration_share[k], float),
         )

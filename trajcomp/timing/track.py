@@ -30,6 +30,11 @@ What binds, and how (`retime_on_track`):
   v_track L_carriage / |e[k] - e[k-1]|; along a joint motion a bound on
   each joint, v_track |q[k]_j - q[k-1]_j| / |e[k] - e[k-1]| (and so for
   the acceleration): both exact where the path is the programmed line;
+  v_track is the track's limit, or the motion's programmed speed of the
+  external axes where lower (RAPID speeddata's v_leax:
+  `trajcomp.programs.items.Motion.external_speed`), so the track runs no
+  faster than programmed whatever field the timing writes (a ``\\T``
+  replaces the speed data, v_leax too);
 - the re-timed path is then sampled at 1 kHz and the track's velocity and
   acceleration measured (`TrackTiming`); a run that exceeds a track limit
   is timed again with its motions' limits lowered by the share it exceeds
@@ -40,8 +45,9 @@ Not timed, left as written and listed: a circular motion that moves the
 track (the carriage TCP then runs on no circle), a motion that moves only
 the track (the arm rests in its carriage) or whose TCP rests in the world
 while the track moves (no TCP speed to keep). At a blended corner the
-track's velocity changes from one motion's to the next as the controller
-blends it, within the zone; that change is not measured here.
+controller blends the track as the position (each motion's share of the
+superposed blend), faster than the TCP's travel where the blend cuts the
+corner; that change is not measured here (docs/tracks.md gives the gap).
 Written speeds are world TCP speeds (`cruise_speeds` converts through
 ``TrackTiming.world_ratio`` and bounds them by ``speed_bound``).
 """
@@ -75,8 +81,9 @@ class TrackTiming:
     world_ratio : ndarray, shape (M,)
         World TCP length over carriage TCP length of the motion into each waypoint (1 where either is 0).
     speed_bound : ndarray, shape (M,)
-        World TCP speed, mm/s, at which the track reaches its velocity limit along the (linear) motion into each
-        waypoint; ``inf`` where the track does not move.
+        World TCP speed, mm/s, at which the track reaches its velocity limit (or the motion's programmed speed of
+        the external axes, where lower) along the (linear) motion into each waypoint; ``inf`` where the track does
+        not move.
     peak_velocity, peak_acceleration : float
         Largest sampled |track velocity| (mm/s) and |acceleration| (mm/s^2).
     limit_velocity, limit_acceleration : float
@@ -125,7 +132,7 @@ def track_values(program, robot, moves, tools=None, frames=None):
     return values if np.ptp(values) > 0 else None
 
 
-def retime_on_track(moves, robot, values, field, *, method="auto", tolerance=TOLERANCE):
+def retime_on_track(moves, robot, values, field, *, programmed=None, method="auto", tolerance=TOLERANCE):
     """Time a motion sequence whose waypoints stand at track positions ``values`` (M,), mm (see the module).
 
     Parameters
@@ -138,6 +145,9 @@ def retime_on_track(moves, robot, values, field, *, method="auto", tolerance=TOL
         Track position of each waypoint, mm.
     field : str
         The program field that holds it (for messages).
+    programmed : ndarray, shape (M,), optional
+        The track speed the program allows along the motion into each
+        waypoint, mm/s (NaN: none; binds where below the track's limit).
     method, tolerance
         As `trajcomp.timing.retiming.retime`.
 
@@ -159,6 +169,8 @@ def retime_on_track(moves, robot, values, field, *, method="auto", tolerance=TOL
         raise TimingError(f"{moves.labels[k]}: {field} {values[k]:g} mm is beyond the track's travel "
                           f"{track.position_min:g} .. {track.position_max:g} mm (track.limits of the robot)")
     change = np.abs(np.diff(values, prepend=values[:1]))
+    limit = track.velocity if programmed is None else np.fmin(track.velocity, programmed)  # (M,) or scalar
+    limit = np.broadcast_to(limit, values.shape)
     carriage, world = _lengths(moves, robot, values)
     reasons = _not_timed(moves, change, carriage, world)
     left = np.zeros(len(moves), dtype=bool)
@@ -173,28 +185,28 @@ def retime_on_track(moves, robot, values, field, *, method="auto", tolerance=TOL
     share[rows, leading[rows]] = joint_change[rows, leading[rows]] / change[rows]
     with np.errstate(divide="ignore", invalid="ignore"):
         ratio = np.where(path, world / carriage, 1.0)
-        bound = np.where(path, track.velocity * carriage / change, np.inf)  # carriage TCP mm/s
+        bound = np.where(path, limit * carriage / change, np.inf)  # carriage TCP mm/s
     limited = dataclasses.replace(
         moves, start=np.asarray(moves.start, dtype=bool) | left, track_position=values,
         track_acceleration=np.full(len(moves), track.acceleration),
         tcp_speed=np.minimum(moves.tcp_speed / ratio, bound),
-        velocity=np.minimum(moves.velocity, track.velocity * share),
+        velocity=np.minimum(moves.velocity, limit[:, None] * share),
         acceleration=np.minimum(moves.acceleration, track.acceleration * share))
     from trajcomp.timing.retiming import retime  # here: retime's TOPP-RA imports `with_track` from this module
 
     slow = np.ones(len(moves))
     for _ in range(ROUNDS):
         result = retime(_slowed(limited, slow), robot, method=method, tolerance=tolerance)
-        peaks = [_run_peaks(run, law, limited, values) for _, run, law in result.pieces]
+        peaks = [_run_peaks(run, law, limited, limit) for _, run, law in result.pieces]
         over = False
-        for (_, run, _), (velocity, acceleration) in zip(result.pieces, peaks):
-            excess = max(velocity / track.velocity, np.sqrt(acceleration / track.acceleration))
+        for (_, run, _), (_, share, acceleration) in zip(result.pieces, peaks):
+            excess = max(share, np.sqrt(acceleration / track.acceleration))
             if excess > 1.0 + 0.5 * LIMIT_TOLERANCE:
                 slow[run.first + 1 : run.last + 1] *= excess * MARGIN
                 over = True
         if not over:
             break
-    peak_velocity, peak_acceleration = np.max(np.reshape(peaks, (-1, 2)), axis=0, initial=0.0)
+    peak_velocity, _, peak_acceleration = np.max(np.reshape(peaks, (-1, 3)), axis=0, initial=0.0)
     timing = TrackTiming(field, values, ratio, bound * ratio, float(peak_velocity), float(peak_acceleration),
                          track.velocity, track.acceleration, tuple(reasons))
     return dataclasses.replace(result, track=timing, tcp_length=result.tcp_length * ratio,
@@ -245,10 +257,11 @@ def _slowed(moves, slow):
                                track_acceleration=moves.track_acceleration / slow**2)
 
 
-def _run_peaks(run, law, moves, values):
-    """Largest |track velocity| (mm/s) and |acceleration| (mm/s^2) of a timed run, sampled at `RATE`."""
+def _run_peaks(run, law, moves, limit):
+    """Largest |track velocity| (mm/s), its largest share of the velocity ``limit`` (M,) of the motion it lies on
+    and largest |acceleration| (mm/s^2) of a timed run, sampled at `RATE`."""
     if run.path is None:
-        return 0.0, 0.0
+        return 0.0, 0.0, 0.0
     grid = run.grid
     per = _per_progress(moves, run.motion_at(grid), grid, run.path(grid, 1), run.grid_rate, np.ones(len(grid) - 1, bool))
     t = sample_times(law.duration, RATE)
@@ -260,7 +273,9 @@ def _run_peaks(run, law, moves, values):
     slope = np.interp(s, grid, _slopes(run.grid_rate, grid, np.ones(len(grid) - 1, bool)))
     rho, drho = _progress_rate(moves.kind[k] == JOINT, run.path(s, 1), run.path(s, 2), rate, slope)
     de, dde = per[at] * rho, per[at] * drho
-    return float(np.max(np.abs(de * sd), initial=0.0)), float(np.max(np.abs(dde * sd**2 + de * sdd), initial=0.0))
+    velocity = np.abs(de * sd)
+    return (float(np.max(velocity, initial=0.0)), float(np.max(velocity / limit[k], initial=0.0)),
+            float(np.max(np.abs(dde * sd**2 + de * sdd), initial=0.0)))
 
 
 def with_track(moves, motion, grid, dq, ddq, rate, acceleration, inside=None):

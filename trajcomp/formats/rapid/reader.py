@@ -106,9 +106,11 @@ _OPTION = re.compile(r"\\(\w+)(?:\s*:=\s*([^\\]+))?")
 _SPEED = re.compile(r"^v(\d+(?:\.\d*)?)$", re.I)
 _DATA_DECL = re.compile(r"[ \t]*(?:(?:LOCAL|TASK)\s+)*(CONST|PERS|VAR)\s+(speeddata|num)\s+(\w+)\s*(?::=\s*([^;]*?))?\s*;",
                         re.I | re.M)
-_SPEEDDATA = re.compile(r"^\[\s*(" + NUMBER + r")\s*,\s*(" + NUMBER + r")\s*,[^\]]*\]$")  # [v_tcp, v_ori, ..]
+_SPEEDDATA = re.compile(r"^\[\s*(" + NUMBER + r")\s*,\s*(" + NUMBER + r")\s*,\s*(" + NUMBER + r")?[^\]]*\]$")
 VMAX = 5000.0  # mm/s, v_tcp of the predefined speeddata vmax
-PREDEFINED_V_ORI = 500.0  # deg/s, v_ori of every predefined speeddata (v5 .. v7000, vmax)
+# every predefined speeddata (v5 .. v7000, vmax) is [v_tcp, 500, 5000, 1000] (RAPID reference, speeddata)
+PREDEFINED_V_ORI = 500.0  # deg/s
+PREDEFINED_V_LEAX = 5000.0  # mm/s, linear external axes
 # instructions that cannot change a speeddata: a VAR speeddata assigned before them is still in force after them
 _STRAIGHT = {"confj", "confl", "tpwrite", "tperase", "waittime", "setdo", "setao", "setgo", "set", "reset", "pulsedo",
              "singarea", "pathresol", "accset"}
@@ -924,7 +926,8 @@ class _Reader:
             self.in_force.clear()
 
     def constant(self, name, typ, line, original, field, depth=0):
-        """``(value, why)`` of a speeddata (its v_tcp, mm/s) or num named ``name``: stated, or why it is not.
+        """``(value, why)`` of a speeddata (its v_tcp, v_ori and v_leax: mm/s, deg/s, mm/s, v_leax None when not a
+        number) or num named ``name``: stated, or why it is not.
 
         Stated: a literal, ``vN``, ``vmax``, or a CONST of this module whose
         value is one of these. PERS and VAR data, routine parameters and
@@ -933,11 +936,13 @@ class _Reader:
         if typ == "num" and _NUMBER.fullmatch(name):
             return self.number(name, line, original, field), ""
         if typ == "speeddata" and (m := _SPEED.match(name)):
-            return (self.number(m.group(1), line, original, field), PREDEFINED_V_ORI), ""
+            return (self.number(m.group(1), line, original, field), PREDEFINED_V_ORI, PREDEFINED_V_LEAX), ""
         if typ == "speeddata" and (m := _SPEEDDATA.match(name)):
-            return (self.number(m.group(1), line, original, field), self.number(m.group(2), line, original, field)), ""
+            v_leax = None if m.group(3) is None else self.number(m.group(3), line, original, field)
+            return (self.number(m.group(1), line, original, field), self.number(m.group(2), line, original, field),
+                    v_leax), ""
         if typ == "speeddata" and name.lower() == "vmax":
-            return (VMAX, PREDEFINED_V_ORI), ""
+            return (VMAX, PREDEFINED_V_ORI, PREDEFINED_V_LEAX), ""
         key = name.lower()
         if key in self.params:
             return None, f"{name}: routine parameter, set at run time"
@@ -1129,12 +1134,12 @@ class _Reader:
         reason = "" if None not in found else (
             "position computed at run time: " + " ".join(positional[found.index(None)][0].split()))
         data, speed_why = self.constant(speed_text, "speeddata", line, original, "speed")
-        (speed, orientation), speed_unit = data or (None, None), "mm/s"
-        if options.get("v"):  # \V:= the TCP speed, in place of the speeddata's (its v_ori stays)
+        (speed, orientation, external), speed_unit = data or (None, None, None), "mm/s"
+        if options.get("v"):  # \V:= the TCP speed, in place of the speeddata's (its v_ori and v_leax stay)
             speed, speed_why = self.constant(options["v"], "num", line, original, "\\V")
         if options.get("t"):  # \T:= the motion's time: the speeds are not used
             (speed, speed_why), speed_unit = self.constant(options["t"], "num", line, original, "\\T"), "s"
-            orientation = None
+            orientation = external = None
         return Motion(
             kind=kind,
             target=found[-1],
@@ -1149,6 +1154,7 @@ class _Reader:
             reason=reason or tool_why or frame_why,
             speed_why=speed_why,
             orientation_speed=float(np.radians(orientation)) if orientation else None,
+            external_speed=external,
         ), offsets
 
     def declared_in(self, file, line):
@@ -1226,9 +1232,10 @@ def read(path):
 def _flow_speeds(table, reached):
     """A RAPID module's speed columns under the VelSet that can reach each motion (`trajcomp.programs.flow`).
 
-    VelSet override, max runs a motion's TCP and orientation speeds at
-    override % and its TCP speed at most max mm/s, and a ``\\T`` at
-    100 / override times as long, whatever the max: the controller does not
+    VelSet override, max runs a motion's TCP, orientation and linear
+    external axes' speeds (v_tcp, v_ori, v_leax) at override % and its
+    TCP speed at most max mm/s, and a ``\\T`` at 100 / override times as
+    long, whatever the max: the controller does not
     hold a motion with a stated time to VelSet's max (RAPID reference,
     VelSet's limitations), so a time is read and written as such (a time
     written for a motion without one is at least its length over the max,
@@ -1248,6 +1255,7 @@ def _flow_speeds(table, reached):
     """
     speed = np.array(table.speed, dtype=float)
     orientation = np.array(table.orientation_speed, dtype=float)
+    external = np.array(table.external_speed, dtype=float)
     why = np.array(table.speed_why, dtype=object)
     share = np.full(len(table), np.nan)
     for r, settings in enumerate(reached.settings):
@@ -1276,7 +1284,9 @@ def _flow_speeds(table, reached):
         tcp = np.where(np.isnan(speed[paced]), VMAX, speed[paced])
         speed[paced] = np.where((override < 1.0) | (top < tcp), np.minimum(tcp * override, top), speed[paced])
         orientation[paced] *= override
-    return {"speed": speed, "orientation_speed": orientation, "speed_why": why, "acceleration_share": share}
+        external[paced] *= override
+    return {"speed": speed, "orientation_speed": orientation, "external_speed": external, "speed_why": why,
+            "acceleration_share": share}
 
 
 def _read(path):
@@ -1508,6 +1518,7 @@ def _motion_table(reader, motions, target, reason, refs, frames_of):
         frame=column([None if f is None else f[1][0] for f in frames_of]),
         line=motions.line, axis_position=np.zeros(m, dtype=bool),
         orientation_speed=column([number(p.orientation_speed) for p in protos], float),
+        external_speed=column([number(p.external_speed) for p in protos], float),
         source=np.full(m, reader.index), text=_Instructions(text, motions.start, motions.end),
         reason=reason,
         speed_why=column([p.speed_why for p in protos]), refs=refs,

@@ -5,7 +5,7 @@ import re
 import numpy as np
 
 from trajcomp.errors import WriteError
-from trajcomp.formats.rapid.reader import CONF, JOINTS, POSITION, PREDEFINED_V_ORI, QUAT, read
+from trajcomp.formats.rapid.reader import CONF, JOINTS, POSITION, PREDEFINED_V_LEAX, PREDEFINED_V_ORI, QUAT, read
 from trajcomp.formats.file_writing import active_axes, write_single_file, written_speed
 from trajcomp.formats.number_writing import ceil_places, floor_places, format_number
 from trajcomp.formats.pose_encoding import encode_targets, same_rotation
@@ -91,16 +91,19 @@ def _identifier(name, prefix, default):
 
 
 def _speed(motion):
-    """The speed data of a generated motion: ``vN``, ``vmax``, a literal with its v_ori, ``\\V`` or ``\\T``."""
+    """The speed data of a generated motion: ``vN``, ``vmax``, a literal with its v_ori and v_leax, ``\\V`` or
+    ``\\T``."""
     value, unit = written_speed(motion, "rapid")
     if value is None:
         return "vmax"  # the arm's limits
     if unit == "s":
         return f"vmax\\T:={format_number(ceil_places(value, 3), 3)}"
     v_tcp = floor_places(value, 3)
-    if motion.orientation_speed is not None and np.degrees(motion.orientation_speed) < PREDEFINED_V_ORI:
-        v_ori = floor_places(np.degrees(motion.orientation_speed), 3)
-        return f"[{format_number(v_tcp, 3)},{format_number(v_ori, 3)},5000,1000]"
+    v_ori = PREDEFINED_V_ORI if motion.orientation_speed is None else np.degrees(motion.orientation_speed)
+    v_leax = PREDEFINED_V_LEAX if motion.external_speed is None else motion.external_speed
+    if v_ori < PREDEFINED_V_ORI or v_leax < PREDEFINED_V_LEAX:
+        return (f"[{format_number(v_tcp, 3)},{format_number(floor_places(min(v_ori, PREDEFINED_V_ORI), 3), 3)},"
+                f"{format_number(floor_places(min(v_leax, PREDEFINED_V_LEAX), 3), 3)},1000]")
     if v_tcp in SPEEDS:
         return f"v{v_tcp:g}"
     return f"v1000\\V:={format_number(v_tcp, 3)}"
