@@ -12,7 +12,10 @@ module holds the fields of scattered data, which need no lattice:
 - :class:`Kriging` (``kriging``): the mean of a Gaussian process of a few
   scattered residuals (a light re-calibration's correction, see
   `trajcomp.calibration.recalibrate`), its length and noise chosen by
-  maximum likelihood; it returns to zero away from its points.
+  maximum likelihood; it returns to zero away from its points;
+- :class:`GaussianField` (``gp``): the same process as calibrate's field on
+  top of a joint residual (`trajcomp.calibration.calibrate`), a kind of its
+  own so that no one takes it for a re-calibration's correction.
 
 The domain of the first two is the bounding box of the data;
 :func:`bounded_evaluate` applies the same outside policy as the lattice
@@ -24,7 +27,7 @@ import dataclasses
 import numpy as np
 
 from trajcomp.errors import CalibrationError, ModelError
-from trajcomp.model.options import KNN_KIND, KRIGING_KIND, RBF_KIND
+from trajcomp.model.options import GP_KIND, KNN_KIND, KRIGING_KIND, RBF_KIND
 from trajcomp.model.stats import as_vectors, kfold_indices
 
 OUTSIDE = ("error", "clamp", "nan")
@@ -380,20 +383,19 @@ class Kriging(_Scattered):
         return float(-0.5 * np.sum(count * np.log(self.signal_variance()) + determinant + count))
 
     @classmethod
-    def fit(cls, points, values, lengths=None, nuggets=KRIGING_NUGGETS):
+    def fit(cls, points, values, lengths=KRIGING_LENGTHS, nuggets=KRIGING_NUGGETS):
         """The candidate ``length`` x ``nugget`` of the highest marginal likelihood (`log_likelihood`).
 
         Parameters
         ----------
         points, values : array_like, shape (N, 3)
             Data positions (N >= 2) and residual errors, mm.
-        lengths : sequence of float, optional
-            Correlation lengths tried, mm. Default: those of
-            `KRIGING_LENGTHS` at least twice the median distance from a
-            point to its nearest neighbour (at least the longest): a
-            shorter correlation the points cannot tell from their noise,
-            and the likelihood of a few points then takes it for the
-            signal.
+        lengths : sequence of float
+            Correlation lengths, mm: those at least twice the median
+            distance from a point to its nearest neighbour are tried (at
+            least the longest): a shorter correlation the points cannot
+            tell from their noise, and the likelihood of a few points then
+            takes it for the signal.
         nuggets : sequence of float
             Noise-to-signal variance ratios tried.
 
@@ -402,10 +404,9 @@ class Kriging(_Scattered):
         Kriging
         """
         p, v = _scattered_data(points, values)
-        if lengths is None:
-            gaps = np.sqrt(_squared_distances(p, p) + np.diag(np.full(len(p), np.inf)))
-            spacing = float(np.median(gaps.min(axis=1)))
-            lengths = [length for length in KRIGING_LENGTHS if length >= 2.0 * spacing] or KRIGING_LENGTHS[-1:]
+        gaps = np.sqrt(_squared_distances(p, p) + np.diag(np.full(len(p), np.inf)))
+        spacing = float(np.median(gaps.min(axis=1)))
+        lengths = [length for length in lengths if length >= 2.0 * spacing] or [max(lengths)]
         best = None
         for length in lengths:
             for nugget in nuggets:  # one candidate at a time: each holds an (N, N) factor
@@ -417,3 +418,27 @@ class Kriging(_Scattered):
     def to_dict(self):
         """Plain-list dict: kind, points, values, length, nugget."""
         return {**self._fields(), "length": self.length, "nugget": self.nugget}
+
+
+GP_MAX_POINTS = 2000
+"""Most points a `GaussianField` is offered for: its factor holds (N, N) floats (32 MB at 2,000 points)."""
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class GaussianField(Kriging):
+    """`Kriging` as the residual field a calibration puts on top of its joint residual.
+
+    The same process, length and nugget (chosen by `Kriging.fit`'s maximum
+    likelihood on the calibration's residuals, or given): between measured
+    points it blends their residuals weighted by the process, not by
+    distance alone (`KNN`), it smooths their noise by the nugget, and
+    beyond a few lengths from every point it adds nothing instead of
+    repeating the nearest residuals. A kind of its own: a model's
+    ``kriging`` field is a re-calibration's correction, whose variance the
+    landing estimate adds and which a later update replaces; this one is
+    part of the calibrated model, its error in the calibration's held-out
+    statistics. At most `GP_MAX_POINTS` points (calibrate offers ``knn``
+    alone beyond them).
+    """
+
+    kind = GP_KIND
