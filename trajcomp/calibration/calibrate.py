@@ -135,7 +135,10 @@ class _Parts:
     fold's). Gross outliers (`trajcomp.calibration.identify.outlier_rows` of the best
     kinematic model's residuals: the joint residual's when there is one)
     pull little on the robust fits; the linear fit and the scattered fields
-    leave them out, the lattice grids fill their nodes from the model.
+    leave them out, the lattice grids fill their nodes from the model. A
+    ``gp`` field on top chooses its length and nugget by likelihood unless
+    ``splines`` gives them (``field_options``: a fold keeps the full fit's);
+    the record it keeps (``selection``) names them.
     """
 
     def __init__(self, robot, joints, position, measured, rotation, *, method, grid_step, kind, loss,

@@ -823,6 +823,8 @@ class _Candidates:
         for rows, jac, held in linear.parts:
             step = linear.without(rows, roughness, held) - linear.x
             plain.append(np.linalg.norm(linear.residual[rows, :3] + jac.apply(step)[:, :3], axis=1))
+            if not self.fields:
+                continue
             moved = linear.residual[:, :3] + linear.jac.apply(step)[:, :3]
             train = np.setdiff1d(np.arange(count), rows)
             for kind, field in self.fields.items():

@@ -39,6 +39,8 @@ KRIGING_LENGTHS = (100.0, 150.0, 200.0, 300.0, 400.0, 600.0, 800.0)
 """Correlation lengths (mm) `Kriging.fit` tries: a tenth to most of an arm's reach."""
 KRIGING_NUGGETS = (0.03, 0.1, 0.2, 0.3, 0.5, 1.0, 2.0)
 """Noise-to-signal variance ratios `Kriging.fit` tries."""
+BLOCK_ELEMENTS = 2_000_000
+"""Most correlations (floats, 16 MB) `Kriging.evaluate` holds at once."""
 
 
 def fmt_point(point):
@@ -357,10 +359,18 @@ class Kriging(_Scattered):
         return np.ones(len(as_vectors(points, "query points", error=ModelError)), bool)
 
     def evaluate(self, points, method=None, outside="error"):
-        """The field (N, 3) mm at points (N, 3) mm; every point is inside (``outside`` is accepted, not needed)."""
+        """The field (N, 3) mm at points (N, 3) mm; every point is inside (``outside`` is accepted, not needed).
+
+        Computed in blocks of queries whose correlations with the data hold
+        at most `BLOCK_ELEMENTS` floats (a long program against 2,000 points).
+        """
         self._check_method(method)
-        return _correlation(as_vectors(points, "query points", error=ModelError), self.points, self.length) \
-            @ self._weights
+        p = as_vectors(points, "query points", error=ModelError)
+        out = np.empty((len(p), 3))
+        block = max(1, BLOCK_ELEMENTS // len(self.points))
+        for start in range(0, len(p), block):
+            out[start:start + block] = _correlation(p[start:start + block], self.points, self.length) @ self._weights
+        return out
 
     def signal_variance(self):
         """Maximum-likelihood variance (3,) mm^2 of each axis's signal, given ``length`` and ``nugget``."""
