@@ -39,6 +39,8 @@ KRIGING_LENGTHS = (100.0, 150.0, 200.0, 300.0, 400.0, 600.0, 800.0)
 """Correlation lengths (mm) `Kriging.fit` tries: a tenth to most of an arm's reach."""
 KRIGING_NUGGETS = (0.03, 0.1, 0.2, 0.3, 0.5, 1.0, 2.0)
 """Noise-to-signal variance ratios `Kriging.fit` tries."""
+LIKELIHOOD_POINTS = 300
+"""Most points whose likelihood `Kriging.fit` compares (every k-th of more)."""
 BLOCK_ELEMENTS = 2_000_000
 """Most correlations (floats, 16 MB) `Kriging.evaluate` holds at once."""
 
@@ -350,9 +352,13 @@ class Kriging(_Scattered):
         object.__setattr__(self, "values", v)
         object.__setattr__(self, "length", float(self.length))
         object.__setattr__(self, "nugget", float(self.nugget))
+        from scipy.linalg import solve_triangular  # here: compensating with a grid never needs scipy
+
         factor = np.linalg.cholesky(_correlation(p, p, self.length) + self.nugget * np.eye(len(p)))
+        whitened = solve_triangular(factor, v, lower=True)
         object.__setattr__(self, "_factor", factor)
-        object.__setattr__(self, "_weights", np.linalg.solve(factor.T, np.linalg.solve(factor, v)))
+        object.__setattr__(self, "_whitened", whitened)
+        object.__setattr__(self, "_weights", solve_triangular(factor.T, whitened, lower=False))
 
     def contains(self, points):
         """All true (N,): the field is defined everywhere (zero far from its points)."""
@@ -374,16 +380,17 @@ class Kriging(_Scattered):
 
     def signal_variance(self):
         """Maximum-likelihood variance (3,) mm^2 of each axis's signal, given ``length`` and ``nugget``."""
-        whitened = np.linalg.solve(self._factor, self.values)
-        return np.sum(whitened**2, axis=0) / len(self.points)
+        return np.sum(self._whitened**2, axis=0) / len(self.points)
 
     def variance(self, points):
         """Posterior variance (N,) mm^2 per axis of the field's signal at points (N, 3), mm (mean of the axes).
 
         Zero at no point; the signal's variance far from every data point.
         """
+        from scipy.linalg import solve_triangular  # here: compensating with a grid never needs scipy
+
         p = as_vectors(points, "query points", error=ModelError)
-        solved = np.linalg.solve(self._factor, _correlation(self.points, p, self.length))
+        solved = solve_triangular(self._factor, _correlation(self.points, p, self.length), lower=True)
         return (1.0 - np.sum(solved**2, axis=0)) * float(self.signal_variance().mean())
 
     def log_likelihood(self):
@@ -409,6 +416,10 @@ class Kriging(_Scattered):
         nuggets : sequence of float
             Noise-to-signal variance ratios tried.
 
+        The likelihood is that of at most `LIKELIHOOD_POINTS` of the points
+        (every k-th: a factor's cost grows with the cube of the points); the
+        field returned holds them all.
+
         Returns
         -------
         Kriging
@@ -417,13 +428,14 @@ class Kriging(_Scattered):
         gaps = np.sqrt(_squared_distances(p, p) + np.diag(np.full(len(p), np.inf)))
         spacing = float(np.median(gaps.min(axis=1)))
         lengths = [length for length in lengths if length >= 2.0 * spacing] or [max(lengths)]
+        every = -(-len(p) // LIKELIHOOD_POINTS)
         best = None
         for length in lengths:
             for nugget in nuggets:  # one candidate at a time: each holds an (N, N) factor
-                field = cls(p, v, length=length, nugget=nugget)
+                field = cls(p[::every], v[::every], length=length, nugget=nugget)
                 if best is None or field.log_likelihood() > best.log_likelihood():
                     best = field
-        return best
+        return best if every == 1 else cls(p, v, length=best.length, nugget=best.nugget)
 
     def to_dict(self):
         """Plain-list dict: kind, points, values, length, nugget."""
