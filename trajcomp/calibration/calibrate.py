@@ -55,7 +55,7 @@ LAYER_PLANES = 20  # positions with at most this many distinct coordinates along
 OUTER_SHARE = 0.1  # the outer layer of scattered positions: this share of the rows on each side of an axis
 OUTER_LAYERS = 2  # outer layers held out on each side of each axis, one and two at a time
 FIELD_ON_TOP = "knn"  # the raw-error grid of a joint residual: scattered, so held-out rows leave no hole
-GP_TRIED = {"lengths": (150.0, 300.0, 600.0), "nuggets": (0.03, 0.1, 0.3)}  # a gp field's on held-out regions
+GP_TRIED = {"lengths": (150.0, 300.0, 600.0), "nuggets": (0.03, 0.1, 0.3)}  # what a gp field on top tries per region
 
 
 def commanded(robot, meas):
