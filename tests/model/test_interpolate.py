@@ -7,7 +7,8 @@ import pytest
 
 from trajcomp.errors import CalibrationError, ModelError
 from trajcomp.model.grid import KINDS, ResidualGrid, field_from_dict, fit_field
-from trajcomp.model.interpolate import KNN, RBF, Kriging
+from trajcomp.model import interpolate
+from trajcomp.model.interpolate import KNN, RBF, GaussianField, Kriging
 
 
 def smooth_field(p):
@@ -184,6 +185,27 @@ def test_kriging_likelihood_finds_the_correlation_length_of_a_sampled_process():
     assert field.length == 300.0 and field.nugget in (0.03, 0.1, 0.2)
     np.testing.assert_allclose(np.sqrt(field.signal_variance()), 0.1, rtol=0.5)
     assert Kriging.fit(points, values, lengths=(100.0, 800.0)).log_likelihood() < field.log_likelihood()
+
+
+def test_gp_field_is_the_kriging_process_under_its_own_kind(monkeypatch):
+    """Calibrate's field on top: one point hand-computed as for kriging; ``fit_field`` with a length takes it, without
+    one it chooses by likelihood; the model file keeps the kind (a ``kriging`` field is a re-calibration's)."""
+    value = np.array([[0.3, -0.2, 0.1]])
+    field = fit_field(np.zeros((1, 3)), value, interpolation="gp", length=200.0, nugget=0.25)
+    assert isinstance(field, GaussianField) and field.kind == "gp" and (field.length, field.nugget) == (200.0, 0.25)
+    np.testing.assert_allclose(field.evaluate(np.array([[200.0, 0.0, 0.0]])), value * np.exp(-0.5) / 1.25, atol=1e-15)
+    rng = np.random.default_rng(5)
+    points = rng.uniform(0.0, 1000.0, (60, 3))
+    values = 0.1 * np.column_stack([np.sin(points[:, 0] / 300), np.cos(points[:, 1] / 300), np.sin(points[:, 2] / 400)])
+    chosen = fit_field(points, values, interpolation="gp")
+    assert isinstance(chosen, GaussianField) and (chosen.length, chosen.nugget) == (lambda k: (k.length, k.nugget))(
+        Kriging.fit(points, values))
+    again = field_from_dict(json.loads(json.dumps(chosen.to_dict())))
+    assert again.kind == "gp" and type(again) is GaussianField
+    whole = chosen.evaluate(QUERY * 10)
+    np.testing.assert_allclose(again.evaluate(QUERY * 10), whole, rtol=1e-12)
+    monkeypatch.setattr(interpolate, "BLOCK_ELEMENTS", 7 * len(points))  # blocks of 7 queries, the last one short
+    np.testing.assert_allclose(chosen.evaluate(QUERY * 10), whole, rtol=1e-12)
 
 
 def test_kriging_refuses_bad_parameters():

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from trajcomp.model import joint_errors
-from trajcomp.calibration.calibrate import calibrate
+from trajcomp.calibration.calibrate import calibrate, selection_words
 from trajcomp.compensation.target_correction import compensate
 from trajcomp.calibration.identify import identify, linearise, region_folds
 from trajcomp.model.joint_errors import JointResidual, SplineBasis
@@ -189,12 +189,13 @@ def test_calibrate_chooses_splines_on_held_out_regions_and_records_the_choice():
 
 
 def test_a_field_over_positions_goes_on_top_of_the_joint_residual_where_it_wins_on_held_out_regions(tmp_path):
-    """An error of the place, not of the joints (a smooth wave along x), is left to a knn field on top.
+    """An error of the place, not of the joints (a smooth wave along x), is left to a field on top.
 
     Each commanded position is measured once (no position at two
-    orientations), so the field is offered; the choice, the field and the
-    other-tools verdict survive the model file, and the model predicts the
-    wave at positions it never measured.
+    orientations), so the fields are offered (knn, and the gp field at the
+    likelihood's length); the one of the least held-out error is taken; the
+    choice, the field and the other-tools verdict survive the model file,
+    and the model predicts the wave at positions it never measured.
     """
     robot = load_robot("ur10")
     q = joints_in_range(300, 9)
@@ -208,11 +209,14 @@ def test_a_field_over_positions_goes_on_top_of_the_joint_residual_where_it_wins_
 
     meas = Measurements(joints=q, position=position, measured=landed(q), lines=np.arange(len(q)) + 2)
     model = calibrate(robot, meas, interpolation="joint", folds=2)
-    assert model.report["cross_validation"]["interpolation"] == "joint with a knn field on top"
     record = model.report["joint_splines"]
-    assert record["field"] == "knn" and model.residual_field.kind == "knn" and not model.places_other_tools
+    kind = record["field"]
+    assert model.report["cross_validation"]["interpolation"] == f"joint with a {kind} field on top"
+    assert kind in ("knn", "gp") and model.residual_field.kind == kind and not model.places_other_tools
     chosen = [c for c in record["candidates"] if c["step_deg"] == record["step_deg"] and c["penalty"] == record["penalty"]]
     assert chosen[0]["with_field_mm"] < chosen[0]["held_out_mm"]  # the wave is what the joint model cannot hold
+    assert chosen[0]["field_kind"] == kind and chosen[0]["with_field_mm"] == min(
+        c.get("with_field_mm", np.inf) for c in record["candidates"])
     save_model(tmp_path / "m.yaml", model)
     loaded = load_model(tmp_path / "m.yaml")
     fresh = joints_in_range(100, 10)
@@ -222,7 +226,40 @@ def test_a_field_over_positions_goes_on_top_of_the_joint_residual_where_it_wins_
     without = model.arm("composite").fk(fresh)[:, :3, 3]
     truth = landed(fresh)
     assert np.linalg.norm(predicted - truth, axis=1).mean() < 0.7 * np.linalg.norm(without - truth, axis=1).mean()
-    assert calibration_report(model, meas).doc["joint_errors"]["field_on_top"] == "knn"
+    assert calibration_report(model, meas).doc["joint_errors"]["field_on_top"] == kind
+
+
+def test_a_long_noisy_wave_takes_the_gp_field_whose_length_the_folds_keep(tmp_path):
+    """A wave of 1.3 m period under 0.02 mm noise per axis: the gp field (the likelihood's length and nugget) beats
+    knn on the held-out regions; the model file keeps its kind and the cross-validation's folds its length and
+    nugget; at positions never measured it takes most of the wave off."""
+    robot = load_robot("ur10")
+    q = joints_in_range(300, 9)
+    true = VirtualRobot.create(robot, ErrorProfile("geometric", length_sigma=0.3, angle_sigma=np.radians(0.03)),
+                               seed=5).true_robot
+
+    def landed(joints):
+        reached = fk(true, joints)[:, :3, 3]
+        return reached + np.column_stack([np.zeros((len(joints), 2)), 0.1 * np.sin(reached[:, 0] / 200.0)])
+
+    noise = np.random.default_rng(2).normal(0.0, 0.02, (len(q), 3))
+    meas = Measurements(joints=q, position=fk(robot, q)[:, :3, 3], measured=landed(q) + noise,
+                        lines=np.arange(len(q)) + 2)
+    model = calibrate(robot, meas, interpolation="joint", folds=2)
+    record = model.report["joint_splines"]
+    field = model.residual_field
+    assert record["field"] == field.kind == "gp" and model.report["residual_field"] == "gp"
+    assert record["field_options"] == {"length": field.length, "nugget": field.nugget}
+    assert model.report["cross_validation"]["interpolation"] == "joint with a gp field on top"
+    assert "+ gp field" in selection_words(record)
+    save_model(tmp_path / "m.yaml", model)
+    assert load_model(tmp_path / "m.yaml").residual_field.kind == "gp"
+    fresh = joints_in_range(100, 10)
+    position = fk(robot, fresh)[:, :3, 3]
+    truth = landed(fresh)
+    with_field = model.predict("composite", fresh, position, outside="clamp")[0]
+    without = model.arm("composite").fk(fresh)[:, :3, 3]
+    assert np.linalg.norm(with_field - truth, axis=1).mean() < 0.6 * np.linalg.norm(without - truth, axis=1).mean()
 
 
 def test_a_refit_without_some_rows_lands_where_identify_lands_on_the_others():

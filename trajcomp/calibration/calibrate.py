@@ -31,7 +31,8 @@ from trajcomp.calibration.options import CALIBRATION_METHODS, INTERPOLATIONS, LO
 from trajcomp.errors import CalibrationError
 from trajcomp.model import landing
 from trajcomp.model.grid import TOLERANCE, ResidualGrid, detect_lattice, fit_field
-from trajcomp.model.options import LATTICE_KINDS
+from trajcomp.model.interpolate import GP_MAX_POINTS, GaussianField
+from trajcomp.model.options import GP_KIND, KNN_KIND, LATTICE_KINDS
 from trajcomp.calibration.identify import (best_fit_transform, identify, linearise, outlier_rows, region_folds,
                                            select_splines)
 from trajcomp.arm.ik import batch_seed, branch_index, ik
@@ -54,7 +55,8 @@ LAYER_PLANES = 20  # positions with at most this many distinct coordinates along
 OUTER_SHARE = 0.1  # the outer layer of scattered positions: this share of the rows on each side of an axis
 OUTER_LAYERS = 2  # outer layers held out on each side of each axis, one and two at a time
 RELIABILITY_BINS = 8  # bins of the stated quantile per class of holdout in the calibration report's reliability
-FIELD_ON_TOP = "knn"  # the residual field a joint residual may take on top: scattered, so held-out rows leave no hole
+FIELD_ON_TOP = "knn"  # the raw-error grid of a joint residual: scattered, so held-out rows leave no hole
+GP_TRIED = {"lengths": (150.0, 300.0, 600.0), "nuggets": (0.03, 0.1, 0.3)}  # what a gp field on top tries per region
 
 
 def commanded(robot, meas):
@@ -134,7 +136,10 @@ class _Parts:
     fold's). Gross outliers (`trajcomp.calibration.identify.outlier_rows` of the best
     kinematic model's residuals: the joint residual's when there is one)
     pull little on the robust fits; the linear fit and the scattered fields
-    leave them out, the lattice grids fill their nodes from the model.
+    leave them out, the lattice grids fill their nodes from the model. A
+    ``gp`` field on top chooses its length and nugget by likelihood unless
+    ``splines`` gives them (``field_options``: a fold keeps the full fit's);
+    the record it keeps (``selection``) names them.
     """
 
     def __init__(self, robot, joints, position, measured, rotation, *, method, grid_step, kind, loss,
@@ -169,7 +174,11 @@ class _Parts:
             if kind != JOINT_KIND:
                 self.residual = _field(position, residuals, self.left_out, kind, grid_step)
             elif self.selection["field"]:
-                self.residual_field = _field(position, residuals, self.left_out, self.selection["field"], None)
+                self.residual_field = _field(position, residuals, self.left_out, self.selection["field"], None,
+                                             **self.selection.get("field_options", {}))
+                if self.residual_field.kind == GP_KIND:  # a fold's refit keeps the full fit's length and nugget
+                    self.selection = self.selection | {"field_options": {"length": self.residual_field.length,
+                                                                         "nugget": self.residual_field.nugget}}
 
     def model(self, robot, robot_ref, method, T_tracker_base, report, places):
         dh = self.dh
@@ -195,21 +204,25 @@ class _Parts:
         )
 
 
-def _field(position, values, left_out, kind, grid_step):
-    """A field over commanded positions; lattice kinds take the left-out rows' model values, the others drop them."""
+def _field(position, values, left_out, kind, grid_step, **options):
+    """A field over commanded positions; lattice kinds take the left-out rows' model values, the others drop them.
+
+    ``options`` go to `fit_field` (a ``gp`` field's ``length`` and ``nugget``).
+    """
     if kind in LATTICE_KINDS:
         return fit_field(position, values, step=grid_step, interpolation=kind, left_out=left_out)
-    return fit_field(position[~left_out], values[~left_out], interpolation=kind)
+    return fit_field(position[~left_out], values[~left_out], interpolation=kind, **options)
 
 
 def _joint_residual(nominal, dh, joints, position, measured, rotation, loss, orientation_weight, workers=1):
     """Joint-error terms and a DH refinement on top of the kinematic fit (frames as that fit found them).
 
     The harmonic and gravity terms are identified with the DH refinement;
-    spline terms of joints 1-5 and a `FIELD_ON_TOP` residual field over
-    the commanded positions on top are chosen on held-out regions
-    (`trajcomp.calibration.identify.select_splines`; the field only where no commanded
-    position was measured in two orientations, `shares_positions`). Joint 6 gets no spline: it turns the TCP
+    spline terms of joints 1-5 and a residual field over the commanded
+    positions on top (`_fields_on_top`, or none) are chosen on
+    held-out regions (`trajcomp.calibration.identify.select_splines`; a
+    field only where no commanded position was measured in two
+    orientations, `shares_positions`). Joint 6 gets no spline: it turns the TCP
     about its own axis, which a point on the axis hardly sees.
 
     Returns
@@ -223,12 +236,12 @@ def _joint_residual(nominal, dh, joints, position, measured, rotation, loss, ori
     spline_joints = (0, 1, 2, 3, 4)
     refined = identify(dh.robot, joints, measured, rotation=rotation, joint_terms=True, loss=loss, nominal=nominal,
                        orientation_weight=orientation_weight, R_tcp_target=dh.R_tcp_target)
+    fields = {} if shares_positions(position, joints) else _fields_on_top(len(position))
     choice = select_splines(refined, dh.robot, nominal, joints, measured, rotation=rotation, position=position,
-                            orientation_weight=orientation_weight, joints=spline_joints,
-                            field=None if shares_positions(position, joints) else _field_on_top, loss=loss,
+                            orientation_weight=orientation_weight, joints=spline_joints, fields=fields, loss=loss,
                             workers=workers)
     refined, basis = choice.fit or refined, choice.basis
-    record = {"regions": choice.regions, "candidates": choice.table, "field": FIELD_ON_TOP if choice.field else None,
+    record = {"regions": choice.regions, "candidates": choice.table, "field": choice.field,
               "step_deg": 0.0 if basis is None else float(np.degrees(basis.step.max())),
               "penalty": 0.0 if basis is None else basis.penalty,
               "joints": [] if basis is None else [j + 1 for j in spline_joints]}
@@ -250,9 +263,27 @@ def shares_positions(position, joints):
     return bool(np.any(np.abs(joints[pairs[:, 0]] - joints[pairs[:, 1]]) > 1e-6))
 
 
-def _field_on_top(points, values, queries):
-    """The `FIELD_ON_TOP` field of residuals values (T, 3) mm at points (T, 3), at queries (H, 3) (clamped)."""
-    return fit_field(points, values, interpolation=FIELD_ON_TOP).evaluate(queries, outside="clamp")
+def _knn_on_top(points, values, queries):
+    """The knn field of residuals values (T, 3) mm at points (T, 3), at queries (H, 3) (clamped)."""
+    return fit_field(points, values, interpolation=KNN_KIND).evaluate(queries, outside="clamp")
+
+
+def _gp_on_top(points, values, queries):
+    """The gp field of residuals values (T, 3) mm at points (T, 3), at queries (H, 3): its length and nugget those of
+    the highest likelihood among `GP_TRIED` for these residuals."""
+    return GaussianField.fit(points, values, **GP_TRIED).evaluate(queries)
+
+
+def _fields_on_top(count):
+    """The fields a joint residual of ``count`` rows may take on top, by kind (`select_splines`'s ``fields``).
+
+    ``knn``, and up to `GP_MAX_POINTS` rows ``gp``: scored on each held-out
+    region at the length and nugget of the highest likelihood for the
+    training regions' residuals among `GP_TRIED` (the field the model takes
+    chooses among all of `GaussianField.fit`'s for the chosen fit's
+    residuals).
+    """
+    return {KNN_KIND: _knn_on_top} | ({GP_KIND: _gp_on_top} if count <= GP_MAX_POINTS else {})
 
 
 def selection_words(choice):
@@ -265,7 +296,7 @@ def selection_words(choice):
     def words(candidate, field):
         splines = (f"splines every {candidate['step_deg']:g} deg (penalty {candidate['penalty']:g})"
                    if candidate["step_deg"] else "no splines")
-        return f"joint errors with {splines}" + (f" + {FIELD_ON_TOP} field" if field else "")
+        return f"joint errors with {splines}" + (f" + {candidate.get('field_kind', KNN_KIND)} field" if field else "")
 
     scored = [(c[key], c, key == "with_field_mm") for c in choice["candidates"]
               for key in ("held_out_mm", "with_field_mm") if key in c]

@@ -759,19 +759,19 @@ class SplineChoice:
     table : list of dict
         Every candidate with its held-out mean position error: ``step_deg``
         and ``penalty`` of its spline terms (step 0 = none),
-        ``held_out_mm`` and, when a residual field was tried on top,
-        ``with_field_mm``.
+        ``held_out_mm`` and, when residual fields were tried on top,
+        ``with_field_mm`` with the best of them, its kind ``field_kind``.
     regions : str
         How the held-out regions were drawn.
-    field : bool
-        True when the chosen candidate takes the residual field on top.
+    field : str or None
+        The kind of the residual field the chosen candidate takes on top (None: none).
     """
 
     fit: object
     basis: object
     table: list
     regions: str
-    field: bool = False
+    field: object = None
 
 
 def region_folds(position, folds):
@@ -794,8 +794,8 @@ def region_folds(position, folds):
 class _Candidates:
     """Held-out scoring of linearised candidate fits over regions, keeping the best (`select_splines`)."""
 
-    def __init__(self, regions, position, field):
-        self.regions, self.position, self.field = regions, position, field
+    def __init__(self, regions, position, fields):
+        self.regions, self.position, self.fields = regions, position, fields or {}
         self.table, self.best = [], None
 
     def result(self):
@@ -814,25 +814,29 @@ class _Candidates:
         return Linearisation(problem, x, weights, ridge=True, parts=self.regions, evaluated=evaluated)
 
     def score(self, entry, linear, roughness, payload):
-        """Held-out mean errors of one candidate (without and with the field on top), added to the table.
+        """Held-out mean errors of one candidate (without and with each field on top), added to the table.
 
         ``roughness`` (P, P) is its roughness penalty per measurement.
         """
-        plain, on_top = [], []
+        plain, on_top = [], {kind: [] for kind in self.fields}
         count = len(linear.residual)
         for rows, jac, held in linear.parts:
             step = linear.without(rows, roughness, held) - linear.x
             plain.append(np.linalg.norm(linear.residual[rows, :3] + jac.apply(step)[:, :3], axis=1))
-            if self.field is not None:
-                moved = linear.residual[:, :3] + linear.jac.apply(step)[:, :3]
-                train = np.setdiff1d(np.arange(count), rows)
-                predicted = self.field(self.position[train], moved[train], self.position[rows])
-                on_top.append(np.linalg.norm(moved[rows] - predicted, axis=1))
+            if not self.fields:
+                continue
+            moved = linear.residual[:, :3] + linear.jac.apply(step)[:, :3]
+            train = np.setdiff1d(np.arange(count), rows)
+            for kind, field in self.fields.items():
+                predicted = field(self.position[train], moved[train], self.position[rows])
+                on_top[kind].append(np.linalg.norm(moved[rows] - predicted, axis=1))
         entry["held_out_mm"] = round(float(np.concatenate(plain).mean()), 5)
-        scores = [(entry["held_out_mm"], False)]
-        if self.field is not None:
-            entry["with_field_mm"] = round(float(np.concatenate(on_top).mean()), 5)
-            scores.append((entry["with_field_mm"], True))
+        scores = [(entry["held_out_mm"], None)]
+        if on_top:
+            means = {kind: float(np.concatenate(errors).mean()) for kind, errors in on_top.items()}
+            entry["field_kind"] = min(means, key=means.get)
+            entry["with_field_mm"] = round(means[entry["field_kind"]], 5)
+            scores.append((entry["with_field_mm"], entry["field_kind"]))
         self.table.append(entry)
         for mean, field in scores:
             if self.best is None or mean < self.best[0]:
@@ -841,15 +845,15 @@ class _Candidates:
 
 def select_splines(fit, start, nominal, q, measured, *, rotation=None, joints=(0, 1, 2, 3, 4), steps=(2.0, 4.0, 8.0),
                    penalties=(1e-5, 1e-4, 1e-3, 1e-2), folds=4, position=None,
-                   orientation_weight=ORIENTATION_WEIGHT, field=None, loss="huber", workers=1):
+                   orientation_weight=ORIENTATION_WEIGHT, fields=None, loss="huber", workers=1):
     """Choose the joint model's spline terms (and a residual field on top) by held-out regions, and fit them.
 
     For each knot step and penalty, the spline terms and the parameters of
     ``fit`` are fitted together on all regions but one (`region_folds`) and
-    the mean position error is taken on the region held out, with and
-    without the residual ``field`` fitted on the training regions'
-    residuals on top; the candidate with the least held-out error over all
-    regions wins, the candidate without spline terms (``fit``'s
+    the mean position error is taken on the region held out, without and
+    with each of the residual ``fields`` fitted on the training regions'
+    residuals on top; the candidate (and field) with the least held-out
+    error over all regions wins, the candidate without spline terms (``fit``'s
     parameters refitted the same way) included. A knot step giving more than one
     spline term per `MEASUREMENTS_PER_SPLINE` measurements is not tried.
     Rows are never interleaved: a region's neighbours are not in its
@@ -879,16 +883,17 @@ def select_splines(fit, start, nominal, q, measured, *, rotation=None, joints=(0
         Roughness penalties tried (`SplineBasis.penalty`).
     folds : int
         Number of held-out regions (0: no selection, the first step and
-        penalty are fitted, with the field on top when one is given).
+        penalty are fitted, with the first of the ``fields`` on top when
+        there are any).
     position : ndarray, shape (N, 3), optional
         Commanded positions the regions are drawn in and the field is
         fitted over (default: FK of ``start``).
     orientation_weight : float
         mm per rad of orientation residual.
-    field : callable, optional
-        ``field(points (T, 3), residuals (T, 3), queries (H, 3)) -> (H, 3)``:
-        the residual field over commanded positions, mm, fitted on the
-        training rows and evaluated at the held-out ones.
+    fields : dict, optional
+        Residual fields over commanded positions tried on top, by kind:
+        ``field(points (T, 3), residuals (T, 3), queries (H, 3)) -> (H, 3)``,
+        mm, fitted on the training rows and evaluated at the held-out ones.
     loss : str
         Robust loss of the final fit (`identify`).
     workers : int
@@ -907,7 +912,7 @@ def select_splines(fit, start, nominal, q, measured, *, rotation=None, joints=(0
         spacing[list(joints)] = np.radians(steps[0])
         basis = SplineBasis(lower, upper, spacing, penalties[0])
         return SplineChoice(_spline_fit(fit, start, nominal, q, measured, rotation, basis, orientation_weight, loss),
-                            basis, [], words, field=field is not None)
+                            basis, [], words, field=next(iter(fields or {}), None))
     tried = [None]  # no splines, then each knot step with enough measurements per spline term
     for step in steps:
         spacing = np.zeros(6)
@@ -923,7 +928,7 @@ def select_splines(fit, start, nominal, q, measured, *, rotation=None, joints=(0
 
     def scored(k):
         """``(table, best)`` of the candidates of ``tried[k]`` (its penalties)."""
-        candidates = _Candidates(regions, position, field)
+        candidates = _Candidates(regions, position, fields)
         if tried[k] is None:
             candidates.score({"step_deg": 0.0, "penalty": 0.0},
                              candidates.linearise(plain, fit.delta, fit.weights, (residual, jac)),
@@ -939,7 +944,7 @@ def select_splines(fit, start, nominal, q, measured, *, rotation=None, joints=(0
                              dataclasses.replace(basis, penalty=penalty))
         return candidates.result()
 
-    candidates = _Candidates(regions, position, field)
+    candidates = _Candidates(regions, position, fields)
     for table, best in share_blocks(scored, len(tried), workers):
         candidates.merge(table, best)
     _, on_top, basis = candidates.best

@@ -21,7 +21,7 @@ import dataclasses
 import numpy as np
 
 from trajcomp.errors import CalibrationError, ModelError
-from trajcomp.model.interpolate import KNN, RBF, Kriging, VERTEX_HIT, bounded_evaluate, fmt_point, in_box
+from trajcomp.model.interpolate import KNN, RBF, GaussianField, Kriging, VERTEX_HIT, bounded_evaluate, fmt_point, in_box
 from trajcomp.model.options import FIELD_KINDS as KINDS, LATTICE_KINDS
 from trajcomp.model.stats import AXES, as_vectors
 
@@ -398,16 +398,18 @@ def fit_field(points, values, step=None, interpolation="idw8", **options):
     step : float or array_like of 3 floats, optional
         Expected lattice step, mm, see :func:`detect_lattice`; the
         scattered kinds have no lattice and need no step.
-    interpolation : {'idw8', 'trilinear', 'knn', 'rbf'}, optional
+    interpolation : {'idw8', 'trilinear', 'knn', 'rbf', 'gp'}, optional
     **options
         ``idw8``/``trilinear``: ``tol``, ``measured`` of
         :meth:`ResidualGrid.from_points`; ``knn``: ``k``, ``power`` of
         :class:`~trajcomp.model.interpolate.KNN`; ``rbf``: the options of
-        :meth:`~trajcomp.model.interpolate.RBF.fit`.
+        :meth:`~trajcomp.model.interpolate.RBF.fit`; ``gp``: ``length`` and
+        ``nugget`` of :class:`~trajcomp.model.interpolate.GaussianField`
+        (without a length: those of its ``fit``).
 
     Returns
     -------
-    ResidualGrid, KNN or RBF
+    ResidualGrid, KNN, RBF or GaussianField
         Each with ``contains``, ``evaluate(points, method=None,
         outside='error')`` and ``to_dict``.
 
@@ -423,6 +425,9 @@ def fit_field(points, values, step=None, interpolation="idw8", **options):
         return KNN(points, values, **options)
     if interpolation == RBF.kind:
         return RBF.fit(points, values, **options)
+    if interpolation == GaussianField.kind:
+        return GaussianField(points, values, **options) if "length" in options else GaussianField.fit(points, values,
+                                                                                                      **options)
     if interpolation not in LATTICE_KINDS:
         raise ValueError(f"unknown interpolation {interpolation!r} (one of {', '.join(KINDS)})")
     return ResidualGrid.from_points(points, values, method=interpolation, step=step, **options)
@@ -439,7 +444,7 @@ def field_from_dict(data):
     kind = data.get("kind")
     if kind == "grid":
         return ResidualGrid.from_dict(data)
-    classes = {KNN.kind: KNN, RBF.kind: RBF, Kriging.kind: Kriging}
+    classes = {KNN.kind: KNN, RBF.kind: RBF, Kriging.kind: Kriging, GaussianField.kind: GaussianField}
     if kind not in classes:
         raise ModelError(f"residual field: unknown kind {kind!r} (one of grid, {', '.join(classes)})")
     try:

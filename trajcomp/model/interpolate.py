@@ -12,7 +12,10 @@ module holds the fields of scattered data, which need no lattice:
 - :class:`Kriging` (``kriging``): the mean of a Gaussian process of a few
   scattered residuals (a light re-calibration's correction, see
   `trajcomp.calibration.recalibrate`), its length and noise chosen by
-  maximum likelihood; it returns to zero away from its points.
+  maximum likelihood; it returns to zero away from its points;
+- :class:`GaussianField` (``gp``): the same process as calibrate's field on
+  top of a joint residual (`trajcomp.calibration.calibrate`), a kind of its
+  own so that no one takes it for a re-calibration's correction.
 
 The domain of the first two is the bounding box of the data;
 :func:`bounded_evaluate` applies the same outside policy as the lattice
@@ -24,7 +27,7 @@ import dataclasses
 import numpy as np
 
 from trajcomp.errors import CalibrationError, ModelError
-from trajcomp.model.options import KNN_KIND, KRIGING_KIND, RBF_KIND
+from trajcomp.model.options import GP_KIND, KNN_KIND, KRIGING_KIND, RBF_KIND
 from trajcomp.model.stats import as_vectors, kfold_indices
 
 OUTSIDE = ("error", "clamp", "nan")
@@ -36,6 +39,10 @@ KRIGING_LENGTHS = (100.0, 150.0, 200.0, 300.0, 400.0, 600.0, 800.0)
 """Correlation lengths (mm) `Kriging.fit` tries: a tenth to most of an arm's reach."""
 KRIGING_NUGGETS = (0.03, 0.1, 0.2, 0.3, 0.5, 1.0, 2.0)
 """Noise-to-signal variance ratios `Kriging.fit` tries."""
+LIKELIHOOD_POINTS = 300
+"""Most points whose likelihood `Kriging.fit` compares (every k-th of more)."""
+BLOCK_ELEMENTS = 2_000_000
+"""Most correlations (floats, 16 MB) `Kriging.evaluate` holds at once."""
 
 
 def fmt_point(point):
@@ -345,32 +352,45 @@ class Kriging(_Scattered):
         object.__setattr__(self, "values", v)
         object.__setattr__(self, "length", float(self.length))
         object.__setattr__(self, "nugget", float(self.nugget))
+        from scipy.linalg import solve_triangular  # here: compensating with a grid never needs scipy
+
         factor = np.linalg.cholesky(_correlation(p, p, self.length) + self.nugget * np.eye(len(p)))
+        whitened = solve_triangular(factor, v, lower=True)
         object.__setattr__(self, "_factor", factor)
-        object.__setattr__(self, "_weights", np.linalg.solve(factor.T, np.linalg.solve(factor, v)))
+        object.__setattr__(self, "_whitened", whitened)
+        object.__setattr__(self, "_weights", solve_triangular(factor.T, whitened, lower=False))
 
     def contains(self, points):
         """All true (N,): the field is defined everywhere (zero far from its points)."""
         return np.ones(len(as_vectors(points, "query points", error=ModelError)), bool)
 
     def evaluate(self, points, method=None, outside="error"):
-        """The field (N, 3) mm at points (N, 3) mm; every point is inside (``outside`` is accepted, not needed)."""
+        """The field (N, 3) mm at points (N, 3) mm; every point is inside (``outside`` is accepted, not needed).
+
+        Computed in blocks of queries whose correlations with the data hold
+        at most `BLOCK_ELEMENTS` floats (a long program against 2,000 points).
+        """
         self._check_method(method)
-        return _correlation(as_vectors(points, "query points", error=ModelError), self.points, self.length) \
-            @ self._weights
+        p = as_vectors(points, "query points", error=ModelError)
+        out = np.empty((len(p), 3))
+        block = max(1, BLOCK_ELEMENTS // len(self.points))
+        for start in range(0, len(p), block):
+            out[start:start + block] = _correlation(p[start:start + block], self.points, self.length) @ self._weights
+        return out
 
     def signal_variance(self):
         """Maximum-likelihood variance (3,) mm^2 of each axis's signal, given ``length`` and ``nugget``."""
-        whitened = np.linalg.solve(self._factor, self.values)
-        return np.sum(whitened**2, axis=0) / len(self.points)
+        return np.sum(self._whitened**2, axis=0) / len(self.points)
 
     def variance(self, points):
         """Posterior variance (N,) mm^2 per axis of the field's signal at points (N, 3), mm (mean of the axes).
 
         Zero at no point; the signal's variance far from every data point.
         """
+        from scipy.linalg import solve_triangular  # here: compensating with a grid never needs scipy
+
         p = as_vectors(points, "query points", error=ModelError)
-        solved = np.linalg.solve(self._factor, _correlation(self.points, p, self.length))
+        solved = solve_triangular(self._factor, _correlation(self.points, p, self.length), lower=True)
         return (1.0 - np.sum(solved**2, axis=0)) * float(self.signal_variance().mean())
 
     def log_likelihood(self):
@@ -380,40 +400,67 @@ class Kriging(_Scattered):
         return float(-0.5 * np.sum(count * np.log(self.signal_variance()) + determinant + count))
 
     @classmethod
-    def fit(cls, points, values, lengths=None, nuggets=KRIGING_NUGGETS):
+    def fit(cls, points, values, lengths=KRIGING_LENGTHS, nuggets=KRIGING_NUGGETS):
         """The candidate ``length`` x ``nugget`` of the highest marginal likelihood (`log_likelihood`).
 
         Parameters
         ----------
         points, values : array_like, shape (N, 3)
             Data positions (N >= 2) and residual errors, mm.
-        lengths : sequence of float, optional
-            Correlation lengths tried, mm. Default: those of
-            `KRIGING_LENGTHS` at least twice the median distance from a
-            point to its nearest neighbour (at least the longest): a
-            shorter correlation the points cannot tell from their noise,
-            and the likelihood of a few points then takes it for the
-            signal.
+        lengths : sequence of float
+            Correlation lengths, mm: those at least twice the median
+            distance from a point to its nearest neighbour are tried (at
+            least the longest): a shorter correlation the points cannot
+            tell from their noise, and the likelihood of a few points then
+            takes it for the signal.
         nuggets : sequence of float
             Noise-to-signal variance ratios tried.
+
+        The likelihood is that of at most `LIKELIHOOD_POINTS` of the points
+        (every k-th: a factor's cost grows with the cube of the points); the
+        field returned holds them all.
 
         Returns
         -------
         Kriging
         """
         p, v = _scattered_data(points, values)
-        if lengths is None:
-            gaps = np.sqrt(_squared_distances(p, p) + np.diag(np.full(len(p), np.inf)))
-            spacing = float(np.median(gaps.min(axis=1)))
-            lengths = [length for length in KRIGING_LENGTHS if length >= 2.0 * spacing] or KRIGING_LENGTHS[-1:]
+        gaps = np.sqrt(_squared_distances(p, p) + np.diag(np.full(len(p), np.inf)))
+        spacing = float(np.median(gaps.min(axis=1)))
+        lengths = [length for length in lengths if length >= 2.0 * spacing] or [max(lengths)]
+        every = -(-len(p) // LIKELIHOOD_POINTS)
         best = None
         for length in lengths:
             for nugget in nuggets:  # one candidate at a time: each holds an (N, N) factor
-                field = cls(p, v, length=length, nugget=nugget)
+                field = cls(p[::every], v[::every], length=length, nugget=nugget)
                 if best is None or field.log_likelihood() > best.log_likelihood():
                     best = field
-        return best
+        return best if every == 1 else cls(p, v, length=best.length, nugget=best.nugget)
 
     def to_dict(self):
         """Plain-list dict: kind, points, values, length, nugget."""
         return {**self._fields(), "length": self.length, "nugget": self.nugget}
+
+
+GP_MAX_POINTS = 2000
+"""Most points a `GaussianField` is offered for: its factor holds (N, N) floats (32 MB at 2,000 points)."""
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class GaussianField(Kriging):
+    """`Kriging` as the residual field a calibration puts on top of its joint residual.
+
+    The same process, length and nugget (chosen by `Kriging.fit`'s maximum
+    likelihood on the calibration's residuals, or given): between measured
+    points it blends their residuals weighted by the process, not by
+    distance alone (`KNN`), it smooths their noise by the nugget, and
+    beyond a few lengths from every point it adds nothing instead of
+    repeating the nearest residuals. A kind of its own: a model's
+    ``kriging`` field is a re-calibration's correction, whose variance the
+    landing estimate adds and which a later update replaces; this one is
+    part of the calibrated model, its error in the calibration's held-out
+    statistics. At most `GP_MAX_POINTS` points (calibrate offers ``knn``
+    alone beyond them).
+    """
+
+    kind = GP_KIND

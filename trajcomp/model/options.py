@@ -12,4 +12,5 @@ KNN_KIND = "knn"  # residual field on scattered points, k nearest neighbours (`t
 RBF_KIND = "rbf"  # residual field on scattered points, radial basis functions (`trajcomp.model.interpolate.RBF`)
 FIELD_KINDS = (*LATTICE_KINDS, KNN_KIND, RBF_KIND)  # residual fields over positions
 KRIGING_KIND = "kriging"  # a re-calibration's correction from a few rows (`trajcomp.model.interpolate.Kriging`)
+GP_KIND = "gp"  # calibrate's field on top of a joint residual, kriged (`trajcomp.model.interpolate.GaussianField`)
 JOINT_KIND = "joint"  # joint-angle error terms (`trajcomp.model.joint_errors`)
