@@ -360,3 +360,12 @@ def format_measurements(meas, comments=(), extra=None):
 def write_measurements(path, meas, comments=(), extra=None):
     """Write measurements atomically in the standard layout; see `format_measurements`."""
     write_atomic(path, format_measurements(meas, comments, extra))
+
+
+def read_validation_run(path):
+    """The rows of a validation run (`Measurements`); ReadError without commanded joints or measured positions."""
+    meas = read_measurements(path)
+    if meas.joints is None or meas.measured is None:
+        raise ReadError(f"{meas.path}: measured landings need the commanded joints j1..j6 (as written) and the "
+                        "measured positions mx, my, mz")
+    return meas

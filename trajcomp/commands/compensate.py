@@ -79,6 +79,7 @@ def add_parser(sub):
 
 def run(args):
     from trajcomp.arm.robot import load_robot
+    from trajcomp.calibration.measurements import read_validation_run
     from trajcomp.jobs import batch
     from trajcomp.jobs.pipeline import CompensationJob, loaded_model
 
@@ -90,7 +91,8 @@ def run(args):
         joint_targets=args.joint_targets, max_joint_change=math.radians(args.max_joint_change),
         max_correction=args.max_correction, in_place=args.in_place, criteria=criteria_of(args),
         report=args.report, json_only=args.json_only, retime=args.retime, path_tolerance=args.path_tolerance,
-        to_format=args.to_format, measured=args.measured,
+        to_format=args.to_format,
+        measured=None if args.measured is None else read_validation_run(args.measured),
     )
     model = loaded_model(job.model)  # a broken model fails the run once, before any file
     if args.robot is not None and load_robot(args.robot).name != model.nominal.name:

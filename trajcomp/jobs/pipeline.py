@@ -34,7 +34,7 @@ from trajcomp.model.compensation_model import CompensationModel
 from trajcomp.model.model_file import load_model, model_files
 from trajcomp.programs.program import place_text
 from trajcomp.report import Criteria, compliance_report, file_entry, model_entry, report_paths, summary_lines
-from trajcomp.report.measured import measured_landing, read_validation_run
+from trajcomp.report.measured import measured_landing
 from trajcomp.support.atomic import FileSet, refuse_inputs
 from trajcomp.support.memory import end_stage, kept_apart, release
 from trajcomp.support.parallel import in_background, meanwhile
@@ -116,7 +116,8 @@ class CompensationJob:
     show_stages: bool = False  # a bar over STAGES on a terminal (one file; a batch shows files instead)
     workers: int = 1  # processes sharing the compensation of one file (a batch spreads files instead)
     output_root: str = None  # the folder every output stays in (a batch's); default the output's own folder
-    measured: str = None  # a validation run of the compensated program (measurement CSV): its landings in the report
+    measured: object = None  # a validation run of the compensated program (`Measurements`, as
+    # `trajcomp.calibration.measurements.read_validation_run` reads it): its landings in the report
 
     def __call__(self, path, output):
         """Compensate ``path`` into ``output``; a `batch.FileResult` (raises TrajcompError on bad input)."""
@@ -151,9 +152,8 @@ class CompensationJob:
             formats.check_robot_language(output, out_format, model.nominal, whose)
             sources = list(dict.fromkeys(formats.input_paths(path, program)))
             inputs = [*sources, *(model_files(self.source) if self.source else []),
-                      *([self.measured] if self.measured else [])]
+                      *([self.measured.path] if self.measured else [])]
             refuse_inputs(report_paths(target) if target else (), [*inputs, output], "give --report another name")
-            validation = None if self.measured is None else read_validation_run(self.measured)
             correct = program_corrector(model, mode=self.mode, outside=self.outside, label=str(path),
                                         workers=self.workers)
             _next(stages)
@@ -180,12 +180,12 @@ class CompensationJob:
                                         root=self.output_root, into=outputs)
                 _next(stages)
                 mode = self.mode or model.method
-                landed = None if validation is None else measured_landing(report, validation, model.T_tracker_base)
+                landed = None if self.measured is None else measured_landing(report, self.measured, model.T_tracker_base)
                 compliance = compliance_report(
                     report, model.nominal, criteria=self.criteria, model=model,
                     model_info=_model_info(self.model, mode, self.source), mode=mode,
                     files=[file_entry("program", p) for p in sources]
-                    + ([file_entry("validation run", self.measured)] if self.measured else [])
+                    + ([file_entry("validation run", self.measured.path)] if self.measured else [])
                     + _output_entries(written, outputs),
                     options=self.options(), timing=timed, cycle_time_before=before if timed is not None else None,
                     workers=self.workers, measured=landed,

@@ -13,20 +13,10 @@ the landing estimate, and how often the estimate covered it.
 import numpy as np
 from scipy.spatial import cKDTree
 
-from trajcomp.calibration.measurements import read_measurements
 from trajcomp.errors import ReadError
 from trajcomp.report.verdict import check
 
 MATCH_DEG = 0.01  # a row commanding every joint within this of a target's written joints measured that target
-
-
-def read_validation_run(path):
-    """The rows of a validation run (`Measurements`); ReadError without commanded joints or measured positions."""
-    meas = read_measurements(path)
-    if meas.joints is None or meas.measured is None:
-        raise ReadError(f"{meas.path}: measured landings need the commanded joints j1..j6 (as written) and the "
-                        "measured positions mx, my, mz")
-    return meas
 
 
 def measured_landing(report, meas, T_tracker_base=None):
@@ -37,7 +27,7 @@ def measured_landing(report, meas, T_tracker_base=None):
     report : ProgramReport
         The compensation's targets (``T_target`` (N, 4, 4), written joints ``q`` (N, 6) rad).
     meas : Measurements
-        The validation run (`read_validation_run`): commanded joints and
+        The validation run (`trajcomp.calibration.measurements.read_validation_run`): commanded joints and
         measured TCP positions, base frame (or tracker frame, when its layout
         says so and ``T_tracker_base`` is given).
     T_tracker_base : ndarray, shape (4, 4), optional
