@@ -11,6 +11,7 @@ import os
 import signal
 import subprocess
 import sys
+import threading
 import time
 from pathlib import Path
 
@@ -18,7 +19,7 @@ import pytest
 
 from tests.signal_runs import STOPPING, long_program, run_stopped
 from trajcomp.compensation.batch import ERROR, FileResult, run_batch
-from trajcomp.support.parallel import WorkerLost, in_background, map_blocks, share_blocks
+from trajcomp.support.parallel import WorkerLost, Workers, in_background, map_blocks, share_blocks
 from trajcomp.support.signals import Interrupted, held, raised
 
 pytestmark = pytest.mark.skipif(not sys.platform.startswith("linux"), reason="process groups, /proc and fork")
@@ -109,6 +110,20 @@ def test_a_stopping_signal_to_one_worker_stops_this_process_as_that_signal(signu
         time.sleep(5)  # the signal comes back to this process
     assert stop.value.signum == signum and stop.value.exit_code == STOPPING[signum]
     assert multiprocessing.active_children() == []
+
+
+def test_a_signal_to_a_worker_ending_after_its_last_block_still_stops_this_process():
+    def block(k):  # the worker then lingers in its exit for 2 s, as a loaded machine lets it
+        multiprocessing.util.Finalize(None, time.sleep, args=(2.0,), exitpriority=0)
+        return os.getpid()
+
+    with raised(), pytest.raises(Interrupted) as stop:
+        with Workers(block, 1) as pool:
+            pool.submit(0)
+            worker = pool.result(0)
+            threading.Timer(0.3, os.kill, (worker, signal.SIGHUP)).start()  # as the pool closes
+        time.sleep(5)
+    assert stop.value.signum == signal.SIGHUP
 
 
 def test_a_background_worker_stopped_by_a_signal_stops_this_process_while_it_computes():
