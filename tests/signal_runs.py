@@ -134,8 +134,17 @@ def _children(pid):
         return []
 
 
+def _has_memory(entry):
+    """Whether the process of ``/proc`` entry ``entry`` still has its memory: one that is ending has released it
+    (an empty command line) and runs no more of its code."""
+    try:
+        return bool((entry / "cmdline").read_bytes())
+    except OSError:
+        return False
+
+
 def _group(pgid):
-    """Processes of process group ``pgid`` still running (zombies not counted)."""
+    """Processes of process group ``pgid`` still running (zombies and those already ending not counted)."""
     left = []
     for entry in Path("/proc").iterdir():
         if not entry.name.isdigit():
@@ -144,6 +153,6 @@ def _group(pgid):
             fields = (entry / "stat").read_text().rsplit(")", 1)[1].split()
         except OSError:
             continue
-        if int(fields[2]) == pgid and fields[0] != "Z":
+        if int(fields[2]) == pgid and fields[0] != "Z" and _has_memory(entry):
             left.append(int(entry.name))
     return left

@@ -102,7 +102,7 @@ def _run(argv):
     try:
         check()  # a signal that came while the program started (`trajcomp.support.signals.hold_from_start`)
         args = parse(build_parser(_needed(argv)), argv)
-        logging.basicConfig(level=logging.WARNING, format="trajcomp: warning: %(message)s")
+        logging.basicConfig(level=logging.WARNING, handlers=[_warnings()])
         return args.run(args) or 0
     except ToleranceError as exc:
         print(f"trajcomp: {exc}", file=sys.stderr)
@@ -128,8 +128,42 @@ def _run(argv):
         return CRASHED
 
 
+def _warnings():
+    """The handler printing logged warnings on stderr: trajcomp's as ``trajcomp: warning: ...``, another library's
+    (Dask's cluster) with its logger's name on one line (an exception named, no traceback).
+
+    Only warnings and errors: a library's own INFO records (Dask logs each
+    worker's start) are not printed. Once a stopping signal came, another
+    library's records are dropped: what its processes say on the way down
+    follows from the stop the run reports.
+    """
+    handler = logging.StreamHandler()
+    handler.setLevel(logging.WARNING)
+    handler.setFormatter(_OneLine())
+    handler.addFilter(lambda record: record.name.partition(".")[0] == "trajcomp" or stopped() is None)
+    return handler
+
+
+class _OneLine(logging.Formatter):
+    """A logged record as one line: ``trajcomp: warning: [logger: ]message[ (ExceptionType: text)]``."""
+
+    def format(self, record):
+        if record.name.partition(".")[0] == "trajcomp":
+            return f"trajcomp: warning: {record.getMessage()}"
+        message = " ".join(record.getMessage().split())
+        if record.exc_info and record.exc_info[1] is not None:
+            error = record.exc_info[1]
+            message += f" ({type(error).__name__}: {error})"
+        return f"trajcomp: warning: {record.name}: {message}"
+
+
 def _stopped(stop):
-    """Say that the run was stopped by a signal (`Interrupted` ``stop``); its exit code."""
+    """Say that the run was stopped by a signal (`Interrupted` ``stop``); its exit code.
+
+    Nothing logged is printed after it (a library's threads and processes
+    on their way down).
+    """
+    logging.disable()
     if stop.signum != signal.SIGINT:
         print(f"trajcomp: terminated ({stop.name}): what was not finished was not written", file=sys.stderr)
         return stop.exit_code

@@ -7,6 +7,7 @@ distributed cluster (``scheduler``: an address, or ``"local"`` for a local
 cluster), and turns every error of one file into that file's result.
 """
 
+import atexit
 import dataclasses
 import glob
 import json
@@ -18,7 +19,7 @@ from trajcomp.support import crash
 from trajcomp.support.atomic import write_atomic
 from trajcomp.errors import TrajcompError
 from trajcomp.support.parallel import WorkerLost, Workers, can_fork
-from trajcomp.support.signals import stopped
+from trajcomp.support.signals import held, stopped
 
 log = logging.getLogger(__name__)
 
@@ -209,9 +210,12 @@ def _on_dask(job, inputs, outputs, jobs, scheduler, done):
         raise TrajcompError(
             f"--scheduler needs Dask distributed ({exc}); install it with: pip install 'trajcomp[cluster]'"
         ) from exc
-    cluster = LocalCluster(n_workers=max(jobs, 1), threads_per_worker=1, dashboard_address=None) \
-        if scheduler == "local" else None
+    if scheduler == "local":
+        _start_resource_tracker()
+    cluster = None
     try:
+        if scheduler == "local":
+            cluster = LocalCluster(n_workers=max(jobs, 1), threads_per_worker=1, dashboard_address=None)
         with Client(cluster if cluster is not None else scheduler, timeout="20s") as client:
             futures = client.map(run_one, [job] * len(inputs), inputs, outputs, pure=False)
             where = {future.key: k for k, future in enumerate(futures)}
@@ -225,12 +229,36 @@ def _on_dask(job, inputs, outputs, jobs, scheduler, done):
                                             message=f"its Dask worker died each time it was tried ({lost}); "
                                             "it was not compensated")
                 done(results[k])
-            return results
-    except OSError as exc:
-        raise TrajcompError(f"--scheduler {scheduler}: cannot reach the Dask scheduler: {exc}") from exc
-    finally:
         if cluster is not None:
             _close_local(cluster)
+        return results
+    except OSError as exc:
+        raise TrajcompError(f"--scheduler {scheduler}: cannot reach the Dask scheduler: {exc}") from exc
+    except KeyboardInterrupt:  # a stopping signal: no close of a local cluster, here or by Dask's exit function
+        # (on an error, that function closes it)
+        if scheduler == "local":
+            from distributed.deploy.spec import close_clusters
+
+            atexit.unregister(close_clusters)  # it would wait up to 10 s and print a traceback
+        raise
+
+
+def _start_resource_tracker():
+    """Start multiprocessing's resource tracker, which a local Dask cluster's processes share, deaf to the stopping
+    signals.
+
+    It ignores SIGINT and SIGTERM itself, not SIGHUP: killed by a SIGHUP to
+    the process group, a new one is started for the next semaphore, which
+    prints a KeyError traceback for each semaphore released that it never
+    saw, and outlives the run. Started here with the signals held
+    (`trajcomp.support.signals.held`), it keeps them blocked for good (a
+    signal mask is inherited); a signal to this process meanwhile is raised
+    after. It ends when the last process of the run closes its pipe.
+    """
+    from multiprocessing import resource_tracker
+
+    with held():
+        resource_tracker.ensure_running()
 
 
 def _close_local(cluster):
@@ -238,7 +266,9 @@ def _close_local(cluster):
 
     A nanny still restarting a worker that died (the OOM killer) can fail
     the close ("can only join a started process"): the results are in by
-    then, and the processes go with the cluster.
+    then, and the processes go with the cluster. A run that a stopping
+    signal stopped does not close it (a second or more): its worker
+    processes end when this one does (they watch a pipe from it).
     """
     try:
         cluster.close()
