@@ -74,6 +74,17 @@ def test_a_signal_to_a_batch_group_ends_it_with_the_files_done_whole_and_no_summ
     assert cam.exists()
 
 
+def test_a_sighup_to_a_dask_batch_group_ends_it_quietly_with_no_process_left(kuka_model, tmp_path):
+    pytest.importorskip("dask.distributed")
+    _batch(tmp_path, count=2, targets=1500)
+    command = ["compensate", "cam", "--model", str(kuka_model), "-o", "out", "--jobs", "2", "--scheduler", "local"]
+    outcome = run_stopped(command, tmp_path, signal.SIGHUP, 5.0, "group")  # the cluster computing
+    finished = {f"out/p{k}.csv" for k in range(2)} | {"out/summary.json"}
+    assert outcome.problems(signal.SIGHUP, lambda files: set(files) == finished,
+                            lambda files: set(files) < finished - {"out/summary.json"}, deadline=SLACK) == []
+    assert "warning" not in outcome.stderr  # neither Dask's INFO records nor its complaints on the way down
+
+
 def test_a_batch_worker_killed_by_sigkill_fails_its_file_and_the_batch_writes_its_summary(kuka_model, tmp_path):
     _batch(tmp_path, count=3, targets=3000)
     command = ["compensate", "cam", "--model", str(kuka_model), "-o", "out", "--jobs", "2"]
@@ -302,6 +313,20 @@ def test_a_dask_batch_file_whose_worker_dies_each_time_is_an_error_and_the_other
                         scheduler="local")
     assert [r.status for r in results] == ["pass", ERROR, "pass"]
     assert "Dask worker died" in results[1].message
+
+
+def test_the_resource_tracker_a_dask_batch_shares_outlives_a_sighup_to_the_group():
+    code = ("import os, signal, time\n"
+            "from multiprocessing import resource_tracker\n"
+            "from trajcomp.compensation.batch import _start_resource_tracker\n"
+            "_start_resource_tracker()\n"
+            "tracker = resource_tracker._resource_tracker._pid\n"
+            "os.kill(tracker, signal.SIGHUP)\n"
+            "time.sleep(0.3)\n"
+            "print(os.waitpid(tracker, os.WNOHANG))\n")
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60,
+                          env=dict(os.environ, PYTHONPATH=str(Path(__file__).resolve().parents[2])))
+    assert done.stdout.strip() == "(0, 0)", done.stderr  # still running
 
 
 def test_what_a_run_killed_while_committing_leaves_hidden_the_next_run_cleans(kuka_model, tmp_path):
