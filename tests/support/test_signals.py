@@ -232,6 +232,23 @@ def test_a_signal_during_the_command_lines_imports_ends_the_run_with_its_code(en
     assert not done.stdout  # the command did not run
 
 
+@pytest.mark.parametrize("entry", ["trajcomp", "trajcomp.cli"])
+def test_a_signal_as_python_m_imports_the_package_ends_the_run_with_its_code(entry, tmp_path):
+    """``python -m trajcomp[.cli]`` imports the package first: its imports (logging, the errors) are held too."""
+    (tmp_path / "sitecustomize.py").write_text(
+        "import os, signal, sys\n"
+        "class SignalOnImport:\n"
+        "    def find_spec(self, name, path=None, target=None):\n"
+        "        if name == 'trajcomp.errors':\n"
+        "            os.kill(os.getpid(), signal.SIGINT)\n"
+        "sys.meta_path.insert(0, SignalOnImport())\n")
+    root = Path(__file__).resolve().parents[2]
+    done = subprocess.run([sys.executable, "-m", entry, "robots"], capture_output=True, text=True, timeout=60,
+                          env=dict(os.environ, PYTHONPATH=f"{tmp_path}{os.pathsep}{root}"))
+    assert done.returncode == 130 and "Traceback" not in done.stderr, done.stderr
+    assert not done.stdout
+
+
 def test_a_signal_held_while_another_thread_runs_is_raised_after_the_block():
     """The kernel gives a process's signal to a thread not blocking it: the hold must not depend on the mask."""
     import threading
