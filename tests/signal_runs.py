@@ -127,20 +127,30 @@ def _files(folder):
 
 
 def _children(pid):
-    try:
-        with open(f"/proc/{pid}/task/{pid}/children") as handle:
-            return [int(c) for c in handle.read().split()]
-    except OSError:
-        return []
+    """The worker processes of process ``pid``, started by any of its threads (a Dask nanny's thread): its
+    children but multiprocessing's resource tracker (a Dask batch's), which is no worker and ignores the
+    stopping signals by design (they are left to its users)."""
+    children = []
+    for task in Path(f"/proc/{pid}/task").glob("*"):
+        try:
+            children += [int(c) for c in (task / "children").read_text().split()]
+        except OSError:
+            pass
+    children.sort()
+    return [child for child in children if b"resource_tracker" not in _command(child)]
 
 
-def _has_memory(entry):
-    """Whether the process of ``/proc`` entry ``entry`` still has its memory: one that is ending has released it
-    (an empty command line) and runs no more of its code."""
+def _command(pid):
     try:
-        return bool((entry / "cmdline").read_bytes())
+        return Path(f"/proc/{pid}/cmdline").read_bytes()
     except OSError:
-        return False
+        return b""
+
+
+def _has_memory(pid):
+    """Whether process ``pid`` still has its memory: one that is ending has released it (an empty command line)
+    and runs no more of its code."""
+    return bool(_command(pid))
 
 
 def _group(pgid):
@@ -153,6 +163,6 @@ def _group(pgid):
             fields = (entry / "stat").read_text().rsplit(")", 1)[1].split()
         except OSError:
             continue
-        if int(fields[2]) == pgid and fields[0] != "Z" and _has_memory(entry):
+        if int(fields[2]) == pgid and fields[0] != "Z" and _has_memory(entry.name):
             left.append(int(entry.name))
     return left

@@ -30,12 +30,13 @@ import traceback
 from trajcomp import __version__
 from trajcomp.support.crash import bug_message, save_traceback
 from trajcomp.support.crash import EXIT_CODE as CRASHED
-from trajcomp.support.signals import Interrupted, check, raised, stopped
+from trajcomp.support.signals import STOPPING, Interrupted, check, raised, stopped
 from trajcomp.support.threads import THREAD_VARIABLES
 from trajcomp.commands import COMMANDS, EXIT_CODES_HELP
 from trajcomp.errors import ToleranceError, TrajcompError
 
 INTERRUPTED = 128 + signal.SIGINT  # 130: exit code of a run stopped by Ctrl-C (SIGINT), as shells report it
+STOPPED_CODES = {128 + signum for signum in STOPPING}  # 130, 143, 129
 PIPE_CLOSED = 128 + signal.SIGPIPE  # 141: the output's reader went away, as shells report a tool SIGPIPE stops
 
 
@@ -93,7 +94,11 @@ def main(argv=None):
     for name in THREAD_VARIABLES:  # before the commands import numpy (this module does not)
         os.environ.setdefault(name, "1")
     with raised():  # SIGINT, SIGTERM and SIGHUP unwind the run (in the main thread; elsewhere as they are)
-        return _run(argv)
+        code = _run(argv)
+    if code in STOPPED_CODES:  # stopped: one that follows (a Dask worker's, sent on as it is ended) keeps its code
+        for signum in STOPPING:
+            signal.signal(signum, signal.SIG_IGN)
+    return code
 
 
 def _run(argv):

@@ -8,10 +8,14 @@ cluster), and turns every error of one file into that file's result.
 """
 
 import atexit
+import contextlib
 import dataclasses
 import glob
 import json
 import logging
+import os
+import signal
+import threading
 from pathlib import Path
 
 from trajcomp import __version__, formats
@@ -19,7 +23,7 @@ from trajcomp.support import crash
 from trajcomp.support.atomic import write_atomic
 from trajcomp.errors import TrajcompError
 from trajcomp.support.parallel import WorkerLost, Workers, can_fork
-from trajcomp.support.signals import held, stopped
+from trajcomp.support.signals import STOPPING, die_by, held, stopped
 
 log = logging.getLogger(__name__)
 
@@ -205,7 +209,7 @@ def _reported(result, done):
 
 def _on_dask(job, inputs, outputs, jobs, scheduler, done):
     try:
-        from dask.distributed import Client, KilledWorker, LocalCluster, as_completed
+        from dask.distributed import Client, KilledWorker, LocalCluster, WorkerPlugin, as_completed
     except ImportError as exc:
         raise TrajcompError(
             f"--scheduler needs Dask distributed ({exc}); install it with: pip install 'trajcomp[cluster]'"
@@ -215,8 +219,14 @@ def _on_dask(job, inputs, outputs, jobs, scheduler, done):
     cluster = None
     try:
         if scheduler == "local":
-            cluster = LocalCluster(n_workers=max(jobs, 1), threads_per_worker=1, dashboard_address=None)
+            try:
+                cluster = LocalCluster(n_workers=max(jobs, 1), threads_per_worker=1, dashboard_address=None)
+            except RuntimeError as exc:  # "Nanny failed to start": a worker process died as it started
+                raise TrajcompError(f"--scheduler local: the local Dask cluster did not start ({exc}: a worker "
+                                    "process died as it started)") from exc
         with Client(cluster if cluster is not None else scheduler, timeout="20s") as client:
+            if cluster is not None:
+                client.register_plugin(_stops_the_run(WorkerPlugin, os.getpid()))
             futures = client.map(run_one, [job] * len(inputs), inputs, outputs, pure=False)
             where = {future.key: k for k, future in enumerate(futures)}
             results = [None] * len(futures)
@@ -241,6 +251,39 @@ def _on_dask(job, inputs, outputs, jobs, scheduler, done):
 
             atexit.unregister(close_clusters)  # it would wait up to 10 s and print a traceback
         raise
+
+
+def _stops_the_run(plugin_base, run):
+    """A Dask worker plugin (a ``plugin_base``, Dask's WorkerPlugin) for a local cluster: a stopping signal to a
+    worker process stops the whole run, the ``trajcomp`` process ``run``.
+
+    Without it a Dask worker that SIGTERM, SIGINT or SIGHUP kills is
+    restarted by its nanny and the batch goes on. In the worker's process
+    (its main thread, where the worker's event loop runs) each of them is
+    sent on to ``run`` (which stops as if it had received it) and then ends
+    the worker by its default action; while the worker closes (its nanny
+    ends it at the batch's end) it only ends it. Defined here, with Dask
+    imported: Dask sends it by value.
+    """
+
+    class StopsTheRun(plugin_base):
+        name = "trajcomp-stops-the-run"
+
+        def setup(self, worker):
+            if threading.current_thread() is not threading.main_thread():  # a worker in a thread: no handlers
+                return
+
+            def stop(signum, frame):
+                if worker.status.name in ("running", "paused"):
+                    with contextlib.suppress(ProcessLookupError):
+                        os.kill(run, signum)
+                die_by(signum)
+
+            for signum in STOPPING:
+                if signal.getsignal(signum) is not signal.SIG_IGN:
+                    signal.signal(signum, stop)
+
+    return StopsTheRun()
 
 
 def _start_resource_tracker():
