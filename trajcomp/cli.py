@@ -89,13 +89,19 @@ def parse(parser, argv):
 
 
 def main(argv=None):
-    """Run the CLI; returns the exit code (also used as the console script)."""
+    """Run the CLI; returns the exit code (also used as the console script).
+
+    Run as the program (no ``argv``: this process's command line), a run a
+    signal stopped then ignores those that follow (a Dask worker's, sent on
+    as it is ended), so that the process exits with the first one's code.
+    """
+    program = argv is None
     argv = sys.argv[1:] if argv is None else list(argv)
     for name in THREAD_VARIABLES:  # before the commands import numpy (this module does not)
         os.environ.setdefault(name, "1")
     with raised():  # SIGINT, SIGTERM and SIGHUP unwind the run (in the main thread; elsewhere as they are)
         code = _run(argv)
-    if code in STOPPED_CODES:  # stopped: one that follows (a Dask worker's, sent on as it is ended) keeps its code
+    if program and code in STOPPED_CODES:
         for signum in STOPPING:
             signal.signal(signum, signal.SIG_IGN)
     return code
