@@ -127,15 +127,34 @@ def _files(folder):
 
 
 def _children(pid):
+    """The worker processes of process ``pid``, started by any of its threads (a Dask nanny's thread): its
+    children but multiprocessing's resource tracker (a Dask batch's), which is no worker and ignores the
+    stopping signals by design (they are left to its users)."""
+    children = []
+    for task in Path(f"/proc/{pid}/task").glob("*"):
+        try:
+            children += [int(c) for c in (task / "children").read_text().split()]
+        except OSError:
+            pass
+    children.sort()
+    return [child for child in children if b"resource_tracker" not in _command(child)]
+
+
+def _command(pid):
     try:
-        with open(f"/proc/{pid}/task/{pid}/children") as handle:
-            return [int(c) for c in handle.read().split()]
+        return Path(f"/proc/{pid}/cmdline").read_bytes()
     except OSError:
-        return []
+        return b""
+
+
+def _has_memory(pid):
+    """Whether process ``pid`` still has its memory: one that is ending has released it (an empty command line)
+    and runs no more of its code."""
+    return bool(_command(pid))
 
 
 def _group(pgid):
-    """Processes of process group ``pgid`` still running (zombies not counted)."""
+    """Processes of process group ``pgid`` still running (zombies and those already ending not counted)."""
     left = []
     for entry in Path("/proc").iterdir():
         if not entry.name.isdigit():
@@ -144,6 +163,6 @@ def _group(pgid):
             fields = (entry / "stat").read_text().rsplit(")", 1)[1].split()
         except OSError:
             continue
-        if int(fields[2]) == pgid and fields[0] != "Z":
+        if int(fields[2]) == pgid and fields[0] != "Z" and _has_memory(entry.name):
             left.append(int(entry.name))
     return left

@@ -499,3 +499,31 @@ def test_calibrate_prints_parameters_seen_only_together_as_their_combinations(ur
            .split(": ", 1)[1].split(", ")]
     assert "d3" in fixed and not set(fixed) & set(own)
     assert "d2 + d3" in lines["identified in combination"] and "d2" not in own
+
+
+def test_another_librarys_log_records_are_printed_from_warning_up_on_one_line():
+    import io
+    import logging
+
+    from trajcomp.cli import _warnings
+
+    handler = _warnings()
+    handler.setStream(io.StringIO())
+    logger = logging.getLogger("distributed.nanny")
+    level = logger.level
+    logger.setLevel(logging.INFO)  # as Dask sets its loggers
+    logging.getLogger().addHandler(handler)
+    try:
+        logger.info("Start Nanny at: 'tcp://127.0.0.1:41935'")
+        try:
+            raise RuntimeError("Nanny failed to start worker process")
+        except RuntimeError:
+            logger.exception("Failed to start\nworker")
+        logging.getLogger("trajcomp.api").warning("a.csv: 2 of 9 targets lie outside the compensation grid")
+    finally:
+        logging.getLogger().removeHandler(handler)
+        logger.setLevel(level)
+    assert handler.stream.getvalue().splitlines() == [
+        "trajcomp: warning: distributed.nanny: Failed to start worker (RuntimeError: Nanny failed to start worker process)",
+        "trajcomp: warning: a.csv: 2 of 9 targets lie outside the compensation grid",
+    ]

@@ -30,12 +30,13 @@ import traceback
 from trajcomp import __version__
 from trajcomp.support.crash import bug_message, save_traceback
 from trajcomp.support.crash import EXIT_CODE as CRASHED
-from trajcomp.support.signals import Interrupted, check, raised, stopped
+from trajcomp.support.signals import STOPPING, Interrupted, check, raised, stopped
 from trajcomp.support.threads import THREAD_VARIABLES
 from trajcomp.commands import COMMANDS, EXIT_CODES_HELP
 from trajcomp.errors import ToleranceError, TrajcompError
 
 INTERRUPTED = 128 + signal.SIGINT  # 130: exit code of a run stopped by Ctrl-C (SIGINT), as shells report it
+STOPPED_CODES = {128 + signum for signum in STOPPING}  # 130, 143, 129
 PIPE_CLOSED = 128 + signal.SIGPIPE  # 141: the output's reader went away, as shells report a tool SIGPIPE stops
 
 
@@ -88,12 +89,22 @@ def parse(parser, argv):
 
 
 def main(argv=None):
-    """Run the CLI; returns the exit code (also used as the console script)."""
+    """Run the CLI; returns the exit code (also used as the console script).
+
+    Run as the program (no ``argv``: this process's command line), a run a
+    signal stopped then ignores those that follow (a Dask worker's, sent on
+    as it is ended), so that the process exits with the first one's code.
+    """
+    program = argv is None
     argv = sys.argv[1:] if argv is None else list(argv)
     for name in THREAD_VARIABLES:  # before the commands import numpy (this module does not)
         os.environ.setdefault(name, "1")
     with raised():  # SIGINT, SIGTERM and SIGHUP unwind the run (in the main thread; elsewhere as they are)
-        return _run(argv)
+        code = _run(argv)
+    if program and code in STOPPED_CODES:
+        for signum in STOPPING:
+            signal.signal(signum, signal.SIG_IGN)
+    return code
 
 
 def _run(argv):
@@ -102,7 +113,7 @@ def _run(argv):
     try:
         check()  # a signal that came while the program started (`trajcomp.support.signals.hold_from_start`)
         args = parse(build_parser(_needed(argv)), argv)
-        logging.basicConfig(level=logging.WARNING, format="trajcomp: warning: %(message)s")
+        logging.basicConfig(level=logging.WARNING, handlers=[_warnings()])
         return args.run(args) or 0
     except ToleranceError as exc:
         print(f"trajcomp: {exc}", file=sys.stderr)
@@ -128,8 +139,42 @@ def _run(argv):
         return CRASHED
 
 
+def _warnings():
+    """The handler printing logged warnings on stderr: trajcomp's as ``trajcomp: warning: ...``, another library's
+    (Dask's cluster) with its logger's name on one line (an exception named, no traceback).
+
+    Only warnings and errors: a library's own INFO records (Dask logs each
+    worker's start) are not printed. Once a stopping signal came, another
+    library's records are dropped: what its processes say on the way down
+    follows from the stop the run reports.
+    """
+    handler = logging.StreamHandler()
+    handler.setLevel(logging.WARNING)
+    handler.setFormatter(_OneLine())
+    handler.addFilter(lambda record: record.name.partition(".")[0] == "trajcomp" or stopped() is None)
+    return handler
+
+
+class _OneLine(logging.Formatter):
+    """A logged record as one line: ``trajcomp: warning: [logger: ]message[ (ExceptionType: text)]``."""
+
+    def format(self, record):
+        if record.name.partition(".")[0] == "trajcomp":
+            return f"trajcomp: warning: {record.getMessage()}"
+        message = " ".join(record.getMessage().split())
+        if record.exc_info and record.exc_info[1] is not None:
+            error = record.exc_info[1]
+            message += f" ({type(error).__name__}: {error})"
+        return f"trajcomp: warning: {record.name}: {message}"
+
+
 def _stopped(stop):
-    """Say that the run was stopped by a signal (`Interrupted` ``stop``); its exit code."""
+    """Say that the run was stopped by a signal (`Interrupted` ``stop``); its exit code.
+
+    Nothing logged is printed after it (a library's threads and processes
+    on their way down).
+    """
+    logging.disable()
     if stop.signum != signal.SIGINT:
         print(f"trajcomp: terminated ({stop.name}): what was not finished was not written", file=sys.stderr)
         return stop.exit_code

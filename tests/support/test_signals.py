@@ -11,6 +11,7 @@ import os
 import signal
 import subprocess
 import sys
+import threading
 import time
 from pathlib import Path
 
@@ -18,7 +19,7 @@ import pytest
 
 from tests.signal_runs import STOPPING, long_program, run_stopped
 from trajcomp.jobs.batch import ERROR, FileResult, run_batch
-from trajcomp.support.parallel import WorkerLost, in_background, map_blocks, share_blocks
+from trajcomp.support.parallel import WorkerLost, Workers, in_background, map_blocks, share_blocks
 from trajcomp.support.signals import Interrupted, held, raised
 
 pytestmark = pytest.mark.skipif(not sys.platform.startswith("linux"), reason="process groups, /proc and fork")
@@ -73,6 +74,17 @@ def test_a_signal_to_a_batch_group_ends_it_with_the_files_done_whole_and_no_summ
     assert cam.exists()
 
 
+def test_a_sighup_to_a_dask_batch_group_ends_it_quietly_with_no_process_left(kuka_model, tmp_path):
+    pytest.importorskip("dask.distributed")
+    _batch(tmp_path, count=2, targets=1500)
+    command = ["compensate", "cam", "--model", str(kuka_model), "-o", "out", "--jobs", "2", "--scheduler", "local"]
+    outcome = run_stopped(command, tmp_path, signal.SIGHUP, 5.0, "group")  # the cluster computing
+    finished = {f"out/p{k}.csv" for k in range(2)} | {"out/summary.json"}
+    assert outcome.problems(signal.SIGHUP, lambda files: set(files) == finished,
+                            lambda files: set(files) < finished - {"out/summary.json"}, deadline=SLACK) == []
+    assert "warning" not in outcome.stderr  # neither Dask's INFO records nor its complaints on the way down
+
+
 def test_a_batch_worker_killed_by_sigkill_fails_its_file_and_the_batch_writes_its_summary(kuka_model, tmp_path):
     _batch(tmp_path, count=3, targets=3000)
     command = ["compensate", "cam", "--model", str(kuka_model), "-o", "out", "--jobs", "2"]
@@ -109,6 +121,20 @@ def test_a_stopping_signal_to_one_worker_stops_this_process_as_that_signal(signu
         time.sleep(5)  # the signal comes back to this process
     assert stop.value.signum == signum and stop.value.exit_code == STOPPING[signum]
     assert multiprocessing.active_children() == []
+
+
+def test_a_signal_to_a_worker_ending_after_its_last_block_still_stops_this_process():
+    def block(k):  # the worker then lingers in its exit for 2 s, as a loaded machine lets it
+        multiprocessing.util.Finalize(None, time.sleep, args=(2.0,), exitpriority=0)
+        return os.getpid()
+
+    with raised(), pytest.raises(Interrupted) as stop:
+        with Workers(block, 1) as pool:
+            pool.submit(0)
+            worker = pool.result(0)
+            threading.Timer(0.3, os.kill, (worker, signal.SIGHUP)).start()  # as the pool closes
+        time.sleep(5)
+    assert stop.value.signum == signal.SIGHUP
 
 
 def test_a_background_worker_stopped_by_a_signal_stops_this_process_while_it_computes():
@@ -206,6 +232,23 @@ def test_a_signal_during_the_command_lines_imports_ends_the_run_with_its_code(en
     assert not done.stdout  # the command did not run
 
 
+@pytest.mark.parametrize("entry", ["trajcomp", "trajcomp.cli"])
+def test_a_signal_as_python_m_imports_the_package_ends_the_run_with_its_code(entry, tmp_path):
+    """``python -m trajcomp[.cli]`` imports the package first: its imports (logging, the errors) are held too."""
+    (tmp_path / "sitecustomize.py").write_text(
+        "import os, signal, sys\n"
+        "class SignalOnImport:\n"
+        "    def find_spec(self, name, path=None, target=None):\n"
+        "        if name == 'trajcomp.errors':\n"
+        "            os.kill(os.getpid(), signal.SIGINT)\n"
+        "sys.meta_path.insert(0, SignalOnImport())\n")
+    root = Path(__file__).resolve().parents[2]
+    done = subprocess.run([sys.executable, "-m", entry, "robots"], capture_output=True, text=True, timeout=60,
+                          env=dict(os.environ, PYTHONPATH=f"{tmp_path}{os.pathsep}{root}"))
+    assert done.returncode == 130 and "Traceback" not in done.stderr, done.stderr
+    assert not done.stdout
+
+
 def test_a_signal_held_while_another_thread_runs_is_raised_after_the_block():
     """The kernel gives a process's signal to a thread not blocking it: the hold must not depend on the mask."""
     import threading
@@ -287,6 +330,20 @@ def test_a_dask_batch_file_whose_worker_dies_each_time_is_an_error_and_the_other
                         scheduler="local")
     assert [r.status for r in results] == ["pass", ERROR, "pass"]
     assert "Dask worker died" in results[1].message
+
+
+def test_the_resource_tracker_a_dask_batch_shares_outlives_a_sighup_to_the_group():
+    code = ("import os, signal, time\n"
+            "from multiprocessing import resource_tracker\n"
+            "from trajcomp.jobs.batch import _start_resource_tracker\n"
+            "_start_resource_tracker()\n"
+            "tracker = resource_tracker._resource_tracker._pid\n"
+            "os.kill(tracker, signal.SIGHUP)\n"
+            "time.sleep(0.3)\n"
+            "print(os.waitpid(tracker, os.WNOHANG))\n")
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60,
+                          env=dict(os.environ, PYTHONPATH=str(Path(__file__).resolve().parents[2])))
+    assert done.stdout.strip() == "(0, 0)", done.stderr  # still running
 
 
 def test_what_a_run_killed_while_committing_leaves_hidden_the_next_run_cleans(kuka_model, tmp_path):

@@ -10,10 +10,15 @@ it: the files named by paths, folders and patterns, their outputs, the
 files of one task together, the summary.
 """
 
+import atexit
+import contextlib
 import dataclasses
 import glob
 import json
 import logging
+import os
+import signal
+import threading
 from pathlib import Path
 
 from trajcomp import __version__, formats
@@ -22,7 +27,7 @@ from trajcomp.support.atomic import refuse_inputs, write_atomic
 from trajcomp.errors import TrajcompError
 from trajcomp.support.parallel import WorkerLost, Workers, can_fork
 from trajcomp.support.progress import progress
-from trajcomp.support.signals import stopped
+from trajcomp.support.signals import STOPPING, die_by, held, stopped
 
 log = logging.getLogger(__name__)
 
@@ -208,15 +213,24 @@ def _reported(result, done):
 
 def _on_dask(job, inputs, outputs, jobs, scheduler, done):
     try:
-        from dask.distributed import Client, KilledWorker, LocalCluster, as_completed
+        from dask.distributed import Client, KilledWorker, LocalCluster, WorkerPlugin, as_completed
     except ImportError as exc:
         raise TrajcompError(
             f"--scheduler needs Dask distributed ({exc}); install it with: pip install 'trajcomp[cluster]'"
         ) from exc
-    cluster = LocalCluster(n_workers=max(jobs, 1), threads_per_worker=1, dashboard_address=None) \
-        if scheduler == "local" else None
+    if scheduler == "local":
+        _start_resource_tracker()
+    cluster = None
     try:
+        if scheduler == "local":
+            try:
+                cluster = LocalCluster(n_workers=max(jobs, 1), threads_per_worker=1, dashboard_address=None)
+            except RuntimeError as exc:  # "Nanny failed to start": a worker process died as it started
+                raise TrajcompError(f"--scheduler local: the local Dask cluster did not start ({exc}: a worker "
+                                    "process died as it started)") from exc
         with Client(cluster if cluster is not None else scheduler, timeout="20s") as client:
+            if cluster is not None:
+                client.register_plugin(_stops_the_run(WorkerPlugin, os.getpid()))
             futures = client.map(run_one, [job] * len(inputs), inputs, outputs, pure=False)
             where = {future.key: k for k, future in enumerate(futures)}
             results = [None] * len(futures)
@@ -229,12 +243,69 @@ def _on_dask(job, inputs, outputs, jobs, scheduler, done):
                                             message=f"its Dask worker died each time it was tried ({lost}); "
                                             "it was not compensated")
                 done(results[k])
-            return results
-    except OSError as exc:
-        raise TrajcompError(f"--scheduler {scheduler}: cannot reach the Dask scheduler: {exc}") from exc
-    finally:
         if cluster is not None:
             _close_local(cluster)
+        return results
+    except OSError as exc:
+        raise TrajcompError(f"--scheduler {scheduler}: cannot reach the Dask scheduler: {exc}") from exc
+    except KeyboardInterrupt:  # a stopping signal: no close of a local cluster, here or by Dask's exit function
+        # (on an error, that function closes it)
+        if scheduler == "local":
+            from distributed.deploy.spec import close_clusters
+
+            atexit.unregister(close_clusters)  # it would wait up to 10 s and print a traceback
+        raise
+
+
+def _stops_the_run(plugin_base, run):
+    """A Dask worker plugin (a ``plugin_base``, Dask's WorkerPlugin) for a local cluster: a stopping signal to a
+    worker process stops the whole run, the ``trajcomp`` process ``run``.
+
+    Without it a Dask worker that SIGTERM, SIGINT or SIGHUP kills is
+    restarted by its nanny and the batch goes on. In the worker's process
+    (its main thread, where the worker's event loop runs) each of them is
+    sent on to ``run`` (which stops as if it had received it) and then ends
+    the worker by its default action; while the worker closes (its nanny
+    ends it at the batch's end) it only ends it. Defined here, with Dask
+    imported: Dask sends it by value.
+    """
+
+    class StopsTheRun(plugin_base):
+        name = "trajcomp-stops-the-run"
+
+        def setup(self, worker):
+            if threading.current_thread() is not threading.main_thread():  # a worker in a thread: no handlers
+                return
+
+            def stop(signum, frame):
+                if worker.status.name in ("running", "paused"):
+                    with contextlib.suppress(ProcessLookupError):
+                        os.kill(run, signum)
+                die_by(signum)
+
+            for signum in STOPPING:
+                if signal.getsignal(signum) is not signal.SIG_IGN:
+                    signal.signal(signum, stop)
+
+    return StopsTheRun()
+
+
+def _start_resource_tracker():
+    """Start multiprocessing's resource tracker, which a local Dask cluster's processes share, deaf to the stopping
+    signals.
+
+    It ignores SIGINT and SIGTERM itself, not SIGHUP: killed by a SIGHUP to
+    the process group, a new one is started for the next semaphore, which
+    prints a KeyError traceback for each semaphore released that it never
+    saw, and outlives the run. Started here with the signals held
+    (`trajcomp.support.signals.held`), it keeps them blocked for good (a
+    signal mask is inherited); a signal to this process meanwhile is raised
+    after. It ends when the last process of the run closes its pipe.
+    """
+    from multiprocessing import resource_tracker
+
+    with held():
+        resource_tracker.ensure_running()
 
 
 def _close_local(cluster):
@@ -242,7 +313,9 @@ def _close_local(cluster):
 
     A nanny still restarting a worker that died (the OOM killer) can fail
     the close ("can only join a started process"): the results are in by
-    then, and the processes go with the cluster.
+    then, and the processes go with the cluster. A run that a stopping
+    signal stopped does not close it (a second or more): its worker
+    processes end when this one does (they watch a pipe from it).
     """
     try:
         cluster.close()

@@ -32,8 +32,8 @@ import time
 from multiprocessing import connection
 
 from trajcomp.errors import TrajcompError
-from trajcomp.support.signals import (STOPPING, Interrupted, check, die_by, held, raise_in_this_process,
-                                      release_inherited, signal_of)
+from trajcomp.support.signals import (STOPPING, Interrupted, check, default_from_now, die_by, held,
+                                      raise_in_this_process, release_inherited, signal_of)
 from trajcomp.support.threads import pin_loaded
 
 _LOOKAHEAD = 2  # blocks a worker may compute ahead of the consumer, each
@@ -180,6 +180,7 @@ def share_blocks(function, count, workers=1):
         try:
             release_inherited()
             sending.send(list(blocks()))  # at the end: a result sent at once would wait for this process to read it
+            default_from_now()
         except KeyboardInterrupt as stop:  # SIGINT, SIGTERM, SIGHUP: die by it, for this process to see
             die_by(signal_of(stop))
 
@@ -205,15 +206,15 @@ def share_blocks(function, count, workers=1):
     finally:
         for process in processes:
             process.join()
+    codes = sorted({process.exitcode for process in processes} - {0})
+    stopped = [-code for code in codes if code is not None and -code in STOPPING]
+    if stopped:  # a signal to a helper stops the run as it would this process, also once its blocks were sent
+        raise Interrupted(stopped[0])
     done.sort(key=lambda block: block[0])
     for _, _, error in done:
         if error is not None:
             raise error
     if len(done) < count:
-        codes = sorted({process.exitcode for process in processes} - {0})
-        stopped = [-code for code in codes if code is not None and -code in STOPPING]
-        if stopped:  # a signal to the helper stops the run as it would this process
-            raise Interrupted(stopped[0])
         raise WorkerLost(f"a helper process {_death(codes[0])} before sending the blocks it had taken")
     return [result for _, result, _ in done]
 
@@ -301,7 +302,7 @@ class Workers:
         self._busy = {}  # worker process -> its block, or None when idle
         self._connections = {}  # worker process -> its end of the pipe
         self._stopped = None  # the exception that ends every block: a worker stopped by a signal
-        self._closing = False
+        self._closing = None  # once closing: whether this process stops the workers (on an exception) or lets them end
         for _ in range(workers):
             self._start_worker()
         _OPEN.add(self)
@@ -333,7 +334,7 @@ class Workers:
 
     def __exit__(self, kind, error, trace):
         with self._lock:
-            self._closing = True
+            self._closing = "stopping" if error is not None else "ending"
             for process in self._busy:
                 if error is None:
                     with contextlib.suppress(OSError):
@@ -410,11 +411,14 @@ class Workers:
         process.join()
         k = self._busy.pop(process)
         code = process.exitcode
-        if self._closing:
+        if self._closing == "stopping":  # this process's own SIGTERM, or a death that no block waits for now
             return
-        if code is not None and -code in STOPPING:  # the whole run stops, by the same signal
+        if code is not None and -code in STOPPING:  # the whole run stops, by the same signal, also when it came
+            # to a worker ending after its last block
             self._stopped = Interrupted(-code)
             os.kill(os.getpid(), -code)
+            return
+        if self._closing:  # it died ending, its blocks done
             return
         lost = WorkerLost(f"a worker process {_death(code)} before sending its result"
                           + (" (out of memory? the kernel's OOM killer sends SIGKILL)" if code == -signal.SIGKILL else ""))
@@ -458,9 +462,9 @@ def _serve(function, connection, parent):
             try:
                 k = connection.recv()
             except EOFError:
-                return
+                break
             if k is None:
-                return
+                break
             try:
                 answer = k, True, function(k)
             except Exception as error:  # noqa: BLE001 (the caller raises it, at its block)
@@ -469,10 +473,9 @@ def _serve(function, connection, parent):
                 connection.send(answer)
             except Exception as error:  # noqa: BLE001 (a result or error that cannot be pickled)
                 connection.send((k, False, TrajcompError(f"block {k}: its result cannot be sent back: {error!r}")))
+        default_from_now()  # done: a signal in its exit ends it as it is, no exception there
     except KeyboardInterrupt as stop:  # SIGINT, SIGTERM, SIGHUP: unwound; now die by it, for the parent to see
         die_by(signal_of(stop))
-    for signum in STOPPING:  # done: a signal from now on ends it as it is (no exception in its exit)
-        signal.signal(signum, signal.SIG_DFL)
 
 
 def init_worker(parent=None):

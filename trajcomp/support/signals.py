@@ -188,6 +188,14 @@ def _raise_held():
             raise Interrupted(signum)
 
 
+def default_from_now():
+    """Have each of `STOPPING` end this process by its default action from now on (a worker whose work is done:
+    a signal in its exit is no exception there, and its parent sees it killed by that signal)."""
+    for signum in STOPPING:
+        if signal.getsignal(signum) is not signal.SIG_IGN:
+            signal.signal(signum, signal.SIG_DFL)
+
+
 def die_by(signum):
     """End this process as ``signum``'s default action does (its parent sees it killed by that signal)."""
     signal.signal(signum, signal.SIG_DFL)
