@@ -509,20 +509,15 @@ def test_another_librarys_log_records_are_printed_from_warning_up_on_one_line():
 
     handler = _warnings()
     handler.setStream(io.StringIO())
-    logger = logging.getLogger("distributed.nanny")
-    level = logger.level
-    logger.setLevel(logging.INFO)  # as Dask sets its loggers
-    logging.getLogger().addHandler(handler)
+    nanny, api = logging.Logger("distributed.nanny"), logging.Logger("trajcomp.api")  # apart from the logging tree
+    for logger in (nanny, api):  # that other tests' runs configure
+        logger.addHandler(handler)
+    nanny.info("Start Nanny at: 'tcp://127.0.0.1:41935'")  # as Dask logs at INFO
     try:
-        logger.info("Start Nanny at: 'tcp://127.0.0.1:41935'")
-        try:
-            raise RuntimeError("Nanny failed to start worker process")
-        except RuntimeError:
-            logger.exception("Failed to start\nworker")
-        logging.getLogger("trajcomp.api").warning("a.csv: 2 of 9 targets lie outside the compensation grid")
-    finally:
-        logging.getLogger().removeHandler(handler)
-        logger.setLevel(level)
+        raise RuntimeError("Nanny failed to start worker process")
+    except RuntimeError:
+        nanny.exception("Failed to start\nworker")
+    api.warning("a.csv: 2 of 9 targets lie outside the compensation grid")
     assert handler.stream.getvalue().splitlines() == [
         "trajcomp: warning: distributed.nanny: Failed to start worker (RuntimeError: Nanny failed to start worker process)",
         "trajcomp: warning: a.csv: 2 of 9 targets lie outside the compensation grid",

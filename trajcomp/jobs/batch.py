@@ -300,12 +300,21 @@ def _start_resource_tracker():
     saw, and outlives the run. Started here with the signals held
     (`trajcomp.support.signals.held`), it keeps them blocked for good (a
     signal mask is inherited); a signal to this process meanwhile is raised
-    after. It ends when the last process of the run closes its pipe.
+    after. It ends when the last process of the run closes its pipe. It
+    cleans up the semaphores of a run a signal stopped without saying so
+    (its "leaked semaphore objects" warning, given to it as a ``-W`` option:
+    the run reports the stop).
     """
+    import sys
     from multiprocessing import resource_tracker
 
-    with held():
-        resource_tracker.ensure_running()
+    quiet = "ignore::UserWarning:multiprocessing.resource_tracker"
+    sys.warnoptions.append(quiet)  # the tracker is started with this process's -W options
+    try:
+        with held():
+            resource_tracker.ensure_running()
+    finally:
+        sys.warnoptions.remove(quiet)
 
 
 def _close_local(cluster):
