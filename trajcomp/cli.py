@@ -93,7 +93,10 @@ def main(argv=None):
 
     Run as the program (no ``argv``: this process's command line), a run a
     signal stopped then ignores those that follow (a Dask worker's, sent on
-    as it is ended), so that the process exits with the first one's code.
+    as it is ended), so that the process exits with the first one's code,
+    and prints nothing more that is logged (a library's threads and
+    processes on their way down). Called in a process that goes on (a test,
+    a plugin), neither is changed.
     """
     program = argv is None
     argv = sys.argv[1:] if argv is None else list(argv)
@@ -104,6 +107,7 @@ def main(argv=None):
     if program and code in STOPPED_CODES:
         for signum in STOPPING:
             signal.signal(signum, signal.SIG_IGN)
+        logging.disable()
     return code
 
 
@@ -171,10 +175,7 @@ class _OneLine(logging.Formatter):
 def _stopped(stop):
     """Say that the run was stopped by a signal (`Interrupted` ``stop``); its exit code.
 
-    Nothing logged is printed after it (a library's threads and processes
-    on their way down).
     """
-    logging.disable()
     if stop.signum != signal.SIGINT:
         print(f"trajcomp: terminated ({stop.name}): what was not finished was not written", file=sys.stderr)
         return stop.exit_code

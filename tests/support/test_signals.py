@@ -74,9 +74,11 @@ def test_a_signal_to_a_batch_group_ends_it_with_the_files_done_whole_and_no_summ
     assert cam.exists()
 
 
+@pytest.mark.xfail(strict=False, reason="known, issue 36: a Dask worker the nanny spawns as the run stops prints its "
+                   "own traceback (EOFError reading from its dead parent) in about 1 run of 5")
 def test_a_sighup_to_a_dask_batch_group_ends_it_quietly_with_no_process_left(kuka_model, tmp_path):
     pytest.importorskip("dask.distributed")
-    _batch(tmp_path, count=2, targets=1500)
+    _batch(tmp_path, count=2, targets=4000)  # still computing at 5 s on an idle machine (1,500 were done by then)
     command = ["compensate", "cam", "--model", str(kuka_model), "-o", "out", "--jobs", "2", "--scheduler", "local"]
     outcome = run_stopped(command, tmp_path, signal.SIGHUP, 5.0, "group")  # the cluster computing
     finished = {f"out/p{k}.csv" for k in range(2)} | {"out/summary.json"}
