@@ -512,7 +512,10 @@ def estimate(model, mode, q, T_target, tool=None, postures=None, other_tool=Fals
     T_target : ndarray, shape (N, 4, 4)
         Targets, base frame, mm.
     tool : ndarray, shape (4, 4), optional
-        The program's tool (TCP in the flange frame); default the measured TCP.
+        The program's tool (TCP in the flange frame); default the measured
+        TCP. On another tool, the flange's orientation error, which no
+        measured point observes, moves the program's TCP by its lever from
+        the measured one (`LandingData.flange_turn`).
     postures : ndarray of bool, shape (N,), optional
         Targets in an arm posture the calibration did not measure: their
         reference configuration is taken in a measured posture.
@@ -521,10 +524,7 @@ def estimate(model, mode, q, T_target, tool=None, postures=None, other_tool=Fals
         tools. Where the mode's correction is a field over the measured
         TCP's positions, that field holds the measured TCP's offset error,
         which the program's tool does not have: the prediction adds the
-        identified offset and the posterior variance of the offset. On any
-        tool other than the measured TCP, the flange's orientation error,
-        which no measured point observes, moves the program's TCP by its
-        lever from the measured one (`LandingData.flange_turn`).
+        identified offset and the posterior variance of the offset.
     outside : ndarray of bool, shape (N,), optional
         Targets where the mode's error field or joint residual does not
         apply (outside its grid or joint range): the kinematic model alone
@@ -549,9 +549,9 @@ def estimate(model, mode, q, T_target, tool=None, postures=None, other_tool=Fals
     identified = model.identified if model.dh_names else model.nominal.as_standard()
     at_target = identified if tool is None else identified.replace(T_flange_tool=tool)
     jac = pose_jacobian(at_target, q, names)[1][:, :3, :]
-    correction = model.error_field(mode) if mode == "composite" else None
-    correction = correction if getattr(correction, "kind", None) == KRIGING_KIND else None
-    field = mode in ("grid", "composite") and model.error_field(mode) is not None and correction is None
+    on_top = model.error_field(mode) if mode in ("grid", "composite") else None
+    correction = on_top if getattr(on_top, "kind", None) == KRIGING_KIND else None  # a re-calibration's
+    field = on_top is not None and correction is None
     if (field or mode in ("none", "linear")) and data.spread < np.radians(ORIENTATION_MARGIN):
         # the field (or the raw errors it stands for) absorbed the error the measured configuration sees there
         absorbed = _reference_jacobian(model, identified, data, T_target, q, names, postures)
