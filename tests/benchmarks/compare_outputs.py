@@ -1,6 +1,7 @@
 """Before/after byte comparison of the written programs of two source trees (not a timed test).
 
-Run:  python tests/benchmarks/compare_outputs.py BEFORE_TREE [AFTER_TREE]     (AFTER_TREE: this checkout)
+Run:  python tests/benchmarks/compare_outputs.py BEFORE_TREE [AFTER_TREE] [--only .src,.ls]
+(AFTER_TREE: this checkout; ``--only``: the programs of these suffixes alone)
 
 e.g. ``git archive main | tar -x -C /tmp/before`` then
 ``python tests/benchmarks/compare_outputs.py /tmp/before``.
@@ -37,10 +38,10 @@ ARMS = {".src": "kuka_kr6_r900", ".mod": "abb_irb4600", ".prg": "abb_irb4600", "
 RETIMES = ("auto", "none")
 
 
-def programs():
-    """The program files of the corpora (a KRL .dat goes with its .src), by path."""
+def programs(suffixes=tuple(ARMS)):
+    """The program files of the corpora of these suffixes (a KRL .dat goes with its .src), by path."""
     roots = [REPO / "tests" / "data" / "programs", REPO / "examples" / "programs"]
-    return sorted(p for root in roots for p in root.rglob("*") if p.is_file() and p.suffix.lower() in ARMS)
+    return sorted(p for root in roots for p in root.rglob("*") if p.is_file() and p.suffix.lower() in suffixes)
 
 
 def run(tree, program, model, retime, out_folder):
@@ -58,14 +59,15 @@ def run(tree, program, model, retime, out_folder):
     return done.returncode, done.stderr.replace(str(out_folder).encode(), b"<out>"), written
 
 
-def main(before_tree, after_tree=REPO):
+def main(before_tree, after_tree=REPO, suffixes=tuple(ARMS)):
     folder = Path(tempfile.mkdtemp(prefix="trajcomp-compare-"))
     models = {}
     for robot in sorted(set(ARMS.values())):
         large = bench_scale.demo_cubes(bench_scale.load_robot(robot))[0]
         models[robot] = bench_scale.make_model(folder, robot, large.corner, large.side - large.step, large.step)
     differ = 0
-    for k, program in enumerate(programs()):
+    chosen = programs(suffixes)
+    for k, program in enumerate(chosen):
         for retime in RETIMES:
             runs = [run(tree, program, models[ARMS[program.suffix.lower()]], retime, folder / f"{k}-{retime}-{side}")
                     for side, tree in (("before", before_tree), ("after", after_tree))]
@@ -80,9 +82,12 @@ def main(before_tree, after_tree=REPO):
                         print(f"{'':>11}differs: {name}")
                 if runs[0][:2] != runs[1][:2]:
                     print(f"{'':>11}exit/stderr: {runs[0][:2]} vs {runs[1][:2]}"[:2000])
-    print(f"{differ} of {2 * len(programs())} runs differ")
+    print(f"{differ} of {2 * len(chosen)} runs differ")
     return 1 if differ else 0
 
 
 if __name__ == "__main__":
-    sys.exit(main(*[Path(a).resolve() for a in sys.argv[1:3]]))
+    only = sys.argv.index("--only") if "--only" in sys.argv else None
+    suffixes = tuple(ARMS) if only is None else tuple(sys.argv[only + 1].lower().split(","))
+    trees = [Path(a).resolve() for a in (sys.argv[1:] if only is None else sys.argv[1:only])]
+    sys.exit(main(*trees, suffixes=suffixes))
