@@ -13,7 +13,6 @@ language.
 import dataclasses
 
 import numpy as np
-from scipy.stats import chi2
 
 from trajcomp.formats import find_format
 from trajcomp.formats.speeds import MotionGeometry, convert_speeds
@@ -24,7 +23,7 @@ from trajcomp.arm.kinematics import fk
 from trajcomp.programs.frames import FrameTable, in_frames
 from trajcomp.compensation.options import MAX_CORRECTION, MAX_JOINT_CHANGE
 from trajcomp.compensation.posture import check_posture, planned_joints
-from trajcomp.model.landing import QUANTILE
+from trajcomp.model.landing import QUANTILE, chi2_quantile
 from trajcomp.programs.program import Program, place_text
 from trajcomp.programs.items import replaced
 
@@ -238,7 +237,7 @@ def _with_track_placement(landing, robot, table, index):
     if track is None or track.scatter is None or not len(index):
         return landing
     values = table.track_positions(index)
-    radius = np.sqrt(chi2.ppf(QUANTILE, 3)) * track.placement_sigma(values)
+    radius = np.sqrt(chi2_quantile(QUANTILE, 3)) * track.placement_sigma(values)
     radius[track.beyond_measured(values)] = np.nan
     n = len(index)
     estimate, unseen = landing["estimate_mm"].copy(), landing["unseen_mm"].copy()

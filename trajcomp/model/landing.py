@@ -49,9 +49,8 @@ import dataclasses
 import functools
 
 import numpy as np
-from scipy.optimize import nnls
 from scipy.spatial import cKDTree
-from scipy.stats import chi2
+from scipy.special import gammaincinv
 
 from trajcomp.errors import ModelError
 from trajcomp.arm.ik import ik
@@ -286,6 +285,7 @@ def fit_growth(distance, beyond, errors, spacing, bins=GROWTH_BINS):
         ``(rms, d0, slope, outside_slope, outside_curve)``: mm, mm, mm per
         mm, mm per mm, mm per mm^2.
     """
+    from scipy.optimize import nnls  # here: compensating never fits a growth, and scipy.optimize takes a second to import
     inside = beyond <= 0.0
     groups = _bins(np.flatnonzero(inside), distance, bins)
     d = np.array([distance[rows].mean() for rows in groups])
@@ -590,6 +590,12 @@ def estimate(model, mode, q, T_target, tool=None, postures=None, other_tool=Fals
     return Estimate(held_out, np.maximum(total - held_out, 0.0), beyond)
 
 
+def chi2_quantile(level, freedom):
+    """The ``level`` quantile of the chi-square distribution of ``freedom`` degrees, float or (n,) (the same
+    numbers as ``scipy.stats.chi2.ppf``, without the seconds that importing scipy.stats adds to every run)."""
+    return 2.0 * gammaincinv(0.5 * np.asarray(freedom, dtype=float), level)
+
+
 def quantile_of_norm(mean, covariance, level=None):
     """The ``level`` quantile (N,) of |e| for Gaussian errors e ~ N(mean, covariance), mm.
 
@@ -612,7 +618,7 @@ def quantile_of_norm(mean, covariance, level=None):
                                                                                         mean)
     scale = np.where(first > 0, second / np.maximum(2.0 * first, 1e-300), 0.0)
     freedom = np.where(second > 0, 2.0 * first**2 / np.maximum(second, 1e-300), 1.0)
-    return np.sqrt(scale * chi2.ppf(level, np.maximum(freedom, 1e-6)))
+    return np.sqrt(scale * chi2_quantile(level, np.maximum(freedom, 1e-6)))
 
 
 def _reference_jacobian(model, identified, data, T_target, q, names, postures):
