@@ -1,6 +1,6 @@
 """Accuracy benchmark: prints the tables of issues 3 and 10 (not a timed test).
 
-Run:  python tests/benchmarks/bench_accuracy.py [virtual|sparse|tools|ur5|ur10|tilt ...]   (default: all)
+Run:  python tests/benchmarks/bench_accuracy.py [virtual|sparse|tools|ur5|ur10|ur10fields|tilt ...]  (default: all)
 
 1. ``virtual``: virtual robot, paper profile, the paper's two cubes:
    compensation landing error at 40 random targets per cube and mode,
@@ -33,6 +33,14 @@ Run:  python tests/benchmarks/bench_accuracy.py [virtual|sparse|tools|ur5|ur10|t
    than 2x the mean. Then the time to calibrate all 5,892 rows (target: well
    under 10 s), and how the residual the model leaves correlates between
    neighbouring grid nodes measured minutes or days apart.
+4b. ``ur10fields``: the same planes, model classes on top of the joint
+   model the training planes give (fitted on its residual there, their
+   options chosen on slabs of the training planes: `pose_fields`): the
+   product's knn and gp fields over positions, a kriging over the six
+   joints (orientation-aware), gravity compliance of the bearings about
+   the axes normal to each joint, held-out mean per plane; then the floor
+   of a held-out row: the residual's semivariogram between rows at one
+   node one Goal angle apart (no pose of series A is revisited).
 5. ``tilt``: virtual UR10, paper profile, the paper's large cube measured
    in one orientation: targets tilted by 0, +-5, +-15, +-30 deg, true
    landing error against the per-target landing estimate the verdict
@@ -53,7 +61,7 @@ for _name in THREAD_VARIABLES:  # one BLAS / OpenMP thread, as the CLI computes 
 
 import numpy as np  # noqa: E402
 
-from trajcomp.calibration.calibrate import calibrate, commanded, mode_errors, selection_words, to_base
+from trajcomp.calibration.calibrate import GP_TRIED, calibrate, commanded, mode_errors, selection_words, to_base
 from trajcomp.calibration.layout import Layout, load_layout
 from trajcomp.compensation.target_correction import compensate
 from trajcomp.paper_protocol import format_comparison, run_demo
@@ -64,10 +72,13 @@ from trajcomp.calibration.orientations import spread_orientations
 from trajcomp.calibration.measurement_plan import default_orientation, plan_grid
 from trajcomp.arm.robot import load_robot
 from trajcomp.calibration.virtual_arm import VirtualRobot
+from trajcomp.model.grid import fit_field
+from trajcomp.model.interpolate import GaussianField
 from trajcomp.model.stats import ErrorStats, format_table
 from trajcomp.support.parallel import usable_cores
 from trajcomp.arm.transforms import abc_to_matrix, matrix_to_abc, pose_to_matrix, rotvec_to_matrix
 from bench_verdict import ForeignArm  # this folder is on the script's path
+from pose_fields import LENGTHS_DEG, NUGGETS, SLABS, JointKriging, bending_features, choose_on_slabs, fit_bending
 
 ROOT = Path(__file__).resolve().parents[2]
 DATA = Path(os.environ.get("TRAJCOMP_DATA", ROOT.parent / "shared" / "data"))
@@ -196,17 +207,22 @@ def ur5_floor(robot, meas, model, reach=80.0):
           "held-out pose better than that")
 
 
+def ur10_data():
+    """The real UR10's series A: measurements, Goal positions (mm), their plane x (mm), Goal roll, pitch, yaw (N, 3)
+    deg, and the nominal robot with the data set's TCP."""
+    meas = read_measurements(UR10_IPA, load_layout(LAYOUTS / "ur10-ipa.yaml"))
+    goal = read_measurements(UR10_IPA, UR10_GOAL)
+    raw = np.degrees([[float(c.replace(",", ".")) for c in line.split(";")[4:7]]
+                      for line in UR10_IPA.read_text(encoding="utf-8").splitlines()[1:]])
+    return meas, goal, np.round(goal.position[:, 0]), raw, load_robot("ur10").replace(T_flange_tool=UR10_TOOL)
+
+
 def ur10_table():
     if not UR10_IPA.exists():
         print(f"\n== real UR10 at 23 orientations: {UR10_IPA} not present, skipped")
         return
-    meas = read_measurements(UR10_IPA, load_layout(LAYOUTS / "ur10-ipa.yaml"))
-    goal = read_measurements(UR10_IPA, UR10_GOAL)
-    plane = np.round(goal.position[:, 0])
-    raw = np.array([[float(c.replace(",", ".")) for c in line.split(";")[4:7]]
-                    for line in UR10_IPA.read_text(encoding="utf-8").splitlines()[1:]])
-    labels = [f"{r:5.0f} {p:5.0f} {y:5.0f}" for r, p, y in np.degrees(raw)]
-    robot = load_robot("ur10").replace(T_flange_tool=UR10_TOOL)
+    meas, goal, plane, raw, robot = ur10_data()
+    labels = [f"{r:5.0f} {p:5.0f} {y:5.0f}" for r, p, y in raw]
     train, test = np.isin(plane, (650, 850)), np.isin(plane, (750, 950))
     start = time.perf_counter()
     model = calibrate(robot, meas.subset(train), folds=0)
@@ -273,6 +289,79 @@ def floor(meas, robot, plane, goal):
         gap = np.median([abs(when[p] - when[o]) for p, o in pairs]) / 60.0
         print(f"  100 mm along {name:24s} {len(pairs):4d} pairs, {gap:8.1f} min apart: "
               f"{np.sum(a * b) / np.sqrt(np.sum(a * a) * np.sum(b * b)):.2f}")
+
+
+def ur10_fields_table():
+    """Model classes on top of the UR10's joint model, held out by whole planes, and the floor of a held-out row."""
+    if not UR10_IPA.exists():
+        print(f"\n== real UR10 at 23 orientations: {UR10_IPA} not present, skipped")
+        return
+    meas, goal, plane, raw, robot = ur10_data()
+    train, test = np.isin(plane, (650, 850)), np.isin(plane, (750, 950))
+    model = calibrate(robot, meas.subset(train), folds=0)
+    joints, position = commanded(robot, meas)
+    residual = to_base(model.T_tracker_base, meas.measured) - model.predict("composite", joints, position,
+                                                                            outside="clamp")[0]
+    print(f"\n== real UR10, planes x = 650, 850 mm -> 750, 950 (bench_accuracy.py ur10): classes on top of the "
+          f"default joint model, fitted on the training rows' residuals; held-out mean |error| mm (by plane)")
+
+    def show(label, predicted):
+        left = np.linalg.norm(residual[test] - predicted, axis=1)
+        by_plane = ", ".join(f"{left[plane[test] == x].mean():.4f}" for x in (750, 950))
+        print(f"{label:78s}{left.mean():8.4f}  ({by_plane})")
+
+    show("nothing (the default model)", 0.0)
+    show("knn over commanded positions (the product's field on top)",
+         fit_field(position[train], residual[train], interpolation="knn").evaluate(position[test], outside="clamp"))
+    gp = GaussianField.fit(position[train], residual[train], **GP_TRIED)
+    show(f"gp over commanded positions (likelihood: {gp.length:g} mm, nugget {gp.nugget:g})",
+         gp.evaluate(position[test]))
+    length, nugget, slabs = choose_on_slabs(position[train], joints[train], residual[train])
+    show(f"kriging over the joints ({length:g} deg, nugget {nugget:g}: chosen on {SLABS} slabs, {slabs:.4f})",
+         JointKriging(joints[train], residual[train], length, nugget).evaluate(joints[test]))
+    oracle = {(length, nugget): np.linalg.norm(residual[test] - JointKriging(
+        joints[train], residual[train], length, nugget).evaluate(joints[test]), axis=1).mean()
+        for length in LENGTHS_DEG for nugget in NUGGETS}
+    best = min(oracle, key=oracle.get)
+    label = f"  (its best on the held-out planes themselves, not a choice: {best[0]:g} deg, nugget {best[1]:g})"
+    print(f"{label:78s}{oracle[best]:8.4f}")
+    features = bending_features(robot, joints)
+    bending = features @ fit_bending(features[train], residual[train])
+    show(f"bearing compliance about the axes normal to each joint ({features.shape[2]} terms)", bending[test])
+    left = residual - bending
+    length, nugget, _ = choose_on_slabs(position[train], joints[train], left[train])
+    show(f"both (kriging {length:g} deg, nugget {nugget:g})",
+         bending[test] + JointKriging(joints[train], left[train], length, nugget).evaluate(joints[test]))
+    orientation_floor(residual, goal.position, raw)
+
+
+def orientation_floor(residual, goal, angles):
+    """The floor of a held-out row: the residual's semivariogram between rows at one node, one Goal angle apart.
+
+    Pairs of rows commanded to the same position whose Goal angles differ
+    in one of roll, pitch, yaw only, measured seconds apart: half their
+    mean squared residual difference against the angle step. A pitch step
+    turns joint 6 alone; a yaw step of 2 deg turns the wrist by 2.5 deg.
+    What is left at the smallest steps (the nugget, 3 sigma**2 for noise of
+    sigma per axis) no model of the pose predicts.
+    """
+    key = np.column_stack([np.round(goal), np.round(angles)]).astype(int)
+    index = {tuple(k): n for n, k in enumerate(key)}
+    print("\nthe floor: residual semivariogram between rows at one node, one Goal angle apart (mm^2)")
+    lowest = np.inf
+    for axis, steps in ((2, (2, 4, 6)), (1, (10, 20, 30)), (0, (10, 20, 30))):
+        cells = []
+        for step in steps:
+            shifted = key.copy()
+            shifted[:, 3 + axis] += step
+            pairs = np.array([(n, index[tuple(k)]) for n, k in enumerate(shifted) if tuple(k) in index])
+            half = 0.5 * np.sum((residual[pairs[:, 0]] - residual[pairs[:, 1]]) ** 2, axis=1).mean()
+            lowest = min(lowest, half)
+            cells.append(f"{step:2d} deg {half:.5f} ({len(pairs)})")
+        print(f"  {'roll pitch yaw'.split()[axis]:6s}" + "   ".join(cells))
+    sigma = np.sqrt(lowest / 3.0)
+    print(f"least {lowest:.5f} mm^2: noise up to {sigma:.4f} mm per axis, mean |noise| {sigma * np.sqrt(8 / np.pi):.4f}"
+          " mm: no model of the pose predicts a held-out row better than about that")
 
 
 TILTS = (0.0, 5.0, 15.0, 30.0)  # deg: each target tilted by this about a random axis of the tool's x-y plane (+ and -)
@@ -379,7 +468,7 @@ def _landing(model, virtual, rng, tilt, mode, count=40):
 
 
 TABLES = {"virtual": virtual_tables, "sparse": sparse_table, "tools": tool_table, "ur5": ur5_table, "ur10": ur10_table,
-          "tilt": tilt_table}
+          "ur10fields": ur10_fields_table, "tilt": tilt_table}
 
 if __name__ == "__main__":
     for name in sys.argv[1:] or TABLES:

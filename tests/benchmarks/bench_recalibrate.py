@@ -33,7 +33,8 @@ it was (same tracker): target a change of the mean of at most 0.005 mm.
 Then the floors: the repeatability of series B from its revisited
 configurations, and what a full calibration of each later campaign alone
 reaches on the same held-out slabs (the best a model of that campaign's own
-rows can do under this protocol), and what the series A model's update and
+rows can do under this protocol; also with bench_accuracy.py ur10fields's
+best class on top, a kriging over the joints), and what the series A model's update and
 correction reach when fitted on every row of the other slabs, not 30.
 """
 
@@ -57,6 +58,7 @@ from trajcomp.calibration.identify import region_folds  # noqa: E402
 from trajcomp.calibration.layout import Layout, load_layout  # noqa: E402
 from trajcomp.calibration.measurements import read_measurements  # noqa: E402
 from trajcomp.support.parallel import usable_cores  # noqa: E402
+from pose_fields import JointKriging, choose_on_slabs  # noqa: E402  (this folder is on the script's path)
 
 ROOT = Path(__file__).resolve().parents[2]
 DATA = Path(os.environ.get("TRAJCOMP_DATA", ROOT.parent / "shared" / "data")) / "ur10-ipa"
@@ -201,15 +203,23 @@ def floor_table(robot, model):
     for label, name in CAMPAIGNS.items():
         meas = read_measurements(DATA / name, load_layout(LAYOUT))
         joints, position = commanded(robot, meas)
-        errors = {"dh": [], "composite": []}
+        errors = {"dh": [], "composite": [], "kriged": []}
         for held in region_folds(position, SLABS)[0]:
-            own = calibrate(robot, meas.subset(np.setdiff1d(np.arange(len(meas)), held)), folds=0)
+            train = np.setdiff1d(np.arange(len(meas)), held)
+            own = calibrate(robot, meas.subset(train), folds=0)
             found = mode_errors(own, joints[held], position[held], to_base(own.T_tracker_base, meas.measured[held]))
-            for mode in errors:
+            for mode in ("dh", "composite"):
                 errors[mode].append(np.linalg.norm(found[mode], axis=1))
+            left = mode_errors(own, joints[train], position[train], to_base(own.T_tracker_base,
+                                                                            meas.measured[train]))["composite"]
+            length, nugget, _ = choose_on_slabs(position[train], joints[train], left)
+            field = JointKriging(joints[train], left, length, nugget)
+            errors["kriged"].append(np.linalg.norm(found["composite"] - field.evaluate(joints[held]), axis=1))
         print(f"{label}: a full calibration of the campaign's own other slabs ({len(meas)} rows in all) predicts its "
               f"held-out slabs at composite {np.concatenate(errors['composite']).mean():.4f}, dh "
-              f"{np.concatenate(errors['dh']).mean():.4f} mm mean")
+              f"{np.concatenate(errors['dh']).mean():.4f} mm mean; with a kriging over the joints on top (the UR10's "
+              f"best class of bench_accuracy.py ur10fields, chosen on slabs of the training rows) "
+              f"{np.concatenate(errors['kriged']).mean():.4f}")
         print(f"{label}: the series A model's update and correction fitted on every row of the other slabs instead of "
               f"{ROWS}: held-out slabs at {all_rows_floor(model, meas):.4f} mm mean")
 
