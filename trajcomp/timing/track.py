@@ -47,7 +47,12 @@ the track (the arm rests in its carriage) or whose TCP rests in the world
 while the track moves (no TCP speed to keep). At a blended corner the
 controller blends the track as the position (each motion's share of the
 superposed blend), faster than the TCP's travel where the blend cuts the
-corner; that change is not measured here (docs/tracks.md gives the gap).
+corner: a run's path carries the track so blended
+(`trajcomp.timing.path.RunPath.track`), whose e'(s) and e''(s) replace the
+progress shares above; its velocity limit bounds the path speed as a
+joint's (`RunPath.speed_bound`, ``Moves.track_velocity``) and samples
+over a limit refine the grid (`trajcomp.timing.check.dense_check`).
+Motions from rest to rest (no blend) keep the progress shares, exact there.
 Written speeds are world TCP speeds (`cruise_speeds` converts through
 ``TrackTiming.world_ratio`` and bounds them by ``speed_bound``).
 """
@@ -60,7 +65,7 @@ from trajcomp.arm.kinematics import fk
 from trajcomp.errors import TimingError
 from trajcomp.programs.frames import FrameTable
 from trajcomp.programs.items import CIRCULAR, JOINT
-from trajcomp.timing.check import LIMIT_TOLERANCE, RATE, sample_times
+from trajcomp.timing.check import LIMIT_TOLERANCE, RATE, sample_times, track_motion
 from trajcomp.timing.options import TOLERANCE
 
 MIN_LENGTH = 1e-3  # mm (TCP) or rad (joints): a motion shorter than this while the track moves has no speed to keep
@@ -188,7 +193,7 @@ def retime_on_track(moves, robot, values, field, *, programmed=None, method="aut
         bound = np.where(path, limit * carriage / change, np.inf)  # carriage TCP mm/s
     limited = dataclasses.replace(
         moves, start=np.asarray(moves.start, dtype=bool) | left, track_position=values,
-        track_acceleration=np.full(len(moves), track.acceleration),
+        track_acceleration=np.full(len(moves), track.acceleration), track_velocity=limit.copy(),
         tcp_speed=np.minimum(moves.tcp_speed / ratio, bound),
         velocity=np.minimum(moves.velocity, limit[:, None] * share),
         acceleration=np.minimum(moves.acceleration, track.acceleration * share))
@@ -254,7 +259,8 @@ def _slowed(moves, slow):
         return moves
     return dataclasses.replace(moves, tcp_speed=moves.tcp_speed / slow, velocity=moves.velocity / slow[:, None],
                                acceleration=moves.acceleration / (slow**2)[:, None],
-                               track_acceleration=moves.track_acceleration / slow**2)
+                               track_acceleration=moves.track_acceleration / slow**2,
+                               track_velocity=moves.track_velocity / slow)
 
 
 def _run_peaks(run, law, moves, limit):
@@ -262,23 +268,27 @@ def _run_peaks(run, law, moves, limit):
     and largest |acceleration| (mm/s^2) of a timed run, sampled at `RATE`."""
     if run.path is None:
         return 0.0, 0.0, 0.0
-    grid = run.grid
-    per = _per_progress(moves, run.motion_at(grid), grid, run.path(grid, 1), run.grid_rate, np.ones(len(grid) - 1, bool))
     t = sample_times(law.duration, RATE)
     s, sd, sdd = law(t)
     s = np.clip(s, 0.0, run.length)
     k = run.motion_at(s)
-    at = np.minimum(np.searchsorted(run.motion_at(grid), k, side="right") - 1, len(grid) - 1)  # a point of motion k
-    rate = np.interp(s, grid, run.grid_rate)
-    slope = np.interp(s, grid, _slopes(run.grid_rate, grid, np.ones(len(grid) - 1, bool)))
-    rho, drho = _progress_rate(moves.kind[k] == JOINT, run.path(s, 1), run.path(s, 2), rate, slope)
-    de, dde = per[at] * rho, per[at] * drho
-    velocity = np.abs(de * sd)
+    if run.track is not None:  # the path's own track position, blended as the controller blends it
+        velocity, acceleration = track_motion(run, law, t)
+    else:
+        grid = run.grid
+        inside = np.ones(len(grid) - 1, bool)
+        per = _per_progress(moves, run.motion_at(grid), grid, run.path(grid, 1), run.grid_rate, inside)
+        at = np.minimum(np.searchsorted(run.motion_at(grid), k, side="right") - 1, len(grid) - 1)  # a point of k
+        rate = np.interp(s, grid, run.grid_rate)
+        slope = np.interp(s, grid, _slopes(run.grid_rate, grid, inside))
+        rho, drho = _progress_rate(moves.kind[k] == JOINT, run.path(s, 1), run.path(s, 2), rate, slope)
+        velocity, acceleration = per[at] * rho * sd, per[at] * (drho * sd**2 + rho * sdd)
+    velocity, acceleration = np.abs(velocity), np.abs(acceleration)
     return (float(np.max(velocity, initial=0.0)), float(np.max(velocity / limit[k], initial=0.0)),
-            float(np.max(np.abs(dde * sd**2 + de * sdd), initial=0.0)))
+            float(np.max(acceleration, initial=0.0)))
 
 
-def with_track(moves, motion, grid, dq, ddq, rate, acceleration, inside=None):
+def with_track(moves, motion, grid, dq, ddq, rate, acceleration, inside=None, track=None):
     """The path's derivatives and acceleration limits with the track's position as a 7th joint (module).
 
     Parameters
@@ -297,6 +307,9 @@ def with_track(moves, motion, grid, dq, ddq, rate, acceleration, inside=None):
         The joints' acceleration limits (of the run, or of each interval).
     inside : ndarray of bool, shape (G - 1,), optional
         Interval i lies within one path (False between paths laid end to end); default all.
+    track : (ndarray (G,), ndarray (G,)), optional
+        e'(s) and e''(s) of the path's own track position (`trajcomp.timing.path.RunPath.track`: blended as the
+        controller blends it); default: the track's share of each motion's progress (exact without blends).
 
     Returns
     -------
@@ -305,13 +318,19 @@ def with_track(moves, motion, grid, dq, ddq, rate, acceleration, inside=None):
     acceleration : ndarray, shape (7,) or (G - 1, 7)
         With the track's, mm/s^2.
     """
-    inside = np.ones(len(grid) - 1, dtype=bool) if inside is None else inside
-    per = _per_progress(moves, motion, grid, dq, rate, inside)
-    rho, drho = _progress_rate(moves.kind[motion] == JOINT, dq, ddq, rate, _slopes(rate, grid, inside))
+    de, dde = _progress_derivatives(moves, motion, grid, dq, ddq, rate, inside) if track is None else track
     limit = moves.track_acceleration[motion]
     acceleration = (np.r_[acceleration, limit.min()] if np.ndim(acceleration) == 1
                     else np.c_[acceleration, limit[:-1]])
-    return np.c_[dq, per * rho], np.c_[ddq, per * drho], acceleration
+    return np.c_[dq, de], np.c_[ddq, dde], acceleration
+
+
+def _progress_derivatives(moves, motion, grid, dq, ddq, rate, inside=None):
+    """e'(s) and e''(s) (each (G,)), mm per unit of s, of the track moving with each motion's progress (module)."""
+    inside = np.ones(len(grid) - 1, dtype=bool) if inside is None else inside
+    per = _per_progress(moves, motion, grid, dq, rate, inside)
+    rho, drho = _progress_rate(moves.kind[motion] == JOINT, dq, ddq, rate, _slopes(rate, grid, inside))
+    return per * rho, per * drho
 
 
 def _per_progress(moves, motion, grid, dq, rate, inside):
