@@ -28,7 +28,7 @@ samples stands for it.
 On a moving track (`trajcomp.timing.track`) the track's position is
 interpolated as the position is: linear in each motion's share of its way,
 the two motions superposed in a blend, e = e_in + e_out - e_corner; the
-samples carry it beside the joints.
+samples carry it beside the joints, `TRACK_BLEND_GAIN` times as many in a blend.
 Where neighbouring samples differ by more than `JUMP_DEG` in a joint the
 interval is bisected (a fast wrist swing near a singularity is sampled
 finely); a jump that survives down to 1e-6 of a motion is a pass through
@@ -56,6 +56,8 @@ MIN_INTERVALS = 4  # sample intervals of a linear / circular motion from rest to
 MIN_INTERVAL_MM = 0.25  # as long as they are no shorter than this
 BLEND_SAMPLES = 32  # sample intervals on each half of a blended corner turning by 60 deg or less, up to twice that
 # for a reversal (the spline's q'' within 0.2 % there)
+TRACK_BLEND_GAIN = 4  # times the blend samples on a moving track: its position e(s), fitted through them, is then
+# where the controller puts the track for the fitted joints' TCP (3e-7 mm, not 3e-5: 1.09x its acceleration limit)
 BLEND_DEFLECTION = TOLERANCE  # mm: a blend that stays this close to its corner is left to the fit (the corner sampled)
 AMBIGUOUS_DEG = 120.0  # deg: a linear motion turning a joint by more is followed to learn which way it turns
 _MIDDLE = 2.0 * (2.5 / 16 - 3 / 32 + 1 / 64)  # |p(1/2) - corner| / (r |e_out - e_in|): 2 Omega(1/2) (lines)
@@ -198,7 +200,8 @@ class _Geometry:
         with np.errstate(divide="ignore", invalid="ignore"):
             self.blend_end[:-1] = np.where(blended, radius / self.length[:-1], 0.0)
             self.blend_start[1:] = np.where(blended, radius / self.length[1:], 0.0)
-        self.blend_samples[:-1] = np.where(blended, np.ceil(BLEND_SAMPLES * np.clip(turn, 1.0, 2.0)), 0)
+        samples = BLEND_SAMPLES * (TRACK_BLEND_GAIN if moves.on_track else 1)
+        self.blend_samples[:-1] = np.where(blended, np.ceil(samples * np.clip(turn, 1.0, 2.0)), 0)
 
     def _same_configuration(self, moves, first, last):
         """Refuse a linear or circular motion whose target is declared in another configuration than its start."""

@@ -173,6 +173,54 @@ def retime_on_track(moves, robot, values, field, *, programmed=None, method="aut
         k = int(outside[0])
         raise TimingError(f"{moves.labels[k]}: {field} {values[k]:g} mm is beyond the track's travel "
                           f"{track.position_min:g} .. {track.position_max:g} mm (track.limits of the robot)")
+    limited, limit, reasons, ratio, bound = track_limits(moves, robot, values, programmed)
+    from trajcomp.timing.retiming import retime  # here: retime's TOPP-RA imports `with_track` from this module
+
+    slow = np.ones(len(moves))
+    for _ in range(ROUNDS):
+        result = retime(_slowed(limited, slow), robot, method=method, tolerance=tolerance)
+        peaks = [_run_peaks(run, law, limited, limit) for _, run, law in result.pieces]
+        over = False
+        for (_, run, _), (_, share, acceleration) in zip(result.pieces, peaks):
+            excess = max(share, np.sqrt(acceleration / track.acceleration))
+            if excess > 1.0 + 0.5 * LIMIT_TOLERANCE:
+                slow[run.first + 1 : run.last + 1] *= excess * MARGIN
+                over = True
+        if not over:
+            break
+    peak_velocity, _, peak_acceleration = np.max(np.reshape(peaks, (-1, 3)), axis=0, initial=0.0)
+    timing = TrackTiming(field, values, ratio, bound * ratio, float(peak_velocity), float(peak_acceleration),
+                         track.velocity, track.acceleration, tuple(reasons))
+    return dataclasses.replace(result, track=timing, tcp_length=result.tcp_length * ratio,
+                               within_limits=result.within_limits and timing.within_limits)
+
+
+def track_limits(moves, robot, values, programmed=None):
+    """The motions with the track's limits folded in, as `retime_on_track` times them (see the module).
+
+    Parameters
+    ----------
+    moves : Moves
+    robot : Robot
+        With its ``track``.
+    values : ndarray, shape (M,)
+        Track position of each waypoint, mm.
+    programmed : ndarray, shape (M,), optional
+        The track speed the program allows along each motion, mm/s (NaN: none).
+
+    Returns
+    -------
+    limited : Moves
+        On the track (``track_position``), its limits per motion, the
+        carriage TCP's speed bound, the motions not timed as starts.
+    limit : ndarray, shape (M,)
+        The track's velocity limit along each motion, mm/s.
+    reasons : list of (int, str)
+        The motions moving the track that are not timed, and why.
+    ratio, bound : ndarray, shape (M,)
+        World over carriage TCP length, and the carriage TCP speed at which the track reaches ``limit``, mm/s.
+    """
+    track = robot.track
     change = np.abs(np.diff(values, prepend=values[:1]))
     limit = track.velocity if programmed is None else np.fmin(track.velocity, programmed)  # (M,) or scalar
     limit = np.broadcast_to(limit, values.shape)
@@ -197,25 +245,7 @@ def retime_on_track(moves, robot, values, field, *, programmed=None, method="aut
         tcp_speed=np.minimum(moves.tcp_speed / ratio, bound),
         velocity=np.minimum(moves.velocity, limit[:, None] * share),
         acceleration=np.minimum(moves.acceleration, track.acceleration * share))
-    from trajcomp.timing.retiming import retime  # here: retime's TOPP-RA imports `with_track` from this module
-
-    slow = np.ones(len(moves))
-    for _ in range(ROUNDS):
-        result = retime(_slowed(limited, slow), robot, method=method, tolerance=tolerance)
-        peaks = [_run_peaks(run, law, limited, limit) for _, run, law in result.pieces]
-        over = False
-        for (_, run, _), (_, share, acceleration) in zip(result.pieces, peaks):
-            excess = max(share, np.sqrt(acceleration / track.acceleration))
-            if excess > 1.0 + 0.5 * LIMIT_TOLERANCE:
-                slow[run.first + 1 : run.last + 1] *= excess * MARGIN
-                over = True
-        if not over:
-            break
-    peak_velocity, _, peak_acceleration = np.max(np.reshape(peaks, (-1, 3)), axis=0, initial=0.0)
-    timing = TrackTiming(field, values, ratio, bound * ratio, float(peak_velocity), float(peak_acceleration),
-                         track.velocity, track.acceleration, tuple(reasons))
-    return dataclasses.replace(result, track=timing, tcp_length=result.tcp_length * ratio,
-                               within_limits=result.within_limits and timing.within_limits)
+    return limited, limit, reasons, ratio, bound
 
 
 def _lengths(moves, robot, values):
