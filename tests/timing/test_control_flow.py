@@ -492,7 +492,7 @@ def test_motions_whose_start_is_not_unique_are_listed_as_unknown_not_failed(rapi
     assert "start not unique" in capsys.readouterr().err
 
 
-TURNED = "0,0.258819,0.965926,0"  # tool0 pointing down, turned by 30 deg about x
+TURNED = "0,0.258819,0.965926,0"  # the orientation [0,0,1,0] turned by 30 deg
 RAMP_MODULE = ("MODULE Ramp\n" + "".join(
     f"  CONST robtarget {name}:=[[{x},{y},{z}],[{q}],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]];\n"
     for name, (x, y, z, q) in {"P1": (1135, 0, 1415, "0,0,1,0"), "P2": (1135, 0, 1415, TURNED),
