@@ -492,6 +492,96 @@ def test_motions_whose_start_is_not_unique_are_listed_as_unknown_not_failed(rapi
     assert "start not unique" in capsys.readouterr().err
 
 
+TURNED = "0,0.258819,0.965926,0"  # the orientation [0,0,1,0] turned by 30 deg
+RAMP_MODULE = ("MODULE Ramp\n" + "".join(
+    f"  CONST robtarget {name}:=[[{x},{y},{z}],[{q}],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]];\n"
+    for name, (x, y, z, q) in {"P1": (1135, 0, 1415, "0,0,1,0"), "P2": (1135, 0, 1415, TURNED),
+                               "P3": (1195, 80, 1335, "0,0,1,0"), "P4": (1195, 80, 1335, TURNED)}.items())
+    + """  PROC main()
+    MoveJ P1, v1000, fine, tool0;
+    IF di1 = 1 THEN
+      AccSet 100, 50;
+    ENDIF
+    MoveL P2, v1000, fine, tool0;
+    MoveJ P3, v1000, fine, tool0;
+    MoveL P1, v200, fine, tool0;
+    AccSet 100, 100 \\FinePointRamp:=40;
+    MoveL P2, v1000, z10, tool0;
+    MoveJ P3, v1000, fine, tool0;
+    AccSet 100, 100;
+    MoveL P4, v1000, fine, tool0;
+    MoveJ P1, v1000, fine, tool0;
+  ENDPROC
+ENDMODULE
+""")
+
+
+def ramp_ops(text):
+    """The controller's reading of a RAPID module with AccSet: `tests.timing.test_control_flow.rapid_ops` line by
+    line, the motions keyed in file order, and ``AccSet acc, ramp [\\FinePointRamp:=f]`` as the setting ``ramp``:
+    (ramp, f) in %, f the ramp towards a fine point (the ramp where not given)."""
+    ops = []
+    for line in text.splitlines():
+        if m := re.match(r"\s*AccSet\s+[\d.]+\s*,\s*([\d.]+)\s*(?:\\FinePointRamp:=([\d.]+))?\s*;", line, re.I):
+            ops.append(Op("set", "ramp", (float(m.group(1)), float(m.group(2) or m.group(1)))))
+            continue
+        for op in rapid_ops(line):
+            motion = op.kind == "motion"
+            ops.append(Op("motion", f"m{sum(o.kind == 'motion' for o in ops)}", op.value) if motion else op)
+    return ops
+
+
+@pytest.mark.parametrize("compensated", [False, True])
+def test_rapid_softer_accset_ramp_gets_no_time_on_any_path_and_is_listed_not_failed(tmp_path, abb_model, compensated):
+    """Behind an AccSet ramp below 100 % (on a branch; ``\\FinePointRamp`` towards a fine point) the controller keeps
+    a ``\\T`` by cruising faster: on every path (`tests.timing.controller_paths`) a motion reached by a softer ramp
+    has no time written, whatever its kind (a MoveJ, a MoveL that only turns the tool); one that runs at full ramps
+    on every path gets its ``\\T``, no shorter than the reorientation at v1000's 500 deg/s or the joints' least
+    time at their limits. The motions left as written are listed under ``modelled`` (not evaluated), not as speeds
+    set at run time: ``speeds`` passes and so does the verdict."""
+    import json
+
+    from scipy.spatial.transform import Rotation
+    from trajcomp.arm.robot import load_robot
+    from tests.timing.test_timing_accelerations import least_joint_time, retimed
+
+    q, _, text = retimed(tmp_path, "Ramp.mod", RAMP_MODULE, "abb_irb4600", model=abb_model if compensated else None)
+    doc = json.loads((tmp_path / "report.json").read_text())
+    source, written = ramp_ops(RAMP_MODULE), ramp_ops(text)
+    fields = {op.name: op.value for op in source if op.kind == "motion"}
+    out = {op.name: op.value for op in written if op.kind == "motion"}
+    seen = by_motion(visits(source, "main", {"ramp": (100.0, 100.0)}))
+    quaternions = {name: [float(v) for v in q_text.split(",")] for name, q_text in
+                   re.findall(r"robtarget\s+(\w+)\s*:=\s*\[\[[^\]]*\],\s*\[([^\]]*)\]", text)}
+    robot, keys, kept, timed = load_robot("abb_irb4600"), list(fields), 0, 0
+    for n, key in enumerate(keys):
+        point, _, _, time, blended = out[key]
+        softer = any(min(v.setting("ramp")[0], 100.0 if blended else v.setting("ramp")[1]) < 100.0 for v in seen[key])
+        if softer:  # no time written; a speed (\V) no faster than programmed
+            assert time == fields[key][3] and float(out[key][2] or fields[key][1]) <= fields[key][1], (key, out[key])
+            kept += 1
+        elif time is not None:
+            before = fields[keys[n - 1]][0]
+            turn = (Rotation.from_quat(np.roll(quaternions[point], -1))
+                    * Rotation.from_quat(np.roll(quaternions[before], -1)).inv()).magnitude()
+            assert float(time) >= np.degrees(turn) / 500.0 * (1 - 1e-6), (key, time)
+            assert float(time) >= least_joint_time(robot, q[n - 1], q[n], 1.0) * (1 - 1e-6), (key, time)
+            timed += 1
+    # behind the branch: a reorientation, a MoveJ, a line; the MoveJ to a fine point. Timed: the reorientations at
+    # full ramps (compensated, they may travel a little: lines, their speeds written) and the last MoveJ
+    assert kept == 4 and timed >= (1 if compensated else 3)
+    criteria = {c["id"]: c for c in doc["verdict"]["criteria"]}
+    assert criteria["speeds"]["status"] == "pass" and doc["timing"]["not_retimed"]["count"] == 0
+    listed = [target.split(" ")[0] for target in criteria["modelled"]["targets"]]
+    assert criteria["modelled"]["status"] == "not evaluated" and "AccSet ramp" in criteria["modelled"]["detail"]
+    assert doc["timing"]["not_modelled"]["count"] == len(listed)
+    # the MoveJs (and, as written, the reorientation: compensated it may travel a little, a line then, its speed
+    # written); the line at its stated v200 keeps it
+    assert listed == (["P3", "P3"] if out["m1"][2] is not None else ["P2", "P3", "P3"])
+    if not compensated:
+        assert doc["verdict"]["result"] == "pass"
+
+
 FANUC_POINTS = {1: (385, 0, 595, "N U T"), 2: (385, 0, 515, "N U T"), 3: (445, 0, 515, "F U T"),
                 4: (445, 40, 515, "N U T"), 5: (400, -60, 560, "N U T"), 6: (300, 200, 600, "N U T")}
 FANUC_MN = """   1:  UFRAME_NUM=0 ;

@@ -309,3 +309,4 @@ def test_a_tcp_acceleration_bounds_a_compensated_line(tmp_path, language, acc_mo
     assert t[k] - t[k - 1] >= 2.0 * np.sqrt(length / a) - STAMP
     source, written = formats.read(tmp_path / "in" / name).motions[k], formats.read(tmp_path / "out" / name).motions[k]
     assert written.speed_unit == source.speed_unit == "mm/s" and written.speed <= source.speed
+

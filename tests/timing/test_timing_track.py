@@ -238,9 +238,6 @@ def test_rapid_v_leax_bounds_the_track_under_the_field_the_timing_writes(tmp_pat
     assert external == [2500.0, 0.5 * V_LEAX, 0.5 * V_LEAX]
 
 
-@pytest.mark.xfail(strict=True, reason="known gap (issue 35): the timing moves the track with the TCP's travel in a "
-                   "blend, the controller with each motion's share of the superposed blend; measured here: up to 181 "
-                   "mm/s against 150 and 3757-9176 mm/s^2 against 400 in the zones (the lines hold)")
 @pytest.mark.parametrize("seed,zone", [(3, 5.0), (7, 20.0)])
 def test_blended_corners_keep_the_track_within_its_limits_on_the_controller_path(seed, zone):
     """Linear motions blended at every corner, the track running back and forth (its velocity changes sign

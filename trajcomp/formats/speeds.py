@@ -314,6 +314,8 @@ def _converted(motion, index, stated, robot, geometry):
         return None, default, ""  # the arm's limits: the language's own default
     if unit in stated and _statable(speed, unit, stated) and not dropped:
         return speed, unit, ""
+    if motion.time_why:  # its time under the controller's ramps is not modelled: no other field is known no faster
+        return None, None, motion.time_why
     if robot is not None and motion.kind == JOINT and not dropped:
         if "%" in stated and unit == "rad/s":  # every joint at most v: p = v / max v_max
             percent = min(100.0 * speed / np.max(robot.v_max), 100.0)

@@ -290,6 +290,13 @@ class Motion:
         elsewhere: `trajcomp.programs.flow`), ``""`` when it is the motion
         before it: such a motion is not timed, its fields are left as
         written and listed (`trajcomp.timing.moves`).
+    time_why : str
+        Why a time written for the motion would not run as timed (RAPID
+        ``AccSet`` with a ramp below 100 %: the controller keeps a ``\\T``
+        by cruising faster behind softer ramps, which the timing does not
+        model), ``""`` where none: re-timing leaves the field of such a
+        motion as written where it would write a time, and lists it
+        (`trajcomp.timing.writeback`); a speed is still written.
     """
 
     kind: str
@@ -313,6 +320,7 @@ class Motion:
     start_why: str = ""
     acceleration: float = None
     acceleration_share: float = None
+    time_why: str = ""
 
 
 @dataclasses.dataclass(frozen=True)

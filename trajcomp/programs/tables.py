@@ -51,7 +51,7 @@ class MotionTable:
         Index of the file each motion is written in.
     text : Sequence of str, length M
         The instructions as written (one line, stripped; built on access where the reader keeps offsets).
-    reason, speed_why, start_why : ndarray of object, shape (M,)
+    reason, speed_why, start_why, time_why : ndarray of object, shape (M,)
         As `Motion`; ``""`` where none.
     refs : Mapping[int, tuple of int]
         ``{row: target indices}`` of the motions that name targets (`Motion.refs`); the others name none.
@@ -80,6 +80,7 @@ class MotionTable:
     acceleration: np.ndarray = None
     acceleration_share: np.ndarray = None
     spans: Sequence = None
+    time_why: np.ndarray = None
 
     def __post_init__(self):
         m = len(self.line)
@@ -87,6 +88,7 @@ class MotionTable:
                     "source": lambda: np.zeros(m, dtype=int),
                     "text": lambda: repeated("", m), "reason": lambda: repeated("", m),
                     "speed_why": lambda: repeated("", m), "refs": dict, "start_why": lambda: repeated("", m),
+                    "time_why": lambda: repeated("", m),
                     "acceleration": lambda: np.broadcast_to(np.nan, (m,)),
                     "acceleration_share": lambda: np.broadcast_to(np.nan, (m,))}
         for name, default in defaults.items():
@@ -124,6 +126,7 @@ class MotionTable:
             reason=column([m.reason for m in motions], object),
             speed_why=column([m.speed_why for m in motions], object),
             start_why=column([m.start_why for m in motions], object),
+            time_why=column([m.time_why for m in motions], object),
             acceleration=column([number(m.acceleration) for m in motions], float),
             acceleration_share=column([number(m.acceleration_share) for m in motions], float),
             refs={k: m.refs for k, m in enumerate(motions) if m.refs},
@@ -196,7 +199,7 @@ class MotionTable:
             spans = Picked([t.spans if t.spans is not None else repeated({}, len(t)) for t in tables], part, row)
         names = ("kind", "target", "via", "speed", "speed_unit", "zone", "tool", "frame", "axis_position",
                  "orientation_speed", "external_speed", "reason", "speed_why", "start_why", "acceleration",
-                 "acceleration_share")
+                 "acceleration_share", "time_why")
         return cls(line=line[order], source=source[order], text=sequence("text"), refs=refs, spans=spans,
                    **{name: column(name) for name in names})
 
@@ -264,7 +267,7 @@ class MotionTable:
             orientation_speed=optional(self.orientation_speed[k], float), start_why=self.start_why[k],
             external_speed=optional(self.external_speed[k], float),
             acceleration=optional(self.acceleration[k], float),
-            acceleration_share=optional(self.acceleration_share[k], float),
+            acceleration_share=optional(self.acceleration_share[k], float), time_why=self.time_why[k],
         )
 
 

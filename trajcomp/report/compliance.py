@@ -194,6 +194,7 @@ def timing_section(timing, before=None, times=True):
                 for s in timing.segments[:ROWS]]
     lowered = getattr(timing, "lowered", ())
     run_time, starts = getattr(timing, "run_time_speeds", ()), getattr(timing, "unknown_starts", ())
+    kept = getattr(timing, "not_modelled", ())
     section = {
         "cycle_time_s": float(timing.cycle_time),
         "cycle_time_before_s": None if before is None else float(before),
@@ -213,6 +214,12 @@ def timing_section(timing, before=None, times=True):
                                     "known: the motion is not timed, its field is left as written (it runs no faster "
                                     "than programmed); its timing and limits are not checked",
                           "motions": [{"waypoint": str(timing.labels[k]), "why": why} for k, why in starts[:ROWS]]},
+        "not_modelled": {"count": len(kept),
+                         "reason": "no time written where the controller would not run it as timed (a RAPID AccSet "
+                                   "ramp below 100 %: it keeps a time by cruising faster behind softer ramps): the "
+                                   "field is left as written, so the motion runs no faster than programmed; timed as "
+                                   "at full ramps",
+                         "motions": [{"waypoint": str(timing.labels[k]), "why": why} for k, why in kept[:ROWS]]},
         "lowered": {"count": len(lowered),
                     "motions": [{"waypoint": str(timing.labels[k]), "detail": text} for k, text in lowered[:ROWS]]},
         "track": _track_entry(timing),
@@ -254,6 +261,21 @@ def speeds_check(section):
     return _listed_check(section, "speeds", "every timed motion's speed known to the re-timing (none set at run time)",
                          "not_retimed", FAIL, "every speed stated or provably constant",
                          "not re-timed, speed set at run time (left as written)")
+
+
+def modelled_check(section):
+    """The criterion that every time the timing would write runs as timed, or what was left as written instead.
+
+    A time the controller would not run as timed (a RAPID AccSet ramp
+    below 100 %) is not written: the motion keeps its field, so it runs no
+    faster than programmed, as a motion whose start is not unique does. Not
+    a failure: the criterion is not evaluated for them and lists them; it
+    passes where there are none.
+    """
+    return _listed_check(section, "modelled", "every time the re-timing would write run by the controller as timed",
+                         "not_modelled", NOT_EVALUATED, "no field left as written for a ramp the timing does not "
+                         "model", "without a time written, the controller would not run it as timed (left as "
+                         "written: no faster than programmed)")
 
 
 def starts_check(section):
@@ -362,6 +384,7 @@ def compliance_report(report, robot, *, criteria=None, model=None, model_info=No
                             lines=lines[:ROWS], failing=len(lines)))
     checks.append(timing_check(section))
     checks.append(speeds_check(section))
+    checks.append(modelled_check(section))
     checks.append(starts_check(section))
     data = None
     if not table["complete"] or long_times:

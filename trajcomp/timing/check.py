@@ -72,6 +72,15 @@ def evaluate(run, law, t):
     return run.path(s), dq * sd[:, None], run.path(s, 2) * (sd**2)[:, None] + dq * sdd[:, None], s, sd
 
 
+def track_motion(run, law, t):
+    """A moving track's velocity and acceleration (each (N,)), mm/s and mm/s^2, of a timed run at times t (N,),
+    from the run's own track position e(s) (`trajcomp.timing.path.RunPath.track`, which it must have)."""
+    s, sd, sdd = law(t)
+    s = np.clip(s, 0.0, run.length)
+    de = run.track(s, 1)
+    return de * sd, run.track(s, 2) * sd**2 + de * sdd
+
+
 def segment_peaks(run, law, moves, robot, *, jerk, rate=RATE):
     """Sample a timed run at ``rate`` and measure its peaks against the limits of each motion.
 
@@ -100,7 +109,8 @@ def dense_check(run, law, moves, robot, *, jerk, over=np.inf, rate=RATE):
     peaks : Peaks
     s : ndarray, shape (m,)
         Path position (rad) of each sample whose largest ratio of a joint
-        velocity, acceleration or the TCP speed to its limit exceeds ``over``.
+        velocity, acceleration, the TCP speed or a moving track's velocity
+        or acceleration (`track_motion`) to its limit exceeds ``over``.
     """
     return dense_checks([run], [law], moves, robot, jerk=[jerk], over=over, rate=rate)[0]
 
@@ -149,7 +159,12 @@ def dense_checks(runs, laws, moves, robot, *, jerk, over=np.inf, rate=RATE):
         q, qd, k = (np.concatenate([part[j] for part in parts]) for j in (1, 2, 5))
         speed_ratios = np.split(_speed_ratios(moves, robot, k, q, qd), np.cumsum([len(part[0]) for part in parts])[:-1])
         for (i, _, _), (t, _, qd, qdd, s, k), speed_ratio in zip(block, parts, speed_ratios):
-            found[i].add(t, qd, qdd, s, speed_ratio, moves.velocity[k], moves.acceleration[k], over)
+            track = 0.0
+            if runs[i].track is not None:  # its samples over a limit refine the grid as a joint's
+                velocity, acceleration = track_motion(runs[i], laws[i], t)
+                track = np.maximum(np.abs(velocity) / moves.track_velocity[k],
+                                   np.abs(acceleration) / moves.track_acceleration[k])
+            found[i].add(t, qd, qdd, s, speed_ratio, moves.velocity[k], moves.acceleration[k], over, track)
     return [(f.peaks(), f.s_over()) for f in found]
 
 
@@ -242,9 +257,10 @@ class _Found:
         self.jerk = np.zeros(6) if jerk else np.full(6, np.nan)
         self.speed_ratio, self.over, self.last, self.samples = 0.0, [], None, 0
 
-    def add(self, t, qd, qdd, s, speed_ratio, velocity, acceleration, over):
+    def add(self, t, qd, qdd, s, speed_ratio, velocity, acceleration, over, other=0.0):
         """Samples at times t (N,): joint velocities and accelerations (N, 6), path positions s (N,), TCP
-        speed ratios (N,), and the limits (N, 6) of each sample's motion."""
+        speed ratios (N,), and the limits (N, 6) of each sample's motion; ``other`` (N,): the ratios to their
+        limits of what else moves (a track), only for the positions over ``over``."""
         velocity_ratio, acceleration_ratio = np.abs(qd) / velocity, np.abs(qdd) / acceleration
         self.samples += len(t)
         np.maximum(self.velocity, np.abs(qd).max(axis=0), out=self.velocity)
@@ -260,7 +276,8 @@ class _Found:
                 jerk = np.abs(np.diff(accelerations, axis=0)) / np.diff(times)[:, None]
                 np.maximum(self.jerk, jerk.max(axis=0), out=self.jerk)
             self.last = t[-1], qdd[-1]
-        ratio = np.maximum(np.maximum(velocity_ratio.max(axis=1), acceleration_ratio.max(axis=1)), speed_ratio)
+        ratio = np.maximum(np.maximum(velocity_ratio.max(axis=1), acceleration_ratio.max(axis=1)),
+                           np.maximum(speed_ratio, other))
         self.over.append(s[ratio > over])
 
     def peaks(self):

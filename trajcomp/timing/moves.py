@@ -67,10 +67,11 @@ class Moves:
         Waypoint names with file and line, for messages.
     motion : ndarray of int, shape (M,)
         Index into `Program.motions` of motion k (``arange(M)`` for a joint path).
-    track_position, track_acceleration : ndarray, shape (M,)
+    track_position, track_velocity, track_acceleration : ndarray, shape (M,)
         On a track that moves (`trajcomp.timing.track`): its position at
-        waypoint k, mm, and its acceleration limit along motion k, mm/s^2;
-        NaN and ``inf`` (read-only views) on a fixed base.
+        waypoint k, mm, and its velocity and acceleration limits along
+        motion k, mm/s and mm/s^2; NaN and ``inf`` (read-only views) on a
+        fixed base.
     """
 
     q: np.ndarray
@@ -89,6 +90,7 @@ class Moves:
     motion: np.ndarray
     track_position: np.ndarray = None
     track_acceleration: np.ndarray = None
+    track_velocity: np.ndarray = None
 
     def __post_init__(self):
         stop = np.array(self.stop, dtype=bool)
@@ -101,6 +103,8 @@ class Moves:
         if self.track_position is None:
             object.__setattr__(self, "track_position", np.broadcast_to(np.nan, (len(self.q),)))
             object.__setattr__(self, "track_acceleration", np.broadcast_to(np.inf, (len(self.q),)))
+        if self.track_velocity is None:
+            object.__setattr__(self, "track_velocity", np.broadcast_to(np.inf, (len(self.q),)))
 
     @property
     def on_track(self):

@@ -180,6 +180,13 @@ class RunPath:
     deviation : float
         Largest TCP deviation (mm, linearized) of the path from a sample
         (the programmed geometry).
+    track : scipy.interpolate.BSpline or None
+        On a moving track, its position e(s) (mm; ``track(s, 1)``,
+        ``track(s, 2)``: its derivatives) through the samples' track
+        positions (`trajcomp.timing.samples.run_samples`: blended as the
+        controller blends the position); None otherwise or for a run of
+        motions from rest to rest built together (`stop_paths`: the
+        track's share of each motion's progress, `trajcomp.timing.track`).
     """
 
     path: JointPath
@@ -190,6 +197,7 @@ class RunPath:
     tcp_lengths: np.ndarray
     grid_rate: np.ndarray
     deviation: float
+    track: object = None
 
     @property
     def length(self):
@@ -209,8 +217,9 @@ class RunPath:
         A grid point obeys the joint velocity limits and the programmed TCP
         speed (or, for a linear / circular motion with a programmed time,
         its TCP length over that time; for a joint motion with one, its
-        path length over that time: `time_limits`) of the motions it
-        belongs to (both, at a waypoint). ``dq`` (G, 6): q' on the grid,
+        path length over that time: `time_limits`), and on a moving track
+        its velocity limit (`track`), of the motions it belongs to (both,
+        at a waypoint). ``dq`` (G, 6): q' on the grid,
         when already evaluated; ``times=False``: without `time_limits` (a
         ruckig law takes the programmed time as its minimum duration).
         """
@@ -226,6 +235,9 @@ class RunPath:
         x = squared_speed_bound(dq, self.grid_rate, velocity, np.min(tcp[motion], axis=0) * speed_scale)
         if times:
             x = np.minimum(x, np.min(time_limits(moves, k, np.diff(self.s_waypoints))[motion], axis=0) ** 2)
+        if self.track is not None:
+            with np.errstate(divide="ignore"):
+                x = np.minimum(x, (np.min(moves.track_velocity[near], axis=0) / np.abs(self.track(grid, 1))) ** 2)
         return x, velocity
 
     def refined(self, moves, robot, s):
@@ -303,7 +315,7 @@ def run_path(moves, robot, first, last, tolerance=TOLERANCE, *, part=None):
         From `trajcomp.timing.samples.run_samples`.
     """
     a, b = part or (first, last)
-    q, owner, s, waypoint_rows, known, curved = _collapsed(moves, robot, first, last)
+    q, owner, s, waypoint_rows, known, curved, track = _collapsed(moves, robot, first, last)
     s_waypoints = s[waypoint_rows]
     s_a, s_b = s_waypoints[a - first], s_waypoints[b - first]
     if s_b <= s_a:
@@ -324,7 +336,12 @@ def run_path(moves, robot, first, last, tolerance=TOLERANCE, *, part=None):
     path = JointPath(_moved(spline, s_a))
     lengths = tcp_lengths[a - first : b - first + 1].copy()
     lengths[0] = 0.0
-    return RunPath(path, s_waypoints[a - first : b - first + 1] - s_a, grid - s_a, a, b, lengths, rate, deviation)
+    if track is not None:
+        from scipy.interpolate import make_interp_spline
+
+        track = _moved(make_interp_spline(s, track, k=min(3, len(s) - 1)), s_a)
+    return RunPath(path, s_waypoints[a - first : b - first + 1] - s_a, grid - s_a, a, b, lengths, rate, deviation,
+                   track)
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -383,7 +400,7 @@ def stop_paths(moves, robot, first, last):
     -------
     StopPaths
     """
-    q, owner, s, waypoint_rows, known, _ = _collapsed(moves, robot, first, last)
+    q, owner, s, waypoint_rows, known, _, _ = _collapsed(moves, robot, first, last)
     k = np.arange(first + 1, last + 1)
     lo, hi = waypoint_rows[:-1], waypoint_rows[1:]
     moving = np.flatnonzero(hi > lo)
@@ -423,9 +440,9 @@ def _collapsed(moves, robot, first, last):
     -------
     q (n, 6), owner (n,), s (n,) joint arc length (rad), waypoint_rows (W,) the sample of each waypoint,
     known : (rows (r,), flange (r, 4, 4), flange Jacobians (r, 6, 6)) of samples that are waypoints,
-    curved : bool (`trajcomp.timing.samples.run_samples`).
+    curved : bool, track : ndarray (n,) or None (`trajcomp.timing.samples.run_samples`).
     """
-    q, owner, (waypoint, flange, flange_jac), curved = run_samples(moves, robot, first, last)
+    q, owner, (waypoint, flange, flange_jac), curved, track = run_samples(moves, robot, first, last)
     keep = np.ones(len(q), dtype=bool)
     keep[1:] = np.linalg.norm(np.diff(q, axis=0), axis=1) > _DUPLICATE
     kept = np.cumsum(keep) - 1
@@ -433,7 +450,8 @@ def _collapsed(moves, robot, first, last):
     q, owner, waypoint = q[keep], owner[keep], waypoint[keep]
     s = np.r_[0.0, np.cumsum(np.linalg.norm(np.diff(q, axis=0), axis=1))]
     at = np.flatnonzero(waypoint >= 0)
-    return q, owner, s, waypoint_rows, (at, flange[waypoint[at]], flange_jac[waypoint[at]]), curved
+    return (q, owner, s, waypoint_rows, (at, flange[waypoint[at]], flange_jac[waypoint[at]]), curved,
+            None if track is None else track[keep])
 
 
 def _no_path(a, b):

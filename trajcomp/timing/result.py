@@ -121,6 +121,10 @@ class TimingResult:
     lowered : tuple of (int, str)
         Waypoints whose stated speed a joint limit forced lower (or whose
         time it forced longer), with what was written and why.
+    not_modelled : tuple of (int, str)
+        Timed waypoints that would get a time their controller would not run
+        as timed (a RAPID AccSet ramp below 100 %), and why: their fields
+        left as written (set by `trajcomp.timing.apply_timing`).
     track : TrackTiming or None
         On a track that moves: its positions, peaks and limits, the world
         TCP's share of each motion (`trajcomp.timing.track`); None otherwise.
@@ -149,6 +153,7 @@ class TimingResult:
     as_written: tuple = ()
     lowered: tuple = ()
     track: object = None
+    not_modelled: tuple = ()
 
     @property
     def notices(self):
@@ -235,7 +240,7 @@ class TimingResult:
         untimed = set(self.untimed)
         return tuple((k, why) for k, why in self.as_written if k not in untimed)
 
-    def with_settings(self, settings, as_written=(), lowered=()):
+    def with_settings(self, settings, as_written=(), lowered=(), not_modelled=()):
         """A copy whose segments carry the written settings.
 
         Parameters
@@ -245,7 +250,7 @@ class TimingResult:
             text for every waypoint (M,) (a long CSV program: its segments
             share the texts instead of a dict of them); `Texts` of every
             waypoint are sliced, their texts still made on demand.
-        as_written, lowered : tuple of (int, str)
+        as_written, lowered, not_modelled : tuple of (int, str)
             The motions left as written and those lowered (the attributes).
         """
         if isinstance(settings, Mapping):
@@ -259,7 +264,8 @@ class TimingResult:
                 return tuple(settings[s.first + 1 : s.last + 1])
         return dataclasses.replace(self, segments=tuple(dataclasses.replace(s, settings=texts(s))
                                                         for s in self.segments),
-                                   as_written=tuple(as_written), lowered=tuple(lowered))
+                                   as_written=tuple(as_written), lowered=tuple(lowered),
+                                   not_modelled=tuple(not_modelled))
 
     def lines_of_text(self, before=None):
         """Summary lines: per joint peaks against limits, cycle time (and before, s)."""
@@ -288,6 +294,8 @@ class TimingResult:
             cycle += f" as timed; {len(self.lowered)} motion(s) written slower than timed (a limit binds, below)"
         out.append(cycle)
         for listed, what in ((self.run_time_speeds, "not re-timed, speed set at run time (left as written)"),
+                             (self.not_modelled, "no time written, the controller would not run it as timed (left "
+                                                 "as written, no faster than programmed)"),
                              (self.unknown_starts, "not timed, start not unique (left as written, no faster than "
                                                    "programmed; its timing and limits not checked)")):
             if listed:

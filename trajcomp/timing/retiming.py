@@ -255,10 +255,13 @@ def _coarse(run, law, check, moves):
 
 
 def _curved(run, x, moves):
-    """Grid intervals (n,) across which the joint acceleration the path's curvature takes at squared path
-    speeds x (G,) (q'' sd^2) changes by more than `_CURVATURE_STEP` of a limit."""
+    """Grid intervals (n,) across which the joint (or a moving track's) acceleration the path's curvature takes at
+    squared path speeds x (G,) (q'' sd^2) changes by more than `_CURVATURE_STEP` of a limit."""
     acceleration = np.min(moves.acceleration[run.first + 1 : run.last + 1], axis=0)
     demand = np.max(np.abs(run.path(run.grid, 2)) / acceleration, axis=1)  # per unit squared path speed
+    if run.track is not None:  # a moving track's too, as a joint's
+        track = np.min(moves.track_acceleration[run.first + 1 : run.last + 1])
+        demand = np.maximum(demand, np.abs(run.track(run.grid, 2)) / track)
     step = np.abs(np.diff(demand)) * np.maximum(x[:-1], x[1:])
     return np.flatnonzero(step > _CURVATURE_STEP)
 

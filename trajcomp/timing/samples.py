@@ -25,6 +25,10 @@ sample: the waypoint's place on the path. A blend that stays within
 `BLEND_DEFLECTION` of its corner (the dense points of a CAM path) is not
 sampled: the corner is, and the path's fit within the tolerance of the
 samples stands for it.
+On a moving track (`trajcomp.timing.track`) the track's position is
+interpolated as the position is: linear in each motion's share of its way,
+the two motions superposed in a blend, e = e_in + e_out - e_corner; the
+samples carry it beside the joints, `TRACK_BLEND_GAIN` times as many in a blend.
 Where neighbouring samples differ by more than `JUMP_DEG` in a joint the
 interval is bisected (a fast wrist swing near a singularity is sampled
 finely); a jump that survives down to 1e-6 of a motion is a pass through
@@ -52,6 +56,8 @@ MIN_INTERVALS = 4  # sample intervals of a linear / circular motion from rest to
 MIN_INTERVAL_MM = 0.25  # as long as they are no shorter than this
 BLEND_SAMPLES = 32  # sample intervals on each half of a blended corner turning by 60 deg or less, up to twice that
 # for a reversal (the spline's q'' within 0.2 % there)
+TRACK_BLEND_GAIN = 4  # times the blend samples on a moving track: its position e(s), fitted through them, is then
+# where the controller puts the track for the fitted joints' TCP (3e-7 mm, not 3e-5: 1.09x its acceleration limit)
 BLEND_DEFLECTION = TOLERANCE  # mm: a blend that stays this close to its corner is left to the fit (the corner sampled)
 AMBIGUOUS_DEG = 120.0  # deg: a linear motion turning a joint by more is followed to learn which way it turns
 _MIDDLE = 2.0 * (2.5 / 16 - 3 / 32 + 1 / 64)  # |p(1/2) - corner| / (r |e_out - e_in|): 2 Omega(1/2) (lines)
@@ -79,6 +85,10 @@ def run_samples(moves, robot, first, last):
         its corner: the corner is the sample, and a path within the
         tolerance of the samples is within it of the programmed geometry
         (a blend of the dense points of a CAM path, rounded as written).
+    track : ndarray, shape (n,), or None
+        On a moving track (`Moves.on_track`), its position at each sample,
+        mm (the controller's interpolation, blended as the position is);
+        None otherwise.
 
     Raises
     ------
@@ -109,7 +119,7 @@ def _with_repeats(moves, robot, first, last, repeats):
     taken["stop"] = np.logical_or.reduceat(np.asarray(moves.stop[first : last + 1]), group_start)
     taken["zone"] = moves.zone[first + group_end]
     compact = dataclasses.replace(moves, labels=[moves.labels[k] for k in kept.tolist()], **taken)
-    q, owner, (waypoint, flange, flange_jac), curved = _samples(compact, robot, 0, len(kept) - 1)
+    q, owner, (waypoint, flange, flange_jac), curved, track = _samples(compact, robot, 0, len(kept) - 1)
     last_row = np.r_[0, np.flatnonzero(np.diff(owner)) + 1, len(owner)][1:] - 1  # of each kept waypoint
     last_row[0] = 0
     rows = np.r_[np.arange(len(q)), last_row[head[repeats]]]
@@ -117,7 +127,8 @@ def _with_repeats(moves, robot, first, last, repeats):
     owner_out = np.r_[kept[owner], first + np.flatnonzero(repeats)][order]
     at = np.where(waypoint >= 0, kept[np.maximum(waypoint, 0)] - first, -1)
     repeated_at = np.where(at[last_row[head[repeats]]] >= 0, np.flatnonzero(repeats), -1)
-    return q[rows[order]], owner_out, (np.r_[at, repeated_at][order], flange[head], flange_jac[head]), curved
+    return (q[rows[order]], owner_out, (np.r_[at, repeated_at][order], flange[head], flange_jac[head]), curved,
+            None if track is None else track[rows[order]])
 
 
 def _samples(moves, robot, first, last):
@@ -129,8 +140,9 @@ def _samples(moves, robot, first, last):
     local, fraction, q = geometry.bisect_jumps(local, fraction, q)
     at_waypoint = (fraction == 1.0) & (geometry.blend_end[local] == 0.0)  # a blended corner's is not on the path
     waypoint = np.where(at_waypoint, local + 1, np.where(np.arange(len(q)) == 0, 0, -1))
+    track = geometry.track(local, fraction) if moves.on_track else None
     return (q, first + np.where(fraction > 0, local + 1, local), (waypoint, geometry.flange, geometry.flange_jac),
-            bool(np.any(geometry.blend_samples > 0)))
+            bool(np.any(geometry.blend_samples > 0)), track)
 
 
 class _Geometry:
@@ -188,7 +200,8 @@ class _Geometry:
         with np.errstate(divide="ignore", invalid="ignore"):
             self.blend_end[:-1] = np.where(blended, radius / self.length[:-1], 0.0)
             self.blend_start[1:] = np.where(blended, radius / self.length[1:], 0.0)
-        self.blend_samples[:-1] = np.where(blended, np.ceil(BLEND_SAMPLES * np.clip(turn, 1.0, 2.0)), 0)
+        samples = BLEND_SAMPLES * (TRACK_BLEND_GAIN if moves.on_track else 1)
+        self.blend_samples[:-1] = np.where(blended, np.ceil(samples * np.clip(turn, 1.0, 2.0)), 0)
 
     def _same_configuration(self, moves, first, last):
         """Refuse a linear or circular motion whose target is declared in another configuration than its start."""
@@ -276,14 +289,35 @@ class _Geometry:
 
         ``seed`` (n, 6): the IK seeds; None to use the joint line.
         """
-        before = fraction < self.blend_start[local]
-        after = fraction > 1.0 - self.blend_end[local]
-        blend = np.flatnonzero(before | after)
+        blend, incoming, f_in, f_out = self._blend_shares(local, fraction)
         if not blend.size:
             return self.plain(local, fraction, seed)
         q = np.empty((len(local), 6))
-        plain = np.flatnonzero(~(before | after))
+        plain = np.ones(len(local), dtype=bool)
+        plain[blend] = False
+        plain = np.flatnonzero(plain)
         q[plain] = self.plain(local[plain], fraction[plain], None if seed is None else seed[plain])
+        q[blend] = self._blended(incoming, f_in, f_out, None if seed is None else seed[blend], local[blend],
+                                 fraction[blend])
+        return q
+
+    def track(self, local, fraction):
+        """The track's position (n,), mm, at fractions of motions on the path: linear in each motion's share of
+        its way outside blends, the two motions' shares superposed inside (as `solve` superposes the position)."""
+        e = self.moves.track_position
+        e_a, e_b = e[self.k - 1], e[self.k]
+        out = e_a[local] + fraction * (e_b[local] - e_a[local])
+        blend, incoming, f_in, f_out = self._blend_shares(local, fraction)
+        out[blend] = (e_a[incoming] + f_in * (e_b[incoming] - e_a[incoming])
+                      + f_out * (e_b[incoming + 1] - e_b[incoming]))
+        return out
+
+    def _blend_shares(self, local, fraction):
+        """The points of a blend among fractions of motions: their rows (b,), the motion into each one's corner
+        (b,), and the shares of their way the incoming and the outgoing motion have gone there (each (b,))."""
+        before = fraction < self.blend_start[local]
+        after = fraction > 1.0 - self.blend_end[local]
+        blend = np.flatnonzero(before | after)
         incoming = local[blend] - before[blend]  # motion i into the corner, i + 1 out of it
         r = self.radius_at[incoming + 1]
         distance = np.where(before[blend], r + fraction[blend] * self.length[local[blend]],
@@ -292,9 +326,7 @@ class _Geometry:
         omega = u**4 * (2.5 - 3.0 * u + u * u)
         f_in = 1.0 - (r - 2.0 * r * (u - omega)) / self.length[incoming]
         f_out = 2.0 * r * omega / self.length[incoming + 1]
-        q[blend] = self._blended(incoming, f_in, f_out, None if seed is None else seed[blend], local[blend],
-                                 fraction[blend])
-        return q
+        return blend, incoming, f_in, f_out
 
     def _blended(self, incoming, f_in, f_out, seed, local, fraction):
         """Joints (n, 6) of blend points: motions ``incoming`` (n,) at f_in and the next at f_out, superposed."""

@@ -294,7 +294,8 @@ def _path_problem(run, moves):
     acceleration = np.min(moves.acceleration[run.first + 1 : run.last + 1], axis=0)
     grid, dq, ddq = run.grid, run.path(run.grid, 1), run.path(run.grid, 2)
     if moves.on_track:
-        return grid, *with_track(moves, run.motion_at(grid), grid, dq, ddq, run.grid_rate, acceleration)
+        track = None if run.track is None else (run.track(grid, 1), run.track(grid, 2))
+        return grid, *with_track(moves, run.motion_at(grid), grid, dq, ddq, run.grid_rate, acceleration, track=track)
     return grid, dq, ddq, acceleration
 
 

@@ -47,7 +47,12 @@ the track (the arm rests in its carriage) or whose TCP rests in the world
 while the track moves (no TCP speed to keep). At a blended corner the
 controller blends the track as the position (each motion's share of the
 superposed blend), faster than the TCP's travel where the blend cuts the
-corner; that change is not measured here (docs/tracks.md gives the gap).
+corner: a run's path carries the track so blended
+(`trajcomp.timing.path.RunPath.track`), whose e'(s) and e''(s) replace the
+progress shares above; its velocity limit bounds the path speed as a
+joint's (`RunPath.speed_bound`, ``Moves.track_velocity``) and samples
+over a limit refine the grid (`trajcomp.timing.check.dense_check`).
+Motions from rest to rest (no blend) keep the progress shares, exact there.
 Written speeds are world TCP speeds (`cruise_speeds` converts through
 ``TrackTiming.world_ratio`` and bounds them by ``speed_bound``).
 """
@@ -60,7 +65,7 @@ from trajcomp.arm.kinematics import fk
 from trajcomp.errors import TimingError
 from trajcomp.programs.frames import FrameTable
 from trajcomp.programs.items import CIRCULAR, JOINT
-from trajcomp.timing.check import LIMIT_TOLERANCE, RATE, sample_times
+from trajcomp.timing.check import LIMIT_TOLERANCE, RATE, sample_times, track_motion
 from trajcomp.timing.options import TOLERANCE
 
 MIN_LENGTH = 1e-3  # mm (TCP) or rad (joints): a motion shorter than this while the track moves has no speed to keep
@@ -168,6 +173,54 @@ def retime_on_track(moves, robot, values, field, *, programmed=None, method="aut
         k = int(outside[0])
         raise TimingError(f"{moves.labels[k]}: {field} {values[k]:g} mm is beyond the track's travel "
                           f"{track.position_min:g} .. {track.position_max:g} mm (track.limits of the robot)")
+    limited, limit, reasons, ratio, bound = track_limits(moves, robot, values, programmed)
+    from trajcomp.timing.retiming import retime  # here: retime's TOPP-RA imports `with_track` from this module
+
+    slow = np.ones(len(moves))
+    for _ in range(ROUNDS):
+        result = retime(_slowed(limited, slow), robot, method=method, tolerance=tolerance)
+        peaks = [_run_peaks(run, law, limited, limit) for _, run, law in result.pieces]
+        over = False
+        for (_, run, _), (_, share, acceleration) in zip(result.pieces, peaks):
+            excess = max(share, np.sqrt(acceleration / track.acceleration))
+            if excess > 1.0 + 0.5 * LIMIT_TOLERANCE:
+                slow[run.first + 1 : run.last + 1] *= excess * MARGIN
+                over = True
+        if not over:
+            break
+    peak_velocity, _, peak_acceleration = np.max(np.reshape(peaks, (-1, 3)), axis=0, initial=0.0)
+    timing = TrackTiming(field, values, ratio, bound * ratio, float(peak_velocity), float(peak_acceleration),
+                         track.velocity, track.acceleration, tuple(reasons))
+    return dataclasses.replace(result, track=timing, tcp_length=result.tcp_length * ratio,
+                               within_limits=result.within_limits and timing.within_limits)
+
+
+def track_limits(moves, robot, values, programmed=None):
+    """The motions with the track's limits folded in, as `retime_on_track` times them (see the module).
+
+    Parameters
+    ----------
+    moves : Moves
+    robot : Robot
+        With its ``track``.
+    values : ndarray, shape (M,)
+        Track position of each waypoint, mm.
+    programmed : ndarray, shape (M,), optional
+        The track speed the program allows along each motion, mm/s (NaN: none).
+
+    Returns
+    -------
+    limited : Moves
+        On the track (``track_position``), its limits per motion, the
+        carriage TCP's speed bound, the motions not timed as starts.
+    limit : ndarray, shape (M,)
+        The track's velocity limit along each motion, mm/s.
+    reasons : list of (int, str)
+        The motions moving the track that are not timed, and why.
+    ratio, bound : ndarray, shape (M,)
+        World over carriage TCP length, and the carriage TCP speed at which the track reaches ``limit``, mm/s.
+    """
+    track = robot.track
     change = np.abs(np.diff(values, prepend=values[:1]))
     limit = track.velocity if programmed is None else np.fmin(track.velocity, programmed)  # (M,) or scalar
     limit = np.broadcast_to(limit, values.shape)
@@ -188,29 +241,11 @@ def retime_on_track(moves, robot, values, field, *, programmed=None, method="aut
         bound = np.where(path, limit * carriage / change, np.inf)  # carriage TCP mm/s
     limited = dataclasses.replace(
         moves, start=np.asarray(moves.start, dtype=bool) | left, track_position=values,
-        track_acceleration=np.full(len(moves), track.acceleration),
+        track_acceleration=np.full(len(moves), track.acceleration), track_velocity=limit.copy(),
         tcp_speed=np.minimum(moves.tcp_speed / ratio, bound),
         velocity=np.minimum(moves.velocity, limit[:, None] * share),
         acceleration=np.minimum(moves.acceleration, track.acceleration * share))
-    from trajcomp.timing.retiming import retime  # here: retime's TOPP-RA imports `with_track` from this module
-
-    slow = np.ones(len(moves))
-    for _ in range(ROUNDS):
-        result = retime(_slowed(limited, slow), robot, method=method, tolerance=tolerance)
-        peaks = [_run_peaks(run, law, limited, limit) for _, run, law in result.pieces]
-        over = False
-        for (_, run, _), (_, share, acceleration) in zip(result.pieces, peaks):
-            excess = max(share, np.sqrt(acceleration / track.acceleration))
-            if excess > 1.0 + 0.5 * LIMIT_TOLERANCE:
-                slow[run.first + 1 : run.last + 1] *= excess * MARGIN
-                over = True
-        if not over:
-            break
-    peak_velocity, _, peak_acceleration = np.max(np.reshape(peaks, (-1, 3)), axis=0, initial=0.0)
-    timing = TrackTiming(field, values, ratio, bound * ratio, float(peak_velocity), float(peak_acceleration),
-                         track.velocity, track.acceleration, tuple(reasons))
-    return dataclasses.replace(result, track=timing, tcp_length=result.tcp_length * ratio,
-                               within_limits=result.within_limits and timing.within_limits)
+    return limited, limit, reasons, ratio, bound
 
 
 def _lengths(moves, robot, values):
@@ -254,7 +289,8 @@ def _slowed(moves, slow):
         return moves
     return dataclasses.replace(moves, tcp_speed=moves.tcp_speed / slow, velocity=moves.velocity / slow[:, None],
                                acceleration=moves.acceleration / (slow**2)[:, None],
-                               track_acceleration=moves.track_acceleration / slow**2)
+                               track_acceleration=moves.track_acceleration / slow**2,
+                               track_velocity=moves.track_velocity / slow)
 
 
 def _run_peaks(run, law, moves, limit):
@@ -262,23 +298,27 @@ def _run_peaks(run, law, moves, limit):
     and largest |acceleration| (mm/s^2) of a timed run, sampled at `RATE`."""
     if run.path is None:
         return 0.0, 0.0, 0.0
-    grid = run.grid
-    per = _per_progress(moves, run.motion_at(grid), grid, run.path(grid, 1), run.grid_rate, np.ones(len(grid) - 1, bool))
     t = sample_times(law.duration, RATE)
     s, sd, sdd = law(t)
     s = np.clip(s, 0.0, run.length)
     k = run.motion_at(s)
-    at = np.minimum(np.searchsorted(run.motion_at(grid), k, side="right") - 1, len(grid) - 1)  # a point of motion k
-    rate = np.interp(s, grid, run.grid_rate)
-    slope = np.interp(s, grid, _slopes(run.grid_rate, grid, np.ones(len(grid) - 1, bool)))
-    rho, drho = _progress_rate(moves.kind[k] == JOINT, run.path(s, 1), run.path(s, 2), rate, slope)
-    de, dde = per[at] * rho, per[at] * drho
-    velocity = np.abs(de * sd)
+    if run.track is not None:  # the path's own track position, blended as the controller blends it
+        velocity, acceleration = track_motion(run, law, t)
+    else:
+        grid = run.grid
+        inside = np.ones(len(grid) - 1, bool)
+        per = _per_progress(moves, run.motion_at(grid), grid, run.path(grid, 1), run.grid_rate, inside)
+        at = np.minimum(np.searchsorted(run.motion_at(grid), k, side="right") - 1, len(grid) - 1)  # a point of k
+        rate = np.interp(s, grid, run.grid_rate)
+        slope = np.interp(s, grid, _slopes(run.grid_rate, grid, inside))
+        rho, drho = _progress_rate(moves.kind[k] == JOINT, run.path(s, 1), run.path(s, 2), rate, slope)
+        velocity, acceleration = per[at] * rho * sd, per[at] * (drho * sd**2 + rho * sdd)
+    velocity, acceleration = np.abs(velocity), np.abs(acceleration)
     return (float(np.max(velocity, initial=0.0)), float(np.max(velocity / limit[k], initial=0.0)),
-            float(np.max(np.abs(dde * sd**2 + de * sdd), initial=0.0)))
+            float(np.max(acceleration, initial=0.0)))
 
 
-def with_track(moves, motion, grid, dq, ddq, rate, acceleration, inside=None):
+def with_track(moves, motion, grid, dq, ddq, rate, acceleration, inside=None, track=None):
     """The path's derivatives and acceleration limits with the track's position as a 7th joint (module).
 
     Parameters
@@ -297,6 +337,9 @@ def with_track(moves, motion, grid, dq, ddq, rate, acceleration, inside=None):
         The joints' acceleration limits (of the run, or of each interval).
     inside : ndarray of bool, shape (G - 1,), optional
         Interval i lies within one path (False between paths laid end to end); default all.
+    track : (ndarray (G,), ndarray (G,)), optional
+        e'(s) and e''(s) of the path's own track position (`trajcomp.timing.path.RunPath.track`: blended as the
+        controller blends it); default: the track's share of each motion's progress (exact without blends).
 
     Returns
     -------
@@ -305,13 +348,19 @@ def with_track(moves, motion, grid, dq, ddq, rate, acceleration, inside=None):
     acceleration : ndarray, shape (7,) or (G - 1, 7)
         With the track's, mm/s^2.
     """
-    inside = np.ones(len(grid) - 1, dtype=bool) if inside is None else inside
-    per = _per_progress(moves, motion, grid, dq, rate, inside)
-    rho, drho = _progress_rate(moves.kind[motion] == JOINT, dq, ddq, rate, _slopes(rate, grid, inside))
+    de, dde = _progress_derivatives(moves, motion, grid, dq, ddq, rate, inside) if track is None else track
     limit = moves.track_acceleration[motion]
     acceleration = (np.r_[acceleration, limit.min()] if np.ndim(acceleration) == 1
                     else np.c_[acceleration, limit[:-1]])
-    return np.c_[dq, per * rho], np.c_[ddq, per * drho], acceleration
+    return np.c_[dq, de], np.c_[ddq, dde], acceleration
+
+
+def _progress_derivatives(moves, motion, grid, dq, ddq, rate, inside=None):
+    """e'(s) and e''(s) (each (G,)), mm per unit of s, of the track moving with each motion's progress (module)."""
+    inside = np.ones(len(grid) - 1, dtype=bool) if inside is None else inside
+    per = _per_progress(moves, motion, grid, dq, rate, inside)
+    rho, drho = _progress_rate(moves.kind[motion] == JOINT, dq, ddq, rate, _slopes(rate, grid, inside))
+    return per * rho, per * drho
 
 
 def _per_progress(moves, motion, grid, dq, rate, inside):

@@ -24,7 +24,11 @@ TCP keeps between the controller's own ramps; a time (RAPID ``\\T``, UR
   as a controller paces a time given to a blended motion, not the
   shorter timed path between blend middles; for a RAPID motion at least the time its speed data's v_ori
   allows the reorientation, `trajcomp.formats.speeds.orientation_time`:
-  ``\\T`` replaces the speed data).
+  ``\\T`` replaces the speed data); but a motion whose controller would
+  not run a time as timed (`trajcomp.programs.items.Motion.time_why`: a
+  RAPID AccSet ramp below 100 %) keeps its field as written and is listed
+  (`TimingResult.not_modelled`), whatever its kind: a joint motion, a
+  linear one that only turns the tool.
 
 The timing decides what to write (`SpeedPlan`); each language writes it in
 its own fields, its format's ``speeds`` hook (`trajcomp.formats`): CSV a
@@ -113,7 +117,8 @@ def apply_timing(program, result, robot):
         return timed, result.with_settings(settings)
     plan = _plan(program, result, robot)
     timed, settings = language.write_speeds(program, result, robot, plan)
-    return timed, result.with_settings(settings, as_written=plan.as_written, lowered=plan.notes(result, settings))
+    return timed, result.with_settings(settings, as_written=plan.as_written, lowered=plan.notes(result, settings),
+                                       not_modelled=plan.not_modelled)
 
 
 def run_time_speeds(program, result):
@@ -155,6 +160,9 @@ class SpeedPlan:
         Waypoint k -> lowered cruise TCP speed to write, mm/s.
     as_written : tuple of (int, str)
         Waypoints whose speed is set at run time, and why.
+    not_modelled : tuple of (int, str)
+        Waypoints that would get a time their controller would not run as
+        timed (`trajcomp.programs.items.Motion.time_why`), and why: left as written.
     reasons : dict of int to str
         Why a cruise speed was lowered or a time raised (the binding joint limit).
     stated : dict of int to float
@@ -166,6 +174,7 @@ class SpeedPlan:
     as_written: tuple
     reasons: dict
     stated: dict
+    not_modelled: tuple = ()
 
     def notes(self, result, settings):
         """``((k, text), ...)``: each lowered speed and raised time, with the limit that forced it."""
@@ -217,11 +226,16 @@ def _plan(program, result, robot):
         if turning > times[j]:
             times[j], stated[w] = turning, float(duration[j])
             reasons[w] = f"its orientation speed {np.degrees(ori):g} deg/s (v_ori) bounds the reorientation"
+    time_why = table.time_why[rows]
+    kept = ~process & (time_why != "")  # a time its controller would not run as timed: the field as written
+    written_time, left = ~process & ~kept, set(k[kept].tolist())
     return SpeedPlan(
-        times=dict(zip(k[~process].tolist(), times[~process].tolist())),
+        times=dict(zip(k[written_time].tolist(), times[written_time].tolist())),
         cruise=dict(zip(k[lowered].tolist(), limit[lowered].tolist())),
         as_written=as_written,
-        reasons=dict(sorted(reasons.items())), stated=dict(sorted(stated.items())),
+        reasons={w: why for w, why in sorted(reasons.items()) if w not in left},
+        stated={w: value for w, value in sorted(stated.items()) if w not in left},
+        not_modelled=tuple(zip(k[kept].tolist(), (f"{why}: left as written" for why in time_why[kept]))),
     )
 
 

@@ -1246,17 +1246,16 @@ def _flow_speeds(table, reached):
     AccSet acc, ramp [\\FinePointRamp:=f] runs the motion's accelerations
     at acc % of the arm's (the lowest of those reaching it:
     ``acceleration_share``); a ramp below 100 % (f for a motion to a fine
-    point) only softens how fast they build up (the jerk), as decided per
-    written field: a speed (a line's speed data, ``\\V``) cruises at it
-    behind softer ramps, never faster, so the motion is timed as at 100 %;
-    a time (``\\T``, written for a joint motion or one with a time) would
-    be kept by cruising faster behind softer ramps, so such a motion is left
-    as written and listed.
+    point) only softens how fast they build up (the jerk): a speed (a
+    line's speed data, ``\\V``) cruises at it behind softer ramps, never
+    faster, so the motion is timed as at 100 %; a time (``\\T``) would be
+    kept by cruising faster, which ``time_why`` says: the write-back, which
+    knows what it would write, leaves such a field as written and lists it.
     """
     speed = np.array(table.speed, dtype=float)
     orientation = np.array(table.orientation_speed, dtype=float)
     external = np.array(table.external_speed, dtype=float)
-    why = np.array(table.speed_why, dtype=object)
+    why, time_why = np.array(table.speed_why, dtype=object), np.array(table.time_why, dtype=object)
     share = np.full(len(table), np.nan)
     for r, settings in enumerate(reached.settings):
         rows = np.arange(len(table))[reached.rows(r)]
@@ -1270,11 +1269,8 @@ def _flow_speeds(table, reached):
             continue
         acc, ramp = min(v[0] for v in accsets), min(v[1] for v in accsets)
         ramp = np.where(np.isnan(table.zone[rows]), min(ramp, min(v[2] for v in accsets)), ramp)
-        written_time = (table.kind[rows] == JOINT) | (table.speed_unit[rows] != "mm/s")  # `timing.writeback`
-        softer = written_time & (ramp < 100.0)
-        why[rows[softer]] = [f"AccSet ramp {r:g} %: softer ramps, which the controller would make up for by cruising "
-                             "faster to keep a written time: left as written" for r in ramp[softer]]
-        rows = rows[~softer]
+        time_why[rows[ramp < 100.0]] = [f"AccSet ramp {r:g} %: softer ramps, which the controller would make up for "
+                                         "by cruising faster to keep a time" for r in ramp[ramp < 100.0]]
         if acc < 100.0:
             share[rows] = acc / 100.0
         override, top = min(v[0] for v in velsets) / 100.0, min(v[1] for v in velsets)
@@ -1286,7 +1282,7 @@ def _flow_speeds(table, reached):
         orientation[paced] *= override
         external[paced] *= override
     return {"speed": speed, "orientation_speed": orientation, "external_speed": external, "speed_why": why,
-            "acceleration_share": share}
+            "acceleration_share": share, "time_why": time_why}
 
 
 def _read(path):
