@@ -138,19 +138,20 @@ def _scaled_jacobian(robot, q, names):
     return jac[:, :3].reshape(-1, len(names)) * scales(names)
 
 
-@pytest.mark.parametrize("outside", ["model", "clamp"])
-def test_spline_terms_stop_at_the_measured_range(outside):
-    """Within the margin beyond the range the spline holds its boundary value; beyond it, policy ``model`` drops it."""
+def test_spline_terms_hold_their_edge_value_beyond_the_measured_range_and_gear_terms_go_on():
+    """Beyond the range a spline holds its boundary value (flagged outside past the margin); a gear harmonic,
+    physics of the whole turn, is evaluated where the joint is."""
     robot = load_robot("ur10")
     basis = SplineBasis(RANGE[:, 0], RANGE[:, 1], np.radians([10, 0, 0, 0, 0, 0]))
     names = basis.names()
     residual = JointResidual(names, np.linspace(-1e-4, 1e-4, len(names)), RANGE[:, 0], RANGE[:, 1], basis)
     q = np.tile(RANGE.mean(axis=1), (3, 1))
     q[:, 0] = RANGE[0, 1] + np.radians([0.0, 3.0, 10.0])  # on the edge, inside the margin, beyond it
-    offsets = residual.offsets(robot, q, outside)[:, 0]
-    assert offsets[1] == offsets[0] != 0.0
+    offsets = residual.offsets(robot, q)[:, 0]
+    assert offsets[2] == offsets[1] == offsets[0] != 0.0
     assert residual.contains(q).tolist() == [True, True, False]
-    assert offsets[2] == (offsets[0] if outside == "clamp" else 0.0)
+    gear = JointResidual(("gear1_s1",), [1e-4], RANGE[:, 0], RANGE[:, 1])
+    assert np.allclose(gear.offsets(robot, q)[:, 0], 1e-4 * np.sin(q[:, 0]), rtol=0, atol=1e-15)
 
 
 def test_region_folds_hold_out_whole_slabs_never_interleaved_rows():

@@ -276,3 +276,31 @@ def test_a_light_re_calibration_s_uncertainty_widens_every_estimate(cell):
     before = landing.estimate(model, "composite", q, targets).total
     after = landing.estimate(updated, "composite", q, targets).total
     assert np.all(after > before) and np.all(after < before + 2.5 * 0.05)
+
+
+def test_a_joint_residual_s_miss_grows_beyond_its_measured_range_along_the_joint_s_own_motion():
+    """Beyond a joint's measured range its error may miss by `BEYOND_FACTOR` times the residual's RMS angle error
+    there, reached `BEYOND_RAMP` out, along the motion of the TCP that turning that joint makes (finite differences
+    of the DH angle); inside the range nothing is added."""
+    from types import SimpleNamespace
+
+    from trajcomp.arm.kinematics import fk
+    from trajcomp.arm.parameters import apply_deltas
+    from trajcomp.model.joint_errors import JointResidual
+
+    robot = load_robot("ur10")
+    middle = np.radians([10.0, -100.0, 90.0, -80.0, -90.0, 0.0])
+    lower, upper = middle - np.radians(20.0), middle + np.radians(20.0)
+    residual = JointResidual(("gear2_s1",), [2e-4], lower, upper)
+    measured = middle + np.random.default_rng(0).uniform(-1.0, 1.0, (60, 6)) * np.radians(20.0)
+    model = SimpleNamespace(residual=residual, nominal=robot)
+    data = SimpleNamespace(configurations=measured)
+    q = np.tile(middle, (4, 1))
+    q[:, 1] = upper[1] + np.radians([0.0, 30.0, 60.0, 120.0])  # on the edge, half the ramp, the ramp, twice it
+    added = landing._beyond_joint_range(model, data, robot, q)
+    size = landing.BEYOND_FACTOR * np.std(2e-4 * np.sin(measured[:, 1]))
+    step = 1e-6
+    column = (fk(apply_deltas(robot, ["theta2"], [step]), q)[:, :3, 3] - fk(robot, q)[:, :3, 3]) / step
+    for k, share in enumerate([0.0, 0.5, 1.0, 1.0]):
+        expected = (size * share) ** 2 * np.outer(column[k], column[k])
+        assert np.allclose(added[k], expected, rtol=1e-4, atol=1e-12)

@@ -130,9 +130,10 @@ class CompensationModel:
             A program tool (TCP in the flange frame), taken as exact; default:
             the measured TCP as identified.
         outside : {"model", "clamp", "error"}
-            Joints outside the range a joint residual was fitted on: without
-            the joint errors (flagged), with those at the nearest joints of
-            the range, or a ModelError.
+            Joints outside the range a joint residual was fitted on: flagged
+            (`Arm.outside_rows`; the joint errors extrapolate as
+            `trajcomp.model.joint_errors.JointResidual.offsets` says), or a
+            ModelError (``error``).
         """
         self.check_mode(mode)
         robot, joints = self.nominal, None
@@ -250,7 +251,7 @@ class Arm:
 
     def reached_joints(self, q):
         """Joint angles (N, 6) rad the arm takes for commanded joints q (N, 6)."""
-        return q if self.joints is None else self.joints.reached(self.nominal, q, self._policy)
+        return q if self.joints is None else self.joints.reached(self.nominal, q)
 
     def fk(self, q):
         """TCP poses (N, 4, 4) reached for commanded joints q (N, 6) rad."""
@@ -258,11 +259,7 @@ class Arm:
 
     def commanded_joints(self, q_reached):
         """Commanded joints (N, 6) rad under which the arm takes ``q_reached``."""
-        return q_reached if self.joints is None else self.joints.commanded(self.nominal, q_reached, self._policy)
-
-    @property
-    def _policy(self):
-        return "extrapolate" if self.outside == "error" else self.outside
+        return q_reached if self.joints is None else self.joints.commanded(self.nominal, q_reached)
 
 
 def evaluate_field(field, points, interpolation=None, outside="model"):

@@ -279,10 +279,6 @@ class JointResidual:
         q = np.atleast_2d(q)
         return np.all((q >= self.lower - RANGE_MARGIN) & (q <= self.upper + RANGE_MARGIN), axis=1)
 
-    def clamped(self, q):
-        """Commanded joints q (N, 6) moved into the fitted range."""
-        return np.clip(q, self.lower, self.upper)
-
     @property
     def terms(self):
         """``(names, values)`` of the joint-error terms alone."""
@@ -294,34 +290,33 @@ class JointResidual:
         pick = [k for k, n in enumerate(self.names) if not is_term(n)]
         return apply_deltas(identified, [self.names[k] for k in pick], self.values[pick])
 
-    def offsets(self, nominal, q, outside="model"):
+    def offsets(self, nominal, q):
         """DH-angle errors (N, 6), rad, at commanded joints q (N, 6) rad.
 
-        ``outside`` applies to joints outside the fitted range: ``model``
-        leaves their errors out (the refined DH model alone), ``clamp``
-        takes them at the nearest joints of the range, ``extrapolate``
-        evaluates the terms anyway (spline terms held at their boundary
-        value all the same).
+        Beyond the fitted range of a joint the gear and gravity terms, which
+        are physics of the whole turn, are evaluated all the same, and the
+        spline terms are held at their boundary value: the model's own
+        extrapolation. On foreign virtual UR10 arms (``bench_verdict``'s,
+        harsh profile) targets 150-300 mm outside the measured cube, near
+        the elbow singularity and in the other wrist posture land 2-5x
+        closer so than with the refined DH model alone (0.05 against 0.22-0.27
+        mm mean, 0.24-0.26 against 0.79-1.08, 0.11 against 0.22-0.37).
         """
         q = np.atleast_2d(np.asarray(q, dtype=float))
-        if outside == "clamp":
-            q = self.clamped(q)
         names, values = self.terms
         smooth = [k for k, n in enumerate(names) if not is_spline(n)]
         joint_of_term = np.eye(6)[[term_joint(names[k]) for k in smooth]].reshape(-1, 6)  # (T, 6)
         out = (features(nominal, q, [names[k] for k in smooth]) * values[smooth]) @ joint_of_term
         if self.basis is not None:
             out += self.basis.offsets(q, names, values)
-        if outside == "model":
-            out[~self.contains(q)] = 0.0
         return out
 
-    def reached(self, nominal, q, outside="model"):
+    def reached(self, nominal, q):
         """Joint angles (N, 6) rad the arm really takes for commands q: DH-angle errors mapped by the joint map."""
         q = np.atleast_2d(np.asarray(q, dtype=float))
-        return q + self.offsets(nominal, q, outside) @ np.linalg.inv(nominal.joint_map).T
+        return q + self.offsets(nominal, q) @ np.linalg.inv(nominal.joint_map).T
 
-    def commanded(self, nominal, q_reached, outside="model"):
+    def commanded(self, nominal, q_reached):
         """Commands (N, 6) rad under which the arm takes the joint angles ``q_reached``.
 
         Solves ``reached(q) = q_reached`` by fixed-point iteration; the errors
@@ -331,7 +326,7 @@ class JointResidual:
         q_reached = np.atleast_2d(np.asarray(q_reached, dtype=float))
         q = q_reached.copy()
         for _ in range(COMMAND_ITERATIONS):
-            q = q_reached - (self.reached(nominal, q, outside) - q)
+            q = q_reached - (self.reached(nominal, q) - q)
         return q
 
     def to_dict(self):

@@ -357,8 +357,9 @@ def _joint_errors(model):
         "measured_range_deg": {"lower": np.degrees(residual.lower).round(3).tolist(),
                                "upper": np.degrees(residual.upper).round(3).tolist()},
         "beyond_range": "a spline term is held at its value at the edge of the measured range of its joint (no shape "
-                        "is extrapolated); a target more than 5 deg beyond the range of any joint is outside the "
-                        "calibrated region and gets no joint-error term",
+                        "is extrapolated), the gear and gravity terms are evaluated where the joints are; a target more "
+                        "than 5 deg beyond the range of any joint is outside the calibrated region (flagged, its "
+                        "landing estimate grows with the joints' distance from the measured ones)",
     }
 
 
