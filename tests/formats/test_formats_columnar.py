@@ -64,15 +64,16 @@ def _line_by_line(path, monkeypatch):
                 patch.setattr(module, name, re.compile(r"(?!)"))
         else:
             patch.setattr(module, function, NONE_AT_ONCE.get(module, lambda *args: {}))
-        if module in (fanuc_reader, krl_reader):
+        if module is fanuc_reader:
             patch.setattr(module, "_WRITTEN_MOTION", re.compile(r"(?!)"))  # matches nothing
         if module is rapid_reader:  # nor any line found from its characters
             patch.setattr(module, "_laid_out_lines", lambda codes, starts, ends: [
                 (np.zeros(0, dtype=np.int64), np.zeros((0, 1, 2), dtype=np.int64))] * len(module.WRITTEN_FORMS))
-        if module is krl_reader:  # nor any motion line read from its characters
+        if module is krl_reader:  # nor any motion line read from its characters or by its pattern
+            patch.setattr(module, "WRITTEN_MOTION", re.compile(r"(?!)"))
             patch.setattr(module, "_motion_layout", lambda codes, starts, ends: (np.zeros(0, dtype=np.int64),
                                                                                  np.zeros((0, 10), dtype=np.int64)))
-            patch.setattr(module, "_INLINE_MOTION", re.compile(r"(?!)"))  # nor any inline motion
+            patch.setattr(module, "INLINE_MOTION", re.compile(r"(?!)"))  # nor any inline motion
             patch.setattr(module, "_inline_layout", lambda codes, starts, ends: NO_INLINE)
         return formats.read(path)
 

@@ -50,10 +50,10 @@ def _program(tmp_path, src=SRC, dat=DAT):
 def _one_by_one(path, monkeypatch):
     """The program read with no motion read at once."""
     with monkeypatch.context() as patch:
-        patch.setattr(krl_reader, "_WRITTEN_MOTION", re.compile("(?!)"))
+        patch.setattr(krl_reader, "WRITTEN_MOTION", re.compile("(?!)"))
         patch.setattr(krl_reader, "_motion_layout", lambda codes, starts, ends: (np.zeros(0, dtype=np.int64),
                                                                                  np.zeros((0, 10), dtype=np.int64)))
-        patch.setattr(krl_reader, "_INLINE_MOTION", re.compile("(?!)"))
+        patch.setattr(krl_reader, "INLINE_MOTION", re.compile("(?!)"))
         patch.setattr(krl_reader, "_inline_layout", lambda codes, starts, ends: NO_INLINE)
         return formats.read(path)
 

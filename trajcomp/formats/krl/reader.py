@@ -10,13 +10,20 @@ import numpy as np
 
 from trajcomp.errors import ReadError
 from trajcomp.formats.krl import config_dat
+from trajcomp.formats.krl.grammar import (
+    ACC, ACC_AXIS, ACC_CP, ACC_GROUPS, ACC_ORI, ACT, APO, APPROX, APPROXIMATIONS, ASSIGN, AXES, AXIS_GROUPS, BAS,
+    BAS_ACC_PTP, BLOCK_CLOSES, BLOCK_OPENS, CARTESIAN_TYPES, CLOSING, DATA, DATA_REF, DECL, DECL_BARE, DECL_START, DEF,
+    DEF_LINE, DEFDAT, END_SPLINE, ENDDAT, EXTERNAL, FIRST_WORD, FLOW_WORDS, GLOBAL_POINT, GLOBAL_WORD, HOME,
+    INLINE_MOTION, INLINE_POINT, JOINT_TYPES, JUMP_TO, LIMITS, MEMBER, MOTION, MOTION_KEYWORDS, MOTIONS, NAME,
+    NUMBER_DECL, ORI_GROUPS, OUTSIDE_ROUTINES, POSE, SPLINE, STATUS_LARGEST, SYSVAR, VEL, VEL_AXIS, VEL_CP, WITH,
+    WITH_BASE, WITH_CALL, WITH_SPEED, WITH_TOOL, WITH_WORD, WORD, WRITTEN_MOTION, WRITTEN_POINT, declaration_heads,
+    member_layouts,
+)
 from trajcomp.formats.number_fields import BLANK as _BLANK, DIGIT as _DIGIT, WORD_CHARACTER as _WORD_CHARACTER
 from trajcomp.formats.number_fields import character_table as _character_table, line_bounds as _line_bounds
 from trajcomp.formats.number_fields import NUMBER, offset_type, read_numbers, text_codes
 from trajcomp.formats.number_fields import spells as _spells, spelt as _spelt, starts_with as _starts_with
 from trajcomp.formats.text import (
-    ANGLE_LIMIT,
-    JOINT_LIMIT,
     LENGTH_LIMIT,
     DeclaredElsewhere,
     Lines,
@@ -46,108 +53,7 @@ from trajcomp.programs.items import (
 )
 from trajcomp.arm.transforms import pose_to_matrix
 
-POSE = ("x", "y", "z", "a", "b", "c")
-AXES = ("a1", "a2", "a3", "a4", "a5", "a6")
-EXTERNAL = ("e1", "e2", "e3", "e4", "e5", "e6")
-MIN_PLACES = dict.fromkeys(POSE[:3], 3) | dict.fromkeys(POSE[3:], 4) | dict.fromkeys(AXES, 4)
-LIMITS = dict.fromkeys(POSE[:3], LENGTH_LIMIT) | dict.fromkeys(POSE[3:], ANGLE_LIMIT) | dict.fromkeys(AXES, JOINT_LIMIT)
-POINT_TYPES = "E6POS|POS|FRAME|E6AXIS|AXIS"
-JOINT_TYPES = {"E6AXIS", "AXIS"}
 MOTION_SPANS = ("motion", "via_name", "target_name", "speed_with", "speed")  # a motion's spans, in this order
-KINDS = {"PTP": JOINT, "SPTP": JOINT, "LIN": LINEAR, "SLIN": LINEAR, "CIRC": CIRCULAR, "SCIRC": CIRCULAR}
-
-_QUALIFIERS = r"(?:(?:GLOBAL|CONST)\s+)*"  # DECL GLOBAL CONST E6POS ..: a data list's constant is a point too
-_DECL = re.compile(
-    r"^\s*(?:DECL\s+)?" + _QUALIFIERS + r"(" + POINT_TYPES + r"|FDAT|PDAT|LDAT)\s+(\w+)\s*=\s*\{(.*)\}\s*$", re.I
-)
-_DECL_START = re.compile(r"^\s*(?:DECL\s+)?" + _QUALIFIERS + r"(?:" + POINT_TYPES + r")\s+\w+\s*=", re.I)
-_DECL_BARE = re.compile(r"^\s*(?:DECL\s+)?(?:GLOBAL\s+)?(?:" + POINT_TYPES + r")\s+(\w+(?:\s*,\s*\w+)*)\s*$", re.I)
-_DATA = re.compile(r"^\s*(TOOL_DATA|BASE_DATA)\s*\[\s*(\d+)\s*\]\s*=\s*(.*?)\s*$", re.I)
-_SYSVAR = re.compile(r"^\s*\$(TOOL|BASE)\s*=\s*(.*?)\s*$", re.I)
-_DATA_REF = re.compile(r"^(TOOL_DATA|BASE_DATA)\s*\[\s*(\d+)\s*\]$", re.I)
-_BAS = re.compile(r"^\s*BAS\s*\(\s*#(TOOL|BASE|VEL_PTP|VEL_CP|PTP_PARAMS|CP_PARAMS)\s*,\s*(.*?)\s*\)\s*$", re.I)
-_ACT = re.compile(r"^\s*(FDAT|PDAT|LDAT)_ACT\s*=\s*(\w+)\s*$", re.I)
-_VEL_CP = re.compile(r"^\s*\$VEL\.CP\s*=\s*(.*?)\s*$", re.I)
-_VEL = re.compile(r"^\s*\$VEL\s*=\s*\{(.*)\}\s*$", re.I)  # $VEL={CP 0.2,ORI1 200,ORI2 200}
-_VEL_AXIS = re.compile(r"^\s*\$VEL_AXIS\s*\[\s*([1-6])\s*\]\s*=\s*(.*?)\s*$", re.I)
-_ACC_CP = re.compile(r"^\s*\$ACC\.CP\s*=\s*(.*?)\s*$", re.I)
-_ACC = re.compile(r"^\s*\$ACC\s*=\s*\{(.*)\}\s*$", re.I)  # $ACC={CP 2.3,ORI1 100,ORI2 100}
-_ACC_ORI = re.compile(r"^\s*\$ACC\.(ORI[12])\s*=\s*(.*?)\s*$", re.I)
-_ACC_AXIS = re.compile(r"^\s*\$ACC_AXIS\s*\[\s*([1-6])\s*\]\s*=\s*(.*?)\s*$", re.I)
-_BAS_ACC = re.compile(r"^\s*BAS\s*\(\s*#ACC_PTP\s*,\s*(.*?)\s*\)\s*$", re.I)  # every axis's $ACC_AXIS
-ACC_GROUPS = tuple(f"acc{n}" for n in range(1, 7))  # the flow's acceleration groups of a PTP: each axis's %
-ORI_GROUPS = ("acc_ori1", "acc_ori2")  # the orientation accelerations of a LIN or CIRC, deg/s^2
-AXIS_GROUPS = tuple(f"ptp{n}" for n in range(1, 7))  # the flow's speed groups of a PTP: each axis's % (`_Reader.give`)
-# the statements that change the order a program runs in (`trajcomp.programs.flow.Step`): keyword -> step kind
-_FLOW_WORDS = {"IF": "if", "ELSE": "else", "ENDIF": "endif", "SWITCH": "if", "CASE": "elif", "DEFAULT": "elif",
-               "ENDSWITCH": "endif", "FOR": "loop", "ENDFOR": "endloop", "WHILE": "loop", "ENDWHILE": "endloop",
-               "LOOP": "loop", "ENDLOOP": "endloop", "REPEAT": "loop", "UNTIL": "endloop", "EXIT": "exit",
-               "RETURN": "return", "END": "end", "ENDFCT": "end", "WAIT": "wait", "HALT": "wait", "GOTO": "jump"}
-_SPLINE = re.compile(r"^\s*(?:PTP_)?SPLINE\b(?:.*?\bWITH\b(.*))?$", re.I)  # a spline block: its WITH holds for it
-_END_SPLINE = re.compile(r"^\s*ENDSPLINE\b", re.I)
-_FIRST_WORD = re.compile(r"^\s*([A-Za-z_$][\w$]*)\s*(\(|:\s*$)?")
-_JUMP_TO = re.compile(r"^\s*GOTO\s+(\w+)", re.I)
-_NUMBER_DECL = re.compile(r"^\s*(?:DECL\s+)?((?:(?:GLOBAL|CONST)\s+)*)(?:REAL|INT)\s+(\w+)\s*=\s*(" + NUMBER + r")\s*$", re.I)
-# a speed in a spline motion's WITH clause: $VEL = SVEL_CP(v, ..), $VEL.CP = v, $VEL_AXIS[n] = SVEL_JOINT(%)
-_WITH_SPEED = re.compile(r"\$VEL(?:\.CP|_AXIS\s*\[\s*\d+\s*\])?\s*=", re.I)
-_WITH_CALL = re.compile(r"\s*(SVEL_CP|SVEL_JOINT)\s*\(", re.I)
-_APO = re.compile(r"^\s*\$APO\.CDIS\s*=\s*(" + NUMBER + r")\s*$", re.I)
-_MOTION = re.compile(r"^\s*(PTP|LIN|CIRC|SPTP|SLIN|SCIRC)(_REL)?\b\s*(.*?)\s*$", re.I)
-_MEMBER = re.compile(r"\s*([A-Za-z_]\w*)\s+(" + NUMBER + r"|'B[01]+')\s*$")
-_APPROX = re.compile(r"\s*((?:\bC_(?:PTP|DIS|VEL|ORI|SPL)\b\s*)+)$", re.I)
-_NAME = re.compile(r"^[A-Za-z_$][\w$]*$")
-_WORD = re.compile(r"[A-Za-z_$][\w$]*")
-_ASSIGN = re.compile(r"^\s*([A-Za-z_]\w*)\s*(?:\.\w+|\[[^\]]*\])*\s*=(?!=)")
-_WITH_TOOL = re.compile(r"\$TOOL\s*=\s*STOOL2\s*\(\s*(\w+)\s*\)", re.I)
-_WITH_BASE = re.compile(r"\$BASE\s*=\s*SBASE\s*\(\s*(\w+)\s*\.\s*BASE_NO\s*\)", re.I)
-# a point another data list declares, with a value or without (`DeclaredElsewhere`)
-_GLOBAL_POINT = re.compile(r"^[ \t]*(?:DECL\s+)?" + _QUALIFIERS + r"(?:" + POINT_TYPES + r")\s+(\w+)\s*(?:=|$)", re.I | re.M)
-_GLOBAL_WORD = re.compile(r"\bGLOBAL\b", re.I)
-_HOME = re.compile(r"^(XHOME\d*|\$AXIS_ACT)$", re.I)  # axis positions stated outside the program: kept
-_DEF = re.compile(r"^\s*(?:GLOBAL\s+)?DEF(?:FCT\s+\w+)?\s+(\w+)\s*\(", re.I | re.M)
-_DEF_LINE = re.compile(r"^\s*(?:GLOBAL\s+)?DEF(?:FCT\s+\w+)?\s+\w+\s*\((.*?)\)", re.I)
-_DEFDAT = re.compile(r"^\s*DEFDAT\s+(\w+)", re.I | re.M)
-_ENDDAT = re.compile(r"^\s*ENDDAT\b", re.I | re.M)
-# the blocks of a .src (a routine or function, the control structures, a spline block) and the keywords closing them
-_CLOSING = {"DEF": "END", "DEFFCT": "ENDFCT", "IF": "ENDIF", "FOR": "ENDFOR", "WHILE": "ENDWHILE", "LOOP": "ENDLOOP",
-            "REPEAT": "UNTIL", "SWITCH": "ENDSWITCH", "SPLINE": "ENDSPLINE", "PTP_SPLINE": "ENDSPLINE"}
-_BLOCK_OPENS = re.compile(r"^[ \t]*(?:GLOBAL\s+)?(DEFFCT|DEF|IF|FOR|WHILE|LOOP|REPEAT|SWITCH|SPLINE|PTP_SPLINE)\b",
-                          re.I | re.M)
-_BLOCK_CLOSES = re.compile(r"^[ \t]*(ENDFCT|END|ENDIF|ENDFOR|ENDWHILE|ENDLOOP|UNTIL|ENDSWITCH|ENDSPLINE)\b",
-                           re.I | re.M)
-_OUTSIDE_ROUTINES = re.compile(r"[ \t]*&")  # what a .src holds outside its routines: its &ACCESS, &REL ... lines
-_PROGRAM_NAME = re.compile(r"^[A-Za-z_][A-Za-z0-9_]{0,23}$")  # KRL names: 24 characters at most
-# A Cartesian point declared as KUKA's editors and CAM post-processors write it, one a line:
-# DECL E6POS XP1={X 1.0,Y 2.0,Z 3.0,A 0.0,B 90.0,C 0.0,S 2,T 35,E1 0.0,..,E6 0.0} (S, T and E1..E6 optional):
-# read a whole data list of them at once (`_written_points`); any other declaration goes line by line.
-
-
-def _externals(separator):
-    """The pattern of a point's E1..Ek (k = 0..6) after its other members, ``separator`` (a pattern) before each."""
-    return "".join(f"(?:{separator}E{k}[ ]({NUMBER})" for k in range(1, 7)) + ")?" * 6
-
-
-_EXTERNAL_MEMBERS = _externals(",")
-_WRITTEN_POINT = re.compile(
-    r"^[ \t]*DECL[ \t]+(?:(?:GLOBAL|CONST)[ \t]+)*(?:E6POS|POS|FRAME)[ \t]+(\w+)[ \t]*=[ \t]*\{"
-    + ",".join(f"{p.upper()}[ ]({NUMBER})" for p in POSE) + r"(?:,S[ ](\d+),T[ ](\d+))?"
-    + _EXTERNAL_MEMBERS + r"\}[ \t]*\r?$", re.I | re.M)
-# A motion to a named point as CAM post-processors write it, one a line: LIN XP1 C_DIS, PTP P2 (no WITH, no _REL):
-# read at once (`_written_motions`); every other motion goes line by line.
-_WRITTEN_MOTION = re.compile(
-    r"^[ \t]*((S?PTP)|S?LIN)[ \t]+(?!(?:C_(?:PTP|DIS|VEL|ORI|SPL)|WITH)\b)([A-Za-z_][A-Za-z0-9_]*)"
-    r"(?:[ \t]+(C_(?:PTP|DIS|VEL|ORI|SPL)))?[ \t]*\r?$", re.I | re.M)
-# A motion to a Cartesian point written inline, one a line, as RoboDK's and SprutCAM's KUKA posts write them,
-# LIN {X 446.0,Y 70.0,Z 635.0,A 0.0,B 90.0,C 0.0} C_DIS, or with its type and a blank after each comma as other
-# generators do, LIN {E6POS: X 446.0, Y 70.0, ..} C_DIS (PTP, SLIN, SPTP too; the members in `_WRITTEN_POINT`'s
-# order, no WITH, no _REL): read at once (`_written_motions`); every other inline motion goes line by line. Groups:
-# the line, the keyword, the keyword if PTP or SPTP, an empty name, X..C, S, T, E1..E6, the approximation.
-_SEPARATOR = ",[ ]?"
-_INLINE_MOTION = re.compile(
-    r"^[ \t]*((S?PTP)|S?LIN)[ \t]+\{(?:(?:E6POS|POS|FRAME):[ ]?)?()"
-    + _SEPARATOR.join(f"{p.upper()}[ ]({NUMBER})" for p in POSE) + rf"(?:{_SEPARATOR}S[ ](\d+){_SEPARATOR}T[ ](\d+))?"
-    + _externals(_SEPARATOR) + r"\}(?:[ \t]+(C_(?:PTP|DIS|VEL|ORI|SPL)))?[ \t]*\r?$", re.I | re.M)
-_INLINE_POINT = [0] + list(range(3, 18))  # the groups of `_INLINE_MOTION` that `_WRITTEN_POINT` has, in its order
 
 
 @dataclasses.dataclass(frozen=True)
@@ -165,7 +71,7 @@ def _members(body, start, source, name, line, text, numeric=True):
     skip = colon.end() if colon else 0
     out, position = {}, skip
     for piece in body[skip:].split(","):
-        m = _MEMBER.match(piece)
+        m = MEMBER.match(piece)
         if m:
             key = m.group(1).lower()
             out[key] = Span(source, start + position + m.start(2), start + position + m.end(2), m.group(2))
@@ -214,8 +120,9 @@ def _status_turn(members, source_name, line, text):
     if "s" not in members or "t" not in members:
         return ()
     words = []
-    for field, largest in (("S", 0xFF), ("T", 0x3F)):
-        value = _int(members[field.lower()].text, source_name, line, text, field)
+    for member, largest in STATUS_LARGEST.items():
+        field = member.upper()
+        value = _int(members[member].text, source_name, line, text, field)
         if not 0 <= value <= largest:
             fail(source_name, line, text, f"{field} {members[field.lower()].text[:40]}: outside 0..{largest} "
                  f"({'the status byte' if field == 'S' else 'one sign bit per axis A1-A6'})")
@@ -233,11 +140,11 @@ def _frame(members, source_name, line, text):
 
 
 def _written_points(index, masked, lines):
-    """The Cartesian points of a data list declared as KUKA writes them (`_WRITTEN_POINT`), read at once.
+    """The Cartesian points of a data list declared as KUKA writes them (`WRITTEN_POINT`), read at once.
 
     The lines written exactly as `_written_layout` knows them are found
     from their characters, `AT_ONCE` lines at a time; the other lines are
-    matched by `_WRITTEN_POINT` one by one. The numbers are read from the
+    matched by `WRITTEN_POINT` one by one. The numbers are read from the
     characters (`trajcomp.formats.number_fields`). A declaration whose
     numbers a line-by-line read would refuse (out of range, S or T beyond
     their bits) is left out: that read then names it.
@@ -273,12 +180,12 @@ def _written_points(index, masked, lines):
     others, matched = np.flatnonzero(~taken), False
     for lo in range(0, len(others), AT_ONCE):
         found = [m for k in others[lo:lo + AT_ONCE].tolist() if not masked[starts[k]:ends[k]].isspace()
-                 and (m := _WRITTEN_POINT.match(masked, int(starts[k]), int(ends[k])))]
+                 and (m := WRITTEN_POINT.match(masked, int(starts[k]), int(ends[k])))]
         if not found:
             continue
         matched = True
         regs = np.array([m.regs for m in found], dtype=np.int64)  # absent groups: (-1, -1)
-        shared = np.array([_GLOBAL_WORD.search(masked, m.start(), m.end()) is not None for m in found], dtype=bool)
+        shared = np.array([GLOBAL_WORD.search(masked, m.start(), m.end()) is not None for m in found], dtype=bool)
         numbers = _field_numbers(codes, regs[:, :, 0], regs[:, :, 1])[0]
         blocks.append(_written_block(regs[:, :, 0], regs[:, :, 1], numbers, shared, offset, configs))
     pose, start, end, config, external, shared = (
@@ -299,26 +206,10 @@ def _written_points(index, masked, lines):
 
 
 AT_ONCE = 65536  # lines or motions whose fields are found and read together: bounds the arrays held
-# the declaration starts read at once (upper case): one space after each word, GLOBAL or not
-_HEADS = tuple(f"DECL {scope}{typ} " for scope in ("", "GLOBAL ", "CONST ", "GLOBAL CONST ")
-               for typ in ("E6POS", "POS", "FRAME"))
-_LONGEST_NAME = 64  # characters of a point name read at once (a longer one: `_WRITTEN_POINT`)
+_HEADS = declaration_heads()  # the declaration starts read at once (upper case): one space after each word
+_LONGEST_NAME = 64  # characters of a point name read at once (a longer one: `WRITTEN_POINT`)
 _LONGEST_WHOLE = 24  # digits of an S or T read at once
-
-
-def _member_layouts():
-    """``{count: [members]}``: the members a point declaration writes, in order, by their count: X..C, S and T if
-    any, then E1..Ek, as `_WRITTEN_POINT` states them; each member's field index (`_written_layout`)."""
-    layouts = {}
-    for status in ((), ("S", "T")):
-        for count in range(7):
-            members = [(p.upper(), 2 + k) for k, p in enumerate(POSE)] + [(s, 8 + k) for k, s in enumerate(status)]
-            members += [(f"E{k + 1}", 10 + k) for k in range(count)]
-            layouts.setdefault(len(members), []).append(members)
-    return layouts
-
-
-_LAYOUTS = _member_layouts()
+_LAYOUTS = member_layouts()  # the members of a point read at once, by their count
 
 
 def _made_of(codes, start, end, table, longest):
@@ -334,8 +225,8 @@ def _written_layout(codes, starts, ends):
 
     One space after each word and member name and none elsewhere (no
     blank at the line's start), E6POS, POS or FRAME, GLOBAL or not, any
-    case, S and T and E1..Ek as `_WRITTEN_POINT` has them, a line ending
-    ``\\n`` or ``\\r\\n``: a subset of what `_WRITTEN_POINT` matches, found
+    case, S and T and E1..Ek as `WRITTEN_POINT` has them, a line ending
+    ``\\n`` or ``\\r\\n``: a subset of what `WRITTEN_POINT` matches, found
     from the characters' codes. The fields' contents are not checked here
     (`_field_numbers`).
 
@@ -351,10 +242,10 @@ def _written_layout(codes, starts, ends):
     at : ndarray of int, shape (K,)
         The lines declaring a point so (indices into ``starts``).
     start, end : ndarray of int, shape (K, 16)
-        Offsets of `_WRITTEN_POINT`'s groups: the declaration (its line,
+        Offsets of `WRITTEN_POINT`'s groups: the declaration (its line,
         ``\\r`` included), the name, X..C, S, T, E1..E6 (-1 where not written).
     shared : ndarray of bool, shape (K,)
-        Declared GLOBAL (`_GLOBAL_WORD` in the declaration: the word or a point named so).
+        Declared GLOBAL (`GLOBAL_WORD` in the declaration: the word or a point named so).
     """
     none = np.zeros(0, dtype=np.int64)
     if not len(starts) or not len(codes):
@@ -475,7 +366,7 @@ def _field_numbers(codes, start, end):
     numbers : ndarray, shape (K, 14)
         X..C, S, T, E1..E6; NaN where not written.
     read : ndarray of bool, shape (K,)
-        Whether each written field is a number as `_WRITTEN_POINT` states it (S and T digits only).
+        Whether each written field is a number as `WRITTEN_POINT` states it (S and T digits only).
     """
     given = start[:, 2:] >= 0
     numbers = np.full(given.shape, np.nan)
@@ -516,16 +407,17 @@ def _written_block(start, end, numbers, shared, offset, configs):
     pose, status, external = numbers[:, :6], numbers[:, 6:8], numbers[:, 8:]
     limits = np.array([LIMITS[p] for p in POSE])
     good = np.isfinite(pose).all(axis=1) & (np.abs(pose) <= limits).all(axis=1)
-    good &= ~given[:, 6] | ((status[:, 0] <= 0xFF) & (status[:, 1] <= 0x3F))
+    good &= ~given[:, 6] | (status <= list(STATUS_LARGEST.values())).all(axis=1)
     good &= (np.isfinite(external) & (np.abs(external) <= LENGTH_LIMIT) | ~given[:, 8:]).all(axis=1)
     keep = np.flatnonzero(good)
     vector = pose[keep]
     vector[:, 3:] = np.radians(vector[:, 3:])
-    key = np.where(given[keep, 6], status[keep, 0] * 64 + status[keep, 1], -1).astype(np.int64)  # S, T: 8, 6 bits
+    turns = STATUS_LARGEST["t"] + 1  # S and T as one whole number: S * turns + T
+    key = np.where(given[keep, 6], status[keep, 0] * turns + status[keep, 1], -1).astype(np.int64)
     distinct, which = np.unique(key, return_inverse=True)
     words = np.empty(len(distinct), dtype=object)
     for k, word in enumerate(distinct.tolist()):
-        words[k] = configs.setdefault(divmod(word, 64), divmod(word, 64)) if word >= 0 else ()
+        words[k] = configs.setdefault(divmod(word, turns), divmod(word, turns)) if word >= 0 else ()
     config = tuple(words[which.ravel()].tolist())
     counts = given[keep, 8:].sum(axis=1)
     external = _shared_rows(external[keep], counts) if counts.any() else (None,) * len(keep)
@@ -610,7 +502,7 @@ class _Reader:
         """Note the names the .src assigns (a declared speed is a constant only if nothing assigns it)."""
         for line_no, start, end in lines:
             text = statement_text(masked, start, end)
-            if (m := _ASSIGN.match(text)) and not _NUMBER_DECL.match(text):
+            if (m := ASSIGN.match(text)) and not NUMBER_DECL.match(text):
                 self.assigned.setdefault(m.group(1).upper(), line_no)
 
     def number_value(self, text, index, line_no, original, field):
@@ -651,7 +543,7 @@ class _Reader:
         name = self.sources[index].name
         text = statement_text(masked, start, end)
         original = self.sources[index].text[start:end]
-        m = _DECL.match(text)
+        m = DECL.match(text)
         if m:
             typ, point = m.group(1).upper(), m.group(2)
             body_start = start + m.start(3)
@@ -659,14 +551,14 @@ class _Reader:
                 self.data[point.upper()] = _members(m.group(3), body_start, index, name, line_no, original, False)
             else:
                 members = _members(m.group(3), body_start, index, name, line_no, original)
-                if _GLOBAL_WORD.search(text, 0, m.start(2)):
+                if GLOBAL_WORD.search(text, 0, m.start(2)):
                     self.shared.add(point.upper())
                 self.redeclared |= point.upper() in self.points
                 self.once_in_data_list(index, point, line_no, original)
                 self.points[point.upper()] = len(self.targets)
                 self.targets.append(_point(members, point, name, line_no, original, typ))
             return True
-        if m := _NUMBER_DECL.match(text):
+        if m := NUMBER_DECL.match(text):
             qualifiers = m.group(1).upper().split()
             if "GLOBAL" in qualifiers and "CONST" not in qualifiers:
                 why = f"{m.group(2)}: GLOBAL data other programs may change, known at run time (line {line_no})"
@@ -674,14 +566,14 @@ class _Reader:
             else:
                 self.numbers[m.group(2).upper()] = (finite(m.group(3), name, line_no, original, m.group(2)), "")
             return True
-        if _DECL_START.match(text):
+        if DECL_START.match(text):
             fail(name, line_no, original, "malformed or cut point declaration")
-        if m := _DECL_BARE.match(text):
+        if m := DECL_BARE.match(text):
             place = f"{name}:{line_no}" if self.sources[index].companion else f"line {line_no}"
             for point in re.split(r"\s*,\s*", m.group(1)):
                 self.unset[point.upper()] = f"{point} is declared without a value (set at run time, {place})"
             return True
-        m = _DATA.match(text)
+        m = DATA.match(text)
         if m:
             which = "TOOL" if m.group(1).upper() == "TOOL_DATA" else "BASE"
             value = m.group(3)
@@ -699,10 +591,10 @@ class _Reader:
         name = self.sources[index].name
         text = statement_text(masked, start, end)
         original = self.sources[index].text[start:end]
-        if m := _DEF_LINE.match(text):
+        if m := DEF_LINE.match(text):
             self.params = {p.split(":")[0].strip().upper() for p in m.group(1).split(",") if p.strip()}
-            self.steps.append(Step("routine", _DEF.match(text).group(1), line=line_no, source=index))
-        m = _MOTION.match(text)  # first: most lines of a long program are motions, and no declaration is one
+            self.steps.append(Step("routine", DEF.match(text).group(1), line=line_no, source=index))
+        m = MOTION.match(text)  # first: most lines of a long program are motions, and no declaration is one
         if m:
             self.items.append(self.motion(m, index, start, line_no, original))
             return
@@ -715,13 +607,13 @@ class _Reader:
 
     def flow_step(self, text, index, line_no):
         """Note a statement that changes the order the program runs in (`trajcomp.programs.flow.Step`)."""
-        m = _FIRST_WORD.match(text)
+        m = FIRST_WORD.match(text)
         if m is None:
             return
         word = m.group(1).upper()
-        kind = _FLOW_WORDS.get(word)
+        kind = FLOW_WORDS.get(word)
         if kind == "jump":
-            target = _JUMP_TO.match(text)
+            target = JUMP_TO.match(text)
             self.steps.append(Step("jump", target.group(1) if target else "", False, line_no, index))
         elif kind is not None:
             self.steps.append(Step(kind, line=line_no, source=index))
@@ -755,9 +647,9 @@ class _Reader:
 
     def state(self, text, index, start, name, line_no, original):
         """Track tool, base, speed and zone statements."""
-        if m := _SYSVAR.match(text):
+        if m := SYSVAR.match(text):
             which, value = m.group(1).upper(), m.group(2)
-            ref = _DATA_REF.match(value)
+            ref = DATA_REF.match(value)
             if ref and (ref.group(1).upper() == "TOOL_DATA") == (which == "TOOL"):
                 self.select(which, ref.group(2))
             elif value.upper() == "$NULLFRAME":
@@ -773,7 +665,7 @@ class _Reader:
                 self.select(which, key)
             else:
                 self.select(which, None, f"${which} = {value} set at run time (line {line_no})")
-        elif m := _BAS.match(text):
+        elif m := BAS.match(text):
             what, value = m.group(1).upper(), m.group(2)
             if what in ("TOOL", "BASE"):
                 if not re.fullmatch(NUMBER, value):
@@ -783,45 +675,45 @@ class _Reader:
                 return
             self.set_speed(JOINT if what in ("VEL_PTP", "PTP_PARAMS") else LINEAR, m, 2, index, start, line_no,
                            original, f"BAS(#{what})")
-        elif m := _ACT.match(text):
+        elif m := ACT.match(text):
             self.activate(m.group(1).upper(), m.group(2).upper(), index, line_no, original)
-        elif m := _SPLINE.match(text):
+        elif m := SPLINE.match(text):
             own = m.group(1) and self.with_speed(m.group(1), start + m.start(1), index, line_no, original, LINEAR)
             if own:  # SPLINE WITH $VEL.CP = v: the block's motions run at v, the speed before it after ENDSPLINE
                 self.outside_spline = (self.speed_cp, self.speed_why[LINEAR], self.speed_spans[LINEAR])
                 self.give(LINEAR, *own, line_no, index)
-        elif _END_SPLINE.match(text) and self.outside_spline is not None:
+        elif END_SPLINE.match(text) and self.outside_spline is not None:
             self.give(LINEAR, *self.outside_spline, line_no, index)
             self.outside_spline = None
-        elif m := _VEL_CP.match(text):
+        elif m := VEL_CP.match(text):
             self.set_speed(LINEAR, m, 1, index, start, line_no, original, "$VEL.CP")
-        elif m := _VEL_AXIS.match(text):
+        elif m := VEL_AXIS.match(text):
             self.set_speed(JOINT, m, 2, index, start, line_no, original, f"$VEL_AXIS[{m.group(1)}]", int(m.group(1)))
-        elif m := _VEL.match(text):
+        elif m := VEL.match(text):
             members = _members(m.group(1), start + m.start(1), index, name, line_no, original, False)
             if "cp" in members:
                 span = members["cp"]
                 value, why = self.number_value(span.text, index, line_no, original, "$VEL.CP")
                 self.give(LINEAR, None if value is None else value * 1000.0, why, span, line_no, index)
-        elif m := _ACC_CP.match(text):
+        elif m := ACC_CP.match(text):
             self.accelerate("acc_cp", m.group(1), 1000.0, index, line_no, original, "$ACC.CP")
-        elif m := _ACC.match(text):
+        elif m := ACC.match(text):
             members = _members(m.group(1), start + m.start(1), index, name, line_no, original, False)
             if "cp" in members:
                 self.accelerate("acc_cp", members["cp"].text, 1000.0, index, line_no, original, "$ACC.CP")
             for member in sorted(set(members) & {"ori1", "ori2"}):
                 self.accelerate(f"acc_{member}", members[member].text, 1.0, index, line_no, original,
                                 f"$ACC.{member.upper()}")
-        elif m := _ACC_ORI.match(text):
+        elif m := ACC_ORI.match(text):
             self.accelerate(f"acc_{m.group(1).lower()}", m.group(2), 1.0, index, line_no, original,
                             f"$ACC.{m.group(1).upper()}")
-        elif m := _ACC_AXIS.match(text):
+        elif m := ACC_AXIS.match(text):
             self.accelerate(ACC_GROUPS[int(m.group(1)) - 1], m.group(2), 1.0, index, line_no, original,
                             f"$ACC_AXIS[{m.group(1)}]")
-        elif m := _BAS_ACC.match(text):
+        elif m := BAS_ACC_PTP.match(text):
             for group in ACC_GROUPS:
                 self.accelerate(group, m.group(1), 1.0, index, line_no, original, "BAS(#ACC_PTP)")
-        elif m := _APO.match(text):
+        elif m := APO.match(text):
             self.zone = finite(m.group(1), name, line_no, original, "$APO.CDIS")
 
     def accelerate(self, group, text, scale, index, line_no, original, field):
@@ -848,11 +740,11 @@ class _Reader:
         value is set at run time.
         """
         for piece, position in split_top(clause, at):
-            m = _WITH_SPEED.search(piece)
+            m = WITH_SPEED.search(piece)
             if m is None or m.start() != len(piece) - len(piece.lstrip()):
                 continue
             rhs, rhs_at = piece[m.end():], position + m.end()
-            call = _WITH_CALL.match(rhs)
+            call = WITH_CALL.match(rhs)
             if call:
                 args = split_top(rhs[call.end():rhs.rindex(")")], rhs_at + call.end())
                 rhs, rhs_at = args[0]
@@ -890,15 +782,15 @@ class _Reader:
     def motion(self, m, index, start, line_no, original):
         """A Motion from a PTP/LIN/CIRC line; named points are resolved at the end (`_resolve`)."""
         name = self.sources[index].name
-        kind = KINDS[m.group(1).upper()]
-        args, *with_clause = re.split(r"\bWITH\b", m.group(3), maxsplit=1, flags=re.I)
+        kind = MOTIONS[m.group(1).upper()]
+        args, *with_clause = WITH_WORD.split(m.group(3), maxsplit=1)
         own_speed = None
         if with_clause:
             self.spline_frames(with_clause[0], name, line_no, original)
             clause_at = start + m.start(3) + len(m.group(3)) - len(with_clause[0])
             own_speed = self.with_speed(with_clause[0], clause_at, index, line_no, original, kind)
         offset = start + m.start(3)
-        approx = _APPROX.search(args)
+        approx = APPROX.search(args)
         zone = self.zone if approx else None
         if approx:
             args = args[: approx.start()]
@@ -947,7 +839,7 @@ class _Reader:
 
     def spline_frames(self, clause, name, line_no, original):
         """Tool and base of a spline inline form: ``$TOOL=STOOL2(FP1), $BASE=SBASE(FP1.BASE_NO)``."""
-        for which, pattern in (("TOOL", _WITH_TOOL), ("BASE", _WITH_BASE)):
+        for which, pattern in (("TOOL", WITH_TOOL), ("BASE", WITH_BASE)):
             if m := pattern.search(clause):
                 data = self.data.get(m.group(1).upper(), {})
                 member = data.get(f"{which.lower()}_no")
@@ -969,7 +861,7 @@ class _Reader:
                 return None  # LIN {Z 500}: the members not given are the arm's current ones, known at run time
             self.targets.append(_point(members, "", name, line_no, original, None))
             return len(self.targets) - 1
-        if _NAME.match(stripped):
+        if NAME.match(stripped):
             return _Named(stripped, line_no, stripped.upper() in self.params)
         return None
 
@@ -978,8 +870,8 @@ def read(path):
     """Read a KRL .src and its .dat (same name, beside it, if there is one).
 
     The lines a CAM post-processor or KUKA's editor writes (points declared
-    one a line, `_WRITTEN_POINT`; motions to them, `_WRITTEN_MOTION`; motions
-    to points written inline, `_INLINE_MOTION`) are read at once as columns; every other line one by one, in order, its
+    one a line, `WRITTEN_POINT`; motions to them, `WRITTEN_MOTION`; motions
+    to points written inline, `INLINE_MOTION`) are read at once as columns; every other line one by one, in order, its
     tool, base, speed and zone in force for the motions read at once after
     it (`_Walk`).
 
@@ -992,22 +884,22 @@ def read(path):
     path = Path(path)
     reader = _Reader()
     src_index, src_lines, src_masked = reader.add_source(read_source(path))
-    if not _DEF.search(src_masked):
+    if not DEF.search(src_masked):
         raise ReadError(f"{path}: not a KRL program: no DEF line")
     src = reader.sources[src_index]
     written, inline = _written_motions(src_index, src_masked, src_lines)
     # the motion lines read at once open and close no block: the runs of other lines between them
-    check_closed(src, src_masked, _BLOCK_OPENS, _BLOCK_CLOSES, _CLOSING,
-                 runs_between(written["start"], written["end"], len(src_masked)), _OUTSIDE_ROUTINES)
+    check_closed(src, src_masked, BLOCK_OPENS, BLOCK_CLOSES, CLOSING,
+                 runs_between(written["start"], written["end"], len(src_masked)), OUTSIDE_ROUTINES)
     others = _other_lines(src_lines, written["line"])
     reader.scan_assignments(src_masked, others)
     dat_path, table = _sibling_dat(path), None
     if dat_path is not None:
         dat_index, dat_lines, dat_masked = reader.add_source(read_source(dat_path))
-        if not _DEFDAT.search(dat_masked):
+        if not DEFDAT.search(dat_masked):
             raise ReadError(f"{dat_path}: not a KRL data list: no DEFDAT line")
         tail = max(0, len(dat_masked) - 65536)  # ENDDAT closes a data list: looked for near its end first
-        if not (_ENDDAT.search(dat_masked, tail) or _ENDDAT.search(dat_masked)):
+        if not (ENDDAT.search(dat_masked, tail) or ENDDAT.search(dat_masked)):
             raise ReadError(f"{dat_path}: no ENDDAT: the data list is cut off")
         point_lines, table, shared = _written_points(dat_index, dat_masked, dat_lines)
         names = table.name if table is not None else ()
@@ -1157,12 +1049,12 @@ def _controller_tables(reader, path, walk):
 
 
 def _written_motions(index, masked, lines):
-    """The motions of a .src written as `_WRITTEN_MOTION` (``LIN XP1 C_DIS``) or `_INLINE_MOTION` (``LIN {X ..}
+    """The motions of a .src written as `WRITTEN_MOTION` (``LIN XP1 C_DIS``) or `INLINE_MOTION` (``LIN {X ..}
     C_DIS``), as columns, and the inline points of the latter.
 
     The lines written exactly as `_motion_layout` knows them are found from
     their characters, `AT_ONCE` lines at a time; the other lines are matched
-    by `_WRITTEN_MOTION`, then `_INLINE_MOTION`, one by one. An inline
+    by `WRITTEN_MOTION`, then `INLINE_MOTION`, one by one. An inline
     point's numbers are read from the characters (`_field_numbers`); a
     point a line-by-line read would refuse (out of range, S or T beyond
     their bits) leaves its motion to that read, which names it.
@@ -1204,16 +1096,16 @@ def _written_motions(index, masked, lines):
         for k in others[lo:lo + AT_ONCE].tolist():
             if masked[starts[k]:ends[k]].isspace():  # a comment's line: the patterns would look at each blank
                 continue
-            if m := _WRITTEN_MOTION.match(masked, int(starts[k]), int(ends[k])):
+            if m := WRITTEN_MOTION.match(masked, int(starts[k]), int(ends[k])):
                 found.append(m)
-            elif m := _INLINE_MOTION.match(masked, int(starts[k]), int(ends[k])):
+            elif m := INLINE_MOTION.match(masked, int(starts[k]), int(ends[k])):
                 inline.append(m)
         named = np.array([m.regs for m in found], dtype=np.int64).reshape(-1, 10)  # (start, end) of groups 0-4
         blocks.append(np.c_[named, np.full(len(named), -1)])
         regs = np.array([m.regs for m in inline], dtype=np.int64).reshape(-1, 19, 2)  # absent groups: (-1, -1)
         groups = regs[:, [0, 1, 2, 3, 18]].reshape(-1, 10)
         groups[:, 6:8] = -1  # no name
-        blocks.append(points.motions(groups, regs[:, _INLINE_POINT, 0], regs[:, _INLINE_POINT, 1]))
+        blocks.append(points.motions(groups, regs[:, INLINE_POINT, 0], regs[:, INLINE_POINT, 1]))
     at = np.concatenate(blocks)
     if len(others):  # the lines matched one by one among the others: in line order
         at = at[np.argsort(at[:, 0], kind="stable")]
@@ -1280,9 +1172,7 @@ class _InlinePoints:
                            SpanColumns(index, lines.text, POSE + ("s", "t"), start[:, 2:], end[:, 2:]))
 
 
-_KEYWORDS = ("LIN", "PTP", "SLIN", "SPTP")  # `_WRITTEN_MOTION`'s motions
-_APPROXIMATIONS = ("C_PTP", "C_DIS", "C_VEL", "C_ORI", "C_SPL")
-_LONGEST_MOTION = 64  # characters of a motion line read at once (a longer one: `_WRITTEN_MOTION`)
+_LONGEST_MOTION = 64  # characters of a motion line read at once (a longer one: `WRITTEN_MOTION`)
 _NAME_START = _character_table("ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz_")
 
 
@@ -1291,7 +1181,7 @@ def _motion_layout(codes, starts, ends):
 
     Blanks (spaces, tabs) before the keyword, one space between the words
     and none after, any case, a line ending ``\\n`` or ``\\r\\n``: a subset
-    of what `_WRITTEN_MOTION` matches.
+    of what `WRITTEN_MOTION` matches.
 
     Parameters
     ----------
@@ -1305,50 +1195,52 @@ def _motion_layout(codes, starts, ends):
     at : ndarray of int, shape (K,)
         The lines written so (indices into ``starts``).
     groups : ndarray of int, shape (K, 10)
-        `_WRITTEN_MOTION`'s groups 0-4 as ``Match.regs`` gives them (start, end; -1 where not written): the line
+        `WRITTEN_MOTION`'s groups 0-4 as ``Match.regs`` gives them (start, end; -1 where not written): the line
         (``\\r`` included), the keyword, the keyword if PTP or SPTP, the point's name, the approximation.
     """
     carriage = (ends > starts) & (codes[np.maximum(ends - 1, 0)] == ord("\r")) if len(codes) else ends > ends
     length = ends - carriage - starts
-    candidate = np.flatnonzero((length >= 5) & (length <= _LONGEST_MOTION))
+    candidate = np.flatnonzero((length >= min(map(len, MOTION_KEYWORDS)) + 2) & (length <= _LONGEST_MOTION))
     width = int(length[candidate].max(initial=0)) + 1  # a character past the longest line: the name's end
     column = np.arange(width)
     spelt = _spelt(codes, starts[candidate], width)
     spelt[column >= length[candidate, None]] = 0  # past the line: no character
     keyword_start = np.argmin(_BLANK[spelt], axis=1)  # the first character not blank
-    keyword_end = np.full(len(candidate), -1)
-    for keyword in _KEYWORDS:
+    keyword_end, joint = np.full(len(candidate), -1), np.zeros(len(candidate), dtype=bool)
+    for keyword in MOTION_KEYWORDS:
         spells = (np.take_along_axis(spelt, np.minimum(keyword_start[:, None] + np.arange(len(keyword) + 1),
                                                        width - 1), axis=1)
                   == np.frombuffer(f"{keyword} ".encode("ascii"), dtype=np.uint8)).all(axis=1)
         keyword_end[spells] = keyword_start[spells] + len(keyword)
+        joint[spells] = MOTIONS[keyword] == JOINT
     name_start = np.minimum(keyword_end + 1, width - 1)
     name_end = np.where(~_WORD_CHARACTER[spelt] & (column > name_start[:, None]), column, width).min(axis=1)
     good = (keyword_end >= 0) & _NAME_START[np.take_along_axis(spelt, name_start[:, None], axis=1)[:, 0]]
     name_length = name_end - name_start
-    for word in ("WITH",) + _APPROXIMATIONS:  # not a name (`_WRITTEN_MOTION`'s look-ahead)
+    for word in (WITH,) + APPROXIMATIONS:  # not a name (`WRITTEN_MOTION`'s look-ahead)
         good &= (name_length != len(word)) | ~_spells(codes, starts[candidate] + name_start, word)
-    approximation_start = name_end + 1
-    approximated = np.zeros(len(candidate), dtype=bool)
-    for word in _APPROXIMATIONS:
-        approximated |= _spells(codes, starts[candidate] + name_end, " " + word)
+    approximation_start, approximation_end = name_end + 1, np.full(len(candidate), -1)
+    for word in APPROXIMATIONS:
+        spells = _spells(codes, starts[candidate] + name_end, " " + word)
+        approximation_end[spells] = approximation_start[spells] + len(word)
+    approximated = approximation_end >= 0
     line_end = length[candidate]
-    good &= (name_end == line_end) | (approximated & (approximation_start + 5 == line_end))
+    good &= (name_end == line_end) | (approximated & (approximation_end == line_end))
     approximated &= name_end < line_end
     at = candidate[good]
     offset = starts[at, None]
     good_keyword_start, good_keyword_end = keyword_start[good] + starts[at], keyword_end[good] + starts[at]
-    joint = np.take_along_axis(spelt[good], keyword_end[good, None] - 1, axis=1)[:, 0] == ord("P")  # PTP or SPTP
+    joint = joint[good]
     groups = np.stack([starts[at], ends[at], good_keyword_start, good_keyword_end,
                        np.where(joint, good_keyword_start, -1), np.where(joint, good_keyword_end, -1),
                        name_start[good] + offset[:, 0], name_end[good] + offset[:, 0],
                        np.where(approximated[good], approximation_start[good] + offset[:, 0], -1),
-                       np.where(approximated[good], approximation_start[good] + 5 + offset[:, 0], -1)], axis=1)
+                       np.where(approximated[good], approximation_end[good] + offset[:, 0], -1)], axis=1)
     return at, groups.reshape(-1, 10)
 
 
-_LONGEST_INDENT = 16  # blanks before an inline motion's keyword read at once (more: `_INLINE_MOTION`)
-_INLINE_TYPES = ("E6POS:", "POS:", "FRAME:")  # the types an inline point may state (`_INLINE_MOTION`)
+_LONGEST_INDENT = 16  # blanks before an inline motion's keyword read at once (more: `INLINE_MOTION`)
+_INLINE_TYPES = tuple(f"{typ}:" for typ in CARTESIAN_TYPES)  # the types an inline point may state
 
 
 def _inline_layout(codes, starts, ends):
@@ -1359,7 +1251,7 @@ def _inline_layout(codes, starts, ends):
     before the approximation, the point's type (`_INLINE_TYPES`) and one
     space or none, the members as `_member_fields` knows them (one space
     after each comma or none), nothing after, any case, a line ending ``\\n`` or ``\\r\\n``: a subset
-    of what `_INLINE_MOTION` matches. The fields' contents are not checked
+    of what `INLINE_MOTION` matches. The fields' contents are not checked
     here (`_field_numbers`).
 
     Parameters
@@ -1384,20 +1276,24 @@ def _inline_layout(codes, starts, ends):
         return none, none.reshape(0, 10), none.reshape(0, 16), none.reshape(0, 16)
     carriage = (ends > starts) & (codes[np.maximum(ends - 1, 0)] == ord("\r"))
     line_end = ends - carriage
-    approximated = np.zeros(len(starts), dtype=bool)
-    for word in _APPROXIMATIONS:
-        approximated |= (line_end - starts > 7) & _spells(codes, np.maximum(line_end - 6, 0), " " + word)
-    close = np.where(approximated, line_end - 7, line_end - 1)  # the "}" closing the point
+    approximation_start = np.full(len(starts), -1)
+    for word in APPROXIMATIONS:
+        spells = (line_end - starts > len(word) + 2) & _spells(codes, np.maximum(line_end - len(word) - 1, 0),
+                                                               " " + word)
+        approximation_start[spells] = line_end[spells] - len(word)
+    approximated = approximation_start >= 0
+    close = np.where(approximated, approximation_start - 2, line_end - 1)  # the "}" closing the point
     candidate = np.flatnonzero((close > starts) & (codes[np.maximum(close, 0)] == ord("}")))
     start_at, close, approximated = starts[candidate], close[candidate], approximated[candidate]
-    width = _LONGEST_INDENT + max(map(len, _KEYWORDS)) + 2
+    width = _LONGEST_INDENT + max(map(len, MOTION_KEYWORDS)) + 2
     spelt = _spelt(codes, start_at, width)
     keyword_start = np.minimum(np.argmin(_BLANK[spelt], axis=1), _LONGEST_INDENT)  # the first character not blank
-    keyword_end = np.full(len(candidate), -1)
-    for keyword in _KEYWORDS:
+    keyword_end, joint = np.full(len(candidate), -1), np.zeros(len(candidate), dtype=bool)
+    for keyword in MOTION_KEYWORDS:
         spells = _starts_with(np.take_along_axis(spelt, keyword_start[:, None] + np.arange(len(keyword) + 2), axis=1),
                               keyword + " {")
         keyword_end[spells] = keyword_start[spells] + len(keyword)
+        joint[spells] = MOTIONS[keyword] == JOINT
     keyword_start, keyword_end = keyword_start + start_at, np.where(keyword_end >= 0, keyword_end + start_at, -1)
     brace, alone, commas = _braces(codes, starts, ends, start_at, close)
     good = (keyword_end >= 0) & alone & (brace == keyword_end + 1)
@@ -1407,13 +1303,13 @@ def _inline_layout(codes, starts, ends):
     for typ in _INLINE_TYPES:
         typed = _spells(codes, first, typ) & (first == brace + 1)
         first[typed] += len(typ) + (codes[np.minimum(brace[typed] + len(typ) + 1, len(codes) - 1)] == ord(" "))
-    start[:, 1] = end[:, 1] = first  # an empty name, where `_INLINE_MOTION` has it
+    start[:, 1] = end[:, 1] = first  # an empty name, where `INLINE_MOTION` has it
     written = _member_fields(codes, commas, first, close, good, start, end)
     written |= _member_fields(codes, commas, first, close, good & ~written, start, end, gap=1)  # ", Y 2"
-    joint = codes[np.maximum(keyword_end - 1, 0)] | 32 == ord("p")  # PTP or SPTP
     groups = np.stack([start_at, ends[candidate], keyword_start, keyword_end, np.where(joint, keyword_start, -1),
                        np.where(joint, keyword_end, -1), np.full(len(candidate), -1), np.full(len(candidate), -1),
-                       np.where(approximated, close + 2, -1), np.where(approximated, close + 7, -1)], axis=1)
+                       np.where(approximated, close + 2, -1), np.where(approximated, line_end[candidate], -1)],
+                      axis=1)
     return candidate[written], groups[written], start[written], end[written]
 
 
@@ -1548,7 +1444,7 @@ def _targets(targets, table, inline):
 
 def _visible(file, match):
     """Whether a program sees a point another data list declares: all of ``$config.dat``'s, GLOBAL ones of others."""
-    return file.name.lower() == "$config.dat" or _GLOBAL_WORD.search(match.group(0)) is not None
+    return file.name.lower() == "$config.dat" or GLOBAL_WORD.search(match.group(0)) is not None
 
 
 def _resolve(reader, path, dat_path, walk):
@@ -1571,10 +1467,10 @@ def _resolve(reader, path, dat_path, walk):
     # other data lists beside it, and $config.dat beside it or in a backup's R1/System (KRC/R1/Program/x.src)
     config = config_dat.find(path)
     folders = [path.parent] + ([config.parent] if config is not None and config.parent != path.parent.resolve() else [])
-    elsewhere = DeclaredElsewhere(dat_path or path, folders, (".dat",), _GLOBAL_POINT, ";", assignment=_ASSIGN,
+    elsewhere = DeclaredElsewhere(dat_path or path, folders, (".dat",), GLOBAL_POINT, ";", assignment=ASSIGN,
                                   code=(".src", ".sub"), visible=_visible)
     for item in reader.items:
-        if isinstance(item, Statement) and (m := _ASSIGN.match(code_of(item.text, ";"))):
+        if isinstance(item, Statement) and (m := ASSIGN.match(code_of(item.text, ";"))):
             assigned.setdefault(m.group(1).upper(), item.line)
     missing = []
 
@@ -1589,7 +1485,7 @@ def _resolve(reader, path, dat_path, walk):
             return None, f"{ref.name} is changed at run time (line {assigned[key]})"
         if ref.name.startswith("$"):
             return None, f"{ref.name}: system variable, known at run time"
-        if _HOME.match(ref.name) and key not in reader.points:
+        if HOME.match(ref.name) and key not in reader.points:
             return None, f"{ref.name}: home position of $config.dat, not in this program (left as written)"
         if key not in reader.points and key not in reader.unset and (found := elsewhere.find(key)):
             reader.declared_in(*found)
@@ -1611,17 +1507,17 @@ def _resolve(reader, path, dat_path, walk):
             reason = via_why or why or item.reason
             spans = motion_spans.row(next(motion_rows))
             if reason:
-                named = {w.upper() for w in _WORD.findall(mask(item.text, ";"))}
+                named = {w.upper() for w in WORD.findall(mask(item.text, ";"))}
                 known = tuple(reader.points[w] for w in sorted(named) if w in reader.points)
-                home = isinstance(item.target, _Named) and bool(_HOME.match(item.target.name))
+                home = isinstance(item.target, _Named) and bool(HOME.match(item.target.name))
                 item = dataclasses.replace(item, target=None, via=None, reason=reason, axis_position=home, spans=spans,
                                            refs=known + tuple(i for i in (via, target) if isinstance(i, int)))
             else:
                 item = whole_circle(replaced(item, target=target, via=via, spans=spans))
         else:
-            named = {w.upper() for w in _WORD.findall(mask(item.text, ";"))}
+            named = {w.upper() for w in WORD.findall(mask(item.text, ";"))}
             refs = tuple(reader.points[w] for w in sorted(named) if w in reader.points)
-            if refs and not _DECL.match(item.text):
+            if refs and not DECL.match(item.text):
                 item = dataclasses.replace(item, refs=refs)
         items.append(item)
     if missing:
@@ -1651,7 +1547,7 @@ def _resolved_rows(reader, walk, assigned, elsewhere):
         elif not (key in reader.shared and (where := elsewhere.assigned(key))):
             continue
         reason[k] = f"{name} is changed at run time ({where})"
-        named = {w.upper() for w in _WORD.findall(mask(text[written["start"][rows[k]]:written["end"][rows[k]]], ";"))}
+        named = {w.upper() for w in WORD.findall(mask(text[written["start"][rows[k]]:written["end"][rows[k]]], ";"))}
         refs.append(tuple(reader.points[w] for w in sorted(named) if w in reader.points))
-        home.append(bool(_HOME.match(name)))
+        home.append(bool(HOME.match(name)))
     return target, reason, refs, np.array(home, dtype=bool)
