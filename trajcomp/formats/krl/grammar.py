@@ -50,10 +50,13 @@ EXTERNAL_AXES = 6  # $VEL_EXTAX[1..6]: the external axes (a track's)
 BAS_COMMANDS = {"TOOL": "tool", "BASE": "base", "VEL_PTP": JOINT, "VEL_CP": LINEAR, "PTP_PARAMS": JOINT,
                 "CP_PARAMS": LINEAR}  # BAS(#COMMAND, value) -> what it sets (`BAS`)
 BAS_ACC = "ACC_PTP"  # BAS(#ACC_PTP, %): every axis's $ACC_AXIS
-ACC_GROUPS = tuple(f"acc{n}" for n in range(1, SPEED_AXES + 1))  # the flow's acceleration groups of a PTP: each axis's %
+ACC_GROUPS = tuple(f"acc{n}" for n in range(1, SPEED_AXES + 1))  # the flow's acceleration groups of a PTP: axes' %
 ORI_GROUPS = ("acc_ori1", "acc_ori2")  # the orientation accelerations of a LIN or CIRC, deg/s^2
 AXIS_GROUPS = tuple(f"ptp{n}" for n in range(1, SPEED_AXES + 1))  # the flow's speed groups of a PTP: each axis's %
-EXTERNAL_GROUPS = tuple(f"extax{n}" for n in range(1, EXTERNAL_AXES + 1))  # each external axis's %, a PTP's too
+EXTERNAL_GROUPS = tuple(f"extax{n}" for n in range(1, EXTERNAL_AXES + 1))  # each external axis's % ($VEL_EXTAX)
+# a PTP's speed groups: the controller moves its axes together, so the slowest setting of any binds the motion (a
+# track's $VEL_EXTAX too); BAS(#VEL_PTP) sets them all
+JOINT_GROUPS = AXIS_GROUPS + EXTERNAL_GROUPS
 
 # --- the order a program runs in (`trajcomp.programs.flow.Step`): keyword -> step kind ---
 FLOW_WORDS = {"IF": "if", "ELSE": "else", "ENDIF": "endif", "SWITCH": "if", "CASE": "elif", "DEFAULT": "elif",
@@ -191,8 +194,8 @@ WRITTEN_POINT = re.compile(
 # LIN XP1 C_DIS, PTP P2: a motion to a named point (no WITH, no _REL). Groups: the line, the keyword, the keyword if
 # a joint motion, the name, the approximation.
 WRITTEN_MOTION = re.compile(
-    r"^[ \t]*" + _ONE_POINT_MOTION + r"[ \t]+(?!(?:" + "|".join(APPROXIMATIONS + (WITH,)) + r")\b)([A-Za-z_][A-Za-z0-9_]*)"
-    r"(?:[ \t]+" + _APPROXIMATION + r")?[ \t]*\r?$", re.I | re.M)
+    r"^[ \t]*" + _ONE_POINT_MOTION + r"[ \t]+(?!" + one_of(APPROXIMATIONS + (WITH,)) + r"\b)"
+    r"([A-Za-z_][A-Za-z0-9_]*)(?:[ \t]+" + _APPROXIMATION + r")?[ \t]*\r?$", re.I | re.M)
 # LIN {X 446.0,Y 70.0,Z 635.0,A 0.0,B 90.0,C 0.0} C_DIS as RoboDK's and SprutCAM's KUKA posts write it, or
 # LIN {E6POS: X 446.0, Y 70.0, ..} C_DIS as other generators do (the members in `WRITTEN_POINT`'s order, no WITH,
 # no _REL). Groups: the line, the keyword, the keyword if a joint motion, an empty name, X..C, S, T, E1..E6, the
@@ -200,4 +203,5 @@ WRITTEN_MOTION = re.compile(
 INLINE_MOTION = re.compile(
     r"^[ \t]*" + _ONE_POINT_MOTION + r"[ \t]+\{(?:" + one_of(CARTESIAN_TYPES) + r":[ ]?)?()"
     + _cartesian_members(SEPARATOR) + r"\}(?:[ \t]+" + _APPROXIMATION + r")?[ \t]*\r?$", re.I | re.M)
-INLINE_POINT = [0] + list(range(3, 4 + len(POSE + STATUS + EXTERNAL)))  # the groups of `INLINE_MOTION` that `WRITTEN_POINT` has, in its order
+# the groups of `INLINE_MOTION` that `WRITTEN_POINT` has, in its order: the line, the name, X..C, S, T, E1..E6
+INLINE_POINT = [0] + list(range(3, 4 + len(POSE + STATUS + EXTERNAL)))

@@ -13,9 +13,10 @@ from trajcomp.formats.krl import at_once, config_dat
 from trajcomp.formats.krl.grammar import (
     ACC, ACC_AXIS, ACC_CP, ACC_GROUPS, ACC_ORI, ACT, APO, APPROX, ASSIGN, AXES, AXIS_GROUPS, BAS, BAS_ACC_PTP,
     BLOCK_CLOSES, BLOCK_OPENS, CLOSING, DATA, DATA_REF, DECL, DECL_BARE, DECL_START, DEF, DEF_LINE, DEFDAT, END_SPLINE,
-    ENDDAT, EXTERNAL, FIRST_WORD, FLOW_WORDS, GLOBAL_POINT, GLOBAL_WORD, HOME, JOINT_TYPES, JUMP_TO, LIMITS, MEMBER,
-    MOTION, MOTIONS, NAME, NUMBER_DECL, ORI_GROUPS, OUTSIDE_ROUTINES, POSE, SPLINE, STATUS_LARGEST, SYSVAR, VEL,
-    VEL_AXIS, VEL_CP, WITH_BASE, WITH_CALL, WITH_SPEED, WITH_TOOL, WITH_WORD, WORD,
+    ENDDAT, EXTERNAL, EXTERNAL_GROUPS, FIRST_WORD, FLOW_WORDS, GLOBAL_POINT, GLOBAL_WORD, HOME, JOINT_GROUPS,
+    JOINT_TYPES, JUMP_TO, LIMITS, MEMBER, MOTION, MOTIONS, NAME, NUMBER_DECL, ORI_GROUPS, OUTSIDE_ROUTINES, POSE,
+    SPLINE, STATUS_LARGEST, SYSVAR, VEL, VEL_AXIS, VEL_CP, VEL_EXTAX, WITH_BASE, WITH_CALL, WITH_SPEED, WITH_TOOL,
+    WITH_WORD, WORD,
 )
 from trajcomp.formats.number_fields import NUMBER, offset_type
 from trajcomp.formats.text import (
@@ -154,12 +155,12 @@ class _Reader:
         self.speed_spans = {JOINT: None, LINEAR: None}  # the number of the statement that set each speed
         none_set = "no {} before it in this program: the speed in force is set at run time"
         self.speed_why = {JOINT: none_set.format("BAS(#VEL_PTP)"), LINEAR: none_set.format("$VEL.CP")}
-        # (value, why, span) of each speed setting in force: the TCP's (mm/s), each axis's (%): `give`
+        # (value, why, span) of each speed setting in force: the TCP's (mm/s), each axis's and external axis's (%)
         self.initial = {"cp": (None, self.speed_why[LINEAR], None)}
-        self.initial |= dict.fromkeys(AXIS_GROUPS, (None, self.speed_why[JOINT], None))
+        self.initial |= dict.fromkeys(JOINT_GROUPS, (None, self.speed_why[JOINT], None))
         # the controller's own: (value, why)
         self.initial |= dict.fromkeys(ACC_GROUPS + ("acc_cp",) + ORI_GROUPS, (None, ""))
-        self.axes = [self.initial["ptp1"]] * 6
+        self.axes = [self.initial[JOINT_GROUPS[0]]] * len(JOINT_GROUPS)  # the settings of a PTP's groups in force
         self.steps = []  # what the .src does besides moving, in order (`trajcomp.programs.flow`)
         self.siblings = set()  # upper names of the other .src files beside it: routines the read does not include
         self.outside_spline = None  # the TCP speed setting in force before the spline block being read
@@ -310,16 +311,17 @@ class _Reader:
             self.steps.append(Step("label", m.group(1), line=line_no, source=index))
 
     def give(self, group, value, why, span, line_no, index, axis=None):
-        """Put a speed setting in force: JOINT ``value`` % of axis ``axis`` (1..6; None: all), LINEAR ``value`` mm/s;
-        ``why`` it is known at run time only, ``span`` the number that states it (re-timing writes there)."""
+        """Put a speed setting in force: JOINT ``value`` % of the axis of flow group ``axis`` (`JOINT_GROUPS`: an
+        arm's or an external axis's; None: all, as ``BAS(#VEL_PTP)`` sets them), LINEAR ``value`` mm/s; ``why`` it is
+        known at run time only, ``span`` the number that states it (re-timing writes there)."""
         setting = (value, why, span)
         if group == LINEAR:
             self.speed_cp, self.speed_why[LINEAR], self.speed_spans[LINEAR] = setting
             self.steps.append(Step("set", "cp", setting, line_no, index))
             return
-        for n in range(6) if axis is None else [axis - 1]:
+        for n in range(len(JOINT_GROUPS)) if axis is None else [JOINT_GROUPS.index(axis)]:
             self.axes[n] = setting
-            self.steps.append(Step("set", AXIS_GROUPS[n], setting, line_no, index))
+            self.steps.append(Step("set", JOINT_GROUPS[n], setting, line_no, index))
         self.speed_ptp, self.speed_why[JOINT], self.speed_spans[JOINT] = in_force(self.axes)
 
     def select(self, which, value, why=""):
@@ -373,7 +375,11 @@ class _Reader:
         elif m := VEL_CP.match(text):
             self.set_speed(LINEAR, m, 1, index, start, line_no, original, "$VEL.CP")
         elif m := VEL_AXIS.match(text):
-            self.set_speed(JOINT, m, 2, index, start, line_no, original, f"$VEL_AXIS[{m.group(1)}]", int(m.group(1)))
+            self.set_speed(JOINT, m, 2, index, start, line_no, original, f"$VEL_AXIS[{m.group(1)}]",
+                           AXIS_GROUPS[int(m.group(1)) - 1])
+        elif m := VEL_EXTAX.match(text):  # the external axis's own % of its maximum: a PTP moving it runs no faster
+            self.set_speed(JOINT, m, 2, index, start, line_no, original, f"$VEL_EXTAX[{m.group(1)}]",
+                           EXTERNAL_GROUPS[int(m.group(1)) - 1])
         elif m := VEL.match(text):
             members = _members(m.group(1), start + m.start(1), index, name, line_no, original, False)
             if "cp" in members:
@@ -409,8 +415,8 @@ class _Reader:
         self.steps.append(Step("set", group, setting, line_no, index))
 
     def set_speed(self, group, m, at, index, start, line_no, original, field, axis=None):
-        """A statement sets the speed of the motions of ``group`` (JOINT: % of axis ``axis`` or all, LINEAR: m/s)
-        to match ``m``'s group ``at``."""
+        """A statement sets the speed of the motions of ``group`` (JOINT: % of the axis of flow group ``axis`` or
+        all, LINEAR: m/s) to match ``m``'s group ``at``."""
         value, why = self.number_value(m.group(at), index, line_no, original, field)
         if group == LINEAR and value is not None:
             value = value * 1000.0
@@ -654,15 +660,15 @@ def in_force(settings):
 
 def _flow_speeds(table, reached):
     """The speed columns of a KRL program's motions from the settings that can reach each
-    (`trajcomp.programs.flow.followed`): PTP the slowest of its axes', LIN and CIRC the TCP's; a spline
-    motion's own WITH speed stays. The spans of the motions whose setting moved to another statement change."""
+    (`trajcomp.programs.flow.followed`): PTP the slowest of its axes' and external axes', LIN and CIRC the TCP's;
+    a spline motion's own WITH speed stays. The spans of the motions whose setting moved to another statement change."""
     own = table.span_offsets("speed_with")[1] >= 0
     joint = table.kind == JOINT
     speed, why = np.array(table.speed, dtype=float), np.array(table.speed_why, dtype=object)
     span = np.full(len(table), None, dtype=object)
     for r, settings in enumerate(reached.settings):
         rows = np.arange(len(table))[reached.rows(r)]
-        for groups, members in ((AXIS_GROUPS, joint[rows]), (("cp",), ~joint[rows])):
+        for groups, members in ((JOINT_GROUPS, joint[rows]), (("cp",), ~joint[rows])):
             at = rows[members & ~own[rows]]
             if len(at):
                 value, why[at], span[at] = in_force([s for group in groups for s in settings[group]])
