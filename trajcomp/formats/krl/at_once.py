@@ -12,8 +12,8 @@ the line reader (`trajcomp.formats.krl.reader`).
 import numpy as np
 
 from trajcomp.formats.krl.grammar import (
-    APPROXIMATIONS, CARTESIAN_TYPES, GLOBAL_WORD, INLINE_MOTION, INLINE_POINT, LIMITS, MOTION_KEYWORDS, MOTIONS, POSE,
-    STATUS_LARGEST, WITH, WRITTEN_MOTION, WRITTEN_POINT, declaration_heads, member_layouts,
+    APPROXIMATIONS, CARTESIAN_TYPES, GLOBAL_WORD, INLINE_BLANKS, INLINE_MOTION, INLINE_POINT, LIMITS, MOTION_KEYWORDS,
+    MOTIONS, POSE, SHARED, STATUS_LARGEST, WITH, WRITTEN_MOTION, WRITTEN_POINT, declaration_heads, member_layouts,
 )
 from trajcomp.formats.number_fields import BLANK as _BLANK, DIGIT as _DIGIT, WORD_CHARACTER as _WORD_CHARACTER
 from trajcomp.formats.number_fields import character_table as _character_table, line_bounds as _line_bounds
@@ -145,13 +145,13 @@ def _written_layout(codes, starts, ends):
     for head in _HEADS:
         spelt = _starts_with(heads, head)
         head_end[spelt] = start_at[spelt] + len(head)
-        shared[spelt] = "GLOBAL" in head
+        shared[spelt] = f" {SHARED} " in head
     brace, alone, commas = _braces(codes, starts, ends, start_at, close)
     good = (head_end >= 0) & alone
     name_end = np.where(good, brace - 1, head_end)
     good &= (codes[np.maximum(name_end, 0)] == ord("=")) & _made_of(codes, head_end, name_end, _WORD_CHARACTER,
                                                                      _LONGEST_NAME)
-    shared |= (name_end - head_end == 6) & _spells(codes, head_end, "GLOBAL")
+    shared |= (name_end - head_end == len(SHARED)) & _spells(codes, head_end, SHARED)
     start, end = np.full((len(candidate), 16), -1), np.full((len(candidate), 16), -1)
     start[:, 0], end[:, 0] = start_at, ends[candidate]
     start[:, 1], end[:, 1] = head_end, name_end
@@ -589,7 +589,8 @@ def _inline_layout(codes, starts, ends):
         first[typed] += len(typ) + (codes[np.minimum(brace[typed] + len(typ) + 1, len(codes) - 1)] == ord(" "))
     start[:, 1] = end[:, 1] = first  # an empty name, where `INLINE_MOTION` has it
     written = _member_fields(codes, commas, first, close, good, start, end)
-    written |= _member_fields(codes, commas, first, close, good & ~written, start, end, gap=1)  # ", Y 2"
+    for gap in range(1, INLINE_BLANKS + 1):  # ", Y 2": the same blanks after each comma
+        written |= _member_fields(codes, commas, first, close, good & ~written, start, end, gap=gap)
     groups = np.stack([start_at, ends[candidate], keyword_start, keyword_end, np.where(joint, keyword_start, -1),
                        np.where(joint, keyword_end, -1), np.full(len(candidate), -1), np.full(len(candidate), -1),
                        np.where(approximated, close + 2, -1), np.where(approximated, line_end[candidate], -1)],

@@ -16,6 +16,7 @@ form changes in one place:
 Words are matched in any case, as the controller reads them.
 """
 
+import itertools
 import re
 
 from trajcomp.formats.number_fields import NUMBER
@@ -34,6 +35,7 @@ POINT_TYPES = CARTESIAN_TYPES + JOINT_TYPES
 DATA_TYPES = ("FDAT", "PDAT", "LDAT")  # an inline form's data: tool and base, a PTP's, a LIN's speed and zone
 NUMBER_TYPES = ("REAL", "INT")
 QUALIFIERS = ("GLOBAL", "CONST")  # DECL GLOBAL CONST E6POS ..: a data list's constant is a point too
+SHARED = "GLOBAL"  # the qualifier of a point other programs see (and may assign)
 MIN_PLACES = dict.fromkeys(POSE[:3], 3) | dict.fromkeys(POSE[3:], 4) | dict.fromkeys(AXES, 4)
 LIMITS = dict.fromkeys(POSE[:3], LENGTH_LIMIT) | dict.fromkeys(POSE[3:], ANGLE_LIMIT) | dict.fromkeys(AXES, JOINT_LIMIT)
 
@@ -100,7 +102,7 @@ NUMBER_DECL = re.compile(r"^\s*(?:DECL\s+)?(" + _QUALIFIED + ")" + one_of(NUMBER
                          + NUMBER + r")\s*$", re.I)
 # a point another data list declares, with a value or without (`DeclaredElsewhere`)
 GLOBAL_POINT = re.compile(r"^[ \t]*(?:DECL\s+)?" + _QUALIFIED + _ANY_POINT + r"\s+(\w+)\s*(?:=|$)", re.I | re.M)
-GLOBAL_WORD = re.compile(r"\bGLOBAL\b", re.I)
+GLOBAL_WORD = re.compile(r"\b" + SHARED + r"\b", re.I)
 MEMBER = re.compile(r"\s*([A-Za-z_]\w*)\s+(" + NUMBER + r"|'B[01]+')\s*$")  # a member of an aggregate's body
 DATA = _assignment(r"(TOOL_DATA|BASE_DATA)\s*\[\s*(\d+)\s*\]")  # TOOL_DATA[2] = {..}
 DATA_REF = re.compile(r"^(TOOL_DATA|BASE_DATA)\s*\[\s*(\d+)\s*\]$", re.I)
@@ -154,9 +156,10 @@ OUTSIDE_ROUTINES = re.compile(r"[ \t]*&")  # what a .src holds outside its routi
 # --- the forms CAM post-processors write a line each, read at once (`trajcomp.formats.krl.at_once`) ---
 def declaration_heads():
     """The starts of a Cartesian point's declaration as `WRITTEN_POINT` states them, one space after each word,
-    upper case: ``DECL E6POS ``, ``DECL GLOBAL CONST FRAME `` .. (tuple of str)."""
-    scopes = ("", "GLOBAL ", "CONST ", "GLOBAL CONST ")
-    return tuple(f"DECL {scope}{typ} " for scope in scopes for typ in CARTESIAN_TYPES)
+    the qualifiers each once in their declared order, upper case: ``DECL E6POS ``, ``DECL GLOBAL CONST FRAME `` ..
+    (tuple of str)."""
+    scopes = [words for count in range(len(QUALIFIERS) + 1) for words in itertools.combinations(QUALIFIERS, count)]
+    return tuple(" ".join(("DECL",) + scope + (typ, "")) for scope in scopes for typ in CARTESIAN_TYPES)
 
 
 def member_layouts():
@@ -185,7 +188,8 @@ def _cartesian_members(separator):
 _APPROXIMATION = "(" + "|".join(APPROXIMATIONS) + ")"
 _ONE_POINT_MOTION = ("((" + "|".join(k for k in MOTION_KEYWORDS if MOTIONS[k] == JOINT) + ")|"
                      + "|".join(k for k in MOTION_KEYWORDS if MOTIONS[k] != JOINT) + ")")
-SEPARATOR = ",[ ]?"  # between an inline point's members: a comma, a blank after it or none
+INLINE_BLANKS = 1  # blanks an inline point may write after each comma: none up to this many
+SEPARATOR = ",[ ]{0,%d}" % INLINE_BLANKS  # between an inline point's members
 # DECL E6POS XP1={X 1.0,Y 2.0,Z 3.0,A 0.0,B 90.0,C 0.0,S 2,T 35,E1 0.0,..,E6 0.0} (S, T and E1..E6 optional), as
 # KUKA's editors and CAM post-processors declare a Cartesian point. Groups: the line, the name, X..C, S, T, E1..E6.
 WRITTEN_POINT = re.compile(
