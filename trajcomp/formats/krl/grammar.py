@@ -45,6 +45,7 @@ RELATIVE = "_REL"  # LIN_REL ..: a motion relative to where the arm is
 APPROXIMATIONS = ("C_PTP", "C_DIS", "C_VEL", "C_ORI", "C_SPL")  # the words after a motion's point that blend it
 WITH = "WITH"  # a spline motion's own settings follow it
 MOTION_KEYWORDS = ("LIN", "PTP", "SLIN", "SPTP")  # the motions to one point, as written a line each (at once)
+MOTION_SPANS = ("motion", "via_name", "target_name", "speed_with", "speed")  # a motion's fields kept, in this order
 
 # --- speed and acceleration settings: the system variables and BAS commands the motions after them run with ---
 SPEED_AXES = 6  # $VEL_AXIS[1..6], $ACC_AXIS[1..6]: the arm's axes
