@@ -460,6 +460,35 @@ _LONGEST_MOTION = 64  # characters of a motion line read at once (a longer one: 
 _NAME_START = _character_table("ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz_")
 
 
+def _motion_keywords(spelt, keyword_start, follows):
+    """The motion keyword (`MOTION_KEYWORDS`) each row of characters spells from a column, ``follows`` after it.
+
+    Parameters
+    ----------
+    spelt : ndarray, shape (K, W)
+        Rows of characters (`_spelt`).
+    keyword_start : ndarray of int, shape (K,)
+        The column each row's keyword would start at.
+    follows : str
+        What must follow the keyword (upper case).
+
+    Returns
+    -------
+    keyword_end : ndarray of int, shape (K,)
+        The column after the keyword; -1 where the row spells none so.
+    joint : ndarray of bool, shape (K,)
+        The keyword is a joint motion's (`MOTIONS`).
+    """
+    keyword_end, joint = np.full(len(spelt), -1), np.zeros(len(spelt), dtype=bool)
+    for keyword in MOTION_KEYWORDS:
+        word = keyword + follows
+        columns = np.minimum(keyword_start[:, None] + np.arange(len(word)), spelt.shape[1] - 1)
+        spells = _starts_with(np.take_along_axis(spelt, columns, axis=1), word)
+        keyword_end[spells] = keyword_start[spells] + len(keyword)
+        joint[spells] = MOTIONS[keyword] == JOINT
+    return keyword_end, joint
+
+
 def _motion_layout(codes, starts, ends):
     """The motion lines written exactly ``LIN XP1`` or ``PTP XP1 C_PTP``, found from the characters' codes.
 
@@ -490,13 +519,7 @@ def _motion_layout(codes, starts, ends):
     spelt = _spelt(codes, starts[candidate], width)
     spelt[column >= length[candidate, None]] = 0  # past the line: no character
     keyword_start = np.argmin(_BLANK[spelt], axis=1)  # the first character not blank
-    keyword_end, joint = np.full(len(candidate), -1), np.zeros(len(candidate), dtype=bool)
-    for keyword in MOTION_KEYWORDS:
-        spells = (np.take_along_axis(spelt, np.minimum(keyword_start[:, None] + np.arange(len(keyword) + 1),
-                                                       width - 1), axis=1)
-                  == np.frombuffer(f"{keyword} ".encode("ascii"), dtype=np.uint8)).all(axis=1)
-        keyword_end[spells] = keyword_start[spells] + len(keyword)
-        joint[spells] = MOTIONS[keyword] == JOINT
+    keyword_end, joint = _motion_keywords(spelt, keyword_start, " ")
     name_start = np.minimum(keyword_end + 1, width - 1)
     name_end = np.where(~_WORD_CHARACTER[spelt] & (column > name_start[:, None]), column, width).min(axis=1)
     good = (keyword_end >= 0) & _NAME_START[np.take_along_axis(spelt, name_start[:, None], axis=1)[:, 0]]
@@ -572,12 +595,7 @@ def _inline_layout(codes, starts, ends):
     width = _LONGEST_INDENT + max(map(len, MOTION_KEYWORDS)) + 2
     spelt = _spelt(codes, start_at, width)
     keyword_start = np.minimum(np.argmin(_BLANK[spelt], axis=1), _LONGEST_INDENT)  # the first character not blank
-    keyword_end, joint = np.full(len(candidate), -1), np.zeros(len(candidate), dtype=bool)
-    for keyword in MOTION_KEYWORDS:
-        spells = _starts_with(np.take_along_axis(spelt, keyword_start[:, None] + np.arange(len(keyword) + 2), axis=1),
-                              keyword + " {")
-        keyword_end[spells] = keyword_start[spells] + len(keyword)
-        joint[spells] = MOTIONS[keyword] == JOINT
+    keyword_end, joint = _motion_keywords(spelt, keyword_start, " {")
     keyword_start, keyword_end = keyword_start + start_at, np.where(keyword_end >= 0, keyword_end + start_at, -1)
     brace, alone, commas = _braces(codes, starts, ends, start_at, close)
     good = (keyword_end >= 0) & alone & (brace == keyword_end + 1)
