@@ -44,14 +44,15 @@ MOTIONS = {"PTP": JOINT, "LIN": LINEAR, "CIRC": CIRCULAR, "SPTP": JOINT, "SLIN":
 RELATIVE = "_REL"  # LIN_REL ..: a motion relative to where the arm is
 APPROXIMATIONS = ("C_PTP", "C_DIS", "C_VEL", "C_ORI", "C_SPL")  # the words after a motion's point that blend it
 WITH = "WITH"  # a spline motion's own settings follow it
-MOTION_KEYWORDS = ("LIN", "PTP", "SLIN", "SPTP")  # the motions to one point, as written a line each (at once)
+# the motions to one point (a CIRC's go via another), those CAM post-processors write a line each (read at once)
+MOTION_KEYWORDS = tuple(keyword for keyword, kind in MOTIONS.items() if kind != CIRCULAR)
 MOTION_SPANS = ("motion", "via_name", "target_name", "speed_with", "speed")  # a motion's fields kept, in this order
 
 # --- speed and acceleration settings: the system variables and BAS commands the motions after them run with ---
 SPEED_AXES = 6  # $VEL_AXIS[1..6], $ACC_AXIS[1..6]: the arm's axes
 EXTERNAL_AXES = 6  # $VEL_EXTAX[1..6]: the external axes (a track's)
-BAS_COMMANDS = {"TOOL": "tool", "BASE": "base", "VEL_PTP": JOINT, "VEL_CP": LINEAR, "PTP_PARAMS": JOINT,
-                "CP_PARAMS": LINEAR}  # BAS(#COMMAND, value) -> what it sets (`BAS`)
+BAS_FRAMES = ("TOOL", "BASE")  # BAS(#TOOL, n), BAS(#BASE, n): the tool or base in force
+BAS_SPEEDS = {"VEL_PTP": JOINT, "VEL_CP": LINEAR, "PTP_PARAMS": JOINT, "CP_PARAMS": LINEAR}  # -> the motions set
 BAS_ACC = "ACC_PTP"  # BAS(#ACC_PTP, %): every axis's $ACC_AXIS
 ACC_GROUPS = tuple(f"acc{n}" for n in range(1, SPEED_AXES + 1))  # the flow's acceleration groups of a PTP: axes' %
 ORI_GROUPS = ("acc_ori1", "acc_ori2")  # the orientation accelerations of a LIN or CIRC, deg/s^2
@@ -71,14 +72,14 @@ CLOSING = {"DEFFCT": "ENDFCT", "DEF": "END", "IF": "ENDIF", "FOR": "ENDFOR", "WH
            "REPEAT": "UNTIL", "SWITCH": "ENDSWITCH", "SPLINE": "ENDSPLINE", "PTP_SPLINE": "ENDSPLINE"}
 
 
-def one_of(words):
+def _one_of(words):
     """The pattern of any of ``words`` (a group that captures nothing)."""
     return "(?:" + "|".join(words) + ")"
 
 
-def _assignment(variable, value=r"(.*?)", flags=re.I):
+def _assignment(variable, value=r"(.*?)"):
     """A statement ``variable = value`` alone on its line (both patterns; blanks around the ``=``)."""
-    return re.compile(r"^\s*" + variable + r"\s*=\s*" + value + r"\s*$", flags)
+    return re.compile(r"^\s*" + variable + r"\s*=\s*" + value + r"\s*$", re.I)
 
 
 def _indexed(variable, largest=SPEED_AXES):
@@ -91,15 +92,15 @@ def _bas(commands):
     return re.compile(r"^\s*BAS\s*\(\s*#" + commands + r"\s*,\s*(.*?)\s*\)\s*$", re.I)
 
 
-_QUALIFIED = r"(?:" + one_of(QUALIFIERS) + r"\s+)*"
-_ANY_POINT = one_of(POINT_TYPES)
+_QUALIFIED = r"(?:" + _one_of(QUALIFIERS) + r"\s+)*"
+_ANY_POINT = _one_of(POINT_TYPES)
 
 # --- declarations (.dat and .src) ---
 DECL = re.compile(r"^\s*(?:DECL\s+)?" + _QUALIFIED + "(" + "|".join(POINT_TYPES + DATA_TYPES)
                   + r")\s+(\w+)\s*=\s*\{(.*)\}\s*$", re.I)  # a point or inline form's data with its value
 DECL_START = re.compile(r"^\s*(?:DECL\s+)?" + _QUALIFIED + _ANY_POINT + r"\s+\w+\s*=", re.I)
 DECL_BARE = re.compile(r"^\s*(?:DECL\s+)?(?:GLOBAL\s+)?" + _ANY_POINT + r"\s+(\w+(?:\s*,\s*\w+)*)\s*$", re.I)
-NUMBER_DECL = re.compile(r"^\s*(?:DECL\s+)?(" + _QUALIFIED + ")" + one_of(NUMBER_TYPES) + r"\s+(\w+)\s*=\s*("
+NUMBER_DECL = re.compile(r"^\s*(?:DECL\s+)?(" + _QUALIFIED + ")" + _one_of(NUMBER_TYPES) + r"\s+(\w+)\s*=\s*("
                          + NUMBER + r")\s*$", re.I)
 # a point another data list declares, with a value or without (`DeclaredElsewhere`)
 GLOBAL_POINT = re.compile(r"^[ \t]*(?:DECL\s+)?" + _QUALIFIED + _ANY_POINT + r"\s+(\w+)\s*(?:=|$)", re.I | re.M)
@@ -121,7 +122,7 @@ ASSIGN = re.compile(r"^\s*([A-Za-z_]\w*)\s*(?:\.\w+|\[[^\]]*\])*\s*=(?!=)")
 
 # --- motions ---
 MOTION = re.compile(r"^\s*(" + "|".join(MOTIONS) + ")(" + RELATIVE + r")?\b\s*(.*?)\s*$", re.I)
-APPROX = re.compile(r"\s*((?:\b" + one_of(APPROXIMATIONS) + r"\b\s*)+)$", re.I)
+APPROX = re.compile(r"\s*((?:\b" + _one_of(APPROXIMATIONS) + r"\b\s*)+)$", re.I)
 WITH_WORD = re.compile(r"\b" + WITH + r"\b", re.I)
 WITH_TOOL = re.compile(r"\$TOOL\s*=\s*STOOL2\s*\(\s*(\w+)\s*\)", re.I)
 WITH_BASE = re.compile(r"\$BASE\s*=\s*SBASE\s*\(\s*(\w+)\s*\.\s*BASE_NO\s*\)", re.I)
@@ -133,7 +134,7 @@ END_SPLINE = re.compile(r"^\s*ENDSPLINE\b", re.I)
 
 # --- tool, base, speed, acceleration and zone settings ---
 SYSVAR = _assignment(r"\$(TOOL|BASE)")  # $TOOL = TOOL_DATA[1], $BASE = {X ..}
-BAS = _bas("(" + "|".join(BAS_COMMANDS) + ")")
+BAS = _bas("(" + "|".join(BAS_FRAMES + tuple(BAS_SPEEDS)) + ")")
 BAS_ACC_PTP = _bas(BAS_ACC)
 ACT = _assignment("(" + "|".join(DATA_TYPES) + ")_ACT", r"(\w+)")  # FDAT_ACT = F1: an inline form's data in force
 VEL_CP = _assignment(r"\$VEL\.CP")  # m/s
@@ -194,19 +195,19 @@ SEPARATOR = ",[ ]{0,%d}" % INLINE_BLANKS  # between an inline point's members
 # DECL E6POS XP1={X 1.0,Y 2.0,Z 3.0,A 0.0,B 90.0,C 0.0,S 2,T 35,E1 0.0,..,E6 0.0} (S, T and E1..E6 optional), as
 # KUKA's editors and CAM post-processors declare a Cartesian point. Groups: the line, the name, X..C, S, T, E1..E6.
 WRITTEN_POINT = re.compile(
-    r"^[ \t]*DECL[ \t]+(?:" + one_of(QUALIFIERS) + r"[ \t]+)*" + one_of(CARTESIAN_TYPES) + r"[ \t]+(\w+)[ \t]*=[ \t]*\{"
-    + _cartesian_members(",") + r"\}[ \t]*\r?$", re.I | re.M)
+    r"^[ \t]*DECL[ \t]+(?:" + _one_of(QUALIFIERS) + r"[ \t]+)*" + _one_of(CARTESIAN_TYPES)
+    + r"[ \t]+(\w+)[ \t]*=[ \t]*\{" + _cartesian_members(",") + r"\}[ \t]*\r?$", re.I | re.M)
 # LIN XP1 C_DIS, PTP P2: a motion to a named point (no WITH, no _REL). Groups: the line, the keyword, the keyword if
 # a joint motion, the name, the approximation.
 WRITTEN_MOTION = re.compile(
-    r"^[ \t]*" + _ONE_POINT_MOTION + r"[ \t]+(?!" + one_of(APPROXIMATIONS + (WITH,)) + r"\b)"
+    r"^[ \t]*" + _ONE_POINT_MOTION + r"[ \t]+(?!" + _one_of(APPROXIMATIONS + (WITH,)) + r"\b)"
     r"([A-Za-z_][A-Za-z0-9_]*)(?:[ \t]+" + _APPROXIMATION + r")?[ \t]*\r?$", re.I | re.M)
 # LIN {X 446.0,Y 70.0,Z 635.0,A 0.0,B 90.0,C 0.0} C_DIS as RoboDK's and SprutCAM's KUKA posts write it, or
 # LIN {E6POS: X 446.0, Y 70.0, ..} C_DIS as other generators do (the members in `WRITTEN_POINT`'s order, no WITH,
 # no _REL). Groups: the line, the keyword, the keyword if a joint motion, an empty name, X..C, S, T, E1..E6, the
 # approximation.
 INLINE_MOTION = re.compile(
-    r"^[ \t]*" + _ONE_POINT_MOTION + r"[ \t]+\{(?:" + one_of(CARTESIAN_TYPES) + r":[ ]?)?()"
+    r"^[ \t]*" + _ONE_POINT_MOTION + r"[ \t]+\{(?:" + _one_of(CARTESIAN_TYPES) + r":[ ]?)?()"
     + _cartesian_members(SEPARATOR) + r"\}(?:[ \t]+" + _APPROXIMATION + r")?[ \t]*\r?$", re.I | re.M)
 # the groups of `INLINE_MOTION` that `WRITTEN_POINT` has, in its order: the line, the name, X..C, S, T, E1..E6
 INLINE_POINT = [0] + list(range(3, 4 + len(POSE + STATUS + EXTERNAL)))

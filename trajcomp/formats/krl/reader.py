@@ -11,11 +11,11 @@ from trajcomp.errors import ReadError
 from trajcomp.formats.krl import at_once, config_dat, line_walk
 from trajcomp.formats.krl.grammar import (
     ACC, ACC_AXIS, ACC_CP, ACC_GROUPS, ACC_ORI, ACT, APO, APPROX, ASSIGN, AXES, AXIS_GROUPS, BAS, BAS_ACC_PTP,
-    BLOCK_CLOSES, BLOCK_OPENS, CLOSING, DATA, DATA_REF, DECL, DECL_BARE, DECL_START, DEF, DEF_LINE, DEFDAT, END_SPLINE,
-    ENDDAT, EXTERNAL, EXTERNAL_GROUPS, FIRST_WORD, FLOW_WORDS, GLOBAL_POINT, GLOBAL_WORD, HOME, JOINT_GROUPS,
-    JOINT_TYPES, JUMP_TO, LIMITS, MEMBER, MOTION, MOTION_SPANS, MOTIONS, NAME, NUMBER_DECL, ORI_GROUPS,
-    OUTSIDE_ROUTINES, POSE, SPLINE, STATUS_LARGEST, SYSVAR, VEL, VEL_AXIS, VEL_CP, VEL_EXTAX, WITH_BASE, WITH_CALL,
-    WITH_SPEED, WITH_TOOL, WITH_WORD, WORD,
+    BAS_FRAMES, BAS_SPEEDS, BLOCK_CLOSES, BLOCK_OPENS, CLOSING, DATA, DATA_REF, DECL, DECL_BARE, DECL_START, DEF,
+    DEF_LINE, DEFDAT, END_SPLINE, ENDDAT, EXTERNAL, EXTERNAL_GROUPS, FIRST_WORD, FLOW_WORDS, GLOBAL_POINT,
+    GLOBAL_WORD, HOME, JOINT_GROUPS, JOINT_TYPES, JUMP_TO, LIMITS, MEMBER, MOTION, MOTION_SPANS, MOTIONS, NAME,
+    NUMBER_DECL, ORI_GROUPS, OUTSIDE_ROUTINES, POSE, SPLINE, STATUS_LARGEST, SYSVAR, VEL, VEL_AXIS, VEL_CP,
+    VEL_EXTAX, WITH_BASE, WITH_CALL, WITH_SPEED, WITH_TOOL, WITH_WORD, WORD,
 )
 from trajcomp.formats.number_fields import NUMBER
 from trajcomp.formats.text import (
@@ -351,14 +351,13 @@ class _Reader:
                 self.select(which, None, f"${which} = {value} set at run time (line {line_no})")
         elif m := BAS.match(text):
             what, value = m.group(1).upper(), m.group(2)
-            if what in ("TOOL", "BASE"):
+            if what in BAS_FRAMES:
                 if not re.fullmatch(NUMBER, value):
                     self.select(what, None, f"BAS(#{what}, {value}) set at run time (line {line_no})")
                 else:
                     self.select(what, str(integer(value, name, line_no, original, what)))
                 return
-            self.set_speed(JOINT if what in ("VEL_PTP", "PTP_PARAMS") else LINEAR, m, 2, index, start, line_no,
-                           original, f"BAS(#{what})")
+            self.set_speed(BAS_SPEEDS[what], m, 2, index, start, line_no, original, f"BAS(#{what})")
         elif m := ACT.match(text):
             self.activate(m.group(1).upper(), m.group(2).upper(), index, line_no, original)
         elif m := SPLINE.match(text):
