@@ -38,7 +38,7 @@ class Walk:
     rows between two other lines), or, where that state is known only at
     run time (a tool or base set at run time, routine parameters) or the
     point is not one the program has declared so far, through the
-    one-by-one read (`_Reader.statement`), which says why.
+    one-by-one read (`trajcomp.formats.krl.reader._Reader.statement`), which says why.
     """
 
     def __init__(self, reader, index, masked, written, first_inline):
