@@ -99,7 +99,7 @@ _ANY_POINT = _one_of(POINT_TYPES)
 DECL = re.compile(r"^\s*(?:DECL\s+)?" + _QUALIFIED + "(" + "|".join(POINT_TYPES + DATA_TYPES)
                   + r")\s+(\w+)\s*=\s*\{(.*)\}\s*$", re.I)  # a point or inline form's data with its value
 DECL_START = re.compile(r"^\s*(?:DECL\s+)?" + _QUALIFIED + _ANY_POINT + r"\s+\w+\s*=", re.I)
-DECL_BARE = re.compile(r"^\s*(?:DECL\s+)?(?:GLOBAL\s+)?" + _ANY_POINT + r"\s+(\w+(?:\s*,\s*\w+)*)\s*$", re.I)
+DECL_BARE = re.compile(r"^\s*(?:DECL\s+)?(?:" + SHARED + r"\s+)?" + _ANY_POINT + r"\s+(\w+(?:\s*,\s*\w+)*)\s*$", re.I)
 NUMBER_DECL = re.compile(r"^\s*(?:DECL\s+)?(" + _QUALIFIED + ")" + _one_of(NUMBER_TYPES) + r"\s+(\w+)\s*=\s*("
                          + NUMBER + r")\s*$", re.I)
 # a point another data list declares, with a value or without (`DeclaredElsewhere`)
@@ -111,8 +111,8 @@ DATA_REF = re.compile(r"^(TOOL_DATA|BASE_DATA)\s*\[\s*(\d+)\s*\]$", re.I)
 HOME = re.compile(r"^(XHOME\d*|\$AXIS_ACT)$", re.I)  # axis positions stated outside the program: kept
 
 # --- routines, data lists, names ---
-DEF = re.compile(r"^\s*(?:GLOBAL\s+)?DEF(?:FCT\s+\w+)?\s+(\w+)\s*\(", re.I | re.M)
-DEF_LINE = re.compile(r"^\s*(?:GLOBAL\s+)?DEF(?:FCT\s+\w+)?\s+\w+\s*\((.*?)\)", re.I)
+DEF = re.compile(r"^\s*(?:" + SHARED + r"\s+)?DEF(?:FCT\s+\w+)?\s+(\w+)\s*\(", re.I | re.M)
+DEF_LINE = re.compile(r"^\s*(?:" + SHARED + r"\s+)?DEF(?:FCT\s+\w+)?\s+\w+\s*\((.*?)\)", re.I)
 DEFDAT = re.compile(r"^\s*DEFDAT\s+(\w+)", re.I | re.M)
 ENDDAT = re.compile(r"^\s*ENDDAT\b", re.I | re.M)
 NAME = re.compile(r"^[A-Za-z_$][\w$]*$")
@@ -150,7 +150,7 @@ APO = _assignment(r"\$APO\.CDIS", "(" + NUMBER + ")")  # mm
 # --- the order a program runs in ---
 FIRST_WORD = re.compile(r"^\s*([A-Za-z_$][\w$]*)\s*(\(|:\s*$)?")
 JUMP_TO = re.compile(r"^\s*GOTO\s+(\w+)", re.I)
-BLOCK_OPENS = re.compile(r"^[ \t]*(?:GLOBAL\s+)?(" + "|".join(CLOSING) + r")\b", re.I | re.M)
+BLOCK_OPENS = re.compile(r"^[ \t]*(?:" + SHARED + r"\s+)?(" + "|".join(CLOSING) + r")\b", re.I | re.M)
 BLOCK_CLOSES = re.compile(r"^[ \t]*(" + "|".join(dict.fromkeys(CLOSING.values())) + r")\b", re.I | re.M)
 OUTSIDE_ROUTINES = re.compile(r"[ \t]*&")  # what a .src holds outside its routines: its &ACCESS, &REL ... lines
 
