@@ -12,7 +12,7 @@ import pytest
 from trajcomp import formats
 from trajcomp.errors import ReadError, TrajcompError, WriteError
 from trajcomp.formats.fanuc import reader as fanuc_reader
-from trajcomp.formats.krl import reader as krl_reader
+from trajcomp.formats.krl import at_once as krl_at_once
 from trajcomp.formats.krl import writer as krl_writer
 from trajcomp.formats.rapid import reader as rapid_reader
 from trajcomp.formats.urscript import reader as urscript_reader
@@ -27,7 +27,7 @@ from trajcomp.arm.transforms import abc_to_matrix
 DATA = Path(__file__).parents[1] / "data"
 EXAMPLES = Path(__file__).parents[2] / "examples" / "programs"
 AT_ONCE = {  # language -> (module, the function reading declarations at once)
-    ".src": (krl_reader, "_written_points"),
+    ".src": (krl_at_once, "written_points"),
     ".mod": (rapid_reader, ("_WRITTEN_POINT", "_WRITTEN_MOTION", "_WRITTEN_INLINE")),  # patterns of lines read at once
     ".ls": (fanuc_reader, "_written_positions"),
     ".script": (urscript_reader, "_literal_poses"),
@@ -50,7 +50,7 @@ _FANUC_WRITTEN = fanuc_reader._written_positions
 NO_INLINE = (np.zeros(0, dtype=np.int64), np.zeros((0, 10), dtype=np.int64), np.zeros((0, 16), dtype=np.int64),
              np.zeros((0, 16), dtype=np.int64))  # what KRL's `_inline_layout` gives when it finds no line
 NONE_AT_ONCE = {  # what a language's reader at once gives when it reads nothing
-    krl_reader: lambda *args: (np.zeros(0, dtype=int), None, np.zeros(0, dtype=bool)),
+    krl_at_once: lambda *args: (np.zeros(0, dtype=int), None, np.zeros(0, dtype=bool)),
     fanuc_reader: lambda masked, start, end: _FANUC_WRITTEN(masked, 0, 0),
 }
 
@@ -64,15 +64,16 @@ def _line_by_line(path, monkeypatch):
                 patch.setattr(module, name, re.compile(r"(?!)"))
         else:
             patch.setattr(module, function, NONE_AT_ONCE.get(module, lambda *args: {}))
-        if module in (fanuc_reader, krl_reader):
+        if module is fanuc_reader:
             patch.setattr(module, "_WRITTEN_MOTION", re.compile(r"(?!)"))  # matches nothing
         if module is rapid_reader:  # nor any line found from its characters
             patch.setattr(module, "_laid_out_lines", lambda codes, starts, ends: [
                 (np.zeros(0, dtype=np.int64), np.zeros((0, 1, 2), dtype=np.int64))] * len(module.WRITTEN_FORMS))
-        if module is krl_reader:  # nor any motion line read from its characters
+        if module is krl_at_once:  # nor any motion line read from its characters or by its pattern
+            patch.setattr(module, "WRITTEN_MOTION", re.compile(r"(?!)"))
             patch.setattr(module, "_motion_layout", lambda codes, starts, ends: (np.zeros(0, dtype=np.int64),
                                                                                  np.zeros((0, 10), dtype=np.int64)))
-            patch.setattr(module, "_INLINE_MOTION", re.compile(r"(?!)"))  # nor any inline motion
+            patch.setattr(module, "INLINE_MOTION", re.compile(r"(?!)"))  # nor any inline motion
             patch.setattr(module, "_inline_layout", lambda codes, starts, ends: NO_INLINE)
         return formats.read(path)
 

@@ -209,3 +209,82 @@ def test_real_robodk_program_reads_with_its_frames_and_external_axis():
     np.testing.assert_allclose(program.tools["TOOL line 48"][:3, 3], [-4.0, 0.0, 371.3])
     index, joints = program.joint_targets()
     assert len(index) == 1 and len(program.cartesian_targets()) == 4
+
+
+VEL_EXTAX_SRC = """DEF p( )
+  BAS(#VEL_PTP,60)
+  $VEL.CP=0.5
+  PTP XP1
+  $VEL_EXTAX[1]=20
+  PTP XP2
+  LIN XP3
+  IF $IN[1] THEN
+    $VEL_EXTAX[1]=5
+  ENDIF
+  PTP XP4
+  track_speed()
+  PTP XP5
+  BAS(#VEL_PTP,40)
+  PTP XP6
+END
+
+DEF track_speed( )
+  $VEL_EXTAX[1]=N_TRACK
+END
+"""
+
+
+def test_vel_extax_bounds_a_ptp_along_branches_and_calls_as_the_controller_reads_it(tmp_path):
+    """``$VEL_EXTAX[1]`` (a track's % of its own maximum) binds a PTP as its arm's axes' % do (the controller moves
+    a PTP's axes together, so the slowest binds), read along branches and calls; ``BAS(#VEL_PTP)`` sets it again
+    with the arm's; a LIN keeps its TCP speed; a value set at run time leaves the PTP as written, saying why."""
+    (tmp_path / "p.src").write_text(VEL_EXTAX_SRC)
+    (tmp_path / "p.dat").write_text("DEFDAT p\n  DECL GLOBAL INT N_TRACK=10\n" + "".join(
+        f"  DECL E6POS XP{k}={{X {400 + 10 * k},Y 0,Z 600,A 0,B 90,C 0,S 2,T 35,E1 {100 * k}}}\n"
+        for k in range(1, 7)) + "ENDDAT\n")
+    table = formats.read(tmp_path / "p.src").motion_table()
+    speed = dict(zip((text.split()[1] for text in table.text), table.speed.tolist()))
+    assert speed["XP1"] == 60.0 and speed["XP2"] == 20.0  # the track's 20 % below the arm's 60 %
+    assert speed["XP3"] == 500.0  # a LIN: $VEL.CP, 0.5 m/s
+    assert speed["XP4"] == 5.0  # IF .. ENDIF: 20 % or 5 %, the slowest
+    assert np.isnan(speed["XP5"]) and "N_TRACK" in table.speed_why[4]  # set by a routine at run time: as written
+    assert speed["XP6"] == 40.0  # BAS(#VEL_PTP) sets the external axes' with the arm's
+
+
+def test_a_ptp_moving_the_track_under_vel_extax_is_written_no_faster_than_it(tmp_path, monkeypatch):
+    """Re-timed on a KL track (500 mm/s), a PTP that turns the arm and moves the track 600 mm under
+    ``$VEL_EXTAX[1]=5`` (25 mm/s) keeps the track at 5 % at most: the ``BAS(#VEL_PTP)`` the timing writes sets
+    the track's speed too. Read without ``$VEL_EXTAX``, the timing writes the arm's speed over it."""
+    from tests.compensation.test_compensate_track import on_track, orientation
+    from tests.timing.test_timing_track import SLOW_TRACK, retimed
+    from trajcomp.arm.ik import ik
+    from trajcomp.arm.transforms import matrix_to_abc
+    from trajcomp.formats.configuration import configuration_for
+    from trajcomp.formats.krl import reader
+
+    robot = on_track("kuka_kr6_r900", SLOW_TRACK)
+    local = np.tile(np.eye(4), (2, 1, 1))
+    local[:, :3, :3] = orientation(robot)
+    local[:, :3, 3] = [[450.0, -150.0, 700.0], [450.0, 150.0, 700.0]]  # A1 turns some 37 degrees
+    q = ik(robot, local, seed=np.tile(robot.home, (2, 1))).raise_on_failure("targets").q
+    carriage = np.array([0.0, 600.0])
+    world = robot.track.placements(robot.T_world_base, carriage) @ local
+    (tmp_path / "rail.dat").write_text("DEFDAT RAIL\n" + "".join(
+        f"DECL E6POS XP{k + 1}={{X {T[0, 3]:.4f},Y {T[1, 3]:.4f},Z {T[2, 3]:.4f},"
+        + ",".join(f"{n} {v:.5f}" for n, v in zip("ABC", matrix_to_abc(T[:3, :3])))
+        + f",S {s},T {t},E1 {e:.1f}}}\n" for k, (T, (s, t), e) in enumerate(
+            zip(world, configuration_for("krl", robot, q), carriage))) + "ENDDAT\n")
+    path = tmp_path / "rail.src"
+    path.write_text("DEF rail( )\n$BASE=$NULLFRAME\nBAS(#VEL_PTP,100)\nPTP XP1\n$VEL_EXTAX[1]=5\nPTP XP2\nEND\n")
+
+    def track_percent(text):
+        """The track's % in force at PTP XP2 as the controller reads the program: its last setting before."""
+        before = text.split("PTP XP2")[0]
+        return float(re.findall(r"(?:BAS\(#VEL_PTP,\s*|\$VEL_EXTAX\[1\]\s*=\s*)([\d.]+)", before)[-1])
+
+    (tmp_path / "read").mkdir()
+    assert track_percent(retimed(tmp_path / "read", robot, path)[1]) <= 5.0
+    with monkeypatch.context() as patch:
+        patch.setattr(reader, "VEL_EXTAX", re.compile("(?!)"))  # the reader without it
+        (tmp_path / "unread").mkdir()
+        assert track_percent(retimed(tmp_path / "unread", robot, path)[1]) > 5.0

@@ -1,4 +1,4 @@
-"""KRL's motions read at once (`trajcomp.formats.krl.reader._written_motions`) against the one-by-one read: the
+"""KRL's motions read at once (`trajcomp.formats.krl.at_once.written_motions`) against the one-by-one read: the
 state in force at each line (tool, base, speeds, zone), points changed at run time, refusals; and the speed
 write-back and text edits of a program held as columns against the same program held as objects."""
 
@@ -9,7 +9,7 @@ import pytest
 
 from trajcomp import formats
 from trajcomp.errors import ReadError
-from trajcomp.formats.krl import reader as krl_reader
+from trajcomp.formats.krl import at_once as krl_at_once
 from trajcomp.formats.number_fields import text_codes
 from trajcomp.formats.text import Lines, mask
 from trajcomp.formats.source_shifts import edit_sources
@@ -50,11 +50,11 @@ def _program(tmp_path, src=SRC, dat=DAT):
 def _one_by_one(path, monkeypatch):
     """The program read with no motion read at once."""
     with monkeypatch.context() as patch:
-        patch.setattr(krl_reader, "_WRITTEN_MOTION", re.compile("(?!)"))
-        patch.setattr(krl_reader, "_motion_layout", lambda codes, starts, ends: (np.zeros(0, dtype=np.int64),
+        patch.setattr(krl_at_once, "WRITTEN_MOTION", re.compile("(?!)"))
+        patch.setattr(krl_at_once, "_motion_layout", lambda codes, starts, ends: (np.zeros(0, dtype=np.int64),
                                                                                  np.zeros((0, 10), dtype=np.int64)))
-        patch.setattr(krl_reader, "_INLINE_MOTION", re.compile("(?!)"))
-        patch.setattr(krl_reader, "_inline_layout", lambda codes, starts, ends: NO_INLINE)
+        patch.setattr(krl_at_once, "INLINE_MOTION", re.compile("(?!)"))
+        patch.setattr(krl_at_once, "_inline_layout", lambda codes, starts, ends: NO_INLINE)
         return formats.read(path)
 
 
@@ -147,7 +147,7 @@ def _at_once_and_by_pattern(function, layout, nothing, *args):
     """``function(*args)`` as written, and with ``layout`` reading nothing (every line through the pattern)."""
     at_once = function(*args)
     with pytest.MonkeyPatch.context() as patch:
-        patch.setattr(krl_reader, layout, lambda codes, starts, ends: nothing)
+        patch.setattr(krl_at_once, layout, lambda codes, starts, ends: nothing)
         return at_once, function(*args)
 
 
@@ -159,9 +159,9 @@ def test_points_read_from_their_characters_are_those_the_pattern_reads(ending):
     nothing = (np.zeros(0, dtype=np.int64), np.zeros((0, 16), dtype=np.int64), np.zeros((0, 16), dtype=np.int64),
                np.zeros(0, dtype=bool))
     codes = text_codes(masked)
-    starts, ends = krl_reader._line_bounds(codes)
-    assert len(krl_reader._written_layout(codes, starts, ends)[0]) == sum(n for _, n in POINT_VARIANTS)
-    at_once, by_pattern = _at_once_and_by_pattern(krl_reader._written_points, "_written_layout", nothing, 0, masked,
+    starts, ends = krl_at_once._line_bounds(codes)
+    assert len(krl_at_once._written_layout(codes, starts, ends)[0]) == sum(n for _, n in POINT_VARIANTS)
+    at_once, by_pattern = _at_once_and_by_pattern(krl_at_once.written_points, "_written_layout", nothing, 0, masked,
                                                   lines)
     (line, table, shared), (line_p, table_p, shared_p) = at_once, by_pattern
     assert line.tolist() == line_p.tolist() and shared.tolist() == shared_p.tolist()
@@ -179,11 +179,11 @@ def test_motions_read_from_their_characters_are_those_the_pattern_reads(ending):
     text = "DEF p( )\n" + "".join(line + ending for line, _ in MOTION_VARIANTS) + "END"
     masked = mask(text, ";")
     codes = text_codes(masked)
-    starts, ends = krl_reader._line_bounds(codes)
-    at = krl_reader._motion_layout(codes, starts, ends)[0]
+    starts, ends = krl_at_once._line_bounds(codes)
+    at = krl_at_once._motion_layout(codes, starts, ends)[0]
     assert (at - 1).tolist() == [k for k, (_, read) in enumerate(MOTION_VARIANTS) if read]
     nothing = (np.zeros(0, dtype=np.int64), np.zeros((0, 10), dtype=np.int64))
-    at_once, by_pattern = _at_once_and_by_pattern(krl_reader._written_motions, "_motion_layout", nothing, 0, masked,
+    at_once, by_pattern = _at_once_and_by_pattern(krl_at_once.written_motions, "_motion_layout", nothing, 0, masked,
                                                   Lines(text))
     assert {k: v.tolist() for k, v in at_once[0].items()} == {k: v.tolist() for k, v in by_pattern[0].items()}
     assert len(at_once[0]["line"]) == 9 and at_once[1] is None
@@ -227,11 +227,11 @@ def test_inline_motions_read_from_their_characters_are_those_the_pattern_reads(e
     text = "DEF p( ) ; Größe\n" + "".join(line + ending for line, _, _ in INLINE_VARIANTS) + "END"
     masked = mask(text, ";")
     codes = text_codes(masked)
-    starts, ends = krl_reader._line_bounds(codes)
-    assert (krl_reader._inline_layout(codes, starts, ends)[0] - 1).tolist() == [
+    starts, ends = krl_at_once._line_bounds(codes)
+    assert (krl_at_once._inline_layout(codes, starts, ends)[0] - 1).tolist() == [
         k for k, (_, found, _) in enumerate(INLINE_VARIANTS) if found]
     (columns, table), (columns_p, table_p) = _at_once_and_by_pattern(
-        krl_reader._written_motions, "_inline_layout", NO_INLINE, 0, masked, Lines(text))
+        krl_at_once.written_motions, "_inline_layout", NO_INLINE, 0, masked, Lines(text))
     assert {k: v.tolist() for k, v in columns.items()} == {k: v.tolist() for k, v in columns_p.items()}
     assert (columns["line"] - 2).tolist() == [k for k, (_, _, read) in enumerate(INLINE_VARIANTS) if read]
     assert columns["inline"].tolist() == list(range(len(table))) and table.name is None

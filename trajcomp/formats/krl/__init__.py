@@ -17,7 +17,8 @@ Read:
   base 0 are the flange and the world; a number the program selects and
   does not define is the controller's, read from its ``$config.dat``:
   `trajcomp.formats.krl.config_dat`); speeds ``$VEL.CP`` (m/s),
-  ``BAS(#VEL_PTP, %)``, ``BAS(#VEL_CP, m/s)``, the inline forms'
+  ``BAS(#VEL_PTP, %)``, ``$VEL_AXIS[n]`` and an external axis's ``$VEL_EXTAX[n]`` (%: a PTP runs at the
+  slowest), ``BAS(#VEL_CP, m/s)``, the inline forms'
   ``BAS(#PTP_PARAMS, %)`` and ``BAS(#CP_PARAMS, m/s)`` (after their PDAT /
   LDAT, whose VEL they replace), a spline motion's own ``WITH $VEL =
   SVEL_CP(m/s, ..)``, ``$VEL.CP = m/s`` or ``$VEL_AXIS[n] =

@@ -1,6 +1,5 @@
 """The KRL reader: .src statements and .dat declarations into a `Program` (see `trajcomp.formats.krl`)."""
 
-import array
 import dataclasses
 import itertools
 import re
@@ -9,14 +8,17 @@ from pathlib import Path
 import numpy as np
 
 from trajcomp.errors import ReadError
-from trajcomp.formats.krl import config_dat
-from trajcomp.formats.number_fields import BLANK as _BLANK, DIGIT as _DIGIT, WORD_CHARACTER as _WORD_CHARACTER
-from trajcomp.formats.number_fields import character_table as _character_table, line_bounds as _line_bounds
-from trajcomp.formats.number_fields import NUMBER, offset_type, read_numbers, text_codes
-from trajcomp.formats.number_fields import spells as _spells, spelt as _spelt, starts_with as _starts_with
+from trajcomp.formats.krl import at_once, config_dat, line_walk
+from trajcomp.formats.krl.grammar import (
+    ACC, ACC_AXIS, ACC_CP, ACC_GROUPS, ACC_ORI, ACT, APO, APPROX, ASSIGN, AXES, AXIS_GROUPS, BAS, BAS_ACC_PTP,
+    BAS_FRAMES, BAS_SPEEDS, BLOCK_CLOSES, BLOCK_OPENS, CLOSING, DATA, DATA_REF, DECL, DECL_BARE, DECL_START, DEF,
+    DEF_LINE, DEFDAT, END_SPLINE, ENDDAT, EXTERNAL, EXTERNAL_GROUPS, FIRST_WORD, FLOW_WORDS, GLOBAL_POINT,
+    GLOBAL_WORD, HOME, JOINT_GROUPS, JOINT_TYPES, JUMP_TO, LIMITS, MEMBER, MOTION, MOTION_SPANS, MOTIONS, NAME,
+    NUMBER_DECL, ORI_GROUPS, OUTSIDE_ROUTINES, POSE, SPLINE, STATUS_LARGEST, SYSVAR, VEL, VEL_AXIS, VEL_CP,
+    VEL_EXTAX, WITH_BASE, WITH_CALL, WITH_SPEED, WITH_TOOL, WITH_WORD, WORD,
+)
+from trajcomp.formats.number_fields import NUMBER
 from trajcomp.formats.text import (
-    ANGLE_LIMIT,
-    JOINT_LIMIT,
     LENGTH_LIMIT,
     DeclaredElsewhere,
     Lines,
@@ -37,117 +39,11 @@ from trajcomp.formats.text import (
 from trajcomp.programs import flow
 from trajcomp.programs.flow import Step, Unknown
 from trajcomp.programs.program import Program
-from trajcomp.programs.tables import (
-    ItemRows, MotionTable, StatementTable, TargetRows, TargetTable, TextSlices, every_row, joined_targets,
-    read_only, repeated,
-)
+from trajcomp.programs.tables import ItemRows, MotionTable, StatementTable
 from trajcomp.programs.items import (
-    CIRCULAR, JOINT, LINEAR, Motion, Span, SpanColumns, SpanTable, Statement, Target, replaced,
+    CIRCULAR, JOINT, LINEAR, Motion, Span, SpanTable, Statement, Target, replaced,
 )
 from trajcomp.arm.transforms import pose_to_matrix
-
-POSE = ("x", "y", "z", "a", "b", "c")
-AXES = ("a1", "a2", "a3", "a4", "a5", "a6")
-EXTERNAL = ("e1", "e2", "e3", "e4", "e5", "e6")
-MIN_PLACES = dict.fromkeys(POSE[:3], 3) | dict.fromkeys(POSE[3:], 4) | dict.fromkeys(AXES, 4)
-LIMITS = dict.fromkeys(POSE[:3], LENGTH_LIMIT) | dict.fromkeys(POSE[3:], ANGLE_LIMIT) | dict.fromkeys(AXES, JOINT_LIMIT)
-POINT_TYPES = "E6POS|POS|FRAME|E6AXIS|AXIS"
-JOINT_TYPES = {"E6AXIS", "AXIS"}
-MOTION_SPANS = ("motion", "via_name", "target_name", "speed_with", "speed")  # a motion's spans, in this order
-KINDS = {"PTP": JOINT, "SPTP": JOINT, "LIN": LINEAR, "SLIN": LINEAR, "CIRC": CIRCULAR, "SCIRC": CIRCULAR}
-
-_QUALIFIERS = r"(?:(?:GLOBAL|CONST)\s+)*"  # DECL GLOBAL CONST E6POS ..: a data list's constant is a point too
-_DECL = re.compile(
-    r"^\s*(?:DECL\s+)?" + _QUALIFIERS + r"(" + POINT_TYPES + r"|FDAT|PDAT|LDAT)\s+(\w+)\s*=\s*\{(.*)\}\s*$", re.I
-)
-_DECL_START = re.compile(r"^\s*(?:DECL\s+)?" + _QUALIFIERS + r"(?:" + POINT_TYPES + r")\s+\w+\s*=", re.I)
-_DECL_BARE = re.compile(r"^\s*(?:DECL\s+)?(?:GLOBAL\s+)?(?:" + POINT_TYPES + r")\s+(\w+(?:\s*,\s*\w+)*)\s*$", re.I)
-_DATA = re.compile(r"^\s*(TOOL_DATA|BASE_DATA)\s*\[\s*(\d+)\s*\]\s*=\s*(.*?)\s*$", re.I)
-_SYSVAR = re.compile(r"^\s*\$(TOOL|BASE)\s*=\s*(.*?)\s*$", re.I)
-_DATA_REF = re.compile(r"^(TOOL_DATA|BASE_DATA)\s*\[\s*(\d+)\s*\]$", re.I)
-_BAS = re.compile(r"^\s*BAS\s*\(\s*#(TOOL|BASE|VEL_PTP|VEL_CP|PTP_PARAMS|CP_PARAMS)\s*,\s*(.*?)\s*\)\s*$", re.I)
-_ACT = re.compile(r"^\s*(FDAT|PDAT|LDAT)_ACT\s*=\s*(\w+)\s*$", re.I)
-_VEL_CP = re.compile(r"^\s*\$VEL\.CP\s*=\s*(.*?)\s*$", re.I)
-_VEL = re.compile(r"^\s*\$VEL\s*=\s*\{(.*)\}\s*$", re.I)  # $VEL={CP 0.2,ORI1 200,ORI2 200}
-_VEL_AXIS = re.compile(r"^\s*\$VEL_AXIS\s*\[\s*([1-6])\s*\]\s*=\s*(.*?)\s*$", re.I)
-_ACC_CP = re.compile(r"^\s*\$ACC\.CP\s*=\s*(.*?)\s*$", re.I)
-_ACC = re.compile(r"^\s*\$ACC\s*=\s*\{(.*)\}\s*$", re.I)  # $ACC={CP 2.3,ORI1 100,ORI2 100}
-_ACC_ORI = re.compile(r"^\s*\$ACC\.(ORI[12])\s*=\s*(.*?)\s*$", re.I)
-_ACC_AXIS = re.compile(r"^\s*\$ACC_AXIS\s*\[\s*([1-6])\s*\]\s*=\s*(.*?)\s*$", re.I)
-_BAS_ACC = re.compile(r"^\s*BAS\s*\(\s*#ACC_PTP\s*,\s*(.*?)\s*\)\s*$", re.I)  # every axis's $ACC_AXIS
-ACC_GROUPS = tuple(f"acc{n}" for n in range(1, 7))  # the flow's acceleration groups of a PTP: each axis's %
-ORI_GROUPS = ("acc_ori1", "acc_ori2")  # the orientation accelerations of a LIN or CIRC, deg/s^2
-AXIS_GROUPS = tuple(f"ptp{n}" for n in range(1, 7))  # the flow's speed groups of a PTP: each axis's % (`_Reader.give`)
-# the statements that change the order a program runs in (`trajcomp.programs.flow.Step`): keyword -> step kind
-_FLOW_WORDS = {"IF": "if", "ELSE": "else", "ENDIF": "endif", "SWITCH": "if", "CASE": "elif", "DEFAULT": "elif",
-               "ENDSWITCH": "endif", "FOR": "loop", "ENDFOR": "endloop", "WHILE": "loop", "ENDWHILE": "endloop",
-               "LOOP": "loop", "ENDLOOP": "endloop", "REPEAT": "loop", "UNTIL": "endloop", "EXIT": "exit",
-               "RETURN": "return", "END": "end", "ENDFCT": "end", "WAIT": "wait", "HALT": "wait", "GOTO": "jump"}
-_SPLINE = re.compile(r"^\s*(?:PTP_)?SPLINE\b(?:.*?\bWITH\b(.*))?$", re.I)  # a spline block: its WITH holds for it
-_END_SPLINE = re.compile(r"^\s*ENDSPLINE\b", re.I)
-_FIRST_WORD = re.compile(r"^\s*([A-Za-z_$][\w$]*)\s*(\(|:\s*$)?")
-_JUMP_TO = re.compile(r"^\s*GOTO\s+(\w+)", re.I)
-_NUMBER_DECL = re.compile(r"^\s*(?:DECL\s+)?((?:(?:GLOBAL|CONST)\s+)*)(?:REAL|INT)\s+(\w+)\s*=\s*(" + NUMBER + r")\s*$", re.I)
-# a speed in a spline motion's WITH clause: $VEL = SVEL_CP(v, ..), $VEL.CP = v, $VEL_AXIS[n] = SVEL_JOINT(%)
-_WITH_SPEED = re.compile(r"\$VEL(?:\.CP|_AXIS\s*\[\s*\d+\s*\])?\s*=", re.I)
-_WITH_CALL = re.compile(r"\s*(SVEL_CP|SVEL_JOINT)\s*\(", re.I)
-_APO = re.compile(r"^\s*\$APO\.CDIS\s*=\s*(" + NUMBER + r")\s*$", re.I)
-_MOTION = re.compile(r"^\s*(PTP|LIN|CIRC|SPTP|SLIN|SCIRC)(_REL)?\b\s*(.*?)\s*$", re.I)
-_MEMBER = re.compile(r"\s*([A-Za-z_]\w*)\s+(" + NUMBER + r"|'B[01]+')\s*$")
-_APPROX = re.compile(r"\s*((?:\bC_(?:PTP|DIS|VEL|ORI|SPL)\b\s*)+)$", re.I)
-_NAME = re.compile(r"^[A-Za-z_$][\w$]*$")
-_WORD = re.compile(r"[A-Za-z_$][\w$]*")
-_ASSIGN = re.compile(r"^\s*([A-Za-z_]\w*)\s*(?:\.\w+|\[[^\]]*\])*\s*=(?!=)")
-_WITH_TOOL = re.compile(r"\$TOOL\s*=\s*STOOL2\s*\(\s*(\w+)\s*\)", re.I)
-_WITH_BASE = re.compile(r"\$BASE\s*=\s*SBASE\s*\(\s*(\w+)\s*\.\s*BASE_NO\s*\)", re.I)
-# a point another data list declares, with a value or without (`DeclaredElsewhere`)
-_GLOBAL_POINT = re.compile(r"^[ \t]*(?:DECL\s+)?" + _QUALIFIERS + r"(?:" + POINT_TYPES + r")\s+(\w+)\s*(?:=|$)", re.I | re.M)
-_GLOBAL_WORD = re.compile(r"\bGLOBAL\b", re.I)
-_HOME = re.compile(r"^(XHOME\d*|\$AXIS_ACT)$", re.I)  # axis positions stated outside the program: kept
-_DEF = re.compile(r"^\s*(?:GLOBAL\s+)?DEF(?:FCT\s+\w+)?\s+(\w+)\s*\(", re.I | re.M)
-_DEF_LINE = re.compile(r"^\s*(?:GLOBAL\s+)?DEF(?:FCT\s+\w+)?\s+\w+\s*\((.*?)\)", re.I)
-_DEFDAT = re.compile(r"^\s*DEFDAT\s+(\w+)", re.I | re.M)
-_ENDDAT = re.compile(r"^\s*ENDDAT\b", re.I | re.M)
-# the blocks of a .src (a routine or function, the control structures, a spline block) and the keywords closing them
-_CLOSING = {"DEF": "END", "DEFFCT": "ENDFCT", "IF": "ENDIF", "FOR": "ENDFOR", "WHILE": "ENDWHILE", "LOOP": "ENDLOOP",
-            "REPEAT": "UNTIL", "SWITCH": "ENDSWITCH", "SPLINE": "ENDSPLINE", "PTP_SPLINE": "ENDSPLINE"}
-_BLOCK_OPENS = re.compile(r"^[ \t]*(?:GLOBAL\s+)?(DEFFCT|DEF|IF|FOR|WHILE|LOOP|REPEAT|SWITCH|SPLINE|PTP_SPLINE)\b",
-                          re.I | re.M)
-_BLOCK_CLOSES = re.compile(r"^[ \t]*(ENDFCT|END|ENDIF|ENDFOR|ENDWHILE|ENDLOOP|UNTIL|ENDSWITCH|ENDSPLINE)\b",
-                           re.I | re.M)
-_OUTSIDE_ROUTINES = re.compile(r"[ \t]*&")  # what a .src holds outside its routines: its &ACCESS, &REL ... lines
-_PROGRAM_NAME = re.compile(r"^[A-Za-z_][A-Za-z0-9_]{0,23}$")  # KRL names: 24 characters at most
-# A Cartesian point declared as KUKA's editors and CAM post-processors write it, one a line:
-# DECL E6POS XP1={X 1.0,Y 2.0,Z 3.0,A 0.0,B 90.0,C 0.0,S 2,T 35,E1 0.0,..,E6 0.0} (S, T and E1..E6 optional):
-# read a whole data list of them at once (`_written_points`); any other declaration goes line by line.
-
-
-def _externals(separator):
-    """The pattern of a point's E1..Ek (k = 0..6) after its other members, ``separator`` (a pattern) before each."""
-    return "".join(f"(?:{separator}E{k}[ ]({NUMBER})" for k in range(1, 7)) + ")?" * 6
-
-
-_EXTERNAL_MEMBERS = _externals(",")
-_WRITTEN_POINT = re.compile(
-    r"^[ \t]*DECL[ \t]+(?:(?:GLOBAL|CONST)[ \t]+)*(?:E6POS|POS|FRAME)[ \t]+(\w+)[ \t]*=[ \t]*\{"
-    + ",".join(f"{p.upper()}[ ]({NUMBER})" for p in POSE) + r"(?:,S[ ](\d+),T[ ](\d+))?"
-    + _EXTERNAL_MEMBERS + r"\}[ \t]*\r?$", re.I | re.M)
-# A motion to a named point as CAM post-processors write it, one a line: LIN XP1 C_DIS, PTP P2 (no WITH, no _REL):
-# read at once (`_written_motions`); every other motion goes line by line.
-_WRITTEN_MOTION = re.compile(
-    r"^[ \t]*((S?PTP)|S?LIN)[ \t]+(?!(?:C_(?:PTP|DIS|VEL|ORI|SPL)|WITH)\b)([A-Za-z_][A-Za-z0-9_]*)"
-    r"(?:[ \t]+(C_(?:PTP|DIS|VEL|ORI|SPL)))?[ \t]*\r?$", re.I | re.M)
-# A motion to a Cartesian point written inline, one a line, as RoboDK's and SprutCAM's KUKA posts write them,
-# LIN {X 446.0,Y 70.0,Z 635.0,A 0.0,B 90.0,C 0.0} C_DIS, or with its type and a blank after each comma as other
-# generators do, LIN {E6POS: X 446.0, Y 70.0, ..} C_DIS (PTP, SLIN, SPTP too; the members in `_WRITTEN_POINT`'s
-# order, no WITH, no _REL): read at once (`_written_motions`); every other inline motion goes line by line. Groups:
-# the line, the keyword, the keyword if PTP or SPTP, an empty name, X..C, S, T, E1..E6, the approximation.
-_SEPARATOR = ",[ ]?"
-_INLINE_MOTION = re.compile(
-    r"^[ \t]*((S?PTP)|S?LIN)[ \t]+\{(?:(?:E6POS|POS|FRAME):[ ]?)?()"
-    + _SEPARATOR.join(f"{p.upper()}[ ]({NUMBER})" for p in POSE) + rf"(?:{_SEPARATOR}S[ ](\d+){_SEPARATOR}T[ ](\d+))?"
-    + _externals(_SEPARATOR) + r"\}(?:[ \t]+(C_(?:PTP|DIS|VEL|ORI|SPL)))?[ \t]*\r?$", re.I | re.M)
-_INLINE_POINT = [0] + list(range(3, 18))  # the groups of `_INLINE_MOTION` that `_WRITTEN_POINT` has, in its order
 
 
 @dataclasses.dataclass(frozen=True)
@@ -165,7 +61,7 @@ def _members(body, start, source, name, line, text, numeric=True):
     skip = colon.end() if colon else 0
     out, position = {}, skip
     for piece in body[skip:].split(","):
-        m = _MEMBER.match(piece)
+        m = MEMBER.match(piece)
         if m:
             key = m.group(1).lower()
             out[key] = Span(source, start + position + m.start(2), start + position + m.end(2), m.group(2))
@@ -214,8 +110,9 @@ def _status_turn(members, source_name, line, text):
     if "s" not in members or "t" not in members:
         return ()
     words = []
-    for field, largest in (("S", 0xFF), ("T", 0x3F)):
-        value = _int(members[field.lower()].text, source_name, line, text, field)
+    for member, largest in STATUS_LARGEST.items():
+        field = member.upper()
+        value = _int(members[member].text, source_name, line, text, field)
         if not 0 <= value <= largest:
             fail(source_name, line, text, f"{field} {members[field.lower()].text[:40]}: outside 0..{largest} "
                  f"({'the status byte' if field == 'S' else 'one sign bit per axis A1-A6'})")
@@ -230,328 +127,6 @@ def _frame(members, source_name, line, text):
     vector = _values(members, POSE, source_name, line, text)
     vector[3:] = np.radians(vector[3:])
     return pose_to_matrix(vector)
-
-
-def _written_points(index, masked, lines):
-    """The Cartesian points of a data list declared as KUKA writes them (`_WRITTEN_POINT`), read at once.
-
-    The lines written exactly as `_written_layout` knows them are found
-    from their characters, `AT_ONCE` lines at a time; the other lines are
-    matched by `_WRITTEN_POINT` one by one. The numbers are read from the
-    characters (`trajcomp.formats.number_fields`). A declaration whose
-    numbers a line-by-line read would refuse (out of range, S or T beyond
-    their bits) is left out: that read then names it.
-
-    Parameters
-    ----------
-    index : int
-        The data list's source index.
-    masked : str
-        Its text, comments and strings blanked (`trajcomp.formats.text.mask`).
-    lines : Lines
-        Its lines.
-
-    Returns
-    -------
-    line : ndarray of int, shape (N,)
-        The line of each point (ascending).
-    table : TargetTable or None
-        The points as columns (no object each): names and spans (`SpanColumns`) in the data list's text.
-    shared : ndarray of bool, shape (N,)
-        The points declared GLOBAL.
-    """
-    offset = offset_type(masked)
-    codes = text_codes(masked)
-    starts, ends = _line_bounds(codes)
-    configs = {}  # one tuple per distinct (S, T): a path's points mostly share theirs
-    blocks, taken = [], np.zeros(len(starts), dtype=bool)
-    for lo in range(0, len(starts), AT_ONCE):
-        at, start, end, shared = _written_layout(codes, starts[lo:lo + AT_ONCE], ends[lo:lo + AT_ONCE])
-        numbers, read = _field_numbers(codes, start, end)
-        taken[lo + at[read]] = True
-        blocks.append(_written_block(start[read], end[read], numbers[read], shared[read], offset, configs))
-    others, matched = np.flatnonzero(~taken), False
-    for lo in range(0, len(others), AT_ONCE):
-        found = [m for k in others[lo:lo + AT_ONCE].tolist() if not masked[starts[k]:ends[k]].isspace()
-                 and (m := _WRITTEN_POINT.match(masked, int(starts[k]), int(ends[k])))]
-        if not found:
-            continue
-        matched = True
-        regs = np.array([m.regs for m in found], dtype=np.int64)  # absent groups: (-1, -1)
-        shared = np.array([_GLOBAL_WORD.search(masked, m.start(), m.end()) is not None for m in found], dtype=bool)
-        numbers = _field_numbers(codes, regs[:, :, 0], regs[:, :, 1])[0]
-        blocks.append(_written_block(regs[:, :, 0], regs[:, :, 1], numbers, shared, offset, configs))
-    pose, start, end, config, external, shared = (
-        np.concatenate(parts) if isinstance(parts[0], np.ndarray) else sum(parts, ()) for parts in zip(*blocks))
-    if not len(start):
-        return np.zeros(0, dtype=int), None, np.zeros(0, dtype=bool)
-    if matched:  # the lines matched one by one among the others: in line order
-        order = np.argsort(start[:, 0], kind="stable")
-        pose, start, end, shared = pose[order], start[order], end[order], shared[order]
-        config, external = (tuple(column[k] for k in order.tolist()) for column in (config, external))
-    line = np.searchsorted(lines.starts, start[:, 0], side="right")
-    n = len(line)
-    none = repeated(None, n)
-    table = TargetTable(pose, np.zeros(n, dtype=bool), np.broadcast_to(np.nan, (n, 6)), line, config, none, none,
-                        external, np.zeros(n, dtype=bool), TextSlices(lines.text, start[:, 1], end[:, 1]),
-                        SpanColumns(index, lines.text, POSE + ("s", "t"), start[:, 2:], end[:, 2:]))
-    return line, table, shared
-
-
-AT_ONCE = 65536  # lines or motions whose fields are found and read together: bounds the arrays held
-# the declaration starts read at once (upper case): one space after each word, GLOBAL or not
-_HEADS = tuple(f"DECL {scope}{typ} " for scope in ("", "GLOBAL ", "CONST ", "GLOBAL CONST ")
-               for typ in ("E6POS", "POS", "FRAME"))
-_LONGEST_NAME = 64  # characters of a point name read at once (a longer one: `_WRITTEN_POINT`)
-_LONGEST_WHOLE = 24  # digits of an S or T read at once
-
-
-def _member_layouts():
-    """``{count: [members]}``: the members a point declaration writes, in order, by their count: X..C, S and T if
-    any, then E1..Ek, as `_WRITTEN_POINT` states them; each member's field index (`_written_layout`)."""
-    layouts = {}
-    for status in ((), ("S", "T")):
-        for count in range(7):
-            members = [(p.upper(), 2 + k) for k, p in enumerate(POSE)] + [(s, 8 + k) for k, s in enumerate(status)]
-            members += [(f"E{k + 1}", 10 + k) for k in range(count)]
-            layouts.setdefault(len(members), []).append(members)
-    return layouts
-
-
-_LAYOUTS = _member_layouts()
-
-
-def _made_of(codes, start, end, table, longest):
-    """Whether each field ``[start, end)`` (K,) is 1 to ``longest`` characters all in ``table`` (`_character_table`)."""
-    width = end - start
-    window = int(min(width.max(initial=0), longest))
-    inside = np.arange(window) < width[:, None]
-    return (width >= 1) & (width <= longest) & (table[_spelt(codes, start, window)] | ~inside).all(axis=1)
-
-
-def _written_layout(codes, starts, ends):
-    """The point declarations among lines written exactly ``DECL E6POS XP1={X 1.5,Y 2,Z 3,A 0,B 90,C 0,S 2,T 35}``.
-
-    One space after each word and member name and none elsewhere (no
-    blank at the line's start), E6POS, POS or FRAME, GLOBAL or not, any
-    case, S and T and E1..Ek as `_WRITTEN_POINT` has them, a line ending
-    ``\\n`` or ``\\r\\n``: a subset of what `_WRITTEN_POINT` matches, found
-    from the characters' codes. The fields' contents are not checked here
-    (`_field_numbers`).
-
-    Parameters
-    ----------
-    codes : ndarray, shape (L,)
-        The masked text's character codes (`text_codes`).
-    starts, ends : ndarray of int, shape (B,)
-        Offsets of the lines' starts and of their ``\\n`` (or the text's end).
-
-    Returns
-    -------
-    at : ndarray of int, shape (K,)
-        The lines declaring a point so (indices into ``starts``).
-    start, end : ndarray of int, shape (K, 16)
-        Offsets of `_WRITTEN_POINT`'s groups: the declaration (its line,
-        ``\\r`` included), the name, X..C, S, T, E1..E6 (-1 where not written).
-    shared : ndarray of bool, shape (K,)
-        Declared GLOBAL (`_GLOBAL_WORD` in the declaration: the word or a point named so).
-    """
-    none = np.zeros(0, dtype=np.int64)
-    if not len(starts) or not len(codes):
-        return none, none.reshape(0, 16), none.reshape(0, 16), np.zeros(0, dtype=bool)
-    carriage = (ends > starts) & (codes[np.maximum(ends - 1, 0)] == ord("\r"))
-    close = ends - carriage - 1  # the "}" closing the declaration
-    candidate = np.flatnonzero((close > starts) & (codes[np.maximum(close, 0)] == ord("}")))
-    start_at, close = starts[candidate], close[candidate]
-    head_end, shared = np.full(len(candidate), -1), np.zeros(len(candidate), dtype=bool)
-    heads = _spelt(codes, start_at, max(map(len, _HEADS)))
-    for head in _HEADS:
-        spelt = _starts_with(heads, head)
-        head_end[spelt] = start_at[spelt] + len(head)
-        shared[spelt] = "GLOBAL" in head
-    brace, alone, commas = _braces(codes, starts, ends, start_at, close)
-    good = (head_end >= 0) & alone
-    name_end = np.where(good, brace - 1, head_end)
-    good &= (codes[np.maximum(name_end, 0)] == ord("=")) & _made_of(codes, head_end, name_end, _WORD_CHARACTER,
-                                                                     _LONGEST_NAME)
-    shared |= (name_end - head_end == 6) & _spells(codes, head_end, "GLOBAL")
-    start, end = np.full((len(candidate), 16), -1), np.full((len(candidate), 16), -1)
-    start[:, 0], end[:, 0] = start_at, ends[candidate]
-    start[:, 1], end[:, 1] = head_end, name_end
-    written = _member_fields(codes, commas, brace + 1, close, good, start, end)
-    return candidate[written], start[written], end[written], shared[written]
-
-
-def _braces(codes, starts, ends, line_start, close):
-    """The first ``{`` of lines, whether it is their only one before their aggregate's close, and the commas.
-
-    Parameters
-    ----------
-    codes : ndarray, shape (L,)
-    starts, ends : ndarray of int, shape (B,)
-        The lines looked at (`_line_bounds`).
-    line_start, close : ndarray of int, shape (K,)
-        The starts of some of them and the offset of the ``}`` that closes each one's aggregate.
-
-    Returns
-    -------
-    brace : ndarray of int, shape (K,)
-        The first ``{`` from each line's start.
-    alone : ndarray of bool, shape (K,)
-        Whether it lies before ``close`` and no other ``{`` lies between them.
-    commas : ndarray of int, shape (C,)
-        The offsets of the commas of the B lines.
-    """
-    base, top = int(starts[0]), int(ends[-1])
-    block = codes[base:top]
-    opens = np.flatnonzero(block == ord("{")) + base
-    commas = np.flatnonzero(block == ord(",")) + base
-    first = np.searchsorted(opens, line_start)
-    brace = opens[np.minimum(first, len(opens) - 1)] if len(opens) else np.full(len(line_start), -1)
-    second = opens[np.minimum(first + 1, len(opens) - 1)] if len(opens) else brace
-    return brace, (first < len(opens)) & (brace < close) & ((first + 1 >= len(opens)) | (second > close)), commas
-
-
-def _member_fields(codes, commas, first, close, good, start, end, gap=0):
-    """The members of aggregates ``{X 1.5,Y 2,Z 3,A 0,B 90,C 0,S 2,T 35,E1 0}`` as a point declaration or an
-    inline point writes them (`_LAYOUTS`: each member's name and one space, ``gap`` blanks after each comma, no
-    other blank), found from the characters' codes.
-
-    Parameters
-    ----------
-    codes : ndarray, shape (L,)
-        The masked text's character codes (`text_codes`).
-    commas : ndarray of int, shape (C,)
-        The offsets of the commas of the lines looked at (ascending).
-    first, close : ndarray of int, shape (K,)
-        The offsets of each aggregate's first member name and of its ``}``.
-    good : ndarray of bool, shape (K,)
-        The aggregates to look at (the others are not written so).
-    start, end : ndarray of int, shape (K, 16)
-        Filled in place: the offsets of the fields X..C, S, T, E1..E6 (columns 2-15) of the aggregates written so.
-    gap : int
-        The blanks after each comma.
-
-    Returns
-    -------
-    ndarray of bool, shape (K,)
-        The aggregates written so.
-    """
-    count = np.searchsorted(commas, close) - np.searchsorted(commas, first) + 1  # members
-    written = np.zeros(len(first), dtype=bool)
-    for members, layouts in _LAYOUTS.items():
-        rows = np.flatnonzero(good & (count == members))
-        if not len(rows):
-            continue
-        comma = commas[np.searchsorted(commas, first[rows])[:, None] + np.arange(members - 1)]
-        name_at = np.concatenate([first[rows, None], comma + 1 + gap], axis=1)
-        member_end = np.concatenate([comma, close[rows, None]], axis=1)
-        names = _spelt(codes, name_at.ravel(), 3).reshape(len(rows), members, 3)  # "X ", "E1 "
-        for layout in layouts:
-            spelt = np.ones(len(rows), dtype=bool)
-            field_start = np.empty((len(rows), members), dtype=np.int64)
-            for k, (member, _) in enumerate(layout):
-                spelt &= _starts_with(names[:, k], member + " ")
-                field_start[:, k] = name_at[:, k] + 1 + len(member)
-            spelt &= (member_end > field_start).all(axis=1)
-            fields = [field for _, field in layout]
-            start[rows[spelt][:, None], fields] = field_start[spelt]
-            end[rows[spelt][:, None], fields] = member_end[spelt]
-            written[rows[spelt]] = True
-    return written
-
-
-def _field_numbers(codes, start, end):
-    """The numbers of point declarations' fields X..C, S, T, E1..E6, read at once.
-
-    Parameters
-    ----------
-    codes : ndarray, shape (L,)
-    start, end : ndarray of int, shape (K, 16)
-        The fields' offsets (`_written_layout`).
-
-    Returns
-    -------
-    numbers : ndarray, shape (K, 14)
-        X..C, S, T, E1..E6; NaN where not written.
-    read : ndarray of bool, shape (K,)
-        Whether each written field is a number as `_WRITTEN_POINT` states it (S and T digits only).
-    """
-    given = start[:, 2:] >= 0
-    numbers = np.full(given.shape, np.nan)
-    read = np.ones(given.shape, dtype=bool)
-    numbers[given], read[given] = read_numbers(codes, start[:, 2:][given], end[:, 2:][given])
-    status = given[:, 6:8]
-    read[:, 6:8][status] &= _made_of(codes, start[:, 8:10][status], end[:, 8:10][status], _DIGIT, _LONGEST_WHOLE)
-    return numbers, read.all(axis=1)
-
-
-def _written_block(start, end, numbers, shared, offset, configs):
-    """Some point declarations as columns, less those a line-by-line read would refuse (`_written_points`).
-
-    Parameters
-    ----------
-    start, end : ndarray of int, shape (K, 16)
-        Offsets of the declarations' fields (`_written_layout`).
-    numbers : ndarray, shape (K, 14)
-        Their numbers (`_field_numbers`).
-    shared : ndarray of bool, shape (K,)
-        Declared GLOBAL.
-    offset : type
-        The integer type of offsets.
-    configs : dict
-        ``{(S, T): (S, T)}``: one tuple per distinct status and turn, shared by every block.
-
-    Returns
-    -------
-    pose : ndarray, shape (k, 4, 4)
-    start, end : ndarray of ``offset``, shape (k, 10)
-        The declaration's start (start only) and name, then x, y, z, a, b, c, s, t (-1 where not written).
-    config, external : tuple, length k
-        ``(S, T)`` or ``()``; E1..E6 as written (ndarray) or None.
-    shared : ndarray of bool, shape (k,)
-        Declared GLOBAL.
-    """
-    given = start[:, 2:] >= 0  # x..c, s, t, e1..e6
-    pose, status, external = numbers[:, :6], numbers[:, 6:8], numbers[:, 8:]
-    limits = np.array([LIMITS[p] for p in POSE])
-    good = np.isfinite(pose).all(axis=1) & (np.abs(pose) <= limits).all(axis=1)
-    good &= ~given[:, 6] | ((status[:, 0] <= 0xFF) & (status[:, 1] <= 0x3F))
-    good &= (np.isfinite(external) & (np.abs(external) <= LENGTH_LIMIT) | ~given[:, 8:]).all(axis=1)
-    keep = np.flatnonzero(good)
-    vector = pose[keep]
-    vector[:, 3:] = np.radians(vector[:, 3:])
-    key = np.where(given[keep, 6], status[keep, 0] * 64 + status[keep, 1], -1).astype(np.int64)  # S, T: 8, 6 bits
-    distinct, which = np.unique(key, return_inverse=True)
-    words = np.empty(len(distinct), dtype=object)
-    for k, word in enumerate(distinct.tolist()):
-        words[k] = configs.setdefault(divmod(word, 64), divmod(word, 64)) if word >= 0 else ()
-    config = tuple(words[which.ravel()].tolist())
-    counts = given[keep, 8:].sum(axis=1)
-    external = _shared_rows(external[keep], counts) if counts.any() else (None,) * len(keep)
-    return (pose_to_matrix(vector), start[keep, :10].astype(offset), end[keep, :10].astype(offset), config, external,
-            shared[keep])
-
-
-def _shared_rows(values, counts):
-    """Each row's first ``counts`` values as an array, one read-only array per distinct row (a path's points
-    mostly share their external axes: E1..E6 of a track that does not move), None where the count is 0.
-
-    Parameters
-    ----------
-    values : ndarray, shape (K, 6)
-    counts : ndarray of int, shape (K,)
-
-    Returns
-    -------
-    tuple, length K
-    """
-    bits = np.where(np.arange(values.shape[1]) < counts[:, None], values, 0.0).view(np.int64)  # -0.0 kept apart
-    distinct, which = np.unique(np.c_[counts, bits], axis=0, return_inverse=True)
-    arrays = np.empty(len(distinct), dtype=object)
-    for k, row in enumerate(distinct):
-        arrays[k] = read_only(row[1:1 + row[0]].view(np.float64)) if row[0] else None
-    return tuple(arrays[which.ravel()].tolist())
 
 
 def _sibling_dat(path):
@@ -577,12 +152,12 @@ class _Reader:
         self.speed_spans = {JOINT: None, LINEAR: None}  # the number of the statement that set each speed
         none_set = "no {} before it in this program: the speed in force is set at run time"
         self.speed_why = {JOINT: none_set.format("BAS(#VEL_PTP)"), LINEAR: none_set.format("$VEL.CP")}
-        # (value, why, span) of each speed setting in force: the TCP's (mm/s), each axis's (%): `give`
+        # (value, why, span) of each speed setting in force: the TCP's (mm/s), each axis's and external axis's (%)
         self.initial = {"cp": (None, self.speed_why[LINEAR], None)}
-        self.initial |= dict.fromkeys(AXIS_GROUPS, (None, self.speed_why[JOINT], None))
+        self.initial |= dict.fromkeys(JOINT_GROUPS, (None, self.speed_why[JOINT], None))
         # the controller's own: (value, why)
         self.initial |= dict.fromkeys(ACC_GROUPS + ("acc_cp",) + ORI_GROUPS, (None, ""))
-        self.axes = [self.initial["ptp1"]] * 6
+        self.axes = [self.initial[JOINT_GROUPS[0]]] * len(JOINT_GROUPS)  # the settings of a PTP's groups in force
         self.steps = []  # what the .src does besides moving, in order (`trajcomp.programs.flow`)
         self.siblings = set()  # upper names of the other .src files beside it: routines the read does not include
         self.outside_spline = None  # the TCP speed setting in force before the spline block being read
@@ -610,7 +185,7 @@ class _Reader:
         """Note the names the .src assigns (a declared speed is a constant only if nothing assigns it)."""
         for line_no, start, end in lines:
             text = statement_text(masked, start, end)
-            if (m := _ASSIGN.match(text)) and not _NUMBER_DECL.match(text):
+            if (m := ASSIGN.match(text)) and not NUMBER_DECL.match(text):
                 self.assigned.setdefault(m.group(1).upper(), line_no)
 
     def number_value(self, text, index, line_no, original, field):
@@ -651,7 +226,7 @@ class _Reader:
         name = self.sources[index].name
         text = statement_text(masked, start, end)
         original = self.sources[index].text[start:end]
-        m = _DECL.match(text)
+        m = DECL.match(text)
         if m:
             typ, point = m.group(1).upper(), m.group(2)
             body_start = start + m.start(3)
@@ -659,14 +234,14 @@ class _Reader:
                 self.data[point.upper()] = _members(m.group(3), body_start, index, name, line_no, original, False)
             else:
                 members = _members(m.group(3), body_start, index, name, line_no, original)
-                if _GLOBAL_WORD.search(text, 0, m.start(2)):
+                if GLOBAL_WORD.search(text, 0, m.start(2)):
                     self.shared.add(point.upper())
                 self.redeclared |= point.upper() in self.points
                 self.once_in_data_list(index, point, line_no, original)
                 self.points[point.upper()] = len(self.targets)
                 self.targets.append(_point(members, point, name, line_no, original, typ))
             return True
-        if m := _NUMBER_DECL.match(text):
+        if m := NUMBER_DECL.match(text):
             qualifiers = m.group(1).upper().split()
             if "GLOBAL" in qualifiers and "CONST" not in qualifiers:
                 why = f"{m.group(2)}: GLOBAL data other programs may change, known at run time (line {line_no})"
@@ -674,14 +249,14 @@ class _Reader:
             else:
                 self.numbers[m.group(2).upper()] = (finite(m.group(3), name, line_no, original, m.group(2)), "")
             return True
-        if _DECL_START.match(text):
+        if DECL_START.match(text):
             fail(name, line_no, original, "malformed or cut point declaration")
-        if m := _DECL_BARE.match(text):
+        if m := DECL_BARE.match(text):
             place = f"{name}:{line_no}" if self.sources[index].companion else f"line {line_no}"
             for point in re.split(r"\s*,\s*", m.group(1)):
                 self.unset[point.upper()] = f"{point} is declared without a value (set at run time, {place})"
             return True
-        m = _DATA.match(text)
+        m = DATA.match(text)
         if m:
             which = "TOOL" if m.group(1).upper() == "TOOL_DATA" else "BASE"
             value = m.group(3)
@@ -699,10 +274,10 @@ class _Reader:
         name = self.sources[index].name
         text = statement_text(masked, start, end)
         original = self.sources[index].text[start:end]
-        if m := _DEF_LINE.match(text):
+        if m := DEF_LINE.match(text):
             self.params = {p.split(":")[0].strip().upper() for p in m.group(1).split(",") if p.strip()}
-            self.steps.append(Step("routine", _DEF.match(text).group(1), line=line_no, source=index))
-        m = _MOTION.match(text)  # first: most lines of a long program are motions, and no declaration is one
+            self.steps.append(Step("routine", DEF.match(text).group(1), line=line_no, source=index))
+        m = MOTION.match(text)  # first: most lines of a long program are motions, and no declaration is one
         if m:
             self.items.append(self.motion(m, index, start, line_no, original))
             return
@@ -715,13 +290,13 @@ class _Reader:
 
     def flow_step(self, text, index, line_no):
         """Note a statement that changes the order the program runs in (`trajcomp.programs.flow.Step`)."""
-        m = _FIRST_WORD.match(text)
+        m = FIRST_WORD.match(text)
         if m is None:
             return
         word = m.group(1).upper()
-        kind = _FLOW_WORDS.get(word)
+        kind = FLOW_WORDS.get(word)
         if kind == "jump":
-            target = _JUMP_TO.match(text)
+            target = JUMP_TO.match(text)
             self.steps.append(Step("jump", target.group(1) if target else "", False, line_no, index))
         elif kind is not None:
             self.steps.append(Step(kind, line=line_no, source=index))
@@ -733,16 +308,17 @@ class _Reader:
             self.steps.append(Step("label", m.group(1), line=line_no, source=index))
 
     def give(self, group, value, why, span, line_no, index, axis=None):
-        """Put a speed setting in force: JOINT ``value`` % of axis ``axis`` (1..6; None: all), LINEAR ``value`` mm/s;
-        ``why`` it is known at run time only, ``span`` the number that states it (re-timing writes there)."""
+        """Put a speed setting in force: JOINT ``value`` % of the axis of flow group ``axis`` (`JOINT_GROUPS`: an
+        arm's or an external axis's; None: all, as ``BAS(#VEL_PTP)`` sets them), LINEAR ``value`` mm/s; ``why`` it is
+        known at run time only, ``span`` the number that states it (re-timing writes there)."""
         setting = (value, why, span)
         if group == LINEAR:
             self.speed_cp, self.speed_why[LINEAR], self.speed_spans[LINEAR] = setting
             self.steps.append(Step("set", "cp", setting, line_no, index))
             return
-        for n in range(6) if axis is None else [axis - 1]:
+        for n in range(len(JOINT_GROUPS)) if axis is None else [JOINT_GROUPS.index(axis)]:
             self.axes[n] = setting
-            self.steps.append(Step("set", AXIS_GROUPS[n], setting, line_no, index))
+            self.steps.append(Step("set", JOINT_GROUPS[n], setting, line_no, index))
         self.speed_ptp, self.speed_why[JOINT], self.speed_spans[JOINT] = in_force(self.axes)
 
     def select(self, which, value, why=""):
@@ -755,9 +331,9 @@ class _Reader:
 
     def state(self, text, index, start, name, line_no, original):
         """Track tool, base, speed and zone statements."""
-        if m := _SYSVAR.match(text):
+        if m := SYSVAR.match(text):
             which, value = m.group(1).upper(), m.group(2)
-            ref = _DATA_REF.match(value)
+            ref = DATA_REF.match(value)
             if ref and (ref.group(1).upper() == "TOOL_DATA") == (which == "TOOL"):
                 self.select(which, ref.group(2))
             elif value.upper() == "$NULLFRAME":
@@ -773,55 +349,58 @@ class _Reader:
                 self.select(which, key)
             else:
                 self.select(which, None, f"${which} = {value} set at run time (line {line_no})")
-        elif m := _BAS.match(text):
+        elif m := BAS.match(text):
             what, value = m.group(1).upper(), m.group(2)
-            if what in ("TOOL", "BASE"):
+            if what in BAS_FRAMES:
                 if not re.fullmatch(NUMBER, value):
                     self.select(what, None, f"BAS(#{what}, {value}) set at run time (line {line_no})")
                 else:
                     self.select(what, str(integer(value, name, line_no, original, what)))
                 return
-            self.set_speed(JOINT if what in ("VEL_PTP", "PTP_PARAMS") else LINEAR, m, 2, index, start, line_no,
-                           original, f"BAS(#{what})")
-        elif m := _ACT.match(text):
+            self.set_speed(BAS_SPEEDS[what], m, 2, index, start, line_no, original, f"BAS(#{what})")
+        elif m := ACT.match(text):
             self.activate(m.group(1).upper(), m.group(2).upper(), index, line_no, original)
-        elif m := _SPLINE.match(text):
+        elif m := SPLINE.match(text):
             own = m.group(1) and self.with_speed(m.group(1), start + m.start(1), index, line_no, original, LINEAR)
             if own:  # SPLINE WITH $VEL.CP = v: the block's motions run at v, the speed before it after ENDSPLINE
                 self.outside_spline = (self.speed_cp, self.speed_why[LINEAR], self.speed_spans[LINEAR])
                 self.give(LINEAR, *own, line_no, index)
-        elif _END_SPLINE.match(text) and self.outside_spline is not None:
+        elif END_SPLINE.match(text) and self.outside_spline is not None:
             self.give(LINEAR, *self.outside_spline, line_no, index)
             self.outside_spline = None
-        elif m := _VEL_CP.match(text):
+        elif m := VEL_CP.match(text):
             self.set_speed(LINEAR, m, 1, index, start, line_no, original, "$VEL.CP")
-        elif m := _VEL_AXIS.match(text):
-            self.set_speed(JOINT, m, 2, index, start, line_no, original, f"$VEL_AXIS[{m.group(1)}]", int(m.group(1)))
-        elif m := _VEL.match(text):
+        elif m := VEL_AXIS.match(text):
+            self.set_speed(JOINT, m, 2, index, start, line_no, original, f"$VEL_AXIS[{m.group(1)}]",
+                           AXIS_GROUPS[int(m.group(1)) - 1])
+        elif m := VEL_EXTAX.match(text):  # the external axis's own % of its maximum: a PTP moving it runs no faster
+            self.set_speed(JOINT, m, 2, index, start, line_no, original, f"$VEL_EXTAX[{m.group(1)}]",
+                           EXTERNAL_GROUPS[int(m.group(1)) - 1])
+        elif m := VEL.match(text):
             members = _members(m.group(1), start + m.start(1), index, name, line_no, original, False)
             if "cp" in members:
                 span = members["cp"]
                 value, why = self.number_value(span.text, index, line_no, original, "$VEL.CP")
                 self.give(LINEAR, None if value is None else value * 1000.0, why, span, line_no, index)
-        elif m := _ACC_CP.match(text):
+        elif m := ACC_CP.match(text):
             self.accelerate("acc_cp", m.group(1), 1000.0, index, line_no, original, "$ACC.CP")
-        elif m := _ACC.match(text):
+        elif m := ACC.match(text):
             members = _members(m.group(1), start + m.start(1), index, name, line_no, original, False)
             if "cp" in members:
                 self.accelerate("acc_cp", members["cp"].text, 1000.0, index, line_no, original, "$ACC.CP")
             for member in sorted(set(members) & {"ori1", "ori2"}):
                 self.accelerate(f"acc_{member}", members[member].text, 1.0, index, line_no, original,
                                 f"$ACC.{member.upper()}")
-        elif m := _ACC_ORI.match(text):
+        elif m := ACC_ORI.match(text):
             self.accelerate(f"acc_{m.group(1).lower()}", m.group(2), 1.0, index, line_no, original,
                             f"$ACC.{m.group(1).upper()}")
-        elif m := _ACC_AXIS.match(text):
+        elif m := ACC_AXIS.match(text):
             self.accelerate(ACC_GROUPS[int(m.group(1)) - 1], m.group(2), 1.0, index, line_no, original,
                             f"$ACC_AXIS[{m.group(1)}]")
-        elif m := _BAS_ACC.match(text):
+        elif m := BAS_ACC_PTP.match(text):
             for group in ACC_GROUPS:
                 self.accelerate(group, m.group(1), 1.0, index, line_no, original, "BAS(#ACC_PTP)")
-        elif m := _APO.match(text):
+        elif m := APO.match(text):
             self.zone = finite(m.group(1), name, line_no, original, "$APO.CDIS")
 
     def accelerate(self, group, text, scale, index, line_no, original, field):
@@ -832,8 +411,8 @@ class _Reader:
         self.steps.append(Step("set", group, setting, line_no, index))
 
     def set_speed(self, group, m, at, index, start, line_no, original, field, axis=None):
-        """A statement sets the speed of the motions of ``group`` (JOINT: % of axis ``axis`` or all, LINEAR: m/s)
-        to match ``m``'s group ``at``."""
+        """A statement sets the speed of the motions of ``group`` (JOINT: % of the axis of flow group ``axis`` or
+        all, LINEAR: m/s) to match ``m``'s group ``at``."""
         value, why = self.number_value(m.group(at), index, line_no, original, field)
         if group == LINEAR and value is not None:
             value = value * 1000.0
@@ -848,11 +427,11 @@ class _Reader:
         value is set at run time.
         """
         for piece, position in split_top(clause, at):
-            m = _WITH_SPEED.search(piece)
+            m = WITH_SPEED.search(piece)
             if m is None or m.start() != len(piece) - len(piece.lstrip()):
                 continue
             rhs, rhs_at = piece[m.end():], position + m.end()
-            call = _WITH_CALL.match(rhs)
+            call = WITH_CALL.match(rhs)
             if call:
                 args = split_top(rhs[call.end():rhs.rindex(")")], rhs_at + call.end())
                 rhs, rhs_at = args[0]
@@ -890,15 +469,15 @@ class _Reader:
     def motion(self, m, index, start, line_no, original):
         """A Motion from a PTP/LIN/CIRC line; named points are resolved at the end (`_resolve`)."""
         name = self.sources[index].name
-        kind = KINDS[m.group(1).upper()]
-        args, *with_clause = re.split(r"\bWITH\b", m.group(3), maxsplit=1, flags=re.I)
+        kind = MOTIONS[m.group(1).upper()]
+        args, *with_clause = WITH_WORD.split(m.group(3), maxsplit=1)
         own_speed = None
         if with_clause:
             self.spline_frames(with_clause[0], name, line_no, original)
             clause_at = start + m.start(3) + len(m.group(3)) - len(with_clause[0])
             own_speed = self.with_speed(with_clause[0], clause_at, index, line_no, original, kind)
         offset = start + m.start(3)
-        approx = _APPROX.search(args)
+        approx = APPROX.search(args)
         zone = self.zone if approx else None
         if approx:
             args = args[: approx.start()]
@@ -947,7 +526,7 @@ class _Reader:
 
     def spline_frames(self, clause, name, line_no, original):
         """Tool and base of a spline inline form: ``$TOOL=STOOL2(FP1), $BASE=SBASE(FP1.BASE_NO)``."""
-        for which, pattern in (("TOOL", _WITH_TOOL), ("BASE", _WITH_BASE)):
+        for which, pattern in (("TOOL", WITH_TOOL), ("BASE", WITH_BASE)):
             if m := pattern.search(clause):
                 data = self.data.get(m.group(1).upper(), {})
                 member = data.get(f"{which.lower()}_no")
@@ -969,7 +548,7 @@ class _Reader:
                 return None  # LIN {Z 500}: the members not given are the arm's current ones, known at run time
             self.targets.append(_point(members, "", name, line_no, original, None))
             return len(self.targets) - 1
-        if _NAME.match(stripped):
+        if NAME.match(stripped):
             return _Named(stripped, line_no, stripped.upper() in self.params)
         return None
 
@@ -978,10 +557,10 @@ def read(path):
     """Read a KRL .src and its .dat (same name, beside it, if there is one).
 
     The lines a CAM post-processor or KUKA's editor writes (points declared
-    one a line, `_WRITTEN_POINT`; motions to them, `_WRITTEN_MOTION`; motions
-    to points written inline, `_INLINE_MOTION`) are read at once as columns; every other line one by one, in order, its
+    one a line, `WRITTEN_POINT`; motions to them, `WRITTEN_MOTION`; motions
+    to points written inline, `INLINE_MOTION`) are read at once as columns; every other line one by one, in order, its
     tool, base, speed and zone in force for the motions read at once after
-    it (`_Walk`).
+    it (`line_walk.Walk`).
 
     Raises
     ------
@@ -992,24 +571,24 @@ def read(path):
     path = Path(path)
     reader = _Reader()
     src_index, src_lines, src_masked = reader.add_source(read_source(path))
-    if not _DEF.search(src_masked):
+    if not DEF.search(src_masked):
         raise ReadError(f"{path}: not a KRL program: no DEF line")
     src = reader.sources[src_index]
-    written, inline = _written_motions(src_index, src_masked, src_lines)
+    written, inline = at_once.written_motions(src_index, src_masked, src_lines)
     # the motion lines read at once open and close no block: the runs of other lines between them
-    check_closed(src, src_masked, _BLOCK_OPENS, _BLOCK_CLOSES, _CLOSING,
-                 runs_between(written["start"], written["end"], len(src_masked)), _OUTSIDE_ROUTINES)
-    others = _other_lines(src_lines, written["line"])
+    check_closed(src, src_masked, BLOCK_OPENS, BLOCK_CLOSES, CLOSING,
+                 runs_between(written["start"], written["end"], len(src_masked)), OUTSIDE_ROUTINES)
+    others = line_walk.other_lines(src_lines, written["line"])
     reader.scan_assignments(src_masked, others)
     dat_path, table = _sibling_dat(path), None
     if dat_path is not None:
         dat_index, dat_lines, dat_masked = reader.add_source(read_source(dat_path))
-        if not _DEFDAT.search(dat_masked):
+        if not DEFDAT.search(dat_masked):
             raise ReadError(f"{dat_path}: not a KRL data list: no DEFDAT line")
         tail = max(0, len(dat_masked) - 65536)  # ENDDAT closes a data list: looked for near its end first
-        if not (_ENDDAT.search(dat_masked, tail) or _ENDDAT.search(dat_masked)):
+        if not (ENDDAT.search(dat_masked, tail) or ENDDAT.search(dat_masked)):
             raise ReadError(f"{dat_path}: no ENDDAT: the data list is cut off")
-        point_lines, table, shared = _written_points(dat_index, dat_masked, dat_lines)
+        point_lines, table, shared = at_once.written_points(dat_index, dat_masked, dat_lines)
         names = table.name if table is not None else ()
         rows = 0
 
@@ -1027,18 +606,18 @@ def read(path):
             reader.shared.update(itertools.compress(declared, shared[rows:stop].tolist()))  # others may assign them
             rows = stop
 
-        for line_no, start, end in _other_lines(dat_lines, point_lines):
+        for line_no, start, end in line_walk.other_lines(dat_lines, point_lines):
             declare_rows(line_no)
             reader.declarations(dat_index, dat_masked, line_no, start, end)
         declare_rows(len(dat_lines.starts) + 1)
     reader.siblings = {p.stem.upper() for p in path.parent.iterdir() if p.suffix.lower() == ".src" and p != path}
-    walk = _Walk(reader, src_index, src_masked, written, 0 if table is None else len(table))
+    walk = line_walk.Walk(reader, src_index, src_masked, written, 0 if table is None else len(table))
     for line_no, start, end in others:
         walk.motions_before(line_no)
         reader.statement(src_index, src_masked, line_no, start, end)
     walk.motions_before(len(src_lines.starts) + 1)
     items, resolved = _resolve(reader, path, dat_path, walk)
-    targets = _targets(reader.targets, table, inline)
+    targets = line_walk.targets(reader.targets, table, inline)
     notes = _controller_tables(reader, path, walk)
     if not len(walk.rows):  # none read at once
         program = Program("krl", path.stem, items, targets, reader.tools, reader.frames, tuple(reader.sources),
@@ -1077,15 +656,15 @@ def in_force(settings):
 
 def _flow_speeds(table, reached):
     """The speed columns of a KRL program's motions from the settings that can reach each
-    (`trajcomp.programs.flow.followed`): PTP the slowest of its axes', LIN and CIRC the TCP's; a spline
-    motion's own WITH speed stays. The spans of the motions whose setting moved to another statement change."""
+    (`trajcomp.programs.flow.followed`): PTP the slowest of its axes' and external axes', LIN and CIRC the TCP's;
+    a spline motion's own WITH speed stays. The spans of the motions whose setting moved to another statement change."""
     own = table.span_offsets("speed_with")[1] >= 0
     joint = table.kind == JOINT
     speed, why = np.array(table.speed, dtype=float), np.array(table.speed_why, dtype=object)
     span = np.full(len(table), None, dtype=object)
     for r, settings in enumerate(reached.settings):
         rows = np.arange(len(table))[reached.rows(r)]
-        for groups, members in ((AXIS_GROUPS, joint[rows]), (("cp",), ~joint[rows])):
+        for groups, members in ((JOINT_GROUPS, joint[rows]), (("cp",), ~joint[rows])):
             at = rows[members & ~own[rows]]
             if len(at):
                 value, why[at], span[at] = in_force([s for group in groups for s in settings[group]])
@@ -1156,399 +735,9 @@ def _controller_tables(reader, path, walk):
     return notes
 
 
-def _written_motions(index, masked, lines):
-    """The motions of a .src written as `_WRITTEN_MOTION` (``LIN XP1 C_DIS``) or `_INLINE_MOTION` (``LIN {X ..}
-    C_DIS``), as columns, and the inline points of the latter.
-
-    The lines written exactly as `_motion_layout` knows them are found from
-    their characters, `AT_ONCE` lines at a time; the other lines are matched
-    by `_WRITTEN_MOTION`, then `_INLINE_MOTION`, one by one. An inline
-    point's numbers are read from the characters (`_field_numbers`); a
-    point a line-by-line read would refuse (out of range, S or T beyond
-    their bits) leaves its motion to that read, which names it.
-
-    Parameters
-    ----------
-    index : int
-        The .src's source index.
-    masked : str
-        Its text, comments and strings blanked (`trajcomp.formats.text.mask`).
-    lines : Lines
-        Its lines.
-
-    Returns
-    -------
-    columns : dict of ndarray, each shape (N,)
-        ``line``; ``start``, ``end``: the line's text (its line ending
-        left out by `_Stripped`); ``keyword_start``, ``keyword_end``,
-        ``name_start``, ``name_end`` (-1 for an inline point); ``joint``:
-        PTP / SPTP; ``approximated``: an approximation (C_DIS ...) is
-        written; ``inline``: the row of ``inline`` of its point, -1 for a name.
-    inline : TargetTable or None
-        The inline points (their lines ascending), spans in the .src; None if there is none.
-    """
-    codes = text_codes(masked)
-    starts, ends = _line_bounds(codes)
-    blocks, taken = [], np.zeros(len(starts), dtype=bool)
-    points = _InlinePoints(codes, offset_type(masked))
-    for lo in range(0, len(starts), AT_ONCE):
-        at, groups = _motion_layout(codes, starts[lo:lo + AT_ONCE], ends[lo:lo + AT_ONCE])
-        taken[lo + at] = True
-        blocks.append(np.c_[groups, np.full(len(groups), -1)])  # to a name: no inline row
-        at, groups, start, end = _inline_layout(codes, starts[lo:lo + AT_ONCE], ends[lo:lo + AT_ONCE])
-        taken[lo + at] = True
-        blocks.append(points.motions(groups, start, end))
-    others = np.flatnonzero(~taken)
-    for lo in range(0, len(others), AT_ONCE):
-        found, inline = [], []
-        for k in others[lo:lo + AT_ONCE].tolist():
-            if masked[starts[k]:ends[k]].isspace():  # a comment's line: the patterns would look at each blank
-                continue
-            if m := _WRITTEN_MOTION.match(masked, int(starts[k]), int(ends[k])):
-                found.append(m)
-            elif m := _INLINE_MOTION.match(masked, int(starts[k]), int(ends[k])):
-                inline.append(m)
-        named = np.array([m.regs for m in found], dtype=np.int64).reshape(-1, 10)  # (start, end) of groups 0-4
-        blocks.append(np.c_[named, np.full(len(named), -1)])
-        regs = np.array([m.regs for m in inline], dtype=np.int64).reshape(-1, 19, 2)  # absent groups: (-1, -1)
-        groups = regs[:, [0, 1, 2, 3, 18]].reshape(-1, 10)
-        groups[:, 6:8] = -1  # no name
-        blocks.append(points.motions(groups, regs[:, _INLINE_POINT, 0], regs[:, _INLINE_POINT, 1]))
-    at = np.concatenate(blocks)
-    if len(others):  # the lines matched one by one among the others: in line order
-        at = at[np.argsort(at[:, 0], kind="stable")]
-    columns = dict(zip(("start", "end", "keyword_start", "keyword_end"), at[:, :4].T))
-    columns |= {"name_start": at[:, 6], "name_end": at[:, 7], "joint": at[:, 4] >= 0, "approximated": at[:, 8] >= 0,
-                "line": np.searchsorted(lines.starts, at[:, 0], side="right")}
-    inline = at[:, 10] >= 0
-    order = at[inline, 10]  # the points' rows in line order (those found by the pattern come after the others)
-    at[inline, 10] = np.arange(len(order))
-    columns["inline"] = at[:, 10]
-    return columns, points.table(index, lines, order)
-
-
-class _InlinePoints:
-    """The inline points of motions read at once (`_written_motions`), block after block, as one `TargetTable`.
-
-    Parameters
-    ----------
-    codes : ndarray, shape (L,)
-        The masked .src's character codes (`text_codes`).
-    offset : type
-        The integer type of its offsets.
-    """
-
-    def __init__(self, codes, offset):
-        self.codes, self.offset = codes, offset
-        self.blocks, self.count = [], 0
-        self.configs = {}  # one tuple per distinct (S, T), shared by every block
-
-    def motions(self, groups, start, end):
-        """The motion rows (k, 11) of K motions found (`_inline_layout`), their points read and kept.
-
-        ``groups`` (K, 10) as `_motion_layout`'s; ``start``, ``end`` (K, 16)
-        their points' fields as `_written_layout`'s. A point whose numbers a
-        line-by-line read would refuse (`_written_block`) leaves its motion
-        out: that read names it. The rows: the groups, then the row of the
-        motion's point in `table`.
-        """
-        numbers, read = _field_numbers(self.codes, start, end)
-        block = _written_block(start[read], end[read], numbers[read], np.zeros(np.count_nonzero(read), dtype=bool),
-                               self.offset, self.configs)
-        groups = groups[read][np.isin(start[read, 0], block[1][:, 0])]  # the motions of the points kept
-        rows = np.c_[groups, self.count + np.arange(len(groups))]
-        self.count += len(groups)
-        self.blocks.append(block)
-        return rows
-
-    def table(self, index, lines, order):
-        """The points as a `TargetTable`, rows ``order`` (N,) of those read (their spans in source ``index``, of
-        `Lines` ``lines``); None if there is none."""
-        if not self.count:
-            return None
-        pose, start, end, config, external, _ = (
-            np.concatenate(parts) if isinstance(parts[0], np.ndarray) else sum(parts, ())
-            for parts in zip(*self.blocks))
-        if not every_row(order, len(order)):
-            pose, start, end = pose[order], start[order], end[order]
-            config, external = (tuple(column[k] for k in order.tolist()) for column in (config, external))
-        n = len(start)
-        none = repeated(None, n)
-        return TargetTable(pose, np.zeros(n, dtype=bool), np.broadcast_to(np.nan, (n, 6)),
-                           np.searchsorted(lines.starts, start[:, 0], side="right"), config, none, none, external,
-                           np.zeros(n, dtype=bool), None,
-                           SpanColumns(index, lines.text, POSE + ("s", "t"), start[:, 2:], end[:, 2:]))
-
-
-_KEYWORDS = ("LIN", "PTP", "SLIN", "SPTP")  # `_WRITTEN_MOTION`'s motions
-_APPROXIMATIONS = ("C_PTP", "C_DIS", "C_VEL", "C_ORI", "C_SPL")
-_LONGEST_MOTION = 64  # characters of a motion line read at once (a longer one: `_WRITTEN_MOTION`)
-_NAME_START = _character_table("ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz_")
-
-
-def _motion_layout(codes, starts, ends):
-    """The motion lines written exactly ``LIN XP1`` or ``PTP XP1 C_PTP``, found from the characters' codes.
-
-    Blanks (spaces, tabs) before the keyword, one space between the words
-    and none after, any case, a line ending ``\\n`` or ``\\r\\n``: a subset
-    of what `_WRITTEN_MOTION` matches.
-
-    Parameters
-    ----------
-    codes : ndarray, shape (L,)
-        The masked text's character codes (`text_codes`).
-    starts, ends : ndarray of int, shape (B,)
-        Offsets of the lines' starts and of their ``\\n`` (or the text's end).
-
-    Returns
-    -------
-    at : ndarray of int, shape (K,)
-        The lines written so (indices into ``starts``).
-    groups : ndarray of int, shape (K, 10)
-        `_WRITTEN_MOTION`'s groups 0-4 as ``Match.regs`` gives them (start, end; -1 where not written): the line
-        (``\\r`` included), the keyword, the keyword if PTP or SPTP, the point's name, the approximation.
-    """
-    carriage = (ends > starts) & (codes[np.maximum(ends - 1, 0)] == ord("\r")) if len(codes) else ends > ends
-    length = ends - carriage - starts
-    candidate = np.flatnonzero((length >= 5) & (length <= _LONGEST_MOTION))
-    width = int(length[candidate].max(initial=0)) + 1  # a character past the longest line: the name's end
-    column = np.arange(width)
-    spelt = _spelt(codes, starts[candidate], width)
-    spelt[column >= length[candidate, None]] = 0  # past the line: no character
-    keyword_start = np.argmin(_BLANK[spelt], axis=1)  # the first character not blank
-    keyword_end = np.full(len(candidate), -1)
-    for keyword in _KEYWORDS:
-        spells = (np.take_along_axis(spelt, np.minimum(keyword_start[:, None] + np.arange(len(keyword) + 1),
-                                                       width - 1), axis=1)
-                  == np.frombuffer(f"{keyword} ".encode("ascii"), dtype=np.uint8)).all(axis=1)
-        keyword_end[spells] = keyword_start[spells] + len(keyword)
-    name_start = np.minimum(keyword_end + 1, width - 1)
-    name_end = np.where(~_WORD_CHARACTER[spelt] & (column > name_start[:, None]), column, width).min(axis=1)
-    good = (keyword_end >= 0) & _NAME_START[np.take_along_axis(spelt, name_start[:, None], axis=1)[:, 0]]
-    name_length = name_end - name_start
-    for word in ("WITH",) + _APPROXIMATIONS:  # not a name (`_WRITTEN_MOTION`'s look-ahead)
-        good &= (name_length != len(word)) | ~_spells(codes, starts[candidate] + name_start, word)
-    approximation_start = name_end + 1
-    approximated = np.zeros(len(candidate), dtype=bool)
-    for word in _APPROXIMATIONS:
-        approximated |= _spells(codes, starts[candidate] + name_end, " " + word)
-    line_end = length[candidate]
-    good &= (name_end == line_end) | (approximated & (approximation_start + 5 == line_end))
-    approximated &= name_end < line_end
-    at = candidate[good]
-    offset = starts[at, None]
-    good_keyword_start, good_keyword_end = keyword_start[good] + starts[at], keyword_end[good] + starts[at]
-    joint = np.take_along_axis(spelt[good], keyword_end[good, None] - 1, axis=1)[:, 0] == ord("P")  # PTP or SPTP
-    groups = np.stack([starts[at], ends[at], good_keyword_start, good_keyword_end,
-                       np.where(joint, good_keyword_start, -1), np.where(joint, good_keyword_end, -1),
-                       name_start[good] + offset[:, 0], name_end[good] + offset[:, 0],
-                       np.where(approximated[good], approximation_start[good] + offset[:, 0], -1),
-                       np.where(approximated[good], approximation_start[good] + 5 + offset[:, 0], -1)], axis=1)
-    return at, groups.reshape(-1, 10)
-
-
-_LONGEST_INDENT = 16  # blanks before an inline motion's keyword read at once (more: `_INLINE_MOTION`)
-_INLINE_TYPES = ("E6POS:", "POS:", "FRAME:")  # the types an inline point may state (`_INLINE_MOTION`)
-
-
-def _inline_layout(codes, starts, ends):
-    """The inline motion lines written exactly ``LIN {X 1.5,Y 2,Z 3,A 0,B 90,C 0}`` or ``PTP {X ..,S 2,T 35} C_PTP``,
-    found from the characters' codes.
-
-    Blanks (spaces, tabs) before the keyword, one space after it and
-    before the approximation, the point's type (`_INLINE_TYPES`) and one
-    space or none, the members as `_member_fields` knows them (one space
-    after each comma or none), nothing after, any case, a line ending ``\\n`` or ``\\r\\n``: a subset
-    of what `_INLINE_MOTION` matches. The fields' contents are not checked
-    here (`_field_numbers`).
-
-    Parameters
-    ----------
-    codes : ndarray, shape (L,)
-        The masked text's character codes (`text_codes`).
-    starts, ends : ndarray of int, shape (B,)
-        Offsets of the lines' starts and of their ``\\n`` (or the text's end).
-
-    Returns
-    -------
-    at : ndarray of int, shape (K,)
-        The lines written so (indices into ``starts``).
-    groups : ndarray of int, shape (K, 10)
-        As `_motion_layout`'s (the name: -1).
-    start, end : ndarray of int, shape (K, 16)
-        Offsets of the point's fields as `_written_layout`'s: the line, an
-        empty name before the first member, X..C, S, T, E1..E6 (-1 where not written).
-    """
-    none = np.zeros(0, dtype=np.int64)
-    if not len(starts) or not len(codes):
-        return none, none.reshape(0, 10), none.reshape(0, 16), none.reshape(0, 16)
-    carriage = (ends > starts) & (codes[np.maximum(ends - 1, 0)] == ord("\r"))
-    line_end = ends - carriage
-    approximated = np.zeros(len(starts), dtype=bool)
-    for word in _APPROXIMATIONS:
-        approximated |= (line_end - starts > 7) & _spells(codes, np.maximum(line_end - 6, 0), " " + word)
-    close = np.where(approximated, line_end - 7, line_end - 1)  # the "}" closing the point
-    candidate = np.flatnonzero((close > starts) & (codes[np.maximum(close, 0)] == ord("}")))
-    start_at, close, approximated = starts[candidate], close[candidate], approximated[candidate]
-    width = _LONGEST_INDENT + max(map(len, _KEYWORDS)) + 2
-    spelt = _spelt(codes, start_at, width)
-    keyword_start = np.minimum(np.argmin(_BLANK[spelt], axis=1), _LONGEST_INDENT)  # the first character not blank
-    keyword_end = np.full(len(candidate), -1)
-    for keyword in _KEYWORDS:
-        spells = _starts_with(np.take_along_axis(spelt, keyword_start[:, None] + np.arange(len(keyword) + 2), axis=1),
-                              keyword + " {")
-        keyword_end[spells] = keyword_start[spells] + len(keyword)
-    keyword_start, keyword_end = keyword_start + start_at, np.where(keyword_end >= 0, keyword_end + start_at, -1)
-    brace, alone, commas = _braces(codes, starts, ends, start_at, close)
-    good = (keyword_end >= 0) & alone & (brace == keyword_end + 1)
-    start, end = np.full((len(candidate), 16), -1), np.full((len(candidate), 16), -1)
-    start[:, 0], end[:, 0] = start_at, ends[candidate]
-    first = brace + 1  # the first member's name: after the point's type if written (`E6POS: `)
-    for typ in _INLINE_TYPES:
-        typed = _spells(codes, first, typ) & (first == brace + 1)
-        first[typed] += len(typ) + (codes[np.minimum(brace[typed] + len(typ) + 1, len(codes) - 1)] == ord(" "))
-    start[:, 1] = end[:, 1] = first  # an empty name, where `_INLINE_MOTION` has it
-    written = _member_fields(codes, commas, first, close, good, start, end)
-    written |= _member_fields(codes, commas, first, close, good & ~written, start, end, gap=1)  # ", Y 2"
-    joint = codes[np.maximum(keyword_end - 1, 0)] | 32 == ord("p")  # PTP or SPTP
-    groups = np.stack([start_at, ends[candidate], keyword_start, keyword_end, np.where(joint, keyword_start, -1),
-                       np.where(joint, keyword_end, -1), np.full(len(candidate), -1), np.full(len(candidate), -1),
-                       np.where(approximated, close + 2, -1), np.where(approximated, close + 7, -1)], axis=1)
-    return candidate[written], groups[written], start[written], end[written]
-
-
-def _other_lines(lines, taken):
-    """``(number, start, end)`` of the lines of ``lines`` (`Lines`) not in ``taken`` (ascending line numbers), as
-    `Lines` iterates them."""
-    starts, text = lines.starts, lines.text
-    other = np.ones(len(starts) + 1, dtype=bool)
-    other[0] = False
-    other[taken] = False
-    out = []
-    for number in np.flatnonzero(other).tolist():
-        start = starts[number - 1]
-        stop = starts[number] if number < len(starts) else len(text)
-        line = text[start:stop].rstrip("\r\n")
-        if number == len(starts) and not line:
-            break
-        out.append((number, start, start + len(line)))
-    return out
-
-
-class _Walk:
-    """The motions read at once (`_written_motions`) given the reader's state in force at their lines.
-
-    The .src's other lines are read one by one in order; before each,
-    `motions_before` takes the motions read at once above it: with the
-    tool, base, speeds and zone then in force (a snapshot shared by the
-    rows between two other lines), or, where that state is known only at
-    run time (a tool or base set at run time, routine parameters) or the
-    point is not one the program has declared so far, through the
-    one-by-one read (`_Reader.statement`), which says why.
-    """
-
-    def __init__(self, reader, index, masked, written, first_inline):
-        self.reader, self.index, self.masked, self.written = reader, index, masked, written
-        self.first_inline = first_inline  # the target index (`_targets`) of row 0 of the inline points
-        self.next = 0  # the first motion read at once not yet taken
-        # the rows kept as columns, the index of each one's point when read, its state (in `states`)
-        self.rows, self.point, self.snapshot = array.array("q"), array.array("q"), array.array("q")
-        self.states = []
-
-    def motions_before(self, line_no):
-        """Take the motions read at once above line ``line_no``."""
-        reader, written = self.reader, self.written
-        stop = int(np.searchsorted(written["line"], line_no))
-        if stop == self.next:
-            return
-        rows = range(self.next, stop)
-        self.next = stop
-        one_by_one = bool(reader.tool_why or reader.base_why or reader.params)
-        text = reader.sources[self.index].text
-        inline = written["inline"][rows.start:rows.stop]
-        named = np.flatnonzero(inline < 0)
-        state = len(self.states)
-        self.states.append((reader.tool, reader.base, reader.speed_ptp, reader.speed_cp, reader.zone,
-                            reader.speed_spans[JOINT], reader.speed_spans[LINEAR], reader.speed_why[JOINT],
-                            reader.speed_why[LINEAR]))
-        point = np.full(len(rows), -1, dtype=np.int64)
-        if not one_by_one:
-            point[named] = [reader.points.get(text[a:b].upper(), -1) for a, b in
-                            zip(written["name_start"][rows.start + named].tolist(),
-                                written["name_end"][rows.start + named].tolist())]
-            points = self.first_inline + inline[inline >= 0]  # the inline points: targets in program order
-            point[inline >= 0] = len(reader.targets) + np.arange(len(points))
-            reader.targets.extend(points.tolist())
-        known = point >= 0
-        self.rows.frombytes(np.arange(rows.start, rows.stop, dtype=np.int64)[known].tobytes())
-        self.point.frombytes(point[known].tobytes())
-        self.snapshot.frombytes(np.full(np.count_nonzero(known), state, dtype=np.int64).tobytes())
-        for row in (rows.start + np.flatnonzero(~known)).tolist():  # the motion lines read one by one say why
-            reader.statement(self.index, self.masked, int(written["line"][row]), int(written["start"][row]),
-                             int(written["start"][row]) + len(text[written["start"][row]:written["end"][row]]
-                                                              .rstrip("\r\n")))
-
-    def table(self, resolved):
-        """The `MotionTable` of the rows kept as columns, their targets ``resolved`` (`_resolved_rows`)."""
-        written, text = self.written, self.reader.sources[self.index].text
-        rows, state = np.frombuffer(self.rows, dtype=np.int64), np.frombuffer(self.snapshot, dtype=np.int64)
-        tool, base, speed_ptp, speed_cp, zone, span_ptp, span_cp, why_ptp, why_cp = (
-            np.array(column + (None,), dtype=object)[:-1] for column in zip(*self.states))  # (S,) each
-
-        def number(values):
-            return np.array([np.nan if v is None else v for v in values], dtype=float)
-
-        def offsets(spans):
-            return np.array([(-1, -1) if s is None else (s.start, s.end) for s in spans], dtype=np.int64).reshape(-1, 2)
-
-        joint, approximated = written["joint"][rows], written["approximated"][rows]
-        span = np.where(joint[:, None], offsets(span_ptp)[state], offsets(span_cp)[state])
-        none = np.full(len(rows), -1)
-        start = np.stack([written["keyword_start"][rows], none, written["name_start"][rows], none, span[:, 0]], 1)
-        end = np.stack([written["keyword_end"][rows], none, written["name_end"][rows], none, span[:, 1]], 1)
-        target, reason, refs, home = resolved
-        offset = offset_type(text)  # the spans and the line as int32 where they fit: 48 bytes a motion less
-        table = MotionTable(
-            kind=np.array([LINEAR, JOINT], dtype=object)[joint.astype(int)], target=target, via=np.full(len(rows), -1),
-            speed=np.where(joint, number(speed_ptp)[state], number(speed_cp)[state]),
-            speed_unit=np.array(["mm/s", "%"], dtype=object)[joint.astype(int)],
-            zone=np.where(approximated, number(zone)[state], np.nan), tool=tool[state], frame=base[state],
-            line=written["line"][rows], axis_position=np.zeros(len(rows), dtype=bool),
-            text=_Stripped(text, written["start"][rows].astype(offset), written["end"][rows].astype(offset)),
-            speed_why=np.where(joint, why_ptp[state], why_cp[state]),
-            spans=SpanColumns(self.index, text, MOTION_SPANS, start.astype(offset), end.astype(offset)))
-        if len(reason):
-            table = table.with_rows(list(reason), target=-1, reason=list(reason.values()), refs=list(refs),
-                                    axis_position=home)
-        return table
-
-
-class _Stripped(TextSlices):
-    """Lines of a text given by their offsets (N,), each stripped on access (a motion's text as the one-by-one
-    read keeps it: `Motion.text`)."""
-
-    def __getitem__(self, k):
-        if isinstance(k, slice):
-            return [line.strip() for line in super().__getitem__(k)]
-        return super().__getitem__(k).strip()
-
-
-def _targets(targets, table, inline):
-    """The program's targets: ``targets`` in order, each a row of the .dat's ``table`` (int below its length),
-    of the .src's ``inline`` points (int from it) or a `Target`; as `TargetRows` of one table when only one
-    holds rows and the objects lie in its file (`joined_targets`: a program written as a CAM post-processor
-    writes it, no object each), else a tuple of `Target`."""
-    tables = [t for t in (table, inline) if t is not None]
-    if len(tables) == 1 and (joined := joined_targets(targets, tables[0], AXES)) is not None:
-        return TargetRows(joined)  # the rows of each table are taken once each, in order
-    first_inline = 0 if table is None else len(table)
-    return tuple(t if not isinstance(t, int) else table.target(t) if t < first_inline else
-                 inline.target(t - first_inline) for t in targets)
-
-
 def _visible(file, match):
     """Whether a program sees a point another data list declares: all of ``$config.dat``'s, GLOBAL ones of others."""
-    return file.name.lower() == "$config.dat" or _GLOBAL_WORD.search(match.group(0)) is not None
+    return file.name.lower() == "$config.dat" or GLOBAL_WORD.search(match.group(0)) is not None
 
 
 def _resolve(reader, path, dat_path, walk):
@@ -1562,7 +751,7 @@ def _resolve(reader, path, dat_path, walk):
     items : tuple
         The items read one by one.
     resolved : tuple
-        The motions read at once (`_Walk`) resolved as the one-by-one
+        The motions read at once (`line_walk.Walk`) resolved as the one-by-one
         read resolves its own: target indices (N,), ``{row: reason}`` of
         the rows whose point is changed at run time, their ``refs``
         (tuples) and whether each is a home position (ndarray of bool).
@@ -1571,10 +760,10 @@ def _resolve(reader, path, dat_path, walk):
     # other data lists beside it, and $config.dat beside it or in a backup's R1/System (KRC/R1/Program/x.src)
     config = config_dat.find(path)
     folders = [path.parent] + ([config.parent] if config is not None and config.parent != path.parent.resolve() else [])
-    elsewhere = DeclaredElsewhere(dat_path or path, folders, (".dat",), _GLOBAL_POINT, ";", assignment=_ASSIGN,
+    elsewhere = DeclaredElsewhere(dat_path or path, folders, (".dat",), GLOBAL_POINT, ";", assignment=ASSIGN,
                                   code=(".src", ".sub"), visible=_visible)
     for item in reader.items:
-        if isinstance(item, Statement) and (m := _ASSIGN.match(code_of(item.text, ";"))):
+        if isinstance(item, Statement) and (m := ASSIGN.match(code_of(item.text, ";"))):
             assigned.setdefault(m.group(1).upper(), item.line)
     missing = []
 
@@ -1589,7 +778,7 @@ def _resolve(reader, path, dat_path, walk):
             return None, f"{ref.name} is changed at run time (line {assigned[key]})"
         if ref.name.startswith("$"):
             return None, f"{ref.name}: system variable, known at run time"
-        if _HOME.match(ref.name) and key not in reader.points:
+        if HOME.match(ref.name) and key not in reader.points:
             return None, f"{ref.name}: home position of $config.dat, not in this program (left as written)"
         if key not in reader.points and key not in reader.unset and (found := elsewhere.find(key)):
             reader.declared_in(*found)
@@ -1611,17 +800,17 @@ def _resolve(reader, path, dat_path, walk):
             reason = via_why or why or item.reason
             spans = motion_spans.row(next(motion_rows))
             if reason:
-                named = {w.upper() for w in _WORD.findall(mask(item.text, ";"))}
+                named = {w.upper() for w in WORD.findall(mask(item.text, ";"))}
                 known = tuple(reader.points[w] for w in sorted(named) if w in reader.points)
-                home = isinstance(item.target, _Named) and bool(_HOME.match(item.target.name))
+                home = isinstance(item.target, _Named) and bool(HOME.match(item.target.name))
                 item = dataclasses.replace(item, target=None, via=None, reason=reason, axis_position=home, spans=spans,
                                            refs=known + tuple(i for i in (via, target) if isinstance(i, int)))
             else:
                 item = whole_circle(replaced(item, target=target, via=via, spans=spans))
         else:
-            named = {w.upper() for w in _WORD.findall(mask(item.text, ";"))}
+            named = {w.upper() for w in WORD.findall(mask(item.text, ";"))}
             refs = tuple(reader.points[w] for w in sorted(named) if w in reader.points)
-            if refs and not _DECL.match(item.text):
+            if refs and not DECL.match(item.text):
                 item = dataclasses.replace(item, refs=refs)
         items.append(item)
     if missing:
@@ -1633,7 +822,7 @@ def _resolve(reader, path, dat_path, walk):
 
 
 def _resolved_rows(reader, walk, assigned, elsewhere):
-    """`_resolve`'s lookup of the motions read at once, all at once (their points are declared: `_Walk`)."""
+    """`_resolve`'s lookup of the motions read at once, all at once (their points are declared: `line_walk.Walk`)."""
     text, written = reader.sources[walk.index].text, walk.written
     rows = np.frombuffer(walk.rows, dtype=np.int64)
     target = np.frombuffer(walk.point, dtype=np.int64).copy()
@@ -1651,7 +840,7 @@ def _resolved_rows(reader, walk, assigned, elsewhere):
         elif not (key in reader.shared and (where := elsewhere.assigned(key))):
             continue
         reason[k] = f"{name} is changed at run time ({where})"
-        named = {w.upper() for w in _WORD.findall(mask(text[written["start"][rows[k]]:written["end"][rows[k]]], ";"))}
+        named = {w.upper() for w in WORD.findall(mask(text[written["start"][rows[k]]:written["end"][rows[k]]], ";"))}
         refs.append(tuple(reader.points[w] for w in sorted(named) if w in reader.points))
-        home.append(bool(_HOME.match(name)))
+        home.append(bool(HOME.match(name)))
     return target, reason, refs, np.array(home, dtype=bool)

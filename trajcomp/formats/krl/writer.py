@@ -7,7 +7,8 @@ from pathlib import Path
 import numpy as np
 
 from trajcomp.errors import WriteError
-from trajcomp.formats.krl.reader import _DEF, _DEFDAT, _NAME, _PROGRAM_NAME, AXES, MIN_PLACES, POSE, read
+from trajcomp.formats.krl.grammar import AXES, DEF, DEFDAT, MIN_PLACES, NAME, POSE, PROGRAM_NAME
+from trajcomp.formats.krl.reader import read
 from trajcomp.formats.text import mask
 from trajcomp.formats.file_writing import active_axes, companion_outputs, numbered, written_speed
 from trajcomp.formats.number_writing import floor_places, format_number
@@ -72,7 +73,7 @@ def write(program, path):
     path = Path(path)
     patch = program.format == "krl" and program.sources
     same_name = patch and path.stem.lower() == Path(program.sources[0].name).stem.lower()
-    if not same_name and not _PROGRAM_NAME.match(path.stem):
+    if not same_name and not PROGRAM_NAME.match(path.stem):
         raise WriteError(
             f"{path}: {path.stem!r} cannot name a KRL program (letters, digits and _, "
             "not starting with a digit, at most 24 characters): KUKA needs DEF name = file name"
@@ -81,7 +82,7 @@ def write(program, path):
     if patch:
         own = 2 if len(program.sources) > 1 and not program.sources[1].companion else 1  # the .src and its .dat
         renames = [[] if same_name else _renamed(source.text, pattern, path.stem)
-                   for source, pattern in zip(program.sources[:own], (_DEF, _DEFDAT))]
+                   for source, pattern in zip(program.sources[:own], (DEF, DEFDAT))]
         written = patched(program, _encode, MIN_PLACES, _encode_columns, renames + [[]] * (len(program.sources) - own))
         return dict(zip([path, dat][:own], written)) | companion_outputs(program, written, path, own)
     src_text, dat_text = _emit(program, path.stem)
@@ -182,6 +183,6 @@ def _selected(key, values, numbers, data):
 
 def _point_name(target, taken, number):
     name = re.sub(r"\W", "_", target.name)[:24]
-    if not name or not _NAME.match(name) or name.upper() in {t.upper() for t in taken}:
+    if not name or not NAME.match(name) or name.upper() in {t.upper() for t in taken}:
         name = f"XP{number}"
     return name
