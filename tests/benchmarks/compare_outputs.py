@@ -41,7 +41,8 @@ RETIMES = ("auto", "none")
 def programs(suffixes=tuple(ARMS)):
     """The program files of the corpora of these suffixes (a KRL .dat goes with its .src), by path."""
     roots = [REPO / "tests" / "data" / "programs", REPO / "examples" / "programs"]
-    return sorted(p for root in roots for p in root.rglob("*") if p.is_file() and p.suffix.lower() in suffixes)
+    return sorted(p for root in roots for p in root.rglob("*")
+                  if p.is_file() and p.suffix.lower() in suffixes and p.suffix.lower() in ARMS)
 
 
 def run(tree, program, model, retime, out_folder):
