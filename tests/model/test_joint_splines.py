@@ -3,7 +3,6 @@
 import dataclasses
 
 import numpy as np
-import pytest
 
 from trajcomp.model import joint_errors
 from trajcomp.calibration.calibrate import calibrate, selection_words
