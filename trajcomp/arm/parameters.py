@@ -150,13 +150,15 @@ def pose_jacobian(robot, q, names, R_tcp_target=None):
         frame; its column is the apparent motion of the TCP in the base
         frame (the measurements move the opposite way).
     """
-    return in_blocks(lambda q: _jacobian_block(robot.as_standard(), q, names, R_tcp_target, 6), np.atleast_2d(q))
+    std = robot.as_standard()
+    return in_blocks(lambda q: _jacobian_block(std, q, names, R_tcp_target, 6), np.atleast_2d(q))
 
 
 def position_jacobian(robot, q, names):
     """Rows 0-2 of `pose_jacobian`: the derivative (N, 3, P) of the TCP position (mm per mm or per rad) with
     respect to each parameter at joints q (N, 6) rad, without the orientation rows' work."""
-    return in_blocks(lambda q: _jacobian_block(robot.as_standard(), q, names, None, 3)[1:], np.atleast_2d(q))[0]
+    std = robot.as_standard()
+    return in_blocks(lambda q: _jacobian_block(std, q, names, None, 3)[1:], np.atleast_2d(q))[0]
 
 
 def _jacobian_block(std, q, names, R_tcp_target, rows):
