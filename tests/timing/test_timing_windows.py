@@ -111,3 +111,16 @@ def test_a_long_path_evaluates_its_derivatives_without_holding_them():
     np.testing.assert_allclose(long_path(inner, 1)[:, 2], 3.0 * np.cos(3.0 * inner), atol=1e-6)
     np.testing.assert_allclose(long_path(inner, 2)[:, 2], -9.0 * np.sin(3.0 * inner), atol=1e-4)
     np.testing.assert_allclose(short_path(inner, 2), long_path(inner, 2), atol=1e-3)
+
+
+def test_corner_lengths_in_blocks_are_the_chords_between_the_waypoints(helix, monkeypatch):
+    """A long run's programmed lengths are placed a block of motions at a time (bounded memory): each is still
+    the chord between its waypoints' TCP positions."""
+    import trajcomp.timing.moves as moves_module
+
+    moves = Moves.from_joints(helix[:700], UR10, zone=0.5)
+    k = np.arange(1, len(moves))
+    monkeypatch.setattr(moves_module, "CORNER_BLOCK", 64)
+    tcp = fk(UR10, moves.q)[:, :3, 3]
+    np.testing.assert_array_equal(moves_module.corner_lengths(moves, UR10, k),
+                                  np.linalg.norm(tcp[k] - tcp[k - 1], axis=1))

@@ -82,18 +82,26 @@ def link_frames(robot, q):
     return in_blocks(frames, np.atleast_2d(q))[0]
 
 
-def frame_columns(robot, q):
+def frame_columns(robot, q, *, tcp=False):
     """The DH frames 0..6 of configurations q (N, 6), rad, as columns with N last: what `link_frames` holds.
+
+    Parameters
+    ----------
+    robot : Robot
+    q : array_like, shape (N, 6)
+        Joint angles, rad.
+    tcp : bool
+        Also the TCP frame, as frame 7 (what `fk` gives).
 
     Returns
     -------
-    ndarray, shape (7, 4, 3, N)
+    ndarray, shape (7, 4, 3, N), or (8, 4, 3, N) with ``tcp``
         ``[i, k]``: column k (x, y, z axis, origin in mm) of DH frame i in
         the base frame. Cheaper than `link_frames` for measures over many
         configurations (no 4 x 4 matrix laid out per row); pass blocks of
-        rows (`in_blocks`): it takes 672 bytes a row.
+        rows (`in_blocks`): it takes 672 bytes a row (768 with ``tcp``).
     """
-    return _frame_columns(robot, q, tcp=False)[:7]
+    return _frame_columns(robot, q, tcp=True) if tcp else _frame_columns(robot, q, tcp=False)[:7]
 
 
 def fk(robot, q, *, tcp=True):

@@ -23,7 +23,7 @@ differences. Lengths mm, angles rad.
 
 import numpy as np
 
-from trajcomp.arm.kinematics import link_frames
+from trajcomp.arm.kinematics import frame_columns, in_blocks
 
 ANGLE_LEVER = 1000.0  # mm: an angle parameter is scaled as its effect at this lever arm
 FRAME_COST = 0.01  # a frame parameter costs this many times an arm parameter along a hidden combination
@@ -151,44 +151,65 @@ def pose_jacobian(robot, q, names, R_tcp_target=None):
         frame (the measurements move the opposite way).
     """
     std = robot.as_standard()
-    frames = link_frames(std, q)
-    flange = frames[:, 6] @ std.T_link6_flange
+    return in_blocks(lambda q: _jacobian_block(std, q, names, R_tcp_target, 6), np.atleast_2d(q))
+
+
+def position_jacobian(robot, q, names):
+    """Rows 0-2 of `pose_jacobian`: the derivative (N, 3, P) of the TCP position (mm per mm or per rad) with
+    respect to each parameter at joints q (N, 6) rad, without the orientation rows' work."""
+    std = robot.as_standard()
+    return in_blocks(lambda q: _jacobian_block(std, q, names, None, 3)[1:], np.atleast_2d(q))[0]
+
+
+def _jacobian_block(std, q, names, R_tcp_target, rows):
+    """`pose_jacobian` ``(T_tcp (n, 4, 4), jac (n, rows, P))`` of a block of joints q (n, 6) of a standard DH robot
+    (``rows`` 3: the position rows alone), built as columns with n last (`frame_columns`)."""
+    columns = frame_columns(std, q)  # (7, 4, 3, n): column k (axes, origin) of DH frame i
+    link6 = np.zeros((len(q), 4, 4))  # as `link_frames` lays it out
+    link6[:, :3, :] = columns[6].transpose(2, 1, 0)
+    link6[:, 3, 3] = 1.0
+    flange = link6 @ std.T_link6_flange
     tcp = flange @ std.T_flange_tool
-    p = tcp[:, :3, 3]
-    jac = np.zeros((len(p), 6, len(names)))
+    p = tcp[:, :3, 3].T
+    jac = np.zeros((len(names), rows, len(q)))
 
     def rotation(column, axis, point):
-        jac[:, :3, column] = np.cross(axis, p - point)
-        jac[:, 3:, column] = axis
+        lever = p - point
+        jac[column, 0] = axis[1] * lever[2] - axis[2] * lever[1]  # axis x lever, as np.cross computes it
+        jac[column, 1] = axis[2] * lever[0] - axis[0] * lever[2]
+        jac[column, 2] = axis[0] * lever[1] - axis[1] * lever[0]
+        if rows > 3:
+            jac[column, 3:] = axis
 
     for k, name in enumerate(names):
         if name in TOOL_NAMES:
-            jac[:, :3, k] = flange[:, :3, TOOL_NAMES.index(name)]
+            jac[k, :3] = flange[:, :3, TOOL_NAMES.index(name)].T
         elif name in TARGET_NAMES:
-            R_target = tcp[:, :3, :3] @ (np.eye(3) if R_tcp_target is None else R_tcp_target)
-            jac[:, 3:, k] = R_target[:, :, TARGET_NAMES.index(name)]
+            if rows > 3:
+                R_target = tcp[:, :3, :3] @ (np.eye(3) if R_tcp_target is None else R_tcp_target)
+                jac[k, 3:] = R_target[:, :, TARGET_NAMES.index(name)].T
         elif name in BASE_NAMES:
-            axis = np.eye(3)[BASE_NAMES.index(name) % 3]
+            axis = np.eye(3)[BASE_NAMES.index(name) % 3][:, None]
             if name in BASE_NAMES[:3]:
-                jac[:, :3, k] = axis
+                jac[k, :3] = axis
             else:
-                rotation(k, np.broadcast_to(axis, p.shape), np.zeros(3))
+                rotation(k, axis, np.zeros((3, 1)))
         else:
             kind, j = name[:-1], int(name[-1])
-            before, after = frames[:, j - 1], frames[:, j]
+            before, after = columns[j - 1], columns[j]
             # x axis of link j before its Hayati twist Ry(beta): Rx(alpha) keeps it
             cb, sb = np.cos(std.beta[j - 1]), np.sin(std.beta[j - 1])
-            x_link = cb * after[:, :3, 0] + sb * after[:, :3, 2]
+            x_link = cb * after[0] + sb * after[2]
             if kind == "theta":
-                rotation(k, before[:, :3, 2], before[:, :3, 3])
+                rotation(k, before[2], before[3])
             elif kind == "d":
-                jac[:, :3, k] = before[:, :3, 2]
+                jac[k, :3] = before[2]
             elif kind == "a":
-                jac[:, :3, k] = x_link
+                jac[k, :3] = x_link
             elif kind == "alpha":
-                rotation(k, x_link, after[:, :3, 3])
+                rotation(k, x_link, after[3])
             elif kind == "beta":
-                rotation(k, after[:, :3, 1], after[:, :3, 3])
+                rotation(k, after[1], after[3])
             else:
                 raise ValueError(f"unknown parameter {name!r}")
-    return tcp, jac
+    return tcp, np.ascontiguousarray(jac.transpose(2, 1, 0))

@@ -25,7 +25,7 @@ track as the controller knows it; a calibration may identify the real one
 (`trajcomp.calibration.track_fit`: ``actual_direction``, ``actual_scale``):
 targets are then placed on the real carriage, and each command is
 written so that the controller, with its own track, sends the arm to
-it (`trajcomp.programs.frames.FrameTable.command_offsets`). A target
+it (`trajcomp.programs.frames.FrameTable.written_commands`). A target
 stated in the world (KUKA E6POS with E1, FANUC /POS with E1, ABB robtarget
 with eax_a) is reached by the arm from its base at the target's own track
 position: the arm part is solved and compensated in that carriage frame,

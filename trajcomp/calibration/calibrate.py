@@ -744,7 +744,7 @@ def _landing(robot, dh, frame, data, held, fitted, split, progress, orientation,
     if dh is not None:
         parameters = landing.posterior(
             robot, dh.robot, joints, rotation, frame=frame, residuals=measured - fk(dh.robot, joints)[:, :3, 3],
-            R_tcp_target=dh.R_tcp_target, fitted=dict(zip(dh.names, dh.delta)),
+            fitted=dict(zip(dh.names, dh.delta)),
             hidden=sum(is_robot_parameter(n) for n in dh.identifiability.fixed),
             located=locates_flange(orientation_spread(rotations)))
     built = landing.build(combined, method, parameters, rotations, position, joints, by_joints)

@@ -188,7 +188,7 @@ def compensate_program(program, correct, robot, *, tools=None, frames=None, join
         _check_correction(result.correction, labels, max_correction)
         check_posture(q_planned, result.q, labels, max_joint_change)
         q, T_command, n = result.q, result.T_command, len(cartesian)
-        written = table.command_offsets(cartesian) @ T_command[:n]  # on a track: for the controller's carriage
+        written = table.written_commands(cartesian, T_command[:n])  # on a track: for the controller's carriage
         edited = edited.with_targets(cartesian, poses=in_frames(T_base_frame, written), joints=q[:n],
                                      configs=_configs(program, robot, cartesian, q[:n]))
         if n < len(rows):

@@ -36,12 +36,11 @@ import re
 import numpy as np
 
 from trajcomp.errors import ModelError
-from trajcomp.arm.kinematics import fk, link_frames
+from trajcomp.arm.kinematics import frame_columns, in_blocks
 from trajcomp.arm.parameters import apply_deltas
 from trajcomp.model.options import JOINT_KIND as KIND
 
 HARMONICS = (1, 2)
-GRAVITY = np.array([0.0, 0.0, -1.0])  # unit weight direction, base frame
 _PARAMETER = re.compile(r"^(?:(?:a|alpha|d|theta|beta)[1-6]|tool_[xyz])$")
 RANGE_MARGIN = np.radians(5.0)  # rad beyond the fitted joint range still inside: smooth terms extrapolate that far
 COMMAND_ITERATIONS = 4  # fixed-point passes of `JointResidual.commanded`: errors are mrad, contraction ~1e-3
@@ -209,24 +208,35 @@ def features(nominal, q, names):
         Dimensionless (gear) or m (grav).
     """
     q = np.atleast_2d(np.asarray(q, dtype=float))
+    unknown = [name for name in names if not name.startswith(("gear", "grav"))]
+    if unknown:
+        raise ModelError(f"joint errors: unknown term {unknown[0]!r}")
+    return in_blocks(lambda block: (_block_features(nominal, block, names),), q)[0]
+
+
+def _block_features(nominal, q, names):
+    """`features` (n, T) of a block of configurations q (n, 6) (`trajcomp.arm.kinematics.in_blocks`).
+
+    The torque about axis ``j`` of a unit weight along -z of the base frame
+    at a point ``p`` is ``axis . ((p - origin) x (0, 0, -1))``, whose cross
+    product is ``(-lever_y, lever_x, 0)``: two products per term on the DH
+    frames' columns (`trajcomp.arm.kinematics.frame_columns`, the TCP as
+    frame 7).
+    """
     out = np.empty((len(q), len(names)))
-    frames = None
+    columns = None
     for k, name in enumerate(names):
         j = term_joint(name)
         if name.startswith("gear"):
             harmonic = int(name[-1])
             out[:, k] = (np.sin if name[-2] == "s" else np.cos)(harmonic * q[:, j])
             continue
-        if name.startswith("grav"):
-            if frames is None:
-                frames = link_frames(nominal, q)
-                tcp = fk(nominal, q)[:, :3, 3]
-            lump = name.split("_")[1]
-            point = tcp if lump == "t" else frames[:, int(lump), :3, 3]
-            axis, origin = frames[:, j, :3, 2], frames[:, j, :3, 3]
-            out[:, k] = np.einsum("ni,ni->n", axis, np.cross(point - origin, GRAVITY)) / 1000.0
-            continue
-        raise ModelError(f"joint errors: unknown term {name!r}")
+        if columns is None:
+            columns = frame_columns(nominal, q, tcp=True)
+        lump = name.split("_")[1]
+        lever = columns[7 if lump == "t" else int(lump), 3, :2] - columns[j, 3, :2]
+        axis = columns[j, 2]
+        out[:, k] = (axis[0] * -lever[1] + axis[1] * lever[0]) / 1000.0
     return out
 
 

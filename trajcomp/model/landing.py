@@ -58,7 +58,7 @@ from trajcomp.arm.ik_closed_form import ik_family
 from trajcomp.arm.kinematics import jacobian
 from trajcomp.model.joint_errors import KIND as JOINT_KIND
 from trajcomp.arm.parameters import (ANGLE_LEVER, TOOL_NAMES, candidate_parameters, is_angle, is_robot_parameter,
-                                     pose_jacobian)
+                                     position_jacobian)
 from trajcomp.model import update
 from trajcomp.model.options import KRIGING_KIND
 from trajcomp.model.stats import ErrorStats
@@ -313,8 +313,7 @@ def _bins(rows, key, bins):
     return [group for group in np.array_split(ordered, min(bins, len(ordered))) if len(group)]
 
 
-def posterior(robot, identified, joints, rotation, *, frame, residuals, R_tcp_target, fitted, hidden=0,
-              located=True):
+def posterior(robot, identified, joints, rotation, *, frame, residuals, fitted, hidden=0, located=True):
     """Posterior mean shift, covariance and identified values of the arm's parameters (linear Gaussian).
 
     The posterior rests on the measured positions only (orientations
@@ -341,7 +340,6 @@ def posterior(robot, identified, joints, rotation, *, frame, residuals, R_tcp_ta
         Tracker-frame data add the registration as parameters.
     residuals : ndarray, shape (N, 3)
         Measured minus identified positions, base frame, mm.
-    R_tcp_target : ndarray, shape (3, 3)
     fitted : dict of str to float
         Identified deltas from the nominal robot, mm or rad.
     hidden : int
@@ -381,7 +379,7 @@ def posterior(robot, identified, joints, rotation, *, frame, residuals, R_tcp_ta
     names = names[:names.index("tool_x")] + list(EXTRA) + names[names.index("tool_x"):]
     robot_part = np.array([is_robot_parameter(n) for n in names])
     angle = np.array([is_angle(n) for n in names])
-    gauge = gauge_directions(identified, names, R_tcp_target)
+    gauge = gauge_directions(identified, names)
     arm = {n: v for n, v in fitted.items() if is_robot_parameter(n) and n not in TOOL_NAMES}
     lengths = [abs(v) for n, v in arm.items() if not is_angle(n)]
     angles = [abs(v) for n, v in arm.items() if is_angle(n)]
@@ -391,7 +389,7 @@ def posterior(robot, identified, joints, rotation, *, frame, residuals, R_tcp_ta
     length, turn = max(length, turn * ANGLE_LEVER), max(turn, length / ANGLE_LEVER)
     prior = np.where(angle, turn, length)
     prior = np.where(robot_part, prior, np.where(angle, NUISANCE_PRIOR[1], NUISANCE_PRIOR[0]))
-    jac = pose_jacobian(identified, joints, names, R_tcp_target)[1][:, :3, :].reshape(-1, len(names))
+    jac = position_jacobian(identified, joints, names).reshape(-1, len(names))
     residual = residuals.reshape(-1)
     noise = max(float(np.sqrt(np.mean(residual**2))), 1e-4)
     pinned = gauge / prior[:, None]  # in units of the prior: a gauge direction is pinned by its own scale
@@ -402,7 +400,7 @@ def posterior(robot, identified, joints, rotation, *, frame, residuals, R_tcp_ta
     return names, shift, (covariance + covariance.T) / 2.0, deltas, 0.0 if located else float(length), float(turn)
 
 
-def gauge_directions(robot, names, R_tcp_target=None, samples=GAUGE_SAMPLES):
+def gauge_directions(robot, names, samples=GAUGE_SAMPLES):
     """Parameter combinations (P, K) that no configuration of the arm can observe, as unit columns.
 
     The null space of the position Jacobian over ``samples`` configurations
@@ -416,7 +414,7 @@ def gauge_directions(robot, names, R_tcp_target=None, samples=GAUGE_SAMPLES):
     low, high = np.maximum(robot.q_min, -np.pi), np.minimum(robot.q_max, np.pi)
     q = low + (high - low) * rng.uniform(size=(samples, 6))
     scale = np.array([ANGLE_LEVER if is_angle(n) else 1.0 for n in names])
-    jac = pose_jacobian(robot, q, names, R_tcp_target)[1][:, :3, :].reshape(-1, len(names)) / scale
+    jac = position_jacobian(robot, q, names).reshape(-1, len(names)) / scale
     _, singular, vt = np.linalg.svd(jac, full_matrices=False)
     null = vt[singular < GAUGE_TOLERANCE * singular[0]].T / scale[:, None]
     return null / np.linalg.norm(null, axis=0)
@@ -551,7 +549,7 @@ def estimate(model, mode, q, T_target, tool=None, postures=None, other_tool=Fals
     covariance = data.covariance[np.ix_(robot_rows, robot_rows)]
     identified = model.identified if model.dh_names else model.nominal.as_standard()
     at_target = identified if tool is None else identified.replace(T_flange_tool=tool)
-    jac = pose_jacobian(at_target, q, names)[1][:, :3, :]
+    jac = position_jacobian(at_target, q, names)
     on_top = model.error_field(mode) if mode in ("grid", "composite") else None
     correction = on_top if getattr(on_top, "kind", None) == KRIGING_KIND else None  # a re-calibration's
     field = on_top is not None and correction is None
@@ -674,5 +672,5 @@ def _reference_jacobian(model, identified, data, T_target, q, names, postures):
     ok &= np.isfinite(q_ref).all(axis=1)
     jac = np.zeros((len(q), 3, len(names)))
     if ok.any():
-        jac[ok] = pose_jacobian(identified, q_ref[ok], names)[1][:, :3, :]
+        jac[ok] = position_jacobian(identified, q_ref[ok], names)
     return jac

@@ -180,18 +180,22 @@ class FrameTable:
             out[:, :3, 3] = -self.shift_in_base(values)
         return out
 
-    def command_offsets(self, index):
-        """``T_real(e)_controller(e)`` (N, 4, 4): the carriage as the controller knows it, seen from the real one
-        at each target's track position (identity unless a calibration identified a track that differs).
+    def written_commands(self, index, T_command):
+        """Commands ``T_command`` (N, 4, 4) of targets ``index`` (N,) in the real carriage as they are written.
 
-        A command ``T`` in the real carriage is written ``command_offsets @ T`` in it: the controller, placing the
-        arm with its own track, then sends the arm to ``T`` on the real one.
+        ``T_real(e)_controller(e) @ T_command``: the carriage as the controller
+        knows it, seen from the real one at each target's track position. The
+        controller, placing the arm with its own track, then sends the arm to
+        ``T_command`` on the real one. ``T_command`` itself unless a
+        calibration identified a track that differs (no product with
+        identities: 256 MB at a million targets).
         """
-        out = np.tile(np.eye(4), (len(index), 1, 1))
-        if self.track is not None and self.track.identified:
-            values = self.track_positions(index)
-            out[:, :3, 3] = self.shift_in_base(values, actual=False) - self.shift_in_base(values)
-        return out
+        if self.track is None or not self.track.identified:
+            return T_command
+        values = self.track_positions(index)
+        offsets = np.tile(np.eye(4), (len(index), 1, 1))
+        offsets[:, :3, 3] = self.shift_in_base(values, actual=False) - self.shift_in_base(values)
+        return offsets @ T_command
 
     def shift_in_base(self, values, actual=True):
         """The carriage's translations (N, 3), mm, at track positions ``values`` (N,), in the base frame at 0 (on

@@ -24,6 +24,7 @@ from trajcomp.programs.program import place_text
 from trajcomp.formats.speeds import arc_length
 
 KINDS = (JOINT, LINEAR, CIRCULAR)
+CORNER_BLOCK = 65536  # motions whose corners `corner_lengths` places at once: two (4, 4) poses each, 16 MB a block
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -178,13 +179,14 @@ def corner_lengths(moves, robot, k):
     k = np.asarray(k, dtype=int)
     out = np.zeros(len(k))
     for tool_index in np.unique(moves.tool[k]).tolist():
-        rows = np.flatnonzero(moves.tool[k] == tool_index)
         arm = robot.replace(T_flange_tool=moves.tools[tool_index])
-        start, end = fk(arm, moves.q[k[rows] - 1])[:, :3, 3], fk(arm, moves.q[k[rows]])[:, :3, 3]
-        out[rows] = np.linalg.norm(end - start, axis=1)
-        for i in np.flatnonzero(moves.kind[k[rows]] == CIRCULAR).tolist():
-            via = fk(arm, moves.via[k[rows[i]]][None])[0, :3, 3]
-            out[rows[i]] = arc_length(np.array([start[i], via, end[i]]))
+        used = np.flatnonzero(moves.tool[k] == tool_index)
+        for rows in (used[lo : lo + CORNER_BLOCK] for lo in range(0, len(used), CORNER_BLOCK)):
+            start, end = fk(arm, moves.q[k[rows] - 1])[:, :3, 3], fk(arm, moves.q[k[rows]])[:, :3, 3]
+            out[rows] = np.linalg.norm(end - start, axis=1)
+            for i in np.flatnonzero(moves.kind[k[rows]] == CIRCULAR).tolist():
+                via = fk(arm, moves.via[k[rows[i]]][None])[0, :3, 3]
+                out[rows[i]] = arc_length(np.array([start[i], via, end[i]]))
     return out
 
 
