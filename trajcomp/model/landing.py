@@ -618,7 +618,7 @@ def _beyond_joint_range(model, data, robot, q):
         return np.zeros((len(q), 3, 3))
     size = BEYOND_FACTOR * np.std(residual.offsets(model.nominal, data.configurations), axis=0)
     variance = (size * np.minimum(gap / BEYOND_RAMP, 1.0)) ** 2  # (N, 6) rad^2
-    columns = pose_jacobian(robot, q, [f"theta{j + 1}" for j in range(6)])[1][:, :3, :]  # (N, 3, 6) mm/rad
+    columns = position_jacobian(robot, q, [f"theta{j + 1}" for j in range(6)])  # (N, 3, 6) mm/rad
     return np.einsum("nij,nj,nkj->nik", columns, variance, columns)
 
 
