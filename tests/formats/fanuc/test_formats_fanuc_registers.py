@@ -21,7 +21,7 @@ from trajcomp.errors import WriteError
 from trajcomp.formats.configuration import configuration_for
 from trajcomp.formats.task import groups
 
-BACKUP = Path(__file__).parents[1] / "data" / "programs" / "real" / "fanuc" / "ub10200"
+BACKUP = Path(__file__).parents[2] / "data" / "programs" / "real" / "fanuc" / "ub10200"
 
 
 def _wpr_pose(x, y, z, w, p, r):
