@@ -69,11 +69,13 @@ def frame_options(args):
 
 
 def add_parser(sub):
+    from trajcomp.formats.capabilities import ConfigurationData
+
     parser = command_parser(
         sub, "convert",
         "Read a robot program and write it in the language of OUT's extension. Languages: "
         f"{languages()}. Poses are kept to 1e-6 mm; configuration data (in "
-        f"{language_names('configuration')}) are computed with the robot's kinematics, so give --robot when "
+        f"{language_names(ConfigurationData)}) are computed with the robot's kinematics, so give --robot when "
         "the target language needs them. Motions whose position is computed at run time are written as comments (exit 1 if every motion is). "
         "Speeds are written in the target language's units, never faster than the source runs them (give --robot "
         "to convert between joint and TCP speeds); a speed that cannot be carried over is written as the "

@@ -146,7 +146,7 @@ class CompensationJob:
             model = loaded_model(self.model)
             whose = "the arm of the model" + (f" {self.source}" if self.source else "")
             program = formats.read(path, workers=self.workers) if task is None else formats.read_task(task)
-            formats.check_robot_language(path, formats.find_format(format=program.format), model.nominal, whose)
+            formats.check_robot_language(path, formats.find_format(path), model.nominal, whose)
             program = placed_on_track(program, model.nominal, self.tools, self.frames)  # also the timing's original
             out_format = formats.output_format(output, program, self.to_format)
             formats.check_robot_language(output, out_format, model.nominal, whose)
@@ -256,11 +256,11 @@ class RetimeJob:
     def run(self, path, output):
         """Time ``path`` into ``output`` (same language), judge it and write its report: a `ProgramRun`."""
         program = formats.read(path)
-        formats.check_robot_language(path, formats.find_format(format=program.format), self.robot, "the arm --robot names")
+        language = formats.find_format(path)
+        formats.check_robot_language(path, language, self.robot, "the arm --robot names")
         program = placed_on_track(program, self.robot, self.tools, self.frames)
-        out_format = formats.find_format(output).name
-        if out_format != program.format:
-            raise TrajcompError(f"{output}: retime writes the language it reads ({program.format}); "
+        if formats.find_format(output) != language:
+            raise TrajcompError(f"{output}: retime writes the language it reads ({language.name}); "
                                 f"convert the program first (trajcomp convert)")
         sources = list(dict.fromkeys(formats.input_paths(path, program)))
         inputs = [*sources, *([self.robot_file] if self.robot_file else [])]
