@@ -264,7 +264,8 @@ def test_a_krl_point_without_e1_on_the_first_motion_is_left_as_written_and_the_r
     the program does not say. That motion is left as written and listed with the reason; the others land within
     0.02 mm of their world targets; run as ``compensate`` runs it, the verdict fails on it (exit 1); ``retime``
     runs it as written."""
-    from trajcomp.jobs.pipeline import CompensationJob, RetimeJob
+    from trajcomp.jobs.pipeline import CompensationJob
+    from trajcomp.jobs.retime import RetimeJob
 
     robot, virtual, correct = cell("kuka_kr6_r900")
     world, q = world_targets(robot, "kuka_kr6_r900")
@@ -361,7 +362,7 @@ def test_a_fanuc_rail_as_motion_group_2_is_read_compensated_retimed_and_written_
     """A rail as FANUC motion group 2 (GP2: J1 in mm in each /POS entry, DEFAULT_GROUP = 1,1,...), described as
     ``fanuc_ls: GP2:J1``: the arm part lands within 0.02 mm of the world targets from the rail's carriage, the
     program is re-timed with the rail as a joint, and every byte but group 1's pose numbers is written back."""
-    from trajcomp.jobs.pipeline import planned
+    from trajcomp.jobs.retime import planned
     from trajcomp.compensation.posture import planned_joints
     from trajcomp.timing.writeback import retime_program
 

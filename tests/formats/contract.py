@@ -23,7 +23,7 @@ from trajcomp.compensation.program_rewrite import convert_program
 from trajcomp.errors import RobotError
 from trajcomp.formats import capabilities as caps
 from trajcomp.formats.configuration import BOUNDARY_TOLERANCE
-from trajcomp.jobs.pipeline import RetimeJob
+from trajcomp.jobs.retime import RetimeJob
 from trajcomp.programs.frames import FrameTable
 from trajcomp.programs.items import CIRCULAR, JOINT, LINEAR, Motion, Target
 from trajcomp.programs.program import Program

@@ -144,7 +144,7 @@ def compensate_program(program, correct, robot, *, tools=None, frames=None, join
         that the program uses but does not define.
     joint_targets : {"keep", "compensate"}
         ``"compensate"`` treats each joint target as the nominal pose FK(q)
-        stands for and replaces it with the corrected joints.
+        stands for and replaces it with the corrected joints (the jobs check the value: `trajcomp.jobs.options`).
     max_joint_change : float
         Largest change of any joint a correction may cause, rad.
     max_correction : float
@@ -168,8 +168,6 @@ def compensate_program(program, correct, robot, *, tools=None, frames=None, join
     CompensationError
         A correction larger than ``max_correction``.
     """
-    if joint_targets not in ("keep", "compensate"):
-        raise ValueError(f"joint_targets must be 'keep' or 'compensate', got {joint_targets!r}")
     program = placed_on_track(program, robot, tools, frames)
     table = FrameTable(program, robot, tools, frames)
     plan = planned_joints(program, robot, tools=tools, frames=frames, workers=workers)
