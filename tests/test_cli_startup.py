@@ -16,6 +16,7 @@ import pytest
 from conftest import install_plugin
 
 from trajcomp import formats
+from trajcomp.formats.capabilities import SpeedFields, Vendor
 from trajcomp.cli import main
 from trajcomp.commands import COMMANDS
 
@@ -47,8 +48,8 @@ def test_the_help_names_the_registrys_languages_and_imports_no_plugin(monkeypatc
     """A language registered as a folder registers it is in the help texts at once; a plugin is not imported."""
     (tmp_path / "heavy_plugin.py").write_text("raise RuntimeError('a help text imported the plugin')\n")
     install_plugin(monkeypatch, tmp_path, "heavy", "heavy_plugin")  # also restores the registry afterwards
-    formats.register_format("sixth", [".six", ".sx"], "sixth.reader:read", "sixth.writer:write", vendor="Maker",
-                            speeds="sixth.speeds:write_speeds", speed_fields="TIME=")
+    formats.register_format("sixth", [".six", ".sx"], "sixth.reader:read", "sixth.writer:write", Vendor("Maker"),
+                            SpeedFields("sixth.speeds:write_speeds", "TIME="))
     shown = {}
     for name in ("compensate", "convert", "retime"):
         with pytest.raises(SystemExit):

@@ -116,3 +116,26 @@ def test_a_programs_route_to_the_written_file_never_enters_the_commands():
     importers = {str(path.relative_to(PACKAGE)) for path in PACKAGE.rglob("*.py")
                  if "commands" in _imported_wings(path) and path.parent.name != "commands"}
     assert importers == {"cli.py"}
+
+
+def _calls(path, owner, names):
+    """The lines of ``path`` calling ``owner.<name>`` or a name imported as it, for ``names`` (list of int)."""
+    tree = ast.parse(path.read_text(encoding="utf-8"))
+    imported = {a.asname or a.name for node in ast.walk(tree) if isinstance(node, ast.ImportFrom)
+                and node.module == f"trajcomp.{owner}" for a in node.names if a.name in names}
+    return [node.lineno for node in ast.walk(tree) if isinstance(node, ast.Call)
+            and (isinstance(node.func, ast.Attribute) and node.func.attr in names
+                 and isinstance(node.func.value, ast.Name) and node.func.value.id == owner
+                 or isinstance(node.func, ast.Name) and node.func.id in imported)]
+
+
+def test_the_jobs_sit_above_the_stages_and_alone_write_programs():
+    """The stages never import the jobs wing; the faces (the CLI's commands, the API, the demo) never write a
+    program file themselves: a program's route to the file written is a job's (compensate, retime, convert)."""
+    stages = ("programs", "formats", "timing", "compensation", "report", "model", "arm")
+    assert all("jobs" not in BELOW[stage] for stage in stages)
+    assert {"compensation", "timing", "report"} <= BELOW["jobs"]
+    writers = {str(path.relative_to(PACKAGE)): lines for path in PACKAGE.rglob("*.py")
+               if path.parent.name not in ("formats", "jobs") and path.parent.parent.name != "formats"
+               and (lines := _calls(path, "formats", {"write"}))}
+    assert not writers

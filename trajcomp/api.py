@@ -37,6 +37,7 @@ from pathlib import Path
 import numpy as np
 
 from trajcomp.jobs.batch import run_programs
+from trajcomp.jobs.options import check_options
 from trajcomp.jobs.pipeline import CompensationJob, loaded_model
 from trajcomp.compensation.target_correction import program_corrector
 from trajcomp.errors import TrajcompError
@@ -126,13 +127,8 @@ class Compensator:
             self.model, self.model_file = load_model(model), str(Path(model).resolve())
         self.mode = mode or self.model.method
         self.model.check_mode(self.mode)
-        if outside not in ("model", "clamp", "error"):
-            raise TrajcompError(f"outside: expected 'model', 'clamp' or 'error', got {outside!r}")
-        for name, value in (("max_joint_change", max_joint_change), ("max_correction", max_correction)):
-            if not (np.isfinite(value) and value > 0):
-                raise TrajcompError(f"{name}: expected a positive number, got {value}")
-        if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
-            raise TrajcompError(f"workers: expected a whole number of at least 1, got {workers!r}")
+        check_options(outside=outside, max_joint_change=max_joint_change, max_correction=max_correction,
+                      workers=workers)
         self.outside = outside
         self.max_joint_change = float(max_joint_change)
         self.max_correction = float(max_correction)

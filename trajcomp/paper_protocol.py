@@ -16,12 +16,12 @@ import numpy as np
 from trajcomp import formats
 from trajcomp.support.atomic import write_atomic
 from trajcomp.calibration.calibrate import calibrate
-from trajcomp.compensation.target_correction import compensate, program_corrector
+from trajcomp.compensation.target_correction import compensate
 from trajcomp.errors import TrajcompError
+from trajcomp.jobs.pipeline import CompensationJob
 from trajcomp.arm.ik import batch_seed, ik
 from trajcomp.arm.kinematics import shoulder_and_reach
 from trajcomp.calibration.measurements import Measurements, read_measurements
-from trajcomp.compensation.program_rewrite import compensate_program
 from trajcomp.calibration.measurement_plan import default_orientation, plan_grid
 from trajcomp.arm.robot import load_robot
 from trajcomp.calibration.profiles import PAPER_ROBOT
@@ -219,9 +219,8 @@ def run_program(virtual, result, folder):
     robot = virtual.nominal
     original, corrected_path = folder / "program.csv", folder / "program-compensated.csv"
     write_example_program(original, robot, result.cube)
+    CompensationJob(result.model, retime="none").run(original, corrected_path)  # as ``trajcomp compensate`` does
     program = formats.read(original)
-    corrected, _ = compensate_program(program, program_corrector(result.model, label=str(original)), robot)
-    formats.write(corrected_path, corrected)
     targets = program.cartesian_targets().T  # CSV targets: base frame, robot tool
     planned = ik(robot, targets, seed=batch_seed(robot, targets)).raise_on_failure(str(original)).q
     landed = {

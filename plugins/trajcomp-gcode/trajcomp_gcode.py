@@ -50,6 +50,7 @@ import numpy as np
 
 from trajcomp.errors import ReadError, WriteError
 from trajcomp.formats import register_format
+from trajcomp.formats.capabilities import SpeedFields
 from trajcomp.formats.text import Lines, read_source
 from trajcomp.formats.file_writing import numbered
 from trajcomp.formats.number_fields import NUMBER, decimals
@@ -378,4 +379,4 @@ def _comment(text):
     return text.replace("(", "[").replace(")", "]").strip()
 
 
-register_format("gcode", (".nc", ".ngc", ".gcode"), read, write, speeds=write_speeds, speed_fields="F (G94 feed)")
+register_format("gcode", (".nc", ".ngc", ".gcode"), read, write, SpeedFields(write_speeds, "F (G94 feed)"))

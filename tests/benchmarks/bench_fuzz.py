@@ -32,7 +32,7 @@ from trajcomp import formats  # noqa: E402
 from trajcomp.calibration.calibrate import calibrate  # noqa: E402
 from trajcomp.compensation.target_correction import program_corrector  # noqa: E402
 from trajcomp.errors import TrajcompError  # noqa: E402
-from trajcomp.jobs.pipeline import planned  # noqa: E402
+from trajcomp.jobs.retime import planned  # noqa: E402
 from trajcomp.compensation.posture import planned_joints  # noqa: E402
 from trajcomp.timing.writeback import retime_program  # noqa: E402
 

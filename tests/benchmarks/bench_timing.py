@@ -66,7 +66,8 @@ import toppra.constraint  # noqa: E402
 
 from trajcomp import formats  # noqa: E402
 from trajcomp.cli import main as cli  # noqa: E402
-from trajcomp.jobs.pipeline import planned, retime_compensated  # noqa: E402
+from trajcomp.jobs.pipeline import retime_compensated  # noqa: E402
+from trajcomp.jobs.retime import planned  # noqa: E402
 from trajcomp.compensation.target_correction import program_corrector  # noqa: E402
 from trajcomp.arm.ik import ik  # noqa: E402
 from trajcomp.arm.kinematics import fk  # noqa: E402

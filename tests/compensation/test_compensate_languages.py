@@ -34,7 +34,7 @@ from trajcomp import formats
 from trajcomp.calibration.calibrate import calibrate
 from trajcomp.cli import main
 from trajcomp.compensation.target_correction import compensate
-from trajcomp.formats.configuration import BOUNDARY_TOLERANCE, configuration_for, declared_windows
+from trajcomp.formats.configuration import BOUNDARY_TOLERANCE, configuration_data, configuration_for, declared_windows
 from trajcomp.arm.ik import configuration_of, ik, ik_all
 from trajcomp.arm.kinematics import fk
 from trajcomp.calibration.measurements import Measurements
@@ -159,7 +159,7 @@ def build_points(language, robot, frame, written, posture):
         T_frame = written(np.linalg.inv(frame) @ T_wanted if framed else T_wanted)
         T_base = frame @ T_frame if framed else T_frame
         q = declared_joints(robot, T_base, posture)
-        config = configuration_for(language, robot, q[None])
+        config = configuration_for(configuration_data(language), robot, q[None])
         points.append(Point(T_base, T_frame, framed, motion, tuple(config[0]) if config else (), q))
     return points
 
@@ -423,8 +423,9 @@ def joints_of_configuration(language, robot, T_base, config):
     turns = 2 * np.pi * np.array(list(itertools.product((-1, 0, 1), repeat=6)))
     candidates = (q_branches[0][valid[0]][:, None, :] + turns[None]).reshape(-1, 6)
     candidates = candidates[robot.within_limits(candidates)]
-    branch, lower, upper = declared_windows(language, [config])
-    flags = [declared_windows(language, [c])[0][0] for c in configuration_for(language, robot, candidates)]
+    data = configuration_data(language)
+    branch, lower, upper = declared_windows(data, [config])
+    flags = [declared_windows(data, [c])[0][0] for c in configuration_for(data, robot, candidates)]
     outside = np.maximum(lower - candidates, candidates - upper).max(axis=1)
     match = np.flatnonzero((np.array(flags) == branch[0]) & (outside <= BOUNDARY_TOLERANCE))
     assert len(match) in (1, 2), f"{language}: {len(match)} solutions have configuration {config}"

@@ -32,7 +32,7 @@ from trajcomp.calibration.virtual_arm import VirtualRobot
 from trajcomp.compensation.program_rewrite import compensate_program
 from trajcomp.compensation.target_correction import program_corrector
 from trajcomp.errors import IKError, RobotError, TrajcompError
-from trajcomp.formats.configuration import configuration_for
+from trajcomp.formats.configuration import configuration_data, configuration_for
 
 DIRECTION = np.array([1.0, 0.02, 0.0]) / np.linalg.norm([1.0, 0.02, 0.0])  # a track not quite along world x
 CARRIAGE = [0.0, 1850.0, 4200.0]  # mm of track position: metres apart
@@ -117,7 +117,7 @@ def landing(robot, virtual, world_command, carriage):
 
 
 def _krl(folder, world, q, robot):
-    status = configuration_for("krl", robot, q)
+    status = configuration_for(configuration_data("krl"), robot, q)
     points = []
     for k, (T, (s, t)) in enumerate(zip(world, status)):
         a, b, c = Rotation.from_matrix(T[:3, :3]).as_euler("ZYX", degrees=True)
@@ -151,7 +151,7 @@ def _read_krl(path):
 
 
 def _fanuc(folder, world, q, robot):
-    configs = configuration_for("fanuc_ls", robot, q)
+    configs = configuration_for(configuration_data("fanuc_ls"), robot, q)
     positions = ""
     for k, (T, config) in enumerate(zip(world, configs)):
         w, p, r = Rotation.from_matrix(T[:3, :3]).as_euler("xyz", degrees=True)
@@ -176,7 +176,7 @@ def _read_fanuc(path):
 
 
 def _rapid(folder, world, q, robot):
-    configs = configuration_for("rapid", robot, q)
+    configs = configuration_for(configuration_data("rapid"), robot, q)
     lines = []
     for k, (T, config) in enumerate(zip(world, configs)):
         x, y, z, w = Rotation.from_matrix(T[:3, :3]).as_quat()
@@ -264,7 +264,8 @@ def test_a_krl_point_without_e1_on_the_first_motion_is_left_as_written_and_the_r
     the program does not say. That motion is left as written and listed with the reason; the others land within
     0.02 mm of their world targets; run as ``compensate`` runs it, the verdict fails on it (exit 1); ``retime``
     runs it as written."""
-    from trajcomp.jobs.pipeline import CompensationJob, RetimeJob
+    from trajcomp.jobs.pipeline import CompensationJob
+    from trajcomp.jobs.retime import RetimeJob
 
     robot, virtual, correct = cell("kuka_kr6_r900")
     world, q = world_targets(robot, "kuka_kr6_r900")
@@ -361,7 +362,7 @@ def test_a_fanuc_rail_as_motion_group_2_is_read_compensated_retimed_and_written_
     """A rail as FANUC motion group 2 (GP2: J1 in mm in each /POS entry, DEFAULT_GROUP = 1,1,...), described as
     ``fanuc_ls: GP2:J1``: the arm part lands within 0.02 mm of the world targets from the rail's carriage, the
     program is re-timed with the rail as a joint, and every byte but group 1's pose numbers is written back."""
-    from trajcomp.jobs.pipeline import planned
+    from trajcomp.jobs.retime import planned
     from trajcomp.compensation.posture import planned_joints
     from trajcomp.timing.writeback import retime_program
 

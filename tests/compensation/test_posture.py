@@ -16,7 +16,7 @@ from trajcomp import formats
 from trajcomp.compensation import posture
 from trajcomp.cli import main
 from trajcomp.compensation.target_correction import CompensationResult
-from trajcomp.formats.configuration import configuration_for, declared_windows
+from trajcomp.formats.configuration import configuration_data, configuration_for, declared_windows
 from trajcomp.errors import CompensationError, IKError
 from trajcomp.arm.ik import configuration_of, ik, ik_all
 from trajcomp.arm.kinematics import fk
@@ -36,8 +36,8 @@ def test_declared_windows_invert_every_encoder(language):
     rng = np.random.default_rng(3)
     q = rng.uniform(robot.q_min, robot.q_max, (2000, 6))
     q[:500, [0, 3, 5]] = np.round(q[:500, [0, 3, 5]] / (np.pi / 2)) * np.pi / 2  # on code boundaries
-    configs = configuration_for(language, robot, q)
-    branch, lower, upper = declared_windows(language, configs)
+    configs = configuration_for(configuration_data(language), robot, q)
+    branch, lower, upper = declared_windows(configuration_data(language), configs)
     assert np.array_equal(branch, [c.index for c in configuration_of(robot, q)])
     assert np.all((lower <= q) & (q <= upper))
     # a joint one hair across a finite bound has another code
@@ -46,7 +46,7 @@ def test_declared_windows_invert_every_encoder(language):
         rows, joints = np.nonzero(finite)
         moved = q[rows].copy()
         moved[np.arange(len(rows)), joints] = bound[rows, joints] + side * 1e-6
-        again = configuration_for(language, robot, moved)
+        again = configuration_for(configuration_data(language), robot, moved)
         assert all(a != configs[r] for a, r in zip(again, rows))
 
 
@@ -126,13 +126,13 @@ def test_kuka_status_and_turn_choose_the_branch_and_turns(tmp_path):
     solutions = [q[0], flipped]
     points = {}
     for k, joints in enumerate(solutions):
-        s, t = configuration_for("krl", robot, joints[None])[0]
+        s, t = configuration_for(configuration_data("krl"), robot, joints[None])[0]
         points[f"P{k + 1}"] = (*T[:3, 3], *np.degrees(matrix_to_abc(T[:3, :3])), s, t)
     program = _krl(tmp_path, points, ["PTP P1", "PTP P2"])
     plan = planned_joints(program, robot)
     for k, joints in enumerate(plan.q):
         np.testing.assert_allclose(fk(robot, joints[None])[0], T, atol=1e-6)
-        assert configuration_for("krl", robot, joints[None])[0] == program.targets[plan.index[k]].config
+        assert configuration_for(configuration_data("krl"), robot, joints[None])[0] == program.targets[plan.index[k]].config
     assert plan.source == ("config", "config")
     assert abs(plan.q[1, 4] + plan.q[0, 4]) < 1e-6  # the second is the flipped wrist
 
@@ -171,7 +171,7 @@ def test_a_correction_that_swings_the_wrist_near_a_singularity_is_refused(tmp_pa
     robot = load_robot("kuka_kr6_r900")
     q = np.radians([[0.0, -80.0, 100.0, 0.0, 0.05, 0.0]])
     T = fk(robot, q)[0]
-    s, t = configuration_for("krl", robot, q)[0]
+    s, t = configuration_for(configuration_data("krl"), robot, q)[0]
     program = _krl(tmp_path, {"P1": (*T[:3, 3], *np.degrees(matrix_to_abc(T[:3, :3])), s, t)}, ["PTP P1"])
     offset = np.array([0.0, 0.5, 0.0])
     swing = ik(robot, (T + np.pad(offset[:, None], ((0, 1), (3, 0))))[None], seed=q[0]).q[0] - q[0]
@@ -261,7 +261,7 @@ def _flipped_weld(tmp_path):
     flipped[:, 4] = -plan.q[:, 4]
     np.testing.assert_allclose(fk(robot, flipped), fk(robot, plan.q), atol=1e-9)
     dat = (tmp_path / "weld.dat").read_text()
-    for i, (s, t) in zip(plan.index, configuration_for("krl", robot, flipped)):
+    for i, (s, t) in zip(plan.index, configuration_for(configuration_data("krl"), robot, flipped)):
         name = program.targets[i].name
         dat = re.sub(rf"(DECL E6POS {name}=.*?)S \d+,T \d+", rf"\g<1>S {s},T {t}", dat)
     (tmp_path / "weld.dat").write_text(dat)

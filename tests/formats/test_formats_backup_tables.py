@@ -22,7 +22,7 @@ from trajcomp.arm.kinematics import fk
 from trajcomp.arm.robot import load_robot
 from trajcomp.compensation.program_rewrite import compensate_program
 from trajcomp.errors import TrajcompError
-from trajcomp.formats.configuration import configuration_for
+from trajcomp.formats.configuration import configuration_data, configuration_for
 
 TOOL = [12.5, -3.0, 185.2, 0.0, 90.0, 0.0]  # KUKA X, Y, Z, A, B, C (mm, deg)
 BASE = [150.0, -220.0, 110.5, 90.0, 0.0, 0.0]
@@ -60,7 +60,7 @@ def _krl_points(robot, tool, base):
     """``X .., S .., T ..`` members of points at `JOINTS` with tool ``tool`` in base ``base`` (KUKA pose lists)."""
     T_world_tcp = fk(robot, np.radians(JOINTS)) @ _kuka_pose(*tool)
     local = np.linalg.inv(_kuka_pose(*base)) @ T_world_tcp
-    status = configuration_for("krl", robot, np.radians(JOINTS))
+    status = configuration_for(configuration_data("krl"), robot, np.radians(JOINTS))
     out = []
     for T, (s, t) in zip(local, status):
         a, b, c = Rotation.from_matrix(T[:3, :3]).as_euler("ZYX", degrees=True)
@@ -213,7 +213,7 @@ def _fanuc_program(robot, folder, frame="1", tool="3"):
     """PROG.LS with two positions in UF ``frame`` / UT ``tool`` reached at `JOINTS`."""
     T_world_tcp = fk(robot, np.radians(JOINTS)) @ _fanuc_pose(*UTOOL)
     local = np.linalg.inv(_fanuc_pose(*UFRAME)) @ T_world_tcp
-    configs = configuration_for("fanuc_ls", robot, np.radians(JOINTS))
+    configs = configuration_for(configuration_data("fanuc_ls"), robot, np.radians(JOINTS))
     positions = ""
     for n, (T, config) in enumerate(zip(local, configs), start=1):
         w, p, r = Rotation.from_matrix(T[:3, :3]).as_euler("xyz", degrees=True)

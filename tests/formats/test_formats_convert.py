@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 from trajcomp import formats
+from trajcomp.formats.capabilities import BaseFrameOnly
 from trajcomp.errors import TrajcompError, WriteError
 from trajcomp.compensation.program_rewrite import compensate_program, convert_program
 from trajcomp.arm.robot import load_robot
@@ -67,7 +68,7 @@ def test_conversion_preserves_poses(from_format, to_format, robot, tmp_path):
     converted = convert_program(seeded, to_format, robot=robot, tools=TOOLS, frames=FRAMES)
     out = tmp_path / f"converted{EXTENSION[to_format]}"
     axis = {"rapid": [250.5], "fanuc_ls": [150.0]}.get(from_format, [])  # pFixture's extax, P[6]'s E1
-    if axis and formats.find_format(format=to_format).frameless:
+    if axis and formats.find_format(format=to_format).capability(BaseFrameOnly):
         with pytest.raises(WriteError, match=r"hold 0 external axes; target (pFixture|P\[6\]) \(line \d+\) gives E1 a value"):
             formats.write(out, converted)
         return
@@ -75,7 +76,7 @@ def test_conversion_preserves_poses(from_format, to_format, robot, tmp_path):
     again = formats.read(out)
     external = [t.external[0] for t in again.targets if t.external is not None]
     assert external == axis  # carried; KUKA's E1..E6 = 0 left out
-    base = formats.find_format(format=to_format).frameless
+    base = formats.find_format(format=to_format).capability(BaseFrameOnly) is not None
     before, after = _positions(program, base), _positions(again, base)
     assert [kind for kind, _ in before] == [kind for kind, _ in after]
     for (kind, a), (_, b) in zip(before, after):

@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 from trajcomp import formats
+from trajcomp.formats.capabilities import ConfigurationData, SpeedFields
 from trajcomp.errors import ReadError, TrajcompError
 from trajcomp.programs.program import Program
 
@@ -130,10 +131,10 @@ def test_a_built_in_language_is_one_folder_that_registers_its_own_modules(langua
 
     package = f"trajcomp.formats.{language}"
     (fmt,) = [f for f in formats.formats() if f.reader.startswith(package + ".")]
-    for face, ref in (("reader", fmt.reader), ("writer", fmt.writer), ("speeds", fmt.speeds)):
+    for face, ref in (("reader", fmt.reader), ("writer", fmt.writer), ("speeds", fmt.capability(SpeedFields).write)):
         module, function = ref.split(":")
         assert module == f"{package}.{face}" and callable(getattr(importlib.import_module(module), function))
-    if fmt.configuration is not None:
-        data = fmt.configuration_data()
+    if fmt.capability(ConfigurationData) is not None:
+        data = fmt.capability(ConfigurationData).codec()
         assert data.__name__ == f"{package}.configuration"
         assert all(callable(getattr(data, hook)) for hook in ("encode", "windows", "merge", "describe"))

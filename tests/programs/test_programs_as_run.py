@@ -14,7 +14,7 @@ import pytest
 from trajcomp import formats
 from trajcomp.cli import main
 from trajcomp.compensation.target_correction import CompensationResult
-from trajcomp.formats.configuration import configuration_for, written_configuration
+from trajcomp.formats.configuration import configuration_data, configuration_for, written_configuration
 from trajcomp.errors import ReadError
 from trajcomp.arm.ik import ik
 from trajcomp.arm.kinematics import fk
@@ -53,7 +53,7 @@ def _krl(tmp_path, points, body):
 
 def _krl_point(robot, q, status=None, turn=None):
     T = fk(robot, np.radians(q)[None])[0]
-    s, t = configuration_for("krl", robot, np.radians(q)[None])[0]
+    s, t = configuration_for(configuration_data("krl"), robot, np.radians(q)[None])[0]
     return (*T[:3, 3], *np.degrees(matrix_to_abc(T[:3, :3])), s if status is None else status,
             t if turn is None else turn)
 
@@ -64,30 +64,30 @@ def _krl_point(robot, q, status=None, turn=None):
 def test_kuka_status_bits_above_bit_2_and_turn_bits_above_a6_are_kept():
     robot = load_robot("kuka_kr6_r900")
     q = np.radians([[10.0, -80.0, 100.0, 20.0, 30.0, -40.0]])
-    s, t = configuration_for("krl", robot, q)[0]  # S 2, T 34: A2 and A6 negative
+    s, t = configuration_for(configuration_data("krl"), robot, q)[0]  # S 2, T 34: A2 and A6 negative
     assert (s, t) == (2, 34)
     # bit 4 of S: taught on an absolutely accurate robot; T bit 6: no axis of this arm
-    assert written_configuration("krl", robot, [(s | 16, t | 64)], q) == [(18, 98)]
+    assert written_configuration(configuration_data("krl"), robot, [(s | 16, t | 64)], q) == [(18, 98)]
     # A1 declared negative but at +10 deg: only T bit 0 follows the joints, the others stay
-    assert written_configuration("krl", robot, [(18, 98 | 1)], q) == [(18, 98)]
+    assert written_configuration(configuration_data("krl"), robot, [(18, 98 | 1)], q) == [(18, 98)]
     # the branch changed (S bits 0-2 say wrist negative): bits 0-2 recomputed, bit 4 kept
-    assert written_configuration("krl", robot, [(16 | 4 | 2, 98)], q) == [(18, 98)]
+    assert written_configuration(configuration_data("krl"), robot, [(16 | 4 | 2, 98)], q) == [(18, 98)]
 
 
 def test_a_joint_on_a_code_boundary_keeps_its_declared_code():
     robot = load_robot("abb_irb4600")
     q = np.radians([[0.0, 10.0, 20.0, 0.0, 30.0, 0.0]])
     # RobotStudio writes a home pose's J4 = J6 = 0 as quadrant -1: the controller accepts it
-    assert written_configuration("rapid", robot, [(0, -1, -1, 0)], q) == [(0, -1, -1, 0)]
+    assert written_configuration(configuration_data("rapid"), robot, [(0, -1, -1, 0)], q) == [(0, -1, -1, 0)]
     q_nudged = q + np.radians([0, 0, 0, -0.2, 0, 0.3])
-    assert written_configuration("rapid", robot, [(0, 0, -1, 0)], q_nudged) == [(0, 0, -1, 0)]
+    assert written_configuration(configuration_data("rapid"), robot, [(0, 0, -1, 0)], q_nudged) == [(0, 0, -1, 0)]
     q_moved = q + np.radians([0, 0, 0, -2.0, 0, 0])  # beyond the tolerance: the quadrant follows the joint
-    assert written_configuration("rapid", robot, [(0, 0, 0, 0)], q_moved) == [(0, -1, 0, 0)]
+    assert written_configuration(configuration_data("rapid"), robot, [(0, 0, 0, 0)], q_moved) == [(0, -1, 0, 0)]
     # FANUC J4 = 180.2 deg declared turn 0: -179.8 deg is inside turn 0, so the written turn must move
     fanuc = load_robot("fanuc_lrmate200id")
     q4 = np.radians([[0.0, 10.0, -20.0, 180.2, -30.0, 0.0]])
-    (flags,) = configuration_for("fanuc_ls", fanuc, q4)
-    assert written_configuration("fanuc_ls", fanuc, [(*flags[:3], 0, 0, 0)], q4) == [(*flags[:3], 0, 1, 0)]
+    (flags,) = configuration_for(configuration_data("fanuc_ls"), fanuc, q4)
+    assert written_configuration(configuration_data("fanuc_ls"), fanuc, [(*flags[:3], 0, 0, 0)], q4) == [(*flags[:3], 0, 1, 0)]
 
 
 def test_rapid_home_pose_written_on_a_quadrant_boundary_is_reachable(tmp_path):

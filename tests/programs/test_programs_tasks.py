@@ -19,7 +19,7 @@ from tests.conftest import calibrated_model
 from tests.programs.test_programs_as_run import OFFSET, _krl_point, _stand_in
 from trajcomp import formats
 from trajcomp.cli import main
-from trajcomp.formats.configuration import configuration_for
+from trajcomp.formats.configuration import configuration_data, configuration_for
 from trajcomp.errors import ReadError, WriteError
 from trajcomp.formats.task import groups
 from trajcomp.arm.kinematics import fk
@@ -33,7 +33,7 @@ UNUSED = "[9E9,9E9,9E9,9E9,9E9,9E9]"
 def _robtarget(robot, q):
     """A robtarget literal of the ABB arm at joints ``q`` (deg), with its confdata."""
     T = fk(robot, np.radians(q)[None])[0]
-    conf = configuration_for("rapid", robot, np.radians(q)[None])[0]
+    conf = configuration_for(configuration_data("rapid"), robot, np.radians(q)[None])[0]
     position = ",".join(f"{v:.3f}" for v in T[:3, 3])
     quat = ",".join(f"{v:.8f}" for v in matrix_to_quat(T[:3, :3]))
     return f"[[{position}],[{quat}],[{','.join(map(str, conf))}],{UNUSED}]"

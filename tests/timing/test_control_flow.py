@@ -673,7 +673,7 @@ def fanuc_check(source_text, written_text, joints, robot):
 
 def fanuc_joints(program, robot):
     """``{position number: joints (6,)}`` of an LS program's positions in their declared configuration."""
-    from trajcomp.jobs.pipeline import planned
+    from trajcomp.jobs.retime import planned
     from trajcomp.compensation.posture import planned_joints
 
     plan = planned_joints(program, robot)

@@ -395,7 +395,7 @@ def test_every_method_keeps_the_limits_and_toppra_is_fastest():
 def test_a_task_s_timing_error_names_the_file_of_the_motion(tmp_path):
     """In a task joined from several files, a line number alone would point into the wrong file."""
     from trajcomp import formats
-    from trajcomp.jobs.pipeline import planned
+    from trajcomp.jobs.retime import planned
     from trajcomp.compensation.posture import planned_joints
     from trajcomp.timing import moves_from_program
 

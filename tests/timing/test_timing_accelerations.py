@@ -21,7 +21,7 @@ from trajcomp import formats
 from trajcomp.arm.kinematics import fk
 from trajcomp.arm.robot import load_robot
 from trajcomp.cli import main
-from trajcomp.jobs.pipeline import planned
+from trajcomp.jobs.retime import planned
 from trajcomp.compensation.posture import planned_joints
 from tests.conftest import calibrated_model
 from tests.timing.test_control_flow import ur_least_time

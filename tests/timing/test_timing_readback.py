@@ -31,7 +31,7 @@ from trajcomp.arm.ik import ik
 from trajcomp.arm.kinematics import fk, jacobian
 from trajcomp.arm.robot import load_robot
 from trajcomp.cli import main
-from trajcomp.jobs.pipeline import planned
+from trajcomp.jobs.retime import planned
 from trajcomp.compensation.posture import planned_joints
 from trajcomp.programs.items import JOINT, LINEAR
 from trajcomp.timing import moves_from_program

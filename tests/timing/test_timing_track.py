@@ -26,7 +26,7 @@ from tests.compensation.test_compensate_track import (
 from trajcomp import formats
 from trajcomp.arm.ik import ik
 from trajcomp.arm.kinematics import fk, jacobian
-from trajcomp.jobs.pipeline import planned
+from trajcomp.jobs.retime import planned
 from trajcomp.compensation.posture import planned_joints
 from trajcomp.timing.writeback import apply_timing, retime_program
 

@@ -7,7 +7,7 @@ A robot YAML file (see ``trajcomp/arm/robots/*.yaml``) holds, in user units
     Short name and the data sheet the numbers come from.
 ``vendor`` (optional)
     The maker, e.g. ``KUKA``: a program in a maker's language
-    (`trajcomp.formats.Format.vendor`) runs only on that maker's arms.
+    (its `trajcomp.formats.capabilities.Vendor`) runs only on that maker's arms.
 ``dh``
     ``convention`` (``standard`` = Craig's distal, or ``modified`` =
     proximal) and six-element lists ``a``, ``alpha``, ``d``,

@@ -147,8 +147,9 @@ def languages():
     import what they import (`trajcomp.formats.formats`).
     """
     from trajcomp import formats
+    from trajcomp.formats.capabilities import Vendor
 
-    known = [f"{fmt.name} ({' '.join(filter(None, [fmt.vendor, *fmt.extensions]))})"
+    known = [f"{fmt.name} ({' '.join(filter(None, [getattr(fmt.capability(Vendor), 'name', None), *fmt.extensions]))})"
              for fmt in formats.formats(plugins=False)]
     return ", ".join(known) + ", and the plugins' (`trajcomp formats` lists them)"
 
@@ -156,21 +157,22 @@ def languages():
 def language_names(declaring=None):
     """The names of the registry's languages for a help text: ``"csv, fanuc_ls, ..."`` (plugins as in `languages`).
 
-    ``declaring``: only the languages whose `trajcomp.formats.Format`
-    declares that capability (``"speeds"``, ``"configuration"``).
+    ``declaring``: only the languages that declare a capability of that
+    type (`trajcomp.formats.capabilities.ConfigurationData` ...).
     """
     from trajcomp import formats
 
     return ", ".join(fmt.name for fmt in formats.formats(plugins=False)
-                     if declaring is None or getattr(fmt, declaring))
+                     if declaring is None or fmt.capability(declaring))
 
 
 def speed_field_names():
     """The languages whose re-timing fields the registry declares, with them: ``"krl ($VEL.CP, ...), ..."``."""
     from trajcomp import formats
+    from trajcomp.formats.capabilities import SpeedFields
 
-    return ", ".join(f"{fmt.name} ({fmt.speed_fields})" if fmt.speed_fields else fmt.name
-                     for fmt in formats.formats(plugins=False) if fmt.speeds)
+    fields = [(fmt.name, fmt.capability(SpeedFields)) for fmt in formats.formats(plugins=False)]
+    return ", ".join(f"{name} ({speeds.names})" if speeds.names else name for name, speeds in fields if speeds)
 
 
 def info(message):

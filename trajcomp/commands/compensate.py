@@ -13,7 +13,7 @@ from trajcomp.commands._args import command_parser, info, language_names, langua
 from trajcomp.commands._report import add_report_options, criteria_of
 from trajcomp.commands.convert import add_frame_options, add_in_place_option, frame_options
 from trajcomp.commands.retime import METHOD_HELP, add_tolerance_option
-from trajcomp.compensation.options import MAX_CORRECTION, MAX_JOINT_CHANGE, RETIME_CHOICES
+from trajcomp.compensation.options import JOINT_TARGETS, MAX_CORRECTION, MAX_JOINT_CHANGE, OUTSIDE, RETIME_CHOICES
 from trajcomp.errors import RobotError, TrajcompError
 from trajcomp.model.options import MODES
 from trajcomp.support.parallel import usable_cores
@@ -39,10 +39,10 @@ def add_parser(sub):
     parser.add_argument("--robot", help="the arm the program runs on (built-in name or robot YAML file): refused "
                         "unless it is the model's robot")
     parser.add_argument("--mode", choices=MODES, help="compensation mode (default: the model's method)")
-    parser.add_argument("--outside", choices=("model", "clamp", "error"), default="model",
+    parser.add_argument("--outside", choices=OUTSIDE, default="model",
                         help="targets outside the grid: model only (flagged; default), nearest grid value, or an error")
     add_frame_options(parser)
-    parser.add_argument("--joint-targets", choices=("keep", "compensate"), default="keep",
+    parser.add_argument("--joint-targets", choices=JOINT_TARGETS, default="keep",
                         help="joint-space targets: keep them (default) or compensate the pose they stand for")
     parser.add_argument("--max-joint-change", type=positive_number, default=math.degrees(MAX_JOINT_CHANGE), metavar="DEG",
                         help="largest joint change a correction may cause before the target counts as leaving "
@@ -81,10 +81,10 @@ def run(args):
     from trajcomp.arm.robot import load_robot
     from trajcomp.calibration.measurements import read_validation_run
     from trajcomp.jobs import batch
+    from trajcomp.jobs.options import check_options
     from trajcomp.jobs.pipeline import CompensationJob, loaded_model
 
-    if args.jobs < 1:
-        raise TrajcompError(f"--jobs: expected a whole number of at least 1, got {args.jobs}")
+    check_options(flags=True, jobs=args.jobs)
     tools, frames = frame_options(args)
     job = CompensationJob(
         model=str(Path(args.model).resolve()), mode=args.mode, outside=args.outside, tools=tools, frames=frames,

@@ -1,4 +1,4 @@
-"""``trajcomp convert IN OUT``: rewrite a robot program in another language.
+"""``trajcomp convert IN OUT``: rewrite a robot program in another language (`trajcomp.jobs.convert.ConvertJob`).
 
 Also home of the tool and frame options shared by the commands that read
 programs (``--tool NAME=x,y,z,a,b,c``, ``--frame``/``--base``/``--wobj``).
@@ -7,7 +7,6 @@ programs (``--tool NAME=x,y,z,a,b,c``, ``--frame``/``--base``/``--wobj``).
 import math
 import sys
 
-from trajcomp import formats
 from trajcomp.commands._args import command_parser, language_names, languages
 from trajcomp.errors import TrajcompError
 
@@ -31,11 +30,6 @@ def add_in_place_option(parser):
     """Add ``--in-place``: without it, an output that is an input file is refused."""
     parser.add_argument("--in-place", action="store_true",
                         help="allow the output to replace the input program (otherwise refused)")
-
-
-def protected_inputs(args, path, program):
-    """The input files of ``program`` (read from ``path``) an output must not overwrite; none with ``--in-place``."""
-    return [] if args.in_place else formats.input_paths(path, program)
 
 
 def parse_frame_values(values, option):
@@ -69,11 +63,13 @@ def frame_options(args):
 
 
 def add_parser(sub):
+    from trajcomp.formats.capabilities import ConfigurationData
+
     parser = command_parser(
         sub, "convert",
         "Read a robot program and write it in the language of OUT's extension. Languages: "
         f"{languages()}. Poses are kept to 1e-6 mm; configuration data (in "
-        f"{language_names('configuration')}) are computed with the robot's kinematics, so give --robot when "
+        f"{language_names(ConfigurationData)}) are computed with the robot's kinematics, so give --robot when "
         "the target language needs them. Motions whose position is computed at run time are written as comments (exit 1 if every motion is). "
         "Speeds are written in the target language's units, never faster than the source runs them (give --robot "
         "to convert between joint and TCP speeds); a speed that cannot be carried over is written as the "
@@ -93,42 +89,18 @@ def add_parser(sub):
     parser.set_defaults(run=run)
 
 
-LISTED = 20  # motions named on stderr
-
-
 def run(args):
     from trajcomp.arm.robot import load_robot
-    from trajcomp.compensation.program_rewrite import convert_program
-    from trajcomp.programs.program import place_text
+    from trajcomp.jobs.batch import EXIT_CODES
+    from trajcomp.jobs.convert import ConvertJob
 
     tools, frames = frame_options(args)
-    robot = load_robot(args.robot) if args.robot else None
-    to_format = formats.find_format(args.output, args.to_format)
-    # into its own language every number is kept as written: a point used with two tools needs no copy per use
-    same = to_format.name == formats.find_format(args.input, args.from_format).name
-    program = formats.read(args.input, args.from_format, copies=not same)
-    if robot is not None:
-        formats.check_robot_language(args.output, to_format, robot, "the arm --robot names")
-    to_format = to_format.name
-    converted = convert_program(program, to_format, robot=robot, tools=tools, frames=frames)
-    written = formats.write(args.output, converted, to_format, protect=protected_inputs(args, args.input, program))
-    if converted is program:  # its own language: every field kept as written
-        print(f"wrote {', '.join(str(p) for p in written)}: {len(program.motions)} motions, as written")
-        return 0
-    skipped = len(program.runtime_motions())
-    print(f"wrote {', '.join(str(p) for p in written)}: {len(converted.motions) - skipped} motions"
-          + (f", {skipped} computed at run time written as comments" if skipped else ""))
-    if skipped and skipped == len(converted.motions):  # a file of comments: nothing the arm could run
-        first = program.runtime_motions()[0]
-        print(f"trajcomp: every motion of {args.input} is computed at run time, so {written[0]} holds comments "
-              f"only, no motion (the first, {place_text(program.place(first))}: {first.reason})", file=sys.stderr)
-        return 1
-    unknown = [m for m in converted.motions if m.speed_why and m.target is not None]  # written at the slowest
-    for motion in unknown[:LISTED]:
-        print(f"trajcomp: warning: {program.location(motion)}: speed of {motion.text!r}: {motion.speed_why}",
-              file=sys.stderr)
-    if unknown:
-        more = f" (the first {LISTED} listed)" if len(unknown) > LISTED else ""
-        print(f"trajcomp: {len(unknown)} motion(s) whose speed could not be carried over are written at "
-              f"{to_format}'s slowest speed{more}: set their speeds before running", file=sys.stderr)
-    return 1 if unknown else 0
+    job = ConvertJob(load_robot(args.robot) if args.robot else None, tools, frames, args.from_format, args.to_format,
+                     args.in_place)
+    run = job.run(args.input, args.output)
+    print(*run.result.lines, sep="\n")
+    for warning in run.warnings:
+        print(f"trajcomp: warning: {warning}", file=sys.stderr)
+    if run.result.message:
+        print(f"trajcomp: {run.result.message}", file=sys.stderr)
+    return EXIT_CODES[run.result.status]

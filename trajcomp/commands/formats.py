@@ -17,12 +17,14 @@ def add_parser(sub):
 
 def run(args):
     from trajcomp import formats  # the registry, with its plugins: what the run lists, not what its --help needs
+    from trajcomp.formats.capabilities import ConfigurationData, SpeedFields, Vendor
 
     rows = [("name", "extensions", "maker", "re-timing writes", "configuration", "source")]
     for fmt in formats.formats():
-        timing = (fmt.speed_fields or "its speed fields") if fmt.speeds else "-"
-        rows.append((fmt.name, " ".join(fmt.extensions), fmt.vendor or "-", timing,
-                     "yes" if fmt.configuration else "-", fmt.source))
+        speeds, maker = fmt.capability(SpeedFields), fmt.capability(Vendor)
+        timing = (speeds.names or "its speed fields") if speeds else "-"
+        rows.append((fmt.name, " ".join(fmt.extensions), maker.name if maker else "-", timing,
+                     "yes" if fmt.capability(ConfigurationData) else "-", fmt.source))
     rows += [(name, "", "", "", "", f"plugin failed to import: {reason}")
              for name, reason in formats.plugin_failures().items()]
     widths = [max(len(row[i]) for row in rows) for i in range(len(rows[0]) - 1)]

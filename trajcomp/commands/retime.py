@@ -1,11 +1,11 @@
 """``trajcomp retime IN -o OUT --robot R``: time a program under the arm's limits and write the timing into it.
 
-The options become a `trajcomp.jobs.pipeline.RetimeJob`.
+The options become a `trajcomp.jobs.retime.RetimeJob`.
 """
 
 import sys
 
-from trajcomp.commands._args import add_robot, command_parser, info, robot_of, speed_field_names
+from trajcomp.commands._args import add_robot, command_parser, info, positive_number, robot_of, speed_field_names
 from trajcomp.commands._report import add_report_options, criteria_of
 from trajcomp.commands.convert import add_frame_options, add_in_place_option, frame_options
 from trajcomp.timing.options import RETIME_METHODS, TOLERANCE
@@ -38,14 +38,14 @@ def add_parser(sub):
 
 def add_tolerance_option(parser):
     """Add ``--path-tolerance MM``: how far the timed path may pass from a waypoint."""
-    parser.add_argument("--path-tolerance", type=float, default=TOLERANCE, metavar="MM",
+    parser.add_argument("--path-tolerance", type=positive_number, default=TOLERANCE, metavar="MM",
                         help="largest distance of the timed joint path from a waypoint, mm: the path is smoothed "
                         "within it against IK noise (default %(default)g mm)")
 
 
 def run(args):
     from trajcomp.jobs.batch import EXIT_CODES
-    from trajcomp.jobs.pipeline import RetimeJob
+    from trajcomp.jobs.retime import RetimeJob
 
     tools, frames = frame_options(args)
     job = RetimeJob(robot_of(args), robot_file=args.robot, method=args.method, path_tolerance=args.path_tolerance,

@@ -33,6 +33,8 @@ import functools
 import numpy as np
 
 from trajcomp.compensation.options import MAX_JOINT_CHANGE
+from trajcomp.formats import capability
+from trajcomp.formats.capabilities import ConfigurationData
 from trajcomp.formats.configuration import BOUNDARY_TOLERANCE, binding, declared_windows
 from trajcomp.errors import IKError
 from trajcomp.programs.frames import FrameTable, tool_groups
@@ -138,7 +140,8 @@ def planned_joints(program, robot, *, tools=None, frames=None, workers=1):
     binds = binding(program)[index]
     stated = np.array([bool(table.config[i]) for i in index.tolist()], dtype=bool)
     configured = np.flatnonzero(~has_hint & stated & binds)
-    branch, lower, upper = declared_windows(program.format, [table.config[i] for i in index[configured].tolist()])
+    branch, lower, upper = declared_windows(capability(program, ConfigurationData),
+                                            [table.config[i] for i in index[configured].tolist()])
     by_config, declared = configured[branch >= 0], branch >= 0
     q = np.full((n, 6), np.nan)
     source = np.empty(n, dtype=object)

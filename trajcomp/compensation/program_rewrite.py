@@ -14,7 +14,8 @@ import dataclasses
 
 import numpy as np
 
-from trajcomp.formats import find_format
+from trajcomp.formats import capability, find_format
+from trajcomp.formats.capabilities import BaseFrameOnly, ConfigurationData, OrientationSpeed, SpeedUnits
 from trajcomp.formats.speeds import MotionGeometry, convert_speeds
 from trajcomp.formats.configuration import BOUNDARY_TOLERANCE, binding, configuration_for, describe, written_configuration
 from trajcomp.errors import CompensationError, TimingError
@@ -142,7 +143,7 @@ def compensate_program(program, correct, robot, *, tools=None, frames=None, join
         that the program uses but does not define.
     joint_targets : {"keep", "compensate"}
         ``"compensate"`` treats each joint target as the nominal pose FK(q)
-        stands for and replaces it with the corrected joints.
+        stands for and replaces it with the corrected joints (the jobs check the value: `trajcomp.jobs.options`).
     max_joint_change : float
         Largest change of any joint a correction may cause, rad.
     max_correction : float
@@ -166,8 +167,6 @@ def compensate_program(program, correct, robot, *, tools=None, frames=None, join
     CompensationError
         A correction larger than ``max_correction``.
     """
-    if joint_targets not in ("keep", "compensate"):
-        raise ValueError(f"joint_targets must be 'keep' or 'compensate', got {joint_targets!r}")
     program = placed_on_track(program, robot, tools, frames)
     table = FrameTable(program, robot, tools, frames)
     plan = planned_joints(program, robot, tools=tools, frames=frames, workers=workers)
@@ -291,7 +290,8 @@ def _configs(program, robot, index, q):
     config = program.target_table().config
     declared = [config[i] for i in index.tolist()]
     binds = np.flatnonzero(binding(program)[index])
-    written = written_configuration(program.format, robot, [declared[k] for k in binds.tolist()], q[binds])
+    data = capability(program, ConfigurationData)
+    written = written_configuration(data, robot, [declared[k] for k in binds.tolist()], q[binds])
     if written is None:
         return None
     for k, config in zip(binds.tolist(), written):
@@ -389,7 +389,8 @@ def _described(program, index):
     if not any(config):  # no target states any (a CSV program)
         return ("",) * len(index)
     configs = [config[i] for i in index.tolist()]
-    texts = {c: describe(program.format, c) for c in set(configs)}  # a path's targets mostly share theirs
+    data = capability(program, ConfigurationData)
+    texts = {c: describe(data, c) for c in set(configs)}  # a path's targets mostly share theirs
     return tuple(texts[c] for c in configs)
 
 
@@ -478,25 +479,25 @@ def convert_program(program, to_format, *, robot=None, tools=None, frames=None):
     targets = list(program.targets)
     motions = program.motions
     language = find_format(format=to_format)
-    if language.frameless:  # its poses are always in the base frame
+    if language.capability(BaseFrameOnly):  # its poses are always in the base frame
         for i, (_, frame) in usage.items():
             if targets[i].pose is not None and frame is not None:
                 targets[i] = dataclasses.replace(targets[i], pose=table.frame(frame) @ targets[i].pose, frame=None)
         motions = tuple(dataclasses.replace(m, frame=None) for m in motions)
     cartesian = [i for i in sorted(usage) if not targets[i].is_joint]
-    needs_config = language.configuration is not None
+    data = language.capability(ConfigurationData)
     unknown = any(targets[i].joints is None for i in cartesian)
     if robot is not None and unknown:
         plan = planned_joints(program, robot, tools=tools, frames=frames)
         for i, joints in zip(plan.index, plan.q):
             if targets[i].joints is None:
                 targets[i] = dataclasses.replace(targets[i], joints=joints)
-    if language.speed_units is not None:
-        motions = convert_speeds(motions, language.speed_units, robot,
-                                 _geometry(program, robot, targets, tools, frames), language.name)
+    if (units := language.capability(SpeedUnits)) is not None:
+        motions = convert_speeds(motions, units.units, robot, _geometry(program, robot, targets, tools, frames),
+                                 language.name, orientation=language.capability(OrientationSpeed) is not None)
     known = [i for i, target in enumerate(targets) if target.joints is not None and not target.is_joint] \
-        if robot is not None and needs_config else []
-    configs = dict(zip(known, configuration_for(to_format, robot, np.array([targets[i].joints for i in known]))
+        if robot is not None and data is not None else []
+    configs = dict(zip(known, configuration_for(data, robot, np.array([targets[i].joints for i in known]))
                        if known else ()))  # every target's at once
     for i in range(len(targets)):
         targets[i] = replaced(targets[i], config=configs.get(i, ()), spans={}, edited=False)

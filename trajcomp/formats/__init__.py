@@ -2,21 +2,24 @@
 
 Each language is one folder here (``formats/urscript/``: the simplest to
 copy) whose ``__init__`` describes the language and registers it with
-`register_format`; its modules are imported on first use only:
+`register_format`: a name, extensions, the protocol every language keeps
+(its modules are imported on first use only)
 
 - ``reader.py``: ``read(path) -> Program``;
 - ``writer.py``: ``write(program, path) -> {path: bytes}`` (the content of
   every file it produces, e.g. a KRL .src and its .dat; `write` puts them on
   disk atomically);
-- ``speeds.py``, optional: ``write_speeds(program, result, robot, plan)``,
-  the re-timing written into the program's own speed and time fields
-  (`trajcomp.timing.writeback`);
-- ``configuration.py``, optional: the arm configuration data its targets
-  declare (``encode``, ``windows``, ``merge``, ``describe``:
-  `trajcomp.formats.configuration`).
+
+and the capability objects it declares (`trajcomp.formats.capabilities`:
+the maker whose controllers run it, speed fields the re-timing writes into
+(``speeds.py``), speed units, configuration data (``configuration.py``),
+tasks of several files, copies of a point per use, ...). The pipeline asks
+for a capability (`capability`), never for a language's name.
 
 Adding a language is one folder with these faces and one line in
-`BUILT_IN` (or, outside trajcomp, an entry point). The text toolkit the
+`BUILT_IN` (or, outside trajcomp, an entry point), and its contract test
+(``tests/formats/<language>/``: the protocol and every capability it
+declares, run on its samples). The text toolkit the
 built-in languages share is public, a module per job: `trajcomp.formats.text`
 (reading and scanning a source), `number_fields` (reading its numbers),
 `number_writing`, `pose_encoding`, `text_edits` (the edit engine),
@@ -38,8 +41,9 @@ import importlib
 import os
 from pathlib import Path
 
-from trajcomp.support.atomic import FileSet, recover
 from trajcomp.errors import ReadError, RobotError, TrajcompError, WriteError
+from trajcomp.formats.capabilities import KINDS, KeptExternalAxes, PointCopies, RowBlocks, Vendor, resolved
+from trajcomp.support.atomic import FileSet, recover
 from trajcomp.support.memory import collection_paused
 
 ENTRY_POINT_GROUP = "trajcomp.formats"
@@ -47,61 +51,42 @@ ENTRY_POINT_GROUP = "trajcomp.formats"
 
 @dataclasses.dataclass(frozen=True)
 class Format:
-    """A registered format.
+    """A registered language: a name, its file extensions, ``read`` and ``write``, and the capability objects it
+    declares (`trajcomp.formats.capabilities`).
 
-    ``reader``, ``writer`` and ``speeds`` are callables, or
-    ``"module:function"`` strings resolved on first use; ``configuration`` is
-    a module or a module's name. The other fields are described in
-    `register_format`.
+    ``reader`` and ``writer`` are callables, or ``"module:function"``
+    strings resolved on first use (`register_format` describes them).
     """
 
     name: str
     extensions: tuple
     reader: object
     writer: object
+    capabilities: tuple = ()
     source: str = "built-in"
-    blocks: bool = False
-    vendor: str = None
-    tasks: bool = False
-    copies: bool = False
-    speeds: object = None
-    timed_rows: bool = False
-    configuration: object = None
-    frameless: bool = False
-    speed_units: object = None
-    speed_fields: str = None
-    kept_axes: bool = False
 
-    def _resolve(self, ref):
-        if callable(ref):
-            return ref
-        module, _, function = ref.partition(":")
-        return getattr(importlib.import_module(module), function)
+    def capability(self, kind):
+        """The language's capability object of type ``kind`` (`trajcomp.formats.capabilities`), or None."""
+        return next((c for c in self.capabilities if isinstance(c, kind)), None)
 
     def read(self, path, workers=1):
-        return self._resolve(self.reader)(path, *([workers] if self.blocks else []))
+        """The program in ``path`` (``workers``: processes sharing its blocks of rows, where it has `RowBlocks`)."""
+        blocks = self.capability(RowBlocks)
+        return resolved(self.reader)(path) if blocks is None else resolved(blocks.read)(path, workers)
 
     def write(self, program, path, workers=1):
-        return self._resolve(self.writer)(program, path, *([workers] if self.blocks else []))
-
-    def write_speeds(self, program, result, robot, plan):
-        """The language's ``speeds`` hook: ``(program with its speed and time fields set, settings)``."""
-        return self._resolve(self.speeds)(program, result, robot, plan)
-
-    def configuration_data(self):
-        """The module of the language's configuration data (`trajcomp.formats.configuration`), or None."""
-        ref = self.configuration
-        return importlib.import_module(ref) if isinstance(ref, str) else ref
+        """``{path: bytes}`` of every file ``program`` is written as (``workers``: as `read`)."""
+        blocks = self.capability(RowBlocks)
+        return resolved(self.writer)(program, path) if blocks is None \
+            else resolved(blocks.write)(program, path, workers)
 
 
 _FORMATS = {}
 _PLUGINS = {"loaded": False, "failed": {}}
 
 
-def register_format(name, extensions, reader, writer, *, source="built-in", blocks=False, vendor=None, tasks=False,
-                    copies=False, speeds=None, timed_rows=False, configuration=None, frameless=False,
-                    speed_units=None, speed_fields=None, kept_axes=False):
-    """Register (or replace) a format.
+def register_format(name, extensions, reader, writer, *capabilities, source="built-in"):
+    """Register (or replace) a language.
 
     Parameters
     ----------
@@ -114,63 +99,30 @@ def register_format(name, extensions, reader, writer, *, source="built-in", bloc
     writer : callable or str
         ``writer(program, path) -> {Path: bytes}`` (or an iterable of bytes pieces, e.g. a generator, for a long
         file), or ``"module:function"``.
+    *capabilities
+        What else the language can do, one object of each type of
+        `trajcomp.formats.capabilities` it has (`Vendor`, `SpeedFields`,
+        `ConfigurationData` ...); the pipeline asks for them by type.
     source : str
         Shown by ``trajcomp formats``.
-    blocks : bool
-        The reader and writer take a third argument, ``workers``: processes
-        that share their blocks of rows (`trajcomp.support.parallel.map_blocks`).
-    vendor : str, optional
-        The maker whose controllers run the language (``"KUKA"``, compared
-        with `trajcomp.arm.robot.Robot.vendor`); None for a language any
-        arm's program may be written in (CSV).
-    tasks : bool
-        A program may use points other files of its controller declare
-        (its reader puts them in companion sources, `trajcomp.programs.items.Source`;
-        a batch reads such files first, `trajcomp.formats.task`).
-    copies : bool
-        Points are declared by name and their motions name them (spans
-        ``target_name``, ``via_name``): a point used with several tools or
-        frames is written as a copy per use (`trajcomp.formats.uses`);
-        otherwise its motions are left as written.
-    speeds : callable or str, optional
-        ``speeds(program, result, robot, plan) -> (Program, settings)``, or
-        ``"module:function"``: a re-timing written into the program's own
-        speed and time fields (`trajcomp.timing.writeback.apply_timing`:
-        ``plan`` says what to write per waypoint, ``settings`` is what was
-        written per waypoint). None: timing cannot be written in the language.
-    timed_rows : bool
-        The program's rows are the trajectory (CSV): every one gets its time
-        stamp, and ``speeds`` is given no plan (None).
-    configuration : module or str, optional
-        The module (or its name) of the configuration data the language's
-        targets declare (`trajcomp.formats.configuration`); None for a
-        language whose targets declare none (their joints are written as
-        joints, or the controller chooses).
-    frameless : bool
-        The language's poses are always in the robot's base frame (no work
-        object, base or user frame).
-    speed_units : Mapping[str, Mapping[str, float]], optional
-        Per motion kind (``"joint"``, ``"linear"``, ``"circular"``), the
-        speed units a program generated in the language states (`Motion`'s
-        ``speed_unit``: ``"%"``, ``"rad/s"``, ``"mm/s"``, ``"s"``; ``"v_ori"``:
-        an orientation speed beside the TCP speed), the one a converted
-        speed takes first, each with the smallest value the writer states
-        in it (a smaller speed would be written faster): a program converted
-        into the language gets its speeds in them, never faster
-        (`trajcomp.formats.speeds.convert_speeds`). None: speeds are
-        converted as they are, the writer's choice.
-    speed_fields : str, optional
-        The fields ``speeds`` writes, as the language names them, for help
-        texts and ``trajcomp formats`` (``"$VEL.CP, BAS(#VEL_PTP, %)"``).
-    kept_axes : bool
-        A Cartesian target that does not state an external axis keeps it
-        where the motion before left it (KRL: a POS or FRAME point, or an
-        aggregate without E1); otherwise the axis is unknown there
-        (`trajcomp.programs.frames.FrameTable.track_positions`).
+
+    Raises
+    ------
+    TypeError
+        An object that is not a capability, or two of one type.
     """
-    _FORMATS[name] = Format(name, tuple(e.lower() for e in extensions), reader, writer, source, blocks, vendor, tasks,
-                            copies, speeds, timed_rows, configuration, frameless, speed_units,
-                            speed_fields, kept_axes)
+    kinds = [type(c) for c in capabilities]
+    if not all(kind in KINDS for kind in kinds) or len(set(kinds)) < len(kinds):
+        raise TypeError(f"register_format({name!r}): expected one object each of trajcomp.formats.capabilities' "
+                        f"{', '.join(k.__name__ for k in KINDS)}; got {', '.join(k.__name__ for k in kinds)}")
+    _FORMATS[name] = Format(name, tuple(e.lower() for e in extensions), reader, writer, tuple(capabilities), source)
+
+
+def capability(program, kind):
+    """The capability of type ``kind`` (`trajcomp.formats.capabilities`) of the language ``program`` was read in
+    (or converted into); None where it has none, or for a program built in memory (format ``"api"``)."""
+    language = registered(program.format)
+    return None if language is None else language.capability(kind)
 
 
 def entry_points(group):
@@ -338,11 +290,12 @@ def read(path, format=None, *, workers=1, copies=True):
 
 def uses_resolved(program, fmt):
     """``program`` with each point used with several tools or frames copied per use (`trajcomp.formats.uses`,
-    languages with ``copies``), the motions of any such point left otherwise, each listed with why."""
-    if fmt.copies or program.with_shared_targets_left() is not program:
+    languages with `PointCopies`), the motions of any such point left otherwise, each listed with why."""
+    copies = fmt.capability(PointCopies) is not None
+    if copies or program.with_shared_targets_left() is not program:
         from trajcomp.formats.uses import per_use  # lazily, like the format modules
 
-        program = per_use(program, copies=fmt.copies)
+        program = per_use(program, copies=copies)
     return program.with_shared_targets_left()
 
 
@@ -371,7 +324,7 @@ def read_task(paths, format=None):
 
 def _with_kept_axes(program, fmt):
     """``program`` marked with its language's reading of the external axes a target does not state."""
-    return dataclasses.replace(program, kept_axes=True) if fmt.kept_axes else program
+    return dataclasses.replace(program, kept_axes=True) if fmt.capability(KeptExternalAxes) else program
 
 
 def input_paths(path, program):
@@ -456,9 +409,10 @@ def check_robot_language(path, format, robot, whose):
     RobotError
         Naming the program's maker and language and the arm's.
     """
-    if format.vendor and robot.vendor and format.vendor.casefold() != robot.vendor.casefold():
+    maker = format.capability(Vendor)
+    if maker and robot.vendor and maker.name.casefold() != robot.vendor.casefold():
         raise RobotError(
-            f"{path}: {'an' if format.vendor[0] in 'AEIO' else 'a'} {format.vendor} program ({format.name}) "
+            f"{path}: {'an' if maker.name[0] in 'AEIO' else 'a'} {maker.name} program ({format.name}) "
             f"cannot run on robot {robot.name} "
             f"({robot.vendor}), {whose}: give the arm (or a model of the arm) that runs it"
         )

@@ -4,8 +4,9 @@ A Cartesian target is reached by several joint solutions; each language
 names the one it means with its own flags, in its folder's
 ``configuration.py`` (KUKA Status and Turn: `trajcomp.formats.krl.configuration`;
 ABB confdata: `trajcomp.formats.rapid.configuration`; FANUC CONFIG:
-`trajcomp.formats.fanuc.configuration`), registered as the format's
-``configuration``. Such a module has:
+`trajcomp.formats.fanuc.configuration`), declared by the language as its
+`trajcomp.formats.capabilities.ConfigurationData`, which the functions here
+take (None: a language whose targets declare none). Such a module has:
 
 - ``encode(robot, q) -> list of tuple``: the data of joint vectors q (N, 6), rad;
 - ``windows(configs) -> (branch (M,), lower (M, 6), upper (M, 6))``: the
@@ -27,7 +28,8 @@ value (`distinct_configs`).
 import numpy as np
 
 from trajcomp.arm import ik
-from trajcomp.formats import registered
+from trajcomp.formats import capability, registered
+from trajcomp.formats.capabilities import ConfigurationData
 
 # A joint this close to the boundary of its code satisfies both codes (RobotStudio writes J4 = J6 = 0 as
 # confdata [0,-1,0,0]; a controller accepts either): declared data are read, and kept, with this slack.
@@ -67,23 +69,29 @@ def distinct_tuples(rows, as_tuple=tuple):
     return [made[k] for k in row.reshape(-1).tolist()]
 
 
-def configuration_for(format_name, robot, q):
-    """Configuration data of joint vectors q (N, 6), rad, in a program format's language.
+def configuration_data(name):
+    """The `ConfigurationData` of the language registered as ``name``; None for one whose targets declare none
+    (CSV, URScript) or an unknown name (a program built in memory, ``"api"``)."""
+    language = registered(name)
+    return None if language is None else language.capability(ConfigurationData)
+
+
+def configuration_for(data, robot, q):
+    """Configuration data of joint vectors q (N, 6), rad, in a language's form.
+
+    Parameters
+    ----------
+    data : ConfigurationData or None
+        The language's (`configuration_data`).
+    robot : Robot
+    q : ndarray, shape (N, 6)
 
     Returns
     -------
-    list of tuple, or None for a format without configuration data (CSV,
+    list of tuple, or None for a language without configuration data (CSV,
     URScript: their joints are written as joints).
     """
-    language = _language(format_name)
-    return None if language is None else language.encode(robot, q)
-
-
-def _language(format_name):
-    """The configuration-data module of a format; None for a language whose targets declare none, or a program
-    built in memory (``"api"``)."""
-    language = registered(format_name)
-    return None if language is None else language.configuration_data()
+    return None if data is None else data.codec().encode(robot, q)
 
 
 # Windows are closed intervals that reproduce the encoders' half-open ones to EDGE: a joint
@@ -97,7 +105,8 @@ def binding(program):
     A target binds if some motion of a kind its language reads configuration
     data for (its module's ``BINDING_KINDS``) uses it, as target or via point.
     """
-    kinds = getattr(_language(program.format), "BINDING_KINDS", None)
+    data = capability(program, ConfigurationData)
+    kinds = None if data is None else getattr(data.codec(), "BINDING_KINDS", None)
     table = program.target_table()
     out = np.zeros(len(table.config), dtype=bool)
     motions = program.motion_table()
@@ -107,7 +116,7 @@ def binding(program):
     return out
 
 
-def written_configuration(format_name, robot, declared, q, tolerance=BOUNDARY_TOLERANCE):
+def written_configuration(data, robot, declared, q, tolerance=BOUNDARY_TOLERANCE):
     """The configuration data to write for corrected joints: as declared wherever they still hold.
 
     Each field the joints still satisfy (within ``tolerance`` of its
@@ -119,7 +128,8 @@ def written_configuration(format_name, robot, declared, q, tolerance=BOUNDARY_TO
 
     Parameters
     ----------
-    format_name : str
+    data : ConfigurationData or None
+        The language's (`configuration_data`).
     robot : Robot
     declared : sequence of tuple, length N
         Configuration data as read (``()`` where a target states none: the
@@ -133,19 +143,19 @@ def written_configuration(format_name, robot, declared, q, tolerance=BOUNDARY_TO
     -------
     list of tuple, length N, or None for a language without configuration data.
     """
-    computed = configuration_for(format_name, robot, q)
+    computed = configuration_for(data, robot, q)
     if computed is None:
         return None
     q = np.atleast_2d(q)
     old, old_row = distinct_configs(declared)
     new, new_row = distinct_configs(computed)
-    old_branch, lower, upper = _windows(format_name, old)
-    branch_kept = old_branch[old_row] == _windows(format_name, new)[0][new_row]
+    old_branch, lower, upper = _windows(data, old)
+    branch_kept = old_branch[old_row] == _windows(data, new)[0][new_row]
     joint_kept = _satisfied(robot, q, lower[old_row], upper[old_row], tolerance)
     # a merge per distinct case (old data, new data, branch kept, a bit per joint kept): a path shares them
     case = ((old_row * len(new) + new_row) * 2 + branch_kept) * 64 + joint_kept @ (1 << np.arange(6))
     _, first, row = np.unique(case, return_index=True, return_inverse=True)
-    merge, merged = _language(format_name).merge, np.empty(len(first), dtype=object)
+    merge, merged = data.codec().merge, np.empty(len(first), dtype=object)
     for k, at in enumerate(first.tolist()):
         was, data = old[old_row[at]], new[new_row[at]]
         merged[k] = merge(was, data, bool(branch_kept[at]), joint_kept[at]) if was else data
@@ -187,12 +197,13 @@ def branch_index(back, up, negative):
     return 4 * back.astype(int) + 2 * (~up).astype(int) + negative.astype(int)
 
 
-def declared_windows(format_name, configs):
+def declared_windows(data, configs):
     """The branch and joint windows that configuration data declare: the inverse of `configuration_for`.
 
     Parameters
     ----------
-    format_name : str
+    data : ConfigurationData or None
+        The language's (`configuration_data`).
     configs : sequence of tuple, length N
         Configuration data as read (``()`` where a target has none).
 
@@ -204,7 +215,7 @@ def declared_windows(format_name, configs):
         Window of each joint, rad (``-inf`` / ``inf`` where free).
     """
     distinct, row = distinct_configs(configs)
-    branch, lower, upper = _windows(format_name, distinct)
+    branch, lower, upper = _windows(data, distinct)
     return branch[row], lower[row], upper[row]
 
 
@@ -234,20 +245,19 @@ def distinct_configs(configs):
     return list(distinct), value[row.reshape(-1)]
 
 
-def _windows(format_name, distinct):
+def _windows(data, distinct):
     """`declared_windows` of distinct configuration data, ``distinct[0]`` being ``()``: branch (M,), lower and
     upper (M, 6)."""
     branch = np.full(len(distinct), -1)
     lower, upper = np.full((len(distinct), 6), -np.inf), np.full((len(distinct), 6), np.inf)
-    language = _language(format_name)
-    if language is not None and len(distinct) > 1:
-        branch[1:], lower[1:], upper[1:] = language.windows(distinct[1:])
+    if data is not None and len(distinct) > 1:
+        branch[1:], lower[1:], upper[1:] = data.codec().windows(distinct[1:])
     return branch, lower, upper
 
 
-def describe(format_name, config):
-    """Configuration data as a program of the language writes them (``""`` for none): ``"S 6, T 50"`` in KRL."""
+def describe(data, config):
+    """Configuration data as a program of the language (its `ConfigurationData`, or None) writes them (``""`` for
+    none): ``"S 6, T 50"`` in KRL."""
     if not config:
         return ""
-    language = _language(format_name)
-    return language.describe(config) if language is not None else "[" + ",".join(str(v) for v in config) + "]"
+    return data.codec().describe(config) if data is not None else "[" + ",".join(str(v) for v in config) + "]"

@@ -17,13 +17,14 @@ def written_speed(motion, language):
     Raises
     ------
     WriteError
-        A speed in a unit the language does not state (its format's
-        ``speed_units``): the program must be converted into it first
+        A speed in a unit the language does not state (its
+        `trajcomp.formats.capabilities.SpeedUnits`): the program must be converted into it first
         (`trajcomp.compensation.program_rewrite.convert_program`), never written faster.
     """
     from trajcomp.formats import find_format
+    from trajcomp.formats.capabilities import SpeedUnits
 
-    units = find_format(format=language).speed_units[motion.kind]
+    units = find_format(format=language).capability(SpeedUnits).units[motion.kind]
     if motion.speed is not None and motion.speed_unit not in units:
         raise WriteError(f"line {motion.line}: a {motion.kind} motion's speed in {motion.speed_unit} cannot be written "
                          f"in {language} (convert the program into it first: its speeds are converted no faster)")

@@ -1,7 +1,7 @@
 """A motion's speed field as its controller runs it, and the same speed carried into another language, never faster.
 
-Each language states a motion's speed in its own units (`register_format`'s
-``speed_units``): a percentage of every axis's speed (KRL PTP, FANUC J),
+Each language states a motion's speed in its own units (its
+`trajcomp.formats.capabilities.SpeedUnits`): a percentage of every axis's speed (KRL PTP, FANUC J),
 the speed of the leading axis (UR movej, rad/s), a TCP speed (mm/s; for a
 joint motion, RAPID MoveJ and program CSV, the TCP's speed along the
 joint path), an orientation speed (FANUC L ``deg/sec``, rad/s; RAPID's
@@ -251,7 +251,7 @@ def field_of_rate(kind, rate, unit, geometry, index, robot):
     return rate * extent if extent > 0 else None
 
 
-def convert_speeds(motions, units, robot=None, geometry=None, language=""):
+def convert_speeds(motions, units, robot=None, geometry=None, language="", orientation=False):
     """``motions`` with their speeds in ``units``, each no faster than as read (see the module).
 
     Parameters
@@ -260,16 +260,18 @@ def convert_speeds(motions, units, robot=None, geometry=None, language=""):
         A program's motions.
     units : Mapping[str, Mapping[str, float]]
         Per motion kind, the units the language states and the smallest
-        value it writes in each (its ``speed_units``), the one to convert
-        into first; ``"v_ori"`` among them: an orientation speed beside a
-        TCP speed (RAPID's speeddata). A speed below a unit's smallest
-        value is stated in the next unit.
+        value it writes in each (its `SpeedUnits`), the one to convert
+        into first. A speed below a unit's smallest value is stated in the
+        next unit.
     robot : Robot, optional
         Its velocity limits convert a percentage to a leading-axis speed and back.
     geometry : MotionGeometry, optional
         Of the program's motions, with ``robot``: every other conversion.
     language : str
         The language's name, for the listing.
+    orientation : bool
+        The language states an orientation speed beside a TCP speed (its
+        `OrientationSpeed`: RAPID's speeddata v_ori).
 
     Returns
     -------
@@ -284,25 +286,26 @@ def convert_speeds(motions, units, robot=None, geometry=None, language=""):
         if motion.target is None:
             out.append(motion)
             continue
-        speed, unit, why = _converted(motion, index, stated, robot, geometry)
-        orientation = motion.orientation_speed if "v_ori" in stated else None
+        speed, unit, why = _converted(motion, index, stated, robot, geometry, orientation)
+        bound = motion.orientation_speed if orientation else None
         if why:
             unit = next(u for u in stated if u in SLOWEST)
             speed = max(SLOWEST[unit], stated[unit])
             why = f"{why}: written at {language}'s slowest speed, set it before running"
-            orientation = SLOWEST["rad/s"] if "v_ori" in stated else None
+            bound = SLOWEST["rad/s"] if orientation else None
         out.append(dataclasses.replace(motion, speed=speed, speed_unit=unit, speed_why=why,
-                                       orientation_speed=orientation))
+                                       orientation_speed=bound))
     return tuple(out)
 
 
-def _converted(motion, index, stated, robot, geometry):
-    """``(speed, unit, why)`` of one motion in the units ``stated``; ``why`` says why it could not be."""
+def _converted(motion, index, stated, robot, geometry, orientation):
+    """``(speed, unit, why)`` of one motion in the units ``stated`` (``orientation``: and an orientation speed);
+    ``why`` says why it could not be."""
     if motion.speed_why:
         return None, None, motion.speed_why
     speed, unit = motion.speed, motion.speed_unit
     known = robot is not None and geometry is not None and geometry.known[index]
-    dropped = motion.orientation_speed is not None and "v_ori" not in stated  # a bound the target cannot state
+    dropped = motion.orientation_speed is not None and not orientation  # a bound the target cannot state
     # a programmed acceleration or share of the arm's: no language states it beside a speed
     dropped |= motion.acceleration is not None or motion.acceleration_share is not None
     if dropped and known:  # it matters only where it binds
@@ -334,11 +337,10 @@ def _converted(motion, index, stated, robot, geometry):
     rate = cruise_rate(motion.kind, speed, unit, motion.orientation_speed, geometry, index, robot, motion.acceleration,
                        motion.acceleration_share)
     for target_unit in stated:
-        value = None if target_unit == "v_ori" else field_of_rate(motion.kind, rate, target_unit, geometry, index,
-                                                                   robot)
+        value = field_of_rate(motion.kind, rate, target_unit, geometry, index, robot)
         if value is not None and np.isfinite(value) and _statable(value, target_unit, stated):
             return value, target_unit, ""
-    return None, None, f"speed {shown} cannot be stated in {', '.join(u for u in stated if u != 'v_ori')}"
+    return None, None, f"speed {shown} cannot be stated in {', '.join(stated)}"
 
 
 def _statable(value, unit, stated):

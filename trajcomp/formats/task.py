@@ -120,7 +120,7 @@ def groups(paths):
     task's modules, KUKA programs using one ``$config.dat``) form one
     group, so that a shared point is corrected once and every file is
     written by one run. Only files of languages whose programs use other
-    files' points (`trajcomp.formats.Format.tasks`) are read for this; a
+    files' points (their `trajcomp.formats.capabilities.Tasks`) are read for this; a
     file that cannot be read is a group of its own (its run says why, a
     crash included).
 
@@ -134,6 +134,7 @@ def groups(paths):
         Ordered by their first file.
     """
     from trajcomp import formats  # the registry imports this module lazily
+    from trajcomp.formats.capabilities import Tasks
 
     parent = list(range(len(paths)))
 
@@ -145,7 +146,7 @@ def groups(paths):
     owner = {}  # file -> the first input reading it
     for k, path in enumerate(paths):
         try:
-            if not formats.find_format(path).tasks:
+            if formats.find_format(path).capability(Tasks) is None:
                 continue
             program = formats.read(path)
         except Exception:  # refused or a bug: the file's own run reports it, as the batch reports any file's

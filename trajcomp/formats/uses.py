@@ -4,7 +4,7 @@ One set of numbers cannot be right for two tools or work objects (the same
 figure drawn in two work objects, a point reached with two grippers:
 legal in every language). Where a language declares points by name (RAPID
 robtargets, KRL data lists, URScript pose variables:
-`trajcomp.formats.Format.copies`), each further use gets a copy of the
+`trajcomp.formats.capabilities.PointCopies`), each further use gets a copy of the
 point's declaration, written right after it under a free name (``p10_2``),
 and the motions of that use name the copy: every copy is then compensated
 for its own tool and frame, and the report says so (`Program.notes`). A
@@ -41,7 +41,7 @@ def per_use(program, copies=True):
         ``target_name`` / ``via_name`` of the names they move to, or the
         name once in their line).
     copies : bool
-        The language declares points by name (`trajcomp.formats.Format.copies`);
+        The language declares points by name (`trajcomp.formats.capabilities.PointCopies`);
         otherwise every such point's motions are left as written.
 
     Returns

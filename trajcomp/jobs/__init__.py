@@ -2,10 +2,16 @@
 
 Above the stages (`trajcomp.compensation`, `trajcomp.timing`,
 `trajcomp.report`), below the faces that run them: the CLI's commands, the
-Python API and the plugins.
+Python API, the plugins and the demo (`trajcomp.paper_protocol`). No face
+writes a program file itself (tests/test_layout.py).
 
-- `trajcomp.jobs.pipeline`: `CompensationJob` (compensate, or convert, one
-  program) and `RetimeJob` (re-time one program, no model);
+- `trajcomp.jobs.pipeline`: `CompensationJob` (compensate one program, and
+  write it in its own language or another);
+- `trajcomp.jobs.retime`: `RetimeJob` (re-time one program, no model);
+- `trajcomp.jobs.convert`: `ConvertJob` (rewrite one program in another
+  language, no model);
 - `trajcomp.jobs.batch`: many programs through one job, in parallel, with a
-  summary.
+  summary;
+- `trajcomp.jobs.options`: the jobs' options, checked in one place;
+- `trajcomp.jobs.program_run`: what a job did with one file (`ProgramRun`).
 """

@@ -132,7 +132,7 @@ def output_paths(inputs, out_dir, suffix=None):
     seen, outputs = {}, []
     for path, relative in inputs:
         relative = relative.with_suffix(suffix) if suffix else relative
-        key = relative.as_posix().lower()  # KRL and Windows controllers do not tell case apart
+        key = relative.as_posix().lower()  # one file where case is not told apart (Windows, macOS, controllers)
         if key in seen:
             raise TrajcompError(f"{seen[key]} and {path} would both be written to {out_dir / relative}")
         seen[key] = path

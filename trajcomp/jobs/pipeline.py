@@ -1,16 +1,15 @@
-"""The program pipeline: read, plan postures, compensate, re-time, write, judge.
+"""The compensation job: read, plan postures, compensate, re-time, write, judge.
 
-Every face of trajcomp runs these jobs: ``trajcomp compensate`` (one file,
-or a batch on local processes or a Dask cluster), ``trajcomp retime``, the
-Python API (`trajcomp.Compensator.filter_program`) and the plugins. The
+Every face of trajcomp runs it: ``trajcomp compensate`` (one file, or a
+batch on local processes or a Dask cluster), the Python API
+(`trajcomp.Compensator.filter_program`), the plugins and the demo. The
 same program and options give the same bytes and the same verdict through
 each of them (tests/jobs/test_pipeline.py).
 
-`CompensationJob` compensates one program file with a model;
-`RetimeJob` times one under an arm's limits without a model. Both are
-picklable, so a batch sends them to its workers, and both return a
-`ProgramRun`: the files written, the compliance report and what each stage
-found.
+`CompensationJob` compensates one program file with a model (re-timed as
+`trajcomp.jobs.retime` times a program). It is picklable, so a batch sends
+it to its workers, and returns a `ProgramRun`: the files written, the
+compliance report and what each stage found.
 """
 
 import contextlib
@@ -23,13 +22,15 @@ import numpy as np
 
 from trajcomp import formats
 from trajcomp.arm.transforms import matrix_to_pose
-from trajcomp.jobs import batch
-from trajcomp.compensation.options import MAX_CORRECTION, MAX_JOINT_CHANGE, RETIME_CHOICES
+from trajcomp.compensation.options import MAX_CORRECTION, MAX_JOINT_CHANGE
 from trajcomp.compensation.posture import planned_joints, planned_targets
-from trajcomp.compensation.program_rewrite import (as_written_report, compensate_program, convert_program,
-                                                   placed_on_track)
+from trajcomp.compensation.program_rewrite import compensate_program, convert_program, placed_on_track
 from trajcomp.compensation.target_correction import program_corrector
-from trajcomp.errors import TimingError, TrajcompError
+from trajcomp.errors import TimingError
+from trajcomp.jobs import batch
+from trajcomp.jobs.options import check_options
+from trajcomp.jobs.program_run import LIMIT_MESSAGE, ProgramRun, output_entries, write_report
+from trajcomp.jobs.retime import planned, timed_program, timing_lines
 from trajcomp.model.compensation_model import CompensationModel
 from trajcomp.model.model_file import load_model, model_files
 from trajcomp.programs.program import place_text
@@ -45,40 +46,7 @@ from trajcomp.timing.options import TOLERANCE
 # Targets below which the original and the corrected program are timed at once on two processes. A timing's
 # working memory is ~230 bytes per waypoint: longer programs are timed one after the other (1M points: 0.95 GB, not 1.1).
 TOGETHER = 500_000
-LIMIT_MESSAGE = "the timing exceeds a limit by more than 1 % in the 1 kHz check (table above): check it before running"
 STAGES = ("read", "compensate", "re-time", "write", "report")
-
-
-@dataclasses.dataclass(frozen=True, eq=False)
-class ProgramRun:
-    """What a job did with one program file.
-
-    Attributes
-    ----------
-    result : batch.FileResult
-        Status (pass or fail), the files written and the lines to show.
-    compliance : Report
-        The compliance report (``.passed``, ``.doc``), written or not.
-    report : ProgramReport
-        Per target: planned and corrected joints, landing estimate, warnings.
-    timing : TimingResult or None
-        The timing of the written program; None when it was not re-timed.
-    """
-
-    result: batch.FileResult
-    compliance: object
-    report: object
-    timing: object = None
-
-    @property
-    def passed(self):
-        """Whether the run passed: its verdict, the timing's 1 kHz check and its report written (bool)."""
-        return self.result.status == batch.PASS
-
-    @property
-    def written(self):
-        """The files written, program files first, then report files (tuple of Path)."""
-        return tuple(map(Path, self.result.outputs))
 
 
 @dataclasses.dataclass(frozen=True)
@@ -119,6 +87,11 @@ class CompensationJob:
     measured: object = None  # a validation run of the compensated program (`Measurements`, as
     # `trajcomp.calibration.measurements.read_validation_run` reads it): its landings in the report
 
+    def __post_init__(self):
+        check_options(outside=self.outside, joint_targets=self.joint_targets, retime=self.retime,
+                      max_joint_change=self.max_joint_change, max_correction=self.max_correction,
+                      path_tolerance=self.path_tolerance, workers=self.workers)
+
     def __call__(self, path, output):
         """Compensate ``path`` into ``output``; a `batch.FileResult` (raises TrajcompError on bad input)."""
         return self.run(path, output).result
@@ -139,14 +112,12 @@ class CompensationJob:
         task = path if isinstance(path, tuple) else None
         if task is not None:
             path, output = task[0], output[0]
-        if self.retime not in RETIME_CHOICES:
-            raise TrajcompError(f"retime: expected one of {', '.join(RETIME_CHOICES)}, got {self.retime!r}")
         target = _report_target(self.report, self.report_folder, output, self.output_root)
         with Stages(STAGES, desc=Path(path).name, enabled=self.show_stages) as stages, kept_apart():
             model = loaded_model(self.model)
             whose = "the arm of the model" + (f" {self.source}" if self.source else "")
             program = formats.read(path, workers=self.workers) if task is None else formats.read_task(task)
-            formats.check_robot_language(path, formats.find_format(format=program.format), model.nominal, whose)
+            formats.check_robot_language(path, formats.find_format(path), model.nominal, whose)
             program = placed_on_track(program, model.nominal, self.tools, self.frames)  # also the timing's original
             out_format = formats.output_format(output, program, self.to_format)
             formats.check_robot_language(output, out_format, model.nominal, whose)
@@ -186,11 +157,11 @@ class CompensationJob:
                     model_info=_model_info(self.model, mode, self.source), mode=mode,
                     files=[file_entry("program", p) for p in sources]
                     + ([file_entry("validation run", self.measured.path)] if self.measured else [])
-                    + _output_entries(written, outputs),
+                    + output_entries(written, outputs),
                     options=self.options(), timing=timed, cycle_time_before=before if timed is not None else None,
                     workers=self.workers, measured=landed,
                 )
-                reports, unwritten = _write_report(compliance, target, self.json_only, [*inputs, *written], written,
+                reports, unwritten = write_report(compliance, target, self.json_only, [*inputs, *written], written,
                                                    outputs)
             _next(stages)
         lines = [*summary_lines(compliance.doc), *(f"warning: {w}" for w in report.warnings), *timing,
@@ -231,89 +202,6 @@ class CompensationJob:
                 "max_joint_change_deg": float(np.degrees(self.max_joint_change)),
                 "max_correction_mm": self.max_correction, "retime": self.retime,
                 "path_tolerance_mm": self.path_tolerance, **poses}
-
-
-@dataclasses.dataclass(frozen=True)
-class RetimeJob:
-    """Time one program file under an arm's limits and write the timing into it: read, plan, re-time, write, judge.
-
-    ``robot`` is the arm (a `trajcomp.arm.robot.Robot`); ``robot_file``
-    its file when it came from one (an input no output may replace).
-    Other attributes are the options of ``trajcomp retime``.
-    """
-
-    robot: object
-    robot_file: str = None
-    method: str = "auto"
-    path_tolerance: float = TOLERANCE
-    tools: dict = dataclasses.field(default_factory=dict)
-    frames: dict = dataclasses.field(default_factory=dict)
-    in_place: bool = False
-    criteria: Criteria = Criteria()
-    report: str = None
-    json_only: bool = False
-
-    def run(self, path, output):
-        """Time ``path`` into ``output`` (same language), judge it and write its report: a `ProgramRun`."""
-        program = formats.read(path)
-        formats.check_robot_language(path, formats.find_format(format=program.format), self.robot, "the arm --robot names")
-        program = placed_on_track(program, self.robot, self.tools, self.frames)
-        out_format = formats.find_format(output).name
-        if out_format != program.format:
-            raise TrajcompError(f"{output}: retime writes the language it reads ({program.format}); "
-                                f"convert the program first (trajcomp convert)")
-        sources = list(dict.fromkeys(formats.input_paths(path, program)))
-        inputs = [*sources, *([self.robot_file] if self.robot_file else [])]
-        refuse_inputs(report_paths(self.report) if self.report else (), inputs, "give --report another name")
-        plan = planned_joints(program, self.robot, tools=self.tools, frames=self.frames)
-        joints = planned(program, plan.index, plan.q)
-        timed, timing = timed_program(program, self.robot, joints, self.method, self.path_tolerance, self.tools,
-                                      self.frames)
-        protect = inputs[len(sources):] if self.in_place else inputs
-        with FileSet() as outputs:  # the program and its report land together, or neither
-            written = formats.write(output, timed, protect=protect, into=outputs)
-            report = as_written_report(program, plan, self.robot)
-            compliance = compliance_report(
-                report, self.robot, criteria=self.criteria, command="retime", timing=timing,
-                files=[file_entry("program", p) for p in sources] + _output_entries(written, outputs),
-                options={"method": self.method, "path_tolerance_mm": self.path_tolerance},
-            )
-            reports, unwritten = _write_report(compliance, self.report and Path(self.report), self.json_only,
-                                               [*inputs, *written], written, outputs)
-        lines = [*timing_lines(timing), f"wrote {', '.join(map(str, written))}", *summary_lines(compliance.doc)]
-        if reports:
-            lines.append(f"report: {', '.join(map(str, reports))}")
-        failures = [unwritten, "" if compliance.passed else "the program is written but fails its verdict; see the "
-                    "report", "" if timing.within_limits else LIMIT_MESSAGE]
-        message = "; ".join(filter(None, failures))
-        result = batch.FileResult(str(path), tuple(map(str, written + reports)), batch.FAIL if message else batch.PASS,
-                                  message, tuple(lines))
-        return ProgramRun(result, compliance, report, timing)
-
-
-def planned(program, index, q):
-    """Joints (N, 6) of a program's N targets: q (n, 6) of targets index (n,)
-    (`trajcomp.compensation.posture.PlannedJoints`), NaN elsewhere."""
-    joints = np.full((len(program.target_table()), 6), np.nan)
-    joints[index] = q
-    return joints
-
-
-def timed_program(program, robot, joints, method, tolerance, tools, frames):
-    """``(program with the timing written into its speed fields, TimingResult)``."""
-    from trajcomp.timing.writeback import apply_timing, retime_program
-
-    if not tolerance > 0:
-        raise TrajcompError(f"--path-tolerance: expected a positive number of mm, got {tolerance}")
-    result = retime_program(program, robot, joints, method=method, tools=tools, frames=frames, tolerance=tolerance)
-    return apply_timing(program, result, robot)
-
-
-def timing_lines(result, before=None):
-    """The dense check table, the cycle time(s) and what was written, as text lines."""
-    written = sum(s.written for s in result.segments)
-    kinds = ", ".join(sorted({s.kind for s in result.segments}))
-    return [*result.lines_of_text(before), f"speed settings written for {written} motions ({kinds})"]
 
 
 def retime_compensated(original, corrected, robot, method, tolerance, tools=None, frames=None, *, q_planned=None,
@@ -428,22 +316,6 @@ def _report_target(report, folder, output, root=None):
     if not folder:
         return Path(report)
     return Path(report) / (Path(output).relative_to(root) if root is not None else Path(output).name)
-
-
-def _output_entries(written, outputs):
-    """The report's entries of the program files ``written`` (staged in the `FileSet` ``outputs``)."""
-    return [file_entry("output", p, staged=outputs.digest(p)) for p in written]
-
-
-def _write_report(compliance, target, json_only, protect, written, outputs):
-    """Stage the report to ``target`` (when given) into the `FileSet` ``outputs`` beside the program
-    (``written``): ``(report files, "")``, or ``([], why)`` when it cannot be written (the program is, alone)."""
-    if not target:
-        return [], ""
-    try:
-        return compliance.write(target, json_only=json_only, protect=protect, into=outputs), ""
-    except TrajcompError as exc:
-        return [], f"the program is written ({', '.join(map(str, written))}) but not its report: {exc}"
 
 
 def _import_timing():

@@ -117,7 +117,7 @@ class Program:
     kept_axes : bool
         A Cartesian target that does not state an external axis keeps it
         where the motion before left it (its language's, set when it is
-        read: `trajcomp.formats.Format.kept_axes`).
+        read: `trajcomp.formats.capabilities.KeptExternalAxes`).
     """
 
     format: str

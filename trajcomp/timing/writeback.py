@@ -31,8 +31,8 @@ TCP keeps between the controller's own ramps; a time (RAPID ``\\T``, UR
   linear one that only turns the tool.
 
 The timing decides what to write (`SpeedPlan`); each language writes it in
-its own fields, its format's ``speeds`` hook (`trajcomp.formats`): CSV a
-``t`` column of time stamps (every row: the rows are the trajectory,
+its own fields, the writer of its `trajcomp.formats.capabilities.SpeedFields`:
+CSV a ``t`` column of time stamps (every row: the rows are the trajectory,
 ``timed_rows``); RAPID ``\\T:=T`` or ``\\V:=v`` after the speed data; URScript
 ``t=T`` or ``v=v``; FANUC ``Tmsec`` / ``T sec`` or ``v mm/sec``; KRL, which
 has no motion time, ``BAS(#VEL_PTP, %)`` before a PTP (the percentage with
@@ -48,7 +48,8 @@ import dataclasses
 import numpy as np
 
 from trajcomp.errors import TimingError
-from trajcomp.formats import find_format, formats, registered
+from trajcomp.formats import capability, formats
+from trajcomp.formats.capabilities import OrientationSpeed, SpeedFields, resolved
 from trajcomp.formats.speeds import orientation_time
 from trajcomp.programs.items import JOINT
 from trajcomp.timing.moves import moves_from_program
@@ -103,20 +104,21 @@ def apply_timing(program, result, robot):
     ------
     TimingError
         A program without sources, or a language timing cannot be written in
-        (its format has no ``speeds`` hook).
+        (it has no `SpeedFields`).
     """
     if not writable(program):
-        languages = ", ".join(f.name for f in formats() if f.speeds is not None)
+        languages = ", ".join(f.name for f in formats() if f.capability(SpeedFields))
         raise TimingError(
             f"{program.name}: timing can be written into programs of {languages} read from a file, not into a "
             f"{program.format} program{'' if program.sources else ' built in memory'}"
         )
-    language = find_format(format=program.format)
-    if language.timed_rows:  # its rows are the trajectory: every one gets its time stamp
-        timed, settings = language.write_speeds(program, result, robot, None)
+    fields = capability(program, SpeedFields)
+    write_speeds = resolved(fields.write)
+    if fields.timed_rows:  # its rows are the trajectory: every one gets its time stamp
+        timed, settings = write_speeds(program, result, robot, None)
         return timed, result.with_settings(settings)
     plan = _plan(program, result, robot)
-    timed, settings = language.write_speeds(program, result, robot, plan)
+    timed, settings = write_speeds(program, result, robot, plan)
     return timed, result.with_settings(settings, as_written=plan.as_written, lowered=plan.notes(result, settings),
                                        not_modelled=plan.not_modelled)
 
@@ -134,9 +136,8 @@ def run_time_speeds(program, result):
 
 
 def writable(program):
-    """True if `apply_timing` can write into this program (its language has a ``speeds`` hook, read from a file)."""
-    language = registered(program.format)
-    return bool(program.sources) and language is not None and language.speeds is not None
+    """True if `apply_timing` can write into this program (read from a file in a language with `SpeedFields`)."""
+    return bool(program.sources) and capability(program, SpeedFields) is not None
 
 
 def _timed(result):
@@ -218,8 +219,9 @@ def _plan(program, result, robot):
     times[slower] = programmed[slower] / limit[slower]
     reasons = {w: binding[w] for w in k[lowered | slower].tolist()}
     stated = dict(zip(k[lowered | slower].tolist(), np.where(lowered, speed, duration)[lowered | slower].tolist()))
-    bounded = np.flatnonzero(~process & ~np.isnan(table.orientation_speed[rows]))  # RAPID's v_ori: a time written
-    for j in bounded.tolist():  # replaces the speed data
+    bounds = capability(program, OrientationSpeed) is not None  # RAPID's v_ori: a time written replaces the speed
+    bounded = np.flatnonzero(bounds & ~process & ~np.isnan(table.orientation_speed[rows]))  # data, bound and all
+    for j in bounded.tolist():
         w, motion = int(k[j]), int(rows[j])
         ori = float(table.orientation_speed[motion])
         turning = orientation_time(table.kind[motion], result.q[w - 1], result.q[w], ori, robot)

@@ -18,15 +18,14 @@ sets the ``t`` column.
 """
 
 from trajcomp.formats import register_format
+from trajcomp.formats.capabilities import BaseFrameOnly, RowBlocks, SpeedFields, SpeedUnits
 
 register_format(
     "csv", [".csv"],
     f"{__name__}.reader:read",
     f"{__name__}.writer:write",
-    blocks=True,
-    timed_rows=True,
-    speeds=f"{__name__}.speeds:write_speeds",
-    speed_fields="the t column",
-    speed_units={"joint": {"mm/s": 1e-3}, "linear": {"mm/s": 1e-3}, "circular": {"mm/s": 1e-3}},
-    frameless=True,
+    RowBlocks(f"{__name__}.reader:read", f"{__name__}.writer:write"),
+    SpeedFields(f"{__name__}.speeds:write_speeds", "the t column", timed_rows=True),
+    SpeedUnits({"joint": {"mm/s": 1e-3}, "linear": {"mm/s": 1e-3}, "circular": {"mm/s": 1e-3}}),
+    BaseFrameOnly(),
 )

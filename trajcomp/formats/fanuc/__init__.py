@@ -43,17 +43,17 @@ removed, so LINE_COUNT stays right. Generated programs count their lines.
 """
 
 from trajcomp.formats import register_format
+from trajcomp.formats.capabilities import ConfigurationData, SpeedFields, SpeedUnits, Tasks, Vendor
 
 register_format(
     "fanuc_ls", [".ls"],
     f"{__name__}.reader:read",
     f"{__name__}.writer:write",
-    vendor="FANUC",
-    speeds=f"{__name__}.speeds:write_speeds",
-    speed_fields="msec, sec, mm/sec",
+    Vendor("FANUC"),
+    SpeedFields(f"{__name__}.speeds:write_speeds", "msec, sec, mm/sec"),
     # whole %, mm/sec and deg/sec (1 deg/s in rad/s); msec
-    speed_units={"joint": {"%": 1.0, "s": 1e-3}, "linear": {"mm/s": 1.0, "s": 1e-3, "rad/s": 0.017453292519943295},
-                 "circular": {"mm/s": 1.0, "s": 1e-3}},
-    configuration=f"{__name__}.configuration",
-    tasks=True,
+    SpeedUnits({"joint": {"%": 1.0, "s": 1e-3}, "linear": {"mm/s": 1.0, "s": 1e-3, "rad/s": 0.017453292519943295},
+                "circular": {"mm/s": 1.0, "s": 1e-3}}),
+    ConfigurationData(f"{__name__}.configuration"),
+    Tasks(),
 )

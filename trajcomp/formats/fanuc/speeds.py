@@ -14,7 +14,7 @@ MSEC_LIMIT = 32000  # FANUC msec speeds: 1 .. 32000
 def write_speeds(program, result, robot, plan):
     """A timed motion's speed becomes ``Tmsec`` (``T sec`` beyond 32 s); a lowered cruise speed ``v mm/sec``.
 
-    The ``speeds`` hook of the format (`trajcomp.formats.register_format`): ``plan.times[k]`` (s) and
+    The language's `trajcomp.formats.capabilities.SpeedFields` writer: ``plan.times[k]`` (s) and
     ``plan.cruise[k]`` (mm/s) are written for waypoint k, the end of motion ``result.motion[k]``; returns the
     program with its fields written and the setting written per waypoint.
     """

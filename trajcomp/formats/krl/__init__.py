@@ -52,17 +52,18 @@ its .dat written beside it under the same name); written under its own name
 """
 
 from trajcomp.formats import register_format
+from trajcomp.formats.capabilities import (ConfigurationData, KeptExternalAxes, PointCopies, SpeedFields, SpeedUnits,
+                                           Tasks, Vendor)
 
 register_format(
     "krl", [".src"],
     f"{__name__}.reader:read",
     f"{__name__}.writer:write",
-    vendor="KUKA",
-    tasks=True,
-    copies=True,
-    speeds=f"{__name__}.speeds:write_speeds",
-    speed_fields="$VEL.CP, BAS(#VEL_PTP, %)",
-    speed_units={"joint": {"%": 1e-3}, "linear": {"mm/s": 1e-3}, "circular": {"mm/s": 1e-3}},
-    configuration=f"{__name__}.configuration",
-    kept_axes=True,  # a POS or FRAME point, or an E6POS without E1, leaves the external axes where they are
+    Vendor("KUKA"),
+    Tasks(),
+    PointCopies(),
+    SpeedFields(f"{__name__}.speeds:write_speeds", "$VEL.CP, BAS(#VEL_PTP, %)"),
+    SpeedUnits({"joint": {"%": 1e-3}, "linear": {"mm/s": 1e-3}, "circular": {"mm/s": 1e-3}}),
+    ConfigurationData(f"{__name__}.configuration"),
+    KeptExternalAxes(),  # a POS or FRAME point, or an E6POS without E1, leaves the external axes where they are
 )

@@ -25,7 +25,7 @@ def write_speeds(program, result, robot, plan):
     fold edits the speed its header shows too; a line inserted for a motion
     inside one goes before the fold.
 
-    The ``speeds`` hook of the format (`trajcomp.formats.register_format`): ``plan.times[k]`` (s) and
+    The language's `trajcomp.formats.capabilities.SpeedFields` writer: ``plan.times[k]`` (s) and
     ``plan.cruise[k]`` (mm/s) are written for waypoint k, the end of motion ``result.motion[k]``; returns the
     program with its fields written and the setting written per waypoint.
     """

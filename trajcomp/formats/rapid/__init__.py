@@ -37,17 +37,19 @@ Write: the edited targets' numbers, with confdata from their configuration.
 """
 
 from trajcomp.formats import register_format
+from trajcomp.formats.capabilities import (ConfigurationData, OrientationSpeed, PointCopies, SpeedFields, SpeedUnits,
+                                           Tasks, Vendor)
 
 register_format(
     "rapid", [".mod", ".prg", ".modx", ".sys"],
     f"{__name__}.reader:read",
     f"{__name__}.writer:write",
-    vendor="ABB",
-    tasks=True,
-    copies=True,
-    speeds=f"{__name__}.speeds:write_speeds",
-    speed_fields="\\T, \\V of the speeddata",
-    speed_units={"joint": {"s": 1e-3, "mm/s": 1e-3, "v_ori": 1e-3}, "linear": {"mm/s": 1e-3, "s": 1e-3, "v_ori": 1e-3},
-                 "circular": {"mm/s": 1e-3, "s": 1e-3, "v_ori": 1e-3}},
-    configuration=f"{__name__}.configuration",
+    Vendor("ABB"),
+    Tasks(),
+    PointCopies(),
+    SpeedFields(f"{__name__}.speeds:write_speeds", "\\T, \\V of the speeddata"),
+    SpeedUnits({"joint": {"s": 1e-3, "mm/s": 1e-3}, "linear": {"mm/s": 1e-3, "s": 1e-3},
+                "circular": {"mm/s": 1e-3, "s": 1e-3}}),
+    OrientationSpeed(),  # the speeddata's v_ori
+    ConfigurationData(f"{__name__}.configuration"),
 )

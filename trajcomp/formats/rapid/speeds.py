@@ -7,7 +7,7 @@ from trajcomp.formats.source_shifts import edit_sources
 def write_speeds(program, result, robot, plan):
     """A timed motion's speed data get ``\\T:=`` (a time, s) or ``\\V:=`` (a lowered cruise TCP speed, mm/s).
 
-    The ``speeds`` hook of the format (`trajcomp.formats.register_format`): ``plan.times[k]`` (s) and
+    The language's `trajcomp.formats.capabilities.SpeedFields` writer: ``plan.times[k]`` (s) and
     ``plan.cruise[k]`` (mm/s) are written for waypoint k, the end of motion ``result.motion[k]``; returns the
     program with its fields written and the setting written per waypoint.
     """

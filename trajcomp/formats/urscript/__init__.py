@@ -43,15 +43,15 @@ variables named by other statements are `Statement.refs`.
 """
 
 from trajcomp.formats import register_format
+from trajcomp.formats.capabilities import BaseFrameOnly, PointCopies, SpeedFields, SpeedUnits, Vendor
 
 register_format(
     "urscript", [".script", ".urscript"],
     f"{__name__}.reader:read",
     f"{__name__}.writer:write",
-    vendor="Universal Robots",
-    speeds=f"{__name__}.speeds:write_speeds",
-    speed_fields="t=, v=",
-    speed_units={"joint": {"rad/s": 1e-6, "s": 1e-4}, "linear": {"mm/s": 1e-3, "s": 1e-4}, "circular": {"mm/s": 1e-3}},
-    frameless=True,
-    copies=True,
+    Vendor("Universal Robots"),
+    SpeedFields(f"{__name__}.speeds:write_speeds", "t=, v="),
+    SpeedUnits({"joint": {"rad/s": 1e-6, "s": 1e-4}, "linear": {"mm/s": 1e-3, "s": 1e-4}, "circular": {"mm/s": 1e-3}}),
+    BaseFrameOnly(),
+    PointCopies(),
 )

@@ -11,7 +11,7 @@ _FUNCTION = re.compile(r"(\w+)\s*\(")  # the function a motion calls (also after
 def write_speeds(program, result, robot, plan):
     """A timed movej / movel gets ``t=`` (s); a lowered cruise speed is written ``v=`` (m/s).
 
-    The ``speeds`` hook of the format (`trajcomp.formats.register_format`): ``plan.times[k]`` (s) and
+    The language's `trajcomp.formats.capabilities.SpeedFields` writer: ``plan.times[k]`` (s) and
     ``plan.cruise[k]`` (mm/s) are written for waypoint k, the end of motion ``result.motion[k]``; returns the
     program with its fields written and the setting written per waypoint. The motions' fields are read as columns
     (`trajcomp.programs.tables.MotionTable.span_offsets`): no motion object per waypoint.

@@ -18,10 +18,10 @@ from trajcomp.arm.robot import load_robot
 from trajcomp.arm.transforms import matrix_to_pose
 from trajcomp.compensation.program_rewrite import compensate_program
 from trajcomp.errors import WriteError
-from trajcomp.formats.configuration import configuration_for
+from trajcomp.formats.configuration import configuration_data, configuration_for
 from trajcomp.formats.task import groups
 
-BACKUP = Path(__file__).parents[1] / "data" / "programs" / "real" / "fanuc" / "ub10200"
+BACKUP = Path(__file__).parents[2] / "data" / "programs" / "real" / "fanuc" / "ub10200"
 
 
 def _wpr_pose(x, y, z, w, p, r):
@@ -89,7 +89,7 @@ def _cartesian(n, robot, q):
     """A Cartesian register entry of the arm at joints ``q`` (deg), as a controller lists it."""
     T = fk(robot, np.radians(q)[None])[0]
     x, y, z, a, b, c = matrix_to_pose(T)
-    flip, elbow, front, *turns = configuration_for("fanuc_ls", robot, np.radians(q)[None])[0]
+    flip, elbow, front, *turns = configuration_for(configuration_data("fanuc_ls"), robot, np.radians(q)[None])[0]
     w, p, r = np.degrees([c, b, a])
     return (f"    [1,{n}] =   'Reg{n}' \n  Group: 1   Config: {flip} {elbow} {front}, {turns[0]}, {turns[1]}, "
             f"{turns[2]}\n  X: {x:9.3f}   Y: {y:9.3f}   Z: {z:9.3f}\n  W: {w:9.3f}   P: {p:9.3f}   R: {r:9.3f}\n")

@@ -8,7 +8,7 @@ import pytest
 from trajcomp import formats
 from trajcomp.errors import ReadError
 
-PATH = Path(__file__).parents[1] / "data" / "programs" / "csv" / "path.csv"
+PATH = Path(__file__).parents[2] / "data" / "programs" / "csv" / "path.csv"
 
 
 def test_columns_and_motions():

@@ -16,8 +16,8 @@ from trajcomp.formats.urscript import reader, speeds, writer
 from trajcomp.programs.tables import ItemRows
 from trajcomp.arm.transforms import rotvec_to_matrix
 
-DATA = Path(__file__).parents[1] / "data"
-EXAMPLES = Path(__file__).parents[2] / "examples" / "programs"
+DATA = Path(__file__).parents[2] / "data"
+EXAMPLES = Path(__file__).parents[3] / "examples" / "programs"
 CORPUS = sorted(p for root in (DATA / "programs", EXAMPLES) for p in root.rglob("*.script"))
 
 

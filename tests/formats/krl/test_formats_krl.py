@@ -12,7 +12,7 @@ from trajcomp.errors import ReadError, WriteError
 from trajcomp.arm.robot import load_robot
 from trajcomp.arm.transforms import abc_to_matrix
 
-WELD = Path(__file__).parents[1] / "data" / "programs" / "krl" / "weld.src"
+WELD = Path(__file__).parents[2] / "data" / "programs" / "krl" / "weld.src"
 
 
 @pytest.fixture(scope="module")
@@ -187,7 +187,7 @@ def test_external_axes_are_carried_by_conversion_and_zero_ones_left_out(tmp_path
     assert [t.external.tolist() for t in again.targets] == [[0.0], [-250.5], [0.0]]  # E2 = 0 everywhere: left out
     with pytest.raises(WriteError, match=r"URScript points hold 0 external axes; target XP2 \(line 3\) gives E1 a value"):
         formats.write(tmp_path / "copy.script", convert_program(program, "urscript"))
-    real = formats.read(Path(__file__).parents[1] / "data" / "programs" / "real" / "krl" / "Prog1.src")
+    real = formats.read(Path(__file__).parents[2] / "data" / "programs" / "real" / "krl" / "Prog1.src")
     formats.write(tmp_path / "real.src", convert_program(real.replace(sources=()), "krl"))
     assert all(t.external is None for t in formats.read(tmp_path / "real.src").targets)  # E1 0.0 only
 
@@ -203,7 +203,7 @@ def test_a_program_keeps_its_def_under_its_own_name_even_if_krl_could_not_use_it
 
 
 def test_real_robodk_program_reads_with_its_frames_and_external_axis():
-    program = formats.read(Path(__file__).parents[1] / "data" / "programs" / "real" / "krl" / "Prog1.src")
+    program = formats.read(Path(__file__).parents[2] / "data" / "programs" / "real" / "krl" / "Prog1.src")
     assert program.not_compensated() == ()
     assert {m.tool for m in program.motions} == {"TOOL line 48"} and {m.frame for m in program.motions} == {"BASE line 43"}
     np.testing.assert_allclose(program.tools["TOOL line 48"][:3, 3], [-4.0, 0.0, 371.3])

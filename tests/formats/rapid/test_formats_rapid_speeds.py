@@ -23,7 +23,7 @@ from trajcomp.cli import main
 from trajcomp.compensation.program_rewrite import convert_program
 from trajcomp.formats.rapid.configuration import encode as abb_confdata
 
-POSTS = Path(__file__).parents[1] / "data" / "robodk_posts"
+POSTS = Path(__file__).parents[2] / "data" / "robodk_posts"
 ROBOT = load_robot("abb_irb4600")
 Q = np.radians([[0.0, 0.0, 0.0, 0.0, 30.0, 0.0], [5.0, 5.0, 5.0, 0.0, 30.0, 0.0], [5.0, 5.0, 5.0, 0.0, 30.0, 90.0],
                 [10.0, 5.0, 0.0, 0.0, 30.0, 90.0]])

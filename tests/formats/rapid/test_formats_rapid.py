@@ -9,7 +9,7 @@ from trajcomp import formats
 from trajcomp.errors import ReadError
 from trajcomp.arm.transforms import quat_to_matrix
 
-WELDING = Path(__file__).parents[1] / "data" / "programs" / "rapid" / "Welding.mod"
+WELDING = Path(__file__).parents[2] / "data" / "programs" / "rapid" / "Welding.mod"
 
 
 @pytest.fixture(scope="module")
@@ -196,7 +196,7 @@ def test_arc_and_trigg_instructions_are_compensated_with_their_tool(tmp_path):
         ("p10", 100.0, 10.0, "MyTool", "Frame2"), ("p20", 200.0, None, "tool0", "wobj0")]
 
 
-REAL = Path(__file__).parents[1] / "data" / "programs" / "real" / "rapid" / "1_T_ROB2.mod"
+REAL = Path(__file__).parents[2] / "data" / "programs" / "real" / "rapid" / "1_T_ROB2.mod"
 
 
 def test_real_compas_rrc_module_with_a_moving_track(tmp_path):

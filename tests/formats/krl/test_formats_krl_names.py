@@ -9,7 +9,7 @@ from trajcomp import formats
 from trajcomp.cli import main
 from trajcomp.errors import WriteError
 
-KRL = Path(__file__).parents[1] / "data" / "programs" / "krl"
+KRL = Path(__file__).parents[2] / "data" / "programs" / "krl"
 
 
 def test_another_file_name_renames_def_and_defdat_and_nothing_else(tmp_path):
