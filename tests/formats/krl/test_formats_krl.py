@@ -259,7 +259,7 @@ def test_a_ptp_moving_the_track_under_vel_extax_is_written_no_faster_than_it(tmp
     from tests.timing.test_timing_track import SLOW_TRACK, retimed
     from trajcomp.arm.ik import ik
     from trajcomp.arm.transforms import matrix_to_abc
-    from trajcomp.formats.configuration import configuration_for
+    from trajcomp.formats.configuration import configuration_data, configuration_for
     from trajcomp.formats.krl import reader
 
     robot = on_track("kuka_kr6_r900", SLOW_TRACK)
@@ -273,7 +273,7 @@ def test_a_ptp_moving_the_track_under_vel_extax_is_written_no_faster_than_it(tmp
         f"DECL E6POS XP{k + 1}={{X {T[0, 3]:.4f},Y {T[1, 3]:.4f},Z {T[2, 3]:.4f},"
         + ",".join(f"{n} {v:.5f}" for n, v in zip("ABC", matrix_to_abc(T[:3, :3])))
         + f",S {s},T {t},E1 {e:.1f}}}\n" for k, (T, (s, t), e) in enumerate(
-            zip(world, configuration_for("krl", robot, q), carriage))) + "ENDDAT\n")
+            zip(world, configuration_for(configuration_data("krl"), robot, q), carriage))) + "ENDDAT\n")
     path = tmp_path / "rail.src"
     path.write_text("DEF rail( )\n$BASE=$NULLFRAME\nBAS(#VEL_PTP,100)\nPTP XP1\n$VEL_EXTAX[1]=5\nPTP XP2\nEND\n")
 
