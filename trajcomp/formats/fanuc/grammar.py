@@ -28,6 +28,9 @@ A program (`SECTIONS`)::
     P[1]{ GP1: UF : 0, UT : 1, CONFIG : 'N U T, 0, 0, 0',      entries (`MEMBERS`)
       X = 1.0 mm, Y = 2.0 mm, Z = 3.0 mm, W = 180.0 deg, P = 0.0 deg, R = 0.0 deg };
     /END
+
+Nothing but blank lines may follow /END (`AFTER_END`): the controller's
+loader refuses such a file.
 """
 
 import dataclasses
@@ -42,6 +45,7 @@ from trajcomp.programs.items import CIRCULAR, JOINT, LINEAR
 SECTIONS = ("PROG", "ATTR", "APPL", "MN", "POS", "END")
 _SECTION_WORDS = "|".join(SECTIONS)
 SECTION_WORD = re.compile(r"/(" + _SECTION_WORDS + r")\b")  # a section header where white space alone precedes it
+AFTER_END = re.compile(r"\s*")  # what may follow the /END line: blank lines alone (fullmatch)
 
 # --- /MN instructions: numbered lines, continued by lines without a number ----------------------------------------------
 NUMBERED = re.compile(r"^\s*(\d+):(.*)$")

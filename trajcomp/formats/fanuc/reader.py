@@ -95,8 +95,9 @@ def read(path):
     ------
     ReadError
         Malformed text, numbers out of range, motions to positions
-        without a /POS entry or not taught, or no /END line (the file is
-        cut off: the controller's loader refuses it too).
+        without a /POS entry or not taught, no /END line (the file is
+        cut off) or text after it (`grammar.AFTER_END`): the controller's
+        loader refuses both too.
     """
     source = read_source(path)
     masked = mask(source.text, "!", quote='"')
@@ -171,13 +172,24 @@ def read(path):
 
 
 def _sections(source, by_line, lines, ends):
-    """``[(line, word)]`` of the section headers (`grammar.SECTION_WORD` at a line's start); ReadError where the
-    last is not /END (the program is cut off)."""
-    headers = [(number, m.group(1)) for m in grammar.SECTION_WORD.finditer(by_line)
-               if not by_line[lines.starts[(number := lines.number(m.start())) - 1]:m.start()].strip()]
-    if not headers or headers[-1][1] != "END":
+    """``[(line, word)]`` of the section headers (`grammar.SECTION_WORD` at a line's start) up to the first /END;
+    ReadError where there is none (the program is cut off) or where more than `grammar.AFTER_END` follows it."""
+    headers = []
+    for m in grammar.SECTION_WORD.finditer(by_line):
+        number = lines.number(m.start())
+        if by_line[lines.starts[number - 1]:m.start()].strip():
+            continue
+        headers.append((number, m.group(1)))
+        if m.group(1) == "END":
+            break
+    else:
         last = last_line(lines)
         fail(source.name, last, lines.line(last), "no /END after it: the program is cut off")
+    after = int(ends[headers[-1][0] - 1])
+    if not grammar.AFTER_END.fullmatch(source.text, after):
+        extra = lines.number(after + len(source.text[after:]) - len(source.text[after:].lstrip()))
+        fail(source.name, extra, lines.line(extra), "text after /END: nothing but blank lines may follow it "
+                                                   "(the controller refuses to load the program)")
     return headers
 
 
