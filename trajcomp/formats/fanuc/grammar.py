@@ -107,6 +107,13 @@ SPEED_UNITS = {"%": (1.0, "%"), "mm/sec": (1.0, "mm/s"), "cm/min": (10.0 / 60.0,
                "sec": (1.0, "s"), "msec": (1e-3, "s")}
 _UNIT_ORDER = ("%", "mm/sec", "cm/min", "inch/min", "deg/sec", "msec", "sec")  # a longer one first
 _UNIT = "|".join(u.replace("sec", "se[ck]") for u in _UNIT_ORDER)
+MAX_SPEED = "max_speed"  # a motion's speed: the arm's own limits
+
+
+def speed_unit(spelling):
+    """``(scale, unit)`` of a speed unit as spelt (`SPEED_UNITS`): any case, "sek" for "sec"."""
+    return SPEED_UNITS[re.sub("sek$", "sec", spelling.lower())]
+
 _WRITTEN_UNIT = "|".join(_UNIT_ORDER)
 # an index: P[3], or P[R[3]] / P[R[3:idx]] (one a register holds)
 INDEX = r"((?:A?R\[[^\]]*\]|[^\]:\[])+?)"
@@ -227,3 +234,4 @@ POSITION_LAYOUT = ((("[", None), ("]", "number"), ("{", ""), (":", GROUP))
                    + ((";", NEXT_TO),))
 COMMENTED_LAYOUT = POSITION_LAYOUT[:1] + ((":", "number"), ('"', ""), ('"', None), ("]", "")) + POSITION_LAYOUT[2:]
 LAYOUT_FIELDS = ("number", "uf", "ut") + XYZWPR + ("config",)  # the fields a layout gives, in this order
+LAYOUT_DELIMITERS = "".join(dict.fromkeys(c for c, _ in POSITION_LAYOUT + COMMENTED_LAYOUT))  # what it finds

@@ -496,9 +496,9 @@ def _motion(m, points, unread, name, number, original, registers, register_why):
         fail(name, number, original, "motion needs a speed and FINE, CNT or CR")
     speed, unit, speed_why = None, "%", ""
     if spec.group(1) is not None:
-        scale, unit = SPEED_UNITS[re.sub("sek$", "sec", spec.group(2).lower())]
+        scale, unit = grammar.speed_unit(spec.group(2))
         speed = finite(spec.group(1), name, number, original, "speed") * scale
-    elif (term := " ".join(rest[: spec.start(3)].split())).lower() != "max_speed":  # max_speed: the arm's limits
+    elif (term := " ".join(rest[: spec.start(3)].split())).lower() != grammar.MAX_SPEED:
         speed_why = f"speed {term}: a register, set at run time"
     blend = spec.group(4) or spec.group(5)
     zone = finite(blend, name, number, original, "CNT") if blend is not None else None
@@ -561,7 +561,6 @@ def _acceleration_share(options, speed_why, name, number, original):
 
 POSITIONS_AT_ONCE = 8192  # /POS entries whose fields are found together (`MOTIONS_AT_ONCE`)
 _SPACE = " \t\n\r\f\v"  # white space a field may have around it (`\s` has more: such an entry goes one by one)
-_DELIMITERS = "[]{}:,'=;\""
 _WIDEST_WORD = 32  # characters of the widest frame, tool or CONFIG text read at once
 
 
@@ -610,7 +609,7 @@ def _entry_fields(masked, heads, stop):
     """`_written_positions` of the entries starting at ``heads`` (B,), the last ending by ``stop``."""
     codes = text_codes(masked[heads[0]:stop])
     head = heads - heads[0]
-    delimiter = np.flatnonzero(_among(codes, _DELIMITERS))
+    delimiter = np.flatnonzero(_among(codes, grammar.LAYOUT_DELIMITERS))
     first = np.searchsorted(delimiter, head)
     count = np.diff(np.append(first, len(delimiter)))
     found = []
