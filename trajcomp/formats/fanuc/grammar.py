@@ -210,6 +210,16 @@ CONFIG = re.compile(r"(?:" + _CONFIG_KEYS + r")\s*:\s*'([^']*)'", re.I)
 CONFIG_VALUE = re.compile(  # flip, elbow, front, turns of J1, J4, J6
     r"^\s*([NF])\s*([UD])\s*([TB])\s*,\s*(-?\d{1,3})\s*,\s*(-?\d{1,3})\s*,\s*(-?\d{1,3})\s*$", re.I)
 SCARA_CONFIG = re.compile(r"^\s*[LR]\s*,(?:\s*-?\d{1,3}\s*,?)*\s*$", re.I)  # a 4-axis arm's: not supported
+
+
+def config(text):
+    """``(flip, elbow, front, t1, t4, t6)`` of a CONFIG string; None where it is not one (`CONFIG_VALUE`)."""
+    value = CONFIG_VALUE.match(text)
+    if value is None:
+        return None
+    return (value.group(1).upper(), value.group(2).upper(), value.group(3).upper(), *map(int, value.groups()[3:]))
+
+
 OTHER_REPRESENTATION = re.compile(r"\bR[" + _COORDINATES + r"]\s*=", re.I)  # RX, RY ..: not read
 
 # The at-once read's layout of an entry: its delimiters, each with what stands before it: None (not looked at), ""
