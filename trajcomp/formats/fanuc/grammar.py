@@ -47,11 +47,6 @@ _SECTION_WORDS = "|".join(SECTIONS)
 SECTION_WORD = re.compile(r"/(" + _SECTION_WORDS + r")\b")  # a section header where white space alone precedes it
 AFTER_END = re.compile(r"\s*")  # what may follow the /END line: blank lines alone (fullmatch)
 
-# --- /MN instructions: numbered lines, continued by lines without a number ----------------------------------------------
-NUMBERED = re.compile(r"^\s*(\d+):(.*)$")
-CONTINUED = re.compile(r"^\s*:(.*)$")
-CLOSED = re.compile(r"(?:^|;)\s*$")  # an instruction ended by its ";", or a comment (masked): none continues it
-
 
 @dataclasses.dataclass(frozen=True)
 class Piece:
@@ -107,6 +102,7 @@ SPEED_UNITS = {"%": (1.0, "%"), "mm/sec": (1.0, "mm/s"), "cm/min": (10.0 / 60.0,
                "sec": (1.0, "s"), "msec": (1e-3, "s")}
 _UNIT_ORDER = ("%", "mm/sec", "cm/min", "inch/min", "deg/sec", "msec", "sec")  # a longer one first
 _UNIT = "|".join(u.replace("sec", "se[ck]") for u in _UNIT_ORDER)
+_WRITTEN_UNIT = "|".join(_UNIT_ORDER)
 MAX_SPEED = "max_speed"  # a motion's speed: the arm's own limits
 
 
@@ -114,21 +110,21 @@ def speed_unit(spelling):
     """``(scale, unit)`` of a speed unit as spelt (`SPEED_UNITS`): any case, "sek" for "sec"."""
     return SPEED_UNITS[re.sub("sek$", "sec", spelling.lower())]
 
-_WRITTEN_UNIT = "|".join(_UNIT_ORDER)
+
 # an index: P[3], or P[R[3]] / P[R[3:idx]] (one a register holds)
 INDEX = r"((?:A?R\[[^\]]*\]|[^\]:\[])+?)"
 _COMMENT = r"\s*(?::[^\]]*)?\]"  # an index's comment, P[3:"seam"], and the closing bracket
 
 KINDS = {"J": JOINT, "L": LINEAR, "C": CIRCULAR}
-LINE_NUMBER = Field("line number", r"\d+:", {"number": Piece(r"\d*", BLANK, DIGITS), ":": Piece(":")})
+LINE_NUMBER = Field("line number", r"(\d+):", {"number": Piece(r"\d*", BLANK, DIGITS), ":": Piece(":")})
 KIND = Field("kind", "([" + "".join(KINDS) + "])", {"kind": Piece("[JL]", BLANK, "JL")})  # C: two lines, not at once
 POSITION = Field("position", r"(P|PR)\[\s*" + INDEX + _COMMENT,
                  {"P[": Piece(r"P\[", BLANKS), "position": Piece(r"\d{1,9}", BLANK, DIGITS), "]": Piece(r"\]", BLANK)})
-VIA_END = Field("circle's end point", r"P\[\s*" + INDEX + _COMMENT)  # after the via point: P[n] or PR[n]
+VIA_END = Field("circle's end point", r"P\[\s*" + INDEX + _COMMENT)  # after the via point (PR[n]: REGISTER_POINT)
 SPEED = Field(  # a number and its unit, a register holding one (set at run time), or max_speed (the arm's limits)
     "speed", r"(?:(" + NUMBER + r")\s*(" + _UNIT + r")|A?R\[[^\]]*\]\s*(?:" + _UNIT + r")?|\S+)",
     {"speed": Piece(r"\d{1,9}(?:\.\d{0,9})?", BLANKS, DIGITS + "."),
-     "unit": Piece("(?:" + _WRITTEN_UNIT + ")", BLANK, "%/abcdefghijklmnopqrstuvwxyz")})
+     "unit": Piece("(?:" + _WRITTEN_UNIT + ")", BLANK, "".join(sorted(set(_WRITTEN_UNIT) - {"|"})))})
 TERMINATION = Field(  # FINE, CNTn (read as an n mm blend), CRn, CDn
     "termination", r"(FINE|FEIN|CNT\s*(" + NUMBER + r")?\S*|C[RD]\s*(" + NUMBER + r")?\S*)",
     {"termination": Piece(r"FINE(?=[ \t])|CNT(?=\d)", BLANKS, "CEFINT"),
@@ -140,6 +136,12 @@ ACC = re.compile(r"\bACC\s*(" + NUMBER + r"|A?R\[[^\]]*\])", re.I)
 RUNTIME = re.compile(r"\b(Offset|Tool_Offset|INC|VOFFSET)\b", re.I)
 
 MOTION_FIELDS = (LINE_NUMBER, KIND, POSITION, SPEED, TERMINATION, END)  # the written form, in order
+
+# /MN instructions: numbered lines, continued by lines without a number up to one ended by its ";"
+NUMBERED = re.compile(r"^\s*" + LINE_NUMBER.accepted + "(.*)$")
+CONTINUED = re.compile(r"^\s*:(.*)$")
+# an instruction ended, or a comment (masked): none continues it
+CLOSED = re.compile(r"(?:^|" + END.accepted + r")\s*$")
 
 # the line-by-line read's patterns of a motion instruction (its text after the line number)
 MOTION = re.compile(r"^\s*" + KIND.accepted + r"\s+" + POSITION.accepted + r"(.*)$", re.I)

@@ -89,7 +89,7 @@ FLOW_KINDS = {"def": "routine", "thread": "routine", "sec": "routine", "if": "if
               "while": "loop", "for": "loop", "break": "exit", "return": "return", "halt": "return"}
 
 
-# --- the at-once read: the motion lines a CAM post writes, one a line --------------------------------------------------
+# --- the at-once read: the motion lines a CAM post writes, one a line -------------------------------------------------
 # ``movel(p[x, y, z, rx, ry, rz], v=0.05, r=0.001)``, ``movej([q1, .., q6], a, v, t, r)``, ``movel(pose_trans(frame,
 # p[...]), accel_mss, speed_ms, t=0, r=0.001)``: a written motion to a pose literal, a joint list or pose_trans of a
 # variable and a pose literal, its options numbers or variables. Its groups tile the line from its start to the
@@ -106,7 +106,8 @@ CAM_GROUP = {name: k for k, name in enumerate(
     ["indent", "function", "(", "pose_trans(", "frame", "frame,", "p", "["]
     + [name for k in range(6) for name in ([f"number {k}"] + ([f", {k}"] if k < 5 else []))]
     + ["]", ")", "blanks"]
-    + [f"option {slot} {part}" for slot in range(SLOTS) for part in (",", "name", "=", "number", "variable", "blanks")])}
+    + [f"option {slot} {part}" for slot in range(SLOTS)
+       for part in (",", "name", "=", "number", "variable", "blanks")])}
 # a statement between them that changes nothing the reader carries: blank, a comment (masked), or a call of another
 # function than `CALLS` with plain arguments (``set_standard_digital_out(5, 0.083)``, ``sleep(0.5)``), fullmatch
 PLAIN = re.compile(rf"[ \t]*(?:({NAME})[ \t]*\([^()\[\]=:\r\n]*\)[ \t]*)?(\r\n|\r|\n|)")

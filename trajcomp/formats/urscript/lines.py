@@ -281,8 +281,8 @@ def _block(masked, starts, ends, first_line):
 
 
 def _plain_lines(texts, layout, rows, start, end, first_line):
-    """`PlainLines` of the lines ``rows`` of a block whose layouts (``texts`` [``layout``]) `grammar.PLAIN` matches without
-    naming one of `grammar.CALLS`; ``start``, ``end``: offsets of the block's lines and of the next (K,)."""
+    """`PlainLines` of the lines ``rows`` of a block whose layouts (``texts`` [``layout``]) `grammar.PLAIN` matches
+    without naming one of `grammar.CALLS`; ``start``, ``end``: offsets of the block's lines and of the next (K,)."""
     matches = [grammar.PLAIN.fullmatch(text) for text in texts]
     plain = [k for k, m in enumerate(matches) if m and m.group(1) not in grammar.CALLS]
     ending = np.array([len(matches[k].group(2)) for k in plain], dtype=np.int64)

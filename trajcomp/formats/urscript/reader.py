@@ -174,7 +174,8 @@ class _Reader:
             start, end = self.where(line)
             if m := grammar.ASSIGN.match(masked[start:end]):
                 self.assigned.setdefault(m.group(1), []).append(line)
-                if not (grammar.POSE_VALUE.match(m.group(2)) or grammar.LIST_VALUE.match(m.group(2)) or re.fullmatch(NUMBER, m.group(2))):
+                value = m.group(2)
+                if not (grammar.POSE_VALUE.match(value) or grammar.LIST_VALUE.match(value) or re.fullmatch(NUMBER, value)):
                     self.set_at_run_time.setdefault(m.group(1), line)
         # a plain statement naming an assigned variable is read one by one: it may name a target (`references`)
         naming = np.array([not self.assigned.keys().isdisjoint(grammar.WORD.findall(text)) for text in plain.layouts],
@@ -622,7 +623,8 @@ def read(path):
         raise ReadError(f"{path}: not a URScript program: no def, move or pose literal")
     lines = Lines(source.text)
     reader = _Reader(source, masked, lines, *cam_lines(masked, np.array(lines.starts)))
-    check_closed(source, masked, grammar.BLOCK_OPENS, grammar.BLOCK_CLOSES, dict.fromkeys(map(str.upper, grammar.BLOCK_WORDS), "END"), reader.parts)
+    check_closed(source, masked, grammar.BLOCK_OPENS, grammar.BLOCK_CLOSES,
+                 dict.fromkeys(map(str.upper, grammar.BLOCK_WORDS), "END"), reader.parts)
     done = 0  # CAM-shaped lines read
     for line in reader.others.tolist():
         upto = int(np.searchsorted(reader.cam.line, line))
