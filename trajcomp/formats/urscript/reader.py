@@ -39,6 +39,7 @@ TIMING = ("t", "v", "end")  # the roles of a motion's spans: where re-timing wri
 KINDS = {function: signature.kind for function, signature in grammar.MOTIONS.items()}
 _PARENTHESIS = re.compile(r"[()]")
 _KINDS = np.array([KINDS[f] for f in FUNCTIONS], dtype=object)  # the kind of each of `FUNCTIONS`
+_DEFAULT_SPEEDS = np.array([float(grammar.MOTIONS[f].default_speed) for f in FUNCTIONS])  # and its v without one
 _UNITS = np.array(["mm/s", "rad/s", "s"], dtype=object)  # of a TCP speed, a movej's speed, a time
 
 
@@ -104,7 +105,8 @@ class _Blocks:
     """
 
     def __init__(self, masked, lines, parts):
-        found = sorted((m.start(), m.group(1)) for start, end in parts for pattern in (grammar.BLOCK_OPENS, grammar.BLOCK_CLOSES)
+        found = sorted((m.start(), m.group(1)) for start, end in parts
+                       for pattern in (grammar.BLOCK_OPENS, grammar.BLOCK_CLOSES)
                        for m in pattern.finditer(masked, start, end))
         spans, open_blocks = [], []  # (first line, last line, word, depth); the blocks open at a line
         for offset, word in found:
@@ -175,11 +177,12 @@ class _Reader:
             if m := grammar.ASSIGN.match(masked[start:end]):
                 self.assigned.setdefault(m.group(1), []).append(line)
                 value = m.group(2)
-                if not (grammar.POSE_VALUE.match(value) or grammar.LIST_VALUE.match(value) or re.fullmatch(NUMBER, value)):
+                if not (grammar.POSE_VALUE.match(value) or grammar.LIST_VALUE.match(value)
+                        or re.fullmatch(NUMBER, value)):
                     self.set_at_run_time.setdefault(m.group(1), line)
         # a plain statement naming an assigned variable is read one by one: it may name a target (`references`)
-        naming = np.array([not self.assigned.keys().isdisjoint(grammar.WORD.findall(text)) for text in plain.layouts],
-                          dtype=bool)[plain.layout]
+        naming = np.array([not self.assigned.keys().isdisjoint(grammar.WORD.findall(text))
+                           for text in plain.layouts], dtype=bool)[plain.layout]
         one_by_one[plain.line[naming]] = True
         self.plain = plain.rows(~naming)
         self.others = np.flatnonzero(one_by_one)  # the lines read one by one
@@ -271,11 +274,11 @@ class _Reader:
             return
         cam, n = self.cam, hi - lo
         line, original = int(cam.line[lo]), self.lines.line(int(cam.line[lo]))  # for messages: none can fail
-        joint = cam.function[lo:hi] == FUNCTIONS.index("movej")
+        joint = _KINDS[cam.function[lo:hi]] == JOINT  # movej: rad/s; the others m/s
         scale = np.where(joint, 1.0, 1000.0)
         v, v_why = self.resolved(lo, hi, 0, lambda name: self.speed(name, line, original, "v"))
         given = cam.option_start[lo:hi, 0] >= 0
-        v[~given] = np.where(joint, float(grammar.MOTIONS["movej"].default_speed), float(grammar.MOTIONS["movel"].default_speed))[~given]
+        v[~given] = _DEFAULT_SPEEDS[cam.function[lo:hi][~given]]
         t, t_why = self.resolved(lo, hi, 1, lambda name: self.speed(name, line, original, "t"))
         timed = (cam.option_start[lo:hi, 1] >= 0) & ~(t == 0.0)  # t=0: no time; a t set at run time is one
         blend, _ = self.resolved(lo, hi, 2, lambda name: (self.option(name, line, original), ""))
@@ -460,8 +463,8 @@ class _Reader:
         options |= {k.strip(): v.strip() for k, v in (a.split("=", 1) for a, _ in args[count:] if "=" in a)}
         blend = self.option(options.get("r"), line, original)
         speed, speed_why = self.speed(options.get("v", grammar.MOTIONS[function].default_speed), line, original, "v")
-        speed = None if speed is None else speed * (1.0 if function == "movej" else 1000.0)
-        unit = "rad/s" if function == "movej" else "mm/s"
+        speed = None if speed is None else speed * (1.0 if kind == JOINT else 1000.0)
+        unit = "rad/s" if kind == JOINT else "mm/s"
         acceleration, acceleration_why = self.acceleration(options.get("a"), line, original)
         if "t" in options:  # t= the motion's time: v and a are ignored (t=0: no time)
             time, time_why = self.speed(options["t"], line, original, "t")
@@ -470,7 +473,7 @@ class _Reader:
                 acceleration, acceleration_why = None, ""
         speed_why = speed_why or acceleration_why
         if acceleration is not None:
-            acceleration *= 1.0 if function == "movej" else 1000.0
+            acceleration *= 1.0 if kind == JOINT else 1000.0
         self.motion_spans.add(_timing_offsets(function, args, count))
         frames = {frame for _, frame, _ in found}
         why = next((w for _, _, w in found if w), "") or self.tool_why
