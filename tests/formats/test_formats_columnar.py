@@ -11,7 +11,8 @@ import pytest
 
 from trajcomp import formats
 from trajcomp.errors import ReadError, TrajcompError, WriteError
-from trajcomp.formats.fanuc import reader as fanuc_reader
+from trajcomp.formats.fanuc import columns as fanuc_columns
+from trajcomp.formats.fanuc import grammar as fanuc_grammar
 from trajcomp.formats.krl import at_once as krl_at_once
 from trajcomp.formats.krl import writer as krl_writer
 from trajcomp.formats.rapid import reader as rapid_reader
@@ -29,7 +30,7 @@ EXAMPLES = Path(__file__).parents[2] / "examples" / "programs"
 AT_ONCE = {  # language -> (module, the function reading declarations at once)
     ".src": (krl_at_once, "written_points"),
     ".mod": (rapid_reader, ("_WRITTEN_POINT", "_WRITTEN_MOTION", "_WRITTEN_INLINE")),  # patterns of lines read at once
-    ".ls": (fanuc_reader, "_written_positions"),
+    ".ls": (fanuc_columns, "written_positions"),
     ".script": (urscript_reader, "_literal_poses"),
 }
 CORPUS = sorted(p for root in (DATA / "programs", EXAMPLES) for p in root.rglob("*")
@@ -46,12 +47,12 @@ def _seen(program):
     return targets, [repr(item) for item in program.items], sorted(program.tools), sorted(program.frames)
 
 
-_FANUC_WRITTEN = fanuc_reader._written_positions
+_FANUC_WRITTEN = fanuc_columns.written_positions
 NO_INLINE = (np.zeros(0, dtype=np.int64), np.zeros((0, 10), dtype=np.int64), np.zeros((0, 16), dtype=np.int64),
              np.zeros((0, 16), dtype=np.int64))  # what KRL's `_inline_layout` gives when it finds no line
 NONE_AT_ONCE = {  # what a language's reader at once gives when it reads nothing
     krl_at_once: lambda *args: (np.zeros(0, dtype=int), None, np.zeros(0, dtype=bool)),
-    fanuc_reader: lambda masked, start, end: _FANUC_WRITTEN(masked, 0, 0),
+    fanuc_columns: lambda masked, start, end: _FANUC_WRITTEN(masked, 0, 0),
 }
 
 
@@ -64,8 +65,8 @@ def _line_by_line(path, monkeypatch):
                 patch.setattr(module, name, re.compile(r"(?!)"))
         else:
             patch.setattr(module, function, NONE_AT_ONCE.get(module, lambda *args: {}))
-        if module is fanuc_reader:
-            patch.setattr(module, "_WRITTEN_MOTION", re.compile(r"(?!)"))  # matches nothing
+        if module is fanuc_columns:  # nor any motion line
+            patch.setattr(fanuc_grammar, "WRITTEN_MOTION", re.compile(r"(?!)"))
         if module is rapid_reader:  # nor any line found from its characters
             patch.setattr(module, "_laid_out_lines", lambda codes, starts, ends: [
                 (np.zeros(0, dtype=np.int64), np.zeros((0, 1, 2), dtype=np.int64))] * len(module.WRITTEN_FORMS))

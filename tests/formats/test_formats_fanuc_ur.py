@@ -72,6 +72,25 @@ def test_fanuc_malformed_position(tmp_path, block, message):
         formats.read(path)
 
 
+@pytest.mark.parametrize("after, line", [("junk\n", 11), ("\n  ! a comment\n", 12),
+                                         ("/MN\n   2:L P[1] 100mm/sec FINE ;\n", 11), ("\x1a", 11)])
+def test_fanuc_text_after_end_is_refused_naming_file_and_line(tmp_path, capsys, after, line):
+    """Issue 36: the controller's loader refuses an .LS with anything but blank lines after /END (the real ones
+    end there); it was accepted with exit 0."""
+    from trajcomp.cli import main
+
+    path = tmp_path / "AFTER.LS"
+    text = ("/PROG AFTER\n/MN\n   1:L P[1] 100mm/sec FINE ;\n/POS\nP[1]{\n   GP1:\n\tUF : 0, UT : 1,\n"
+            "\tX = 1.0 mm, Y = 2.0 mm, Z = 3.0 mm, W = 0 deg, P = 0 deg, R = 0 deg\n};\n/END\n")
+    path.write_text(text + "\n \t\n\n")  # blank lines: read
+    assert len(formats.read(path).motions) == 1
+    path.write_text(text + after)
+    with pytest.raises(ReadError, match=rf"AFTER\.LS:{line}: text after /END: nothing but blank lines"):
+        formats.read(path)
+    assert main(["convert", str(path), str(tmp_path / "out.csv")]) == 2
+    assert f"AFTER.LS:{line}: text after /END" in capsys.readouterr().err
+
+
 def test_fanuc_motion_errors(tmp_path):
     path = tmp_path / "BAD.LS"
     path.write_text("/PROG BAD\n/MN\n   1:L P[7] 100mm/sec FINE ;\n/POS\n/END\n")

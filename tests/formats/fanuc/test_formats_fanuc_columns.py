@@ -8,7 +8,7 @@ import pytest
 
 from trajcomp import formats
 from trajcomp.errors import ReadError, WriteError
-from trajcomp.formats.fanuc import reader, speeds, writer
+from trajcomp.formats.fanuc import columns, grammar, speeds, writer
 from trajcomp.formats.text import Lines
 from trajcomp.formats.source_shifts import edit_sources
 from trajcomp.formats.text_edits import target_edits
@@ -63,10 +63,10 @@ def _seen(program):
 
 def _line_by_line(path, monkeypatch):
     """The program read with no line read at once."""
-    written = reader._written_positions
+    written = columns.written_positions
     with monkeypatch.context() as patch:
-        patch.setattr(reader, "_written_positions", lambda masked, start, end: written(masked, 0, 0))
-        patch.setattr(reader, "_WRITTEN_MOTION", re.compile(r"(?!)"))
+        patch.setattr(columns, "written_positions", lambda masked, start, end: written(masked, 0, 0))
+        patch.setattr(grammar, "WRITTEN_MOTION", re.compile(r"(?!)"))
         return formats.read(path)
 
 
@@ -174,15 +174,15 @@ def test_line_starts_found_at_once_are_those_of_the_regular_expression(text, pie
 
 
 def _counted(monkeypatch, name):
-    """Count what ``reader.<name>`` returns (the rows read at once) in a list, each call's count appended."""
-    counts, function = [], getattr(reader, name)
+    """Count what ``columns.<name>`` returns (the rows read at once) in a list, each call's count appended."""
+    counts, function = [], getattr(columns, name)
 
     def counting(*args):
         found = function(*args)
         counts.append(len(found["p"] if "p" in found else found["line"]))
         return found
 
-    monkeypatch.setattr(reader, name, counting)
+    monkeypatch.setattr(columns, name, counting)
     return counts
 
 
@@ -233,10 +233,10 @@ def test_written_variants_read_at_once_as_line_by_line(tmp_path, monkeypatch, en
     path = _program(tmp_path, ["  ! Grüße, Ωmega ;"] + [line for line, _ in MOTION_VARIANTS],
                     [entry for entry, _ in POSITION_VARIANTS], ending)
     for name, size in (("POSITIONS_AT_ONCE", block), ("MOTIONS_AT_ONCE", block), ("HEADS_AT_ONCE", 3 * block)):
-        monkeypatch.setattr(reader, name, size)
+        monkeypatch.setattr(columns, name, size)
     expected = _line_by_line(path, monkeypatch)
-    positions_read, motions_read = _counted(monkeypatch, "_written_positions"), _counted(monkeypatch,
-                                                                                         "_written_motions")
+    positions_read, motions_read = _counted(monkeypatch, "written_positions"), _counted(monkeypatch,
+                                                                                         "written_motions")
     at_once = formats.read(path)
     assert _seen(at_once) == _seen(expected)
     assert positions_read == [sum(fast for _, fast in POSITION_VARIANTS)]

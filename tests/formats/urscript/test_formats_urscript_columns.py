@@ -172,7 +172,8 @@ def test_cam_lines_are_columns_of_their_numbers_and_offsets():
             "  movel(pose_trans(base, p[1, 2, 3, 4, 5, 6]))\n  movel(p[1, 2, 3, 4, 5, 6], v=1, v=2)\nend\n")
     found, plain = cam.cam_lines(mask(text, "#"), np.array(Lines(text).starts))
     assert found.line.tolist() == [2, 3, 5]  # line 6 names v twice: read line by line
-    assert found.function.tolist() == [0, 1, 0] and found.is_joint.tolist() == [False, True, False]
+    assert [cam.FUNCTIONS[f] for f in found.function] == ["movel", "movej", "movel"]
+    assert found.is_joint.tolist() == [False, True, False]
     assert np.array_equal(found.values, [[0.5, -0.1, 0.3, 0, 3.14, 0], [1, 2, 3, 4, 5, 6], [1, 2, 3, 4, 5, 6]])
     assert [text[a:b] for a, b in zip(found.number_start[0], found.number_end[0])] == ["0.5", "-.1", "3e-1", "0",
                                                                                       "3.14", "0"]

@@ -42,15 +42,13 @@ from pathlib import Path
 import numpy as np
 
 from trajcomp.errors import ReadError
-from trajcomp.formats.fanuc.reader import _CONFIG_VALUE, JOINTS, XYZWPR
+from trajcomp.formats.fanuc.grammar import CONFIG_VALUE, JOINTS, MOTION_REGISTER, XYZWPR
 from trajcomp.formats.text import ANGLE_LIMIT, JOINT_LIMIT, LENGTH_LIMIT, Lines, fail, finite, mask, read_source
 from trajcomp.formats.number_fields import NUMBER
 from trajcomp.programs.items import Span, Target
 from trajcomp.arm.transforms import pose_to_matrix
 
 FILE_NAME = "posreg.va"
-# A motion line's register (``J PR[3] ...``, a circle's continuation ``: PR[4] ...``), in an /MN line.
-_MOTION_REGISTER = re.compile(r"^\s*(?:\d+:\s*[JLC]|:)\s*PR\[\s*(\d+)\s*[:\]]", re.I | re.M)
 # An instruction that sets a register: ``PR[3]=``, ``PR[GP1:3,2:x]=``, ``PR[R[1]]=`` (any register), ``TO PR[3]``.
 _SETS = re.compile(r"\bPR\[\s*(?:GP\d+\s*:\s*)?(\d+|R\[[^\]]*\])[^\]=]*\]\s*=(?!=)"
                    r"|\bTO\s+PR\[\s*(?:GP\d+\s*:\s*)?(\d+|R\[[^\]]*\])", re.I)
@@ -91,7 +89,7 @@ def used_registers(masked):
     """Register numbers the motion lines of a program's masked text name (sorted list of int)."""
     if "R[" not in masked and "r[" not in masked:  # no register at all (a CAM path): the text is not scanned
         return []
-    return sorted({int(n) for n in _MOTION_REGISTER.findall(masked)})
+    return sorted({int(n) for n in MOTION_REGISTER.findall(masked)})
 
 
 def resolve(program_path, masked, lines, targets, index):
@@ -220,7 +218,7 @@ def _target(source, index, lines, n, entry, entries):
     config = ()
     c = _CONFIG.search(text, body_start, body_end)
     if c:
-        v = _CONFIG_VALUE.match(c.group(1))
+        v = CONFIG_VALUE.match(c.group(1))
         if not v:
             fail(source.name, lines.number(c.start()), lines.line(lines.number(c.start())),
                  f"{label}: malformed Config (a 6-axis arm's is 'N U T, 0, 0, 0')")

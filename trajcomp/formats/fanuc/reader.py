@@ -1,15 +1,15 @@
 """The FANUC LS reader: /MN motion lines and /POS positions into a `Program` (see `trajcomp.formats.fanuc`)."""
 
 import dataclasses
-import functools
-import itertools
 import re
 from pathlib import Path
 
 import numpy as np
 
 from trajcomp.errors import ReadError
-from trajcomp.formats.number_fields import NUMBER, character_table, offset_type, read_numbers, text_codes
+from trajcomp.formats.fanuc import columns, grammar
+from trajcomp.formats.fanuc.grammar import JOINTS, KINDS, XYZWPR
+from trajcomp.formats.number_fields import NUMBER, offset_type
 from trajcomp.formats.text import (
     ANGLE_LIMIT,
     JOINT_LIMIT,
@@ -25,62 +25,13 @@ from trajcomp.formats.text import (
 from trajcomp.programs import flow
 from trajcomp.programs.flow import Step
 from trajcomp.programs.program import Program
-from trajcomp.programs.items import CIRCULAR, JOINT, LINEAR, Motion, Span, SpanColumns, Target, replaced
+from trajcomp.programs.items import CIRCULAR, Motion, Span, SpanColumns, Target, replaced
 from trajcomp.programs.tables import ItemRows, MotionTable, StatementTable, TargetRows, TargetTable, TextSlices
 from trajcomp.arm.transforms import pose_to_matrix
 
-XYZWPR = ("x", "y", "z", "w", "p", "r")
 ABC_ORDER = ("x", "y", "z", "r", "p", "w")  # A = R, B = P, C = W
-JOINTS = ("j1", "j2", "j3", "j4", "j5", "j6")
 MIN_PLACES = dict.fromkeys(XYZWPR[:3], 3) | dict.fromkeys(XYZWPR[3:], 4) | dict.fromkeys(JOINTS, 4)
-KINDS = {"J": JOINT, "L": LINEAR, "C": CIRCULAR}
-SPEED_UNITS = {"%": (1.0, "%"), "mm/sec": (1.0, "mm/s"), "cm/min": (10.0 / 60.0, "mm/s"),
-               "inch/min": (25.4 / 60.0, "mm/s"), "deg/sec": (np.pi / 180.0, "rad/s"),
-               "sec": (1.0, "s"), "msec": (1e-3, "s")}
-_UNIT = r"%|mm/se[ck]|cm/min|inch/min|deg/se[ck]|mse[ck]|se[ck]"
-
-_SECTION = re.compile(r"^/(PROG|ATTR|APPL|MN|POS|END)\b")
-_NUMBERED = re.compile(r"^\s*(\d+):(.*)$")
-_CONTINUED = re.compile(r"^\s*:(.*)$")
-_CLOSED = re.compile(r"(?:^|;)\s*$")  # an instruction ended by its ";", or a comment (masked): none continues it
-_INDEX = r"((?:A?R\[[^\]]*\]|[^\]:\[])+?)"  # P[3], or P[R[3]] / P[R[3:idx]]: an index a register holds
-_MOTION = re.compile(r"^\s*([JLC])\s+(P|PR)\[\s*" + _INDEX + r"\s*(?::[^\]]*)?\](.*)$", re.I)
-_POINT = re.compile(r"^\s*P\[\s*" + _INDEX + r"\s*(?::[^\]]*)?\](.*)$", re.I)
-_SPEED_TERM = re.compile(
-    r"^\s*(?:(" + NUMBER + r")\s*(" + _UNIT + r")|A?R\[[^\]]*\]\s*(?:" + _UNIT + r")?|\S+)\s+(FINE|FEIN|CNT\s*(" + NUMBER + r")?\S*|C[RD]\s*(" + NUMBER
-    + r")?\S*)(?:\s|$)", re.I
-)
-_SPEED_FIELD = re.compile(r"(?:" + NUMBER + r")\s*(?:" + _UNIT + r")(?=\s+(?:FINE|FEIN|CNT|CR|CD))", re.I)
-_RUNTIME = re.compile(r"\b(Offset|Tool_Offset|INC|VOFFSET)\b", re.I)
-_ACC = re.compile(r"\bACC\s*(" + NUMBER + r"|A?R\[[^\]]*\])", re.I)  # the motion's acceleration override, %
-_STATE = re.compile(r"^\s*(UFRAME_NUM|UTOOL_NUM|BENUTZER_NUM|WKZ_NUM)\s*=\s*(.*?)\s*;", re.I)
-_SET_FRAME = re.compile(r"^\s*(UFRAME|UTOOL|BENUTZER|WKZ)\s*\[\s*(\d+)\s*\]\s*=\s*(.*?)\s*;", re.I)
-_POINT_REF = re.compile(r"\bP\[\s*(\d+)\s*(?::[^\]]*)?\]", re.I)
-_POS = re.compile(r"P\[\s*(\d+)\s*(?::\s*\"[^\"]*\")?\s*\]\s*\{(.*?)\};", re.S)
-_GROUP = re.compile(r"GP(\d+)\s*:(.*?)(?=GP\d+\s*:|$)", re.S)
-_FIELD = re.compile(r"\b([XYZWPR]|J\d|E\d)\s*=\s*(" + NUMBER + r"|\*+)\s*(mm|deg)", re.I)
-_FRAME_NUMBER = re.compile(r"\b(UF|UT)\s*:\s*(\d+)", re.I)
-_CONFIG = re.compile(r"(?:CONFIG|KONFIG)\s*:\s*'([^']*)'", re.I)
-_CONFIG_VALUE = re.compile(r"^\s*([NF])\s*([UD])\s*([TB])\s*,\s*(-?\d{1,3})\s*,\s*(-?\d{1,3})\s*,\s*(-?\d{1,3})\s*$", re.I)
-_OTHER_REPRESENTATION = re.compile(r"\bR[XYZWPR]\s*=", re.I)
-# The /MN motion lines a CAM post-processor (and `trajcomp convert`) writes, read together (`_written_motions`):
-#    12:L P[12] 50mm/sec CNT1    ;   (J or L, a position P[n], a speed in a unit, FINE or CNTn; its number may
-#                                       be left out, as MakeTP allows: `_instructions`)
-_WRITTEN_MOTION = re.compile(
-    r"^[ \t]*\d*:[ \t]*([JL])[ \t]+P\[[ \t]*(\d{1,9})[ \t]*\][ \t]+((\d{1,9}(?:\.\d{0,9})?)[ \t]*"
-    r"(%|mm/sec|cm/min|inch/min|deg/sec|msec|sec))[ \t]+(?:FINE[ \t]+|CNT(\d{1,3})[ \t]*);[ \t]*\r?$", re.M)
-_SECTION_WORD = re.compile(r"/(PROG|ATTR|APPL|MN|POS|END)\b")  # `_SECTION` where white space alone precedes it
 _LONE_CR = re.compile(r"\r(?!\n)")  # a line ending of its own (`Lines`), which `^` and `$` do not see
-_SCARA_CONFIG = re.compile(r"^\s*[LR]\s*,(?:\s*-?\d{1,3}\s*,?)*\s*$", re.I)
-# the instructions that change the order a program runs in (`trajcomp.programs.flow.Step`)
-_CALL = re.compile(r"\bCALL\s+(\w+)", re.I)
-_JUMP = re.compile(r"\bJMP\s+LBL\s*\[\s*(\w+)", re.I)
-_LABEL = re.compile(r"^\s*LBL\s*\[\s*(\w+)", re.I)
-_CONDITION = re.compile(r"^\s*(IF|SELECT|=|ELSE\s*,)", re.I)  # IF .., JMP / CALL; SELECT .. =n, JMP ..; ELSE, JMP
-_BLOCK_WORDS = {"ELSE": "else", "ENDIF": "endif", "ENDFOR": "endloop", "END": "return", "ABORT": "return"}
-_WAIT = re.compile(r"^\s*(WAIT|PAUSE)\b", re.I)
-_TOOL_WORDS = {"UTOOL_NUM": "tool", "WKZ_NUM": "tool", "UFRAME_NUM": "frame", "BENUTZER_NUM": "frame",
-               "UTOOL": "tool", "WKZ": "tool", "UFRAME": "frame", "BENUTZER": "frame"}
 
 
 @dataclasses.dataclass
@@ -94,16 +45,16 @@ class _State:
 
     def update(self, content, line):
         """Follow ``UTOOL_NUM=n``, ``UTOOL_NUM=R[1]`` and ``UTOOL[n]=PR[m]`` (and the user frame ones)."""
-        if m := _STATE.match(content):
-            what, value = _TOOL_WORDS[m.group(1).upper()], m.group(2)
+        if m := grammar.FRAME_STATE.match(content):
+            what, value = grammar.FRAME_WORDS[m.group(1).upper()], m.group(2)
             if value.isdigit():
                 setattr(self, what, value)
                 self.why[what] = ""
             else:
                 setattr(self, what, None)
                 self.why[what] = f"{m.group(1).upper()}={value} chosen at run time (line {line})"
-        elif m := _SET_FRAME.match(content):
-            what = _TOOL_WORDS[m.group(1).upper()]
+        elif m := grammar.SET_FRAME.match(content):
+            what = grammar.FRAME_WORDS[m.group(1).upper()]
             self.set_at_run_time[what][m.group(2)] = (
                 f"{what} {m.group(2)} set at run time by {m.group(1).upper()}[{m.group(2)}]={m.group(3)} (line {line})")
 
@@ -132,7 +83,7 @@ def read(path):
     """Read a FANUC .LS program.
 
     The /MN motion lines and /POS positions a CAM post-processor writes
-    (`_WRITTEN_MOTION`, `_LAYOUT`) are read together as columns
+    (`grammar.WRITTEN_MOTION`, `grammar.POSITION_LAYOUT`) are read together as columns
     (`Program.from_tables`: no object per motion or position); every other
     /MN line is read one by one, in order, and the tool and user frame it
     sets hold for the motions after it.
@@ -141,8 +92,9 @@ def read(path):
     ------
     ReadError
         Malformed text, numbers out of range, motions to positions
-        without a /POS entry or not taught, or no /END line (the file is
-        cut off: the controller's loader refuses it too).
+        without a /POS entry or not taught, no /END line (the file is
+        cut off) or text after it (`grammar.AFTER_END`): the controller's
+        loader refuses both too.
     """
     source = read_source(path)
     masked = mask(source.text, "!", quote='"')
@@ -154,11 +106,7 @@ def read(path):
     starts, ends = _line_offsets(lines)
     count = len(starts)
     by_line = _LONE_CR.sub("\n", masked) if "\r" in masked else masked  # `^` and `$` at every line's ends
-    headers = [(number, m.group(1)) for m in _SECTION_WORD.finditer(by_line)  # at a line's start (`_SECTION`)
-               if not by_line[lines.starts[(number := lines.number(m.start())) - 1]:m.start()].strip()]
-    if not headers or headers[-1][1] != "END":
-        last = last_line(lines)
-        fail(source.name, last, lines.line(last), "no /END after it: the program is cut off")
+    headers = _sections(source, by_line, lines, ends)
     pos_start, pos_end = None, len(source.text)
     in_mn = np.zeros(count + 1, dtype=bool)  # by line number (1-based): a line of the /MN section
     for (number, what), (following, _) in zip(headers, headers[1:] + [(count + 1, None)]):
@@ -176,7 +124,7 @@ def read(path):
         targets = list(targets)  # the registers' targets join the positions (objects)
         registers_source, registers, register_why, notes = posreg.resolve(path, masked, lines, targets, 1)
         sources += (registers_source,) if registers_source is not None else ()
-    written = _written_motions(by_line, starts, ends, in_mn, points, unread)
+    written = columns.written_motions(by_line, starts, ends, in_mn, points, unread)
     covered = np.zeros(count + 1, dtype=bool)  # lines of a motion or an instruction: the others are statements
     covered[written["line"]] = True
     state, one_by_one, speed_at, kept, blocks, steps = _State(), [], [], [], {}, []
@@ -187,14 +135,14 @@ def read(path):
         blocks.setdefault(state.key(), (state.copy(), []))[1].append(np.arange(done, upto))
         done = upto
         state.update(content, number)
-        m = _MOTION.match(content)
+        m = grammar.MOTION.match(content)
         if not m:
             steps += _flow_steps(content, number)
-            kept.append((number, start, end, tuple(points[int(n)] for n in _POINT_REF.findall(content)
+            kept.append((number, start, end, tuple(points[int(n)] for n in grammar.POINT_REF.findall(content)
                                                    if int(n) in points)))
             continue
         motion = _motion(m, points, unread, source.name, number, source.text[start:end], registers, register_why)
-        speed = _SPEED_FIELD.search(masked, start, end)  # where re-timing writes the motion's speed
+        speed = grammar.SPEED_FIELD.search(masked, start, end)  # where re-timing writes the motion's speed
         speed_at.append((-1, -1) if speed is None else speed.span())
         one_by_one.append(_with_frames(motion, targets, state))
     blocks.setdefault(state.key(), (state.copy(), []))[1].append(np.arange(done, len(written["line"])))
@@ -220,24 +168,46 @@ def read(path):
     return flow.program_followed(_with_controller_frames(program, path), steps, {})
 
 
+def _sections(source, by_line, lines, ends):
+    """``[(line, word)]`` of the section headers (`grammar.SECTION_WORD` at a line's start) up to the first /END;
+    ReadError where there is none (the program is cut off) or where more than `grammar.AFTER_END` follows it."""
+    headers = []
+    for m in grammar.SECTION_WORD.finditer(by_line):
+        number = lines.number(m.start())
+        if by_line[lines.starts[number - 1]:m.start()].strip():
+            continue
+        headers.append((number, m.group(1)))
+        if m.group(1) == "END":
+            break
+    else:
+        last = last_line(lines)
+        fail(source.name, last, lines.line(last), "no /END after it: the program is cut off")
+    after = int(ends[headers[-1][0] - 1])
+    if not grammar.AFTER_END.fullmatch(source.text, after):
+        extra = lines.number(after + len(source.text[after:]) - len(source.text[after:].lstrip()))
+        fail(source.name, extra, lines.line(extra), "text after /END: nothing but blank lines may follow it "
+                                                   "(the controller refuses to load the program)")
+    return headers
+
+
 def _flow_steps(content, line):
     """The `trajcomp.programs.flow.Step` s of one /MN instruction that is not a motion (none for most)."""
     text = content.strip().rstrip(";").strip()
     word = text.split("(")[0].split()[0].upper() if text else ""
-    if _WAIT.match(text):
+    if grammar.WAIT.match(text):
         return [Step("wait", line=line)]
-    if m := _LABEL.match(text):
+    if m := grammar.LABEL.match(text):
         return [Step("label", m.group(1), line=line)]
     if word == "FOR":
         return [Step("loop", line=line)]
-    if word == "IF" and re.search(r"\bTHEN\s*$", text, re.I):
+    if word == "IF" and grammar.THEN.search(text):
         return [Step("if", line=line)]
-    if word in _BLOCK_WORDS and text.upper() == word:
-        return [Step(_BLOCK_WORDS[word], line=line)]
-    conditional = bool(_CONDITION.match(text))
-    if m := _JUMP.search(text):
+    if word in grammar.BLOCK_WORDS and text.upper() == word:
+        return [Step(grammar.BLOCK_WORDS[word], line=line)]
+    conditional = bool(grammar.CONDITION.match(text))
+    if m := grammar.JUMP.search(text):
         return [Step("jump", m.group(1), conditional, line)]
-    if (conditional or word == "CALL") and (m := _CALL.search(text)):
+    if (conditional or word == "CALL") and (m := grammar.CALL.search(text)):
         call = Step("call", m.group(1), f"program {m.group(1).upper()}, which may move the arm", line)
         return [Step("if", line=line), call, Step("endif", line=line)] if conditional else [call]
     return []
@@ -290,12 +260,12 @@ def _instructions(masked, starts, ends, numbers):
     for number in numbers.tolist():
         start, end = int(starts[number - 1]), int(ends[number - 1])
         text = masked[start:end]
-        head = _NUMBERED.match(text)
-        if not head and out and out[-1][1] == number - 1 and not _CLOSED.search(out[-1][4]):
+        head = grammar.NUMBERED.match(text)
+        if not head and out and out[-1][1] == number - 1 and not grammar.CLOSED.search(out[-1][4]):
             first, _, begin, _, content = out[-1]
-            c = _CONTINUED.match(text)
+            c = grammar.CONTINUED.match(text)
             out[-1] = (first, number, begin, end, content + " " + (c.group(1) if c else text))
-        elif head := head or _CONTINUED.match(text):
+        elif head := head or grammar.CONTINUED.match(text):
             out.append((number, number, start, end, head.group(head.lastindex)))
     return out
 
@@ -311,132 +281,6 @@ def _statements(text, starts, ends, plain, kept):
                   ((starts, kept_start), (ends, kept_end)))
     refs = {int(at[k]) + k: named[3] for k, named in enumerate(kept) if named[3]}
     return StatementTable(line, TextSlices(text, start, end), 0, refs)
-
-
-MOTIONS_AT_ONCE = 16384  # motion lines whose fields are found together: bounds the offset arrays of a long program
-WRITTEN_NUMBERS = 10**9  # position numbers of the motion lines read at once (9 digits, `_WRITTEN_MOTION`) are below
-_BLANK, _DIGIT, _SPEED_DIGIT = " \t", "0123456789", "0123456789."
-
-
-def _written_motions(by_line, starts, ends, in_mn, points, unread):
-    """The /MN motion lines written as a CAM post-processor writes them (`_WRITTEN_MOTION`), read at once.
-
-    The pattern only finds the lines; their fields are located from the
-    characters' classes (`_line_fields`) and their numbers read at once
-    (`trajcomp.formats.number_fields`). A line to a position the /POS
-    section lacks or leaves untaught is left out: the one-by-one read then
-    names it.
-
-    Returns
-    -------
-    dict of ndarray
-        Over the K motions, in line order: ``line``, ``kind`` (object),
-        ``target`` (index), ``value`` (the speed, mm/s, rad/s, % or s),
-        ``unit`` (object), ``zone`` (mm, NaN: FINE or CNT0), ``speed``
-        (K, 2) the offsets of the speed field; ``start``, ``end`` those of
-        the line.
-    """
-    mn = np.flatnonzero(in_mn)
-    begin = int(starts[mn[0] - 1]) if len(mn) else 0
-    stop = (int(starts[mn[-1]]) if mn[-1] < len(starts) else len(by_line)) if len(mn) else 0
-    found = (m.start() for m in _WRITTEN_MOTION.finditer(by_line, begin, stop))
-    parts = []
-    while at := list(itertools.islice(found, MOTIONS_AT_ONCE)):
-        line = np.searchsorted(starts, at, side="right")
-        parts.append((line, *_line_fields(by_line, np.array(at, dtype=np.int64), int(ends[line[-1] - 1]))))
-    line, read, numbers, speed_at, is_joint, value, scale, unit, zone, unnumbered = (
-        np.concatenate(column) for column in zip(*parts)) if parts else (
-        np.zeros(0, dtype=np.int64), np.zeros(0, dtype=bool), np.zeros(0, dtype=np.int64),
-        np.zeros((0, 2), dtype=np.int64), np.zeros(0, dtype=bool), np.zeros(0), np.zeros(0), np.zeros(0, dtype=object),
-        np.zeros(0), np.zeros(0, dtype=bool))
-    continued = unnumbered & ~np.isin(line - 1, line)  # ":L P[3] ..;" after a line not read at once may continue
-    for k in np.flatnonzero(continued).tolist():  # it (`_instructions`): only one after a ";" is surely not
-        continued[k] = not by_line[int(starts[line[k] - 2]):int(ends[line[k] - 2])].rstrip().endswith(";")
-    known = np.array(sorted(n for n in points if n < WRITTEN_NUMBERS), dtype=np.int64)
-    slot = np.minimum(np.searchsorted(known, numbers), max(len(known) - 1, 0))
-    good = read & ~continued & in_mn[line] & (known[slot] == numbers if len(known)
-                                               else np.zeros(len(line), dtype=bool))
-    good &= ~np.isin(numbers, np.array([n for n in unread if n < WRITTEN_NUMBERS], dtype=np.int64))
-    keep = np.flatnonzero(good)
-    index = np.array([points[n] for n in known.tolist()], dtype=np.int64)
-    return {"line": line[keep], "kind": np.array([LINEAR, JOINT], dtype=object)[is_joint[keep].astype(np.int64)],
-            "target": index[slot[keep]] if len(keep) else np.zeros(0, dtype=np.int64),
-            "speed": speed_at[keep], "start": starts[line[keep] - 1].astype(offset_type(by_line)),
-            "end": ends[line[keep] - 1].astype(offset_type(by_line)),
-            "value": value[keep] * scale[keep], "unit": unit[keep],
-            "zone": np.where(zone[keep] == 0.0, np.nan, zone[keep])}
-
-
-def _line_fields(by_line, at, stop):
-    """The fields of K motion lines starting at offsets ``at`` (K,) that `_WRITTEN_MOTION` matches, ``stop`` the
-    end of the last.
-
-    The pattern fixes what each field is made of: a field starts past the
-    blanks after the one before it and ends at the first character not of
-    its kind (`_skip`). A line whose blanks run longer than `_MOST_SKIPPED`
-    is not read.
-
-    Returns
-    -------
-    tuple of ndarray (K,)
-        Whether the line is read; the position number; the offsets (K, 2)
-        of the speed field (number and unit); whether the motion is J; the
-        speed's number; its unit's scale and unit (`SPEED_UNITS`); the CNT
-        number (0 for FINE); whether the line has no number (``:L P[3] ..``).
-    """
-    codes = text_codes(by_line[at[0]:stop])
-    start = at - at[0]
-    unnumbered = codes[_skip(codes, start, _BLANK)[0]] == ord(":")
-    kind, read = _skip(codes, _following(codes, ":", start) + 1, _BLANK)
-    number, past = _skip(codes, _following(codes, "[", start) + 1, _BLANK)
-    number_end = _skip(codes, number, _DIGIT)[0]
-    speed, past_speed = _skip(codes, _following(codes, "]", number_end) + 1, _BLANK)
-    speed_end = _skip(codes, speed, _SPEED_DIGIT)[0]
-    unit, past_unit = _skip(codes, speed_end, _BLANK)
-    unit_end = _skip(codes, unit, _BLANK, over=False)[0]
-    zone, past_zone = _skip(codes, unit_end, _BLANK)
-    zone += 3  # the digits after CNT (none after FINE)
-    read &= past & past_speed & past_unit & past_zone
-    numbers = [read_numbers(codes, a, b)[0] for a, b in ((number, number_end), (speed, speed_end),
-                                                           (zone, _skip(codes, zone, _DIGIT)[0]))]
-    scale, names = np.ones(len(at)), np.empty(len(at), dtype=object)
-    for spelling, (factor, name) in SPEED_UNITS.items():
-        spelt = ((unit_end - unit) == len(spelling)) & (codes[unit] == ord(spelling[0]))  # one unit to each
-        scale[spelt], names[spelt] = factor, name
-    return (read, numbers[0].astype(np.int64), np.stack([speed, unit_end], axis=1) + at[0], codes[kind] == ord("J"),
-            numbers[1], scale, names, np.nan_to_num(numbers[2]), unnumbered)
-
-
-def _following(codes, character, at):
-    """The offset of the first ``character`` at or after each of ``at`` (K,) that has one after it."""
-    found = np.flatnonzero(codes == ord(character))
-    return found[np.searchsorted(found, at)]
-
-
-def _among(codes, characters):
-    """Whether each character code (L,) is one of ``characters`` (ASCII), as a boolean array (L,)."""
-    return _table(characters)[codes if codes.dtype == np.uint8 else np.minimum(codes, 255)]  # 255 (ÿ): in no set
-
-
-_table = functools.lru_cache(maxsize=None)(character_table)  # a character set's look-up table (256,), made once
-
-
-_MOST_SKIPPED = 64  # characters `_skip` passes at most (a field of a long run of blanks is read one by one)
-
-
-def _skip(codes, at, characters, step=1, over=True):
-    """The offsets (K,) reached from ``at`` (K,) moving by ``step`` past the characters among ``characters``
-    (``over``; else past those not among them), and whether each stopped within `_MOST_SKIPPED` moves.
-
-    The caller knows a character that stops each: no move leaves the text.
-    """
-    at = at.copy()
-    for _ in range(_MOST_SKIPPED):
-        moving = _among(codes[at], characters) == over
-        if not moving.any():
-            return at, np.ones(len(at), dtype=bool)
-        at += step * moving
-    return at, _among(codes[at], characters) != over
 
 
 def _motion_block(written, rows, state, table, text):
@@ -504,28 +348,28 @@ def _motion(m, points, unread, name, number, original, registers, register_why):
     rest = m.group(4)
     refs = [(m.group(2).upper(), m.group(3))]
     if kind == CIRCULAR:
-        second = _POINT.search(rest) or re.search(r"\b(PR)\[\s*" + _INDEX + r"\s*(?::[^\]]*)?\](.*)$", rest, re.I)
+        second = grammar.POINT.search(rest) or grammar.REGISTER_POINT.search(rest)
         if not second:
             fail(name, number, original, "C needs a via point and an end point")
-        if second.re is _POINT:
+        if second.re is grammar.POINT:
             refs.append(("P", second.group(1)))
             rest = second.group(2)
         else:
             refs.append(("PR", second.group(2)))
             rest = second.group(3)
-    spec = _SPEED_TERM.match(rest)
+    spec = grammar.SPEED_TERM.match(rest)
     if not spec:
         fail(name, number, original, "motion needs a speed and FINE, CNT or CR")
     speed, unit, speed_why = None, "%", ""
     if spec.group(1) is not None:
-        scale, unit = SPEED_UNITS[re.sub("sek$", "sec", spec.group(2).lower())]
+        scale, unit = grammar.speed_unit(spec.group(2))
         speed = finite(spec.group(1), name, number, original, "speed") * scale
-    elif (term := " ".join(rest[: spec.start(3)].split())).lower() != "max_speed":  # max_speed: the arm's limits
+    elif (term := " ".join(rest[: spec.start(3)].split())).lower() != grammar.MAX_SPEED:
         speed_why = f"speed {term}: a register, set at run time"
     blend = spec.group(4) or spec.group(5)
     zone = finite(blend, name, number, original, "CNT") if blend is not None else None
     share, speed_why = _acceleration_share(rest[spec.end(3):], speed_why, name, number, original)
-    runtime = _RUNTIME.search(rest)
+    runtime = grammar.RUNTIME.search(rest)
     found, reason = [], ""
     for kind_ref, ref in refs:
         if kind_ref == "P" and ref.isdigit() and int(ref) in unread:
@@ -570,7 +414,7 @@ def _acceleration_share(options, speed_why, name, number, original):
     of the arm's (`trajcomp.programs.items.Motion.acceleration_share`; above 100 read as 100: the timing keeps the
     arm's limits, and a time written at them is no shorter than the controller's steeper ramps take); ``ACC R[n]``
     is set at run time."""
-    m = _ACC.search(options)
+    m = grammar.ACC.search(options)
     if m is None:
         return None, speed_why
     if not re.fullmatch(NUMBER, m.group(1)):
@@ -581,184 +425,18 @@ def _acceleration_share(options, speed_why, name, number, original):
     return (percent / 100.0 if percent < 100.0 else None), speed_why
 
 
-POSITIONS_AT_ONCE = 8192  # /POS entries whose fields are found together (`MOTIONS_AT_ONCE`)
-_SPACE = " \t\n\r\f\v"  # white space a field may have around it (`\s` has more: such an entry goes one by one)
-_DELIMITERS = "[]{}:,'=;\""
-# A Cartesian position of group 1 as the teach pendant and CAM post-processors write it, by its delimiters, each
-# with what stands before it: None (not looked at), "" (white space or nothing), `_NEXT_TO` (nothing), a keyword
-# (upper case, any case in the file) or a field (lower case), white space around: P[1]{ GP1: UF : 0, UT : 1,
-# CONFIG : 'N U T, 0, 0, 0', X = .. mm, Y = .. mm, Z = .. mm, W = .. deg, P = .. deg, R = .. deg }; -- as
-# `_POS` ends an entry at the first "};" (`_written_positions`)
-_NEXT_TO = "next to"
-_LAYOUT = ((("[", None), ("]", "number"), ("{", ""), (":", "GP1"), (":", "UF"), (",", "uf"), (":", "UT"),
-            (",", "ut"), (":", "CONFIG"), ("'", ""), (",", None), (",", None), (",", None), ("'", "config"),
-            (",", ""))
-           + tuple(pair for c in XYZWPR for pair in (("=", c.upper()), ("," if c != "r" else "}", c)))
-           + ((";", _NEXT_TO),))
-_COMMENTED = _LAYOUT[:1] + ((":", "number"), ('"', ""), ('"', None), ("]", "")) + _LAYOUT[2:]  # P[1: "..."]
-_FIELDS = ("number", "uf", "ut") + XYZWPR + ("config",)  # the fields a layout gives, in this order
-_UNITS = dict.fromkeys(XYZWPR[:3], "mm") | dict.fromkeys(XYZWPR[3:], "deg")
-_WIDEST_WORD = 32  # characters of the widest frame, tool or CONFIG text read at once
-
-
-def _written_positions(masked, start, end):
-    """The positions of the /POS section written as the pendant writes them (`_LAYOUT`), read at once.
-
-    An entry is found by its delimiters (any white space around them,
-    keywords in any case, a comment ``P[n: "..."]`` allowed), one block of
-    entries at a time (`_entry_fields`). A position whose numbers or
-    configuration the one-by-one read would refuse, or written otherwise,
-    is left out: that read then names it.
-
-    Returns
-    -------
-    dict
-        Over the G positions kept, in text order: ``at`` (G, 2) the offsets
-        of each entry, ``number`` (G, 2) those of its P number, ``p`` that
-        number (int), ``uf``, ``ut`` (object: str) its frame and tool
-        numbers, ``config`` (object: tuple), ``xyzwpr`` (G, 6) its numbers
-        (mm, deg), ``spans`` (G, 2, 7) the offsets of X, Y, Z, W, P, R and
-        CONFIG.
-    """
-    heads = _entry_heads(masked, start, end)
-    parts = [_entry_fields(masked, heads[k:k + POSITIONS_AT_ONCE], int(heads[k + POSITIONS_AT_ONCE])
-                           if k + POSITIONS_AT_ONCE < len(heads) else end)
-             for k in range(0, len(heads), POSITIONS_AT_ONCE)]
-    empty = {"at": np.zeros((0, 2), dtype=np.int64), "number": np.zeros((0, 2), dtype=np.int64),
-             "p": np.zeros(0, dtype=np.int64), "xyzwpr": np.zeros((0, 6)), "uf": _objects([]), "ut": _objects([]),
-             "config": _objects([]), "spans": np.zeros((0, 2, 7), dtype=np.int64)}
-    return {key: np.concatenate([p[key] for p in parts]) for key in empty} if parts else empty
-
-
-HEADS_AT_ONCE = 1 << 22  # characters of a /POS section looked at together for the starts of its entries
-
-
-def _entry_heads(masked, start, end):
-    """The offsets (ascending) in ``masked[start:end]`` where a /POS entry (`_POS`) may start: each ``P[``."""
-    parts = [np.zeros(0, dtype=np.int64)]
-    for lo in range(start, end, HEADS_AT_ONCE):
-        codes = text_codes(masked[lo:min(lo + HEADS_AT_ONCE + 1, end)])  # one more: a P[ across the block's end
-        parts.append(np.flatnonzero((codes[:-1] == ord("P")) & (codes[1:] == ord("["))) + lo)
-    return np.concatenate(parts)
-
-
-def _entry_fields(masked, heads, stop):
-    """`_written_positions` of the entries starting at ``heads`` (B,), the last ending by ``stop``."""
-    codes = text_codes(masked[heads[0]:stop])
-    head = heads - heads[0]
-    delimiter = np.flatnonzero(_among(codes, _DELIMITERS))
-    first = np.searchsorted(delimiter, head)
-    count = np.diff(np.append(first, len(delimiter)))
-    found = []
-    for layout in (_LAYOUT, _COMMENTED):
-        rows = np.flatnonzero(count == len(layout))
-        at = delimiter[first[rows, None] + np.arange(len(layout))]
-        found.append(_layout_fields(codes, at, layout) + (rows,))
-    good, fields, ends, rows = (np.concatenate(column) for column in zip(*found))
-    order = np.argsort(rows[good], kind="stable")
-    fields, ends, rows = fields[good][order], ends[good][order], rows[good][order]  # (G, fields, 2), text order
-    xyzwpr = np.stack([read_numbers(codes, *fields[:, 3 + k].T)[0] for k in range(6)], axis=1)
-    words = [_distinct_words(codes, *fields[:, k].T, check) for k, check in ((1, str), (2, str), (9, _config))]
-    good = (np.abs(xyzwpr) <= np.array([LENGTH_LIMIT] * 3 + [ANGLE_LIMIT] * 3)).all(axis=1)  # NaN: no number
-    for _, read in words:
-        good &= read
-    words = [values for values, _ in words]
-    keep = np.flatnonzero(good)
-    fields = fields[keep] + heads[0]
-    return {"at": np.stack([heads[rows[keep]], ends[keep] + heads[0]], axis=1), "number": fields[:, 0],
-            "p": read_numbers(codes, *(fields[:, 0] - heads[0]).T)[0].astype(np.int64), "xyzwpr": xyzwpr[keep],
-            "uf": words[0][keep], "ut": words[1][keep], "config": words[2][keep],
-            "spans": fields[:, 3:].transpose(0, 2, 1)}
-
-
-def _layout_fields(codes, at, layout):
-    """Whether the E entries whose delimiters are at ``at`` (E, D) are written as ``layout`` states (E,), the offsets
-    (E, 10, 2) of their `_FIELDS` and the end of each (E,).
-
-    A word is found past the white space after the delimiter before it and
-    before its own (`_skip`).
-    """
-    good = (codes[at] == np.array([ord(c) for c, _ in layout])).all(axis=1)
-    fields = np.zeros((len(at), len(_FIELDS), 2), dtype=np.int64)
-    for j, (_, before) in enumerate(layout[1:], start=1):
-        if before is None:
-            continue
-        if before is _NEXT_TO:
-            good &= at[:, j] == at[:, j - 1] + 1
-            continue
-        start, past = _skip(codes, at[:, j - 1] + 1, _SPACE)
-        end, before_end = _skip(codes, at[:, j] - 1, _SPACE, step=-1)
-        end += 1  # the word before the delimiter is text[start:end], if any
-        good &= past & before_end
-        if before == "config":  # as written between the quotes
-            opening = max(k for k in range(j) if layout[k][0] == "'")
-            fields[:, _FIELDS.index(before)] = np.stack([at[:, opening] + 1, at[:, j]], axis=1)
-        elif before in _UNITS:  # a number and its unit
-            unit = _UNITS[before]
-            good &= (end - start > len(unit)) & _spelt(codes, end - len(unit), unit)
-            number_end, past = _skip(codes, np.maximum(end - len(unit) - 1, 0), _SPACE, step=-1)
-            number_end = np.maximum(number_end + 1, start)
-            good &= past
-            fields[:, _FIELDS.index(before)] = np.stack([start, number_end], axis=1)
-        elif before in _FIELDS:  # a whole number
-            good &= (start < at[:, j]) & (_skip(codes, start, _DIGIT)[0] >= end) & (end - start <= 15)
-            fields[:, _FIELDS.index(before)] = np.stack([start, end], axis=1)
-        else:
-            good &= start == at[:, j] if before == "" else (end - start == len(before)) & _spelt(codes, start,
-                                                                                                  before)
-    return good, fields, at[:, -1] + 1
-
-
-def _spelt(codes, start, word):
-    """Whether ``word`` (upper case) is written at each of ``start`` (N,), in any case."""
-    spelt = np.ones(len(start), dtype=bool)
-    for k, c in enumerate(word):
-        spelt &= (codes[start + k] == ord(c)) | (codes[start + k] == ord(c.lower()))
-    return spelt
-
-
-def _distinct_words(codes, start, end, value):
-    """``value(text)`` of each of N pieces ``text[start:end]``, taken once per distinct text.
-
-    Returns
-    -------
-    values : ndarray of object, shape (N,)
-    read : ndarray of bool, shape (N,)
-        Whether the value is not None and the piece is at most `_WIDEST_WORD` characters (others go one by one).
-    """
-    length = np.minimum(end - start, _WIDEST_WORD + 1)
-    column = np.arange(int(length.max(initial=0)))
-    matrix = np.zeros((len(start), len(column) + 1), dtype=codes.dtype)  # a row: the length, the characters
-    matrix[:, 0] = length
-    matrix[:, 1:] = np.where(column < length[:, None], codes[np.minimum(start[:, None] + column, len(codes) - 1)], 0)
-    rows = matrix.view(np.dtype((np.void, matrix.itemsize * matrix.shape[1]))).reshape(-1)
-    _, first, inverse = np.unique(rows, return_index=True, return_inverse=True)
-    values = _objects([value("".join(map(chr, codes[start[k]:end[k]].tolist()))) for k in first.tolist()])
-    read = np.array([v is not None for v in values], dtype=bool) & (matrix[first, 0] <= _WIDEST_WORD)
-    inverse = inverse.reshape(-1)
-    return values[inverse], read[inverse]
-
-
-def _config(text):
-    """``(flip, elbow, front, t1, t4, t6)`` of a CONFIG string; None where it is not one (`_CONFIG_VALUE`)."""
-    value = _CONFIG_VALUE.match(text)
-    if value is None:
-        return None
-    return (value.group(1).upper(), value.group(2).upper(), value.group(3).upper(), *map(int, value.groups()[3:]))
-
-
 def _positions(source, masked, lines, starts, start, end):
     """Targets of the /POS section as a `TargetTable`, ``{P number: target index}`` and ``{P number: why}`` of
     positions not read.
 
     The positions written as the pendant writes them are read at once
-    (`_written_positions`), the others one by one (`_position`), in the
+    (`columns.written_positions`), the others one by one (`_position`), in the
     order of the section's entries (``P[n]{ .. };``).
     """
     points, unread, order, slow = {}, {}, [], []  # order: row of the written ones, or -1 - k of slow[k]
     if start is not None:
-        written = _written_positions(masked, start, end)
-        heads = _entry_heads(masked, start, end)
+        written = columns.written_positions(masked, start, end)
+        heads = columns.entry_heads(masked, start, end)
         if np.array_equal(heads, written["at"][:, 0]):  # every entry is written as the pendant writes it
             _once(source, written["p"].tolist(), heads.tolist(), starts)
             points = dict(zip(written["p"].tolist(), range(len(heads))))
@@ -775,7 +453,7 @@ def _positions(source, masked, lines, starts, start, end):
                 points[written_p[k]] = len(order)
                 order.append(k)
                 reached = written_end[k]
-            elif m := _POS.match(masked, head, end):
+            elif m := grammar.POSITION_ENTRY.match(masked, head, end):
                 reached = m.end()
                 given.append((int(m.group(1)), head))
                 target = _position(source, masked, lines, m, unread)
@@ -785,7 +463,7 @@ def _positions(source, masked, lines, starts, start, end):
                     slow.append((target, m.span(1)))
         _once(source, [number for number, _ in given], [offset for _, offset in given], starts)
     else:
-        written = _written_positions(masked, 0, 0)
+        written = columns.written_positions(masked, 0, 0)
     return _target_table(source.text, written, np.array(order, dtype=np.int64), slow, starts), points, unread
 
 
@@ -830,7 +508,7 @@ def _target_table(text, written, order, slow, starts):
 
     vector = written["xyzwpr"][rows]
     vector = np.concatenate([vector[:, :3], np.radians(vector[:, 5:2:-1])], axis=1)  # A, B, C = R, P, W
-    config = merged(written["config"][rows], _objects(one_by_one.config), object)
+    config = merged(written["config"][rows], columns.objects(one_by_one.config), object)
     return TargetTable(
         pose=merged(pose_to_matrix(vector.reshape(-1, 6)), one_by_one.pose, float),
         is_joint=merged(np.zeros(len(rows), dtype=bool), one_by_one.is_joint, bool),
@@ -840,38 +518,32 @@ def _target_table(text, written, order, slow, starts):
         config=tuple(config.tolist()),
         tool=merged(written["ut"][rows], one_by_one.tool, object),
         frame=merged(written["uf"][rows], one_by_one.frame, object),
-        external=tuple(merged(_objects([None] * len(rows)), _objects(one_by_one.external), object).tolist()),
+        external=tuple(merged(columns.objects([None] * len(rows)), columns.objects(one_by_one.external),
+                              object).tolist()),
         edited=np.zeros(n, dtype=bool), name=_Named(text, number_at[:, 0], number_at[:, 1]),
         spans=SpanColumns(0, text, roles, span_at[:, 0], span_at[:, 1]))
-
-
-def _objects(values):
-    """An object array (N,) of ``values`` (tuples and arrays stay elements)."""
-    out = np.empty(len(values), dtype=object)
-    out[:] = list(values) if len(values) else []
-    return out
 
 
 def _position(source, masked, lines, m, unread):
     """The target of a /POS entry (`_POS` match ``m``) read one by one, or None (its why put in ``unread``)."""
     body_start = m.start(2)
     body = masked[body_start:m.end(2)]
-    groups = {int(g.group(1)): (body_start + g.start(2), g.group(2)) for g in _GROUP.finditer(body)}
+    groups = {int(g.group(1)): (body_start + g.start(2), g.group(2)) for g in grammar.GROUPS.finditer(body)}
     if 1 not in groups:
         return None
     gp_start, gp = groups[1]
     line = lines.number(m.start())
     original = source.text[m.start():m.end()]
     label = f"P[{m.group(1)}]"
-    if "*" in "".join(f.group(2) for f in _FIELD.finditer(gp)):
+    if "*" in "".join(f.group(2) for f in grammar.COORDINATE.finditer(gp)):
         unread[int(m.group(1))] = (f"is not taught (its position is ********, line {line}): the controller faults "
                                    "only if this line runs")
         return None
     fields, units = {}, {}
-    for f in _FIELD.finditer(gp):
+    for f in grammar.COORDINATE.finditer(gp):
         fields[f.group(1).lower()] = Span(0, gp_start + f.start(2), gp_start + f.end(2), f.group(2))
         units[f.group(1).lower()] = f.group(3).lower()
-    if "x" not in fields and "j1" not in fields and _OTHER_REPRESENTATION.search(gp):
+    if "x" not in fields and "j1" not in fields and grammar.OTHER_REPRESENTATION.search(gp):
         unread[int(m.group(1))] = (f"is stated as RX, RY, RZ, RW, RP, RR (line {line}), a representation "
                                    "trajcomp does not read: left as written")
         return None
@@ -881,11 +553,11 @@ def _position(source, masked, lines, m, unread):
                  else ANGLE_LIMIT if role in "wpr" else JOINT_LIMIT)
         return finite(fields[role].text, source.name, line, original, f"{label} {role.upper()}", limit)
 
-    frames = {f.group(1).upper(): f.group(2) for f in _FRAME_NUMBER.finditer(gp)}
+    frames = {f.group(1).upper(): f.group(2) for f in grammar.FRAME_NUMBER.finditer(gp)}
     external = [value(e) for e in sorted(f for f in fields if f.startswith("e"))]
     for k in sorted(g for g in groups if g > 1):
         external += [finite(f.group(2), source.name, line, original, f"{label} GP{k} {f.group(1)}", LENGTH_LIMIT)
-                     for f in _FIELD.finditer(groups[k][1]) if "*" not in f.group(2)]
+                     for f in grammar.COORDINATE.finditer(groups[k][1]) if "*" not in f.group(2)]
     where = {"name": label, "line": line, "tool": frames.get("UT"), "frame": frames.get("UF"),
              "external": np.array(external) if external else None}
     if "j1" in fields:
@@ -900,15 +572,15 @@ def _position(source, masked, lines, m, unread):
     x, y, z, w, p, r = (value(c) for c in XYZWPR)
     spans = {c: fields[c] for c in XYZWPR}
     config = ()
-    c = _CONFIG.search(gp)
+    c = grammar.CONFIG.search(gp)
     if c:
-        v = _CONFIG_VALUE.match(c.group(1))
-        if not v and _SCARA_CONFIG.match(c.group(1)):
+        v = grammar.CONFIG_VALUE.match(c.group(1))
+        if not v and grammar.SCARA_CONFIG.match(c.group(1)):
             fail(source.name, line, original, f"{label}: CONFIG '{c.group(1)}' is a 4-axis arm's (SCARA, "
                                               "arm left or right): 4-axis arms are not supported")
         if not v:
             fail(source.name, line, original, f"{label}: malformed CONFIG")
-        config = _config(c.group(1))
+        config = grammar.config(c.group(1))
         spans["config"] = Span(0, gp_start + c.start(1), gp_start + c.end(1), c.group(1))
     pose = pose_to_matrix([x, y, z, *np.radians([r, p, w])])
     return Target(**where, pose=pose, config=config, spans=spans)

@@ -9,7 +9,8 @@ import numpy as np
 
 from trajcomp.errors import WriteError
 
-from trajcomp.formats.fanuc.reader import ABC_ORDER, JOINTS, MIN_PLACES, _config
+from trajcomp.formats.fanuc.grammar import JOINTS, config as _config
+from trajcomp.formats.fanuc.reader import ABC_ORDER, MIN_PLACES
 from trajcomp.formats.fanuc.speeds import time_field
 from trajcomp.formats.file_writing import active_axes, numbered, write_single_file, written_speed
 from trajcomp.formats.number_writing import format_number

@@ -1,4 +1,5 @@
-"""The motion lines a CAM post-processor writes in URScript, read together as columns (`CamLines`).
+"""The motion lines a CAM post-processor writes in URScript, read together as columns (`CamLines`): the at-once
+execution of the grammar's written motion form (`trajcomp.formats.urscript.grammar.CAM_LINE`).
 
 Our converter writes ``movel(p[x, y, z, rx, ry, rz], v=0.050000,
 r=0.001000)`` one a line; RoboDK writes ``movel(pose_trans(ref_frame,
@@ -22,42 +23,37 @@ statement that changes nothing the reader carries.
 """
 
 import dataclasses
-import re
 
 import numpy as np
 
-from trajcomp.formats.number_fields import NUMBER, BLANK, WORD_CHARACTER, character_table, read_numbers, text_codes
+from trajcomp.formats.number_fields import BLANK, WORD_CHARACTER, character_table, read_numbers, text_codes
 from trajcomp.formats.text import JOINT_LIMIT, LENGTH_LIMIT
+from trajcomp.formats.urscript import grammar
 from trajcomp.programs.tables import TextSlices
 
-FUNCTIONS = ("movel", "movej", "movep")
-CALLS = ("movej", "movel", "movep", "movec", "set_tcp", "servoj", "servoc")  # the calls the reader reads
-OPTIONS = ("a", "v", "t", "r")
-# the option each positional argument is, per function (URScript's signatures; -1: none, ignored)
-POSITIONAL = np.array([[0, 1, 2, 3], [0, 1, 2, 3], [0, 1, 3, -1]])
-SLOTS = 4  # options a line may give
-_NAME = r"[A-Za-z_]\w*"
-# Groups tile the line from its start to the call's ")" (so that their offsets are the sums of their lengths):
-# 1 indent, 2 function, 3 "(", 4-6 "pose_trans(" frame ",", 7 "p", 8 "[", 9-19 the six numbers (odd) and the commas
-# between them (even), 20 "]", 21 the ")" of pose_trans, 22 blanks, then per option 6 groups: ",", its name, "=",
-# its value as a number or as a variable name, blanks.
-_OPTION = rf"(?:(,[ \t]*)(?:([avtr])([ \t]*=[ \t]*))?(?:({NUMBER})|({_NAME}))([ \t]*))?"
-_CAM_LINE = re.compile(
-    r"(?m)^([ \t]*)(movel|movej|movep)([ \t]*\([ \t]*)"
-    rf"(?:(pose_trans[ \t]*\([ \t]*)({_NAME})([ \t]*,[ \t]*))?(p?)(\[[ \t]*)"
-    + r"([ \t]*,[ \t]*)".join([f"({NUMBER})"] * 6)
-    + r"([ \t]*\])(?(4)([ \t]*\)))([ \t]*)" + _OPTION * SLOTS + r"\)[ \t]*(?=[\r\n]|\Z)")
-_PLAIN = re.compile(rf"[ \t]*(?:({_NAME})[ \t]*\([^()\[\]=:\r\n]*\)[ \t]*)?(\r\n|\r|\n|)")  # `PlainLines`, fullmatch
-_GROUPS = 22 + 6 * SLOTS
-_NUMBERS = np.arange(8, 19, 2)  # columns (0-based groups) of the six numbers
-_SLOT = 22 + 6 * np.arange(SLOTS)  # first column of each option
-_LAST = np.concatenate([[19, 20], _SLOT + 3, _SLOT + 4])  # what may end the call's last argument
+FUNCTIONS = grammar.WRITTEN
+OPTION_COLUMNS = ("v", "t", "r", "a")  # the options of `CamLines`, in its columns' order
+# the option (index in `grammar.OPTIONS`) each positional argument is, per function (-1: none, ignored)
+POSITIONAL = np.array([[grammar.OPTIONS.index(o) if o in grammar.OPTIONS else -1
+                        for o in (grammar.MOTIONS[f].positional + (None,) * grammar.SLOTS)[:grammar.SLOTS]]
+                       for f in FUNCTIONS])
+_GROUP = grammar.CAM_GROUP
+_NUMBERS = np.array([_GROUP[f"number {k}"] for k in range(6)])  # columns (0-based groups) of the six numbers
+
+
+def _option_columns(part):
+    """The column of a part of each option slot (`grammar.CAM_GROUP`), (SLOTS,)."""
+    return np.array([_GROUP[f"option {slot} {part}"] for slot in range(grammar.SLOTS)])
+
+
+_OPTION_NAME, _OPTION_NUMBER, _OPTION_VARIABLE = (_option_columns(part) for part in ("name", "number", "variable"))
+_LAST = np.concatenate([[_GROUP["]"], _GROUP[")"]], _OPTION_NUMBER, _OPTION_VARIABLE])  # what may end the last argument
 LINES_AT_ONCE = 16384  # lines read together: bounds the arrays a long script's read makes
 _NUMBER_CHARACTERS = "0123456789.eE+-"  # what a number is written with (`NUMBER`)
 _NUMBER_FIRST = character_table("0123456789.+-")  # what a number starts with
 _LINE_START = character_table("\r\nABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz_")  # past the indent of a
-# line `_PLAIN` or `_CAM_LINE` may match: its end or a name's first character
-_WORD = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789_"  # a name's characters (`_NAME`)
+# line `grammar.PLAIN` or `grammar.CAM_LINE` may match: its end or a name's first character
+_WORD = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789_"  # a name's characters (`grammar.NAME`)
 _MOST_INDENT = 16  # blanks of an indent passed at once (a longer one: one by one)
 _WIDEST_LAYOUT = 512  # characters of the longest line layout read in blocks (a longer line: one by one)
 
@@ -130,7 +126,7 @@ class _Stripped(TextSlices):
 @dataclasses.dataclass(frozen=True, eq=False)
 class PlainLines:
     """The statements of a script (P,) that change nothing its reader carries: blank and comment lines and calls of
-    other functions than `CALLS` with plain arguments (the module's docstring), in line order.
+    other functions than `grammar.CALLS` with plain arguments (the module's docstring), in line order.
 
     Attributes
     ----------
@@ -203,7 +199,7 @@ def _block(masked, starts, ends, first_line):
     A number is a run of `_NUMBER_CHARACTERS` that starts with a digit, a
     sign or a point after a character that is no word character (a digit
     in a name is none). A line's layout is its text with each number
-    written ``0``. Where `_CAM_LINE` matches a layout, its number groups
+    written ``0``. Where `grammar.CAM_LINE` matches a layout, its number groups
     are exactly the layout's numbers (each follows ``[``, ``,``, ``=`` or a
     blank and is followed by none of `_NUMBER_CHARACTERS`), so a line of
     that layout matches it too when each of its numbers is one as `NUMBER`
@@ -211,13 +207,13 @@ def _block(masked, starts, ends, first_line):
     layout) give the line's fields, moved by the widths of the numbers
     before them, and its numbers are read at once from their characters
     (`trajcomp.formats.number_fields.read_numbers`). A line whose layout
-    `_PLAIN` matches, naming none of `CALLS`, is a plain statement.
+    `grammar.PLAIN` matches, naming none of `grammar.CALLS`, is a plain statement.
     """
     begin = int(starts[0])
     codes = text_codes(masked[begin:int(ends[-1])])
     start, end = starts - begin, ends - begin
     after_break = np.where(start > 0, codes[np.maximum(start - 1, 0)] == ord("\n"),
-                           begin == 0 or masked[begin - 1] == "\n")  # where `^` matches in `_CAM_LINE`
+                           begin == 0 or masked[begin - 1] == "\n")  # where `^` matches in `grammar.CAM_LINE`
     word = start.copy()  # the first character past each line's indent
     for _ in range(_MOST_INDENT):
         blank = _among(codes[np.minimum(word, len(codes) - 1)], BLANK) & (word < end)
@@ -267,7 +263,7 @@ def _block(masked, starts, ends, first_line):
     texts = ["".join(map(chr, layout_codes[layout_start[k]:layout_start[k] + layout_length[k]].tolist()))
              for k in first.tolist()]
     plain = _plain_lines(texts, layout, rows, begin + start, begin + end, first_line)
-    matched = [(k, m) for k, m in enumerate(map(_CAM_LINE.match, texts)) if m]
+    matched = [(k, m) for k, m in enumerate(map(grammar.CAM_LINE.match, texts)) if m]
     if not matched:
         return _NONE, plain
     fields, layout_good = _layout_fields([m for _, m in matched])
@@ -285,10 +281,10 @@ def _block(masked, starts, ends, first_line):
 
 
 def _plain_lines(texts, layout, rows, start, end, first_line):
-    """`PlainLines` of the lines ``rows`` of a block whose layouts (``texts`` [``layout``]) `_PLAIN` matches without
-    naming one of `CALLS`; ``start``, ``end``: offsets of the block's lines and of the next (K,)."""
-    matches = [_PLAIN.fullmatch(text) for text in texts]
-    plain = [k for k, m in enumerate(matches) if m and m.group(1) not in CALLS]
+    """`PlainLines` of the lines ``rows`` of a block whose layouts (``texts`` [``layout``]) `grammar.PLAIN` matches
+    without naming one of `grammar.CALLS`; ``start``, ``end``: offsets of the block's lines and of the next (K,)."""
+    matches = [grammar.PLAIN.fullmatch(text) for text in texts]
+    plain = [k for k, m in enumerate(matches) if m and m.group(1) not in grammar.CALLS]
     ending = np.array([len(matches[k].group(2)) for k in plain], dtype=np.int64)
     code = np.full(len(texts), -1)
     code[plain] = np.arange(len(plain))
@@ -349,47 +345,49 @@ def _column_numbers(codes, start, end):
 
 
 def _layout_fields(matches):
-    """The fields of B layouts `_CAM_LINE` matches (`_block`), as `CamLines` (offsets in each layout, numbers 0,
+    """The fields of B layouts `grammar.CAM_LINE` matches (`_block`), as `CamLines` (offsets in each layout, numbers 0,
     ``option`` 0 where a literal gives it), and whether lines of each are read so (B,): not where they give an
     option twice (the line-by-line read's rules decide) or a joint list to ``pose_trans``."""
     b = len(matches)
-    groups = np.array([m.groups("") for m in matches], dtype=object).reshape(b, _GROUPS)
+    groups = np.array([m.groups("") for m in matches], dtype=object).reshape(b, len(_GROUP))
     stop = np.fromiter((m.end() for m in matches), dtype=np.int64, count=b)
-    length = np.fromiter(map(len, groups.ravel().tolist()), dtype=np.int64, count=groups.size).reshape(b, _GROUPS)
+    length = np.fromiter(map(len, groups.ravel().tolist()), dtype=np.int64, count=groups.size).reshape(b, len(_GROUP))
     group_end = np.cumsum(length, axis=1)
     group_start = group_end - length
-    function = np.select([groups[:, 1] == name for name in FUNCTIONS], range(len(FUNCTIONS)), 0)
-    is_joint = length[:, 6] == 0
-    framed = length[:, 4] > 0
+    function = np.select([groups[:, _GROUP["function"]] == name for name in FUNCTIONS], range(len(FUNCTIONS)), 0)
+    is_joint = length[:, _GROUP["p"]] == 0
+    framed = length[:, _GROUP["frame"]] > 0
     good = ~(framed & is_joint)
-    given = length[:, _SLOT + 3] + length[:, _SLOT + 4] > 0  # (B, SLOTS)
-    named = length[:, _SLOT + 1] > 0
+    given = length[:, _OPTION_NUMBER] + length[:, _OPTION_VARIABLE] > 0  # (B, SLOTS)
+    named = length[:, _OPTION_NAME] > 0
     positional = np.cumsum(given & ~named, axis=1) - 1
-    code = np.where(named, np.select([groups[:, _SLOT + 1] == o for o in OPTIONS], range(len(OPTIONS)), -1),
-                    POSITIONAL[function[:, None], np.clip(positional, 0, SLOTS - 1)])
+    options = grammar.OPTIONS
+    code = np.where(named, np.select([groups[:, _OPTION_NAME] == o for o in options], range(len(options)), -1),
+                    POSITIONAL[function[:, None], np.clip(positional, 0, grammar.SLOTS - 1)])
     code[~given] = -1
-    for c in range(len(OPTIONS)):
+    for c in range(len(options)):
         good &= (code == c).sum(axis=1) <= 1
     rows = np.arange(b)
     option = np.full((b, 4), np.nan)
     option_name = np.full((b, 4), None, dtype=object)
     option_start, option_end = np.full((b, 4), -1, dtype=np.int64), np.full((b, 4), -1, dtype=np.int64)
-    for j, c in enumerate((1, 2, 3, 0)):  # v, t, r, a
+    for j, c in enumerate(options.index(o) for o in OPTION_COLUMNS):
         has = (code == c).any(axis=1)
-        slot = _SLOT[np.argmax(code == c, axis=1)]
-        literal = has & (length[rows, slot + 3] > 0)
+        slot = np.argmax(code == c, axis=1)
+        number, variable = _OPTION_NUMBER[slot], _OPTION_VARIABLE[slot]
+        literal = has & (length[rows, number] > 0)
         option[literal, j] = 0.0
         by_name = has & ~literal
-        option_name[by_name, j] = groups[rows[by_name], slot[by_name] + 4]
-        value = np.where(literal, slot + 3, slot + 4)
+        option_name[by_name, j] = groups[rows[by_name], variable[by_name]]
+        value = np.where(literal, number, variable)
         option_start[has, j] = group_start[rows, value][has]
         option_end[has, j] = group_end[rows, value][has]
     end = np.where(length[:, _LAST] > 0, group_end[:, _LAST], -1).max(axis=1)
     fields = CamLines(
         line=np.zeros(b, dtype=np.int64), function=function, is_joint=is_joint, values=np.zeros((b, 6)),
         number_start=group_start[:, _NUMBERS], number_end=group_end[:, _NUMBERS],
-        frame=np.where(framed, groups[:, 4], None), option=option, option_name=option_name,
-        option_start=option_start, option_end=option_end, end=end, start=group_start[:, 1], stop=stop)
+        frame=np.where(framed, groups[:, _GROUP["frame"]], None), option=option, option_name=option_name,
+        option_start=option_start, option_end=option_end, end=end, start=group_start[:, _GROUP["function"]], stop=stop)
     return fields, good
 
 

@@ -23,47 +23,24 @@ from trajcomp.formats.text import (
     split_top,
     unresolved,
 )
-from trajcomp.formats.urscript.lines import CALLS, FUNCTIONS, cam_lines
+from trajcomp.formats.urscript import grammar
+from trajcomp.formats.urscript.grammar import JOINTS, NEAR, POSE
+from trajcomp.formats.urscript.lines import FUNCTIONS, cam_lines
 from trajcomp.formats.urscript.polyscope import notes as polyscope_notes
 from trajcomp.programs import flow
 from trajcomp.programs.flow import Step
 from trajcomp.programs.program import Program
-from trajcomp.programs.items import CIRCULAR, JOINT, LINEAR, Motion, SpanColumns, SpanTable, Statement, Target
+from trajcomp.programs.items import CIRCULAR, JOINT, Motion, SpanColumns, SpanTable, Statement, Target
 from trajcomp.programs.tables import MotionTable, StatementTable, TargetTable, TextSlices, repeated
 from trajcomp.arm.transforms import rotvec_to_matrix
 
-POSE = ("x", "y", "z", "rx", "ry", "rz")
-JOINTS = ("j1", "j2", "j3", "j4", "j5", "j6")
-NEAR = ("near1", "near2", "near3", "near4", "near5", "near6")
 ROLES = POSE + JOINTS + NEAR  # the roles of a target's spans
 TIMING = ("t", "v", "end")  # the roles of a motion's spans: where re-timing writes
-KINDS = {"movej": JOINT, "movel": LINEAR, "movep": LINEAR, "movec": CIRCULAR}
-NOT_READ = ("servoj", "servoc")  # motions with a target trajcomp does not compensate (streamed set points)
-DEFAULT_SPEED = {"movej": "1.05", "movel": "0.25", "movep": "0.25", "movec": "0.25"}  # v when not given: rad/s, m/s
-POSITIONAL = {"movej": ("a", "v", "t", "r"), "movel": ("a", "v", "t", "r"), "movep": ("a", "v", "r"),
-              "movec": ("a", "v", "r", "mode")}
-
-_N = r"\s*(" + NUMBER + r")\s*"
-_SIX = ",".join([_N] * 6)
-_POSE = re.compile(r"^\s*p\[" + _SIX + r"\]\s*$")
-_LIST = re.compile(r"^\s*\[" + _SIX + r"\]\s*$")
-_ASSIGN = re.compile(r"^\s*(?:global\s+|local\s+)?([A-Za-z_]\w*)\s*=(?!=)\s*(.+?)\s*$")
-_DEF = re.compile(r"^\s*def\s+\w+\s*\((.*?)\)\s*:", re.M)
-_BLOCKS = ("DEF", "SEC", "THREAD", "IF", "WHILE", "FOR")  # statements whose body ends with ``end``
-_BLOCK_OPENS = re.compile(r"^[ \t]*(def|sec|thread|if|while|for)\b[^\n]*:\s*$", re.M)
-_BLOCK_CLOSES = re.compile(r"^[ \t]*(end)\s*$", re.M)
-_CALL = re.compile(rf"\b({'|'.join(CALLS)})\s*\(")
-_IK = re.compile(r"^\s*get_inverse_kin\s*\((.*)\)\s*$", re.S)
-_POSE_TRANS = re.compile(r"^\s*pose_trans\s*\((.*)\)\s*$", re.S)
-_NAME = re.compile(r"^\s*([A-Za-z_]\w*)\s*$")
-_WORD = re.compile(r"[A-Za-z_]\w*")
-_NUMBERS_ONLY = re.compile(r"^\s*p\[[\s\d.eE+,-]*\]\s*$")
-_SIGNS = re.compile(r"(?m)^\s*def\s+\w+\s*\(|\b(?:movej|movel|movep|movec)\s*\(|\bp\[")
+KINDS = {function: signature.kind for function, signature in grammar.MOTIONS.items()}
 _PARENTHESIS = re.compile(r"[()]")
 _KINDS = np.array([KINDS[f] for f in FUNCTIONS], dtype=object)  # the kind of each of `FUNCTIONS`
+_DEFAULT_SPEEDS = np.array([float(grammar.MOTIONS[f].default_speed) for f in FUNCTIONS])  # and its v without one
 _UNITS = np.array(["mm/s", "rad/s", "s"], dtype=object)  # of a TCP speed, a movej's speed, a time
-# every pose literal of the script, whose rotations are computed together (`_literal_poses`)
-_POSE_LITERAL = re.compile(r"\bp\[" + _SIX + r"\]")
 
 
 def _closing(text, open_at):
@@ -83,7 +60,7 @@ def _literal_poses(masked, ranges):
     ``ranges``: ``(start, end)`` offsets of the parts. Literals with a number out of range are left out (their
     reading refuses them).
     """
-    found = [m for start, end in ranges for m in _POSE_LITERAL.finditer(masked, start, end)]
+    found = [m for start, end in ranges for m in grammar.POSE_LITERAL.finditer(masked, start, end)]
     values = np.array([m.groups() for m in found], dtype=float).reshape(-1, 6)
     keep = np.flatnonzero((np.isfinite(values) & (np.abs(values) <= LENGTH_LIMIT / 1000.0)).all(axis=1))
     T = poses(values[keep])
@@ -128,7 +105,8 @@ class _Blocks:
     """
 
     def __init__(self, masked, lines, parts):
-        found = sorted((m.start(), m.group(1)) for start, end in parts for pattern in (_BLOCK_OPENS, _BLOCK_CLOSES)
+        found = sorted((m.start(), m.group(1)) for start, end in parts
+                       for pattern in (grammar.BLOCK_OPENS, grammar.BLOCK_CLOSES)
                        for m in pattern.finditer(masked, start, end))
         spans, open_blocks = [], []  # (first line, last line, word, depth); the blocks open at a line
         for offset, word in found:
@@ -196,13 +174,15 @@ class _Reader:
         self.set_at_run_time, self.assigned = {}, {}  # name -> line of a non-literal assignment; of every one
         for line in np.flatnonzero(one_by_one).tolist():  # a CAM-shaped motion line or plain statement assigns nothing
             start, end = self.where(line)
-            if m := _ASSIGN.match(masked[start:end]):
+            if m := grammar.ASSIGN.match(masked[start:end]):
                 self.assigned.setdefault(m.group(1), []).append(line)
-                if not (_POSE.match(m.group(2)) or _LIST.match(m.group(2)) or re.fullmatch(NUMBER, m.group(2))):
+                value = m.group(2)
+                if not (grammar.POSE_VALUE.match(value) or grammar.LIST_VALUE.match(value)
+                        or re.fullmatch(NUMBER, value)):
                     self.set_at_run_time.setdefault(m.group(1), line)
         # a plain statement naming an assigned variable is read one by one: it may name a target (`references`)
-        naming = np.array([not self.assigned.keys().isdisjoint(_WORD.findall(text)) for text in plain.layouts],
-                          dtype=bool)[plain.layout]
+        naming = np.array([not self.assigned.keys().isdisjoint(grammar.WORD.findall(text))
+                           for text in plain.layouts], dtype=bool)[plain.layout]
         one_by_one[plain.line[naming]] = True
         self.plain = plain.rows(~naming)
         self.others = np.flatnonzero(one_by_one)  # the lines read one by one
@@ -211,7 +191,7 @@ class _Reader:
         self.parts = _parts(lines, self.others)  # the offsets of the runs of lines read one by one
         self.poses = _literal_poses(masked, self.parts)
         self.params = {p.strip().split("=")[0].strip() for start, end in self.parts
-                       for m in _DEF.finditer(masked, start, end) for p in m.group(1).split(",") if p.strip()}
+                       for m in grammar.DEF.finditer(masked, start, end) for p in m.group(1).split(",") if p.strip()}
 
     def where(self, line):
         """``(start, end)`` offsets of line ``line`` (1-based), its line ending left out."""
@@ -222,7 +202,7 @@ class _Reader:
         """Read line ``line`` (1-based): a statement or a motion (`call`) into the items."""
         start, end = self.where(line)
         text, original = self.masked[start:end], self.source.text[start:end]
-        call = _CALL.search(text)
+        call = grammar.CALL.search(text)
         if call:
             close = _closing(text, call.end() - 1)
             if close < 0:
@@ -230,7 +210,7 @@ class _Reader:
             args = split_top(text[call.end():close], start + call.end())
             self.items.append(self.call(call.group(1), args, line, original) or Statement(line, original))
             return
-        assign = _ASSIGN.match(text)
+        assign = grammar.ASSIGN.match(text)
         refs = self.references(assign.group(2) if assign else text)
         if assign:
             self.assignment(assign, start, line, original)
@@ -294,11 +274,11 @@ class _Reader:
             return
         cam, n = self.cam, hi - lo
         line, original = int(cam.line[lo]), self.lines.line(int(cam.line[lo]))  # for messages: none can fail
-        joint = cam.function[lo:hi] == FUNCTIONS.index("movej")
+        joint = _KINDS[cam.function[lo:hi]] == JOINT  # movej: rad/s; the others m/s
         scale = np.where(joint, 1.0, 1000.0)
         v, v_why = self.resolved(lo, hi, 0, lambda name: self.speed(name, line, original, "v"))
         given = cam.option_start[lo:hi, 0] >= 0
-        v[~given] = np.where(joint, float(DEFAULT_SPEED["movej"]), float(DEFAULT_SPEED["movel"]))[~given]
+        v[~given] = _DEFAULT_SPEEDS[cam.function[lo:hi][~given]]
         t, t_why = self.resolved(lo, hi, 1, lambda name: self.speed(name, line, original, "t"))
         timed = (cam.option_start[lo:hi, 1] >= 0) & ~(t == 0.0)  # t=0: no time; a t set at run time is one
         blend, _ = self.resolved(lo, hi, 2, lambda name: (self.option(name, line, original), ""))
@@ -336,17 +316,17 @@ class _Reader:
 
     def literal(self, text, offset, line, original, name=""):
         """A Target from a pose or six-number list literal; None if ``text`` is not one."""
-        if m := _POSE.match(text):
+        if m := grammar.POSE_VALUE.match(text):
             values = [finite(m.group(k), self.source.name, line, original, f"{name or 'pose'} {r}", LENGTH_LIMIT / 1000.0)
                       for k, r in enumerate(POSE, start=1)]
             computed = self.poses.get(offset + m.start(1))
             return Target(name=name, line=line, pose=pose(values) if computed is None else computed,
                           spans=spans(0, m, POSE, offset))
-        if m := _LIST.match(text):
+        if m := grammar.LIST_VALUE.match(text):
             joints = np.array([finite(m.group(k), self.source.name, line, original, f"{name or 'list'} {r}",
                                       np.radians(JOINT_LIMIT)) for k, r in enumerate(JOINTS, start=1)])
             return Target(name=name, line=line, joints=joints, spans=spans(0, m, JOINTS, offset))
-        if _NUMBERS_ONLY.match(text):
+        if grammar.NUMBERS_ONLY.match(text):
             self.fail(line, original, "malformed pose (p[...] needs six numbers)")
         return None
 
@@ -375,7 +355,7 @@ class _Reader:
         """``(target index or _Named or None, frame key, why)`` of a motion's position argument."""
         if target := self.literal(text, offset, line, original):
             return self.add(target), None, ""
-        if m := _NAME.match(text):
+        if m := grammar.VARIABLE.match(text):
             name = m.group(1)
             if why := self.runtime(name):
                 return None, None, why
@@ -387,7 +367,7 @@ class _Reader:
             if name in self.numbers:
                 return None, None, f"{name} is a number, not a position"
             return _Named(name, line), None, ""
-        if m := _IK.match(text):
+        if m := grammar.INVERSE_KINEMATICS.match(text):
             args = split_top(m.group(1), offset + m.start(1))
             index, frame, why = self.position(args[0][0], args[0][1], line, original)
             near = [a for a in args[1:] if a[0].strip().startswith("qnear")] or args[1:2]
@@ -397,7 +377,7 @@ class _Reader:
                 shift = near_at + (near_text.index("=") + 1 if "=" in near_text else 0)
                 self.link(index, value, shift, line, original)
             return index, frame, why
-        if m := _POSE_TRANS.match(text):
+        if m := grammar.POSE_TRANS.match(text):
             args = split_top(m.group(1), offset + m.start(1))
             if len(args) == 2:
                 frame, why = self.frame(args[0][0], args[0][1], line, original)
@@ -416,7 +396,7 @@ class _Reader:
             key = f"pose_trans line {line}"
             self.frames[key] = target.pose
             return key, ""
-        if m := _NAME.match(text):
+        if m := grammar.VARIABLE.match(text):
             name = m.group(1)
             if why := self.runtime(name):
                 return None, why
@@ -438,11 +418,11 @@ class _Reader:
         target = self.targets[index]
         if target.is_joint:
             return
-        if m := _LIST.match(text):
+        if m := grammar.LIST_VALUE.match(text):
             joints = np.array([finite(m.group(k), self.source.name, line, original, f"qnear {k}", np.radians(JOINT_LIMIT))
                                for k in range(1, 7)])
             found = spans(0, m, NEAR, offset)
-        elif (m := _NAME.match(text)) and m.group(1) in self.values and self.values[m.group(1)].target.is_joint:
+        elif (m := grammar.VARIABLE.match(text)) and m.group(1) in self.values and self.values[m.group(1)].target.is_joint:
             listed = self.values[m.group(1)].target
             joints, found = listed.joints, dict(zip(NEAR, (listed.spans[j] for j in JOINTS)))
         else:
@@ -456,7 +436,7 @@ class _Reader:
             self.values.pop(name, None)
             return
         self.numbers.pop(name, None)
-        if (listed := _LIST.match(text)) and any(abs(float(v)) > np.radians(JOINT_LIMIT) for v in listed.groups()):
+        if (listed := grammar.LIST_VALUE.match(text)) and any(abs(float(v)) > np.radians(JOINT_LIMIT) for v in listed.groups()):
             self.values.pop(name, None)  # six numbers no joint can hold (gains, limits): data, not a position
             return
         target = self.literal(text, start + m.start(2), line, original, name)
@@ -470,7 +450,7 @@ class _Reader:
             self.set_tcp(args, line, original)
             return None
         text = original.strip()
-        if function in NOT_READ:
+        if function in grammar.STREAMED:
             self.motion_spans.add({})
             return Motion(kind=JOINT, line=line, text=text,
                           reason=f"{function}: streamed set point, not compensated by trajcomp")
@@ -479,12 +459,12 @@ class _Reader:
         if len(args) < count or not args[0][0].strip():
             self.fail(line, original, f"{function} needs {count} position(s)")
         found = [self.position(a, s, line, original) for a, s in args[:count]]
-        options = dict(zip(POSITIONAL[function], (a.strip() for a, _ in args[count:] if "=" not in a)))
+        options = dict(zip(grammar.MOTIONS[function].positional, (a.strip() for a, _ in args[count:] if "=" not in a)))
         options |= {k.strip(): v.strip() for k, v in (a.split("=", 1) for a, _ in args[count:] if "=" in a)}
         blend = self.option(options.get("r"), line, original)
-        speed, speed_why = self.speed(options.get("v", DEFAULT_SPEED[function]), line, original, "v")
-        speed = None if speed is None else speed * (1.0 if function == "movej" else 1000.0)
-        unit = "rad/s" if function == "movej" else "mm/s"
+        speed, speed_why = self.speed(options.get("v", grammar.MOTIONS[function].default_speed), line, original, "v")
+        speed = None if speed is None else speed * (1.0 if kind == JOINT else 1000.0)
+        unit = "rad/s" if kind == JOINT else "mm/s"
         acceleration, acceleration_why = self.acceleration(options.get("a"), line, original)
         if "t" in options:  # t= the motion's time: v and a are ignored (t=0: no time)
             time, time_why = self.speed(options["t"], line, original, "t")
@@ -493,7 +473,7 @@ class _Reader:
                 acceleration, acceleration_why = None, ""
         speed_why = speed_why or acceleration_why
         if acceleration is not None:
-            acceleration *= 1.0 if function == "movej" else 1000.0
+            acceleration *= 1.0 if kind == JOINT else 1000.0
         self.motion_spans.add(_timing_offsets(function, args, count))
         frames = {frame for _, frame, _ in found}
         why = next((w for _, _, w in found if w), "") or self.tool_why
@@ -535,7 +515,7 @@ class _Reader:
         """
         if re.fullmatch(NUMBER, text):
             return finite(text, self.source.name, line, original, field), ""
-        if not (m := _NAME.match(text)):
+        if not (m := grammar.VARIABLE.match(text)):
             return None, f"{field}={text}: computed at run time"
         name = m.group(1)
         if why := self.runtime(name):
@@ -589,7 +569,7 @@ class _Reader:
         """The TCP of the following motions: a literal pose or a variable holding one, else known at run time."""
         text = args[0][0] if args else ""
         tcp = self.literal(text, args[0][1], line, original) if args else None
-        m = _NAME.match(text)
+        m = grammar.VARIABLE.match(text)
         if tcp is None and m and m.group(1) in self.values and not self.runtime(m.group(1)):
             tcp = self.values[m.group(1)].target
             self.frame_uses.setdefault(m.group(1), line)  # a TCP, like a frame: not a point
@@ -603,7 +583,7 @@ class _Reader:
 
     def references(self, text, assigned=None):
         """Targets of the pose variables a statement names (made targets: used, but not by a motion)."""
-        names = [w for w in dict.fromkeys(_WORD.findall(text)) if w != assigned and w in self.values
+        names = [w for w in dict.fromkeys(grammar.WORD.findall(text)) if w != assigned and w in self.values
                  and not self.values[w].target.is_joint and w not in self.frame_uses]
         return tuple(self.use(self.values[w]) for w in names)
 
@@ -613,7 +593,7 @@ def _timing_offsets(function, args, count):
     """Where re-timing writes, ``{role: (start, end)}``: the values of ``t`` and ``v`` (named or positional) and the
     call's end."""
     spans = {}
-    positional = iter(POSITIONAL[function])
+    positional = iter(grammar.MOTIONS[function].positional)
     for text, at in args[count:]:
         key, _, value = text.partition("=") if "=" in text else (next(positional, ""), "", text)
         shift = at + (len(text) - len(value) if "=" in text else 0)
@@ -626,9 +606,10 @@ def _timing_offsets(function, args, count):
 
 
 def read(path):
-    """Read a URScript program.
+    """Read a URScript program, as its grammar declares it (`trajcomp.formats.urscript.grammar`).
 
-    The motion lines a CAM post-processor writes (`trajcomp.formats.urscript.lines`) are read together, in
+    The motion lines a CAM post-processor writes (`grammar.CAM_LINE`, executed by
+    `trajcomp.formats.urscript.lines`) are read together, in
     blocks that take the TCP, frames and variables in force at their lines, and the plain statements between them
     at once; every other line is read one by one, in order.
 
@@ -641,11 +622,12 @@ def read(path):
     """
     source = read_source(path)
     masked = mask(source.text, "#")
-    if not _SIGNS.search(masked):
+    if not grammar.SIGNS.search(masked):
         raise ReadError(f"{path}: not a URScript program: no def, move or pose literal")
     lines = Lines(source.text)
     reader = _Reader(source, masked, lines, *cam_lines(masked, np.array(lines.starts)))
-    check_closed(source, masked, _BLOCK_OPENS, _BLOCK_CLOSES, dict.fromkeys(_BLOCKS, "END"), reader.parts)
+    check_closed(source, masked, grammar.BLOCK_OPENS, grammar.BLOCK_CLOSES,
+                 dict.fromkeys(map(str.upper, grammar.BLOCK_WORDS), "END"), reader.parts)
     done = 0  # CAM-shaped lines read
     for line in reader.others.tolist():
         upto = int(np.searchsorted(reader.cam.line, line))
@@ -656,15 +638,6 @@ def read(path):
     _finish(reader)
     # def calls, if, while, sleep: starts and stops as the script runs
     return flow.program_followed(_program(reader, path), _flow_steps(reader), {})
-
-
-# the lines that change the order a script runs in (`trajcomp.programs.flow.Step`): blocks, their ends, waits
-_FLOW_LINE = re.compile(r"^[ \t]*(?:(def|thread|sec|if|elif|while|for)\b(?:[ \t]+(\w+))?[^\n]*:[ \t]*\r?$"
-                        r"|(else)[ \t]*:[ \t]*\r?$|(end|break|halt)[ \t]*\r?$|(return)\b"
-                        r"|(sleep|sync|stopj|stopl)[ \t]*\()", re.M)
-_OPENED = {"def": "end", "thread": "end", "sec": "end", "if": "endif", "while": "endloop", "for": "endloop"}
-_FLOW_KINDS = {"def": "routine", "thread": "routine", "sec": "routine", "if": "if", "elif": "elif", "else": "else",
-               "while": "loop", "for": "loop", "break": "exit", "return": "return", "halt": "return"}
 
 
 def _flow_steps(reader):
@@ -678,7 +651,7 @@ def _flow_steps(reader):
     offsets = [start for start, _ in reader.parts] + [int(plain.start[k]) for k in rows]
     texts = [masked[start:end] for start, end in reader.parts] + [masked[plain.start[k]:plain.stop[k]] for k in rows]
     found = [(at + m.start(), next(g for g in m.group(1, 3, 4, 5, 6) if g), m.group(2))
-             for at, text in zip(offsets, texts) for m in _FLOW_LINE.finditer(text)]
+             for at, text in zip(offsets, texts) for m in grammar.FLOW_LINE.finditer(text)]
     names = {name for _, word, name in found if word == "def" and name}
     if names:
         calls = re.compile(r"^[ \t]*(" + "|".join(map(re.escape, sorted(names))) + r")[ \t]*\(", re.M)
@@ -691,9 +664,9 @@ def _flow_steps(reader):
         if word == "end":
             steps.append(Step(opened.pop() if opened else "end", line=line))
             continue
-        if word in _OPENED:
-            opened.append(_OPENED[word])
-        kind = _FLOW_KINDS.get(word, "wait" if word != "call" else "call")
+        if word in grammar.OPENED:
+            opened.append(grammar.OPENED[word])
+        kind = grammar.FLOW_KINDS.get(word, "wait" if word != "call" else "call")
         steps.append(Step(kind, name or "", line=line))
     return steps
 
@@ -740,7 +713,7 @@ def _offsets_made(motions, offsets):
     for name, key, index, why in offsets:
         offset = np.flatnonzero(motions.frame == key) if key is not None else np.zeros(0, dtype=int)
         naming = [k for k in np.flatnonzero(motions.reason != "").tolist() if k not in set(offset.tolist())
-                  and index not in motions.refs.get(k, ()) and name in _WORD.findall(motions.text[k])]
+                  and index not in motions.refs.get(k, ()) and name in grammar.WORD.findall(motions.text[k])]
         motions = motions.with_rows(offset, target=np.full(len(offset), -1), via=np.full(len(offset), -1),
                                     frame=np.full(len(offset), None), reason=np.full(len(offset), why, dtype=object),
                                     refs=[(index,)] * len(offset))

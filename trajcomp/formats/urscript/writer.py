@@ -8,7 +8,8 @@ from trajcomp.errors import WriteError
 from trajcomp.formats.file_writing import active_axes, write_single_file, written_speed
 from trajcomp.formats.number_writing import ceil_places, floor_places, format_number
 from trajcomp.formats.pose_encoding import encode_targets, same_rotation
-from trajcomp.formats.urscript.reader import JOINTS, NEAR, POSE, read
+from trajcomp.formats.urscript.grammar import JOINTS, NEAR, POSE
+from trajcomp.formats.urscript.reader import read
 from trajcomp.programs.items import CIRCULAR, JOINT, LINEAR
 from trajcomp.arm.transforms import matrix_to_rotvec, rotvec_to_matrix
 
