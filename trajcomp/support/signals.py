@@ -15,6 +15,7 @@ be cut (the renames of a set, the loading of a C extension).
 import contextlib
 import os
 import signal
+import sys
 import threading
 
 STOPPING = tuple(getattr(signal, name) for name in ("SIGINT", "SIGTERM", "SIGHUP") if hasattr(signal, name))
@@ -92,7 +93,7 @@ def hold_from_start():
     its code and message, not with a traceback out of an import. Before
     that line (the interpreter's own start-up) Python's defaults hold.
     """
-    if threading.current_thread() is not threading.main_thread():
+    if threading.current_thread() is not threading.main_thread() or spawned():  # a worker's start: not the program's
         return
     for signum in STOPPING:
         handler = signal.getsignal(signum)
@@ -186,6 +187,32 @@ def _raise_held():
         if not _STOPPED:
             _STOPPED.append(signum)
             raise Interrupted(signum)
+
+
+def spawned():
+    """Whether this process is one that multiprocessing spawned (a local Dask cluster's worker): it runs the parent's
+    main module too (as ``__mp_main__``) before its work, and is no program of its own."""
+    return "--multiprocessing-fork" in getattr(sys, "orig_argv", ())
+
+
+def release_in_spawned():
+    """In a process that multiprocessing spawned with `STOPPING` blocked (a local Dask cluster's worker,
+    `trajcomp.jobs.batch`): each of them ends it by its default action from now on, one that came meanwhile now.
+
+    Called by the package's first lines, the earliest trajcomp's code runs
+    there (the spawned process imports its parent's main module before it
+    unpickles its work). Any other process, a library user's spawned
+    processes included, is left as it is.
+    """
+    if not spawned():
+        return
+    try:
+        if not set(STOPPING) <= signal.pthread_sigmask(signal.SIG_BLOCK, []):
+            return
+    except (AttributeError, OSError):
+        return
+    default_from_now()
+    signal.pthread_sigmask(signal.SIG_UNBLOCK, STOPPING)
 
 
 def default_from_now():
