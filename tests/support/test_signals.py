@@ -271,6 +271,25 @@ def test_a_signal_held_while_another_thread_runs_is_raised_after_the_block():
     assert reached and stop.value.signum == signal.SIGTERM
 
 
+def test_a_stop_raised_where_python_ignores_it_is_raised_again_at_once(capsys):
+    """A signal whose handler runs in a weak reference's callback (an import's module lock has one) or a
+    destructor: Python printed the Interrupted as "Exception ignored" and the run went on to its next check."""
+    import weakref
+
+    class Thing:
+        pass
+
+    thing = Thing()
+    reference = weakref.ref(thing, lambda ref: time.sleep(0.5))  # the signal comes during the callback
+    start = time.monotonic()
+    with raised(), pytest.raises(Interrupted) as stop:
+        threading.Timer(0.1, os.kill, (os.getpid(), signal.SIGTERM)).start()
+        del thing
+        time.sleep(3)
+    assert stop.value.signum == signal.SIGTERM and time.monotonic() - start < 1.5 and reference() is None
+    assert "Exception ignored" not in capsys.readouterr().err
+
+
 def test_a_signal_the_process_ignores_stays_ignored():
     """``nohup trajcomp ...`` ignores SIGHUP; a shell's background job, SIGINT."""
     previous = signal.signal(signal.SIGHUP, signal.SIG_IGN)

@@ -12,11 +12,14 @@ so that the process that started it sees which one it was
 be cut (the renames of a set, the loading of a C extension).
 """
 
+import _thread
 import contextlib
+import functools
 import os
 import signal
 import sys
 import threading
+import time
 
 STOPPING = tuple(getattr(signal, name) for name in ("SIGINT", "SIGTERM", "SIGHUP") if hasattr(signal, name))
 _STOPPED = []  # the signal that stopped this process's run, once raised (a second one is not raised again)
@@ -67,8 +70,9 @@ def check():
 
     The handler runs wherever the main thread is; where it is running an
     at-fork callback, a destructor or a weak reference's callback, Python
-    prints the exception and goes on. The places that start work or
-    write call this, so that such a run stops there.
+    ignores the exception (`raised` then sends the signal again). The
+    places that start work or write call this, so that such a run stops
+    there at the latest.
     """
     if _STOPPED and not _HELD[0]:
         raise Interrupted(_STOPPED[0])
@@ -126,12 +130,41 @@ def raised():
             signal.signal(signum, _raise)
     if "came" in _STARTING:  # a signal during the program's start (`hold_from_start`): raised by the first `check`
         _STOPPED.append(_STARTING.pop("came"))
+    unraisable = sys.unraisablehook
+    sys.unraisablehook = functools.partial(_raise_lost, unraisable)
     try:
         yield
     finally:
         for signum, handler in previous.items():
             signal.signal(signum, handler)
+        sys.unraisablehook = unraisable
         _STOPPED.clear()
+
+
+def _raise_lost(hook, unraisable):
+    """``sys.unraisablehook`` within `raised` (``hook`` the one before): an `Interrupted` that Python could not raise
+    where the signal came, and ignored, is raised again a moment later where the main thread then is.
+
+    The handler runs wherever the main thread is, a weak reference's
+    callback or a destructor included (an import's module lock has such a
+    callback, the garbage collector runs destructors anywhere): Python
+    printed the exception there ("Exception ignored in") and went on, and
+    the run went on until its next `check`. Here the signal is sent again
+    to the main thread 10 ms later, from a new thread (started without
+    waiting for it: the handler run within this hook would be lost the
+    same way), as if it came then; nothing is printed. Any other exception
+    goes to ``hook``.
+    """
+    if not isinstance(unraisable.exc_value, Interrupted):
+        hook(unraisable)
+        return
+    _STOPPED.clear()
+    _thread.start_new_thread(_send_later, (threading.main_thread().ident, unraisable.exc_value.signum))
+
+
+def _send_later(thread, signum):
+    time.sleep(0.01)
+    signal.pthread_kill(thread, signum)
 
 
 def raise_in_this_process():
