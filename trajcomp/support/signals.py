@@ -234,8 +234,9 @@ def release_in_spawned():
 
     Called by the package's first lines, the earliest trajcomp's code runs
     there (the spawned process imports its parent's main module before it
-    unpickles its work). Any other process, a library user's spawned
-    processes included, is left as it is.
+    unpickles its work). Any other process (not spawned, or spawned with
+    them unblocked, as multiprocessing starts its processes) is left as it
+    is.
     """
     if not spawned():
         return
