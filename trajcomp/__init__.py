@@ -4,7 +4,7 @@ import sys
 
 from trajcomp.support.signals import hold_from_start, release_in_spawned
 
-# A worker process a run spawned with the stopping signals blocked (a local Dask cluster's): from here they end it
+# A worker process a run spawned with SIGINT blocked (a local Dask cluster's): from here the stopping signals end it
 release_in_spawned()
 
 # ``python -m trajcomp[.cli]`` imports this package first (sys.argv[0] is "-m" while it does): the command line's

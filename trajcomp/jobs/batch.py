@@ -262,28 +262,29 @@ def _stopping_nanny(nanny_base, nannies):
     """The nanny class of a local Dask cluster (a ``nanny_base``, Dask's Nanny): a stopping signal that ends one of
     its workers stops the whole run as that signal; each nanny started is appended to ``nannies``.
 
-    A worker process starts with SIGINT, SIGTERM and SIGHUP blocked (the
-    nanny blocks them in the cluster's event-loop thread, whose threads
-    start the processes and pass them their mask), until trajcomp's
-    package is imported there (it is the cluster's preload, if nothing
-    imported it before): from then on each of them ends the worker by its
-    default action, and one that came meanwhile ends it then
-    (`trajcomp.support.signals.release_in_spawned`). Its nanny, in the
-    run's process, sees the worker killed by that signal and sends it to
+    SIGTERM and SIGHUP end a worker process by their default action, SIGINT
+    too once trajcomp's package is imported there (it is the cluster's
+    preload, if nothing imported it before; Python's own handler would print
+    a KeyboardInterrupt traceback): the worker starts with SIGINT blocked
+    (the nanny blocks it in the cluster's event-loop thread, whose threads
+    start the processes and pass them their mask), and one that came
+    meanwhile ends it then (`trajcomp.support.signals.release_in_spawned`).
+    Its nanny, in the run's process, sees the worker killed by a stopping
+    signal and sends it to
     the run's main thread, which stops as if it had received it; the
     worker is not restarted, nor is any started once the run stopped (a
     process started as the run ends would print its own traceback, reading
     its start from a parent gone: `_end_starting`). A worker its nanny
     ends at the batch's end stops nothing. Multiprocessing's resource
     tracker is started before (`_start_resource_tracker`): its start
-    unblocks SIGINT and SIGTERM in the thread that starts it. Defined here,
+    unblocks SIGINT in the thread that starts it. Defined here,
     with Dask imported.
     """
     from distributed.core import Status
 
     class StoppingNanny(nanny_base):
         async def start_unsafe(self):
-            signal.pthread_sigmask(signal.SIG_BLOCK, STOPPING)  # the cluster's loop thread, where no handler runs
+            signal.pthread_sigmask(signal.SIG_BLOCK, [signal.SIGINT])  # the cluster's loop thread: no handler there
             nannies.append(self)
             return await super().start_unsafe()
 

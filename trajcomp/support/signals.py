@@ -229,19 +229,20 @@ def spawned():
 
 
 def release_in_spawned():
-    """In a process that multiprocessing spawned with `STOPPING` blocked (a local Dask cluster's worker,
-    `trajcomp.jobs.batch`): each of them ends it by its default action from now on, one that came meanwhile now.
+    """In a process that multiprocessing spawned with SIGINT blocked (a local Dask cluster's worker,
+    `trajcomp.jobs.batch`): each of `STOPPING` ends it by its default action from now on, one that came meanwhile
+    now.
 
     Called by the package's first lines, the earliest trajcomp's code runs
     there (the spawned process imports its parent's main module before it
     unpickles its work). Any other process (not spawned, or spawned with
-    them unblocked, as multiprocessing starts its processes) is left as it
-    is.
+    SIGINT unblocked, as multiprocessing starts its processes) is left as
+    it is.
     """
     if not spawned():
         return
     try:
-        if not set(STOPPING) <= signal.pthread_sigmask(signal.SIG_BLOCK, []):
+        if signal.SIGINT not in signal.pthread_sigmask(signal.SIG_BLOCK, []):
             return
     except (AttributeError, OSError):
         return
