@@ -97,10 +97,10 @@ def run_stopped(command, folder, signum, delay, target="group"):
         elif target == "main":
             os.kill(process.pid, signum)
         else:  # a worker of the main process, or the next one it starts
-            children = _children(process.pid)
+            children = _executed(_children(process.pid), process.pid)
             while not children and process.poll() is None:
                 time.sleep(0.01)
-                children = _children(process.pid)
+                children = _executed(_children(process.pid), process.pid)
             sent_to = f"worker after {time.monotonic() - started:.2f} s" if children else "none (ended)"
             if children:
                 os.kill(children[0], signum)
@@ -138,6 +138,30 @@ def _children(pid):
             pass
     children.sort()
     return [child for child in children if b"resource_tracker" not in _command(child)]
+
+
+def _executed(children, pid):
+    """``children`` of process ``pid`` once each runs its own program: one that is still a copy of the run about to
+    execute its program (the thread of the run that started it waits for that: state D, vfork) is waited for, up to
+    0.5 s; those that become multiprocessing's resource tracker are left out (a forked worker never executes another
+    program, and its thread goes on at once)."""
+    deadline = time.monotonic() + 0.5
+    while _starting(pid) & set(children) and time.monotonic() < deadline:
+        time.sleep(0.01)
+    return [child for child in children if b"resource_tracker" not in _command(child)]
+
+
+def _starting(pid):
+    """The children of process ``pid`` that a thread of it waits for (state D), as one waits for a vfork child to
+    execute its program."""
+    starting = set()
+    for task in Path(f"/proc/{pid}/task").glob("*"):
+        try:
+            if (task / "stat").read_text().rsplit(")", 1)[1].split()[0] == "D":
+                starting.update(int(c) for c in (task / "children").read_text().split())
+        except OSError:
+            pass
+    return starting
 
 
 def _command(pid):

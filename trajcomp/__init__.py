@@ -2,13 +2,16 @@
 
 import sys
 
+from trajcomp.support.signals import hold_from_start, release_in_spawned
+
+# A worker process a run spawned with SIGINT blocked (a local Dask cluster's): from here the stopping signals end it
+release_in_spawned()
+
 # ``python -m trajcomp[.cli]`` imports this package first (sys.argv[0] is "-m" while it does): the command line's
 # stopping signals are kept from here (`trajcomp.support.signals.hold_from_start`), before the imports below; a
 # library user's never
 _MODULE = " ".join(getattr(sys, "orig_argv", ())).partition(" -m")[2].split()[:1] if sys.argv[:1] == ["-m"] else []
 if _MODULE in (["trajcomp"], ["trajcomp.cli"]):
-    from trajcomp.support.signals import hold_from_start
-
     hold_from_start()
 
 import logging  # noqa: E402

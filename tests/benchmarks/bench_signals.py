@@ -13,7 +13,9 @@ wrong code, a file left under a real name or a temporary) and the longest
 time from the signal to the end; then each broken run. Target: 0 broken,
 every run ended within 2 s.
 
-    PYTHONPATH=$PWD python tests/benchmarks/bench_signals.py [MOMENTS [SEED]]
+    PYTHONPATH=$PWD python tests/benchmarks/bench_signals.py [MOMENTS [SEED [COMMAND]]]
+
+COMMAND runs one of them alone (e.g. ``"dask batch"``).
 """
 
 import collections
@@ -63,10 +65,11 @@ COMMANDS = {  # name: (arguments, how long it runs about (s), what a finished ru
 }
 
 
-def main(moments=100, seed=0):
+def main(moments=100, seed=0, only=None):
     signal.signal(signal.SIGINT, signal.default_int_handler)  # not ignored by the runs (a shell's background job)
     rng = random.Random(seed)
     commands = [name for name in COMMANDS if name != "dask batch" or importlib.util.find_spec("distributed")]
+    commands = [name for name in commands if only in (None, name)]
     table = collections.defaultdict(lambda: [0, 0, 0, 0, 0.0])
     broken = []
     with tempfile.TemporaryDirectory() as tmp:
@@ -102,4 +105,4 @@ def main(moments=100, seed=0):
 
 
 if __name__ == "__main__":
-    sys.exit(main(*map(int, sys.argv[1:3])))
+    sys.exit(main(*map(int, sys.argv[1:3]), *sys.argv[3:4]))

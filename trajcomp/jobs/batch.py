@@ -19,6 +19,7 @@ import logging
 import os
 import signal
 import threading
+import time
 from pathlib import Path
 
 from trajcomp import __version__, formats
@@ -27,7 +28,7 @@ from trajcomp.support.atomic import refuse_inputs, write_atomic
 from trajcomp.errors import TrajcompError
 from trajcomp.support.parallel import WorkerLost, Workers, can_fork
 from trajcomp.support.progress import progress
-from trajcomp.support.signals import STOPPING, die_by, held, stopped
+from trajcomp.support.signals import STOPPING, held, stopped
 
 log = logging.getLogger(__name__)
 
@@ -213,24 +214,23 @@ def _reported(result, done):
 
 def _on_dask(job, inputs, outputs, jobs, scheduler, done):
     try:
-        from dask.distributed import Client, KilledWorker, LocalCluster, WorkerPlugin, as_completed
+        from dask.distributed import Client, KilledWorker, LocalCluster, Nanny, as_completed
     except ImportError as exc:
         raise TrajcompError(
             f"--scheduler needs Dask distributed ({exc}); install it with: pip install 'trajcomp[cluster]'"
         ) from exc
     if scheduler == "local":
         _start_resource_tracker()
-    cluster = None
+    cluster, nannies = None, []
     try:
         if scheduler == "local":
             try:
-                cluster = LocalCluster(n_workers=max(jobs, 1), threads_per_worker=1, dashboard_address=None)
+                cluster = LocalCluster(n_workers=max(jobs, 1), threads_per_worker=1, dashboard_address=None,
+                                       worker_class=_stopping_nanny(Nanny, nannies), preload=["trajcomp"])
             except RuntimeError as exc:  # "Nanny failed to start": a worker process died as it started
                 raise TrajcompError(f"--scheduler local: the local Dask cluster did not start ({exc}: a worker "
                                     "process died as it started)") from exc
         with Client(cluster if cluster is not None else scheduler, timeout="20s") as client:
-            if cluster is not None:
-                client.register_plugin(_stops_the_run(WorkerPlugin, os.getpid()))
             futures = client.map(run_one, [job] * len(inputs), inputs, outputs, pure=False)
             where = {future.key: k for k, future in enumerate(futures)}
             results = [None] * len(futures)
@@ -254,40 +254,74 @@ def _on_dask(job, inputs, outputs, jobs, scheduler, done):
             from distributed.deploy.spec import close_clusters
 
             atexit.unregister(close_clusters)  # it would wait up to 10 s and print a traceback
+            _end_starting(nannies)
         raise
 
 
-def _stops_the_run(plugin_base, run):
-    """A Dask worker plugin (a ``plugin_base``, Dask's WorkerPlugin) for a local cluster: a stopping signal to a
-    worker process stops the whole run, the ``trajcomp`` process ``run``.
+def _stopping_nanny(nanny_base, nannies):
+    """The nanny class of a local Dask cluster (a ``nanny_base``, Dask's Nanny): a stopping signal that ends one of
+    its workers stops the whole run as that signal; each nanny started is appended to ``nannies``.
 
-    Without it a Dask worker that SIGTERM, SIGINT or SIGHUP kills is
-    restarted by its nanny and the batch goes on. In the worker's process
-    (its main thread, where the worker's event loop runs) each of them is
-    sent on to ``run`` (which stops as if it had received it) and then ends
-    the worker by its default action; while the worker closes (its nanny
-    ends it at the batch's end) it only ends it. Defined here, with Dask
-    imported: Dask sends it by value.
+    SIGTERM and SIGHUP end a worker process by their default action, SIGINT
+    too once trajcomp's package is imported there (it is the cluster's
+    preload, if nothing imported it before; Python's own handler would print
+    a KeyboardInterrupt traceback): the worker starts with SIGINT blocked
+    (the nanny blocks it in the cluster's event-loop thread, whose threads
+    start the processes and pass them their mask), and one that came
+    meanwhile ends it then (`trajcomp.support.signals.release_in_spawned`).
+    Its nanny, in the run's process, sees the worker killed by a stopping
+    signal and sends it to
+    the run's main thread, which stops as if it had received it; the
+    worker is not restarted, nor is any started once the run stopped (a
+    process started as the run ends would print its own traceback, reading
+    its start from a parent gone: `_end_starting`). A worker its nanny
+    ends at the batch's end stops nothing. Multiprocessing's resource
+    tracker is started before (`_start_resource_tracker`): its start
+    unblocks SIGINT in the thread that starts it. Defined here,
+    with Dask imported.
     """
+    from distributed.core import Status
 
-    class StopsTheRun(plugin_base):
-        name = "trajcomp-stops-the-run"
+    class StoppingNanny(nanny_base):
+        async def start_unsafe(self):
+            signal.pthread_sigmask(signal.SIG_BLOCK, [signal.SIGINT])  # the cluster's loop thread: no handler there
+            nannies.append(self)
+            return await super().start_unsafe()
 
-        def setup(self, worker):
-            if threading.current_thread() is not threading.main_thread():  # a worker in a thread: no handlers
-                return
+        async def instantiate(self):
+            if stopped() is not None:  # the run stops: no worker is started
+                return Status.failed
+            return await super().instantiate()
 
-            def stop(signum, frame):
-                if worker.status.name in ("running", "paused"):
-                    with contextlib.suppress(ProcessLookupError):
-                        os.kill(run, signum)
-                die_by(signum)
+        def _on_worker_exit_sync(self, exitcode):
+            if -exitcode in STOPPING and self.status.name not in ("closing", "closing_gracefully", "closed"):
+                signal.pthread_kill(threading.main_thread().ident, -exitcode)
+            elif stopped() is None:
+                super()._on_worker_exit_sync(exitcode)
 
-            for signum in STOPPING:
-                if signal.getsignal(signum) is not signal.SIG_IGN:
-                    signal.signal(signum, stop)
+    return StoppingNanny
 
-    return StopsTheRun()
+
+def _end_starting(nannies):
+    """Kill (SIGKILL) the worker processes of ``nannies`` that are still starting, as the run stops.
+
+    Such a process has run nothing; left, it would outlive the run for a
+    moment and print a traceback, reading its start from the run gone. A
+    start under way whose process is not there yet is waited for, up to
+    0.5 s in all (once the run stopped, no nanny begins one:
+    `_stopping_nanny`).
+    """
+    deadline = time.monotonic() + 0.5
+    while nannies and time.monotonic() < deadline:
+        for nanny in list(nannies):
+            worker = nanny.process
+            if worker is None or worker.status.name not in ("init", "starting"):
+                nannies.remove(nanny)
+            elif worker.process is not None and worker.process.pid is not None:
+                with contextlib.suppress(ProcessLookupError):
+                    os.kill(worker.process.pid, signal.SIGKILL)
+                nannies.remove(nanny)
+        time.sleep(0.01)
 
 
 def _start_resource_tracker():

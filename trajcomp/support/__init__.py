@@ -2,7 +2,8 @@
 
 `atomic` (files and file sets written whole or not at all), `memory`
 (memory budgets), `parallel` (process pools over blocks), `threads` (one
-BLAS / OpenMP thread per process), `progress`
-(progress bars), `yaml_text` (safe YAML), `plain_data` (numpy values as
-plain data) and `crash` (unexpected exceptions reported as bugs).
+BLAS / OpenMP thread per process), `progress` (progress bars), `signals`
+(the signals that stop a run), `yaml_text` (safe YAML), `plain_data`
+(numpy values as plain data) and `crash` (unexpected exceptions reported
+as bugs).
 """

@@ -12,10 +12,14 @@ so that the process that started it sees which one it was
 be cut (the renames of a set, the loading of a C extension).
 """
 
+import _thread
 import contextlib
+import functools
 import os
 import signal
+import sys
 import threading
+import time
 
 STOPPING = tuple(getattr(signal, name) for name in ("SIGINT", "SIGTERM", "SIGHUP") if hasattr(signal, name))
 _STOPPED = []  # the signal that stopped this process's run, once raised (a second one is not raised again)
@@ -66,8 +70,9 @@ def check():
 
     The handler runs wherever the main thread is; where it is running an
     at-fork callback, a destructor or a weak reference's callback, Python
-    prints the exception and goes on. The places that start work or
-    write call this, so that such a run stops there.
+    ignores the exception (`raised` then sends the signal again). The
+    places that start work or write call this, so that such a run stops
+    there at the latest.
     """
     if _STOPPED and not _HELD[0]:
         raise Interrupted(_STOPPED[0])
@@ -92,7 +97,7 @@ def hold_from_start():
     its code and message, not with a traceback out of an import. Before
     that line (the interpreter's own start-up) Python's defaults hold.
     """
-    if threading.current_thread() is not threading.main_thread():
+    if threading.current_thread() is not threading.main_thread() or spawned():  # a worker's start: not the program's
         return
     for signum in STOPPING:
         handler = signal.getsignal(signum)
@@ -125,12 +130,41 @@ def raised():
             signal.signal(signum, _raise)
     if "came" in _STARTING:  # a signal during the program's start (`hold_from_start`): raised by the first `check`
         _STOPPED.append(_STARTING.pop("came"))
+    unraisable = sys.unraisablehook
+    sys.unraisablehook = functools.partial(_raise_lost, unraisable)
     try:
         yield
     finally:
         for signum, handler in previous.items():
             signal.signal(signum, handler)
+        sys.unraisablehook = unraisable
         _STOPPED.clear()
+
+
+def _raise_lost(hook, unraisable):
+    """``sys.unraisablehook`` within `raised` (``hook`` the one before): an `Interrupted` that Python could not raise
+    where the signal came, and ignored, is raised again a moment later where the main thread then is.
+
+    The handler runs wherever the main thread is, a weak reference's
+    callback or a destructor included (an import's module lock has such a
+    callback, the garbage collector runs destructors anywhere): Python
+    printed the exception there ("Exception ignored in") and went on, and
+    the run went on until its next `check`. Here the signal is sent again
+    to the main thread 10 ms later, from a new thread (started without
+    waiting for it: the handler run within this hook would be lost the
+    same way), as if it came then; nothing is printed. Any other exception
+    goes to ``hook``.
+    """
+    if not isinstance(unraisable.exc_value, Interrupted):
+        hook(unraisable)
+        return
+    _STOPPED.clear()
+    _thread.start_new_thread(_send_later, (threading.main_thread().ident, unraisable.exc_value.signum))
+
+
+def _send_later(thread, signum):
+    time.sleep(0.01)
+    signal.pthread_kill(thread, signum)
 
 
 def raise_in_this_process():
@@ -186,6 +220,34 @@ def _raise_held():
         if not _STOPPED:
             _STOPPED.append(signum)
             raise Interrupted(signum)
+
+
+def spawned():
+    """Whether this process is one that multiprocessing spawned (a local Dask cluster's worker): it runs the parent's
+    main module too (as ``__mp_main__``) before its work, and is no program of its own."""
+    return "--multiprocessing-fork" in getattr(sys, "orig_argv", ())
+
+
+def release_in_spawned():
+    """In a process that multiprocessing spawned with SIGINT blocked (a local Dask cluster's worker,
+    `trajcomp.jobs.batch`): each of `STOPPING` ends it by its default action from now on, one that came meanwhile
+    now.
+
+    Called by the package's first lines, the earliest trajcomp's code runs
+    there (the spawned process imports its parent's main module before it
+    unpickles its work). Any other process (not spawned, or spawned with
+    SIGINT unblocked, as multiprocessing starts its processes) is left as
+    it is.
+    """
+    if not spawned():
+        return
+    try:
+        if signal.SIGINT not in signal.pthread_sigmask(signal.SIG_BLOCK, []):
+            return
+    except (AttributeError, OSError):
+        return
+    default_from_now()
+    signal.pthread_sigmask(signal.SIG_UNBLOCK, STOPPING)
 
 
 def default_from_now():
