@@ -67,8 +67,9 @@ FLOW_WORDS = {"IF": "if", "ELSE": "else", "ENDIF": "endif", "SWITCH": "if", "CAS
               "ENDSWITCH": "endif", "FOR": "loop", "ENDFOR": "endloop", "WHILE": "loop", "ENDWHILE": "endloop",
               "LOOP": "loop", "ENDLOOP": "endloop", "REPEAT": "loop", "UNTIL": "endloop", "EXIT": "exit",
               "RETURN": "return", "END": "end", "ENDFCT": "end", "WAIT": "wait", "HALT": "wait", "GOTO": "jump"}
-# the blocks of a .src (a routine or function, the control structures, a spline block) and the keywords closing them
-CLOSING = {"DEFFCT": "ENDFCT", "DEF": "END", "IF": "ENDIF", "FOR": "ENDFOR", "WHILE": "ENDWHILE", "LOOP": "ENDLOOP",
+# the blocks of a .src (a routine, first: what a statement outside them all lacks; a function, the control
+# structures, a spline block) and the keywords closing them
+CLOSING = {"DEF": "END", "DEFFCT": "ENDFCT", "IF": "ENDIF", "FOR": "ENDFOR", "WHILE": "ENDWHILE", "LOOP": "ENDLOOP",
            "REPEAT": "UNTIL", "SWITCH": "ENDSWITCH", "SPLINE": "ENDSPLINE", "PTP_SPLINE": "ENDSPLINE"}
 
 
