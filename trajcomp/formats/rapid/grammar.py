@@ -137,11 +137,16 @@ _ROUTINE_HEAD = r"^\s*(?:LOCAL\s+)?(?:PROC|FUNC\s+\w+|TRAP)\s+"
 ROUTINE = re.compile(_ROUTINE_HEAD + r"\w+\s*\((.*)\)", re.I | re.S)  # group: the parameters
 STARTS_ROUTINE = re.compile(_ROUTINE_HEAD + r"\w+\s*\(", re.I)
 ROUTINE_NAME = re.compile(_ROUTINE_HEAD + r"(\w+)", re.I)
-# every module and routine block and the word that closes it: a controller refuses a module whose blocks are not
-# closed in order
-BLOCKS = {"MODULE": "ENDMODULE", "PROC": "ENDPROC", "FUNC": "ENDFUNC", "TRAP": "ENDTRAP"}
+# every block and the word that closes it: a controller refuses a module whose blocks are not closed in order
+BLOCKS = {"MODULE": "ENDMODULE", "PROC": "ENDPROC", "FUNC": "ENDFUNC", "TRAP": "ENDTRAP",
+          "IF": "ENDIF", "FOR": "ENDFOR", "WHILE": "ENDWHILE", "TEST": "ENDTEST"}
 ROUTINE_OPENS = re.compile(r"^[ \t]*(?:LOCAL\s+)?(MODULE|PROC|FUNC|TRAP)\b", re.I | re.M)
 ROUTINE_CLOSES = re.compile(r"^[ \t]*(ENDMODULE|ENDPROC|ENDFUNC|ENDTRAP)\b", re.I | re.M)
+# ... opened at a line's start: a module or routine, LOCAL or not, or a flow block; an IF only with a THEN before
+# its ';' (``IF cond instruction;`` is one statement)
+BLOCK_OPENS = re.compile(r"^[ \t]*(?:LOCAL\s+)?(MODULE|PROC|FUNC|TRAP|IF(?=[^;]*?\bTHEN\b)|FOR|WHILE|TEST)\b",
+                         re.I | re.M)
+BLOCK_CLOSES = re.compile(r"^[ \t]*(" + "|".join(BLOCKS.values()) + r")\b", re.I | re.M)
 # the statements that change the order a module runs in (`trajcomp.programs.flow.Step`): first word -> step kind
 FLOW_STEPS = {"if": "if", "elseif": "elif", "else": "else", "endif": "endif", "test": "if", "case": "elif",
               "default": "elif", "endtest": "endif", "for": "loop", "endfor": "endloop", "while": "loop",

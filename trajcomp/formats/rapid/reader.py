@@ -194,9 +194,9 @@ def _runs_between(masked, found):
 
 
 def _check_blocks(source, masked, runs):
-    """`check_closed` of a module's MODULE, PROC, FUNC and TRAP blocks, over the ``runs`` of lines between those
-    read at once (`_runs_between`)."""
-    check_closed(source, masked, grammar.ROUTINE_OPENS, grammar.ROUTINE_CLOSES, grammar.BLOCKS, runs,
+    """`check_closed` of a module's blocks (`grammar.BLOCKS`: MODULE, routines, IF, FOR, WHILE, TEST), over the
+    ``runs`` of lines between those read at once (`_runs_between`)."""
+    check_closed(source, masked, grammar.BLOCK_OPENS, grammar.BLOCK_CLOSES, grammar.BLOCKS, runs,
                  grammar.OUTSIDE_MODULES)
 
 
