@@ -12,6 +12,7 @@ from trajcomp.formats.configuration import distinct_tuples
 from trajcomp.formats.number_fields import NUMBER, BLANK, line_bounds, offset_type, read_numbers, text_codes
 from trajcomp.formats.rapid import grammar
 from trajcomp.formats.rapid.forms import Cursor
+from trajcomp.formats.rapid.task_data import TaskData, changed_at
 from trajcomp.formats.text import (
     JOINT_LIMIT,
     LENGTH_LIMIT,
@@ -64,6 +65,7 @@ VMAX = 5000.0  # mm/s, v_tcp of the predefined speeddata vmax
 # every predefined speeddata (v5 .. v7000, vmax) is [v_tcp, 500, 5000, 1000] (RAPID reference, speeddata)
 PREDEFINED_V_ORI = 500.0  # deg/s
 PREDEFINED_V_LEAX = 5000.0  # mm/s, linear external axes
+VARIABLE = ("VAR", "PERS")  # the storages of a speeddata a program may change (a CONST it may not)
 # the one-line forms read at once (`grammar.WRITTEN_FORMS`), by the names of their patterns here (`_written_lines`)
 _WRITTEN_POINT, _WRITTEN_MOTION, _WRITTEN_INLINE = (form.regex for form in grammar.WRITTEN_FORMS)
 WRITTEN_FORMS = ("_WRITTEN_POINT", "_WRITTEN_MOTION", "_WRITTEN_INLINE")
@@ -493,7 +495,9 @@ class _Reader:
         self.data = {}  # lower name of a speeddata or num -> (storage, type, value text, line); None if declared twice
         self.in_force = {}  # lower name of a VAR speeddata -> (value, why) a straight-line assignment gave it
         self.touched = {}  # lower name of a VAR speeddata -> first line of a statement that may change it
-        self.task = None  # the other modules of the task (`DeclaredElsewhere`), which may assign a VAR too
+        self.task = None  # the other modules of the task (`DeclaredElsewhere`): the points they declare and assign
+        self.task_data = None  # ... and the speeddata and num they declare or may change (`TaskData`)
+        self.scanned = None  # the masked text, `Lines` and runs `scan_data` looked at
         self.motion_spans = SpanTable(MOTION_SPANS)  # the spans of the motions read one by one, in order
         self.protos = []  # Motion of each distinct instruction of motions read at once (`read_at_once`)
         self.steps = []  # what the module does besides moving, in order (`trajcomp.programs.flow`)
@@ -643,27 +647,20 @@ class _Reader:
 
     def scan_data(self, masked, lines, runs):
         """Note the module's speeddata and num declarations (a motion may use one declared further down), and
-        where a statement other than its declaration and motions may change a VAR speeddata (``lines``: the
-        module's `Lines`; ``runs``: the offsets of the text between the lines read at once, `_runs_between`,
+        where a statement other than its declaration and motions may change a VAR or PERS speeddata (``lines``:
+        the module's `Lines`; ``runs``: the offsets of the text between the lines read at once, `_runs_between`,
         which only declare points or use a speeddata)."""
+        self.scanned = masked, lines, runs
         if not _declares_data(masked):  # a CAM module declares none: its lines are not tried
             return
         for m in (m for start, end in runs for m in _line_matches(grammar.SPEED_DECLARATION, masked, start, end)):
             key = m.group(3).lower()
             entry = (m.group(1).upper(), m.group(2).lower(), (m.group(4) or "").strip(), lines.number(m.start(1)))
             self.data[key] = entry if key not in self.data else None
-        names = [key for key, entry in self.data.items() if entry is not None and entry[:2] == ("VAR", "speeddata")]
-        if not names:
-            return
-        used = re.compile(r"\b(" + "|".join(map(re.escape, names)) + r")\b", re.I)
-        for m in (m for start, end in runs for m in used.finditer(masked, start, end)):
-            line = lines.number(m.start())
-            text = masked[lines.starts[line - 1]:lines.starts[line] if line < len(lines.starts) else len(masked)]
-            text = text.rstrip("\r\n")  # the line's masked text
-            assigned = grammar.ASSIGNMENT.match(text)
-            if not (grammar.STARTS_MOTION.match(text) or grammar.STARTS_DECLARATION.match(text)
-                    or assigned and assigned.group(1).lower() != m.group(1).lower()):  # read, not changed
-                self.touched.setdefault(m.group(1).lower(), line)
+        for key, entry in self.data.items():
+            if entry is not None and entry[0] in VARIABLE and entry[1] == "speeddata" \
+                    and (line := changed_at(masked, lines, key, runs)):
+                self.touched[key] = line
 
     def flow(self, text, line, original):
         """Follow the VAR speeddata a statement (not a motion) gives a value or may change.
@@ -689,9 +686,11 @@ class _Reader:
         """``(value, why)`` of a speeddata (its v_tcp, v_ori and v_leax: mm/s, deg/s, mm/s, v_leax None when not a
         number) or num named ``name``: stated, or why it is not.
 
-        Stated: a literal, ``vN``, ``vmax``, or a CONST of this module whose
-        value is one of these. PERS and VAR data, routine parameters and
-        data declared elsewhere are set at run time: value None.
+        Stated: a literal, ``vN``, ``vmax``, a CONST of this module whose
+        value is one of these, a VAR or PERS speeddata where its value is
+        known (`variable`), or one of these another module of the task
+        declares (`declared_elsewhere`). Routine parameters, other VAR and
+        PERS data and data declared nowhere are set at run time: value None.
         """
         if typ == "num" and _NUMBER.fullmatch(name):
             return self.number(name, line, original, field), ""
@@ -709,37 +708,69 @@ class _Reader:
         if not _NAME.match(name):
             return None, f"{field} {name}: computed at run time"
         if key not in self.data:
-            return None, f"{name}: {typ} not declared in this module, set at run time"
+            return self.declared_elsewhere(name, typ, original, field, depth)
         entry = self.data[key]
         if entry is None:
             return None, f"{name}: declared more than once in this module, which one applies is known at run time"
         storage, declared, value, at = entry
-        if storage == "VAR" and declared == typ == "speeddata":
-            return self.variable(name, value, at, original, field, depth)
+        if storage in VARIABLE and declared == typ == "speeddata":
+            return self.variable(name, storage, value, at, original, field, depth)
         if storage != "CONST":
             return None, f"{name}: {storage} {declared}, set at run time (line {at})"
         if declared != typ or depth > 8 or not value:
             return None, f"{name}: {declared} {value}, known at run time (line {at})"
         return self.constant(value, typ, at, original, field, depth + 1)
 
-    def variable(self, name, value, at, original, field, depth):
-        """``(value, why)`` of VAR speeddata ``name`` (declared at line ``at`` with ``value``) where a motion uses it.
+    def variable(self, name, storage, value, at, original, field, depth):
+        """``(value, why)`` of VAR or PERS (``storage``) speeddata ``name``, declared at line ``at`` with ``value``,
+        where a motion uses it.
 
         Known: the value a straight-line assignment before the motion gave it
         (`flow`), or its declared value if no statement of the module, and
         none of another module of the task, may change it (only motions use
-        it). Else set at run time.
+        it; `task_data.may_change`): a VAR's value as the program starts, a
+        PERS's as declared, since nothing gives it another (a PERS another
+        module declares too starts at the value of the module loaded
+        first: set at run time). Else set at run time.
         """
         key = name.lower()
         if key in self.in_force:
             return self.in_force[key]
-        elsewhere = self.task.assigned(key) if self.task is not None else ""
         if key in self.touched:
-            return None, (f"{name}: VAR speeddata the module changes (line {self.touched[key]}) and does not assign a "
-                          "literal in the code running straight to this motion: set at run time")
+            return None, (f"{name}: {storage} speeddata the module changes (line {self.touched[key]}) and does not "
+                          "assign a literal in the code running straight to this motion: set at run time")
+        elsewhere = self.task_data.changed(key) if self.task_data is not None else ""
         if elsewhere or not value:
-            return None, f"{name}: VAR speeddata, set at run time ({elsewhere or f'declared at line {at}'})"
+            return None, f"{name}: {storage} speeddata, set at run time ({elsewhere or f'declared at line {at}'})"
+        if storage == "PERS" and self.task_data is not None and (again := self.task_data.declared(key)):
+            return None, (f"{name}: PERS speeddata also declared in {again[0][0].name}:{again[0][1]}: its value is "
+                          "that of the module loaded first, set at run time")
         return self.constant(value, "speeddata", at, original, field, depth + 1)
+
+    def declared_elsewhere(self, name, typ, original, field, depth):
+        """``(value, why)`` of a speeddata or num ``name`` this module does not declare, as another module of its task
+        declares it (`TaskData.declared`): a CONST, or a VAR or PERS speeddata no module changes, whose value is
+        stated (a literal, ``vN``, ``vmax``: a name in it would be looked up in that module). Else set at run time.
+        """
+        key = name.lower()
+        found = self.task_data.declared(key) if self.task_data is not None else []
+        if not found:
+            return None, f"{name}: {typ} not declared in this module, set at run time"
+        file, at, storage, declared, value = found[0]
+        where = f"{file.name}:{at}"
+        if len(found) > 1:
+            return None, f"{name}: declared in {where} and {found[1][0].name}:{found[1][1]}, set at run time"
+        if declared != typ or depth > 8 or not value or _NAME.match(value) and not (
+                typ == "speeddata" and (grammar.PREDEFINED_SPEED.match(value) or value.lower() == "vmax")):
+            return None, f"{name}: {storage} {declared} {value} of {where}, known at run time"
+        if storage != "CONST":
+            changed = changed_at(*self.scanned[:2], key, self.scanned[2]) if self.scanned else 0
+            if declared != "speeddata" or changed:
+                return None, f"{name}: {storage} {declared} of {where}, set at run time" + (
+                    f" (changed at line {changed})" if changed else "")
+            if elsewhere := self.task_data.changed(key):
+                return None, f"{name}: {storage} speeddata of {where}, set at run time ({elsewhere})"
+        return self.constant(value, typ, at, original, f"{field} ({where})", depth + 1)
 
     def number(self, text, line, original, field, limit=LENGTH_LIMIT):
         return finite(text, self.source.name, line, original, field, limit)
@@ -1064,6 +1095,7 @@ def _read(path):
     while True:  # a statement spread over lines that look read-at-once takes them back (`_Spread`): rare
         reader = _Reader(source)
         reader.task = DeclaredElsewhere(Path(path), folders, modules, grammar.TASK_POINT, "!", assignment=grammar.ASSIGNED)
+        reader.task_data = TaskData(path, folders, modules)
         found_points, named, inline = _written_lines(masked, codes, lines, excluded)
         runs = _runs_between(masked, (found_points, named, inline))
         if not excluded:  # first: the module's blocks closed, checked where they may open or close
