@@ -36,6 +36,7 @@ class Cursor:
 
     def __init__(self, codes, line_end, closes=None):
         self.codes, self.line_end, self.closes = codes, line_end, closes
+        self._word = None  # the last `word` asked: (at, its end), reused while the same array is asked again
 
     def of(self, rows):
         """The cursor of lines ``rows`` (K',) of these."""
@@ -67,12 +68,13 @@ class Cursor:
         milliseconds (a column at a time, it took 13 s).
         """
         at = np.array(at, dtype=np.int64)
-        moving = np.flatnonzero(at < self.line_end)
-        width = self.WINDOW
+        last = len(self.codes) - 1
+        moving = np.flatnonzero((at < self.line_end) & table[np.minimum(self.codes[np.minimum(at, last)], 127)])
+        width = self.WINDOW  # the lines whose first character is out of the run (most: no blank) are done
         while len(moving):
             window = at[moving, None] + np.arange(width)
             inside = window < self.line_end[moving, None]
-            in_run = inside & table[np.minimum(self.codes[np.minimum(window, len(self.codes) - 1)], 127)]
+            in_run = inside & table[np.minimum(self.codes[np.minimum(window, last)], 127)]
             run = np.argmin(in_run, axis=1)  # the first character out of the run: 0 where all are in it
             ended = ~in_run[np.arange(len(moving)), run]
             at[moving] += np.where(ended, run, width)
@@ -86,7 +88,9 @@ class Cursor:
 
     def word(self, at):
         """The end of the word (ASCII ``\\w+``) at ``at`` (K,): ``at`` itself where none starts."""
-        return self.skip(at, WORD_CHARACTER)
+        if self._word is None or self._word[0] is not at:  # each form's first word is the same (`find_lines`)
+            self._word = at, self.skip(at, WORD_CHARACTER)
+        return self._word[1]
 
     def keyword(self, at, words, word_end=None):
         """The end of the one of ``words`` (upper case ASCII, whole words, any case) at ``at`` (K,); -1 where none.
@@ -274,11 +278,24 @@ class LineEnd(Element):
 
 
 def _run_all(elements, cursor, at, found):
-    there = np.ones(len(at), dtype=bool)
+    """Run ``elements`` in order from ``at`` (K,), each on the lines where those before it are there (the others
+    dropped: no work on them). The offsets after them (K,; -1 where not there), whether they are there (K,); their
+    groups appended to ``found`` (each (K, 2); -1 on the lines an element before the group is not on)."""
+    count, alive, spans = len(at), np.arange(len(at)), []
     for element in elements:
-        at, here = element.run(cursor, at, found)
-        there &= here
-    return at, there
+        inner = []
+        at, here = element.run(cursor, at, inner)
+        spans.extend((alive, span) for span in inner)
+        if not here.all():
+            kept = np.flatnonzero(here)
+            alive, at, cursor = alive[kept], at[kept], cursor.of(kept)
+    end, there = np.full(count, -1, dtype=np.int64), np.zeros(count, dtype=bool)
+    end[alive], there[alive] = at, True
+    for rows, span in spans:
+        full = np.full((count, 2), -1, dtype=np.int64)
+        full[rows] = span
+        found.append(full)
+    return end, there
 
 
 class Form:
@@ -318,19 +335,22 @@ class Form:
         regs : ndarray of int, shape (K, groups + 1, 2)
             Their matches' offsets as ``Match.regs`` gives them.
         """
-        if not len(starts) or not len(codes):
-            return np.zeros(0, dtype=np.int64), np.zeros((0, self.groups + 1, 2), dtype=np.int64)
-        carriage = (ends > starts) & (codes[np.maximum(ends - 1, 0)] == ord("\r"))
-        lo, hi = int(starts[0]), int(ends[-1])
-        closes = np.flatnonzero(codes[lo:hi] == ord("]")) + lo
-        rows = np.arange(len(starts))
-        cursor, at, found = Cursor(codes, ends - carriage, closes), np.asarray(starts, dtype=np.int64), []
-        for element in self.elements:  # the lines not written so dropped after each element: the others run on
-            at, there = element.run(cursor, at, found)
-            if not there.all():
-                kept = np.flatnonzero(there)
-                rows, at, cursor = rows[kept], at[kept], cursor.of(kept)
-                found = [span[kept] for span in found]
-        whole = np.c_[starts[rows], ends[rows]]
-        return rows, np.stack([whole, *found], axis=1) if len(rows) else np.zeros((0, self.groups + 1, 2),
-                                                                                   dtype=np.int64)
+        return find_lines([self], codes, starts, ends)[0]
+
+
+def find_lines(forms, codes, starts, ends):
+    """`Form.find` of each of ``forms`` over the same lines, the blanks at their starts skipped once: list of
+    ``(rows, regs)``."""
+    if not len(starts) or not len(codes):
+        return [(np.zeros(0, dtype=np.int64), np.zeros((0, form.groups + 1, 2), dtype=np.int64)) for form in forms]
+    carriage = (ends > starts) & (codes[np.maximum(ends - 1, 0)] == ord("\r"))
+    lo, hi = int(starts[0]), int(ends[-1])
+    cursor = Cursor(codes, ends - carriage, np.flatnonzero(codes[lo:hi] == ord("]")) + lo)
+    first = cursor.blanks(starts)  # every form starts with the blanks (`Form`)
+    out = []
+    for form in forms:
+        found = []
+        _, there = _run_all(form.elements[1:], cursor, first, found)
+        rows = np.flatnonzero(there)
+        out.append((rows, np.stack([np.c_[starts[rows], ends[rows]], *(span[rows] for span in found)], axis=1)))
+    return out

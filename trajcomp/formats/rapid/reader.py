@@ -11,7 +11,7 @@ from trajcomp.errors import ReadError
 from trajcomp.formats.configuration import distinct_tuples
 from trajcomp.formats.number_fields import NUMBER, BLANK, line_bounds, offset_type, read_numbers, text_codes
 from trajcomp.formats.rapid import grammar
-from trajcomp.formats.rapid.forms import Cursor
+from trajcomp.formats.rapid.forms import Cursor, find_lines
 from trajcomp.formats.rapid.task_data import TaskData, changed_at
 from trajcomp.formats.text import (
     JOINT_LIMIT,
@@ -184,7 +184,7 @@ def _laid_out_lines(codes, starts, ends):
         Per form: the lines written so (K,) (indices into ``starts``) and
         their matches' offsets (K, groups + 1, 2) as ``Match.regs`` gives them.
     """
-    return [form.find(codes, starts, ends) for form in grammar.WRITTEN_FORMS]
+    return find_lines(grammar.WRITTEN_FORMS, codes, starts, ends)
 
 
 def _runs_between(masked, found):
