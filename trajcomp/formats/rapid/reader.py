@@ -48,9 +48,9 @@ from trajcomp.programs.tables import (
 )
 from trajcomp.arm.transforms import quat_to_matrix
 
-POSITION = ("x", "y", "z")
-QUAT = ("q1", "q2", "q3", "q4")
-CONF = ("cf1", "cf4", "cf6", "cfx")
+# a robtarget's numbers' spans, named by their fields (`grammar.ROBTARGET`)
+POSITION, QUAT, CONF = (tuple(name for name, _ in record.fields) for record in (grammar.POS, grammar.ORIENT,
+                                                                              grammar.CONFDATA))
 EXTAX = ("ea", "eb", "ec", "ed", "ee", "ef")
 JOINTS = ("j1", "j2", "j3", "j4", "j5", "j6")
 UNUSED_AXIS = 8.9e9  # ABB writes 9E9 for an external axis that is not used
@@ -493,8 +493,8 @@ class _Reader:
         self.unset = {}  # lower point name -> why its value is known only at run time
         self.params = set()
         self.data = {}  # lower name of a speeddata or num -> (storage, type, value text, line); None if declared twice
-        self.in_force = {}  # lower name of a VAR speeddata -> (value, why) a straight-line assignment gave it
-        self.touched = {}  # lower name of a VAR speeddata -> first line of a statement that may change it
+        self.in_force = {}  # lower name of a VAR or PERS speeddata -> (value, why) a straight-line assignment gave it
+        self.touched = {}  # lower name of a VAR or PERS speeddata -> first line of a statement that may change it
         self.task = None  # the other modules of the task (`DeclaredElsewhere`): the points they declare and assign
         self.task_data = None  # ... and the speeddata and num they declare or may change (`TaskData`)
         self.scanned = None  # the masked text, `Lines` and runs `scan_data` looked at
@@ -663,7 +663,7 @@ class _Reader:
                 self.touched[key] = line
 
     def flow(self, text, line, original):
-        """Follow the VAR speeddata a statement (not a motion) gives a value or may change.
+        """Follow the VAR and PERS speeddata a statement (not a motion) gives a value or may change.
 
         An assignment of a literal (or a constant) is in force for the
         motions after it while the code runs straight: a routine's start, a
