@@ -8,10 +8,10 @@ Python object per line). Both give the same groups, as ``Match.regs``
 gives them. Run at once, an element that has no vectorised run (a
 `Number`, a `Repeat`) is taken as absent: a line that holds it fails
 there (or leaves the `Optional` around it) and is left to the pattern,
-so that the lines found at once are
-always a subset of those the pattern matches, with the same groups (the
-pattern being greedy, its first match is the one that takes every
-optional part the line holds).
+so that the lines found at once are a subset of those the pattern
+matches, with the same groups (the pattern being greedy, its first match
+is the one that takes every optional part the line holds); but for what
+lies inside a `Value`, which the one reading its fields checks.
 """
 
 import re
@@ -197,8 +197,9 @@ class Number(Element):
 
 class Value(Element):
     """A bracketed value laid out as ``layout`` (its delimiters, e.g. ``[[,,],[,,,]]``: each innermost list any
-    characters but ``]``, a line break and ``;``). Run at once, its start and the end of its ``]`` are found;
-    the delimiters between are checked where its numbers are read."""
+    characters but ``]``, a line break and ``;``). Run at once, its opening brackets are checked and its end
+    found (after as many ``]`` as it has); what lies between is not: the one reading its fields checks it (a
+    value not laid out so is left to the statement-by-statement read)."""
 
     def __init__(self, layout):
         self.layout = layout
