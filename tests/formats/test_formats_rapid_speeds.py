@@ -175,6 +175,7 @@ def test_the_speeds_of_a_module_robodk_writes_are_read(tmp_path):
 
 def _task(tmp_path, decls, body, **others):
     """A task folder: speeds.mod (`module` of ``body``, ``decls``) and other modules ``{name: text}``; its motions."""
+    tmp_path.mkdir(exist_ok=True)
     for name, text in others.items():
         (tmp_path / f"{name}.mod").write_text(f"MODULE {name}\n{text}\nENDMODULE\n")
     return read(tmp_path, module(body, decls)).motions
@@ -198,6 +199,13 @@ def test_a_pers_speeddata_nothing_changes_is_its_declared_value(tmp_path):
         motions = _task(tmp_path, decls, MOVES, Other=f"  PROC faster()\n    {statement}\n  ENDPROC")
         assert {(m.speed, m.speed_why) for m in motions} == {
             (None, "vWeld: PERS speeddata, set at run time (Other.mod:3)")}
+    # a call of a routine no module of the task declares (a module the folder lacks) may change it
+    motions = _task(tmp_path / "lacking", decls, "    SetFromHost;\n" + MOVES)
+    assert {m.speed for m in motions} == {None} and motions[0].speed_why == (
+        "vWeld: PERS speeddata, set at run time: SetFromHost (speeds.mod:8) calls a routine no module of the task "
+        "declares, which may change it")
+    assert _task(tmp_path / "declared", decls, "    SetFromHost;\n" + MOVES,
+                 Host="  PROC SetFromHost()\n    TPWrite \"ready\";\n  ENDPROC")[0].speed == 20.0
     # another module declares the same PERS: it starts at the value of the module loaded first
     motions = _task(tmp_path, decls, MOVES, Other="  PERS speeddata vWeld := [2000,500,5000,1000];")
     assert {m.speed for m in motions} == {None} and "also declared in Other.mod:2" in motions[0].speed_why

@@ -137,6 +137,7 @@ _ROUTINE_HEAD = r"^\s*(?:LOCAL\s+)?(?:PROC|FUNC\s+\w+|TRAP)\s+"
 ROUTINE = re.compile(_ROUTINE_HEAD + r"\w+\s*\((.*)\)", re.I | re.S)  # group: the parameters
 STARTS_ROUTINE = re.compile(_ROUTINE_HEAD + r"\w+\s*\(", re.I)
 ROUTINE_NAME = re.compile(_ROUTINE_HEAD + r"(\w+)", re.I)
+ROUTINE_NAME_LINE = re.compile(_ROUTINE_HEAD.replace("^\\s*", "^[ \\t]*") + r"(\w+)", re.I | re.M)  # per line
 # every block and the word that closes it: a controller refuses a module whose blocks are not closed in order
 BLOCKS = {"MODULE": "ENDMODULE", "PROC": "ENDPROC", "FUNC": "ENDFUNC", "TRAP": "ENDTRAP",
           "IF": "ENDIF", "FOR": "ENDFOR", "WHILE": "ENDWHILE", "TEST": "ENDTEST"}

@@ -745,7 +745,16 @@ class _Reader:
         if storage == "PERS" and self.task_data is not None and (again := self.task_data.declared(key)):
             return None, (f"{name}: PERS speeddata also declared in {again[0][0].name}:{again[0][1]}: its value is "
                           "that of the module loaded first, set at run time")
+        if storage == "PERS" and (why := self.unknown_call()):
+            return None, why.format(name=name, what="PERS speeddata")
         return self.constant(value, "speeddata", at, original, field, depth + 1)
+
+    def unknown_call(self):
+        """Why a PERS (made to be shared) is set at run time where the task calls a routine no module of it
+        declares (`TaskData.unknown_call`): a format string of ``name`` and ``what`` it is; ``""`` if none."""
+        called = self.task_data.unknown_call(*self.scanned[:2]) if self.task_data and self.scanned else ""
+        return f"{{name}}: {{what}}, set at run time: {called} calls a routine no module of the task declares, " \
+               "which may change it" if called else ""
 
     def declared_elsewhere(self, name, typ, original, field, depth):
         """``(value, why)`` of a speeddata or num ``name`` this module does not declare, as another module of its task
@@ -760,7 +769,9 @@ class _Reader:
         where = f"{file.name}:{at}"
         if len(found) > 1:
             return None, f"{name}: declared in {where} and {found[1][0].name}:{found[1][1]}, set at run time"
-        if declared != typ or depth > 8 or not value or _NAME.match(value) and not (
+        if not value:
+            return None, f"{name}: {storage} {declared} declared without a value in {where}, set at run time"
+        if declared != typ or depth > 8 or _NAME.match(value) and not (
                 typ == "speeddata" and (grammar.PREDEFINED_SPEED.match(value) or value.lower() == "vmax")):
             return None, f"{name}: {storage} {declared} {value} of {where}, known at run time"
         if storage != "CONST":
@@ -770,6 +781,8 @@ class _Reader:
                     f" (changed at line {changed})" if changed else "")
             if elsewhere := self.task_data.changed(key):
                 return None, f"{name}: {storage} speeddata of {where}, set at run time ({elsewhere})"
+            if storage == "PERS" and (why := self.unknown_call()):
+                return None, why.format(name=name, what=f"PERS speeddata of {where}")
         return self.constant(value, typ, at, original, f"{field} ({where})", depth + 1)
 
     def number(self, text, line, original, field, limit=LENGTH_LIMIT):

@@ -31,6 +31,24 @@ def changed_at(masked, lines, key, parts=None):
     return 0
 
 
+# a statement calling a routine by its name (the name first, then ';', blanks or an optional argument), or by a
+# name computed at run time (%"name"%)
+_CALL = re.compile(r"^[ \t]*(?:([A-Za-z]\w*)[ \t]*(?:;|[ \t]|\\)|(%))", re.M)
+_NOT_ROUTINES = grammar.BUILT_IN | grammar.NOT_CALLS | set(grammar.FLOW_STEPS) | {
+    w.lower() for w in (*grammar.PREFIXES, *grammar.STORAGES, *grammar.ROUTINES, "THEN", "DO", "TO", "FROM", "STEP")}
+
+
+def unknown_calls(masked, routines):
+    """``(name, offset)`` of the statements of ``masked`` that call a routine not among ``routines`` (lower
+    names): a built-in instruction trajcomp does not know, or a routine of a module the folder lacks."""
+    for m in _CALL.finditer(masked):
+        name = m.group(1) or m.group(2)
+        line = masked[m.start():masked.find("\n", m.start()) % (len(masked) + 1)]
+        if name.lower() not in routines and name.lower() not in _NOT_ROUTINES \
+                and not (grammar.ASSIGNMENT.match(line) or grammar.STARTS_MOTION.match(line)):
+            yield name, m.start()
+
+
 class TaskData:
     """The speeddata and num the other modules of a module's task declare, read as the controller sees them.
 
@@ -46,7 +64,7 @@ class TaskData:
 
     def __init__(self, path, folders, extensions):
         self.path, self.folders, self.extensions = Path(path), list(folders), set(extensions)
-        self._modules, self._declared, self._changed = None, None, {}
+        self._modules, self._declared, self._changed, self._unknown = None, None, {}, None
 
     def modules(self):
         """``(file, masked text, Lines)`` of each other module of the task, read once (an unreadable one skipped)."""
@@ -82,6 +100,17 @@ class TaskData:
                         (file, lines.number(d.start(1)), d.group(1).upper(), d.group(2).lower(),
                          (d.group(4) or "").strip()))
         return self._declared.get(key, [])
+
+    def unknown_call(self, masked, lines):
+        """``"name (file:line)"`` of the first call, in the module read (``masked``, its `Lines`) or another of
+        its task, of a routine no module of the task declares (`unknown_calls`: it may change any datum the
+        module sees), or ``""``."""
+        if self._unknown is None:
+            texts = [(self.path, masked, lines), *self.modules()]
+            routines = {m.group(1).lower() for _, text, _ in texts for m in grammar.ROUTINE_NAME_LINE.finditer(text)}
+            self._unknown = next((f"{name} ({file.name}:{lines_of.number(at)})" for file, text, lines_of in texts
+                                  for name, at in unknown_calls(text, routines)), "")
+        return self._unknown
 
     def changed(self, key):
         """``"file:line"`` of the first statement of another module of the task that may change datum ``key``
