@@ -69,7 +69,9 @@ def test_rapid_const_speeddata_is_read_as_its_v_tcp_and_kept(tmp_path):
 
 
 @pytest.mark.parametrize("declaration,why", [
-    ("PERS speeddata vWeld := [20,500,5000,1000];", "vWeld: PERS speeddata, set at run time (line 4)"),
+    ("PERS speeddata vWeld := [20,500,5000,1000];\n  PROC tune()\n    SetWeld vWeld;\n  ENDPROC",
+     "vWeld: PERS speeddata the module changes (line 6) and does not assign a literal in the code running straight "
+     "to this motion: set at run time"),  # a routine may change its argument; a PERS nothing changes is read
     ("VAR speeddata vWeld := [20,500,5000,1000];\n  PROC faster()\n    vWeld := [900,500,5000,1000];\n  ENDPROC",
      "vWeld: VAR speeddata the module changes (line 6) and does not assign a literal in the code running straight "
      "to this motion: set at run time"),  # a VAR nothing changes is its declared value (test_formats_rapid_speeds)
@@ -253,10 +255,12 @@ def test_a_lowered_cruise_speed_holds_the_joint_limits_at_its_slowest_point(tmp_
 
 
 def test_converting_a_speed_set_at_run_time_says_so(tmp_path, capsys):
-    """A PERS speeddata has no value another language could take: the converted motion is written at the
-    language's slowest and listed (exit 1)."""
-    path = rapid_module(tmp_path, ["PERS speeddata vWeld := [20,500,5000,1000];"], ["MoveL P2, vWeld, fine, tool0;"])
+    """A PERS speeddata the program changes has no value another language could take: the converted motion is
+    written at the language's slowest and listed (exit 1)."""
+    path = rapid_module(tmp_path, ["PERS speeddata vWeld := [20,500,5000,1000];", "PROC tune()",
+                                   "  vWeld.v_tcp := 40;", "ENDPROC"], ["MoveL P2, vWeld, fine, tool0;"])
     assert main(["convert", str(path), str(tmp_path / "speeds.csv"), "--robot", "abb_irb4600"]) == 1
-    assert ("Speeds.mod:7: speed of 'MoveL P2, vWeld, fine, tool0;': vWeld: PERS speeddata, set at run time (line 4): "
+    assert ("Speeds.mod:10: speed of 'MoveL P2, vWeld, fine, tool0;': vWeld: PERS speeddata the module changes "
+            "(line 6) and does not assign a literal in the code running straight to this motion: set at run time: "
             "written at csv's slowest speed, set it before running") in capsys.readouterr().err
     assert formats.read(tmp_path / "speeds.csv").motions[1].speed == 1.0

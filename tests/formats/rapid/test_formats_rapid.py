@@ -222,3 +222,37 @@ def test_real_module_with_work_object_after_a_comma_and_run_time_targets():
         (120, "position computed at run time: Offs(home,0,0,0)"),
     ]
     assert [program.targets[i].name for i in program.usage()] == ["home"]
+
+
+_FLOW = ["MODULE Flow", "  CONST robtarget p1:=[[100,0,500],[0,0,1,0],[0,0,0,1],[9E9,9E9,9E9,9E9,9E9,9E9]];",
+         "  PROC main()", "    {}", "    MoveL p1, v100, z10, tool0;", "    {}", "  ENDPROC", "ENDMODULE", ""]
+
+
+@pytest.mark.parametrize("opens, closes, message", [
+    ("IF di1 = 1 THEN", "", r"Flow\.mod:4: IF has no ENDIF before the ENDPROC of line 7"),
+    ("FOR i FROM 1 TO 3 DO", "", r"Flow\.mod:4: FOR has no ENDFOR before the ENDPROC of line 7"),
+    ("WHILE di1 = 1 DO", "ENDWHILE\n    ENDWHILE", r"Flow\.mod:7: ENDWHILE closes no block"),
+    ("TEST n", "", r"Flow\.mod:4: TEST has no ENDTEST before the ENDPROC of line 7"),
+    ("", "ENDIF", r"Flow\.mod:6: ENDIF closes no block"),
+    ("IF di1 = 1 AND\n      di2 = 0 THEN", "", r"Flow\.mod:4: IF has no ENDIF before the ENDPROC of line 8"),
+])
+def test_flow_blocks_not_closed_are_refused_naming_file_and_line(tmp_path, opens, closes, message):
+    """A controller refuses to load a module whose IF, FOR, WHILE or TEST is not closed in order (issue 36):
+    refused like the module's routines, naming the block's line; exit 2 from the command."""
+    path = tmp_path / "Flow.mod"
+    path.write_text("\n".join(_FLOW).format(opens, closes))
+    with pytest.raises(ReadError, match=message):
+        formats.read(path)
+    from trajcomp.cli import main
+    assert main(["convert", str(path), str(tmp_path / "out.mod"), "--robot", "abb_irb4600"]) == 2
+
+
+def test_flow_blocks_closed_and_one_line_ifs_are_read(tmp_path):
+    """Closed blocks, nested; ``IF cond instruction;`` (no THEN) is one statement, not a block; ELSEIF and CASE
+    open none."""
+    body = ["    IF di1 = 1 Stop;", "    IF di1 = 1 THEN", "      WHILE di2 = 0 DO", "        TEST n",
+            "        CASE 1:", "          MoveL p1, v100, z10, tool0;", "        DEFAULT:", "        ENDTEST",
+            "      ENDWHILE", "    ELSEIF di1 = 2 THEN", "      FOR i FROM 1 TO 3 DO", "      ENDFOR", "    ENDIF"]
+    path = tmp_path / "Flow.mod"
+    path.write_text("\n".join(_FLOW).format("\n".join(body), "if di1 = 0 then\n    endif"))
+    assert len(formats.read(path).motions) == 2

@@ -10,6 +10,7 @@ import pytest
 from trajcomp import formats
 from trajcomp.errors import ReadError
 from trajcomp.formats.number_fields import line_bounds, text_codes
+from trajcomp.formats.rapid import grammar
 from trajcomp.formats.rapid import reader as rapid_reader
 from trajcomp.formats.text import mask
 from trajcomp.programs.tables import ItemRows, TargetRows
@@ -322,3 +323,38 @@ def test_a_robodk_module_is_written_as_through_the_objects(tmp_path, monkeypatch
     assert written[0] == written[1]
     assert ("MoveL [[500.375, -20.375, 301.000],[0.00000000, 0.00000000, 1.00000000, 0.00000000],[0,-1,0,1],"
             in written[0])
+
+
+def test_lines_changed_at_random_are_found_at_once_only_as_their_pattern_matches_them():
+    """The forms run at once (`forms.Form.find`) on lines changed at random (blanks, optional parts, other words,
+    cuts, non-ASCII letters, carriage returns): every line found is one its pattern matches, with its groups, or
+    one whose robtarget is not laid out as one (`_value_fields`: then read statement by statement)."""
+    rng = np.random.default_rng(7)
+    pieces = [" ", "\t", ",", ";", "\\V:=12", "\\WObj:=w1", "LOCAL ", "[", "]", "é", "\r", "x", "MoveL ", ":="]
+    seeds = [line for text in (*VARIANTS.values(), *ROBODK_VARIANTS.values()) for line in text.splitlines()]
+    lines = []
+    for _ in range(3000):
+        line = list(seeds[rng.integers(len(seeds))])
+        for _ in range(rng.integers(1, 4)):
+            at = int(rng.integers(len(line) + 1))
+            if rng.random() < 0.5 and line:
+                del line[min(at, len(line) - 1)]
+            else:
+                line[at:at] = pieces[rng.integers(len(pieces))]
+        lines.append("".join(line))
+    masked = mask("\n".join(lines), "!")
+    codes = text_codes(masked)
+    starts, ends = line_bounds(codes)
+    found = rapid_reader._laid_out_lines(codes, starts, ends)
+    for name, (rows, groups) in zip(rapid_reader.WRITTEN_FORMS, found):
+        pattern = getattr(rapid_reader, name)
+        for row, regs in zip(rows.tolist(), groups.tolist()):
+            m = pattern.match(masked, starts[row], ends[row])
+            if m is None:
+                value = regs[4] if name == "_WRITTEN_POINT" else regs[2]
+                laid_out = rapid_reader._value_fields(codes, np.array(value[:1]), np.array(value[1:]),
+                                                      grammar.ROBTARGET.layout)[3]
+                assert not laid_out[0], masked[starts[row]:ends[row]]
+            else:
+                assert m.regs == tuple(map(tuple, regs)), masked[starts[row]:ends[row]]
+    assert sum(len(rows) for rows, _ in found) > 300  # many changed lines are still lines CAM tools write

@@ -8,6 +8,7 @@ whose ``VAR speeddata rdkSpeed`` its ``setSpeed`` reassigns between moves.
 """
 
 import importlib.util
+import json
 import re
 import warnings
 from pathlib import Path
@@ -170,3 +171,81 @@ def test_the_speeds_of_a_module_robodk_writes_are_read(tmp_path):
     # the MoveAbsJ runs before the routine assigns rdkSpeed: at the value a previous run left, set at run time
     assert motions[0].speed is None and "rdkSpeed: VAR speeddata the module changes" in motions[0].speed_why
     assert [(m.speed, m.speed_why) for m in motions[1:]] == [(100.0, ""), (100.0, ""), (250.0, "")]
+
+
+def _task(tmp_path, decls, body, **others):
+    """A task folder: speeds.mod (`module` of ``body``, ``decls``) and other modules ``{name: text}``; its motions."""
+    tmp_path.mkdir(exist_ok=True)
+    for name, text in others.items():
+        (tmp_path / f"{name}.mod").write_text(f"MODULE {name}\n{text}\nENDMODULE\n")
+    return read(tmp_path, module(body, decls)).motions
+
+
+MOVES = "    MoveJ p1, vWeld, fine, tool0;\n    MoveL p2, vWeld, fine, tool0;"
+
+
+def test_a_pers_speeddata_nothing_changes_is_its_declared_value(tmp_path):
+    """The controller runs a PERS at the value it was declared with until the program gives it another
+    (issue 35): read so, where no statement of the task may change it; else set at run time."""
+    decls = "  PERS speeddata vWeld := [20,30,5000,1000];"
+    assert {(m.speed, round(np.degrees(m.orientation_speed), 9), m.speed_why)
+            for m in _task(tmp_path, decls, MOVES)} == {(20.0, 30.0, "")}
+    # a straight-line assignment before a motion: that value there, the declared one unknown before it
+    first, second = _task(tmp_path, decls, MOVES.replace("    MoveL", "    vWeld := v50;\n    MoveL"))
+    assert first.speed is None and "PERS speeddata the module changes (line 9)" in first.speed_why
+    assert (second.speed, second.speed_why) == (50.0, "")
+    # another module of the task assigns it, or takes it as a routine's argument (INOUT: it may change it)
+    for statement in ("vWeld.v_tcp := 2000;", "SetSpeed vWeld;"):
+        motions = _task(tmp_path, decls, MOVES, Other=f"  PROC faster()\n    {statement}\n  ENDPROC")
+        assert {(m.speed, m.speed_why) for m in motions} == {
+            (None, "vWeld: PERS speeddata, set at run time (Other.mod:3)")}
+    # a call of a routine no module of the task declares (a module the folder lacks) may change it
+    motions = _task(tmp_path / "lacking", decls, "    SetFromHost;\n" + MOVES)
+    assert {m.speed for m in motions} == {None} and motions[0].speed_why == (
+        "vWeld: PERS speeddata, set at run time: SetFromHost (speeds.mod:8) calls a routine no module of the task "
+        "declares, which may change it")
+    assert _task(tmp_path / "declared", decls, "    SetFromHost;\n" + MOVES,
+                 Host="  PROC SetFromHost()\n    TPWrite \"ready\";\n  ENDPROC")[0].speed == 20.0
+    # another module declares the same PERS: it starts at the value of the module loaded first
+    motions = _task(tmp_path, decls, MOVES, Other="  PERS speeddata vWeld := [2000,500,5000,1000];")
+    assert {m.speed for m in motions} == {None} and "also declared in Other.mod:2" in motions[0].speed_why
+
+
+def test_speeddata_another_module_of_the_task_declares_is_read_where_its_value_is_known(tmp_path):
+    """A speeddata (or num) declared in another module of the task, not LOCAL nor a routine's own: a CONST, or a
+    VAR or PERS no statement of the task may change, is its stated value; the others are set at run time."""
+    data = ("  CONST speeddata vWeld := [20,30,5000,1000];\n  PERS speeddata vPers := v40;\n"
+            "  VAR speeddata vVar := [60,500,5000,1000];\n  LOCAL CONST speeddata vLocal := v10;\n"
+            "  CONST num nRate := 15;\n  PERS num nPers := 15;\n  CONST speeddata vNamed := vWeld;\n"
+            "  PROC own()\n    CONST speeddata vRoutine := v10;\n  ENDPROC")
+    body = "\n".join(f"    MoveL p1, {speed}, fine, tool0;" for speed in (
+        "vWeld", "vPers", "vVar", "vLocal", "v100\\V:=nRate", "v100\\V:=nPers", "vNamed", "vRoutine"))
+    motions = _task(tmp_path, "", body, BData=data)
+    assert [m.speed for m in motions] == [20.0, 40.0, 60.0, None, 15.0, None, None, None]
+    assert round(np.degrees(motions[0].orientation_speed), 9) == 30.0
+    whys = [m.speed_why for m in motions]
+    assert (whys[3], whys[7]) == ("vLocal: speeddata not declared in this module, set at run time",
+                                  "vRoutine: speeddata not declared in this module, set at run time")
+    assert whys[5] == "nPers: PERS num of BData.mod:7, set at run time"
+    assert whys[6] == "vNamed: CONST speeddata vWeld of BData.mod:8, known at run time"
+    # this module, or a third, changes the VAR and the PERS: set at run time
+    motions = _task(tmp_path, "", body.replace("    MoveL p1, vWeld", "    vVar := v100;\n    MoveL p1, vWeld"),
+                    BData=data, Tune="  PROC tune()\n    vPers.v_tcp := 900;\n  ENDPROC")
+    assert [m.speed for m in motions][:3] == [20.0, None, None]
+    assert motions[1].speed_why == "vPers: PERS speeddata of BData.mod:3, set at run time (Tune.mod:3)"
+    assert motions[2].speed_why == "vVar: VAR speeddata of BData.mod:4, set at run time (changed at line 8)"
+
+
+def test_a_pers_speeddata_of_the_task_is_never_run_faster_than_its_value(tmp_path):
+    """Re-timed through the command: the weld at a PERS of another module declared at 20 mm/s is timed at it (its
+    time at least its length over 20 mm/s) and kept as written, never sped up."""
+    (tmp_path / "BData.mod").write_text("MODULE BData\n  PERS speeddata vWeld := [20,500,5000,1000];\nENDMODULE\n")
+    (tmp_path / "speeds.mod").write_text(module("    MoveJ p2, v1000, fine, tool0;\n    MoveL p3, vWeld, fine, tool0;"))
+    out = tmp_path / "out"
+    out.mkdir()
+    assert main(["retime", str(tmp_path / "speeds.mod"), "-o", str(out / "speeds.mod"), "--robot", "abb_irb4600",
+                 "--report", str(out / "speeds.html")]) == 0
+    assert "    MoveL p3, vWeld, fine, tool0;" in (out / "speeds.mod").read_text()
+    timing = json.loads((out / "speeds.json").read_text())["timing"]
+    length = np.linalg.norm(fk(ROBOT, Q[3])[:3, 3] - fk(ROBOT, Q[2])[:3, 3])  # mm
+    assert timing["t_s"][-1] - timing["t_s"][-2] >= length / 20.0 and timing["not_retimed"]["count"] == 0

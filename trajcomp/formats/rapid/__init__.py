@@ -13,10 +13,14 @@ Read:
   TriggL/J/C, ArcL/C, CladL/C) to a declared name or an inline literal, with
   speeddata ``vN`` / ``vmax`` / ``\\V:=`` / ``\\T:=``, zonedata ``fine`` /
   ``zN`` / ``\\Z:=``, the tool and ``\\WObj:=``, also after a comma
-  (``tool0,\\WObj:=wobj1``). A named speeddata or num is read where the
-  module proves it constant (a CONST with a literal or another such CONST,
-  its v_tcp); PERS and VAR data, routine parameters and data declared
-  elsewhere are set at run time (`Motion.speed_why`).
+  (``tool0,\\WObj:=wobj1``). A named speeddata or num is read where its
+  value is known as the controller runs it: a CONST with a literal or
+  another such CONST; a VAR or PERS speeddata at its declared value where
+  no statement of the task may change it, or at the literal a straight-line
+  assignment before the motion gave it; one another module of the task
+  declares (not LOCAL) likewise. Routine parameters and the others are set
+  at run time (`Motion.speed_why`).
+  The language's statement forms and their fields: `grammar`.
   Identifiers are case-insensitive; tool0 (the flange) and wobj0 (the
   world frame) need no declaration.
 Not compensated, with the reason (`Motion.reason`): expressions (Offs,
@@ -30,6 +34,7 @@ folder, or of a backup's TASKn/PROGMOD and SYSMOD) is read from that module
 (a companion `Source`): corrected there, which is written back beside the
 output (`trajcomp.formats.file_writing.companion_outputs`) when it changed. A
 motion to a point no module declares is a ReadError naming the points; so are
+blocks (MODULE, PROC, FUNC, TRAP, IF ... THEN, FOR, WHILE, TEST) not closed in order,
 numbers out of range and quaternions that are not rotations. Points passed
 to routines (``MyProc p10;``) are `Statement.refs`.
 

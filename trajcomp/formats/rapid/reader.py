@@ -9,9 +9,10 @@ import numpy as np
 
 from trajcomp.errors import ReadError
 from trajcomp.formats.configuration import distinct_tuples
-from trajcomp.formats.number_fields import (
-    NUMBER, BLANK, WORD_CHARACTER, line_bounds, offset_type, read_numbers, spelt, starts_with, text_codes,
-)
+from trajcomp.formats.number_fields import NUMBER, BLANK, line_bounds, offset_type, read_numbers, text_codes
+from trajcomp.formats.rapid import grammar
+from trajcomp.formats.rapid.forms import Cursor, find_lines
+from trajcomp.formats.rapid.task_data import TaskData, changed_at
 from trajcomp.formats.text import (
     JOINT_LIMIT,
     LENGTH_LIMIT,
@@ -47,114 +48,27 @@ from trajcomp.programs.tables import (
 )
 from trajcomp.arm.transforms import quat_to_matrix
 
-POSITION = ("x", "y", "z")
-QUAT = ("q1", "q2", "q3", "q4")
-CONF = ("cf1", "cf4", "cf6", "cfx")
+# a robtarget's numbers' spans, named by their fields (`grammar.ROBTARGET`)
+POSITION, QUAT, CONF = (tuple(name for name, _ in record.fields) for record in (grammar.POS, grammar.ORIENT,
+                                                                              grammar.CONFDATA))
 EXTAX = ("ea", "eb", "ec", "ed", "ee", "ef")
 JOINTS = ("j1", "j2", "j3", "j4", "j5", "j6")
 UNUSED_AXIS = 8.9e9  # ABB writes 9E9 for an external axis that is not used
 QUAT_TOLERANCE = 0.01  # |norm - 1| a stated quaternion may have (written with few decimals)
 PREDEFINED = {"tool0": np.eye(4)}, {"wobj0": np.eye(4)}  # need no declaration
 
-# Motion instructions read: points (1, or 2 for circles), then speed; Move* have zone and tool
-# next, the others (TriggL, ArcL, CladL ...) more data in between and the tool last. Other
-# motion instructions (SearchL, MoveExtJ, SpotL ...) are listed as not compensated.
-_FAMILIES = {f"MOVE{k}{s}": k for k in ("J", "L", "C") for s in ("", "DO", "AO", "GO", "SYNC")}
-_FAMILIES |= {"MOVEABSJ": "J"} | {f"{p}{k}": k for p in ("TRIGG", "ARC", "CLAD") for k in ("J", "L", "C")}
-KINDS = {"J": JOINT, "L": LINEAR, "C": CIRCULAR}
 MOTION_SPANS = ("speed", "via_name", "target_name")  # a motion's spans, in this order
-
-_N = r"\s*(" + NUMBER + r")\s*"
-_POSE = r"\[\s*\[" + ",".join([_N] * 3) + r"\]\s*,\s*\[" + ",".join([_N] * 4) + r"\]\s*\]"
-_ROBTARGET = re.compile(
-    r"^\s*\[\s*\[" + ",".join([_N] * 3) + r"\]\s*,\s*\[" + ",".join([_N] * 4) + r"\]\s*,\s*\["
-    + ",".join([_N] * 4) + r"\]\s*,\s*\[" + ",".join([_N] * 6) + r"\]\s*\]\s*$"
-)
-_JOINTTARGET = re.compile(r"^\s*\[\s*\[" + ",".join([_N] * 6) + r"\]\s*,\s*\[" + ",".join([_N] * 6) + r"\]\s*\]\s*$")
-_TOOLDATA = re.compile(r"^\s*\[\s*(TRUE|FALSE)\s*,\s*" + _POSE + r"\s*,", re.I)
-_WOBJDATA = re.compile(
-    r"^\s*\[\s*(TRUE|FALSE)\s*,\s*(?:TRUE|FALSE)\s*,\s*\"(\s*)\"\s*,\s*" + _POSE + r"\s*,\s*" + _POSE + r"\s*\]\s*$", re.I
-)
-_POSE_LITERAL = re.compile(r"^\s*" + _POSE + r"\s*$")
-# a point another module of the task declares (`DeclaredElsewhere`): a LOCAL one is not seen outside its module
-_TASK_POINT = re.compile(r"^[ \t]*(?:TASK\s+)?(?:CONST|PERS|VAR)\s+(?:robtarget|jointtarget)\s+(\w+)", re.I | re.M)
-_TASK_FRAME = re.compile(r"^[ \t]*(?:TASK\s+)?(?:CONST|PERS|VAR)\s+(?:tooldata|wobjdata)\s+(\w+)", re.I | re.M)
-_ASSIGNED_POINT = re.compile(r"^\s*([A-Za-z]\w*)(?:\.\w+)*\s*:=")  # a statement giving a point (or a part of it) a value
-_STORAGE = re.compile(r"^\s*((?:(?:LOCAL|TASK)\s+)*)(CONST|PERS|VAR)\b", re.I)
-_DECL = re.compile(
-    r"^\s*(?:(?:LOCAL|TASK)\s+)*(?:CONST|PERS|VAR)\s+(robtarget|jointtarget|tooldata|wobjdata)\s+(\w+)\s*:=(.*);\s*$",
-    re.I | re.S,
-)
-_DECL_BARE = re.compile(
-    r"^\s*(?:(?:LOCAL|TASK)\s+)*(?:PERS|VAR)\s+(?:robtarget|jointtarget|tooldata|wobjdata)\s+(\w+(?:\s*,\s*\w+)*)\s*;",
-    re.I,
-)
-_STARTS_DECL = re.compile(r"^\s*(?:(?:LOCAL|TASK)\s+)*(?:CONST|PERS|VAR)\b", re.I)
-_INSTRUCTION = re.compile(r"^\s*([A-Za-z]\w*)\b(.*);\s*$", re.S)
-_STARTS_MOTION = re.compile(r"^\s*(?:Move|Trigg|Search|Arc|Clad|Spot|Paint|Disp|Contact)\w*\b", re.I)
-_ROUTINE = re.compile(r"^\s*(?:LOCAL\s+)?(?:PROC|FUNC\s+\w+|TRAP)\s+\w+\s*\((.*)\)", re.I | re.S)
-_STARTS_ROUTINE = re.compile(r"^\s*(?:LOCAL\s+)?(?:PROC|FUNC\s+\w+|TRAP)\s+\w+\s*\(", re.I)
-_ASSIGN = re.compile(r"^\s*([A-Za-z]\w*)((?:\.\w+)*)\s*:=(.*);\s*$", re.S)
-_MODULE = re.compile(r"^\s*MODULE\s+(\w+)", re.I | re.M)
-_BLOCK_OPENS = re.compile(r"^[ \t]*(?:LOCAL\s+)?(MODULE|PROC|FUNC|TRAP)\b", re.I | re.M)
-_BLOCK_CLOSES = re.compile(r"^[ \t]*(ENDMODULE|ENDPROC|ENDFUNC|ENDTRAP)\b", re.I | re.M)
-_OUTSIDE_MODULES = re.compile(r"[ \t]*(?:%%%|VERSION\s*:|LANGUAGE\s*:)", re.I)  # a file's header, outside its modules
 _NAME = re.compile(r"^[A-Za-z]\w*$")
 _NUMBER = re.compile(NUMBER)
 _WORD = re.compile(r"[A-Za-z]\w*")
-_OPTION = re.compile(r"\\(\w+)(?:\s*:=\s*([^\\]+))?")
-_SPEED = re.compile(r"^v(\d+(?:\.\d*)?)$", re.I)
-_DATA_DECL = re.compile(r"[ \t]*(?:(?:LOCAL|TASK)\s+)*(CONST|PERS|VAR)\s+(speeddata|num)\s+(\w+)\s*(?::=\s*([^;]*?))?\s*;",
-                        re.I | re.M)
-_SPEEDDATA = re.compile(r"^\[\s*(" + NUMBER + r")\s*,\s*(" + NUMBER + r")\s*,\s*(" + NUMBER + r")?[^\]]*\]$")
 VMAX = 5000.0  # mm/s, v_tcp of the predefined speeddata vmax
 # every predefined speeddata (v5 .. v7000, vmax) is [v_tcp, 500, 5000, 1000] (RAPID reference, speeddata)
 PREDEFINED_V_ORI = 500.0  # deg/s
 PREDEFINED_V_LEAX = 5000.0  # mm/s, linear external axes
-# instructions that cannot change a speeddata: a VAR speeddata assigned before them is still in force after them
-_STRAIGHT = {"confj", "confl", "tpwrite", "tperase", "waittime", "setdo", "setao", "setgo", "set", "reset", "pulsedo",
-             "singarea", "pathresol", "accset"}
-_ZONE = re.compile(r"^(fine|z(\d+(?:\.\d*)?))$", re.I)
-# the statements that change the order a module runs in (`trajcomp.programs.flow.Step`): first word -> step kind
-_FLOW_WORDS = {"if": "if", "elseif": "elif", "else": "else", "endif": "endif", "test": "if", "case": "elif",
-               "default": "elif", "endtest": "endif", "for": "loop", "endfor": "endloop", "while": "loop",
-               "endwhile": "endloop", "goto": "jump", "return": "return", "exit": "return", "stop": "wait",
-               "endproc": "end", "endfunc": "end", "endtrap": "end"}
-_WAITS = re.compile(r"^\s*(Wait\w*|Stop|StopMove|Break)\b", re.I)  # the arm stops there: WaitTime, WaitDI, ...
-_VELSET = re.compile(r"^\s*VelSet\s+([^,;]+),\s*([^,;]+);", re.I)
-_ACCSET = re.compile(r"^\s*AccSet\s+([^,;]+),\s*([^,;\\]+)(?:\\FinePointRamp\s*:=\s*([^,;\\]+))?\s*;",
-                     re.I)  # Acc, Ramp [\FinePointRamp:=n]
-_LABEL = re.compile(r"^\s*([A-Za-z]\w*)\s*:\s*$")
-_ROUTINE_NAME = re.compile(r"^\s*(?:LOCAL\s+)?(?:PROC|FUNC\s+\w+|TRAP)\s+(\w+)", re.I)
-_NOT_CALLS = {"module", "endmodule", "local", "task", "error", "backward", "undo", "record", "endrecord", "alias"}
-# instructions that neither move the arm nor change its speed: a call of any other name not declared in the module
-# may (a routine of another module of the task)
-_BUILT_IN = _STRAIGHT | {"accset", "velset", "tpreadfk", "tpreadnum", "tpshow", "errwrite", "incr", "decr", "add",
-                         "clear", "setdo", "setao", "setgo", "open", "close", "write", "writestr", "rewind",
-                         "iwatch", "isleep", "idelete", "isignaldi", "isignaldo", "itimer", "connect", "triggio",
-                         "triggequip", "triggint", "gripload", "load", "unload", "eraseModule".lower(), "raise",
-                         "retry", "trynext", "skipwarn", "waittime", "waitdi", "waitdo", "waituntil", "waitai",
-                         "waitao", "waitgi", "waitgo", "waitrob", "waitsynctask", "stopmove", "startmove",
-                         "storepath", "restopath", "clearpath", "confj", "confl", "singarea", "pathresol"}
-# A robtarget declared on one line as RobotStudio and CAM post-processors write it, no blanks in its value:
-# CONST robtarget p1:=[[x,y,z],[q1,q2,q3,q4],[cf1,cf4,cf6,cfx],[ea,..,ef]]; -- read a whole module of them at once
-# (`_WrittenPoints`): the lines found by the pattern, the value's layout checked and its numbers read from the
-# text's characters (`_value_fields`); any other declaration goes statement by statement.
-_ROBTARGET_VALUE = r"\[\[" + r"\],\[".join([r"[^]\r\n;]*"] * 4) + r"\]\]"  # 4 bracketed lists, numbers checked after
-_ROBTARGET_LAYOUT = "[[,,],[,,,],[,,,],[,,,,,]]"  # its delimiters: x, y, z / q1..q4 / cf1..cfx / ea..ef between them
-_WRITTEN_POINT = re.compile(  # groups: LOCAL / TASK, storage, name, value, the end of its ';'
-    r"[ \t]*((?:(?:LOCAL|TASK)[ \t]+)*)(CONST|PERS|VAR)[ \t]+robtarget[ \t]+(\w+)[ \t]*:=[ \t]*("
-    + _ROBTARGET_VALUE + r")[ \t]*;()[ \t]*\r?$", re.I | re.M)
-# A MoveL or MoveJ to a named point on one line, as CAM post-processors and trajcomp's converter write it:
-# MoveL p1, v50, z1, tool0\WObj:=wobj1; (the speed data possibly with \V:= or \T:=) -- read at once (`_WrittenMotions`)
-_MOTION_REST = (r"[ \t]*,[ \t]*(\w+(?:[ \t]*\\[VT][ \t]*:=[ \t]*" + NUMBER + r")?)[ \t]*,[ \t]*\w+[ \t]*,[ \t]*\w+"
-                r"[ \t]*(?:(?:,[ \t]*)?\\[ \t]*WObj[ \t]*:=[ \t]*\w+[ \t]*)?;()[ \t]*\r?$")  # speed, zone, tool, wobj
-_WRITTEN_MOTION = re.compile(r"[ \t]*(Move[LJ])[ \t]+([A-Za-z]\w*)" + _MOTION_REST, re.I | re.M)  # groups:
-# instruction, point, speed data, the end of its ';'
-# ... and to an inline robtarget written without blanks, as RoboDK's ABB posts write them:
-# MoveL [[x,y,z],[q1,q2,q3,q4],[cf1,cf4,cf6,cfx],[ea,..,ef]],v50,z1,tool0\WObj:=wobj0;
-_WRITTEN_INLINE = re.compile(r"[ \t]*(Move[LJ])[ \t]+(" + _ROBTARGET_VALUE + ")" + _MOTION_REST, re.I | re.M)
-WRITTEN_FORMS = ("_WRITTEN_POINT", "_WRITTEN_MOTION", "_WRITTEN_INLINE")  # the lines read at once (`_written_lines`)
+VARIABLE = ("VAR", "PERS")  # the storages of a speeddata a program may change (a CONST it may not)
+# the one-line forms read at once (`grammar.WRITTEN_FORMS`), by the names of their patterns here (`_written_lines`)
+_WRITTEN_POINT, _WRITTEN_MOTION, _WRITTEN_INLINE = (form.regex for form in grammar.WRITTEN_FORMS)
+WRITTEN_FORMS = ("_WRITTEN_POINT", "_WRITTEN_MOTION", "_WRITTEN_INLINE")
 
 
 ROWS_AT_ONCE = 16384  # values whose delimiters are found together (`_value_fields`): bounds the arrays
@@ -191,7 +105,7 @@ class _WrittenPoints:
         self.table, self.line, self.start, self.end = None, *(np.zeros(0, dtype=np.int64) for _ in range(3))
         self.shared = np.zeros(0, dtype=bool)  # found (N, 6, 2): the line, LOCAL / TASK, storage, name, value, ';'
         numbers, field_start, field_end, laid_out = _value_fields(codes, found[:, 4, 0], found[:, 4, 1],
-                                                                  _ROBTARGET_LAYOUT) if len(found) else [[]] * 4
+                                                                  grammar.ROBTARGET.layout) if len(found) else [[]] * 4
         if not np.any(laid_out):
             return
         if not laid_out.all():
@@ -253,95 +167,9 @@ def _written_lines(masked, codes, lines, excluded):
 LINES_AT_ONCE = 65536  # lines parsed together (`_laid_out_lines`): bounds the arrays held
 
 
-class _Cursor:
-    """Offsets into a text, one in each of K lines, moved over its characters at once: `_laid_out_lines`' parser.
-
-    Parameters
-    ----------
-    codes : ndarray, shape (L,)
-        The text's character codes (`text_codes`).
-    line_end : ndarray of int, shape (K,)
-        Offset of each line's end (its line ending excluded): no character is read there or after.
-    """
-
-    def __init__(self, codes, line_end):
-        self.codes, self.line_end = codes, line_end
-
-    def of(self, rows):
-        """The cursor of lines ``rows`` (K',) of these."""
-        return _Cursor(self.codes, self.line_end[rows])
-
-    def _code(self, at):
-        code = self.codes[np.minimum(at, len(self.codes) - 1)]
-        return np.where(at < self.line_end, np.minimum(code, 127), 0)  # 0: past the line's end, 127: not ASCII
-
-    def char(self, at, character):
-        """Whether each line has ``character`` at ``at`` (K,)."""
-        return self._code(at) == ord(character)
-
-    def letter(self, at):
-        """Whether each line has an ASCII letter at ``at`` (K,)."""
-        code = self._code(at) | 0x20
-        return (code >= ord("a")) & (code <= ord("z"))
-
-    WINDOW = 8  # characters first looked at together on each line; doubled for the lines still in a run
-    LOOKED_AT = 1 << 22  # characters looked at together at most (over all lines in a run)
-
-    def skip(self, at, table):
-        """The first offset at or after ``at`` (K,) whose character is not in ``table`` (`character_table`).
-
-        The characters are looked at a window at a time, over the lines
-        still in a run, the window doubled each time (up to `LOOKED_AT`
-        characters in all): a run of n characters takes about log2(n)
-        steps and 2n characters looked at, a megabyte of blanked comment
-        milliseconds (a column at a time, it took 13 s).
-        """
-        at = np.array(at, dtype=np.int64)
-        moving = np.flatnonzero(at < self.line_end)
-        width = self.WINDOW
-        while len(moving):
-            window = at[moving, None] + np.arange(width)
-            inside = window < self.line_end[moving, None]
-            in_run = inside & table[np.minimum(self.codes[np.minimum(window, len(self.codes) - 1)], 127)]
-            run = np.argmin(in_run, axis=1)  # the first character out of the run: 0 where all are in it
-            ended = ~in_run[np.arange(len(moving)), run]
-            at[moving] += np.where(ended, run, width)
-            moving = moving[~ended]
-            width = max(self.WINDOW, min(2 * width, self.LOOKED_AT // max(len(moving), 1)))
-        return at
-
-    def blanks(self, at):
-        """The first offset at or after ``at`` (K,) not blank."""
-        return self.skip(at, BLANK)
-
-    def word(self, at):
-        """The end of the word (ASCII ``\\w+``) at ``at`` (K,): ``at`` itself where none starts."""
-        return self.skip(at, WORD_CHARACTER)
-
-    def keyword(self, at, words, word_end=None):
-        """The end of the one of ``words`` (upper case ASCII, whole words, any case) at ``at`` (K,); -1 where none.
-        ``word_end``: `word` of ``at`` if known."""
-        end = np.full(len(at), -1)
-        length = (self.word(at) if word_end is None else word_end) - at
-        for word in words:
-            rows = np.flatnonzero(length == len(word))
-            whole = rows[starts_with(spelt(self.codes, at[rows], len(word)), word)]
-            end[whole] = at[whole] + len(word)
-        return end
-
-
 def _laid_out_lines(codes, starts, ends):
-    """The lines of the `WRITTEN_FORMS` written as CAM tools write them, found from the characters' codes.
-
-    A subset of what each pattern matches (the others are matched by it):
-    a declaration ``CONST robtarget p1 := [[..],[..],[..],[..]];`` (CONST,
-    PERS or VAR, no LOCAL or TASK, ``;`` right after the value and ending
-    the line), a ``MoveL`` or ``MoveJ`` to a name or to an inline
-    robtarget, then its speed data (no ``\\V`` or ``\\T``), zone, tool and
-    optional work object (``tool0\\WObj:=wobj1`` or ``tool0,\\WObj:=wobj1``),
-    any case, any blanks where the pattern has them, ASCII names, a line
-    ending ``\\n`` or ``\\r\\n``. The robtargets' contents are not checked
-    here (`_value_fields`).
+    """The lines of each of the `WRITTEN_FORMS` found at once from the codes of their characters (`forms.Form.find`:
+    a subset of those each form's pattern matches, with the same groups; the others are matched by it).
 
     Parameters
     ----------
@@ -356,73 +184,7 @@ def _laid_out_lines(codes, starts, ends):
         Per form: the lines written so (K,) (indices into ``starts``) and
         their matches' offsets (K, groups + 1, 2) as ``Match.regs`` gives them.
     """
-    if not len(starts) or not len(codes):
-        return [(np.zeros(0, dtype=np.int64), np.zeros((0, globals()[name].groups + 1, 2), dtype=np.int64))
-                for name in WRITTEN_FORMS]
-    carriage = (ends > starts) & (codes[np.maximum(ends - 1, 0)] == ord("\r"))
-    line_end = ends - carriage  # the line's characters end: its "\r\n" or "\n" excluded
-    closes = np.flatnonzero(codes[int(starts[0]):int(ends[-1])] == ord("]")) + int(starts[0])
-
-    def value_end(at):  # after the 5th "]" from ``at``: a robtarget's "]]" if it holds no other "]"; -1 if none
-        k = np.searchsorted(closes, at) + 4
-        found = k < len(closes)
-        return np.where(found, closes[np.where(found, k, 0)] + 1, -1) if len(closes) else np.full(len(at), -1)
-
-    lines = _Cursor(codes, line_end)
-    first = lines.blanks(starts)
-    first_word = lines.word(first)
-    # CONST robtarget p1 := [[..]];
-    storage = lines.keyword(first, ("CONST", "PERS", "VAR"), first_word)
-    rows = np.flatnonzero(storage >= 0)
-    text, first_at, storage_end = lines.of(rows), first[rows], storage[rows]
-    type_at = text.blanks(storage_end)
-    type_end = text.keyword(type_at, ("ROBTARGET",))
-    name_at = text.blanks(type_end)
-    name_end = text.word(name_at)
-    assign = text.blanks(name_end)
-    value_at = text.blanks(assign + 2)
-    point = (type_at > storage_end) & (type_end >= 0) & (name_at > type_end) & (name_end > name_at)
-    point &= text.char(assign, ":") & text.char(assign + 1, "=")
-    point &= text.char(value_at, "[") & text.char(value_at + 1, "[")
-    value_stop = np.where(point, value_end(value_at), -1)
-    point &= (value_stop > 0) & (value_stop + 1 == text.line_end) & text.char(value_stop, ";")
-    taken = np.flatnonzero(point)
-    points = np.stack([np.c_[starts[rows], ends[rows]], np.c_[first_at, first_at], np.c_[first_at, storage_end],
-                       np.c_[name_at, name_end], np.c_[value_at, value_stop], np.c_[value_stop + 1, value_stop + 1]],
-                      axis=1)[taken]
-    point_rows = rows[taken]
-    # MoveL p1, v50, z1, tool0\WObj:=wobj1;  MoveL [[..]],v50,z1,tool0,\WObj:=wobj1;
-    move = lines.keyword(first, ("MOVEL", "MOVEJ"), first_word)
-    rows = np.flatnonzero(move >= 0)
-    text, first_at, move_end = lines.of(rows), first[rows], move[rows]
-    target_at = text.blanks(move_end)
-    named = (target_at > move_end) & text.letter(target_at)
-    inline = (target_at > move_end) & text.char(target_at, "[") & text.char(target_at + 1, "[")
-    target_end = np.where(named, text.word(target_at), np.where(inline, value_end(target_at), -1))
-    comma = text.blanks(target_end)
-    speed_at = text.blanks(comma + 1)
-    speed_end = text.word(speed_at)
-    motion = (named | inline) & (target_end > 0) & text.char(comma, ",") & (speed_end > speed_at)
-    word_end = speed_end
-    for _ in ("zone", "tool"):
-        comma = text.blanks(word_end)
-        word_at = text.blanks(comma + 1)
-        word_end = text.word(word_at)
-        motion &= text.char(comma, ",") & (word_end > word_at)
-    after = text.blanks(word_end)
-    option = np.where(text.char(after, ","), text.blanks(after + 1), after)
-    wobj_at = text.blanks(option + 1)
-    assign = text.blanks(wobj_at + 4)
-    frame_at = text.blanks(assign + 2)
-    frame_end = text.word(frame_at)
-    with_frame = text.char(option, "\\") & (text.keyword(wobj_at, ("WOBJ",)) >= 0) & text.char(assign, ":")
-    with_frame &= text.char(assign + 1, "=") & (frame_end > frame_at)
-    semicolon = np.where(with_frame, text.blanks(frame_end), after)
-    motion &= text.char(semicolon, ";") & (text.blanks(semicolon + 1) == text.line_end)
-    motions = np.stack([np.c_[starts[rows], ends[rows]], np.c_[first_at, move_end], np.c_[target_at, target_end],
-                        np.c_[speed_at, speed_end], np.c_[semicolon + 1, semicolon + 1]], axis=1)
-    by_name, inline = np.flatnonzero(motion & named), np.flatnonzero(motion & inline)
-    return [(point_rows, points), (rows[by_name], motions[by_name]), (rows[inline], motions[inline])]
+    return find_lines(grammar.WRITTEN_FORMS, codes, starts, ends)
 
 
 def _runs_between(masked, found):
@@ -434,11 +196,10 @@ def _runs_between(masked, found):
 
 
 def _check_blocks(source, masked, runs):
-    """`check_closed` of a module's MODULE, PROC, FUNC and TRAP blocks, over the ``runs`` of lines between those
-    read at once (`_runs_between`)."""
-    check_closed(source, masked, _BLOCK_OPENS, _BLOCK_CLOSES,
-                 {"MODULE": "ENDMODULE", "PROC": "ENDPROC", "FUNC": "ENDFUNC", "TRAP": "ENDTRAP"}, runs,
-                 _OUTSIDE_MODULES)
+    """`check_closed` of a module's blocks (`grammar.BLOCKS`: MODULE, routines, IF, FOR, WHILE, TEST), over the
+    ``runs`` of lines between those read at once (`_runs_between`)."""
+    check_closed(source, masked, grammar.BLOCK_OPENS, grammar.BLOCK_CLOSES, grammar.BLOCKS, runs,
+                 grammar.OUTSIDE_MODULES)
 
 
 def _line_matches(pattern, text, start=0, end=None):
@@ -510,7 +271,7 @@ def _unpadded(codes, start, end):
     """Offsets ``start, end`` (N, F) of fields less the blanks around their texts (RoboDK writes ``[x, y, z]``)."""
     shape = start.shape
     end = end.ravel().astype(np.int64)
-    start = _Cursor(codes, end).blanks(start.ravel())
+    start = Cursor(codes, end).blanks(start.ravel())
     while len(back := np.flatnonzero((end > start) & BLANK[np.minimum(codes[np.maximum(end - 1, 0)], 127)])):
         end[back] -= 1
     return start.reshape(shape), end.reshape(shape)
@@ -618,7 +379,7 @@ class _WrittenMotions:
         self.table = None
         if len(inline):
             numbers, field_start, field_end, laid_out = _value_fields(codes, inline[:, 2, 0], inline[:, 2, 1],
-                                                                      _ROBTARGET_LAYOUT)
+                                                                      grammar.ROBTARGET.layout)
             if not laid_out.all():
                 inline, numbers, field_start, field_end = (a[laid_out] for a in (inline, numbers, field_start,
                                                                                     field_end))
@@ -679,8 +440,8 @@ def _statements(source, masked, lines=None, skipped=None):
                 pending = None
             continue
         text = statement_text(masked, start, end)
-        closer = ";" if _STARTS_DECL.match(text) or _STARTS_MOTION.match(text) else \
-            ")" if _STARTS_ROUTINE.match(text) else None
+        closer = ";" if grammar.STARTS_DECLARATION.match(text) or grammar.STARTS_MOTION.match(text) else \
+            ")" if grammar.STARTS_ROUTINE.match(text) else None
         if closer is not None and closer not in text:
             pending = (number, start, closer)
         elif closer == ";":
@@ -732,9 +493,11 @@ class _Reader:
         self.unset = {}  # lower point name -> why its value is known only at run time
         self.params = set()
         self.data = {}  # lower name of a speeddata or num -> (storage, type, value text, line); None if declared twice
-        self.in_force = {}  # lower name of a VAR speeddata -> (value, why) a straight-line assignment gave it
-        self.touched = {}  # lower name of a VAR speeddata -> first line of a statement that may change it
-        self.task = None  # the other modules of the task (`DeclaredElsewhere`), which may assign a VAR too
+        self.in_force = {}  # lower name of a VAR or PERS speeddata -> (value, why) a straight-line assignment gave it
+        self.touched = {}  # lower name of a VAR or PERS speeddata -> first line of a statement that may change it
+        self.task = None  # the other modules of the task (`DeclaredElsewhere`): the points they declare and assign
+        self.task_data = None  # ... and the speeddata and num they declare or may change (`TaskData`)
+        self.scanned = None  # the masked text, `Lines` and runs `scan_data` looked at
         self.motion_spans = SpanTable(MOTION_SPANS)  # the spans of the motions read one by one, in order
         self.protos = []  # Motion of each distinct instruction of motions read at once (`read_at_once`)
         self.steps = []  # what the module does besides moving, in order (`trajcomp.programs.flow`)
@@ -744,23 +507,24 @@ class _Reader:
     def statement(self, masked, line, start, end):
         """Read the statement at ``start:end`` (line ``line``): a declaration, a motion, an assignment ..."""
         text, original = statement_text(masked, start, end), self.source.text[start:end]
-        if (block := _BLOCK_OPENS.match(text) or _BLOCK_CLOSES.match(text)) and "MODULE" not in block[1].upper():
-            self.routine = line if block.re is _BLOCK_OPENS else None
-        if m := _ROUTINE.match(text):
+        if (block := grammar.ROUTINE_OPENS.match(text) or grammar.ROUTINE_CLOSES.match(text)) \
+                and "MODULE" not in block[1].upper():
+            self.routine = line if block.re is grammar.ROUTINE_OPENS else None
+        if m := grammar.ROUTINE.match(text):
             # parameters: separated by commas, an optional one introduced by '\' (alternatives by '|')
             self.params = {_WORD.findall(p.split("{")[0])[-1].lower() for p in re.split(r"[,\\|]", m.group(1))
                            if _WORD.findall(p.split("{")[0])}
-        if m := _DECL.match(text):
+        if m := grammar.DECLARATION.match(text):
             self.declaration(m, start, line, original)
-        elif m := _DECL_BARE.match(text):
+        elif m := grammar.DECLARATION_WITHOUT_VALUE.match(text):
             for name in re.split(r"\s*,\s*", m.group(1)):
                 self.unset[name.lower()] = f"{name} is declared without a value (set at run time, line {line})"
-        elif _STARTS_MOTION.match(text) and (m := _INSTRUCTION.match(text)):
+        elif grammar.STARTS_MOTION.match(text) and (m := grammar.INSTRUCTION.match(text)):
             motion, offsets = self.motion(m.group(1), m.group(2), start + m.start(2), line, original)
             self.motion_spans.add(offsets)
             self.items.append(motion)
             return
-        elif m := _ASSIGN.match(text):
+        elif m := grammar.ASSIGNMENT.match(text):
             self.assignment(m, line, original)
         else:
             self.flow_step(text, line, original)
@@ -769,25 +533,25 @@ class _Reader:
 
     def flow_step(self, text, line, original):
         """Note a statement that changes the order the module runs in or its speed (`trajcomp.programs.flow.Step`)."""
-        if m := _ROUTINE_NAME.match(text):
+        if m := grammar.ROUTINE_NAME.match(text):
             self.steps.append(Step("routine", m.group(1), line=line, source=self.index))
             return
-        if (m := _LABEL.match(text)) and m.group(1).lower() not in _FLOW_WORDS:  # not DEFAULT:
+        if (m := grammar.LABEL.match(text)) and m.group(1).lower() not in grammar.FLOW_STEPS:  # not DEFAULT:
             self.steps.append(Step("label", m.group(1), line=line, source=self.index))
             return
-        if m := _VELSET.match(text):
+        if m := grammar.VELSET.pattern.match(text):
             override, why = self.constant(m.group(1).strip(), "num", line, original, "VelSet override")
             top, top_why = self.constant(m.group(2).strip(), "num", line, original, "VelSet max")
             self.steps.append(Step("set", "velset", (override, top, why or top_why), line, self.index))
             return
-        if m := _ACCSET.match(text):
+        if m := grammar.ACCSET.pattern.match(text):
             acc, why = self.constant(m.group(1).strip(), "num", line, original, "AccSet Acc")
             ramp, ramp_why = self.constant(m.group(2).strip(), "num", line, original, "AccSet Ramp")
             fine, fine_why = (100.0, "") if m.group(3) is None else self.constant(
                 m.group(3).strip(), "num", line, original, "AccSet \\FinePointRamp")
             self.steps.append(Step("set", "accset", (acc, ramp, fine, why or ramp_why or fine_why), line, self.index))
             return
-        if _WAITS.match(text):
+        if grammar.WAITS.match(text):
             self.steps.append(Step("wait", line=line, source=self.index))
             return
         word = _WORD.match(text.strip())
@@ -796,7 +560,7 @@ class _Reader:
             return
         if word is None:
             return
-        kind = _FLOW_WORDS.get(word.group().lower())
+        kind = grammar.FLOW_STEPS.get(word.group().lower())
         if kind == "if" and word.group().lower() == "if" and not re.search(r"\bTHEN\s*$", text, re.I):
             self.steps.append(Step("if", line=line, source=self.index))  # IF cond instruction; on one line
             inner = re.match(r"^\s*IF\s+.*?\s([A-Za-z]\w*\b[^;]*;)\s*$", text, re.I | re.S)
@@ -808,8 +572,8 @@ class _Reader:
             self.steps.append(Step("jump", target.group(1) if target else "", False, line, self.index))
         elif kind is not None:
             self.steps.append(Step(kind, line=line, source=self.index))
-        elif (word.group().lower() not in _BUILT_IN and word.group().lower() not in _NOT_CALLS
-              and not _STARTS_DECL.match(text) and re.match(r"^\s*[A-Za-z]\w*\s*(;|\s|\\)", text)):
+        elif (word.group().lower() not in grammar.BUILT_IN and word.group().lower() not in grammar.NOT_CALLS
+              and not grammar.STARTS_DECLARATION.match(text) and re.match(r"^\s*[A-Za-z]\w*\s*(;|\s|\\)", text)):
             self.steps.append(Step("call", word.group(), "a routine of another module of the task, which may move "
                                                          "the arm and set speeds", line, self.index))
 
@@ -839,7 +603,7 @@ class _Reader:
         for code, row in sorted(zip(codes.tolist(), run[first].tolist()), key=lambda pair: pair[1]):
             start, end = int(motions.start[row]), int(motions.end[row])
             original = self.source.text[start:end]  # no comment or string inside: as masked
-            m = _INSTRUCTION.match(original)
+            m = grammar.INSTRUCTION.match(original)
             count = len(self.targets)
             motion, _ = self.motion(m.group(1), m.group(2), start + m.start(2), int(motions.line[row]), original)
             del self.targets[count:]  # an inline target read again: the motions' own are taken above
@@ -883,30 +647,23 @@ class _Reader:
 
     def scan_data(self, masked, lines, runs):
         """Note the module's speeddata and num declarations (a motion may use one declared further down), and
-        where a statement other than its declaration and motions may change a VAR speeddata (``lines``: the
-        module's `Lines`; ``runs``: the offsets of the text between the lines read at once, `_runs_between`,
+        where a statement other than its declaration and motions may change a VAR or PERS speeddata (``lines``:
+        the module's `Lines`; ``runs``: the offsets of the text between the lines read at once, `_runs_between`,
         which only declare points or use a speeddata)."""
+        self.scanned = masked, lines, runs
         if not _declares_data(masked):  # a CAM module declares none: its lines are not tried
             return
-        for m in (m for start, end in runs for m in _line_matches(_DATA_DECL, masked, start, end)):
+        for m in (m for start, end in runs for m in _line_matches(grammar.SPEED_DECLARATION, masked, start, end)):
             key = m.group(3).lower()
             entry = (m.group(1).upper(), m.group(2).lower(), (m.group(4) or "").strip(), lines.number(m.start(1)))
             self.data[key] = entry if key not in self.data else None
-        names = [key for key, entry in self.data.items() if entry is not None and entry[:2] == ("VAR", "speeddata")]
-        if not names:
-            return
-        used = re.compile(r"\b(" + "|".join(map(re.escape, names)) + r")\b", re.I)
-        for m in (m for start, end in runs for m in used.finditer(masked, start, end)):
-            line = lines.number(m.start())
-            text = masked[lines.starts[line - 1]:lines.starts[line] if line < len(lines.starts) else len(masked)]
-            text = text.rstrip("\r\n")  # the line's masked text
-            assigned = _ASSIGN.match(text)
-            if not (_STARTS_MOTION.match(text) or _STARTS_DECL.match(text)
-                    or assigned and assigned.group(1).lower() != m.group(1).lower()):  # read, not changed
-                self.touched.setdefault(m.group(1).lower(), line)
+        for key, entry in self.data.items():
+            if entry is not None and entry[0] in VARIABLE and entry[1] == "speeddata" \
+                    and (line := changed_at(masked, lines, key, runs)):
+                self.touched[key] = line
 
     def flow(self, text, line, original):
-        """Follow the VAR speeddata a statement (not a motion) gives a value or may change.
+        """Follow the VAR and PERS speeddata a statement (not a motion) gives a value or may change.
 
         An assignment of a literal (or a constant) is in force for the
         motions after it while the code runs straight: a routine's start, a
@@ -915,29 +672,31 @@ class _Reader:
         """
         if not self.touched:
             return
-        if m := _ASSIGN.match(text):
+        if m := grammar.ASSIGNMENT.match(text):
             key = m.group(1).lower()
             if key in self.touched:
                 self.in_force[key] = (None, f"{m.group(1)} is changed at run time (line {line})") if m.group(2) \
                     else self.constant(m.group(3).strip(), "speeddata", line, original, m.group(1))
             return
         word = _WORD.match(text.strip())
-        if word and word.group().lower() not in _STRAIGHT and not _STARTS_DECL.match(text):
+        if word and word.group().lower() not in grammar.STRAIGHT and not grammar.STARTS_DECLARATION.match(text):
             self.in_force.clear()
 
     def constant(self, name, typ, line, original, field, depth=0):
         """``(value, why)`` of a speeddata (its v_tcp, v_ori and v_leax: mm/s, deg/s, mm/s, v_leax None when not a
         number) or num named ``name``: stated, or why it is not.
 
-        Stated: a literal, ``vN``, ``vmax``, or a CONST of this module whose
-        value is one of these. PERS and VAR data, routine parameters and
-        data declared elsewhere are set at run time: value None.
+        Stated: a literal, ``vN``, ``vmax``, a CONST of this module whose
+        value is one of these, a VAR or PERS speeddata where its value is
+        known (`variable`), or one of these another module of the task
+        declares (`declared_elsewhere`). Routine parameters, other VAR and
+        PERS data and data declared nowhere are set at run time: value None.
         """
         if typ == "num" and _NUMBER.fullmatch(name):
             return self.number(name, line, original, field), ""
-        if typ == "speeddata" and (m := _SPEED.match(name)):
+        if typ == "speeddata" and (m := grammar.PREDEFINED_SPEED.match(name)):
             return (self.number(m.group(1), line, original, field), PREDEFINED_V_ORI, PREDEFINED_V_LEAX), ""
-        if typ == "speeddata" and (m := _SPEEDDATA.match(name)):
+        if typ == "speeddata" and (m := grammar.SPEEDDATA_VALUE.match(name)):
             v_leax = None if m.group(3) is None else self.number(m.group(3), line, original, field)
             return (self.number(m.group(1), line, original, field), self.number(m.group(2), line, original, field),
                     v_leax), ""
@@ -949,37 +708,82 @@ class _Reader:
         if not _NAME.match(name):
             return None, f"{field} {name}: computed at run time"
         if key not in self.data:
-            return None, f"{name}: {typ} not declared in this module, set at run time"
+            return self.declared_elsewhere(name, typ, original, field, depth)
         entry = self.data[key]
         if entry is None:
             return None, f"{name}: declared more than once in this module, which one applies is known at run time"
         storage, declared, value, at = entry
-        if storage == "VAR" and declared == typ == "speeddata":
-            return self.variable(name, value, at, original, field, depth)
+        if storage in VARIABLE and declared == typ == "speeddata":
+            return self.variable(name, storage, value, at, original, field, depth)
         if storage != "CONST":
             return None, f"{name}: {storage} {declared}, set at run time (line {at})"
         if declared != typ or depth > 8 or not value:
             return None, f"{name}: {declared} {value}, known at run time (line {at})"
         return self.constant(value, typ, at, original, field, depth + 1)
 
-    def variable(self, name, value, at, original, field, depth):
-        """``(value, why)`` of VAR speeddata ``name`` (declared at line ``at`` with ``value``) where a motion uses it.
+    def variable(self, name, storage, value, at, original, field, depth):
+        """``(value, why)`` of VAR or PERS (``storage``) speeddata ``name``, declared at line ``at`` with ``value``,
+        where a motion uses it.
 
         Known: the value a straight-line assignment before the motion gave it
         (`flow`), or its declared value if no statement of the module, and
         none of another module of the task, may change it (only motions use
-        it). Else set at run time.
+        it; `task_data.may_change`): a VAR's value as the program starts, a
+        PERS's as declared, since nothing gives it another (a PERS another
+        module declares too starts at the value of the module loaded
+        first: set at run time). Else set at run time.
         """
         key = name.lower()
         if key in self.in_force:
             return self.in_force[key]
-        elsewhere = self.task.assigned(key) if self.task is not None else ""
         if key in self.touched:
-            return None, (f"{name}: VAR speeddata the module changes (line {self.touched[key]}) and does not assign a "
-                          "literal in the code running straight to this motion: set at run time")
+            return None, (f"{name}: {storage} speeddata the module changes (line {self.touched[key]}) and does not "
+                          "assign a literal in the code running straight to this motion: set at run time")
+        elsewhere = self.task_data.changed(key) if self.task_data is not None else ""
         if elsewhere or not value:
-            return None, f"{name}: VAR speeddata, set at run time ({elsewhere or f'declared at line {at}'})"
+            return None, f"{name}: {storage} speeddata, set at run time ({elsewhere or f'declared at line {at}'})"
+        if storage == "PERS" and self.task_data is not None and (again := self.task_data.declared(key)):
+            return None, (f"{name}: PERS speeddata also declared in {again[0][0].name}:{again[0][1]}: its value is "
+                          "that of the module loaded first, set at run time")
+        if storage == "PERS" and (why := self.unknown_call()):
+            return None, why.format(name=name, what="PERS speeddata")
         return self.constant(value, "speeddata", at, original, field, depth + 1)
+
+    def unknown_call(self):
+        """Why a PERS (made to be shared) is set at run time where the task calls a routine no module of it
+        declares (`TaskData.unknown_call`): a format string of ``name`` and ``what`` it is; ``""`` if none."""
+        called = self.task_data.unknown_call(*self.scanned[:2]) if self.task_data and self.scanned else ""
+        return f"{{name}}: {{what}}, set at run time: {called} calls a routine no module of the task declares, " \
+               "which may change it" if called else ""
+
+    def declared_elsewhere(self, name, typ, original, field, depth):
+        """``(value, why)`` of a speeddata or num ``name`` this module does not declare, as another module of its task
+        declares it (`TaskData.declared`): a CONST, or a VAR or PERS speeddata no module changes, whose value is
+        stated (a literal, ``vN``, ``vmax``: a name in it would be looked up in that module). Else set at run time.
+        """
+        key = name.lower()
+        found = self.task_data.declared(key) if self.task_data is not None else []
+        if not found:
+            return None, f"{name}: {typ} not declared in this module, set at run time"
+        file, at, storage, declared, value = found[0]
+        where = f"{file.name}:{at}"
+        if len(found) > 1:
+            return None, f"{name}: declared in {where} and {found[1][0].name}:{found[1][1]}, set at run time"
+        if not value:
+            return None, f"{name}: {storage} {declared} declared without a value in {where}, set at run time"
+        if declared != typ or depth > 8 or _NAME.match(value) and not (
+                typ == "speeddata" and (grammar.PREDEFINED_SPEED.match(value) or value.lower() == "vmax")):
+            return None, f"{name}: {storage} {declared} {value} of {where}, known at run time"
+        if storage != "CONST":
+            changed = changed_at(*self.scanned[:2], key, self.scanned[2]) if self.scanned else 0
+            if declared != "speeddata" or changed:
+                return None, f"{name}: {storage} {declared} of {where}, set at run time" + (
+                    f" (changed at line {changed})" if changed else "")
+            if elsewhere := self.task_data.changed(key):
+                return None, f"{name}: {storage} speeddata of {where}, set at run time ({elsewhere})"
+            if storage == "PERS" and (why := self.unknown_call()):
+                return None, why.format(name=name, what=f"PERS speeddata of {where}")
+        return self.constant(value, typ, at, original, f"{field} ({where})", depth + 1)
 
     def number(self, text, line, original, field, limit=LENGTH_LIMIT):
         return finite(text, self.source.name, line, original, field, limit)
@@ -988,14 +792,14 @@ class _Reader:
         """A Target from a robtarget or jointtarget literal starting at ``offset``."""
         label = name or kind
         if kind == "jointtarget":
-            m = _JOINTTARGET.match(text)
+            m = grammar.JOINTTARGET_VALUE.match(text)
             if not m:
                 fail(self.source.name, line, original, "malformed jointtarget")
             joints = np.radians([self.number(m.group(k), line, original, f"{label} joint {k}", JOINT_LIMIT)
                                  for k in range(1, 7)])
             return Target(name=name, line=line, joints=joints, spans=spans(self.index, m, JOINTS, offset),
                           external=self.external(m, 7, line, original, label))
-        m = _ROBTARGET.match(text)
+        m = grammar.ROBTARGET_VALUE.match(text)
         if not m:
             fail(self.source.name, line, original, "malformed robtarget")
         values = np.array([self.number(m.group(k), line, original, f"{label} {r}")
@@ -1021,7 +825,7 @@ class _Reader:
 
     def frame_values(self, kind, d, line, original, name):
         """The pose numbers of a tooldata (tframe) or wobjdata (uframe, oframe) match, checked."""
-        groups = d.groups()[1 if kind == "tooldata" else 2:]
+        groups = d.groups()[-7 * (1 if kind == "tooldata" else 2):]  # x, y, z, q1 .. q4 of its tframe, uframe, oframe
         numbers = [self.number(g, line, original, f"{name} {kind}") for g in groups]
         for start in range(0, len(numbers), 7):
             self.check_quaternion(numbers[start + 3:start + 7], line, original, name)
@@ -1030,7 +834,7 @@ class _Reader:
     def point(self, name, target, original):
         """Add a point the module declares (``original``: its declaration, whose storage says whether other
         modules may assign it: PERS or VAR, not LOCAL)."""
-        storage = _STORAGE.match(original)
+        storage = grammar.STORAGE.match(original)
         if storage and storage.group(2).upper() != "CONST" and "LOCAL" not in storage.group(1).upper():
             self.shared.add(name.lower())
         self.once([name.lower()], [target.line])
@@ -1043,7 +847,7 @@ class _Reader:
         if kind in ("robtarget", "jointtarget"):
             self.point(name, self.literal(kind, value, offset, name, line, original), original)
             return
-        pattern = _TOOLDATA if kind == "tooldata" else _WOBJDATA
+        pattern = grammar.TOOLDATA_VALUE if kind == "tooldata" else grammar.WOBJDATA_VALUE
         d = pattern.match(value)
         if not d:
             fail(self.source.name, line, original, f"malformed {kind}")
@@ -1064,7 +868,7 @@ class _Reader:
         """``tool.tframe := [..]``, ``wobj.uframe := [..]``: a new value from here on; other assignments at run time."""
         name, key = m.group(1), m.group(1).lower()
         field, value = m.group(2).lower(), m.group(3)
-        literal = _POSE_LITERAL.match(value)
+        literal = grammar.POSE_VALUE.match(value)
         if key in self.active["tool"] and key != "tool0":
             if field == ".tframe" and literal:
                 numbers = [self.number(g, line, original, name) for g in literal.groups()]
@@ -1087,12 +891,13 @@ class _Reader:
             else:
                 self.why[key] = f"{name} is changed at run time (line {line})"
 
-    def position(self, piece, start, kind, line, original):
-        """Target index of an inline literal, `_Named` for a name, None for an expression."""
+    def position(self, piece, start, joints, line, original):
+        """Target index of an inline literal (a jointtarget where ``joints``), `_Named` for a name, None for an
+        expression."""
         text = _bare(piece)
         if text.startswith("["):
             shift = start + len(piece) - len(piece.lstrip())
-            self.targets.append(self.literal("jointtarget" if kind == "MOVEABSJ" else "robtarget",
+            self.targets.append(self.literal("jointtarget" if joints else "robtarget",
                                              text, shift, "", line, original))
             return len(self.targets) - 1
         return _Named(text, line, text.lower() in self.params) if _NAME.match(text) else None
@@ -1107,28 +912,27 @@ class _Reader:
     def motion(self, instruction, rest, start, line, original):
         """The `Motion` of an instruction (its points: target indices or `_Named`) and its spans' offsets
         ``{role: (start, end)}`` (`MOTION_SPANS`)."""
-        keyword = instruction.upper()
-        family = _FAMILIES.get(keyword)
+        read = grammar.MOTIONS.get(instruction.upper())
         text = " ".join(original.split())
-        if family is None:
+        if read is None:
             return Motion(kind=LINEAR, line=line, text=text,
                           reason=f"{instruction}: instruction not read by trajcomp, left as written"), {}
-        kind = KINDS[family]
+        kind, count = read.kind, read.points
         pieces = split_top(rest, start)
-        options = {k.lower(): (v or "").strip() for p, _ in pieces for k, v in _OPTION.findall(p)}
+        options = {k.lower(): (v or "").strip() for p, _ in pieces for k, v in grammar.OPTION.findall(p)
+                   if k.lower() in grammar.MOTION_OPTIONS}
         positional = [(p, s) for p, s in pieces if not p.strip().startswith("\\")]
-        count = 2 if kind == CIRCULAR else 1
-        tool_at = count + 2 if keyword.startswith("MOVE") else len(positional) - 1
+        tool_at = len(positional) - 1 if read.tool_last else count + 2
         if len(positional) < count + 3 or tool_at >= len(positional):
             fail(self.source.name, line, original, f"{instruction} needs {count + 3} arguments")
-        found = [self.position(p, s, keyword, line, original) for p, s in positional[:count]]
+        found = [self.position(p, s, read.joints, line, original) for p, s in positional[:count]]
         roles = ("via_name", "target_name")[2 - count:]
         offsets = (  # where re-timing writes, the points' names (`trajcomp.formats.uses`)
             {"speed": _stripped_offsets(*positional[count])}
             | {role: name_offsets(p, s) for role, (p, s), point in zip(roles, positional, found)
                if isinstance(point, _Named)})
         speed_text = _bare(positional[count][0])
-        zones = [_bare(p) for p, _ in positional[count + 1:tool_at + 1] if _ZONE.match(_bare(p))]
+        zones = [_bare(p) for p, _ in positional[count + 1:tool_at + 1] if grammar.PREDEFINED_ZONE.match(_bare(p))]
         tool, tool_why = self.frame_name("tool", _bare(positional[tool_at][0]), line)
         frame, frame_why = self.frame_name("wobj", options.get("wobj", "wobj0"), line)
         reason = "" if None not in found else (
@@ -1171,7 +975,7 @@ class _Reader:
             self.companions[file] = (self.index + len(self.companions) + 1, source, masked, statements)
         index, source, masked, statements = self.companions[file]
         start, end = statements[line]
-        m = _DECL.match(masked[start:end])
+        m = grammar.DECLARATION.match(masked[start:end])
         if m is None:
             return None
         module = _Reader(source, index)
@@ -1202,7 +1006,7 @@ class _Reader:
         """mm of ``\\Z:=`` or ``zN``; None for fine or zonedata the module names."""
         if option and _NUMBER.fullmatch(option):
             return self.number(option, line, original, "\\Z") or None
-        m = _ZONE.match(zones[0]) if zones else None
+        m = grammar.PREDEFINED_ZONE.match(zones[0]) if zones else None
         if m is None or m.group(2) is None:
             return None
         return self.number(m.group(2), line, original, "zone") or None
@@ -1289,7 +1093,7 @@ def _read(path):
     """The module (`read`) in file order, and its flow steps."""
     source = read_source(path)
     masked = mask(source.text, "!")
-    module = _MODULE.search(masked)
+    module = grammar.MODULE.search(masked)
     if not module:
         raise ReadError(f"{path}: not a RAPID module: no MODULE line")
     folder = Path(path).parent
@@ -1299,7 +1103,8 @@ def _read(path):
     lines, excluded, codes = Lines(source.text), set(), text_codes(masked)
     while True:  # a statement spread over lines that look read-at-once takes them back (`_Spread`): rare
         reader = _Reader(source)
-        reader.task = DeclaredElsewhere(Path(path), folders, modules, _TASK_POINT, "!", assignment=_ASSIGNED_POINT)
+        reader.task = DeclaredElsewhere(Path(path), folders, modules, grammar.TASK_POINT, "!", assignment=grammar.ASSIGNED)
+        reader.task_data = TaskData(path, folders, modules)
         found_points, named, inline = _written_lines(masked, codes, lines, excluded)
         runs = _runs_between(masked, (found_points, named, inline))
         if not excluded:  # first: the module's blocks closed, checked where they may open or close
@@ -1330,7 +1135,7 @@ def _read(path):
         if start == len(source.text):
             break
         reader.statement(masked, line, start, end)
-    items = _resolve(reader, reader.task, DeclaredElsewhere(Path(path), folders, modules, _TASK_FRAME, "!"), motions)
+    items = _resolve(reader, reader.task, DeclaredElsewhere(Path(path), folders, modules, grammar.TASK_FRAME, "!"), motions)
     companions = tuple(source for _, source, _, _ in reader.companions.values())
     sources = (source, *companions)
     if table is None and not len(motions):  # nothing read at once: the program of objects
@@ -1365,7 +1170,7 @@ def _resolve(reader, task, frames, motions):
     """
     assigned = {}
     for item in reader.items:
-        if isinstance(item, Statement) and (m := _ASSIGN.match(code_of(item.text, "!"))):
+        if isinstance(item, Statement) and (m := grammar.ASSIGNMENT.match(code_of(item.text, "!"))):
             assigned.setdefault(m.group(1).lower(), f"line {item.line}")
     missing = []
 
@@ -1427,7 +1232,7 @@ def _resolve(reader, task, frames, motions):
                                            + tuple(i for i in (via, target) if isinstance(i, int)))
             else:
                 item = whole_circle(replaced(item, target=target, via=via))
-        elif not _DECL.match(code_of(item.text, "!")) and (names := named(item.text)):
+        elif not grammar.DECLARATION.match(code_of(item.text, "!")) and (names := named(item.text)):
             item = dataclasses.replace(item, refs=names)
         items.append(item)
     if missing:

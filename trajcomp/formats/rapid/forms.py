@@ -1,0 +1,357 @@
+"""Statement forms: a line of a language declared once as a sequence of elements, run two ways.
+
+A `Form` compiles to a regular expression matched on one line at a time
+(`Form.regex`, what the statement-by-statement read and any line the other
+strategy leaves use), and runs over many lines at once on their
+characters' codes (`Form.find`, a `Cursor` moved element by element: no
+Python object per line). Both give the same groups, as ``Match.regs``
+gives them. Run at once, an element that has no vectorised run (a
+`Number`, a `Repeat`) is taken as absent: a line that holds it fails
+there (or leaves the `Optional` around it) and is left to the pattern,
+so that the lines found at once are a subset of those the pattern
+matches, with the same groups (the pattern being greedy, its first match
+is the one that takes every optional part the line holds); but for what
+lies inside a `Value`, which the one reading its fields checks.
+"""
+
+import re
+
+import numpy as np
+
+from trajcomp.formats.number_fields import BLANK, NUMBER, WORD_CHARACTER, spelt, starts_with
+
+
+class Cursor:
+    """Offsets into a text, one in each of K lines, moved over its characters at once.
+
+    Parameters
+    ----------
+    codes : ndarray, shape (L,)
+        The text's character codes (`trajcomp.formats.number_fields.text_codes`).
+    line_end : ndarray of int, shape (K,)
+        Offset of each line's end (its line ending excluded): no character is read there or after.
+    closes : ndarray of int, optional
+        Offsets of the text's ``]`` (ascending) where a `Value` is looked for.
+    """
+
+    def __init__(self, codes, line_end, closes=None):
+        self.codes, self.line_end, self.closes = codes, line_end, closes
+        self._word = None  # the last `word` asked: (at, its end), reused while the same array is asked again
+
+    def of(self, rows):
+        """The cursor of lines ``rows`` (K',) of these."""
+        return Cursor(self.codes, self.line_end[rows], self.closes)
+
+    def _code(self, at):
+        code = self.codes[np.minimum(at, len(self.codes) - 1)]
+        return np.where(at < self.line_end, np.minimum(code, 127), 0)  # 0: past the line's end, 127: not ASCII
+
+    def char(self, at, character):
+        """Whether each line has ``character`` at ``at`` (K,)."""
+        return self._code(at) == ord(character)
+
+    def letter(self, at):
+        """Whether each line has an ASCII letter at ``at`` (K,)."""
+        code = self._code(at) | 0x20
+        return (code >= ord("a")) & (code <= ord("z"))
+
+    WINDOW = 8  # characters first looked at together on each line; doubled for the lines still in a run
+    LOOKED_AT = 1 << 22  # characters looked at together at most (over all lines in a run)
+
+    def skip(self, at, table):
+        """The first offset at or after ``at`` (K,) whose character is not in ``table`` (`character_table`).
+
+        The characters are looked at a window at a time, over the lines
+        still in a run, the window doubled each time (up to `LOOKED_AT`
+        characters in all): a run of n characters takes about log2(n)
+        steps and 2n characters looked at, a megabyte of blanked comment
+        milliseconds (a column at a time, it took 13 s).
+        """
+        at = np.array(at, dtype=np.int64)
+        last = len(self.codes) - 1
+        moving = np.flatnonzero((at < self.line_end) & table[np.minimum(self.codes[np.minimum(at, last)], 127)])
+        width = self.WINDOW  # the lines whose first character is out of the run (most: no blank) are done
+        while len(moving):
+            window = at[moving, None] + np.arange(width)
+            inside = window < self.line_end[moving, None]
+            in_run = inside & table[np.minimum(self.codes[np.minimum(window, last)], 127)]
+            run = np.argmin(in_run, axis=1)  # the first character out of the run: 0 where all are in it
+            ended = ~in_run[np.arange(len(moving)), run]
+            at[moving] += np.where(ended, run, width)
+            moving = moving[~ended]
+            width = max(self.WINDOW, min(2 * width, self.LOOKED_AT // max(len(moving), 1)))
+        return at
+
+    def blanks(self, at):
+        """The first offset at or after ``at`` (K,) not blank."""
+        return self.skip(at, BLANK)
+
+    def word(self, at):
+        """The end of the word (ASCII ``\\w+``) at ``at`` (K,): ``at`` itself where none starts."""
+        if self._word is None or self._word[0] is not at:  # each form's first word is the same (`find_lines`)
+            self._word = at, self.skip(at, WORD_CHARACTER)
+        return self._word[1]
+
+    def keyword(self, at, words, word_end=None):
+        """The end of the one of ``words`` (upper case ASCII, whole words, any case) at ``at`` (K,); -1 where none.
+        ``word_end``: `word` of ``at`` if known."""
+        end = np.full(len(at), -1)
+        length = (self.word(at) if word_end is None else word_end) - at
+        for word in words:
+            rows = np.flatnonzero(length == len(word))
+            whole = rows[starts_with(spelt(self.codes, at[rows], len(word)), word)]
+            end[whole] = at[whole] + len(word)
+        return end
+
+    def close_after(self, at, count):
+        """The offset after the ``count``-th ``]`` at or after ``at`` (K,); -1 where the text has fewer."""
+        k = np.searchsorted(self.closes, at) + count - 1
+        found = k < len(self.closes)
+        return np.where(found, self.closes[np.where(found, k, 0)] + 1, -1) if len(self.closes) else np.full(len(at), -1)
+
+
+class Element:
+    """A part of a form: its pattern (`pattern`) and its run over K lines at once (`run`)."""
+
+    groups = 0  # the groups it holds
+
+    def pattern(self):
+        """Its regular expression (flags ``re.I | re.M``)."""
+        raise NotImplementedError
+
+    def run(self, cursor, at, found):
+        """The offsets (K,) after the element on each line from ``at`` (K,) and whether it is there (K,) bool;
+        its groups' ``(start, end)`` (each (K, 2)) appended to ``found``."""
+        raise NotImplementedError
+
+
+class Blank(Element):
+    """Blanks (spaces, tabs): any number, or at least one (``required``)."""
+
+    def __init__(self, required=False):
+        self.required = required
+
+    def pattern(self):
+        return r"[ \t]+" if self.required else r"[ \t]*"
+
+    def run(self, cursor, at, found):
+        end = cursor.blanks(at)
+        return end, (end > at) if self.required else np.ones(len(at), dtype=bool)
+
+
+class Literal(Element):
+    """These characters, as written (``:=``, ``,``, ``;``)."""
+
+    def __init__(self, text):
+        self.text = text
+
+    def pattern(self):
+        return re.escape(self.text)
+
+    def run(self, cursor, at, found):
+        there = np.ones(len(at), dtype=bool)
+        for k, character in enumerate(self.text):
+            there &= cursor.char(at + k, character)
+        return at + len(self.text), there
+
+
+class Words(Element):
+    """One of these words (ASCII, any case), ended where the next element starts."""
+
+    def __init__(self, *words):
+        self.words = words
+
+    def pattern(self):
+        return "(?:" + "|".join(map(re.escape, self.words)) + ")"
+
+    def run(self, cursor, at, found):
+        end = cursor.keyword(at, [w.upper() for w in self.words])
+        return end, end >= 0
+
+
+class Name(Element):
+    """A word (``\\w+``), or a name (a letter first) where ``letter_first``."""
+
+    def __init__(self, letter_first=False):
+        self.letter_first = letter_first
+
+    def pattern(self):
+        return r"[A-Za-z]\w*" if self.letter_first else r"\w+"
+
+    def run(self, cursor, at, found):
+        end = cursor.word(at)
+        there = end > at
+        return end, there & cursor.letter(at) if self.letter_first else there
+
+
+class Number(Element):
+    """A number as the robot languages write one (`trajcomp.formats.number_fields.NUMBER`); matched by the
+    pattern only."""
+
+    def pattern(self):
+        return NUMBER
+
+    def run(self, cursor, at, found):
+        return at, np.zeros(len(at), dtype=bool)  # not read at once: the line is left to the pattern
+
+
+class Value(Element):
+    """A bracketed value laid out as ``layout`` (its delimiters, e.g. ``[[,,],[,,,]]``: each innermost list any
+    characters but ``]``, a line break and ``;``). Run at once, its opening brackets are checked and its end
+    found (after as many ``]`` as it has); what lies between is not: the one reading its fields checks it (a
+    value not laid out so is left to the statement-by-statement read)."""
+
+    def __init__(self, layout):
+        self.layout = layout
+
+    def pattern(self):
+        return "".join(r"\[[^]\r\n;]*\]" if len(token) > 1 else re.escape(token)
+                       for token in re.findall(r"\[[^][]*\]|.", self.layout))  # an innermost list: any such text
+
+    def run(self, cursor, at, found):
+        opening = len(self.layout) - len(self.layout.lstrip("["))
+        there = np.ones(len(at), dtype=bool)
+        for k in range(opening):
+            there &= cursor.char(at + k, "[")
+        end = cursor.close_after(at, self.layout.count("]"))
+        return end, there & (end > 0)
+
+
+class Optional(Element):
+    """Its elements, or nothing (a group inside: ``(-1, -1)`` where not taken). Run at once, taken where all its
+    elements are there."""
+
+    def __init__(self, *elements):
+        self.elements = elements
+        self.groups = sum(e.groups for e in elements)
+
+    def pattern(self):
+        return "(?:" + "".join(e.pattern() for e in self.elements) + ")?"
+
+    def run(self, cursor, at, found):
+        inner = []
+        end, there = _run_all(self.elements, cursor, at, inner)
+        for span in inner:
+            span[~there] = -1
+        found.extend(inner)
+        return np.where(there, end, at), np.ones(len(at), dtype=bool)
+
+
+class Repeat(Element):
+    """Its elements, any number of times; run at once: none (a line that holds them is left to the pattern)."""
+
+    def __init__(self, *elements):
+        self.elements = elements
+
+    def pattern(self):
+        return "(?:" + "".join(e.pattern() for e in self.elements) + ")*"
+
+    def run(self, cursor, at, found):
+        return at, np.ones(len(at), dtype=bool)
+
+
+class Group(Element):
+    """Its elements, their text a group (``Match.group``)."""
+
+    def __init__(self, *elements):
+        self.elements = elements
+        self.groups = 1 + sum(e.groups for e in elements)
+
+    def pattern(self):
+        return "(" + "".join(e.pattern() for e in self.elements) + ")"
+
+    def run(self, cursor, at, found):
+        inner = []
+        end, there = _run_all(self.elements, cursor, at, inner)
+        found.append(np.c_[at, end])
+        found.extend(inner)
+        return end, there
+
+
+class LineEnd(Element):
+    """The end of the line (a ``\\r`` before its ``\\n`` allowed)."""
+
+    def pattern(self):
+        return r"\r?$"
+
+    def run(self, cursor, at, found):
+        return at, at == cursor.line_end
+
+
+def _run_all(elements, cursor, at, found):
+    """Run ``elements`` in order from ``at`` (K,), each on the lines where those before it are there (the others
+    dropped: no work on them). The offsets after them (K,; -1 where not there), whether they are there (K,); their
+    groups appended to ``found`` (each (K, 2); -1 on the lines an element before the group is not on)."""
+    count, alive, spans = len(at), np.arange(len(at)), []
+    for element in elements:
+        inner = []
+        at, here = element.run(cursor, at, inner)
+        spans.extend((alive, span) for span in inner)
+        if not here.all():
+            kept = np.flatnonzero(here)
+            alive, at, cursor = alive[kept], at[kept], cursor.of(kept)
+    end, there = np.full(count, -1, dtype=np.int64), np.zeros(count, dtype=bool)
+    end[alive], there[alive] = at, True
+    for rows, span in spans:
+        full = np.full((count, 2), -1, dtype=np.int64)
+        full[rows] = span
+        found.append(full)
+    return end, there
+
+
+class Form:
+    """A statement written on one line: its elements, after any blanks at the line's start.
+
+    Parameters
+    ----------
+    *elements : Element
+        In order; the form's groups are those of its `Group` elements, numbered as in a regular expression.
+
+    Attributes
+    ----------
+    regex : re.Pattern
+        Its pattern (``re.I | re.M``), matched from a line's start to its end (``match(text, start, end)``).
+    """
+
+    def __init__(self, *elements):
+        self.elements = (Blank(), *elements)
+        self.regex = re.compile("".join(e.pattern() for e in self.elements), re.I | re.M)
+        self.groups = self.regex.groups
+
+    def find(self, codes, starts, ends):
+        """The lines written in this form, found at once from their characters.
+
+        Parameters
+        ----------
+        codes : ndarray, shape (L,)
+            The masked text's character codes (`trajcomp.formats.number_fields.text_codes`).
+        starts, ends : ndarray of int, shape (B,)
+            Offsets of the lines' starts and of their ``\\n`` (or the text's end), ascending.
+
+        Returns
+        -------
+        rows : ndarray of int, shape (K,)
+            The lines written so (indices into ``starts``): a subset of
+            those `regex` matches (module docstring).
+        regs : ndarray of int, shape (K, groups + 1, 2)
+            Their matches' offsets as ``Match.regs`` gives them.
+        """
+        return find_lines([self], codes, starts, ends)[0]
+
+
+def find_lines(forms, codes, starts, ends):
+    """`Form.find` of each of ``forms`` over the same lines, the blanks at their starts skipped once: list of
+    ``(rows, regs)``."""
+    if not len(starts) or not len(codes):
+        return [(np.zeros(0, dtype=np.int64), np.zeros((0, form.groups + 1, 2), dtype=np.int64)) for form in forms]
+    carriage = (ends > starts) & (codes[np.maximum(ends - 1, 0)] == ord("\r"))
+    lo, hi = int(starts[0]), int(ends[-1])
+    cursor = Cursor(codes, ends - carriage, np.flatnonzero(codes[lo:hi] == ord("]")) + lo)
+    first = cursor.blanks(starts)  # every form starts with the blanks (`Form`)
+    out = []
+    for form in forms:
+        found = []
+        _, there = _run_all(form.elements[1:], cursor, first, found)
+        rows = np.flatnonzero(there)
+        out.append((rows, np.stack([np.c_[starts[rows], ends[rows]], *(span[rows] for span in found)], axis=1)))
+    return out
