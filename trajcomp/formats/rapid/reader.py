@@ -36,7 +36,7 @@ from trajcomp.formats.text import (
 from trajcomp.programs import flow
 from trajcomp.programs.flow import Step, Unknown
 from trajcomp.programs.program import Program
-from trajcomp.programs.items import CIRCULAR, JOINT, LINEAR, Motion, SpanColumns, SpanTable, Statement, Target, replaced
+from trajcomp.programs.items import CIRCULAR, LINEAR, Motion, SpanColumns, SpanTable, Statement, Target, replaced
 from trajcomp.programs.tables import (
     ItemRows,
     MotionTable,
