@@ -443,12 +443,14 @@ def test_locations_read_file_line_field_message(tmp_path, capsys, monkeypatch):
     assert "trajcomp: error: nocmd.csv:1: need commanded joints" in capsys.readouterr().err
     # convert's warnings name the file of the motion, not a bare line
     weld = (Path(__file__).resolve().parents[1] / "examples" / "programs" / "abb" / "Weld.mod").read_text()
-    Path("W.mod").write_text(weld.replace("MODULE Weld", "MODULE Weld\n  PERS speeddata vWeld := [20,500,5000,1000];")
+    Path("W.mod").write_text(weld.replace("MODULE Weld", "MODULE Weld\n  PERS speeddata vWeld := [20,500,5000,1000];\n"
+                                          "  PERS num nFeed := 20;")  # a PERS num: set at run time
+                             .replace("  PROC main()\n", "  PROC main()\n    vWeld.v := nFeed;\n")
                              .replace("MoveL P3, v20", "MoveL P3, vWeld"))
     assert main(["convert", "W.mod", "W.csv", "--robot", "abb_irb4600"]) == 1
     warnings = [line for line in capsys.readouterr().err.splitlines() if line.startswith("trajcomp: warning:")]
-    assert warnings[-1] == ("trajcomp: warning: W.mod:12: speed of 'MoveL P3, vWeld, z5, tool0;': vWeld: PERS "
-                        "speeddata, set at run time (line 2): written at csv's slowest speed, set it before running")
+    assert warnings[-1] == ("trajcomp: warning: W.mod:14: speed of 'MoveL P3, vWeld, z5, tool0;': vWeld is changed "
+                            "at run time (line 11): written at csv's slowest speed, set it before running")
     assert all(line.startswith("trajcomp: warning: W.mod:1") for line in warnings)
     assert main(["convert", "W.mod", "W.src", "--robot", "ur10"]) == 2
     assert "W.src: a KUKA program (krl) cannot run on robot ur10" in capsys.readouterr().err
