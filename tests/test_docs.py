@@ -337,7 +337,6 @@ def help_session(tmp_path_factory):
     return Session(tmp_path_factory.mktemp("help"), HELP_EXAMPLES)
 
 
-@pytest.mark.xdist_group("readme")  # one worker runs the session in order (another would first catch up on it)
 @pytest.mark.parametrize("index", range(len(README_COMMANDS)), ids=[c.where for c in README_COMMANDS])
 def test_readme_command_runs_as_written(readme_session, index):
     reason = readme_session.run_through(index)
@@ -345,7 +344,6 @@ def test_readme_command_runs_as_written(readme_session, index):
         pytest.skip(reason)
 
 
-@pytest.mark.xdist_group("help")
 @pytest.mark.parametrize("index", range(len(HELP_EXAMPLES)), ids=[c.where for c in HELP_EXAMPLES])
 def test_help_example_runs_as_written(help_session, index):
     reason = help_session.run_through(index)
