@@ -1,13 +1,20 @@
 """Fixtures shared by several test modules."""
 
 import importlib.metadata
+import os
 import sys
 from pathlib import Path
 
-import pytest
+from trajcomp.support.threads import THREAD_VARIABLES
 
-from trajcomp import formats
-from trajcomp.cli import main
+for _name in THREAD_VARIABLES:  # one BLAS thread per test worker, as the CLI runs (set before numpy loads): the
+    os.environ.setdefault(_name, "1")  # in-process commands with OpenBLAS's threads beside the other worker's pools
+    # made the suite's CPU time vary from 9 to 12 minutes
+
+import pytest  # noqa: E402
+
+from trajcomp import formats  # noqa: E402
+from trajcomp.cli import main  # noqa: E402
 
 
 REAL_DATA = Path(__file__).resolve().parents[2] / "shared" / "data"  # beside the clone, not in it
