@@ -45,14 +45,18 @@ Rules (the README's "Set up" section points here):
 
 Each command is one test item. An item run alone first runs the commands
 before it, so any selection works; after a failure the rest of that session
-is skipped.
+is skipped. The test workers share one session of each kind (its folder, its
+state and each command's outcome on disk, under a lock): whichever worker
+reaches an item first runs the commands up to it, once for all workers.
 """
 
 import argparse
 import contextlib
 import dataclasses
+import fcntl
 import importlib
 import io
+import json
 import logging
 import os
 import re
@@ -212,43 +216,96 @@ def help_examples():
 
 
 class Session:
-    """One terminal session over a list of commands in a temporary clone."""
+    """One terminal session over a list of commands in a temporary clone, shared by every process that opens it.
+
+    The clone, the session's state and each command's outcome live in
+    ``root``; `run_through` takes a lock on them, so processes that open
+    the same root (the test workers) continue one session and never run a
+    command twice.
+    """
 
     def __init__(self, root, commands):
         self.root = root
-        self.cwd = root / "clone"
         self.commands = commands
-        self.next = 0
-        self.failed = None
-        self.output, self.skipped = "", None  # the last command's output; why it was not run
-        shutil.copytree(REPO / "examples", self.cwd / "examples")
-        if (REPO.parent / "shared").is_dir():
-            (root / "shared").symlink_to(REPO.parent / "shared")
+        root.mkdir(parents=True, exist_ok=True)
         bin_dir = root / "bin"
-        bin_dir.mkdir()
-        shim = bin_dir / "trajcomp"
-        shim.write_text(f'#!/bin/sh\nexec {shlex.quote(sys.executable)} -m trajcomp.cli "$@"\n')
-        shim.chmod(0o755)
         self.env = dict(
             os.environ,
             PATH=os.pathsep.join([str(bin_dir), str(Path(sys.executable).parent), os.environ.get("PATH", "")]),
             PYTHONPATH=os.pathsep.join([str(REPO), os.environ.get("PYTHONPATH", "")]),
         )
+        with self._locked():
+            if (root / "state.json").exists():
+                return
+            self.cwd = root / "clone"
+            self.next, self.failed, self.outcomes = 0, None, {}
+            self.output, self.skipped = "", None  # the last command's output; why it was not run
+            shutil.copytree(REPO / "examples", self.cwd / "examples")
+            if (REPO.parent / "shared").is_dir():
+                (root / "shared").symlink_to(REPO.parent / "shared")
+            bin_dir.mkdir()
+            shim = bin_dir / "trajcomp"
+            shim.write_text(f'#!/bin/sh\nexec {shlex.quote(sys.executable)} -m trajcomp.cli "$@"\n')
+            shim.chmod(0o755)
+            self._save()
+
+    @contextlib.contextmanager
+    def _locked(self):
+        """Hold the session's lock (blocking while another process runs its commands); its state loaded."""
+        with open(self.root / "lock", "a") as lock:
+            fcntl.flock(lock, fcntl.LOCK_EX)
+            try:
+                if (self.root / "state.json").exists():
+                    state = json.loads((self.root / "state.json").read_text())
+                    self.cwd = Path(state.pop("cwd"))
+                    self.outcomes = {int(k): v for k, v in state.pop("outcomes").items()}
+                    vars(self).update(state)
+                yield
+            finally:
+                fcntl.flock(lock, fcntl.LOCK_UN)
+
+    def _save(self):
+        state = dict(cwd=str(self.cwd), next=self.next, failed=self.failed, outcomes=self.outcomes,
+                     output=self.output, skipped=self.skipped)
+        (self.root / "state.json").write_text(json.dumps(state))
 
     def run_through(self, index):
-        """Run the commands up to ``index``; the skip reason of the last one, or None."""
-        if self.failed is not None:
-            pytest.skip(f"not run: {self.failed} failed before")
-        reason = None
-        while self.next <= index:
-            command = self.commands[self.next]
-            self.next += 1
+        """Run the commands up to ``index`` not yet run; the skip reason of the last one, or None.
+
+        Raises
+        ------
+        pytest.fail.Exception
+            Command ``index`` failed (its message, whichever process ran it).
+        pytest.skip.Exception
+            A command before it failed.
+        """
+        with self._locked():
             try:
-                reason = self.run(command)
-            except BaseException:
-                self.failed = command.where
-                raise
-        return reason
+                while self.next <= index:
+                    self.outcomes[self.next] = self._outcome(self.commands[self.next])
+                    self.next += 1
+            finally:
+                self._save()
+        kind, text = self.outcomes[index]
+        if kind == "fail":
+            pytest.fail(text, pytrace=False)
+        if kind == "after failure":
+            pytest.skip(text)
+        return text
+
+    def _outcome(self, command):
+        """``(kind, text)`` of running ``command``: ``("ran", skip reason or None)``, ``("fail", message)`` or
+        ``("after failure", reason)``."""
+        if self.failed is not None:
+            return "after failure", f"not run: {self.failed} failed before"
+        try:
+            return "ran", self.run(command)
+        except pytest.fail.Exception as failure:
+            self.failed = command.where
+            return "fail", str(failure)
+        except Exception:
+            self.failed = command.where
+            return "fail", f"{command} raised:\n{traceback.format_exc()}"
 
     def run(self, command):
         """Run one command in the session's folder (or compare a shown output); the reason it is not, or None."""
@@ -327,14 +384,21 @@ HELP_EXAMPLES = [
 ]
 
 
+def shared_folder(tmp_path_factory, name):
+    """A folder ``name`` of this test run, the same for every test worker (the workers' base folders share
+    their parent, which is the run's own)."""
+    base = tmp_path_factory.getbasetemp()
+    return (base.parent if os.environ.get("PYTEST_XDIST_WORKER") else base) / name
+
+
 @pytest.fixture(scope="module")
 def readme_session(tmp_path_factory):
-    return Session(tmp_path_factory.mktemp("readme"), README_COMMANDS)
+    return Session(shared_folder(tmp_path_factory, "readme-session"), README_COMMANDS)
 
 
 @pytest.fixture(scope="module")
 def help_session(tmp_path_factory):
-    return Session(tmp_path_factory.mktemp("help"), HELP_EXAMPLES)
+    return Session(shared_folder(tmp_path_factory, "help-session"), HELP_EXAMPLES)
 
 
 @pytest.mark.parametrize("index", range(len(README_COMMANDS)), ids=[c.where for c in README_COMMANDS])
@@ -450,3 +514,16 @@ def test_shown_example_files_are_the_files():
         name = re.match(r"# (examples/\S+\.py)", lines[0][1]).group(1)
         assert "\n".join(text for _, text in lines) + "\n" == (REPO / name).read_text(), f"{page.name}:{lines[0][0]}"
     assert any(page == README for page, _ in shown)
+
+
+def test_sessions_opened_on_one_folder_continue_one_session_and_run_each_command_once(tmp_path):
+    commands = [Command("README.md:1", "mkdir -p tour && cd tour"), Command("README.md:2", "echo ran >> log.txt"),
+                Command("README.md:3", "echo ran >> log.txt"), Command("README.md:4", "false")]
+    first, second = Session(tmp_path / "s", commands), Session(tmp_path / "s", commands)
+    assert second.run_through(2) is None  # runs 0-2, in the folder the first one made
+    assert first.run_through(1) is None and first.cwd == second.cwd  # already run: its outcome, nothing again
+    assert (first.cwd / "log.txt").read_text() == "ran\nran\n"
+    with pytest.raises(pytest.fail.Exception, match=r"README.md:4: `false` exited 1"):
+        first.run_through(3)
+    with pytest.raises(pytest.fail.Exception, match=r"README.md:4: `false` exited 1"):
+        second.run_through(3)  # the failure the first one met
