@@ -18,8 +18,13 @@ Read:
   another such CONST; a VAR or PERS speeddata at its declared value where
   no statement of the task may change it, or at the literal a straight-line
   assignment before the motion gave it; one another module of the task
-  declares (not LOCAL) likewise. Routine parameters and the others are set
-  at run time (`Motion.speed_why`).
+  declares (not LOCAL) likewise. A PERS without TASK or LOCAL is one datum
+  of every task of the controller declaring it, and its value in a module
+  is the one saved last: read only where every task is read (a backup's
+  ``RAPID/TASKn``) and none may change it (`task_data.TaskData.
+  other_tasks_change`); outside a backup the other tasks are not known, so
+  it is set at run time. Routine parameters and the others are set at run
+  time (`Motion.speed_why`).
   The language's statement forms and their fields: `grammar`.
   Identifiers are case-insensitive; tool0 (the flange) and wobj0 (the
   world frame) need no declaration.
