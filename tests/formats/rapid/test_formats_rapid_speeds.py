@@ -258,19 +258,42 @@ def test_speeddata_another_module_of_the_task_declares_is_read_where_its_value_i
     body = "\n".join(f"    MoveL p1, {speed}, fine, tool0;" for speed in (
         "vWeld", "vPers", "vVar", "vLocal", "v100\\V:=nRate", "v100\\V:=nPers", "vNamed", "vRoutine"))
     motions = _task(tmp_path, "", body, BData=data)
-    assert [m.speed for m in motions] == [20.0, 40.0, 60.0, None, 15.0, None, None, None]
+    assert [m.speed for m in motions] == [20.0, 40.0, 60.0, None, 15.0, 15.0, None, None]
     assert round(np.degrees(motions[0].orientation_speed), 9) == 30.0
     whys = [m.speed_why for m in motions]
     assert (whys[3], whys[7]) == ("vLocal: speeddata not declared in this module, set at run time",
                                   "vRoutine: speeddata not declared in this module, set at run time")
-    assert whys[5] == "nPers: PERS num of BData.mod:7, set at run time"
     assert whys[6] == "vNamed: CONST speeddata vWeld of BData.mod:8, known at run time"
     # this module, or a third, changes the VAR and the PERS: set at run time
     motions = _task(tmp_path, "", body.replace("    MoveL p1, vWeld", "    vVar := v100;\n    MoveL p1, vWeld"),
-                    BData=data, Tune="  PROC tune()\n    vPers.v_tcp := 900;\n  ENDPROC")
-    assert [m.speed for m in motions][:3] == [20.0, None, None]
+                    BData=data, Tune="  PROC tune()\n    vPers.v_tcp := 900;\n    Incr nPers;\n  ENDPROC")
+    assert [m.speed for m in motions][:3] == [20.0, None, None] and motions[5].speed is None
     assert motions[1].speed_why == "vPers: PERS speeddata of BData.mod:3, set at run time (Tune.mod:3)"
+    assert motions[5].speed_why == "nPers: PERS num of BData.mod:7, set at run time (Tune.mod:4)"
     assert motions[2].speed_why == "vVar: VAR speeddata of BData.mod:4, set at run time (changed at line 8)"
+
+
+def test_a_num_in_a_speed_is_read_where_its_value_is_known_as_a_speeddata_is(tmp_path):
+    """A VAR or PERS num named in a speed (``\\V:=``, ``\\T:=``, VelSet) is its declared value where no statement
+    of the controller's tasks may change it (VelSet, AccSet, TPWrite read their arguments), the literal a
+    straight-line assignment gave it, else set at run time (``Incr``, ``TPReadNum`` and a routine may change it)."""
+    decls = "  VAR num nSpeed := 50;\n  PERS num nOverride := 40;"
+    body = ("    VelSet nOverride, 1000;\n    MoveL p1, v100\\V:=nSpeed, fine, tool0;\n"
+            "    TPWrite \"speed\" \\Num:=nSpeed;\n    MoveL p2, v100\\V:=nSpeed, fine, tool0;")
+    assert [m.speed for m in _task(tmp_path / "read", decls, body)] == [20.0, 20.0]  # 40 % of 50 mm/s
+    assigned = _task(tmp_path / "assigned", decls,
+                     body + "\n    nSpeed := 80;\n    MoveL p3, v100\\V:=nSpeed, fine, tool0;")
+    assert [m.speed for m in assigned] == [None, None, 32.0]  # before it: the value a previous run left
+    motions = _task(tmp_path / "changed", decls, body.replace("TPWrite \"speed\" \\Num:=", "Incr "))
+    assert [m.speed for m in motions] == [None, None]
+    assert motions[0].speed_why == ("nSpeed: VAR num the module changes (line 11) and does not assign a literal in "
+                                    "the code running straight to this motion: set at run time")
+    # outside a backup the PERS override is another task's too: set at run time, so is every motion it reaches
+    loose = tmp_path / "loose"
+    loose.mkdir()
+    assert {m.speed_why for m in read(loose, module(body, decls)).motions} == {
+        "VelSet: nOverride: PERS num, set at run time: the controller's other tasks share it and are not read (the "
+        "module is not in a backup's RAPID/TASKn folders)"}
 
 
 def test_a_pers_speeddata_of_the_task_is_never_run_faster_than_its_value(tmp_path):

@@ -219,6 +219,8 @@ OPTION = re.compile(r"\\(\w+)(?:\s*:=\s*([^\\]+))?")  # groups: an optional argu
 # instructions that cannot change a speeddata: a VAR speeddata assigned before them is still in force after them
 STRAIGHT = {"confj", "confl", "tpwrite", "tperase", "waittime", "setdo", "setao", "setgo", "set", "reset", "pulsedo",
             "singarea", "pathresol", "accset"}
+# instructions that read their arguments and change none (a num or speeddata named in one keeps its value)
+READS_ONLY = STRAIGHT | {"velset"}
 # words that start a statement but call no routine
 NOT_CALLS = {"module", "endmodule", "local", "task", "error", "backward", "undo", "record", "endrecord", "alias"}
 # instructions that neither move the arm nor change its speed: a call of any other name not declared in the module
