@@ -542,7 +542,7 @@ class _Reader:
             spans["speed"] = (self.speed_spans[group].start, self.speed_spans[group].end)
         speed, speed_why = _capped(speed, speed_why, caps.get("VEL"))
         share, share_why = caps.get("ACC", (None, ""))
-        speed_why = speed_why or share_why and f"acceleration: {share_why}"
+        speed_why = speed_why or (f"acceleration: {share_why}" if share_why else "")
         self.motion_spans.add(spans)
         return Motion(
             kind=kind,
@@ -733,8 +733,7 @@ def _flow_accelerations(table, reached, joint, why, capped):
     """The acceleration columns of a KRL program's motions from the settings that can reach each: a PTP's share
     of the arm's (the slowest of its axes' ``$ACC_AXIS`` and external axes' ``$ACC_EXTAX``, %, and of those its
     WITH clause gives its external axes, ``capped``: ``[(row, caps)]``), a LIN's or CIRC's TCP acceleration
-    (``$ACC.CP``,
-    mm/s^2), the slowest that can reach it; where one is the controller's own (none set) and others are set, the
+    (``$ACC.CP``, mm/s^2), the slowest that can reach it; where one is the controller's own (none set) and others are set, the
     TCP's is not known (none is stated), each axis's own is 100 %. One set at run time leaves the motion as
     written (``why``, changed in place); so does an orientation acceleration (``$ACC.ORI1``, ``ORI2``) stated for a
     LIN or CIRC, which the timing does not model (its joint limits may turn the tool faster)."""

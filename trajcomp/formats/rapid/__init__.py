@@ -17,8 +17,8 @@ Read:
   value is known as the controller runs it: a CONST with a literal or
   another such CONST; a VAR or PERS speeddata or num at its declared value
   where no statement of the task may change it (VelSet, AccSet, TPWrite ...
-  read their arguments: `grammar.READS_ONLY`), or at the literal a straight-line
-  assignment before the motion gave it; one another module of the task
+  read their arguments: `grammar.STRAIGHT`), or at the literal a
+  straight-line assignment before the motion gave it; one another module of the task
   declares (not LOCAL) likewise. A PERS without TASK or LOCAL is one datum
   of every task of the controller declaring it, and its value in a module
   is the one saved last: read only where every task is read (a backup's

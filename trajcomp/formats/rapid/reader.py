@@ -670,7 +670,7 @@ class _Reader:
 
         An assignment of a literal (or a constant) is in force for the
         motions after it while the code runs straight: a routine's start, a
-        branch, a loop, a label or any instruction but those of `_STRAIGHT`
+        branch, a loop, a label or any instruction but those of `grammar.STRAIGHT`
         (a routine call may change it) ends it.
         """
         if not self.touched:

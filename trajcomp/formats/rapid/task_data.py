@@ -13,13 +13,13 @@ from trajcomp.formats.text import Lines, mask, read_source
 def may_change(text, key):
     """Whether a statement's masked line ``text`` that names datum ``key`` (lower case) may change it: any
     statement but a motion (which reads its speed data), a declaration, an assignment of another datum (which
-    reads it) and an instruction that changes none of its arguments (`grammar.READS_ONLY`: VelSet, AccSet,
+    reads it) and an instruction that changes none of its arguments (`grammar.STRAIGHT`: VelSet, AccSet,
     WaitTime ...) may (a routine call may take it as an INOUT, VAR or PERS argument)."""
     assigned = grammar.ASSIGNMENT.match(text)
     instruction = grammar.INSTRUCTION.match(text)
     return not (grammar.STARTS_MOTION.match(text) or grammar.STARTS_DECLARATION.match(text)
                 or assigned and assigned.group(1).lower() != key
-                or instruction and instruction.group(1).lower() in grammar.READS_ONLY)
+                or instruction and instruction.group(1).lower() in grammar.STRAIGHT)
 
 
 def changed_at(masked, lines, key, parts=None):
