@@ -79,6 +79,12 @@ def fanuc_model(tmp_path_factory):
     return calibrated_model(tmp_path_factory.mktemp("fanuc"), "fanuc_lrmate200id", "300,-100,300", 200, 50)
 
 
+@pytest.fixture(scope="session")
+def abb_model(tmp_path_factory):
+    """A composite model of the virtual IRB 4600 (a 400 mm cube at 100 mm steps around the test modules' points)."""
+    return calibrated_model(tmp_path_factory.mktemp("abb"), "abb_irb4600", "1050,-50,950", 400, 100)
+
+
 @pytest.fixture
 def makerless(tmp_path):
     """``makerless(name)``: the path of a copy of built-in robot ``name`` whose description names no maker.

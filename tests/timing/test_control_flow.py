@@ -448,12 +448,6 @@ def test_rapid_goto_forward_over_a_velset_and_back_as_a_loop_runs_no_faster_on_a
                                    rapid_line_speed, target, makerless("abb_irb4600"), tmp_path)
 
 
-@pytest.fixture(scope="module")
-def abb_model(tmp_path_factory):
-    """A model of the virtual IRB 4600 around the module's points."""
-    return calibrated_model(tmp_path_factory.mktemp("abb"), "abb_irb4600", "1050,-50,950", 400, 100)
-
-
 def test_rapid_retimed_and_compensated_run_no_faster_on_any_path(rapid_source, tmp_path, capsys, abb_model):
     out = tmp_path / "out" / "Cell.mod"
     out.parent.mkdir()

@@ -71,7 +71,7 @@ def test_rapid_const_speeddata_is_read_as_its_v_tcp_and_kept(tmp_path):
 @pytest.mark.parametrize("declaration,why", [
     ("PERS speeddata vWeld := [20,500,5000,1000];\n  PROC tune()\n    SetWeld vWeld;\n  ENDPROC",
      "vWeld: PERS speeddata the module changes (line 6) and does not assign a literal in the code running straight "
-     "to this motion: set at run time"),  # a routine may change its argument; a PERS nothing changes is read
+     "to this motion: set at run time"),  # a routine may change its argument (a PERS nothing changes: read in a backup)
     ("VAR speeddata vWeld := [20,500,5000,1000];\n  PROC faster()\n    vWeld := [900,500,5000,1000];\n  ENDPROC",
      "vWeld: VAR speeddata the module changes (line 6) and does not assign a literal in the code running straight "
      "to this motion: set at run time"),  # a VAR nothing changes is its declared value (test_formats_rapid_speeds)

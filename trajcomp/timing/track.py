@@ -137,7 +137,8 @@ def track_values(program, robot, moves, tools=None, frames=None):
     return values if np.ptp(values) > 0 else None
 
 
-def retime_on_track(moves, robot, values, field, *, programmed=None, method="auto", tolerance=TOLERANCE):
+def retime_on_track(moves, robot, values, field, *, programmed=None, programmed_acceleration=None, method="auto",
+                    tolerance=TOLERANCE):
     """Time a motion sequence whose waypoints stand at track positions ``values`` (M,), mm (see the module).
 
     Parameters
@@ -150,9 +151,10 @@ def retime_on_track(moves, robot, values, field, *, programmed=None, method="aut
         Track position of each waypoint, mm.
     field : str
         The program field that holds it (for messages).
-    programmed : ndarray, shape (M,), optional
-        The track speed the program allows along the motion into each
-        waypoint, mm/s (NaN: none; binds where below the track's limit).
+    programmed, programmed_acceleration : ndarray, shape (M,), optional
+        The track speed and acceleration the program allows along the
+        motion into each waypoint, mm/s and mm/s^2 (NaN: none; bind where
+        below the track's limits: `programmed_limits`).
     method, tolerance
         As `trajcomp.timing.retiming.retime`.
 
@@ -173,7 +175,7 @@ def retime_on_track(moves, robot, values, field, *, programmed=None, method="aut
         k = int(outside[0])
         raise TimingError(f"{moves.labels[k]}: {field} {values[k]:g} mm is beyond the track's travel "
                           f"{track.position_min:g} .. {track.position_max:g} mm (track.limits of the robot)")
-    limited, limit, reasons, ratio, bound = track_limits(moves, robot, values, programmed)
+    limited, limit, reasons, ratio, bound = track_limits(moves, robot, values, programmed, programmed_acceleration)
     from trajcomp.timing.retiming import retime  # here: retime's TOPP-RA imports `with_track` from this module
 
     slow = np.ones(len(moves))
@@ -181,21 +183,40 @@ def retime_on_track(moves, robot, values, field, *, programmed=None, method="aut
         result = retime(_slowed(limited, slow), robot, method=method, tolerance=tolerance)
         peaks = [_run_peaks(run, law, limited, limit) for _, run, law in result.pieces]
         over = False
-        for (_, run, _), (_, share, acceleration) in zip(result.pieces, peaks):
-            excess = max(share, np.sqrt(acceleration / track.acceleration))
+        for (_, run, _), (_, share, _, acceleration_share) in zip(result.pieces, peaks):
+            excess = max(share, np.sqrt(acceleration_share))
             if excess > 1.0 + 0.5 * LIMIT_TOLERANCE:
                 slow[run.first + 1 : run.last + 1] *= excess * MARGIN
                 over = True
         if not over:
             break
-    peak_velocity, _, peak_acceleration = np.max(np.reshape(peaks, (-1, 3)), axis=0, initial=0.0)
+    peak_velocity, _, peak_acceleration, _ = np.max(np.reshape(peaks, (-1, 4)), axis=0, initial=0.0)
     timing = TrackTiming(field, values, ratio, bound * ratio, float(peak_velocity), float(peak_acceleration),
                          track.velocity, track.acceleration, tuple(reasons))
     return dataclasses.replace(result, track=timing, tcp_length=result.tcp_length * ratio,
                                within_limits=result.within_limits and timing.within_limits)
 
 
-def track_limits(moves, robot, values, programmed=None):
+def programmed_limits(table, motion, track):
+    """The track's speed and acceleration a program allows along its motions ``motion`` (M,) (rows of its
+    `MotionTable` ``table``), mm/s and mm/s^2 (NaN: the track's own), each (M,).
+
+    A speed data's speed of the linear external axes (RAPID v_leax:
+    ``external_speed``); a joint motion's speed in % of every axis's
+    maximum, at which the controller moves the track too (a KRL PTP's, the
+    slowest of its axes' and external axes' ``$VEL_EXTAX``, as the arm's
+    axes are timed; FANUC's J %); the share of the axes' accelerations the
+    program leaves the motion (``acceleration_share``: KRL ``$ACC_AXIS``
+    and ``$ACC_EXTAX``, RAPID ``AccSet``, FANUC ``ACC``), of the track's.
+    """
+    speed, unit, kind = (np.asarray(column)[motion] for column in (table.speed, table.speed_unit, table.kind))
+    percent = (kind == JOINT) & (unit == "%") & ~np.isnan(speed.astype(float))
+    share = np.where(percent, np.minimum(speed.astype(float), 100.0) / 100.0, np.nan)
+    velocity = np.fmin(np.asarray(table.external_speed, dtype=float)[motion], track.velocity * share)
+    return velocity, track.acceleration * np.asarray(table.acceleration_share, dtype=float)[motion]
+
+
+def track_limits(moves, robot, values, programmed=None, programmed_acceleration=None):
     """The motions with the track's limits folded in, as `retime_on_track` times them (see the module).
 
     Parameters
@@ -205,8 +226,8 @@ def track_limits(moves, robot, values, programmed=None):
         With its ``track``.
     values : ndarray, shape (M,)
         Track position of each waypoint, mm.
-    programmed : ndarray, shape (M,), optional
-        The track speed the program allows along each motion, mm/s (NaN: none).
+    programmed, programmed_acceleration : ndarray, shape (M,), optional
+        The track speed and acceleration the program allows along each motion, mm/s and mm/s^2 (NaN: none).
 
     Returns
     -------
@@ -224,6 +245,8 @@ def track_limits(moves, robot, values, programmed=None):
     change = np.abs(np.diff(values, prepend=values[:1]))
     limit = track.velocity if programmed is None else np.fmin(track.velocity, programmed)  # (M,) or scalar
     limit = np.broadcast_to(limit, values.shape)
+    acceleration_limit = np.broadcast_to(track.acceleration if programmed_acceleration is None
+                                         else np.fmin(track.acceleration, programmed_acceleration), values.shape)
     carriage, world = _lengths(moves, robot, values)
     reasons = _not_timed(moves, change, carriage, world)
     left = np.zeros(len(moves), dtype=bool)
@@ -241,10 +264,10 @@ def track_limits(moves, robot, values, programmed=None):
         bound = np.where(path, limit * carriage / change, np.inf)  # carriage TCP mm/s
     limited = dataclasses.replace(
         moves, start=np.asarray(moves.start, dtype=bool) | left, track_position=values,
-        track_acceleration=np.full(len(moves), track.acceleration), track_velocity=limit.copy(),
+        track_acceleration=acceleration_limit.copy(), track_velocity=limit.copy(),
         tcp_speed=np.minimum(moves.tcp_speed / ratio, bound),
         velocity=np.minimum(moves.velocity, limit[:, None] * share),
-        acceleration=np.minimum(moves.acceleration, track.acceleration * share))
+        acceleration=np.minimum(moves.acceleration, acceleration_limit[:, None] * share))
     return limited, limit, reasons, ratio, bound
 
 
@@ -294,10 +317,11 @@ def _slowed(moves, slow):
 
 
 def _run_peaks(run, law, moves, limit):
-    """Largest |track velocity| (mm/s), its largest share of the velocity ``limit`` (M,) of the motion it lies on
-    and largest |acceleration| (mm/s^2) of a timed run, sampled at `RATE`."""
+    """Largest |track velocity| (mm/s), its largest share of the velocity ``limit`` (M,) of the motion it lies on,
+    largest |acceleration| (mm/s^2) and its largest share of the motion's ``moves.track_acceleration`` of a timed
+    run, sampled at `RATE`."""
     if run.path is None:
-        return 0.0, 0.0, 0.0
+        return 0.0, 0.0, 0.0, 0.0
     t = sample_times(law.duration, RATE)
     s, sd, sdd = law(t)
     s = np.clip(s, 0.0, run.length)
@@ -315,7 +339,8 @@ def _run_peaks(run, law, moves, limit):
         velocity, acceleration = per[at] * rho * sd, per[at] * (drho * sd**2 + rho * sdd)
     velocity, acceleration = np.abs(velocity), np.abs(acceleration)
     return (float(np.max(velocity, initial=0.0)), float(np.max(velocity / limit[k], initial=0.0)),
-            float(np.max(acceleration, initial=0.0)))
+            float(np.max(acceleration, initial=0.0)),
+            float(np.max(acceleration / moves.track_acceleration[k], initial=0.0)))
 
 
 def with_track(moves, motion, grid, dq, ddq, rate, acceleration, inside=None, track=None):

@@ -55,7 +55,7 @@ from trajcomp.programs.items import JOINT
 from trajcomp.timing.moves import moves_from_program
 from trajcomp.timing.path import TOLERANCE
 from trajcomp.timing.retiming import retime
-from trajcomp.timing.track import retime_on_track, track_values
+from trajcomp.timing.track import programmed_limits, retime_on_track, track_values
 
 # a cruise speed is kept this much below its bound: the fitted path's second derivative differs from the exact
 # line's (solved every 0.05 mm) by up to ~0.05 % of the acceleration at the slowest point
@@ -75,9 +75,9 @@ def retime_program(program, robot, joints, *, method="auto", tools=None, frames=
     moves = moves_from_program(program, robot, joints, tools=tools, frames=frames)
     values = track_values(program, robot, moves, tools, frames)
     if values is not None:  # the track moves: a joint of the timed path
-        return retime_on_track(moves, robot, values, robot.track.written[program.format],
-                               programmed=program.motion_table().external_speed[moves.motion], method=method,
-                               tolerance=tolerance)
+        velocity, acceleration = programmed_limits(program.motion_table(), moves.motion, robot.track)
+        return retime_on_track(moves, robot, values, robot.track.written[program.format], programmed=velocity,
+                               programmed_acceleration=acceleration, method=method, tolerance=tolerance)
     return retime(moves, robot, method=method, tolerance=tolerance)
 
 

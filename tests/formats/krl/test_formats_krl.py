@@ -251,16 +251,14 @@ def test_vel_extax_bounds_a_ptp_along_branches_and_calls_as_the_controller_reads
     assert speed["XP6"] == 40.0  # BAS(#VEL_PTP) sets the external axes' with the arm's
 
 
-def test_a_ptp_moving_the_track_under_vel_extax_is_written_no_faster_than_it(tmp_path, monkeypatch):
-    """Re-timed on a KL track (500 mm/s), a PTP that turns the arm and moves the track 600 mm under
-    ``$VEL_EXTAX[1]=5`` (25 mm/s) keeps the track at 5 % at most: the ``BAS(#VEL_PTP)`` the timing writes sets
-    the track's speed too. Read without ``$VEL_EXTAX``, the timing writes the arm's speed over it."""
+def _rail(tmp_path, src):
+    """The KR6 on a KL track (`SLOW_TRACK`: 500 mm/s, 2500 mm/s^2) and ``tmp_path / "rail.src"`` of ``src`` with its
+    .dat: XP1 and XP2 turn the arm some 37 degrees (A1) and lie 600 mm of track apart."""
     from tests.compensation.test_compensate_track import on_track, orientation
-    from tests.timing.test_timing_track import SLOW_TRACK, retimed
+    from tests.timing.test_timing_track import SLOW_TRACK
     from trajcomp.arm.ik import ik
     from trajcomp.arm.transforms import matrix_to_abc
     from trajcomp.formats.configuration import configuration_data, configuration_for
-    from trajcomp.formats.krl import reader
 
     robot = on_track("kuka_kr6_r900", SLOW_TRACK)
     local = np.tile(np.eye(4), (2, 1, 1))
@@ -275,7 +273,19 @@ def test_a_ptp_moving_the_track_under_vel_extax_is_written_no_faster_than_it(tmp
         + f",S {s},T {t},E1 {e:.1f}}}\n" for k, (T, (s, t), e) in enumerate(
             zip(world, configuration_for(configuration_data("krl"), robot, q), carriage))) + "ENDDAT\n")
     path = tmp_path / "rail.src"
-    path.write_text("DEF rail( )\n$BASE=$NULLFRAME\nBAS(#VEL_PTP,100)\nPTP XP1\n$VEL_EXTAX[1]=5\nPTP XP2\nEND\n")
+    path.write_text(src)
+    return robot, path
+
+
+def test_a_ptp_moving_the_track_under_vel_extax_is_written_no_faster_than_it(tmp_path, monkeypatch):
+    """Re-timed on a KL track (500 mm/s), a PTP that turns the arm and moves the track 600 mm under
+    ``$VEL_EXTAX[1]=5`` (25 mm/s) keeps the track at 5 % at most: the ``BAS(#VEL_PTP)`` the timing writes sets
+    the track's speed too. Read without ``$VEL_EXTAX``, the timing writes the arm's speed over it."""
+    from tests.timing.test_timing_track import retimed
+    from trajcomp.formats.krl import reader
+
+    robot, path = _rail(tmp_path, "DEF rail( )\n$BASE=$NULLFRAME\nBAS(#VEL_PTP,100)\nPTP XP1\n$VEL_EXTAX[1]=5\n"
+                                  "PTP XP2\nEND\n")
 
     def track_percent(text):
         """The track's % in force at PTP XP2 as the controller reads the program: its last setting before."""
@@ -288,3 +298,67 @@ def test_a_ptp_moving_the_track_under_vel_extax_is_written_no_faster_than_it(tmp
         patch.setattr(reader, "VEL_EXTAX", re.compile("(?!)"))  # the reader without it
         (tmp_path / "unread").mkdir()
         assert track_percent(retimed(tmp_path / "unread", robot, path)[1]) > 5.0
+
+
+EXTERNAL_SHARES_SRC = """DEF p( )
+  BAS(#VEL_PTP,60)
+  SPTP XP1 WITH $VEL_AXIS[1] = SVEL_JOINT(80), $VEL_EXTAX[1] = 20
+  SPTP XP2 WITH $VEL_EXTAX[1] = 10, $ACC_EXTAX[1] = 30
+  SPTP XP3
+  $ACC_EXTAX[1]=40
+  PTP XP4
+  IF $IN[1] THEN
+    $ACC_EXTAX[1]=25
+  ENDIF
+  SPTP XP5 WITH $VEL_EXTAX[1] = N_TRACK
+  track_acc()
+  PTP XP6
+  SPTP XP2 WITH $VEL_EXTAX[1] = SVEL_EXTAX(5)
+END
+
+DEF track_acc( )
+  $ACC_EXTAX[1]=N_TRACK
+END
+"""
+
+
+def test_external_axis_shares_are_read_as_the_controller_runs_them(tmp_path):
+    """A spline PTP's WITH ``$VEL_EXTAX[n]`` and ``$ACC_EXTAX[n]`` bind that motion alone (the slowest of them and
+    the speed in force); a ``$ACC_EXTAX[n]`` statement binds every PTP it reaches along branches and calls, as
+    ``$ACC_AXIS[n]`` does; a value set at run time (GLOBAL data, a function) leaves the motion as written."""
+    (tmp_path / "p.src").write_text(EXTERNAL_SHARES_SRC)
+    (tmp_path / "p.dat").write_text("DEFDAT p\n  DECL GLOBAL INT N_TRACK=15\n" + "".join(
+        f"  DECL E6POS XP{k}={{X {400 + 10 * k},Y 0,Z 600,A 0,B 90,C 0,S 2,T 35,E1 {100 * k}}}\n"
+        for k in range(1, 7)) + "ENDDAT\n")
+    table = formats.read(tmp_path / "p.src").motion_table()
+    speeds = [None if np.isnan(v) else v for v in table.speed.tolist()]
+    shares = [None if np.isnan(v) else round(v, 9) for v in table.acceleration_share.tolist()]
+    assert speeds == [20.0, 10.0, 60.0, 60.0, None, 60.0, None]  # WITH: its own, below the 80 % and the 60 %
+    assert shares[:4] == [None, 0.3, None, 0.4] and shares[4] == 0.25  # IF .. ENDIF: 40 % or 25 %, the slowest
+    assert "N_TRACK" in table.speed_why[4] and "N_TRACK" in table.speed_why[5]  # the routine sets it at run time
+    assert table.speed_why[6] == "$VEL_EXTAX[1] = SVEL_EXTAX(5): set at run time (line 14)"
+    # a PTP spline block's WITH binds its motions, the slowest of it and theirs, not those after ENDSPLINE
+    (tmp_path / "p.src").write_text("DEF p( )\n  BAS(#VEL_PTP,60)\n  PTP_SPLINE WITH $VEL_EXTAX[1] = 30\n"
+                                    "    SPTP XP1\n    SPTP XP2 WITH $VEL_EXTAX[1] = 10\n  ENDSPLINE\n"
+                                    "  SPTP XP3\nEND\n")
+    assert formats.read(tmp_path / "p.src").motion_table().speed.tolist() == [30.0, 10.0, 60.0]
+
+
+@pytest.mark.parametrize("setting", ["SPTP XP2 WITH $VEL_AXIS[1] = SVEL_JOINT(100), $VEL_EXTAX[1] = 5",
+                                     "SPTP XP2 WITH $VEL_AXIS[1] = SVEL_JOINT(100), $ACC_EXTAX[1] = 4",
+                                     "$ACC_EXTAX[1]=4\nPTP XP2"])
+def test_a_ptp_s_external_axis_shares_bound_its_time_as_the_controller_runs_them(tmp_path, setting):
+    """A spline PTP's WITH ``$VEL_EXTAX[1]`` / ``$ACC_EXTAX[1]`` (the track's % of its own maximum speed or
+    acceleration, for that motion alone) and a ``$ACC_EXTAX[1]`` statement bind the PTP as the controller moves
+    its axes together: 600 mm of track at 5 % of 500 mm/s take at least 24 s, and at 4 % of 2500 mm/s^2 at least
+    2 sqrt(600 / 100) = 4.9 s from rest to rest; the setting is kept as written. (The track moves at the PTP's
+    % of its limit whatever sets it: a ``$VEL_EXTAX[1]=5`` statement before the PTP was timed 14.3 s, the arm's
+    axes alone slowed.)"""
+    from tests.timing.test_timing_track import TRACK_ACCELERATION, TRACK_VELOCITY, retimed
+
+    robot, path = _rail(tmp_path, f"DEF rail( )\n$BASE=$NULLFRAME\nBAS(#VEL_PTP,100)\nPTP XP1\n{setting}\nEND\n")
+    least = 600.0 / (0.05 * TRACK_VELOCITY) if "VEL_EXTAX" in setting else 2.0 * np.sqrt(
+        600.0 / (0.04 * TRACK_ACCELERATION))
+    result, text = retimed(tmp_path, robot, path)
+    assert result.t[-1] - result.t[-2] >= least
+    assert setting.split("\n")[0].split(", ")[-1] in text

@@ -173,12 +173,15 @@ def test_the_speeds_of_a_module_robodk_writes_are_read(tmp_path):
     assert [(m.speed, m.speed_why) for m in motions[1:]] == [(100.0, ""), (100.0, ""), (250.0, "")]
 
 
-def _task(tmp_path, decls, body, **others):
-    """A task folder: speeds.mod (`module` of ``body``, ``decls``) and other modules ``{name: text}``; its motions."""
-    tmp_path.mkdir(exist_ok=True)
-    for name, text in others.items():
-        (tmp_path / f"{name}.mod").write_text(f"MODULE {name}\n{text}\nENDMODULE\n")
-    return read(tmp_path, module(body, decls)).motions
+def _task(folder, decls, body, tasks=None, **others):
+    """A task of a backup under ``folder`` (``RAPID/TASK1/PROGMOD``): speeds.mod (`module` of ``body``, ``decls``)
+    and other modules ``{name: text}``; ``tasks``: the backup's other tasks, ``{task: {name: text}}``. Its
+    motions."""
+    for task, modules in {"TASK1": others, **(tasks or {})}.items():
+        (folder / "RAPID" / task / "PROGMOD").mkdir(parents=True, exist_ok=True)
+        for name, text in modules.items():
+            (folder / "RAPID" / task / "PROGMOD" / f"{name}.mod").write_text(f"MODULE {name}\n{text}\nENDMODULE\n")
+    return read(folder / "RAPID" / "TASK1" / "PROGMOD", module(body, decls)).motions
 
 
 MOVES = "    MoveJ p1, vWeld, fine, tool0;\n    MoveL p2, vWeld, fine, tool0;"
@@ -186,7 +189,8 @@ MOVES = "    MoveJ p1, vWeld, fine, tool0;\n    MoveL p2, vWeld, fine, tool0;"
 
 def test_a_pers_speeddata_nothing_changes_is_its_declared_value(tmp_path):
     """The controller runs a PERS at the value it was declared with until the program gives it another
-    (issue 35): read so, where no statement of the task may change it; else set at run time."""
+    (issue 35): read so, where no statement of the controller's tasks (each read, in a backup) may change it;
+    else set at run time."""
     decls = "  PERS speeddata vWeld := [20,30,5000,1000];"
     assert {(m.speed, round(np.degrees(m.orientation_speed), 9), m.speed_why)
             for m in _task(tmp_path, decls, MOVES)} == {(20.0, 30.0, "")}
@@ -207,8 +211,41 @@ def test_a_pers_speeddata_nothing_changes_is_its_declared_value(tmp_path):
     assert _task(tmp_path / "declared", decls, "    SetFromHost;\n" + MOVES,
                  Host="  PROC SetFromHost()\n    TPWrite \"ready\";\n  ENDPROC")[0].speed == 20.0
     # another module declares the same PERS: it starts at the value of the module loaded first
-    motions = _task(tmp_path, decls, MOVES, Other="  PERS speeddata vWeld := [2000,500,5000,1000];")
+    motions = _task(tmp_path / "twice", decls, MOVES, Other="  PERS speeddata vWeld := [2000,500,5000,1000];")
     assert {m.speed for m in motions} == {None} and "also declared in Other.mod:2" in motions[0].speed_why
+
+
+def test_a_pers_speeddata_another_task_may_change_is_set_at_run_time(tmp_path):
+    """Every task of the controller declaring a PERS (not TASK, not LOCAL) shares that one datum, and a module
+    holds the value saved last (issue 35): it is its declared value only where every task is read (a backup's
+    RAPID/TASKn) and none may give it another; a module outside a backup: the other tasks are unknown."""
+    decls = "  PERS speeddata vWeld := [20,30,5000,1000];"
+    shared = "  PERS speeddata vWeld := [20,30,5000,1000];"
+    changes = {"TASK2": {"Other": shared + "\n  PROC main()\n    vWeld.v := 5;\n  ENDPROC"}}
+    motions = _task(tmp_path / "changed", decls, MOVES, tasks=changes)
+    assert {(m.speed, m.speed_why) for m in motions} == {
+        (None, "vWeld: PERS speeddata, set at run time: task TASK2 may change it (Other.mod:4)")}
+    # another task declaring it with the same value and not changing it: the value holds
+    assert {m.speed for m in _task(tmp_path / "same", decls, MOVES, tasks={"TASK2": {"Other": shared}})} == {20.0}
+    # ... declaring another value: that of the task loaded first; calling a routine its task lacks
+    assert _task(tmp_path / "other", decls, MOVES, tasks={"TASK2": {"Other": shared.replace("20,", "2000,")}}
+                 )[0].speed_why == ("vWeld: PERS speeddata, set at run time: task TASK2 declares it "
+                                    "[2000,30,5000,1000] (Other.mod:2): its value is that of the task loaded first")
+    lacking = {"TASK2": {"Other": "  PROC main()\n    FromHost;\n  ENDPROC"}}
+    assert _task(tmp_path / "lacking", decls, MOVES, tasks=lacking)[0].speed_why == (
+        "vWeld: PERS speeddata, set at run time: task TASK2 calls FromHost (Other.mod:3), a routine no module of "
+        "its task declares, which may change it")
+    # a TASK PERS is its task's own: what another task does with its name is not its concern
+    own = _task(tmp_path / "own", decls.replace("PERS", "TASK PERS"), MOVES, tasks=changes)
+    assert {m.speed for m in own} == {20.0}
+    # outside a backup (a folder of modules): the controller's other tasks are not known
+    loose = tmp_path / "loose"
+    loose.mkdir()
+    motions = read(loose, module(MOVES, decls)).motions
+    assert {(m.speed, m.speed_why) for m in motions} == {
+        (None, "vWeld: PERS speeddata, set at run time: the controller's other tasks share it and are not read (the "
+               "module is not in a backup's RAPID/TASKn folders)")}
+    assert {m.speed for m in read(loose, module(MOVES, decls.replace("PERS", "TASK PERS"))).motions} == {20.0}
 
 
 def test_speeddata_another_module_of_the_task_declares_is_read_where_its_value_is_known(tmp_path):
@@ -221,31 +258,84 @@ def test_speeddata_another_module_of_the_task_declares_is_read_where_its_value_i
     body = "\n".join(f"    MoveL p1, {speed}, fine, tool0;" for speed in (
         "vWeld", "vPers", "vVar", "vLocal", "v100\\V:=nRate", "v100\\V:=nPers", "vNamed", "vRoutine"))
     motions = _task(tmp_path, "", body, BData=data)
-    assert [m.speed for m in motions] == [20.0, 40.0, 60.0, None, 15.0, None, None, None]
+    assert [m.speed for m in motions] == [20.0, 40.0, 60.0, None, 15.0, 15.0, None, None]
     assert round(np.degrees(motions[0].orientation_speed), 9) == 30.0
     whys = [m.speed_why for m in motions]
     assert (whys[3], whys[7]) == ("vLocal: speeddata not declared in this module, set at run time",
                                   "vRoutine: speeddata not declared in this module, set at run time")
-    assert whys[5] == "nPers: PERS num of BData.mod:7, set at run time"
     assert whys[6] == "vNamed: CONST speeddata vWeld of BData.mod:8, known at run time"
     # this module, or a third, changes the VAR and the PERS: set at run time
     motions = _task(tmp_path, "", body.replace("    MoveL p1, vWeld", "    vVar := v100;\n    MoveL p1, vWeld"),
-                    BData=data, Tune="  PROC tune()\n    vPers.v_tcp := 900;\n  ENDPROC")
-    assert [m.speed for m in motions][:3] == [20.0, None, None]
+                    BData=data, Tune="  PROC tune()\n    vPers.v_tcp := 900;\n    Incr nPers;\n  ENDPROC")
+    assert [m.speed for m in motions][:3] == [20.0, None, None] and motions[5].speed is None
     assert motions[1].speed_why == "vPers: PERS speeddata of BData.mod:3, set at run time (Tune.mod:3)"
+    assert motions[5].speed_why == "nPers: PERS num of BData.mod:7, set at run time (Tune.mod:4)"
     assert motions[2].speed_why == "vVar: VAR speeddata of BData.mod:4, set at run time (changed at line 8)"
 
 
+def test_a_num_in_a_speed_is_read_where_its_value_is_known_as_a_speeddata_is(tmp_path):
+    """A VAR or PERS num named in a speed (``\\V:=``, ``\\T:=``, VelSet) is its declared value where no statement
+    of the controller's tasks may change it (VelSet, AccSet, TPWrite read their arguments), the literal a
+    straight-line assignment gave it, else set at run time (``Incr``, ``TPReadNum`` and a routine may change it)."""
+    decls = "  VAR num nSpeed := 50;\n  PERS num nOverride := 40;"
+    body = ("    VelSet nOverride, 1000;\n    MoveL p1, v100\\V:=nSpeed, fine, tool0;\n"
+            "    TPWrite \"speed\" \\Num:=nSpeed;\n    MoveL p2, v100\\V:=nSpeed, fine, tool0;")
+    assert [m.speed for m in _task(tmp_path / "read", decls, body)] == [20.0, 20.0]  # 40 % of 50 mm/s
+    assigned = _task(tmp_path / "assigned", decls,
+                     body + "\n    nSpeed := 80;\n    MoveL p3, v100\\V:=nSpeed, fine, tool0;")
+    assert [m.speed for m in assigned] == [None, None, 32.0]  # before it: the value a previous run left
+    motions = _task(tmp_path / "changed", decls, body.replace("TPWrite \"speed\" \\Num:=", "Incr "))
+    assert [m.speed for m in motions] == [None, None]
+    assert motions[0].speed_why == ("nSpeed: VAR num the module changes (line 11) and does not assign a literal in "
+                                    "the code running straight to this motion: set at run time")
+    # outside a backup the PERS override is another task's too: set at run time, so is every motion it reaches
+    loose = tmp_path / "loose"
+    loose.mkdir()
+    assert {m.speed_why for m in read(loose, module(body, decls)).motions} == {
+        "VelSet: nOverride: PERS num, set at run time: the controller's other tasks share it and are not read (the "
+        "module is not in a backup's RAPID/TASKn folders)"}
+
+
 def test_a_pers_speeddata_of_the_task_is_never_run_faster_than_its_value(tmp_path):
-    """Re-timed through the command: the weld at a PERS of another module declared at 20 mm/s is timed at it (its
-    time at least its length over 20 mm/s) and kept as written, never sped up."""
-    (tmp_path / "BData.mod").write_text("MODULE BData\n  PERS speeddata vWeld := [20,500,5000,1000];\nENDMODULE\n")
-    (tmp_path / "speeds.mod").write_text(module("    MoveJ p2, v1000, fine, tool0;\n    MoveL p3, vWeld, fine, tool0;"))
+    """Re-timed through the command: the weld at a PERS of another module of a backup's task declared at 20 mm/s,
+    which no task changes, is timed at it (its time at least its length over 20 mm/s) and kept as written, never
+    sped up."""
+    task = tmp_path / "RAPID" / "TASK1" / "PROGMOD"
+    task.mkdir(parents=True)
+    (task / "BData.mod").write_text("MODULE BData\n  PERS speeddata vWeld := [20,500,5000,1000];\nENDMODULE\n")
+    (task / "speeds.mod").write_text(module("    MoveJ p2, v1000, fine, tool0;\n    MoveL p3, vWeld, fine, tool0;"))
     out = tmp_path / "out"
     out.mkdir()
-    assert main(["retime", str(tmp_path / "speeds.mod"), "-o", str(out / "speeds.mod"), "--robot", "abb_irb4600",
+    assert main(["retime", str(task / "speeds.mod"), "-o", str(out / "speeds.mod"), "--robot", "abb_irb4600",
                  "--report", str(out / "speeds.html")]) == 0
     assert "    MoveL p3, vWeld, fine, tool0;" in (out / "speeds.mod").read_text()
     timing = json.loads((out / "speeds.json").read_text())["timing"]
     length = np.linalg.norm(fk(ROBOT, Q[3])[:3, 3] - fk(ROBOT, Q[2])[:3, 3])  # mm
     assert timing["t_s"][-1] - timing["t_s"][-2] >= length / 20.0 and timing["not_retimed"]["count"] == 0
+
+
+def test_a_pers_another_task_slows_is_never_retimed_from_its_declared_value(tmp_path, abb_model):
+    """Issue 35's never-faster gap: a backup's TASK1 welds P2 -> P3 at PERS vWeld, declared [200,..]; TASK2,
+    declaring the same PERS, sets ``vWeld.v := 5``, so the controller welds at 5 mm/s. The weld is read as set at
+    run time, and retime and compensate leave its field as written and list it, never timed from 200 mm/s."""
+    weld = (Path(__file__).parents[3] / "examples" / "programs" / "abb" / "Weld.mod").read_text()
+    weld = (weld.replace("1415.000000", "1315.000000").replace("1335.000000", "1235.000000")  # in the model's cube
+            .replace("MODULE Weld", "MODULE Weld\n  PERS speeddata vWeld := [200,500,5000,1000];")
+            .replace("MoveL P3, v20", "MoveL P3, vWeld"))
+    other = ("MODULE Other\n  PERS speeddata vWeld := [200,500,5000,1000];\n  PROC main()\n    vWeld.v := 5;\n"
+             "  ENDPROC\nENDMODULE\n")
+    rapid = tmp_path / "backup" / "RAPID"
+    for task, name, text in (("TASK1", "Weld", weld), ("TASK2", "Other", other)):
+        (rapid / task / "PROGMOD").mkdir(parents=True)
+        (rapid / task / "PROGMOD" / f"{name}.mod").write_text(text)
+    path = rapid / "TASK1" / "PROGMOD" / "Weld.mod"
+    why = "vWeld: PERS speeddata, set at run time: task TASK2 may change it (Other.mod:4)"
+    assert [(m.speed, m.speed_why) for m in formats.read(path).motions][2] == (None, why)
+    for command, option in (("retime", ["--robot", "abb_irb4600"]), ("compensate", ["--model", str(abb_model)])):
+        out = tmp_path / command / "Weld.mod"
+        out.parent.mkdir()
+        assert main([command, str(path), "-o", str(out), *option, "--report", str(out.with_suffix(".html"))]) == 1
+        written = out.read_text()
+        assert "    MoveL P3, vWeld, z5, tool0;" in written and "vWeld\\" not in written  # no \T, no \V
+        timing = json.loads(out.with_suffix(".json").read_text())["timing"]
+        assert [(m["waypoint"], m["why"]) for m in timing["not_retimed"]["motions"]] == [("P3 (Weld.mod:5)", why)]

@@ -22,9 +22,13 @@ Read:
   ``BAS(#PTP_PARAMS, %)`` and ``BAS(#CP_PARAMS, m/s)`` (after their PDAT /
   LDAT, whose VEL they replace), a spline motion's own ``WITH $VEL =
   SVEL_CP(m/s, ..)``, ``$VEL.CP = m/s`` or ``$VEL_AXIS[n] =
-  SVEL_JOINT(%)``: a number, or REAL / INT data declared with one (CONST or
-  not GLOBAL) that the .src never assigns; any other value, or no speed set
-  before the motion, is set at run time (`Motion.speed_why`); zone
+  SVEL_JOINT(%)``, and a spline PTP's (or PTP spline block's) ``WITH
+  $VEL_EXTAX[n] = %`` (for it alone: the slowest of it and the speed in
+  force): a number, or REAL / INT data declared with one (CONST or not
+  GLOBAL) that the .src never assigns; any other value, or no speed set
+  before the motion, is set at run time (`Motion.speed_why`); accelerations ``$ACC_AXIS[n]``, ``$ACC_EXTAX[n]``
+  (a PTP's share: the slowest, a spline PTP's ``WITH $ACC_EXTAX[n]`` for it
+  alone), ``BAS(#ACC_PTP, %)`` and ``$ACC.CP``, read likewise; zone
   ``$APO.CDIS`` or the PDAT / LDAT APO_DIST.
 Not compensated, with the reason (`Motion.reason`): relative motions
 (PTP_REL ...), expressions (geometric operator ``XP1:{X 10}``, function

@@ -50,11 +50,15 @@ MOTION_SPANS = ("motion", "via_name", "target_name", "speed_with", "speed")  # a
 
 # --- speed and acceleration settings: the system variables and BAS commands the motions after them run with ---
 SPEED_AXES = 6  # $VEL_AXIS[1..6], $ACC_AXIS[1..6]: the arm's axes
-EXTERNAL_AXES = 6  # $VEL_EXTAX[1..6]: the external axes (a track's)
+EXTERNAL_AXES = 6  # $VEL_EXTAX[1..6], $ACC_EXTAX[1..6]: the external axes (a track's)
 BAS_FRAMES = ("TOOL", "BASE")  # BAS(#TOOL, n), BAS(#BASE, n): the tool or base in force
 BAS_SPEEDS = {"VEL_PTP": JOINT, "VEL_CP": LINEAR, "PTP_PARAMS": JOINT, "CP_PARAMS": LINEAR}  # -> the motions set
 BAS_ACC = "ACC_PTP"  # BAS(#ACC_PTP, %): every axis's $ACC_AXIS
 ACC_GROUPS = tuple(f"acc{n}" for n in range(1, SPEED_AXES + 1))  # the flow's acceleration groups of a PTP: axes' %
+EXTERNAL_ACC_GROUPS = tuple(f"acc_extax{n}" for n in range(1, EXTERNAL_AXES + 1))  # each external axis's % ($ACC_EXTAX)
+# a PTP's acceleration groups: its axes accelerate together, so the slowest share of any binds the motion (a track's
+# $ACC_EXTAX too); BAS(#ACC_PTP) sets the arm's (read so: the external axes' it may leave stay the slowest)
+PTP_ACC_GROUPS = ACC_GROUPS + EXTERNAL_ACC_GROUPS
 ORI_GROUPS = ("acc_ori1", "acc_ori2")  # the orientation accelerations of a LIN or CIRC, deg/s^2
 AXIS_GROUPS = tuple(f"ptp{n}" for n in range(1, SPEED_AXES + 1))  # the flow's speed groups of a PTP: each axis's %
 EXTERNAL_GROUPS = tuple(f"extax{n}" for n in range(1, EXTERNAL_AXES + 1))  # each external axis's % ($VEL_EXTAX)
@@ -129,6 +133,9 @@ WITH_TOOL = re.compile(r"\$TOOL\s*=\s*STOOL2\s*\(\s*(\w+)\s*\)", re.I)
 WITH_BASE = re.compile(r"\$BASE\s*=\s*SBASE\s*\(\s*(\w+)\s*\.\s*BASE_NO\s*\)", re.I)
 # a speed in a spline motion's WITH clause: $VEL = SVEL_CP(v, ..), $VEL.CP = v, $VEL_AXIS[n] = SVEL_JOINT(%)
 WITH_SPEED = re.compile(r"\$VEL(?:\.CP|_AXIS\s*\[\s*\d+\s*\])?\s*=", re.I)
+# an external axis's own % of its maximum speed or acceleration in a WITH clause, for that motion alone: group 1 the
+# setting (VEL, ACC), group 2 the axis
+WITH_EXTAX = re.compile(r"\$(VEL|ACC)_EXTAX\s*\[\s*([1-" + str(EXTERNAL_AXES) + r"])\s*\]\s*=", re.I)
 WITH_CALL = re.compile(r"\s*(SVEL_CP|SVEL_JOINT)\s*\(", re.I)
 SPLINE = re.compile(r"^\s*(?:PTP_)?SPLINE\b(?:.*?\b" + WITH + r"\b(.*))?$", re.I)  # a spline block: its WITH holds
 END_SPLINE = re.compile(r"^\s*ENDSPLINE\b", re.I)
@@ -146,6 +153,7 @@ ACC_CP = _assignment(r"\$ACC\.CP")  # m/s^2
 ACC = _assignment(r"\$ACC", r"\{(.*)\}")  # $ACC={CP 2.3,ORI1 100,ORI2 100}
 ACC_ORI = _assignment(r"\$ACC\.(ORI[12])")  # deg/s^2
 ACC_AXIS = _assignment(_indexed("$ACC_AXIS"))  # %
+ACC_EXTAX = _assignment(_indexed("$ACC_EXTAX", EXTERNAL_AXES))  # % of the external axis's own maximum
 APO = _assignment(r"\$APO\.CDIS", "(" + NUMBER + ")")  # mm
 
 # --- the order a program runs in ---

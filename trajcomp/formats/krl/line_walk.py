@@ -36,8 +36,9 @@ class Walk:
     `motions_before` takes the motions read at once above it: with the
     tool, base, speeds and zone then in force (a snapshot shared by the
     rows between two other lines), or, where that state is known only at
-    run time (a tool or base set at run time, routine parameters) or the
-    point is not one the program has declared so far, through the
+    run time (a tool or base set at run time, routine parameters), in a
+    spline block whose WITH bounds its external axes, or where the point
+    is not one the program has declared so far, through the
     one-by-one read (`trajcomp.formats.krl.reader._Reader.statement`), which says why.
     """
 
@@ -57,7 +58,7 @@ class Walk:
             return
         rows = range(self.next, stop)
         self.next = stop
-        one_by_one = bool(reader.tool_why or reader.base_why or reader.params)
+        one_by_one = bool(reader.tool_why or reader.base_why or reader.params or reader.block_caps)
         text = reader.sources[self.index].text
         inline = written["inline"][rows.start:rows.stop]
         named = np.flatnonzero(inline < 0)

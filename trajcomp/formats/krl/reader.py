@@ -1,6 +1,7 @@
 """The KRL reader: .src statements and .dat declarations into a `Program` (see `trajcomp.formats.krl`)."""
 
 import dataclasses
+import functools
 import itertools
 import re
 from pathlib import Path
@@ -10,12 +11,13 @@ import numpy as np
 from trajcomp.errors import ReadError
 from trajcomp.formats.krl import at_once, config_dat, line_walk
 from trajcomp.formats.krl.grammar import (
-    ACC, ACC_AXIS, ACC_CP, ACC_GROUPS, ACC_ORI, ACT, APO, APPROX, ASSIGN, AXES, AXIS_GROUPS, BAS, BAS_ACC_PTP,
-    BAS_FRAMES, BAS_SPEEDS, BLOCK_CLOSES, BLOCK_OPENS, CLOSING, DATA, DATA_REF, DECL, DECL_BARE, DECL_START, DEF,
-    DEF_LINE, DEFDAT, END_SPLINE, ENDDAT, EXTERNAL, EXTERNAL_GROUPS, FIRST_WORD, FLOW_WORDS, GLOBAL_POINT,
-    GLOBAL_WORD, HOME, JOINT_GROUPS, JOINT_TYPES, JUMP_TO, LIMITS, MEMBER, MOTION, MOTION_SPANS, MOTIONS, NAME,
-    NUMBER_DECL, ORI_GROUPS, OUTSIDE_ROUTINES, POSE, SPLINE, STATUS_LARGEST, SYSVAR, VEL, VEL_AXIS, VEL_CP,
-    VEL_EXTAX, WITH_BASE, WITH_CALL, WITH_SPEED, WITH_TOOL, WITH_WORD, WORD,
+    ACC, ACC_AXIS, ACC_CP, ACC_EXTAX, ACC_GROUPS, ACC_ORI, ACT, APO, APPROX, ASSIGN, AXES, AXIS_GROUPS, BAS,
+    BAS_ACC_PTP, BAS_FRAMES, BAS_SPEEDS, BLOCK_CLOSES, BLOCK_OPENS, CLOSING, DATA, DATA_REF, DECL, DECL_BARE,
+    DECL_START, DEF, DEF_LINE, DEFDAT, END_SPLINE, ENDDAT, EXTERNAL, EXTERNAL_ACC_GROUPS, EXTERNAL_GROUPS,
+    FIRST_WORD, FLOW_WORDS, GLOBAL_POINT, GLOBAL_WORD, HOME, JOINT_GROUPS, JOINT_TYPES, JUMP_TO, LIMITS, MEMBER,
+    MOTION, MOTION_SPANS, MOTIONS, NAME, NUMBER_DECL, ORI_GROUPS, OUTSIDE_ROUTINES, POSE, PTP_ACC_GROUPS, SPLINE,
+    STATUS_LARGEST, SYSVAR, VEL, VEL_AXIS, VEL_CP, VEL_EXTAX, WITH_BASE, WITH_CALL, WITH_EXTAX, WITH_SPEED,
+    WITH_TOOL, WITH_WORD, WORD,
 )
 from trajcomp.formats.number_fields import NUMBER
 from trajcomp.formats.text import (
@@ -156,11 +158,12 @@ class _Reader:
         self.initial = {"cp": (None, self.speed_why[LINEAR], None)}
         self.initial |= dict.fromkeys(JOINT_GROUPS, (None, self.speed_why[JOINT], None))
         # the controller's own: (value, why)
-        self.initial |= dict.fromkeys(ACC_GROUPS + ("acc_cp",) + ORI_GROUPS, (None, ""))
+        self.initial |= dict.fromkeys(PTP_ACC_GROUPS + ("acc_cp",) + ORI_GROUPS, (None, ""))
         self.axes = [self.initial[JOINT_GROUPS[0]]] * len(JOINT_GROUPS)  # the settings of a PTP's groups in force
         self.steps = []  # what the .src does besides moving, in order (`trajcomp.programs.flow`)
         self.siblings = set()  # upper names of the other .src files beside it: routines the read does not include
         self.outside_spline = None  # the TCP speed setting in force before the spline block being read
+        self.block_caps = {}  # what the spline block being read gives its PTPs' external axes (`with_external`)
         self.numbers = {}  # NAME -> (value, why it is only known at run time) of REAL / INT data declared with one
         self.assigned = {}  # NAME -> first line of the .src that assigns it
         self.shared = set()  # NAMEs of GLOBAL points: other programs may assign them
@@ -168,6 +171,8 @@ class _Reader:
         self.in_data_list = {}  # (source index, NAME) -> line: the points each data list declares (once each)
         self.companions = {}  # file -> (source index, Lines, masked text) of other data lists read
         self.motion_spans = SpanTable(MOTION_SPANS)  # the spans of the motions, in order: all in the .src
+        # (source, line) -> the shares a PTP's WITH clause gives its external axes for it alone (`with_external`)
+        self.external_caps = {}
 
     def declared_in(self, file, line_no):
         """Read the point another data list (``$config.dat``, a GLOBAL one) declares at ``file``:``line_no``.
@@ -362,12 +367,15 @@ class _Reader:
             self.activate(m.group(1).upper(), m.group(2).upper(), index, line_no, original)
         elif m := SPLINE.match(text):
             own = m.group(1) and self.with_speed(m.group(1), start + m.start(1), index, line_no, original, LINEAR)
+            self.block_caps = self.with_external(m.group(1), index, line_no, original) if m.group(1) else {}
             if own:  # SPLINE WITH $VEL.CP = v: the block's motions run at v, the speed before it after ENDSPLINE
                 self.outside_spline = (self.speed_cp, self.speed_why[LINEAR], self.speed_spans[LINEAR])
                 self.give(LINEAR, *own, line_no, index)
-        elif END_SPLINE.match(text) and self.outside_spline is not None:
-            self.give(LINEAR, *self.outside_spline, line_no, index)
-            self.outside_spline = None
+        elif END_SPLINE.match(text):
+            self.block_caps = {}
+            if self.outside_spline is not None:
+                self.give(LINEAR, *self.outside_spline, line_no, index)
+                self.outside_spline = None
         elif m := VEL_CP.match(text):
             self.set_speed(LINEAR, m, 1, index, start, line_no, original, "$VEL.CP")
         elif m := VEL_AXIS.match(text):
@@ -397,6 +405,9 @@ class _Reader:
         elif m := ACC_AXIS.match(text):
             self.accelerate(ACC_GROUPS[int(m.group(1)) - 1], m.group(2), 1.0, index, line_no, original,
                             f"$ACC_AXIS[{m.group(1)}]")
+        elif m := ACC_EXTAX.match(text):  # the external axis's own % of its maximum acceleration
+            self.accelerate(EXTERNAL_ACC_GROUPS[int(m.group(1)) - 1], m.group(2), 1.0, index, line_no, original,
+                            f"$ACC_EXTAX[{m.group(1)}]")
         elif m := BAS_ACC_PTP.match(text):
             for group in ACC_GROUPS:
                 self.accelerate(group, m.group(1), 1.0, index, line_no, original, "BAS(#ACC_PTP)")
@@ -445,6 +456,23 @@ class _Reader:
             return (None if value is None else value * scale), why, span
         return None
 
+    def with_external(self, clause, index, line_no, original, found=None):
+        """The shares a spline motion's (or block's) WITH clause gives its external axes for that motion (the
+        block's motions) alone: ``{"VEL": (%, why), "ACC": (%, why)}`` from ``$VEL_EXTAX[n] = p`` and
+        ``$ACC_EXTAX[n] = p`` (a literal or a constant, `number_value`; value None where set at run time, with
+        why), the slowest of each and of those ``found`` already (a block's); a setting none gives has no key."""
+        found = dict(found or {})
+        for piece, _ in split_top(clause):
+            m = WITH_EXTAX.match(piece.strip())
+            if m is None:
+                continue
+            which, field = m.group(1).upper(), f"${m.group(1).upper()}_EXTAX[{m.group(2)}]"
+            value, why = self.number_value(piece.strip()[m.end():].strip(), index, line_no, original, field)
+            known = found.get(which, (np.inf, ""))[0]
+            if known is not None and (value is None or value < known):
+                found[which] = (value, why)
+        return found
+
     def activate(self, kind, data_name, index, line_no, original):
         """FDAT_ACT / PDAT_ACT / LDAT_ACT: tool, base, speed and zone of the next motion."""
         name = self.sources[index].name
@@ -476,6 +504,10 @@ class _Reader:
             self.spline_frames(with_clause[0], name, line_no, original)
             clause_at = start + m.start(3) + len(m.group(3)) - len(with_clause[0])
             own_speed = self.with_speed(with_clause[0], clause_at, index, line_no, original, kind)
+        caps = self.with_external(with_clause[0] if with_clause else "", index, line_no, original,
+                                  self.block_caps) if kind == JOINT else {}
+        if caps:
+            self.external_caps[(index, line_no)] = caps
         offset = start + m.start(3)
         approx = APPROX.search(args)
         zone = self.zone if approx else None
@@ -508,6 +540,9 @@ class _Reader:
             spans["speed_with"] = (with_span.start, with_span.end)
         elif self.speed_spans[group] is not None:  # the statement that set it: re-timing writes there
             spans["speed"] = (self.speed_spans[group].start, self.speed_spans[group].end)
+        speed, speed_why = _capped(speed, speed_why, caps.get("VEL"))
+        share, share_why = caps.get("ACC", (None, ""))
+        speed_why = speed_why or (f"acceleration: {share_why}" if share_why else "")
         self.motion_spans.add(spans)
         return Motion(
             kind=kind,
@@ -522,6 +557,7 @@ class _Reader:
             text=original.strip(),
             reason=reason,
             speed_why=speed_why,
+            acceleration_share=None if share is None or share >= 100.0 else share / 100.0,
         )
 
     def spline_frames(self, clause, name, line_no, original):
@@ -631,7 +667,8 @@ def read(path):
     # calls, branches, loops, jumps or waits: speeds and starts as the program runs; accelerations, which the
     # reading in file order does not hold, whenever the program sets one
     accelerating = any(step.kind == "set" and step.name.startswith("acc") for step in reader.steps)
-    return flow.program_followed(program, reader.steps, reader.initial, _flow_speeds, settings=accelerating)
+    speeds = functools.partial(_flow_speeds, caps=reader.external_caps)
+    return flow.program_followed(program, reader.steps, reader.initial, speeds, settings=accelerating)
 
 
 def in_force(settings):
@@ -654,10 +691,19 @@ def in_force(settings):
     return min(value for value, _, _ in settings), "", None
 
 
-def _flow_speeds(table, reached):
+def _capped(speed, why, cap):
+    """A PTP's speed ``(%, why)`` under ``cap``, the ``(%, why)`` its WITH clause gives an external axis for it
+    alone (`_Reader.with_external`; None: none): the slower; set at run time where the cap is."""
+    if cap is None or why or speed is None:
+        return speed, why
+    return (None, cap[1]) if cap[0] is None else (min(speed, cap[0]), "")
+
+
+def _flow_speeds(table, reached, caps):
     """The speed columns of a KRL program's motions from the settings that can reach each
-    (`trajcomp.programs.flow.followed`): PTP the slowest of its axes' and external axes', LIN and CIRC the TCP's;
-    a spline motion's own WITH speed stays. The spans of the motions whose setting moved to another statement change."""
+    (`trajcomp.programs.flow.followed`): PTP the slowest of its axes' and external axes', and of those its WITH
+    clause gives its external axes (``caps``: `_Reader.external_caps`), LIN and CIRC the TCP's; a spline motion's
+    own WITH speed stays. The spans of the motions whose setting moved to another statement change."""
     own = table.span_offsets("speed_with")[1] >= 0
     joint = table.kind == JOINT
     speed, why = np.array(table.speed, dtype=float), np.array(table.speed_why, dtype=object)
@@ -669,26 +715,32 @@ def _flow_speeds(table, reached):
             if len(at):
                 value, why[at], span[at] = in_force([s for group in groups for s in settings[group]])
                 speed[at] = np.nan if value is None else value
+    capped = [(k, caps[key]) for k, key in enumerate(zip(table.source.tolist(), table.line.tolist()))
+              if key in caps] if caps else []
+    for k, cap in capped:
+        value, why[k] = _capped(None if np.isnan(speed[k]) else float(speed[k]), why[k], cap.get("VEL"))
+        speed[k] = np.nan if value is None else value
     _, start, end = table.span_offsets("speed")
     new = np.array([(-1, -1) if s is None else (s.start, s.end) for s in span.tolist()], dtype=np.int64).reshape(-1, 2)
     moved = np.flatnonzero(~own & ((new[:, 0] != start) | (new[:, 1] != end)))
     spans = [{**{role: value for role, value in table.spans[k].items() if role != "speed"},
               **({} if span[k] is None else {"speed": span[k]})} for k in moved.tolist()]
-    columns = {"speed": speed, "speed_why": why} | _flow_accelerations(table, reached, joint, why)
+    columns = {"speed": speed, "speed_why": why} | _flow_accelerations(table, reached, joint, why, capped)
     return columns | ({"spans": (moved, spans)} if len(moved) else {})
 
 
-def _flow_accelerations(table, reached, joint, why):
+def _flow_accelerations(table, reached, joint, why, capped):
     """The acceleration columns of a KRL program's motions from the settings that can reach each: a PTP's share
-    of the arm's (the slowest of its axes' ``$ACC_AXIS``, %), a LIN's or CIRC's TCP acceleration (``$ACC.CP``,
-    mm/s^2), the slowest that can reach it; where one is the controller's own (none set) and others are set, the
+    of the arm's (the slowest of its axes' ``$ACC_AXIS`` and external axes' ``$ACC_EXTAX``, %, and of those its
+    WITH clause gives its external axes, ``capped``: ``[(row, caps)]``), a LIN's or CIRC's TCP acceleration
+    (``$ACC.CP``, mm/s^2), the slowest that can reach it; where one is the controller's own (none set) and others are set, the
     TCP's is not known (none is stated), each axis's own is 100 %. One set at run time leaves the motion as
     written (``why``, changed in place); so does an orientation acceleration (``$ACC.ORI1``, ``ORI2``) stated for a
     LIN or CIRC, which the timing does not model (its joint limits may turn the tool faster)."""
     share, tcp = np.full(len(table), np.nan), np.array(table.acceleration, dtype=float)
     for r, settings in enumerate(reached.settings):
         rows = np.arange(len(table))[reached.rows(r)]
-        for groups, members in ((ACC_GROUPS, joint[rows]), (("acc_cp",), ~joint[rows])):
+        for groups, members in ((PTP_ACC_GROUPS, joint[rows]), (("acc_cp",), ~joint[rows])):
             at = rows[members]
             found = [s for group in groups for s in settings[group]]
             unknown = [s.why if isinstance(s, Unknown) else s[1] for s in found if isinstance(s, Unknown) or s[1]]
@@ -696,7 +748,7 @@ def _flow_accelerations(table, reached, joint, why):
                 continue
             if unknown:
                 why[at[why[at] == ""]] = f"acceleration: {unknown[0]}"
-            elif groups == ACC_GROUPS:
+            elif groups == PTP_ACC_GROUPS:
                 least = min(100.0 if value is None else value for value, _ in found)
                 share[at] = least / 100.0 if least < 100.0 else np.nan
             elif all(value is not None for value, _ in found):
@@ -709,6 +761,12 @@ def _flow_accelerations(table, reached, joint, why):
             value = "set at run time" if isinstance(s, Unknown) or s[1] else f"{s[0]:g} deg/s^2"
             why[at[why[at] == ""]] = (f"$ACC.{group} {value}: an orientation acceleration, which the timing does not "
                                       "model: left as written")
+    for k, caps in capped:
+        value, cap_why = caps.get("ACC", (100.0, ""))
+        if cap_why:
+            why[k] = why[k] or f"acceleration: {cap_why}"
+        elif value < 100.0:
+            share[k] = np.fmin(share[k], value / 100.0)
     return {"acceleration_share": share, "acceleration": tcp}
 
 

@@ -15,11 +15,17 @@ Read:
   ``zN`` / ``\\Z:=``, the tool and ``\\WObj:=``, also after a comma
   (``tool0,\\WObj:=wobj1``). A named speeddata or num is read where its
   value is known as the controller runs it: a CONST with a literal or
-  another such CONST; a VAR or PERS speeddata at its declared value where
-  no statement of the task may change it, or at the literal a straight-line
-  assignment before the motion gave it; one another module of the task
-  declares (not LOCAL) likewise. Routine parameters and the others are set
-  at run time (`Motion.speed_why`).
+  another such CONST; a VAR or PERS speeddata or num at its declared value
+  where no statement of the task may change it (VelSet, AccSet, TPWrite ...
+  read their arguments: `grammar.STRAIGHT`), or at the literal a
+  straight-line assignment before the motion gave it; one another module of the task
+  declares (not LOCAL) likewise. A PERS without TASK or LOCAL is one datum
+  of every task of the controller declaring it, and its value in a module
+  is the one saved last: read only where every task is read (a backup's
+  ``RAPID/TASKn``) and none may change it (`task_data.TaskData.
+  other_tasks_change`); outside a backup the other tasks are not known, so
+  it is set at run time. Routine parameters and the others are set at run
+  time (`Motion.speed_why`).
   The language's statement forms and their fields: `grammar`.
   Identifiers are case-insensitive; tool0 (the flange) and wobj0 (the
   world frame) need no declaration.

@@ -216,9 +216,10 @@ STARTS_MOTION = re.compile(r"^\s*(?:Move|Trigg|Search|Arc|Clad|Spot|Paint|Disp|C
 INSTRUCTION = re.compile(r"^\s*([A-Za-z]\w*)\b(.*);\s*$", re.S)  # groups: its name, its arguments
 OPTION = re.compile(r"\\(\w+)(?:\s*:=\s*([^\\]+))?")  # groups: an optional argument's name, its value
 
-# instructions that cannot change a speeddata: a VAR speeddata assigned before them is still in force after them
+# instructions that read their arguments and change none: a VAR speeddata or num assigned before them is still in
+# force after them, and one named in them keeps its value
 STRAIGHT = {"confj", "confl", "tpwrite", "tperase", "waittime", "setdo", "setao", "setgo", "set", "reset", "pulsedo",
-            "singarea", "pathresol", "accset"}
+            "singarea", "pathresol", "accset", "velset"}
 # words that start a statement but call no routine
 NOT_CALLS = {"module", "endmodule", "local", "task", "error", "backward", "undo", "record", "endrecord", "alias"}
 # instructions that neither move the arm nor change its speed: a call of any other name not declared in the module

@@ -12,7 +12,7 @@ from trajcomp.formats.configuration import distinct_tuples
 from trajcomp.formats.number_fields import NUMBER, BLANK, line_bounds, offset_type, read_numbers, text_codes
 from trajcomp.formats.rapid import grammar
 from trajcomp.formats.rapid.forms import Cursor, find_lines
-from trajcomp.formats.rapid.task_data import TaskData, changed_at
+from trajcomp.formats.rapid.task_data import TaskData, changed_at, shared_by_tasks, task_folders
 from trajcomp.formats.text import (
     JOINT_LIMIT,
     LENGTH_LIMIT,
@@ -492,9 +492,12 @@ class _Reader:
         self.wobj_parts = {}  # lower name -> (uframe, oframe)
         self.unset = {}  # lower point name -> why its value is known only at run time
         self.params = set()
-        self.data = {}  # lower name of a speeddata or num -> (storage, type, value text, line); None if declared twice
-        self.in_force = {}  # lower name of a VAR or PERS speeddata -> (value, why) a straight-line assignment gave it
-        self.touched = {}  # lower name of a VAR or PERS speeddata -> first line of a statement that may change it
+        # lower name of a speeddata or num -> (storage, type, value text, line, shared by the controller's tasks:
+        # `shared_by_tasks`); None if declared twice
+        self.data = {}
+        # lower name of a VAR or PERS speeddata or num -> (value, why) a straight-line assignment gave it
+        self.in_force = {}
+        self.touched = {}  # lower name of a VAR or PERS speeddata or num -> first line of a statement changing it
         self.task = None  # the other modules of the task (`DeclaredElsewhere`): the points they declare and assign
         self.task_data = None  # ... and the speeddata and num they declare or may change (`TaskData`)
         self.scanned = None  # the masked text, `Lines` and runs `scan_data` looked at
@@ -647,27 +650,27 @@ class _Reader:
 
     def scan_data(self, masked, lines, runs):
         """Note the module's speeddata and num declarations (a motion may use one declared further down), and
-        where a statement other than its declaration and motions may change a VAR or PERS speeddata (``lines``:
-        the module's `Lines`; ``runs``: the offsets of the text between the lines read at once, `_runs_between`,
-        which only declare points or use a speeddata)."""
+        where a statement other than its declaration and motions may change a VAR or PERS speeddata or num
+        (``lines``: the module's `Lines`; ``runs``: the offsets of the text between the lines read at once,
+        `_runs_between`, which only declare points or use a speeddata)."""
         self.scanned = masked, lines, runs
         if not _declares_data(masked):  # a CAM module declares none: its lines are not tried
             return
         for m in (m for start, end in runs for m in _line_matches(grammar.SPEED_DECLARATION, masked, start, end)):
             key = m.group(3).lower()
-            entry = (m.group(1).upper(), m.group(2).lower(), (m.group(4) or "").strip(), lines.number(m.start(1)))
+            entry = (m.group(1).upper(), m.group(2).lower(), (m.group(4) or "").strip(), lines.number(m.start(1)),
+                     shared_by_tasks(m))
             self.data[key] = entry if key not in self.data else None
         for key, entry in self.data.items():
-            if entry is not None and entry[0] in VARIABLE and entry[1] == "speeddata" \
-                    and (line := changed_at(masked, lines, key, runs)):
+            if entry is not None and entry[0] in VARIABLE and (line := changed_at(masked, lines, key, runs)):
                 self.touched[key] = line
 
     def flow(self, text, line, original):
-        """Follow the VAR and PERS speeddata a statement (not a motion) gives a value or may change.
+        """Follow the VAR and PERS speeddata and num a statement (not a motion) gives a value or may change.
 
         An assignment of a literal (or a constant) is in force for the
         motions after it while the code runs straight: a routine's start, a
-        branch, a loop, a label or any instruction but those of `_STRAIGHT`
+        branch, a loop, a label or any instruction but those of `grammar.STRAIGHT`
         (a routine call may change it) ends it.
         """
         if not self.touched:
@@ -676,7 +679,7 @@ class _Reader:
             key = m.group(1).lower()
             if key in self.touched:
                 self.in_force[key] = (None, f"{m.group(1)} is changed at run time (line {line})") if m.group(2) \
-                    else self.constant(m.group(3).strip(), "speeddata", line, original, m.group(1))
+                    else self.constant(m.group(3).strip(), self.data[key][1], line, original, m.group(1))
             return
         word = _WORD.match(text.strip())
         if word and word.group().lower() not in grammar.STRAIGHT and not grammar.STARTS_DECLARATION.match(text):
@@ -687,8 +690,8 @@ class _Reader:
         number) or num named ``name``: stated, or why it is not.
 
         Stated: a literal, ``vN``, ``vmax``, a CONST of this module whose
-        value is one of these, a VAR or PERS speeddata where its value is
-        known (`variable`), or one of these another module of the task
+        value is one of these, a VAR or PERS speeddata or num where its value
+        is known (`variable`), or one of these another module of the task
         declares (`declared_elsewhere`). Routine parameters, other VAR and
         PERS data and data declared nowhere are set at run time: value None.
         """
@@ -712,18 +715,19 @@ class _Reader:
         entry = self.data[key]
         if entry is None:
             return None, f"{name}: declared more than once in this module, which one applies is known at run time"
-        storage, declared, value, at = entry
-        if storage in VARIABLE and declared == typ == "speeddata":
-            return self.variable(name, storage, value, at, original, field, depth)
+        storage, declared, value, at, shared = entry
+        if storage in VARIABLE and declared == typ:
+            return self.variable(name, storage, declared, value, at, shared, original, field, depth)
         if storage != "CONST":
             return None, f"{name}: {storage} {declared}, set at run time (line {at})"
         if declared != typ or depth > 8 or not value:
             return None, f"{name}: {declared} {value}, known at run time (line {at})"
         return self.constant(value, typ, at, original, field, depth + 1)
 
-    def variable(self, name, storage, value, at, original, field, depth):
-        """``(value, why)`` of VAR or PERS (``storage``) speeddata ``name``, declared at line ``at`` with ``value``,
-        where a motion uses it.
+    def variable(self, name, storage, typ, value, at, shared, original, field, depth):
+        """``(value, why)`` of VAR or PERS (``storage``) speeddata or num (``typ``) ``name``, declared at line
+        ``at`` with ``value`` (``shared``: a PERS every task of the controller shares, `shared_by_tasks`), where a
+        motion or a speed setting uses it.
 
         Known: the value a straight-line assignment before the motion gave it
         (`flow`), or its declared value if no statement of the module, and
@@ -731,41 +735,49 @@ class _Reader:
         it; `task_data.may_change`): a VAR's value as the program starts, a
         PERS's as declared, since nothing gives it another (a PERS another
         module declares too starts at the value of the module loaded
-        first: set at run time). Else set at run time.
+        first: set at run time). A PERS shared by the controller's tasks
+        (not TASK nor LOCAL) holds its declared value only where none of
+        the other tasks may change it, which is known only when they are
+        all read, in a backup (`TaskData.other_tasks_change`). Else set at
+        run time.
         """
         key = name.lower()
         if key in self.in_force:
             return self.in_force[key]
         if key in self.touched:
-            return None, (f"{name}: {storage} speeddata the module changes (line {self.touched[key]}) and does not "
+            return None, (f"{name}: {storage} {typ} the module changes (line {self.touched[key]}) and does not "
                           "assign a literal in the code running straight to this motion: set at run time")
         elsewhere = self.task_data.changed(key) if self.task_data is not None else ""
         if elsewhere or not value:
-            return None, f"{name}: {storage} speeddata, set at run time ({elsewhere or f'declared at line {at}'})"
+            return None, f"{name}: {storage} {typ}, set at run time ({elsewhere or f'declared at line {at}'})"
         if storage == "PERS" and self.task_data is not None and (again := self.task_data.declared(key)):
-            return None, (f"{name}: PERS speeddata also declared in {again[0][0].name}:{again[0][1]}: its value is "
+            return None, (f"{name}: PERS {typ} also declared in {again[0][0].name}:{again[0][1]}: its value is "
                           "that of the module loaded first, set at run time")
-        if storage == "PERS" and (why := self.unknown_call()):
-            return None, why.format(name=name, what="PERS speeddata")
-        return self.constant(value, "speeddata", at, original, field, depth + 1)
+        if storage == "PERS" and (why := self.pers_changed(key, value, shared)):
+            return None, f"{name}: PERS {typ}, set at run time: {why}"
+        return self.constant(value, typ, at, original, field, depth + 1)
 
-    def unknown_call(self):
-        """Why a PERS (made to be shared) is set at run time where the task calls a routine no module of it
-        declares (`TaskData.unknown_call`): a format string of ``name`` and ``what`` it is; ``""`` if none."""
-        called = self.task_data.unknown_call(*self.scanned[:2]) if self.task_data and self.scanned else ""
-        return f"{{name}}: {{what}}, set at run time: {called} calls a routine no module of the task declares, " \
-               "which may change it" if called else ""
+    def pers_changed(self, key, value, shared):
+        """Why PERS ``key`` (made to be shared), declared with ``value``, may hold another value than that as the
+        program runs though no statement of its task names it so, or ``""``: the task calls a routine no module
+        of it declares (`TaskData.unknown_call`), or, ``shared`` by the controller's tasks (`shared_by_tasks`),
+        another task may change it (`TaskData.other_tasks_change`)."""
+        if self.task_data is None:
+            return ""
+        if called := self.task_data.unknown_call(*self.scanned[:2]) if self.scanned else "":
+            return f"{called} calls a routine no module of the task declares, which may change it"
+        return self.task_data.other_tasks_change(key, value) if shared else ""
 
     def declared_elsewhere(self, name, typ, original, field, depth):
         """``(value, why)`` of a speeddata or num ``name`` this module does not declare, as another module of its task
-        declares it (`TaskData.declared`): a CONST, or a VAR or PERS speeddata no module changes, whose value is
+        declares it (`TaskData.declared`): a CONST, or a VAR or PERS no module changes, whose value is
         stated (a literal, ``vN``, ``vmax``: a name in it would be looked up in that module). Else set at run time.
         """
         key = name.lower()
         found = self.task_data.declared(key) if self.task_data is not None else []
         if not found:
             return None, f"{name}: {typ} not declared in this module, set at run time"
-        file, at, storage, declared, value = found[0]
+        file, at, storage, declared, value, shared = found[0]
         where = f"{file.name}:{at}"
         if len(found) > 1:
             return None, f"{name}: declared in {where} and {found[1][0].name}:{found[1][1]}, set at run time"
@@ -776,13 +788,12 @@ class _Reader:
             return None, f"{name}: {storage} {declared} {value} of {where}, known at run time"
         if storage != "CONST":
             changed = changed_at(*self.scanned[:2], key, self.scanned[2]) if self.scanned else 0
-            if declared != "speeddata" or changed:
-                return None, f"{name}: {storage} {declared} of {where}, set at run time" + (
-                    f" (changed at line {changed})" if changed else "")
+            if changed:
+                return None, f"{name}: {storage} {declared} of {where}, set at run time (changed at line {changed})"
             if elsewhere := self.task_data.changed(key):
-                return None, f"{name}: {storage} speeddata of {where}, set at run time ({elsewhere})"
-            if storage == "PERS" and (why := self.unknown_call()):
-                return None, why.format(name=name, what=f"PERS speeddata of {where}")
+                return None, f"{name}: {storage} {declared} of {where}, set at run time ({elsewhere})"
+            if storage == "PERS" and (why := self.pers_changed(key, value, shared)):
+                return None, f"{name}: PERS {declared} of {where}, set at run time: {why}"
         return self.constant(value, typ, at, original, f"{field} ({where})", depth + 1)
 
     def number(self, text, line, original, field, limit=LENGTH_LIMIT):
@@ -1096,15 +1107,13 @@ def _read(path):
     module = grammar.MODULE.search(masked)
     if not module:
         raise ReadError(f"{path}: not a RAPID module: no MODULE line")
-    folder = Path(path).parent
-    folders = [folder.parent / "PROGMOD", folder.parent / "SYSMOD"] if folder.name.upper() in ("PROGMOD", "SYSMOD") \
-        else [folder]  # a backup's TASKn holds its modules in PROGMOD and SYSMOD
+    folders, other_tasks = task_folders(path)
     modules = (".mod", ".modx", ".sys", ".prg")
     lines, excluded, codes = Lines(source.text), set(), text_codes(masked)
     while True:  # a statement spread over lines that look read-at-once takes them back (`_Spread`): rare
         reader = _Reader(source)
         reader.task = DeclaredElsewhere(Path(path), folders, modules, grammar.TASK_POINT, "!", assignment=grammar.ASSIGNED)
-        reader.task_data = TaskData(path, folders, modules)
+        reader.task_data = TaskData(path, folders, modules, other_tasks)
         found_points, named, inline = _written_lines(masked, codes, lines, excluded)
         runs = _runs_between(masked, (found_points, named, inline))
         if not excluded:  # first: the module's blocks closed, checked where they may open or close
