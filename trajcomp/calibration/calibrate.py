@@ -647,7 +647,8 @@ def split_distances(robot, joints, position, splits):
         ``positions``: from the nearest training position; ``joints``: from
         what the training rows measured, joint by joint
         (`trajcomp.model.landing.coverage_distance`; absent without joints);
-        ``beyond``: outside the box of the training positions.
+        ``beyond``: outside the box of the training positions (`trajcomp.model.landing.outside_box`, in units
+        of its extent).
     """
     out = {key: np.full(len(position), np.nan) for key in ("positions", "beyond", *(("joints",) if joints is not None
                                                                                     else ()))}
@@ -747,7 +748,8 @@ def _landing(robot, dh, frame, data, held, fitted, split, progress, orientation,
             fitted=dict(zip(dh.names, dh.delta)),
             hidden=sum(is_robot_parameter(n) for n in dh.identifiability.fixed),
             located=locates_flange(orientation_spread(rotations)))
-    built = landing.build(combined, method, parameters, rotations, position, joints, by_joints)
+    extrapolates = {"composite"} if options["kind"] == JOINT_KIND else set()  # its terms go on beyond the ranges
+    built = landing.build(combined, method, parameters, rotations, position, joints, by_joints, extrapolates)
     mode = options["method"]
     if mode not in combined:
         return built.to_dict(), None
