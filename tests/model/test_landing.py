@@ -104,13 +104,17 @@ def test_the_held_out_rms_grows_as_fitted_with_the_distance_and_outside():
     beyond = np.where(rng.uniform(size=4000) < 0.3, rng.uniform(10.0, 200.0, 4000), 0.0)
     rms = 0.02 + 0.0005 * distance + beyond * (0.0002 + 1e-6 * beyond)
     errors = np.linalg.norm(rng.normal(size=(4000, 3)), axis=1) / np.sqrt(3.0) * rms  # RMS of |error| = rms
-    intercept, start, slope, outside, curve = landing.fit_growth(distance, beyond, errors)
+    intercept, start, slope, outside, curve, least = landing.fit_growth(distance, beyond, errors)
     grown = intercept + slope * (np.array([10.0, 70.0]) - start)
     np.testing.assert_allclose(grown, 0.02 + 0.0005 * np.array([10.0, 70.0]), rtol=0.1)
     at = np.array([50.0, 150.0])
     np.testing.assert_allclose(outside * at + curve * at**2, at * (0.0002 + 1e-6 * at), rtol=0.25)
+    assert least == 0.0
     # for a model that does not carry the error's structure outside: an error of the interior's size every spacing
-    assert landing.fit_growth(distance, beyond, errors, spacing=10.0)[3] >= intercept / 10.0
+    floored = SimpleNamespace(growth={"dh": landing.fit_growth(distance, beyond, errors, spacing=10.0)})
+    assert floored.growth["dh"][5] == pytest.approx(intercept / 10.0)
+    near = landing.LandingData.rms_at(floored, "dh", np.zeros(2), np.array([0.01, 0.01]), np.array([1.0, 100.0]))
+    np.testing.assert_allclose(near, intercept * np.array([1.1, 11.0]), rtol=1e-3)  # the floor: 1 and 100 mm out
 
 
 def test_the_stated_quantile_covers_held_out_errors_with_heavier_tails_than_a_gaussian_s():
@@ -120,7 +124,7 @@ def test_the_stated_quantile_covers_held_out_errors_with_heavier_tails_than_a_ga
     scale = 0.02 + 0.0005 * distance + 0.05 * beyond
     errors = np.linalg.norm(rng.standard_t(3, size=(8000, 3)), axis=1) * scale  # Student t, 3 degrees: heavy tails
     fitted = SimpleNamespace(growth={"composite": landing.fit_growth(distance, beyond, errors)})
-    near = landing.LandingData.rms_at(fitted, "composite", distance, beyond)
+    near = landing.LandingData.rms_at(fitted, "composite", distance, beyond, beyond * 400.0)
     stated = landing.quantile_of_norm(np.zeros((len(near), 3)), near[:, None, None] ** 2 / 3.0 * np.eye(3))
     for rows in (beyond == 0, beyond > 0, distance > 60):  # inside, outside, far inside
         assert 0.93 < np.mean(errors[rows] <= stated[rows]) < 0.97

@@ -68,7 +68,7 @@ from trajcomp.model.stats import ErrorStats
 from trajcomp.arm.transforms import abc_to_matrix, matrix_to_abc, mean_rotation, rotation_angle_between
 
 QUANTILE = 0.95  # the landing estimate is this quantile of a target's predicted landing error
-GROWTH_KEYS = ("rms_mm", "from_mm", "slope", "outside_mm", "outside_curve_mm")  # `fit_growth`'s, as stored
+GROWTH_KEYS = ("rms_mm", "from_mm", "slope", "outside_mm", "outside_curve_mm", "least_outside")  # `fit_growth`'s, as stored
 GROWTH_BINS = 8  # bins of the distance from the measured positions over which the held-out RMS is fitted
 POSITION_DIGITS = 1  # measured positions are stored rounded to 0.1 mm (and once each)
 SAME_PLACE = 5.0  # mm: measured positions closer than this are one place (several orientations at one node)
@@ -101,12 +101,12 @@ class LandingData:
         The measured configurations (each once, to 0.001 deg), rad; none
         for a model measured without joints.
     growth : dict of str to tuple of float
-        Per mode, ``(rms, d0, slope, outside, outside_curve)`` of
+        Per mode, ``(rms, d0, slope, outside, outside_curve, least)`` of
         `fit_growth`: the held-out RMS of a target at distance ``d``
         from what was measured (`coverage_distance`) and ``g`` outside the
         box of the measured positions, in units of its extent
-        (`outside_box`), is ``rms + slope max(d - d0, 0) + outside g +
-        outside_curve g^2`` (mm).
+        (`outside_box`), ``b`` mm, is ``rms + slope max(d - d0, 0) +
+        max(outside g + outside_curve g^2, least b)`` (mm).
     by_joints : list of str
         The modes whose distance ``d`` is `coverage_distance` (a joint-angle
         residual); the others' is from the nearest measured position.
@@ -209,13 +209,16 @@ class LandingData:
         It grows with their distance from the measured configurations and
         outside the box of the measured positions (`fit_growth`).
         """
-        return self.rms_at(mode, self.distance(mode, robot, q, points), outside_box(points, self.positions))
+        return self.rms_at(mode, self.distance(mode, robot, q, points), outside_box(points, self.positions),
+                           outside_box(points, self.positions, relative=False))
 
-    def rms_at(self, mode, distance, beyond):
+    def rms_at(self, mode, distance, beyond, beyond_mm):
         """RMS held-out |error| (N,) mm in ``mode`` at a distance (N,) mm from what was measured and (N,)
-        outside the box of the measured positions (`outside_box`), as `fit_growth` fitted it."""
-        rms, start, slope, outside, outside_curve = self.growth[mode]
-        return rms + slope * np.maximum(distance - start, 0.0) + beyond * (outside + outside_curve * beyond)
+        outside the box of the measured positions, in units of its extent and in mm (`outside_box`), as
+        `fit_growth` fitted it."""
+        rms, start, slope, outside, outside_curve, least = self.growth[mode]
+        return (rms + slope * np.maximum(distance - start, 0.0)
+                + np.maximum(beyond * (outside + outside_curve * beyond), least * beyond_mm))
 
 
 def coverage_distance(robot, measured, q):
@@ -244,7 +247,7 @@ def _user_scale(names):
     return np.array([np.degrees(1.0) if is_angle(name) else 1.0 for name in names])
 
 
-def outside_box(points, positions):
+def outside_box(points, positions, relative=True):
     """How far points (N, 3) lie outside the axis-aligned box of positions (M, 3), in units of its extent (N,).
 
     Along each axis the distance outside the box over the box's extent
@@ -252,10 +255,11 @@ def outside_box(points, positions):
     error model extrapolates by its extent: a fit whose outer layer of a
     400 mm cube is held out predicts that layer 100 mm beyond its 300 mm
     box (1/3), the whole model a target 100 mm beyond the cube (1/4).
+    ``relative`` False: the distance in mm.
     """
     lower, upper = positions.min(axis=0), positions.max(axis=0)
     excess = np.maximum(np.maximum(lower - points, points - upper), 0.0)
-    return np.linalg.norm(excess / np.maximum(upper - lower, THIN), axis=1)
+    return np.linalg.norm(excess / np.maximum(upper - lower, THIN) if relative else excess, axis=1)
 
 
 def measured_spacing(positions):
@@ -288,9 +292,9 @@ def fit_growth(distance, beyond, errors, spacing=None, bins=GROWTH_BINS):
     part's, over the rows' true / stated ratios), which the fitted line
     through bins alone does only on average. Given a ``spacing``, an error of the interior's size
     may arise outside within every spacing, which no measurement resolves:
-    ``outside`` is then at least the interior size per spacing (for a
-    model that does not carry the error's structure beyond the measured
-    volume, `build`).
+    the outside part is then at least ``least``, the interior size per
+    spacing, times the distance in mm (for a model that does not carry the
+    error's structure beyond the measured volume, `build`).
 
     Parameters
     ----------
@@ -301,14 +305,14 @@ def fit_growth(distance, beyond, errors, spacing=None, bins=GROWTH_BINS):
     errors : ndarray, shape (M,)
         Its held-out |error|, mm.
     spacing : float, optional
-        Median distance between neighbouring measured positions, in units of
-        the measured box's extent (`outside_box`); default: no least ``outside``.
+        Median distance between neighbouring measured positions, mm; default: no ``least``.
     bins : int
 
     Returns
     -------
     tuple of float
-        ``(rms, d0, slope, outside, outside_curve)``: mm, mm, mm per mm, mm, mm.
+        ``(rms, d0, slope, outside, outside_curve, least)``: mm, mm, mm per mm, mm, mm, mm per mm
+        (`LandingData.rms_at`).
     """
     from scipy.optimize import nnls  # here: compensating never fits a growth, and scipy.optimize takes a second to import
     inside = beyond <= 0.0
@@ -334,9 +338,8 @@ def fit_growth(distance, beyond, errors, spacing=None, bins=GROWTH_BINS):
         needed = np.maximum(errors[~inside] / factor - interior[~inside], 0.0) / shape
         scale = np.quantile(needed, QUANTILE)
         outside, outside_curve = scale * outside, scale * outside_curve
-    if spacing is not None:
-        outside = max(outside, intercept / spacing)
-    return float(intercept), float(d[0]), float(slope), float(outside), float(outside_curve)
+    least = 0.0 if spacing is None else intercept / spacing
+    return float(intercept), float(d[0]), float(slope), float(outside), float(outside_curve), float(least)
 
 
 def quantile_size(errors):
@@ -495,14 +498,13 @@ def build(held, method, parameters, rotations, positions, joints, by_joints=froz
         The modes whose model carries the error's structure beyond the
         measured volume (a joint residual's gear and gravity terms): their
         growth outside is the outer layers' alone. The others' grows by at
-        least an error of the interior's size per measured spacing (along
-        the box's longest side: `fit_growth`).
+        least an error of the interior's size per measured spacing (`fit_growth`).
     """
     names, shift, covariance, deltas, turning, flange_turn = parameters
     reference, spread = (np.eye(3), np.pi) if rotations is None else orientation_reference(rotations)
     stats = {mode: ErrorStats.from_errors(e).as_dict() for mode, (_, _, e) in held.items()}
     unique = np.unique(np.round(positions, POSITION_DIGITS), axis=0)
-    spacing = measured_spacing(unique) / max(float(np.ptp(unique, axis=0).max()), THIN)
+    spacing = measured_spacing(unique)
     growth = {mode: fit_growth(d, g, np.linalg.norm(e, axis=1), None if mode in extrapolates else spacing)
               for mode, (d, g, e) in held.items()}
     configurations = np.zeros((0, 6)) if joints is None else np.radians(
