@@ -106,7 +106,7 @@ class LandingData:
         from what was measured (`coverage_distance`) and ``g`` outside the
         box of the measured positions, in units of its extent
         (`outside_box`), ``b`` mm, is ``rms + slope max(d - d0, 0) +
-        max(outside g + outside_curve g^2, least b)`` (mm).
+        max(outside g, least b) + outside_curve g^2`` (mm).
     by_joints : list of str
         The modes whose distance ``d`` is `coverage_distance` (a joint-angle
         residual); the others' is from the nearest measured position.
@@ -217,8 +217,8 @@ class LandingData:
         outside the box of the measured positions, in units of its extent and in mm (`outside_box`), as
         `fit_growth` fitted it."""
         rms, start, slope, outside, outside_curve, least = self.growth[mode]
-        return (rms + slope * np.maximum(distance - start, 0.0)
-                + np.maximum(beyond * (outside + outside_curve * beyond), least * beyond_mm))
+        return (rms + slope * np.maximum(distance - start, 0.0) + np.maximum(outside * beyond, least * beyond_mm)
+                + outside_curve * beyond**2)
 
 
 def coverage_distance(robot, measured, q):
@@ -291,10 +291,10 @@ def fit_growth(distance, beyond, errors, spacing=None, bins=GROWTH_BINS):
     too few: real held-out errors have heavier tails (the real UR10's
     k-fold rows: 92.6 % within it). Given a ``spacing``, an error of the
     interior's size may arise outside within every spacing, which no
-    measurement resolves: the outside part is then at least ``least``, the
-    interior size per spacing, times the distance in mm (for a model that
-    does not carry the error's structure beyond the measured volume,
-    `build`).
+    measurement resolves: the outside part's linear term is then at least
+    ``least``, the interior size per spacing, times the distance in mm (for
+    a model that does not carry the error's structure beyond the measured
+    volume, `build`).
 
     Parameters
     ----------
