@@ -287,9 +287,9 @@ def fit_growth(distance, beyond, errors, spacing=None, bins=GROWTH_BINS):
     shape; its size is then scaled so that the stated quantile (of a
     Gaussian error of that RMS) covers `QUANTILE` of the part's own rows (a
     conformal scale over the rows' true / stated ratios: the interior's
-    first, then the outside part's). A Gaussian's quantile alone covers
-    too few: real held-out errors have heavier tails (the real UR10's
-    k-fold rows: 92.6 % within it). Given a ``spacing``, an error of the
+    first, never below the Gaussian's own, then the outside part's). A
+    Gaussian's quantile alone covers too few: real held-out errors have
+    heavier tails (the real UR10's k-fold rows: 92.6 % within it). Given a ``spacing``, an error of the
     interior's size may arise outside within every spacing, which no
     measurement resolves: the outside part's linear term is then at least
     ``least``, the interior size per spacing, times the distance in mm (for
@@ -323,7 +323,7 @@ def fit_growth(distance, beyond, errors, spacing=None, bins=GROWTH_BINS):
     (intercept, slope), _ = nnls(np.column_stack([np.ones_like(d), d - d[0]]) * weight[:, None], rms * weight)
     factor = np.sqrt(chi2_quantile(QUANTILE, 3) / 3.0)  # the stated quantile over the RMS
     interior = intercept + slope * np.maximum(distance - d[0], 0.0)
-    scale = np.quantile(errors[inside] / (factor * interior[inside]), QUANTILE) if intercept > 0 else 1.0
+    scale = max(np.quantile(errors[inside] / (factor * interior[inside]), QUANTILE), 1.0) if intercept > 0 else 1.0
     intercept, slope, interior = scale * intercept, scale * slope, scale * interior
     outside = outside_curve = 0.0
     if (~inside).any():
