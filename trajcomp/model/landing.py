@@ -650,9 +650,11 @@ def _beyond_joint_range(model, data, robot, q):
     UR10 arms (``bench_verdict.py``: paper and harsh profiles, seeds 21-23)
     the held-out errors, which lie inside the joints' ranges, show no
     growth that would cover targets 50-150 deg beyond them (coverage 64-88 %
-    near the singularities without this term); with it they are covered
+    near the singularities without this term); with it they were covered
     96-100 %, at a median estimate 2.2-10x the true error (a ramp of 30
-    deg: up to 11x; of 90 deg: coverage down to 84 %).
+    deg: up to 11x; of 90 deg: coverage down to 84 %), with the held-out
+    growth of the time (before `outside_box` counted in units of the box's
+    extent and `fit_growth` scaled each part to its rows).
     """
     residual = model.residual
     gap = np.maximum(np.maximum(residual.lower - q, q - residual.upper), 0.0)
