@@ -289,12 +289,13 @@ def fit_growth(distance, beyond, errors, spacing=None, bins=GROWTH_BINS):
     conformal scale over the rows' true / stated ratios: the interior's
     first, never below the Gaussian's own, then the outside part's). A
     Gaussian's quantile alone covers too few: real held-out errors have
-    heavier tails (the real UR10's k-fold rows: 92.6 % within it). Given a ``spacing``, an error of the
-    interior's size may arise outside within every spacing, which no
-    measurement resolves: the outside part's linear term is then at least
-    ``least``, the interior size per spacing, times the distance in mm (for
-    a model that does not carry the error's structure beyond the measured
-    volume, `build`).
+    heavier tails (the real UR10's k-fold rows: 92.6 % within it).
+
+    Given a ``spacing``, an error of the interior's size may arise outside
+    within every spacing, which no measurement resolves: the outside
+    part's linear term is then at least ``least``, the interior size per
+    spacing, times the distance in mm (for a model that does not carry the
+    error's structure beyond the measured volume, `build`).
 
     Parameters
     ----------
