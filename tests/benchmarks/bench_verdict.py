@@ -1,7 +1,8 @@
 """The landing estimate as a forecast: coverage and sharpness per class of target, on arms the calibration never saw.
 
-Run:  python tests/benchmarks/bench_verdict.py [virtual] [ur10] [--orientations N] [--probe X,Y,Z]
-      (default: both, 5 orientations, the built-in UR10's TCP as the measured point)
+Run:  python tests/benchmarks/bench_verdict.py [virtual] [ur10] [--orientations N] [--probe X,Y,Z] [--seeds S,...]
+      (default: both, 5 orientations, the built-in UR10's TCP as the measured point, seeds 21,22,23; other
+      seeds check a choice made on these on arms it was not made on)
 
 ``virtual``: UR10 arms whose errors the project's simulator does not draw
 (`ForeignArm`: the paper and harsh profiles' errors plus a Hayati tilt of
@@ -276,7 +277,8 @@ if __name__ == "__main__":
     arguments = sys.argv[1:]
     options = {}
     for flag, key, value in (("--orientations", "orientations", int),  # the plan spread over this many
-                             ("--probe", "probe", lambda text: [float(v) for v in text.split(",")])):
+                             ("--probe", "probe", lambda text: [float(v) for v in text.split(",")]),
+                             ("--seeds", "seeds", lambda text: tuple(int(v) for v in text.split(",")))):
         if flag in arguments:
             at = arguments.index(flag)
             options[key] = value(arguments[at + 1])

@@ -7,6 +7,7 @@ compliance verdict of programs against what the arm really does.
 """
 
 import json
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
@@ -103,13 +104,41 @@ def test_the_held_out_rms_grows_as_fitted_with_the_distance_and_outside():
     beyond = np.where(rng.uniform(size=4000) < 0.3, rng.uniform(10.0, 200.0, 4000), 0.0)
     rms = 0.02 + 0.0005 * distance + beyond * (0.0002 + 1e-6 * beyond)
     errors = np.linalg.norm(rng.normal(size=(4000, 3)), axis=1) / np.sqrt(3.0) * rms  # RMS of |error| = rms
-    intercept, start, slope, outside, curve = landing.fit_growth(distance, beyond, errors, spacing=1e6)
+    intercept, start, slope, outside, curve, least = landing.fit_growth(distance, beyond, errors)
     grown = intercept + slope * (np.array([10.0, 70.0]) - start)
     np.testing.assert_allclose(grown, 0.02 + 0.0005 * np.array([10.0, 70.0]), rtol=0.1)
     at = np.array([50.0, 150.0])
     np.testing.assert_allclose(outside * at + curve * at**2, at * (0.0002 + 1e-6 * at), rtol=0.25)
-    # an error of the interior's size every spacing outside, at the least
-    assert landing.fit_growth(distance, beyond, errors, spacing=10.0)[3] >= intercept / 10.0
+    assert least == 0.0
+    # for a model that does not carry the error's structure outside: an error of the interior's size every spacing
+    floored = SimpleNamespace(growth={"dh": landing.fit_growth(distance, beyond, errors, spacing=10.0)})
+    assert floored.growth["dh"][5] == pytest.approx(intercept / 10.0)
+    near = landing.LandingData.rms_at(floored, "dh", np.zeros(2), np.array([0.01, 0.01]), np.array([1.0, 100.0]))
+    np.testing.assert_allclose(near, intercept * np.array([1.1, 11.0]), rtol=1e-3)  # the floor: 1 and 100 mm out
+
+
+def test_the_stated_quantile_covers_held_out_errors_with_heavier_tails_than_a_gaussian_s():
+    rng = np.random.default_rng(16)
+    distance = rng.uniform(0.0, 80.0, 8000)
+    beyond = np.where(rng.uniform(size=8000) < 0.3, rng.uniform(0.05, 1.0, 8000), 0.0)
+    scale = 0.02 + 0.0005 * distance + 0.05 * beyond
+    errors = np.linalg.norm(rng.standard_t(3, size=(8000, 3)), axis=1) * scale  # Student t, 3 degrees: heavy tails
+    fitted = SimpleNamespace(growth={"composite": landing.fit_growth(distance, beyond, errors)})
+    near = landing.LandingData.rms_at(fitted, "composite", distance, beyond, beyond * 400.0)
+    stated = landing.quantile_of_norm(np.zeros((len(near), 3)), near[:, None, None] ** 2 / 3.0 * np.eye(3))
+    for rows in (beyond == 0, beyond > 0, distance > 60):  # inside, outside, far inside
+        assert 0.93 < np.mean(errors[rows] <= stated[rows]) < 0.97
+    # the RMS of these errors would state too little
+    assert np.mean(errors <= landing.quantile_of_norm(np.zeros((len(near), 3)), np.mean(
+        (errors / near) ** 2) * near[:, None, None] ** 2 / 3.0 * np.eye(3))) < 0.93
+
+
+def test_outside_the_box_counts_in_units_of_its_extent():
+    box = np.array([[0.0, 0.0, 0.0], [400.0, 200.0, 0.0]])  # a flat box: its z extent is a plane's
+    points = np.array([[500.0, 100.0, 0.0], [200.0, 300.0, 0.0], [-100.0, -100.0, 0.0], [200.0, 100.0, 10.0],
+                       [200.0, 100.0, 0.0]])
+    expected = [0.25, 0.5, np.hypot(0.25, 0.5), 10.0 / landing.THIN, 0.0]
+    np.testing.assert_allclose(landing.outside_box(points, box), expected)
 
 
 def test_the_coverage_distance_is_each_joint_gap_times_its_lever():

@@ -647,13 +647,15 @@ def split_distances(robot, joints, position, splits):
         ``positions``: from the nearest training position; ``joints``: from
         what the training rows measured, joint by joint
         (`trajcomp.model.landing.coverage_distance`; absent without joints);
-        ``beyond``: outside the box of the training positions.
+        ``beyond`` and ``beyond_mm``: outside the box of the training positions, in units of its extent and
+        in mm (`trajcomp.model.landing.outside_box`).
     """
-    out = {key: np.full(len(position), np.nan) for key in ("positions", "beyond", *(("joints",) if joints is not None
-                                                                                    else ()))}
+    keys = ("positions", "beyond", "beyond_mm", *(("joints",) if joints is not None else ()))
+    out = {key: np.full(len(position), np.nan) for key in keys}
     for train, test in splits:
         out["positions"][test] = cKDTree(position[train]).query(position[test])[0]
         out["beyond"][test] = landing.outside_box(position[test], position[train])
+        out["beyond_mm"][test] = landing.outside_box(position[test], position[train], relative=False)
         if joints is not None:
             out["joints"][test] = landing.coverage_distance(robot, joints[train], joints[test])
     return out
@@ -737,7 +739,7 @@ def _landing(robot, dh, frame, data, held, fitted, split, progress, orientation,
     # its joints lie from the measured ones
     fields = {"grid"} | ({"composite"} if options["kind"] != JOINT_KIND else set())
     by_joints = set() if joints is None else set(held) - fields
-    combined = {mode: _held_rows(sets, mode, "joints" if mode in by_joints else "positions") for mode in held}
+    combined = {mode: _held_rows(sets, mode, "joints" if mode in by_joints else "positions")[:3] for mode in held}
     rotations = fk(robot, joints)[:, :3, :3] if joints is not None else (
         abc_to_matrix(orientation) if orientation is not None else None)
     parameters = ([], np.zeros(0), np.zeros((0, 0)), np.zeros(0), 0.0, 0.0)
@@ -747,26 +749,28 @@ def _landing(robot, dh, frame, data, held, fitted, split, progress, orientation,
             fitted=dict(zip(dh.names, dh.delta)),
             hidden=sum(is_robot_parameter(n) for n in dh.identifiability.fixed),
             located=locates_flange(orientation_spread(rotations)))
-    built = landing.build(combined, method, parameters, rotations, position, joints, by_joints)
+    extrapolates = {"composite"} if options["kind"] == JOINT_KIND else set()  # its terms go on beyond the ranges
+    built = landing.build(combined, method, parameters, rotations, position, joints, by_joints, extrapolates)
     mode = options["method"]
     if mode not in combined:
         return built.to_dict(), None
     rows = {kind: _held_rows([where], mode, "joints" if mode in by_joints else "positions")
             for kind, where in shown.items()}
-    d, g, e = (np.concatenate(part) for part in zip(*rows.values()))
-    near = built.rms_at(mode, d, g)
+    d, g, e, g_mm = (np.concatenate(part) for part in zip(*rows.values()))
+    near = built.rms_at(mode, d, g, g_mm)
     stated = landing.quantile_of_norm(np.zeros((len(near), 3)), near[:, None, None] ** 2 / 3.0 * np.eye(3))
     classes = np.repeat(list(rows), [len(r[0]) for r in rows.values()])
     return built.to_dict(), reliability(stated, np.linalg.norm(e, axis=1), classes, mode)
 
 
 def _held_rows(sets, mode, metric):
-    """``(distance, beyond, error)`` (M,), (M,), (M, 3) of the rows held out in ``sets`` ``[(distances, errors)]``
-    (`split_distances`, per-mode (N, 3) errors): distance by ``metric``, NaN rows (never held out) left out."""
-    d, g, e = (np.concatenate(part) for part in zip(*[(where[metric], where["beyond"], errors[mode])
-                                                      for where, errors in sets]))
+    """``(distance, beyond, error, beyond_mm)`` (M,), (M,), (M, 3), (M,) of the rows held out in ``sets``
+    ``[(distances, errors)]`` (`split_distances`, per-mode (N, 3) errors): distance by ``metric``, NaN rows (never
+    held out) left out."""
+    d, g, e, g_mm = (np.concatenate(part) for part in zip(*[
+        (where[metric], where["beyond"], errors[mode], where["beyond_mm"]) for where, errors in sets]))
     finite = np.isfinite(d) & np.isfinite(e).all(axis=1)
-    return d[finite], g[finite], e[finite]
+    return d[finite], g[finite], e[finite], g_mm[finite]
 
 
 def reliability(stated, true, classes, mode, bins=RELIABILITY_BINS):

@@ -12,11 +12,14 @@ held-out
     interpolator as the compensation (a lattice field: every other node
     plane held out; the other modes: k-fold), and at the outer layers of
     the measured positions held out in turn (how the errors grow beyond the
-    measured volume). Their RMS is fitted as it grows with the distance
+    measured volume). Their size is fitted as it grows with the distance
     from what the fit that predicted them measured (`fit_growth`): between
     positions for a field over positions, joint by joint for the other
-    modes (`coverage_distance`), and outside the box of the measured
-    positions. A target's RMS at its own distance is an isotropic part of ``S``.
+    modes (`coverage_distance`), and outside the box of the positions
+    that fit measured, in units of that box's extent (`outside_box`: a fit
+    that lost its outer layers extrapolates from a smaller box than the
+    whole model does). A target's size at its own distances is an
+    isotropic part of ``S``.
     Where the mode's field or joint residual does not apply (outside its
     grid or joint range), the kinematic model's (dh) held-out errors serve.
 unseen
@@ -65,10 +68,11 @@ from trajcomp.model.stats import ErrorStats
 from trajcomp.arm.transforms import abc_to_matrix, matrix_to_abc, mean_rotation, rotation_angle_between
 
 QUANTILE = 0.95  # the landing estimate is this quantile of a target's predicted landing error
-GROWTH_KEYS = ("rms_mm", "from_mm", "slope", "outside_slope", "outside_curve_per_mm")  # `fit_growth`'s, as stored
+GROWTH_KEYS = ("rms_mm", "from_mm", "slope", "outside_mm", "outside_curve_mm", "least_outside")  # `fit_growth`'s
 GROWTH_BINS = 8  # bins of the distance from the measured positions over which the held-out RMS is fitted
 POSITION_DIGITS = 1  # measured positions are stored rounded to 0.1 mm (and once each)
 SAME_PLACE = 5.0  # mm: measured positions closer than this are one place (several orientations at one node)
+THIN = SAME_PLACE  # mm: the least extent of a box of measured positions along an axis (one plane of them)
 JOINT_DIGITS = 3  # measured configurations are stored rounded to 0.001 deg (and once each)
 ORIENTATION_MARGIN = 1.0  # deg beyond the measured orientations' largest deviation still counted as measured
 PRIOR_FLOOR = (1e-3, 1e-6)  # mm, rad: smallest prior of a length and an angle parameter
@@ -97,11 +101,12 @@ class LandingData:
         The measured configurations (each once, to 0.001 deg), rad; none
         for a model measured without joints.
     growth : dict of str to tuple of float
-        Per mode, ``(rms, d0, slope, outside_slope, outside_curve)`` of
-        `fit_growth`: the RMS held-out |error| of a target at distance ``d``
+        Per mode, ``(rms, d0, slope, outside, outside_curve, least)`` of
+        `fit_growth`: the held-out RMS of a target at distance ``d``
         from what was measured (`coverage_distance`) and ``g`` outside the
-        box of the measured positions is ``rms + slope max(d - d0, 0) +
-        outside_slope g + outside_curve g^2`` (mm).
+        box of the measured positions, in units of its extent
+        (`outside_box`), ``b`` mm, is ``rms + slope max(d - d0, 0) +
+        max(outside g, least b) + outside_curve g^2`` (mm).
     by_joints : list of str
         The modes whose distance ``d`` is `coverage_distance` (a joint-angle
         residual); the others' is from the nearest measured position.
@@ -204,13 +209,16 @@ class LandingData:
         It grows with their distance from the measured configurations and
         outside the box of the measured positions (`fit_growth`).
         """
-        return self.rms_at(mode, self.distance(mode, robot, q, points), outside_box(points, self.positions))
+        return self.rms_at(mode, self.distance(mode, robot, q, points), outside_box(points, self.positions),
+                           outside_box(points, self.positions, relative=False))
 
-    def rms_at(self, mode, distance, beyond):
-        """RMS held-out |error| (N,) mm in ``mode`` at a distance (N,) mm from what was measured and (N,) mm
-        outside the box of the measured positions, as `fit_growth` fitted it."""
-        rms, start, slope, outside_slope, outside_curve = self.growth[mode]
-        return rms + slope * np.maximum(distance - start, 0.0) + beyond * (outside_slope + outside_curve * beyond)
+    def rms_at(self, mode, distance, beyond, beyond_mm):
+        """RMS held-out |error| (N,) mm in ``mode`` at a distance (N,) mm from what was measured and (N,)
+        outside the box of the measured positions, in units of its extent and in mm (`outside_box`), as
+        `fit_growth` fitted it."""
+        rms, start, slope, outside, outside_curve, least = self.growth[mode]
+        return (rms + slope * np.maximum(distance - start, 0.0) + np.maximum(outside * beyond, least * beyond_mm)
+                + outside_curve * beyond**2)
 
 
 def coverage_distance(robot, measured, q):
@@ -239,10 +247,19 @@ def _user_scale(names):
     return np.array([np.degrees(1.0) if is_angle(name) else 1.0 for name in names])
 
 
-def outside_box(points, positions):
-    """Distance (N,) mm of points (N, 3) outside the axis-aligned box of positions (M, 3) (0 inside)."""
+def outside_box(points, positions, relative=True):
+    """How far points (N, 3) lie outside the axis-aligned box of positions (M, 3), in units of its extent (N,).
+
+    Along each axis the distance outside the box over the box's extent
+    there (at least `THIN`), the axes joined in quadrature; 0 inside. An
+    error model extrapolates by its extent: a fit whose outer layer of a
+    400 mm cube is held out predicts that layer 100 mm beyond its 300 mm
+    box (1/3), the whole model a target 100 mm beyond the cube (1/4).
+    ``relative`` False: the distance in mm.
+    """
     lower, upper = positions.min(axis=0), positions.max(axis=0)
-    return np.linalg.norm(np.maximum(np.maximum(lower - points, points - upper), 0.0), axis=1)
+    excess = np.maximum(np.maximum(lower - points, points - upper), 0.0)
+    return np.linalg.norm(excess / np.maximum(upper - lower, THIN) if relative else excess, axis=1)
 
 
 def measured_spacing(positions):
@@ -254,38 +271,49 @@ def measured_spacing(positions):
     return float(np.median(far[np.isfinite(far)])) if np.isfinite(far).any() else SAME_PLACE
 
 
-def fit_growth(distance, beyond, errors, spacing, bins=GROWTH_BINS):
-    """How the RMS of held-out errors grows with the distance from the rows they were predicted from.
+def fit_growth(distance, beyond, errors, spacing=None, bins=GROWTH_BINS):
+    """How the size of held-out errors grows with the distance from the rows they were predicted from.
 
     The rows held out inside the measured volume (``beyond`` 0) are binned
     by distance (equal counts), and the bins' RMS |error| fitted by ``rms +
     slope (d - d0)`` (non-negative, weighted by the rows in each bin; ``d0``
     the nearest bin's distance: rows all at one distance give no slope).
     The rows held out beyond the rest (outer layers) give how much more an
-    error grows outside the measured volume: binned by their distance
-    ``g`` outside the box of the rows that predicted them, their RMS beyond
-    what the interior growth predicts is fitted by ``outside_slope g +
-    outside_curve g^2`` (non-negative). Outside, an error of the interior's
-    size may arise within every ``spacing``, which no measurement resolves:
-    ``outside_slope`` is at least the interior RMS per spacing.
+    error grows outside the measured volume: binned by their distance ``g``
+    outside the box of the rows that predicted them (`outside_box`, in
+    units of its extent), their RMS beyond what the interior growth
+    predicts is fitted by ``outside g + outside_curve g^2`` (non-negative;
+    linear where no bin shows an excess). The RMS gives each part its
+    shape; its size is then scaled so that the stated quantile (of a
+    Gaussian error of that RMS) covers `QUANTILE` of the part's own rows (a
+    conformal scale over the rows' true / stated ratios: the interior's
+    first, never below the Gaussian's own, then the outside part's). A
+    Gaussian's quantile alone covers too few: real held-out errors have
+    heavier tails (the real UR10's k-fold rows: 92.6 % within it).
+
+    Given a ``spacing``, an error of the interior's size may arise outside
+    within every spacing, which no measurement resolves: the outside
+    part's linear term is then at least ``least``, the interior size per
+    spacing, times the distance in mm (for a model that does not carry the
+    error's structure beyond the measured volume, `build`).
 
     Parameters
     ----------
     distance : ndarray, shape (M,)
         Each held-out row's distance from the nearest row of the fit that predicted it, mm.
     beyond : ndarray, shape (M,)
-        Its distance outside the box of those rows, mm.
+        Its distance outside the box of those rows (`outside_box`: in units of the box's extent).
     errors : ndarray, shape (M,)
         Its held-out |error|, mm.
-    spacing : float
-        Median distance between neighbouring measured positions, mm.
+    spacing : float, optional
+        Median distance between neighbouring measured positions, mm; default: no ``least``.
     bins : int
 
     Returns
     -------
     tuple of float
-        ``(rms, d0, slope, outside_slope, outside_curve)``: mm, mm, mm per
-        mm, mm per mm, mm per mm^2.
+        ``(rms, d0, slope, outside, outside_curve, least)``: mm, mm, mm per mm, mm, mm, mm per mm
+        (`LandingData.rms_at`).
     """
     from scipy.optimize import nnls  # here: compensating never fits a growth, and scipy.optimize takes a second to import
     inside = beyond <= 0.0
@@ -294,17 +322,26 @@ def fit_growth(distance, beyond, errors, spacing, bins=GROWTH_BINS):
     rms = np.array([np.sqrt(np.mean(errors[rows] ** 2)) for rows in groups])
     weight = np.sqrt([len(rows) for rows in groups])
     (intercept, slope), _ = nnls(np.column_stack([np.ones_like(d), d - d[0]]) * weight[:, None], rms * weight)
-    outside_slope = outside_curve = 0.0
+    factor = np.sqrt(chi2_quantile(QUANTILE, 3) / 3.0)  # the stated quantile over the RMS
+    interior = intercept + slope * np.maximum(distance - d[0], 0.0)
+    scale = max(np.quantile(errors[inside] / (factor * interior[inside]), QUANTILE), 1.0) if intercept > 0 else 1.0
+    intercept, slope, interior = scale * intercept, scale * slope, scale * interior
+    outside = outside_curve = 0.0
     if (~inside).any():
         groups = _bins(np.flatnonzero(~inside), beyond, bins)
         g = np.array([beyond[rows].mean() for rows in groups])
-        interior = [np.sqrt(np.mean((intercept + slope * np.maximum(distance[rows] - d[0], 0.0)) ** 2))
-                    for rows in groups]
-        excess = np.array([np.sqrt(np.mean(errors[rows] ** 2)) for rows in groups]) - interior
+        excess = np.array([np.sqrt(np.mean(errors[rows] ** 2)) - np.sqrt(np.mean(interior[rows] ** 2))
+                           for rows in groups])
         weight = np.sqrt([len(rows) for rows in groups])
-        (outside_slope, outside_curve), _ = nnls(np.column_stack([g, g**2]) * weight[:, None], excess * weight)
-    outside_slope = max(outside_slope, intercept / spacing)
-    return float(intercept), float(d[0]), float(slope), float(outside_slope), float(outside_curve)
+        (outside, outside_curve), _ = nnls(np.column_stack([g, g**2]) * weight[:, None], excess * weight)
+        if outside == outside_curve == 0.0:
+            outside = 1.0  # the shape, when no bin shows an excess: linear
+        shape = beyond[~inside] * (outside + outside_curve * beyond[~inside])
+        needed = np.maximum(errors[~inside] / factor - interior[~inside], 0.0) / shape
+        scale = np.quantile(needed, QUANTILE)
+        outside, outside_curve = scale * outside, scale * outside_curve
+    least = 0.0 if spacing is None else intercept / spacing
+    return float(intercept), float(d[0]), float(slope), float(outside), float(outside_curve), float(least)
 
 
 def _bins(rows, key, bins):
@@ -431,7 +468,7 @@ def orientation_reference(rotations):
     return reference, float(rotation_angle_between(rotations, reference[None]).max())
 
 
-def build(held, method, parameters, rotations, positions, joints, by_joints=frozenset()):
+def build(held, method, parameters, rotations, positions, joints, by_joints=frozenset(), extrapolates=frozenset()):
     """`LandingData` from held-out errors, the posterior and the measured orientations.
 
     Parameters
@@ -439,7 +476,7 @@ def build(held, method, parameters, rotations, positions, joints, by_joints=froz
     held : dict of str to tuple of ndarray
         Per mode, ``(distance (M,), beyond (M,), errors (M, 3))``: held-out
         errors (mm), each one's distance from the rows of the fit that
-        predicted it and outside their box (mm).
+        predicted it (mm) and outside their box (`outside_box`).
     method : str
         How they were held out, in words.
     parameters : tuple
@@ -454,13 +491,19 @@ def build(held, method, parameters, rotations, positions, joints, by_joints=froz
     by_joints : set of str
         The modes whose distances are `coverage_distance` (a joint-angle
         residual); the others' are between positions.
+    extrapolates : set of str
+        The modes whose model carries the error's structure beyond the
+        measured volume (a joint residual's gear and gravity terms): their
+        growth outside is the outer layers' alone. The others' grows by at
+        least an error of the interior's size per measured spacing (`fit_growth`).
     """
     names, shift, covariance, deltas, turning, flange_turn = parameters
     reference, spread = (np.eye(3), np.pi) if rotations is None else orientation_reference(rotations)
     stats = {mode: ErrorStats.from_errors(e).as_dict() for mode, (_, _, e) in held.items()}
     unique = np.unique(np.round(positions, POSITION_DIGITS), axis=0)
     spacing = measured_spacing(unique)
-    growth = {mode: fit_growth(d, g, np.linalg.norm(e, axis=1), spacing) for mode, (d, g, e) in held.items()}
+    growth = {mode: fit_growth(d, g, np.linalg.norm(e, axis=1), None if mode in extrapolates else spacing)
+              for mode, (d, g, e) in held.items()}
     configurations = np.zeros((0, 6)) if joints is None else np.radians(
         np.unique(np.round(np.degrees(joints), JOINT_DIGITS), axis=0))
     return LandingData(stats, method, unique, configurations, growth, sorted(by_joints), list(names), shift,
@@ -608,9 +651,11 @@ def _beyond_joint_range(model, data, robot, q):
     UR10 arms (``bench_verdict.py``: paper and harsh profiles, seeds 21-23)
     the held-out errors, which lie inside the joints' ranges, show no
     growth that would cover targets 50-150 deg beyond them (coverage 64-88 %
-    near the singularities without this term); with it they are covered
+    near the singularities without this term); with it they were covered
     96-100 %, at a median estimate 2.2-10x the true error (a ramp of 30
-    deg: up to 11x; of 90 deg: coverage down to 84 %).
+    deg: up to 11x; of 90 deg: coverage down to 84 %), with the held-out
+    growth of the time (before `outside_box` counted in units of the box's
+    extent and `fit_growth` scaled each part to its rows).
     """
     residual = model.residual
     gap = np.maximum(np.maximum(residual.lower - q, q - residual.upper), 0.0)
