@@ -141,6 +141,26 @@ def test_outside_the_box_counts_in_units_of_its_extent():
     np.testing.assert_allclose(landing.outside_box(points, box), expected)
 
 
+def test_a_model_calibrated_before_the_box_counted_in_extents_keeps_its_estimate(cell):
+    """Its growth outside was stored per mm (``outside_slope``, ``outside_curve_per_mm``): read, it states what it
+    stated, exactly along the box's longest side, at least that elsewhere."""
+    stored = cell[2].report["landing"]
+    rms, start, slope, per_mm, curve_per_mm = 0.01, 2.0, 3e-4, 2e-4, 1e-6
+    old = dict(stored, growth={mode: {"rms_mm": rms, "from_mm": start, "slope": slope, "outside_slope": per_mm,
+                                      "outside_curve_per_mm": curve_per_mm} for mode in stored["growth"]})
+    data = landing.LandingData.from_dict(old)
+    lower, upper = data.positions.min(axis=0), data.positions.max(axis=0)
+    longest = int(np.argmax(upper - lower))
+    points = np.repeat(((lower + upper) / 2)[None], 3, axis=0)
+    points[0, longest] = upper[longest] + 120.0  # along the longest side
+    points[1, (longest + 1) % 3] = upper[(longest + 1) % 3] + 120.0  # along a shorter one
+    beyond_mm = landing.outside_box(points, data.positions, relative=False)
+    was = rms + slope * (30.0 - start) + beyond_mm * (per_mm + curve_per_mm * beyond_mm)
+    now = data.rms_at("composite", np.full(3, 30.0), landing.outside_box(points, data.positions), beyond_mm)
+    np.testing.assert_allclose(now[[0, 2]], was[[0, 2]], rtol=1e-12)
+    assert now[1] >= was[1]
+
+
 def test_the_coverage_distance_is_each_joint_gap_times_its_lever():
     robot = load_robot("ur10")
     rng = np.random.default_rng(7)

@@ -172,10 +172,11 @@ class LandingData:
             parameters = data["parameters"]
             names = list(parameters["names"])
             scale = _user_scale(names)
-            growth = {mode: tuple(float(g[key]) for key in GROWTH_KEYS) for mode, g in data["growth"].items()}
+            positions = np.array(data["positions_mm"], dtype=float).reshape(-1, 3)
+            growth = {mode: _stored_growth(g, positions) for mode, g in data["growth"].items()}
             return cls(
                 held_out=dict(data["held_out"]), method=str(data["method"]),
-                positions=np.array(data["positions_mm"], dtype=float).reshape(-1, 3),
+                positions=positions,
                 configurations=np.radians(np.array(data["configurations_deg"], dtype=float).reshape(-1, 6)),
                 growth=growth, by_joints=[str(m) for m in data["by_joints"]], names=names,
                 shift=np.array(parameters["shift"], dtype=float).reshape(len(names)) / scale,
@@ -219,6 +220,22 @@ class LandingData:
         rms, start, slope, outside, outside_curve, least = self.growth[mode]
         return (rms + slope * np.maximum(distance - start, 0.0) + np.maximum(outside * beyond, least * beyond_mm)
                 + outside_curve * beyond**2)
+
+
+def _stored_growth(stored, positions):
+    """A mode's `fit_growth` tuple from its stored entry (`GROWTH_KEYS`), or from the entry of a model calibrated
+    before the growth outside counted in units of the box's extent: ``outside_slope`` (mm per mm outside) and
+    ``outside_curve_per_mm`` (mm per mm^2).
+
+    An older model keeps its estimate: its linear term outside becomes the
+    least growth per mm, exact; its curve counts the distance over the
+    box's longest extent, at least what it stated (equal along that axis).
+    """
+    if "outside_slope" not in stored:
+        return tuple(float(stored[key]) for key in GROWTH_KEYS)
+    extent = float(np.max(np.maximum(np.ptp(positions, axis=0), THIN))) if len(positions) else THIN
+    return (float(stored["rms_mm"]), float(stored["from_mm"]), float(stored["slope"]), 0.0,
+            float(stored["outside_curve_per_mm"]) * extent**2, float(stored["outside_slope"]))
 
 
 def coverage_distance(robot, measured, q):
