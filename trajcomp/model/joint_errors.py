@@ -179,7 +179,8 @@ class SplineBasis:
         return table
 
     def offsets(self, q, table):
-        """DH-angle errors (N, 6) rad of spline terms with coefficients ``table`` (`coefficients`), at joints q (N, 6) rad."""
+        """DH-angle errors (N, 6) rad of the spline terms of coefficients ``table`` (`coefficients`) at joints q (N, 6)
+        rad."""
         out = np.zeros((len(q), 6))
         joints = [j for j in range(6) if self.intervals(j)]
         if joints:
@@ -260,9 +261,10 @@ def _layout(names):
         gear = [k for k, n in enumerate(names) if n.startswith("gear") and term_joint(n) == j]
         gravity = [k for k, n in enumerate(names) if n.startswith("grav") and term_joint(n) == j]
         lumps = [names[k].split("_")[1] for k in gravity]
-        layout.append((np.array([float(names[k][-1]) for k in gear]), np.array([names[k][-2] == "s" for k in gear], dtype=bool),
-                       np.array([7 if lump == "t" else int(lump) for lump in lumps], dtype=int),
-                       np.array(gear + gravity, dtype=int)))
+        harmonics = np.array([float(names[k][-1]) for k in gear])
+        sines = np.array([names[k][-2] == "s" for k in gear], dtype=bool)
+        frames = np.array([7 if lump == "t" else int(lump) for lump in lumps], dtype=int)
+        layout.append((harmonics, sines, frames, np.array(gear + gravity, dtype=int)))
     return layout
 
 
@@ -365,16 +367,17 @@ class JointResidual:
         """`offsets` (n, 6) of a block of commanded joints q (n, 6) (`trajcomp.arm.kinematics.in_blocks`).
 
         Each term's feature (`features`) times its coefficient, summed per
-        joint in the order of the names (the sum a product with a (T, 6)
-        matrix of the terms' joints makes, to the bit), then the splines'.
+        joint in the order of the names (the order in which a product with a
+        (T, 6) matrix of the terms' joints summed them: the same bits), then
+        the splines'.
         """
         layout, values, splines = self._terms_laid_out
         out = np.zeros(q.shape)
         columns = [None]
         for j, (harmonics, sines, lumps, order) in enumerate(layout):
             if order.size:
-                features = _joint_features(nominal, q, j, harmonics, sines, lumps, columns)
-                out[:, j] = np.add.reduce(features * values[order][:, None], axis=0)
+                terms = _joint_features(nominal, q, j, harmonics, sines, lumps, columns) * values[order][:, None]
+                out[:, j] = np.add.reduce(terms, axis=0)
         if self.basis is not None:
             out += self.basis.offsets(q, splines)
         return out
