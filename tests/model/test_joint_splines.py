@@ -153,6 +153,26 @@ def test_spline_terms_hold_their_edge_value_beyond_the_measured_range_and_gear_t
     assert np.allclose(gear.offsets(robot, q)[:, 0], 1e-4 * np.sin(q[:, 0]), rtol=0, atol=1e-15)
 
 
+def test_offsets_are_the_identifications_features_times_their_coefficients():
+    """Every term (harmonics, gravity at each frame and the TCP, splines) summed per joint as `offsets` does it
+    equals the feature matrix identification fits (`features`, the spline basis matrix) times the coefficients."""
+    robot = load_robot("ur10")
+    basis = SplineBasis(RANGE[:, 0], RANGE[:, 1], np.radians([10, 7, 0, 0, 12, 0]))
+    smooth = joint_errors.term_names()
+    names = [*smooth, *basis.names()]
+    values = np.random.default_rng(6).normal(0.0, 1e-4, len(names))
+    residual = JointResidual(names, values, RANGE[:, 0], RANGE[:, 1], basis)
+    q = np.vstack([joints_in_range(3000, 7), RANGE[:, 1] + 0.1])  # past the top too: the splines' edge
+    expected = np.zeros((len(q), 6))
+    for k, value in enumerate((joint_errors.features(robot, q, smooth) * values[: len(smooth)]).T):
+        expected[:, joint_errors.term_joint(smooth[k])] += value
+    for j in (0, 1, 4):
+        own = values[[names.index(f"spline{j + 1}_{k}") for k in range(basis.intervals(j) + 3)]]
+        expected[:, j] += basis.matrix(q, j) @ own
+    np.testing.assert_allclose(residual.offsets(robot, q), expected, rtol=0, atol=1e-15)
+    assert np.abs(expected).max() > 1e-4
+
+
 def test_region_folds_hold_out_whole_slabs_never_interleaved_rows():
     position = np.random.default_rng(0).uniform(-100.0, 100.0, (200, 3)) * [1.0, 4.0, 2.0]
     regions, words = region_folds(position, 4)

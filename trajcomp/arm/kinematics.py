@@ -5,9 +5,12 @@ into DH angles. Poses are homogeneous matrices in mm, expressed in the robot
 base frame.
 """
 
+import weakref
+
 import numpy as np
 
 BLOCK = 2048  # rows computed together: enough to vectorize, few enough to keep the arrays in cache
+_CHAINS = weakref.WeakKeyDictionary()  # robot -> `_chain` (made once per robot: FK runs in blocks, many per robot)
 
 
 def dh_link_transforms(a, alpha, d, theta, beta=0.0):
@@ -201,7 +204,7 @@ def _frame_columns(robot, q, tcp):
         ``[i, k]``: column k (x, y, z axis, origin in mm) of DH frame i
         (i = 0..6) or of the end frame (i = 7), base frame.
     """
-    std = robot.as_standard()
+    std, twists = _chain(robot)
     theta = std.dh_angles(np.atleast_2d(q)).T
     cos, sin = _cos_sin(theta)
     columns = np.empty((8, 4, 3, theta.shape[1]))
@@ -214,13 +217,22 @@ def _frame_columns(robot, q, tcp):
         np.multiply(cos[i], y, out=turned[1])
         turned[1] -= sin[i] * x
         turned[2] = z
-        np.matmul(_twist(std.alpha[i], std.beta[i]).T, turned.reshape(3, -1), out=columns[i + 1, :3].reshape(3, -1))
+        np.matmul(twists[i], turned.reshape(3, -1), out=columns[i + 1, :3].reshape(3, -1))
         columns[i + 1, 3] = origin + std.d[i] * z + std.a[i] * turned[0]
     end = robot.T_link6_flange @ robot.T_flange_tool if tcp else robot.T_link6_flange
     rotation6 = columns[6, :3].reshape(3, -1)
     np.matmul(end[:3, :3].T, rotation6, out=columns[7, :3].reshape(3, -1))
     columns[7, 3] = columns[6, 3] + (end[:3, 3] @ rotation6).reshape(3, -1)
     return columns
+
+
+def _chain(robot):
+    """The standard DH table of ``robot`` (`Robot.as_standard`) and its links' fixed rotations, transposed (6, 3, 3)."""
+    chain = _CHAINS.get(robot)
+    if chain is None:
+        std = robot.as_standard()
+        chain = _CHAINS[robot] = std, np.array([_twist(std.alpha[i], std.beta[i]).T for i in range(6)])
+    return chain
 
 
 def _twist(alpha, beta):

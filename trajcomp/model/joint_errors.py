@@ -31,6 +31,7 @@ coefficients are identified with a refinement of the DH parameters
 """
 
 import dataclasses
+import functools
 import re
 
 import numpy as np
@@ -70,10 +71,18 @@ def term_joint(name):
     return int(name[6 if is_spline(name) else 4]) - 1
 
 
-def cardinal_cubic(u):
-    """Uniform cubic B-spline (N,) centred at 0, support (-2, 2), at u (N,) in knot steps."""
-    u = np.abs(u)
-    return np.where(u < 1.0, (4.0 - 6.0 * u**2 + 3.0 * u**3) / 6.0, np.where(u < 2.0, (2.0 - u) ** 3 / 6.0, 0.0))
+def cubic_pieces(t):
+    """The 4 uniform cubic B-splines non-zero in a knot interval, at places t (...) in [0, 1] along it.
+
+    Returns
+    -------
+    ndarray, shape (..., 4)
+        The B-spline centred one knot before the interval's start, at its
+        start, at its end and one knot after it (dimensionless, summing to 1).
+    """
+    inner = lambda u: (4.0 - 6.0 * u**2 + 3.0 * u**3) / 6.0  # noqa: E731 (|u| <= 1 knot steps from the centre)
+    outer = lambda u: (2.0 - u) ** 3 / 6.0  # noqa: E731 (1 to 2 knot steps)
+    return np.stack([outer(t + 1.0), inner(t), inner(np.abs(t - 1.0)), outer(np.abs(t - 2.0))], axis=-1)
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -131,12 +140,26 @@ class SplineBasis:
         values : ndarray, shape (N, 4)
             Their values (dimensionless, summing to 1).
         """
-        count = self.intervals(joint)
-        width = max(self.upper[joint] - self.lower[joint], 1e-12) / count
-        u = (np.clip(q[:, joint], self.lower[joint], self.upper[joint]) - self.lower[joint]) / width
-        first = np.minimum(np.floor(u).astype(int), count - 1)  # basis k is centred at knot k - 1
-        columns = first[:, None] + np.arange(4)
-        return columns, cardinal_cubic(u[:, None] - (columns - 1))
+        first, place = self._intervals_at(q, [joint])
+        return first + np.arange(4), cubic_pieces(place[:, 0])
+
+    def _intervals_at(self, q, joints):
+        """The knot interval of each of commanded joints q (N, 6) rad, of 0-based ``joints`` (M,) with splines.
+
+        Returns
+        -------
+        first : ndarray of int, shape (N, M)
+            Index of the interval, which is that of the first of the 4
+            basis functions non-zero in it (basis k is centred at knot k - 1).
+        place : ndarray, shape (N, M)
+            Where the angle lies along it, in [0, 1] (angles beyond the
+            measured range at its boundary).
+        """
+        count = np.array([self.intervals(j) for j in joints])
+        lower, upper = self.lower[joints], self.upper[joints]
+        u = (np.clip(q[:, joints], lower, upper) - lower) / (np.maximum(upper - lower, 1e-12) / count)
+        first = np.minimum(np.floor(u).astype(int), count - 1)
+        return first, u - first
 
     def matrix(self, q, joint):
         """Basis values (N, K) of a 0-based joint at commanded joints q (N, 6) rad, sparse (4 per row, `support`)."""
@@ -146,20 +169,25 @@ class SplineBasis:
         rows = np.repeat(np.arange(len(q)), 4)
         return sparse.csr_matrix((values.ravel(), (rows, columns.ravel())), shape=(len(q), self.intervals(joint) + 3))
 
-    def offsets(self, q, names, values):
-        """DH-angle errors (N, 6) rad of spline terms ``names`` with coefficients ``values`` (rad), at joints q (N, 6) rad.
+    def coefficients(self, names, values):
+        """The spline terms among ``names`` with coefficients ``values`` (rad) as a table (6, K) rad: row j the
+        coefficients of joint j's basis functions in order (zero for a term not named, and beyond its count)."""
+        table = np.zeros((6, max(self.intervals(j) for j in range(6)) + 3))
+        for name, value in zip(names, values):
+            if is_spline(name):
+                table[term_joint(name), int(name.split("_")[1])] = value
+        return table
 
-        Other names in ``names`` are ignored.
-        """
+    def offsets(self, q, table):
+        """DH-angle errors (N, 6) rad of the spline terms of coefficients ``table`` (`coefficients`) at joints q (N, 6)
+        rad."""
         out = np.zeros((len(q), 6))
-        coefficients = {n: v for n, v in zip(names, values) if is_spline(n)}
-        for joint in range(6):
-            count = self.intervals(joint) + 3 if self.intervals(joint) else 0
-            if not count:
-                continue
-            own = np.array([coefficients.get(f"spline{joint + 1}_{k}", 0.0) for k in range(count)])
-            columns, weights = self.support(q, joint)
-            out[:, joint] = np.einsum("nk,nk->n", weights, own[columns])
+        joints = [j for j in range(6) if self.intervals(j)]
+        if joints:
+            first, place = self._intervals_at(q, joints)
+            own = table[joints][np.arange(len(joints))[:, None], first[..., None] + np.arange(4)]  # (N, M, 4)
+            terms = own * cubic_pieces(place)
+            out[:, joints] = (terms[..., 0] + terms[..., 2]) + (terms[..., 1] + terms[..., 3])  # as einsum sums 4
         return out
 
     def roughness(self, names):
@@ -215,29 +243,49 @@ def features(nominal, q, names):
 
 
 def _block_features(nominal, q, names):
-    """`features` (n, T) of a block of configurations q (n, 6) (`trajcomp.arm.kinematics.in_blocks`).
+    """`features` (n, T) of a block of configurations q (n, 6) (`trajcomp.arm.kinematics.in_blocks`)."""
+    out = np.empty((len(q), len(names)))
+    columns = [None]  # the DH frames' columns, once a gravity term needs them
+    for j, (harmonics, sines, lumps, order) in enumerate(_layout(names)):
+        out[:, order] = _joint_features(nominal, q, j, harmonics, sines, lumps, columns).T
+    return out
+
+
+def _layout(names):
+    """The gear and gravity terms among ``names`` joint by joint, as `_joint_features` computes them: per joint its
+    harmonics (H,), whether each is a sine (H,) bool, the frames its gravity terms' weights are at (G,) int (DH
+    frames 0..6, the TCP as 7) and where those H + G terms are in ``names`` (the harmonics first, as `term_names`
+    orders them)."""
+    layout = []
+    for j in range(6):
+        gear = [k for k, n in enumerate(names) if n.startswith("gear") and term_joint(n) == j]
+        gravity = [k for k, n in enumerate(names) if n.startswith("grav") and term_joint(n) == j]
+        lumps = [names[k].split("_")[1] for k in gravity]
+        harmonics = np.array([float(names[k][-1]) for k in gear])
+        sines = np.array([names[k][-2] == "s" for k in gear], dtype=bool)
+        frames = np.array([7 if lump == "t" else int(lump) for lump in lumps], dtype=int)
+        layout.append((harmonics, sines, frames, np.array(gear + gravity, dtype=int)))
+    return layout
+
+
+def _joint_features(nominal, q, j, harmonics, sines, lumps, columns):
+    """The features (H + G, n) of joint ``j``'s harmonics and gravity terms (`_layout`) at configurations q (n, 6).
 
     The torque about axis ``j`` of a unit weight along -z of the base frame
     at a point ``p`` is ``axis . ((p - origin) x (0, 0, -1))``, whose cross
     product is ``(-lever_y, lever_x, 0)``: two products per term on the DH
     frames' columns (`trajcomp.arm.kinematics.frame_columns`, the TCP as
-    frame 7).
+    frame 7), which ``columns[0]`` holds once made (None before).
     """
-    out = np.empty((len(q), len(names)))
-    columns = None
-    for k, name in enumerate(names):
-        j = term_joint(name)
-        if name.startswith("gear"):
-            harmonic = int(name[-1])
-            out[:, k] = (np.sin if name[-2] == "s" else np.cos)(harmonic * q[:, j])
-            continue
-        if columns is None:
-            columns = frame_columns(nominal, q, tcp=True)
-        lump = name.split("_")[1]
-        lever = columns[7 if lump == "t" else int(lump), 3, :2] - columns[j, 3, :2]
-        axis = columns[j, 2]
-        out[:, k] = (axis[0] * -lever[1] + axis[1] * lever[0]) / 1000.0
-    return out
+    multiples = harmonics[:, None] * q[:, j]
+    multiples[sines], multiples[~sines] = np.sin(multiples[sines]), np.cos(multiples[~sines])
+    if not lumps.size:
+        return multiples
+    if columns[0] is None:
+        columns[0] = frame_columns(nominal, q, tcp=True)
+    lever = columns[0][lumps, 3, :2] - columns[0][j, 3, :2]  # (G, 2, n), mm
+    axis = columns[0][j, 2]
+    return np.concatenate([multiples, (axis[1] * lever[:, 0] - axis[0] * lever[:, 1]) / 1000.0])
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -313,13 +361,34 @@ class JointResidual:
         mm mean, 0.24-0.26 against 0.79-1.08, 0.11 against 0.22-0.37).
         """
         q = np.atleast_2d(np.asarray(q, dtype=float))
-        names, values = self.terms
-        smooth = [k for k, n in enumerate(names) if not is_spline(n)]
-        joint_of_term = np.eye(6)[[term_joint(names[k]) for k in smooth]].reshape(-1, 6)  # (T, 6)
-        out = (features(nominal, q, [names[k] for k in smooth]) * values[smooth]) @ joint_of_term
+        return in_blocks(lambda block: (self._block_offsets(nominal, block),), q)[0]
+
+    def _block_offsets(self, nominal, q):
+        """`offsets` (n, 6) of a block of commanded joints q (n, 6) (`trajcomp.arm.kinematics.in_blocks`).
+
+        Each term's feature (`features`) times its coefficient, summed per
+        joint in the order of the names (the order in which a product with a
+        (T, 6) matrix of the terms' joints summed them: the same bits), then
+        the splines'.
+        """
+        layout, values, splines = self._terms_laid_out
+        out = np.zeros(q.shape)
+        columns = [None]
+        for j, (harmonics, sines, lumps, order) in enumerate(layout):
+            if order.size:
+                terms = _joint_features(nominal, q, j, harmonics, sines, lumps, columns) * values[order][:, None]
+                out[:, j] = np.add.reduce(terms, axis=0)
         if self.basis is not None:
-            out += self.basis.offsets(q, names, values)
+            out += self.basis.offsets(q, splines)
         return out
+
+    @functools.cached_property
+    def _terms_laid_out(self):
+        """The terms as `offsets` takes them: the `_layout` of their names, their coefficients (rad, rad/m) in the
+        names' order and the splines' table (`SplineBasis.coefficients`, None without a basis)."""
+        names, values = self.terms
+        splines = None if self.basis is None else self.basis.coefficients(names, values)
+        return _layout(names), values, splines
 
     def reached(self, nominal, q):
         """Joint angles (N, 6) rad the arm really takes for commands q: DH-angle errors mapped by the joint map."""

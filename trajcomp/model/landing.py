@@ -712,7 +712,8 @@ def quantile_of_norm(mean, covariance, level=None):
                                                                                         mean)
     scale = np.where(first > 0, second / np.maximum(2.0 * first, 1e-300), 0.0)
     freedom = np.where(second > 0, 2.0 * first**2 / np.maximum(second, 1e-300), 1.0)
-    return np.sqrt(scale * chi2_quantile(level, np.maximum(freedom, 1e-6)))
+    distinct, row = np.unique(np.maximum(freedom, 1e-6), return_inverse=True)  # isotropic errors: a few
+    return np.sqrt(scale * chi2_quantile(level, distinct)[row])
 
 
 def _reference_jacobian(model, identified, data, T_target, q, names, postures):

@@ -24,7 +24,7 @@ from trajcomp.programs.program import place_text
 from trajcomp.formats.speeds import arc_length
 
 KINDS = (JOINT, LINEAR, CIRCULAR)
-CORNER_BLOCK = 65536  # motions whose corners `corner_lengths` places at once: two (4, 4) poses each, 16 MB a block
+CORNER_BLOCK = 65536  # motions whose corners `corner_lengths` places at once: two (4, 4) poses each at most
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -182,7 +182,9 @@ def corner_lengths(moves, robot, k):
         arm = robot.replace(T_flange_tool=moves.tools[tool_index])
         used = np.flatnonzero(moves.tool[k] == tool_index)
         for rows in (used[lo : lo + CORNER_BLOCK] for lo in range(0, len(used), CORNER_BLOCK)):
-            start, end = fk(arm, moves.q[k[rows] - 1])[:, :3, 3], fk(arm, moves.q[k[rows]])[:, :3, 3]
+            corners = np.union1d(k[rows] - 1, k[rows])  # a run's motions share their corners: each placed once
+            placed = fk(arm, moves.q[corners])[:, :3, 3]
+            start, end = placed[np.searchsorted(corners, k[rows] - 1)], placed[np.searchsorted(corners, k[rows])]
             out[rows] = np.linalg.norm(end - start, axis=1)
             for i in np.flatnonzero(moves.kind[k[rows]] == CIRCULAR).tolist():
                 via = fk(arm, moves.via[k[rows[i]]][None])[0, :3, 3]
