@@ -5,6 +5,7 @@ as a CI runner or a terminal starts them (tests/signal_runs.py); a handful
 of moments here, hundreds in tests/benchmarks/bench_signals.py.
 """
 
+import contextlib
 import dataclasses
 import json
 import multiprocessing
@@ -395,6 +396,22 @@ def test_a_local_dask_cluster_left_without_workers_fails_the_files_not_done(tmp_
                            jobs=1, scheduler="local")
     assert [r.status for r in results][1:] == [ERROR, ERROR] and results[0].status in ("pass", ERROR)
     assert all("no worker left" in r.message for r in results if r.status == ERROR)
+
+
+def test_a_local_dask_cluster_that_failed_to_start_as_the_run_stopped_stops_it(tmp_path, monkeypatch):
+    """A SIGINT to the group killed a starting worker, and the run said exit 2 'did not start' (bench_signals)."""
+    pytest.importorskip("dask.distributed")
+
+    def starting(**options):  # the signal came as the cluster started; its exception did not reach this thread
+        with contextlib.suppress(Interrupted):
+            os.kill(os.getpid(), signal.SIGINT)
+            time.sleep(5)
+        raise RuntimeError("StoppingNanny failed to start.")
+
+    monkeypatch.setattr("dask.distributed.LocalCluster", starting)
+    with raised(), pytest.raises(Interrupted) as stop:
+        run_batch(None, [tmp_path / "a"], [tmp_path / "out" / "a"], scheduler="local")
+    assert stop.value.signum == signal.SIGINT
 
 
 def test_a_process_spawned_with_sigint_blocked_is_ended_by_it_as_it_imports_trajcomp(capfd):

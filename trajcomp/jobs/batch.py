@@ -242,6 +242,8 @@ def _on_dask(job, inputs, outputs, jobs, scheduler, done):
                     cluster = LocalCluster(n_workers=max(jobs, 1), threads_per_worker=1, dashboard_address=None,
                                            worker_class=_stopping_nanny(Nanny, nannies), preload=["trajcomp"])
                 except RuntimeError as exc:  # "Nanny failed to start": a worker process died as it started
+                    if stopped() is not None:  # by the stopping signal that stopped the run (sent to the group)
+                        raise stopped() from exc
                     raise TrajcompError(f"--scheduler local: the local Dask cluster did not start ({exc}: a worker "
                                         "process died as it started)") from exc
             with Client(cluster if cluster is not None else scheduler, timeout="20s") as client:
