@@ -35,6 +35,7 @@ log = logging.getLogger(__name__)
 PASS, FAIL, ERROR, CRASH = "pass", "fail", "error", "crash"
 EXIT_CODES = {PASS: 0, FAIL: 1, ERROR: 2, CRASH: crash.EXIT_CODE}  # a crash is a bug: neither success nor bad input
 SUMMARY_SCHEMA = "trajcomp-batch/1"
+RESTARTS_WAITED = "1000 days"  # a local Dask cluster's lost-worker timeout: its nannies restart workers however slowly
 
 
 @dataclasses.dataclass(frozen=True)
@@ -237,7 +238,7 @@ def _on_dask(job, inputs, outputs, jobs, scheduler, done):
     try:
         with contextlib.ExitStack() as local:
             if scheduler == "local":
-                local.enter_context(dask.config.set({"distributed.deploy.lost-worker-timeout": "1000 days"}))
+                local.enter_context(dask.config.set({"distributed.deploy.lost-worker-timeout": RESTARTS_WAITED}))
                 try:
                     cluster = LocalCluster(n_workers=max(jobs, 1), threads_per_worker=1, dashboard_address=None,
                                            worker_class=_stopping_nanny(Nanny, nannies), preload=["trajcomp"])
@@ -261,16 +262,8 @@ def _on_dask(job, inputs, outputs, jobs, scheduler, done):
                         break
                     for future, result in finished.next_batch(block=False):
                         k = where[future.key]
-                        if not isinstance(result, FileResult):  # its error: (type, exception, traceback), or the
-                            error = result if isinstance(result, BaseException) else result[1]  # cancellation
-                            if not isinstance(error, KilledWorker):
-                                raise error
-                            # its worker died each time Dask tried it (the OOM killer): this file failed
-                            result = FileResult(named(inputs[k]), status=ERROR,
-                                                message=f"its Dask worker died each time it was tried ({error}); "
-                                                "it was not compensated")
-                        results[k] = result
-                        done(result)
+                        results[k] = _dask_result(result, inputs[k], KilledWorker)
+                        done(results[k])
                     time.sleep(0.05)
             if cluster is not None:
                 _close_local(cluster)
@@ -287,9 +280,27 @@ def _on_dask(job, inputs, outputs, jobs, scheduler, done):
         raise
 
 
+def _dask_result(result, path, killed_worker):
+    """A file's `FileResult` from what Dask's ``as_completed(with_results=True, raise_errors=False)`` gave for it:
+    its result, or its error, ``(type, exception, traceback)`` (a cancellation: the exception alone).
+
+    A `killed_worker` error (Dask's KilledWorker: its worker died each time
+    Dask tried it, as the OOM killer does) fails this file; any other is
+    raised.
+    """
+    if isinstance(result, FileResult):
+        return result
+    error = result if isinstance(result, BaseException) else result[1]
+    if not isinstance(error, killed_worker):
+        raise error
+    return FileResult(named(path), status=ERROR,
+                      message=f"its Dask worker died each time it was tried ({error}); it was not compensated")
+
+
 def _workers_coming(cluster):
     """Whether a local Dask cluster has a nanny that runs its worker or restarts it (not one closed or failed)."""
-    return any(nanny.status.name in ("init", "created", "starting", "running") for nanny in list(cluster.workers.values()))
+    return any(nanny.status.name in ("init", "created", "starting", "running")
+               for nanny in list(cluster.workers.values()))
 
 
 def _stopping_nanny(nanny_base, nannies):
