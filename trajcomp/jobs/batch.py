@@ -35,6 +35,7 @@ log = logging.getLogger(__name__)
 PASS, FAIL, ERROR, CRASH = "pass", "fail", "error", "crash"
 EXIT_CODES = {PASS: 0, FAIL: 1, ERROR: 2, CRASH: crash.EXIT_CODE}  # a crash is a bug: neither success nor bad input
 SUMMARY_SCHEMA = "trajcomp-batch/1"
+RESTARTS_WAITED = "1000 days"  # a local Dask cluster's lost-worker timeout: its nannies restart workers however slowly
 
 
 @dataclasses.dataclass(frozen=True)
@@ -213,7 +214,19 @@ def _reported(result, done):
 
 
 def _on_dask(job, inputs, outputs, jobs, scheduler, done):
+    """`run_batch` on a Dask cluster: its scheduler's address, or ``"local"`` for a local cluster of ``jobs``
+    workers.
+
+    Each result is gathered as its file is done (kept on its worker, a
+    worker that died later lost it: computed again). A local cluster's
+    nanny restarts a worker that died for as long as its start takes (Dask
+    closes a nanny whose worker is not back within its lost-worker timeout,
+    15 s, that a loaded machine's start exceeds: then no worker was left and
+    the batch waited forever); once none is left (a restart failed), the
+    files not done are errors.
+    """
     try:
+        import dask
         from dask.distributed import Client, KilledWorker, LocalCluster, Nanny, as_completed
     except ImportError as exc:
         raise TrajcompError(
@@ -223,28 +236,37 @@ def _on_dask(job, inputs, outputs, jobs, scheduler, done):
         _start_resource_tracker()
     cluster, nannies = None, []
     try:
-        if scheduler == "local":
-            try:
-                cluster = LocalCluster(n_workers=max(jobs, 1), threads_per_worker=1, dashboard_address=None,
-                                       worker_class=_stopping_nanny(Nanny, nannies), preload=["trajcomp"])
-            except RuntimeError as exc:  # "Nanny failed to start": a worker process died as it started
-                raise TrajcompError(f"--scheduler local: the local Dask cluster did not start ({exc}: a worker "
-                                    "process died as it started)") from exc
-        with Client(cluster if cluster is not None else scheduler, timeout="20s") as client:
-            futures = client.map(run_one, [job] * len(inputs), inputs, outputs, pure=False)
-            where = {future.key: k for k, future in enumerate(futures)}
-            results = [None] * len(futures)
-            for future in as_completed(futures):
-                k = where[future.key]
+        with contextlib.ExitStack() as local:
+            if scheduler == "local":
+                local.enter_context(dask.config.set({"distributed.deploy.lost-worker-timeout": RESTARTS_WAITED}))
                 try:
-                    results[k] = future.result()
-                except KilledWorker as lost:  # its worker died each time Dask tried it (the OOM killer): this file
-                    results[k] = FileResult(named(inputs[k]), status=ERROR,
-                                            message=f"its Dask worker died each time it was tried ({lost}); "
-                                            "it was not compensated")
-                done(results[k])
-        if cluster is not None:
-            _close_local(cluster)
+                    cluster = LocalCluster(n_workers=max(jobs, 1), threads_per_worker=1, dashboard_address=None,
+                                           worker_class=_stopping_nanny(Nanny, nannies), preload=["trajcomp"])
+                except RuntimeError as exc:  # "Nanny failed to start": a worker process died as it started
+                    if stopped() is not None:  # by the stopping signal that stopped the run (sent to the group)
+                        raise stopped() from exc
+                    raise TrajcompError(f"--scheduler local: the local Dask cluster did not start ({exc}: a worker "
+                                        "process died as it started)") from exc
+            with Client(cluster if cluster is not None else scheduler, timeout="20s") as client:
+                futures = client.map(run_one, [job] * len(inputs), inputs, outputs, pure=False)
+                where = {future.key: k for k, future in enumerate(futures)}
+                results = [None] * len(futures)
+                finished = as_completed(futures, with_results=True, raise_errors=False)
+                while not finished.is_empty():
+                    if not finished.has_ready() and cluster is not None and not _workers_coming(cluster):
+                        for k in (k for k, result in enumerate(results) if result is None):
+                            results[k] = FileResult(named(inputs[k]), status=ERROR,
+                                                    message="the local Dask cluster has no worker left (a restart "
+                                                    "failed); it was not compensated")
+                            done(results[k])
+                        break
+                    for future, result in finished.next_batch(block=False):
+                        k = where[future.key]
+                        results[k] = _dask_result(result, inputs[k], KilledWorker)
+                        done(results[k])
+                    time.sleep(0.05)
+            if cluster is not None:
+                _close_local(cluster)
         return results
     except OSError as exc:
         raise TrajcompError(f"--scheduler {scheduler}: cannot reach the Dask scheduler: {exc}") from exc
@@ -256,6 +278,29 @@ def _on_dask(job, inputs, outputs, jobs, scheduler, done):
             atexit.unregister(close_clusters)  # it would wait up to 10 s and print a traceback
             _end_starting(nannies)
         raise
+
+
+def _dask_result(result, path, killed_worker):
+    """A file's `FileResult` from what Dask's ``as_completed(with_results=True, raise_errors=False)`` gave for it:
+    its result, or its error, ``(type, exception, traceback)`` (a cancellation: the exception alone).
+
+    A `killed_worker` error (Dask's KilledWorker: its worker died each time
+    Dask tried it, as the OOM killer does) fails this file; any other is
+    raised.
+    """
+    if isinstance(result, FileResult):
+        return result
+    error = result if isinstance(result, BaseException) else result[1]
+    if not isinstance(error, killed_worker):
+        raise error
+    return FileResult(named(path), status=ERROR,
+                      message=f"its Dask worker died each time it was tried ({error}); it was not compensated")
+
+
+def _workers_coming(cluster):
+    """Whether a local Dask cluster has a nanny that runs its worker or restarts it (not one closed or failed)."""
+    return any(nanny.status.name in ("init", "created", "starting", "running")
+               for nanny in list(cluster.workers.values()))
 
 
 def _stopping_nanny(nanny_base, nannies):

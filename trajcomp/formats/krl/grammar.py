@@ -20,7 +20,7 @@ import itertools
 import re
 
 from trajcomp.formats.number_fields import NUMBER
-from trajcomp.formats.text import ANGLE_LIMIT, JOINT_LIMIT, LENGTH_LIMIT
+from trajcomp.formats.text import ANGLE_LIMIT, INDENT, JOINT_LIMIT, LENGTH_LIMIT
 from trajcomp.programs.items import CIRCULAR, JOINT, LINEAR
 
 # --- points: their types and members (lower case: the members' keys) ---
@@ -159,8 +159,8 @@ APO = _assignment(r"\$APO\.CDIS", "(" + NUMBER + ")")  # mm
 # --- the order a program runs in ---
 FIRST_WORD = re.compile(r"^\s*([A-Za-z_$][\w$]*)\s*(\(|:\s*$)?")
 JUMP_TO = re.compile(r"^\s*GOTO\s+(\w+)", re.I)
-BLOCK_OPENS = re.compile(r"^[ \t]*(?:" + SHARED + r"\s+)?(" + "|".join(CLOSING) + r")\b", re.I | re.M)
-BLOCK_CLOSES = re.compile(r"^[ \t]*(" + "|".join(dict.fromkeys(CLOSING.values())) + r")\b", re.I | re.M)
+BLOCK_OPENS = re.compile(INDENT + r"(?:" + SHARED + r"\s+)?(" + "|".join(CLOSING) + r")\b", re.I | re.M)
+BLOCK_CLOSES = re.compile(INDENT + r"(" + "|".join(dict.fromkeys(CLOSING.values())) + r")\b", re.I | re.M)
 OUTSIDE_ROUTINES = re.compile(r"[ \t]*&")  # what a .src holds outside its routines: its &ACCESS, &REL ... lines
 
 

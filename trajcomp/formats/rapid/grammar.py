@@ -18,6 +18,7 @@ import functools
 import re
 
 from trajcomp.formats.number_fields import NUMBER
+from trajcomp.formats.text import INDENT
 from trajcomp.formats.rapid.forms import (
     Blank, Form, Group, LineEnd, Literal, Name, Number, Optional, Repeat, Value, Words,
 )
@@ -141,13 +142,13 @@ ROUTINE_NAME_LINE = re.compile(_ROUTINE_HEAD.replace("^\\s*", "^[ \\t]*") + r"(\
 # every block and the word that closes it: a controller refuses a module whose blocks are not closed in order
 BLOCKS = {"MODULE": "ENDMODULE", "PROC": "ENDPROC", "FUNC": "ENDFUNC", "TRAP": "ENDTRAP",
           "IF": "ENDIF", "FOR": "ENDFOR", "WHILE": "ENDWHILE", "TEST": "ENDTEST"}
-ROUTINE_OPENS = re.compile(r"^[ \t]*(?:LOCAL\s+)?(MODULE|PROC|FUNC|TRAP)\b", re.I | re.M)
-ROUTINE_CLOSES = re.compile(r"^[ \t]*(ENDMODULE|ENDPROC|ENDFUNC|ENDTRAP)\b", re.I | re.M)
+ROUTINE_OPENS = re.compile(INDENT + r"(?:LOCAL\s+)?(MODULE|PROC|FUNC|TRAP)\b", re.I | re.M)
+ROUTINE_CLOSES = re.compile(INDENT + r"(ENDMODULE|ENDPROC|ENDFUNC|ENDTRAP)\b", re.I | re.M)
 # ... opened at a line's start: a module or routine, LOCAL or not, or a flow block; an IF only with a THEN before
 # its ';' (``IF cond instruction;`` is one statement)
-BLOCK_OPENS = re.compile(r"^[ \t]*(?:LOCAL\s+)?(MODULE|PROC|FUNC|TRAP|IF(?=[^;]*?\bTHEN\b)|FOR|WHILE|TEST)\b",
+BLOCK_OPENS = re.compile(INDENT + r"(?:LOCAL\s+)?(MODULE|PROC|FUNC|TRAP|IF(?=[^;]*?\bTHEN\b)|FOR|WHILE|TEST)\b",
                          re.I | re.M)
-BLOCK_CLOSES = re.compile(r"^[ \t]*(" + "|".join(BLOCKS.values()) + r")\b", re.I | re.M)
+BLOCK_CLOSES = re.compile(INDENT + r"(" + "|".join(BLOCKS.values()) + r")\b", re.I | re.M)
 # the statements that change the order a module runs in (`trajcomp.programs.flow.Step`): first word -> step kind
 FLOW_STEPS = {"if": "if", "elseif": "elif", "else": "else", "endif": "endif", "test": "if", "case": "elif",
               "default": "elif", "endtest": "endif", "for": "loop", "endfor": "endloop", "while": "loop",

@@ -27,6 +27,7 @@ import dataclasses
 import re
 
 from trajcomp.formats.number_fields import NUMBER
+from trajcomp.formats.text import INDENT
 from trajcomp.programs.items import CIRCULAR, JOINT, LINEAR
 
 NAME = r"[A-Za-z_]\w*"
@@ -78,10 +79,10 @@ SIGNS = re.compile(r"(?m)^\s*def\s+\w+\s*\(|\b(?:" + "|".join(MOTIONS) + r")\s*\
 
 # blocks: a statement ending with ":" opens one up to its ``end``
 BLOCK_WORDS = ("def", "sec", "thread", "if", "while", "for")
-BLOCK_OPENS = re.compile(r"^[ \t]*(" + "|".join(BLOCK_WORDS) + r")\b[^\n]*:\s*$", re.M)
-BLOCK_CLOSES = re.compile(r"^[ \t]*(end)\s*$", re.M)
+BLOCK_OPENS = re.compile(INDENT + r"(" + "|".join(BLOCK_WORDS) + r")\b[^\n]*:\s*$", re.M)
+BLOCK_CLOSES = re.compile(INDENT + r"(end)\s*$", re.M)
 # the lines that change the order a script runs in (`trajcomp.programs.flow.Step`): blocks, their ends, waits
-FLOW_LINE = re.compile(r"^[ \t]*(?:(def|thread|sec|if|elif|while|for)\b(?:[ \t]+(\w+))?[^\n]*:[ \t]*\r?$"
+FLOW_LINE = re.compile(INDENT + r"(?:(def|thread|sec|if|elif|while|for)\b(?:[ \t]+(\w+))?[^\n]*:[ \t]*\r?$"
                        r"|(else)[ \t]*:[ \t]*\r?$|(end|break|halt)[ \t]*\r?$|(return)\b"
                        r"|(sleep|sync|stopj|stopl)[ \t]*\()", re.M)
 OPENED = {"def": "end", "thread": "end", "sec": "end", "if": "endif", "while": "endloop", "for": "endloop"}

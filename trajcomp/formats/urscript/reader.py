@@ -11,6 +11,7 @@ import numpy as np
 from trajcomp.errors import ReadError
 from trajcomp.formats.number_fields import NUMBER, offset_type
 from trajcomp.formats.text import (
+    INDENT,
     JOINT_LIMIT,
     LENGTH_LIMIT,
     Lines,
@@ -654,7 +655,7 @@ def _flow_steps(reader):
              for at, text in zip(offsets, texts) for m in grammar.FLOW_LINE.finditer(text)]
     names = {name for _, word, name in found if word == "def" and name}
     if names:
-        calls = re.compile(r"^[ \t]*(" + "|".join(map(re.escape, sorted(names))) + r")[ \t]*\(", re.M)
+        calls = re.compile(INDENT + r"(" + "|".join(map(re.escape, sorted(names))) + r")[ \t]*\(", re.M)
         found += [(at + m.start(), "call", m.group(1)) for at, text in zip(offsets, texts)
                   for m in calls.finditer(text)]
     found.sort()
