@@ -225,8 +225,8 @@ def _compensate_rows(model, mode, nominal, arm, field, outside, label, tool, tar
     passes = ITERATIONS if mode == "linear" or field is not None else 1
     offset = np.zeros_like(goal)
     if passes > 1:  # the error term about where the command lands: most rows then land in one pass
-        expected = goal - error_term(goal)[0] + command[:, :3, 3] - arm.fk(q)[:, :3, 3]
-        offset = error_term(expected)[0]
+        expected = goal - error_term(goal, q)[0] + command[:, :3, 3] - arm.fk(q)[:, :3, 3]
+        offset = error_term(expected, q)[0]
     todo = np.arange(len(targets))
     for k in range(passes):
         aimed = targets[todo]
@@ -237,7 +237,7 @@ def _compensate_rows(model, mode, nominal, arm, field, outside, label, tool, tar
                                                                  _at_the_reach(nominal, q[todo][~solved.success]))
         q[todo] = arm.commanded_joints(solved.q)
         command[todo] = fk(nominal, q[todo])
-        offset, flagged = error_term(command[:, :3, 3])
+        offset, flagged = error_term(command[:, :3, 3], q)
         residual[todo] = np.linalg.norm(arm.fk(q[todo])[:, :3, 3] + offset[todo] - goal[todo], axis=1)
         todo = todo[residual[todo] >= LANDED]
         if not todo.size:
@@ -253,8 +253,9 @@ def _compensate_rows(model, mode, nominal, arm, field, outside, label, tool, tar
                               unmeasured_posture=posture)
 
 
-def _error_term(model, mode, field, outside, inside, commanded):
-    """The mode's additive error (N, 3), mm, at commanded positions (N, 3) and the rows outside its grid (N,).
+def _error_term(model, mode, field, outside, inside, commanded, joints):
+    """The mode's additive error (N, 3), mm, at commanded positions (N, 3) and joints (N, 6) rad, and the rows
+    outside its grid (N,).
 
     Rows whose target is ``inside`` (N,) the grid take the grid's nearest
     value where their command leaves it (near a face): their error is the
@@ -263,10 +264,10 @@ def _error_term(model, mode, field, outside, inside, commanded):
     if field is None:
         flagged = np.zeros(len(commanded), dtype=bool)
         return (model.linear.predict_error(commanded) if mode == "linear" else np.zeros_like(commanded)), flagged
-    values, flagged = evaluate_field(field, commanded, outside=outside)
+    values, flagged = evaluate_field(field, commanded, outside=outside, joints=joints)
     near_face = inside & flagged
     if near_face.any():
-        values[near_face] = evaluate_field(field, commanded[near_face], outside="clamp")[0]
+        values[near_face] = evaluate_field(field, commanded[near_face], outside="clamp", joints=joints[near_face])[0]
     return values, flagged & ~inside
 
 

@@ -208,7 +208,7 @@ class CompensationModel:
         field = self.error_field(mode)
         if field is None:
             return base, flagged
-        term, beyond = evaluate_field(field, position, interpolation, outside)
+        term, beyond = evaluate_field(field, position, interpolation, outside, joints)
         return base + term, flagged | beyond
 
 
@@ -262,8 +262,11 @@ class Arm:
         return q_reached if self.joints is None else self.joints.commanded(self.nominal, q_reached)
 
 
-def evaluate_field(field, points, interpolation=None, outside="model"):
-    """A residual field's value at points (N, 3), with the outside policy of `CompensationModel.predict`."""
+def evaluate_field(field, points, interpolation=None, outside="model", joints=None):
+    """A residual field's value at points (N, 3), with the outside policy of `CompensationModel.predict`.
+
+    ``joints`` (N, 6) rad: the commanded joints there, for a field over the wrist angles too (`needs_joints`).
+    """
     inside = field.contains(points)
     if outside == "error" and not inside.all():
         first = int(np.flatnonzero(~inside)[0])
@@ -271,7 +274,8 @@ def evaluate_field(field, points, interpolation=None, outside="model"):
             f"target {first} at {np.round(points[first], 3).tolist()} mm is outside the "
             f"compensation grid ({int((~inside).sum())} targets outside)"
         )
-    values = field.evaluate(points, method=interpolation, outside="clamp")
+    by_joints = {"joints": joints} if getattr(field, "needs_joints", False) else {}
+    values = field.evaluate(points, method=interpolation, outside="clamp", **by_joints)
     if outside == "model":
         values = np.where(inside[:, None], values, 0.0)
     return values, ~inside
