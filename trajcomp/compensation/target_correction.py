@@ -25,7 +25,7 @@ from trajcomp.errors import ModelError, TrajcompError
 from trajcomp.programs.frames import tool_groups
 from trajcomp.arm.ik import IKResult, batch_seed, ik_near, ik_numeric, pose_error
 from trajcomp.arm.kinematics import fk
-from trajcomp.model.compensation_model import evaluate_field
+from trajcomp.model.compensation_model import evaluate_field, same_tool
 from trajcomp.report.measures import singularity_distances
 from trajcomp.support.parallel import map_blocks
 
@@ -33,11 +33,6 @@ ITERATIONS = 3  # fixed-point passes at most
 REACH_EDGE = 2.0  # deg: an elbow this close to stretched is at the edge of the arm's reach
 LANDED = 1e-5  # mm: a target whose predicted landing error is below this needs no further pass
 CHUNK = 16384  # targets compensated together: the working arrays stay small and memory stays flat
-
-
-def same_tool(T_a, T_b):
-    """True when two tools (4, 4) agree to the precision programs write (0.001 mm, 1e-5 rad)."""
-    return np.allclose(T_a[:3, 3], T_b[:3, 3], atol=1e-3) and np.allclose(T_a[:3, :3], T_b[:3, :3], atol=1e-5)
 
 
 @dataclasses.dataclass(frozen=True, eq=False)

@@ -262,6 +262,11 @@ class Arm:
         return q_reached if self.joints is None else self.joints.commanded(self.nominal, q_reached)
 
 
+def same_tool(T_a, T_b):
+    """True when two tools (4, 4) agree to the precision programs write (0.001 mm, 1e-5 rad)."""
+    return np.allclose(T_a[:3, 3], T_b[:3, 3], atol=1e-3) and np.allclose(T_a[:3, :3], T_b[:3, :3], atol=1e-5)
+
+
 def evaluate_field(field, points, interpolation=None, outside="model", joints=None):
     """A residual field's value at points (N, 3), with the outside policy of `CompensationModel.predict`.
 
