@@ -293,7 +293,8 @@ def test_a_refit_without_some_rows_lands_where_identify_lands_on_the_others():
 def test_an_error_that_turns_with_the_wrist_takes_the_gp_field_over_the_wrist(tmp_path):
     """Each position measured in several wrist orientations, an error of the place times the wrist's joint 5 (no
     joint-angle error holds it): the gp field over the position and the wrist goes on top, the model file keeps it,
-    and predicted poses, and programs compensated with it, land closer at orientations never measured."""
+    and predicted poses, and programs compensated with it, land closer at orientations never measured; a program
+    with another tool takes no field (it holds what the joint model leaves at the measured TCP)."""
     robot = load_robot("ur10")
     rng = np.random.default_rng(12)
     centre = joints_in_range(60, 11)
@@ -325,3 +326,7 @@ def test_an_error_that_turns_with_the_wrist_takes_the_gp_field_over_the_wrist(tm
     miss = np.linalg.norm(landed(result.q) - targets[:, :3, 3], axis=1)
     plain = np.linalg.norm(landed(compensate(loaded, targets, seed=fresh, mode="dh").q) - targets[:, :3, 3], axis=1)
     assert miss.mean() < 0.5 * plain.mean()
+    assert loaded.error_field("composite", robot.T_flange_tool) is loaded.error_field("composite") is not None
+    other = robot.T_flange_tool @ np.diag([1.0, 1.0, 1.0, 1.0])
+    other[2, 3] += 100.0
+    assert loaded.error_field("composite", other) is None

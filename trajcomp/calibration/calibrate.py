@@ -356,12 +356,12 @@ def other_tools(robot, method, kind, joints, spread, oriented, field_on_top=None
     if method == "composite" and kind != JOINT_KIND:
         return False, (f"{turned}, but the composite residual is a {kind} field over the measured TCP's positions; "
                        "calibrate with --interpolation joint (or use mode dh) for other tools")
-    if method == "composite" and field_on_top is not None:
-        return False, (f"{turned}, but the joint residual has a {field_on_top.kind} field over the measured TCP's "
-                       "positions on top (it won on held-out regions); use mode dh for other tools")
+    on_top = ("" if field_on_top is None else f"; the {field_on_top.kind} field on top of the joint residual holds "
+              "what that leaves at the measured TCP, and another tool is placed by the joint residual alone")
     return True, (f"{turned}{' with orientations measured' if oriented else f' at {offset:.0f} mm from the last axis'}"
                   ": the flange is located; another tool lands as the measured one does, as far as its offset from "
-                  "the flange is exact and the zero of the last joint is right (one measured frame cannot see it)")
+                  f"the flange is exact and the zero of the last joint is right (one measured frame cannot see it)"
+                  f"{on_top}")
 
 
 def too_many_rows():

@@ -165,8 +165,8 @@ def compensate(model, targets, *, mode=None, tool=None, seed=None, outside="mode
     seed = np.broadcast_to(np.asarray(seed, dtype=float), (len(targets), 6))
     policy = "model" if outside == "error" else outside  # "error": the targets outside are refused below, all named
     arm = model.arm(mode, tool, policy)
-    rows = functools.partial(_compensate_rows, model, mode, nominal, arm, model.error_field(mode), policy, label,
-                             tool)
+    rows = functools.partial(_compensate_rows, model, mode, nominal, arm, model.error_field(mode, tool), policy,
+                             label, tool)
     if len(targets) <= CHUNK:
         result = rows(targets, seed, names)
     else:
@@ -181,13 +181,13 @@ def compensate(model, targets, *, mode=None, tool=None, seed=None, outside="mode
             # same way) for the message naming every failing target of the set.
             result = rows(targets, seed, names)
     if outside == "error" and (result.outside | result.unmeasured_posture).any():
-        _refuse_outside(model, mode, arm, result, label, names)
+        _refuse_outside(model, mode, tool, arm, result, label, names)
     return result
 
 
-def _refuse_outside(model, mode, arm, result, label, names):
+def _refuse_outside(model, mode, tool, arm, result, label, names):
     """ModelError naming every target outside the calibrated region and why (``outside="error"``)."""
-    field = model.error_field(mode)
+    field = model.error_field(mode, tool)
     reasons = [
         (np.zeros(len(result.q), dtype=bool) if field is None else ~field.contains(result.T_command[:, :3, 3])
          & ~result.near_face, "outside the grid"),

@@ -162,10 +162,18 @@ class CompensationModel:
         if mode not in self.modes:
             raise ModelError(f"mode {mode!r} is not available in this model (available: {', '.join(self.modes)})")
 
-    def error_field(self, mode):
-        """The field over commanded positions ``mode`` adds (raw-error grid, residual grid), else None."""
+    def error_field(self, mode, tool=None):
+        """The field over commanded positions ``mode`` adds (raw-error grid, residual grid), else None.
+
+        ``tool`` (4, 4): the program's tool, None for the measured TCP. A
+        field on top of a joint residual holds what the joint model leaves
+        at the measured TCP: a tool other than that one takes none (it lands
+        as the joint model places it).
+        """
         field = {"grid": self.grid, "composite": self.residual}.get(mode)
-        return self.residual_field if getattr(field, "kind", None) == JOINT_KIND else field
+        if getattr(field, "kind", None) != JOINT_KIND:
+            return field
+        return self.residual_field if tool is None or same_tool(tool, self.nominal.T_flange_tool) else None
 
     def predict(self, mode, joints, position, *, interpolation=None, outside="model"):
         """Predicted reached TCP positions.
