@@ -56,6 +56,7 @@ OUTER_SHARE = 0.1  # the outer layer of scattered positions: this share of the r
 OUTER_LAYERS = 2  # outer layers held out on each side of each axis, one and two at a time
 RELIABILITY_BINS = 8  # bins of the stated quantile per class of holdout in the calibration report's reliability
 FIELD_ON_TOP = "knn"  # the raw-error grid of a joint residual: scattered, so held-out rows leave no hole
+GP_SCORED_ROWS = 1000  # training rows (every k-th of more) a gp field is fitted on while scored on held-out regions
 GP_TRIED = {"lengths": (150.0, 300.0, 600.0), "nuggets": (0.01, 0.03, 0.1, 0.3)}  # a gp field on top, per region
 
 
@@ -283,8 +284,11 @@ def _fields_on_top(position, joints, residuals):
     of the highest likelihood (among `GP_TRIED` and
     `trajcomp.model.interpolate.ANGLE_LENGTHS`) for the training regions'
     ``residuals`` (N, 3) mm of the joint fit without splines, chosen once
-    per region for every candidate (the field the model takes chooses among
-    all of `GaussianField.fit`'s for the chosen fit's residuals); ``knn``
+    per region for every candidate, and fitted on every k-th of the
+    training rows beyond `GP_SCORED_ROWS` (a factor's cost grows with the
+    cube of its rows; the field the model takes holds all of them, its
+    lengths and nugget chosen among all of `GaussianField.fit`'s for the
+    chosen fit's residuals); ``knn``
     where no commanded position was measured in two orientations
     (`shares_positions`: a field of the position alone would give one
     orientation's error to the other).
@@ -300,9 +304,11 @@ def _fields_on_top(position, joints, residuals):
             likely = GaussianField.fit(position[train], residuals[train], joints=joints[train], **GP_TRIED)
             chosen[key] = {"length": likely.length, "nugget": likely.nugget, "angle_length": likely.angle_length}
         options = chosen[key]
-        angles = np.degrees(joints[train][:, WRIST]) if np.isfinite(options["angle_length"]) else None
-        return GaussianField(position[train], values, angles=angles, **options).evaluate(position[held],
-                                                                                         joints=joints[held])
+        every = -(-len(train) // GP_SCORED_ROWS)
+        rows = train[::every]
+        angles = np.degrees(joints[rows][:, WRIST]) if np.isfinite(options["angle_length"]) else None
+        field = GaussianField(position[rows], values[::every], angles=angles, **options)
+        return field.evaluate(position[held], joints=joints[held])
 
     fields = {} if shares_positions(position, joints) else {KNN_KIND: knn}
     return fields | ({GP_KIND: gp} if len(position) <= GP_MAX_POINTS else {})
