@@ -18,7 +18,7 @@ from trajcomp.report.calibration import calibration_report
 from trajcomp.report.html import render
 from trajcomp.arm.robot import load_robot
 from trajcomp.calibration.virtual_arm import ErrorProfile, VirtualRobot
-from trajcomp.arm.transforms import abc_to_matrix, rotvec_to_matrix
+from trajcomp.arm.transforms import abc_to_matrix, pose_to_matrix, rotvec_to_matrix
 
 RANGE = np.radians([[-60, 60], [-120, -40], [40, 130], [-150, -30], [60, 120], [-90, 90]])
 
@@ -293,9 +293,10 @@ def test_a_refit_without_some_rows_lands_where_identify_lands_on_the_others():
 def test_an_error_that_turns_with_the_wrist_takes_the_gp_field_over_the_wrist(tmp_path):
     """Each position measured in several wrist orientations, an error of the place times the wrist's joint 5 (no
     joint-angle error holds it): the gp field over the position and the wrist goes on top, the model file keeps it,
-    and predicted poses, and programs compensated with it, land closer at orientations never measured; a program
-    with another tool takes no field (it holds what the joint model leaves at the measured TCP)."""
-    robot = load_robot("ur10")
+    and predicted poses, and programs compensated with it, land closer at orientations never measured. The measured
+    point lies off the last axis, so the model places other tools: a program with another tool takes no field (it
+    holds what the joint model leaves at the measured TCP) and is compensated as by the joint model alone."""
+    robot = load_robot("ur10").replace(T_flange_tool=pose_to_matrix([40.0, -30.0, 150.0, 0.0, 0.0, 0.0]))
     rng = np.random.default_rng(12)
     centre = joints_in_range(60, 11)
     q = np.repeat(centre, 4, axis=0)
@@ -327,6 +328,8 @@ def test_an_error_that_turns_with_the_wrist_takes_the_gp_field_over_the_wrist(tm
     plain = np.linalg.norm(landed(compensate(loaded, targets, seed=fresh, mode="dh").q) - targets[:, :3, 3], axis=1)
     assert miss.mean() < 0.5 * plain.mean()
     assert loaded.error_field("composite", robot.T_flange_tool) is loaded.error_field("composite") is not None
-    other = robot.T_flange_tool @ np.diag([1.0, 1.0, 1.0, 1.0])
-    other[2, 3] += 100.0
-    assert loaded.error_field("composite", other) is None
+    other = pose_to_matrix([0.0, 0.0, 250.0, 0.0, 0.0, 0.0])
+    assert loaded.places_other_tools and loaded.error_field("composite", other) is None
+    joint_alone = dataclasses.replace(loaded, residual_field=None)
+    np.testing.assert_allclose(compensate(loaded, targets, tool=other, seed=fresh).q,
+                               compensate(joint_alone, targets, tool=other, seed=fresh).q, atol=1e-12)
