@@ -35,8 +35,9 @@ Run:  python tests/benchmarks/bench_accuracy.py [virtual|sparse|tools|ur5|ur10|u
    neighbouring grid nodes measured minutes or days apart.
 4b. ``ur10fields``: the same planes, model classes on top of the joint
    model the training planes give (fitted on its residual there, their
-   options chosen on slabs of the training planes: `pose_fields`): the
-   product's knn and gp fields over positions, a kriging over the six
+   options chosen on slabs of the training planes: `pose_fields`): what
+   calibrate puts on top (the gp field over the position and the wrist),
+   the knn and gp fields over positions alone, a kriging over the six
    joints (orientation-aware), gravity compliance of the bearings about
    the axes normal to each joint, held-out mean per plane; then the floor
    of a held-out row: the residual's semivariogram between rows at one
