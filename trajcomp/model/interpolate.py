@@ -13,9 +13,10 @@ module holds the fields of scattered data, which need no lattice:
   scattered residuals (a light re-calibration's correction, see
   `trajcomp.calibration.recalibrate`), its length and noise chosen by
   maximum likelihood; it returns to zero away from its points;
-- :class:`GaussianField` (``gp``): the same process as calibrate's field on
-  top of a joint residual (`trajcomp.calibration.calibrate`), a kind of its
-  own so that no one takes it for a re-calibration's correction.
+- :class:`GaussianField` (``gp``): the same process, of the position and the
+  wrist angles together, as calibrate's field on top of a joint residual
+  (`trajcomp.calibration.calibrate`), a kind of its own so that no one takes
+  it for a re-calibration's correction.
 
 The domain of the first two is the bounding box of the data;
 :func:`bounded_evaluate` applies the same outside policy as the lattice
@@ -501,8 +502,8 @@ class GaussianField(Kriging):
     ``kriging`` field is a re-calibration's correction, whose variance the
     landing estimate adds and which a later update replaces; this one is
     part of the calibrated model, its error in the calibration's held-out
-    statistics. At most `GP_MAX_POINTS` points (calibrate offers ``knn``
-    alone beyond them).
+    statistics. At most `GP_MAX_POINTS` points (calibrate offers no ``gp``
+    beyond them).
 
     With the wrist angles of its points (``angles``, joints 4-6) and a
     finite ``angle_length``, the process is one of the position and the
@@ -510,8 +511,8 @@ class GaussianField(Kriging):
     group): rows at one position in other orientations are told apart, and
     the field is evaluated with the commanded joints. On the held-out
     regions of the real arms it predicts what the joint model leaves better
-    than a field of the position alone (docs/benchmarks.md: UR5 0.088 ->
-    0.077 mm, UR10 planes 0.121 -> 0.101 mm).
+    than a field of the position alone (docs/benchmarks.md: UR5 slabs
+    0.088 -> 0.076 mm, UR10 planes 0.107 -> 0.100 mm).
 
     Attributes
     ----------
