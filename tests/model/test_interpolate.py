@@ -199,7 +199,7 @@ def test_gp_field_is_the_kriging_process_under_its_own_kind(monkeypatch):
     values = 0.1 * np.column_stack([np.sin(points[:, 0] / 300), np.cos(points[:, 1] / 300), np.sin(points[:, 2] / 400)])
     chosen = fit_field(points, values, interpolation="gp")
     assert isinstance(chosen, GaussianField) and (chosen.length, chosen.nugget) == (lambda k: (k.length, k.nugget))(
-        Kriging.fit(points, values))
+        Kriging.fit(points, values, nuggets=interpolate.GP_NUGGETS))
     again = field_from_dict(json.loads(json.dumps(chosen.to_dict())))
     assert again.kind == "gp" and type(again) is GaussianField
     whole = chosen.evaluate(QUERY * 10)
