@@ -515,7 +515,7 @@ class GaussianField(Kriging):
     the field is evaluated with the commanded joints. On the held-out
     regions of the real arms it predicts what the joint model leaves better
     than a field of the position alone (docs/benchmarks.md: UR5 slabs
-    0.088 -> 0.076 mm, UR10 planes 0.107 -> 0.100 mm).
+    0.088 -> 0.075 mm, UR10 planes 0.107 -> 0.100 mm).
 
     Attributes
     ----------
