@@ -35,8 +35,9 @@ Run:  python tests/benchmarks/bench_accuracy.py [virtual|sparse|tools|ur5|ur10|u
    neighbouring grid nodes measured minutes or days apart.
 4b. ``ur10fields``: the same planes, model classes on top of the joint
    model the training planes give (fitted on its residual there, their
-   options chosen on slabs of the training planes: `pose_fields`): the
-   product's knn and gp fields over positions, a kriging over the six
+   options chosen on slabs of the training planes: `pose_fields`): what
+   calibrate puts on top (the gp field over the position and the wrist),
+   the knn and gp fields over positions alone, a kriging over the six
    joints (orientation-aware), gravity compliance of the bearings about
    the axes normal to each joint, held-out mean per plane; then the floor
    of a held-out row: the residual's semivariogram between rows at one
@@ -300,22 +301,31 @@ def ur10_fields_table():
     train, test = np.isin(plane, (650, 850)), np.isin(plane, (750, 950))
     model = calibrate(robot, meas.subset(train), folds=0)
     joints, position = commanded(robot, meas)
-    residual = to_base(model.T_tracker_base, meas.measured) - model.predict("composite", joints, position,
-                                                                            outside="clamp")[0]
-    print(f"\n== real UR10, planes x = 650, 850 mm -> 750, 950 (bench_accuracy.py ur10): classes on top of the "
-          f"default joint model, fitted on the training rows' residuals; held-out mean |error| mm (by plane)")
+    measured = to_base(model.T_tracker_base, meas.measured)
+    residual = measured - model.arm("composite", outside="clamp").fk(joints)[:, :3, 3]
+    print("\n== real UR10, planes x = 650, 850 mm -> 750, 950 (bench_accuracy.py ur10): classes on top of the "
+          "default joint model (without its field), fitted on the training rows' residuals; held-out mean |error| "
+          "mm (by plane)")
 
     def show(label, predicted):
         left = np.linalg.norm(residual[test] - predicted, axis=1)
         by_plane = ", ".join(f"{left[plane[test] == x].mean():.4f}" for x in (750, 950))
         print(f"{label:78s}{left.mean():8.4f}  ({by_plane})")
 
-    show("nothing (the default model)", 0.0)
+    show("nothing (the joint model alone)", 0.0)
+    field = model.residual_field
+    default = measured - model.predict("composite", joints, position, outside="clamp")[0]
+    show(f"what calibrate gives: its field on top ({field.kind if field else 'none'}"
+         + (f", {field.length:g} mm, wrist {field.angle_length:g} deg, nugget {field.nugget:g})" if field else ")"),
+         residual[test] - default[test])
     show("knn over commanded positions (the product's field on top)",
          fit_field(position[train], residual[train], interpolation="knn").evaluate(position[test], outside="clamp"))
     gp = GaussianField.fit(position[train], residual[train], **GP_TRIED)
     show(f"gp over commanded positions (likelihood: {gp.length:g} mm, nugget {gp.nugget:g})",
          gp.evaluate(position[test]))
+    both = GaussianField.fit(position[train], residual[train], joints=joints[train])
+    show(f"gp over positions and the wrist (likelihood: {both.length:g} mm, {both.angle_length:g} deg, "
+         f"nugget {both.nugget:g})", both.evaluate(position[test], joints=joints[test]))
     length, nugget, slabs = choose_on_slabs(position[train], joints[train], residual[train])
     show(f"kriging over the joints ({length:g} deg, nugget {nugget:g}: chosen on {SLABS} slabs, {slabs:.4f})",
          JointKriging(joints[train], residual[train], length, nugget).evaluate(joints[test]))

@@ -2,8 +2,10 @@
 
 None of them is in trajcomp: on the UR10's held-out planes and campaign
 slabs they win too little to pay for what they cost (bench_accuracy.py
-``ur10fields``, bench_recalibrate.py's floors; docs/benchmarks.md). Kept
-here so that the figures in the docs come with the code that printed them.
+``ur10fields``, bench_recalibrate.py's floors; docs/benchmarks.md); the
+field over the position and the wrist angles that beat them is
+(`trajcomp.model.interpolate.GaussianField`). Kept here so that the
+figures in the docs come with the code that printed them.
 
 - `JointKriging`: the kriging mean of the residual over the commanded
   joints (an orientation-aware field: the data set measures up to 23

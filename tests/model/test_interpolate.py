@@ -199,7 +199,7 @@ def test_gp_field_is_the_kriging_process_under_its_own_kind(monkeypatch):
     values = 0.1 * np.column_stack([np.sin(points[:, 0] / 300), np.cos(points[:, 1] / 300), np.sin(points[:, 2] / 400)])
     chosen = fit_field(points, values, interpolation="gp")
     assert isinstance(chosen, GaussianField) and (chosen.length, chosen.nugget) == (lambda k: (k.length, k.nugget))(
-        Kriging.fit(points, values))
+        Kriging.fit(points, values, nuggets=interpolate.GP_NUGGETS))
     again = field_from_dict(json.loads(json.dumps(chosen.to_dict())))
     assert again.kind == "gp" and type(again) is GaussianField
     whole = chosen.evaluate(QUERY * 10)
@@ -213,3 +213,43 @@ def test_kriging_refuses_bad_parameters():
         Kriging(np.zeros((2, 3)), np.zeros((2, 3)), length=0.0)
     with pytest.raises(ModelError, match="cannot be evaluated by"):
         Kriging(np.zeros((1, 3)), np.zeros((1, 3))).evaluate(np.zeros((1, 3)), method="idw8")
+
+
+def test_gp_field_over_the_wrist_hand_computed_and_round_trips():
+    """One point: the correlation of the position and of the wrist angles (joints 4-6) multiply, each over its own
+    length; a field over the wrist refuses to be evaluated without the joints and keeps its angles in the file."""
+    value = np.array([[0.3, -0.2, 0.1]])
+    wrist = np.array([[10.0, 20.0, 30.0]])  # deg
+    field = GaussianField(np.zeros((1, 3)), value, length=200.0, nugget=0.25, angles=wrist, angle_length=40.0)
+    assert field.needs_joints and not GaussianField(np.zeros((1, 3)), value).needs_joints
+    joints = np.radians([[5.0, 6.0, 7.0, 10.0, 20.0, 30.0], [5.0, 6.0, 7.0, 50.0, 20.0, 30.0],
+                         [0.0, 0.0, 0.0, 10.0, 60.0, 30.0], [0.0, 0.0, 0.0, 10.0, 20.0, 30.0]])
+    points = np.array([[0.0, 0.0, 0.0], [0.0, 0.0, 0.0], [200.0, 0.0, 0.0], [0.0, 0.0, 0.0]])
+    expected = value * (np.exp([0.0, -0.5, -1.0, 0.0]) / 1.25)[:, None]  # joints 1-3 do not count
+    np.testing.assert_allclose(field.evaluate(points, joints=joints), expected, atol=1e-15)
+    with pytest.raises(ModelError, match="commanded joints"):
+        field.evaluate(points)
+    again = field_from_dict(json.loads(json.dumps(field.to_dict())))
+    np.testing.assert_allclose(again.evaluate(points, joints=joints), expected, atol=1e-15)
+    with pytest.raises(CalibrationError, match="one finite triple"):
+        GaussianField(np.zeros((2, 3)), np.zeros((2, 3)), angles=wrist, angle_length=40.0)
+
+
+def test_gp_field_likelihood_takes_the_wrist_where_the_residual_turns_with_it():
+    """Residuals at 12 positions, each in 8 wrist orientations: where they follow the wrist's joint 5 the fit takes a
+    finite wrist length and predicts orientations it did not see far better than a field of the position alone;
+    where they follow the position alone it leaves the wrist out."""
+    rng = np.random.default_rng(3)
+    positions = np.repeat(rng.uniform(0.0, 1000.0, (12, 3)), 8, axis=0)
+    joints = np.zeros((len(positions), 6))
+    joints[:, 3:] = np.radians(rng.uniform(-90.0, 90.0, (len(positions), 3)))
+    wrist_error = 0.1 * np.column_stack([np.sin(joints[:, 4]), np.cos(joints[:, 4]), np.sin(2 * joints[:, 4])])
+    train, held = np.arange(len(positions)) % 4 != 0, np.arange(len(positions)) % 4 == 0
+    tried = {"lengths": (150.0, 300.0, 600.0), "nuggets": (0.03, 0.3)}
+    turned = GaussianField.fit(positions[train], wrist_error[train], joints=joints[train], **tried)
+    alone = GaussianField.fit(positions[train], wrist_error[train], **tried)
+    assert turned.needs_joints and np.isfinite(turned.angle_length)
+    miss = np.abs(turned.evaluate(positions[held], joints=joints[held]) - wrist_error[held]).mean()
+    assert miss < 0.3 * np.abs(alone.evaluate(positions[held]) - wrist_error[held]).mean()
+    position_error = 0.1 * np.sin(positions / 300.0)
+    assert not GaussianField.fit(positions, position_error, joints=joints, **tried).needs_joints

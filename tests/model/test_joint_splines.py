@@ -18,7 +18,7 @@ from trajcomp.report.calibration import calibration_report
 from trajcomp.report.html import render
 from trajcomp.arm.robot import load_robot
 from trajcomp.calibration.virtual_arm import ErrorProfile, VirtualRobot
-from trajcomp.arm.transforms import abc_to_matrix, rotvec_to_matrix
+from trajcomp.arm.transforms import abc_to_matrix, pose_to_matrix, rotvec_to_matrix
 
 RANGE = np.radians([[-60, 60], [-120, -40], [40, 130], [-150, -30], [60, 120], [-90, 90]])
 
@@ -308,3 +308,48 @@ def test_a_refit_without_some_rows_lands_where_identify_lands_on_the_others():
     assert moved > 1e-3
     assert np.linalg.norm(landed(refit) - landed(again), axis=1).max() < 0.02 * moved
     assert refit.residuals.shape == (300, 3) and refit.names == again.names
+
+
+def test_an_error_that_turns_with_the_wrist_takes_the_gp_field_over_the_wrist(tmp_path):
+    """Each position measured in several wrist orientations, an error of the place times the wrist's joint 5 (no
+    joint-angle error holds it): the gp field over the position and the wrist goes on top, the model file keeps it,
+    and predicted poses, and programs compensated with it, land closer at orientations never measured. The measured
+    point lies off the last axis, so the model places other tools: a program with another tool takes no field (it
+    holds what the joint model leaves at the measured TCP) and is compensated as by the joint model alone."""
+    robot = load_robot("ur10").replace(T_flange_tool=pose_to_matrix([40.0, -30.0, 150.0, 0.0, 0.0, 0.0]))
+    rng = np.random.default_rng(12)
+    centre = joints_in_range(60, 11)
+    q = np.repeat(centre, 4, axis=0)
+    q[:, 3:] += np.radians(rng.uniform(-40.0, 40.0, (len(q), 3)))
+    true = VirtualRobot.create(robot, ErrorProfile("geometric", length_sigma=0.3, angle_sigma=np.radians(0.03)),
+                               seed=5).true_robot
+
+    def landed(joints):
+        reached = fk(true, joints)[:, :3, 3]
+        wave = 0.1 * np.sin(reached[:, 0] / 150.0) * np.cos(2.0 * joints[:, 4])
+        return reached + np.column_stack([np.zeros((len(joints), 2)), wave])
+
+    meas = Measurements(joints=q, position=fk(robot, q)[:, :3, 3], measured=landed(q), lines=np.arange(len(q)) + 2)
+    model = calibrate(robot, meas, interpolation="joint", folds=0)
+    field = model.residual_field
+    assert model.report["joint_splines"]["field"] == "gp" and field.needs_joints
+    save_model(tmp_path / "m.yaml", model)
+    loaded = load_model(tmp_path / "m.yaml")
+    fresh = np.repeat(centre[:20], 2, axis=0)
+    fresh[:, 3:] += np.radians(rng.uniform(-40.0, 40.0, (len(fresh), 3)))
+    position = fk(robot, fresh)[:, :3, 3]
+    predicted = loaded.predict("composite", fresh, position)[0]
+    truth = landed(fresh)
+    without = model.arm("composite").fk(fresh)[:, :3, 3]
+    assert np.linalg.norm(predicted - truth, axis=1).mean() < 0.5 * np.linalg.norm(without - truth, axis=1).mean()
+    targets = fk(robot, fresh)
+    result = compensate(loaded, targets, seed=fresh)
+    miss = np.linalg.norm(landed(result.q) - targets[:, :3, 3], axis=1)
+    plain = np.linalg.norm(landed(compensate(loaded, targets, seed=fresh, mode="dh").q) - targets[:, :3, 3], axis=1)
+    assert miss.mean() < 0.5 * plain.mean()
+    assert loaded.error_field("composite", robot.T_flange_tool) is loaded.error_field("composite") is not None
+    other = pose_to_matrix([0.0, 0.0, 250.0, 0.0, 0.0, 0.0])
+    assert loaded.places_other_tools and loaded.error_field("composite", other) is None
+    joint_alone = dataclasses.replace(loaded, residual_field=None)
+    np.testing.assert_allclose(compensate(loaded, targets, tool=other, seed=fresh).q,
+                               compensate(joint_alone, targets, tool=other, seed=fresh).q, atol=1e-12)

@@ -31,7 +31,7 @@ from trajcomp.calibration.options import CALIBRATION_METHODS, INTERPOLATIONS, LO
 from trajcomp.errors import CalibrationError
 from trajcomp.model import landing
 from trajcomp.model.grid import TOLERANCE, ResidualGrid, detect_lattice, fit_field
-from trajcomp.model.interpolate import GP_MAX_POINTS, GaussianField
+from trajcomp.model.interpolate import GP_MAX_POINTS, WRIST, GaussianField
 from trajcomp.model.options import GP_KIND, KNN_KIND, LATTICE_KINDS
 from trajcomp.calibration.identify import (best_fit_transform, identify, linearise, outlier_rows, region_folds,
                                            select_splines)
@@ -56,7 +56,8 @@ OUTER_SHARE = 0.1  # the outer layer of scattered positions: this share of the r
 OUTER_LAYERS = 2  # outer layers held out on each side of each axis, one and two at a time
 RELIABILITY_BINS = 8  # bins of the stated quantile per class of holdout in the calibration report's reliability
 FIELD_ON_TOP = "knn"  # the raw-error grid of a joint residual: scattered, so held-out rows leave no hole
-GP_TRIED = {"lengths": (150.0, 300.0, 600.0), "nuggets": (0.03, 0.1, 0.3)}  # what a gp field on top tries per region
+GP_SCORED_ROWS = 1000  # training rows (every k-th of more) a gp field is fitted on while scored on held-out regions
+GP_TRIED = {"lengths": (150.0, 300.0, 600.0), "nuggets": (0.01, 0.03, 0.1, 0.3)}  # a gp field on top, per region
 
 
 def commanded(robot, meas):
@@ -174,11 +175,12 @@ class _Parts:
             if kind != JOINT_KIND:
                 self.residual = _field(position, residuals, self.left_out, kind, grid_step)
             elif self.selection["field"]:
-                self.residual_field = _field(position, residuals, self.left_out, self.selection["field"], None,
-                                             **self.selection.get("field_options", {}))
-                if self.residual_field.kind == GP_KIND:  # a fold's refit keeps the full fit's length and nugget
-                    self.selection = self.selection | {"field_options": {"length": self.residual_field.length,
-                                                                         "nugget": self.residual_field.nugget}}
+                self.residual_field = _field_on_top(position, joints, residuals, self.left_out, self.selection)
+                if self.residual_field.kind == GP_KIND:  # a fold's refit keeps the full fit's lengths and nugget
+                    field = self.residual_field
+                    self.selection = self.selection | {"field_options": {"length": field.length, "nugget": field.nugget}
+                                                       | ({"angle_length": field.angle_length}
+                                                          if field.needs_joints else {})}
 
     def model(self, robot, robot_ref, method, T_tracker_base, report, places):
         dh = self.dh
@@ -204,14 +206,25 @@ class _Parts:
         )
 
 
-def _field(position, values, left_out, kind, grid_step, **options):
-    """A field over commanded positions; lattice kinds take the left-out rows' model values, the others drop them.
-
-    ``options`` go to `fit_field` (a ``gp`` field's ``length`` and ``nugget``).
-    """
+def _field(position, values, left_out, kind, grid_step):
+    """A field over commanded positions; lattice kinds take the left-out rows' model values, the others drop them."""
     if kind in LATTICE_KINDS:
         return fit_field(position, values, step=grid_step, interpolation=kind, left_out=left_out)
-    return fit_field(position[~left_out], values[~left_out], interpolation=kind, **options)
+    return fit_field(position[~left_out], values[~left_out], interpolation=kind)
+
+
+def _field_on_top(position, joints, residuals, left_out, selection):
+    """The joint residual's field on top (kind ``selection["field"]``) of residuals (N, 3) mm, rows ``left_out``
+    dropped: a ``gp`` field over the position and the wrist at the lengths and nugget of ``field_options`` where
+    the selection holds them (a fold's refit), else at those of the highest likelihood (`GaussianField.fit`)."""
+    keep = ~left_out
+    if selection["field"] != GP_KIND:
+        return fit_field(position[keep], residuals[keep], interpolation=selection["field"])
+    options = selection.get("field_options")
+    if options is None:
+        return GaussianField.fit(position[keep], residuals[keep], joints=joints[keep])
+    angles = np.degrees(joints[keep][:, WRIST]) if "angle_length" in options else None
+    return GaussianField(position[keep], residuals[keep], angles=angles, **options)
 
 
 def _joint_residual(nominal, dh, joints, position, measured, rotation, loss, orientation_weight, workers=1):
@@ -219,11 +232,10 @@ def _joint_residual(nominal, dh, joints, position, measured, rotation, loss, ori
 
     The harmonic and gravity terms are identified with the DH refinement;
     spline terms of joints 1-5 and a residual field over the commanded
-    positions on top (`_fields_on_top`, or none) are chosen on
-    held-out regions (`trajcomp.calibration.identify.select_splines`; a
-    field only where no commanded position was measured in two
-    orientations, `shares_positions`). Joint 6 gets no spline: it turns the TCP
-    about its own axis, which a point on the axis hardly sees.
+    positions and the wrist on top (`_fields_on_top`, or none) are chosen on
+    held-out regions (`trajcomp.calibration.identify.select_splines`).
+    Joint 6 gets no spline: it turns the TCP about its own axis, which a
+    point on the axis hardly sees.
 
     Returns
     -------
@@ -236,7 +248,7 @@ def _joint_residual(nominal, dh, joints, position, measured, rotation, loss, ori
     spline_joints = (0, 1, 2, 3, 4)
     refined = identify(dh.robot, joints, measured, rotation=rotation, joint_terms=True, loss=loss, nominal=nominal,
                        orientation_weight=orientation_weight, R_tcp_target=dh.R_tcp_target)
-    fields = {} if shares_positions(position, joints) else _fields_on_top(len(position))
+    fields = _fields_on_top(position, joints, refined.residuals)
     choice = select_splines(refined, dh.robot, nominal, joints, measured, rotation=rotation, position=position,
                             orientation_weight=orientation_weight, joints=spline_joints, fields=fields, loss=loss,
                             workers=workers)
@@ -263,27 +275,43 @@ def shares_positions(position, joints):
     return bool(np.any(np.abs(joints[pairs[:, 0]] - joints[pairs[:, 1]]) > 1e-6))
 
 
-def _knn_on_top(points, values, queries):
-    """The knn field of residuals values (T, 3) mm at points (T, 3), at queries (H, 3) (clamped)."""
-    return fit_field(points, values, interpolation=KNN_KIND).evaluate(queries, outside="clamp")
+def _fields_on_top(position, joints, residuals):
+    """The fields a joint residual of commanded positions (N, 3) mm and joints (N, 6) rad may take on top, by kind
+    (`select_splines`'s ``fields``: ``field(train, values, held)`` of row indices).
 
-
-def _gp_on_top(points, values, queries):
-    """The gp field of residuals values (T, 3) mm at points (T, 3), at queries (H, 3): its length and nugget those of
-    the highest likelihood among `GP_TRIED` for these residuals."""
-    return GaussianField.fit(points, values, **GP_TRIED).evaluate(queries)
-
-
-def _fields_on_top(count):
-    """The fields a joint residual of ``count`` rows may take on top, by kind (`select_splines`'s ``fields``).
-
-    ``knn``, and up to `GP_MAX_POINTS` rows ``gp``: scored on each held-out
-    region at the length and nugget of the highest likelihood for the
-    training regions' residuals among `GP_TRIED` (the field the model takes
-    chooses among all of `GaussianField.fit`'s for the chosen fit's
-    residuals).
+    Up to `GP_MAX_POINTS` rows ``gp``: the field over the position and the
+    wrist angles, scored on each held-out region at the lengths and nugget
+    of the highest likelihood (among `GP_TRIED` and
+    `trajcomp.model.interpolate.ANGLE_LENGTHS`) for the training regions'
+    ``residuals`` (N, 3) mm of the joint fit without splines, chosen once
+    per region for every candidate, and fitted on every k-th of the
+    training rows beyond `GP_SCORED_ROWS` (a factor's cost grows with the
+    cube of its rows; the field the model takes holds all of them, its
+    lengths and nugget chosen among all of `GaussianField.fit`'s for the
+    chosen fit's residuals); ``knn``
+    where no commanded position was measured in two orientations
+    (`shares_positions`: a field of the position alone would give one
+    orientation's error to the other).
     """
-    return {KNN_KIND: _knn_on_top} | ({GP_KIND: _gp_on_top} if count <= GP_MAX_POINTS else {})
+    chosen = {}  # per held-out region (its rows' bytes): the gp's length, nugget and wrist length
+
+    def knn(train, values, held):
+        return fit_field(position[train], values, interpolation=KNN_KIND).evaluate(position[held], outside="clamp")
+
+    def gp(train, values, held):
+        key = held.tobytes()
+        if key not in chosen:
+            likely = GaussianField.fit(position[train], residuals[train], joints=joints[train], **GP_TRIED)
+            chosen[key] = {"length": likely.length, "nugget": likely.nugget, "angle_length": likely.angle_length}
+        options = chosen[key]
+        every = -(-len(train) // GP_SCORED_ROWS)
+        rows = train[::every]
+        angles = np.degrees(joints[rows][:, WRIST]) if np.isfinite(options["angle_length"]) else None
+        field = GaussianField(position[rows], values[::every], angles=angles, **options)
+        return field.evaluate(position[held], joints=joints[held])
+
+    fields = {} if shares_positions(position, joints) else {KNN_KIND: knn}
+    return fields | ({GP_KIND: gp} if len(position) <= GP_MAX_POINTS else {})
 
 
 def selection_words(choice):
@@ -334,12 +362,12 @@ def other_tools(robot, method, kind, joints, spread, oriented, field_on_top=None
     if method == "composite" and kind != JOINT_KIND:
         return False, (f"{turned}, but the composite residual is a {kind} field over the measured TCP's positions; "
                        "calibrate with --interpolation joint (or use mode dh) for other tools")
-    if method == "composite" and field_on_top is not None:
-        return False, (f"{turned}, but the joint residual has a {field_on_top.kind} field over the measured TCP's "
-                       "positions on top (it won on held-out regions); use mode dh for other tools")
+    on_top = ("" if field_on_top is None else f"; the {field_on_top.kind} field on top of the joint residual holds "
+              "what that leaves at the measured TCP, and another tool is placed by the joint residual alone")
     return True, (f"{turned}{' with orientations measured' if oriented else f' at {offset:.0f} mm from the last axis'}"
                   ": the flange is located; another tool lands as the measured one does, as far as its offset from "
-                  "the flange is exact and the zero of the last joint is right (one measured frame cannot see it)")
+                  f"the flange is exact and the zero of the last joint is right (one measured frame cannot see it)"
+                  f"{on_top}")
 
 
 def too_many_rows():

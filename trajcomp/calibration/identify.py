@@ -794,8 +794,8 @@ def region_folds(position, folds):
 class _Candidates:
     """Held-out scoring of linearised candidate fits over regions, keeping the best (`select_splines`)."""
 
-    def __init__(self, regions, position, fields):
-        self.regions, self.position, self.fields = regions, position, fields or {}
+    def __init__(self, regions, fields):
+        self.regions, self.fields = regions, fields or {}
         self.table, self.best = [], None
 
     def result(self):
@@ -828,7 +828,7 @@ class _Candidates:
             moved = linear.residual[:, :3] + linear.jac.apply(step)[:, :3]
             train = np.setdiff1d(np.arange(count), rows)
             for kind, field in self.fields.items():
-                predicted = field(self.position[train], moved[train], self.position[rows])
+                predicted = field(train, moved[train], rows)
                 on_top[kind].append(np.linalg.norm(moved[rows] - predicted, axis=1))
         entry["held_out_mm"] = round(float(np.concatenate(plain).mean()), 5)
         scores = [(entry["held_out_mm"], None)]
@@ -891,9 +891,9 @@ def select_splines(fit, start, nominal, q, measured, *, rotation=None, joints=(0
     orientation_weight : float
         mm per rad of orientation residual.
     fields : dict, optional
-        Residual fields over commanded positions tried on top, by kind:
-        ``field(points (T, 3), residuals (T, 3), queries (H, 3)) -> (H, 3)``,
-        mm, fitted on the training rows and evaluated at the held-out ones.
+        Residual fields tried on top, by kind: ``field(train (T,),
+        residuals (T, 3), held (H,)) -> (H, 3)``, mm, fitted on the residuals
+        of the training rows (indices) and evaluated at the held-out ones.
     loss : str
         Robust loss of the final fit (`identify`).
     workers : int
@@ -928,7 +928,7 @@ def select_splines(fit, start, nominal, q, measured, *, rotation=None, joints=(0
 
     def scored(k):
         """``(table, best)`` of the candidates of ``tried[k]`` (its penalties)."""
-        candidates = _Candidates(regions, position, fields)
+        candidates = _Candidates(regions, fields)
         if tried[k] is None:
             candidates.score({"step_deg": 0.0, "penalty": 0.0},
                              candidates.linearise(plain, fit.delta, fit.weights, (residual, jac)),
@@ -944,7 +944,7 @@ def select_splines(fit, start, nominal, q, measured, *, rotation=None, joints=(0
                              dataclasses.replace(basis, penalty=penalty))
         return candidates.result()
 
-    candidates = _Candidates(regions, position, fields)
+    candidates = _Candidates(regions, fields)
     for table, best in share_blocks(scored, len(tried), workers):
         candidates.merge(table, best)
     _, on_top, basis = candidates.best

@@ -58,6 +58,7 @@ from trajcomp.arm.transforms import invert, matrix_to_rotvec, mean_rotation, rot
 from trajcomp.calibration.identify import analyse_identifiability, best_fit_transform, region_folds, robust_weights
 from trajcomp.calibration.options import ORIENTATION_WEIGHT
 from trajcomp.errors import CalibrationError
+from trajcomp.model.compensation_model import evaluate_field
 from trajcomp.model.interpolate import Kriging
 from trajcomp.model.options import KRIGING_KIND
 from trajcomp.model.update import PPM, SCALE, SCALED_LINKS, parameter_jacobian, position_covariance, to_display
@@ -157,7 +158,7 @@ class _Rows:
 
     def __init__(self, model, joints, position, measured, rotation, weight):
         self.joints, self.measured, self.rotation, self.weight = joints, measured, rotation, weight
-        self.field = _field(model, position)
+        self.field = _field(model, position, joints)
 
     def residual(self, candidate, names, jacobian=True):
         """Residual rows (N, 3 or 6), mm (orientation: rad times the weight), and their Jacobian (N, rows, P)
@@ -726,7 +727,7 @@ def design(model, joints, names, oriented, orientation_weight=ORIENTATION_WEIGHT
     return rows.residual(model, names)[1] * _solver_scale(names)  # it does not depend on the measured values
 
 
-def _field(model, position):
-    """The composite's field on top at commanded positions (N, 3), mm, or 0.0 without one."""
+def _field(model, position, joints):
+    """The composite's field on top at commanded positions (N, 3), mm, and joints (N, 6) rad, or 0.0 without one."""
     field = model.error_field("composite")
-    return 0.0 if field is None else field.evaluate(position, outside="clamp")
+    return 0.0 if field is None else evaluate_field(field, position, outside="clamp", joints=joints)[0]

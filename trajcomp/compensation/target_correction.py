@@ -25,7 +25,7 @@ from trajcomp.errors import ModelError, TrajcompError
 from trajcomp.programs.frames import tool_groups
 from trajcomp.arm.ik import IKResult, batch_seed, ik_near, ik_numeric, pose_error
 from trajcomp.arm.kinematics import fk
-from trajcomp.model.compensation_model import evaluate_field
+from trajcomp.model.compensation_model import evaluate_field, same_tool
 from trajcomp.report.measures import singularity_distances
 from trajcomp.support.parallel import map_blocks
 
@@ -33,11 +33,6 @@ ITERATIONS = 3  # fixed-point passes at most
 REACH_EDGE = 2.0  # deg: an elbow this close to stretched is at the edge of the arm's reach
 LANDED = 1e-5  # mm: a target whose predicted landing error is below this needs no further pass
 CHUNK = 16384  # targets compensated together: the working arrays stay small and memory stays flat
-
-
-def same_tool(T_a, T_b):
-    """True when two tools (4, 4) agree to the precision programs write (0.001 mm, 1e-5 rad)."""
-    return np.allclose(T_a[:3, 3], T_b[:3, 3], atol=1e-3) and np.allclose(T_a[:3, :3], T_b[:3, :3], atol=1e-5)
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -170,8 +165,8 @@ def compensate(model, targets, *, mode=None, tool=None, seed=None, outside="mode
     seed = np.broadcast_to(np.asarray(seed, dtype=float), (len(targets), 6))
     policy = "model" if outside == "error" else outside  # "error": the targets outside are refused below, all named
     arm = model.arm(mode, tool, policy)
-    rows = functools.partial(_compensate_rows, model, mode, nominal, arm, model.error_field(mode), policy, label,
-                             tool)
+    rows = functools.partial(_compensate_rows, model, mode, nominal, arm, model.error_field(mode, tool), policy,
+                             label, tool)
     if len(targets) <= CHUNK:
         result = rows(targets, seed, names)
     else:
@@ -186,13 +181,13 @@ def compensate(model, targets, *, mode=None, tool=None, seed=None, outside="mode
             # same way) for the message naming every failing target of the set.
             result = rows(targets, seed, names)
     if outside == "error" and (result.outside | result.unmeasured_posture).any():
-        _refuse_outside(model, mode, arm, result, label, names)
+        _refuse_outside(model, mode, tool, arm, result, label, names)
     return result
 
 
-def _refuse_outside(model, mode, arm, result, label, names):
+def _refuse_outside(model, mode, tool, arm, result, label, names):
     """ModelError naming every target outside the calibrated region and why (``outside="error"``)."""
-    field = model.error_field(mode)
+    field = model.error_field(mode, tool)
     reasons = [
         (np.zeros(len(result.q), dtype=bool) if field is None else ~field.contains(result.T_command[:, :3, 3])
          & ~result.near_face, "outside the grid"),
@@ -225,8 +220,8 @@ def _compensate_rows(model, mode, nominal, arm, field, outside, label, tool, tar
     passes = ITERATIONS if mode == "linear" or field is not None else 1
     offset = np.zeros_like(goal)
     if passes > 1:  # the error term about where the command lands: most rows then land in one pass
-        expected = goal - error_term(goal)[0] + command[:, :3, 3] - arm.fk(q)[:, :3, 3]
-        offset = error_term(expected)[0]
+        expected = goal - error_term(goal, q)[0] + command[:, :3, 3] - arm.fk(q)[:, :3, 3]
+        offset = error_term(expected, q)[0]
     todo = np.arange(len(targets))
     for k in range(passes):
         aimed = targets[todo]
@@ -237,7 +232,7 @@ def _compensate_rows(model, mode, nominal, arm, field, outside, label, tool, tar
                                                                  _at_the_reach(nominal, q[todo][~solved.success]))
         q[todo] = arm.commanded_joints(solved.q)
         command[todo] = fk(nominal, q[todo])
-        offset, flagged = error_term(command[:, :3, 3])
+        offset, flagged = error_term(command[:, :3, 3], q)
         residual[todo] = np.linalg.norm(arm.fk(q[todo])[:, :3, 3] + offset[todo] - goal[todo], axis=1)
         todo = todo[residual[todo] >= LANDED]
         if not todo.size:
@@ -253,8 +248,9 @@ def _compensate_rows(model, mode, nominal, arm, field, outside, label, tool, tar
                               unmeasured_posture=posture)
 
 
-def _error_term(model, mode, field, outside, inside, commanded):
-    """The mode's additive error (N, 3), mm, at commanded positions (N, 3) and the rows outside its grid (N,).
+def _error_term(model, mode, field, outside, inside, commanded, joints):
+    """The mode's additive error (N, 3), mm, at commanded positions (N, 3) and joints (N, 6) rad, and the rows
+    outside its grid (N,).
 
     Rows whose target is ``inside`` (N,) the grid take the grid's nearest
     value where their command leaves it (near a face): their error is the
@@ -263,10 +259,10 @@ def _error_term(model, mode, field, outside, inside, commanded):
     if field is None:
         flagged = np.zeros(len(commanded), dtype=bool)
         return (model.linear.predict_error(commanded) if mode == "linear" else np.zeros_like(commanded)), flagged
-    values, flagged = evaluate_field(field, commanded, outside=outside)
+    values, flagged = evaluate_field(field, commanded, outside=outside, joints=joints)
     near_face = inside & flagged
     if near_face.any():
-        values[near_face] = evaluate_field(field, commanded[near_face], outside="clamp")[0]
+        values[near_face] = evaluate_field(field, commanded[near_face], outside="clamp", joints=joints[near_face])[0]
     return values, flagged & ~inside
 
 

@@ -162,10 +162,18 @@ class CompensationModel:
         if mode not in self.modes:
             raise ModelError(f"mode {mode!r} is not available in this model (available: {', '.join(self.modes)})")
 
-    def error_field(self, mode):
-        """The field over commanded positions ``mode`` adds (raw-error grid, residual grid), else None."""
+    def error_field(self, mode, tool=None):
+        """The field over commanded positions ``mode`` adds (raw-error grid, residual grid), else None.
+
+        ``tool`` (4, 4): the program's tool, None for the measured TCP. A
+        field on top of a joint residual holds what the joint model leaves
+        at the measured TCP: a tool other than that one takes none (it lands
+        as the joint model places it).
+        """
         field = {"grid": self.grid, "composite": self.residual}.get(mode)
-        return self.residual_field if getattr(field, "kind", None) == JOINT_KIND else field
+        if getattr(field, "kind", None) != JOINT_KIND:
+            return field
+        return self.residual_field if tool is None or same_tool(tool, self.nominal.T_flange_tool) else None
 
     def predict(self, mode, joints, position, *, interpolation=None, outside="model"):
         """Predicted reached TCP positions.
@@ -208,7 +216,7 @@ class CompensationModel:
         field = self.error_field(mode)
         if field is None:
             return base, flagged
-        term, beyond = evaluate_field(field, position, interpolation, outside)
+        term, beyond = evaluate_field(field, position, interpolation, outside, joints)
         return base + term, flagged | beyond
 
 
@@ -262,8 +270,16 @@ class Arm:
         return q_reached if self.joints is None else self.joints.commanded(self.nominal, q_reached)
 
 
-def evaluate_field(field, points, interpolation=None, outside="model"):
-    """A residual field's value at points (N, 3), with the outside policy of `CompensationModel.predict`."""
+def same_tool(T_a, T_b):
+    """True when two tools (4, 4) agree to the precision programs write (0.001 mm, 1e-5 rad)."""
+    return np.allclose(T_a[:3, 3], T_b[:3, 3], atol=1e-3) and np.allclose(T_a[:3, :3], T_b[:3, :3], atol=1e-5)
+
+
+def evaluate_field(field, points, interpolation=None, outside="model", joints=None):
+    """A residual field's value at points (N, 3), with the outside policy of `CompensationModel.predict`.
+
+    ``joints`` (N, 6) rad: the commanded joints there, for a field over the wrist angles too (`needs_joints`).
+    """
     inside = field.contains(points)
     if outside == "error" and not inside.all():
         first = int(np.flatnonzero(~inside)[0])
@@ -271,7 +287,8 @@ def evaluate_field(field, points, interpolation=None, outside="model"):
             f"target {first} at {np.round(points[first], 3).tolist()} mm is outside the "
             f"compensation grid ({int((~inside).sum())} targets outside)"
         )
-    values = field.evaluate(points, method=interpolation, outside="clamp")
+    by_joints = {"joints": joints} if getattr(field, "needs_joints", False) else {}
+    values = field.evaluate(points, method=interpolation, outside="clamp", **by_joints)
     if outside == "model":
         values = np.where(inside[:, None], values, 0.0)
     return values, ~inside

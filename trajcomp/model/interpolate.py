@@ -13,9 +13,10 @@ module holds the fields of scattered data, which need no lattice:
   scattered residuals (a light re-calibration's correction, see
   `trajcomp.calibration.recalibrate`), its length and noise chosen by
   maximum likelihood; it returns to zero away from its points;
-- :class:`GaussianField` (``gp``): the same process as calibrate's field on
-  top of a joint residual (`trajcomp.calibration.calibrate`), a kind of its
-  own so that no one takes it for a re-calibration's correction.
+- :class:`GaussianField` (``gp``): the same process, of the position and the
+  wrist angles together, as calibrate's field on top of a joint residual
+  (`trajcomp.calibration.calibrate`), a kind of its own so that no one takes
+  it for a re-calibration's correction.
 
 The domain of the first two is the bounding box of the data;
 :func:`bounded_evaluate` applies the same outside policy as the lattice
@@ -41,6 +42,8 @@ KRIGING_NUGGETS = (0.03, 0.1, 0.2, 0.3, 0.5, 1.0, 2.0)
 """Noise-to-signal variance ratios `Kriging.fit` tries."""
 LIKELIHOOD_POINTS = 300
 """Most points whose likelihood `Kriging.fit` compares (every k-th of more)."""
+WRIST = slice(3, 6)
+"""The joints (4-6, 0-based 3-5) whose angles a `GaussianField` may correlate over: they turn the tool at a position."""
 BLOCK_ELEMENTS = 2_000_000
 """Most correlations (floats, 16 MB) `Kriging.evaluate` holds at once."""
 
@@ -308,13 +311,21 @@ def _cv_score(x, values, splits, smoothing, options):
 
 
 def _squared_distances(a, b):
-    """Squared distances (N, M) mm^2 between points a (N, 3) and b (M, 3), mm."""
+    """Squared distances (N, M) between points a (N, D) and b (M, D) (mm^2 for positions in mm)."""
     return np.maximum(np.sum(a**2, axis=1)[:, None] + np.sum(b**2, axis=1)[None, :] - 2.0 * a @ b.T, 0.0)
 
 
-def _correlation(a, b, length):
-    """Squared-exponential correlation (N, M) of points a (N, 3) and b (M, 3), mm, at ``length`` mm."""
-    return np.exp(-_squared_distances(a, b) / (2.0 * length**2))
+def _log_likelihood(factor, whitened):
+    """Log marginal likelihood of values under a Gaussian process, each axis's variance at its maximum, from the
+    Cholesky factor (N, N) of their correlation (nugget included) and the values whitened by it (N, 3)."""
+    count = len(factor)
+    variance = np.sum(whitened**2, axis=0) / count
+    return float(-0.5 * np.sum(count * np.log(variance) + 2.0 * np.sum(np.log(np.diag(factor))) + count))
+
+
+def _unit_correlation(a, b):
+    """Squared-exponential correlation (N, M) of points a (N, D) and b (M, D) given in units of its lengths."""
+    return np.exp(-0.5 * _squared_distances(a, b))
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -354,8 +365,10 @@ class Kriging(_Scattered):
         object.__setattr__(self, "nugget", float(self.nugget))
         from scipy.linalg import solve_triangular  # here: compensating with a grid never needs scipy
 
-        factor = np.linalg.cholesky(_correlation(p, p, self.length) + self.nugget * np.eye(len(p)))
+        data = self._coordinates(p, self._data_angles())
+        factor = np.linalg.cholesky(_unit_correlation(data, data) + self.nugget * np.eye(len(p)))
         whitened = solve_triangular(factor, v, lower=True)
+        object.__setattr__(self, "_data", data)
         object.__setattr__(self, "_factor", factor)
         object.__setattr__(self, "_whitened", whitened)
         object.__setattr__(self, "_weights", solve_triangular(factor.T, whitened, lower=False))
@@ -364,40 +377,53 @@ class Kriging(_Scattered):
         """All true (N,): the field is defined everywhere (zero far from its points)."""
         return np.ones(len(as_vectors(points, "query points", error=ModelError)), bool)
 
-    def evaluate(self, points, method=None, outside="error"):
+    def _data_angles(self):
+        """Wrist angles (N, 3) deg at the data points, or None (`GaussianField`'s; this process has none)."""
+        return None
+
+    def _coordinates(self, points, angles):
+        """Points (N, 3) mm in units of the correlation length (N, 3); ``angles`` (a `GaussianField`'s) unused."""
+        return points / self.length
+
+    def _query(self, points, joints):
+        """Scaled coordinates of query points (N, 3) mm and their commanded joints (N, 6) rad or None."""
+        p = as_vectors(points, "query points", error=ModelError)
+        return self._coordinates(p, None if joints is None else np.degrees(np.asarray(joints, float)[:, WRIST]))
+
+    def evaluate(self, points, method=None, outside="error", joints=None):
         """The field (N, 3) mm at points (N, 3) mm; every point is inside (``outside`` is accepted, not needed).
 
+        ``joints`` (N, 6) rad: the commanded joints at the points, which a
+        `GaussianField` over the wrist angles needs (others ignore them).
         Computed in blocks of queries whose correlations with the data hold
         at most `BLOCK_ELEMENTS` floats (a long program against 2,000 points).
         """
         self._check_method(method)
-        p = as_vectors(points, "query points", error=ModelError)
-        out = np.empty((len(p), 3))
+        query = self._query(points, joints)
+        out = np.empty((len(query), 3))
         block = max(1, BLOCK_ELEMENTS // len(self.points))
-        for start in range(0, len(p), block):
-            out[start:start + block] = _correlation(p[start:start + block], self.points, self.length) @ self._weights
+        for start in range(0, len(query), block):
+            out[start:start + block] = _unit_correlation(query[start:start + block], self._data) @ self._weights
         return out
 
     def signal_variance(self):
         """Maximum-likelihood variance (3,) mm^2 of each axis's signal, given ``length`` and ``nugget``."""
         return np.sum(self._whitened**2, axis=0) / len(self.points)
 
-    def variance(self, points):
+    def variance(self, points, joints=None):
         """Posterior variance (N,) mm^2 per axis of the field's signal at points (N, 3), mm (mean of the axes).
 
         Zero at no point; the signal's variance far from every data point.
+        ``joints`` as for `evaluate`.
         """
         from scipy.linalg import solve_triangular  # here: compensating with a grid never needs scipy
 
-        p = as_vectors(points, "query points", error=ModelError)
-        solved = solve_triangular(self._factor, _correlation(self.points, p, self.length), lower=True)
+        solved = solve_triangular(self._factor, _unit_correlation(self._data, self._query(points, joints)), lower=True)
         return (1.0 - np.sum(solved**2, axis=0)) * float(self.signal_variance().mean())
 
     def log_likelihood(self):
         """Log marginal likelihood of the values under the process, its variances at their maximum."""
-        count = len(self.points)
-        determinant = 2.0 * np.sum(np.log(np.diag(self._factor)))
-        return float(-0.5 * np.sum(count * np.log(self.signal_variance()) + determinant + count))
+        return _log_likelihood(self._factor, self._whitened)
 
     @classmethod
     def fit(cls, points, values, lengths=KRIGING_LENGTHS, nuggets=KRIGING_NUGGETS):
@@ -424,26 +450,46 @@ class Kriging(_Scattered):
         -------
         Kriging
         """
+        return cls._most_likely(points, values, lengths, nuggets)
+
+    @classmethod
+    def _most_likely(cls, points, values, lengths, nuggets, angles=None, angle_lengths=(np.inf,)):
+        """`fit` among ``lengths`` x ``nuggets`` x ``angle_lengths`` (deg) of the wrist ``angles`` (N, 3) deg at the
+        points (a `GaussianField`'s; None: none), the squared distances of the likelihood's points computed once."""
+        from scipy.linalg import solve_triangular  # here: compensating with a grid never needs scipy
+
         p, v = _scattered_data(points, values)
         gaps = np.sqrt(_squared_distances(p, p) + np.diag(np.full(len(p), np.inf)))
         spacing = float(np.median(gaps.min(axis=1)))
         lengths = [length for length in lengths if length >= 2.0 * spacing] or [max(lengths)]
         every = -(-len(p) // LIKELIHOOD_POINTS)
-        best = None
-        for length in lengths:
-            for nugget in nuggets:  # one candidate at a time: each holds an (N, N) factor
-                field = cls(p[::every], v[::every], length=length, nugget=nugget)
-                if best is None or field.log_likelihood() > best.log_likelihood():
-                    best = field
-        return best if every == 1 else cls(p, v, length=best.length, nugget=best.nugget)
+        sample, sampled = p[::every], v[::every]
+        squares = _squared_distances(sample, sample)
+        angle_squares = 0.0 if angles is None else _squared_distances(angles[::every], angles[::every])
+        scores = {}
+        for angle_length in angle_lengths:
+            for length in lengths:
+                correlation = np.exp(-0.5 * (squares / length**2 + angle_squares / angle_length**2))
+                for nugget in nuggets:  # one candidate at a time: each holds an (N, N) factor
+                    factor = np.linalg.cholesky(correlation + nugget * np.eye(len(sample)))
+                    scores[angle_length, length, nugget] = _log_likelihood(
+                        factor, solve_triangular(factor, sampled, lower=True))
+        angle_length, length, nugget = max(scores, key=scores.get)
+        wrist = {"angles": angles, "angle_length": angle_length} if np.isfinite(angle_length) else {}
+        return cls(p, v, length=length, nugget=nugget, **wrist)
 
     def to_dict(self):
         """Plain-list dict: kind, points, values, length, nugget."""
         return {**self._fields(), "length": self.length, "nugget": self.nugget}
 
 
-GP_MAX_POINTS = 2000
-"""Most points a `GaussianField` is offered for: its factor holds (N, N) floats (32 MB at 2,000 points)."""
+GP_MAX_POINTS = 3000
+"""Most points a `GaussianField` is offered for: its factor holds (N, N) floats (72 MB at 3,000 points)."""
+GP_NUGGETS = (0.01, *KRIGING_NUGGETS)
+"""Noise-to-signal variance ratios `GaussianField.fit` tries: down to 0.01, where the likelihood of the UR5's held-out
+slabs sat at the 0.03 bound of `KRIGING_NUGGETS` (it takes 0.01 there, and 0.01 again with 0.003 offered)."""
+ANGLE_LENGTHS = (np.inf, 40.0, 80.0, 160.0)
+"""Correlation lengths (deg) of the wrist angles `GaussianField.fit` tries with the commanded joints (inf: none)."""
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -459,8 +505,72 @@ class GaussianField(Kriging):
     ``kriging`` field is a re-calibration's correction, whose variance the
     landing estimate adds and which a later update replaces; this one is
     part of the calibrated model, its error in the calibration's held-out
-    statistics. At most `GP_MAX_POINTS` points (calibrate offers ``knn``
-    alone beyond them).
+    statistics. At most `GP_MAX_POINTS` points (calibrate offers no ``gp``
+    beyond them).
+
+    With the wrist angles of its points (``angles``, joints 4-6) and a
+    finite ``angle_length``, the process is one of the position and the
+    wrist together (a squared-exponential correlation with a length per
+    group): rows at one position in other orientations are told apart, and
+    the field is evaluated with the commanded joints. On the held-out
+    regions of the real arms it predicts what the joint model leaves better
+    than a field of the position alone (docs/benchmarks.md: UR5 slabs
+    0.088 -> 0.075 mm, UR10 planes 0.107 -> 0.100 mm).
+
+    Attributes
+    ----------
+    angles : ndarray, shape (N, 3), or None
+        Commanded angles of joints 4-6 at the points, deg (None: a field of
+        the position alone).
+    angle_length : float
+        Their correlation length, deg (inf: the angles are not used).
     """
 
+    angles: np.ndarray = None
+    angle_length: float = np.inf
     kind = GP_KIND
+
+    def __post_init__(self):
+        angle_length = float(self.angle_length)
+        angles = None
+        if np.isfinite(angle_length):
+            angles = np.asarray(self.angles if self.angles is not None else np.zeros((0, 3)), dtype=float)
+            if not (angle_length > 0 and angles.shape == (len(np.asarray(self.points)), 3)
+                    and np.isfinite(angles).all()):
+                raise CalibrationError(f"gp field: a wrist length of {angle_length} deg needs one finite triple of "
+                                       f"angles (deg) per point and a length > 0, got angles of shape {angles.shape}")
+        elif not np.isinf(angle_length) or angle_length < 0:
+            raise CalibrationError(f"gp field: the wrist length must be > 0 deg or inf, got {angle_length}")
+        object.__setattr__(self, "angles", angles)
+        object.__setattr__(self, "angle_length", angle_length)
+        super().__post_init__()
+
+    @property
+    def needs_joints(self):
+        """True when the field depends on the commanded wrist angles (`evaluate` then needs ``joints``)."""
+        return self.angles is not None
+
+    def _data_angles(self):
+        return self.angles
+
+    def _coordinates(self, points, angles):
+        """Points (N, 3) mm and wrist angles (N, 3) deg in units of their lengths (N, 3 or 6)."""
+        if not self.needs_joints:
+            return points / self.length
+        if angles is None:
+            raise ModelError("this gp field depends on the wrist angles: evaluate it with the commanded joints")
+        return np.column_stack([points / self.length, angles / self.angle_length])
+
+    @classmethod
+    def fit(cls, points, values, lengths=KRIGING_LENGTHS, nuggets=GP_NUGGETS, joints=None,
+            angle_lengths=ANGLE_LENGTHS):
+        """`Kriging.fit`, and with the commanded joints (N, 6) rad each of ``angle_lengths`` (deg) of the wrist."""
+        if joints is None:
+            return cls._most_likely(points, values, lengths, nuggets)
+        return cls._most_likely(points, values, lengths, nuggets, np.degrees(np.asarray(joints, float)[:, WRIST]),
+                                angle_lengths)
+
+    def to_dict(self):
+        """Plain-list dict: kind, points, values, length, nugget, and the wrist's angles and length where used."""
+        return super().to_dict() | ({"angles": self.angles.tolist(), "angle_length": self.angle_length}
+                                    if self.needs_joints else {})

@@ -610,7 +610,7 @@ def estimate(model, mode, q, T_target, tool=None, postures=None, other_tool=Fals
     identified = model.identified if model.dh_names else model.nominal.as_standard()
     at_target = identified if tool is None else identified.replace(T_flange_tool=tool)
     jac = position_jacobian(at_target, q, names)
-    on_top = model.error_field(mode) if mode in ("grid", "composite") else None
+    on_top = model.error_field(mode, tool) if mode in ("grid", "composite") else None
     correction = on_top if getattr(on_top, "kind", None) == KRIGING_KIND else None  # a re-calibration's
     field = on_top is not None and correction is None
     if (field or mode in ("none", "linear")) and data.spread < np.radians(ORIENTATION_MARGIN):
