@@ -18,7 +18,7 @@ import functools
 import re
 
 from trajcomp.formats.number_fields import NUMBER
-from trajcomp.formats.rapid.forms import (
+from trajcomp.formats.forms import (
     Blank, Form, Group, LineEnd, Literal, Name, Number, Optional, Repeat, Value, Words,
 )
 from trajcomp.programs.items import CIRCULAR, JOINT, LINEAR

@@ -11,7 +11,7 @@ from trajcomp.errors import ReadError
 from trajcomp.formats.configuration import distinct_tuples
 from trajcomp.formats.number_fields import NUMBER, BLANK, line_bounds, offset_type, read_numbers, text_codes
 from trajcomp.formats.rapid import grammar
-from trajcomp.formats.rapid.forms import Cursor, find_lines
+from trajcomp.formats.forms import Cursor, find_lines
 from trajcomp.formats.rapid.task_data import TaskData, changed_at
 from trajcomp.formats.text import (
     JOINT_LIMIT,
