@@ -248,7 +248,7 @@ _MOTION_REST = (
              Name(), Blank()),
     Literal(";"), Group(), Blank(), LineEnd())
 # MoveL p1, v50, z1, tool0; groups: instruction, point, speed data, the end of its ';'
-WRITTEN_MOTION = Form(Group(Words(*AT_ONCE_MOTIONS)), Blank(True), Group(Name(letter_first=True)), *_MOTION_REST)
+WRITTEN_MOTION = Form(Group(Words(*AT_ONCE_MOTIONS)), Blank(True), Group(Name(first="A-Za-z")), *_MOTION_REST)
 # MoveL [[x,y,z],[q1,q2,q3,q4],[cf1,cf4,cf6,cfx],[ea,..,ef]],v50,z1,tool0\WObj:=wobj0; as RoboDK's ABB posts write it
 WRITTEN_INLINE = Form(Group(Words(*AT_ONCE_MOTIONS)), Blank(True), Group(Value(ROBTARGET.layout)), *_MOTION_REST)
 WRITTEN_FORMS = (WRITTEN_POINT, WRITTEN_MOTION, WRITTEN_INLINE)
