@@ -14,6 +14,7 @@ from trajcomp.errors import ReadError, TrajcompError, WriteError
 from trajcomp.formats.fanuc import columns as fanuc_columns
 from trajcomp.formats.fanuc import grammar as fanuc_grammar
 from trajcomp.formats.krl import at_once as krl_at_once
+from trajcomp.formats.krl import grammar as krl_grammar
 from trajcomp.formats.krl import writer as krl_writer
 from trajcomp.formats.forms import Number
 from trajcomp.formats.rapid import grammar as rapid_grammar
@@ -50,8 +51,6 @@ def _seen(program):
 
 
 _FANUC_WRITTEN = fanuc_columns.written_positions
-NO_INLINE = (np.zeros(0, dtype=np.int64), np.zeros((0, 10), dtype=np.int64), np.zeros((0, 16), dtype=np.int64),
-             np.zeros((0, 16), dtype=np.int64))  # what KRL's `_inline_layout` gives when it finds no line
 NONE_AT_ONCE = {  # what a language's reader at once gives when it reads nothing
     krl_at_once: lambda *args: (np.zeros(0, dtype=int), None, np.zeros(0, dtype=bool)),
     fanuc_columns: lambda masked, start, end: _FANUC_WRITTEN(masked, 0, 0),
@@ -76,12 +75,8 @@ def _line_by_line(path, monkeypatch):
             patch.setattr(module, function, NONE_AT_ONCE.get(module, lambda *args: {}))
         if module is fanuc_columns:  # nor any motion line
             patch.setattr(fanuc_grammar, "WRITTEN_MOTION", re.compile(r"(?!)"))
-        if module is krl_at_once:  # nor any motion line read from its characters or by its pattern
-            patch.setattr(module, "WRITTEN_MOTION", re.compile(r"(?!)"))
-            patch.setattr(module, "_motion_layout", lambda codes, starts, ends: (np.zeros(0, dtype=np.int64),
-                                                                                 np.zeros((0, 10), dtype=np.int64)))
-            patch.setattr(module, "INLINE_MOTION", re.compile(r"(?!)"))  # nor any inline motion
-            patch.setattr(module, "_inline_layout", lambda codes, starts, ends: NO_INLINE)
+        if module is krl_at_once:  # nor any motion line, to a name or to an inline point
+            never_written(patch, krl_grammar.WRITTEN_MOTION, krl_grammar.INLINE_MOTION)
         return formats.read(path)
 
 
