@@ -58,10 +58,16 @@ class Cursor:
         return np.where(at < self.line_end, np.minimum(code, 127), 0)  # 0: past the line's end, 127: not ASCII
 
     def char(self, at, character):
-        """Whether each line has ``character`` (ASCII; a letter in either case) at ``at`` (K,)."""
-        if character.isalpha():
-            return self._code(at) | 0x20 == ord(character.lower())
+        """Whether each line has ``character`` at ``at`` (K,)."""
         return self._code(at) == ord(character)
+
+    def spells(self, at, text):
+        """Whether each line has ``text`` (ASCII; its letters in either case) from ``at`` (K,)."""
+        offsets = at[:, None] + np.arange(len(text))
+        code = self.codes[np.minimum(offsets, len(self.codes) - 1)]
+        code = np.where(offsets < self.line_end[:, None], np.minimum(code, 127), 0)
+        letter = np.array([c.isalpha() for c in text])
+        return (np.where(letter, code | 0x20, code) == [ord(c) for c in text.lower()]).all(axis=1)
 
     def among(self, at, table):
         """Whether each line has a character of ``table`` (`character_table`) at ``at`` (K,)."""
@@ -120,7 +126,8 @@ class Cursor:
         it holds fewer."""
         if characters not in self._found:
             lo, hi = self.span
-            self._found[characters] = np.flatnonzero(np.isin(self.codes[lo:hi], [ord(c) for c in characters])) + lo
+            block = self.codes[lo:hi]
+            self._found[characters] = np.flatnonzero(np.logical_or.reduce([block == ord(c) for c in characters])) + lo
         offsets = self._found[characters]
         if not len(offsets):
             return np.full(len(at), -1)
@@ -168,10 +175,7 @@ class Literal(Element):
         return re.escape(self.text)
 
     def run(self, cursor, at, found):
-        there = np.ones(len(at), dtype=bool)
-        for k, character in enumerate(self.text):
-            there &= cursor.char(at + k, character)
-        return at + len(self.text), there
+        return at + len(self.text), cursor.spells(at, self.text)
 
 
 class Words(Element):

@@ -17,7 +17,7 @@ from trajcomp.formats.krl.grammar import (
     WRITTEN_POINT,
 )
 from trajcomp.formats.number_fields import DIGIT as _DIGIT, offset_type, read_numbers, text_codes
-from trajcomp.formats.number_fields import spelt as _spelt
+from trajcomp.formats.number_fields import spells as _spells, spelt as _spelt
 from trajcomp.formats.text import LENGTH_LIMIT
 from trajcomp.programs.tables import TargetTable, TextSlices, read_only, repeated
 from trajcomp.programs.items import SpanColumns
@@ -63,8 +63,8 @@ def written_points(index, masked, lines):
         regs = found[lo:lo + AT_ONCE]
         start, end = regs[:, fields, 0], regs[:, fields, 1]
         numbers, read = _field_numbers(codes, start, end)
-        blocks.append(_written_block(start[read], end[read], numbers[read], _declared_global(masked, regs[read]),
-                                     offset, configs))
+        shared = _declared_global(masked, codes, regs[read])
+        blocks.append(_written_block(start[read], end[read], numbers[read], shared, offset, configs))
     if not blocks:
         return np.zeros(0, dtype=int), None, np.zeros(0, dtype=bool)
     pose, start, end, config, external, shared = (
@@ -80,14 +80,13 @@ def written_points(index, masked, lines):
     return line, table, shared
 
 
-def _declared_global(masked, regs):
+def _declared_global(masked, codes, regs):
     """Whether each of K declarations (``regs`` (K, groups + 1, 2): `WRITTEN_POINT`'s) is GLOBAL (K,) bool:
-    `GLOBAL_WORD` in it, the word among its qualifiers or a point named so."""
+    `GLOBAL_WORD` among its qualifiers (rare: looked for one by one), or a point named so."""
     (qualifiers,), (name,) = WRITTEN_POINT.group("qualifiers"), WRITTEN_POINT.group("name")
-    shared = np.zeros(len(regs), dtype=bool)
-    maybe = (regs[:, qualifiers, 1] > regs[:, qualifiers, 0]) | (regs[:, name, 1] - regs[:, name, 0] == len(SHARED))
-    for k in np.flatnonzero(maybe).tolist():
-        shared[k] = GLOBAL_WORD.search(masked, int(regs[k, 0, 0]), int(regs[k, 0, 1])) is not None
+    shared = (regs[:, name, 1] - regs[:, name, 0] == len(SHARED)) & _spells(codes, regs[:, name, 0], SHARED)
+    for k in np.flatnonzero(regs[:, qualifiers, 1] > regs[:, qualifiers, 0]).tolist():
+        shared[k] |= GLOBAL_WORD.search(masked, int(regs[k, qualifiers, 0]), int(regs[k, qualifiers, 1])) is not None
     return shared
 
 
