@@ -313,7 +313,7 @@ def _off_the_track(program, robot, index, T_base_tcp):
     """Why targets ``index`` (N,) at ``T_base_tcp`` (N, 4, 4) the arm cannot reach are unreachable when an external
     axis of the program carries the arm (`trajcomp.arm.track.carried_by_a_track`) and the robot's description has
     no track for it; "" otherwise."""
-    if robot.track is not None and robot.track.index(program.format) is not None:
+    if robot.track is not None and robot.track.index(program.track_key) is not None:
         return ""
     external = program.target_table().external
     shoulder, reach = shoulder_and_reach(robot)

@@ -75,7 +75,7 @@ def retime_program(program, robot, joints, *, method="auto", tools=None, frames=
     moves = moves_from_program(program, robot, joints, tools=tools, frames=frames)
     values = track_values(program, robot, moves, tools, frames)
     if values is not None:  # the track moves: a joint of the timed path
-        return retime_on_track(moves, robot, values, robot.track.written[program.format],
+        return retime_on_track(moves, robot, values, robot.track.written[program.track_key],
                                programmed=program.motion_table().external_speed[moves.motion], method=method,
                                tolerance=tolerance)
     return retime(moves, robot, method=method, tolerance=tolerance)
