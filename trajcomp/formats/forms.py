@@ -269,16 +269,24 @@ class Value(Element):
         return end, there & (end > 0)
 
 
-class Optional(Element):
-    """Its elements, or nothing (a group inside: ``(-1, -1)`` where not taken). Run at once, taken where all its
-    elements are there."""
+class _Several(Element):
+    """Elements together: their patterns joined by `joining` in a group that captures nothing, then `after`."""
+
+    joining, after = "", ""
 
     def __init__(self, *elements):
         self.elements = elements
         self.groups = sum(e.groups for e in elements)
 
     def pattern(self):
-        return "(?:" + "".join(e.pattern() for e in self.elements) + ")?"
+        return "(?:" + self.joining.join(e.pattern() for e in self.elements) + ")" + self.after
+
+
+class Optional(_Several):
+    """Its elements, or nothing (a group inside: ``(-1, -1)`` where not taken). Run at once, taken where all its
+    elements are there."""
+
+    after = "?"
 
     def run(self, cursor, at, found):
         inner = []
@@ -289,17 +297,16 @@ class Optional(Element):
         return np.where(there, end, at), np.ones(len(at), dtype=bool)
 
 
-class Repeat(Element):
+class Repeat(_Several):
     """Its elements (no group among them: a pattern's repeated group holds its last repeat only), any number of
     times; run at once, as many times as they are there."""
 
-    def __init__(self, *elements):
-        if any(e.groups for e in elements):
-            raise ValueError("a Repeat holds no group")
-        self.elements = elements
+    after = "*"
 
-    def pattern(self):
-        return "(?:" + "".join(e.pattern() for e in self.elements) + ")*"
+    def __init__(self, *elements):
+        super().__init__(*elements)
+        if self.groups:
+            raise ValueError("a Repeat holds no group")
 
     def run(self, cursor, at, found):
         at, rows, moving = np.array(at), np.arange(len(at)), cursor
@@ -312,19 +319,14 @@ class Repeat(Element):
         return at, np.ones(len(at), dtype=bool)
 
 
-class Either(Element):
+class Either(_Several):
     """One of its elements (``a|b``): run at once, the first that is there; the groups of the others ``(-1, -1)``."""
 
-    def __init__(self, *alternatives):
-        self.alternatives = alternatives
-        self.groups = sum(e.groups for e in alternatives)
-
-    def pattern(self):
-        return "(?:" + "|".join(e.pattern() for e in self.alternatives) + ")"
+    joining = "|"
 
     def run(self, cursor, at, found):
         end, there = np.full(len(at), -1, dtype=np.int64), np.zeros(len(at), dtype=bool)
-        for alternative in self.alternatives:
+        for alternative in self.elements:
             inner = []
             after, here = _run_all((alternative,), cursor, at, inner)
             taken = here & ~there
