@@ -61,13 +61,13 @@ class Cursor:
         """Whether each line has ``character`` at ``at`` (K,)."""
         return self._code(at) == ord(character)
 
-    def spells(self, at, text):
-        """Whether each line has ``text`` (ASCII; its letters in either case) from ``at`` (K,)."""
-        offsets = at[:, None] + np.arange(len(text))
+    def spells(self, at, lower, letter):
+        """Whether each line has a text (ASCII) from ``at`` (K,): ``lower`` (W,) its codes in lower case, ``letter``
+        (W,) bool where it has a letter (either case there)."""
+        offsets = at[:, None] + np.arange(len(lower))
         code = self.codes[np.minimum(offsets, len(self.codes) - 1)]
         code = np.where(offsets < self.line_end[:, None], np.minimum(code, 127), 0)
-        letter = np.array([c.isalpha() for c in text])
-        return (np.where(letter, code | 0x20, code) == [ord(c) for c in text.lower()]).all(axis=1)
+        return (np.where(letter, code | 0x20, code) == lower).all(axis=1)
 
     def among(self, at, table):
         """Whether each line has a character of ``table`` (`character_table`) at ``at`` (K,)."""
@@ -170,12 +170,13 @@ class Literal(Element):
 
     def __init__(self, text):
         self.text = text
+        self.lower, self.letter = np.array([ord(c) for c in text.lower()]), np.array([c.isalpha() for c in text])
 
     def pattern(self):
         return re.escape(self.text)
 
     def run(self, cursor, at, found):
-        return at + len(self.text), cursor.spells(at, self.text)
+        return at + len(self.text), cursor.spells(at, self.lower, self.letter)
 
 
 class Words(Element):
@@ -350,7 +351,7 @@ class Group(Element):
     def run(self, cursor, at, found):
         inner = []
         end, there = _run_all(self.elements, cursor, at, inner)
-        found.append(np.c_[at, end])
+        found.append(np.stack((at, end), axis=1))
         found.extend(inner)
         return end, there
 
@@ -377,6 +378,9 @@ def _run_all(elements, cursor, at, found):
         if not here.all():
             kept = np.flatnonzero(here)
             alive, at, cursor = alive[kept], at[kept], cursor.of(kept)
+    if len(alive) == count:  # every line there: no line's offsets to fill with -1
+        found.extend(span for _, span in spans)
+        return at, np.ones(count, dtype=bool)
     end, there = np.full(count, -1, dtype=np.int64), np.zeros(count, dtype=bool)
     end[alive], there[alive] = at, True
     for rows, span in spans:
@@ -443,7 +447,10 @@ def find_lines(forms, codes, starts, ends):
         found = []
         _, there = _run_all(form.elements[1:], cursor, first, found)
         rows = np.flatnonzero(there)
-        out.append((rows, np.stack([np.c_[starts[rows], ends[rows]], *(span[rows] for span in found)], axis=1)))
+        spans = [np.stack((starts, ends), axis=1), *found]
+        if len(rows) < len(starts):
+            spans = [span[rows] for span in spans]
+        out.append((rows, np.stack(spans, axis=1)))
     return out
 
 
