@@ -291,6 +291,25 @@ def check_base_frame_only(language, base, samples, robot, folder):
     _tcp_in_base(again, robot)
 
 
+def check_external_axes(language, axes, samples, robot, folder):
+    """A program converted into the language, its targets stating a track position, is written and read back with
+    it: on a robot whose track names a field for the language's key (and only for it), the targets are placed there."""
+    from tests.compensation.test_compensate_track import on_track
+
+    program = generated(robot)
+    program = dataclasses.replace(program, targets=tuple(dataclasses.replace(t, external=np.array([750.0]))
+                                                         for t in program.targets))
+    converted, again = _converted_write_read(language, program, robot, folder)
+    assert converted.track_key == again.track_key == axes.track_key
+    used = again.usage_table().index
+    track = ("\ntrack:\n  direction: [1.0, 0.0, 0.0]\n  limits: {position_min: -100, position_max: 5800, velocity: 2000, "
+             "acceleration: 2500}\n  fields: {%s: E1, another_language: E2}\n")
+    np.testing.assert_array_equal(FrameTable(again, on_track(samples.robot, track % axes.track_key))
+                                  .track_positions(used), np.full(len(used), 750.0))
+    np.testing.assert_array_equal(FrameTable(again, on_track(samples.robot, track % "another_key"))
+                                  .track_positions(used), np.zeros(len(used)))  # no field for it: position 0
+
+
 def check_kept_external_axes(language, kept, samples, robot, folder):
     """A target that states no external axis is where the motion before left it."""
     from tests.compensation.test_compensate_track import on_track
@@ -309,4 +328,4 @@ CHECKS = {caps.Vendor: check_vendor, caps.RowBlocks: check_row_blocks, caps.Spee
           caps.SpeedUnits: check_speed_units, caps.OrientationSpeed: check_orientation_speed,
           caps.ConfigurationData: check_configuration_data, caps.Tasks: check_tasks,
           caps.PointCopies: check_point_copies, caps.BaseFrameOnly: check_base_frame_only,
-          caps.KeptExternalAxes: check_kept_external_axes}
+          caps.ExternalAxes: check_external_axes, caps.KeptExternalAxes: check_kept_external_axes}

@@ -14,7 +14,10 @@ from trajcomp.errors import ReadError, TrajcompError, WriteError
 from trajcomp.formats.fanuc import columns as fanuc_columns
 from trajcomp.formats.fanuc import grammar as fanuc_grammar
 from trajcomp.formats.krl import at_once as krl_at_once
+from trajcomp.formats.krl import grammar as krl_grammar
 from trajcomp.formats.krl import writer as krl_writer
+from trajcomp.formats.forms import Number
+from trajcomp.formats.rapid import grammar as rapid_grammar
 from trajcomp.formats.rapid import reader as rapid_reader
 from trajcomp.formats.urscript import reader as urscript_reader
 from trajcomp.formats import text_edits
@@ -29,7 +32,7 @@ DATA = Path(__file__).parents[1] / "data"
 EXAMPLES = Path(__file__).parents[2] / "examples" / "programs"
 AT_ONCE = {  # language -> (module, the function reading declarations at once)
     ".src": (krl_at_once, "written_points"),
-    ".mod": (rapid_reader, ("_WRITTEN_POINT", "_WRITTEN_MOTION", "_WRITTEN_INLINE")),  # patterns of lines read at once
+    ".mod": (rapid_reader, rapid_grammar.WRITTEN_FORMS),  # the forms of the lines read at once
     ".ls": (fanuc_columns, "written_positions"),
     ".script": (urscript_reader, "_literal_poses"),
 }
@@ -48,34 +51,32 @@ def _seen(program):
 
 
 _FANUC_WRITTEN = fanuc_columns.written_positions
-NO_INLINE = (np.zeros(0, dtype=np.int64), np.zeros((0, 10), dtype=np.int64), np.zeros((0, 16), dtype=np.int64),
-             np.zeros((0, 16), dtype=np.int64))  # what KRL's `_inline_layout` gives when it finds no line
 NONE_AT_ONCE = {  # what a language's reader at once gives when it reads nothing
     krl_at_once: lambda *args: (np.zeros(0, dtype=int), None, np.zeros(0, dtype=bool)),
     fanuc_columns: lambda masked, start, end: _FANUC_WRITTEN(masked, 0, 0),
 }
 
 
+def never_written(patch, *written_forms):
+    """Patch ``written_forms`` (`trajcomp.formats.forms.Form`) so that no line is found written in them: neither
+    at once (a `Number` not run at once) nor by their patterns."""
+    for form in written_forms:
+        patch.setattr(form, "regex", re.compile(r"(?!)"))
+        patch.setattr(form, "elements", form.elements[:1] + (Number(),))
+
+
 def _line_by_line(path, monkeypatch):
     """The program read with no declaration (FANUC, KRL: nor motion line) read at once."""
     module, function = AT_ONCE[path.suffix.lower()]
     with monkeypatch.context() as patch:
-        if isinstance(function, tuple):  # patterns: none matches
-            for name in function:
-                patch.setattr(module, name, re.compile(r"(?!)"))
+        if isinstance(function, tuple):  # forms: no line written so
+            never_written(patch, *function)
         else:
             patch.setattr(module, function, NONE_AT_ONCE.get(module, lambda *args: {}))
         if module is fanuc_columns:  # nor any motion line
             patch.setattr(fanuc_grammar, "WRITTEN_MOTION", re.compile(r"(?!)"))
-        if module is rapid_reader:  # nor any line found from its characters
-            patch.setattr(module, "_laid_out_lines", lambda codes, starts, ends: [
-                (np.zeros(0, dtype=np.int64), np.zeros((0, 1, 2), dtype=np.int64))] * len(module.WRITTEN_FORMS))
-        if module is krl_at_once:  # nor any motion line read from its characters or by its pattern
-            patch.setattr(module, "WRITTEN_MOTION", re.compile(r"(?!)"))
-            patch.setattr(module, "_motion_layout", lambda codes, starts, ends: (np.zeros(0, dtype=np.int64),
-                                                                                 np.zeros((0, 10), dtype=np.int64)))
-            patch.setattr(module, "INLINE_MOTION", re.compile(r"(?!)"))  # nor any inline motion
-            patch.setattr(module, "_inline_layout", lambda codes, starts, ends: NO_INLINE)
+        if module is krl_at_once:  # nor any motion line, to a name or to an inline point
+            never_written(patch, krl_grammar.WRITTEN_MOTION, krl_grammar.INLINE_MOTION)
         return formats.read(path)
 
 

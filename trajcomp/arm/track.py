@@ -57,10 +57,12 @@ class Track:
     velocity, acceleration : float
         Limits, mm/s and mm/s^2 of track position.
     fields : dict of str to int
-        ``{language: index}``: the external axis (`Target.external`) of a
-        language's target that holds the track position (E1 -> 0, eax_b -> 1).
+        ``{key: index}``: the external axis (`Target.external`) of a
+        language's target that holds the track position (E1 -> 0, eax_b -> 1),
+        the language named by its key (``krl``: its
+        `trajcomp.formats.capabilities.ExternalAxes`, `Program.track_key`).
     written : dict of str to str
-        ``{language: field}`` as the YAML names them (for messages).
+        ``{key: field}`` as the YAML names them (for messages).
     scale : float
         World mm moved per mm of track position, as the controller has it (1 nominally).
     actual_direction : ndarray, shape (3,), or None
@@ -94,9 +96,10 @@ class Track:
     straightness: np.ndarray = None
     scatter: float = None
 
-    def index(self, language):
-        """The external axis index of ``language``'s targets that holds the track position, or None."""
-        return self.fields.get(language)
+    def index(self, key):
+        """The external axis index that holds the track position in the targets of the language named ``key``
+        (`Program.track_key`), or None (None: a language whose targets state none)."""
+        return self.fields.get(key)
 
     @property
     def identified(self):

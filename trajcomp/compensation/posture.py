@@ -313,7 +313,7 @@ def _off_the_track(program, robot, index, T_base_tcp):
     """Why targets ``index`` (N,) at ``T_base_tcp`` (N, 4, 4) the arm cannot reach are unreachable when an external
     axis of the program carries the arm (`trajcomp.arm.track.carried_by_a_track`) and the robot's description has
     no track for it; "" otherwise."""
-    if robot.track is not None and robot.track.index(program.format) is not None:
+    if robot.track is not None and robot.track.index(program.track_key) is not None:
         return ""
     external = program.target_table().external
     shoulder, reach = shoulder_and_reach(robot)
@@ -324,7 +324,8 @@ def _off_the_track(program, robot, index, T_base_tcp):
         stated = np.isfinite(values)
         if carried_by_a_track(T_base_tcp[stated, :3, 3] - shoulder, values[stated], reach):
             where = ("describes no track" if robot.track is None else
-                     f"has a track but names no field of {program.format} programs for it (track.fields)")
+                     f"has a track but names no field of {program.track_key or program.format} programs for it "
+                     "(track.fields)")
             return (f"{program.name}: the program moves external axis {axis} over {np.ptp(values[stated]):.0f} mm "
                     f"and its targets move with it, out of the reach of robot {robot.name} from a fixed base: a robot "
                     f"on a track, and the robot's description {where}. Describe the track in the robot's YAML (track: "

@@ -14,7 +14,7 @@ import dataclasses
 
 import numpy as np
 
-from trajcomp.formats import capability, find_format
+from trajcomp.formats import capability, find_format, track_key
 from trajcomp.formats.capabilities import BaseFrameOnly, ConfigurationData, OrientationSpeed, SpeedUnits
 from trajcomp.formats.speeds import MotionGeometry, convert_speeds
 from trajcomp.formats.configuration import BOUNDARY_TOLERANCE, binding, configuration_for, describe, written_configuration
@@ -410,7 +410,7 @@ def _warnings(program, robot):
     """What the user must know about a compensated program: its notes (copies of a point per use), external axes
     that move other than the robot's track (whose carriage places each target's arm base)."""
     moving = program.moving_external_axes()
-    axis = None if robot is None or robot.track is None else robot.track.index(program.format)
+    axis = None if robot is None or robot.track is None else robot.track.index(program.track_key)
     if axis is not None:
         moving = tuple(name for name in moving if name != f"E{axis + 1}")
     if not moving:
@@ -503,6 +503,7 @@ def convert_program(program, to_format, *, robot=None, tools=None, frames=None):
         targets[i] = replaced(targets[i], config=configs.get(i, ()), spans={}, edited=False)
     return Program(
         format=to_format,
+        track_key=track_key(language),
         name=program.name,
         items=motions,
         targets=tuple(targets),

@@ -42,7 +42,9 @@ import os
 from pathlib import Path
 
 from trajcomp.errors import ReadError, RobotError, TrajcompError, WriteError
-from trajcomp.formats.capabilities import KINDS, KeptExternalAxes, PointCopies, RowBlocks, Vendor, resolved
+from trajcomp.formats.capabilities import (
+    KINDS, ExternalAxes, KeptExternalAxes, PointCopies, RowBlocks, Vendor, resolved,
+)
 from trajcomp.support.atomic import FileSet, recover
 from trajcomp.support.memory import collection_paused
 
@@ -284,7 +286,7 @@ def read(path, format=None, *, workers=1, copies=True):
         raise ReadError(f"{path}: no such file" if what is None else f"{path}: is {what}; a program is read from a file")
     recover(path.parent)  # a set of files a killed run left half-renamed is completed first
     with collection_paused():  # a program is made of many objects without cycles (`trajcomp.support.memory`)
-        program = _with_kept_axes(fmt.read(path, workers), fmt)
+        program = _with_external_axes(fmt.read(path, workers), fmt)
         return uses_resolved(program, fmt) if copies else program.with_shared_targets_left()
 
 
@@ -319,12 +321,22 @@ def read_task(paths, format=None):
 
     programs = [read(path, format) for path in paths]
     fmt = find_format(paths[0], format)
-    return uses_resolved(_with_kept_axes(merge(programs), fmt), fmt)
+    return uses_resolved(_with_external_axes(merge(programs), fmt), fmt)
 
 
-def _with_kept_axes(program, fmt):
-    """``program`` marked with its language's reading of the external axes a target does not state."""
-    return dataclasses.replace(program, kept_axes=True) if fmt.capability(KeptExternalAxes) else program
+def _with_external_axes(program, fmt):
+    """``program`` marked with its language's external axes: the key of the language in a robot's track fields
+    (`ExternalAxes`), whether a target that does not state them keeps them (`KeptExternalAxes`)."""
+    marks = {"track_key": track_key(fmt)} if track_key(fmt) else {}
+    if fmt.capability(KeptExternalAxes):
+        marks["kept_axes"] = True
+    return dataclasses.replace(program, **marks) if marks else program
+
+
+def track_key(language):
+    """The key naming ``language`` (`Format`) in a robot's track fields (`ExternalAxes`), or None."""
+    axes = language.capability(ExternalAxes)
+    return None if axes is None else axes.track_key
 
 
 def input_paths(path, program):

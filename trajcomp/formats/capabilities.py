@@ -139,6 +139,21 @@ class BaseFrameOnly:
 
 
 @dataclasses.dataclass(frozen=True)
+class ExternalAxes:
+    """The language's targets state external axes (`trajcomp.programs.items.Target.external`: KUKA E1..E6, ABB
+    eax_a..eax_f, FANUC E1..), a track's position among them (`trajcomp.arm.track.Track`).
+
+    ``track_key`` is the key naming the language in a robot YAML's
+    ``track.fields`` (``krl: E1``), whose value is the field that holds the
+    track position. A program read in (or converted into) the language
+    carries it (`trajcomp.programs.program.Program.track_key`); a language
+    without it runs at track position 0.
+    """
+
+    track_key: str
+
+
+@dataclasses.dataclass(frozen=True)
 class KeptExternalAxes:
     """A Cartesian target that does not state an external axis keeps it where the motion before left it (KRL: a
     POS or FRAME point, or an E6POS without E1); in a language without it the axis is unknown there
@@ -146,4 +161,4 @@ class KeptExternalAxes:
 
 
 KINDS = (Vendor, RowBlocks, SpeedFields, SpeedUnits, OrientationSpeed, ConfigurationData, Tasks, PointCopies,
-         BaseFrameOnly, KeptExternalAxes)
+         BaseFrameOnly, ExternalAxes, KeptExternalAxes)

@@ -85,7 +85,7 @@ class FrameTable:
             A target without a value it states or keeps (named with its file and line).
         """
         index = np.asarray(index, dtype=int)
-        axis = None if self.track is None else self.track.index(self.program.format)
+        axis = None if self.track is None else self.track.index(self.program.track_key)
         if axis is None:
             return np.zeros(len(index))
         values = self._stated(axis)
@@ -96,7 +96,7 @@ class FrameTable:
         else:
             why = np.full(len(values), "", dtype=object)
         if missing.any():
-            field = self.track.written[self.program.format]
+            field = self.track.written[self.program.track_key]
             first = int(index[np.flatnonzero(missing)[0]])
             kept = (f"; {why[first]}" if why[first] else
                     f"; state {field} in every Cartesian target of a robot on a track")
@@ -110,12 +110,12 @@ class FrameTable:
         in a language whose controller runs them from where the track stands (`Program.kept_axes`: KRL); empty
         elsewhere, on a fixed base or where every used target's position is known (`carried_over` says why not).
         """
-        axis = None if self.track is None else self.track.index(self.program.format)
+        axis = None if self.track is None else self.track.index(self.program.track_key)
         if axis is None or not self.program.kept_axes:
             return {}
         values, why = self.carried_over(self._stated(axis))
         used = self.program.usage_table().index
-        field = self.track.written[self.program.format]
+        field = self.track.written[self.program.track_key]
         return {int(t): (f"states no {field}, so its track position, hence the arm's base, is unknown"
                          + (f": {why[t]}" if why[t] else ""))
                 for t in used[~np.isfinite(values[used])].tolist()}

@@ -118,6 +118,11 @@ class Program:
         A Cartesian target that does not state an external axis keeps it
         where the motion before left it (its language's, set when it is
         read: `trajcomp.formats.capabilities.KeptExternalAxes`).
+    track_key : str or None
+        The key naming its language in a robot's track fields
+        (`trajcomp.arm.track.Track.index`; set when it is read or converted:
+        `trajcomp.formats.capabilities.ExternalAxes`); None: its targets
+        state no track position.
     """
 
     format: str
@@ -130,6 +135,7 @@ class Program:
     times: np.ndarray = None
     notes: tuple = ()
     kept_axes: bool = False
+    track_key: str = None
 
     @classmethod
     def from_tables(cls, format, name, statements, motions, targets, sources=(), **fields):

@@ -130,7 +130,7 @@ def track_values(program, robot, moves, tools=None, frames=None):
 
     None too for a robot without a track, or whose track names no field of the program's language.
     """
-    if robot.track is None or robot.track.index(program.format) is None or not len(moves):
+    if robot.track is None or robot.track.index(program.track_key) is None or not len(moves):
         return None
     target = program.motion_table().target[moves.motion]
     values = FrameTable(program, robot, tools, frames).track_positions(target)

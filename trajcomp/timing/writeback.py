@@ -76,7 +76,7 @@ def retime_program(program, robot, joints, *, method="auto", tools=None, frames=
     values = track_values(program, robot, moves, tools, frames)
     if values is not None:  # the track moves: a joint of the timed path
         velocity, acceleration = programmed_limits(program.motion_table(), moves.motion, robot.track)
-        return retime_on_track(moves, robot, values, robot.track.written[program.format], programmed=velocity,
+        return retime_on_track(moves, robot, values, robot.track.written[program.track_key], programmed=velocity,
                                programmed_acceleration=acceleration, method=method, tolerance=tolerance)
     return retime(moves, robot, method=method, tolerance=tolerance)
 

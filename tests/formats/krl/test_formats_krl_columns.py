@@ -9,12 +9,14 @@ import pytest
 
 from trajcomp import formats
 from trajcomp.errors import ReadError
+from trajcomp.formats import forms
 from trajcomp.formats.krl import at_once as krl_at_once
-from trajcomp.formats.number_fields import text_codes
+from trajcomp.formats.krl import grammar
+from trajcomp.formats.number_fields import line_bounds, text_codes
 from trajcomp.formats.text import Lines, mask
 from trajcomp.formats.source_shifts import edit_sources
 from trajcomp.programs.tables import ItemRows, TargetRows
-from tests.formats.test_formats_columnar import NO_INLINE, _seen
+from tests.formats.test_formats_columnar import _seen, never_written
 
 DAT = ("DEFDAT p\n" + "".join(f"DECL E6POS XP{k}={{X {500 + k},Y {k},Z 600,A 0,B 90,C 0,S 2,T 35}}\n"
                               for k in range(1, 7))
@@ -50,11 +52,7 @@ def _program(tmp_path, src=SRC, dat=DAT):
 def _one_by_one(path, monkeypatch):
     """The program read with no motion read at once."""
     with monkeypatch.context() as patch:
-        patch.setattr(krl_at_once, "WRITTEN_MOTION", re.compile("(?!)"))
-        patch.setattr(krl_at_once, "_motion_layout", lambda codes, starts, ends: (np.zeros(0, dtype=np.int64),
-                                                                                 np.zeros((0, 10), dtype=np.int64)))
-        patch.setattr(krl_at_once, "INLINE_MOTION", re.compile("(?!)"))
-        patch.setattr(krl_at_once, "_inline_layout", lambda codes, starts, ends: NO_INLINE)
+        never_written(patch, grammar.WRITTEN_MOTION, grammar.INLINE_MOTION)
         return formats.read(path)
 
 
@@ -114,7 +112,7 @@ def test_a_point_declared_again_after_its_motion_is_the_last_declaration_as_read
     assert at_once.motions[0].target == 6 and at_once.targets[6].pose[0, 3] == 1.0
 
 
-POINT_VARIANTS = [  # (a line of a data list, whether `_written_layout` finds its fields from their characters)
+POINT_VARIANTS = [  # (a line of a data list, whether `WRITTEN_POINT` run at once finds it (`forms.find_lines`))
     ("DECL E6POS XP1={X 1.5,Y -2,Z 3.25,A 0.0,B 90.0,C -0.5,S 2,T 35}", 1),
     ("decl e6pos xp2={x .5,y -.5,z +3,a 1.,b 1e2,c -2.5E-1,s 6,t 0}", 1),
     ("DECL GLOBAL POS XP3={X 1,Y 2,Z 3,A 4,B 5,C 6}", 1),
@@ -123,32 +121,39 @@ POINT_VARIANTS = [  # (a line of a data list, whether `_written_layout` finds it
     ("DECL E6POS GLOBAL={X 1,Y 2,Z 3,A 4,B 5,C 6,S 2,T 35}", 1),  # a point named GLOBAL: shared, as the pattern says
     ("DECL E6POS XP6={X 1.23456789012345678,Y 2,Z 3,A 1e400,B 5,C 6}", 1),  # read by float; an infinite A: left out
     ("DECL E6POS XP7={X 1e9,Y 2,Z 3,A 4,B 5,C 6,S 256,T 35}", 1),  # out of range, S beyond its bits: left out
-    ("  DECL E6POS XP8={X 1,Y 2,Z 3,A 4,B 5,C 6}", 0),  # indented: the pattern
-    ("DECL\tE6POS XP9 = {X 1,Y 2,Z 3,A 4,B 5,C 6}  ", 0),
-    ("DECL E6POS XPé={X 1,Y 2,Z 3,A 4,B 5,C 6}", 0),  # a name beyond ASCII
+    ("  DECL E6POS XP8={X 1,Y 2,Z 3,A 4,B 5,C 6}", 1),  # indented
+    ("DECL\tE6POS XP9 = {X 1,Y 2,Z 3,A 4,B 5,C 6}  ", 1),
+    ("DECL E6POS XPé={X 1,Y 2,Z 3,A 4,B 5,C 6}", 0),  # a name beyond ASCII: the pattern
     ("DECL E6POS XP10={X 1..2,Y 2,Z 3,A 4,B 5,C 6}", 1),  # no number (`_field_numbers`): neither reads it
     ("DECL E6POS XP11={X 1,Y 2,Z 3,A 4,B 5,C 6,S +2,T 35}", 1),
     ("DECL E6POS XP12={X 1,Y 2,Z 3,A 4,B 5,C 6,E2 1}", 0),
     ("DECL E6POS XP13={X 1,Y 2,Z 3,A 4,B 5,C 6}{", 0),
-    ("DECL E6POS XP14={X 1,Y 2,Z 3,A 4,B 5,C 6} ; a comment after it", 0),  # blanks after the brace: the pattern
+    ("DECL E6POS XP14={X 1,Y 2,Z 3,A 4,B 5,C 6} ; a comment after it", 1),  # blanks after the brace
     ("DECL E6POS XP15={X 1,Y 2,Z ,A 4,B 5,C 6}", 0),
     ("DECL E6AXIS XA1={A1 0,A2 -90,A3 90,A4 0,A5 0,A6 0}", 0),
     ("DECL FDAT F1={TOOL_NO 1,BASE_NO 0}", 0),
 ]
-MOTION_VARIANTS = [  # (a .src line, whether `_motion_layout` reads it from its characters)
+MOTION_VARIANTS = [  # (a .src line, whether `WRITTEN_MOTION` run at once finds it (`forms.find_lines`))
     ("  LIN XP1 C_DIS", True), ("PTP XP2", True), ("\tsptp xp3 c_ptp", True), ("  SLIN _P4 C_VEL", True),
-    ("  LIN WITHIN", True), ("  LIN C_DISX", True), ("  LIN XP5  C_DIS", False), ("  LIN XP6 C_DIS  ", False),
+    ("  LIN WITHIN", True), ("  LIN C_DISX", True), ("  LIN XP5  C_DIS", True), ("  LIN XP6 C_DIS  ", True),
     ("  LIN WITH", False), ("  LIN C_DIS", False), ("  LIN XPé", False), ("  LIN XP7 WITH $VEL.CP=0.1", False),
-    ("  LIN_REL XP8", False), ("  CIRC XP1, XP2", False), ("  LIN 1XP", False), ("  LIN " + "X" * 70, False),
+    ("  LIN_REL XP8", False), ("  CIRC XP1, XP2", False), ("  LIN 1XP", False), ("  LIN " + "X" * 70, True),
 ]
 
 
-def _at_once_and_by_pattern(function, layout, nothing, *args):
-    """``function(*args)`` as written, and with ``layout`` reading nothing (every line through the pattern)."""
+def _at_once_and_by_pattern(function, *args):
+    """``function(*args)`` as written, and with no line found at once (every line through the forms' patterns)."""
     at_once = function(*args)
     with pytest.MonkeyPatch.context() as patch:
-        patch.setattr(krl_at_once, layout, lambda codes, starts, ends: nothing)
+        patch.setattr(forms, "find_lines", lambda written, codes, starts, ends: [
+            (np.zeros(0, dtype=np.int64), np.zeros((0, form.groups + 1, 2), dtype=np.int64)) for form in written])
         return at_once, function(*args)
+
+
+def _found_at_once(form, masked):
+    """The lines (from 0) ``form`` run at once finds in a text."""
+    codes = text_codes(masked)
+    return forms.find_lines([form], codes, *line_bounds(codes))[0][0]
 
 
 @pytest.mark.parametrize("ending", ["\n", "\r\n"])
@@ -156,13 +161,8 @@ def test_points_read_from_their_characters_are_those_the_pattern_reads(ending):
     text = "; Größe, Maße: a comment beyond ASCII before the points\nDEFDAT p\n" + "".join(
         line + ending for line, _ in POINT_VARIANTS) + "ENDDAT"
     masked, lines = mask(text, ";"), Lines(text)
-    nothing = (np.zeros(0, dtype=np.int64), np.zeros((0, 16), dtype=np.int64), np.zeros((0, 16), dtype=np.int64),
-               np.zeros(0, dtype=bool))
-    codes = text_codes(masked)
-    starts, ends = krl_at_once._line_bounds(codes)
-    assert len(krl_at_once._written_layout(codes, starts, ends)[0]) == sum(n for _, n in POINT_VARIANTS)
-    at_once, by_pattern = _at_once_and_by_pattern(krl_at_once.written_points, "_written_layout", nothing, 0, masked,
-                                                  lines)
+    assert len(_found_at_once(grammar.WRITTEN_POINT, masked)) == sum(n for _, n in POINT_VARIANTS)
+    at_once, by_pattern = _at_once_and_by_pattern(krl_at_once.written_points, 0, masked, lines)
     (line, table, shared), (line_p, table_p, shared_p) = at_once, by_pattern
     assert line.tolist() == line_p.tolist() and shared.tolist() == shared_p.tolist()
     assert table.pose.tobytes() == table_p.pose.tobytes() and list(table.name) == list(table_p.name)
@@ -178,18 +178,14 @@ def test_points_read_from_their_characters_are_those_the_pattern_reads(ending):
 def test_motions_read_from_their_characters_are_those_the_pattern_reads(ending):
     text = "DEF p( )\n" + "".join(line + ending for line, _ in MOTION_VARIANTS) + "END"
     masked = mask(text, ";")
-    codes = text_codes(masked)
-    starts, ends = krl_at_once._line_bounds(codes)
-    at = krl_at_once._motion_layout(codes, starts, ends)[0]
+    at = _found_at_once(grammar.WRITTEN_MOTION, masked)
     assert (at - 1).tolist() == [k for k, (_, read) in enumerate(MOTION_VARIANTS) if read]
-    nothing = (np.zeros(0, dtype=np.int64), np.zeros((0, 10), dtype=np.int64))
-    at_once, by_pattern = _at_once_and_by_pattern(krl_at_once.written_motions, "_motion_layout", nothing, 0, masked,
-                                                  Lines(text))
+    at_once, by_pattern = _at_once_and_by_pattern(krl_at_once.written_motions, 0, masked, Lines(text))
     assert {k: v.tolist() for k, v in at_once[0].items()} == {k: v.tolist() for k, v in by_pattern[0].items()}
     assert len(at_once[0]["line"]) == 9 and at_once[1] is None
 
 
-INLINE_VARIANTS = [  # (a .src line, whether `_inline_layout` finds it from its characters, whether it is read at once)
+INLINE_VARIANTS = [  # (a .src line, whether `INLINE_MOTION` run at once finds it, whether it is read at once)
     ("  LIN {X 1.5,Y -2,Z 3.25,A 0.0,B 90.0,C -0.5} C_DIS", True, True),
     ("lin {x .5,y -.5,z +3,a 1.,b 1e2,c -2.5E-1}", True, True),  # any case, exponents
     ("\tPTP {X 1,Y 2,Z 3,A 4,B 5,C 6,S 2,T 35} C_PTP", True, True),
@@ -199,14 +195,14 @@ INLINE_VARIANTS = [  # (a .src line, whether `_inline_layout` finds it from its 
     ("  LIN {X 1e9,Y 2,Z 3,A 4,B 5,C 6} C_DIS", True, False),  # out of range: its line's read names it
     ("  LIN {X 1,Y 2,Z 3,A 4,B 5,C 6,S 256,T 35}", True, False),  # S beyond its bits
     ("  LIN {X 1..2,Y 2,Z 3,A 4,B 5,C 6}", True, False),  # no number
-    ("  LIN  {X 1,Y 2,Z 3,A 4,B 5,C 6}", False, True),  # two blanks: the pattern
-    ("  LIN {X 1,Y 2,Z 3,A 4,B 5,C 6}\tC_DIS ", False, True),
-    ("  LIN {X 1,Y 2,Z 3,A 4,B 5,C 6} C_DIS ; Größe, Maße", False, True),  # a comment: blanks after the motion
-    ("                    LIN {X 1,Y 2,Z 3,A 4,B 5,C 6}", False, True),  # indented beyond `_LONGEST_INDENT`
-    ("  LIN {X 1, Y 2,Z 3,A 4,B 5,C 6}", False, True),  # blanks after some commas: the pattern
+    ("  LIN  {X 1,Y 2,Z 3,A 4,B 5,C 6}", True, True),  # two blanks
+    ("  LIN {X 1,Y 2,Z 3,A 4,B 5,C 6}\tC_DIS ", True, True),
+    ("  LIN {X 1,Y 2,Z 3,A 4,B 5,C 6} C_DIS ; Größe, Maße", True, True),  # a comment: blanks after the motion
+    ("                    LIN {X 1,Y 2,Z 3,A 4,B 5,C 6}", True, True),  # indented far
+    ("  LIN {X 1, Y 2,Z 3,A 4,B 5,C 6}", True, True),  # blanks after some commas
     ("  LIN {X 1, Y 2, Z 3, A 4, B 5, C 6}", True, True),
     ("  LIN {E6POS: X 1.5, Y 2, Z 3, A 4, B 5, C 6, E1 0, E2 0, E3 0, E4 0, E5 0, E6 0} C_DIS", True, True),
-    ("  LIN {POS:X 1.5, Y 2, Z 3, A 4, B 5, C 6,S 2, T 35}", False, True),  # the separators mixed: the pattern
+    ("  LIN {POS:X 1.5, Y 2, Z 3, A 4, B 5, C 6,S 2, T 35}", True, True),  # the separators mixed
     ("  LIN {FRAME:  X 1.5,Y 2,Z 3,A 4,B 5,C 6}", False, False),
     ("  LIN {X 1,  Y 2,Z 3,A 4,B 5,C 6}", False, False),  # two blanks: one by one
     ("  LIN {X 1 ,Y 2,Z 3,A 4,B 5,C 6}", True, False),  # the field "1 ": no number
@@ -226,12 +222,10 @@ INLINE_VARIANTS = [  # (a .src line, whether `_inline_layout` finds it from its 
 def test_inline_motions_read_from_their_characters_are_those_the_pattern_reads(ending):
     text = "DEF p( ) ; Größe\n" + "".join(line + ending for line, _, _ in INLINE_VARIANTS) + "END"
     masked = mask(text, ";")
-    codes = text_codes(masked)
-    starts, ends = krl_at_once._line_bounds(codes)
-    assert (krl_at_once._inline_layout(codes, starts, ends)[0] - 1).tolist() == [
+    assert (_found_at_once(grammar.INLINE_MOTION, masked) - 1).tolist() == [
         k for k, (_, found, _) in enumerate(INLINE_VARIANTS) if found]
-    (columns, table), (columns_p, table_p) = _at_once_and_by_pattern(
-        krl_at_once.written_motions, "_inline_layout", NO_INLINE, 0, masked, Lines(text))
+    (columns, table), (columns_p, table_p) = _at_once_and_by_pattern(krl_at_once.written_motions, 0, masked,
+                                                                     Lines(text))
     assert {k: v.tolist() for k, v in columns.items()} == {k: v.tolist() for k, v in columns_p.items()}
     assert (columns["line"] - 2).tolist() == [k for k, (_, _, read) in enumerate(INLINE_VARIANTS) if read]
     assert columns["inline"].tolist() == list(range(len(table))) and table.name is None

@@ -1,4 +1,4 @@
-"""A RAPID module written as CAM tools write it, read at once (`_laid_out_lines`, `WRITTEN_FORMS`): the same
+"""A RAPID module written as CAM tools write it, read at once (`grammar.WRITTEN_FORMS`, `forms.find_lines`): the same
 program as the statement-by-statement read, the state in force at each line (tool, work object, speed data,
 routine parameters, points assigned at run time), without an object per line."""
 
@@ -9,11 +9,13 @@ import pytest
 
 from trajcomp import formats
 from trajcomp.errors import ReadError
+from trajcomp.formats.forms import find_lines
 from trajcomp.formats.number_fields import line_bounds, text_codes
 from trajcomp.formats.rapid import grammar
 from trajcomp.formats.rapid import reader as rapid_reader
 from trajcomp.formats.text import mask
 from trajcomp.programs.tables import ItemRows, TargetRows
+from tests.formats.test_formats_columnar import never_written
 
 POINT = "  CONST robtarget p{0}:=[[{0}00,{0}0,500],[0,0,1,0],[0,0,0,1],[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]];"
 
@@ -40,10 +42,7 @@ def _both(path, monkeypatch):
 
 def _nothing_at_once(patch):
     """Patch the reader so that it reads no line at once."""
-    for name in rapid_reader.WRITTEN_FORMS:
-        patch.setattr(rapid_reader, name, re.compile(r"(?!)"))
-    patch.setattr(rapid_reader, "_laid_out_lines", lambda codes, starts, ends: [
-        (np.zeros(0, dtype=np.int64), np.zeros((0, 1, 2), dtype=np.int64))] * len(rapid_reader.WRITTEN_FORMS))
+    never_written(patch, *grammar.WRITTEN_FORMS)
 
 
 STATES = {
@@ -295,15 +294,14 @@ def test_robodk_out_of_range_number_is_refused_naming_its_field(tmp_path):
 
 @pytest.mark.parametrize("text", [*ROBODK_VARIANTS.values(), *VARIANTS.values(), *STATES.values()])
 def test_lines_found_from_their_characters_are_those_the_patterns_match(text):
-    """`_laid_out_lines` finds a subset of each pattern's lines, with the same groups; here all of them but those
+    """`find_lines` finds a subset of each pattern's lines, with the same groups; here all of them but those
     the patterns match with a \\V or \\T, a LOCAL or blanks before the ``;`` of a declaration."""
     masked = mask(text, "!")
     codes = text_codes(masked)
     starts, ends = line_bounds(codes)
-    found = rapid_reader._laid_out_lines(codes, starts, ends)
-    for name, (lines, groups) in zip(rapid_reader.WRITTEN_FORMS, found):
-        pattern = getattr(rapid_reader, name)
-        matched = {k: m.regs for k in range(len(starts)) if (m := pattern.match(masked, starts[k], ends[k]))}
+    found = find_lines(grammar.WRITTEN_FORMS, codes, starts, ends)
+    for form, (lines, groups) in zip(grammar.WRITTEN_FORMS, found):
+        matched = {k: m.regs for k in range(len(starts)) if (m := form.regex.match(masked, starts[k], ends[k]))}
         assert {k: tuple(map(tuple, g)) for k, g in zip(lines.tolist(), groups.tolist())}.items() <= matched.items()
         left = [masked[starts[k]:ends[k]] for k in set(matched) - set(lines.tolist())]
         assert all(re.search(r"\\[VT]|LOCAL|\] ;", line) for line in left), left
@@ -345,13 +343,12 @@ def test_lines_changed_at_random_are_found_at_once_only_as_their_pattern_matches
     masked = mask("\n".join(lines), "!")
     codes = text_codes(masked)
     starts, ends = line_bounds(codes)
-    found = rapid_reader._laid_out_lines(codes, starts, ends)
-    for name, (rows, groups) in zip(rapid_reader.WRITTEN_FORMS, found):
-        pattern = getattr(rapid_reader, name)
+    found = find_lines(grammar.WRITTEN_FORMS, codes, starts, ends)
+    for form, (rows, groups) in zip(grammar.WRITTEN_FORMS, found):
         for row, regs in zip(rows.tolist(), groups.tolist()):
-            m = pattern.match(masked, starts[row], ends[row])
+            m = form.regex.match(masked, starts[row], ends[row])
             if m is None:
-                value = regs[4] if name == "_WRITTEN_POINT" else regs[2]
+                value = regs[4] if form is grammar.WRITTEN_POINT else regs[2]
                 laid_out = rapid_reader._value_fields(codes, np.array(value[:1]), np.array(value[1:]),
                                                       grammar.ROBTARGET.layout)[3]
                 assert not laid_out[0], masked[starts[row]:ends[row]]

@@ -43,7 +43,7 @@ removed, so LINE_COUNT stays right. Generated programs count their lines.
 """
 
 from trajcomp.formats import register_format
-from trajcomp.formats.capabilities import ConfigurationData, SpeedFields, SpeedUnits, Tasks, Vendor
+from trajcomp.formats.capabilities import ConfigurationData, ExternalAxes, SpeedFields, SpeedUnits, Tasks, Vendor
 
 register_format(
     "fanuc_ls", [".ls"],
@@ -56,4 +56,5 @@ register_format(
                 "circular": {"mm/s": 1.0, "s": 1e-3}}),
     ConfigurationData(f"{__name__}.configuration"),
     Tasks(),
+    ExternalAxes("fanuc_ls"),  # track: {fields: {fanuc_ls: E1}} (or GP2:J1)
 )

@@ -56,8 +56,8 @@ its .dat written beside it under the same name); written under its own name
 """
 
 from trajcomp.formats import register_format
-from trajcomp.formats.capabilities import (ConfigurationData, KeptExternalAxes, PointCopies, SpeedFields, SpeedUnits,
-                                           Tasks, Vendor)
+from trajcomp.formats.capabilities import (ConfigurationData, ExternalAxes, KeptExternalAxes, PointCopies, SpeedFields,
+                                           SpeedUnits, Tasks, Vendor)
 
 register_format(
     "krl", [".src"],
@@ -69,5 +69,6 @@ register_format(
     SpeedFields(f"{__name__}.speeds:write_speeds", "$VEL.CP, BAS(#VEL_PTP, %)"),
     SpeedUnits({"joint": {"%": 1e-3}, "linear": {"mm/s": 1e-3}, "circular": {"mm/s": 1e-3}}),
     ConfigurationData(f"{__name__}.configuration"),
+    ExternalAxes("krl"),  # track: {fields: {krl: E1}}
     KeptExternalAxes(),  # a POS or FRAME point, or an E6POS without E1, leaves the external axes where they are
 )

@@ -5,20 +5,18 @@ form changes in one place:
 
 - the line reader (`trajcomp.formats.krl.reader`) matches the patterns
   built here from the declared words (`MOTION`, `DECL`, the settings);
-- the at-once strategy (`trajcomp.formats.krl.at_once`) finds the forms
+- the at-once strategy (`trajcomp.formats.krl.at_once`) runs the forms
   CAM post-processors write a line each (`WRITTEN_POINT`,
-  `WRITTEN_MOTION`, `INLINE_MOTION`) from the characters' codes, with
-  tables generated from the same declarations (`declaration_heads`,
-  `member_layouts`, `MOTION_KEYWORDS`, `APPROXIMATIONS`,
-  `CARTESIAN_TYPES`), and matches those forms' patterns, built here
-  too, where a line is written in a way its tables do not lay out.
+  `WRITTEN_MOTION`, `INLINE_MOTION`: `forms.Form`, declared from the
+  same words) over every line of a text together, and matches their
+  patterns on the lines the run at once leaves (`forms.written_lines`).
 
 Words are matched in any case, as the controller reads them.
 """
 
-import itertools
 import re
 
+from trajcomp.formats.forms import Blank, Either, Form, Group, LineEnd, Literal, Name, Number, Optional, Repeat, Words
 from trajcomp.formats.number_fields import NUMBER
 from trajcomp.formats.text import ANGLE_LIMIT, INDENT, JOINT_LIMIT, LENGTH_LIMIT
 from trajcomp.programs.items import CIRCULAR, JOINT, LINEAR
@@ -164,59 +162,46 @@ BLOCK_CLOSES = re.compile(INDENT + r"(" + "|".join(dict.fromkeys(CLOSING.values(
 OUTSIDE_ROUTINES = re.compile(r"[ \t]*&")  # what a .src holds outside its routines: its &ACCESS, &REL ... lines
 
 
-# --- the forms CAM post-processors write a line each, read at once (`trajcomp.formats.krl.at_once`) ---
-def declaration_heads():
-    """The starts of a Cartesian point's declaration as `WRITTEN_POINT` states them, one space after each word,
-    the qualifiers each once in their declared order, upper case: ``DECL E6POS ``, ``DECL GLOBAL CONST FRAME `` ..
-    (tuple of str)."""
-    scopes = [words for count in range(len(QUALIFIERS) + 1) for words in itertools.combinations(QUALIFIERS, count)]
-    return tuple(" ".join(("DECL",) + scope + (typ, "")) for scope in scopes for typ in CARTESIAN_TYPES)
+# --- the forms CAM post-processors write a line each (`forms.Form`), read at once (`trajcomp.formats.krl.at_once`) ---
+_ENDS_MEMBER = ",}"  # what ends a member's value in an aggregate (`forms.Number` run at once)
 
 
-def member_layouts():
-    """``{count: [layout]}``: the members a Cartesian point writes, in order, by their count (`WRITTEN_POINT`):
-    X..C, S and T if any, then E1..Ek (k = 0..6); a layout is ``[(member, field)]``, the member upper case and its
-    field the column of the point's fields (0: the whole, 1: the name, then X..C, S, T, E1..E6)."""
-    layouts = {}
-    for status in ((), STATUS):
-        for count in range(len(EXTERNAL) + 1):
-            members = [(p.upper(), 2 + k) for k, p in enumerate(POSE)]
-            members += [(s.upper(), 2 + len(POSE) + k) for k, s in enumerate(status)]
-            members += [(e.upper(), 2 + len(POSE) + len(STATUS) + k) for k, e in enumerate(EXTERNAL[:count])]
-            layouts.setdefault(len(members), []).append(members)
-    return layouts
+def _members(*separator):
+    """A Cartesian point's members as KUKA writes them: X..C, then S and T, then E1..Ek (k = 0..6), each its name,
+    one space and its value (S and T digits), ``separator`` (elements) between them; each value a group named as
+    its member (`POINT_FIELDS`)."""
+    def member(name, value=NUMBER):
+        return Literal(name.upper() + " "), Group(Number(value, _ENDS_MEMBER), name=name)
+
+    pose = [e for k, p in enumerate(POSE) for e in (separator if k else ()) + member(p)]
+    status = Optional(*(e for s in STATUS for e in separator + member(s, r"\d+")))
+    externals = ()
+    for e in reversed(EXTERNAL):  # E2 only after E1, ..
+        externals = (Optional(*separator, *member(e), *externals),)
+    return (*pose, status, *externals)
 
 
-def _cartesian_members(separator):
-    """The pattern of a Cartesian point's members as `member_layouts` lays them out, ``separator`` (a pattern)
-    between them: one group each for X..C, S, T, E1..E6 (S and T together, E1..Ek each after the one before)."""
-    pose = separator.join(f"{p.upper()}[ ]({NUMBER})" for p in POSE)
-    status = "".join(f"{separator}{s.upper()}[ ](\\d+)" for s in STATUS)
-    externals = "".join(f"(?:{separator}{e.upper()}[ ]({NUMBER})" for e in EXTERNAL) + ")?" * len(EXTERNAL)
-    return pose + "(?:" + status + ")?" + externals
-
-
-_APPROXIMATION = "(" + "|".join(APPROXIMATIONS) + ")"
-_ONE_POINT_MOTION = ("((" + "|".join(k for k in MOTION_KEYWORDS if MOTIONS[k] == JOINT) + ")|"
-                     + "|".join(k for k in MOTION_KEYWORDS if MOTIONS[k] != JOINT) + ")")
-INLINE_BLANKS = 1  # blanks an inline point may write after each comma: none up to this many
-SEPARATOR = ",[ ]{0,%d}" % INLINE_BLANKS  # between an inline point's members
+POINT_FIELDS = ("name",) + POSE + STATUS + EXTERNAL  # the groups of a point read at once, after its line's
+# the keyword (PTP, SPTP: also a group "joint") of a motion to one point (a CIRC's go via another)
+_MOTION_KEYWORD = Group(Either(Group(Words(*(k for k in MOTION_KEYWORDS if MOTIONS[k] == JOINT)), name="joint"),
+                               Words(*(k for k in MOTION_KEYWORDS if MOTIONS[k] != JOINT))), name="keyword")
+_APPROXIMATION = Optional(Blank(True), Group(Words(*APPROXIMATIONS), name="approximation"))
+MOTION_GROUPS = ("keyword", "joint", "name", "approximation")  # the groups of a motion read at once, after its line's
 # DECL E6POS XP1={X 1.0,Y 2.0,Z 3.0,A 0.0,B 90.0,C 0.0,S 2,T 35,E1 0.0,..,E6 0.0} (S, T and E1..E6 optional), as
-# KUKA's editors and CAM post-processors declare a Cartesian point. Groups: the line, the name, X..C, S, T, E1..E6.
-WRITTEN_POINT = re.compile(
-    r"^[ \t]*DECL[ \t]+(?:" + _one_of(QUALIFIERS) + r"[ \t]+)*" + _one_of(CARTESIAN_TYPES)
-    + r"[ \t]+(\w+)[ \t]*=[ \t]*\{" + _cartesian_members(",") + r"\}[ \t]*\r?$", re.I | re.M)
-# LIN XP1 C_DIS, PTP P2: a motion to a named point (no WITH, no _REL). Groups: the line, the keyword, the keyword if
-# a joint motion, the name, the approximation.
-WRITTEN_MOTION = re.compile(
-    r"^[ \t]*" + _ONE_POINT_MOTION + r"[ \t]+(?!" + _one_of(APPROXIMATIONS + (WITH,)) + r"\b)"
-    r"([A-Za-z_][A-Za-z0-9_]*)(?:[ \t]+" + _APPROXIMATION + r")?[ \t]*\r?$", re.I | re.M)
+# KUKA's editors and CAM post-processors declare a Cartesian point
+WRITTEN_POINT = Form(
+    Words("DECL"), Blank(True), Group(Repeat(Words(*QUALIFIERS), Blank(True)), name="qualifiers"),
+    Words(*CARTESIAN_TYPES), Blank(True), Group(Name(), name="name"), Blank(), Literal("="), Blank(), Literal("{"),
+    *_members(Literal(",")), Literal("}"), Blank(), LineEnd())
+# LIN XP1 C_DIS, PTP P2: a motion to a named point (no WITH, no _REL)
+WRITTEN_MOTION = Form(
+    _MOTION_KEYWORD, Blank(True), Group(Name(first="A-Za-z_", ascii=True, excluding=APPROXIMATIONS + (WITH,)),
+                                        name="name"),
+    _APPROXIMATION, Blank(), LineEnd())
 # LIN {X 446.0,Y 70.0,Z 635.0,A 0.0,B 90.0,C 0.0} C_DIS as RoboDK's and SprutCAM's KUKA posts write it, or
-# LIN {E6POS: X 446.0, Y 70.0, ..} C_DIS as other generators do (the members in `WRITTEN_POINT`'s order, no WITH,
-# no _REL). Groups: the line, the keyword, the keyword if a joint motion, an empty name, X..C, S, T, E1..E6, the
-# approximation.
-INLINE_MOTION = re.compile(
-    r"^[ \t]*" + _ONE_POINT_MOTION + r"[ \t]+\{(?:" + _one_of(CARTESIAN_TYPES) + r":[ ]?)?()"
-    + _cartesian_members(SEPARATOR) + r"\}(?:[ \t]+" + _APPROXIMATION + r")?[ \t]*\r?$", re.I | re.M)
-# the groups of `INLINE_MOTION` that `WRITTEN_POINT` has, in its order: the line, the name, X..C, S, T, E1..E6
-INLINE_POINT = [0] + list(range(3, 4 + len(POSE + STATUS + EXTERNAL)))
+# LIN {E6POS: X 446.0, Y 70.0, ..} C_DIS as other generators do (the members as `WRITTEN_POINT` has them, a blank
+# or none after each comma; no WITH, no _REL); an empty name before the members
+INLINE_MOTION = Form(
+    _MOTION_KEYWORD, Blank(True), Literal("{"), Optional(Words(*CARTESIAN_TYPES), Literal(":"), Optional(Literal(" "))),
+    Group(name="name"), *_members(Literal(","), Optional(Literal(" "))), Literal("}"), _APPROXIMATION, Blank(),
+    LineEnd())

@@ -48,8 +48,8 @@ Write: the edited targets' numbers, with confdata from their configuration.
 """
 
 from trajcomp.formats import register_format
-from trajcomp.formats.capabilities import (ConfigurationData, OrientationSpeed, PointCopies, SpeedFields, SpeedUnits,
-                                           Tasks, Vendor)
+from trajcomp.formats.capabilities import (ConfigurationData, ExternalAxes, OrientationSpeed, PointCopies, SpeedFields,
+                                           SpeedUnits, Tasks, Vendor)
 
 register_format(
     "rapid", [".mod", ".prg", ".modx", ".sys"],
@@ -63,4 +63,5 @@ register_format(
                 "circular": {"mm/s": 1e-3, "s": 1e-3}}),
     OrientationSpeed(),  # the speeddata's v_ori
     ConfigurationData(f"{__name__}.configuration"),
+    ExternalAxes("rapid"),  # track: {fields: {rapid: eax_a}}
 )

@@ -19,7 +19,7 @@ import re
 
 from trajcomp.formats.number_fields import NUMBER
 from trajcomp.formats.text import INDENT
-from trajcomp.formats.rapid.forms import (
+from trajcomp.formats.forms import (
     Blank, Form, Group, LineEnd, Literal, Name, Number, Optional, Repeat, Value, Words,
 )
 from trajcomp.programs.items import CIRCULAR, JOINT, LINEAR
@@ -250,7 +250,7 @@ _MOTION_REST = (
              Name(), Blank()),
     Literal(";"), Group(), Blank(), LineEnd())
 # MoveL p1, v50, z1, tool0; groups: instruction, point, speed data, the end of its ';'
-WRITTEN_MOTION = Form(Group(Words(*AT_ONCE_MOTIONS)), Blank(True), Group(Name(letter_first=True)), *_MOTION_REST)
+WRITTEN_MOTION = Form(Group(Words(*AT_ONCE_MOTIONS)), Blank(True), Group(Name(first="A-Za-z")), *_MOTION_REST)
 # MoveL [[x,y,z],[q1,q2,q3,q4],[cf1,cf4,cf6,cfx],[ea,..,ef]],v50,z1,tool0\WObj:=wobj0; as RoboDK's ABB posts write it
 WRITTEN_INLINE = Form(Group(Words(*AT_ONCE_MOTIONS)), Blank(True), Group(Value(ROBTARGET.layout)), *_MOTION_REST)
 WRITTEN_FORMS = (WRITTEN_POINT, WRITTEN_MOTION, WRITTEN_INLINE)

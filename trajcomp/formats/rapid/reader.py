@@ -9,9 +9,9 @@ import numpy as np
 
 from trajcomp.errors import ReadError
 from trajcomp.formats.configuration import distinct_tuples
-from trajcomp.formats.number_fields import NUMBER, BLANK, line_bounds, offset_type, read_numbers, text_codes
+from trajcomp.formats.number_fields import NUMBER, BLANK, offset_type, read_numbers, text_codes
 from trajcomp.formats.rapid import grammar
-from trajcomp.formats.rapid.forms import Cursor, find_lines
+from trajcomp.formats.forms import Cursor, written_lines
 from trajcomp.formats.rapid.task_data import TaskData, changed_at, shared_by_tasks, task_folders
 from trajcomp.formats.text import (
     JOINT_LIMIT,
@@ -66,9 +66,6 @@ VMAX = 5000.0  # mm/s, v_tcp of the predefined speeddata vmax
 PREDEFINED_V_ORI = 500.0  # deg/s
 PREDEFINED_V_LEAX = 5000.0  # mm/s, linear external axes
 VARIABLE = ("VAR", "PERS")  # the storages of a speeddata a program may change (a CONST it may not)
-# the one-line forms read at once (`grammar.WRITTEN_FORMS`), by the names of their patterns here (`_written_lines`)
-_WRITTEN_POINT, _WRITTEN_MOTION, _WRITTEN_INLINE = (form.regex for form in grammar.WRITTEN_FORMS)
-WRITTEN_FORMS = ("_WRITTEN_POINT", "_WRITTEN_MOTION", "_WRITTEN_INLINE")
 
 
 ROWS_AT_ONCE = 16384  # values whose delimiters are found together (`_value_fields`): bounds the arrays
@@ -83,7 +80,7 @@ def pose(values):
 
 
 class _WrittenPoints:
-    """The robtargets of a module declared on one line as RAPID tools write them (`_WRITTEN_POINT`), read at once.
+    """The robtargets of a module declared on one line as RAPID tools write them (`grammar.WRITTEN_POINT`), read at once.
 
     A declaration whose numbers the statement-by-statement read would
     refuse (out of range, not a rotation, a configuration that is not a
@@ -120,8 +117,7 @@ class _WrittenPoints:
 
 
 def _written_lines(masked, codes, lines, excluded):
-    """The lines of each of the `WRITTEN_FORMS`: those laid out as `_laid_out_lines` knows them found from their
-    characters, the others matched by the form's pattern one by one.
+    """The lines of each of the `grammar.WRITTEN_FORMS` (`forms.written_lines`) but those ``excluded``.
 
     Parameters
     ----------
@@ -136,55 +132,13 @@ def _written_lines(masked, codes, lines, excluded):
     Returns
     -------
     list of ndarray, shape (N_k, groups_k + 1, 2)
-        Per form, the offsets ``(start, end)`` of each line's match (from
-        the line's start) and of each of its groups, as ``Match.regs``
-        gives them (`offset_type`: int32 where they fit), ascending.
+        Per form, the offsets of each line's match and of its groups (`forms.written_lines`), ascending.
     """
-    forms, offset = [globals()[name] for name in WRITTEN_FORMS], offset_type(masked)
-    starts, ends = line_bounds(codes)
-    found = [[] for _ in forms]
-    taken = np.zeros(len(starts), dtype=bool)
-    for lo in range(0, len(starts), LINES_AT_ONCE):
-        for k, (at, groups) in enumerate(_laid_out_lines(codes, starts[lo:lo + LINES_AT_ONCE],
-                                                         ends[lo:lo + LINES_AT_ONCE])):
-            taken[lo + at] = True
-            found[k].append(groups.astype(offset))
-    others = np.flatnonzero(~taken).tolist()
-    for k, form in enumerate(forms):
-        matched = [m.regs for line in others if not masked[starts[line]:ends[line]].isspace()  # not a comment's line
-                   and (m := form.match(masked, int(starts[line]), int(ends[line])))]
-        found[k].append(np.array(matched, dtype=offset).reshape(-1, form.groups + 1, 2))
-    out = []
-    for blocks in found:
-        rows = np.concatenate([block for block in blocks if len(block)] or blocks[-1:])
-        rows = rows[np.argsort(rows[:, 0, 0], kind="stable")] if len(blocks[-1]) else rows  # matched among them
-        if excluded:
-            rows = rows[~np.isin(np.searchsorted(lines.starts, rows[:, 0, 0], side="right"), list(excluded))]
-        out.append(rows)
-    return out
-
-
-LINES_AT_ONCE = 65536  # lines parsed together (`_laid_out_lines`): bounds the arrays held
-
-
-def _laid_out_lines(codes, starts, ends):
-    """The lines of each of the `WRITTEN_FORMS` found at once from the codes of their characters (`forms.Form.find`:
-    a subset of those each form's pattern matches, with the same groups; the others are matched by it).
-
-    Parameters
-    ----------
-    codes : ndarray, shape (L,)
-        The masked text's character codes (`text_codes`).
-    starts, ends : ndarray of int, shape (B,)
-        Offsets of the lines' starts and of their ``\\n`` (or the text's end), ascending.
-
-    Returns
-    -------
-    list of (ndarray, ndarray)
-        Per form: the lines written so (K,) (indices into ``starts``) and
-        their matches' offsets (K, groups + 1, 2) as ``Match.regs`` gives them.
-    """
-    return find_lines(grammar.WRITTEN_FORMS, codes, starts, ends)
+    found = written_lines(grammar.WRITTEN_FORMS, masked, codes)
+    if excluded:
+        found = [rows[~np.isin(np.searchsorted(lines.starts, rows[:, 0, 0], side="right"), list(excluded))]
+                 for rows in found]
+    return found
 
 
 def _runs_between(masked, found):
@@ -344,7 +298,7 @@ def _declares_data(masked, piece=1 << 20):
 
 
 class _WrittenMotions:
-    """The motions of a module written one a line as CAM tools write them (`_WRITTEN_MOTION`, `_WRITTEN_INLINE`),
+    """The motions of a module written one a line as CAM tools write them (`grammar.WRITTEN_MOTION`, `grammar.WRITTEN_INLINE`),
     as columns.
 
     What a motion's instruction states besides its point (kind, speed,
@@ -366,7 +320,7 @@ class _WrittenMotions:
     combo : ndarray of int, shape (M,)
         Code of its instruction, speed, zone, tool and work object texts.
     table : TargetTable or None
-        The inline targets (`_WRITTEN_INLINE`, `_robtargets`).
+        The inline targets (`grammar.WRITTEN_INLINE`, `_robtargets`).
     """
 
     def __init__(self, text, masked, lines, codes, named, inline):
