@@ -164,6 +164,19 @@ def test_iso9283_accuracy_and_repeatability_by_hand():
     assert not iso9283(command[::4], measured[::4], None, "dh")["available"]
 
 
+def test_iso9283_takes_one_position_in_other_orientations_as_other_poses_not_cycles():
+    position = np.repeat([[500.0, 0.0, 400.0]], 5, axis=0)
+    orientation = np.array([[0.0, 180.0, 0.0]] * 3 + [[30.0, 180.0, 0.0], [0.0, 150.0, 0.0]])
+    measured = position + [[1.0, 0, 0], [1.0, 0.02, 0], [1.0, -0.02, 0], [-2.0, 0, 0], [0, 2.0, 0]]  # its own error
+    pose = np.hstack([position, orientation])
+    got = iso9283(position, measured, None, "none", pose)
+    assert got["cycles_max"] == 3 and len(got["poses"]) == 1  # the three visits of the first pose alone
+    distances = np.array([0.0, 0.02, 0.02])  # from the barycentre, 1 mm off in x
+    assert got["rp_max_mm"] == pytest.approx(distances.mean() + 3.0 * distances.std(ddof=1))
+    assert got["ap_max_mm"] == pytest.approx(1.0)
+    assert iso9283(position, measured, None, "none")["rp_max_mm"] > 2.0  # taken as cycles of one: the errors' spread
+
+
 def test_calibration_report_with_repeats_is_valid_and_embeds_its_figures(kuka_model, tmp_path):
     folder = Path(kuka_model).parent
     model = load_model(kuka_model)

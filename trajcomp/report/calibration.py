@@ -51,13 +51,15 @@ def trends(position, errors):
     return out
 
 
-def iso9283(position, measured, predicted, mode):
+def iso9283(position, measured, predicted, mode, command=None):
     """ISO 9283-style pose accuracy (AP) and repeatability (RP) over commands measured more than once.
 
-    Per repeated command (positions equal to 0.001 mm): the barycentre of
-    the attained positions; AP = its distance to the command (and to the
-    model's prediction); RP = mean + 3 standard deviations (n - 1) of the
-    distances of the attained positions to the barycentre.
+    Per repeated command (a pose: its values equal to the third decimal):
+    the barycentre of the attained positions; AP = its distance to the
+    command (and to the model's prediction); RP = mean + 3 standard
+    deviations (n - 1) of the distances of the attained positions to the
+    barycentre. One position reached in several orientations is several
+    poses, each with its own error: not repeated cycles of one.
 
     Parameters
     ----------
@@ -65,8 +67,12 @@ def iso9283(position, measured, predicted, mode):
         Commanded, measured and model-predicted positions, mm.
     mode : str
         The mode of ``predicted``.
+    command : ndarray, shape (N, K), optional
+        What tells each row's commanded pose: its joints (deg), or its
+        position and orientation; default the position alone.
     """
-    _, group, counts = np.unique(np.round(position, 3), axis=0, return_inverse=True, return_counts=True)
+    command = position if command is None else command
+    _, group, counts = np.unique(np.round(command, 3), axis=0, return_inverse=True, return_counts=True)
     group = group.ravel()
     repeated = np.flatnonzero(counts >= 2)
     if not repeated.size:
@@ -286,7 +292,10 @@ def calibration_report(model, meas, *, criteria=None, files=(), options=None):
                        "grid box; targets are compensated by the parameter or linear model everywhere")
     if cv is None:
         missing.append("no cross-validation: calibrate ran with --folds 0; the fit statistics flatter the model")
-    iso = iso9283(position[~excluded], measured[~excluded], (measured - errors[after])[~excluded], after)
+    command = np.degrees(joints) if joints is not None else (
+        position if meas.orientation is None else np.hstack([position, meas.orientation]))
+    iso = iso9283(position[~excluded], measured[~excluded], (measured - errors[after])[~excluded], after,
+                  command[~excluded])
     if not iso["available"]:
         missing.append("no repeatability: " + iso["note"])
     rotations = fk(model.nominal, joints)[:, :3, :3] if joints is not None else (
