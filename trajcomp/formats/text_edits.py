@@ -242,7 +242,7 @@ class Edits:
     texts: str
     cut: np.ndarray
 
-    EDITS_AT_ONCE = 8192  # edits whose pieces are joined together (`applied`): a few MB of pieces at a time
+    EDITS_AT_ONCE = 2048  # edits joined together (`blocks`): some 0.25 MB of a CAM program's text at a time
 
     def __len__(self):
         return len(self.start)
@@ -304,11 +304,14 @@ class Edits:
                                                           cut[1:].tolist())
                             for piece in (text[a:b], self.texts[c:d])])
         codes = np.frombuffer((source + replacements).encode("ascii"), dtype=np.uint8)
+        index = np.int32 if len(codes) < 2**31 else np.int64  # the per-character index arrays, 4 bytes where they fit
         piece_start, piece_length = np.empty((2, 2 * (hi - lo)), dtype=np.int64)  # kept, replacement, kept, ...
         piece_start[0::2], piece_length[0::2] = kept_from - position, start - kept_from
         piece_start[1::2], piece_length[1::2] = len(source) + cut[:-1] - cut[0], np.diff(cut)
-        shift = piece_start - (np.cumsum(piece_length) - piece_length)  # from a piece's place out to its codes
-        return codes[np.repeat(shift, piece_length) + np.arange(int(piece_length.sum()))].tobytes().decode("ascii")
+        shift = (piece_start - (np.cumsum(piece_length) - piece_length)).astype(index)  # a piece's place -> its codes
+        at = np.repeat(shift, piece_length)
+        at += np.arange(len(at), dtype=index)
+        return codes[at].tobytes().decode("ascii")
 
 
 def _fields(spans):
