@@ -138,7 +138,9 @@ def test_outside_the_box_counts_in_units_of_its_extent():
     points = np.array([[500.0, 100.0, 0.0], [200.0, 300.0, 0.0], [-100.0, -100.0, 0.0], [200.0, 100.0, 10.0],
                        [200.0, 100.0, 0.0]])
     expected = [0.25, 0.5, np.hypot(0.25, 0.5), 10.0 / landing.THIN, 0.0]
-    np.testing.assert_allclose(landing.outside_box(points, box), expected)
+    relative, mm = landing.outside_box(points, box)
+    np.testing.assert_allclose(relative, expected)
+    np.testing.assert_allclose(mm, [100.0, 100.0, np.hypot(100.0, 100.0), 10.0, 0.0])
 
 
 def test_a_model_calibrated_before_the_box_counted_in_extents_keeps_its_estimate(cell):
@@ -154,9 +156,9 @@ def test_a_model_calibrated_before_the_box_counted_in_extents_keeps_its_estimate
     points = np.repeat(((lower + upper) / 2)[None], 3, axis=0)
     points[0, longest] = upper[longest] + 120.0  # along the longest side
     points[1, (longest + 1) % 3] = upper[(longest + 1) % 3] + 120.0  # along a shorter one
-    beyond_mm = landing.outside_box(points, data.positions, relative=False)
+    beyond, beyond_mm = landing.outside_box(points, data.positions)
     was = rms + slope * (30.0 - start) + beyond_mm * (per_mm + curve_per_mm * beyond_mm)
-    now = data.rms_at("composite", np.full(3, 30.0), landing.outside_box(points, data.positions), beyond_mm)
+    now = data.rms_at("composite", np.full(3, 30.0), beyond, beyond_mm)
     np.testing.assert_allclose(now[[0, 2]], was[[0, 2]], rtol=1e-12)
     assert now[1] >= was[1]
 

@@ -682,8 +682,7 @@ def split_distances(robot, joints, position, splits):
     out = {key: np.full(len(position), np.nan) for key in keys}
     for train, test in splits:
         out["positions"][test] = cKDTree(position[train]).query(position[test])[0]
-        out["beyond"][test] = landing.outside_box(position[test], position[train])
-        out["beyond_mm"][test] = landing.outside_box(position[test], position[train], relative=False)
+        out["beyond"][test], out["beyond_mm"][test] = landing.outside_box(position[test], position[train])
         if joints is not None:
             out["joints"][test] = landing.coverage_distance(robot, joints[train], joints[test])
     return out

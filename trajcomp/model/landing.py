@@ -210,8 +210,7 @@ class LandingData:
         It grows with their distance from the measured configurations and
         outside the box of the measured positions (`fit_growth`).
         """
-        return self.rms_at(mode, self.distance(mode, robot, q, points), outside_box(points, self.positions),
-                           outside_box(points, self.positions, relative=False))
+        return self.rms_at(mode, self.distance(mode, robot, q, points), *outside_box(points, self.positions))
 
     def rms_at(self, mode, distance, beyond, beyond_mm):
         """RMS held-out |error| (N,) mm in ``mode`` at a distance (N,) mm from what was measured and (N,)
@@ -264,19 +263,23 @@ def _user_scale(names):
     return np.array([np.degrees(1.0) if is_angle(name) else 1.0 for name in names])
 
 
-def outside_box(points, positions, relative=True):
-    """How far points (N, 3) lie outside the axis-aligned box of positions (M, 3), in units of its extent (N,).
+def outside_box(points, positions):
+    """How far points (N, 3) lie outside the axis-aligned box of positions (M, 3): in units of its extent, and in mm.
 
     Along each axis the distance outside the box over the box's extent
     there (at least `THIN`), the axes joined in quadrature; 0 inside. An
     error model extrapolates by its extent: a fit whose outer layer of a
     400 mm cube is held out predicts that layer 100 mm beyond its 300 mm
     box (1/3), the whole model a target 100 mm beyond the cube (1/4).
-    ``relative`` False: the distance in mm.
+
+    Returns
+    -------
+    relative, mm : ndarray, shape (N,)
+        The distance in units of the box's extent, and in mm.
     """
     lower, upper = positions.min(axis=0), positions.max(axis=0)
     excess = np.maximum(np.maximum(lower - points, points - upper), 0.0)
-    return np.linalg.norm(excess / np.maximum(upper - lower, THIN) if relative else excess, axis=1)
+    return np.linalg.norm(excess / np.maximum(upper - lower, THIN), axis=1), np.linalg.norm(excess, axis=1)
 
 
 def measured_spacing(positions):

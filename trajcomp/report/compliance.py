@@ -112,7 +112,7 @@ def _landing_checks(report, v, tolerance, model, has_grid):
     outside = np.asarray(report.outside_grid, dtype=bool)
     measured = None if has_grid else landing.of_model(model)
     if measured is not None:
-        outside = outside | (landing.outside_box(np.asarray(report.T_target)[:, :3, 3], measured.positions) > 0)
+        outside = outside | (landing.outside_box(np.asarray(report.T_target)[:, :3, 3], measured.positions)[1] > 0)
     where = "grid" if has_grid else "measured volume"
     if data is None:
         return {"residual": (unknown, "no landing estimate: the run was compensated without the model's statistics"),
