@@ -616,19 +616,20 @@ def estimate(model, mode, q, T_target, tool=None, postures=None, other_tool=Fals
     on_top = model.error_field(mode, tool) if mode in ("grid", "composite") else None
     correction = on_top if getattr(on_top, "kind", None) == KRIGING_KIND else None  # a re-calibration's
     field = on_top is not None and correction is None
+    joint_residual = mode == "composite" and getattr(model.residual, "kind", None) == JOINT_KIND
     if (field or mode in ("none", "linear")) and data.spread < np.radians(ORIENTATION_MARGIN):
         # the field (or the raw errors it stands for) absorbed the error the measured configuration sees there
         absorbed = _reference_jacobian(model, identified, data, T_target, q, names, postures)
         jac = jac - np.where(outside[:, None, None] & field, 0.0, absorbed)
     if mode in ("none", "linear", "grid"):
         mean = (data.identified + data.shift)[robot_rows]
-    elif mode == "composite" and getattr(model.residual, "kind", None) == JOINT_KIND:
+    elif joint_residual:
         mean = np.zeros(len(names))
     else:
         mean = data.shift[robot_rows]
     near = data.near_rms(mode, model.nominal, q, position)
-    if field and outside.any():  # where the field does not apply, the kinematic model's (a joint residual
-        # extrapolates: its own growth with the joints' distance serves)
+    if field and not joint_residual and outside.any():  # where the field does not apply, the kinematic model's (a
+        # joint residual extrapolates, a field on top of it fading to it: its own growth with the joints' distance serves)
         far_mode = "dh" if "dh" in data.growth else "none"
         near[outside] = data.near_rms(far_mode, model.nominal, q[outside], position[outside])
     isotropic = near[:, None, None] ** 2 / 3.0 * np.eye(3)  # the held-out RMS, shared by the three axes
@@ -636,7 +637,7 @@ def estimate(model, mode, q, T_target, tool=None, postures=None, other_tool=Fals
     spread = spread + update.position_covariance(model, q)  # what a light re-calibration left uncertain
     if correction is not None:  # the re-calibration's correction, as uncertain as its few rows leave it
         spread = spread + correction.variance(position)[:, None, None] * np.eye(3)
-    if mode == "composite" and getattr(model.residual, "kind", None) == JOINT_KIND:
+    if joint_residual:
         spread = spread + _beyond_joint_range(model, data, at_target, q)
     if data.turning:  # the TCP offset's error absorbed in the measured orientation turns with the tool
         R_tool = (model.nominal.T_flange_tool if tool is None else tool)[:3, :3]
