@@ -20,8 +20,13 @@ held-out
     that lost its outer layers extrapolates from a smaller box than the
     whole model does). A target's size at its own distances is an
     isotropic part of ``S``.
-    Where the mode's field or joint residual does not apply (outside its
-    grid or joint range), the kinematic model's (dh) held-out errors serve.
+    Where the mode's model was not measured, the kinematic model's (dh)
+    held-out errors serve: outside the grid of a field that is the mode's
+    whole correction, and in an arm posture never measured for a joint
+    residual. Beyond the measured volume a joint residual extrapolates (a
+    field on top of it fading to it): its own growth serves, and beyond a
+    joint's measured range a prior of what its curves miss there
+    (`_beyond_joint_range`).
 unseen
     What the measurements could not see. The arm's kinematic parameters
     are known only as far as the measured configurations constrain them:
@@ -581,7 +586,9 @@ def estimate(model, mode, q, T_target, tool=None, postures=None, other_tool=Fals
         the measured one (`LandingData.flange_turn`).
     postures : ndarray of bool, shape (N,), optional
         Targets in an arm posture the calibration did not measure: their
-        reference configuration is taken in a measured posture.
+        reference configuration is taken in a measured posture, and a joint
+        residual's wrist curves, measured at other angles, do not serve
+        them (the kinematic model's held-out errors do).
     other_tool : bool
         ``tool`` is not the measured TCP and the model cannot place other
         tools. Where the mode's correction is a field over the measured
