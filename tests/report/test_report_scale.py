@@ -324,3 +324,18 @@ def test_the_measures_on_two_processes_equal_those_of_one(sweep, monkeypatch):
     for name in ("branch", "branch_planned", "changed"):
         np.testing.assert_array_equal(getattr(two, name), getattr(one, name))
     assert one.changed.tolist().count(True) == 1 and one.changed[FLIP]
+
+
+def test_without_a_grid_the_box_of_the_measured_positions_counts_outside_for_every_part_of_the_report(model):
+    """A mode without a grid (here dh) judges targets against the box of the measured positions: the criterion,
+    the summary, the targets' rows and the figure take the same targets (the summary counted the grid's alone)."""
+    from trajcomp.model import landing
+    from trajcomp.report.compliance import _outside_measured
+
+    report = _sweep(OUTSIDE)
+    beyond = landing.outside_box(report.T_target[:, :3, 3], landing.of_model(model).positions)[1] > 0
+    assert 0 < beyond.sum() < N  # the sweep crosses the measured box
+    for mode, expected in (("dh", beyond | report.outside_grid), ("composite", report.outside_grid)):
+        has_grid = model.error_field(mode) is not None
+        counted = _outside_measured(report, model, has_grid).outside_grid
+        np.testing.assert_array_equal(counted, expected)

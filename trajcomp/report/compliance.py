@@ -11,6 +11,8 @@ compensable motion, no grid in the mode, no re-timing) is listed under
 ``missing`` instead of being shown empty.
 """
 
+import dataclasses
+
 import numpy as np
 
 from trajcomp.model import landing
@@ -110,9 +112,6 @@ def _landing_checks(report, v, tolerance, model, has_grid):
     data = report.landing
     unknown = np.ones(len(report.labels), bool)  # a target passes only with an estimate within the tolerance
     outside = np.asarray(report.outside_grid, dtype=bool)
-    measured = None if has_grid else landing.of_model(model)
-    if measured is not None:
-        outside = outside | (landing.outside_box(np.asarray(report.T_target)[:, :3, 3], measured.positions)[1] > 0)
     where = "grid" if has_grid else "measured volume"
     if data is None:
         return {"residual": (unknown, "no landing estimate: the run was compensated without the model's statistics"),
@@ -351,6 +350,7 @@ def compliance_report(report, robot, *, criteria=None, model=None, model_info=No
     criteria = criteria or Criteria()
     mode = mode or (model.method if model is not None else None)
     has_grid = model is not None and model.error_field(mode) is not None
+    report = _outside_measured(report, model, has_grid)
     measures = target_measures(report, robot, workers)
     checks, masks = target_checks(report, measures, criteria, has_grid, mode, model)
     flags = flag_bits(masks) if masks else np.zeros(len(measures), np.uint8)
@@ -419,6 +419,17 @@ def compliance_report(report, robot, *, criteria=None, model=None, model_info=No
 
 
 TIMELINE = 4000  # instants at which the joint motion figure samples the timed program
+
+
+def _outside_measured(report, model, has_grid):
+    """The report with its targets outside the box of the measured positions counted outside the grid too, for a
+    mode without a grid (the box stands for it): the criterion, the summary, the targets' rows and the figure
+    count the same targets."""
+    data = None if has_grid or model is None else landing.of_model(model)
+    if data is None or not len(report.labels):
+        return report
+    beyond = landing.outside_box(np.asarray(report.T_target)[:, :3, 3], data.positions)[1] > 0
+    return dataclasses.replace(report, outside_grid=np.asarray(report.outside_grid, dtype=bool) | beyond)
 
 
 def _figures(report, robot, measures, doc, field, timing=None, compensated=True):
