@@ -182,7 +182,8 @@ def corner_lengths(moves, robot, k):
         arm = robot.replace(T_flange_tool=moves.tools[tool_index])
         used = np.flatnonzero(moves.tool[k] == tool_index)
         for rows in (used[lo : lo + CORNER_BLOCK] for lo in range(0, len(used), CORNER_BLOCK)):
-            corners = np.union1d(k[rows] - 1, k[rows])  # a run's motions share their corners: each placed once
+            corners = np.sort(np.r_[k[rows] - 1, k[rows]])  # a run's motions share their corners: each placed once
+            corners = corners[np.r_[True, corners[1:] != corners[:-1]]]  # (np.union1d hashes them: 10x slower)
             placed = fk(arm, moves.q[corners])[:, :3, 3]
             start, end = placed[np.searchsorted(corners, k[rows] - 1)], placed[np.searchsorted(corners, k[rows])]
             out[rows] = np.linalg.norm(end - start, axis=1)
