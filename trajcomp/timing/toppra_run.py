@@ -27,7 +27,7 @@ from trajcomp.timing.reachability import Bands, backward, forward, squared_speed
 from trajcomp.timing.track import with_track
 
 _X_CAP = 1e12  # (rad/s)^2 ceiling of the squared path speed where no limit binds
-GROUP_POINTS = 1 << 16  # grid points of consecutive windows solved as one problem at most
+GROUP_POINTS = 1 << 15  # grid points of consecutive windows solved as one problem at most
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
