@@ -32,7 +32,7 @@ from trajcomp.support.parallel import map_blocks
 ITERATIONS = 3  # fixed-point passes at most
 REACH_EDGE = 2.0  # deg: an elbow this close to stretched is at the edge of the arm's reach
 LANDED = 1e-5  # mm: a target whose predicted landing error is below this needs no further pass
-CHUNK = 16384  # targets compensated together: the working arrays stay small and memory stays flat
+CHUNK = 8192  # targets compensated together: the working arrays stay small and memory stays flat
 
 
 @dataclasses.dataclass(frozen=True, eq=False)

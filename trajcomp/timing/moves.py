@@ -24,7 +24,7 @@ from trajcomp.programs.program import place_text
 from trajcomp.formats.speeds import arc_length
 
 KINDS = (JOINT, LINEAR, CIRCULAR)
-CORNER_BLOCK = 65536  # motions whose corners `corner_lengths` places at once: two (4, 4) poses each at most
+CORNER_BLOCK = 8192  # motions whose corners `corner_lengths` places at once: two (4, 4) poses each at most (2 MB)
 
 
 @dataclasses.dataclass(frozen=True, eq=False)

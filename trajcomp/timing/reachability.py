@@ -31,7 +31,7 @@ step (O(R^2): 17-20 s on a 100,000-point Lissajous path). The result is
 exactly the sequential recurrence's. A step costs a few numpy calls on
 contiguous (chunks, 12) columns, so the time is about R + chunk_length
 steps: consecutive windows of a long run are solved as one problem
-(`Bands.joined`, `trajcomp.timing.toppra_run.toppra_laws`), so that a
+(`Bands.of_paths`, `trajcomp.timing.toppra_run.toppra_laws`), so that a
 ramp is swept once, not once per window.
 """
 
@@ -89,10 +89,13 @@ def backward(bands, x_max, end, *, length=None):
     largest = bands.largest_x(x_max[:-1])
     h = np.append(largest, min(end, x_max[-1]))
     chunks = _Chunks(len(h), length)
+    inverse, offset = chunks.laid(bands.sigma, 0.0), chunks.laid(bands.w, np.inf)  # made in place from here
+    rising = inverse > 0.0  # x_i <= (h_{i+1} + w) / sigma for the bands with sigma > 0
     with np.errstate(divide="ignore", invalid="ignore"):
-        rising = bands.sigma > 0.0  # x_i <= (h_{i+1} + w) / sigma for the bands with sigma > 0
-        inverse = chunks.laid(np.where(rising, 1.0 / bands.sigma, 0.0), 0.0)
-        offset = chunks.laid(np.where(rising, bands.w / bands.sigma, np.inf), np.inf)
+        np.divide(offset, inverse, out=offset, where=rising)
+        np.divide(1.0, inverse, out=inverse, where=rising)
+    falling = ~rising
+    offset[falling], inverse[falling] = np.inf, 0.0
     largest = chunks.laid(largest, np.inf)
     reach = np.empty(inverse.shape[1:])
 
@@ -210,9 +213,27 @@ class Bands:
     def of_path(cls, ds, dq, ddq, acceleration):
         """The bands of a grid's intervals ds (G - 1,), from q', q'' (G, n) at the grid points and the joint
         acceleration limits (n,) or (G - 1, n), rad/s^2 (a track's: mm/s^2)."""
+        return cls.of_paths([(ds, dq, ddq, acceleration)], len(ds))
+
+    @classmethod
+    def of_paths(cls, paths, intervals):
+        """The bands of consecutive grids laid end to end (each grid's last point the next one's first), ``intervals``
+        in all: `of_path` of each ``(ds, dq, ddq, acceleration)`` of ``paths``, in order, written into the joined
+        arrays. ``paths`` may be any iterable (a generator): it is consumed once, so that the paths made one after
+        the other are never all held at once."""
+        bands, at = None, 0
+        for ds, dq, ddq, acceleration in paths:
+            if bands is None:
+                bands = cls(*np.empty((2, intervals, 2 * dq.shape[1])), np.empty(intervals))
+            bands._fill(slice(at, at + len(ds)), ds, dq, ddq, acceleration)
+            at += len(ds)
+        return bands
+
+    def _fill(self, rows, ds, dq, ddq, acceleration):
+        """Write the bands of a grid's intervals ds (``rows``) from q', q'' and the acceleration limits (`of_path`)."""
         # alpha x_i + beta x_{i+1} in [-a, a]: joint j at the interval's start (first n), at its end (last n)
         two_ds, n = 2.0 * ds[:, None], dq.shape[1]  # n: the arm's 6 joints, and a track's position (7)
-        beta, alpha = np.empty((2, len(ds), 2 * n))  # filled in place: these are the largest arrays of a long run
+        beta, alpha = np.empty((2, len(ds), 2 * n))  # filled in place, then made the bands and bounds in place
         np.divide(dq[:-1], two_ds, out=beta[:, :n])
         np.divide(dq[1:], two_ds, out=alpha[:, n:])
         np.add(alpha[:, n:], ddq[1:], out=beta[:, n:])
@@ -220,20 +241,18 @@ class Bands:
         np.negative(alpha[:, n:], out=alpha[:, n:])
         acceleration = np.asarray(acceleration, dtype=float)
         a = np.concatenate([acceleration, acceleration], axis=-1)
+        sigma, w = self.sigma[rows], self.w[rows]
+        still = beta == 0.0  # a joint that does not move: no band, a bound on x_i alone
         with np.errstate(divide="ignore", invalid="ignore"):
-            sigma = np.negative(alpha / beta)
-            w = a / np.abs(beta)
-            still = beta == 0.0  # a joint that does not move: no band, a bound on x_i alone
+            np.negative(np.divide(alpha, beta, out=sigma), out=sigma)
+            np.divide(a, np.abs(beta, out=beta), out=w)
             if not still.any():
-                return cls(sigma, w, np.full(len(ds), np.inf))
+                self.x_bound[rows] = np.inf
+                return
             sigma[still], w[still] = 0.0, np.inf
-            return cls(sigma, w, np.min(np.where(still, a / np.abs(alpha), np.inf), axis=1))
-
-    @classmethod
-    def joined(cls, parts):
-        """The bands of consecutive grids laid end to end (each grid's last point the next one's first):
-        the intervals of every part (list of Bands), in order."""
-        return cls(*(np.concatenate([getattr(part, name) for part in parts]) for name in ("sigma", "w", "x_bound")))
+            np.divide(a, np.abs(alpha, out=alpha), out=alpha)
+            alpha[~still] = np.inf
+            np.min(alpha, axis=1, out=self.x_bound[rows])
 
     def largest_x(self, x_max):
         """X_i (G-1,): the largest x_i <= x_max (G-1,) with some x_{i+1} >= 0 inside every band.

@@ -27,7 +27,7 @@ from trajcomp.timing.reachability import Bands, backward, forward, squared_speed
 from trajcomp.timing.track import with_track
 
 _X_CAP = 1e12  # (rad/s)^2 ceiling of the squared path speed where no limit binds
-GROUP_POINTS = 1 << 16  # grid points of consecutive windows solved as one problem at most
+GROUP_POINTS = 1 << 15  # grid points of consecutive windows solved as one problem at most
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -183,6 +183,7 @@ def toppra_laws(runs, moves, robot):
             continue
         bands, offsets, x_max = _joined_problem([runs[i] for i in group], moves, with_bound=True)
         h = backward(bands, x_max, end)
+        del bands  # before the next group's are made
         for i, lo, hi in zip(group, offsets[:-1], offsets[1:]):
             bounds[i] = h[lo : hi + 1]
         end = h[0]
@@ -193,6 +194,7 @@ def toppra_laws(runs, moves, robot):
             continue
         bands, offsets, _ = _joined_problem([runs[i] for i in group], moves, with_bound=False)
         x = forward(bands, np.concatenate([bounds[group[0]], *(bounds[i][1:] for i in group[1:])]), start)
+        del bands
         start = x[-1]
         for i, lo, hi in zip(group, offsets[:-1], offsets[1:]):
             run, x_run = runs[i], x[lo : hi + 1]
@@ -223,18 +225,21 @@ def _joined_problem(runs, moves, *, with_bound):
     """Consecutive windows with paths as one problem: their `Bands` laid end to end, the offsets (W + 1,)
     of each window's first grid point in it (and of the last point), and with ``with_bound`` the bound
     on x (G,) (at a shared point the lower of the two windows')."""
-    parts, bound, offsets = [], [], [0]
-    for run in runs:
-        grid, dq, ddq, acceleration = _path_problem(run, moves)
-        parts.append(Bands.of_path(np.diff(grid), dq, ddq, acceleration))
-        offsets.append(offsets[-1] + len(grid) - 1)
-        if with_bound:
-            x_max = np.minimum(run.speed_bound(moves, dq=dq[:, :6])[0], _X_CAP)
-            if bound:
-                bound[-1][-1] = min(bound[-1][-1], x_max[0])
-                x_max = x_max[1:]
-            bound.append(x_max)
-    return Bands.joined(parts), np.array(offsets), (np.concatenate(bound) if with_bound else None)
+    offsets, bound = np.cumsum([0] + [len(run.grid) - 1 for run in runs]), []
+
+    def paths():  # one window's path derivatives at a time
+        for run in runs:
+            grid, dq, ddq, acceleration = _path_problem(run, moves)
+            if with_bound:
+                x_max = np.minimum(run.speed_bound(moves, dq=dq[:, :6])[0], _X_CAP)
+                if bound:
+                    bound[-1][-1] = min(bound[-1][-1], x_max[0])
+                    x_max = x_max[1:]
+                bound.append(x_max)
+            yield np.diff(grid), dq, ddq, acceleration
+
+    bands = Bands.of_paths(paths(), offsets[-1])
+    return bands, offsets, (np.concatenate(bound) if with_bound else None)
 
 
 def rest_to_rest_laws(stops, paths, moves):
