@@ -4,7 +4,7 @@ import functools
 
 import numpy as np
 import pytest
-from hypothesis import given, settings
+from hypothesis import example, given, settings
 from hypothesis import strategies as st
 from scipy.optimize import brentq
 
@@ -200,6 +200,7 @@ def test_configuration_of_known_poses():
     st.lists(st.floats(-2 * np.pi, 2 * np.pi), min_size=6, max_size=6),
     st.lists(st.floats(-2 * np.pi, 2 * np.pi), min_size=6, max_size=6),
 )
+@example([0.0, 3.0, 2.0, 1e-09, 3.0, 0.0], [0.0, 0.0, 0.0, 4.0, 0.0, 0.0])  # 1e-9 + 2 pi rounded an ulp beyond 2 pi
 def test_ur_turns_stay_inside_limits_and_nearest_the_seed(q, seed):
     robot = robot_named("ur5")
     q, seed = np.array(q), np.array(seed)

@@ -168,8 +168,10 @@ def turn_towards(robot, q, ref):
         lowest = np.ceil((robot.q_min - _LIMIT_TOL - q) / turn)
         highest = np.floor((robot.q_max + _LIMIT_TOL - q) / turn)
         k = np.clip(np.round((ref - q) / turn), lowest, highest)
-        inside = np.all(lowest <= highest, axis=-1)
-    return q + turn * k, inside
+        has_turn = lowest <= highest
+    # a turn within the tolerance may round one ulp beyond it (1e-9 + 2 pi against a limit of 2 pi): held at it
+    turned = np.where(has_turn, np.clip(q + turn * k, robot.q_min - _LIMIT_TOL, robot.q_max + _LIMIT_TOL), q + turn * k)
+    return turned, np.all(has_turn, axis=-1)
 
 
 def _up_sign(robot):
