@@ -327,8 +327,9 @@ def test_the_measures_on_two_processes_equal_those_of_one(sweep, monkeypatch):
 
 
 def test_without_a_grid_the_box_of_the_measured_positions_counts_outside_for_every_part_of_the_report(model):
-    """A mode without a grid (here dh) judges targets against the box of the measured positions: the criterion,
-    the summary, the targets' rows and the figure take the same targets (the summary counted the grid's alone)."""
+    """A mode without a grid (here dh) judges targets against the box of the measured positions: the run the
+    compliance report is made from counts those targets outside the grid, so that the criterion, the summary, the
+    targets' rows and the figure, which all read it, take the same targets (the summary counted the grid's alone)."""
     from trajcomp.model import landing
     from trajcomp.report.compliance import _outside_measured
 

@@ -169,9 +169,10 @@ def turn_towards(robot, q, ref):
         highest = np.floor((robot.q_max + _LIMIT_TOL - q) / turn)
         k = np.clip(np.round((ref - q) / turn), lowest, highest)
         has_turn = lowest <= highest
+    turned = q + turn * k
     # a turn within the tolerance may round one ulp beyond it (1e-9 + 2 pi against a limit of 2 pi): held at it
-    turned = np.where(has_turn, np.clip(q + turn * k, robot.q_min - _LIMIT_TOL, robot.q_max + _LIMIT_TOL), q + turn * k)
-    return turned, np.all(has_turn, axis=-1)
+    held = np.clip(turned, robot.q_min - _LIMIT_TOL, robot.q_max + _LIMIT_TOL)
+    return np.where(has_turn, held, turned), np.all(has_turn, axis=-1)
 
 
 def _up_sign(robot):
