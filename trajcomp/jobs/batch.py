@@ -240,7 +240,10 @@ def _on_dask(job, inputs, outputs, jobs, scheduler, done):
             if scheduler == "local":
                 local.enter_context(dask.config.set({"distributed.deploy.lost-worker-timeout": RESTARTS_WAITED}))
                 try:
+                    # no dashboard; the scheduler's HTTP server (its metrics) on any free port: on Dask's 8787, a
+                    # second batch at once warned on stderr that the port was taken
                     cluster = LocalCluster(n_workers=max(jobs, 1), threads_per_worker=1, dashboard_address=None,
+                                           scheduler_kwargs={"dashboard_address": ":0"},
                                            worker_class=_stopping_nanny(Nanny, nannies), preload=["trajcomp"])
                 except RuntimeError as exc:  # "Nanny failed to start": a worker process died as it started
                     if stopped() is not None:  # by the stopping signal that stopped the run (sent to the group)
