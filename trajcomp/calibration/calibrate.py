@@ -331,14 +331,18 @@ def _fields_on_top(position, joints, residuals):
 def selection_words(choice):
     """The joint residual's choice (a ``joint_splines`` record of `calibrate`'s report) in words.
 
-    Names the chosen candidate with its held-out mean |error| (and the
-    penalties whose fits the model averages, with their shares) and, for
-    comparison, the best candidate without splines or, when that was
-    chosen, with them, in mm.
+    Names the chosen candidate with its held-out mean |error| (the
+    penalties whose fits the model averages with their shares, and the
+    heaviest one's held-out mean) and, for comparison, the best candidate
+    without splines or, when that was chosen, with them, in mm.
     """
-    def words(candidate, field):
-        splines = (f"splines every {candidate['step_deg']:g} deg (penalty {candidate['penalty']:g})"
-                   if candidate["step_deg"] else "no splines")
+    shares = [f"{c['penalty']:g} {c['share']:.0%}" for c in choice["candidates"] if c.get("share")]
+    shared = len(shares) > 1
+
+    def words(candidate, field, shared=False):
+        penalty = (f"penalties {', '.join(shares)}: the mean of their fits" if shared
+                   else f"penalty {candidate['penalty']:g}")
+        splines = f"splines every {candidate['step_deg']:g} deg ({penalty})" if candidate["step_deg"] else "no splines"
         return f"joint errors with {splines}" + (f" + {candidate.get('field_kind', KNN_KIND)} field" if field else "")
 
     scored = [(c[key], c, key == "with_field_mm") for c in choice["candidates"]
@@ -347,10 +351,8 @@ def selection_words(choice):
                   and s[2] == bool(choice.get("field")))
     other = min((s for s in scored if (s[1]["step_deg"] > 0) != (chosen[1]["step_deg"] > 0)), key=lambda s: s[0],
                 default=None)
-    shares = [c for c in choice["candidates"] if c.get("share")]
-    mean = ("" if len(shares) < 2 else " as the weighted mean of its fits at penalties "
-            + ", ".join(f"{c['penalty']:g} ({c['share']:.0%})" for c in shares))
-    return (f"{words(chosen[1], chosen[2])}{mean}, held-out mean {chosen[0]:.4f} mm"
+    return (f"{words(chosen[1], chosen[2], shared)}, held-out mean {chosen[0]:.4f} mm"
+            + (f" at {chosen[1]['penalty']:g}" if shared else "")
             + ("" if other is None else f" (best with{'out' if chosen[1]['step_deg'] else ''} splines: "
                                         f"{words(other[1], other[2])}, {other[0]:.4f})"))
 
