@@ -796,7 +796,7 @@ class SplineChoice:
         and ``penalty`` of its spline terms (step 0 = none),
         ``held_out_mm`` and, when residual fields were tried on top,
         ``with_field_mm`` with the best of them, its kind ``field_kind``;
-        the members' ``share`` (`_Candidates.shares`).
+        the sharing penalties' ``share`` (`_Candidates.shares`).
     regions : str
         How the held-out regions were drawn.
     field : str or None
