@@ -15,10 +15,10 @@ position (``idw8`` by default); measured at several orientations or with
 orientations (6-DoF), it is the joint-angle error model of
 `trajcomp.model.joint_errors`, identified with a refinement of the DH parameters,
 which holds at any orientation and for any tool; its spline terms (knot
-step and penalty) are chosen on held-out regions of the measurements, never
-on interleaved rows, and the choice with every candidate's held-out error
-is recorded in the report (``joint_splines``). The k-fold cross-validation
-refits with that choice.
+step, and the penalties whose fits it averages) are chosen on held-out
+regions of the measurements, never on interleaved rows, and the choice with
+every candidate's held-out error is recorded in the report
+(``joint_splines``). The k-fold cross-validation refits with that choice.
 """
 
 import dataclasses
@@ -150,6 +150,7 @@ class _Parts:
         self.residual = None
         self.residual_field = None
         self.selection = None
+        self.shares = ()
         self.left_out = np.zeros(len(position), dtype=bool)
         if dh is None and joints is not None and method in ("dh", "composite"):
             self.dh = identify(robot, joints, measured, rotation=rotation, loss=loss,
@@ -159,8 +160,9 @@ class _Parts:
             modelled = fk(self.dh.robot, joints)[:, :3, 3]
             self.left_out[self.dh.outliers] = True
             if method == "composite" and kind == JOINT_KIND:
-                self.residual, self.selection = (residual, splines) if residual is not None else _joint_residual(
-                    robot, self.dh, joints, position, measured, rotation, loss, orientation_weight, workers)
+                self.residual, self.selection, self.shares = (
+                    (residual, splines, ()) if residual is not None else _joint_residual(
+                        robot, self.dh, joints, position, measured, rotation, loss, orientation_weight, workers))
                 modelled = fk(self.residual.robot(self.dh.robot), self.residual.reached(robot, joints))[:, :3, 3]
                 self.left_out = np.zeros(len(position), dtype=bool)
                 self.left_out[outlier_rows(measured - modelled)] = True
@@ -240,10 +242,16 @@ def _joint_residual(nominal, dh, joints, position, measured, rotation, loss, ori
     Returns
     -------
     JointResidual
+        On the knots of the chosen step: the fit at the penalty of the most
+        weight, or the weighted mean of the fits at the penalties sharing the
+        choice (`trajcomp.calibration.identify.Linearisation.shared`, one
+        linearised step from the former).
     dict
-        The choice: ``field`` (the kind of the field on top, or None), the spline ``step_deg``, ``penalty`` and
-        ``joints``, the held-out ``regions`` and every candidate's held-out
-        mean error (``candidates``).
+        The choice: ``field`` (the kind of the field on top, or None), the spline ``step_deg``, ``penalty`` (of
+        the most weight) and ``joints``, the held-out ``regions`` and every candidate's held-out
+        mean error (``candidates``, the members with their ``share``).
+    tuple
+        ``(weight, penalty)`` of the penalties sharing the choice (`SplineChoice.shares`; empty without splines).
     """
     spline_joints = (0, 1, 2, 3, 4)
     refined = identify(dh.robot, joints, measured, rotation=rotation, joint_terms=True, loss=loss, nominal=nominal,
@@ -252,15 +260,21 @@ def _joint_residual(nominal, dh, joints, position, measured, rotation, loss, ori
     choice = select_splines(refined, dh.robot, nominal, joints, measured, rotation=rotation, position=position,
                             orientation_weight=orientation_weight, joints=spline_joints, fields=fields, loss=loss,
                             workers=workers)
-    refined, basis = choice.fit or refined, choice.basis
+    basis = choice.basis
     record = {"regions": choice.regions, "candidates": choice.table, "field": choice.field,
               "step_deg": 0.0 if basis is None else float(np.degrees(basis.step.max())),
               "penalty": 0.0 if basis is None else basis.penalty,
               "joints": [] if basis is None else [j + 1 for j in spline_joints]}
-    pick = [k for k, n in enumerate(refined.names) if is_robot_parameter(n) or is_term(n)]
-    residual = JointResidual([refined.names[k] for k in pick], refined.delta[pick], joints.min(axis=0),
+    fitted = choice.fit or refined
+    pick = [k for k, n in enumerate(fitted.names) if is_robot_parameter(n) or is_term(n)]
+    residual = JointResidual([fitted.names[k] for k in pick], fitted.delta[pick], joints.min(axis=0),
                              joints.max(axis=0), basis)
-    return residual, record
+    if len(choice.shares) > 1:
+        residual = dataclasses.replace(residual, values=linearise(
+            dh.robot, joints, measured, dict(zip(residual.names, residual.values)), rotation=rotation, nominal=nominal,
+            R_tcp_target=dh.R_tcp_target, basis=basis, loss=loss, orientation_weight=orientation_weight,
+        ).shared(np.zeros(0, dtype=int), choice.shares))
+    return residual, record, choice.shares
 
 
 def shares_positions(position, joints):
@@ -317,13 +331,18 @@ def _fields_on_top(position, joints, residuals):
 def selection_words(choice):
     """The joint residual's choice (a ``joint_splines`` record of `calibrate`'s report) in words.
 
-    Names the chosen candidate with its held-out mean |error| and, for
-    comparison, the best candidate without splines or, when that was
-    chosen, with them, in mm.
+    Names the chosen candidate with its held-out mean |error| (the
+    penalties whose fits the model averages with their shares, and the
+    heaviest one's held-out mean) and, for comparison, the best candidate
+    without splines or, when that was chosen, with them, in mm.
     """
-    def words(candidate, field):
-        splines = (f"splines every {candidate['step_deg']:g} deg (penalty {candidate['penalty']:g})"
-                   if candidate["step_deg"] else "no splines")
+    shares = [f"{c['penalty']:g} {c['share']:.0%}" for c in choice["candidates"] if c.get("share")]
+    shared = len(shares) > 1
+
+    def words(candidate, field, shared=False):
+        penalty = (f"penalties {', '.join(shares)}: the mean of their fits" if shared
+                   else f"penalty {candidate['penalty']:g}")
+        splines = f"splines every {candidate['step_deg']:g} deg ({penalty})" if candidate["step_deg"] else "no splines"
         return f"joint errors with {splines}" + (f" + {candidate.get('field_kind', KNN_KIND)} field" if field else "")
 
     scored = [(c[key], c, key == "with_field_mm") for c in choice["candidates"]
@@ -332,7 +351,8 @@ def selection_words(choice):
                   and s[2] == bool(choice.get("field")))
     other = min((s for s in scored if (s[1]["step_deg"] > 0) != (chosen[1]["step_deg"] > 0)), key=lambda s: s[0],
                 default=None)
-    return (f"{words(chosen[1], chosen[2])}, held-out mean {chosen[0]:.4f} mm"
+    return (f"{words(chosen[1], chosen[2], shared)}, held-out mean {chosen[0]:.4f} mm"
+            + (f" at {chosen[1]['penalty']:g}" if shared else "")
             + ("" if other is None else f" (best with{'out' if chosen[1]['step_deg'] else ''} splines: "
                                         f"{words(other[1], other[2])}, {other[0]:.4f})"))
 
@@ -507,7 +527,8 @@ def calibrate(robot, meas, *, robot_ref=None, method="composite", frame=None, gr
     if folds > 1:
         data = (robot, _rows(joints, keep), position[keep], measured[keep], _rows(rotation_base, keep),
                 options | {"R_tcp_target": None if dh is None else dh.R_tcp_target, "splines": parts.selection})
-        fitted = (dh, model.residual if kind == JOINT_KIND else None) if method in ("dh", "composite") else None
+        fitted = ((dh, model.residual if kind == JOINT_KIND else None, parts.shares) if method in ("dh", "composite")
+                  else None)
         held = fold_errors(*data, folds, seed, progress, fitted, workers)
         report["cross_validation"] = {"folds": folds, "interpolation": held.pop("interpolation")} | {
             m: ErrorStats.from_errors(e).as_dict() for m, e in held.items()}
@@ -530,8 +551,9 @@ def fold_errors(robot, joints, position, measured, rotation, options, folds, see
     inverse-distance weighting over the 8 nearest training nodes; the
     ``interpolation`` entry names the interpolator the folds used
     (`plane_errors` holds out with the lattice interpolator itself) and the
-    field a joint residual takes on top. ``fitted`` ``(dh, residual)``, the
-    full fit's `KinematicFit` and joint residual (or None), are refitted
+    field a joint residual takes on top. ``fitted`` ``(dh, residual,
+    shares)``, the full fit's `KinematicFit`, joint residual (or None) and
+    the penalties sharing it (`_joint_residual`), are refitted
     without each fold's rows by `_Refit`; without it the folds identify
     from the nominal robot. The folds are computed by up to ``workers``
     processes (`trajcomp.support.parallel.share_blocks`); the errors do not
@@ -576,7 +598,9 @@ class _Refit:
     identification from the nominal robot per fold: the fits of a fifth
     fewer rows differ from the full fit by micrometres, where the step's
     error is of second order. The joint residual keeps the full fit's
-    knots and penalty (its selection), and the range of the fold's joints.
+    knots and penalty (its selection; the weighted mean of the refits at
+    the penalties sharing it, `Linearisation.shared`), and the range of the
+    fold's joints.
 
     Parameters
     ----------
@@ -594,9 +618,12 @@ class _Refit:
         The full fit's kinematic model (from ``robot``).
     residual : JointResidual or None
         The full fit's joint residual (on ``dh.robot``).
+    shares : tuple
+        ``(weight, penalty)`` of the penalties sharing it (`_joint_residual`;
+        fewer than two: its own penalty alone).
     """
 
-    def __init__(self, robot, joints, measured, rotation, options, dh, residual):
+    def __init__(self, robot, joints, measured, rotation, options, dh, residual, shares=()):
         common = dict(rotation=rotation, R_tcp_target=dh.R_tcp_target, loss=options["loss"],
                       orientation_weight=options["orientation_weight"])
         self.arm = {n: v for n, v in zip(dh.names, dh.delta) if is_robot_parameter(n)}
@@ -604,7 +631,7 @@ class _Refit:
         self.joint = None if residual is None else linearise(
             dh.robot, joints, measured, dict(zip(residual.names, residual.values)), nominal=robot, basis=residual.basis,
             **common)
-        self.joints, self.basis = joints, None if residual is None else residual.basis
+        self.joints, self.basis, self.shares = joints, None if residual is None else residual.basis, shares
 
     def __call__(self, train, test):
         """The fold's `KinematicFit` and joint residual (or None), without the rows ``test``."""
@@ -615,7 +642,8 @@ class _Refit:
         # the DH refinement adds to the DH table (apply_deltas): on the fold's kinematic fit instead of the full
         # fit's, it takes the difference of the two with it
         fold = dict(zip(dh.names, dh.delta))
-        values = self.joint.without(test) + [self.arm[n] - fold[n] if n in fold else 0.0 for n in names]
+        refitted = self.joint.shared(test, self.shares) if len(self.shares) > 1 else self.joint.without(test)
+        values = refitted + [self.arm[n] - fold[n] if n in fold else 0.0 for n in names]
         train_joints = self.joints[train]
         return dh, JointResidual(names, values, train_joints.min(axis=0), train_joints.max(axis=0), self.basis)
 

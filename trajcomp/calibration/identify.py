@@ -57,6 +57,7 @@ MAX_ITERATIONS = 50
 STEP_TOLERANCE = 1e-7  # mm (or rad * ANGLE_LEVER): converged when no scaled parameter moves more
 COST_TOLERANCE = 1e-5  # or when a step lowers the weighted cost by less than this fraction (its RMS by 5 ppm)
 MEASUREMENTS_PER_SPLINE = 3  # a knot step is tried only with at least this many measurements per spline term
+BOOTSTRAP_DRAWS = 1000  # random weightings of the held-out regions that share the chosen knot step's penalties out
 
 
 @dataclasses.dataclass(frozen=True)
@@ -627,6 +628,39 @@ class Linearisation:
         step = _penalised_step(matrix, gradient) if self.ridge else -_truncated_solve(matrix, gradient, self.rtol)
         return self.x + self.scale * step
 
+    def shared(self, rows, shares):
+        """Parameters (P,), mm or rad, refitted to every measurement but ``rows`` (indices) at each of several
+        roughness penalties and averaged (a model shared by penalties, `SplineChoice.shares`).
+
+        ``shares`` are ``(weight, penalty)`` (`SplineBasis.penalty`), the
+        most weight first, weights summing to 1. The first refit is
+        `without`'s at its penalty; the others are solved in the directions
+        its normal equations see (`_seen`): the penalties differ on the
+        spline terms alone, which every penalty makes seen, and one
+        eigendecomposition serves them all.
+        """
+        from scipy import sparse
+
+        normal, gradient = self.held_out(rows) if len(rows) else (0.0, 0.0)
+        rough = self._roughness * (len(self.residual) - len(rows))
+        first = shares[0][1]
+        eigenvalues, directions = _seen(self.normal - normal + rough * first, self.rtol)
+        seen_rough = directions.T @ (sparse.csr_matrix(rough) @ directions)
+        values = []
+        for _, penalty in shares:
+            vector = directions.T @ (self.gradient - gradient + (rough * penalty) @ (self.x / self.scale))
+            if penalty == first:
+                step = vector / eigenvalues
+            else:
+                step = np.linalg.solve(np.diag(eigenvalues) + (penalty - first) * seen_rough, vector)
+            values.append(self.x - self.scale * (directions @ step))
+        return np.average(values, axis=0, weights=[weight for weight, _ in shares])
+
+    @functools.cached_property
+    def _roughness(self):
+        """The spline terms' second-difference matrix (P, P) (`SplineBasis.roughness`), per unit penalty and row."""
+        return self.problem.basis.roughness(self.problem.names)
+
     def fit_without(self, rows):
         """The `KinematicFit` refitted to every measurement but ``rows`` (indices), its statistics over those."""
         held = self.held_out(rows)
@@ -753,18 +787,25 @@ class SplineChoice:
     Attributes
     ----------
     fit : KinematicFit or None
-        The joint fit with the chosen spline terms (None: the candidate
-        without spline terms won).
+        The joint fit with the chosen spline terms, at the penalty of the
+        most weight (None: the candidate without spline terms won).
     basis : SplineBasis or None
+        The chosen knots, at that penalty.
     table : list of dict
         Every candidate with its held-out mean position error: ``step_deg``
         and ``penalty`` of its spline terms (step 0 = none),
         ``held_out_mm`` and, when residual fields were tried on top,
-        ``with_field_mm`` with the best of them, its kind ``field_kind``.
+        ``with_field_mm`` with the best of them, its kind ``field_kind``;
+        the sharing penalties' ``share`` (`_Candidates.shares`).
     regions : str
         How the held-out regions were drawn.
     field : str or None
         The kind of the residual field the chosen candidate takes on top (None: none).
+    shares : tuple
+        ``(weight, penalty)`` of each penalty of the chosen knot step that
+        shares the choice (`_Candidates.shares`; weights summing to 1, the
+        most first: ``basis``'s): the joint model is the weighted mean of
+        the fits at them (`Linearisation.shared`). Empty without splines.
     """
 
     fit: object
@@ -772,6 +813,7 @@ class SplineChoice:
     table: list
     regions: str
     field: object = None
+    shares: tuple = ()
 
 
 def region_folds(position, folds):
@@ -796,17 +838,39 @@ class _Candidates:
 
     def __init__(self, regions, fields):
         self.regions, self.fields = regions, fields or {}
-        self.table, self.best = [], None
+        self.table, self.best, self.scored = [], None, []
 
     def result(self):
-        """``(table, best)``: what `merge` takes (plain data, passed between processes)."""
-        return self.table, self.best
+        """``(table, best, scored)``: what `merge` takes (plain data, passed between processes)."""
+        return self.table, self.best, self.scored
 
-    def merge(self, table, best):
-        """Take the table entries and the best of candidates scored after these (`result`)."""
+    def merge(self, table, best, scored):
+        """Take the table entries, the best and the scores of candidates scored after these (`result`)."""
         self.table += table
+        self.scored += scored
         if best is not None and (self.best is None or best[0] < self.best[0]):
             self.best = best
+
+    def shares(self):
+        """``(weight, basis, (step_deg, penalty))`` of the penalties of the best candidate's knot step, with its
+        field on top.
+
+        A penalty's weight is how often it scores best among them when the
+        held-out regions are weighted at random (`BOOTSTRAP_DRAWS` draws
+        of flat Dirichlet weights, seeded: the same rows share out the
+        same): the penalties the regions cannot tell apart share the
+        model, instead of the one a region's noise ranks first. The
+        candidate without spline terms is alone in its step. Penalties
+        that never score best are left out; the most weight first.
+        """
+        _, field, basis = self.best
+        step = None if basis is None else basis.step.tobytes()
+        same = [(regions, payload, key) for kind, regions, payload, key in self.scored if kind == field
+                and (payload is None if basis is None else payload is not None and payload.step.tobytes() == step)]
+        draws = np.random.default_rng(0).dirichlet(np.ones(len(self.regions)), BOOTSTRAP_DRAWS)
+        wins = np.bincount((draws @ np.array([regions for regions, _, _ in same]).T).argmin(axis=1),
+                           minlength=len(same)) / BOOTSTRAP_DRAWS
+        return [(float(wins[k]), *same[k][1:]) for k in np.argsort(-wins, kind="stable") if wins[k] > 0]
 
     def linearise(self, problem, x, weights, evaluated):
         """The `Linearisation` of a candidate's problem at x (P,), evaluated there (``evaluated``: residual rows,
@@ -832,6 +896,8 @@ class _Candidates:
                 on_top[kind].append(np.linalg.norm(moved[rows] - predicted, axis=1))
         entry["held_out_mm"] = round(float(np.concatenate(plain).mean()), 5)
         scores = [(entry["held_out_mm"], None)]
+        self.scored += [(kind, [float(e.mean()) for e in errors], payload, (entry["step_deg"], entry["penalty"]))
+                        for kind, errors in [(None, plain), *on_top.items()]]
         if on_top:
             means = {kind: float(np.concatenate(errors).mean()) for kind, errors in on_top.items()}
             entry["field_kind"] = min(means, key=means.get)
@@ -854,13 +920,19 @@ def select_splines(fit, start, nominal, q, measured, *, rotation=None, joints=(0
     with each of the residual ``fields`` fitted on the training regions'
     residuals on top; the candidate (and field) with the least held-out
     error over all regions wins, the candidate without spline terms (``fit``'s
-    parameters refitted the same way) included. A knot step giving more than one
+    parameters refitted the same way) included. Its knot step is kept and
+    its penalty shared: each penalty of that step weighs by how often it
+    scores best when the regions are weighted at random
+    (`_Candidates.shares`), and the model is the weighted mean of their
+    fits (`SplineChoice.shares`): which of two penalties wins often turns
+    on one region's noise. A knot step giving more than one
     spline term per `MEASUREMENTS_PER_SPLINE` measurements is not tried.
     Rows are never interleaved: a region's neighbours are not in its
     training set. The candidates are linearised at ``fit`` (its errors are
     milliradians: one Gauss-Newton step of `identify` with the spline terms
     added); the chosen spline terms are then fitted on all rows by
-    `identify` itself, iterated to convergence with the robust loss.
+    `identify` itself, iterated to convergence with the robust loss, at the
+    penalty of the most weight.
 
     Parameters
     ----------
@@ -912,7 +984,7 @@ def select_splines(fit, start, nominal, q, measured, *, rotation=None, joints=(0
         spacing[list(joints)] = np.radians(steps[0])
         basis = SplineBasis(lower, upper, spacing, penalties[0])
         return SplineChoice(_spline_fit(fit, start, nominal, q, measured, rotation, basis, orientation_weight, loss),
-                            basis, [], words, field=next(iter(fields or {}), None))
+                            basis, [], words, field=next(iter(fields or {}), None), shares=((1.0, basis.penalty),))
     tried = [None]  # no splines, then each knot step with enough measurements per spline term
     for step in steps:
         spacing = np.zeros(6)
@@ -927,7 +999,7 @@ def select_splines(fit, start, nominal, q, measured, *, rotation=None, joints=(0
     residual, jac = plain.evaluate(fit.delta)
 
     def scored(k):
-        """``(table, best)`` of the candidates of ``tried[k]`` (its penalties)."""
+        """`_Candidates.result` of the candidates of ``tried[k]`` (its penalties)."""
         candidates = _Candidates(regions, fields)
         if tried[k] is None:
             candidates.score({"step_deg": 0.0, "penalty": 0.0},
@@ -945,12 +1017,19 @@ def select_splines(fit, start, nominal, q, measured, *, rotation=None, joints=(0
         return candidates.result()
 
     candidates = _Candidates(regions, fields)
-    for table, best in share_blocks(scored, len(tried), workers):
-        candidates.merge(table, best)
-    _, on_top, basis = candidates.best
-    fitted = None if basis is None else _spline_fit(fit, start, nominal, q, measured, rotation, basis,
-                                                    orientation_weight, loss)
-    return SplineChoice(fitted, basis, candidates.table, words, on_top)
+    for result in share_blocks(scored, len(tried), workers):
+        candidates.merge(*result)
+    _, on_top, _ = candidates.best
+    shares = candidates.shares()
+    basis = shares[0][1]
+    if basis is None:
+        return SplineChoice(None, None, candidates.table, words, on_top)
+    weights = {key: weight for weight, _, key in shares}
+    for entry in candidates.table:
+        if (entry["step_deg"], entry["penalty"]) in weights:
+            entry["share"] = weights[(entry["step_deg"], entry["penalty"])]
+    return SplineChoice(_spline_fit(fit, start, nominal, q, measured, rotation, basis, orientation_weight, loss), basis,
+                        candidates.table, words, on_top, tuple((weight, member.penalty) for weight, member, _ in shares))
 
 
 def _spline_fit(fit, start, nominal, q, measured, rotation, basis, orientation_weight, loss):

@@ -457,16 +457,21 @@ def _joint_errors(j):
                   enumerate(zip(j["measured_range_deg"]["lower"], j["measured_range_deg"]["upper"]))], numeric=(1, 2))
     splines = j.get("splines")
     if splines:
-        chosen = (f"knots every {splines['step_deg']:g} deg on joints {splines['joints']}, penalty {splines['penalty']:g}"
+        shares = [c for c in splines.get("candidates", ()) if c.get("share")]
+        penalty = (f"penalty {splines['penalty']:g}" if len(shares) < 2 else "the weighted mean of its fits at penalties " + ", ".join(
+            f"{c['penalty']:g} ({c['share']:.0%})" for c in shares))
+        chosen = (f"knots every {splines['step_deg']:g} deg on joints {splines['joints']}, {penalty}"
                   if splines["step_deg"] else "no spline terms")
         if j.get("field_on_top"):
             chosen += f", a {j['field_on_top']} field over the commanded positions on top"
         out += f"<p>Chosen on held-out regions ({esc(splines.get('regions', ''))}): {esc(chosen)}.</p>"
         if splines.get("candidates"):
-            out += table(("knot step (deg)", "penalty", "held-out mean |error| (mm)", "with the field on top (mm)"),
+            out += table(("knot step (deg)", "penalty", "held-out mean |error| (mm)", "with the field on top (mm)",
+                          "share of the model"),
                          [(f"{c['step_deg']:g}", f"{c['penalty']:g}", f"{c['held_out_mm']:.4f}",
-                           f"{c['with_field_mm']:.4f}" if "with_field_mm" in c else "-")
-                          for c in splines["candidates"]], numeric=(0, 1, 2, 3))
+                           f"{c['with_field_mm']:.4f}" if "with_field_mm" in c else "-",
+                           f"{c['share']:.3f}" if c.get("share") else "-")
+                          for c in splines["candidates"]], numeric=(0, 1, 2, 3, 4))
     return out
 
 
