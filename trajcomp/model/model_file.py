@@ -175,7 +175,7 @@ def _ref_from(ref, folder):
     """How a model file in ``folder`` names its robot: a built-in name as it is, a robot file by its path relative
     to that folder (``ref`` is a path from the working folder), so that the model is read from any working
     folder and moved together with its robot file."""
-    if ref in builtin_robot_names():
+    if ref in builtin_robot_names() or not _is_file(Path(ref)):  # a name, or an arm made in code: as it is
         return ref
     return Path(os.path.relpath(Path(ref).resolve(), folder.resolve())).as_posix()
 
@@ -187,19 +187,24 @@ def _found_ref(ref, path):
     if not isinstance(ref, str):
         raise ModelError(f"{path}: field robot.ref: expected a robot name, got {yaml_text.shown(ref)}")
     beside = path.parent / ref
-    if ref in builtin_robot_names() or Path(ref).is_absolute() or not beside.is_file():
+    if ref in builtin_robot_names() or Path(ref).is_absolute() or not _is_file(beside):
         return ref
     return str(beside)
+
+
+def _is_file(path):
+    """Whether ``path`` is a file; False for a name longer than the system allows (`Path.is_file` raises)."""
+    try:
+        return path.is_file()
+    except OSError:
+        return False
 
 
 def _same_robot(asked, ref):
     """Whether the robot a caller asks for (a built-in name or a robot file path) is the model's ``ref``."""
     if asked == ref:
         return True
-    try:
-        return Path(asked).is_file() and Path(asked).resolve() == Path(ref).resolve()
-    except OSError:  # a name longer than the system allows
-        return False
+    return _is_file(Path(asked)) and Path(asked).resolve() == Path(ref).resolve()
 
 
 def _nominal_robot(ref, path):
