@@ -13,6 +13,7 @@ from trajcomp.arm.ik import (
     POS_TOL,
     ROT_TOL,
     Configuration,
+    IKResult,
     configuration_of,
     ik,
     ik_all,
@@ -343,3 +344,16 @@ def test_numeric_failures_have_reasons():
     assert result.reason[2] == "unreachable"
     near = ik_near(real, nominal, T)
     assert list(near.reason) == ["", "unreachable", ""]
+
+
+def test_a_reason_taken_from_other_rows_is_kept_whole():
+    """A reason longer than any of the rows it replaces is not cut to their text width: with_rows of a result
+    whose reasons are all "" (numpy text of width 1) once named a UR10 target of a real program "not converg"."""
+    n = 3
+    solved = IKResult(np.zeros((n, 6)), np.ones(n, dtype=bool), np.zeros(n), np.zeros(n), np.array(["", "", ""]))
+    failed = IKResult(np.full((1, 6), np.nan), np.zeros(1, dtype=bool), np.full(1, np.nan), np.full(1, np.nan),
+                      np.array(["not converged"]))
+    both = solved.with_rows([1], failed)
+    assert list(both.reason) == ["", "not converged", ""] and list(solved.reason) == ["", "", ""]
+    with pytest.raises(IKError, match=r"\(target 1: not converged\)$"):
+        both.raise_on_failure()

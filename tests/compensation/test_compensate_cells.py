@@ -21,12 +21,34 @@ def test_demo_with_a_robot_file_makes_models_compensate_finds_the_arm_of(tmp_pat
     (tmp_path / "cell_kr6.yaml").write_text(text.replace("name: kuka_kr6_r900", "name: cell_kr6"))
     assert main(["demo", "--robot", "cell_kr6.yaml", "-o", "demo"]) == 0
     model = yaml.safe_load((tmp_path / "demo" / "model-large.yaml").read_text())
-    assert model["robot"]["name"] == "cell_kr6" and model["robot"]["ref"] == "cell_kr6.yaml"
+    assert model["robot"]["name"] == "cell_kr6" and model["robot"]["ref"] == "../cell_kr6.yaml"
     capsys.readouterr()
     assert main(["compensate", "demo/program.csv", "--robot", "cell_kr6.yaml", "--model", "demo/model-large.yaml",
                  "-o", "out.csv"]) == 0
     assert (tmp_path / "out.csv").exists() and "unknown robot" not in capsys.readouterr().err
 
+
+
+def test_a_model_finds_its_robot_file_from_another_working_folder(tmp_path, monkeypatch, capsys):
+    """The model names its robot file relative to the model's own folder: ``compensate`` run from another folder
+    (or with the folder moved whole) loads the same arm, and ``--robot`` naming that file by another path is the
+    model's robot. The model named it as typed, so from another folder it was "unknown robot ... no such file"."""
+    cell = tmp_path / "cell"
+    cell.mkdir()
+    text = resources.files("trajcomp.arm.robots").joinpath("kuka_kr6_r900.yaml").read_text(encoding="utf-8")
+    (cell / "cell_kr6.yaml").write_text(text.replace("name: kuka_kr6_r900", "name: cell_kr6"))
+    monkeypatch.chdir(cell)
+    assert main(["demo", "--robot", "cell_kr6.yaml", "-o", "demo"]) == 0
+    assert yaml.safe_load((cell / "demo" / "model-large.yaml").read_text())["robot"]["ref"] == "../cell_kr6.yaml"
+    moved = tmp_path / "moved"
+    cell.rename(moved)
+    monkeypatch.chdir(tmp_path)
+    capsys.readouterr()
+    assert main(["compensate", "moved/demo/program.csv", "--model", "moved/demo/model-large.yaml",
+                 "-o", "out.csv"]) == 0
+    assert main(["compensate", "moved/demo/program.csv", "--robot", str(moved / "cell_kr6.yaml"),
+                 "--model", "moved/demo/model-large.yaml", "-o", "out2.csv"]) == 0
+    assert "unknown robot" not in capsys.readouterr().err
 
 def test_a_task_s_messages_name_the_module_that_moves_the_arm_not_a_data_module_before_it(tmp_path):
     """BData.mod (tooldata only) sorts before ZMain.mod (the motions): a refusal names ZMain and the point's file."""

@@ -280,6 +280,19 @@ def test_urscript_positions_known_only_at_run_time_are_listed(tmp_path):
     assert [(program.targets[i].name, line) for i, line, _ in program.referenced_targets()] == [("p1", 3), ("p1", 11)]
 
 
+
+def test_urscript_velocity_and_torque_control_is_listed(tmp_path):
+    """speedl, speedj and direct_torque move the arm (UniversalRobots/URScript_Examples: admittance_control.script
+    drives it by speedl in a loop, joint_impedance_cartesian_circle_motion.script by direct_torque): listed, not
+    passed over as "no compensable motion" (nothing silent)."""
+    program = formats.read(_script(tmp_path, [
+        "speedl([0, 0, 0.05, 0, 0, 0], a=0.5, t=0.008)", "speedj([0.1, 0, 0, 0, 0, 0], 1.4, 0.008)",
+        "direct_torque([0, 0, 0, 0, 0, 0], friction_comp=True)", "movel(p[0.4, 0.1, 0.3, 0, 3.14, 0], a=1.2, v=0.1)"]))
+    reasons = [reason for _, _, reason in program.not_compensated()]
+    assert reasons == [f"{f}: the arm moves by the velocity or torque given at run time, not compensated by trajcomp"
+                       for f in ("speedl", "speedj", "direct_torque")]
+    assert len(program.targets) == 1
+
 def test_a_variable_the_script_never_assigns_is_refused(tmp_path):
     with pytest.raises(ReadError, match=r"s\.script: .*Waypoint_9_p \(line 2\); they are never assigned"):
         formats.read(_script(tmp_path, ["movel(Waypoint_9_p, a=1.2, v=0.25)"]))

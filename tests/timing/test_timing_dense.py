@@ -129,3 +129,16 @@ def test_the_dense_checks_memory_does_not_grow_with_the_duration():
         tracemalloc.stop()
         assert law.duration > 200.0 / speed and 0.999 < peaks.speed_ratio <= 1.0005
     assert peak_mb[1] < 1.05 * peak_mb[0] and peak_mb[1] < 40.0
+
+
+def test_a_run_of_more_than_an_hour_between_two_stops_is_timed_not_refused():
+    """A layer of wire-arc additive manufacturing runs 999 motions at 15-30 cm/min, blended, for 4,578 s between
+    two stops (Creearc/welding_project, layers_splitter/data/cub.ls): a controller runs it, and the check's memory
+    is flat in the duration, so a run beyond an hour is timed (it was refused as "a speed no process uses"). A
+    200 mm line at 0.055 mm/s, 3,636 s: its check takes seconds per million samples."""
+    start = fk(UR10, UR10.home)
+    end = start.copy()
+    end[0, 3] -= 200.0
+    q = ik(UR10, np.array([start, end]), seed=UR10.home).raise_on_failure().q
+    timing = retime(Moves.from_joints(q, UR10, tcp_speed=0.055, stop=True), UR10)
+    assert timing.cycle_time > 3600.0 and timing.within_limits

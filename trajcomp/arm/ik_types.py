@@ -102,8 +102,9 @@ class IKResult:
         """A copy with rows ``rows`` (M,) taken from ``other``, an IKResult of M targets."""
         fields = {}
         for field in dataclasses.fields(self):
-            values = getattr(self, field.name).copy()
-            values[rows] = getattr(other, field.name)
+            values, taken = getattr(self, field.name), getattr(other, field.name)
+            values = values.astype(np.result_type(values, taken))  # a copy; text as wide as the longer reason
+            values[rows] = taken
             fields[field.name] = values
         return IKResult(**fields)
 

@@ -11,6 +11,7 @@ import datetime
 import hashlib
 import io
 import math
+import os
 import stat
 import uuid
 import zipfile
@@ -31,7 +32,7 @@ from trajcomp.model.linear import LinearCorrection
 from trajcomp.model.compensation_model import CompensationModel
 from trajcomp.arm.parameters import TOOL_NAMES, candidate_parameters, is_angle
 from trajcomp.support.plain_data import plain
-from trajcomp.arm.robot import load_robot
+from trajcomp.arm.robot import builtin_robot_names, load_robot
 from trajcomp.arm.transforms import abc_to_matrix, matrix_to_abc, matrix_to_pose, pose_to_matrix
 
 _DUMPER = getattr(yaml, "CSafeDumper", yaml.SafeDumper)  # libyaml's emitter where built (the same text, 4x faster)
@@ -113,7 +114,7 @@ def save_model(path, model):
         "created": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
         "robot": {
             "name": model.nominal.name,
-            "ref": model.robot_ref,
+            "ref": _ref_from(model.robot_ref, path.parent),
             "dh_fingerprint": _robot_fingerprint(model.nominal),
             "tool": _pose_user(model.nominal.T_flange_tool),
             "track": _track_user(model.nominal.track),
@@ -170,10 +171,44 @@ def _posture_index(text, path):
         raise ModelError(f"{path}: field postures: {exc}") from None
 
 
-def _nominal_robot(ref, path):
-    """The robot a model names (a built-in name or a robot file); ModelError naming the model's field if not."""
+def _ref_from(ref, folder):
+    """How a model file in ``folder`` names its robot: a built-in name as it is, a robot file by its path relative
+    to that folder (``ref`` is a path from the working folder), so that the model is read from any working
+    folder and moved together with its robot file."""
+    if ref in builtin_robot_names() or not _is_file(Path(ref)):  # a name, or an arm made in code: as it is
+        return ref
+    return Path(os.path.relpath(Path(ref).resolve(), folder.resolve())).as_posix()
+
+
+def _found_ref(ref, path):
+    """The robot a model file at ``path`` names, as `load_robot` takes it: a built-in name, or the robot file's
+    path from the working folder; a relative path is the model's folder's (`_ref_from`), else the working
+    folder's (the models of an earlier version named the file as typed)."""
     if not isinstance(ref, str):
         raise ModelError(f"{path}: field robot.ref: expected a robot name, got {yaml_text.shown(ref)}")
+    beside = path.parent / ref
+    if ref in builtin_robot_names() or Path(ref).is_absolute() or not _is_file(beside):
+        return ref
+    return str(beside)
+
+
+def _is_file(path):
+    """Whether ``path`` is a file; False for a name longer than the system allows (`Path.is_file` raises)."""
+    try:
+        return path.is_file()
+    except OSError:
+        return False
+
+
+def _same_robot(asked, ref):
+    """Whether the robot a caller asks for (a built-in name or a robot file path) is the model's ``ref``."""
+    if asked == ref:
+        return True
+    return _is_file(Path(asked)) and Path(asked).resolve() == Path(ref).resolve()
+
+
+def _nominal_robot(ref, path):
+    """The robot a model names (a built-in name or a robot file); ModelError naming the model's field if not."""
     try:
         return load_robot(ref)
     except RobotError as exc:
@@ -262,9 +297,10 @@ def load_model(path, robot=None):
         )
     try:
         info = doc["robot"]
-        if robot is not None and robot not in (info["name"], info["ref"]):
+        ref = _found_ref(info["ref"], path)
+        if robot is not None and robot != info["name"] and not _same_robot(robot, ref):
             raise ModelError(f"{path}: model is for robot {yaml_text.shown(info['name'])}, not {robot!r}")
-        nominal = _nominal_robot(info["ref"], path)
+        nominal = _nominal_robot(ref, path)
         if _robot_fingerprint(nominal) != info["dh_fingerprint"]:
             raise ModelError(f"{path}: the nominal DH table of robot {yaml_text.shown(info['ref'])} differs from the one calibrated")
         nominal = nominal.replace(T_flange_tool=_pose_internal(info["tool"], f"{path}: field robot.tool"),
@@ -293,7 +329,7 @@ def load_model(path, robot=None):
         tools = doc["places_other_tools"]
         model = CompensationModel(
             nominal=nominal,
-            robot_ref=info["ref"],
+            robot_ref=ref,
             method=doc["method"],
             T_tracker_base=_pose_internal(doc["tracker_to_base"], f"{path}: field tracker_to_base"),
             dh_names=names,

@@ -23,7 +23,7 @@ from trajcomp.timing.path import tcp_speeds
 RATE = 1000.0  # Hz
 LIMIT_TOLERANCE = 0.01  # a sampled value may exceed its limit by this share
 BLOCK = 16384  # samples checked at a time: the check's memory does not grow with the duration
-MAX_SAMPLES = 3_600_000  # per run between two stops (an hour at 1 kHz): its check takes seconds per million
+MAX_SAMPLES = 86_400_000  # per run between two stops (a day at 1 kHz; wire-arc additive layers run over an hour): its check takes seconds per million
 
 
 @dataclasses.dataclass(frozen=True)

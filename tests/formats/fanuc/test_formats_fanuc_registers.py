@@ -208,3 +208,17 @@ def test_a_position_whose_index_a_register_holds_is_listed_not_refused(tmp_path)
         (6, "2: L P[R[3:idx]] 100mm/sec CNT10 ;", "P[R[3:idx]]: position index computed at run time"),
         (7, "3: J PR[R[4]] 50% FINE ;", "position register PR[R[4]]: its number is set at run time"),
         (8, "4: L P[AR[1]] R[2]mm/sec FINE ;", "P[AR[1]]: position index computed at run time"))
+
+
+def test_a_commented_out_line_sets_no_register_and_calls_nothing(tmp_path):
+    """``//PR[R[199]]=PR[26] ;`` is an instruction the pendant commented out: it does not run. In a real backup
+    (WILDER-SYSTEMS-LLC/git-ftp, rivetlocation.ls line 7) it made every register of the backup "set at run time"
+    (an indirect write sets any register), so no register motion of any of its programs was compensated."""
+    robot = load_robot("fanuc_lrmate200id")
+    path = _cell(tmp_path, robot, "UFRAME_NUM=0\nUTOOL_NUM=1\nLBL[1]\n//PR[1]=LPOS\nL PR[1] 100mm/sec FINE\n"
+                                  "//CALL TEACH\nJ PR[3] 50% FINE\n//JMP LBL[1]",
+                 others=[("TEACH.LS", "//PR[R[199]]=PR[26:RIVET LOCATION]\n//UTOOL_NUM=9")])
+    program = formats.read(path)
+    assert program.not_compensated() == ()
+    assert [program.where(m.target) for m in program.motions] == ["PR[1] (POSREG.VA:2)", "PR[3] (POSREG.VA:10)"]
+    assert [m.start_why for m in program.motions][1:] == [""]  # after a call, or a jump back, its start is unknown

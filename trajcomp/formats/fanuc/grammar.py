@@ -39,6 +39,7 @@ import re
 import numpy as np
 
 from trajcomp.formats.number_fields import NUMBER
+from trajcomp.formats.text import mask
 from trajcomp.programs.items import CIRCULAR, JOINT, LINEAR
 
 # --- sections ---------------------------------------------------------------------------------------------------------
@@ -159,6 +160,15 @@ MOTION_PIECES = tuple((name, piece) for field in MOTION_FIELDS for name, piece i
 WRITTEN_MOTION = re.compile(
     "^" + "".join(piece.blanks + "(?:" + piece.written + ")" for _, piece in MOTION_PIECES) + r"[ \t]*\r?$", re.M)
 WRITTEN_NUMBERS = 10**9  # position numbers of the written motion lines (9 digits) are below
+
+COMMENTED_OUT = "//"  # an instruction the pendant commented out (``  7:  //PR[1]=LPOS ;``): it does not run
+
+
+def masked(text):
+    """`trajcomp.formats.text.mask` of a listing: remarks (``!``), instructions commented out (`COMMENTED_OUT`)
+    and the contents of strings blanked, so that no pattern finds what the controller does not run."""
+    return mask(mask(text, "!", quote='"'), COMMENTED_OUT, quote='"')
+
 
 # --- /MN instructions that are not motions ---------------------------------------------------------------------------
 FRAME_WORDS = {"UTOOL_NUM": "tool", "WKZ_NUM": "tool", "UFRAME_NUM": "frame", "BENUTZER_NUM": "frame",

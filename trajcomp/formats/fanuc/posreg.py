@@ -42,8 +42,8 @@ from pathlib import Path
 import numpy as np
 
 from trajcomp.errors import ReadError
-from trajcomp.formats.fanuc.grammar import CONFIG_VALUE, JOINTS, MOTION_REGISTER, XYZWPR
-from trajcomp.formats.text import ANGLE_LIMIT, JOINT_LIMIT, LENGTH_LIMIT, Lines, fail, finite, mask, read_source
+from trajcomp.formats.fanuc.grammar import CONFIG_VALUE, JOINTS, MOTION_REGISTER, XYZWPR, masked
+from trajcomp.formats.text import ANGLE_LIMIT, JOINT_LIMIT, LENGTH_LIMIT, Lines, fail, finite, read_source
 from trajcomp.formats.number_fields import NUMBER
 from trajcomp.programs.items import Span, Target
 from trajcomp.arm.transforms import pose_to_matrix
@@ -100,7 +100,7 @@ def resolve(program_path, masked, lines, targets, index):
     program_path : Path
         The program.
     masked : str
-        Its text with comments and strings blanked (`trajcomp.formats.text.mask`).
+        Its text with comments and strings blanked (`trajcomp.formats.fanuc.grammar.masked`).
     lines : Lines
         Its lines.
     targets : list of Target
@@ -253,7 +253,7 @@ def _sets_in_file(path, mtime_ns, size):
         source = read_source(path)
     except ReadError:  # a binary file named .ls: no listing, nothing trajcomp can read sets a register
         return {}
-    return _sets(mask(source.text, "!", quote='"'), Lines(source.text), f"{source.name}:{{}}")
+    return _sets(masked(source.text), Lines(source.text), f"{source.name}:{{}}")
 
 
 def _sets(masked, lines, place):

@@ -18,7 +18,6 @@ from trajcomp.formats.text import (
     fail,
     finite,
     last_line,
-    mask,
     read_source,
     whole_circle,
 )
@@ -97,7 +96,7 @@ def read(path):
         loader refuses both too.
     """
     source = read_source(path)
-    masked = mask(source.text, "!", quote='"')
+    masked = grammar.masked(source.text)
     lines = Lines(source.text)
     head = next((source.text[s:e] for _, s, e in lines if source.text[s:e].strip()), "")
     if not head.lstrip().upper().startswith("/PROG"):

@@ -28,7 +28,8 @@ Read:
 Not compensated, with the reason (`Motion.reason`): poses computed at run
 time (pose_add, get_actual_tcp_pose, nested pose_trans ...), variables
 assigned anything but a literal, function parameters, variables assigned
-only further down, motions after a TCP set at run time, servoj / servoc.
+only further down, motions after a TCP set at run time, servoj / servoc,
+speedl / speedj / direct_torque (the arm moved by a velocity or torque).
 A point also used as the frame of ``pose_trans`` (the approach idiom
 ``movel(pose_trans(pick_p, p[0,0,-0.1,0,0,0]))`` then ``movel(pick_p)``)
 stays a point: the offsets from it are computed at run time and move with

@@ -53,7 +53,8 @@ MOTIONS = {"movej": Signature(JOINT, ("a", "v", "t", "r"), "1.05", True),
            "movep": Signature(LINEAR, ("a", "v", "r"), "0.25", True),
            "movec": Signature(CIRCULAR, ("a", "v", "r", "mode"), "0.25")}
 STREAMED = ("servoj", "servoc")  # set points streamed to the arm: motions trajcomp does not compensate
-CALLS = tuple(MOTIONS) + ("set_tcp",) + STREAMED  # the calls the reader reads
+DRIVEN = ("speedl", "speedj", "direct_torque")  # the arm moved by a velocity or torque: likewise, listed
+CALLS = tuple(MOTIONS) + ("set_tcp",) + STREAMED + DRIVEN  # the calls the reader reads
 OPTIONS = ("a", "v", "t", "r")  # the options of a motion a CAM post gives, named or by position
 WRITTEN = tuple(f for f, signature in MOTIONS.items() if signature.written)  # the functions of ``CAM_LINE``
 

@@ -451,10 +451,11 @@ class _Reader:
             self.set_tcp(args, line, original)
             return None
         text = original.strip()
-        if function in grammar.STREAMED:
+        if function in grammar.STREAMED + grammar.DRIVEN:
             self.motion_spans.add({})
-            return Motion(kind=JOINT, line=line, text=text,
-                          reason=f"{function}: streamed set point, not compensated by trajcomp")
+            what = "streamed set point" if function in grammar.STREAMED else (
+                "the arm moves by the velocity or torque given at run time")
+            return Motion(kind=JOINT, line=line, text=text, reason=f"{function}: {what}, not compensated by trajcomp")
         kind = KINDS[function]
         count = 2 if kind == CIRCULAR else 1
         if len(args) < count or not args[0][0].strip():
