@@ -470,7 +470,7 @@ def _joint_errors(j):
                           "share of the model"),
                          [(f"{c['step_deg']:g}", f"{c['penalty']:g}", f"{c['held_out_mm']:.4f}",
                            f"{c['with_field_mm']:.4f}" if "with_field_mm" in c else "-",
-                           f"{c['share']:.3f}" if c.get("share") else "-")
+                           f"{c['share']:.1%}" if c.get("share") else "-")
                           for c in splines["candidates"]], numeric=(0, 1, 2, 3, 4))
     return out
 
