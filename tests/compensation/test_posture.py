@@ -386,3 +386,16 @@ def test_a_program_whose_joints_were_solved_for_another_arm_is_refused_naming_bo
             assert "robot ur5's TCP" in message and "fit robot ur10" in message and "ur10.csv:2" in message
         else:  # the same targets with the UR5's own joints: compensated
             assert result in (0, 1) and out.exists()
+
+
+def test_a_program_in_millimetres_where_metres_are_read_is_refused_with_the_unit_named(tmp_path):
+    """A URScript whose poses are written in mm (the language reads metres): every target lies hundreds of the
+    arm's reaches away; refused naming the unit, where it said only that the targets cannot be reached."""
+    robot = load_robot("ur10")
+    T = fk(robot, np.radians([[10.0, -100.0, 100.0, -90.0, 90.0, 0.0], [20.0, -90.0, 90.0, -90.0, 90.0, 0.0]]))
+    poses = [f"p[{pose[0, 3]:.3f}, {pose[1, 3]:.3f}, {pose[2, 3]:.3f}, 0.0, 3.1416, 0.0]" for pose in T]
+    (tmp_path / "mm.script").write_text("def mm():\n" + "".join(f"  movel({p}, a=1.2, v=0.25)\n" for p in poses)
+                                        + "end\n")
+    with pytest.raises(IKError, match=r"mm: every target lies .* m or more from robot ur10's shoulder, "
+                                      r"\d+ times its reach .*in millimetres where the program's language reads metres"):
+        planned_joints(formats.read(tmp_path / "mm.script"), robot)

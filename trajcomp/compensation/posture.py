@@ -48,6 +48,7 @@ TURN = 2.0 * np.pi
 _WINDOW_TOL = 1e-9  # rad, slack of the joint limits
 _TURNS = np.arange(-3, 4)  # whole turns tried when placing a joint in its window
 METRES_BOX = 10.0  # mm: targets all this close to the base origin are positions in metres
+SMALLER_UNIT = 20.0  # of the reach: targets all this far from the shoulder are in a unit smaller than the one read
 OTHER_ARM = 0.1  # of the reach: declared joints this far from their targets (median) were solved for another arm
 FITS = 5.0  # mm: declared joints this close to their targets (median) fit an arm
 BLOCK = 16_384  # undeclared targets whose eight branches are held at once: bounded memory at millions of targets
@@ -132,6 +133,7 @@ def planned_joints(program, robot, *, tools=None, frames=None, workers=1):
     T_base_frame, T_flange_tool, T_base_tcp = FrameTable(program, robot, tools, frames).targets_in_base(index)
     n = len(index)
     _fail_in_metres(program, T_base_tcp)
+    _fail_in_a_smaller_unit(program, robot, T_base_tcp)
     branches = functools.partial(_all_branches, robot, T_base_tcp, T_flange_tool)
     hint = table.joints[index]
     has_hint = np.all(np.isfinite(hint), axis=1)
@@ -291,6 +293,22 @@ def _fail_in_metres(program, T_base_tcp):
         raise IKError(
             f"{program.name}: every target lies within {METRES_BOX:g} mm of the robot base origin, inside the "
             "robot itself: are the positions in metres? trajcomp reads millimetres; the program was not changed"
+        )
+
+
+def _fail_in_a_smaller_unit(program, robot, T_base_tcp):
+    """IKError for a program whose every target (N, 4, 4), mm, lies `SMALLER_UNIT` times ``robot``'s reach or
+    farther from its shoulder: positions written in a smaller unit than the program's language reads (millimetres in
+    a language of metres), where each target would otherwise be refused as out of reach."""
+    if not len(T_base_tcp):
+        return
+    shoulder, reach = shoulder_and_reach(robot)
+    nearest = np.linalg.norm(T_base_tcp[:, :3, 3] - shoulder, axis=1).min()
+    if nearest >= SMALLER_UNIT * reach:
+        raise IKError(
+            f"{program.name}: every target lies {nearest / 1000.0:.4g} m or more from robot {robot.name}'s shoulder, "
+            f"{nearest / reach:.0f} times its reach ({reach / 1000.0:.3g} m): are the positions in millimetres where "
+            "the program's language reads metres (or in another smaller unit)? The program was not changed"
         )
 
 
