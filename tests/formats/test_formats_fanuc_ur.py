@@ -142,6 +142,20 @@ def test_wrong_language_is_a_clear_error(tmp_path, suffix, other):
         formats.read(path)
 
 
+def test_a_script_of_statements_alone_is_read_and_a_text_of_none_refused(tmp_path):
+    """A script of top-level I/O statements without a def, a move or a pose (as UniversalRobots/URScript_Examples'
+    modbus/wago-750/read-digital.script, sent to the secondary interface): a controller runs it, so it is read, with
+    no motion (it was refused as "not a URScript program"); a text with no URScript in it still is."""
+    path = tmp_path / "io.script"
+    path.write_text('# read the inputs\nmodbus_add_signal("192.168.1.100", 255, 0, 0, "D_IN", True, 24)\nsleep(1)\n'
+                    'global inputs = modbus_get_signal_status("D_IN", False)\nmodbus_delete_signal("D_IN")\n')
+    program = formats.read(path)
+    assert len(program.targets) == 0 and list(program.not_compensated()) == []
+    (tmp_path / "notes.script").write_text("call the cell about the new fixture\n")
+    with pytest.raises(ReadError, match=r"notes\.script: not a URScript program"):
+        formats.read(tmp_path / "notes.script")
+
+
 def _ls(tmp_path, mn, pos):
     path = tmp_path / "T.LS"
     lines = "".join(f"{k:4d}:{line} ;\n" for k, line in enumerate(mn, start=1))
@@ -280,7 +294,6 @@ def test_urscript_positions_known_only_at_run_time_are_listed(tmp_path):
     assert [(program.targets[i].name, line) for i, line, _ in program.referenced_targets()] == [("p1", 3), ("p1", 11)]
 
 
-
 def test_urscript_velocity_and_torque_control_is_listed(tmp_path):
     """speedl, speedj and direct_torque move the arm (UniversalRobots/URScript_Examples: admittance_control.script
     drives it by speedl in a loop, joint_impedance_cartesian_circle_motion.script by direct_torque): listed, not
@@ -292,6 +305,7 @@ def test_urscript_velocity_and_torque_control_is_listed(tmp_path):
     assert reasons == [f"{f}: the arm moves by the velocity or torque given at run time, not compensated by trajcomp"
                        for f in ("speedl", "speedj", "direct_torque")]
     assert len(program.targets) == 1
+
 
 def test_a_variable_the_script_never_assigns_is_refused(tmp_path):
     with pytest.raises(ReadError, match=r"s\.script: .*Waypoint_9_p \(line 2\); they are never assigned"):

@@ -76,7 +76,13 @@ INVERSE_KINEMATICS = re.compile(r"^\s*get_inverse_kin\s*\((.*)\)\s*$", re.S)  # 
 POSE_TRANS = re.compile(r"^\s*pose_trans\s*\((.*)\)\s*$", re.S)  # pose_trans(frame, pose): a pose in a frame
 VARIABLE = re.compile(r"^\s*(" + NAME + r")\s*$")
 WORD = re.compile(NAME)
-SIGNS = re.compile(r"(?m)^\s*def\s+\w+\s*\(|\b(?:" + "|".join(MOTIONS) + r")\s*\(|\bp\[")  # a script has one
+# a script has one: a def, a move or a pose literal; or, a script of statements alone (the lines a controller's
+# secondary interface or a Script node runs: IO, Modbus, waits), a global or local assignment or a call of the I/O,
+# communication or messaging functions of the URScript manual
+SIGNS = re.compile(r"(?m)^\s*def\s+\w+\s*\(|\b(?:" + "|".join(MOTIONS) + r")\s*\(|\bp\["
+                   r"|^\s*(?:global|local)\s+\w+\s*="
+                   r"|\b(?:sleep|sync|halt|textmsg|popup|set_(?:standard_|tool_|configurable_)?(?:digital|analog)_out"
+                   r"|(?:modbus|socket|rtde|rpc)_\w+|(?:read|write)_(?:input|output|port)_\w+)\s*\(")
 
 # blocks: a statement ending with ":" opens one up to its ``end``
 BLOCK_WORDS = ("def", "sec", "thread", "if", "while", "for")

@@ -625,7 +625,7 @@ def read(path):
     source = read_source(path)
     masked = mask(source.text, "#")
     if not grammar.SIGNS.search(masked):
-        raise ReadError(f"{path}: not a URScript program: no def, move or pose literal")
+        raise ReadError(f"{path}: not a URScript program: no def, move, pose literal or URScript statement")
     lines = Lines(source.text)
     reader = _Reader(source, masked, lines, *cam_lines(masked, np.array(lines.starts)))
     check_closed(source, masked, grammar.BLOCK_OPENS, grammar.BLOCK_CLOSES,
