@@ -85,6 +85,16 @@ def test_partial_inline_target_is_the_current_position_in_its_other_members(tmp_
         "position computed at run time: {X 1,Y 2,Z 3}", "position computed at run time: {A1 10}"]
 
 
+def test_a_point_of_an_array_is_listed_as_such(tmp_path):
+    """``PTP P[1]`` to a point of an array whose values the .dat holds (a palletiser's layers): listed with what it is,
+    not as "computed at run time", which it is not (reading arrays' elements is not built)."""
+    path = _write(tmp_path, "DEF p( )\nPTP P[1]\nLIN P[I]\nEND\n",
+                  "DEFDAT p\nDECL E6POS P[2]\nP[1]={X 500,Y 0,Z 600,A 0,B 90,C 0,S 2,T 2}\nENDDAT\n")
+    assert [reason for _, _, reason in formats.read(path).not_compensated()] == [
+        f"an element of a point array: {name} (trajcomp reads single points, not arrays' elements)"
+        for name in ("P[1]", "P[I]")]
+
+
 def test_motion_without_target(tmp_path):
     path = _write(tmp_path, "DEF p( )\nCIRC XP1\nEND\n")
     with pytest.raises(ReadError, match=r"p\.src:2: CIRC needs 2 target"):

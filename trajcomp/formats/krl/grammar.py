@@ -119,6 +119,7 @@ DEF_LINE = re.compile(r"^\s*(?:" + SHARED + r"\s+)?DEF(?:FCT\s+\w+)?\s+\w+\s*\((
 DEFDAT = re.compile(r"^\s*DEFDAT\s+(\w+)", re.I | re.M)
 ENDDAT = re.compile(r"^\s*ENDDAT\b", re.I | re.M)
 NAME = re.compile(r"^[A-Za-z_$][\w$]*$")
+ARRAY_ELEMENT = re.compile(r"[A-Za-z_][\w$]*\s*\[[^\]]*\]")  # a point of an array (``P[1]``, ``P[I]``)
 WORD = re.compile(r"[A-Za-z_$][\w$]*")
 PROGRAM_NAME = re.compile(r"^[A-Za-z_][A-Za-z0-9_]{0,23}$")  # KRL names: 24 characters at most
 ASSIGN = re.compile(r"^\s*([A-Za-z_]\w*)\s*(?:\.\w+|\[[^\]]*\])*\s*=(?!=)")

@@ -11,13 +11,13 @@ import numpy as np
 from trajcomp.errors import ReadError
 from trajcomp.formats.krl import at_once, config_dat, line_walk
 from trajcomp.formats.krl.grammar import (
-    ACC, ACC_AXIS, ACC_CP, ACC_EXTAX, ACC_GROUPS, ACC_ORI, ACT, APO, APPROX, ASSIGN, AXES, AXIS_GROUPS, BAS,
-    BAS_ACC_PTP, BAS_FRAMES, BAS_SPEEDS, BLOCK_CLOSES, BLOCK_OPENS, CLOSING, DATA, DATA_REF, DECL, DECL_BARE,
-    DECL_START, DEF, DEF_LINE, DEFDAT, END_SPLINE, ENDDAT, EXTERNAL, EXTERNAL_ACC_GROUPS, EXTERNAL_GROUPS,
-    FIRST_WORD, FLOW_WORDS, GLOBAL_POINT, GLOBAL_WORD, HOME, JOINT_GROUPS, JOINT_TYPES, JUMP_TO, LIMITS, MEMBER,
-    MOTION, MOTION_SPANS, MOTIONS, NAME, NUMBER_DECL, ORI_GROUPS, OUTSIDE_ROUTINES, POSE, PTP_ACC_GROUPS, SPLINE,
-    STATUS_LARGEST, SYSVAR, VEL, VEL_AXIS, VEL_CP, VEL_EXTAX, WITH_BASE, WITH_CALL, WITH_EXTAX, WITH_SPEED,
-    WITH_TOOL, WITH_WORD, WORD,
+    ACC, ACC_AXIS, ACC_CP, ACC_EXTAX, ACC_GROUPS, ACC_ORI, ACT, APO, APPROX, ARRAY_ELEMENT, ASSIGN, AXES,
+    AXIS_GROUPS, BAS, BAS_ACC_PTP, BAS_FRAMES, BAS_SPEEDS, BLOCK_CLOSES, BLOCK_OPENS, CLOSING, DATA, DATA_REF, DECL,
+    DECL_BARE, DECL_START, DEF, DEF_LINE, DEFDAT, END_SPLINE, ENDDAT, EXTERNAL, EXTERNAL_ACC_GROUPS,
+    EXTERNAL_GROUPS, FIRST_WORD, FLOW_WORDS, GLOBAL_POINT, GLOBAL_WORD, HOME, JOINT_GROUPS, JOINT_TYPES, JUMP_TO,
+    LIMITS, MEMBER, MOTION, MOTION_SPANS, MOTIONS, NAME, NUMBER_DECL, ORI_GROUPS, OUTSIDE_ROUTINES, POSE,
+    PTP_ACC_GROUPS, SPLINE, STATUS_LARGEST, SYSVAR, VEL, VEL_AXIS, VEL_CP, VEL_EXTAX, WITH_BASE, WITH_CALL,
+    WITH_EXTAX, WITH_SPEED, WITH_TOOL, WITH_WORD, WORD,
 )
 from trajcomp.formats.number_fields import NUMBER
 from trajcomp.formats.text import (
@@ -526,7 +526,10 @@ class _Reader:
         else:
             found = [self.target(piece, at, index, name, line_no, original) for piece, at in parts[:wanted]]
             if None in found:
-                reason = "position computed at run time: " + " ".join(parts[found.index(None)][0].split())
+                written = " ".join(parts[found.index(None)][0].split())
+                reason = (f"an element of a point array: {written} (trajcomp reads single points, not arrays' "
+                          "elements)" if ARRAY_ELEMENT.fullmatch(written) else
+                          f"position computed at run time: {written}")
         roles = ("via_name", "target_name")[2 - wanted:]
         spans = {"motion": (start + m.start(1), start + m.end(1))}  # offsets: the spans are columns (`_resolve`)
         spans |= {role: name_offsets(piece, at) for role, (piece, at), point in zip(roles, parts, found)
