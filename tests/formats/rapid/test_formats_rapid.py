@@ -128,6 +128,16 @@ def test_undeclared_point_is_refused_naming_it(tmp_path):
         formats.read(path)
 
 
+def test_motions_an_external_device_guides_are_listed(tmp_path):
+    """EGM (Externally Guided Motion) moves the arm to poses a sensor streams at run time: listed as motions not read,
+    as SearchL is (they were taken for a call that may move the arm, and no report line named them)."""
+    body = ("    MoveL p10, v100, fine, tool0;\n    EGMMoveL egmID1, p10, v10, fine, tool0;\n"
+            "    EGMRunPose egmID1, EGM_STOP_HOLD \\x \\y \\z \\CondTime:=20;\n")
+    program = formats.read(_module(tmp_path, body, ""))
+    assert [reason for _, _, reason in program.not_compensated()] == [
+        f"{name}: instruction not read by trajcomp, left as written" for name in ("EGMMoveL", "EGMRunPose")]
+
+
 def test_positions_known_only_at_run_time_are_listed_with_their_reason(tmp_path):
     body = ("    MoveL p10, v100, z10, tool0;\n    MoveL pTemp, v100, z10, tool0;\n    p20.trans.z := 50;\n"
             "    MoveL p20, v100, z10, tool0;\n    MoveL pts{2}, v100, z10, tool0;\n    MyProc p10;\n"

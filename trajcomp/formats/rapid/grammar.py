@@ -212,8 +212,9 @@ MOTION_OPTIONS = {"v": "num: the TCP speed in place of the speeddata's v_tcp (mm
                   "t": "num: the motion's time, its speeds not used (s)",
                   "z": "num: the zone's size in place of the zonedata's (mm)",
                   "wobj": "wobjdata: the work object (default wobj0)"}
-# every motion instruction's family: one not in `MOTIONS` (SearchL, MoveExtJ, SpotL ...) is listed, not read
-STARTS_MOTION = re.compile(r"^\s*(?:Move|Trigg|Search|Arc|Clad|Spot|Paint|Disp|Contact)\w*\b", re.I)
+# every motion instruction's family: one not in `MOTIONS` (SearchL, MoveExtJ, SpotL, EGMMoveL, EGMRunPose ...) is
+# listed, not read
+STARTS_MOTION = re.compile(r"^\s*(?:Move|Trigg|Search|Arc|Clad|Spot|Paint|Disp|Contact|EGMMove|EGMRun)\w*\b", re.I)
 INSTRUCTION = re.compile(r"^\s*([A-Za-z]\w*)\b(.*);\s*$", re.S)  # groups: its name, its arguments
 OPTION = re.compile(r"\\(\w+)(?:\s*:=\s*([^\\]+))?")  # groups: an optional argument's name, its value
 
