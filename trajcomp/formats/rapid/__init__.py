@@ -33,7 +33,7 @@ Not compensated, with the reason (`Motion.reason`): expressions (Offs,
 RelTool, CRobT, array elements), routine parameters, points declared without
 a value or assigned in the code, tools and work objects changed at run time
 or not supported (stationary tool, robot-held work object), and motion
-instructions trajcomp does not read (SearchL, MoveExtJ ...), points,
+instructions trajcomp does not read (SearchL, MoveExtJ, EGMMoveL ...), points,
 tools and work objects another module of the task assigns. A point
 another module of the task declares (not LOCAL; a module of the same
 folder, or of a backup's TASKn/PROGMOD and SYSMOD) is read from that module
