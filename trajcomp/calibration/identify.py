@@ -639,13 +639,11 @@ class Linearisation:
         spline terms alone, which every penalty makes seen, and one
         eigendecomposition serves them all.
         """
-        from scipy import sparse
-
         normal, gradient = self.held_out(rows) if len(rows) else (0.0, 0.0)
         rough = self._roughness * (len(self.residual) - len(rows))
         first = shares[0][1]
         eigenvalues, directions = _seen(self.normal - normal + rough * first, self.rtol)
-        seen_rough = directions.T @ (sparse.csr_matrix(rough) @ directions)
+        seen_rough = directions.T @ rough @ directions
         values = []
         for _, penalty in shares:
             vector = directions.T @ (self.gradient - gradient + (rough * penalty) @ (self.x / self.scale))
