@@ -458,8 +458,8 @@ def _joint_errors(j):
     splines = j.get("splines")
     if splines:
         shares = [c for c in splines.get("candidates", ()) if c.get("share")]
-        penalty = (f"penalty {splines['penalty']:g}" if len(shares) < 2 else "the weighted mean of its fits at penalties " + ", ".join(
-            f"{c['penalty']:g} ({c['share']:.0%})" for c in shares))
+        penalty = (f"penalty {splines['penalty']:g}" if len(shares) < 2 else "the weighted mean of its fits at "
+                   "penalties " + ", ".join(f"{c['penalty']:g} ({c['share']:.0%})" for c in shares))
         chosen = (f"knots every {splines['step_deg']:g} deg on joints {splines['joints']}, {penalty}"
                   if splines["step_deg"] else "no spline terms")
         if j.get("field_on_top"):

@@ -23,7 +23,9 @@ from trajcomp.timing.path import tcp_speeds
 RATE = 1000.0  # Hz
 LIMIT_TOLERANCE = 0.01  # a sampled value may exceed its limit by this share
 BLOCK = 16384  # samples checked at a time: the check's memory does not grow with the duration
-MAX_SAMPLES = 86_400_000  # per run between two stops (a day at 1 kHz; wire-arc additive layers run over an hour): its check takes seconds per million
+# per run between two stops: a day at 1 kHz (wire-arc additive layers run over an hour); its check takes seconds per
+# million samples
+MAX_SAMPLES = 86_400_000
 
 
 @dataclasses.dataclass(frozen=True)
