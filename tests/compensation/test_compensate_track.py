@@ -259,6 +259,19 @@ def test_a_program_on_a_track_whose_robot_has_none_is_refused_for_that_reason(tm
     assert "track" not in str(refused.value)
 
 
+def test_a_program_far_along_a_track_is_not_taken_for_one_in_another_unit(tmp_path, monkeypatch):
+    """Every target 30 m along a track the robot's description lacks: tens of the arm's reaches from its fixed base,
+    as the positions of a program in millimetres read as metres are; its targets are refused as out of reach, not
+    its unit (a KRL program is in millimetres)."""
+    monkeypatch.setitem(globals(), "CARRIAGE", [position + 30_000.0 for position in CARRIAGE])
+    robot = on_track("kuka_kr6_r900")
+    world, q = world_targets(robot, "kuka_kr6_r900")
+    program = formats.read(_krl(tmp_path, world, q, robot))
+    with pytest.raises(IKError, match=r"^rail: .*cannot be reached by robot kuka_kr6_r900") as refused:
+        compensate_program(program, cell("kuka_kr6_r900")[2], load_robot("kuka_kr6_r900"))
+    assert "millimetres" not in str(refused.value)
+
+
 def test_a_krl_point_without_e1_on_the_first_motion_is_left_as_written_and_the_rest_compensated(tmp_path):
     """KRL: the first motion's point states no E1: the controller runs it from wherever the track stands, which
     the program does not say. That motion is left as written and listed with the reason; the others land within

@@ -299,8 +299,9 @@ def _fail_in_metres(program, T_base_tcp):
 def _fail_in_a_smaller_unit(program, robot, T_base_tcp):
     """IKError for a program whose every target (N, 4, 4), mm, lies `SMALLER_UNIT` times ``robot``'s reach or
     farther from its shoulder: positions written in a smaller unit than the program's language reads (millimetres in
-    a language of metres), where each target would otherwise be refused as out of reach."""
-    if not len(T_base_tcp):
+    a language of metres), where each target would otherwise be refused as out of reach. Not for a program whose
+    external axes move: a track may carry the arm that far (`_off_the_track` says why it cannot reach)."""
+    if not len(T_base_tcp) or program.moving_external_axes():
         return
     shoulder, reach = shoulder_and_reach(robot)
     nearest = np.linalg.norm(T_base_tcp[:, :3, 3] - shoulder, axis=1).min()
